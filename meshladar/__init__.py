@@ -1,0 +1,14 @@
+"""meshladar: mesh-based 3D ladar simulation and reflection tomography.
+
+Importing meshladar loads numpy and scipy only; trimesh, embreex, matplotlib and pyvista
+are imported lazily by the features that use them.
+"""
+
+from __future__ import annotations
+
+from . import brdf, errors, materials
+from .brdf import SandfordRobertson
+
+__version__ = "0.1.0"
+
+__all__ = ["SandfordRobertson", "brdf", "errors", "materials", "__version__"]

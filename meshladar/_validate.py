@@ -1,0 +1,55 @@
+"""Boundary checks shared by the engine: each raises and returns nothing, or returns the
+cleaned value. Messages name the argument, the value received and what is valid."""
+
+from __future__ import annotations
+
+import math
+from numbers import Real
+
+import numpy as np
+
+from .errors import ParameterError
+
+__all__: list[str] = []
+
+
+def check_real(name: str, value, *, low: float | None = None, high: float | None = None,
+               low_open: bool = False, high_open: bool = False) -> float:
+    """Return ``value`` as a float after checking that it is a finite real in the range.
+
+    ``low``/``high`` bound the range, closed unless ``low_open``/``high_open``.
+    """
+    if isinstance(value, bool) or not isinstance(value, (Real, np.floating, np.integer)):
+        raise ParameterError(f"{name} must be a real number; got {value!r}")
+    x = float(value)
+    lo = "(" if low_open else "["
+    hi = ")" if high_open else "]"
+    valid = f"{lo}{'-inf' if low is None else f'{low:g}'}, {'inf' if high is None else f'{high:g}'}{hi}"
+    if not math.isfinite(x):
+        raise ParameterError(f"{name} must be finite and in {valid}; got {x!r}")
+    if low is not None and (x < low or (low_open and x == low)):
+        raise ParameterError(f"{name} must be in {valid}; got {x!r}")
+    if high is not None and (x > high or (high_open and x == high)):
+        raise ParameterError(f"{name} must be in {valid}; got {x!r}")
+    return x
+
+
+def check_choice(name: str, value, choices: tuple[str, ...]) -> str:
+    """Return ``value`` if it is one of ``choices``, else raise naming them."""
+    if not isinstance(value, str) or value not in choices:
+        raise ParameterError(f"{name} must be one of {choices}; got {value!r}")
+    return value
+
+
+def finite_array(name: str, value) -> np.ndarray:
+    """Return ``value`` as a float64 array, raising if any element is NaN or infinite."""
+    try:
+        a = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ParameterError(f"{name} must be an array of real numbers; got {value!r}") from exc
+    if not np.all(np.isfinite(a)):
+        bad = a[~np.isfinite(a)].ravel()[0]
+        idx = np.argwhere(~np.isfinite(a))[0]
+        where = f" at index {tuple(int(i) for i in idx)}" if a.ndim else ""
+        raise ParameterError(f"{name} must be finite; got {bad!r}{where}")
+    return a

@@ -1,0 +1,105 @@
+"""The ``meshladar`` command line.
+
+Errors from bad input print one line (``meshladar: error: ...``) and exit with status 2;
+they never show a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+import numpy as np
+
+from .errors import MeshladarError
+
+__all__ = ["main"]
+
+_DEMO_ANGLES_DEG = (0.0, 1.0, 5.0, 10.0, 30.0, 60.0, 85.0, 90.0)
+
+
+def _cmd_demo(args) -> int:
+    """Print the paper's two coatings' monostatic BRDF at a few incidence angles."""
+    from . import materials
+
+    angles = np.array(args.angles_deg, dtype=np.float64)
+    theta = np.deg2rad(angles)
+    print("Sandford-Robertson BRDF, monostatic (collocated ladar), paper coatings at 1 um")
+    for m in (materials.DARK_GRAY, materials.ALUMINUM):
+        print(f"\n{m.name}: rho_d={m.rho_d:g} epsilon={m.epsilon:g} b={m.b:g} e={m.e:g}"
+              f"  G(b)={m.G:.6f}")
+        print(f"  {'theta [deg]':>11}  {'F [1/sr]':>12}  {'F cos(theta) [1/sr]':>20}"
+              f"  {'rho_s(theta)':>12}")
+        f = m.monostatic(theta)
+        fc = m.monostatic(theta, projected=True)
+        rs = m.specular_reflectance(theta)
+        for row in zip(angles, f, fc, rs):
+            print(f"  {row[0]:11.3f}  {row[1]:12.6g}  {row[2]:20.6g}  {row[3]:12.6f}")
+    return 0
+
+
+def _cmd_materials(args) -> int:
+    """List a coating table (the packaged one by default)."""
+    from . import materials
+
+    if args.table is None:
+        from meshladar.phantoms import materials as packaged
+
+        table = packaged()
+    else:
+        table = materials.load_table(args.table)
+    print(f"{'name':<14} {'lobes':<9} {'rho_d':>7} {'epsilon':>8} {'b':>6} {'e':>7}"
+          f" {'G(b)':>8} {'F(0) [1/sr]':>12}")
+    for name, m in table.items():
+        print(f"{name:<14} {m.lobes:<9} {m.rho_d:7.4g} {m.epsilon:8.4g} {m.b:6.4g} {m.e:7.4g}"
+              f" {m.G:8.5f} {m.monostatic(0.0):12.5g}")
+    return 0
+
+
+def _angle_list(text: str):
+    try:
+        values = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"must be comma-separated numbers in degrees; got {text!r}") from None
+    if not values or not all(math.isfinite(v) for v in values):
+        raise argparse.ArgumentTypeError(f"must be finite numbers in degrees; got {text!r}")
+    return values
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="meshladar",
+        description="Mesh-based ladar simulation and reflection tomography.",
+        epilog="examples:\n  meshladar demo\n  meshladar demo --angles-deg 0,2,4\n"
+               "  meshladar materials\n  meshladar materials my_coatings.toml",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    d = sub.add_parser("demo", help="print the paper's coatings' monostatic BRDF",
+                       description=_cmd_demo.__doc__,
+                       epilog="example:\n  meshladar demo --angles-deg 0,1,5,45,90",
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    d.add_argument("--angles-deg", type=_angle_list,
+                   default=list(_DEMO_ANGLES_DEG),
+                   help="incidence angles in degrees, comma-separated (default: %(default)s)")
+    d.set_defaults(func=_cmd_demo)
+    m = sub.add_parser("materials", help="list a coating table",
+                       description=_cmd_materials.__doc__,
+                       epilog="examples:\n  meshladar materials\n  meshladar materials mine.toml",
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    m.add_argument("table", nargs="?", default=None,
+                   help="a TOML material table (default: the packaged paper coatings)")
+    m.set_defaults(func=_cmd_materials)
+    return p
+
+
+def main(argv=None) -> int:
+    """Run the command line; returns the exit status."""
+    parser = _parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except MeshladarError as exc:
+        print(f"meshladar: error: {exc}", file=sys.stderr)
+        return 2

@@ -1,0 +1,35 @@
+"""Exceptions and warnings raised by meshladar.
+
+Every exception subclasses the matching builtin as well as :class:`MeshladarError`, so a
+user can catch either ``ValueError`` or ``meshladar.errors.MeshladarError``.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "MeshladarError",
+    "ParameterError",
+    "MaterialFileError",
+    "MeshladarWarning",
+    "EnergyConservationWarning",
+]
+
+
+class MeshladarError(Exception):
+    """Base class of every error meshladar raises on purpose."""
+
+
+class ParameterError(MeshladarError, ValueError):
+    """A parameter is out of its valid range, non-finite or of the wrong kind."""
+
+
+class MaterialFileError(MeshladarError, ValueError):
+    """A material table (TOML) is unreadable or one of its entries is invalid."""
+
+
+class MeshladarWarning(UserWarning):
+    """Base class of meshladar's warnings: a soft precondition is not met."""
+
+
+class EnergyConservationWarning(MeshladarWarning):
+    """A coating reflects more light than it receives at some incidence angle."""

@@ -1,0 +1,117 @@
+"""Coatings: the paper's two SR coatings, simple helpers, and TOML material tables.
+
+``DARK_GRAY`` and ``ALUMINUM`` are the Sandford-Robertson fits at λ = 1 µm used in the
+paper's Sec. 4.B (Figs 9-11). A material table is a TOML file with one table per
+material::
+
+    [dark_gray]
+    description = "dark gray paint, 1 µm (Jin & Levine 2009, Sec. 4.B)"   # optional
+    rho_d = 0.032
+    epsilon = 0.877
+    b = 0.1
+    e = 0.17
+    lobes = "both"                                                         # optional
+
+``load_table(path)`` reads one with the same validation as :class:`SandfordRobertson`,
+and an error names the file, the entry and the field. The phantom library ships the
+paper's table as ``meshladar.phantoms`` ``materials.toml``.
+"""
+
+from __future__ import annotations
+
+import os
+import tomllib
+from types import MappingProxyType
+
+from .brdf import SandfordRobertson
+from ._validate import check_real
+from .errors import MaterialFileError
+
+__all__ = ["DARK_GRAY", "ALUMINUM", "lambertian", "glint", "load_table", "parse_table"]
+
+#: Dark gray paint at 1 µm: ρd = 0.032, ε = 0.877, b = 0.1, e = 0.17 (paper Sec. 4.B).
+DARK_GRAY = SandfordRobertson(rho_d=0.032, epsilon=0.877, b=0.1, e=0.17, name="dark_gray")
+
+#: Commercial aluminium at 1 µm: ρd = 0.047, ε = 0.53, b = 0.1, e = 0.007 (paper Sec. 4.B).
+#: Its monostatic F is about 651 sr⁻¹ at normal incidence and 0.04 sr⁻¹ five degrees off.
+ALUMINUM = SandfordRobertson(rho_d=0.047, epsilon=0.53, b=0.1, e=0.007, name="aluminum")
+
+_FIELDS = {"rho_d": float, "epsilon": float, "b": float, "e": float, "lobes": str,
+           "description": str}
+_REQUIRED = ("rho_d", "epsilon", "b", "e")
+
+
+def lambertian(rho_d=1.0, *, name=None):
+    """A Lambertian coating: F = ρd/π at every angle (SR with b = 0, diffuse lobe only)."""
+    return SandfordRobertson(rho_d=rho_d, epsilon=0.0, b=0.0, e=1.0, lobes="diffuse", name=name)
+
+
+def glint(e, rho_s=1.0, *, name=None):
+    """A pure glint coating: the specular lobe alone with constant reflectivity ρs.
+
+    With b = 0 the SR reflectivity A8 is ρs = 1 − ε, so ε = 1 − ρs; ``glint(e)`` is the
+    paper's Fig. 8 surface (ρs = 1, ε = ρd = 0).
+    """
+    epsilon = 1.0 - check_real("rho_s", rho_s, low=0.0, high=1.0)
+    return SandfordRobertson(rho_d=0.0, epsilon=epsilon, b=0.0, e=e, lobes="specular", name=name)
+
+
+def parse_table(data, *, source="<table>"):
+    """Build materials from a mapping ``{name: {field: value}}`` (a parsed TOML table).
+
+    Returns a read-only mapping of name to :class:`SandfordRobertson`. Errors are
+    :class:`~meshladar.errors.MaterialFileError` naming ``source``, the entry and the field.
+    """
+    if not isinstance(data, dict) or not data:
+        raise MaterialFileError(f"{source}: expected at least one [material] table; got none")
+    out = {}
+    for entry, spec in data.items():
+        where = f"{source}: material [{entry}]"
+        if not isinstance(spec, dict):
+            raise MaterialFileError(f"{where} must be a table of fields; got {spec!r}")
+        unknown = sorted(set(spec) - set(_FIELDS))
+        if unknown:
+            raise MaterialFileError(
+                f"{where}: unknown field {unknown[0]!r}; valid fields are {tuple(_FIELDS)}")
+        missing = [f for f in _REQUIRED if f not in spec]
+        if missing:
+            raise MaterialFileError(f"{where}: missing field {missing[0]!r}")
+        for f, kind in _FIELDS.items():
+            if f not in spec:
+                continue
+            v = spec[f]
+            ok = isinstance(v, str) if kind is str else (
+                isinstance(v, (int, float)) and not isinstance(v, bool))
+            if not ok:
+                raise MaterialFileError(
+                    f"{where}: field {f!r} must be a {'string' if kind is str else 'number'}; "
+                    f"got {v!r}")
+        try:
+            out[entry] = SandfordRobertson(
+                rho_d=spec["rho_d"], epsilon=spec["epsilon"], b=spec["b"], e=spec["e"],
+                lobes=spec.get("lobes", "both"), name=entry)
+        except ValueError as exc:
+            raise MaterialFileError(f"{where}: {exc}") from exc
+    return MappingProxyType(out)
+
+
+def load_table(path):
+    """Read a TOML material table; see the module docstring for its format.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    Mapping[str, SandfordRobertson]
+    """
+    path = os.fspath(path)
+    try:
+        with open(path, "rb") as fh:
+            data = tomllib.load(fh)
+    except OSError as exc:
+        raise MaterialFileError(f"{path}: cannot read material table ({exc.strerror})") from exc
+    except tomllib.TOMLDecodeError as exc:
+        raise MaterialFileError(f"{path}: not valid TOML ({exc})") from exc
+    return parse_table(data, source=path)
