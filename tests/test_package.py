@@ -1,0 +1,83 @@
+"""The project as a user meets it: install layout, import cost, README/CI, command line."""
+
+from __future__ import annotations
+
+import importlib.util
+import re
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+HEAVY = ("pyvista", "matplotlib", "trimesh", "embreex", "vtk")
+
+
+def _run(*args, check=True):
+    return subprocess.run([sys.executable, *args], capture_output=True, text=True, check=check,
+                          cwd=ROOT)
+
+
+def test_import_is_light():
+    # The heavy packages are installed in the test environment, so their absence from
+    # sys.modules after `import meshladar` means meshladar did not import them.
+    for name in HEAVY:
+        assert importlib.util.find_spec(name) is not None, f"{name} should be installed for tests"
+    code = ("import sys, meshladar; "
+            f"print(','.join(m for m in {HEAVY!r} if m in sys.modules))")
+    out = _run("-c", code).stdout.strip()
+    assert out == "", f"import meshladar pulled in: {out}"
+
+
+def test_subpackages_install_from_top_level_folders():
+    import meshladar.phantoms
+    import meshladar.viz
+
+    assert Path(meshladar.phantoms.__file__).parent == ROOT / "phantoms"
+    assert Path(meshladar.viz.__file__).parent == ROOT / "viz"
+    assert meshladar.phantoms.MATERIALS_TOML.is_file()
+
+
+def test_readme_opens_with_two_commands_and_ci_runs_the_second():
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    block = re.search(r"```bash\n(.*?)```", readme, re.S)
+    assert block is not None and readme.index("```bash") < readme.index("\n## ")
+    commands = [line for line in block.group(1).splitlines() if line.strip()]
+    assert len(commands) == 2
+    assert "meshladar demo" in commands[0] and "pytest" in commands[1]
+    ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8")
+    assert commands[1] in ci.splitlines()
+
+
+def test_pytest_is_strict():
+    cfg = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["pytest"]["ini_options"]
+    assert cfg["filterwarnings"] == ["error"]
+    assert "--strict-markers" in cfg["addopts"]
+
+
+def test_cli_demo_prints_paper_values():
+    out = _run("-m", "meshladar", "demo", "--angles-deg", "0,5,90").stdout
+    # aluminium at normal incidence: ρs(0)(1 + e²)/(4π e²) + ρd/(πG²) = 651.125 sr⁻¹
+    assert re.search(r"aluminum.*\n.*\n\s+0\.000\s+651\.12", out)
+    assert "dark_gray" in out and "G(b)=0.963114" in out
+    assert "nan" not in out.lower() and "inf" not in out.lower()
+
+
+def test_cli_materials_lists_table(tmp_path):
+    out = _run("-m", "meshladar", "materials").stdout
+    assert re.search(r"^aluminum\s+both\s+0\.047\s+0\.53\s+0\.1\s+0\.007", out, re.M)
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[x]\nrho_d = 3\nepsilon = 0\nb = 0\ne = 1\n")
+    res = _run("-m", "meshladar", "materials", str(bad), check=False)
+    assert res.returncode == 2
+    assert res.stderr.strip().count("\n") == 0 and "Traceback" not in res.stderr
+    assert "bad.toml: material [x]: rho_d must be in [0, 1]; got 3.0" in res.stderr
+
+
+@pytest.mark.parametrize("args", [["demo", "--angles-deg", "a,b"], ["nosuch"], []])
+def test_cli_bad_arguments_exit_nonzero_without_traceback(args):
+    res = _run("-m", "meshladar", *args, check=False)
+    assert res.returncode == 2
+    assert "Traceback" not in res.stderr and "error" in res.stderr
