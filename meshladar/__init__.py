@@ -8,7 +8,12 @@ from __future__ import annotations
 
 from . import brdf, errors, materials
 from .brdf import SandfordRobertson
+from .forward import simulate
+from .ladar import Ladar
+from .scene import Disk, Ellipse, Scene
+from .sinogram import Sinogram
 
 __version__ = "0.1.0"
 
-__all__ = ["SandfordRobertson", "brdf", "errors", "materials", "__version__"]
+__all__ = ["SandfordRobertson", "Disk", "Ellipse", "Scene", "Ladar", "Sinogram", "simulate",
+           "brdf", "errors", "materials", "__version__"]

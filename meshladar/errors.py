@@ -10,6 +10,7 @@ __all__ = [
     "MeshladarError",
     "ParameterError",
     "MaterialFileError",
+    "GeometryError",
     "MeshladarWarning",
     "EnergyConservationWarning",
 ]
@@ -25,6 +26,10 @@ class ParameterError(MeshladarError, ValueError):
 
 class MaterialFileError(MeshladarError, ValueError):
     """A material table (TOML) is unreadable or one of its entries is invalid."""
+
+
+class GeometryError(MeshladarError, ValueError):
+    """A scene's geometry is invalid: overlapping shapes, a mesh that fails its checks."""
 
 
 class MeshladarWarning(UserWarning):

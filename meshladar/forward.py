@@ -1,0 +1,39 @@
+"""``simulate``: one entry point for the forward models (DESIGN.md's pipeline)."""
+
+from __future__ import annotations
+
+from ._validate import check_choice
+from .errors import ParameterError
+from .ladar import Ladar
+from .scene import Scene
+from .sinogram import Sinogram
+
+__all__ = ["simulate", "MODELS"]
+
+#: The forward models available in this version.
+MODELS = ("analytic",)
+
+
+def simulate(scene, ladar, model="analytic") -> Sinogram:
+    """Range-resolved returns of ``scene`` seen by ``ladar``.
+
+    Parameters
+    ----------
+    scene : Scene
+    ladar : Ladar
+    model : str
+        ``"analytic"``: exact profiles of disks and ellipses (no faceting, no sampling).
+
+    Returns
+    -------
+    Sinogram
+        ``values`` (n_views, n_bins) bin integrals of F(θ) cos θ dA (paper Eq. 8).
+    """
+    if not isinstance(scene, Scene):
+        raise ParameterError(f"scene must be a meshladar.Scene; got {type(scene).__name__}")
+    if not isinstance(ladar, Ladar):
+        raise ParameterError(f"ladar must be a meshladar.Ladar; got {type(ladar).__name__}")
+    check_choice("model", model, MODELS)
+    from .analytic import simulate_analytic
+
+    return simulate_analytic(scene, ladar)

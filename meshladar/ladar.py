@@ -1,0 +1,142 @@
+"""The ladar: view directions and range bins (monostatic, range-resolved).
+
+Conventions (DESIGN.md): a view is a unit vector w from the scene toward the ladar, which
+sits at infinity along w; for views about the z axis, view angle φ gives
+w = (cos φ, sin φ, 0). The range of a point p is r = −p·w (zero on the plane through the
+origin, growing away from the ladar). Range bins are given by strictly increasing edges.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from ._validate import check_real, finite_array
+from .errors import ParameterError
+
+__all__ = ["Ladar", "PAPER_BIN_DIVISOR"]
+
+#: The paper's range resolution is A/256 for a disk of radius A (Sec. 4.A).
+PAPER_BIN_DIVISOR = 256
+
+
+def _readonly(a):
+    a = np.array(a, dtype=np.float64, copy=True)
+    a.flags.writeable = False
+    return a
+
+
+def _check_count(name, value, low=1):
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
+        raise ParameterError(f"{name} must be an integer >= {low}; got {value!r}")
+    return int(value)
+
+
+@dataclass(frozen=True, eq=False)
+class Ladar:
+    """A monostatic, range-resolved ladar: where it looks from and how it bins range.
+
+    Parameters
+    ----------
+    angles_deg : (n_views,) array_like
+        View angles φ in degrees about the z axis (w = (cos φ, sin φ, 0)). Any finite
+        values; at least one.
+    bin_edges : (n_bins + 1,) array_like
+        Strictly increasing, finite range bin edges in scene units; at least one bin.
+
+    Examples
+    --------
+    >>> import numpy as np, meshladar as ml
+    >>> ladar = ml.Ladar(angles_deg=np.arange(360.0), bin_edges=np.linspace(-1, 1, 513))
+    >>> ladar = ml.Ladar.centered(n_bins=512, bin_width=0.8 / 256)     # the paper's A/256
+    >>> ladar.n_views, ladar.n_bins
+    (360, 512)
+    """
+
+    angles_deg: np.ndarray
+    bin_edges: np.ndarray
+
+    def __post_init__(self):
+        angles = finite_array("angles_deg", self.angles_deg)
+        edges = finite_array("bin_edges", self.bin_edges)
+        if angles.ndim != 1 or angles.size == 0:
+            raise ParameterError(f"angles_deg must be a non-empty 1-D array of view angles; got "
+                                 f"shape {angles.shape}")
+        if edges.ndim != 1 or edges.size < 2:
+            raise ParameterError(f"bin_edges must be a 1-D array of at least 2 edges; got shape "
+                                 f"{edges.shape}")
+        steps = np.diff(edges)
+        if np.any(steps <= 0):
+            k = int(np.argmax(steps <= 0))
+            raise ParameterError(f"bin_edges must be strictly increasing; got {edges[k]!r} then "
+                                 f"{edges[k + 1]!r} at index {k}")
+        object.__setattr__(self, "angles_deg", _readonly(angles))
+        object.__setattr__(self, "bin_edges", _readonly(edges))
+
+    # -- constructors -------------------------------------------------------------------
+    @classmethod
+    def centered(cls, n_bins, bin_width, *, center=0.0, angles_deg=None):
+        """n_bins bins of width ``bin_width`` centred on range ``center``.
+
+        ``angles_deg`` defaults to the paper's 360 views at 1° (0, 1, ..., 359).
+        """
+        n = _check_count("n_bins", n_bins)
+        w = check_real("bin_width", bin_width, low=0.0, low_open=True)
+        c = check_real("center", center)
+        edges = c + (np.arange(n + 1) - n / 2.0) * w
+        return cls(np.arange(360.0) if angles_deg is None else angles_deg, edges)
+
+    @classmethod
+    def paper(cls, radius=0.8, *, n_bins=2 * PAPER_BIN_DIVISOR, angles_deg=None):
+        """The paper's set-up: bins of width A/256 for A = ``radius``, 360 views at 1°.
+
+        With the default A = 0.8 and 512 bins, the bins cover [−A, A]: the paper's disk.
+        """
+        a = check_real("radius", radius, low=0.0, low_open=True)
+        return cls.centered(n_bins, a / PAPER_BIN_DIVISOR, angles_deg=angles_deg)
+
+    @classmethod
+    def covering(cls, scene, *, bin_width=None, n_bins=None, margin=0.0, angles_deg=None):
+        """Bins covering every range the scene can occupy over views about the z axis.
+
+        The scene's bounding circle (centre C, radius R) spans ranges within
+        |C| + R of 0 in every view. Give exactly one of ``bin_width`` or ``n_bins``.
+        """
+        if (bin_width is None) == (n_bins is None):
+            raise ParameterError("give exactly one of bin_width or n_bins; got "
+                                 f"bin_width={bin_width!r}, n_bins={n_bins!r}")
+        center, radius = scene.bounding_circle()
+        m = check_real("margin", margin, low=0.0)
+        half = float(np.hypot(*center)) + radius + m
+        if bin_width is not None:
+            w = check_real("bin_width", bin_width, low=0.0, low_open=True)
+            n = max(1, int(np.ceil(2 * half / w - 1e-9)))
+        else:
+            n = _check_count("n_bins", n_bins)
+            w = 2 * half / n
+        return cls.centered(n, w, angles_deg=angles_deg)
+
+    # -- derived ------------------------------------------------------------------------
+    @property
+    def n_views(self) -> int:
+        return self.angles_deg.size
+
+    @property
+    def n_bins(self) -> int:
+        return self.bin_edges.size - 1
+
+    @cached_property
+    def bin_centers(self) -> np.ndarray:
+        return 0.5 * (self.bin_edges[1:] + self.bin_edges[:-1])
+
+    @cached_property
+    def view_vectors(self) -> np.ndarray:
+        """(n_views, 3) unit vectors w from the scene toward the ladar."""
+        phi = np.deg2rad(self.angles_deg)
+        return np.stack([np.cos(phi), np.sin(phi), np.zeros_like(phi)], axis=-1)
+
+    def __repr__(self) -> str:
+        return (f"Ladar(n_views={self.n_views}, n_bins={self.n_bins}, "
+                f"range=[{self.bin_edges[0]:g}, {self.bin_edges[-1]:g}])")

@@ -1,0 +1,251 @@
+"""Scenes: exact analytic shapes (disks, ellipses) with a coating each.
+
+Shapes are 2-D cross-sections in the x-y plane (an extruded phantom seen by views about
+the z axis). Every shape is convex and closed; its boundary is the reflecting surface.
+Shapes in one scene must not overlap (touching is allowed): the boundary of a union of
+overlapping shapes is not the union of their boundaries, so overlapping shapes raise
+:class:`~meshladar.errors.GeometryError`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import optimize
+
+from ._validate import check_real, finite_array
+from .brdf import SandfordRobertson
+from .errors import GeometryError, ParameterError
+
+__all__ = ["Shape", "Disk", "Ellipse", "Scene", "OVERLAP_RTOL"]
+
+#: Relative tolerance of the overlap test: shapes whose boundaries interpenetrate by less
+#: than this fraction of their size count as touching (the paper's disk pair touches).
+OVERLAP_RTOL = 1e-9
+
+
+def _center(value):
+    c = finite_array("center", value)
+    if c.shape != (2,):
+        raise ParameterError(f"center must be a point (x, y); got shape {c.shape}")
+    return (float(c[0]), float(c[1]))
+
+
+def _material(value):
+    if not isinstance(value, SandfordRobertson):
+        raise ParameterError(f"material must be a SandfordRobertson (see meshladar.materials); "
+                             f"got {type(value).__name__}")
+    return value
+
+
+class Shape:
+    """Geometry shared by the analytic shapes: an ellipse with centre, semi-axes ``axes``
+    (A, B) and rotation ``angle`` (radians). Subclasses are frozen dataclasses."""
+
+    center: tuple[float, float]
+    material: SandfordRobertson
+
+    @property
+    def axes(self) -> tuple[float, float]:
+        raise NotImplementedError
+
+    @property
+    def angle(self) -> float:
+        raise NotImplementedError
+
+    @property
+    def is_circle(self) -> bool:
+        return self.axes[0] == self.axes[1]
+
+    @property
+    def bounding_radius(self) -> float:
+        return max(self.axes)
+
+    def boundary(self, t):
+        """Points (..., 2) at eccentric angle ``t`` (radians): c + R (A cos t, B sin t)."""
+        a, b = self.axes
+        ca, sa = math.cos(self.angle), math.sin(self.angle)
+        x, y = a * np.cos(t), b * np.sin(t)
+        return np.stack([self.center[0] + ca * x - sa * y, self.center[1] + sa * x + ca * y], -1)
+
+    def implicit(self, p):
+        """(x'/A)² + (y'/B)² of points p (..., 2) in the shape's frame: < 1 inside."""
+        a, b = self.axes
+        d = np.asarray(p, dtype=np.float64) - np.asarray(self.center)
+        ca, sa = math.cos(self.angle), math.sin(self.angle)
+        x = ca * d[..., 0] + sa * d[..., 1]
+        y = -sa * d[..., 0] + ca * d[..., 1]
+        return (x / a) ** 2 + (y / b) ** 2
+
+    def perimeter(self) -> float:
+        """Exact perimeter (complete elliptic integral of the second kind)."""
+        from scipy.special import ellipe
+
+        a, b = sorted(self.axes, reverse=True)
+        return 4.0 * a * float(ellipe(1.0 - (b / a) ** 2))
+
+
+@dataclass(frozen=True)
+class Ellipse(Shape):
+    """An elliptical cylinder's cross-section with an SR coating.
+
+    Parameters
+    ----------
+    center : (2,) float
+        Centre (x, y) in scene units.
+    semi_axes : (2,) float
+        Semi-axes (A, B) > 0 along the ellipse's own x and y axes (A need not be the larger).
+    angle_deg : float
+        Rotation of the ellipse's A axis from the scene's x axis, counter-clockwise, degrees.
+    material : SandfordRobertson
+    name : str, optional
+        A label (e.g. which part of a phantom); not part of equality.
+    """
+
+    center: tuple[float, float]
+    semi_axes: tuple[float, float]
+    angle_deg: float
+    material: SandfordRobertson
+    name: str | None = field(default=None, kw_only=True, compare=False)
+
+    def __post_init__(self):
+        object.__setattr__(self, "center", _center(self.center))
+        axes = finite_array("semi_axes", self.semi_axes)
+        if axes.shape != (2,) or np.any(axes <= 0):
+            raise ParameterError(f"semi_axes must be two positive lengths (A, B); got "
+                                 f"{self.semi_axes!r}")
+        object.__setattr__(self, "semi_axes", (float(axes[0]), float(axes[1])))
+        object.__setattr__(self, "angle_deg", check_real("angle_deg", self.angle_deg))
+        _material(self.material)
+
+    @property
+    def axes(self) -> tuple[float, float]:
+        return self.semi_axes
+
+    @property
+    def angle(self) -> float:
+        return math.radians(self.angle_deg)
+
+
+@dataclass(frozen=True)
+class Disk(Shape):
+    """A circular cylinder's cross-section (a disk) with an SR coating.
+
+    Parameters
+    ----------
+    center : (2,) float
+        Centre (x, y) in scene units.
+    radius : float > 0
+    material : SandfordRobertson
+    name : str, optional
+        A label (e.g. "large" in the disk pair); not part of equality.
+    """
+
+    center: tuple[float, float]
+    radius: float
+    material: SandfordRobertson
+    name: str | None = field(default=None, kw_only=True, compare=False)
+
+    def __post_init__(self):
+        object.__setattr__(self, "center", _center(self.center))
+        object.__setattr__(self, "radius", check_real("radius", self.radius, low=0.0,
+                                                      low_open=True))
+        _material(self.material)
+
+    @property
+    def axes(self) -> tuple[float, float]:
+        return (self.radius, self.radius)
+
+    @property
+    def angle(self) -> float:
+        return 0.0
+
+
+def _overlap(p: Shape, q: Shape) -> bool:
+    """True when the interiors of two ellipses intersect by more than OVERLAP_RTOL.
+
+    Disks: exact (centre distance against the sum of radii). Ellipses: the minimum of q's
+    implicit function over p's boundary (dense sampling, then bounded refinement), and the
+    converse, compared with 1 − tol; plus centre containment, for one inside the other.
+    """
+    scale = max(p.bounding_radius, q.bounding_radius)
+    if p.is_circle and q.is_circle:
+        d = math.dist(p.center, q.center)
+        return d < (p.axes[0] + q.axes[0]) * (1.0 - OVERLAP_RTOL)
+    d = math.dist(p.center, q.center)
+    if d >= (p.bounding_radius + q.bounding_radius) * (1.0 - OVERLAP_RTOL):
+        return False
+    if p.implicit(q.center) < 1.0 or q.implicit(p.center) < 1.0:
+        return True
+    for a, b in ((p, q), (q, p)):
+        t = np.linspace(0.0, 2.0 * math.pi, 1025)
+        f = b.implicit(a.boundary(t))
+        k = int(np.argmin(f))
+        res = optimize.minimize_scalar(lambda s: float(b.implicit(a.boundary(s))),
+                                       bounds=(t[max(k - 1, 0)], t[min(k + 1, 1024)]),
+                                       method="bounded", options={"xatol": 1e-14})
+        # f ≈ 1 − 2 δ / size for a penetration depth δ
+        if min(res.fun, f[k]) < 1.0 - 2.0 * OVERLAP_RTOL * scale / min(b.axes):
+            return True
+    return False
+
+
+class Scene:
+    """A set of non-overlapping analytic shapes, each with its coating.
+
+    Parameters
+    ----------
+    shapes : sequence of Disk or Ellipse
+        At least one. Shapes may touch but not overlap (GeometryError).
+
+    Examples
+    --------
+    >>> import meshladar as ml
+    >>> scene = ml.Scene([ml.Disk(center=(0.0, 0.0), radius=0.8,
+    ...                           material=ml.materials.DARK_GRAY)])
+    """
+
+    def __init__(self, shapes):
+        try:
+            shapes = tuple(shapes)
+        except TypeError:
+            raise ParameterError(f"shapes must be a sequence of Disk or Ellipse; got "
+                                 f"{type(shapes).__name__}") from None
+        if not shapes:
+            raise ParameterError("shapes must hold at least one shape; got an empty scene")
+        for i, s in enumerate(shapes):
+            if not isinstance(s, Shape):
+                raise ParameterError(f"shapes[{i}] must be a Disk or an Ellipse; got "
+                                     f"{type(s).__name__}")
+        for i in range(len(shapes)):
+            for j in range(i + 1, len(shapes)):
+                if _overlap(shapes[i], shapes[j]):
+                    raise GeometryError(
+                        f"shapes[{i}] and shapes[{j}] overlap; shapes in a scene may touch "
+                        "but not overlap (the boundary of their union is not theirs)")
+        self._shapes = shapes
+
+    @property
+    def shapes(self) -> tuple[Shape, ...]:
+        return self._shapes
+
+    def __len__(self) -> int:
+        return len(self._shapes)
+
+    def __iter__(self):
+        return iter(self._shapes)
+
+    def bounding_circle(self) -> tuple[tuple[float, float], float]:
+        """A circle (centre, radius) containing every shape (about the shapes' box centre)."""
+        pts = np.array([s.center for s in self._shapes])
+        rad = np.array([s.bounding_radius for s in self._shapes])
+        lo = (pts - rad[:, None]).min(axis=0)
+        hi = (pts + rad[:, None]).max(axis=0)
+        c = 0.5 * (lo + hi)
+        r = float(np.max(np.hypot(*(pts - c).T) + rad))
+        return (float(c[0]), float(c[1])), r
+
+    def __repr__(self) -> str:
+        return f"Scene({list(self._shapes)!r})"

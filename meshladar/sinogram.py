@@ -1,0 +1,111 @@
+"""The sinogram: range profiles of many views, the data every forward model produces.
+
+A :class:`Sinogram` is what ``simulate`` returns and what a user wraps around measured data.
+Its values are bin integrals (not densities): ``values[i, k]`` is the return of view i
+integrated over range bin k, ``[bin_edges[k], bin_edges[k + 1])``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from ._validate import finite_array
+from .errors import ParameterError
+
+__all__ = ["Sinogram"]
+
+
+def _readonly(a: np.ndarray) -> np.ndarray:
+    a = np.array(a, dtype=np.float64, copy=True)
+    a.flags.writeable = False
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class Sinogram:
+    """Range-resolved returns of many views.
+
+    Parameters
+    ----------
+    values : (n_views, n_bins) array_like, float64
+        Bin integrals of F(θ) cos θ dA over the visible surface (DESIGN.md, paper Eq. 8):
+        scene units of area (length in 2D) times 1/sr.
+    angles_deg : (n_views,) array_like, keyword-only
+        View angles φ in degrees, about the z axis: the ladar looks from
+        w = (cos φ, sin φ, 0) toward the scene; φ = 90° is the paper's Fig. 1.
+    bin_edges : (n_bins + 1,) array_like, keyword-only
+        Strictly increasing range bin edges; range r = −p·w grows away from the ladar.
+    model : str, keyword-only
+        Which forward model made it ("analytic", "mesh", "pixel"), or "measured".
+    info : dict, keyword-only
+        Free-form metadata (run parameters, error estimates); not compared.
+
+    All arrays are stored as read-only float64 copies.
+    """
+
+    values: np.ndarray
+    angles_deg: np.ndarray = field(kw_only=True)
+    bin_edges: np.ndarray = field(kw_only=True)
+    model: str = field(default="measured", kw_only=True)
+    info: dict = field(default_factory=dict, kw_only=True)
+
+    def __post_init__(self):
+        values = finite_array("values", self.values)
+        angles = finite_array("angles_deg", self.angles_deg)
+        edges = finite_array("bin_edges", self.bin_edges)
+        if values.ndim != 2:
+            raise ParameterError(f"values must be a 2-D array (n_views, n_bins); got shape "
+                                 f"{values.shape}")
+        if angles.ndim != 1 or angles.size != values.shape[0]:
+            raise ParameterError(f"angles_deg must have one angle per view (row of values): "
+                                 f"{values.shape[0]}; got shape {angles.shape}")
+        if edges.ndim != 1 or edges.size != values.shape[1] + 1:
+            raise ParameterError(f"bin_edges must have n_bins + 1 = {values.shape[1] + 1} "
+                                 f"entries; got shape {edges.shape}")
+        if np.any(np.diff(edges) <= 0):
+            raise ParameterError("bin_edges must be strictly increasing")
+        object.__setattr__(self, "values", _readonly(values))
+        object.__setattr__(self, "angles_deg", _readonly(angles))
+        object.__setattr__(self, "bin_edges", _readonly(edges))
+        object.__setattr__(self, "info", dict(self.info))
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(n_views, n_bins)."""
+        return self.values.shape
+
+    @property
+    def n_views(self) -> int:
+        return self.values.shape[0]
+
+    @property
+    def n_bins(self) -> int:
+        return self.values.shape[1]
+
+    @cached_property
+    def bin_centers(self) -> np.ndarray:
+        """(n_bins,) mid-points of the range bins."""
+        return 0.5 * (self.bin_edges[1:] + self.bin_edges[:-1])
+
+    @cached_property
+    def bin_widths(self) -> np.ndarray:
+        """(n_bins,) widths of the range bins."""
+        return np.diff(self.bin_edges)
+
+    @cached_property
+    def view_vectors(self) -> np.ndarray:
+        """(n_views, 3) unit vectors from the scene toward the ladar."""
+        phi = np.deg2rad(self.angles_deg)
+        return np.stack([np.cos(phi), np.sin(phi), np.zeros_like(phi)], axis=-1)
+
+    def total(self) -> np.ndarray:
+        """(n_views,) total return of each view: the sum of its bins."""
+        return self.values.sum(axis=1)
+
+    def __repr__(self) -> str:
+        return (f"Sinogram(model={self.model!r}, n_views={self.n_views}, n_bins={self.n_bins}, "
+                f"range=[{self.bin_edges[0]:g}, {self.bin_edges[-1]:g}], "
+                f"max={self.values.max(initial=0.0):.4g})")
