@@ -11,6 +11,7 @@ __all__ = [
     "ParameterError",
     "MaterialFileError",
     "GeometryError",
+    "PhantomSpecError",
     "MeshladarWarning",
     "EnergyConservationWarning",
 ]
@@ -30,6 +31,10 @@ class MaterialFileError(MeshladarError, ValueError):
 
 class GeometryError(MeshladarError, ValueError):
     """A scene's geometry is invalid: overlapping shapes, a mesh that fails its checks."""
+
+
+class PhantomSpecError(MeshladarError, ValueError):
+    """A phantom spec (TOML) is unreadable or one of its fields is invalid."""
 
 
 class MeshladarWarning(UserWarning):

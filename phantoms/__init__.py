@@ -1,26 +1,199 @@
 """The phantom library: the paper's phantoms and coatings as small declarative specs.
 
-Installed as ``meshladar.phantoms``. For now it holds the coating table
-(``materials.toml``); the phantom specs arrive with the analytic forward model.
+Installed as ``meshladar.phantoms``. Each phantom is a TOML file in this folder (``disk``,
+``ellipse``, ``disk_pair``) holding its shapes, a coating per shape and the paper's ladar
+set-up; :func:`load` builds it. Coatings are named from ``materials.toml`` (or given inline
+as a table of SR parameters) and can be overridden per shape::
+
+    import meshladar as ml
+    from meshladar import phantoms
+    pair = phantoms.load("disk_pair", materials={"large": "dark_gray", "small": "aluminum"})
+    sino = ml.simulate(pair.scene, pair.ladar)
+
+Spec format (all lengths in scene units)::
+
+    name = "disk_pair"
+    description = "..."
+    [ladar]
+    bin_width = 0.003125                      # or bin_edges = [...]
+    n_bins = 512                              # centred on range 0
+    angles_deg = { start = 0.0, stop = 360.0, step = 1.0 }   # or a list
+    [[shape]]
+    name = "large"
+    kind = "disk"                             # or "ellipse" with semi_axes, angle_deg
+    center = [-0.3, 0.0]
+    radius = 0.4
+    material = "dark_gray"                    # a name, or { rho_d = ..., epsilon = ..., ... }
 """
 
 from __future__ import annotations
 
+import os
+import tomllib
+from dataclasses import dataclass
 from importlib import resources
 
-__all__ = ["materials", "MATERIALS_TOML"]
+import numpy as np
+
+__all__ = ["Phantom", "load", "names", "materials", "MATERIALS_TOML"]
 
 #: Path of the packaged coating table.
 MATERIALS_TOML = resources.files(__name__) / "materials.toml"
 
+_SHAPE_FIELDS = {"disk": ("name", "kind", "center", "radius", "material"),
+                 "ellipse": ("name", "kind", "center", "semi_axes", "angle_deg", "material")}
+_LADAR_FIELDS = ("bin_width", "n_bins", "bin_edges", "angles_deg")
+
 
 def materials():
-    """The packaged coating table as a read-only mapping of name to SandfordRobertson.
-
-    Note that the paper's idealised diffuse surfaces are not all energy-conserving; the
-    packaged table holds only entries that are (b = 0.99 with rho_d = 1 is made in code).
-    """
+    """The packaged coating table as a read-only mapping of name to SandfordRobertson."""
     from meshladar.materials import load_table
 
     with resources.as_file(MATERIALS_TOML) as path:
         return load_table(path)
+
+
+def names() -> list[str]:
+    """Names of the packaged phantoms."""
+    return sorted(p.name[:-5] for p in resources.files(__name__).iterdir()
+                  if p.name.endswith(".toml") and p.name != "materials.toml")
+
+
+@dataclass(frozen=True)
+class Phantom:
+    """A built phantom: its scene and the paper's ladar set-up for it."""
+
+    name: str
+    description: str
+    scene: object
+    ladar: object
+
+
+def _error(source, msg):
+    from meshladar.errors import PhantomSpecError
+
+    return PhantomSpecError(f"{source}: {msg}")
+
+
+def _resolve_material(value, table, where, source):
+    from meshladar.brdf import SandfordRobertson
+    from meshladar.materials import parse_table
+
+    if isinstance(value, SandfordRobertson):
+        return value
+    if isinstance(value, str):
+        if value not in table:
+            raise _error(source, f"{where}: unknown material {value!r}; known: {sorted(table)}")
+        return table[value]
+    if isinstance(value, dict):
+        try:
+            return parse_table({where: value}, source=source)[where]
+        except ValueError as exc:
+            raise _error(source, str(exc).split(": ", 1)[-1]) from exc
+    raise _error(source, f"{where}: material must be a name, an inline table or a "
+                         f"SandfordRobertson; got {value!r}")
+
+
+def _angles(spec, source):
+    if isinstance(spec, dict):
+        unknown = set(spec) - {"start", "stop", "step"}
+        if unknown or not {"start", "stop", "step"} <= set(spec):
+            raise _error(source, "[ladar] angles_deg must be a list or {start, stop, step}; "
+                                 f"got {spec!r}")
+        if not spec["step"] > 0:
+            raise _error(source, f"[ladar] angles_deg step must be > 0; got {spec['step']!r}")
+        return np.arange(spec["start"], spec["stop"], spec["step"], dtype=np.float64)
+    return spec
+
+
+def _build(spec, source, overrides):
+    import meshladar as ml
+    from meshladar.errors import MeshladarError
+
+    table = dict(materials())
+    shapes_spec = spec.get("shape")
+    if not isinstance(shapes_spec, list) or not shapes_spec:
+        raise _error(source, "expected at least one [[shape]] table")
+    overrides = dict(overrides or {})
+    known_names = [s.get("name") for s in shapes_spec if isinstance(s, dict)]
+    unknown = sorted(set(overrides) - set(known_names))
+    if unknown:
+        raise _error(source, f"materials: no shape named {unknown[0]!r}; shapes are "
+                             f"{known_names}")
+    shapes = []
+    for i, s in enumerate(shapes_spec):
+        where = f"[[shape]] {i} ({s.get('name', 'unnamed') if isinstance(s, dict) else s!r})"
+        if not isinstance(s, dict):
+            raise _error(source, f"{where} must be a table")
+        kind = s.get("kind")
+        if kind not in _SHAPE_FIELDS:
+            raise _error(source, f"{where}: kind must be one of {tuple(_SHAPE_FIELDS)}; "
+                                 f"got {kind!r}")
+        extra = sorted(set(s) - set(_SHAPE_FIELDS[kind]))
+        if extra:
+            raise _error(source, f"{where}: unknown field {extra[0]!r} for a {kind}; valid "
+                                 f"fields are {_SHAPE_FIELDS[kind]}")
+        missing = [f for f in _SHAPE_FIELDS[kind] if f not in s and f not in ("name",)]
+        if missing and not (missing == ["material"] and s.get("name") in overrides):
+            raise _error(source, f"{where}: missing field {missing[0]!r}")
+        mat = _resolve_material(overrides.get(s.get("name"), s.get("material")), table, where,
+                                source)
+        try:
+            if kind == "disk":
+                shapes.append(ml.Disk(s["center"], s["radius"], mat, name=s.get("name")))
+            else:
+                shapes.append(ml.Ellipse(s["center"], s["semi_axes"], s.get("angle_deg", 0.0),
+                                         mat, name=s.get("name")))
+        except MeshladarError as exc:
+            raise _error(source, f"{where}: {exc}") from exc
+    try:
+        scene = ml.Scene(shapes)
+    except MeshladarError as exc:
+        raise _error(source, str(exc)) from exc
+    lad = spec.get("ladar", {})
+    extra = sorted(set(lad) - set(_LADAR_FIELDS))
+    if extra:
+        raise _error(source, f"[ladar]: unknown field {extra[0]!r}; valid fields are "
+                             f"{_LADAR_FIELDS}")
+    angles = _angles(lad.get("angles_deg", {"start": 0.0, "stop": 360.0, "step": 1.0}), source)
+    try:
+        if "bin_edges" in lad:
+            ladar = ml.Ladar(angles, lad["bin_edges"])
+        else:
+            ladar = ml.Ladar.centered(lad.get("n_bins", 512), lad.get("bin_width", 0.003125),
+                                      angles_deg=angles)
+    except MeshladarError as exc:
+        raise _error(source, f"[ladar]: {exc}") from exc
+    return Phantom(spec.get("name", "phantom"), spec.get("description", ""), scene, ladar)
+
+
+def load(name_or_path, *, materials=None):
+    """Build a phantom from its spec: a packaged name (see :func:`names`) or a TOML path.
+
+    Parameters
+    ----------
+    name_or_path : str or os.PathLike
+    materials : dict, optional
+        Coating per shape name, overriding the spec: a material name from the packaged
+        table, an inline dict of SR parameters, or a SandfordRobertson.
+
+    Returns
+    -------
+    Phantom
+        ``.scene`` and ``.ladar`` (the paper's set-up), ``.name``, ``.description``.
+    """
+    key = os.fspath(name_or_path)
+    if key in names():
+        with resources.as_file(resources.files(__name__) / f"{key}.toml") as p:
+            return load(p, materials=materials)
+    if not key.endswith(".toml") and not os.path.exists(key):
+        raise _error(key, f"unknown phantom; packaged phantoms are {names()}, or give a "
+                          "path to a .toml spec")
+    try:
+        with open(key, "rb") as fh:
+            spec = tomllib.load(fh)
+    except OSError as exc:
+        raise _error(key, f"cannot read phantom spec ({exc.strerror})") from exc
+    except tomllib.TOMLDecodeError as exc:
+        raise _error(key, f"not valid TOML ({exc})") from exc
+    return _build(spec, key, materials)
