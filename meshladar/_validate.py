@@ -48,7 +48,7 @@ def finite_array(name: str, value) -> np.ndarray:
     except (TypeError, ValueError) as exc:
         raise ParameterError(f"{name} must be an array of real numbers; got {value!r}") from exc
     if not np.all(np.isfinite(a)):
-        bad = a[~np.isfinite(a)].ravel()[0]
+        bad = float(a[~np.isfinite(a)].ravel()[0])
         idx = np.argwhere(~np.isfinite(a))[0]
         where = f" at index {tuple(int(i) for i in idx)}" if a.ndim else ""
         raise ParameterError(f"{name} must be finite; got {bad!r}{where}")

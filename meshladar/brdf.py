@@ -179,7 +179,7 @@ def diffuse_normalization(b):
     """
     arr = finite_array("b", b)
     if np.any((arr < 0) | (arr > 1)):
-        bad = arr[(arr < 0) | (arr > 1)].ravel()[0]
+        bad = float(arr[(arr < 0) | (arr > 1)].ravel()[0])
         raise ParameterError(f"b must be in [0, 1]; got {bad!r}")
     return _out(_G(arr), b)
 

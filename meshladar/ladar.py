@@ -70,8 +70,8 @@ class Ladar:
         steps = np.diff(edges)
         if np.any(steps <= 0):
             k = int(np.argmax(steps <= 0))
-            raise ParameterError(f"bin_edges must be strictly increasing; got {edges[k]!r} then "
-                                 f"{edges[k + 1]!r} at index {k}")
+            raise ParameterError(f"bin_edges must be strictly increasing; got "
+                                 f"{float(edges[k])!r} then {float(edges[k + 1])!r} at index {k}")
         object.__setattr__(self, "angles_deg", _readonly(angles))
         object.__setattr__(self, "bin_edges", _readonly(edges))
 
