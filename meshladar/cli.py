@@ -57,6 +57,29 @@ def _cmd_materials(args) -> int:
     return 0
 
 
+def _cmd_bench(args) -> int:
+    """Time the analytic forward model on the paper's set-ups (median of several runs)."""
+    from .bench import bench_analytic
+
+    print(f"analytic model, 360 views x 512 bins (A/256), median of {args.repeats} runs "
+          "after one warm-up")
+    print(f"  {'case':<40} {'median [s]':>10} {'min [s]':>9} {'max [s]':>9}")
+    for row in bench_analytic(repeats=args.repeats):
+        print(f"  {row['case']:<40} {row['median_s']:10.3f} {row['min_s']:9.3f} "
+              f"{row['max_s']:9.3f}")
+    return 0
+
+
+def _positive_int(text: str):
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a positive integer; got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be a positive integer; got {text!r}")
+    return value
+
+
 def _angle_list(text: str):
     try:
         values = [float(v) for v in text.split(",") if v.strip()]
@@ -73,7 +96,8 @@ def _parser() -> argparse.ArgumentParser:
         prog="meshladar",
         description="Mesh-based ladar simulation and reflection tomography.",
         epilog="examples:\n  meshladar demo\n  meshladar demo --angles-deg 0,2,4\n"
-               "  meshladar materials\n  meshladar materials my_coatings.toml",
+               "  meshladar materials\n  meshladar materials my_coatings.toml\n"
+               "  meshladar bench",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
     d = sub.add_parser("demo", help="print the paper's coatings' monostatic BRDF",
@@ -91,6 +115,13 @@ def _parser() -> argparse.ArgumentParser:
     m.add_argument("table", nargs="?", default=None,
                    help="a TOML material table (default: the packaged paper coatings)")
     m.set_defaults(func=_cmd_materials)
+    bch = sub.add_parser("bench", help="time the forward models (median of several runs)",
+                         description=_cmd_bench.__doc__,
+                         epilog="example:\n  meshladar bench --repeats 7",
+                         formatter_class=argparse.RawDescriptionHelpFormatter)
+    bch.add_argument("--repeats", type=_positive_int, default=5,
+                     help="timed runs per case after one warm-up (default: %(default)s)")
+    bch.set_defaults(func=_cmd_bench)
     return p
 
 
