@@ -10,10 +10,12 @@ from . import brdf, errors, materials
 from .brdf import SandfordRobertson
 from .forward import simulate
 from .ladar import Ladar
+from .reconstruct import Image, clip_radiance, fbp, log_radiance
 from .scene import Disk, Ellipse, Scene
 from .sinogram import Sinogram
 
 __version__ = "0.1.0"
 
 __all__ = ["SandfordRobertson", "Disk", "Ellipse", "Scene", "Ladar", "Sinogram", "simulate",
+           "fbp", "Image", "log_radiance", "clip_radiance",
            "brdf", "errors", "materials", "__version__"]

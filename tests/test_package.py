@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-HEAVY = ("pyvista", "matplotlib", "trimesh", "embreex", "vtk")
+HEAVY = ("pyvista", "matplotlib", "trimesh", "embreex", "vtk", "numba", "skimage")
 
 
 def _run(*args, check=True):
