@@ -11,10 +11,12 @@ from .sinogram import Sinogram
 __all__ = ["simulate", "MODELS"]
 
 #: The forward models available in this version.
-MODELS = ("analytic",)
+MODELS = ("analytic", "pixel")
+
+_OPTIONS = {"analytic": (), "pixel": ("pixel_size", "ray_spacing")}
 
 
-def simulate(scene, ladar, model="analytic") -> Sinogram:
+def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
     """Range-resolved returns of ``scene`` seen by ``ladar``.
 
     Parameters
@@ -23,6 +25,10 @@ def simulate(scene, ladar, model="analytic") -> Sinogram:
     ladar : Ladar
     model : str
         ``"analytic"``: exact profiles of disks and ellipses (no faceting, no sampling).
+        ``"pixel"``: the paper's method, a rasterised surface traced with Siddon rays
+        (options ``pixel_size``, ``ray_spacing``; see :func:`meshladar.pixel.simulate_pixel`).
+    **options
+        Options of the chosen model; an option another model takes is an error.
 
     Returns
     -------
@@ -34,6 +40,14 @@ def simulate(scene, ladar, model="analytic") -> Sinogram:
     if not isinstance(ladar, Ladar):
         raise ParameterError(f"ladar must be a meshladar.Ladar; got {type(ladar).__name__}")
     check_choice("model", model, MODELS)
+    unknown = sorted(set(options) - set(_OPTIONS[model]))
+    if unknown:
+        raise ParameterError(f"model {model!r} takes options {_OPTIONS[model]}; got "
+                             f"{unknown[0]!r}")
+    if model == "pixel":
+        from .pixel import simulate_pixel
+
+        return simulate_pixel(scene, ladar, **options)
     from .analytic import simulate_analytic
 
     return simulate_analytic(scene, ladar)
