@@ -16,6 +16,18 @@ from .sinogram import Sinogram
 
 __version__ = "0.1.0"
 
+_LAZY_SUBPACKAGES = ("phantoms", "viz")
+
+
+def __getattr__(name):
+    # The phantom library and the viewer are reached as meshladar.phantoms / meshladar.viz
+    # but imported only on first use, so that `import meshladar` stays light.
+    if name in _LAZY_SUBPACKAGES:
+        import importlib
+
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 __all__ = ["SandfordRobertson", "Disk", "Ellipse", "Scene", "Ladar", "Sinogram", "simulate",
            "fbp", "Image", "log_radiance", "clip_radiance",
            "brdf", "errors", "materials", "__version__"]

@@ -1,14 +1,13 @@
 """The paper's own forward method (``model="pixel"``): a rasterised surface, Siddon rays.
 
-The boundary of every shape is rasterised on a square pixel grid: a pixel is a *surface
-pixel* of a shape when the shape's boundary passes through it (its implicit function
-(x'/A)² + (y'/B)² − 1 changes sign over the pixel's corners and centre). Each surface pixel
-carries its shape's coating and the unit outward normal of the implicit function's gradient
-at the pixel centre (the normal of the level curve through it; exact for disks).
+Every shape is rasterised on a square pixel grid: a pixel belongs to a shape when its centre
+lies inside it. Each filled pixel carries its shape's coating and the unit outward normal
+of the implicit function's gradient at the pixel centre (the normal of the level curve
+through it; radial, hence exact in direction, for disks).
 
 For each view, parallel rays spaced ``ray_spacing`` apart across the scene travel from the
 ladar along −w and are traced through the grid with Siddon's algorithm (``meshladar.siddon``)
-to the first surface pixel they cross. The hit's range is that of the middle of the ray's
+to the first filled pixel they cross: the rasterised surface. The hit's range is that of the middle of the ray's
 path through the pixel. A ray of cross-section δs covers the arc length δs / cos θ of the
 surface, cos θ = n·w, and deposits F(θ) cos θ times that arc (Σ F δs → ∫ F cos θ dl,
 DESIGN.md), but never more arc than one ray can cover on the true shape: the outermost ray
@@ -39,43 +38,36 @@ __all__ = ["simulate_pixel", "rasterize"]
 
 
 def rasterize(scene: Scene, grid: PixelGrid):
-    """Surface pixels of the scene on a grid.
+    """The scene rasterised on a grid: which shape fills each pixel, and its normals.
+
+    A pixel belongs to a shape when its centre lies inside it. A ray entering the filled
+    region from outside stops at its first filled pixel, which is always on the region's
+    border: the rasterised surface. (Marking only pixels the boundary crosses would leave
+    diagonal gaps through which rays slip to the far side.)
 
     Returns
     -------
     owner : (ny, nx) int
-        Index of the shape whose boundary crosses the pixel, −1 elsewhere (where two
-        boundaries cross one pixel, the shape whose boundary passes nearer its centre).
+        Index of the shape filling the pixel, −1 outside every shape.
     normal : (ny, nx, 2) float
-        Unit outward normal at surface pixels (0 elsewhere).
+        Unit outward normal of the shape's level curve through the pixel centre (the
+        gradient of (x'/A)² + (y'/B)², radial for a disk); 0 outside and at a centre.
     """
-    h = grid.pixel_size
     xc, yc = np.meshgrid(grid.x, grid.y)
     owner = np.full(grid.shape, -1, dtype=np.int64)
-    best = np.full(grid.shape, np.inf)
     normal = np.zeros(grid.shape + (2,))
-    offsets = [(0.0, 0.0), (-0.5, -0.5), (-0.5, 0.5), (0.5, -0.5), (0.5, 0.5),
-               (0.0, -0.5), (0.0, 0.5), (-0.5, 0.0), (0.5, 0.0)]
     for k, shape in enumerate(scene.shapes):
-        vals = np.stack([shape.implicit(np.stack([xc + dx * h, yc + dy * h], -1))
-                         for dx, dy in offsets])
-        crossed = (vals.min(axis=0) <= 1.0) & (vals.max(axis=0) >= 1.0)
-        # distance-like measure of the centre from the boundary: |f − 1| / |∇f|
+        inside = shape.implicit(np.stack([xc, yc], -1)) < 1.0
         a, b = shape.axes
         ca, sa = math.cos(shape.angle), math.sin(shape.angle)
-        dxc, dyc = xc - shape.center[0], yc - shape.center[1]
+        dxc, dyc = xc[inside] - shape.center[0], yc[inside] - shape.center[1]
         xl = ca * dxc + sa * dyc
         yl = -sa * dxc + ca * dyc
-        gl = np.stack([2 * xl / a**2, 2 * yl / b**2], -1)
-        gx = ca * gl[..., 0] - sa * gl[..., 1]
-        gy = sa * gl[..., 0] + ca * gl[..., 1]
-        gn = np.hypot(gx, gy)
-        gn_safe = np.where(gn > 0, gn, 1.0)
-        dist = np.abs(vals[0] - 1.0) / gn_safe
-        take = crossed & (dist < best) & (gn > 0)
-        owner[take] = k
-        best[take] = dist[take]
-        normal[take] = np.stack([gx[take], gy[take]], -1) / gn[take][:, None]
+        gxl, gyl = xl / a**2, yl / b**2
+        g = np.stack([ca * gxl - sa * gyl, sa * gxl + ca * gyl], -1)
+        gn = np.hypot(g[:, 0], g[:, 1])
+        owner[inside] = k
+        normal[inside] = np.where(gn[:, None] > 0, g / np.where(gn > 0, gn, 1.0)[:, None], 0.0)
     return owner, normal
 
 

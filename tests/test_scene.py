@@ -138,8 +138,12 @@ def test_sinogram_contract():
 def test_simulate_validation():
     scene = ml.Scene([ml.Disk((0, 0), 0.5, M)])
     lad = ml.Ladar([0.0], [-1.0, 1.0])
-    with pytest.raises(ParameterError, match=r"model must be one of \('analytic',\); got 'mesh2'"):
+    with pytest.raises(ParameterError, match=r"model must be one of \('analytic', 'pixel'\); "
+                                             r"got 'mesh2'"):
         ml.simulate(scene, lad, model="mesh2")
+    with pytest.raises(ParameterError, match=r"model 'analytic' takes options \(\); got "
+                                             r"'pixel_size'"):
+        ml.simulate(scene, lad, pixel_size=0.1)
     with pytest.raises(ParameterError, match=r"scene must be a meshladar.Scene; got list"):
         ml.simulate([scene], lad)
     with pytest.raises(ParameterError, match=r"ladar must be a meshladar.Ladar; got dict"):
