@@ -46,7 +46,7 @@ def test_readme_opens_with_two_commands_and_ci_runs_the_second():
     assert block is not None and readme.index("```bash") < readme.index("\n## ")
     commands = [line for line in block.group(1).splitlines() if line.strip()]
     assert len(commands) == 2
-    assert "meshladar demo" in commands[0] and "pytest" in commands[1]
+    assert "meshladar paper" in commands[0] and "pytest" in commands[1]
     ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8")
     assert commands[1] in ci.splitlines()
 

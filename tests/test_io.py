@@ -1,0 +1,50 @@
+"""Saved results: atomic writes, no pickle, clear errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import meshladar
+from meshladar.io import ResultFileError, load_result, save_result, write_text_atomic
+
+
+def test_round_trip(tmp_path):
+    p = tmp_path / "sub" / "r.npz"
+    save_result(p, {"a": np.arange(3.0), "b": np.eye(2)}, {"seed": 3, "model": "analytic"})
+    arrays, meta = load_result(p)
+    np.testing.assert_array_equal(arrays["a"], np.arange(3.0))
+    assert meta == {"seed": 3, "model": "analytic", "meshladar_version": meshladar.__version__}
+    assert [f.name for f in p.parent.iterdir()] == ["r.npz"]       # no temporary left over
+
+
+def test_failed_write_keeps_the_old_file(tmp_path):
+    p = tmp_path / "r.npz"
+    save_result(p, {"a": np.zeros(2)}, {"v": 1})
+    with pytest.raises(TypeError):
+        save_result(p, {"a": np.zeros(2)}, {"v": object()})        # not JSON: the save fails
+    arrays, meta = load_result(p)
+    assert meta["v"] == 1 and [f.name for f in tmp_path.iterdir()] == ["r.npz"]
+
+
+def test_errors(tmp_path):
+    with pytest.raises(ResultFileError, match="no such result file"):
+        load_result(tmp_path / "missing.npz")
+    bad = tmp_path / "bad.npz"
+    bad.write_bytes(b"not a zip")
+    with pytest.raises(ResultFileError, match="not a readable result file"):
+        load_result(bad)
+    plain = tmp_path / "plain.npz"
+    np.savez(plain, a=np.zeros(1))
+    with pytest.raises(ResultFileError, match="not a meshladar result"):
+        load_result(plain)
+    obj = tmp_path / "obj.npz"
+    np.savez(obj, __meta__=np.array("{}"), a=np.array([{"x": 1}], dtype=object))
+    with pytest.raises(ResultFileError, match="not a readable result file"):
+        load_result(obj)                                           # pickled data refused
+
+
+def test_write_text_atomic(tmp_path):
+    p = tmp_path / "t.txt"
+    write_text_atomic(p, "héllo")
+    assert p.read_text(encoding="utf-8") == "héllo"

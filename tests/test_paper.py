@@ -1,0 +1,73 @@
+"""The paper's findings as numbers (Jin & Levine 2009, Figs 5-11), and its figures."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+
+from meshladar import io, paper
+
+
+@pytest.fixture(scope="module")
+def result():
+    # 256² images keep the run to ~3 s; the metrics move by < 0.1 between 256² and 512²
+    return paper.run(size=256)
+
+
+def test_lambertian_disk_is_not_darkened(result):
+    m = result["metrics"]
+    # ≈ 0 (measured +0.06): a tenth of the b = 0.99 effect at most
+    assert abs(m["disk_b0.darkening"]) < 0.1 * abs(m["disk_b0.99.darkening"])
+    assert abs(m["disk_e1.darkening"]) < 0.1 * abs(m["disk_b0.99.darkening"])
+
+
+def test_glancing_loss_darkens_the_interior_boundary(result):
+    m = result["metrics"]
+    assert m["disk_b0.99.darkening"] < -0.8                       # measured −1.36
+    # the glint's darkening is far deeper (measured 10×) and narrower (measured 6×)
+    assert m["disk_e0.007.darkening"] < 5 * m["disk_b0.99.darkening"]
+    assert m["disk_e0.007.darkening_width"] < 0.5 * m["disk_b0.99.darkening_width"]
+
+
+def test_ellipse_darkening_concentrates_at_the_tapered_ends(result):
+    m = result["metrics"]
+    assert m["ellipse_b0.99.ends_darkening"] < -1.5                     # measured −3.8
+    assert m["ellipse_b0.99.ends_darkening"] < 3 * m["ellipse_b0.99.sides_darkening"]
+    for k in ("ellipse_b0.ends_darkening", "ellipse_b0.sides_darkening"):
+        assert abs(m[k]) < 0.1 * abs(m["ellipse_b0.99.ends_darkening"])
+
+
+def test_glints_hide_the_gray_disk_and_log_or_clip_recover_it(result):
+    m = result["metrics"]
+    for k in ("pair_gray_al.visibility", "pair_al_gray.visibility"):
+        assert abs(m[k]) < 0.1                                     # measured 0.03, −0.003
+    assert m["pair_gray_al_log.visibility"] > 0.5                  # measured 0.86
+    assert m["pair_gray_al_clip.visibility"] > 0.5                 # measured 0.72
+
+
+def test_shadowing_leaves_range_gaps(result):
+    # the pair's sinogram has empty bins between the disks' returns at views along x
+    sino = result["sinograms"]["pair_gray_gray"]
+    row = sino[0]
+    lit = np.nonzero(row)[0]
+    assert np.any(row[lit.min():lit.max()] == 0)
+
+
+def test_figures_are_drawn_from_the_saved_result(tmp_path):
+    from meshladar.viz import paper as vpaper
+
+    path, metrics = vpaper.save_run(tmp_path, size=64)
+    arrays, meta = io.load_result(path)
+    assert meta["metrics"] == metrics and meta["model"] == "analytic"
+    assert arrays["image/disk_b0"].shape == (64, 64)
+    paths = vpaper.draw(path, tmp_path / "figs", dpi=40)
+    assert [os.path.basename(p) for p in paths] == [f"fig{n:02d}.png" for n in range(5, 12)]
+    import matplotlib.image as mpimg
+
+    for p in paths:
+        img = mpimg.imread(p)
+        assert img.shape[0] > 100 and img.shape[1] > 200
+        assert img[..., :3].std() > 0.05                       # not a blank canvas
+    assert not list((tmp_path / "figs").glob("*.tmp*"))
