@@ -13,6 +13,7 @@ from .ladar import Ladar
 from .reconstruct import Image, clip_radiance, fbp, log_radiance
 from .scene import Disk, Ellipse, Scene
 from .sinogram import Sinogram
+from .trace import Hits, trace, weigh
 
 __version__ = "0.1.0"
 
@@ -29,5 +30,5 @@ def __getattr__(name):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 __all__ = ["SandfordRobertson", "Disk", "Ellipse", "Scene", "Ladar", "Sinogram", "simulate",
-           "fbp", "Image", "log_radiance", "clip_radiance",
+           "fbp", "Image", "log_radiance", "clip_radiance", "trace", "weigh", "Hits",
            "brdf", "errors", "materials", "__version__"]

@@ -11,9 +11,11 @@ from .sinogram import Sinogram
 __all__ = ["simulate", "MODELS"]
 
 #: The forward models available in this version.
-MODELS = ("analytic", "pixel")
+MODELS = ("analytic", "mesh", "pixel")
 
-_OPTIONS = {"analytic": (), "pixel": ("pixel_size", "ray_spacing")}
+_OPTIONS = {"analytic": (), "pixel": ("pixel_size", "ray_spacing"),
+            "mesh": ("mode", "normals", "back_faces", "z0", "ray_spacing", "rays_per_bin",
+                     "footprint", "seed", "jobs", "executor", "progress")}
 
 
 def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
@@ -25,6 +27,9 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
     ladar : Ladar
     model : str
         ``"analytic"``: exact profiles of disks and ellipses (no faceting, no sampling).
+        ``"mesh"``: triangle meshes ray-cast with Embree (options in
+        :func:`meshladar.trace.simulate_mesh`: mode, normals, back_faces, z0, ray_spacing,
+        rays_per_bin, footprint, seed, jobs, executor, progress).
         ``"pixel"``: the paper's method, a rasterised surface traced with Siddon rays
         (options ``pixel_size``, ``ray_spacing``; see :func:`meshladar.pixel.simulate_pixel`).
     **options
@@ -44,6 +49,16 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
     if unknown:
         raise ParameterError(f"model {model!r} takes options {_OPTIONS[model]}; got "
                              f"{unknown[0]!r}")
+    if model == "mesh":
+        from .trace import simulate_mesh
+
+        return simulate_mesh(scene, ladar, **options)
+    if not scene.shapes:
+        raise ParameterError(f"model {model!r} needs analytic shapes (Disk, Ellipse); this "
+                             "scene is a mesh: use model='mesh'")
+    if not ladar.planar:
+        raise ParameterError(f"model {model!r} needs views about the z axis; the ladar has "
+                             "view vectors off the x-y plane")
     if model == "pixel":
         from .pixel import simulate_pixel
 

@@ -8,7 +8,7 @@ origin, growing away from the ladar). Range bins are given by strictly increasin
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
@@ -40,11 +40,16 @@ class Ladar:
 
     Parameters
     ----------
-    angles_deg : (n_views,) array_like
+    angles_deg : (n_views,) array_like or None
         View angles φ in degrees about the z axis (w = (cos φ, sin φ, 0)). Any finite
-        values; at least one.
+        values; at least one. None when ``view_vectors`` are given (then the vectors'
+        azimuths).
     bin_edges : (n_bins + 1,) array_like
         Strictly increasing, finite range bin edges in scene units; at least one bin.
+    view_vectors : (n_views, 3) array_like, keyword-only, optional
+        Arbitrary view directions (from the scene toward the ladar), normalised here; for
+        3-D meshes seen from anywhere (see ``meshladar.mesh.fibonacci_sphere``). Only the mesh
+        model accepts views off the x-y plane.
 
     Examples
     --------
@@ -57,8 +62,24 @@ class Ladar:
 
     angles_deg: np.ndarray
     bin_edges: np.ndarray
+    view_vectors: np.ndarray = field(default=None, kw_only=True)
 
     def __post_init__(self):
+        if self.view_vectors is not None:
+            vec = finite_array("view_vectors", self.view_vectors)
+            if vec.ndim != 2 or vec.shape[1] != 3 or len(vec) == 0:
+                raise ParameterError(f"view_vectors must have shape (n_views, 3); got "
+                                     f"{vec.shape}")
+            norm = np.linalg.norm(vec, axis=1)
+            if np.any(norm == 0):
+                raise ParameterError("view_vectors must be non-zero")
+            vec = vec / norm[:, None]
+            if self.angles_deg is None:
+                object.__setattr__(self, "angles_deg",
+                                   np.degrees(np.arctan2(vec[:, 1], vec[:, 0])))
+            object.__setattr__(self, "view_vectors", _readonly(vec))
+        elif self.angles_deg is None:
+            raise ParameterError("give angles_deg or view_vectors; got neither")
         angles = finite_array("angles_deg", self.angles_deg)
         edges = finite_array("bin_edges", self.bin_edges)
         if angles.ndim != 1 or angles.size == 0:
@@ -72,8 +93,20 @@ class Ladar:
             k = int(np.argmax(steps <= 0))
             raise ParameterError(f"bin_edges must be strictly increasing; got "
                                  f"{float(edges[k])!r} then {float(edges[k + 1])!r} at index {k}")
+        if self.view_vectors is not None and len(self.view_vectors) != angles.size:
+            raise ParameterError(f"angles_deg and view_vectors must have the same length; got "
+                                 f"{angles.size} and {len(self.view_vectors)}")
         object.__setattr__(self, "angles_deg", _readonly(angles))
         object.__setattr__(self, "bin_edges", _readonly(edges))
+        if self.view_vectors is None:
+            phi = np.deg2rad(angles)
+            object.__setattr__(self, "view_vectors", _readonly(
+                np.stack([np.cos(phi), np.sin(phi), np.zeros_like(phi)], axis=-1)))
+
+    @property
+    def planar(self) -> bool:
+        """True when every view lies in the x-y plane (views about the z axis)."""
+        return bool(np.all(self.view_vectors[:, 2] == 0.0))
 
     # -- constructors -------------------------------------------------------------------
     @classmethod
@@ -130,12 +163,6 @@ class Ladar:
     @cached_property
     def bin_centers(self) -> np.ndarray:
         return 0.5 * (self.bin_edges[1:] + self.bin_edges[:-1])
-
-    @cached_property
-    def view_vectors(self) -> np.ndarray:
-        """(n_views, 3) unit vectors w from the scene toward the ladar."""
-        phi = np.deg2rad(self.angles_deg)
-        return np.stack([np.cos(phi), np.sin(phi), np.zeros_like(phi)], axis=-1)
 
     def __repr__(self) -> str:
         return (f"Ladar(n_views={self.n_views}, n_bins={self.n_bins}, "

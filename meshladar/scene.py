@@ -193,12 +193,15 @@ def _overlap(p: Shape, q: Shape) -> bool:
 
 
 class Scene:
-    """A set of non-overlapping analytic shapes, each with its coating.
+    """A set of non-overlapping analytic shapes, or of triangle meshes, each with a coating.
 
     Parameters
     ----------
     shapes : sequence of Disk or Ellipse
         At least one. Shapes may touch but not overlap (GeometryError).
+
+    Mesh scenes come from :meth:`from_mesh`, :meth:`from_meshes` or :meth:`tessellate`;
+    they hold ``parts`` (MeshPart), ``materials`` and a ``report`` of the mesh checks.
 
     Examples
     --------
@@ -206,6 +209,10 @@ class Scene:
     >>> scene = ml.Scene([ml.Disk(center=(0.0, 0.0), radius=0.8,
     ...                           material=ml.materials.DARK_GRAY)])
     """
+
+    _parts: tuple = ()
+    _materials: tuple = ()
+    _report: dict = {}
 
     def __init__(self, shapes):
         try:
@@ -229,16 +236,155 @@ class Scene:
 
     @property
     def shapes(self) -> tuple[Shape, ...]:
+        """The analytic shapes (empty for a mesh scene)."""
         return self._shapes
 
+    @property
+    def is_mesh(self) -> bool:
+        return bool(self._parts)
+
+    @property
+    def parts(self):
+        """The mesh parts (empty for an analytic scene)."""
+        return self._parts
+
+    @property
+    def materials(self) -> tuple:
+        """The coatings: one per shape, or the mesh scene's material list."""
+        return self._materials if self._parts else tuple(s.material for s in self._shapes)
+
+    @property
+    def report(self) -> dict:
+        """Mesh checks: degenerate faces dropped, watertight and inverted parts, faces."""
+        return dict(self._report)
+
+    # -- mesh scenes ------------------------------------------------------------------------
+    @classmethod
+    def _from_parts(cls, parts, materials, shapes=()):
+        from .mesh import inspect_parts
+
+        mats = tuple(materials)
+        for i, m in enumerate(mats):
+            if not isinstance(m, SandfordRobertson):
+                raise ParameterError(f"materials[{i}] must be a SandfordRobertson; got "
+                                     f"{type(m).__name__}")
+        for p in parts:
+            if len(p.material) and (p.material.min() < 0 or p.material.max() >= len(mats)):
+                raise ParameterError(f"{p.name}: face material indices must be in "
+                                     f"[0, {len(mats) - 1}]; got {int(p.material.min())}.."
+                                     f"{int(p.material.max())}")
+        cleaned, report = inspect_parts(parts)
+        self = cls.__new__(cls)
+        self._shapes = tuple(shapes)
+        self._parts = tuple(cleaned)
+        self._materials = mats
+        self._report = report
+        return self
+
+    @classmethod
+    def from_mesh(cls, mesh_or_path, material=None, *, materials=None, face_materials=None,
+                  transform=None):
+        """A scene from anything trimesh loads (STL, OBJ, PLY, OFF, GLB/GLTF with parts).
+
+        Parameters
+        ----------
+        mesh_or_path : trimesh.Trimesh, trimesh.Scene or path
+        material : SandfordRobertson, optional
+            The coating of every part (unless ``materials`` names a part's own).
+        materials : dict, optional
+            Coating per part name (GLB/GLTF node names); parts not named take ``material``.
+        face_materials : (n_faces,) int, optional
+            Per-face index into ``materials`` given as a list (single-mesh input only).
+        transform : (4, 4) array, optional
+            Applied to every part.
+        """
+        from .mesh import load_parts, part_from_trimesh
+
+        loaded = load_parts(mesh_or_path)
+        if face_materials is not None:
+            if len(loaded) != 1:
+                raise ParameterError("face_materials needs a single mesh; got a scene of "
+                                     f"{len(loaded)} parts (use materials={{part: m}})")
+            if not isinstance(materials, (list, tuple)):
+                raise ParameterError("with face_materials, materials must be a list of "
+                                     "SandfordRobertson indexed by face_materials")
+            name, m = loaded[0]
+            fm = np.asarray(face_materials)
+            if fm.shape != (len(m.faces),) or not np.issubdtype(fm.dtype, np.integer):
+                raise ParameterError(f"face_materials must be ({len(m.faces)},) integers; got "
+                                     f"shape {fm.shape}, dtype {fm.dtype}")
+            return cls._from_parts([part_from_trimesh(m, fm, name, transform)], materials)
+        named = dict(materials or {})
+        unknown = sorted(set(named) - {n for n, _ in loaded})
+        if unknown:
+            raise ParameterError(f"materials: no part named {unknown[0]!r}; parts are "
+                                 f"{[n for n, _ in loaded]}")
+        mats, parts = [], []
+        for name, m in loaded:
+            coat = named.get(name, material)
+            if coat is None:
+                raise ParameterError(f"part {name!r} has no material: give material= or "
+                                     f"materials={{{name!r}: ...}}")
+            if coat not in mats:
+                mats.append(coat)
+            parts.append(part_from_trimesh(m, mats.index(coat), name, transform))
+        return cls._from_parts(parts, mats)
+
+    @classmethod
+    def from_meshes(cls, items):
+        """A scene of several meshes: items of (mesh_or_path, material) or
+        (mesh_or_path, material, transform)."""
+        from .mesh import load_parts, part_from_trimesh
+
+        mats, parts = [], []
+        for k, item in enumerate(items):
+            if not isinstance(item, (tuple, list)) or len(item) not in (2, 3):
+                raise ParameterError(f"items[{k}] must be (mesh, material[, transform]); got "
+                                     f"{item!r}")
+            mesh, coat = item[0], item[1]
+            transform = item[2] if len(item) == 3 else None
+            if coat not in mats:
+                mats.append(coat)
+            for name, m in load_parts(mesh):
+                parts.append(part_from_trimesh(m, mats.index(coat), f"{k}:{name}", transform))
+        return cls._from_parts(parts, mats)
+
+    def tessellate(self, segments=256, *, height=1.0, z0=0.0):
+        """This analytic scene as a mesh scene: each disk/ellipse extruded to a prism of
+        ``height`` centred on z = z0 with ``segments`` boundary vertices. The parts keep the
+        shapes' exact normals (``normals="exact"`` when tracing)."""
+        from .mesh import prism
+
+        if self.is_mesh:
+            raise ParameterError("tessellate needs an analytic scene; this one is a mesh")
+        from ._validate import check_real
+
+        height = check_real("height", height, low=0.0, low_open=True)
+        z0 = check_real("z0", z0)
+        mats = list(self.materials)
+        parts = [prism(s, segments, height, i, z0=z0) for i, s in enumerate(self._shapes)]
+        return Scene._from_parts(parts, mats, shapes=self._shapes)
+
     def __len__(self) -> int:
-        return len(self._shapes)
+        return len(self._parts) if self._parts else len(self._shapes)
 
     def __iter__(self):
-        return iter(self._shapes)
+        return iter(self._parts if self._parts else self._shapes)
+
+    def bounds(self) -> np.ndarray:
+        """(2, 3) axis-aligned bounds of a mesh scene (min, max)."""
+        if not self._parts:
+            raise ParameterError("bounds() is for mesh scenes; use bounding_circle()")
+        v = np.concatenate([p.vertices for p in self._parts])
+        return np.stack([v.min(axis=0), v.max(axis=0)])
 
     def bounding_circle(self) -> tuple[tuple[float, float], float]:
-        """A circle (centre, radius) containing every shape (about the shapes' box centre)."""
+        """A circle (centre, radius) in x-y containing every shape (about their box centre)."""
+        if self._parts and not self._shapes:
+            b = self.bounds()
+            c = 0.5 * (b[0, :2] + b[1, :2])
+            v = np.concatenate([p.vertices for p in self._parts])[:, :2]
+            return (float(c[0]), float(c[1])), float(np.max(np.hypot(*(v - c).T)))
         pts = np.array([s.center for s in self._shapes])
         rad = np.array([s.bounding_radius for s in self._shapes])
         lo = (pts - rad[:, None]).min(axis=0)
@@ -248,4 +394,7 @@ class Scene:
         return (float(c[0]), float(c[1])), r
 
     def __repr__(self) -> str:
+        if self._parts:
+            return (f"Scene(mesh: {len(self._parts)} parts, {self._report.get('faces')} faces, "
+                    f"{len(self._materials)} materials)")
         return f"Scene({list(self._shapes)!r})"

@@ -40,6 +40,8 @@ class Sinogram:
         Strictly increasing range bin edges; range r = −p·w grows away from the ladar.
     model : str, keyword-only
         Which forward model made it ("analytic", "mesh", "pixel"), or "measured".
+    view_vectors : (n_views, 3) array_like, keyword-only, optional
+        The view directions when they are not all about the z axis (mesh model).
     info : dict, keyword-only
         Free-form metadata (run parameters, error estimates); not compared.
 
@@ -51,6 +53,7 @@ class Sinogram:
     bin_edges: np.ndarray = field(kw_only=True)
     model: str = field(default="measured", kw_only=True)
     info: dict = field(default_factory=dict, kw_only=True)
+    view_vectors: np.ndarray = field(default=None, kw_only=True, repr=False)
 
     def __post_init__(self):
         values = finite_array("values", self.values)
@@ -71,6 +74,15 @@ class Sinogram:
         object.__setattr__(self, "angles_deg", _readonly(angles))
         object.__setattr__(self, "bin_edges", _readonly(edges))
         object.__setattr__(self, "info", dict(self.info))
+        if self.view_vectors is None:
+            phi = np.deg2rad(angles)
+            vec = np.stack([np.cos(phi), np.sin(phi), np.zeros_like(phi)], axis=-1)
+        else:
+            vec = finite_array("view_vectors", self.view_vectors)
+            if vec.shape != (values.shape[0], 3):
+                raise ParameterError(f"view_vectors must have shape ({values.shape[0]}, 3); got "
+                                     f"{vec.shape}")
+        object.__setattr__(self, "view_vectors", _readonly(vec))
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -94,12 +106,6 @@ class Sinogram:
     def bin_widths(self) -> np.ndarray:
         """(n_bins,) widths of the range bins."""
         return np.diff(self.bin_edges)
-
-    @cached_property
-    def view_vectors(self) -> np.ndarray:
-        """(n_views, 3) unit vectors from the scene toward the ladar."""
-        phi = np.deg2rad(self.angles_deg)
-        return np.stack([np.cos(phi), np.sin(phi), np.zeros_like(phi)], axis=-1)
 
     def total(self) -> np.ndarray:
         """(n_views,) total return of each view: the sum of its bins."""

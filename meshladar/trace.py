@@ -1,0 +1,538 @@
+"""The mesh engine (``model="mesh"``): Embree first hits, SR weights, range bins.
+
+Per view, an orthographic grid of parallel rays covers the scene's projected extent (the
+convex hull's projection, not a fixed square) and travels along −w from just outside the
+scene. Embree (embreex) returns each ray's first hit: that is the shadowing, so a monostatic
+ladar casts no other ray. Each hit carries its range, cos θ of the chosen normal, the face's
+material, and its footprint; weighing turns hits into bins with F(θ)·δA⊥ per ray
+(DESIGN.md: P[k] = Σ F(θ_hit) δA⊥ over the rays whose first hit lies in bin k).
+
+Two modes:
+
+* ``mode="slice"`` (views about z): one row of rays in the plane z = z0, spaced δs; each
+  ray stands for a strip δs wide and one unit high, so values are per unit height and match
+  the analytic 2-D profile of an extruded phantom.
+* ``mode="3d"``: a square grid of rays spaced δ (δA⊥ = δ²), any view vectors.
+
+Precision (Embree works in float32): the scene is shifted to its bounding-box centre in
+float64 before it is converted, rays start at distance L = 1.01 R_bound + ... from that centre,
+and ranges are formed in float64 as r = −c·w − L + t_hit. A scene far from the origin or
+tiny keeps its range accuracy relative to its own size (float32: ~1e-7 of it).
+
+Normals: ``"flat"`` (the face's geometric normal, float64), ``"smooth"`` (vertex normals
+interpolated with Embree's barycentrics, averaged only across edges sharper than
+``CREASE_DEG``), ``"exact"`` (the analytic shape's own normal at the hit point, for scenes
+tessellated from analytic shapes).
+
+Footprint binning (``footprint=True``): a ray of width δ hitting a flat facet covers a range
+interval, not a point: along the transverse axis u the range changes at dr/du = (n·u)/(n·w).
+The ray's weight is spread over that interval (a box in slice mode; in 3-D the sum of the u
+and v boxes, a trapezoid), exactly as the flat facet would return it.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ._validate import check_choice, check_real
+from .errors import GeometryError, ParameterError
+from .ladar import Ladar
+from .scene import Scene
+from .sinogram import Sinogram
+
+__all__ = ["Hits", "trace", "weigh", "simulate_mesh", "NORMALS", "MODES", "BACK_FACES"]
+
+NORMALS = ("flat", "smooth", "exact")
+MODES = ("slice", "3d")
+BACK_FACES = ("two-sided", "ignore")
+#: Default rays per range-bin width: slice rows are cheap, 3-D grids are rays_per_bin² per
+#: bin area.
+_DEFAULT_RAYS_PER_BIN = {"slice": 8.0, "3d": 1.0}
+#: Rays start this far outside the bounding sphere (relative), so no face is behind them.
+_ORIGIN_MARGIN = 0.01
+#: Views per task: enough work to amortise a task, few enough to balance two cores.
+_VIEWS_PER_TASK = 8
+
+
+# ------------------------------------------------------------------ geometry held per job
+
+class _Geometry:
+    """Everything a worker needs to trace: float64 originals and float32 shifted copies."""
+
+    def __init__(self, scene: Scene, normals: str):
+        parts = scene.parts
+        offs = np.cumsum([0] + [len(p.vertices) for p in parts])
+        self.vertices = np.concatenate([p.vertices for p in parts])
+        self.faces = np.concatenate([p.faces + o for p, o in zip(parts, offs[:-1])])
+        self.material = np.concatenate([p.material for p in parts]).astype(np.int32)
+        self.part_of = np.concatenate([np.full(len(p.faces), i, np.int32)
+                                       for i, p in enumerate(parts)])
+        lo, hi = self.vertices.min(axis=0), self.vertices.max(axis=0)
+        self.center = 0.5 * (lo + hi)
+        shifted = self.vertices - self.center
+        self.radius = float(np.max(np.linalg.norm(shifted, axis=1)))
+        self.shifted32 = np.ascontiguousarray(shifted, dtype=np.float32)
+        self.faces32 = np.ascontiguousarray(self.faces, dtype=np.int32)
+        tri = self.vertices[self.faces]
+        cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        self.face_normals = cross / np.linalg.norm(cross, axis=1)[:, None]
+        self.hull = _hull_points(shifted)
+        self.normals = normals
+        self.corner = None
+        if normals == "smooth":
+            from .mesh import corner_normals
+
+            self.corner = np.concatenate([corner_normals(p) for p in parts])
+        self.exact = [p.exact_normal for p in parts]
+        if normals == "exact" and any(e is None for e in self.exact):
+            missing = [p.name for p in parts if p.exact_normal is None]
+            raise ParameterError(f"normals='exact' needs parts tessellated from analytic shapes; "
+                                 f"{missing[0]!r} has no exact normal (use 'flat' or 'smooth')")
+        self.key = _digest(self.vertices, self.faces)
+
+
+def _digest(v, f):
+    import hashlib
+
+    h = hashlib.sha1(v.tobytes())
+    h.update(f.tobytes())
+    return h.hexdigest()
+
+
+def _hull_points(points):
+    """Vertices of the convex hull (all points when the hull is degenerate or tiny)."""
+    if len(points) <= 64:
+        return points
+    from scipy.spatial import ConvexHull, QhullError
+
+    try:
+        return points[ConvexHull(points).vertices]
+    except (QhullError, ValueError):
+        return points
+
+
+_EMBREE_CACHE: dict = {}
+
+
+def _embree_scene(geo: _Geometry):
+    """The Embree scene of the geometry, built once per process (cached by content)."""
+    scene = _EMBREE_CACHE.get(geo.key)
+    if scene is None:
+        try:
+            from embreex import rtcore_scene
+            from embreex.mesh_construction import TriangleMesh
+        except ImportError as exc:  # pragma: no cover - embreex is a core dependency
+            raise ImportError("the mesh model needs embreex: pip install embreex") from exc
+        scene = rtcore_scene.EmbreeScene()
+        TriangleMesh(scene, geo.shifted32, geo.faces32)
+        _EMBREE_CACHE.clear()                   # one scene per process is enough
+        _EMBREE_CACHE[geo.key] = scene
+    return scene
+
+
+def _frame(w):
+    """(u, v) completing w to a right-handed orthonormal frame; v = z for horizontal w."""
+    z = np.array([0.0, 0.0, 1.0])
+    u = np.cross(z, w)
+    n = np.linalg.norm(u)
+    if n < 1e-12:                                         # looking along ±z
+        u = np.array([1.0, 0.0, 0.0])
+    else:
+        u = u / n
+    return u, np.cross(w, u)
+
+
+# ------------------------------------------------------------------ hits
+
+@dataclass(frozen=True, eq=False)
+class Hits:
+    """First hits of every ray, per view: geometry only, no materials' BRDFs.
+
+    Arrays (k,) over hits: ``view`` (index into the views), ``range`` (float64),
+    ``cos_theta`` and ``sin_theta`` of the chosen normal against w (cos θ = −1 marks a
+    back-face hit that ``back_faces="ignore"`` blocks), ``material`` (index into
+    ``materials``), ``spread`` (k, 2): half-widths of the footprint's range interval along
+    the two transverse axes (0 for the second in slice mode).
+    Per view (n_views,): ``rays`` cast, ``back_face_hits``. Scalars: ``area`` (δA⊥ per
+    ray), ``mode``, ``normals``; ``ladar`` and ``materials`` as traced.
+    """
+
+    view: np.ndarray
+    range: np.ndarray
+    cos_theta: np.ndarray
+    sin_theta: np.ndarray
+    material: np.ndarray
+    spread: np.ndarray
+    rays: np.ndarray
+    back_face_hits: np.ndarray
+    area: float
+    mode: str
+    normals: str
+    ladar: Ladar
+    materials: tuple
+    info: dict = field(default_factory=dict)
+
+    @property
+    def size(self) -> int:
+        return self.view.size
+
+
+def _ray_grid(geo, w, mode, spacing, z0_shifted, rng):
+    """Origins (n, 3) float32 in shifted coordinates, the start distance L, and (u, v)."""
+    u, v = _frame(w)
+    L = (1.0 + _ORIGIN_MARGIN) * geo.radius + spacing
+    su = geo.hull @ u
+    s_lo, s_hi = su.min() - spacing, su.max() + spacing
+    ns = max(1, int(math.ceil((s_hi - s_lo) / spacing)))
+    s = s_lo + (np.arange(ns) + 0.5) * spacing
+    if mode == "slice":
+        if rng is not None:
+            s = s + rng.uniform(-0.5, 0.5, ns) * spacing
+        o = s[:, None] * u + z0_shifted * v + L * w
+    else:
+        tv = geo.hull @ v
+        t_lo, t_hi = tv.min() - spacing, tv.max() + spacing
+        nt = max(1, int(math.ceil((t_hi - t_lo) / spacing)))
+        t = t_lo + (np.arange(nt) + 0.5) * spacing
+        S, T = np.meshgrid(s, t, indexing="ij")
+        if rng is not None:
+            S = S + rng.uniform(-0.5, 0.5, S.shape) * spacing
+            T = T + rng.uniform(-0.5, 0.5, T.shape) * spacing
+        o = S.reshape(-1, 1) * u + T.reshape(-1, 1) * v + L * w
+    return np.ascontiguousarray(o, dtype=np.float32), L, u, v
+
+
+def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng):
+    """Hits of one view (range relative to the shifted centre's plane)."""
+    o, L, u, v = _ray_grid(geo, w, mode, spacing, z0_shifted, rng)
+    d = np.ascontiguousarray((-w)[None, :], dtype=np.float32)
+    res = scene.run(o, d, output=1)
+    prim = res["primID"]
+    hit = prim >= 0
+    prim = prim[hit]
+    t_hit = res["tfar"][hit].astype(np.float64)
+    n_geo = geo.face_normals[prim]
+    cos_geo = n_geo @ w
+    back = cos_geo < 0
+    if geo.normals == "flat":
+        n = n_geo
+    elif geo.normals == "smooth":
+        bu = res["u"][hit].astype(np.float64)[:, None]
+        bv = res["v"][hit].astype(np.float64)[:, None]
+        c = geo.corner[prim]
+        n = (1 - bu - bv) * c[:, 0] + bu * c[:, 1] + bv * c[:, 2]
+        n /= np.linalg.norm(n, axis=1, keepdims=True)
+    else:
+        p = (o[hit].astype(np.float64) - t_hit[:, None] * w) + geo.center
+        n = np.empty((prim.size, 3))
+        part = geo.part_of[prim]
+        for k in np.unique(part):
+            sel = part == k
+            n[sel] = geo.exact[k](p[sel])
+    sign = np.where(back, -1.0, 1.0)
+    if back_faces == "two-sided":
+        n = n * sign[:, None]
+        n_geo = n_geo * sign[:, None]
+    cos_t = n @ w
+    sin_t = np.linalg.norm(np.cross(n, w), axis=1)
+    if back_faces == "ignore":
+        cos_t = np.where(back, -1.0, cos_t)
+    # footprint: range spread along u and v on the flat facet, and the facet's own range
+    # interval relative to the hit (a footprint cannot return ranges the facet does not span)
+    cg = np.maximum(np.abs(n_geo @ w), 1e-300)
+    rng_rel = t_hit - L                          # r = −c·w + (t − L)
+    tri_r = -((geo.vertices[geo.faces[prim]] - geo.center) @ w)
+    spread = np.zeros((prim.size, 4))
+    spread[:, 0] = np.abs(n_geo @ u) / cg * 0.5 * spacing
+    if mode == "3d":
+        spread[:, 1] = np.abs(n_geo @ v) / cg * 0.5 * spacing
+    spread[:, 2] = np.minimum(tri_r.min(axis=1) - rng_rel, 0.0)
+    spread[:, 3] = np.maximum(tri_r.max(axis=1) - rng_rel, 0.0)
+    return (rng_rel, cos_t, sin_t, geo.material[prim], spread, len(o), int(back.sum()))
+
+
+def _spacing(ladar, mode, ray_spacing, rays_per_bin):
+    if ray_spacing is not None and rays_per_bin is not None:
+        raise ParameterError("give ray_spacing or rays_per_bin, not both")
+    if ray_spacing is not None:
+        return check_real("ray_spacing", ray_spacing, low=0.0, low_open=True)
+    rpb = _DEFAULT_RAYS_PER_BIN[mode] if rays_per_bin is None else check_real(
+        "rays_per_bin", rays_per_bin, low=0.0, low_open=True)
+    return float(np.min(np.diff(ladar.bin_edges))) / rpb
+
+
+def _options(scene, ladar, mode, normals, back_faces, z0):
+    if not isinstance(scene, Scene):
+        raise ParameterError(f"scene must be a meshladar.Scene; got {type(scene).__name__}")
+    if not isinstance(ladar, Ladar):
+        raise ParameterError(f"ladar must be a meshladar.Ladar; got {type(ladar).__name__}")
+    check_choice("normals", normals, NORMALS)
+    check_choice("back_faces", back_faces, BACK_FACES)
+    if mode is None:
+        mode = "slice" if ladar.planar else "3d"
+    check_choice("mode", mode, MODES)
+    if mode == "slice" and not ladar.planar:
+        raise ParameterError("mode='slice' needs views about the z axis (angles_deg); the "
+                             "ladar has view vectors off the x-y plane: use mode='3d'")
+    if not scene.is_mesh:
+        raise ParameterError("the mesh model needs a mesh scene: Scene.from_mesh(...) or "
+                             "scene.tessellate(segments=...)")
+    geo = _Geometry(scene, normals)
+    if z0 is None:
+        z0 = float(geo.center[2])
+    z0 = check_real("z0", z0)
+    return mode, geo, z0
+
+
+def _chunks(n, size):
+    return [np.arange(i, min(i + size, n)) for i in range(0, n, size)]
+
+
+def _job(geo, ladar_vectors, views, mode, spacing, z0_shifted, back_faces, seed, edges,
+         weigh_with):
+    """Trace a chunk of views; return hits (weigh_with None) or binned values."""
+    scene = _embree_scene(geo)
+    out = []
+    for i in views:
+        w = ladar_vectors[i]
+        rng = None if seed is None else np.random.default_rng([seed, int(i)])
+        out.append(_trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng))
+    if weigh_with is None:
+        return out
+    materials, footprint, area = weigh_with
+    vals = np.zeros((len(views), len(edges) - 1))
+    for j, (i, h) in enumerate(zip(views, out)):
+        r = h[0] - float(geo.center @ ladar_vectors[i])
+        vals[j] = _bin_one(r, h[1], h[2], h[3], h[4], materials, edges, area, footprint)
+    return vals, [h[5] for h in out], [h[6] for h in out]
+
+
+# ------------------------------------------------------------------ weighing and binning
+
+def _weights(cos_t, sin_t, mat, materials, area):
+    """F(θ)·δA⊥ per hit, evaluated per material group (0 for cos θ < 0)."""
+    wt = np.zeros(cos_t.size)
+    for k in np.unique(mat):
+        sel = mat == k
+        c, s = cos_t[sel], sin_t[sel]
+        wt[sel] = materials[k]._core(c, s, c, s, c, s, False) * area
+    return wt
+
+
+def _box_cdf(x, h):
+    return np.clip((x + h) / np.where(h > 0, 2 * h, 1.0), 0.0, 1.0)
+
+
+def _trap_cdf(x, a, b):
+    """CDF of A + B, A ~ U(−a, a), B ~ U(−b, b): second differences of Q(y) = y₊²/2."""
+    def q(y):
+        return 0.5 * np.maximum(y, 0.0) ** 2
+
+    return np.clip((q(x + a + b) - q(x + a - b) - q(x - a + b) + q(x - a - b))
+                   / np.where(a * b > 0, 4 * a * b, 1.0), 0.0, 1.0)
+
+
+def _bin_one(r, cos_t, sin_t, mat, spread, materials, edges, area, footprint):
+    """One view's profile from its hits."""
+    nb = len(edges) - 1
+    wt = _weights(cos_t, sin_t, mat, materials, area)
+    if not footprint:
+        k = np.searchsorted(edges, r, side="right") - 1
+        ok = (k >= 0) & (k < nb)
+        return np.bincount(k[ok], weights=wt[ok], minlength=nb)
+    a = np.maximum(spread[:, 0], spread[:, 1])
+    b = np.minimum(spread[:, 0], spread[:, 1])
+    # the footprint's interval, clipped to the facet's own range interval
+    lo_c = np.maximum(-(a + b), spread[:, 2])
+    hi_c = np.minimum(a + b, spread[:, 3])
+    point = (a <= 0) | (hi_c <= lo_c)
+    k0 = np.clip(np.searchsorted(edges, r + lo_c, side="right") - 1, 0, nb - 1)
+    k1 = np.clip(np.searchsorted(edges, r + hi_c, side="right") - 1, 0, nb - 1)
+    k0 = np.where(point, np.clip(np.searchsorted(edges, r, side="right") - 1, 0, nb - 1), k0)
+    k1 = np.where(point, k0, k1)
+    inside = (r + hi_c >= edges[0]) & (r + lo_c < edges[-1]) & (wt != 0)
+    cnt = np.where(inside, k1 - k0 + 1, 0)
+    rows = np.repeat(np.arange(r.size), cnt)
+    kk = k0[rows] + np.arange(rows.size) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+    lo = np.maximum(edges[kk] - r[rows], lo_c[rows])
+    hi = np.minimum(edges[kk + 1] - r[rows], hi_c[rows])
+    ar, br = a[rows], b[rows]
+    tiny = br <= 1e-12 * np.maximum(ar, 1e-300)
+
+    def cdf(x):
+        return np.where(tiny, _box_cdf(x, ar), _trap_cdf(x, ar, br))
+
+    mass = cdf(hi_c[rows]) - cdf(lo_c[rows])
+    frac = np.where(hi > lo, cdf(hi) - cdf(lo), 0.0) / np.where(mass > 0, mass, 1.0)
+    frac = np.where(point[rows], ((edges[kk] <= r[rows]) & (r[rows] < edges[kk + 1]))
+                    .astype(float), frac)
+    return np.bincount(kk, weights=wt[rows] * frac, minlength=nb)
+
+
+def _executor(jobs, executor, n_rays_total):
+    """The executor to use: the user's, or processes when it pays (embreex holds the GIL)."""
+    if executor is not None:
+        return executor, False
+    if jobs is None:
+        jobs = 1 if n_rays_total < 4e6 else (os.cpu_count() or 1)
+    if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)) or jobs < 1:
+        raise ParameterError(f"jobs must be an integer >= 1; got {jobs!r}")
+    if jobs == 1:
+        return None, False
+    from concurrent.futures import ProcessPoolExecutor
+
+    return ProcessPoolExecutor(max_workers=int(jobs)), True
+
+
+def _estimate_rays(geo, ladar, mode, spacing):
+    extent = 2 * geo.radius / spacing + 2
+    return ladar.n_views * (extent if mode == "slice" else extent * extent)
+
+
+def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_bin, seed,
+         jobs, executor, progress, weigh_with):
+    mode, geo, z0 = _options(scene, ladar, mode, normals, back_faces, z0)
+    spacing = _spacing(ladar, mode, ray_spacing, rays_per_bin)
+    area = spacing if mode == "slice" else spacing * spacing
+    if weigh_with is not None:
+        weigh_with = (weigh_with[0], weigh_with[1], area)
+    z0_shifted = z0 - float(geo.center[2])
+    vectors = np.asarray(ladar.view_vectors, dtype=np.float64)
+    chunks = _chunks(ladar.n_views, _VIEWS_PER_TASK)
+    ex, own = _executor(jobs, executor, _estimate_rays(geo, ladar, mode, spacing))
+    from ._progress import Progress
+
+    bar = Progress(ladar.n_views, "views", enabled=progress)
+    args = (mode, spacing, z0_shifted, back_faces, seed, ladar.bin_edges, weigh_with)
+    results = []
+    try:
+        if ex is None:
+            for c in chunks:
+                results.append(_job(geo, vectors, c, *args))
+                bar.update(len(c))
+        else:
+            futures = [ex.submit(_job, geo, vectors, c, *args) for c in chunks]
+            for c, f in zip(chunks, futures):
+                results.append(f.result())
+                bar.update(len(c))
+    finally:
+        bar.close()
+        if own:
+            ex.shutdown()
+    return geo, mode, spacing, area, chunks, results
+
+
+def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0=None,
+          ray_spacing=None, rays_per_bin=None, seed=None, jobs=None, executor=None,
+          progress=False) -> Hits:
+    """Trace every view once and keep the hits (geometry only): re-weigh them with
+    :func:`weigh` for any coating without tracing again.
+
+    Parameters
+    ----------
+    scene : Scene
+        A mesh scene (``Scene.from_mesh``, ``Scene.tessellate``).
+    ladar : Ladar
+        Views (angles about z, or view vectors) and range bins.
+    mode : {"slice", "3d"}, optional
+        Default: "slice" for views about z, else "3d". Slice: one row of rays in z = z0,
+        values per unit height.
+    normals : {"flat", "smooth", "exact"}
+    back_faces : {"two-sided", "ignore"}
+    z0 : float, optional
+        Slice plane (default the scene's mid-height).
+    ray_spacing, rays_per_bin : float, optional
+        Ray spacing, or rays per range-bin width (default 8 in slice mode, 1 in 3-D).
+    seed : int, optional
+        Stratified jitter of each ray within its cell, reproducible per view.
+    jobs : int, optional
+        Worker processes (embreex holds the GIL during casts, so threads do not help).
+        Default: 1 for small jobs, all cores from 4e6 rays.
+    executor : concurrent.futures.Executor, optional
+        Any executor (e.g. a Dask client's) to run chunks of views on; overrides ``jobs``.
+    progress : bool
+        A progress bar on a terminal.
+    """
+    geo, mode, spacing, area, chunks, results = _run(
+        scene, ladar, mode=mode, normals=normals, back_faces=back_faces, z0=z0,
+        ray_spacing=ray_spacing, rays_per_bin=rays_per_bin, seed=seed, jobs=jobs,
+        executor=executor, progress=progress, weigh_with=None)
+    per_view = [h for res in results for h in res]
+    vectors = ladar.view_vectors
+    offsets = -(vectors @ geo.center)
+    view = np.concatenate([np.full(h[0].size, i, np.int32) for i, h in enumerate(per_view)])
+    return Hits(view=view,
+                range=np.concatenate([h[0] + offsets[i] for i, h in enumerate(per_view)]),
+                cos_theta=np.concatenate([h[1] for h in per_view]),
+                sin_theta=np.concatenate([h[2] for h in per_view]),
+                material=np.concatenate([h[3] for h in per_view]),
+                spread=np.concatenate([h[4] for h in per_view]),
+                rays=np.array([h[5] for h in per_view]),
+                back_face_hits=np.array([h[6] for h in per_view]),
+                area=area, mode=mode, normals=normals, ladar=ladar,
+                materials=tuple(scene.materials),
+                info={"ray_spacing": spacing, "z0": z0})
+
+
+def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None) -> Sinogram:
+    """Turn hits into a sinogram: F(θ)·δA⊥ per ray, binned by range.
+
+    Parameters
+    ----------
+    hits : Hits
+    materials : sequence of SandfordRobertson, optional
+        Replacement coatings, one per material index of the traced scene (default: the
+        scene's). A material sweep re-weighs the same hits.
+    footprint : bool
+        Spread each ray over the range interval its footprint covers on the hit facet.
+    bin_edges : array_like, optional
+        Other range bins (default the ladar's).
+    """
+    mats = hits.materials if materials is None else tuple(materials)
+    if len(mats) != len(hits.materials):
+        raise ParameterError(f"materials must give {len(hits.materials)} coatings (one per "
+                             f"material index); got {len(mats)}")
+    edges = hits.ladar.bin_edges if bin_edges is None else np.asarray(bin_edges, np.float64)
+    order = np.argsort(hits.view, kind="stable")
+    bounds = np.searchsorted(hits.view[order], np.arange(hits.ladar.n_views + 1))
+    vals = np.zeros((hits.ladar.n_views, len(edges) - 1))
+    for i in range(hits.ladar.n_views):
+        sel = order[bounds[i]:bounds[i + 1]]
+        vals[i] = _bin_one(hits.range[sel], hits.cos_theta[sel], hits.sin_theta[sel],
+                           hits.material[sel], hits.spread[sel], mats, edges, hits.area,
+                           footprint)
+    return _sinogram(vals, hits.ladar, edges, hits.mode, hits.normals, footprint,
+                     hits.info["ray_spacing"], hits.rays, hits.back_face_hits)
+
+
+def _sinogram(vals, ladar, edges, mode, normals, footprint, spacing, rays, back):
+    planar = ladar.planar
+    return Sinogram(vals, angles_deg=ladar.angles_deg, bin_edges=edges, model="mesh",
+                    view_vectors=None if planar else ladar.view_vectors,
+                    info={"mode": mode, "normals": normals, "footprint": footprint,
+                          "ray_spacing": spacing, "rays": int(np.sum(rays)),
+                          "back_face_hits": np.asarray(back).tolist()})
+
+
+def simulate_mesh(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0=None,
+                  ray_spacing=None, rays_per_bin=None, footprint=False, seed=None, jobs=None,
+                  executor=None, progress=False) -> Sinogram:
+    """Trace and weigh in one streaming pass: each chunk of views is binned and its hits
+    dropped, so memory stays bounded whatever the number of views and rays. Options as
+    :func:`trace` and :func:`weigh`. An analytic scene is tessellated first (1024 segments
+    per shape, see :meth:`Scene.tessellate`)."""
+    if isinstance(scene, Scene) and not scene.is_mesh:
+        scene = scene.tessellate(1024)
+    geo, mode, spacing, area, chunks, results = _run(
+        scene, ladar, mode=mode, normals=normals, back_faces=back_faces, z0=z0,
+        ray_spacing=ray_spacing, rays_per_bin=rays_per_bin, seed=seed, jobs=jobs,
+        executor=executor, progress=progress, weigh_with=(tuple(scene.materials), footprint))
+    vals = np.concatenate([r[0] for r in results])
+    rays = [x for r in results for x in r[1]]
+    back = [x for r in results for x in r[2]]
+    return _sinogram(vals, ladar, ladar.bin_edges, mode, normals, footprint, spacing, rays,
+                     back)
