@@ -24,6 +24,11 @@ interpolated with Embree's barycentrics, averaged only across edges sharper than
 ``CREASE_DEG``), ``"exact"`` (the analytic shape's own normal at the hit point, for scenes
 tessellated from analytic shapes).
 
+Grazing incidence: a glossy coating's F grows like 1/cos θ toward a silhouette (A5), an
+integrable singularity of the integrand per unit projected area; point samples of it
+converge slowly there (~δ^½), so bins at a silhouette are the last to converge for
+non-Lambertian coatings. Bins away from silhouettes converge at the facet and ray rates.
+
 Footprint binning (``footprint=True``): a ray of width δ hitting a flat facet covers a range
 interval, not a point: along the transverse axis u the range changes at dr/du = (n·u)/(n·w).
 The ray's weight is spread over that interval (a box in slice mode; in 3-D the sum of the u

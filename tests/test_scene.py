@@ -138,8 +138,8 @@ def test_sinogram_contract():
 def test_simulate_validation():
     scene = ml.Scene([ml.Disk((0, 0), 0.5, M)])
     lad = ml.Ladar([0.0], [-1.0, 1.0])
-    with pytest.raises(ParameterError, match=r"model must be one of \('analytic', 'pixel'\); "
-                                             r"got 'mesh2'"):
+    with pytest.raises(ParameterError, match=r"model must be one of \('analytic', 'mesh', "
+                                             r"'pixel'\); got 'mesh2'"):
         ml.simulate(scene, lad, model="mesh2")
     with pytest.raises(ParameterError, match=r"model 'analytic' takes options \(\); got "
                                              r"'pixel_size'"):
