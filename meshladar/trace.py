@@ -61,6 +61,9 @@ _DEFAULT_RAYS_PER_BIN = {"slice": 8.0, "3d": 1.0}
 _ORIGIN_MARGIN = 0.01
 #: Views per task: enough work to amortise a task, few enough to balance two cores.
 _VIEWS_PER_TASK = 8
+#: Occlusion rays toward a bistatic receiver start this far (relative to the scene's
+#: radius) off the hit facet, above float32 round-off of the hit point (~1e-7 R).
+_RECEIVER_LIFT = 1e-5
 
 
 # ------------------------------------------------------------------ geometry held per job
@@ -163,7 +166,9 @@ class Hits:
     ``materials``), ``spread`` (k, 2): half-widths of the footprint's range interval along
     the two transverse axes (0 for the second in slice mode).
     Per view (n_views,): ``rays`` cast, ``back_face_hits``. Scalars: ``area`` (δA⊥ per
-    ray), ``mode``, ``normals``; ``ladar`` and ``materials`` as traced.
+    ray), ``mode``, ``normals``; ``ladar`` and ``materials`` as traced. With a bistatic
+    receiver, ``bistatic`` (k, 4) holds cos θr, sin θr, cos α, sin α (cos θr = −1 where the
+    occlusion ray toward the receiver is blocked).
     """
 
     view: np.ndarray
@@ -179,6 +184,7 @@ class Hits:
     normals: str
     ladar: Ladar
     materials: tuple
+    bistatic: np.ndarray = None
     info: dict = field(default_factory=dict)
 
     @property
@@ -211,8 +217,9 @@ def _ray_grid(geo, w, mode, spacing, z0_shifted, rng):
     return np.ascontiguousarray(o, dtype=np.float32), L, u, v
 
 
-def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng):
-    """Hits of one view (range relative to the shifted centre's plane)."""
+def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=None):
+    """Hits of one view (range relative to the shifted centre's plane); with a bistatic
+    receiver direction w_r, one occlusion ray per hit toward it."""
     o, L, u, v = _ray_grid(geo, w, mode, spacing, z0_shifted, rng)
     d = np.ascontiguousarray((-w)[None, :], dtype=np.float32)
     res = scene.run(o, d, output=1)
@@ -246,10 +253,30 @@ def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng):
     sin_t = np.linalg.norm(np.cross(n, w), axis=1)
     if back_faces == "ignore":
         cos_t = np.where(back, -1.0, cos_t)
+    bi = None
+    rng_extra = 0.0
+    if w_r is not None:
+        # one occlusion ray per hit toward the receiver, from just off the facet
+        p = o[hit].astype(np.float64) - t_hit[:, None] * w
+        lift = _RECEIVER_LIFT * geo.radius
+        o2 = np.ascontiguousarray(p + lift * n_geo, dtype=np.float32)
+        blocked = scene.run(o2, np.ascontiguousarray(w_r[None, :], dtype=np.float32),
+                            query="OCCLUDED") != -1
+        cos_r = n @ w_r
+        sin_r = np.linalg.norm(np.cross(n, w_r), axis=1)
+        half = (w + w_r) / np.linalg.norm(w + w_r)
+        cos_a = n @ half
+        sin_a = np.linalg.norm(np.cross(n, half), axis=1)
+        cos_r = np.where(blocked | (back_faces == "ignore") & back, -1.0, cos_r)
+        bi = np.stack([cos_r, sin_r, cos_a, sin_a], -1)
+        # range from the two-way path: r = −p·(w + w_r)/2 (monostatic: −p·w)
+        rng_extra = -(p @ w_r)
     # footprint: range spread along u and v on the flat facet, and the facet's own range
     # interval relative to the hit (a footprint cannot return ranges the facet does not span)
     cg = np.maximum(np.abs(n_geo @ w), 1e-300)
     rng_rel = t_hit - L                          # r = −c·w + (t − L)
+    if w_r is not None:
+        rng_rel = 0.5 * (rng_rel + rng_extra)     # r = −c·(w + w_r)/2 + ...
     tri_r = -((geo.vertices[geo.faces[prim]] - geo.center) @ w)
     spread = np.zeros((prim.size, 4))
     spread[:, 0] = np.abs(n_geo @ u) / cg * 0.5 * spacing
@@ -257,7 +284,7 @@ def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng):
         spread[:, 1] = np.abs(n_geo @ v) / cg * 0.5 * spacing
     spread[:, 2] = np.minimum(tri_r.min(axis=1) - rng_rel, 0.0)
     spread[:, 3] = np.maximum(tri_r.max(axis=1) - rng_rel, 0.0)
-    return (rng_rel, cos_t, sin_t, geo.material[prim], spread, len(o), int(back.sum()))
+    return (rng_rel, cos_t, sin_t, geo.material[prim], spread, len(o), int(back.sum()), bi)
 
 
 def _spacing(ladar, mode, ray_spacing, rays_per_bin):
@@ -298,33 +325,46 @@ def _chunks(n, size):
 
 
 def _job(geo, ladar_vectors, views, mode, spacing, z0_shifted, back_faces, seed, edges,
-         weigh_with):
+         weigh_with, receivers=None):
     """Trace a chunk of views; return hits (weigh_with None) or binned values."""
     scene = _embree_scene(geo)
     out = []
     for i in views:
         w = ladar_vectors[i]
+        w_r = None if receivers is None else receivers[i]
         rng = None if seed is None else np.random.default_rng([seed, int(i)])
-        out.append(_trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng))
+        out.append(_trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng,
+                               w_r))
     if weigh_with is None:
         return out
     materials, footprint, area = weigh_with
     vals = np.zeros((len(views), len(edges) - 1))
     for j, (i, h) in enumerate(zip(views, out)):
-        r = h[0] - float(geo.center @ ladar_vectors[i])
-        vals[j] = _bin_one(r, h[1], h[2], h[3], h[4], materials, edges, area, footprint)
+        r = h[0] + _range_offset(geo.center, ladar_vectors[i],
+                                 None if receivers is None else receivers[i])
+        vals[j] = _bin_one(r, h[1], h[2], h[3], h[4], materials, edges, area, footprint, h[7])
     return vals, [h[5] for h in out], [h[6] for h in out]
+
+
+def _range_offset(center, w, w_r):
+    """−c·w (monostatic) or −c·(w + w_r)/2 (bistatic): the range of the shifted origin."""
+    return -float(center @ w) if w_r is None else -0.5 * float(center @ (w + w_r))
 
 
 # ------------------------------------------------------------------ weighing and binning
 
-def _weights(cos_t, sin_t, mat, materials, area):
-    """F(θ)·δA⊥ per hit, evaluated per material group (0 for cos θ < 0)."""
+def _weights(cos_t, sin_t, mat, materials, area, bi=None):
+    """F·δA⊥ per hit, evaluated per material group (0 where either direction is below the
+    horizon): monostatic F(θ; −θ), or bistatic F(w, w_r) from (cos, sin) of θr and α."""
     wt = np.zeros(cos_t.size)
     for k in np.unique(mat):
         sel = mat == k
         c, s = cos_t[sel], sin_t[sel]
-        wt[sel] = materials[k]._core(c, s, c, s, c, s, False) * area
+        if bi is None:
+            wt[sel] = materials[k]._core(c, s, c, s, c, s, False) * area
+        else:
+            b = bi[sel]
+            wt[sel] = materials[k]._core(c, s, b[:, 0], b[:, 1], b[:, 2], b[:, 3], False) * area
     return wt
 
 
@@ -341,10 +381,10 @@ def _trap_cdf(x, a, b):
                    / np.where(a * b > 0, 4 * a * b, 1.0), 0.0, 1.0)
 
 
-def _bin_one(r, cos_t, sin_t, mat, spread, materials, edges, area, footprint):
+def _bin_one(r, cos_t, sin_t, mat, spread, materials, edges, area, footprint, bi=None):
     """One view's profile from its hits."""
     nb = len(edges) - 1
-    wt = _weights(cos_t, sin_t, mat, materials, area)
+    wt = _weights(cos_t, sin_t, mat, materials, area, bi)
     if not footprint:
         k = np.searchsorted(edges, r, side="right") - 1
         ok = (k >= 0) & (k < nb)
@@ -398,9 +438,33 @@ def _estimate_rays(geo, ladar, mode, spacing):
     return ladar.n_views * (extent if mode == "slice" else extent * extent)
 
 
+def _receivers(receiver, ladar, mode, footprint):
+    if receiver is None:
+        return None
+    r = np.asarray(receiver, dtype=np.float64)
+    if r.shape == (3,):
+        r = np.broadcast_to(r, (ladar.n_views, 3))
+    if r.shape != (ladar.n_views, 3) or not np.all(np.isfinite(r)):
+        raise ParameterError(f"receiver must be a direction (3,) or one per view "
+                             f"({ladar.n_views}, 3); got shape {np.shape(receiver)}")
+    norm = np.linalg.norm(r, axis=1)
+    if np.any(norm == 0):
+        raise ParameterError("receiver directions must be non-zero")
+    r = r / norm[:, None]
+    if np.any(np.einsum("ij,ij->i", r, ladar.view_vectors) <= -1 + 1e-12):
+        raise ParameterError("receiver must not point exactly opposite the view (no return)")
+    if mode == "slice" and np.any(r[:, 2] != 0):
+        raise ParameterError("in slice mode the receiver must lie in the x-y plane")
+    if footprint:
+        raise ParameterError("footprint binning is monostatic only; use footprint=False with "
+                             "a bistatic receiver")
+    return np.ascontiguousarray(r)
+
+
 def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_bin, seed,
-         jobs, executor, progress, weigh_with):
+         jobs, executor, progress, weigh_with, receiver=None):
     mode, geo, z0 = _options(scene, ladar, mode, normals, back_faces, z0)
+    receivers = _receivers(receiver, ladar, mode, bool(weigh_with and weigh_with[1]))
     spacing = _spacing(ladar, mode, ray_spacing, rays_per_bin)
     area = spacing if mode == "slice" else spacing * spacing
     if weigh_with is not None:
@@ -412,7 +476,8 @@ def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_b
     from ._progress import Progress
 
     bar = Progress(ladar.n_views, "views", enabled=progress)
-    args = (mode, spacing, z0_shifted, back_faces, seed, ladar.bin_edges, weigh_with)
+    args = (mode, spacing, z0_shifted, back_faces, seed, ladar.bin_edges, weigh_with,
+            receivers)
     results = []
     try:
         if ex is None:
@@ -428,12 +493,12 @@ def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_b
         bar.close()
         if own:
             ex.shutdown()
-    return geo, mode, spacing, area, chunks, results
+    return geo, mode, spacing, area, chunks, results, receivers
 
 
 def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0=None,
-          ray_spacing=None, rays_per_bin=None, seed=None, jobs=None, executor=None,
-          progress=False) -> Hits:
+          ray_spacing=None, rays_per_bin=None, seed=None, receiver=None, jobs=None,
+          executor=None, progress=False) -> Hits:
     """Trace every view once and keep the hits (geometry only): re-weigh them with
     :func:`weigh` for any coating without tracing again.
 
@@ -454,6 +519,10 @@ def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0
         Ray spacing, or rays per range-bin width (default 8 in slice mode, 1 in 3-D).
     seed : int, optional
         Stratified jitter of each ray within its cell, reproducible per view.
+    receiver : (3,) or (n_views, 3) array_like, optional
+        Bistatic receiver direction(s) from the scene (default: collocated, monostatic).
+        Each hit then casts one occlusion ray toward the receiver, F is the bistatic SR
+        BRDF, and range is half the two-way path, r = −p·(w + w_r)/2.
     jobs : int, optional
         Worker processes (embreex holds the GIL during casts, so threads do not help).
         Default: 1 for small jobs, all cores from 4e6 rays.
@@ -462,13 +531,15 @@ def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0
     progress : bool
         A progress bar on a terminal.
     """
-    geo, mode, spacing, area, chunks, results = _run(
+    geo, mode, spacing, area, chunks, results, receivers = _run(
         scene, ladar, mode=mode, normals=normals, back_faces=back_faces, z0=z0,
         ray_spacing=ray_spacing, rays_per_bin=rays_per_bin, seed=seed, jobs=jobs,
-        executor=executor, progress=progress, weigh_with=None)
+        executor=executor, progress=progress, weigh_with=None, receiver=receiver)
     per_view = [h for res in results for h in res]
     vectors = ladar.view_vectors
-    offsets = -(vectors @ geo.center)
+    offsets = [_range_offset(geo.center, vectors[i],
+                             None if receivers is None else receivers[i])
+               for i in range(ladar.n_views)]
     view = np.concatenate([np.full(h[0].size, i, np.int32) for i, h in enumerate(per_view)])
     return Hits(view=view,
                 range=np.concatenate([h[0] + offsets[i] for i, h in enumerate(per_view)]),
@@ -480,7 +551,8 @@ def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0
                 back_face_hits=np.array([h[6] for h in per_view]),
                 area=area, mode=mode, normals=normals, ladar=ladar,
                 materials=tuple(scene.materials),
-                info={"ray_spacing": spacing, "z0": z0})
+                bistatic=None if receivers is None else np.concatenate([h[7] for h in per_view]),
+                info={"ray_spacing": spacing, "z0": z0, "receiver": receivers})
 
 
 def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None) -> Sinogram:
@@ -497,6 +569,8 @@ def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None) -> Sin
     bin_edges : array_like, optional
         Other range bins (default the ladar's).
     """
+    if footprint and hits.bistatic is not None:
+        raise ParameterError("footprint binning is monostatic only; these hits are bistatic")
     mats = hits.materials if materials is None else tuple(materials)
     if len(mats) != len(hits.materials):
         raise ParameterError(f"materials must give {len(hits.materials)} coatings (one per "
@@ -509,7 +583,7 @@ def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None) -> Sin
         sel = order[bounds[i]:bounds[i + 1]]
         vals[i] = _bin_one(hits.range[sel], hits.cos_theta[sel], hits.sin_theta[sel],
                            hits.material[sel], hits.spread[sel], mats, edges, hits.area,
-                           footprint)
+                           footprint, None if hits.bistatic is None else hits.bistatic[sel])
     return _sinogram(vals, hits.ladar, edges, hits.mode, hits.normals, footprint,
                      hits.info["ray_spacing"], hits.rays, hits.back_face_hits)
 
@@ -524,18 +598,19 @@ def _sinogram(vals, ladar, edges, mode, normals, footprint, spacing, rays, back)
 
 
 def simulate_mesh(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0=None,
-                  ray_spacing=None, rays_per_bin=None, footprint=False, seed=None, jobs=None,
-                  executor=None, progress=False) -> Sinogram:
+                  ray_spacing=None, rays_per_bin=None, footprint=False, seed=None,
+                  receiver=None, jobs=None, executor=None, progress=False) -> Sinogram:
     """Trace and weigh in one streaming pass: each chunk of views is binned and its hits
     dropped, so memory stays bounded whatever the number of views and rays. Options as
     :func:`trace` and :func:`weigh`. An analytic scene is tessellated first (1024 segments
     per shape, see :meth:`Scene.tessellate`)."""
     if isinstance(scene, Scene) and not scene.is_mesh:
         scene = scene.tessellate(1024)
-    geo, mode, spacing, area, chunks, results = _run(
+    geo, mode, spacing, area, chunks, results, _ = _run(
         scene, ladar, mode=mode, normals=normals, back_faces=back_faces, z0=z0,
         ray_spacing=ray_spacing, rays_per_bin=rays_per_bin, seed=seed, jobs=jobs,
-        executor=executor, progress=progress, weigh_with=(tuple(scene.materials), footprint))
+        executor=executor, progress=progress, weigh_with=(tuple(scene.materials), footprint),
+        receiver=receiver)
     vals = np.concatenate([r[0] for r in results])
     rays = [x for r in results for x in r[1]]
     back = [x for r in results for x in r[2]]
