@@ -92,3 +92,82 @@ def bench_fbp(*, n_bins=1024, size=1024, repeats=3, filter="ramp"):
             "speedup": statistics.median(t_theirs) / statistics.median(t_ours),
             "max_diff_rel": float(np.max(np.abs(a - b)) / np.max(np.abs(b))),
             "shape": (360, n_bins), "size": size}
+
+
+def _icosphere_scene(subdivisions, material):
+    from .mesh import sphere
+    from .scene import Scene
+
+    return Scene._from_parts([sphere((0.0, 0.0, 0.0), 0.5, 0, subdivisions=subdivisions)],
+                             [material])
+
+
+def bench_mesh(*, repeats=3, subdivisions=6, rays_per_view=1_000_000, views=16):
+    """Mesh engine throughput against raw embreex on the same rays, and its build cost.
+
+    Returns a dict: ``raw_mrays``, ``pipeline_mrays`` (one process, rays → hits → weights
+    → bins), their ratio, ``two_core_mrays`` (2 worker processes) and its ratio to one core,
+    ``faces``, and the Embree build split for a 1.3M-triangle mesh (``upload_s``,
+    ``bvh_s``).
+    """
+    import math
+
+    import numpy as np
+
+    from . import materials
+    from .ladar import Ladar
+    from .mesh import fibonacci_sphere
+    from .trace import _embree_scene, _Geometry, _ray_grid, simulate_mesh
+
+    scene = _icosphere_scene(subdivisions, materials.DARK_GRAY)
+    spacing = 1.0 / math.sqrt(rays_per_view)          # the sphere's 1 × 1 projected square
+    vecs = fibonacci_sphere(views)
+    ladar = Ladar(None, np.linspace(-0.6, 0.6, 513), view_vectors=vecs)
+    geo = _Geometry(scene, "flat")
+    emb = _embree_scene(geo)
+    grids = [_ray_grid(geo, w, "3d", spacing, 0.0, None)[0] for w in vecs]
+    dirs = [np.ascontiguousarray((-w)[None, :], dtype=np.float32) for w in vecs]
+    n_rays = sum(len(o) for o in grids)
+
+    def raw_all():                   # the same rays, one embreex call per view
+        for o, d in zip(grids, dirs):
+            emb.run(o, d, output=1)
+
+    raw = statistics.median(time_call(raw_all, repeats=repeats))
+    t1 = statistics.median(time_call(
+        lambda: simulate_mesh(scene, ladar, mode="3d", ray_spacing=spacing, jobs=1),
+        repeats=repeats))
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(2) as pool:        # warm workers: the pool is reused in a run
+        t2 = statistics.median(time_call(
+            lambda: simulate_mesh(scene, ladar, mode="3d", ray_spacing=spacing,
+                                  executor=pool), repeats=1))
+    build = _build_split(8)
+    return {"faces": len(geo.faces), "rays": n_rays, "views": views,
+            "raw_mrays": n_rays / raw / 1e6, "pipeline_mrays": n_rays / t1 / 1e6,
+            "pipeline_over_raw": raw / t1,
+            "two_core_mrays": n_rays / t2 / 1e6, "two_over_one": t1 / t2, **build}
+
+
+def _build_split(subdivisions):
+    """Embree build of an icosphere (8 subdivisions: 1.3M triangles): embreex's upload loop
+    against the BVH build (commit on the first query)."""
+    import time as _time
+
+    import numpy as np
+
+    from .mesh import _icosphere
+
+    v, f = _icosphere(subdivisions)
+    from embreex import rtcore_scene
+    from embreex.mesh_construction import TriangleMesh
+
+    sc = rtcore_scene.EmbreeScene()
+    t0 = _time.perf_counter()
+    TriangleMesh(sc, np.ascontiguousarray(v, np.float32), np.ascontiguousarray(f, np.int32))
+    t1 = _time.perf_counter()
+    sc.run(np.array([[0, 0, 5]], np.float32), np.array([[0, 0, -1]], np.float32))
+    t2 = _time.perf_counter()
+    return {"build_faces": len(f), "upload_s": t1 - t0, "bvh_s": t2 - t1,
+            "build_over_bvh": (t2 - t0) / (t2 - t1)}

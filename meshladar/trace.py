@@ -142,6 +142,12 @@ def _embree_scene(geo: _Geometry):
     return scene
 
 
+def _dot(a, w):
+    """Row-wise a·w for (k, 3) a, without BLAS (whose threads would oversubscribe the cores
+    that worker processes already share)."""
+    return a[:, 0] * w[0] + a[:, 1] * w[1] + a[:, 2] * w[2]
+
+
 def _frame(w):
     """(u, v) completing w to a right-handed orthonormal frame; v = z for horizontal w."""
     z = np.array([0.0, 0.0, 1.0])
@@ -217,7 +223,8 @@ def _ray_grid(geo, w, mode, spacing, z0_shifted, rng):
     return np.ascontiguousarray(o, dtype=np.float32), L, u, v
 
 
-def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=None):
+def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=None,
+                footprint=True):
     """Hits of one view (range relative to the shifted centre's plane); with a bistatic
     receiver direction w_r, one occlusion ray per hit toward it."""
     o, L, u, v = _ray_grid(geo, w, mode, spacing, z0_shifted, rng)
@@ -228,7 +235,7 @@ def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=N
     prim = prim[hit]
     t_hit = res["tfar"][hit].astype(np.float64)
     n_geo = geo.face_normals[prim]
-    cos_geo = n_geo @ w
+    cos_geo = _dot(n_geo, w)
     back = cos_geo < 0
     if geo.normals == "flat":
         n = n_geo
@@ -245,12 +252,15 @@ def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=N
         for k in np.unique(part):
             sel = part == k
             n[sel] = geo.exact[k](p[sel])
-    sign = np.where(back, -1.0, 1.0)
-    if back_faces == "two-sided":
+    cos_t = _dot(n, w)
+    if back_faces == "two-sided" and back.any():
+        sign = np.where(back, -1.0, 1.0)
         n = n * sign[:, None]
         n_geo = n_geo * sign[:, None]
-    cos_t = n @ w
-    sin_t = np.linalg.norm(np.cross(n, w), axis=1)
+        cos_t = cos_t * sign
+    # sin θ from cos θ: near normal incidence the absolute error of 1 − cos² is 1e-16, far
+    # below the glint lobe's e² ≥ 1e-8 that sin² is compared with in h(α)
+    sin_t = np.sqrt(np.maximum(1.0 - cos_t * cos_t, 0.0))
     if back_faces == "ignore":
         cos_t = np.where(back, -1.0, cos_t)
     bi = None
@@ -262,28 +272,30 @@ def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=N
         o2 = np.ascontiguousarray(p + lift * n_geo, dtype=np.float32)
         blocked = scene.run(o2, np.ascontiguousarray(w_r[None, :], dtype=np.float32),
                             query="OCCLUDED") != -1
-        cos_r = n @ w_r
+        cos_r = _dot(n, w_r)
         sin_r = np.linalg.norm(np.cross(n, w_r), axis=1)
         half = (w + w_r) / np.linalg.norm(w + w_r)
-        cos_a = n @ half
+        cos_a = _dot(n, half)
         sin_a = np.linalg.norm(np.cross(n, half), axis=1)
         cos_r = np.where(blocked | (back_faces == "ignore") & back, -1.0, cos_r)
         bi = np.stack([cos_r, sin_r, cos_a, sin_a], -1)
         # range from the two-way path: r = −p·(w + w_r)/2 (monostatic: −p·w)
-        rng_extra = -(p @ w_r)
+        rng_extra = -_dot(p, w_r)
     # footprint: range spread along u and v on the flat facet, and the facet's own range
     # interval relative to the hit (a footprint cannot return ranges the facet does not span)
-    cg = np.maximum(np.abs(n_geo @ w), 1e-300)
     rng_rel = t_hit - L                          # r = −c·w + (t − L)
     if w_r is not None:
         rng_rel = 0.5 * (rng_rel + rng_extra)     # r = −c·(w + w_r)/2 + ...
-    tri_r = -((geo.vertices[geo.faces[prim]] - geo.center) @ w)
     spread = np.zeros((prim.size, 4))
-    spread[:, 0] = np.abs(n_geo @ u) / cg * 0.5 * spacing
-    if mode == "3d":
-        spread[:, 1] = np.abs(n_geo @ v) / cg * 0.5 * spacing
-    spread[:, 2] = np.minimum(tri_r.min(axis=1) - rng_rel, 0.0)
-    spread[:, 3] = np.maximum(tri_r.max(axis=1) - rng_rel, 0.0)
+    if footprint:
+        cg = np.maximum(np.abs(_dot(n_geo, w)), 1e-300)
+        tri = geo.vertices[geo.faces[prim]] - geo.center
+        tri_r = -(tri[..., 0] * w[0] + tri[..., 1] * w[1] + tri[..., 2] * w[2])
+        spread[:, 0] = np.abs(_dot(n_geo, u)) / cg * 0.5 * spacing
+        if mode == "3d":
+            spread[:, 1] = np.abs(_dot(n_geo, v)) / cg * 0.5 * spacing
+        spread[:, 2] = np.minimum(tri_r.min(axis=1) - rng_rel, 0.0)
+        spread[:, 3] = np.maximum(tri_r.max(axis=1) - rng_rel, 0.0)
     return (rng_rel, cos_t, sin_t, geo.material[prim], spread, len(o), int(back.sum()), bi)
 
 
@@ -334,7 +346,7 @@ def _job(geo, ladar_vectors, views, mode, spacing, z0_shifted, back_faces, seed,
         w_r = None if receivers is None else receivers[i]
         rng = None if seed is None else np.random.default_rng([seed, int(i)])
         out.append(_trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng,
-                               w_r))
+                               w_r, footprint=weigh_with is None or weigh_with[1]))
     if weigh_with is None:
         return out
     materials, footprint, area = weigh_with
@@ -356,6 +368,8 @@ def _range_offset(center, w, w_r):
 def _weights(cos_t, sin_t, mat, materials, area, bi=None):
     """F·δA⊥ per hit, evaluated per material group (0 where either direction is below the
     horizon): monostatic F(θ; −θ), or bistatic F(w, w_r) from (cos, sin) of θr and α."""
+    if len(materials) == 1 and bi is None:
+        return materials[0]._core(cos_t, sin_t, cos_t, sin_t, cos_t, sin_t, False) * area
     wt = np.zeros(cos_t.size)
     for k in np.unique(mat):
         sel = mat == k
