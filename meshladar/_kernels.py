@@ -214,3 +214,63 @@ def corner_normals(faces, face_normals, face_areas, ptr, face_of, cos_crease, ou
                 out[f, c, 0] = face_normals[f, 0]
                 out[f, c, 1] = face_normals[f, 1]
                 out[f, c, 2] = face_normals[f, 2]
+
+
+_COS_HORIZON = math.cos(math.pi / 2)
+
+
+@njit(cache=True)
+def _sr_monostatic(c, s, rho_d, eps, b, e, G, diffuse, specular):
+    """F(θ; −θ) of meshladar.brdf.SandfordRobertson from cos θ ≥ 0 and sin θ: the same
+    expressions as SandfordRobertson._core (tests hold the two to 1e-13)."""
+    den = math.hypot(c, b * s)
+    g = (c / den) ** 2 if den > 0.0 else 1.0
+    out = 0.0
+    if diffuse:
+        out += rho_d / (math.pi * G * G) * g * g
+    if specular:
+        rho_s = max(1.0 - (eps + rho_d) / G * g, 0.0)
+        d = math.hypot(e * c, s) ** 2
+        k = (1.0 - e) * (1.0 + e)
+        kc = k * c
+        h_scaled = kc + (2.0 * e * e + kc * kc) / math.hypot(2.0 * e, kc)
+        out += rho_s * (2.0 * e * e / (d * d * h_scaled)) / (4.0 * math.pi) / max(c, _COS_HORIZON)
+    return out
+
+
+@njit(cache=True)
+def bin_flat_hits(prim, tfar, face_normals, face_material, params, w, start, edges, area,
+                  ignore_back, out):
+    """Monostatic, flat-normal weighing and binning of one view's Embree hits, fused:
+    out[k] += F(θ)·area for each hit with range start + tfar in bin k. ``params`` rows are
+    (rho_d, epsilon, b, e, G, has_diffuse, has_specular) per material. Returns the number of
+    back-face hits."""
+    nb = edges.size - 1
+    back = 0
+    for i in range(prim.size):
+        p = prim[i]
+        if p < 0:
+            continue
+        c = face_normals[p, 0] * w[0] + face_normals[p, 1] * w[1] + face_normals[p, 2] * w[2]
+        if c < 0.0:
+            back += 1
+            if ignore_back:
+                continue
+            c = -c
+        r = start + tfar[i]
+        if r < edges[0] or r >= edges[nb]:
+            continue
+        lo = 0
+        hi = nb
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            if edges[mid] <= r:
+                lo = mid
+            else:
+                hi = mid
+        s = math.sqrt(max(1.0 - c * c, 0.0))
+        m = face_material[p]
+        f = _sr_monostatic(c, s, params[m, 0], params[m, 1], params[m, 2], params[m, 3],
+                           params[m, 4], params[m, 5] > 0.5, params[m, 6] > 0.5)
+        out[lo] += f * area
+    return back

@@ -199,7 +199,10 @@ class Hits:
 
 
 def _ray_grid(geo, w, mode, spacing, z0_shifted, rng):
-    """Origins (n, 3) float32 in shifted coordinates, the start distance L, and (u, v)."""
+    """Origins (n, 3) float32 in shifted coordinates, the start distance L, and (u, v).
+
+    Built component by component in float32 (Embree's precision): o = s u + t v + L w.
+    """
     u, v = _frame(w)
     L = (1.0 + _ORIGIN_MARGIN) * geo.radius + spacing
     su = geo.hull @ u
@@ -207,20 +210,27 @@ def _ray_grid(geo, w, mode, spacing, z0_shifted, rng):
     ns = max(1, int(math.ceil((s_hi - s_lo) / spacing)))
     s = s_lo + (np.arange(ns) + 0.5) * spacing
     if mode == "slice":
-        if rng is not None:
-            s = s + rng.uniform(-0.5, 0.5, ns) * spacing
-        o = s[:, None] * u + z0_shifted * v + L * w
+        t = np.array([z0_shifted])
     else:
         tv = geo.hull @ v
         t_lo, t_hi = tv.min() - spacing, tv.max() + spacing
         nt = max(1, int(math.ceil((t_hi - t_lo) / spacing)))
         t = t_lo + (np.arange(nt) + 0.5) * spacing
-        S, T = np.meshgrid(s, t, indexing="ij")
-        if rng is not None:
-            S = S + rng.uniform(-0.5, 0.5, S.shape) * spacing
-            T = T + rng.uniform(-0.5, 0.5, T.shape) * spacing
-        o = S.reshape(-1, 1) * u + T.reshape(-1, 1) * v + L * w
-    return np.ascontiguousarray(o, dtype=np.float32), L, u, v
+    o = np.empty((s.size, t.size, 3), dtype=np.float32)
+    if rng is None:
+        s32, t32 = s.astype(np.float32), t.astype(np.float32)
+        for k in range(3):
+            np.add.outer(s32 * np.float32(u[k]), t32 * np.float32(v[k]), out=o[:, :, k])
+    else:
+        S = s[:, None] + rng.uniform(-0.5, 0.5, (s.size, t.size)) * spacing
+        T = np.broadcast_to(t[None, :], S.shape)
+        if mode == "3d":
+            T = T + rng.uniform(-0.5, 0.5, S.shape) * spacing
+        for k in range(3):
+            o[:, :, k] = S * u[k] + T * v[k]
+    for k in range(3):
+        o[:, :, k] += np.float32(L * w[k])
+    return o.reshape(-1, 3), L, u, v
 
 
 def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=None,
@@ -340,6 +350,10 @@ def _job(geo, ladar_vectors, views, mode, spacing, z0_shifted, back_faces, seed,
          weigh_with, receivers=None):
     """Trace a chunk of views; return hits (weigh_with None) or binned values."""
     scene = _embree_scene(geo)
+    if (weigh_with is not None and geo.normals == "flat" and receivers is None
+            and not weigh_with[1]):
+        return _fast_job(geo, scene, ladar_vectors, views, mode, spacing, z0_shifted,
+                         back_faces, seed, edges, weigh_with[0], weigh_with[2])
     out = []
     for i in views:
         w = ladar_vectors[i]
@@ -356,6 +370,34 @@ def _job(geo, ladar_vectors, views, mode, spacing, z0_shifted, back_faces, seed,
                                  None if receivers is None else receivers[i])
         vals[j] = _bin_one(r, h[1], h[2], h[3], h[4], materials, edges, area, footprint, h[7])
     return vals, [h[5] for h in out], [h[6] for h in out]
+
+
+def _material_table(materials):
+    """(n, 7) rows of (rho_d, epsilon, b, e, G, has_diffuse, has_specular)."""
+    return np.array([[m.rho_d, m.epsilon, m.b, m.e, m.G, float(m.has_diffuse),
+                      float(m.has_specular)] for m in materials])
+
+
+def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces, seed, edges,
+              materials, area):
+    """The common case fused in one compiled loop per view: monostatic, flat normals,
+    point binning (no per-hit arrays beyond Embree's own output)."""
+    from . import _kernels
+
+    params = _material_table(materials)
+    vals = np.zeros((len(views), len(edges) - 1))
+    rays, backs = [], []
+    for j, i in enumerate(views):
+        w = vectors[i]
+        rng = None if seed is None else np.random.default_rng([seed, int(i)])
+        o, L, _, _ = _ray_grid(geo, w, mode, spacing, z0_shifted, rng)
+        res = scene.run(o, np.ascontiguousarray((-w)[None, :], dtype=np.float32), output=1)
+        start = _range_offset(geo.center, w, None) - L
+        backs.append(_kernels.bin_flat_hits(res["primID"], res["tfar"], geo.face_normals,
+                                            geo.material, params, w, start, edges, area,
+                                            back_faces == "ignore", vals[j]))
+        rays.append(len(o))
+    return vals, rays, backs
 
 
 def _range_offset(center, w, w_r):
