@@ -171,3 +171,36 @@ def _build_split(subdivisions):
     t2 = _time.perf_counter()
     return {"build_faces": len(f), "upload_s": t1 - t0, "bvh_s": t2 - t1,
             "build_over_bvh": (t2 - t0) / (t2 - t1)}
+
+
+def bench_streaming(*, views=360, rays_per_view=1_000_000, subdivisions=6, jobs=2):
+    """The streaming run of the issue: ``views`` views × ~1e6 rays of an 82k-triangle
+    sphere, binned per chunk. Runs in a fresh subprocess and reports its wall time and the
+    peak RSS of it and its workers (ru_maxrss of the largest process)."""
+    import json
+    import subprocess
+    import sys
+
+    code = f"""
+import json, math, resource, time
+import numpy as np
+from meshladar import materials
+from meshladar.bench import _icosphere_scene
+from meshladar.ladar import Ladar
+from meshladar.mesh import fibonacci_sphere
+from meshladar.trace import simulate_mesh
+scene = _icosphere_scene({subdivisions}, materials.DARK_GRAY)
+ladar = Ladar(None, np.linspace(-0.6, 0.6, 1025), view_vectors=fibonacci_sphere({views}))
+t = time.perf_counter()
+sino = simulate_mesh(scene, ladar, mode="3d", ray_spacing=1.0 / math.sqrt({rays_per_view}),
+                     jobs={jobs})
+dt = time.perf_counter() - t
+rss = max(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss,
+          resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss) / 1024.0
+print(json.dumps({{"seconds": dt, "rays": sino.info["rays"], "peak_rss_mb": rss}}))
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True)
+    res = json.loads(out.stdout.strip().splitlines()[-1])
+    res["mrays"] = res["rays"] / res["seconds"] / 1e6
+    return res

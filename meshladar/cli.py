@@ -73,7 +73,7 @@ def _cmd_paper(args) -> int:
 
 
 def _cmd_bench(args) -> int:
-    """Time the analytic forward model on the paper's set-ups (median of several runs)."""
+    """Time the forward models and FBP against their peers (median of several runs)."""
     from .bench import bench_analytic
 
     print(f"analytic model, 360 views x 512 bins (A/256), median of {args.repeats} runs "
@@ -92,6 +92,22 @@ def _cmd_bench(args) -> int:
     print(f"FBP {r['shape'][0]} x {r['shape'][1]} -> {r['size']}^2, ramp, linear: "
           f"meshladar {r['ours_s']:.3f} s, skimage.iradon {r['skimage_s']:.3f} s, "
           f"speed-up {r['speedup']:.1f}x, max |difference| {r['max_diff_rel']:.1e} of max")
+    from .bench import bench_mesh, bench_streaming
+
+    m = bench_mesh(repeats=args.repeats)
+    print(f"mesh engine, {m['faces']} triangles, {m['views']} views x "
+          f"{m['rays'] // m['views']} rays (3-D grid), same rays in the same process:")
+    print(f"  raw embreex cast (output=1)       {m['raw_mrays']:7.2f} Mrays/s")
+    print(f"  pipeline, 1 process               {m['pipeline_mrays']:7.2f} Mrays/s "
+          f"({100 * m['pipeline_over_raw']:.0f}% of raw)")
+    print(f"  pipeline, 2 processes             {m['two_core_mrays']:7.2f} Mrays/s "
+          f"({m['two_over_one']:.2f}x one)")
+    print(f"  Embree build, {m['build_faces']} triangles: embreex upload {m['upload_s']:.2f} s "
+          f"+ BVH {m['bvh_s']:.2f} s = {m['build_over_bvh']:.1f}x the BVH build")
+    if args.full:
+        st = bench_streaming()
+        print(f"streaming 360 views x 1e6 rays, 2 processes: {st['seconds']:.1f} s, "
+              f"{st['mrays']:.2f} Mrays/s, peak RSS {st['peak_rss_mb']:.0f} MB")
     return 0
 
 
@@ -154,6 +170,8 @@ def _parser() -> argparse.ArgumentParser:
                          formatter_class=argparse.RawDescriptionHelpFormatter)
     bch.add_argument("--repeats", type=_positive_int, default=5,
                      help="timed runs per case after one warm-up (default: %(default)s)")
+    bch.add_argument("--full", action="store_true",
+                     help="also the streaming run: 360 views x 1e6 rays (about a minute)")
     bch.set_defaults(func=_cmd_bench)
     return p
 
