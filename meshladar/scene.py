@@ -282,6 +282,12 @@ class Scene:
         return self
 
     @classmethod
+    def from_parts(cls, parts, materials):
+        """A mesh scene from :class:`meshladar.mesh.MeshPart` objects (e.g.
+        ``meshladar.mesh.sphere(center, radius, 0, subdivisions=5)``) and their materials."""
+        return cls._from_parts(list(parts), materials)
+
+    @classmethod
     def from_mesh(cls, mesh_or_path, material=None, *, materials=None, face_materials=None,
                   transform=None):
         """A scene from anything trimesh loads (STL, OBJ, PLY, OFF, GLB/GLTF with parts).

@@ -352,3 +352,35 @@ def test_fused_flat_path_equals_trace_and_weigh(back_faces):
         slow = ml.weigh(ml.trace(mesh, ladar, back_faces=back_faces))
         np.testing.assert_allclose(fast.values, slow.values, rtol=1e-12, atol=1e-300)
         assert fast.info["back_face_hits"] == slow.info["back_face_hits"]
+
+
+def test_file_formats_and_per_face_materials(tmp_path):
+    box = trimesh.creation.box(extents=(0.5, 0.5, 0.5))
+    ladar = ml.Ladar([90.0], np.linspace(-0.5, 0.5, 101))
+    ref = ml.simulate(ml.Scene.from_mesh(box, DARK_GRAY), ladar, model="mesh", mode="3d",
+                      rays_per_bin=2)
+    for ext in ("stl", "obj", "ply", "off"):
+        path = tmp_path / f"box.{ext}"
+        box.export(path)
+        got = ml.simulate(ml.Scene.from_mesh(path, DARK_GRAY), ladar, model="mesh", mode="3d",
+                          rays_per_bin=2)
+        np.testing.assert_allclose(got.values, ref.values, rtol=1e-6, atol=1e-12)
+    # per-face materials: the +y face (seen from φ = 90°) aluminium, the rest gray
+    ids = (box.face_normals[:, 1] > 0.5).astype(int)
+    scene = ml.Scene.from_mesh(box, materials=[DARK_GRAY, ALUMINUM], face_materials=ids)
+    hits = ml.trace(scene, ladar, mode="3d", rays_per_bin=2)
+    assert np.all(hits.material == 1)                    # only the +y face is seen
+    sino = ml.weigh(hits)
+    assert sino.total()[0] == pytest.approx(ALUMINUM.monostatic(0.0) * 0.25, rel=0.02)
+    with pytest.raises(ParameterError, match=r"face_materials must be \(12,\) integers"):
+        ml.Scene.from_mesh(box, materials=[DARK_GRAY], face_materials=[0, 1])
+
+
+def test_sphere_part_via_public_api_and_progress_is_quiet_off_a_terminal(capsys):
+    scene = ml.Scene.from_parts([ml.mesh.sphere((0, 0, 0), 0.5, 0, subdivisions=3)],
+                                [lambertian(1.0)])
+    sino = ml.simulate(scene, ml.Ladar.paper(angles_deg=[0.0, 90.0]), model="mesh",
+                       progress=True)
+    assert capsys.readouterr().err == ""                 # not a TTY: no bar
+    # a slice through a sphere's equator is a disk of radius 0.5: 2R·ρd/π per unit height
+    np.testing.assert_allclose(sino.total(), 2 * 0.5 / math.pi, rtol=0.01)
