@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import math
 import os
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -653,13 +654,99 @@ def _sinogram(vals, ladar, edges, mode, normals, footprint, spacing, rays, back)
                           "back_face_hits": np.asarray(back).tolist()})
 
 
-def simulate_mesh(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0=None,
-                  ray_spacing=None, rays_per_bin=None, footprint=False, seed=None,
-                  receiver=None, jobs=None, executor=None, progress=False) -> Sinogram:
+#: The accuracy knob starts here (segments for scenes it tessellates, rays per bin) and
+#: doubles both until the error estimate meets tol, at most _TOL_STEPS times.
+_TOL_START = (256, 1.0)
+_TOL_STEPS = 6
+#: Bounds on the convergence order estimated from three successive runs.
+_ORDER_BOUNDS = (0.3, 2.0)
+
+
+def _simulate_tol(scene, ladar, tol, normals, footprint, kwargs):
+    """The accuracy knob: refine until the estimated relative L2 error is at most tol.
+
+    Each step doubles the rays per bin (and, for a scene meshladar tessellates itself, the
+    segments). The error of the finer run S₁ is estimated from its difference to the
+    coarser S₀, d = ‖S₁ − S₀‖/‖S₁‖, as d·2^−p/(1 − 2^−p) with p the convergence order
+    measured from the last three runs (p = 1 until there are three), so that slowly
+    converging cases are not accepted early.
+    """
+    from ._validate import check_real
+
+    tol = check_real("tol", tol, low=0.0, high=1.0, low_open=True, high_open=True)
+    if kwargs.pop("ray_spacing") is not None or kwargs.pop("rays_per_bin") is not None:
+        raise ParameterError("tol chooses the ray density itself: drop ray_spacing and "
+                             "rays_per_bin, or drop tol")
+    tessellate = not scene.is_mesh
+    if normals is None:
+        normals = "exact" if tessellate else "smooth"
+    if footprint is None:
+        footprint = kwargs.get("receiver") is None
+    n, r = _TOL_START
+    runs, sinos = [], []
+    est = float("inf")
+    order = 1.0
+    for step in range(_TOL_STEPS + 1):
+        mesh = scene.tessellate(n) if tessellate else scene
+        t0 = time.perf_counter()
+        sino = simulate_mesh(mesh, ladar, normals=normals, rays_per_bin=r,
+                             footprint=footprint, **kwargs)
+        runs.append({"segments": n if tessellate else None, "rays_per_bin": r,
+                     "seconds": time.perf_counter() - t0})
+        sinos.append(sino.values)
+        if len(sinos) >= 2:
+            d1 = np.linalg.norm(sinos[-1] - sinos[-2])
+            if len(sinos) >= 3:
+                d0 = np.linalg.norm(sinos[-2] - sinos[-3])
+                if d1 > 0 and d0 > 0:
+                    order = float(np.clip(math.log2(d0 / d1), *_ORDER_BOUNDS))
+            factor = 2.0 ** -order / (1.0 - 2.0 ** -order)
+            est = d1 / max(np.linalg.norm(sinos[-1]), 1e-300) * factor
+            runs[-1]["error_estimate"] = est
+            if est <= tol:
+                break
+        if tessellate:
+            n *= 2
+        r *= 2
+    else:
+        import warnings
+
+        from .errors import MeshladarWarning
+
+        warnings.warn(f"tol={tol:g} not reached after {_TOL_STEPS} refinements: estimated "
+                      f"error {est:.2g} at {runs[-1]}", MeshladarWarning, stacklevel=3)
+    info = dict(sino.info, tol=tol, error_estimate=est, convergence_order=order,
+                chosen={"segments": runs[-1]["segments"], "rays_per_bin": r,
+                        "normals": normals, "footprint": footprint},
+                refinement=runs)
+    return Sinogram(sino.values, angles_deg=sino.angles_deg, bin_edges=sino.bin_edges,
+                    model="mesh", info=info,
+                    view_vectors=None if ladar.planar else ladar.view_vectors)
+
+
+def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-sided", z0=None,
+                  ray_spacing=None, rays_per_bin=None, footprint=None, seed=None,
+                  receiver=None, tol=None, jobs=None, executor=None,
+                  progress=False) -> Sinogram:
     """Trace and weigh in one streaming pass: each chunk of views is binned and its hits
     dropped, so memory stays bounded whatever the number of views and rays. Options as
-    :func:`trace` and :func:`weigh`. An analytic scene is tessellated first (1024 segments
-    per shape, see :meth:`Scene.tessellate`)."""
+    :func:`trace` and :func:`weigh` (defaults: flat normals, point binning). An analytic
+    scene is tessellated first (1024 segments per shape, see :meth:`Scene.tessellate`).
+
+    ``tol`` asks for a relative L2 sinogram accuracy instead: meshladar refines rays per bin
+    (and segments, for analytic scenes) from 256 segments and 1 ray per bin, doubling until
+    a refinement check (the difference between successive runs, extrapolated with the
+    measured convergence order) estimates the error at most ``tol``; defaults then become
+    exact (analytic) or smooth (mesh) normals and footprint binning. The result's
+    ``info`` holds ``chosen``, ``error_estimate`` and every ``refinement`` run.
+    """
+    common = dict(mode=mode, back_faces=back_faces, z0=z0, seed=seed, receiver=receiver,
+                  jobs=jobs, executor=executor, progress=progress)
+    if tol is not None:
+        return _simulate_tol(scene, ladar, tol, normals, footprint,
+                             dict(common, ray_spacing=ray_spacing, rays_per_bin=rays_per_bin))
+    normals = "flat" if normals is None else normals
+    footprint = False if footprint is None else footprint
     if isinstance(scene, Scene) and not scene.is_mesh:
         scene = scene.tessellate(1024)
     geo, mode, spacing, area, chunks, results, _ = _run(
