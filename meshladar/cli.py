@@ -72,6 +72,20 @@ def _cmd_paper(args) -> int:
     return 0
 
 
+def _cmd_study(args) -> int:
+    """Run a study and write its table (CSV/JSON), results and figures into a folder."""
+    from . import studies
+    from meshladar.viz import studies as vstudies
+
+    result = studies.faceting_study(args.setting, progress=not args.quiet)
+    files = studies.save_study(result, args.outdir)
+    figs = vstudies.draw(args.outdir)
+    print(studies.report(result))
+    for p in files + figs:
+        print(f"  wrote {p}")
+    return 0
+
+
 def _cmd_bench(args) -> int:
     """Time the forward models and FBP against their peers (median of several runs)."""
     from .bench import bench_analytic
@@ -138,7 +152,8 @@ def _parser() -> argparse.ArgumentParser:
         description="Mesh-based ladar simulation and reflection tomography.",
         epilog="examples:\n  meshladar demo\n  meshladar demo --angles-deg 0,2,4\n"
                "  meshladar materials\n  meshladar materials my_coatings.toml\n"
-               "  meshladar paper paper-figures/\n  meshladar bench",
+               "  meshladar paper paper-figures/\n  meshladar study faceting study/\n"
+               "  meshladar bench",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
     d = sub.add_parser("demo", help="print the paper's coatings' monostatic BRDF",
@@ -164,6 +179,17 @@ def _parser() -> argparse.ArgumentParser:
     pp.add_argument("--size", type=_positive_int, default=512,
                     help="reconstruction size in pixels (default: %(default)s)")
     pp.set_defaults(func=_cmd_paper)
+    st = sub.add_parser("study", help="faceting-vs-analytic study into a folder",
+                        description=_cmd_study.__doc__,
+                        epilog="examples:\n  meshladar study faceting study/\n"
+                               "  meshladar study faceting study-full/ --full",
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
+    st.add_argument("kind", choices=["faceting"], help="which study")
+    st.add_argument("outdir", help="folder for faceting.csv/json, results and figures")
+    st.add_argument("--full", dest="setting", action="store_const", const="full",
+                    default="quick", help="the full sweep (360 views, segments to 4096)")
+    st.add_argument("--quiet", action="store_true", help="no progress bar")
+    st.set_defaults(func=_cmd_study)
     bch = sub.add_parser("bench", help="time the forward models (median of several runs)",
                          description=_cmd_bench.__doc__,
                          epilog="example:\n  meshladar bench --repeats 7",

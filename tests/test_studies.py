@@ -81,6 +81,15 @@ def test_study_files(study, tmp_path):
     lines = (tmp_path / "faceting.csv").read_text().splitlines()
     assert lines[0].startswith("phantom,coating,series") and len(lines) == len(study["rows"]) + 1
     assert "breaks at" in studies.report(study)
+    from meshladar.viz import studies as vstudies
+    import matplotlib.image as mpimg
+
+    figs = vstudies.draw(tmp_path)
+    names = sorted(p.split("/")[-1] for p in figs)
+    assert names == ["difference_disk_aluminum.png", "difference_disk_diffuse_b0.99.png",
+                     "error_vs_segments.png", "pareto.png"]
+    for p in figs:
+        assert mpimg.imread(p)[..., :3].std() > 0.02            # drawn, not blank
 
 
 @pytest.mark.parametrize("big, small", [(DARK_GRAY, ALUMINUM), (ALUMINUM, DARK_GRAY)],
