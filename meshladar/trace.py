@@ -716,8 +716,9 @@ def _simulate_tol(scene, ladar, tol, normals, footprint, kwargs):
         warnings.warn(f"tol={tol:g} not reached after {_TOL_STEPS} refinements: estimated "
                       f"error {est:.2g} at {runs[-1]}", MeshladarWarning, stacklevel=3)
     info = dict(sino.info, tol=tol, error_estimate=est, convergence_order=order,
-                chosen={"segments": runs[-1]["segments"], "rays_per_bin": r,
-                        "normals": normals, "footprint": footprint},
+                chosen={"segments": runs[-1]["segments"],
+                        "rays_per_bin": runs[-1]["rays_per_bin"], "normals": normals,
+                        "footprint": footprint},
                 refinement=runs)
     return Sinogram(sino.values, angles_deg=sino.angles_deg, bin_edges=sino.bin_edges,
                     model="mesh", info=info,

@@ -119,6 +119,22 @@ def test_tol_knob_meets_the_accuracy_at_a_fair_cost(big, small, tol):
     assert best is not None and got.info["rays"] <= 4 * best
 
 
+def test_tol_that_cannot_be_met_warns_and_reports(monkeypatch):
+    # dark gray alone stalls near silhouettes (see the study); with two refinements allowed
+    # the knob warns, and what it reports is the last run it made
+    import meshladar.trace as tr
+
+    monkeypatch.setattr(tr, "_TOL_STEPS", 2)
+    scene = ml.Scene([ml.Disk((0.0, 0.0), 0.5, DARK_GRAY)])
+    lad = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 30.0))
+    with pytest.warns(ml.errors.MeshladarWarning, match=r"tol=1e-06 not reached after 2"):
+        got = ml.simulate(scene, lad, model="mesh", tol=1e-6)
+    last = got.info["refinement"][-1]
+    assert got.info["chosen"]["rays_per_bin"] == last["rays_per_bin"] == 4.0
+    assert got.info["chosen"]["segments"] == last["segments"] == 1024
+    assert got.info["error_estimate"] == last["error_estimate"] > 1e-6
+
+
 def test_tol_validation():
     scene = ml.Scene([ml.Disk((0.0, 0.0), 0.5, DARK_GRAY)])
     lad = ml.Ladar.paper(angles_deg=[0.0])
