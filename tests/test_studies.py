@@ -122,9 +122,10 @@ def test_tol_knob_meets_the_accuracy_at_a_fair_cost(big, small, tol):
 def test_tol_that_cannot_be_met_warns_and_reports(monkeypatch):
     # dark gray alone stalls near silhouettes (see the study); with two refinements allowed
     # the knob warns, and what it reports is the last run it made
-    import meshladar.trace as tr
+    import sys
 
-    monkeypatch.setattr(tr, "_TOL_STEPS", 2)
+    # (the module, not the function meshladar.trace that the package exports)
+    monkeypatch.setattr(sys.modules["meshladar.trace"], "_TOL_STEPS", 2)
     scene = ml.Scene([ml.Disk((0.0, 0.0), 0.5, DARK_GRAY)])
     lad = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 30.0))
     with pytest.warns(ml.errors.MeshladarWarning, match=r"tol=1e-06 not reached after 2"):
