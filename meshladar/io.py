@@ -16,7 +16,8 @@ import numpy as np
 
 from .errors import MeshladarError
 
-__all__ = ["save_result", "load_result", "write_text_atomic", "ResultFileError"]
+__all__ = ["save_result", "load_result", "write_text_atomic", "save_sinogram", "load_sinogram",
+           "describe_scene", "ResultFileError"]
 
 
 class ResultFileError(MeshladarError, ValueError):
@@ -71,3 +72,73 @@ def load_result(path):
         raise ResultFileError(f"{path}: not a meshladar result (no metadata)")
     meta = json.loads(str(arrays.pop("__meta__")))
     return arrays, meta
+
+
+def describe_scene(scene) -> dict:
+    """A JSON-serialisable description of a scene: shapes or mesh parts, and coatings."""
+    def mat(m):
+        return {"name": m.name, "rho_d": m.rho_d, "epsilon": m.epsilon, "b": m.b, "e": m.e,
+                "lobes": m.lobes}
+
+    if scene.is_mesh:
+        return {"kind": "mesh", "materials": [mat(m) for m in scene.materials],
+                "parts": [{"name": p.name, "faces": int(len(p.faces)),
+                           "vertices": int(len(p.vertices)), "digest": p.digest()}
+                          for p in scene.parts], "report": {
+                    k: v for k, v in scene.report.items()}}
+    shapes = []
+    for s in scene.shapes:
+        shapes.append({"type": type(s).__name__, "name": s.name, "center": list(s.center),
+                       "semi_axes": list(s.axes), "angle_deg": float(getattr(s, "angle_deg",
+                                                                             0.0)),
+                       "material": mat(s.material)})
+    return {"kind": "analytic", "shapes": shapes}
+
+
+def save_sinogram(path, sino, *, scene=None, params=None):
+    """Save a sinogram with everything needed to reconstruct and plot it: values, angles,
+    bin edges, view vectors, the model and its info, a description of the scene and its
+    coatings, the run's parameters, and meshladar's version. Atomic, no pickle."""
+    meta = {"kind": "sinogram", "model": sino.model, "info": _jsonable(sino.info),
+            "scene": None if scene is None else describe_scene(scene),
+            "params": _jsonable(params or {})}
+    save_result(path, {"values": sino.values, "angles_deg": sino.angles_deg,
+                       "bin_edges": sino.bin_edges, "view_vectors": sino.view_vectors}, meta)
+
+
+def load_sinogram(path):
+    """Load a sinogram saved by :func:`save_sinogram`: (Sinogram, meta)."""
+    from .sinogram import Sinogram
+
+    arrays, meta = load_result(path)
+    if meta.get("kind") != "sinogram":
+        raise ResultFileError(f"{os.fspath(path)}: not a sinogram result (kind "
+                              f"{meta.get('kind')!r})")
+    missing = [k for k in ("values", "angles_deg", "bin_edges") if k not in arrays]
+    if missing:
+        raise ResultFileError(f"{os.fspath(path)}: sinogram result lacks {missing[0]!r}")
+    try:
+        sino = Sinogram(arrays["values"], angles_deg=arrays["angles_deg"],
+                        bin_edges=arrays["bin_edges"], model=meta.get("model", "measured"),
+                        info=meta.get("info", {}), view_vectors=arrays.get("view_vectors"))
+    except ValueError as exc:
+        raise ResultFileError(f"{os.fspath(path)}: invalid sinogram ({exc})") from exc
+    return sino, meta
+
+
+def _jsonable(x):
+    """Plain JSON types for metadata (numpy scalars and arrays become numbers and lists;
+    anything else its repr)."""
+    if isinstance(x, dict):
+        return {str(k): _jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_jsonable(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return _jsonable(x.tolist())
+    if isinstance(x, (np.integer,)):
+        return int(x)
+    if isinstance(x, (np.floating,)):
+        return float(x)
+    if x is None or isinstance(x, (bool, int, float, str)):
+        return x
+    return repr(x)

@@ -50,7 +50,8 @@ from .ladar import Ladar
 from .scene import Scene
 from .sinogram import Sinogram
 
-__all__ = ["Hits", "trace", "weigh", "simulate_mesh", "NORMALS", "MODES", "BACK_FACES"]
+__all__ = ["Hits", "trace", "weigh", "simulate_mesh", "first_hits", "occluded", "NORMALS",
+           "MODES", "BACK_FACES"]
 
 NORMALS = ("flat", "smooth", "exact")
 MODES = ("slice", "3d")
@@ -404,6 +405,43 @@ def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces,
 def _range_offset(center, w, w_r):
     """−c·w (monostatic) or −c·(w + w_r)/2 (bistatic): the range of the shifted origin."""
     return -float(center @ w) if w_r is None else -0.5 * float(center @ (w + w_r))
+
+
+def first_hits(scene, view_vector, *, ray_spacing):
+    """First hits of one view's 3-D ray grid: (points (k, 3) float64 in scene coordinates,
+    global face index (k,), range (k,)). Faces are numbered part by part in scene order;
+    for the viewer (which faces are lit, where hits land)."""
+    if not isinstance(scene, Scene) or not scene.is_mesh:
+        raise ParameterError("first_hits needs a mesh scene")
+    w = np.asarray(view_vector, dtype=np.float64)
+    if w.shape != (3,) or not np.all(np.isfinite(w)) or not np.linalg.norm(w) > 0:
+        raise ParameterError(f"view_vector must be a finite non-zero (3,) vector; got "
+                             f"{view_vector!r}")
+    w = w / np.linalg.norm(w)
+    spacing = check_real("ray_spacing", ray_spacing, low=0.0, low_open=True)
+    geo = _Geometry(scene, "flat")
+    emb = _embree_scene(geo)
+    o, L, _, _ = _ray_grid(geo, w, "3d", spacing, 0.0, None)
+    res = emb.run(o, np.ascontiguousarray((-w)[None, :], dtype=np.float32), output=1)
+    hit = res["primID"] >= 0
+    t = res["tfar"][hit].astype(np.float64)
+    p = o[hit].astype(np.float64) - t[:, None] * w + geo.center
+    return p, res["primID"][hit].astype(np.int64), -(p @ w)
+
+
+def occluded(scene, points, direction, *, lift=_RECEIVER_LIFT):
+    """Whether the ray from each point (k, 3) toward ``direction`` meets the scene; points
+    are lifted by ``lift`` × the scene's radius along the direction first (so a point on a
+    face does not hit that face)."""
+    if not isinstance(scene, Scene) or not scene.is_mesh:
+        raise ParameterError("occluded needs a mesh scene")
+    d = np.asarray(direction, dtype=np.float64)
+    d = d / np.linalg.norm(d)
+    geo = _Geometry(scene, "flat")
+    emb = _embree_scene(geo)
+    p = np.asarray(points, dtype=np.float64) - geo.center + lift * geo.radius * d
+    return emb.run(np.ascontiguousarray(p, dtype=np.float32),
+                   np.ascontiguousarray(d[None, :], dtype=np.float32), query="OCCLUDED") != -1
 
 
 # ------------------------------------------------------------------ weighing and binning

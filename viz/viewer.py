@@ -1,0 +1,238 @@
+"""The pyvista 3-D viewer: scenes coloured by their return, hits, slices and volumes.
+
+Every entry point takes ``off_screen`` and ``screenshot``: on a desktop it opens a window and
+returns the plotter; off screen (a headless machine, a test) it renders and returns the
+image array (height, width, 3), writing ``screenshot`` if given. With no display, VTK is
+pointed at its EGL window (Mesa's software renderer: Debian packages libegl1 and
+libgl1-mesa-dri), so nothing needs Xvfb.
+
+Colours: lit faces by their return F(θ)·cos θ for the chosen view (monostatic, grey scale,
+lighting off so the colour is the value), faces that face the ladar but are hidden by
+another part in ``shadow_color``, faces turned away in ``back_color``.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+__all__ = ["show_scene", "show_slice", "show_volume", "face_returns", "SHADOW_COLOR",
+           "BACK_COLOR"]
+
+#: Colour of faces that face the ladar but are shadowed by another part.
+SHADOW_COLOR = (1.0, 0.0, 1.0)
+#: Colour of faces turned away from the ladar.
+BACK_COLOR = (0.15, 0.15, 0.35)
+
+
+def _pyvista():
+    if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
+        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+    try:
+        import pyvista as pv
+    except ImportError as exc:
+        raise ImportError("the viewer needs pyvista: pip install 'meshladar[viz]'") from exc
+    return pv
+
+
+def _view_vector(view_angle_deg, view_vector):
+    if view_vector is not None:
+        w = np.asarray(view_vector, dtype=np.float64)
+        return w / np.linalg.norm(w)
+    phi = np.deg2rad(90.0 if view_angle_deg is None else float(view_angle_deg))
+    return np.array([np.cos(phi), np.sin(phi), 0.0])
+
+
+def _mesh_scene(scene, segments):
+    if scene.is_mesh:
+        return scene
+    (cx, cy), r = scene.bounding_circle()
+    return scene.tessellate(segments, height=r)
+
+
+def face_returns(scene, w, *, segments=256):
+    """Per face of the (tessellated) scene: the monostatic return F(θ)·cos θ for view ``w``
+    and a state: 0 lit, 1 shadowed (facing the ladar, but the ray from its centroid toward
+    the ladar meets another face), 2 turned away. Returns (mesh scene, returns (m,),
+    state (m,))."""
+    from meshladar.trace import occluded
+
+    mesh = _mesh_scene(scene, segments)
+    v = np.concatenate([p.vertices for p in mesh.parts])
+    offs = np.cumsum([0] + [len(p.vertices) for p in mesh.parts])[:-1]
+    f = np.concatenate([p.faces + o for p, o in zip(mesh.parts, offs)])
+    mat = np.concatenate([p.material for p in mesh.parts])
+    tri = v[f]
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    cos_t = n @ w
+    facing = cos_t > 0
+    blocked = np.zeros(len(f), bool)
+    blocked[facing] = occluded(mesh, tri[facing].mean(axis=1), w)
+    state = np.where(~facing, 2, np.where(blocked, 1, 0))
+    ret = np.zeros(len(f))
+    for k, m in enumerate(mesh.materials):
+        sel = mat == k
+        ret[sel] = m.monostatic(np.arccos(np.clip(cos_t[sel], -1, 1)), projected=True)
+    return mesh, np.where(state == 0, ret, 0.0), state
+
+
+def _finish(plotter, off_screen, screenshot):
+    if off_screen:
+        img = plotter.screenshot(screenshot, return_img=True)
+        plotter.close()
+        return img
+    plotter.show(screenshot=screenshot)
+    return plotter
+
+
+def show_scene(scene, *, view_angle_deg=None, view_vector=None, ladar=None, segments=256,
+               show_rays=True, show_hits=True, iso_ranges=6, log_scale=False,
+               shadow_color=SHADOW_COLOR, back_color=BACK_COLOR, off_screen=False,
+               screenshot=None, window_size=(900, 700), camera=None):
+    """Show a scene coloured by its return for one view.
+
+    Parameters
+    ----------
+    scene : Scene
+        A mesh scene, or an analytic one (drawn as prisms of ``segments`` sides).
+    view_angle_deg, view_vector :
+        The view: an angle about z (default 90°, the paper's Fig. 1) or any vector.
+    ladar : Ladar, optional
+        For hits coloured by range bin and iso-range planes at its bin edges.
+    show_rays, show_hits : bool
+        Draw the ray grid's footprint and the view direction; draw first hits coloured by
+        range bin.
+    iso_ranges : int
+        Number of iso-range planes drawn (0: none).
+    log_scale : bool
+        Colour lit faces by log10 of their return (glints next to diffuse coatings).
+    off_screen, screenshot, window_size :
+        See the module docstring.
+    camera : pyvista camera position, "view", or None
+        "view" looks along the beam from the ladar; None (default) an oblique view.
+    """
+    pv = _pyvista()
+    w = _view_vector(view_angle_deg, view_vector)
+    mesh, ret, state = face_returns(scene, w, segments=segments)
+    v = np.concatenate([p.vertices for p in mesh.parts])
+    offs = np.cumsum([0] + [len(p.vertices) for p in mesh.parts])[:-1]
+    f = np.concatenate([p.faces + o for p, o in zip(mesh.parts, offs)])
+    plotter = pv.Plotter(off_screen=off_screen, window_size=window_size)
+    plotter.set_background("black")
+
+    def poly(sel):
+        cells = np.hstack([np.full((sel.sum(), 1), 3), f[sel]]).ravel()
+        return pv.PolyData(v, cells)
+
+    lit = state == 0
+    if lit.any():
+        pd = poly(lit)
+        vals = ret[lit]
+        pd.cell_data["return"] = np.log10(np.maximum(vals, 1e-12)) if log_scale else vals
+        plotter.add_mesh(pd, scalars="return", cmap="gray", lighting=False,
+                         show_scalar_bar=True,
+                         scalar_bar_args={"title": "log10 F cos(theta) [1/sr]" if log_scale
+                                          else "F cos(theta) [1/sr]"})
+    if (state == 1).any():
+        plotter.add_mesh(poly(state == 1), color=shadow_color, lighting=False)
+    if (state == 2).any():
+        plotter.add_mesh(poly(state == 2), color=back_color, lighting=False)
+    center = 0.5 * (v.min(axis=0) + v.max(axis=0))
+    size = float(np.ptp(v, axis=0).max())
+    if show_rays:
+        plotter.add_mesh(pv.Arrow(start=center + 0.9 * size * w, direction=-w,
+                                  scale=0.5 * size), color="yellow", lighting=False)
+        plane = pv.Plane(center=center + 0.8 * size * w, direction=w, i_size=1.1 * size,
+                         j_size=1.1 * size, i_resolution=1, j_resolution=1)
+        plotter.add_mesh(plane, style="wireframe", color="yellow", line_width=2,
+                         lighting=False)
+    if ladar is not None and show_hits:
+        from meshladar.trace import first_hits
+
+        pts, _, rng = first_hits(mesh, w, ray_spacing=size / 150.0)
+        k = np.searchsorted(ladar.bin_edges, rng, side="right") - 1
+        cloud = pv.PolyData(pts)
+        cloud.point_data["range bin"] = k
+        plotter.add_mesh(cloud, scalars="range bin", cmap="viridis", point_size=3,
+                         render_points_as_spheres=False, lighting=False)
+        if iso_ranges:
+            edges = ladar.bin_edges
+            inside = edges[(edges >= rng.min()) & (edges <= rng.max())] if rng.size else []
+            for r in np.asarray(inside)[:: max(1, len(inside) // iso_ranges)][:iso_ranges]:
+                plane = pv.Plane(center=center - (r + center @ w) * w, direction=w,
+                                 i_size=size, j_size=size, i_resolution=1, j_resolution=1)
+                plotter.add_mesh(plane, color="cyan", opacity=0.08, lighting=False)
+    if camera == "view":                     # look along the beam, from the ladar
+        camera = [tuple(center + 2.5 * size * w), tuple(center),
+                  (0.0, 0.0, 1.0) if abs(w[2]) < 0.9 else (0.0, 1.0, 0.0)]
+    if camera is None:                       # oblique: beside and above the ladar
+        side = np.cross([0.0, 0.0, 1.0], w)
+        side = side / np.linalg.norm(side) if np.linalg.norm(side) > 1e-9 else \
+            np.array([1.0, 0.0, 0.0])
+        eye = w + 0.9 * side + np.array([0.0, 0.0, 0.7])
+        camera = [tuple(center + 2.8 * size * eye / np.linalg.norm(eye)), tuple(center),
+                  (0.0, 0.0, 1.0)]
+    plotter.camera_position = camera
+    return _finish(plotter, off_screen, screenshot)
+
+
+def _image_data(pv, image, z):
+    img = np.asarray(image.values)
+    grid = pv.ImageData(dimensions=(img.shape[1] + 1, img.shape[0] + 1, 1),
+                        spacing=(image.pixel_size, image.pixel_size, 1.0),
+                        origin=(image.x[0] - image.pixel_size / 2,
+                                image.y[0] - image.pixel_size / 2, z))
+    grid.cell_data["reconstruction"] = img.ravel(order="C")
+    return grid
+
+
+def show_slice(image, *, z=0.0, scene=None, clim=None, off_screen=False, screenshot=None,
+               window_size=(800, 700), camera=None):
+    """A reconstructed slice (an ``Image``) placed in 3-D at height ``z``, optionally with
+    the scene's mesh as a wireframe. Cell (i, j) of the slice sits at (x_j, y_i, z)."""
+    pv = _pyvista()
+    plotter = pv.Plotter(off_screen=off_screen, window_size=window_size)
+    plotter.set_background("black")
+    grid = _image_data(pv, image, z)
+    plotter.add_mesh(grid, scalars="reconstruction", cmap="gray", lighting=False, clim=clim)
+    if scene is not None:
+        mesh = _mesh_scene(scene, 128)
+        for p in mesh.parts:
+            cells = np.hstack([np.full((len(p.faces), 1), 3), p.faces]).ravel()
+            plotter.add_mesh(pv.PolyData(p.vertices, cells), style="wireframe",
+                             color="orange", opacity=0.3, lighting=False)
+    c = (float(image.center[0]), float(image.center[1]), float(z))
+    plotter.camera_position = camera if camera is not None else [
+        (c[0], c[1], c[2] + 4.0 * image.extent), c, (0.0, 1.0, 0.0)]
+    return _finish(plotter, off_screen, screenshot)
+
+
+def show_volume(images, zs, *, iso=None, off_screen=False, screenshot=None,
+                window_size=(800, 700), camera=None):
+    """A stack of reconstructed slices at heights ``zs`` (increasing, evenly spaced) as a
+    volume rendering, or as the iso-surface at value ``iso``."""
+    pv = _pyvista()
+    zs = np.asarray(zs, dtype=np.float64)
+    if len(images) != len(zs) or len(zs) < 2:
+        raise ValueError(f"images and zs must have the same length >= 2; got {len(images)} "
+                         f"and {len(zs)}")
+    dz = np.diff(zs)
+    if np.any(dz <= 0) or np.ptp(dz) > 1e-9 * dz.mean():
+        raise ValueError("zs must be increasing and evenly spaced")
+    first = images[0]
+    vol = np.stack([np.asarray(im.values) for im in images])          # (nz, ny, nx)
+    grid = pv.ImageData(dimensions=(vol.shape[2], vol.shape[1], vol.shape[0]),
+                        spacing=(first.pixel_size, first.pixel_size, float(dz[0])),
+                        origin=(first.x[0], first.y[0], zs[0]))
+    grid.point_data["reconstruction"] = vol.ravel(order="C")
+    plotter = pv.Plotter(off_screen=off_screen, window_size=window_size)
+    plotter.set_background("black")
+    if iso is not None:
+        plotter.add_mesh(grid.contour([iso], scalars="reconstruction"), color="white")
+    else:
+        plotter.add_volume(grid, scalars="reconstruction", cmap="gray")
+    if camera is not None:
+        plotter.camera_position = camera
+    return _finish(plotter, off_screen, screenshot)
