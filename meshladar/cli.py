@@ -72,6 +72,166 @@ def _cmd_paper(args) -> int:
     return 0
 
 
+_MESH_SUFFIXES = (".stl", ".obj", ".ply", ".off", ".glb", ".gltf")
+
+
+def _coatings(text):
+    """'part=name,part=name' → dict (names from the packaged coating table)."""
+    out = {}
+    for item in filter(None, (x.strip() for x in text.split(","))):
+        if "=" not in item:
+            raise argparse.ArgumentTypeError(f"must be PART=COATING pairs; got {item!r}")
+        k, v = item.split("=", 1)
+        out[k.strip()] = v.strip()
+    return out
+
+
+def _load_scene(args):
+    """(scene, default ladar or None, model default) from SCENE: phantom, spec or mesh."""
+    import os
+
+    from . import materials as mats
+    from .errors import ParameterError
+    from .scene import Scene
+
+    src = args.scene
+    if src.lower().endswith(_MESH_SUFFIXES):
+        if not os.path.exists(src):
+            raise ParameterError(f"SCENE: no such mesh file {src!r}")
+        table = _coating_table()
+        if args.material not in table:
+            raise ParameterError(f"--material: unknown coating {args.material!r}; known: "
+                                 f"{sorted(table)}")
+        per_part = {k: _coating(table, v) for k, v in (args.coating or {}).items()}
+        return (Scene.from_mesh(src, table[args.material], materials=per_part or None), None,
+                "mesh")
+    from meshladar import phantoms
+
+    overrides = {k: _coating(_coating_table(), v) for k, v in (args.coating or {}).items()}
+    ph = phantoms.load(src, materials=overrides or None)
+    del mats
+    return ph.scene, ph.ladar, "analytic"
+
+
+def _coating_table():
+    from meshladar.phantoms import materials
+
+    return dict(materials())
+
+
+def _coating(table, name):
+    from .errors import ParameterError
+
+    if name not in table:
+        raise ParameterError(f"--coating: unknown coating {name!r}; known: {sorted(table)}")
+    return table[name]
+
+
+def _ladar(args, scene, default):
+    import numpy as np
+
+    from .ladar import Ladar
+
+    angles = args.angles_deg if args.angles_deg is not None else (
+        np.arange(args.views) * (360.0 / args.views) if args.views else None)
+    if args.bins or args.bin_width:
+        if not (args.bins and args.bin_width):
+            from .errors import ParameterError
+
+            raise ParameterError("--bins and --bin-width go together; got only one")
+        return Ladar.centered(args.bins, args.bin_width, angles_deg=angles)
+    if default is not None:
+        return default if angles is None else Ladar(angles, default.bin_edges)
+    return Ladar.covering(scene, n_bins=512, angles_deg=angles)
+
+
+def _cmd_simulate(args) -> int:
+    """Simulate a scene's range profiles and save them (sinogram, scene, parameters)."""
+    from . import io
+    from .forward import simulate
+
+    scene, default_ladar, default_model = _load_scene(args)
+    ladar = _ladar(args, scene, default_ladar)
+    model = args.model or default_model
+    opts = {}
+    if model == "mesh":
+        if not scene.is_mesh and args.tol is None:       # with --tol the knob tessellates
+            scene = scene.tessellate(args.segments)
+        for k in ("normals", "rays_per_bin", "tol"):
+            if getattr(args, k) is not None:
+                opts[k] = getattr(args, k)
+        if args.footprint:
+            opts["footprint"] = True
+        opts["jobs"] = args.jobs
+        opts["progress"] = not args.quiet
+    elif model == "pixel" and args.pixel_size is not None:
+        opts["pixel_size"] = args.pixel_size
+    sino = simulate(scene, ladar, model=model, **opts)
+    params = {"scene": args.scene, "model": model, "options": {k: v for k, v in opts.items()
+                                                                if k != "progress"},
+              "n_views": ladar.n_views, "n_bins": ladar.n_bins}
+    io.save_sinogram(args.output, sino, scene=scene, params=params)
+    if not args.quiet:
+        print(f"{args.scene}: {model} model, {ladar.n_views} views x {ladar.n_bins} bins, "
+              f"total return per view {sino.total().mean():.6g}; wrote {args.output}")
+    return 0
+
+
+def _cmd_reconstruct(args) -> int:
+    """Reconstruct a saved sinogram by FBP and write the image as a PNG (and .npz)."""
+    import os
+
+    from . import io
+    from .reconstruct import clip_radiance, fbp, log_radiance
+
+    sino, meta = io.load_sinogram(args.result)
+    if args.log:
+        sino = log_radiance(sino)
+    if args.clip is not None:
+        sino = clip_radiance(sino, threshold=args.clip)
+    extent = args.extent or float(max(abs(sino.bin_edges[0]), abs(sino.bin_edges[-1])))
+    image = fbp(sino, size=args.size, extent=extent, filter=args.filter)
+    from meshladar.viz import style
+
+    plt = style.use()
+    fig, ax = plt.subplots(figsize=(5.5, 4.6))
+    h = ax.imshow(image.values, extent=(-extent, extent, -extent, extent))
+    ax.set_xlabel("x [scene units]")
+    ax.set_ylabel("y [scene units]")
+    ax.set_title(f"FBP of {os.path.basename(args.result)} ({args.filter})")
+    fig.colorbar(h, ax=ax, label="reconstruction [radiance / area]")
+    tmp = args.output + ".tmp.png"
+    fig.savefig(tmp)
+    plt.close(fig)
+    os.replace(tmp, args.output)
+    io.save_result(os.path.splitext(args.output)[0] + ".npz", {"image": image.values},
+                   {"kind": "image", "extent": extent, "info": image.info,
+                    "source": os.path.basename(args.result)})
+    if not args.quiet:
+        print(f"wrote {args.output} ({args.size}x{args.size}, extent {extent:g})")
+    return 0
+
+
+def _cmd_view(args) -> int:
+    """Show a scene in 3-D coloured by its return for one view (or save a screenshot)."""
+    import os
+
+    from .errors import ParameterError
+
+    scene, default_ladar, _ = _load_scene(args)
+    if args.screenshot is None and not (os.environ.get("DISPLAY")
+                                        or os.environ.get("WAYLAND_DISPLAY")):
+        raise ParameterError("no display to open a window on: use --screenshot PNG")
+    from meshladar.viz import viewer
+
+    viewer.show_scene(scene, view_angle_deg=args.view_angle, ladar=default_ladar,
+                      off_screen=args.screenshot is not None, screenshot=args.screenshot,
+                      log_scale=args.log)
+    if args.screenshot and not args.quiet:
+        print(f"wrote {args.screenshot}")
+    return 0
+
+
 def _cmd_study(args) -> int:
     """Run a study and write its table (CSV/JSON), results and figures into a folder."""
     from . import studies
@@ -135,6 +295,16 @@ def _positive_int(text: str):
     return value
 
 
+def _positive_float(text: str):
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a positive number; got {text!r}") from None
+    if not (value > 0 and math.isfinite(value)):
+        raise argparse.ArgumentTypeError(f"must be a positive finite number; got {text!r}")
+    return value
+
+
 def _angle_list(text: str):
     try:
         values = [float(v) for v in text.split(",") if v.strip()]
@@ -152,8 +322,11 @@ def _parser() -> argparse.ArgumentParser:
         description="Mesh-based ladar simulation and reflection tomography.",
         epilog="examples:\n  meshladar demo\n  meshladar demo --angles-deg 0,2,4\n"
                "  meshladar materials\n  meshladar materials my_coatings.toml\n"
-               "  meshladar paper paper-figures/\n  meshladar study faceting study/\n"
-               "  meshladar bench",
+               "  meshladar paper paper-figures/\n"
+               "  meshladar simulate disk_pair -o pair.npz --coating small=aluminum\n"
+               "  meshladar reconstruct pair.npz -o pair.png\n"
+               "  meshladar view disk_pair --view-angle 0 --screenshot view.png\n"
+               "  meshladar study faceting study/\n  meshladar bench",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
     d = sub.add_parser("demo", help="print the paper's coatings' monostatic BRDF",
@@ -179,6 +352,79 @@ def _parser() -> argparse.ArgumentParser:
     pp.add_argument("--size", type=_positive_int, default=512,
                     help="reconstruction size in pixels (default: %(default)s)")
     pp.set_defaults(func=_cmd_paper)
+    def scene_args(q):
+        q.add_argument("scene", help="a phantom name (disk, ellipse, disk_pair), a phantom "
+                                     "spec (.toml) or a mesh file (.stl .obj .ply .off .glb)")
+        q.add_argument("--material", default="dark_gray",
+                       help="coating of a mesh's parts (default: %(default)s)")
+        q.add_argument("--coating", type=_coatings, default=None, metavar="PART=NAME,...",
+                       help="coating per phantom shape or mesh part, e.g. small=aluminum")
+        q.add_argument("--quiet", action="store_true", help="no progress or summary")
+
+    sim = sub.add_parser("simulate", help="simulate range profiles and save them",
+                         description=_cmd_simulate.__doc__,
+                         epilog="examples:\n  meshladar simulate disk_pair -o pair.npz "
+                                "--coating small=aluminum\n"
+                                "  meshladar simulate part.stl --material aluminum "
+                                "--views 90 --bins 256 --bin-width 0.01 -o part.npz\n"
+                                "  meshladar simulate disk_pair --model mesh --tol 1e-3 "
+                                "-o mesh.npz",
+                         formatter_class=argparse.RawDescriptionHelpFormatter)
+    scene_args(sim)
+    sim.add_argument("-o", "--output", required=True, help="result file (.npz)")
+    sim.add_argument("--model", choices=["analytic", "mesh", "pixel"], default=None,
+                     help="forward model (default: analytic for phantoms, mesh for meshes)")
+    sim.add_argument("--views", type=_positive_int, default=None,
+                     help="number of views evenly over 360 degrees")
+    sim.add_argument("--angles-deg", type=_angle_list, default=None,
+                     help="view angles in degrees, comma-separated")
+    sim.add_argument("--bins", type=_positive_int, default=None, help="number of range bins")
+    sim.add_argument("--bin-width", type=_positive_float, default=None,
+                     help="range bin width (scene units)")
+    sim.add_argument("--segments", type=_positive_int, default=1024,
+                     help="tessellation of analytic phantoms for --model mesh")
+    sim.add_argument("--normals", choices=["flat", "smooth", "exact"], default=None)
+    sim.add_argument("--rays-per-bin", type=_positive_float, default=None)
+    sim.add_argument("--footprint", action="store_true", help="footprint binning")
+    sim.add_argument("--tol", type=_positive_float, default=None,
+                     help="relative sinogram accuracy: meshladar picks rays and segments")
+    sim.add_argument("--pixel-size", type=_positive_float, default=None,
+                     help="pixel size for --model pixel")
+    sim.add_argument("--jobs", type=_positive_int, default=None,
+                     help="worker processes for the mesh model")
+    sim.set_defaults(func=_cmd_simulate)
+
+    rec = sub.add_parser("reconstruct", help="FBP of a saved sinogram into a PNG",
+                         description=_cmd_reconstruct.__doc__,
+                         epilog="examples:\n  meshladar reconstruct pair.npz -o pair.png\n"
+                                "  meshladar reconstruct pair.npz -o pair-log.png --log",
+                         formatter_class=argparse.RawDescriptionHelpFormatter)
+    rec.add_argument("result", help="a result file written by meshladar simulate")
+    rec.add_argument("-o", "--output", required=True, help="image file (.png)")
+    rec.add_argument("--size", type=_positive_int, default=512)
+    rec.add_argument("--extent", type=_positive_float, default=None,
+                     help="half-width of the image (default: the bins' reach)")
+    rec.add_argument("--filter", choices=["ramp", "shepp-logan", "cosine", "hamming", "hann"],
+                     default="ramp")
+    rec.add_argument("--log", action="store_true", help="log of the radiance (Fig. 11a)")
+    rec.add_argument("--clip", type=_positive_float, default=None,
+                     help="clip at this fraction of the maximum (Fig. 11b: 0.008)")
+    rec.add_argument("--quiet", action="store_true")
+    rec.set_defaults(func=_cmd_reconstruct)
+
+    vw = sub.add_parser("view", help="3-D view of a scene coloured by its return",
+                        description=_cmd_view.__doc__,
+                        epilog="examples:\n  meshladar view disk_pair --view-angle 0 "
+                               "--screenshot pair.png\n  meshladar view part.glb "
+                               "--material aluminum",
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
+    scene_args(vw)
+    vw.add_argument("--view-angle", type=float, default=90.0,
+                    help="view angle about z in degrees (default: %(default)s)")
+    vw.add_argument("--screenshot", default=None, help="render off screen into this PNG")
+    vw.add_argument("--log", action="store_true", help="colour by log10 of the return")
+    vw.set_defaults(func=_cmd_view)
+
     st = sub.add_parser("study", help="faceting-vs-analytic study into a folder",
                         description=_cmd_study.__doc__,
                         epilog="examples:\n  meshladar study faceting study/\n"
@@ -202,12 +448,23 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
+def _one_line_warning(message, category, filename, lineno, line=None):
+    return f"meshladar: warning: {message}\n"
+
+
 def main(argv=None) -> int:
     """Run the command line; returns the exit status."""
+    import warnings
+
+    warnings.formatwarning = _one_line_warning
     parser = _parser()
     args = parser.parse_args(argv)
     try:
         return args.func(args)
     except MeshladarError as exc:
         print(f"meshladar: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        where = f" {exc.filename!r}" if getattr(exc, "filename", None) else ""
+        print(f"meshladar: error:{where} {exc.strerror or exc}", file=sys.stderr)
         return 2

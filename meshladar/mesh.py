@@ -170,7 +170,9 @@ def load_parts(mesh_or_path):
         if not os.path.exists(path):
             raise GeometryError(f"{path}: no such mesh file")
         try:
-            loaded = trimesh.load(path)
+            # unprocessed, so that NaN vertices reach meshladar's own check (trimesh's
+            # processing would silently drop them); vertices are merged below
+            loaded = trimesh.load(path, process=False)
         except Exception as exc:  # trimesh raises many types on bad files
             raise GeometryError(f"{path}: cannot load mesh ({type(exc).__name__}: {exc})") \
                 from exc
@@ -183,17 +185,31 @@ def load_parts(mesh_or_path):
             transform, geom_name = loaded.graph[node]
             g = loaded.geometry[geom_name]
             if isinstance(g, trimesh.Trimesh):
-                m = g.copy()
+                m = _welded(g, f"{source}: part {node!r}")
                 m.apply_transform(transform)
                 out.append((str(node), m))
         if not out:
             raise GeometryError(f"{source}: the scene holds no triangle meshes")
         return out
     if isinstance(loaded, trimesh.Trimesh):
-        return [(str(loaded.metadata.get("name", "mesh")) if hasattr(loaded, "metadata")
-                 else "mesh", loaded)]
+        name = str(loaded.metadata.get("name", "mesh")) if hasattr(loaded, "metadata") \
+            else "mesh"
+        return [(name, _welded(loaded, source))]
     raise GeometryError(f"{source}: expected a triangle mesh or a scene of meshes; got "
                         f"{type(loaded).__name__}")
+
+
+def _welded(mesh, where):
+    """A copy with shared vertices merged (STL stores each triangle's own), after checking
+    that every vertex is finite."""
+    v = np.asarray(mesh.vertices, dtype=np.float64)
+    if not np.all(np.isfinite(v)):
+        bad = int(np.argwhere(~np.isfinite(v))[0][0])
+        raise GeometryError(f"{where}: vertices must be finite; got {v[bad].tolist()} at "
+                            f"vertex {bad}")
+    m = mesh.copy()
+    m.merge_vertices()
+    return m
 
 
 # ------------------------------------------------------------------ analytic tessellations
