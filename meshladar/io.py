@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import os
 import tempfile
+import zipfile
 
 import numpy as np
 
@@ -62,11 +63,11 @@ def load_result(path):
     """Load a result saved by :func:`save_result`: (arrays dict, meta dict)."""
     path = os.fspath(path)
     try:
-        with np.load(path, allow_pickle=False) as z:
+        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
             arrays = {k: z[k] for k in z.files}
     except FileNotFoundError:
         raise ResultFileError(f"{path}: no such result file") from None
-    except (OSError, ValueError) as exc:
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
         raise ResultFileError(f"{path}: not a readable result file ({exc})") from exc
     if "__meta__" not in arrays:
         raise ResultFileError(f"{path}: not a meshladar result (no metadata)")

@@ -48,3 +48,26 @@ def test_write_text_atomic(tmp_path):
     p = tmp_path / "t.txt"
     write_text_atomic(p, "héllo")
     assert p.read_text(encoding="utf-8") == "héllo"
+
+
+def test_truncated_and_pickled_sinogram_results_are_rejected(tmp_path):
+    import meshladar as ml
+    from meshladar.io import load_sinogram, save_sinogram
+
+    sino = ml.simulate(ml.Scene([ml.Disk((0, 0), 0.5, ml.materials.DARK_GRAY)]),
+                       ml.Ladar.paper(angles_deg=[0.0, 90.0]))
+    p = tmp_path / "s.npz"
+    save_sinogram(p, sino, scene=None, params={"n": np.int64(3)})
+    back, meta = load_sinogram(p)
+    np.testing.assert_array_equal(back.values, sino.values)
+    assert meta["params"] == {"n": 3}
+    data = p.read_bytes()
+    (tmp_path / "cut.npz").write_bytes(data[: len(data) // 2])
+    with pytest.raises(ResultFileError, match="cut.npz: not a readable result file"):
+        load_sinogram(tmp_path / "cut.npz")
+    # a pickle-bearing array is never unpickled (allow_pickle=False)
+    evil = tmp_path / "evil.npz"
+    np.savez(evil, __meta__=np.array('{"kind": "sinogram"}'),
+             values=np.array([object()], dtype=object))
+    with pytest.raises(ResultFileError, match="evil.npz: not a readable result file"):
+        load_sinogram(evil)
