@@ -164,6 +164,8 @@ def _cmd_simulate(args) -> int:
             opts["footprint"] = True
         opts["jobs"] = args.jobs
         opts["progress"] = not args.quiet
+        if args.run_dir is not None:
+            opts["run_dir"] = args.run_dir
     elif model == "pixel" and args.pixel_size is not None:
         opts["pixel_size"] = args.pixel_size
     sino = simulate(scene, ladar, model=model, **opts)
@@ -392,6 +394,9 @@ def _parser() -> argparse.ArgumentParser:
                      help="pixel size for --model pixel")
     sim.add_argument("--jobs", type=_positive_int, default=None,
                      help="worker processes for the mesh model")
+    sim.add_argument("--run-dir", default=None,
+                     help="resumable run folder for the mesh model: finished chunks are kept "
+                          "there, and re-running the same command resumes")
     sim.set_defaults(func=_cmd_simulate)
 
     rec = sub.add_parser("reconstruct", help="FBP of a saved sinogram into a PNG",
@@ -468,3 +473,10 @@ def main(argv=None) -> int:
         where = f" {exc.filename!r}" if getattr(exc, "filename", None) else ""
         print(f"meshladar: error:{where} {exc.strerror or exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        hint = ""
+        if getattr(args, "run_dir", None):
+            hint = (f"; finished chunks are kept in {args.run_dir}: run the same command "
+                    "again to resume")
+        print(f"meshladar: interrupted{hint}", file=sys.stderr)
+        return 130

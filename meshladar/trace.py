@@ -556,8 +556,25 @@ def _receivers(receiver, ladar, mode, footprint):
     return np.ascontiguousarray(r)
 
 
+def _job_description(geo, scene, ladar, mode, spacing, z0, back_faces, seed, weigh_with,
+                     receivers):
+    """Everything that determines a streaming run's result, for its run folder."""
+    import hashlib
+
+    def digest(a):
+        return hashlib.sha256(np.ascontiguousarray(a).tobytes()).hexdigest()
+
+    mats, footprint, area = weigh_with
+    return {"kind": "simulate_mesh", "geometry": geo.key, "normals": geo.normals,
+            "materials": [repr(m) for m in mats], "view_vectors": digest(ladar.view_vectors),
+            "bin_edges": digest(ladar.bin_edges), "n_views": ladar.n_views, "mode": mode,
+            "ray_spacing": spacing, "z0": z0, "back_faces": back_faces, "seed": seed,
+            "footprint": bool(footprint), "receivers": None if receivers is None
+            else digest(receivers), "views_per_chunk": _VIEWS_PER_TASK}
+
+
 def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_bin, seed,
-         jobs, executor, progress, weigh_with, receiver=None):
+         jobs, executor, progress, weigh_with, receiver=None, run_dir=None):
     mode, geo, z0 = _options(scene, ladar, mode, normals, back_faces, z0)
     receivers = _receivers(receiver, ladar, mode, bool(weigh_with and weigh_with[1]))
     spacing = _spacing(ladar, mode, ray_spacing, rays_per_bin)
@@ -573,17 +590,45 @@ def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_b
     bar = Progress(ladar.n_views, "views", enabled=progress)
     args = (mode, spacing, z0_shifted, back_faces, seed, ladar.bin_edges, weigh_with,
             receivers)
-    results = []
+    folder = None
+    results = [None] * len(chunks)
+    if run_dir is not None:
+        if weigh_with is None:
+            raise ParameterError("run_dir is for streaming runs (simulate), not trace()")
+        from .runs import RunFolder
+
+        folder = RunFolder(run_dir, _job_description(geo, scene, ladar, mode, spacing, z0,
+                                                     back_faces, seed, weigh_with, receivers),
+                           len(chunks))
+        for k in range(len(chunks)):
+            arrays = folder.load(k)
+            if arrays is not None:
+                results[k] = (arrays["values"], arrays["rays"].tolist(),
+                              arrays["backs"].tolist())
+                bar.update(len(chunks[k]))
+
+    def keep(k, res):
+        results[k] = res
+        if folder is not None:
+            folder.save(k, {"values": res[0], "rays": np.asarray(res[1]),
+                            "backs": np.asarray(res[2])})
+        bar.update(len(chunks[k]))
+
+    todo = [k for k in range(len(chunks)) if results[k] is None]
+    payload = geo
     try:
-        if ex is None:
-            for c in chunks:
-                results.append(_job(geo, vectors, c, *args))
-                bar.update(len(c))
+        if ex is None or not todo:
+            for k in todo:
+                keep(k, _job(geo, vectors, chunks[k], *args))
         else:
-            futures = [ex.submit(_job, geo, vectors, c, *args) for c in chunks]
-            for c, f in zip(chunks, futures):
-                results.append(f.result())
-                bar.update(len(c))
+            scatter = getattr(getattr(ex, "_client", None), "scatter", None)
+            if scatter is not None:            # a Dask executor: ship the mesh once per worker
+                payload = scatter(geo, broadcast=True, hash=False)
+            futures = {ex.submit(_job, payload, vectors, chunks[k], *args): k for k in todo}
+            from concurrent.futures import as_completed
+
+            for f in as_completed(futures):
+                keep(futures[f], f.result())
     finally:
         bar.close()
         if own:
@@ -765,8 +810,8 @@ def _simulate_tol(scene, ladar, tol, normals, footprint, kwargs):
 
 def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-sided", z0=None,
                   ray_spacing=None, rays_per_bin=None, footprint=None, seed=None,
-                  receiver=None, tol=None, jobs=None, executor=None,
-                  progress=False) -> Sinogram:
+                  receiver=None, tol=None, jobs=None, executor=None, progress=False,
+                  run_dir=None) -> Sinogram:
     """Trace and weigh in one streaming pass: each chunk of views is binned and its hits
     dropped, so memory stays bounded whatever the number of views and rays. Options as
     :func:`trace` and :func:`weigh` (defaults: flat normals, point binning). An analytic
@@ -778,10 +823,16 @@ def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-side
     measured convergence order) estimates the error at most ``tol``; defaults then become
     exact (analytic) or smooth (mesh) normals and footprint binning. The result's
     ``info`` holds ``chosen``, ``error_estimate`` and every ``refinement`` run.
+
+    ``run_dir`` makes the run resumable and loss-free (:mod:`meshladar.runs`): each finished
+    chunk of views is saved there atomically with a checksum, and running the same job
+    again reuses them and computes only what is missing.
     """
     common = dict(mode=mode, back_faces=back_faces, z0=z0, seed=seed, receiver=receiver,
                   jobs=jobs, executor=executor, progress=progress)
     if tol is not None:
+        if run_dir is not None:
+            raise ParameterError("run_dir and tol do not combine: the knob runs several jobs")
         return _simulate_tol(scene, ladar, tol, normals, footprint,
                              dict(common, ray_spacing=ray_spacing, rays_per_bin=rays_per_bin))
     normals = "flat" if normals is None else normals
@@ -792,7 +843,7 @@ def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-side
         scene, ladar, mode=mode, normals=normals, back_faces=back_faces, z0=z0,
         ray_spacing=ray_spacing, rays_per_bin=rays_per_bin, seed=seed, jobs=jobs,
         executor=executor, progress=progress, weigh_with=(tuple(scene.materials), footprint),
-        receiver=receiver)
+        receiver=receiver, run_dir=run_dir)
     vals = np.concatenate([r[0] for r in results])
     rays = [x for r in results for x in r[1]]
     back = [x for r in results for x in r[2]]

@@ -1,0 +1,110 @@
+"""Resumable, loss-free runs: a run folder with a manifest and one verified file per chunk.
+
+A long job (many views, a study, a material sweep) is split into chunks. With a run folder,
+each finished chunk is written atomically as ``chunk_00012.npz`` holding its arrays and, in
+its metadata, the SHA-256 of their bytes; ``manifest.json`` holds the job's full parameters
+and meshladar's version. Re-running the same job in the same folder verifies every chunk file
+(readable, checksum, shape) and reuses it; only missing or corrupt chunks are computed. A
+different job pointed at the same folder is refused (:class:`RunFolderError`), never mixed.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+
+import numpy as np
+
+from .errors import MeshladarError
+
+__all__ = ["RunFolder", "RunFolderError", "job_digest"]
+
+
+class RunFolderError(MeshladarError, ValueError):
+    """A run folder holds another job, or cannot be used."""
+
+
+def job_digest(job: dict) -> str:
+    """A stable hash of a job description (JSON with sorted keys)."""
+    return hashlib.sha256(json.dumps(job, sort_keys=True, default=str).encode()).hexdigest()
+
+
+def _array_digest(arrays: dict) -> str:
+    h = hashlib.sha256()
+    for k in sorted(arrays):
+        a = np.ascontiguousarray(arrays[k])
+        h.update(k.encode())
+        h.update(str(a.dtype).encode())
+        h.update(str(a.shape).encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
+class RunFolder:
+    """The run folder of one job: ``RunFolder(path, job, n_chunks)``.
+
+    ``load(i)`` returns chunk i's arrays if its file exists and verifies, else None;
+    ``save(i, arrays)`` writes it atomically.
+    """
+
+    def __init__(self, path, job: dict, n_chunks: int):
+        from . import __version__
+        from .io import write_text_atomic
+
+        self.path = os.fspath(path)
+        self.n_chunks = int(n_chunks)
+        self.job = dict(job, n_chunks=self.n_chunks)
+        self.digest = job_digest(self.job)
+        os.makedirs(self.path, exist_ok=True)
+        manifest = os.path.join(self.path, "manifest.json")
+        if os.path.exists(manifest):
+            try:
+                with open(manifest, encoding="utf-8") as fh:
+                    old = json.load(fh)
+            except (OSError, ValueError) as exc:
+                raise RunFolderError(f"{manifest}: unreadable manifest ({exc}); use another "
+                                     "folder or delete this one") from exc
+            if old.get("digest") != self.digest:
+                changed = sorted(k for k in set(old.get("job", {})) | set(self.job)
+                                 if old.get("job", {}).get(k) != _jsonable(self.job.get(k)))
+                raise RunFolderError(
+                    f"{self.path}: this run folder holds a different job (differs in "
+                    f"{', '.join(changed[:5]) or 'its parameters'}); use another folder, or "
+                    "delete this one to start over")
+        else:
+            write_text_atomic(manifest, json.dumps(
+                {"digest": self.digest, "job": _jsonable(self.job),
+                 "meshladar_version": __version__}, indent=1, sort_keys=True))
+
+    def _file(self, i):
+        return os.path.join(self.path, f"chunk_{i:05d}.npz")
+
+    def load(self, i):
+        """Chunk i's arrays, or None when it is missing, unreadable or fails its checksum."""
+        from .io import ResultFileError, load_result
+
+        f = self._file(i)
+        if not os.path.exists(f):
+            return None
+        try:
+            arrays, meta = load_result(f)
+        except ResultFileError:
+            return None
+        if meta.get("job") != self.digest or meta.get("sha256") != _array_digest(arrays):
+            return None
+        return arrays
+
+    def save(self, i, arrays: dict):
+        from .io import save_result
+
+        arrays = {k: np.asarray(v) for k, v in arrays.items()}
+        save_result(self._file(i), arrays, {"job": self.digest, "chunk": int(i),
+                                            "sha256": _array_digest(arrays)})
+
+    def done(self):
+        return [i for i in range(self.n_chunks) if os.path.exists(self._file(i))]
+
+
+def _jsonable(x):
+    return json.loads(json.dumps(x, sort_keys=True, default=str))
