@@ -168,7 +168,14 @@ def _cmd_simulate(args) -> int:
             opts["run_dir"] = args.run_dir
     elif model == "pixel" and args.pixel_size is not None:
         opts["pixel_size"] = args.pixel_size
-    sino = simulate(scene, ladar, model=model, **opts)
+    if model == "mesh" and (args.scheduler or args.workers):
+        from .parallel import dask_executor
+
+        with dask_executor(args.scheduler, workers=args.workers or 2) as ex:
+            sino = simulate(scene, ladar, model=model, executor=ex,
+                            **{k: v for k, v in opts.items() if k != "jobs"})
+    else:
+        sino = simulate(scene, ladar, model=model, **opts)
     params = {"scene": args.scene, "model": model, "options": {k: v for k, v in opts.items()
                                                                 if k != "progress"},
               "n_views": ladar.n_views, "n_bins": ladar.n_bins}
@@ -394,6 +401,10 @@ def _parser() -> argparse.ArgumentParser:
                      help="pixel size for --model pixel")
     sim.add_argument("--jobs", type=_positive_int, default=None,
                      help="worker processes for the mesh model")
+    sim.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                     help="run the mesh model on an existing Dask cluster (tcp://host:8786)")
+    sim.add_argument("--workers", type=_positive_int, default=None,
+                     help="run the mesh model on a local Dask cluster of N processes")
     sim.add_argument("--run-dir", default=None,
                      help="resumable run folder for the mesh model: finished chunks are kept "
                           "there, and re-running the same command resumes")
