@@ -17,12 +17,13 @@ from .trace import Hits, trace, weigh
 
 __version__ = "0.1.0"
 
-_LAZY_SUBPACKAGES = ("phantoms", "viz")
+_LAZY_SUBPACKAGES = ("phantoms", "viz", "mesh", "studies", "io", "siddon", "parallel", "runs",
+                     "bench", "paper")
 
 
 def __getattr__(name):
-    # The phantom library and the viewer are reached as meshladar.phantoms / meshladar.viz
-    # but imported only on first use, so that `import meshladar` stays light.
+    # The phantom library, the viewer and the heavier engine modules are reached as
+    # meshladar.<name> but imported only on first use, so `import meshladar` stays light.
     if name in _LAZY_SUBPACKAGES:
         import importlib
 
