@@ -204,3 +204,39 @@ print(json.dumps({{"seconds": dt, "rays": sino.info["rays"], "peak_rss_mb": rss}
     res = json.loads(out.stdout.strip().splitlines()[-1])
     res["mrays"] = res["rays"] / res["seconds"] / 1e6
     return res
+
+
+def bench_dask(*, views=360, rays_per_view=1_000_000, subdivisions=6, workers=2):
+    """The streaming mesh run on a local Dask cluster of ``workers`` processes against the
+    same run serially, in this process; and the per-task overhead (mean wall time of a no-op
+    task through the executor). Returns a dict of seconds and the speed-up."""
+    import math
+    import time as _time
+
+    import numpy as np
+
+    from . import materials
+    from .ladar import Ladar
+    from .mesh import fibonacci_sphere
+    from .parallel import dask_executor
+    from .trace import simulate_mesh
+
+    scene = _icosphere_scene(subdivisions, materials.DARK_GRAY)
+    ladar = Ladar(None, np.linspace(-0.6, 0.6, 1025), view_vectors=fibonacci_sphere(views))
+    spacing = 1.0 / math.sqrt(rays_per_view)
+    t0 = _time.perf_counter()
+    serial = simulate_mesh(scene, ladar, mode="3d", ray_spacing=spacing, jobs=1)
+    t_serial = _time.perf_counter() - t0
+    with dask_executor(workers=workers) as ex:
+        ex.submit(int, 0).result()                           # workers up
+        t0 = _time.perf_counter()
+        futures = [ex.submit(int, k) for k in range(200)]
+        [f.result() for f in futures]
+        overhead = (_time.perf_counter() - t0) / 200
+        t0 = _time.perf_counter()
+        dist = simulate_mesh(scene, ladar, mode="3d", ray_spacing=spacing, executor=ex)
+        t_dask = _time.perf_counter() - t0
+    same = bool(np.array_equal(serial.values, dist.values))
+    return {"views": views, "rays": serial.info["rays"], "serial_s": t_serial,
+            "dask_s": t_dask, "speedup": t_serial / t_dask, "task_overhead_s": overhead,
+            "identical": same}

@@ -291,6 +291,16 @@ def _cmd_bench(args) -> int:
         st = bench_streaming()
         print(f"streaming 360 views x 1e6 rays, 2 processes: {st['seconds']:.1f} s, "
               f"{st['mrays']:.2f} Mrays/s, peak RSS {st['peak_rss_mb']:.0f} MB")
+        from .bench import bench_dask
+
+        try:
+            d = bench_dask()
+        except ImportError as exc:
+            print(f"Dask: skipped ({exc})")
+        else:
+            print(f"Dask, 2 local workers, {d['views']} views x 1e6 rays: {d['dask_s']:.1f} s "
+                  f"vs serial {d['serial_s']:.1f} s = {d['speedup']:.2f}x; per-task overhead "
+                  f"{1e3 * d['task_overhead_s']:.1f} ms; identical: {d['identical']}")
     return 0
 
 
