@@ -94,11 +94,13 @@ def _errors(values, ref, ref_image, ladar, size):
                                   / np.linalg.norm(ref_image.values))}
 
 
-def faceting_study(setting="quick", *, phantoms=None, coatings=None, progress=False):
+def faceting_study(setting="quick", *, phantoms=None, coatings=None, progress=False,
+                   executor=None):
     """Run the sweep; returns a dict with ``rows`` (one dict per point), ``setting`` and
     ``orders`` (see :func:`convergence_orders`), plus ``examples``: for each phantom and
     coating, the analytic sinogram, a coarse flat mesh's (segments[1]) sinogram and both
-    FBP images, for the difference figures."""
+    FBP images, for the difference figures. ``executor`` (any concurrent.futures executor,
+    e.g. a Dask one) runs the mesh points' chunks of views; wall times then include it."""
     from .forward import simulate
     from ._progress import Progress
 
@@ -134,8 +136,9 @@ def faceting_study(setting="quick", *, phantoms=None, coatings=None, progress=Fa
                 else:
                     if n not in meshes:
                         meshes[n] = scene.tessellate(n)
+                    par = {"executor": executor} if executor is not None else {"jobs": 1}
                     sino = simulate(meshes[n], ladar, model="mesh", normals=normals,
-                                    rays_per_bin=r, footprint=foot, jobs=1)
+                                    rays_per_bin=r, footprint=foot, **par)
                 dt = time.perf_counter() - t0
                 row = {"phantom": ph, "coating": co, "series": series, "segments": n,
                        "normals": normals, "rays_per_bin": r, "footprint": foot,

@@ -93,6 +93,16 @@ def test_help_everywhere_with_examples(sub):
     (["reconstruct", "junk.npz", "-o", "x.png"], "not a readable result file"),
     (["reconstruct", "plain.npz", "-o", "x.png"], "not a meshladar result"),
     (["materials", "missing.toml"], "cannot read material table"),
+    (["view", "nope"], "unknown phantom"),
+    (["view", "disk_pair", "--view-angle", "abc"], "invalid float value"),
+    (["study", "pixels", "out"], "invalid choice"),
+    (["paper"], "required: outdir"),
+    (["paper", "out", "--size", "-3"], "must be a positive integer"),
+    (["bench", "--repeats", "0"], "must be a positive integer"),
+    (["demo", "--angles-deg", "1,nan"], "must be finite numbers"),
+    (["reconstruct", "junk.npz", "-o", "x.png", "--filter", "rampp"], "invalid choice"),
+    (["simulate", "disk_pair", "-o", "x.npz", "--model", "mesh", "--tol", "2"],
+     "tol must be in (0, 1)"),
 ])
 def test_bad_input_is_one_clear_line(tmp_path, args, message):
     (tmp_path / "bad.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n")
