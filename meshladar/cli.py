@@ -246,7 +246,10 @@ def _cmd_study(args) -> int:
     from . import studies
     from meshladar.viz import studies as vstudies
 
-    result = studies.faceting_study(args.setting, progress=not args.quiet)
+    import os
+
+    result = studies.faceting_study(args.setting, progress=not args.quiet,
+                                    run_dir=os.path.join(args.outdir, "run"))
     files = studies.save_study(result, args.outdir)
     figs = vstudies.draw(args.outdir)
     print(studies.report(result))
@@ -461,6 +464,8 @@ def _parser() -> argparse.ArgumentParser:
     st.add_argument("--full", dest="setting", action="store_const", const="full",
                     default="quick", help="the full sweep (360 views, segments to 4096)")
     st.add_argument("--quiet", action="store_true", help="no progress bar")
+    st.epilog += ("\n\nFinished study points are kept in OUTDIR/run: re-running the same "
+                  "command resumes an interrupted study.")
     st.set_defaults(func=_cmd_study)
     bch = sub.add_parser("bench", help="time the forward models (median of several runs)",
                          description=_cmd_bench.__doc__,

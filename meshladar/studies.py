@@ -95,12 +95,14 @@ def _errors(values, ref, ref_image, ladar, size):
 
 
 def faceting_study(setting="quick", *, phantoms=None, coatings=None, progress=False,
-                   executor=None):
+                   executor=None, run_dir=None):
     """Run the sweep; returns a dict with ``rows`` (one dict per point), ``setting`` and
     ``orders`` (see :func:`convergence_orders`), plus ``examples``: for each phantom and
     coating, the analytic sinogram, a coarse flat mesh's (segments[1]) sinogram and both
     FBP images, for the difference figures. ``executor`` (any concurrent.futures executor,
-    e.g. a Dask one) runs the mesh points' chunks of views; wall times then include it."""
+    e.g. a Dask one) runs the mesh points' chunks of views; wall times then include it.
+    ``run_dir`` makes the study resumable: each finished point is kept there (checksummed),
+    and running the same study again computes only the missing points."""
     from .forward import simulate
     from ._progress import Progress
 
@@ -121,36 +123,62 @@ def faceting_study(setting="quick", *, phantoms=None, coatings=None, progress=Fa
     rows, examples = [], {}
     bar = Progress(len(phantoms) * len(coatings) * len(plan), "study points",
                    enabled=progress)
+    folder = None
+    if run_dir is not None:
+        from . import __version__
+        from .runs import RunFolder
+
+        folder = RunFolder(run_dir, {"kind": "faceting_study", "setting": setting,
+                                     "config": cfg, "phantoms": phantoms,
+                                     "coatings": coatings, "version": __version__},
+                           len(phantoms) * len(coatings) * len(plan))
+    index = 0
     for ph in phantoms:
         for co in coatings:
             scene = study_scene(ph, co)
-            t0 = time.perf_counter()
-            ref = simulate(scene, ladar)
-            t_ref = time.perf_counter() - t0
-            ref_image = fbp(ref, size=size, extent=1.0)
+            ref = ref_image = None
             meshes = {}
             for series, n, normals, r, foot, pix in plan:
-                t0 = time.perf_counter()
-                if series == "pixel":
-                    sino = simulate(scene, ladar, model="pixel", pixel_size=pix)
-                else:
-                    if n not in meshes:
-                        meshes[n] = scene.tessellate(n)
-                    par = {"executor": executor} if executor is not None else {"jobs": 1}
-                    sino = simulate(meshes[n], ladar, model="mesh", normals=normals,
-                                    rays_per_bin=r, footprint=foot, **par)
-                dt = time.perf_counter() - t0
                 row = {"phantom": ph, "coating": co, "series": series, "segments": n,
                        "normals": normals, "rays_per_bin": r, "footprint": foot,
-                       "pixel_size": pix, "seconds": dt, "analytic_seconds": t_ref}
-                row.update(_errors(sino.values, ref, ref_image, ladar, size))
+                       "pixel_size": pix}
+                example = series == "normal" and n == seg[1]
+                saved = folder.load(index) if folder is not None else None
+                if saved is None:
+                    if ref is None:
+                        t0 = time.perf_counter()
+                        ref = simulate(scene, ladar)
+                        t_ref = time.perf_counter() - t0
+                        ref_image = fbp(ref, size=size, extent=1.0)
+                    t0 = time.perf_counter()
+                    if series == "pixel":
+                        sino = simulate(scene, ladar, model="pixel", pixel_size=pix)
+                    else:
+                        if n not in meshes:
+                            meshes[n] = scene.tessellate(n)
+                        par = {"executor": executor} if executor is not None else {"jobs": 1}
+                        sino = simulate(meshes[n], ladar, model="mesh", normals=normals,
+                                        rays_per_bin=r, footprint=foot, **par)
+                    dt = time.perf_counter() - t0
+                    err = _errors(sino.values, ref, ref_image, ladar, size)
+                    saved = {k: np.float64(v) for k, v in err.items()}
+                    saved["seconds"] = np.float64(dt)
+                    saved["analytic_seconds"] = np.float64(t_ref)
+                    if example:
+                        saved.update({"analytic": ref.values, "mesh": sino.values,
+                                      "analytic_image": ref_image.values,
+                                      "mesh_image": fbp(sino, size=size, extent=1.0).values})
+                    if folder is not None:
+                        folder.save(index, saved)
+                row.update({k: float(saved[k]) for k in ("rel_l2", "rel_max", "image_rel_l2",
+                                                         "seconds", "analytic_seconds")})
                 rows.append(row)
-                if series == "normal" and n == seg[1]:
-                    examples[f"{ph}/{co}"] = {
-                        "analytic": ref.values, "mesh": sino.values,
-                        "analytic_image": ref_image.values,
-                        "mesh_image": fbp(sino, size=size, extent=1.0).values,
-                        "segments": n}
+                if example:
+                    examples[f"{ph}/{co}"] = {k: np.asarray(saved[k]) for k in
+                                              ("analytic", "mesh", "analytic_image",
+                                               "mesh_image")}
+                    examples[f"{ph}/{co}"]["segments"] = n
+                index += 1
                 bar.update()
     bar.close()
     return {"setting": setting, "config": cfg, "rows": rows,

@@ -72,6 +72,26 @@ def test_glint_regime_breaks_flat_facets_until_n_exceeds_pi_over_e(study):
     assert pos["break_at"] <= 128 and pos["order"] > 1.3
 
 
+def test_study_resumes_from_its_run_folder(tmp_path, monkeypatch):
+    import sys
+
+    first = studies.faceting_study("quick", phantoms=["disk"], coatings=["aluminum"],
+                                   run_dir=tmp_path)
+    # the second run computes nothing: simulate must not be called
+    def forbidden(*a, **k):
+        raise AssertionError("a finished study point was computed again")
+
+    monkeypatch.setattr(sys.modules["meshladar.forward"], "simulate", forbidden)
+    again = studies.faceting_study("quick", phantoms=["disk"], coatings=["aluminum"],
+                                   run_dir=tmp_path)
+    assert again["rows"] == first["rows"]
+    np.testing.assert_array_equal(again["examples"]["disk/aluminum"]["mesh"],
+                                  first["examples"]["disk/aluminum"]["mesh"])
+    with pytest.raises(ml.runs.RunFolderError, match="different job"):
+        studies.faceting_study("quick", phantoms=["disk"], coatings=["dark_gray"],
+                               run_dir=tmp_path)
+
+
 def test_study_files(study, tmp_path):
     paths = studies.save_study(study, tmp_path)
     assert [p.split("/")[-1] for p in paths] == ["faceting.csv", "faceting.json",
