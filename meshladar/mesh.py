@@ -26,7 +26,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .brdf import SandfordRobertson
 from .errors import GeometryError, ParameterError
 
 __all__ = ["MeshPart", "load_parts", "part_from_trimesh", "prism", "sphere", "ellipsoid",
@@ -336,9 +335,3 @@ def corner_normals(part: MeshPart, crease_deg=CREASE_DEG):
     out = np.zeros((len(f), 3, 3))
     _kernels.corner_normals(f, fn, area, ptr, face_of, math.cos(math.radians(crease_deg)), out)
     return out
-
-
-def _material_list(materials):
-    if isinstance(materials, SandfordRobertson):
-        return [materials]
-    return list(materials)

@@ -45,7 +45,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._validate import check_choice, check_real
-from .errors import GeometryError, ParameterError
+from .errors import ParameterError
 from .ladar import Ladar
 from .scene import Scene
 from .sinogram import Sinogram

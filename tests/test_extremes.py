@@ -11,7 +11,7 @@ import pytest
 import trimesh
 
 import meshladar as ml
-from meshladar.materials import ALUMINUM, DARK_GRAY, glint, lambertian
+from meshladar.materials import ALUMINUM, DARK_GRAY, glint
 
 EXTREME_COATINGS = {
     "b=1e-12": lambda: ml.SandfordRobertson(0.02, 0.3, 1e-12, 0.17),
