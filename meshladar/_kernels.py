@@ -239,12 +239,14 @@ def _sr_monostatic(c, s, rho_d, eps, b, e, G, diffuse, specular):
 
 
 @njit(cache=True)
-def bin_flat_hits(prim, tfar, face_normals, face_material, params, w, start, edges, area,
-                  ignore_back, out):
+def bin_flat_hits(prim, tfar, origins, vertices, faces, face_normals, face_material, params,
+                  w, start, edges, area, ignore_back, out):
     """Monostatic, flat-normal weighing and binning of one view's Embree hits, fused:
-    out[k] += F(θ)·area for each hit with range start + tfar in bin k. ``params`` rows are
-    (rho_d, epsilon, b, e, G, has_diffuse, has_specular) per material. Returns the number of
-    back-face hits."""
+    out[k] += F(θ)·area for each hit with range start + t − o·w in bin k (o the float32 origin
+    as cast), t the hit distance recomputed in float64 against the face's plane (as
+    meshladar.trace._refine_t).
+    ``params`` rows are (rho_d, epsilon, b, e, G, has_diffuse, has_specular) per material.
+    Returns the number of back-face hits."""
     nb = edges.size - 1
     back = 0
     for i in range(prim.size):
@@ -252,12 +254,18 @@ def bin_flat_hits(prim, tfar, face_normals, face_material, params, w, start, edg
         if p < 0:
             continue
         c = face_normals[p, 0] * w[0] + face_normals[p, 1] * w[1] + face_normals[p, 2] * w[2]
+        t = tfar[i] * 1.0
+        if abs(c) > 1e-6:
+            v0 = faces[p, 0]
+            t = (face_normals[p, 0] * (vertices[v0, 0] - origins[i, 0])
+                 + face_normals[p, 1] * (vertices[v0, 1] - origins[i, 1])
+                 + face_normals[p, 2] * (vertices[v0, 2] - origins[i, 2])) / (-c)
         if c < 0.0:
             back += 1
             if ignore_back:
                 continue
             c = -c
-        r = start + tfar[i]
+        r = start + t - (origins[i, 0] * w[0] + origins[i, 1] * w[1] + origins[i, 2] * w[2])
         if r < edges[0] or r >= edges[nb]:
             continue
         lo = 0

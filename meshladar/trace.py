@@ -15,9 +15,11 @@ Two modes:
 * ``mode="3d"``: a square grid of rays spaced δ (δA⊥ = δ²), any view vectors.
 
 Precision (Embree works in float32): the scene is shifted to its bounding-box centre in
-float64 before it is converted, rays start at distance L = 1.01 R_bound + ... from that centre,
-and ranges are formed in float64 as r = −c·w − L + t_hit. A scene far from the origin or
-tiny keeps its range accuracy relative to its own size (float32: ~1e-7 of it).
+float64 before it is converted, rays start just outside its bounding sphere, and each hit's
+distance is recomputed in float64 against the hit face's float64 plane, from the float32
+origin exactly as cast: r = −c·w + t − o·w. A scene far from the origin or tiny keeps its
+range accuracy relative to its own size, and a surface lying on a bin edge (the paper's
+first edge is the disk's top, where the glint peaks) is binned to float64 precision.
 
 Normals: ``"flat"`` (the face's geometric normal, float64), ``"smooth"`` (vertex normals
 interpolated with Embree's barycentrics, averaged only across edges sharper than
@@ -85,6 +87,7 @@ class _Geometry:
         self.center = 0.5 * (lo + hi)
         shifted = self.vertices - self.center
         self.radius = float(np.max(np.linalg.norm(shifted, axis=1)))
+        self.shifted = np.ascontiguousarray(shifted)
         self.shifted32 = np.ascontiguousarray(shifted, dtype=np.float32)
         self.faces32 = np.ascontiguousarray(self.faces, dtype=np.int32)
         tri = self.vertices[self.faces]
@@ -137,7 +140,10 @@ def _embree_scene(geo: _Geometry):
             from embreex.mesh_construction import TriangleMesh
         except ImportError as exc:  # pragma: no cover - embreex is a core dependency
             raise ImportError("the mesh model needs embreex: pip install embreex") from exc
-        scene = rtcore_scene.EmbreeScene()
+        # robust mode: watertight ray-triangle tests, so a ray through a shared edge (the
+        # diagonal of a prism's side quad crosses the mid-height slice plane) cannot slip
+        # between the two triangles
+        scene = rtcore_scene.EmbreeScene(robust=True)
         TriangleMesh(scene, geo.shifted32, geo.faces32)
         _EMBREE_CACHE.clear()                   # one scene per process is enough
         _EMBREE_CACHE[geo.key] = scene
@@ -245,8 +251,8 @@ def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=N
     prim = res["primID"]
     hit = prim >= 0
     prim = prim[hit]
-    t_hit = res["tfar"][hit].astype(np.float64)
     n_geo = geo.face_normals[prim]
+    t_hit = _refine_t(geo, prim, o[hit], w, res["tfar"][hit])
     cos_geo = _dot(n_geo, w)
     back = cos_geo < 0
     if geo.normals == "flat":
@@ -295,7 +301,9 @@ def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=N
         rng_extra = -_dot(p, w_r)
     # footprint: range spread along u and v on the flat facet, and the facet's own range
     # interval relative to the hit (a footprint cannot return ranges the facet does not span)
-    rng_rel = t_hit - L                          # r = −c·w + (t − L)
+    # r = −(c + o − t w)·w = −c·w + t − o·w, with the float32 origin o exactly as cast
+    oh = o[hit].astype(np.float64)
+    rng_rel = t_hit - (oh[:, 0] * w[0] + oh[:, 1] * w[1] + oh[:, 2] * w[2])
     if w_r is not None:
         rng_rel = 0.5 * (rng_rel + rng_extra)     # r = −c·(w + w_r)/2 + ...
     spread = np.zeros((prim.size, 4))
@@ -309,6 +317,28 @@ def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=N
         spread[:, 2] = np.minimum(tri_r.min(axis=1) - rng_rel, 0.0)
         spread[:, 3] = np.maximum(tri_r.max(axis=1) - rng_rel, 0.0)
     return (rng_rel, cos_t, sin_t, geo.material[prim], spread, len(o), int(back.sum()), bi)
+
+
+#: Below this |n·w| the float64 plane intersection is ill-conditioned and Embree's float32
+#: distance is kept.
+_REFINE_MIN_COS = 1e-6
+
+
+def _refine_t(geo, prim, origins32, w, t32):
+    """Hit distances recomputed in float64 against the hit face's plane.
+
+    Embree's t is float32 (~1e-7 of the scene's size): enough for geometry, not for a bin
+    edge that coincides with a surface (the paper's first bin edge is the disk's top, where
+    the glint peaks). The ray is o + t(−w) with o exactly the float32 origin cast; the face
+    plane uses the float64 vertices: t = n·(v0 − o) / (−n·w)."""
+    n = geo.face_normals[prim]
+    v0 = geo.shifted[geo.faces[prim, 0]]
+    o = origins32.astype(np.float64)
+    denom = -(n[:, 0] * w[0] + n[:, 1] * w[1] + n[:, 2] * w[2])
+    num = (n[:, 0] * (v0[:, 0] - o[:, 0]) + n[:, 1] * (v0[:, 1] - o[:, 1])
+           + n[:, 2] * (v0[:, 2] - o[:, 2]))
+    ok = np.abs(denom) > _REFINE_MIN_COS
+    return np.where(ok, num / np.where(ok, denom, 1.0), t32.astype(np.float64))
 
 
 def _spacing(ladar, mode, ray_spacing, rays_per_bin):
@@ -394,9 +424,10 @@ def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces,
         rng = None if seed is None else np.random.default_rng([seed, int(i)])
         o, L, _, _ = _ray_grid(geo, w, mode, spacing, z0_shifted, rng)
         res = scene.run(o, np.ascontiguousarray((-w)[None, :], dtype=np.float32), output=1)
-        start = _range_offset(geo.center, w, None) - L
-        backs.append(_kernels.bin_flat_hits(res["primID"], res["tfar"], geo.face_normals,
-                                            geo.material, params, w, start, edges, area,
+        start = _range_offset(geo.center, w, None)
+        backs.append(_kernels.bin_flat_hits(res["primID"], res["tfar"], o, geo.shifted,
+                                            geo.faces, geo.face_normals, geo.material,
+                                            params, w, start, edges, area,
                                             back_faces == "ignore", vals[j]))
         rays.append(len(o))
     return vals, rays, backs
