@@ -53,3 +53,17 @@ def finite_array(name: str, value) -> np.ndarray:
         where = f" at index {tuple(int(i) for i in idx)}" if a.ndim else ""
         raise ParameterError(f"{name} must be finite; got {bad!r}{where}")
     return a
+
+
+def readonly_copy(a) -> np.ndarray:
+    """A read-only float64 copy (stage outputs are immutable)."""
+    a = np.array(a, dtype=np.float64, copy=True)
+    a.flags.writeable = False
+    return a
+
+
+def check_count(name: str, value, low: int = 1) -> int:
+    """Return ``value`` as an int after checking it is an integer >= low (bools refused)."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
+        raise ParameterError(f"{name} must be an integer >= {low}; got {value!r}")
+    return int(value)

@@ -13,25 +13,13 @@ from functools import cached_property
 
 import numpy as np
 
-from ._validate import check_real, finite_array
+from ._validate import check_count, check_real, finite_array, readonly_copy
 from .errors import ParameterError
 
 __all__ = ["Ladar", "PAPER_BIN_DIVISOR"]
 
 #: The paper's range resolution is A/256 for a disk of radius A (Sec. 4.A).
 PAPER_BIN_DIVISOR = 256
-
-
-def _readonly(a):
-    a = np.array(a, dtype=np.float64, copy=True)
-    a.flags.writeable = False
-    return a
-
-
-def _check_count(name, value, low=1):
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
-        raise ParameterError(f"{name} must be an integer >= {low}; got {value!r}")
-    return int(value)
 
 
 @dataclass(frozen=True, eq=False)
@@ -77,7 +65,7 @@ class Ladar:
             if self.angles_deg is None:
                 object.__setattr__(self, "angles_deg",
                                    np.degrees(np.arctan2(vec[:, 1], vec[:, 0])))
-            object.__setattr__(self, "view_vectors", _readonly(vec))
+            object.__setattr__(self, "view_vectors", readonly_copy(vec))
         elif self.angles_deg is None:
             raise ParameterError("give angles_deg or view_vectors; got neither")
         angles = finite_array("angles_deg", self.angles_deg)
@@ -96,11 +84,11 @@ class Ladar:
         if self.view_vectors is not None and len(self.view_vectors) != angles.size:
             raise ParameterError(f"angles_deg and view_vectors must have the same length; got "
                                  f"{angles.size} and {len(self.view_vectors)}")
-        object.__setattr__(self, "angles_deg", _readonly(angles))
-        object.__setattr__(self, "bin_edges", _readonly(edges))
+        object.__setattr__(self, "angles_deg", readonly_copy(angles))
+        object.__setattr__(self, "bin_edges", readonly_copy(edges))
         if self.view_vectors is None:
             phi = np.deg2rad(angles)
-            object.__setattr__(self, "view_vectors", _readonly(
+            object.__setattr__(self, "view_vectors", readonly_copy(
                 np.stack([np.cos(phi), np.sin(phi), np.zeros_like(phi)], axis=-1)))
 
     @property
@@ -115,7 +103,7 @@ class Ladar:
 
         ``angles_deg`` defaults to the paper's 360 views at 1° (0, 1, ..., 359).
         """
-        n = _check_count("n_bins", n_bins)
+        n = check_count("n_bins", n_bins)
         w = check_real("bin_width", bin_width, low=0.0, low_open=True)
         c = check_real("center", center)
         edges = c + (np.arange(n + 1) - n / 2.0) * w
@@ -147,7 +135,7 @@ class Ladar:
             w = check_real("bin_width", bin_width, low=0.0, low_open=True)
             n = max(1, int(np.ceil(2 * half / w - 1e-9)))
         else:
-            n = _check_count("n_bins", n_bins)
+            n = check_count("n_bins", n_bins)
             w = 2 * half / n
         return cls.centered(n, w, angles_deg=angles_deg)
 

@@ -30,7 +30,7 @@ from functools import cached_property
 import numpy as np
 from scipy import fft as sfft
 
-from ._validate import check_choice, check_real, finite_array
+from ._validate import check_choice, check_count, check_real, finite_array
 from .errors import MeshladarWarning, ParameterError
 from .sinogram import Sinogram
 
@@ -237,8 +237,7 @@ def fbp(sinogram, size=512, extent=1.0, *, filter="ramp", interpolation="linear"
     if not isinstance(sinogram, Sinogram):
         raise ParameterError(f"sinogram must be a meshladar.Sinogram; got "
                              f"{type(sinogram).__name__}")
-    if isinstance(size, bool) or not isinstance(size, (int, np.integer)) or size < 1:
-        raise ParameterError(f"size must be an integer >= 1; got {size!r}")
+    size = check_count("size", size)
     extent = check_real("extent", extent, low=0.0, low_open=True)
     check_choice("filter", filter, FILTERS)
     check_choice("interpolation", interpolation, INTERPOLATIONS)

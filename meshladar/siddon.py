@@ -19,7 +19,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ._validate import check_real, finite_array
+from ._validate import check_count, check_real, finite_array
 from .errors import ParameterError
 
 __all__ = ["PixelGrid", "Rays", "parallel_rays", "project", "backproject", "ParallelProjector"]
@@ -37,9 +37,7 @@ class PixelGrid:
 
     def __post_init__(self):
         for name in ("nx", "ny"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
-                raise ParameterError(f"{name} must be an integer >= 1; got {v!r}")
+            object.__setattr__(self, name, check_count(name, getattr(self, name)))
         object.__setattr__(self, "pixel_size",
                            check_real("pixel_size", self.pixel_size, low=0.0, low_open=True))
         o = finite_array("origin", self.origin)
@@ -51,8 +49,7 @@ class PixelGrid:
     def square(cls, size, extent, center=(0.0, 0.0)):
         """size × size pixels spanning [−extent, extent]² about ``center`` (an Image's grid)."""
         extent = check_real("extent", extent, low=0.0, low_open=True)
-        if isinstance(size, bool) or not isinstance(size, (int, np.integer)) or size < 1:
-            raise ParameterError(f"size must be an integer >= 1; got {size!r}")
+        size = check_count("size", size)
         c = finite_array("center", center)
         return cls(int(size), int(size), 2.0 * extent / size,
                    (float(c[0]) - extent, float(c[1]) - extent))

@@ -12,16 +12,10 @@ from functools import cached_property
 
 import numpy as np
 
-from ._validate import finite_array
+from ._validate import finite_array, readonly_copy
 from .errors import ParameterError
 
 __all__ = ["Sinogram"]
-
-
-def _readonly(a: np.ndarray) -> np.ndarray:
-    a = np.array(a, dtype=np.float64, copy=True)
-    a.flags.writeable = False
-    return a
 
 
 @dataclass(frozen=True, eq=False)
@@ -70,9 +64,9 @@ class Sinogram:
                                  f"entries; got shape {edges.shape}")
         if np.any(np.diff(edges) <= 0):
             raise ParameterError("bin_edges must be strictly increasing")
-        object.__setattr__(self, "values", _readonly(values))
-        object.__setattr__(self, "angles_deg", _readonly(angles))
-        object.__setattr__(self, "bin_edges", _readonly(edges))
+        object.__setattr__(self, "values", readonly_copy(values))
+        object.__setattr__(self, "angles_deg", readonly_copy(angles))
+        object.__setattr__(self, "bin_edges", readonly_copy(edges))
         object.__setattr__(self, "info", dict(self.info))
         if self.view_vectors is None:
             phi = np.deg2rad(angles)
@@ -82,7 +76,7 @@ class Sinogram:
             if vec.shape != (values.shape[0], 3):
                 raise ParameterError(f"view_vectors must have shape ({values.shape[0]}, 3); got "
                                      f"{vec.shape}")
-        object.__setattr__(self, "view_vectors", _readonly(vec))
+        object.__setattr__(self, "view_vectors", readonly_copy(vec))
 
     @property
     def shape(self) -> tuple[int, int]:
