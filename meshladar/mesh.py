@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ._validate import check_count
 from .errors import GeometryError, ParameterError
 
 __all__ = ["MeshPart", "load_parts", "part_from_trimesh", "prism", "sphere", "ellipsoid",
@@ -258,9 +259,7 @@ def prism(shape, segments, height, material_index, *, z0=0.0):
     The part's ``exact_normal`` is the shape's own outward normal (in x-y) for side points
     and ±z on the caps.
     """
-    if isinstance(segments, bool) or not isinstance(segments, (int, np.integer)) or segments < 3:
-        raise ParameterError(f"segments must be an integer >= 3; got {segments!r}")
-    n = int(segments)
+    n = check_count("segments", segments, 3)
     t = 2 * math.pi * np.arange(n) / n
     ring = shape.boundary(t)                                 # (n, 2)
     lo, hi = z0 - height / 2, z0 + height / 2
@@ -281,10 +280,8 @@ def prism(shape, segments, height, material_index, *, z0=0.0):
 def _icosphere(subdivisions):
     import trimesh
 
-    if isinstance(subdivisions, bool) or not isinstance(subdivisions, (int, np.integer)) \
-            or subdivisions < 0:
-        raise ParameterError(f"subdivisions must be an integer >= 0; got {subdivisions!r}")
-    m = trimesh.creation.icosphere(subdivisions=int(subdivisions), radius=1.0)
+    subdivisions = check_count("subdivisions", subdivisions, 0)
+    m = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)
     return np.asarray(m.vertices, dtype=np.float64), np.asarray(m.faces)
 
 
@@ -309,8 +306,7 @@ def sphere(center, radius, material_index, *, subdivisions=4, name="sphere"):
 def fibonacci_sphere(n, *, hemisphere=False):
     """n view vectors spread evenly over the sphere (or the upper hemisphere z ≥ 0), by the
     golden-angle (Fibonacci) lattice: each covers ~4π/n sr."""
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise ParameterError(f"n must be an integer >= 1; got {n!r}")
+    n = check_count("n", n)
     k = np.arange(n) + 0.5
     z = 1 - k / n if hemisphere else 1 - 2 * k / n
     r = np.sqrt(np.maximum(1 - z * z, 0.0))
