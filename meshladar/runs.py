@@ -57,6 +57,13 @@ class RunFolder:
         self.job = dict(job, n_chunks=self.n_chunks)
         self.digest = job_digest(self.job)
         os.makedirs(self.path, exist_ok=True)
+        # temporaries of writes cut short by a kill: never under a final name, removed here
+        for name in os.listdir(self.path):
+            if name.startswith(".tmp-"):
+                try:
+                    os.remove(os.path.join(self.path, name))
+                except OSError:
+                    pass
         manifest = os.path.join(self.path, "manifest.json")
         if os.path.exists(manifest):
             try:
