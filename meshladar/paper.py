@@ -154,12 +154,13 @@ def run(*, size=IMAGE_SIZE, extent=IMAGE_EXTENT, ladar=None):
     -------
     dict
         ``sinograms``: key → (360, 512) values; ``images``: key → (size, size) values;
-        ``bin_edges``, ``angles_deg``, ``extent``, ``captions``, and ``metrics``: a flat
-        dict of the findings' numbers (see the module docstring).
+        ``bin_edges``, ``angles_deg``, ``extent``, ``captions``, ``outlines`` (each panel's
+        shapes, for the figures' colour scales), and ``metrics``: a flat dict of the
+        findings' numbers (see the module docstring).
     """
     ladar = Ladar.paper(_A) if ladar is None else ladar
     panels = _panels()
-    sinos, images, captions, metrics = {}, {}, {}, {}
+    sinos, images, captions, metrics, outlines = {}, {}, {}, {}, {}
     raw = {}
     for key, (scene, prep, caption) in panels.items():
         base = key.replace("_log", "").replace("_clip", "")
@@ -172,6 +173,8 @@ def run(*, size=IMAGE_SIZE, extent=IMAGE_EXTENT, ladar=None):
             sino = clip_radiance(sino)
         image = fbp(sino, size=size, extent=extent)
         sinos[key], images[key], captions[key] = sino.values, image.values, caption
+        outlines[key] = [{"center": list(sh.center), "axes": list(sh.axes),
+                          "angle": sh.angle} for sh in scene.shapes]
         power = float(raw[base].total().mean())
         shapes = scene.shapes
         if key.startswith("disk"):
@@ -188,5 +191,6 @@ def run(*, size=IMAGE_SIZE, extent=IMAGE_EXTENT, ladar=None):
                 metrics[f"{key}.visibility"] = ring_visibility(image, g, a,
                                                                float(np.min(np.diff(ladar.bin_edges))))
     return {"sinograms": sinos, "images": images, "captions": captions, "metrics": metrics,
+            "outlines": outlines,
             "bin_edges": ladar.bin_edges, "angles_deg": ladar.angles_deg, "extent": extent,
             "size": size}

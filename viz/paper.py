@@ -6,8 +6,9 @@ Figures only load results, so restyling never means simulating again::
     paths = paper.reproduce("figures/")          # run, save figures/paper_result.npz, draw
     paths = paper.draw("figures/paper_result.npz", "figures/")   # redraw only
 
-Images are shown with the colour range clipped to the 1st-99.5th percentile so that the
-interior, not the bright surface ring, sets the grey levels (the ring saturates).
+Images take their grey levels from the shapes' interiors (0.5th-99.5th percentile, with
+headroom), so the interior pedestal and its darkening show while the bright surface ring
+saturates.
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ def save_run(outdir, *, size=None):
     arrays["bin_edges"] = res["bin_edges"]
     arrays["angles_deg"] = res["angles_deg"]
     meta = {"captions": res["captions"], "metrics": res["metrics"], "extent": res["extent"],
+            "outlines": res["outlines"],
             "size": res["size"], "figures": {str(k): v for k, v in paper.FIGURES.items()},
             "model": "analytic"}
     path = os.path.join(outdir, RESULT_NAME)
@@ -41,13 +43,33 @@ def save_run(outdir, *, size=None):
     return path, res["metrics"]
 
 
-def _limits(img):
-    lo, hi = np.percentile(img, [1.0, 99.5])
+def _inside(shape, outlines, extent, shrink=0.97):
+    """Pixels inside the panel's shapes, shrunk to leave out the bright surface ring."""
+    n = shape[0]
+    c = -extent + (np.arange(n) + 0.5) * 2 * extent / n
+    X, Y = np.meshgrid(c, c)
+    mask = np.zeros(shape, bool)
+    for o in outlines:
+        ca, sa = np.cos(o["angle"]), np.sin(o["angle"])
+        dx, dy = X - o["center"][0], Y - o["center"][1]
+        xl, yl = ca * dx + sa * dy, -sa * dx + ca * dy
+        mask |= (xl / (shrink * o["axes"][0])) ** 2 + (yl / (shrink * o["axes"][1])) ** 2 < 1
+    return mask
+
+
+def _limits(img, mask=None):
+    """Grey levels set by the shapes' interiors (the surface ring saturates), so the
+    interior pedestal and its darkening show; the whole image when no outline is known."""
+    vals = img[mask] if mask is not None and mask.any() else img
+    lo, hi = np.percentile(vals, [0.5, 99.5])
+    if mask is not None and mask.any():
+        span = max(hi - lo, 1e-300)
+        hi = hi + 0.5 * span                      # room above the interior for the ring
     return (lo, hi) if hi > lo else (img.min(), img.max() + 1e-300)
 
 
-def _image_panel(fig, ax, img, extent, title):
-    lo, hi = _limits(img)
+def _image_panel(fig, ax, img, extent, title, outlines=None):
+    lo, hi = _limits(img, None if outlines is None else _inside(img.shape, outlines, extent))
     h = ax.imshow(img, extent=(-extent, extent, -extent, extent), vmin=lo, vmax=hi,
                   interpolation="nearest")
     ax.set_xlabel("x [scene units]")
@@ -76,6 +98,7 @@ def draw(result_path, outdir, *, dpi=None):
     extent = meta["extent"]
     caps = meta["captions"]
     met = meta["metrics"]
+    outl = meta.get("outlines", {})
     edges = arrays["bin_edges"]
     paths = []
 
@@ -108,7 +131,8 @@ def draw(result_path, outdir, *, dpi=None):
     fig, axes = plt.subplots(1, 3, figsize=(13.5, 4.2))
     for ax, key in zip(axes[:2], ("disk_b0", "disk_b0.99")):
         _image_panel(fig, ax, arrays[f"image/{key}"], extent,
-                     f"{caps[key]}\ndarkening {met[f'{key}.darkening']:+.2f}")
+                     f"{caps[key]}\ndarkening {met[f'{key}.darkening']:+.2f}",
+                     outlines=outl.get(key))
     size = arrays["image/disk_b0"].shape[0]
     x = -extent + (np.arange(size) + 0.5) * 2 * extent / size
     row = size // 2
@@ -155,7 +179,8 @@ def draw(result_path, outdir, *, dpi=None):
                 extra = f"\ngray/aluminium visibility {met[f'{key}.visibility']:.3f}"
             elif f"{key}.darkening" in met:
                 extra = f"\ndarkening {met[f'{key}.darkening']:+.2f}"
-            _image_panel(fig, ax, arrays[f"image/{key}"], extent, f"({tag}) {caps[key]}{extra}")
+            _image_panel(fig, ax, arrays[f"image/{key}"], extent,
+                         f"({tag}) {caps[key]}{extra}", outlines=outl.get(key))
         fig.suptitle(f"Fig. {n} — {title}")
         fig.subplots_adjust(bottom=0.2, wspace=0.35)
         _caption(fig, texts[n])
