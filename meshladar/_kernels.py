@@ -239,7 +239,7 @@ def _sr_monostatic(c, s, rho_d, eps, b, e, G, diffuse, specular):
 
 
 @njit(cache=True)
-def bin_flat_hits(prim, tfar, origins, vertices, faces, face_normals, face_material, params,
+def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, params,
                   w, start, edges, area, ignore_back, out):
     """Monostatic, flat-normal weighing and binning of one view's Embree hits, fused:
     out[k] += F(θ)·area for each hit with range start + t − o·w in bin k (o the float32 origin
@@ -256,10 +256,9 @@ def bin_flat_hits(prim, tfar, origins, vertices, faces, face_normals, face_mater
         c = face_normals[p, 0] * w[0] + face_normals[p, 1] * w[1] + face_normals[p, 2] * w[2]
         t = tfar[i] * 1.0
         if abs(c) > 1e-6:
-            v0 = faces[p, 0]
-            t = (face_normals[p, 0] * (vertices[v0, 0] - origins[i, 0])
-                 + face_normals[p, 1] * (vertices[v0, 1] - origins[i, 1])
-                 + face_normals[p, 2] * (vertices[v0, 2] - origins[i, 2])) / (-c)
+            t = (plane_d[p] - (face_normals[p, 0] * origins[i, 0]
+                               + face_normals[p, 1] * origins[i, 1]
+                               + face_normals[p, 2] * origins[i, 2])) / (-c)
         if c < 0.0:
             back += 1
             if ignore_back:

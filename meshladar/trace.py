@@ -93,6 +93,8 @@ class _Geometry:
         tri = self.vertices[self.faces]
         cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
         self.face_normals = cross / np.linalg.norm(cross, axis=1)[:, None]
+        # each face's plane n·p = d in shifted coordinates (float64), for exact hit distances
+        self.plane_d = np.einsum("ij,ij->i", self.face_normals, shifted[self.faces[:, 0]])
         self.hull = _hull_points(shifted)
         self.normals = normals
         self.corner = None
@@ -330,13 +332,11 @@ def _refine_t(geo, prim, origins32, w, t32):
     Embree's t is float32 (~1e-7 of the scene's size): enough for geometry, not for a bin
     edge that coincides with a surface (the paper's first bin edge is the disk's top, where
     the glint peaks). The ray is o + t(−w) with o exactly the float32 origin cast; the face
-    plane uses the float64 vertices: t = n·(v0 − o) / (−n·w)."""
+    plane uses the float64 vertices: t = (d − n·o) / (−n·w), with d = n·v0."""
     n = geo.face_normals[prim]
-    v0 = geo.shifted[geo.faces[prim, 0]]
     o = origins32.astype(np.float64)
     denom = -(n[:, 0] * w[0] + n[:, 1] * w[1] + n[:, 2] * w[2])
-    num = (n[:, 0] * (v0[:, 0] - o[:, 0]) + n[:, 1] * (v0[:, 1] - o[:, 1])
-           + n[:, 2] * (v0[:, 2] - o[:, 2]))
+    num = geo.plane_d[prim] - (n[:, 0] * o[:, 0] + n[:, 1] * o[:, 1] + n[:, 2] * o[:, 2])
     ok = np.abs(denom) > _REFINE_MIN_COS
     return np.where(ok, num / np.where(ok, denom, 1.0), t32.astype(np.float64))
 
@@ -425,10 +425,10 @@ def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces,
         o, L, _, _ = _ray_grid(geo, w, mode, spacing, z0_shifted, rng)
         res = scene.run(o, np.ascontiguousarray((-w)[None, :], dtype=np.float32), output=1)
         start = _range_offset(geo.center, w, None)
-        backs.append(_kernels.bin_flat_hits(res["primID"], res["tfar"], o, geo.shifted,
-                                            geo.faces, geo.face_normals, geo.material,
-                                            params, w, start, edges, area,
-                                            back_faces == "ignore", vals[j]))
+        backs.append(_kernels.bin_flat_hits(res["primID"], res["tfar"], o, geo.plane_d,
+                                            geo.face_normals, geo.material, params, w,
+                                            start, edges, area, back_faces == "ignore",
+                                            vals[j]))
         rays.append(len(o))
     return vals, rays, backs
 
