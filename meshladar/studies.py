@@ -198,24 +198,31 @@ def _resolution(row):
 def convergence_orders(rows, *, tail=3):
     """Fitted convergence order of each series per phantom and coating.
 
-    The order is −slope of log(rel_l2) against log(resolution) over the ``tail`` finest
-    points (segments; rays per bin; 1/pixel size). ``break_at`` is the first resolution at
-    which the error falls below half its coarsest value (where a series starts converging:
-    large for flat facets on a narrow glint).
+    The order is −slope of log(rel_l2) against log(resolution) (segments; rays per bin;
+    1/pixel size) over the ``tail`` points that end where the series reaches its floor: the
+    first point within 2× of its finest error (later points only measure the floor set by
+    what the series holds fixed). ``floor`` says whether the finest two points differ by
+    less than 30%. ``break_at`` is the first resolution at which the error falls below half
+    its coarsest value (where a series starts converging: large for flat facets on a narrow
+    glint).
     """
     out = []
     keys = sorted({(r["phantom"], r["coating"], r["series"]) for r in rows})
     for ph, co, s in keys:
         sel = [r for r in rows if (r["phantom"], r["coating"], r["series"]) == (ph, co, s)]
         sel.sort(key=_resolution)
+        err = np.array([max(r["rel_l2"], 1e-300) for r in sel])
         x = np.log([_resolution(r) for r in sel])
-        y = np.log([max(r["rel_l2"], 1e-300) for r in sel])
-        k = min(tail, len(sel))
-        slope = float(np.polyfit(x[-k:], y[-k:], 1)[0]) if k >= 2 else float("nan")
+        y = np.log(err)
+        end = int(np.argmax(err <= 2.0 * err[-1])) + 1          # first point near the floor
+        lo = max(0, end - tail)
+        slope = float(np.polyfit(x[lo:end], y[lo:end], 1)[0]) if end - lo >= 2 \
+            else float("nan")
         first = sel[0]["rel_l2"]
         brk = next((_resolution(r) for r in sel if r["rel_l2"] < 0.5 * first), None)
+        floor = bool(len(err) >= 2 and err[-2] < 1.3 * err[-1])
         out.append({"phantom": ph, "coating": co, "series": s, "order": -slope,
-                    "break_at": brk, "finest_rel_l2": sel[-1]["rel_l2"],
+                    "break_at": brk, "floor": floor, "finest_rel_l2": sel[-1]["rel_l2"],
                     "coarsest_rel_l2": first})
     return out
 
@@ -259,9 +266,10 @@ def report(result) -> str:
     """A plain-text summary: the convergence orders and break points of every series."""
     lines = [f"faceting study ({result['setting']}): {len(result['rows'])} points",
              f"{'phantom':<10} {'coating':<16} {'series':<15} {'order':>6} {'breaks at':>9} "
-             f"{'coarsest':>9} {'finest':>9}"]
+             f"{'coarsest':>9} {'finest':>9} floor"]
     for o in result["orders"]:
         lines.append(f"{o['phantom']:<10} {o['coating']:<16} {o['series']:<15} "
                      f"{o['order']:6.2f} {_fmt(o['break_at']):>9} "
-                     f"{o['coarsest_rel_l2']:9.2e} {o['finest_rel_l2']:9.2e}")
+                     f"{o['coarsest_rel_l2']:9.2e} {o['finest_rel_l2']:9.2e} "
+                     f"{'yes' if o['floor'] else ''}")
     return "\n".join(lines)
