@@ -240,6 +240,19 @@ class _PrismNormal:
         out[bottom, 2] = -1.0
         return out
 
+    def curvature_radius(self, p):
+        """Radius of curvature of the cross-section at the points' eccentric angle (inf on
+        the caps): (a² sin²t + b² cos²t)^(3/2) / (a b)."""
+        p = np.asarray(p, dtype=np.float64)
+        (cx, cy), (a, b) = self.center, self.axes
+        ca, sa = math.cos(self.angle), math.sin(self.angle)
+        dx, dy = p[:, 0] - cx, p[:, 1] - cy
+        t = np.arctan2((-sa * dx + ca * dy) / b, (ca * dx + sa * dy) / a)
+        rho = (a * a * np.sin(t) ** 2 + b * b * np.cos(t) ** 2) ** 1.5 / (a * b)
+        eps = 1e-9 * max(a, b, self.hi - self.lo)
+        cap = (np.abs(p[:, 2] - self.hi) < eps) | (np.abs(p[:, 2] - self.lo) < eps)
+        return np.where(cap, np.inf, rho)
+
 
 class _EllipsoidNormal:
     """Exact outward normal of an ellipsoid: the gradient of Σ ((x − c)_i / a_i)²."""
