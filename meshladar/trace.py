@@ -65,6 +65,8 @@ _DEFAULT_RAYS_PER_BIN = {"slice": 8.0, "3d": 1.0}
 _ORIGIN_MARGIN = 0.01
 #: Views per task: enough work to amortise a task, few enough to balance two cores.
 _VIEWS_PER_TASK = 8
+#: Resubmissions of a chunk whose task was cancelled (a worker lost with its data).
+_MAX_RETRIES = 3
 #: Occlusion rays toward a bistatic receiver start this far (relative to the scene's
 #: radius) off the hit facet, above float32 round-off of the hit point (~1e-7 R).
 _RECEIVER_LIFT = 1e-5
@@ -202,6 +204,7 @@ class Hits:
     materials: tuple
     bistatic: np.ndarray = None
     weight_factor: np.ndarray = None
+    curve: np.ndarray = None
     info: dict = field(default_factory=dict)
 
     @property
@@ -287,8 +290,16 @@ def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=N
     # below the glint lobe's e² ≥ 1e-8 that sin² is compared with in h(α)
     sin_t = np.sqrt(np.maximum(1.0 - cos_t * cos_t, 0.0))
     factor = None
+    curve = None
     if geo.normals == "exact" and mode == "slice" and np.any(np.isfinite(rho)):
         factor = _arc_factor(n, u, cos_t, rho, spacing)
+        if footprint:
+            sin_signed = _dot(n, u)
+            r_ = np.where(np.isfinite(rho), rho, 0.0)
+            half = np.where(r_ > 0, 0.5 * spacing / np.where(r_ > 0, r_, 1.0), 0.0)
+            curve = np.stack([np.arcsin(np.clip(sin_signed, -1, 1)),
+                              np.arcsin(np.clip(sin_signed - half, -1, 1)),
+                              np.arcsin(np.clip(sin_signed + half, -1, 1)), r_], -1)
     if back_faces == "ignore":
         cos_t = np.where(back, -1.0, cos_t)
     bi = None
@@ -327,7 +338,7 @@ def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=N
         spread[:, 2] = np.minimum(tri_r.min(axis=1) - rng_rel, 0.0)
         spread[:, 3] = np.maximum(tri_r.max(axis=1) - rng_rel, 0.0)
     return (rng_rel, cos_t, sin_t, geo.material[prim], spread, len(o), int(back.sum()), bi,
-            factor)
+            factor, curve)
 
 
 def _arc_factor(n, u, cos_t, rho, spacing):
@@ -429,7 +440,7 @@ def _job(geo, ladar_vectors, views, mode, spacing, z0_shifted, back_faces, seed,
         r = h[0] + _range_offset(geo.center, ladar_vectors[i],
                                  None if receivers is None else receivers[i])
         vals[j] = _bin_one(r, h[1], h[2], h[3], h[4], materials, edges, area, footprint, h[7],
-                           h[8])
+                           h[8], h[9])
     return vals, [h[5] for h in out], [h[6] for h in out]
 
 
@@ -536,13 +547,63 @@ def _trap_cdf(x, a, b):
                    / np.where(a * b > 0, 4 * a * b, 1.0), 0.0, 1.0)
 
 
+def _curved_spread(r, wt, curve, edges):
+    """Bin each ray's weight over its cell on the locally circular exact surface.
+
+    ``curve`` rows: (θ at the hit, θ at the cell's two ends, ρ), θ signed incidence angles.
+    Range along the circle is r(θ) = r_hit + ρ(cos θ_hit − cos θ), monotone in |θ|, and the
+    weight is spread uniformly in θ (arc length) over the cell; a cell straddling the top
+    (θ = 0) is split there."""
+    nb = len(edges) - 1
+    th, ta, tb, rho = curve.T
+    total = np.maximum(tb - ta, 1e-300)
+    # pieces in |θ|: [lo, hi] with their weight share
+    straddle = (ta < 0) & (tb > 0)
+    lo1 = np.where(straddle, 0.0, np.minimum(np.abs(ta), np.abs(tb)))
+    hi1 = np.where(straddle, -ta, np.maximum(np.abs(ta), np.abs(tb)))
+    lo2 = np.zeros_like(lo1)
+    hi2 = np.where(straddle, tb, 0.0)
+    out = np.zeros(nb)
+    ct = np.cos(th)
+    for lo, hi in ((lo1, hi1), (lo2, hi2)):
+        ok = hi > lo
+        if not ok.any():
+            continue
+        rr, w, c0, rh, l, h, tot = r[ok], wt[ok], ct[ok], rho[ok], lo[ok], hi[ok], total[ok]
+        r_lo = rr + rh * (c0 - np.cos(l))
+        r_hi = rr + rh * (c0 - np.cos(h))
+        k0 = np.clip(np.searchsorted(edges, r_lo, side="right") - 1, 0, nb - 1)
+        k1 = np.clip(np.searchsorted(edges, r_hi, side="right") - 1, 0, nb - 1)
+        inside = (r_hi >= edges[0]) & (r_lo < edges[-1])
+        cnt = np.where(inside, k1 - k0 + 1, 0)
+        rows = np.repeat(np.arange(rr.size), cnt)
+        kk = k0[rows] + np.arange(rows.size) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+
+        def theta_at(edge, i):
+            # |θ| where r(θ) = edge, clipped to the piece
+            x = np.clip(c0[i] - (edge - rr[i]) / rh[i], -1.0, 1.0)
+            return np.clip(np.arccos(x), l[i], h[i])
+
+        t1 = theta_at(edges[kk], rows)
+        t2 = theta_at(edges[kk + 1], rows)
+        out += np.bincount(kk, weights=w[rows] * (t2 - t1) / tot[rows], minlength=nb)
+    return out
+
+
 def _bin_one(r, cos_t, sin_t, mat, spread, materials, edges, area, footprint, bi=None,
-             factor=None):
+             factor=None, curve=None):
     """One view's profile from its hits."""
     nb = len(edges) - 1
     wt = _weights(cos_t, sin_t, mat, materials, area, bi)
     if factor is not None:
         wt = wt * factor
+    if footprint and curve is not None:
+        curved = curve[:, 3] > 0
+        out = _curved_spread(r[curved], wt[curved], curve[curved], edges)
+        flat = ~curved
+        return out + _bin_one(r[flat], cos_t[flat], sin_t[flat], mat[flat], spread[flat],
+                              materials, edges, area, True, None if bi is None else bi[flat],
+                              None)
     if not footprint:
         k = np.searchsorted(edges, r, side="right") - 1
         ok = (k >= 0) & (k < nb)
@@ -688,10 +749,22 @@ def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_b
             if scatter is not None:            # a Dask executor: ship the mesh once per worker
                 payload = scatter(geo, broadcast=True, hash=False)
             futures = {ex.submit(_job, payload, vectors, chunks[k], *args): k for k in todo}
-            from concurrent.futures import as_completed
+            from concurrent.futures import CancelledError, as_completed
 
-            for f in as_completed(futures):
-                keep(futures[f], f.result())
+            retries = {}
+            while futures:
+                for f in as_completed(list(futures)):
+                    k = futures.pop(f)
+                    try:
+                        keep(k, f.result())
+                    except CancelledError:
+                        # a lost worker took the scattered mesh (or the task) with it: send
+                        # the chunk again with the mesh itself, a bounded number of times
+                        retries[k] = retries.get(k, 0) + 1
+                        if retries[k] > _MAX_RETRIES:
+                            raise
+                        futures[ex.submit(_job, geo, vectors, chunks[k], *args)] = k
+                    break
     finally:
         bar.close()
         if own:
@@ -757,6 +830,8 @@ def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0
                 bistatic=None if receivers is None else np.concatenate([h[7] for h in per_view]),
                 weight_factor=None if per_view[0][8] is None else np.concatenate(
                     [h[8] for h in per_view]),
+                curve=None if per_view[0][9] is None else np.concatenate(
+                    [h[9] for h in per_view]),
                 info={"ray_spacing": spacing, "z0": z0, "receiver": receivers})
 
 
@@ -789,7 +864,8 @@ def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None) -> Sin
         vals[i] = _bin_one(hits.range[sel], hits.cos_theta[sel], hits.sin_theta[sel],
                            hits.material[sel], hits.spread[sel], mats, edges, hits.area,
                            footprint, None if hits.bistatic is None else hits.bistatic[sel],
-                           None if hits.weight_factor is None else hits.weight_factor[sel])
+                           None if hits.weight_factor is None else hits.weight_factor[sel],
+                           None if hits.curve is None else hits.curve[sel])
     return _sinogram(vals, hits.ladar, edges, hits.mode, hits.normals, footprint,
                      hits.info["ray_spacing"], hits.rays, hits.back_face_hits)
 
