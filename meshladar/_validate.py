@@ -67,3 +67,14 @@ def check_count(name: str, value, low: int = 1) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
         raise ParameterError(f"{name} must be an integer >= {low}; got {value!r}")
     return int(value)
+
+
+def unit_vectors(name: str, value) -> np.ndarray:
+    """``value`` as finite (..., 3) float64 directions, each normalised to unit length."""
+    a = finite_array(name, value)
+    if a.shape[-1:] != (3,):
+        raise ParameterError(f"{name} must have shape (..., 3); got {a.shape}")
+    norm = np.linalg.norm(a, axis=-1, keepdims=True)
+    if np.any(norm == 0):
+        raise ParameterError(f"{name} must be non-zero direction vectors; got a zero vector")
+    return a / norm

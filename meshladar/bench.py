@@ -98,7 +98,7 @@ def _icosphere_scene(subdivisions, material):
     from .mesh import sphere
     from .scene import Scene
 
-    return Scene._from_parts([sphere((0.0, 0.0, 0.0), 0.5, 0, subdivisions=subdivisions)],
+    return Scene.from_parts([sphere((0.0, 0.0, 0.0), 0.5, 0, subdivisions=subdivisions)],
                              [material])
 
 

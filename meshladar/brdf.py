@@ -39,7 +39,7 @@ from functools import cached_property
 import numpy as np
 from scipy.special import xlogy
 
-from ._validate import check_choice, check_real, finite_array
+from ._validate import check_choice, check_real, finite_array, unit_vectors
 from .errors import EnergyConservationWarning, ParameterError
 
 __all__ = [
@@ -415,9 +415,9 @@ class SandfordRobertson:
         (...) ndarray
             0 where either direction is below the horizon.
         """
-        w_i = _unit("incident", incident)
-        w_r = _unit("reflected", reflected)
-        n = _unit("normal", normal)
+        w_i = unit_vectors("incident", incident)
+        w_r = unit_vectors("reflected", reflected)
+        n = unit_vectors("normal", normal)
         cos_i, sin_i = _cos_sin_vec(w_i, n)
         cos_r, sin_r = _cos_sin_vec(w_r, n)
         half = w_i + w_r
@@ -441,16 +441,6 @@ class SandfordRobertson:
         w_r = np.stack([np.sin(tr) * np.cos(dp) + zero, np.sin(tr) * np.sin(dp) + zero,
                         np.cos(tr) + zero], axis=-1)
         return _out(self.evaluate(w_i, w_r, projected=projected), theta_i, theta_r, delta_phi)
-
-
-def _unit(name, v):
-    a = finite_array(name, v)
-    if a.shape[-1:] != (3,):
-        raise ParameterError(f"{name} must have shape (..., 3); got {a.shape}")
-    norm = np.linalg.norm(a, axis=-1, keepdims=True)
-    if np.any(norm == 0):
-        raise ParameterError(f"{name} must be non-zero direction vectors; got a zero vector")
-    return a / norm
 
 
 def _cos_sin_vec(w, n):

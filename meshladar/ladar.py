@@ -13,7 +13,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ._validate import check_count, check_real, finite_array, readonly_copy
+from ._validate import check_count, check_real, finite_array, readonly_copy, unit_vectors
 from .errors import ParameterError
 
 __all__ = ["Ladar", "PAPER_BIN_DIVISOR"]
@@ -54,14 +54,10 @@ class Ladar:
 
     def __post_init__(self):
         if self.view_vectors is not None:
-            vec = finite_array("view_vectors", self.view_vectors)
-            if vec.ndim != 2 or vec.shape[1] != 3 or len(vec) == 0:
+            vec = unit_vectors("view_vectors", self.view_vectors)
+            if vec.ndim != 2 or len(vec) == 0:
                 raise ParameterError(f"view_vectors must have shape (n_views, 3); got "
                                      f"{vec.shape}")
-            norm = np.linalg.norm(vec, axis=1)
-            if np.any(norm == 0):
-                raise ParameterError("view_vectors must be non-zero")
-            vec = vec / norm[:, None]
             if self.angles_deg is None:
                 object.__setattr__(self, "angles_deg",
                                    np.degrees(np.arctan2(vec[:, 1], vec[:, 0])))

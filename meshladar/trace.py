@@ -46,7 +46,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._validate import check_choice, check_real
+from ._validate import check_choice, check_real, unit_vectors
 from .errors import ParameterError
 from .ladar import Ladar
 from .scene import Scene
@@ -484,11 +484,9 @@ def first_hits(scene, view_vector, *, ray_spacing):
     for the viewer (which faces are lit, where hits land)."""
     if not isinstance(scene, Scene) or not scene.is_mesh:
         raise ParameterError("first_hits needs a mesh scene")
-    w = np.asarray(view_vector, dtype=np.float64)
-    if w.shape != (3,) or not np.all(np.isfinite(w)) or not np.linalg.norm(w) > 0:
-        raise ParameterError(f"view_vector must be a finite non-zero (3,) vector; got "
-                             f"{view_vector!r}")
-    w = w / np.linalg.norm(w)
+    w = unit_vectors("view_vector", view_vector)
+    if w.shape != (3,):
+        raise ParameterError(f"view_vector must be one (3,) direction; got shape {w.shape}")
     spacing = check_real("ray_spacing", ray_spacing, low=0.0, low_open=True)
     geo = _Geometry(scene, "flat")
     emb = _embree_scene(geo)
@@ -506,8 +504,7 @@ def occluded(scene, points, direction, *, lift=_RECEIVER_LIFT):
     face does not hit that face)."""
     if not isinstance(scene, Scene) or not scene.is_mesh:
         raise ParameterError("occluded needs a mesh scene")
-    d = np.asarray(direction, dtype=np.float64)
-    d = d / np.linalg.norm(d)
+    d = unit_vectors("direction", direction)
     geo = _Geometry(scene, "flat")
     emb = _embree_scene(geo)
     p = np.asarray(points, dtype=np.float64) - geo.center + lift * geo.radius * d
@@ -660,16 +657,10 @@ def _estimate_rays(geo, ladar, mode, spacing):
 def _receivers(receiver, ladar, mode, footprint):
     if receiver is None:
         return None
-    r = np.asarray(receiver, dtype=np.float64)
-    if r.shape == (3,):
-        r = np.broadcast_to(r, (ladar.n_views, 3))
-    if r.shape != (ladar.n_views, 3) or not np.all(np.isfinite(r)):
+    if np.shape(receiver) not in ((3,), (ladar.n_views, 3)):
         raise ParameterError(f"receiver must be a direction (3,) or one per view "
                              f"({ladar.n_views}, 3); got shape {np.shape(receiver)}")
-    norm = np.linalg.norm(r, axis=1)
-    if np.any(norm == 0):
-        raise ParameterError("receiver directions must be non-zero")
-    r = r / norm[:, None]
+    r = np.broadcast_to(unit_vectors("receiver", receiver), (ladar.n_views, 3))
     if np.any(np.einsum("ij,ij->i", r, ladar.view_vectors) <= -1 + 1e-12):
         raise ParameterError("receiver must not point exactly opposite the view (no return)")
     if mode == "slice" and np.any(r[:, 2] != 0):
