@@ -72,11 +72,8 @@ def _cmd_paper(args) -> int:
     return 0
 
 
-_MESH_SUFFIXES = (".stl", ".obj", ".ply", ".off", ".glb", ".gltf")
-
-
 def _coatings(text):
-    """'part=name,part=name' → dict (names from the packaged coating table)."""
+    """'part=name,part=name' → dict (names from the coating table)."""
     out = {}
     for item in filter(None, (x.strip() for x in text.split(","))):
         if "=" not in item:
@@ -86,19 +83,32 @@ def _coatings(text):
     return out
 
 
+def _is_phantom(src):
+    """A packaged phantom's name or a phantom spec (.toml); anything else is a mesh file."""
+    from meshladar import phantoms
+
+    return src in phantoms.names() or src.lower().endswith(".toml")
+
+
 def _load_scene(args):
-    """(scene, default ladar or None, model default) from SCENE: phantom, spec or mesh."""
+    """(scene, default ladar or None, model default) from SCENE: phantom, spec or mesh.
+
+    Dispatch is on what SCENE is, not on a list of suffixes: a packaged phantom's name or a
+    ``.toml`` spec is a phantom; any other path goes to trimesh, which reads the format from
+    the file (archives, GLB/GLTF, 3MF, DAE... when their optional readers are installed)."""
     import os
 
-    from . import materials as mats
     from .errors import ParameterError
     from .scene import Scene
 
     src = args.scene
-    if src.lower().endswith(_MESH_SUFFIXES):
+    table = _coating_table(args)
+    if not _is_phantom(src):
         if not os.path.exists(src):
-            raise ParameterError(f"SCENE: no such mesh file {src!r}")
-        table = _coating_table()
+            from meshladar import phantoms
+
+            raise ParameterError(f"SCENE: no such mesh file {src!r}, and not a known phantom "
+                                 f"({', '.join(phantoms.names())})")
         if args.material not in table:
             raise ParameterError(f"--material: unknown coating {args.material!r}; known: "
                                  f"{sorted(table)}")
@@ -107,16 +117,22 @@ def _load_scene(args):
                 "mesh")
     from meshladar import phantoms
 
-    overrides = {k: _coating(_coating_table(), v) for k, v in (args.coating or {}).items()}
+    overrides = {k: _coating(table, v) for k, v in (args.coating or {}).items()}
     ph = phantoms.load(src, materials=overrides or None)
-    del mats
     return ph.scene, ph.ladar, "analytic"
 
 
-def _coating_table():
+def _coating_table(args=None):
+    """The packaged coatings, plus (overriding by name) a user's ``--materials`` table."""
     from meshladar.phantoms import materials
 
-    return dict(materials())
+    table = dict(materials())
+    extra = getattr(args, "materials", None)
+    if extra is not None:
+        from .materials import load_table
+
+        table.update(load_table(extra))
+    return table
 
 
 def _coating(table, name):

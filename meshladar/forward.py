@@ -15,7 +15,7 @@ MODELS = ("analytic", "mesh", "pixel")
 
 _OPTIONS = {"analytic": (), "pixel": ("pixel_size", "ray_spacing"),
             "mesh": ("mode", "normals", "back_faces", "z0", "ray_spacing", "rays_per_bin",
-                     "footprint", "seed", "receiver", "tol", "jobs", "executor", "progress",
+                     "footprint", "sampling", "seed", "receiver", "tol", "jobs", "executor", "progress",
                      "run_dir")}
 
 

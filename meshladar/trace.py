@@ -53,11 +53,15 @@ from .scene import Scene
 from .sinogram import Sinogram
 
 __all__ = ["Hits", "trace", "weigh", "simulate_mesh", "first_hits", "occluded", "NORMALS",
-           "MODES", "BACK_FACES"]
+           "MODES", "BACK_FACES", "SAMPLINGS"]
 
 NORMALS = ("flat", "smooth", "exact")
 MODES = ("slice", "3d")
 BACK_FACES = ("two-sided", "ignore")
+#: "regular": rays at cell centres (a midpoint rule: second order on smooth slice profiles,
+#: but it aliases on thin walls seen edge-on); "stratified": one ray per cell at a seeded
+#: random offset (unbiased areas; see _stratified_offsets).
+SAMPLINGS = ("regular", "stratified")
 #: Default rays per range-bin width: slice rows are cheap, 3-D grids are rays_per_bin² per
 #: bin area.
 _DEFAULT_RAYS_PER_BIN = {"slice": 8.0, "3d": 1.0}
@@ -235,16 +239,47 @@ def _ray_grid(geo, w, mode, spacing, z0_shifted, rng):
         s32, t32 = s.astype(np.float32), t.astype(np.float32)
         for k in range(3):
             np.add.outer(s32 * np.float32(u[k]), t32 * np.float32(v[k]), out=o[:, :, k])
-    else:
+    elif mode == "slice":
         S = s[:, None] + rng.uniform(-0.5, 0.5, (s.size, t.size)) * spacing
         T = np.broadcast_to(t[None, :], S.shape)
-        if mode == "3d":
-            T = T + rng.uniform(-0.5, 0.5, S.shape) * spacing
+        for k in range(3):
+            o[:, :, k] = S * u[k] + T * v[k]
+    else:
+        du, dv = _stratified_offsets(s.size, t.size, rng)
+        S = s[:, None] + du * spacing
+        T = t[None, :] + dv * spacing
         for k in range(3):
             o[:, :, k] = S * u[k] + T * v[k]
     for k in range(3):
         o[:, :, k] += np.float32(L * w[k])
     return o.reshape(-1, 3), L, u, v
+
+
+#: The golden ratio's conjugate: the Kronecker sequence frac(x + kα) is the most evenly
+#: spread sequence of its kind (its gaps take at most three lengths).
+_GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
+
+
+def _stratified_offsets(ns, nt, rng):
+    """Offsets in [−½, ½) of each ray from its cell centre, (ns, nt) along u and along v.
+
+    Every cell holds one ray uniformly distributed in it, so the expected number of rays
+    hitting any region is its projected area over δ²: the estimate of every area (a thin
+    wall seen edge-on, a sub-ray facet) is unbiased. Unlike independent jitter, the offsets
+    are correlated along rows and columns to cancel most of the noise at straight edges:
+    along each row (a run of cells across u at one v) the v offsets follow a randomly
+    shifted Kronecker sequence frac(η + iα), and along each column the u offsets
+    frac(ξ + jα), so the fraction of a row's rays that fall on one side of an edge parallel
+    to it is right to O(log n / n) instead of O(n^-½). Each cell's offset stays uniform
+    (η and ξ are uniform and independent), hence the expectation is exact.
+    """
+    xi = rng.uniform(0.0, 1.0, ns)[:, None]               # one shift per column (along v)
+    eta = rng.uniform(0.0, 1.0, nt)[None, :]              # one shift per row (along u)
+    i = np.arange(ns)[:, None]
+    j = np.arange(nt)[None, :]
+    du = np.mod(xi + j * _GOLDEN, 1.0) - 0.5
+    dv = np.mod(eta + i * _GOLDEN, 1.0) - 0.5
+    return du, dv
 
 
 def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=None,
@@ -291,6 +326,8 @@ def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=N
     sin_t = np.sqrt(np.maximum(1.0 - cos_t * cos_t, 0.0))
     factor = None
     curve = None
+    if geo.normals == "smooth" or (geo.normals == "exact" and mode == "3d"):
+        factor = _shading_factor(cos_t, cos_geo)
     if geo.normals == "exact" and mode == "slice" and np.any(np.isfinite(rho)):
         factor = _arc_factor(n, u, cos_t, rho, spacing)
         if footprint:
@@ -341,6 +378,28 @@ def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=N
             factor, curve)
 
 
+#: A facet seen within this cosine of edge-on counts as seen at it: the float32 ray-facet
+#: intersection is meaningless there, and it bounds a shading ray's area factor by 1e6.
+_MIN_COS_FACET = 1e-6
+
+
+def _shading_factor(cos_shading, cos_facet):
+    """Per-ray factor cos θs / cos θg that makes a shading normal's weight the Eq. 8
+    integrand over the facet area the ray stands for.
+
+    A ray of cross-section δA⊥ hitting a facet at incidence θg stands for the facet area
+    δA⊥ / cos θg; with the shading normal (interpolated or exact) the integrand there is
+    F(θs) cos θs, so the ray's weight is F(θs) cos θs · δA⊥ / cos θg = F(θs) δA⊥ · factor.
+    F(θs) cos θs is finite up to θs = 90° (DESIGN.md), so a shading normal near grazing on a
+    facet that faces the ladar no longer multiplies a divergent F by a full ray
+    cross-section (F δA⊥ alone returned bins tens of times too large at mesh silhouettes).
+    The expectation over rays is ∫ F(θs) cos θs dA over the facets: consistent as the mesh
+    is refined. With flat normals θs = θg and the factor is 1.
+    """
+    cg = np.maximum(np.abs(cos_facet), _MIN_COS_FACET)
+    return np.maximum(cos_shading, 0.0) / cg
+
+
 def _arc_factor(n, u, cos_t, rho, spacing):
     """Per-ray weight factor that integrates the exact surface over the ray's cell.
 
@@ -380,6 +439,24 @@ def _refine_t(geo, prim, origins32, w, t32):
     return np.where(ok, num / np.where(ok, denom, 1.0), t32.astype(np.float64))
 
 
+def _sampling(mode, sampling, seed):
+    """(sampling, seed used): stratified by default in 3-D (and whenever a seed is given),
+    regular in slice mode; seed 0 unless given."""
+    if sampling is None:
+        sampling = "stratified" if (mode == "3d" or seed is not None) else "regular"
+    check_choice("sampling", sampling, SAMPLINGS)
+    if sampling == "regular":
+        if seed is not None:
+            raise ParameterError(f"seed jitters the rays, so it needs sampling='stratified'; "
+                                 f"got seed={seed!r} with sampling='regular'")
+        return sampling, None
+    if seed is None:
+        return sampling, 0
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ParameterError(f"seed must be a non-negative integer; got {seed!r}")
+    return sampling, int(seed)
+
+
 def _spacing(ladar, mode, ray_spacing, rays_per_bin):
     if ray_spacing is not None and rays_per_bin is not None:
         raise ParameterError("give ray_spacing or rays_per_bin, not both")
@@ -398,7 +475,9 @@ def _options(scene, ladar, mode, normals, back_faces, z0):
     check_choice("normals", normals, NORMALS)
     check_choice("back_faces", back_faces, BACK_FACES)
     if mode is None:
-        mode = "slice" if ladar.planar else "3d"
+        # a mesh is a 3-D target; only a scene tessellated from the 2-D analytic shapes (the
+        # paper's phantoms) is an extruded slice by default
+        mode = "slice" if (scene.shapes and ladar.planar) else "3d"
     check_choice("mode", mode, MODES)
     if mode == "slice" and not ladar.planar:
         raise ParameterError("mode='slice' needs views about the z axis (angles_deg); the "
@@ -689,8 +768,9 @@ def _job_description(geo, scene, ladar, mode, spacing, z0, back_faces, seed, wei
 
 
 def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_bin, seed,
-         jobs, executor, progress, weigh_with, receiver=None, run_dir=None):
+         jobs, executor, progress, weigh_with, receiver=None, run_dir=None, sampling=None):
     mode, geo, z0 = _options(scene, ladar, mode, normals, back_faces, z0)
+    sampling, seed = _sampling(mode, sampling, seed)
     receivers = _receivers(receiver, ladar, mode, bool(weigh_with and weigh_with[1]))
     spacing = _spacing(ladar, mode, ray_spacing, rays_per_bin)
     area = spacing if mode == "slice" else spacing * spacing
@@ -760,12 +840,14 @@ def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_b
         bar.close()
         if own:
             ex.shutdown()
-    return geo, mode, spacing, area, chunks, results, receivers
+    run = {"mode": mode, "ray_spacing": spacing, "z0": z0, "sampling": sampling, "seed": seed,
+           "receiver": receivers}
+    return geo, run, area, chunks, results
 
 
 def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0=None,
-          ray_spacing=None, rays_per_bin=None, seed=None, receiver=None, jobs=None,
-          executor=None, progress=False) -> Hits:
+          ray_spacing=None, rays_per_bin=None, sampling=None, seed=None, receiver=None,
+          jobs=None, executor=None, progress=False) -> Hits:
     """Trace every view once and keep the hits (geometry only): re-weigh them with
     :func:`weigh` for any coating without tracing again.
 
@@ -776,16 +858,22 @@ def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0
     ladar : Ladar
         Views (angles about z, or view vectors) and range bins.
     mode : {"slice", "3d"}, optional
-        Default: "slice" for views about z, else "3d". Slice: one row of rays in z = z0,
-        values per unit height.
+        "3d" (default for meshes): a square grid of rays per view over the whole target.
+        "slice": one row of rays in the plane z = z0, values per unit height (the default
+        only for scenes tessellated from the 2-D analytic shapes, the paper's phantoms).
     normals : {"flat", "smooth", "exact"}
     back_faces : {"two-sided", "ignore"}
     z0 : float, optional
-        Slice plane (default the scene's mid-height).
+        Slice plane, slice mode only (default the scene's mid-height).
     ray_spacing, rays_per_bin : float, optional
         Ray spacing, or rays per range-bin width (default 8 in slice mode, 1 in 3-D).
+    sampling : {"stratified", "regular"}, optional
+        Where each ray sits in its cell of the grid. "stratified" (default in 3-D, and
+        whenever ``seed`` is given): at a seeded random offset, so every area (a thin wall
+        seen edge-on) is estimated without bias; "regular" (default in slice mode): at the
+        cell centre, a midpoint rule that can alias on thin walls.
     seed : int, optional
-        Stratified jitter of each ray within its cell, reproducible per view.
+        Seed of the stratified offsets (default 0), reproducible per view.
     receiver : (3,) or (n_views, 3) array_like, optional
         Bistatic receiver direction(s) from the scene (default: collocated, monostatic).
         Each hit then casts one occlusion ray toward the receiver, F is the bistatic SR
@@ -798,10 +886,12 @@ def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0
     progress : bool
         A progress bar on a terminal.
     """
-    geo, mode, spacing, area, chunks, results, receivers = _run(
+    geo, run, area, chunks, results = _run(
         scene, ladar, mode=mode, normals=normals, back_faces=back_faces, z0=z0,
         ray_spacing=ray_spacing, rays_per_bin=rays_per_bin, seed=seed, jobs=jobs,
-        executor=executor, progress=progress, weigh_with=None, receiver=receiver)
+        executor=executor, progress=progress, weigh_with=None, receiver=receiver,
+        sampling=sampling)
+    receivers = run["receiver"]
     per_view = [h for res in results for h in res]
     vectors = ladar.view_vectors
     offsets = [_range_offset(geo.center, vectors[i],
@@ -816,14 +906,14 @@ def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0
                 spread=np.concatenate([h[4] for h in per_view]),
                 rays=np.array([h[5] for h in per_view]),
                 back_face_hits=np.array([h[6] for h in per_view]),
-                area=area, mode=mode, normals=normals, ladar=ladar,
+                area=area, mode=run["mode"], normals=normals, ladar=ladar,
                 materials=tuple(scene.materials),
                 bistatic=None if receivers is None else np.concatenate([h[7] for h in per_view]),
                 weight_factor=None if per_view[0][8] is None else np.concatenate(
                     [h[8] for h in per_view]),
                 curve=None if per_view[0][9] is None else np.concatenate(
                     [h[9] for h in per_view]),
-                info={"ray_spacing": spacing, "z0": z0, "receiver": receivers})
+                info=run)
 
 
 def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None) -> Sinogram:
@@ -857,17 +947,21 @@ def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None) -> Sin
                            footprint, None if hits.bistatic is None else hits.bistatic[sel],
                            None if hits.weight_factor is None else hits.weight_factor[sel],
                            None if hits.curve is None else hits.curve[sel])
-    return _sinogram(vals, hits.ladar, edges, hits.mode, hits.normals, footprint,
-                     hits.info["ray_spacing"], hits.rays, hits.back_face_hits)
+    return _sinogram(vals, hits.ladar, edges, hits.info, hits.normals, footprint, hits.rays,
+                     hits.back_face_hits)
 
 
-def _sinogram(vals, ladar, edges, mode, normals, footprint, spacing, rays, back):
-    planar = ladar.planar
+def _sinogram(vals, ladar, edges, run, normals, footprint, rays, back):
+    """The mesh model's sinogram; its info says how it was made (mode, normals, sampling,
+    rays) and under which convention (radiometry)."""
+    info = {"radiometry": "paper", "mode": run["mode"], "normals": normals,
+            "footprint": footprint, "ray_spacing": run["ray_spacing"],
+            "sampling": run["sampling"], "seed": run["seed"], "rays": int(np.sum(rays)),
+            "back_face_hits": np.asarray(back).tolist()}
+    if run["mode"] == "slice":
+        info["z0"] = run["z0"]
     return Sinogram(vals, angles_deg=ladar.angles_deg, bin_edges=edges, model="mesh",
-                    view_vectors=None if planar else ladar.view_vectors,
-                    info={"mode": mode, "normals": normals, "footprint": footprint,
-                          "ray_spacing": spacing, "rays": int(np.sum(rays)),
-                          "back_face_hits": np.asarray(back).tolist()})
+                    view_vectors=None if ladar.planar else ladar.view_vectors, info=info)
 
 
 #: The accuracy knob starts here (segments for scenes it tessellates, rays per bin) and
@@ -942,9 +1036,9 @@ def _simulate_tol(scene, ladar, tol, normals, footprint, kwargs):
 
 
 def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-sided", z0=None,
-                  ray_spacing=None, rays_per_bin=None, footprint=None, seed=None,
-                  receiver=None, tol=None, jobs=None, executor=None, progress=False,
-                  run_dir=None) -> Sinogram:
+                  ray_spacing=None, rays_per_bin=None, footprint=None, sampling=None,
+                  seed=None, receiver=None, tol=None, jobs=None, executor=None,
+                  progress=False, run_dir=None) -> Sinogram:
     """Trace and weigh in one streaming pass: each chunk of views is binned and its hits
     dropped, so memory stays bounded whatever the number of views and rays. Options as
     :func:`trace` and :func:`weigh` (defaults: flat normals, point binning). An analytic
@@ -961,8 +1055,8 @@ def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-side
     chunk of views is saved there atomically with a checksum, and running the same job
     again reuses them and computes only what is missing.
     """
-    common = dict(mode=mode, back_faces=back_faces, z0=z0, seed=seed, receiver=receiver,
-                  jobs=jobs, executor=executor, progress=progress)
+    common = dict(mode=mode, back_faces=back_faces, z0=z0, sampling=sampling, seed=seed,
+                  receiver=receiver, jobs=jobs, executor=executor, progress=progress)
     if tol is not None:
         if run_dir is not None:
             raise ParameterError("run_dir and tol do not combine: the knob runs several jobs")
@@ -972,13 +1066,12 @@ def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-side
     footprint = False if footprint is None else footprint
     if isinstance(scene, Scene) and not scene.is_mesh:
         scene = scene.tessellate(1024)
-    geo, mode, spacing, area, chunks, results, _ = _run(
+    geo, run, area, chunks, results = _run(
         scene, ladar, mode=mode, normals=normals, back_faces=back_faces, z0=z0,
         ray_spacing=ray_spacing, rays_per_bin=rays_per_bin, seed=seed, jobs=jobs,
         executor=executor, progress=progress, weigh_with=(tuple(scene.materials), footprint),
-        receiver=receiver, run_dir=run_dir)
+        receiver=receiver, run_dir=run_dir, sampling=sampling)
     vals = np.concatenate([r[0] for r in results])
     rays = [x for r in results for x in r[1]]
     back = [x for r in results for x in r[2]]
-    return _sinogram(vals, ladar, ladar.bin_edges, mode, normals, footprint, spacing, rays,
-                     back)
+    return _sinogram(vals, ladar, ladar.bin_edges, run, normals, footprint, rays, back)

@@ -77,7 +77,7 @@ def test_help_everywhere_with_examples(sub):
 
 
 @pytest.mark.parametrize("args, message", [
-    (["simulate", "nope", "-o", "x.npz"], "unknown phantom"),
+    (["simulate", "nope", "-o", "x.npz"], "not a known phantom"),
     (["simulate", "missing.stl", "-o", "x.npz"], "no such mesh file"),
     (["simulate", "disk_pair", "--coating", "small=gold", "-o", "x.npz"],
      "unknown coating 'gold'"),
@@ -93,7 +93,7 @@ def test_help_everywhere_with_examples(sub):
     (["reconstruct", "junk.npz", "-o", "x.png"], "not a readable result file"),
     (["reconstruct", "plain.npz", "-o", "x.png"], "not a meshladar result"),
     (["materials", "missing.toml"], "cannot read material table"),
-    (["view", "nope"], "unknown phantom"),
+    (["view", "nope"], "not a known phantom"),
     (["view", "disk_pair", "--view-angle", "abc"], "invalid float value"),
     (["study", "pixels", "out"], "invalid choice"),
     (["paper"], "required: outdir"),

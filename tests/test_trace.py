@@ -195,7 +195,7 @@ def test_far_from_origin_and_tiny_scenes_keep_their_accuracy():
                                 for v, p in zip(part_v, base_mesh.parts)], base_mesh.materials)
     for i in range(3):
         lad = ml.Ladar([ladar.angles_deg[i]], ladar.bin_edges - d @ w[i])
-        got = ml.simulate(far, lad, model="mesh", normals="smooth", z0=d[2])
+        got = ml.simulate(far, lad, model="mesh", normals="smooth", mode="slice", z0=d[2])
         # float32 relative to the scene's own size: the same rays up to last-bit rounding of
         # the shifted vertices (measured ≤ 2e-11 absolute). Naive float32 coordinates at
         # 1.4e4 would misplace every hit by ~1e-3, a third of a bin.
@@ -207,7 +207,7 @@ def test_far_from_origin_and_tiny_scenes_keep_their_accuracy():
     tiny = ml.Scene._from_parts([mlmesh.MeshPart(v * s, p.faces, p.material, p.name)
                                  for v, p in zip(part_v, base_mesh.parts)], base_mesh.materials)
     got = ml.simulate(tiny, ml.Ladar(ladar.angles_deg, ladar.bin_edges * s), model="mesh",
-                      normals="smooth", ray_spacing=s * 0.003125 / 8)
+                      normals="smooth", mode="slice", ray_spacing=s * 0.003125 / 8)
     # (float32 rounds the scaled coordinates differently: a ray sitting on a bin edge may
     # change sides, moving ~1e-5 of a bin; measured 1.4e-5)
     np.testing.assert_allclose(got.values, base.values * s, rtol=1e-4,
@@ -382,5 +382,7 @@ def test_sphere_part_via_public_api_and_progress_is_quiet_off_a_terminal(capsys)
     sino = ml.simulate(scene, ml.Ladar.paper(angles_deg=[0.0, 90.0]), model="mesh",
                        progress=True)
     assert capsys.readouterr().err == ""                 # not a TTY: no bar
-    # a slice through a sphere's equator is a disk of radius 0.5: 2R·ρd/π per unit height
-    np.testing.assert_allclose(sino.total(), 2 * 0.5 / math.pi, rtol=0.01)
+    # a mesh is a 3-D target by default: the whole sphere's return, ρd/π × its projected
+    # area πR² (the 1280-face icosphere's silhouette is 0.5% inside the sphere's)
+    assert sino.info["mode"] == "3d"
+    np.testing.assert_allclose(sino.total(), 0.5**2, rtol=0.01)
