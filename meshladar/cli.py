@@ -13,6 +13,9 @@ import sys
 import numpy as np
 
 from .errors import MeshladarError
+from .forward import MODELS
+from .reconstruct import FILTERS
+from .trace import MODES, NORMALS, SAMPLINGS
 
 __all__ = ["main"]
 
@@ -144,21 +147,82 @@ def _coating(table, name):
 
 
 def _ladar(args, scene, default):
-    import numpy as np
-
     from .ladar import Ladar
+    from .mesh import fibonacci_sphere
 
+    vectors = None if args.view_vectors is None else fibonacci_sphere(args.view_vectors)
     angles = args.angles_deg if args.angles_deg is not None else (
         np.arange(args.views) * (360.0 / args.views) if args.views else None)
     if args.bins or args.bin_width:
-        if not (args.bins and args.bin_width):
-            from .errors import ParameterError
-
-            raise ParameterError("--bins and --bin-width go together; got only one")
-        return Ladar.centered(args.bins, args.bin_width, angles_deg=angles)
-    if default is not None:
+        return Ladar.covering(scene, n_bins=args.bins, bin_width=args.bin_width,
+                              angles_deg=angles, view_vectors=vectors)
+    if default is not None and vectors is None:
         return default if angles is None else Ladar(angles, default.bin_edges)
-    return Ladar.covering(scene, n_bins=512, angles_deg=angles)
+    return Ladar.covering(scene, n_bins=512, angles_deg=angles, view_vectors=vectors)
+
+
+#: simulate's options that only the mesh model reads (flag -> attribute).
+_MESH_ONLY = {"--mode": "mode", "--z0": "z0", "--normals": "normals",
+              "--ray-spacing": "ray_spacing", "--rays-per-bin": "rays_per_bin",
+              "--sampling": "sampling", "--seed": "seed", "--footprint": "footprint",
+              "--receiver": "receiver", "--tol": "tol", "--max-rays": "max_rays",
+              "--jobs": "jobs", "--run-dir": "run_dir", "--scheduler": "scheduler",
+              "--workers": "workers"}
+
+
+def _check_applicable(args, model, is_phantom):
+    """Options that do not apply to this run are errors, never silently ignored."""
+    from .errors import ParameterError
+
+    def given(attr):
+        v = getattr(args, attr)
+        return v is not None and v is not False
+
+    exclusive = [("--views", "views"), ("--angles-deg", "angles_deg"),
+                 ("--view-vectors", "view_vectors")]
+    named = [flag for flag, attr in exclusive if given(attr)]
+    if len(named) > 1:
+        raise ParameterError(f"{named[0]} and {named[1]} both choose the views; give one")
+    if model != "mesh":
+        for flag, attr in _MESH_ONLY.items():
+            if given(attr):
+                raise ParameterError(f"{flag} is an option of the mesh model; the {model} "
+                                     "model does not use it (add --model mesh)")
+    if model != "pixel" and given("pixel_size"):
+        raise ParameterError(f"--pixel-size is an option of the pixel model; the {model} "
+                             "model does not use it (add --model pixel)")
+    if given("segments") and not (is_phantom and model == "mesh"):
+        raise ParameterError("--segments tessellates an analytic phantom for --model mesh; "
+                             "it does not apply here")
+    if given("z0") and args.mode != "slice" and not (is_phantom and args.mode is None):
+        raise ParameterError("--z0 places the slice plane: it needs --mode slice")
+    if given("seed") and args.sampling == "regular":
+        raise ParameterError("--seed jitters the rays: it needs --sampling stratified, not "
+                             "regular")
+    if given("max_rays") and not given("tol"):
+        raise ParameterError("--max-rays bounds the work of --tol; give --tol too")
+    if given("jobs") and (given("scheduler") or given("workers")):
+        raise ParameterError("--jobs runs local processes; with --scheduler or --workers "
+                             "Dask runs the work: give one")
+
+
+def _summary(args, sino, ladar, model):
+    """One line: what was simulated, how (mode, normals, sampling, rays, bins) and where."""
+    info = sino.info
+    how = f"{model} model"
+    if model == "mesh":
+        how += (f", {info.get('mode')} mode, {info.get('normals')} normals, "
+                f"{info.get('sampling')} sampling, ray spacing {info.get('ray_spacing'):.4g}, "
+                f"{info.get('rays', 0):,} rays cast")
+        if info.get("mode") == "slice":
+            how += f" (values per unit height at z0 = {info.get('z0'):g})"
+        if "error_estimate" in info:
+            how += f", estimated error {info['error_estimate']:.2g}"
+    return (f"{args.scene}: {how}; {ladar.n_views} views x {ladar.n_bins} bins over range "
+            f"[{ladar.bin_edges[0]:.6g}, {ladar.bin_edges[-1]:.6g}] (range 0 on the plane "
+            f"through the origin facing the ladar); {info.get('radiometry', 'paper')} "
+            f"radiometry; total return per view {sino.total().mean():.6g}; wrote "
+            f"{args.output}")
 
 
 def _cmd_simulate(args) -> int:
@@ -166,14 +230,17 @@ def _cmd_simulate(args) -> int:
     from . import io
     from .forward import simulate
 
+    _check_output(args.output, (".npz",), [args.scene, args.materials])
     scene, default_ladar, default_model = _load_scene(args)
-    ladar = _ladar(args, scene, default_ladar)
     model = args.model or default_model
+    _check_applicable(args, model, default_ladar is not None)
+    ladar = _ladar(args, scene, default_ladar)
     opts = {}
     if model == "mesh":
         if not scene.is_mesh and args.tol is None:       # with --tol the knob tessellates
-            scene = scene.tessellate(args.segments)
-        for k in ("normals", "rays_per_bin", "tol"):
+            scene = scene.tessellate(args.segments or 1024)
+        for k in ("mode", "z0", "normals", "ray_spacing", "rays_per_bin", "sampling", "seed",
+                  "tol", "max_rays", "receiver"):
             if getattr(args, k) is not None:
                 opts[k] = getattr(args, k)
         if args.footprint:
@@ -197,18 +264,53 @@ def _cmd_simulate(args) -> int:
               "n_views": ladar.n_views, "n_bins": ladar.n_bins}
     io.save_sinogram(args.output, sino, scene=scene, params=params)
     if not args.quiet:
-        print(f"{args.scene}: {model} model, {ladar.n_views} views x {ladar.n_bins} bins, "
-              f"total return per view {sino.total().mean():.6g}; wrote {args.output}")
+        print(_summary(args, sino, ladar, model))
     return 0
 
 
+def _check_output(output, suffixes, inputs):
+    """An output path must name a file of a known format and never an input."""
+    import os
+
+    from .errors import ParameterError
+
+    if not output or os.path.basename(output) in ("", ".", ".."):
+        raise ParameterError(f"-o: must name a file; got {output!r}")
+    ext = os.path.splitext(output)[1].lower()
+    if ext not in suffixes:
+        raise ParameterError(f"-o: the extension decides the format: one of "
+                             f"{', '.join(suffixes)}; got {output!r}")
+    for src in inputs:
+        if src and os.path.exists(src) and os.path.exists(output) and \
+                os.path.samefile(src, output):
+            raise ParameterError(f"-o {output!r} is the input {src!r}: meshladar never "
+                                 "overwrites an input; choose another output name")
+        if src and os.path.abspath(src) == os.path.abspath(output):
+            raise ParameterError(f"-o {output!r} is the input {src!r}: meshladar never "
+                                 "overwrites an input; choose another output name")
+
+
+#: Image formats reconstruct writes (matplotlib's own writers; JPEG and TIFF through Pillow,
+#: a dependency of matplotlib).
+_IMAGE_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg", ".tif", ".tiff")
+
+
 def _cmd_reconstruct(args) -> int:
-    """Reconstruct a saved sinogram by FBP and write the image as a PNG (and .npz)."""
+    """Reconstruct a saved sinogram by FBP: a figure (PNG, PDF, SVG, JPEG or TIFF, chosen by
+    the extension of -o) and the image's values in OUTPUT.image.npz."""
     import os
 
     from . import io
+    from .errors import ParameterError
     from .reconstruct import clip_radiance, fbp, log_radiance
 
+    _check_output(args.output, _IMAGE_SUFFIXES, [args.result])
+    data = os.path.splitext(args.output)[0] + ".image.npz"
+    if os.path.abspath(data) == os.path.abspath(args.result) or (
+            os.path.exists(data) and os.path.samefile(data, args.result)):
+        raise ParameterError(f"-o {args.output!r} would write the image data to "
+                             f"{data!r}, the input: meshladar never overwrites an input; "
+                             "choose another output name")
     sino, meta = io.load_sinogram(args.result)
     if args.log:
         sino = log_radiance(sino)
@@ -220,20 +322,21 @@ def _cmd_reconstruct(args) -> int:
 
     plt = style.use()
     fig, ax = plt.subplots(figsize=(5.5, 4.6))
-    h = ax.imshow(image.values, extent=(-extent, extent, -extent, extent))
+    h = ax.imshow(image.values, extent=(-extent, extent, -extent, extent), origin="lower")
     ax.set_xlabel("x [scene units]")
     ax.set_ylabel("y [scene units]")
     ax.set_title(f"FBP of {os.path.basename(args.result)} ({args.filter})")
     fig.colorbar(h, ax=ax, label="reconstruction [radiance / area]")
-    tmp = args.output + ".tmp.png"
-    fig.savefig(tmp)
-    plt.close(fig)
-    os.replace(tmp, args.output)
-    io.save_result(os.path.splitext(args.output)[0] + ".npz", {"image": image.values},
+    fmt = os.path.splitext(args.output)[1].lower().lstrip(".")
+    try:
+        io.write_atomic(args.output, lambda fh: fig.savefig(fh, format=fmt))
+    finally:
+        plt.close(fig)
+    io.save_result(data, {"image": image.values},
                    {"kind": "image", "extent": extent, "info": image.info,
                     "source": os.path.basename(args.result)})
     if not args.quiet:
-        print(f"wrote {args.output} ({args.size}x{args.size}, extent {extent:g})")
+        print(f"wrote {args.output} and {data} ({args.size}x{args.size}, extent {extent:g})")
     return 0
 
 
@@ -243,6 +346,8 @@ def _cmd_view(args) -> int:
 
     from .errors import ParameterError
 
+    if args.screenshot is not None:
+        _check_output(args.screenshot, (".png",), [args.scene, args.materials])
     scene, default_ladar, _ = _load_scene(args)
     if args.screenshot is None and not (os.environ.get("DISPLAY")
                                         or os.environ.get("WAYLAND_DISPLAY")):
@@ -343,6 +448,39 @@ def _positive_float(text: str):
     return value
 
 
+def _nonnegative_int(text: str):
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a non-negative integer; got {text!r}") \
+            from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be a non-negative integer; got {text!r}")
+    return value
+
+
+def _finite_float(text: str):
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a number; got {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"must be a finite number; got {text!r}")
+    return value
+
+
+def _direction(text: str):
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        values = []
+    if len(values) != 3 or not all(math.isfinite(v) for v in values) or \
+            not any(values):
+        raise argparse.ArgumentTypeError(f"must be a direction X,Y,Z (three finite numbers, "
+                                         f"not all zero); got {text!r}")
+    return values
+
+
 def _angle_list(text: str):
     try:
         values = [float(v) for v in text.split(",") if v.strip()]
@@ -366,6 +504,9 @@ def _parser() -> argparse.ArgumentParser:
                "  meshladar view disk_pair --view-angle 0 --screenshot view.png\n"
                "  meshladar study faceting study/\n  meshladar bench",
         formatter_class=argparse.RawDescriptionHelpFormatter)
+    from . import __version__
+
+    p.add_argument("--version", action="version", version=f"meshladar {__version__}")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
     d = sub.add_parser("demo", help="print the paper's coatings' monostatic BRDF",
                        description=_cmd_demo.__doc__,
@@ -391,52 +532,101 @@ def _parser() -> argparse.ArgumentParser:
                     help="reconstruction size in pixels (default: %(default)s)")
     pp.set_defaults(func=_cmd_paper)
     def scene_args(q):
-        q.add_argument("scene", help="a phantom name (disk, ellipse, disk_pair), a phantom "
-                                     "spec (.toml) or a mesh file (.stl .obj .ply .off .glb)")
+        q.add_argument("scene", help="a packaged phantom's name (disk, ellipse, disk_pair), a "
+                                     "phantom spec (.toml) or any mesh file trimesh reads "
+                                     "(STL, OBJ, PLY, OFF, GLB/GLTF, 3MF, DAE, zip...)")
         q.add_argument("--material", default="dark_gray",
                        help="coating of a mesh's parts (default: %(default)s)")
         q.add_argument("--coating", type=_coatings, default=None, metavar="PART=NAME,...",
-                       help="coating per phantom shape or mesh part, e.g. small=aluminum")
-        q.add_argument("--quiet", action="store_true", help="no progress or summary")
+                       help="coating per phantom shape or mesh part, e.g. small=aluminum "
+                            "(default: each shape's own, or --material)")
+        q.add_argument("--materials", default=None, metavar="TABLE.toml",
+                       help="your own coating table: its names can be used by --material "
+                            "and --coating (default: only the packaged coatings)")
+        q.add_argument("--quiet", action="store_true",
+                       help="no progress bar or summary (default: shown)")
 
     sim = sub.add_parser("simulate", help="simulate range profiles and save them",
                          description=_cmd_simulate.__doc__,
                          epilog="examples:\n  meshladar simulate disk_pair -o pair.npz "
                                 "--coating small=aluminum\n"
                                 "  meshladar simulate part.stl --material aluminum "
-                                "--views 90 --bins 256 --bin-width 0.01 -o part.npz\n"
-                                "  meshladar simulate disk_pair --model mesh --tol 1e-3 "
-                                "-o mesh.npz",
+                                "--views 90 -o part.npz\n"
+                                "  meshladar simulate part.stl --view-vectors 200 "
+                                "--normals smooth -o part3d.npz\n"
+                                "  meshladar simulate part.stl --mode slice --z0 0.1 "
+                                "-o slice.npz\n"
+                                "  meshladar simulate disk_pair --model mesh --tol 1e-2 "
+                                "-o mesh.npz\n\n"
+                                "Range r = -p.w is zero on the plane through the origin "
+                                "facing the ladar and grows away from it. A mesh is a 3-D "
+                                "target: the whole of it returns (values are areas x 1/sr); "
+                                "--mode slice gives one slice per unit height.",
                          formatter_class=argparse.RawDescriptionHelpFormatter)
     scene_args(sim)
     sim.add_argument("-o", "--output", required=True, help="result file (.npz)")
-    sim.add_argument("--model", choices=["analytic", "mesh", "pixel"], default=None,
+    sim.add_argument("--model", choices=MODELS, default=None,
                      help="forward model (default: analytic for phantoms, mesh for meshes)")
     sim.add_argument("--views", type=_positive_int, default=None,
-                     help="number of views evenly over 360 degrees")
+                     help="number of views evenly over 360 degrees about z (default: the "
+                          "phantom's, or 360)")
     sim.add_argument("--angles-deg", type=_angle_list, default=None,
-                     help="view angles in degrees, comma-separated")
-    sim.add_argument("--bins", type=_positive_int, default=None, help="number of range bins")
+                     help="view angles about z in degrees, comma-separated")
+    sim.add_argument("--view-vectors", type=_positive_int, default=None, metavar="N",
+                     help="N view directions spread evenly over the sphere (mesh model)")
+    sim.add_argument("--bins", type=_positive_int, default=None,
+                     help="number of range bins (default: the phantom's, or 512 covering "
+                          "the ranges the target spans over the views)")
     sim.add_argument("--bin-width", type=_positive_float, default=None,
-                     help="range bin width (scene units)")
-    sim.add_argument("--segments", type=_positive_int, default=1024,
-                     help="tessellation of analytic phantoms for --model mesh")
-    sim.add_argument("--normals", choices=["flat", "smooth", "exact"], default=None)
-    sim.add_argument("--rays-per-bin", type=_positive_float, default=None)
-    sim.add_argument("--footprint", action="store_true", help="footprint binning")
+                     help="range bin width in scene units (default: from --bins)")
+    sim.add_argument("--segments", type=_positive_int, default=None,
+                     help="tessellation of an analytic phantom for --model mesh (default: "
+                          "1024)")
+    sim.add_argument("--mode", choices=MODES, default=None,
+                     help="mesh model: 3d (the whole target) or slice (one plane z = z0, "
+                          "per unit height) (default: 3d for meshes, slice for phantoms)")
+    sim.add_argument("--z0", type=_finite_float, default=None,
+                     help="height of the slice plane for --mode slice (default: the "
+                          "target's mid-height)")
+    sim.add_argument("--normals", choices=NORMALS, default=None,
+                     help="mesh model shading normals (default: flat; with --tol smooth "
+                          "for meshes, exact for phantoms)")
+    sim.add_argument("--ray-spacing", type=_positive_float, default=None,
+                     help="distance between rays in scene units (default: from "
+                          "--rays-per-bin)")
+    sim.add_argument("--rays-per-bin", type=_positive_float, default=None,
+                     help="rays per range-bin width (default: 1 in 3d, at least 128 across "
+                          "the target; 8 in slice)")
+    sim.add_argument("--sampling", choices=SAMPLINGS, default=None,
+                     help="rays at a seeded random offset in their cell (stratified: "
+                          "unbiased) or at cell centres (default: stratified in 3d, regular "
+                          "in slice)")
+    sim.add_argument("--seed", type=_nonnegative_int, default=None,
+                     help="seed of the stratified sampling (default: 0)")
+    sim.add_argument("--receiver", type=_direction, default=None, metavar="X,Y,Z",
+                     help="bistatic receiver direction from the scene (default: collocated "
+                          "with the ladar)")
+    sim.add_argument("--footprint", action="store_true",
+                     help="spread each ray over the range its footprint covers on the facet "
+                          "(default: point binning)")
     sim.add_argument("--tol", type=_positive_float, default=None,
-                     help="relative sinogram accuracy: meshladar picks rays and segments")
+                     help="relative sinogram accuracy: meshladar picks rays and segments "
+                          "(default: off)")
+    sim.add_argument("--max-rays", type=_positive_float, default=None,
+                     help="budget of rays for --tol over all its refinement runs (default: "
+                          "2e9)")
     sim.add_argument("--pixel-size", type=_positive_float, default=None,
-                     help="pixel size for --model pixel")
+                     help="pixel size for --model pixel (default: a quarter bin)")
     sim.add_argument("--jobs", type=_positive_int, default=None,
-                     help="worker processes for the mesh model")
+                     help="worker processes for the mesh model (default: 1 for small jobs, "
+                          "all cores from 4e6 rays)")
     sim.add_argument("--scheduler", default=None, metavar="ADDRESS",
                      help="run the mesh model on an existing Dask cluster (tcp://host:8786)")
     sim.add_argument("--workers", type=_positive_int, default=None,
                      help="run the mesh model on a local Dask cluster of N processes")
     sim.add_argument("--run-dir", default=None,
                      help="resumable run folder for the mesh model: finished chunks are kept "
-                          "there, and re-running the same command resumes")
+                          "there, and re-running the same command resumes (default: none)")
     sim.set_defaults(func=_cmd_simulate)
 
     rec = sub.add_parser("reconstruct", help="FBP of a saved sinogram into a PNG",
@@ -445,16 +635,21 @@ def _parser() -> argparse.ArgumentParser:
                                 "  meshladar reconstruct pair.npz -o pair-log.png --log",
                          formatter_class=argparse.RawDescriptionHelpFormatter)
     rec.add_argument("result", help="a result file written by meshladar simulate")
-    rec.add_argument("-o", "--output", required=True, help="image file (.png)")
-    rec.add_argument("--size", type=_positive_int, default=512)
+    rec.add_argument("-o", "--output", required=True,
+                     help="figure file: .png, .pdf, .svg, .jpg or .tif (the image's values go "
+                          "to OUTPUT.image.npz beside it)")
+    rec.add_argument("--size", type=_positive_int, default=512,
+                     help="image size in pixels (default: %(default)s)")
     rec.add_argument("--extent", type=_positive_float, default=None,
                      help="half-width of the image (default: the bins' reach)")
-    rec.add_argument("--filter", choices=["ramp", "shepp-logan", "cosine", "hamming", "hann"],
-                     default="ramp")
-    rec.add_argument("--log", action="store_true", help="log of the radiance (Fig. 11a)")
+    rec.add_argument("--filter", choices=FILTERS, default="ramp",
+                     help="FBP filter (default: %(default)s)")
+    rec.add_argument("--log", action="store_true",
+                     help="log of the radiance (Fig. 11a) (default: off)")
     rec.add_argument("--clip", type=_positive_float, default=None,
-                     help="clip at this fraction of the maximum (Fig. 11b: 0.008)")
-    rec.add_argument("--quiet", action="store_true")
+                     help="clip at this fraction of the maximum (Fig. 11b: 0.008) (default: "
+                          "off)")
+    rec.add_argument("--quiet", action="store_true", help="no summary line (default: shown)")
     rec.set_defaults(func=_cmd_reconstruct)
 
     vw = sub.add_parser("view", help="3-D view of a scene coloured by its return",
@@ -466,8 +661,10 @@ def _parser() -> argparse.ArgumentParser:
     scene_args(vw)
     vw.add_argument("--view-angle", type=float, default=90.0,
                     help="view angle about z in degrees (default: %(default)s)")
-    vw.add_argument("--screenshot", default=None, help="render off screen into this PNG")
-    vw.add_argument("--log", action="store_true", help="colour by log10 of the return")
+    vw.add_argument("--screenshot", default=None,
+                    help="render off screen into this PNG (default: open a window)")
+    vw.add_argument("--log", action="store_true",
+                    help="colour by log10 of the return (default: linear)")
     vw.set_defaults(func=_cmd_view)
 
     st = sub.add_parser("study", help="faceting-vs-analytic study into a folder",
@@ -478,8 +675,9 @@ def _parser() -> argparse.ArgumentParser:
     st.add_argument("kind", choices=["faceting"], help="which study")
     st.add_argument("outdir", help="folder for faceting.csv/json, results and figures")
     st.add_argument("--full", dest="setting", action="store_const", const="full",
-                    default="quick", help="the full sweep (360 views, segments to 4096)")
-    st.add_argument("--quiet", action="store_true", help="no progress bar")
+                    default="quick", help="the full sweep (360 views, segments to 4096) "
+                                          "(default: the quick one)")
+    st.add_argument("--quiet", action="store_true", help="no progress bar (default: shown)")
     st.epilog += ("\n\nFinished study points are kept in OUTDIR/run: re-running the same "
                   "command resumes an interrupted study.")
     st.set_defaults(func=_cmd_study)
@@ -490,7 +688,8 @@ def _parser() -> argparse.ArgumentParser:
     bch.add_argument("--repeats", type=_positive_int, default=5,
                      help="timed runs per case after one warm-up (default: %(default)s)")
     bch.add_argument("--full", action="store_true",
-                     help="also the streaming run: 360 views x 1e6 rays (about a minute)")
+                     help="also the streaming run: 360 views x 1e6 rays (about a minute) "
+                          "(default: off)")
     bch.set_defaults(func=_cmd_bench)
     return p
 

@@ -15,8 +15,8 @@ MODELS = ("analytic", "mesh", "pixel")
 
 _OPTIONS = {"analytic": (), "pixel": ("pixel_size", "ray_spacing"),
             "mesh": ("mode", "normals", "back_faces", "z0", "ray_spacing", "rays_per_bin",
-                     "footprint", "sampling", "seed", "receiver", "tol", "jobs", "executor", "progress",
-                     "run_dir")}
+                     "footprint", "sampling", "seed", "receiver", "tol", "max_rays", "jobs",
+                     "executor", "progress", "run_dir")}
 
 
 def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
@@ -30,7 +30,9 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
         ``"analytic"``: exact profiles of disks and ellipses (no faceting, no sampling).
         ``"mesh"``: triangle meshes ray-cast with Embree (options in
         :func:`meshladar.trace.simulate_mesh`: mode, normals, back_faces, z0, ray_spacing,
-        rays_per_bin, footprint, seed, jobs, executor, progress).
+        rays_per_bin, footprint, sampling, seed, receiver, tol, max_rays, jobs, executor,
+        progress, run_dir). A mesh is a 3-D target (``mode="3d"``) unless it was
+        tessellated from the analytic shapes.
         ``"pixel"``: the paper's method, a rasterised surface traced with Siddon rays
         (options ``pixel_size``, ``ray_spacing``; see :func:`meshladar.pixel.simulate_pixel`).
     **options

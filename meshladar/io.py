@@ -17,7 +17,7 @@ import numpy as np
 
 from .errors import MeshladarError
 
-__all__ = ["save_result", "load_result", "write_text_atomic", "save_sinogram", "load_sinogram",
+__all__ = ["save_result", "load_result", "write_atomic", "write_text_atomic", "save_sinogram", "load_sinogram",
            "describe_scene", "ResultFileError"]
 
 
@@ -25,12 +25,32 @@ class ResultFileError(MeshladarError, ValueError):
     """A result file is missing, unreadable, or not a meshladar result."""
 
 
+def _new_file_mode(path):
+    """The permissions an ordinary ``open(path, "w")`` would give: the existing file's, or
+    0o666 less the user's umask (mkstemp's temporaries are 0o600)."""
+    try:
+        return os.stat(path).st_mode & 0o7777
+    except OSError:
+        mask = os.umask(0)
+        os.umask(mask)
+        return 0o666 & ~mask
+
+
+def write_atomic(path, write):
+    """Write a file atomically: ``write(fh)`` fills a temporary beside ``path`` (binary
+    mode), which is renamed over ``path`` once complete, with the user's normal
+    permissions."""
+    _atomic(path, write)
+
+
 def _atomic(path, write):
     path = os.fspath(path)
     folder = os.path.dirname(os.path.abspath(path))
     os.makedirs(folder, exist_ok=True)
+    mode = _new_file_mode(path)
     fd, tmp = tempfile.mkstemp(dir=folder, prefix=".tmp-", suffix=os.path.basename(path))
     try:
+        os.fchmod(fd, mode)
         with os.fdopen(fd, "wb") as fh:
             write(fh)
             fh.flush()

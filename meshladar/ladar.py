@@ -115,25 +115,55 @@ class Ladar:
         return cls.centered(n_bins, a / PAPER_BIN_DIVISOR, angles_deg=angles_deg)
 
     @classmethod
-    def covering(cls, scene, *, bin_width=None, n_bins=None, margin=0.0, angles_deg=None):
-        """Bins covering every range the scene can occupy over views about the z axis.
+    def covering(cls, scene, *, bin_width=None, n_bins=None, margin=0.0, angles_deg=None,
+                 view_vectors=None):
+        """Bins covering the ranges the scene spans over the requested views.
 
-        The scene's bounding circle (centre C, radius R) spans ranges within
-        |C| + R of 0 in every view. Give exactly one of ``bin_width`` or ``n_bins``.
+        Range r = −p·w is zero on the plane through the world origin perpendicular to the
+        view and grows away from the ladar. For a mesh scene the bins span exactly the
+        nearest to the farthest range of any vertex over the views (half a bin beyond each
+        end), so a target far from the origin fills its bins; for analytic shapes (the
+        paper's phantoms, centred on the rotation axis) they are centred on range 0 and
+        reach |C| + R, the scene's bounding circle, in every view about z.
+
+        Give ``bin_width`` or ``n_bins`` (or both: ``n_bins`` bins of that width centred on
+        the span). Views: ``angles_deg`` about z (default 0, 1, ..., 359) or
+        ``view_vectors``.
         """
-        if (bin_width is None) == (n_bins is None):
-            raise ParameterError("give exactly one of bin_width or n_bins; got "
-                                 f"bin_width={bin_width!r}, n_bins={n_bins!r}")
-        center, radius = scene.bounding_circle()
+        if bin_width is None and n_bins is None:
+            raise ParameterError("give bin_width or n_bins (or both); got neither")
         m = check_real("margin", margin, low=0.0)
-        half = float(np.hypot(*center)) + radius + m
-        if bin_width is not None:
-            w = check_real("bin_width", bin_width, low=0.0, low_open=True)
-            n = max(1, int(np.ceil(2 * half / w - 1e-9)))
+        w = check_real("bin_width", bin_width, low=0.0, low_open=True) \
+            if bin_width is not None else None
+        n = check_count("n_bins", n_bins) if n_bins is not None else None
+        if view_vectors is not None:
+            views = cls(angles_deg, np.array([0.0, 1.0]), view_vectors=view_vectors)
         else:
-            n = check_count("n_bins", n_bins)
-            w = 2 * half / n
-        return cls.centered(n, w, angles_deg=angles_deg)
+            views = cls(np.arange(360.0) if angles_deg is None else angles_deg,
+                        np.array([0.0, 1.0]))
+        if scene.is_mesh:
+            lo, hi = scene.range_span(views.view_vectors)
+            lo, hi = lo - m, hi + m
+            center = 0.5 * (lo + hi)
+            span = max(hi - lo, 0.0)
+            if n is None:
+                n = max(1, int(np.ceil(span / w - 1e-9)) + 1)
+            elif w is None:
+                # n bins whose centres run from the nearest to the farthest range
+                w = span / (n - 1) if n > 1 and span > 0 else max(span, 1e-12 * (
+                    1.0 + abs(center)))
+        else:
+            c, radius = scene.bounding_circle()
+            center = 0.0
+            half = float(np.hypot(*c)) + radius + m
+            if n is None:
+                n = max(1, int(np.ceil(2 * half / w - 1e-9)))
+            elif w is None:
+                w = 2 * half / n
+        edges = center + (np.arange(n + 1) - n / 2.0) * w
+        if view_vectors is not None:
+            return cls(None, edges, view_vectors=views.view_vectors)
+        return cls(views.angles_deg, edges)
 
     # -- derived ------------------------------------------------------------------------
     @property

@@ -19,7 +19,9 @@ Checks, with clear outcomes:
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
+import io
 import math
 import os
 from dataclasses import dataclass, field
@@ -160,56 +162,411 @@ def part_from_trimesh(mesh, material_index, name="mesh", transform=None):
     return MeshPart(v, np.asarray(mesh.faces), material_index, name)
 
 
-def load_parts(mesh_or_path):
-    """Load anything trimesh loads; returns a list of (name, trimesh.Trimesh) in world
-    coordinates (a GLB/GLTF scene's transforms applied)."""
-    import trimesh
+# ------------------------------------------------------------------ reading mesh files
 
+#: Bytes read from the start of a file to recognise its format by content (magic numbers,
+#: headers, the first lines of a text format).
+_HEAD_BYTES = 1 << 16
+#: Longest piece of a reader's own message quoted in a GeometryError (characters).
+_MAX_REASON = 160
+#: Single-file compression meshladar undoes itself with the standard library, then reads the
+#: inner file by its own suffix (or content): trimesh reads neither .gz nor .xz, and its
+#: .bz2 reader hides why the inner file failed.
+_COMPRESSED = {"gz": "gzip", "bz2": "bzip2", "xz": "xz"}
+#: Tar archives, by suffix, as trimesh's archive reader names them. Its reader opens any tar
+#: with ``tarfile.open(mode="r")``, which detects the compression itself, so plain and xz tars
+#: go through 'tar.gz' too.
+_TAR = {"tar.gz": "tar.gz", "tgz": "tar.gz", "tar.bz2": "tar.bz2", "tbz2": "tar.bz2",
+        "tbz": "tar.bz2", "tar.xz": "tar.gz", "txz": "tar.gz", "tar": "tar.gz"}
+#: Formats trimesh reads only with an optional package installed (pip names), as its
+#: ``trimesh.exchange`` modules import them: COLLADA through pycollada, 3MF and 3DXML through
+#: lxml and networkx, XAML through lxml, STEP through cascadio, OpenCTM through openctm, and
+#: the volume and finite-element formats through meshio. (SVG, through svg.path and lxml, is
+#: a 2-D drawing format: see _DRAWINGS.)
+_OPTIONAL_READERS = {
+    "dae": "pycollada", "zae": "pycollada", "3mf": "lxml networkx", "3dxml": "lxml networkx",
+    "xaml": "lxml", "step": "cascadio", "stp": "cascadio", "ctm": "openctm",
+    **dict.fromkeys(("vtk", "vtu", "msh", "inp", "mesh", "meshb", "med", "xdmf", "xmf",
+                     "h5m", "su2", "ugrid", "mdpa", "bdf", "fem", "nas", "avs", "cgns",
+                     "exo", "e", "tec", "f3grid", "vol"), "meshio"),
+}
+#: Formats that hold 2-D drawings (trimesh Path2D), never a 3-D triangle mesh.
+_DRAWINGS = {"svg": "svg.path lxml", "dxf": ""}
+#: What each format is called in messages.
+_NAMES = {"stl": "STL file", "obj": "OBJ file", "ply": "PLY file", "off": "OFF file",
+          "glb": "GLB file", "gltf": "glTF file", "zip": "ZIP archive", "tar.gz": "tar archive",
+          "tar.bz2": "tar archive", "bz2": "bzip2 file", "gz": "gzip file", "xz": "xz file",
+          "dxf": "DXF drawing", "svg": "SVG drawing", "xyz": "XYZ point file",
+          "dae": "COLLADA file", "3mf": "3MF file"}
+
+
+def load_parts(mesh_or_path):
+    """Load a mesh file (or take a trimesh object) as the triangle meshes of a scene.
+
+    Parameters
+    ----------
+    mesh_or_path : str, os.PathLike, trimesh.Trimesh or trimesh.Scene
+        A file of any format trimesh reads: STL (ASCII or binary), OBJ, PLY, OFF, GLB/glTF
+        (several parts, each placed by its node's transform), ZIP and tar archives; 3MF,
+        COLLADA and others when their optional readers are installed. ``.gz``, ``.bz2`` and
+        ``.xz`` files are decompressed and their inner file read. The format comes from the
+        suffix, or from the content when the suffix is unknown or its reader fails (a binary
+        STL named ``.dat`` loads). Textures, colours and normals in the file are not read.
+
+    Returns
+    -------
+    list of (str, trimesh.Trimesh)
+        Part names and meshes in world coordinates, each a fresh mesh of vertices and faces
+        only, with vertices at the same position merged (see :func:`_welded`).
+
+    Raises
+    ------
+    GeometryError
+        With a one-line message naming the file and what is wrong: no such file, an empty
+        file, binary junk, an unknown format, a format whose optional reader is not installed
+        (naming the pip package), a point cloud, a 2-D drawing or a 3-D path (no faces), a
+        scene without triangle meshes, non-finite vertices. Any exception of trimesh's reader
+        becomes a GeometryError chained to it.
+    """
     if isinstance(mesh_or_path, (str, os.PathLike)):
         path = os.fspath(mesh_or_path)
-        if not os.path.exists(path):
-            raise GeometryError(f"{path}: no such mesh file")
+        if isinstance(path, bytes):
+            path = os.fsdecode(path)
+        return _read_file(path)
+    return _parts_of(mesh_or_path, "mesh")
+
+
+def _read_file(path):
+    """load_parts for a path: check the file, undo single-file compression, read it."""
+    where = _printable(path)
+    if not os.path.exists(path):
+        raise GeometryError(f"{where}: no such mesh file")
+    if os.path.isdir(path):
+        raise GeometryError(f"{where}: is a directory, not a mesh file")
+    try:
+        size = os.path.getsize(path)
+        with open(path, "rb") as fh:
+            head = fh.read(_HEAD_BYTES)
+    except OSError as exc:
+        raise GeometryError(f"{where}: cannot read the file "
+                            f"({_one_line(exc.strerror or exc)})") from exc
+    suffix = _suffix(path)
+    kind = suffix if suffix in _COMPRESSED else _sniff(head, size)
+    # a compressed file (by suffix, or by content unless a tar reader takes it whole)
+    if kind in _COMPRESSED and (suffix == kind or suffix not in _TAR):
+        import trimesh
+
+        data = _decompress(path, kind, where)
+        name = os.path.basename(path)
+        inner = name[: -len(suffix) - 1] if suffix == kind else name
+
+        return _read(f"{where} (decompressed {_COMPRESSED[kind]})", lambda: io.BytesIO(data),
+                     _suffix(inner), data[:_HEAD_BYTES], len(data),
+                     resolver=trimesh.resolvers.FilePathResolver(path),
+                     default_name=inner or "mesh")
+    return _read(where, lambda: path, suffix, head, size, resolver=None, default_name="mesh")
+
+
+def _read(where, source, suffix, head, size, *, resolver, default_name):
+    """Read one file's bytes (``source()`` gives a path or a fresh stream) with trimesh,
+    trying the format its suffix names, then the format its content announces."""
+    import trimesh
+
+    if size == 0:
+        raise GeometryError(f"{where}: empty file (0 bytes)")
+    if size <= len(head) and not head.strip():
+        raise GeometryError(f"{where}: empty file (only whitespace)")
+    formats = _readable_formats()
+    suffix = _TAR.get(suffix, suffix)
+    sniffed = _sniff(head, size)
+    sniffed = _TAR.get(sniffed, sniffed)
+    tries = [t for t in dict.fromkeys((suffix, sniffed)) if t in formats]
+    content = "binary data" if _is_binary(head) else "text"
+    if suffix not in formats and (suffix in _OPTIONAL_READERS or suffix in _DRAWINGS):
+        tries = []                # a 3MF is a ZIP too: say what its own reader needs
+    if not tries:
+        kind = suffix if suffix in _OPTIONAL_READERS or suffix in _DRAWINGS else sniffed
+        if kind in _DRAWINGS:
+            raise GeometryError(f"{where}: {_label(kind)} is a 2-D drawing format, not a 3-D "
+                                f"triangle mesh")
+        if kind in _OPTIONAL_READERS:
+            raise GeometryError(_needs(where, kind))
+        what = f"file format {_label(suffix)}" if suffix else "file format (no file suffix)"
+        raise GeometryError(f"{where}: unknown {what}, and its content ({content}) is not "
+                            f"a format trimesh reads either; readable formats: "
+                            f"{', '.join(sorted(formats | set(_COMPRESSED)))}")
+    first = None
+    for ftype in tries:
+        reached_geometry = False
         try:
-            # unprocessed, so that NaN vertices reach meshladar's own check (trimesh's
-            # processing would silently drop them); vertices are merged below
-            loaded = trimesh.load(path, process=False)
-        except Exception as exc:  # trimesh raises many types on bad files
-            raise GeometryError(f"{path}: cannot load mesh ({type(exc).__name__}: {exc})") \
-                from exc
-        source = path
-    else:
-        loaded, source = mesh_or_path, "mesh"
+            with _quiet_reader():
+                loaded = trimesh.load(source(), file_type=ftype, resolver=resolver,
+                                      process=False, skip_materials=True)
+        except ImportError as exc:
+            err = GeometryError(_needs(where, ftype, exc))
+            err.__cause__ = exc
+        except Exception as exc:   # trimesh's readers raise many types on bad files
+            err = GeometryError(f"{where}: not a readable {_name(ftype)}"
+                                f" ({type(exc).__name__}: {_one_line(exc)})")
+            err.__cause__ = exc
+        else:
+            if isinstance(loaded, trimesh.Scene) and not loaded.geometry:
+                if ftype in ("zip", "tar.gz", "tar.bz2"):
+                    err = GeometryError(f"{where}: the {_NAMES[ftype]} holds no file trimesh "
+                                        f"reads as geometry{_members(source, ftype)}")
+                else:
+                    err = GeometryError(f"{where}: not a readable "
+                                        f"{_name(ftype)} (trimesh found no "
+                                        f"geometry in {size} bytes of {content})")
+            else:
+                reached_geometry = True
+                try:
+                    return _parts_of(loaded, where, default_name)
+                except GeometryError as exc:
+                    err = exc
+        if first is None or (reached_geometry and not first[1]):
+            first = (err, reached_geometry)
+    raise first[0]
+
+
+def _parts_of(loaded, where, default_name="mesh"):
+    """(name, welded mesh) of each triangle mesh in a trimesh object, or a GeometryError
+    saying what the object holds instead."""
+    import trimesh
+
     if isinstance(loaded, trimesh.Scene):
-        out = []
+        out, other = [], []
         for node in loaded.graph.nodes_geometry:
             transform, geom_name = loaded.graph[node]
             g = loaded.geometry[geom_name]
-            if isinstance(g, trimesh.Trimesh):
-                m = _welded(g, f"{source}: part {node!r}")
+            if isinstance(g, trimesh.Trimesh) and len(g.faces):
+                m = _welded(g, f"{where}: part {node!r}")
                 m.apply_transform(transform)
                 out.append((str(node), m))
+            else:
+                other.append(g)
         if not out:
-            raise GeometryError(f"{source}: the scene holds no triangle meshes")
+            held = other or list(loaded.geometry.values())
+            if len(held) == 1:
+                raise GeometryError(f"{where}: {_not_a_mesh(held[0])}")
+            kinds = ", ".join(dict.fromkeys(_describe(g) for g in held))
+            raise GeometryError(f"{where}: the scene holds no triangle meshes"
+                                f"{f' (only {_one_line(kinds)})' if held else ''}")
         return out
-    if isinstance(loaded, trimesh.Trimesh):
-        name = str(loaded.metadata.get("name", "mesh")) if hasattr(loaded, "metadata") \
-            else "mesh"
-        return [(name, _welded(loaded, source))]
-    raise GeometryError(f"{source}: expected a triangle mesh or a scene of meshes; got "
-                        f"{type(loaded).__name__}")
+    if isinstance(loaded, trimesh.Trimesh) and len(loaded.faces):
+        meta = getattr(loaded, "metadata", None) or {}
+        return [(str(meta.get("name") or default_name), _welded(loaded, where))]
+    raise GeometryError(f"{where}: {_not_a_mesh(loaded)}")
+
+
+def _describe(g):
+    """What a trimesh geometry without triangles is, in a few words (by class name, so that
+    trimesh.path, which needs more optional packages, is never imported here)."""
+    import trimesh
+
+    kind = type(g).__name__
+    if isinstance(g, (trimesh.PointCloud, trimesh.Trimesh)):
+        return f"a point cloud ({len(g.vertices)} points, no faces)"
+    if kind == "Path2D":
+        return f"a 2-D drawing ({len(g.entities)} lines/curves)"
+    if kind == "Path3D":
+        return f"a 3-D path ({len(g.entities)} lines/curves, no faces)"
+    return f"a {kind}"
+
+
+def _not_a_mesh(g):
+    """The end of the message for a geometry that is not a triangle mesh."""
+    import trimesh
+
+    if type(g).__name__ == "Path2D":
+        return f"is {_describe(g)}, not a 3-D triangle mesh"
+    if isinstance(g, trimesh.parent.Geometry):
+        return f"holds {_describe(g)}, not a triangle mesh"
+    return f"expected a triangle mesh or a scene of meshes; got {type(g).__name__}"
 
 
 def _welded(mesh, where):
-    """A copy with shared vertices merged (STL stores each triangle's own), after checking
-    that every vertex is finite."""
-    v = np.asarray(mesh.vertices, dtype=np.float64)
+    """A fresh trimesh.Trimesh of ``mesh``'s vertices and faces only, vertices at the same
+    position merged (STL stores each triangle's own), after checking that every vertex is
+    finite and every face indexes a vertex.
+
+    Nothing else is kept: meshladar needs positions and faces, and copying a texture needs
+    Pillow. Merging by position alone also joins the vertices a file splits at UV seams and
+    at split normals, which are not creases (:func:`corner_normals` finds creases from the
+    face normals); trimesh's own merge keeps them apart on a textured mesh.
+    """
+    import trimesh
+
+    v = np.array(mesh.vertices, dtype=np.float64)         # a copy: the caller's mesh stays
+    f = np.asarray(mesh.faces)
+    if v.ndim != 2 or v.shape[1] != 3:
+        raise GeometryError(f"{where}: vertices must have shape (n, 3); got {v.shape}")
     if not np.all(np.isfinite(v)):
         bad = int(np.argwhere(~np.isfinite(v))[0][0])
         raise GeometryError(f"{where}: vertices must be finite; got {v[bad].tolist()} at "
                             f"vertex {bad}")
-    m = mesh.copy()
-    m.merge_vertices()
+    if f.ndim != 2 or f.shape[1] != 3 or (f.size and not np.issubdtype(f.dtype, np.integer)):
+        raise GeometryError(f"{where}: faces must be an (m, 3) integer array; got shape "
+                            f"{f.shape}, dtype {f.dtype}")
+    if f.size and (f.min() < 0 or f.max() >= len(v)):
+        raise GeometryError(f"{where}: faces index vertices 0..{len(v) - 1}; got "
+                            f"{int(f.min())}..{int(f.max())}")
+    m = trimesh.Trimesh(vertices=v, faces=f.astype(np.int64), process=False)
+    m.merge_vertices(merge_tex=True, merge_norm=True)
     return m
+
+
+def _readable_formats():
+    """The formats this trimesh reads with what is installed ('stl_ascii' is an alias)."""
+    import trimesh
+
+    return set(trimesh.available_formats()) - {"stl_ascii"}
+
+
+def _needs(where, ftype, exc=None):
+    """The message for a format whose optional reader is not installed."""
+    pkgs = _OPTIONAL_READERS.get(ftype) or _DRAWINGS.get(ftype)
+    if pkgs:
+        names = " and ".join(pkgs.split())
+        return (f"{where}: reading {_label(ftype)} files needs the optional package"
+                f"{'s' if ' ' in pkgs else ''} {names}: pip install {pkgs}")
+    return (f"{where}: reading {_label(ftype)} files needs a package that is not installed "
+            f"({_one_line(exc)})")
+
+
+def _label(suffix):
+    return f"'.{suffix}'"
+
+
+def _name(ftype):
+    return _NAMES.get(ftype, f"{ftype.upper()} file")
+
+
+def _suffix(name):
+    """Lower-case suffix of a file name without the dot ('tar.gz' style for tars), or ''."""
+    base = os.path.basename(name).lower()
+    for double in ("tar.gz", "tar.bz2", "tar.xz"):
+        if base.endswith("." + double):
+            return double
+    stem, dot, ext = base.rpartition(".")
+    return ext if dot and stem else ""
+
+
+def _sniff(head, size):
+    """The format a file's first bytes announce (magic numbers and headers), or None."""
+    import re
+
+    if head.startswith(b"glTF"):
+        return "glb"
+    if head.startswith(b"PK\x03\x04"):
+        return "zip"
+    if head.startswith(b"\x1f\x8b"):
+        return "gz"
+    if head.startswith(b"BZh"):
+        return "bz2"
+    if head.startswith(b"\xfd7zXZ\x00"):
+        return "xz"
+    if head[257:262] == b"ustar":
+        return "tar"
+    if head[:3] == b"ply" and head[3:4] in (b"\n", b"\r"):
+        return "ply"
+    # binary STL: an 80-byte header, a triangle count, 50 bytes per triangle
+    if size >= 134 and 84 + 50 * int.from_bytes(head[80:84], "little") == size:
+        return "stl"
+    text = head[:4096].decode("utf-8", "replace").lstrip("\ufeff \t\r\n")
+    low = text.lower()
+    if low.startswith("solid") and "facet" in low:
+        return "stl"
+    if low.split(None, 1)[:1] in (["off"], ["coff"]):
+        return "off"
+    if low.startswith("{") and '"asset"' in low:
+        return "gltf"
+    if "<collada" in low:
+        return "dae"
+    if "<svg" in low:
+        return "svg"
+    if re.search(r"^\s*0\s*\n\s*section\s*$", low, re.M):
+        return "dxf"
+    if re.search(r"^v\s+\S+\s+\S+\s+\S+", text, re.M):
+        return "obj"
+    return None
+
+
+def _is_binary(head):
+    """True when the bytes are not text (a NUL byte, or not UTF-8 before the last char)."""
+    if b"\x00" in head:
+        return True
+    try:
+        head.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        return exc.start < len(head) - 3
+    return False
+
+
+def _decompress(path, kind, where):
+    import bz2
+    import gzip
+    import lzma
+
+    opener = {"gz": gzip.open, "bz2": bz2.open, "xz": lzma.open}[kind]
+    try:
+        with opener(path, "rb") as fh:
+            return fh.read()
+    except Exception as exc:                  # BadGzipFile, OSError, EOFError, LZMAError
+        raise GeometryError(f"{where}: not a valid {_name(kind)} "
+                            f"({type(exc).__name__}: {_one_line(exc)})") from exc
+
+
+def _members(source, ftype):
+    """' (files: a, b, ...)' of an archive, for a message; '' if it cannot be listed."""
+    import tarfile
+    import zipfile
+
+    try:
+        src = source()
+        if ftype == "zip":
+            with zipfile.ZipFile(src) as z:
+                names = z.namelist()
+        else:
+            with (tarfile.open(src) if isinstance(src, str)
+                  else tarfile.open(fileobj=src)) as t:
+                names = t.getnames()
+    except Exception:                          # only a nicety of the message
+        return ""
+    shown = ", ".join(names[:4]) + (f", ... ({len(names)} files)" if len(names) > 4 else "")
+    return f" (files: {_one_line(shown)})" if names else " (it is empty)"
+
+
+@contextlib.contextmanager
+def _quiet_reader():
+    """Keep trimesh's own diagnostics off stderr while it reads a file: meshladar accepts
+    the file or rejects it with its own one-line message. trimesh logs without a handler, so
+    Python's last-resort handler would print its warnings (some with tracebacks); its
+    ``warnings.warn`` calls (deprecations) are silenced in this scope only."""
+    import logging
+    import warnings
+
+    logger = logging.getLogger("trimesh")
+    handler = logging.NullHandler()
+    logger.addHandler(handler)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            yield
+    finally:
+        logger.removeHandler(handler)
+
+
+def _one_line(text):
+    """``text`` on one line (whitespace runs collapsed, control characters escaped), cut to
+    _MAX_REASON characters."""
+    s = _printable(" ".join(str(text).split()))
+    return s if len(s) <= _MAX_REASON else s[: _MAX_REASON - 3] + "..."
+
+
+def _printable(path):
+    """A path for a one-line message: line breaks and other control characters escaped."""
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in path)
 
 
 # ------------------------------------------------------------------ analytic tessellations
@@ -331,16 +688,35 @@ def fibonacci_sphere(n, *, hemisphere=False):
 
 def corner_normals(part: MeshPart, crease_deg=CREASE_DEG):
     """(m, 3, 3) unit normal at each face corner: the area-weighted mean of the normals of
-    the faces around that vertex that lie within ``crease_deg`` of the face's own normal
-    (so shared smooth edges blend and creases stay sharp)."""
+    the faces around that corner's point that lie within ``crease_deg`` of the face's own
+    normal (so shared smooth edges blend and creases stay sharp).
+
+    Faces meet at a point when their corners have the same position (exact float equality),
+    whatever the vertex indices: a file's UV seams and split normals store one point as
+    several vertices, and they are not creases.
+    """
     from . import _kernels
 
     fn, area = part.face_normals_areas()
-    f = part.faces
+    point_of, n_points = _point_index(part.vertices)
+    f = np.ascontiguousarray(point_of[part.faces], dtype=np.int64)
     order = np.argsort(f.ravel(), kind="stable")
-    vert_of = f.ravel()[order]
+    point_at = f.ravel()[order]
     face_of = order // 3
-    ptr = np.searchsorted(vert_of, np.arange(len(part.vertices) + 1))
+    ptr = np.searchsorted(point_at, np.arange(n_points + 1))
     out = np.zeros((len(f), 3, 3))
     _kernels.corner_normals(f, fn, area, ptr, face_of, math.cos(math.radians(crease_deg)), out)
     return out
+
+
+def _point_index(vertices):
+    """((n,) int64, k): each vertex's index among the k distinct positions, by exact float
+    equality (-0.0 equals 0.0), numbered in lexicographic order of the positions."""
+    v = np.asarray(vertices, dtype=np.float64)
+    order = np.lexsort(v.T[::-1])
+    s = v[order]
+    new = np.ones(len(v), dtype=bool)
+    new[1:] = np.any(s[1:] != s[:-1], axis=1)
+    out = np.empty(len(v), dtype=np.int64)
+    out[order] = np.cumsum(new) - 1
+    return out, int(new.sum())

@@ -274,6 +274,16 @@ class Scene:
                                      f"[0, {len(mats) - 1}]; got {int(p.material.min())}.."
                                      f"{int(p.material.max())}")
         cleaned, report = inspect_parts(parts)
+        inverted = [p.name for p, bad in zip(cleaned, report["inverted"]) if bad]
+        if inverted:
+            import warnings
+
+            from .errors import MeshladarWarning
+
+            warnings.warn(f"{len(inverted)} closed part(s) have inverted normals (faces wound "
+                          f"clockwise seen from outside), e.g. {inverted[0]!r}: they are "
+                          "traced two-sided by default, but back_faces='ignore' would blank "
+                          "them (scene.report['inverted'])", MeshladarWarning, stacklevel=3)
         self = cls.__new__(cls)
         self._shapes = tuple(shapes)
         self._parts = tuple(cleaned)
@@ -383,6 +393,51 @@ class Scene:
             raise ParameterError("bounds() is for mesh scenes; use bounding_circle()")
         v = np.concatenate([p.vertices for p in self._parts])
         return np.stack([v.min(axis=0), v.max(axis=0)])
+
+    def hull_points(self) -> np.ndarray:
+        """(k, 3) vertices of the convex hull of a mesh scene (all vertices when the hull is
+        degenerate: a flat sheet), computed once per scene. Every extreme of a linear
+        function of position (a range, a ray grid's extent) is attained at one of them."""
+        if not self._parts:
+            raise ParameterError("hull_points() is for mesh scenes")
+        hull = self.__dict__.get("_hull")
+        if hull is None:
+            v = np.concatenate([p.vertices for p in self._parts])
+            hull = v
+            if len(v) > 64:
+                from scipy.spatial import ConvexHull, QhullError
+
+                try:
+                    hull = v[ConvexHull(v).vertices]
+                except (QhullError, ValueError):
+                    hull = v
+            hull = np.ascontiguousarray(hull)
+            hull.flags.writeable = False
+            self._hull = hull
+        return hull
+
+    def range_span(self, view_vectors) -> tuple[float, float]:
+        """(nearest, farthest) range r = −p·w that any point of the scene takes over the
+        views (n_views, 3) (DESIGN.md: range zero is the plane through the world origin
+        perpendicular to w, growing away from the ladar)."""
+        w = np.asarray(view_vectors, dtype=np.float64).reshape(-1, 3)
+        if self._parts:
+            pts = self.hull_points()
+            lo, hi = np.inf, -np.inf
+            for start in range(0, len(w), 256):           # bounded memory: hull × 256 views
+                r = -(pts @ w[start:start + 256].T)
+                lo, hi = min(lo, float(r.min())), max(hi, float(r.max()))
+            return lo, hi
+        lo, hi = np.inf, -np.inf
+        for s in self._shapes:
+            # an ellipse's support along −w: centre's range ∓ its half-width along w
+            a, b = s.axes
+            ca, sa = np.cos(s.angle), np.sin(s.angle)
+            wx, wy = w[:, 0], w[:, 1]
+            half = np.hypot(a * (ca * wx + sa * wy), b * (-sa * wx + ca * wy))
+            rc = -(s.center[0] * wx + s.center[1] * wy)
+            lo, hi = min(lo, float((rc - half).min())), max(hi, float((rc + half).max()))
+        return lo, hi
 
     def bounding_circle(self) -> tuple[tuple[float, float], float]:
         """A circle (centre, radius) in x-y containing every shape (about their box centre)."""

@@ -65,6 +65,8 @@ SAMPLINGS = ("regular", "stratified")
 #: Default rays per range-bin width: slice rows are cheap, 3-D grids are rays_per_bin² per
 #: bin area.
 _DEFAULT_RAYS_PER_BIN = {"slice": 8.0, "3d": 1.0}
+#: By default a 3-D grid has at least this many rays across the target's diameter.
+_MIN_RAYS_ACROSS = 128
 #: Rays start this far outside the bounding sphere (relative), so no face is behind them.
 _ORIGIN_MARGIN = 0.01
 #: Views per task: enough work to amortise a task, few enough to balance two cores.
@@ -101,7 +103,7 @@ class _Geometry:
         self.face_normals = cross / np.linalg.norm(cross, axis=1)[:, None]
         # each face's plane n·p = d in shifted coordinates (float64), for exact hit distances
         self.plane_d = np.einsum("ij,ij->i", self.face_normals, shifted[self.faces[:, 0]])
-        self.hull = _hull_points(shifted)
+        self.hull = scene.hull_points() - self.center
         self.normals = normals
         self.corner = None
         if normals == "smooth":
@@ -122,18 +124,6 @@ def _digest(v, f):
     h = hashlib.sha1(v.tobytes())
     h.update(f.tobytes())
     return h.hexdigest()
-
-
-def _hull_points(points):
-    """Vertices of the convex hull (all points when the hull is degenerate or tiny)."""
-    if len(points) <= 64:
-        return points
-    from scipy.spatial import ConvexHull, QhullError
-
-    try:
-        return points[ConvexHull(points).vertices]
-    except (QhullError, ValueError):
-        return points
 
 
 _EMBREE_CACHE: dict = {}
@@ -457,14 +447,20 @@ def _sampling(mode, sampling, seed):
     return sampling, int(seed)
 
 
-def _spacing(ladar, mode, ray_spacing, rays_per_bin):
+def _spacing(ladar, mode, ray_spacing, rays_per_bin, radius):
     if ray_spacing is not None and rays_per_bin is not None:
         raise ParameterError("give ray_spacing or rays_per_bin, not both")
     if ray_spacing is not None:
         return check_real("ray_spacing", ray_spacing, low=0.0, low_open=True)
-    rpb = _DEFAULT_RAYS_PER_BIN[mode] if rays_per_bin is None else check_real(
-        "rays_per_bin", rays_per_bin, low=0.0, low_open=True)
-    return float(np.min(np.diff(ladar.bin_edges))) / rpb
+    if rays_per_bin is not None:
+        rpb = check_real("rays_per_bin", rays_per_bin, low=0.0, low_open=True)
+        return float(np.min(np.diff(ladar.bin_edges))) / rpb
+    spacing = float(np.min(np.diff(ladar.bin_edges))) / _DEFAULT_RAYS_PER_BIN[mode]
+    if mode == "3d":
+        # bins much wider than the target (a target far off the rotation axis, seen from
+        # all around) must not leave it with a handful of rays
+        spacing = min(spacing, 2.0 * radius / _MIN_RAYS_ACROSS)
+    return spacing
 
 
 def _options(scene, ladar, mode, normals, back_faces, z0):
@@ -485,10 +481,23 @@ def _options(scene, ladar, mode, normals, back_faces, z0):
     if not scene.is_mesh:
         raise ParameterError("the mesh model needs a mesh scene: Scene.from_mesh(...) or "
                              "scene.tessellate(segments=...)")
+    if z0 is not None and mode == "3d":
+        raise ParameterError(f"z0 places the slice plane of mode='slice'; got z0={z0!r} "
+                             "with mode='3d'")
     geo = _Geometry(scene, normals)
     if z0 is None:
         z0 = float(geo.center[2])
     z0 = check_real("z0", z0)
+    if mode == "slice":
+        lo, hi = float(geo.vertices[:, 2].min()), float(geo.vertices[:, 2].max())
+        if not lo <= z0 <= hi:
+            import warnings
+
+            from .errors import MeshladarWarning
+
+            warnings.warn(f"z0={z0:.6g} lies outside the target's heights [{lo:.6g}, "
+                          f"{hi:.6g}]: the slice returns nothing", MeshladarWarning,
+                          stacklevel=5)
     return mode, geo, z0
 
 
@@ -772,7 +781,7 @@ def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_b
     mode, geo, z0 = _options(scene, ladar, mode, normals, back_faces, z0)
     sampling, seed = _sampling(mode, sampling, seed)
     receivers = _receivers(receiver, ladar, mode, bool(weigh_with and weigh_with[1]))
-    spacing = _spacing(ladar, mode, ray_spacing, rays_per_bin)
+    spacing = _spacing(ladar, mode, ray_spacing, rays_per_bin, geo.radius)
     area = spacing if mode == "slice" else spacing * spacing
     if weigh_with is not None:
         weigh_with = (weigh_with[0], weigh_with[1], area)
@@ -866,7 +875,8 @@ def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0
     z0 : float, optional
         Slice plane, slice mode only (default the scene's mid-height).
     ray_spacing, rays_per_bin : float, optional
-        Ray spacing, or rays per range-bin width (default 8 in slice mode, 1 in 3-D).
+        Ray spacing, or rays per range-bin width (default 8 in slice mode; in 3-D 1, and
+        at least 128 rays across the target's diameter).
     sampling : {"stratified", "regular"}, optional
         Where each ray sits in its cell of the grid. "stratified" (default in 3-D, and
         whenever ``seed`` is given): at a seeded random offset, so every area (a thin wall
@@ -970,9 +980,11 @@ _TOL_START = (256, 1.0)
 _TOL_STEPS = 6
 #: Bounds on the convergence order estimated from three successive runs.
 _ORDER_BOUNDS = (0.3, 2.0)
+#: Default budget of rays the knob may cast over all its runs (about 2–5 minutes here).
+TOL_MAX_RAYS = 2e9
 
 
-def _simulate_tol(scene, ladar, tol, normals, footprint, kwargs):
+def _simulate_tol(scene, ladar, tol, normals, footprint, max_rays, kwargs):
     """The accuracy knob: refine until the estimated relative L2 error is at most tol.
 
     Each step doubles the rays per bin (and, for a scene meshladar tessellates itself, the
@@ -980,10 +992,20 @@ def _simulate_tol(scene, ladar, tol, normals, footprint, kwargs):
     coarser S₀, d = ‖S₁ − S₀‖/‖S₁‖, as d·2^−p/(1 − 2^−p) with p the convergence order
     measured from the last three runs (p = 1 until there are three), so that slowly
     converging cases are not accepted early.
+
+    It stops early, keeping the run with the smallest estimate, when an estimate fails to
+    fall below the best so far (refinement no longer converges: noise or a singular
+    feature dominates) or when the next run would take the rays cast past ``max_rays``;
+    both warn with the estimate reached and what to change.
     """
+    import warnings
+
     from ._validate import check_real
+    from .errors import MeshladarWarning
 
     tol = check_real("tol", tol, low=0.0, high=1.0, low_open=True, high_open=True)
+    max_rays = check_real("max_rays", TOL_MAX_RAYS if max_rays is None else max_rays,
+                          low=1.0)
     if kwargs.pop("ray_spacing") is not None or kwargs.pop("rays_per_bin") is not None:
         raise ParameterError("tol chooses the ray density itself: drop ray_spacing and "
                              "rays_per_bin, or drop tol")
@@ -993,41 +1015,63 @@ def _simulate_tol(scene, ladar, tol, normals, footprint, kwargs):
     if footprint is None:
         footprint = kwargs.get("receiver") is None
     n, r = _TOL_START
-    runs, sinos = [], []
-    est = float("inf")
+    runs, last = [], []                    # every run's record; the last three values
+    best = None                            # (estimate, sinogram, run index)
     order = 1.0
+    spent = 0
+    why = None
     for step in range(_TOL_STEPS + 1):
+        if runs:
+            # rays grow 2x per step in slice mode, 4x in 3-D: predict from the last run
+            growth = 2.0 if sino.info["mode"] == "slice" else 4.0
+            if spent + growth * runs[-1]["rays"] > max_rays:
+                why = (f"the next run would cast about {growth * runs[-1]['rays']:.3g} rays, "
+                       f"past the budget max_rays={max_rays:.3g} ({spent:.3g} cast so far); "
+                       "raise max_rays or loosen tol")
+                break
         mesh = scene.tessellate(n) if tessellate else scene
         t0 = time.perf_counter()
         sino = simulate_mesh(mesh, ladar, normals=normals, rays_per_bin=r,
                              footprint=footprint, **kwargs)
+        spent += sino.info["rays"]
         runs.append({"segments": n if tessellate else None, "rays_per_bin": r,
-                     "seconds": time.perf_counter() - t0})
-        sinos.append(sino.values)
-        if len(sinos) >= 2:
-            d1 = np.linalg.norm(sinos[-1] - sinos[-2])
-            if len(sinos) >= 3:
-                d0 = np.linalg.norm(sinos[-2] - sinos[-3])
+                     "rays": sino.info["rays"], "seconds": time.perf_counter() - t0})
+        last = (last + [sino.values])[-3:]
+        if len(last) >= 2:
+            d1 = np.linalg.norm(last[-1] - last[-2])
+            if len(last) >= 3:
+                d0 = np.linalg.norm(last[-2] - last[-3])
                 if d1 > 0 and d0 > 0:
                     order = float(np.clip(math.log2(d0 / d1), *_ORDER_BOUNDS))
             factor = 2.0 ** -order / (1.0 - 2.0 ** -order)
-            est = d1 / max(np.linalg.norm(sinos[-1]), 1e-300) * factor
+            est = d1 / max(np.linalg.norm(last[-1]), 1e-300) * factor
             runs[-1]["error_estimate"] = est
+            if best is not None and est >= best[0]:
+                why = (f"refinement stopped converging (estimate {est:.2g} after "
+                       f"{best[0]:.2g}): sampling noise or a singular feature (glints, "
+                       "silhouettes) dominates; try footprint=True, smooth or exact "
+                       "normals, or a looser tol")
+                break
+            best = (est, sino, len(runs) - 1)
             if est <= tol:
                 break
         if tessellate:
             n *= 2
         r *= 2
     else:
-        import warnings
-
-        from .errors import MeshladarWarning
-
-        warnings.warn(f"tol={tol:g} not reached after {_TOL_STEPS} refinements: estimated "
-                      f"error {est:.2g} at {runs[-1]}", MeshladarWarning, stacklevel=3)
+        why = f"{_TOL_STEPS} refinements were not enough; loosen tol"
+    if best is None:                       # a single run: nothing to estimate from
+        best = (float("inf"), sino, len(runs) - 1)
+    est, sino, k = best
+    if why is not None:
+        warnings.warn(f"tol={tol:g} not reached: {why}; returning the run with estimated "
+                      f"error {est:.2g} ({runs[k]['rays_per_bin']:g} rays per bin"
+                      + (f", {runs[k]['segments']} segments" if tessellate else "") + ")",
+                      MeshladarWarning, stacklevel=3)
     info = dict(sino.info, tol=tol, error_estimate=est, convergence_order=order,
-                chosen={"segments": runs[-1]["segments"],
-                        "rays_per_bin": runs[-1]["rays_per_bin"], "normals": normals,
+                max_rays=max_rays, rays_total=spent, stopped=why or "tol reached",
+                chosen={"segments": runs[k]["segments"],
+                        "rays_per_bin": runs[k]["rays_per_bin"], "normals": normals,
                         "footprint": footprint},
                 refinement=runs)
     return Sinogram(sino.values, angles_deg=sino.angles_deg, bin_edges=sino.bin_edges,
@@ -1037,8 +1081,8 @@ def _simulate_tol(scene, ladar, tol, normals, footprint, kwargs):
 
 def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-sided", z0=None,
                   ray_spacing=None, rays_per_bin=None, footprint=None, sampling=None,
-                  seed=None, receiver=None, tol=None, jobs=None, executor=None,
-                  progress=False, run_dir=None) -> Sinogram:
+                  seed=None, receiver=None, tol=None, max_rays=None, jobs=None,
+                  executor=None, progress=False, run_dir=None) -> Sinogram:
     """Trace and weigh in one streaming pass: each chunk of views is binned and its hits
     dropped, so memory stays bounded whatever the number of views and rays. Options as
     :func:`trace` and :func:`weigh` (defaults: flat normals, point binning). An analytic
@@ -1048,8 +1092,11 @@ def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-side
     (and segments, for analytic scenes) from 256 segments and 1 ray per bin, doubling until
     a refinement check (the difference between successive runs, extrapolated with the
     measured convergence order) estimates the error at most ``tol``; defaults then become
-    exact (analytic) or smooth (mesh) normals and footprint binning. The result's
-    ``info`` holds ``chosen``, ``error_estimate`` and every ``refinement`` run.
+    exact (analytic) or smooth (mesh) normals and footprint binning. The knob stops early,
+    keeping its best run and warning why, when an estimate fails to fall or when the next
+    run would pass ``max_rays`` rays in all (default ``TOL_MAX_RAYS`` = 2e9). The result's
+    ``info`` holds ``chosen``, ``error_estimate``, ``stopped`` and every ``refinement``
+    run.
 
     ``run_dir`` makes the run resumable and loss-free (:mod:`meshladar.runs`): each finished
     chunk of views is saved there atomically with a checksum, and running the same job
@@ -1060,8 +1107,10 @@ def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-side
     if tol is not None:
         if run_dir is not None:
             raise ParameterError("run_dir and tol do not combine: the knob runs several jobs")
-        return _simulate_tol(scene, ladar, tol, normals, footprint,
+        return _simulate_tol(scene, ladar, tol, normals, footprint, max_rays,
                              dict(common, ray_spacing=ray_spacing, rays_per_bin=rays_per_bin))
+    if max_rays is not None:
+        raise ParameterError("max_rays is the budget of the tol knob; give tol too")
     normals = "flat" if normals is None else normals
     footprint = False if footprint is None else footprint
     if isinstance(scene, Scene) and not scene.is_mesh:
@@ -1074,4 +1123,30 @@ def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-side
     vals = np.concatenate([r[0] for r in results])
     rays = [x for r in results for x in r[1]]
     back = [x for r in results for x in r[2]]
+    if not np.any(vals):
+        _warn_empty(scene, ladar, run, back_faces, sum(back))
     return _sinogram(vals, ladar, ladar.bin_edges, run, normals, footprint, rays, back)
+
+
+def _warn_empty(scene, ladar, run, back_faces, back_hits):
+    """One line saying that a run returned nothing, and the likely reasons."""
+    import warnings
+
+    from .errors import MeshladarWarning
+
+    lo, hi = scene.range_span(ladar.view_vectors)
+    reasons = []
+    if hi < ladar.bin_edges[0] or lo >= ladar.bin_edges[-1]:
+        reasons.append(f"the target spans ranges [{lo:.6g}, {hi:.6g}], outside the bins "
+                       f"[{ladar.bin_edges[0]:.6g}, {ladar.bin_edges[-1]:.6g}]")
+    if run["mode"] == "slice":
+        reasons.append(f"the slice z0 = {run['z0']:.6g} may miss the target (mode='3d' "
+                       "returns all of it)")
+    if back_faces == "ignore" and any(scene.report.get("inverted", [])):
+        reasons.append("the scene has inverted parts and back_faces='ignore' blanks them")
+    elif back_faces == "ignore" and back_hits:
+        reasons.append(f"{back_hits} rays hit the back of a face, which back_faces='ignore' "
+                       "blanks (an open mesh seen from behind?)")
+    reasons.append(f"ray_spacing {run['ray_spacing']:.4g} may be too coarse for the target")
+    warnings.warn("the sinogram is all zeros: no return reached any bin; " +
+                  "; ".join(reasons), MeshladarWarning, stacklevel=4)

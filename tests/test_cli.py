@@ -32,7 +32,7 @@ def test_simulate_then_reconstruct_round_trip(tmp_path):
     assert meta["params"]["model"] == "analytic" and meta["meshladar_version"]
     _cli("reconstruct", tmp_path / "pair.npz", "-o", tmp_path / "pair.png", "--size", "64",
          check=True)
-    img_arrays, img_meta = io.load_result(str(tmp_path / "pair.png")[:-4] + ".npz")
+    img_arrays, img_meta = io.load_result(str(tmp_path / "pair.png")[:-4] + ".image.npz")
     expected = ml.fbp(sino, size=64, extent=0.8)
     np.testing.assert_allclose(img_arrays["image"], expected.values, rtol=1e-12, atol=1e-12)
     assert (tmp_path / "pair.png").stat().st_size > 1000
@@ -84,8 +84,8 @@ def test_help_everywhere_with_examples(sub):
     (["simulate", "disk_pair", "--coating", "huge=aluminum", "-o", "x.npz"],
      "no shape named 'huge'"),
     (["simulate", "disk_pair", "--views", "0", "-o", "x.npz"], "must be a positive integer"),
-    (["simulate", "disk_pair", "--bins", "10", "-o", "x.npz"],
-     "--bins and --bin-width go together"),
+    (["simulate", "disk_pair", "--views", "4", "--angles-deg", "0,1", "-o", "x.npz"],
+     "--views and --angles-deg both choose the views"),
     (["simulate", "disk_pair", "--bin-width", "nan", "--bins", "3", "-o", "x.npz"],
      "must be a positive finite number"),
     (["simulate", "bad.obj", "-o", "x.npz"], "vertices must be finite"),

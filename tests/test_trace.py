@@ -86,7 +86,8 @@ def test_tilted_plate_cos_theta_everywhere():
     # seen from behind, a plate is two-sided by default and blocks silently with "ignore"
     behind = ml.Ladar(None, np.linspace(-3, 3, 61), view_vectors=[[0, 0, -1]])
     two = ml.simulate(scene, behind, model="mesh", ray_spacing=0.05)
-    ign = ml.simulate(scene, behind, model="mesh", ray_spacing=0.05, back_faces="ignore")
+    with pytest.warns(ml.errors.MeshladarWarning, match=r"all zeros.*back of a face"):
+        ign = ml.simulate(scene, behind, model="mesh", ray_spacing=0.05, back_faces="ignore")
     assert two.info["back_face_hits"][0] == hits.size and two.total()[0] > 0
     assert ign.total()[0] == 0.0
 
@@ -241,8 +242,15 @@ def test_mesh_checks_and_bad_input(tmp_path):
     scene = ml.Scene._from_parts([mlmesh.MeshPart(v, f, 0)], [DARK_GRAY])
     assert scene.report["degenerate_faces"] == 1 and scene.report["faces"] == 4
     assert scene.report["watertight"] == [True] and scene.report["inverted"] == [False]
-    inverted = ml.Scene._from_parts([mlmesh.MeshPart(v, f[:4, ::-1], 0)], [DARK_GRAY])
+    with pytest.warns(ml.errors.MeshladarWarning, match=r"1 closed part\(s\) have inverted"):
+        inverted = ml.Scene._from_parts([mlmesh.MeshPart(v, f[:4, ::-1], 0)], [DARK_GRAY])
     assert inverted.report["inverted"] == [True]
+    # back_faces="ignore" then blanks the part: an all-zero sinogram says why
+    lad = ml.Ladar(None, np.linspace(-2, 2, 41), view_vectors=[[1.0, 1.0, 1.0]])
+    with pytest.warns(ml.errors.MeshladarWarning, match=r"all zeros.*inverted"):
+        blank = ml.simulate(inverted, lad, model="mesh", back_faces="ignore", ray_spacing=0.02)
+    assert blank.total()[0] == 0.0
+    assert ml.simulate(inverted, lad, model="mesh", ray_spacing=0.02).total()[0] > 0
     bad = v.copy()
     bad[2, 1] = np.nan
     with pytest.raises(GeometryError, match=r"vertices must be finite; got \[0.0, nan, 0.0\] "
