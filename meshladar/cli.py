@@ -571,9 +571,11 @@ def _parser() -> argparse.ArgumentParser:
                      help="number of views evenly over 360 degrees about z (default: the "
                           "phantom's, or 360)")
     sim.add_argument("--angles-deg", type=_angle_list, default=None,
-                     help="view angles about z in degrees, comma-separated")
+                     help="view angles about z in degrees, comma-separated (default: "
+                          "from --views)")
     sim.add_argument("--view-vectors", type=_positive_int, default=None, metavar="N",
-                     help="N view directions spread evenly over the sphere (mesh model)")
+                     help="N view directions spread evenly over the sphere (mesh model) "
+                          "(default: views about z)")
     sim.add_argument("--bins", type=_positive_int, default=None,
                      help="number of range bins (default: the phantom's, or 512 covering "
                           "the ranges the target spans over the views)")
@@ -621,9 +623,11 @@ def _parser() -> argparse.ArgumentParser:
                      help="worker processes for the mesh model (default: 1 for small jobs, "
                           "all cores from 4e6 rays)")
     sim.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                     help="run the mesh model on an existing Dask cluster (tcp://host:8786)")
+                     help="run the mesh model on an existing Dask cluster (tcp://host:8786) "
+                          "(default: local)")
     sim.add_argument("--workers", type=_positive_int, default=None,
-                     help="run the mesh model on a local Dask cluster of N processes")
+                     help="run the mesh model on a local Dask cluster of N processes "
+                          "(default: no Dask)")
     sim.add_argument("--run-dir", default=None,
                      help="resumable run folder for the mesh model: finished chunks are kept "
                           "there, and re-running the same command resumes (default: none)")

@@ -22,6 +22,7 @@ c + (−extent + (k + ½) 2 extent/size) increasing along both axes.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from dataclasses import dataclass, field
@@ -168,8 +169,8 @@ def resample_uniform(sino: Sinogram, n_bins=None) -> Sinogram:
     new = np.linspace(edges[0], edges[-1], int(n_bins) + 1)
     cum = np.concatenate([np.zeros((sino.n_views, 1)), np.cumsum(sino.values, axis=1)], axis=1)
     cum_new = np.stack([np.interp(new, edges, row) for row in cum])
-    return Sinogram(np.diff(cum_new, axis=1), angles_deg=sino.angles_deg, bin_edges=new,
-                    model=sino.model, info=dict(sino.info, resampled_from=sino.n_bins))
+    return dataclasses.replace(sino, values=np.diff(cum_new, axis=1), bin_edges=new,
+                               info=dict(sino.info, resampled_from=sino.n_bins))
 
 
 def _view_weights(angles_deg):
@@ -237,6 +238,11 @@ def fbp(sinogram, size=512, extent=1.0, *, filter="ramp", interpolation="linear"
     if not isinstance(sinogram, Sinogram):
         raise ParameterError(f"sinogram must be a meshladar.Sinogram; got "
                              f"{type(sinogram).__name__}")
+    if not sinogram.planar:
+        raise ParameterError("fbp reconstructs views about the z axis; this sinogram has "
+                             f"{int(np.count_nonzero(sinogram.view_vectors[:, 2]))} view "
+                             "vectors off the x-y plane (3-D views), which a planar FBP "
+                             "would silently misplace")
     size = check_count("size", size)
     extent = check_real("extent", extent, low=0.0, low_open=True)
     check_choice("filter", filter, FILTERS)
@@ -288,15 +294,14 @@ def log_radiance(sinogram: Sinogram, *, floor=LOG_FLOOR) -> Sinogram:
     else:
         m = floor * vmax
         out = np.log(np.maximum(sinogram.values, m) / m)
-    return Sinogram(out, angles_deg=sinogram.angles_deg, bin_edges=sinogram.bin_edges,
-                    model=sinogram.model,
-                    info=dict(sinogram.info, preprocess=f"log(floor={floor:g})"))
+    return dataclasses.replace(sinogram, values=out,
+                               info=dict(sinogram.info, preprocess=f"log(floor={floor:g})"))
 
 
 def clip_radiance(sinogram: Sinogram, *, threshold=PAPER_CLIP) -> Sinogram:
     """The paper's Fig. 11(b) input: radiance clipped at ``threshold`` × its maximum."""
     threshold = check_real("threshold", threshold, low=0.0, high=1.0, low_open=True)
     cap = threshold * float(sinogram.values.max(initial=0.0))
-    return Sinogram(np.minimum(sinogram.values, cap), angles_deg=sinogram.angles_deg,
-                    bin_edges=sinogram.bin_edges, model=sinogram.model,
-                    info=dict(sinogram.info, preprocess=f"clip(threshold={threshold:g})"))
+    return dataclasses.replace(sinogram, values=np.minimum(sinogram.values, cap),
+                               info=dict(sinogram.info,
+                                         preprocess=f"clip(threshold={threshold:g})"))

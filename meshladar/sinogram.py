@@ -84,6 +84,11 @@ class Sinogram:
         return self.values.shape
 
     @property
+    def planar(self) -> bool:
+        """True when every view lies in the x-y plane (views about the z axis)."""
+        return bool(np.all(self.view_vectors[:, 2] == 0.0))
+
+    @property
     def n_views(self) -> int:
         return self.values.shape[0]
 

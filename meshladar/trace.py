@@ -825,9 +825,7 @@ def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_b
             for k in todo:
                 keep(k, _job(geo, vectors, chunks[k], *args))
         else:
-            scatter = getattr(getattr(ex, "_client", None), "scatter", None)
-            if scatter is not None:            # a Dask executor: ship the mesh once per worker
-                payload = scatter(geo, broadcast=True, hash=False)
+            payload = _scatter(ex, geo)
             futures = {ex.submit(_job, payload, vectors, chunks[k], *args): k for k in todo}
             from concurrent.futures import CancelledError, as_completed
 
@@ -852,6 +850,23 @@ def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_b
     run = {"mode": mode, "ray_spacing": spacing, "z0": z0, "sampling": sampling, "seed": seed,
            "receiver": receivers}
     return geo, run, area, chunks, results
+
+
+def _scatter(ex, geo):
+    """On a Dask executor, the mesh shipped once to every worker (a future standing for
+    it); elsewhere the mesh itself. A worker lost while the mesh is being scattered is
+    retried like a lost chunk; if scattering keeps failing, every task carries the mesh."""
+    scatter = getattr(getattr(ex, "_client", None), "scatter", None)
+    if scatter is None:
+        return geo
+    from concurrent.futures import CancelledError
+
+    for _ in range(_MAX_RETRIES):
+        try:
+            return scatter(geo, broadcast=True, hash=False)
+        except (OSError, TimeoutError, CancelledError):   # distributed's CommClosedError is
+            continue                                      # an OSError
+    return geo
 
 
 def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0=None,
