@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from ._validate import check_choice
 from .errors import ParameterError
 from .ladar import Ladar
@@ -65,7 +67,19 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
     if model == "pixel":
         from .pixel import simulate_pixel
 
-        return simulate_pixel(scene, ladar, **options)
-    from .analytic import simulate_analytic
+        sino = simulate_pixel(scene, ladar, **options)
+    else:
+        from .analytic import simulate_analytic
 
-    return simulate_analytic(scene, ladar)
+        sino = simulate_analytic(scene, ladar)
+    if not np.any(sino.values):
+        import warnings
+
+        from .errors import MeshladarWarning
+
+        lo, hi = scene.range_span(ladar.view_vectors)
+        warnings.warn(f"the sinogram is all zeros: the scene spans ranges [{lo:.6g}, "
+                      f"{hi:.6g}] over these views (its lit side the nearer half), the bins "
+                      f"cover [{ladar.bin_edges[0]:.6g}, {ladar.bin_edges[-1]:.6g}]",
+                      MeshladarWarning, stacklevel=2)
+    return sino

@@ -139,20 +139,24 @@ def test_tol_knob_meets_the_accuracy_at_a_fair_cost(big, small, tol):
 
 
 def test_tol_that_cannot_be_met_warns_and_reports(monkeypatch):
-    # dark gray alone stalls near silhouettes (see the study); with two refinements allowed
-    # the knob warns, and what it reports is the last run it made
+    # dark gray alone stalls near silhouettes (see the study): within two refinements its
+    # estimate rises again (measured 0.0065 then 0.0095), so the knob stops there, warns,
+    # and reports the best run it made, not the last
     import sys
 
     # (the module, not the function meshladar.trace that the package exports)
     monkeypatch.setattr(sys.modules["meshladar.trace"], "_TOL_STEPS", 2)
     scene = ml.Scene([ml.Disk((0.0, 0.0), 0.5, DARK_GRAY)])
     lad = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 30.0))
-    with pytest.warns(ml.errors.MeshladarWarning, match=r"tol=1e-06 not reached after 2"):
+    with pytest.warns(ml.errors.MeshladarWarning, match=r"tol=1e-06 not reached: "
+                                                        r"refinement stopped converging"):
         got = ml.simulate(scene, lad, model="mesh", tol=1e-6)
-    last = got.info["refinement"][-1]
-    assert got.info["chosen"]["rays_per_bin"] == last["rays_per_bin"] == 4.0
-    assert got.info["chosen"]["segments"] == last["segments"] == 1024
-    assert got.info["error_estimate"] == last["error_estimate"] > 1e-6
+    runs = got.info["refinement"]
+    best = min(runs[1:], key=lambda r: r["error_estimate"])
+    assert runs[-1]["error_estimate"] > best["error_estimate"]
+    assert got.info["chosen"]["rays_per_bin"] == best["rays_per_bin"] == 2.0
+    assert got.info["chosen"]["segments"] == best["segments"] == 512
+    assert got.info["error_estimate"] == best["error_estimate"] > 1e-6
 
 
 def test_tol_validation():
