@@ -1062,10 +1062,13 @@ def _simulate_tol(scene, ladar, tol, normals, footprint, max_rays, kwargs):
             est = d1 / max(np.linalg.norm(last[-1]), 1e-300) * factor
             runs[-1]["error_estimate"] = est
             if best is not None and est >= best[0]:
+                tips = [t for t, use in (("footprint=True", not footprint),
+                                         ("smooth or exact normals", normals == "flat"))
+                        if use] + ["a looser tol"]
                 why = (f"refinement stopped converging (estimate {est:.2g} after "
-                       f"{best[0]:.2g}): sampling noise or a singular feature (glints, "
-                       "silhouettes) dominates; try footprint=True, smooth or exact "
-                       "normals, or a looser tol")
+                       f"{best[0]:.2g}): sampling noise or a singular feature dominates "
+                       "(a glint spot or silhouette narrower than the ray spacing); try "
+                       + ", ".join(tips))
                 break
             best = (est, sino, len(runs) - 1)
             if est <= tol:

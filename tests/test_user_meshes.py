@@ -195,9 +195,11 @@ def test_tol_stops_when_estimates_stop_falling_and_keeps_the_best(monkeypatch):
     # differences 0.1, 0.05 (falling), then 0.4: the third estimate is worse than the second
     calls = _fake_runs(monkeypatch, [1.0, 1.1, 1.15, 1.55, 1.56])
     with pytest.warns(MeshladarWarning, match=r"tol=1e-06 not reached: refinement stopped "
-                                              r"converging.*footprint=True"):
-        sino = sys.modules["meshladar.trace"]._simulate_tol(scene, ladar, 1e-6, None, None, None,
-                                      dict(mode=None, ray_spacing=None, rays_per_bin=None))
+                                              r"converging.*try footprint=True, smooth or "
+                                              r"exact normals, a looser tol"):
+        sino = sys.modules["meshladar.trace"]._simulate_tol(
+            scene, ladar, 1e-6, "flat", False, None,
+            dict(mode=None, ray_spacing=None, rays_per_bin=None))
     assert calls == [1.0, 2.0, 4.0, 8.0]                      # stopped after the 4th run
     np.testing.assert_array_equal(sino.values, 1.15)          # the best run, not the last
     assert sino.info["chosen"]["rays_per_bin"] == 4.0
@@ -214,8 +216,9 @@ def test_tol_respects_its_ray_budget(monkeypatch):
     # runs cast 1000, 4000, 16000 rays: a budget of 25000 stops before the 4th (64000)
     with pytest.warns(MeshladarWarning, match=r"past the budget max_rays=2.5e\+04.*raise "
                                               r"max_rays or loosen tol"):
-        sino = sys.modules["meshladar.trace"]._simulate_tol(scene, ladar, 1e-6, None, None, 25000,
-                                      dict(mode=None, ray_spacing=None, rays_per_bin=None))
+        sino = sys.modules["meshladar.trace"]._simulate_tol(
+            scene, ladar, 1e-6, None, None, 25000,
+            dict(mode=None, ray_spacing=None, rays_per_bin=None))
     assert len(calls) == 3 and sino.info["rays_total"] == 21000
 
 
@@ -327,7 +330,8 @@ def test_cli_refuses_options_that_do_not_apply(tmp_path, capsys, args, message):
 
 
 def test_cli_analytic_refuses_mesh_options(capsys, tmp_path):
-    code, _, err = _run(capsys, "simulate", "disk", "--normals", "smooth", "-o", tmp_path / "d.npz")
+    code, _, err = _run(capsys, "simulate", "disk", "--normals", "smooth", "-o",
+                        tmp_path / "d.npz")
     assert code == 2 and "--normals is an option of the mesh model" in err
 
 
