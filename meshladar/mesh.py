@@ -169,6 +169,10 @@ def part_from_trimesh(mesh, material_index, name="mesh", transform=None):
 _HEAD_BYTES = 1 << 16
 #: Longest piece of a reader's own message quoted in a GeometryError (characters).
 _MAX_REASON = 160
+#: Vertices of a loaded mesh are one point when their positions agree to this fraction of
+#: the mesh's size: far below any modelled feature, far above the float64 round-off of a
+#: position a file recomputes (a seam written as sin 2π ≈ 2e-16 rather than 0).
+_WELD_REL = 2.0 ** -40
 #: Single-file compression meshladar undoes itself with the standard library, then reads the
 #: inner file by its own suffix (or content): trimesh reads neither .gz nor .xz, and its
 #: .bz2 reader hides why the inner file failed.
@@ -386,14 +390,17 @@ def _not_a_mesh(g):
 
 
 def _welded(mesh, where):
-    """A fresh trimesh.Trimesh of ``mesh``'s vertices and faces only, vertices at the same
-    position merged (STL stores each triangle's own), after checking that every vertex is
-    finite and every face indexes a vertex.
+    """A fresh trimesh.Trimesh of ``mesh``'s vertices and faces only, with the vertices at
+    the same position merged into one (STL stores each triangle's own) and unreferenced
+    vertices dropped, after checking that every vertex is finite and every face indexes a
+    vertex.
 
     Nothing else is kept: meshladar needs positions and faces, and copying a texture needs
     Pillow. Merging by position alone also joins the vertices a file splits at UV seams and
     at split normals, which are not creases (:func:`corner_normals` finds creases from the
-    face normals); trimesh's own merge keeps them apart on a textured mesh.
+    face normals); trimesh's own merge keeps them apart on a textured mesh, and rounds to
+    1e-8 absolute, which merges the vertices of a nanometre-sized part and overflows far
+    from the origin. Positions are compared relative to the mesh's size (_WELD_REL).
     """
     import trimesh
 
@@ -411,9 +418,22 @@ def _welded(mesh, where):
     if f.size and (f.min() < 0 or f.max() >= len(v)):
         raise GeometryError(f"{where}: faces index vertices 0..{len(v) - 1}; got "
                             f"{int(f.min())}..{int(f.max())}")
-    m = trimesh.Trimesh(vertices=v, faces=f.astype(np.int64), process=False)
-    m.merge_vertices(merge_tex=True, merge_norm=True)
-    return m
+    used = np.zeros(len(v), dtype=bool)
+    used[f.ravel()] = True
+    v = v[used]
+    f = (np.cumsum(used) - 1)[f]
+    if len(v):
+        # positions on a grid of _WELD_REL × the mesh's size, from its lowest corner: exact
+        # integers in float64 (below 2**40), whatever the scale and offset
+        size = float(np.ptp(v, axis=0).max())
+        key = np.round((v - v.min(axis=0)) / (size * _WELD_REL)) if size > 0 else 0.0 * v
+        point, n = _point_index(key)
+        first = np.full(n, len(v))
+        np.minimum.at(first, point, np.arange(len(v)))     # each point's first vertex
+        rank = np.empty(n, dtype=np.int64)
+        rank[np.argsort(first)] = np.arange(n)               # points numbered in file order
+        v, f = v[np.sort(first)], rank[point][f]
+    return trimesh.Trimesh(vertices=v, faces=f.astype(np.int64), process=False)
 
 
 def _readable_formats():
