@@ -65,6 +65,9 @@ SAMPLINGS = ("regular", "stratified")
 #: Default rays per range-bin width: slice rows are cheap, 3-D grids are rays_per_bin² per
 #: bin area.
 _DEFAULT_RAYS_PER_BIN = {"slice": 8.0, "3d": 1.0}
+#: A view's rays are held in memory together (origins and Embree's results, ~50 bytes a
+#: ray): beyond this many a run is refused before it allocates (about 2.5 GB).
+MAX_RAYS_PER_VIEW = 5e7
 #: By default a 3-D grid has at least this many rays across the target's diameter.
 _MIN_RAYS_ACROSS = 128
 #: Rays start this far outside the bounding sphere (relative), so no face is behind them.
@@ -782,6 +785,13 @@ def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_b
     sampling, seed = _sampling(mode, sampling, seed)
     receivers = _receivers(receiver, ladar, mode, bool(weigh_with and weigh_with[1]))
     spacing = _spacing(ladar, mode, ray_spacing, rays_per_bin, geo.radius)
+    per_view = _estimate_rays(geo, ladar, mode, spacing) / ladar.n_views
+    if per_view > MAX_RAYS_PER_VIEW:
+        raise ParameterError(
+            f"one view would cast about {per_view:.3g} rays (ray spacing {spacing:.3g} over "
+            f"a target {2 * geo.radius:.3g} across), more than the {MAX_RAYS_PER_VIEW:.0e} a "
+            "view may hold in memory; give a larger ray_spacing (or fewer rays_per_bin, "
+            "or wider bins)")
     area = spacing if mode == "slice" else spacing * spacing
     if weigh_with is not None:
         weigh_with = (weigh_with[0], weigh_with[1], area)

@@ -149,6 +149,21 @@ def test_a_thin_plate_seen_edge_on_has_its_area_at_the_default_density(turn_deg,
         assert np.max(np.abs(reg.total() / exact - 1)) > 0.01
 
 
+def test_a_ray_grid_too_large_for_memory_is_refused_before_it_is_made(tmp_path, capsys):
+    # a 1e4-unit box (1.7e4 across its hull) with 1e-2 spacing: ~3e12 rays in one view
+    big = trimesh.creation.box(extents=(1e4, 1e4, 1e4))
+    scene = ml.Scene.from_mesh(big, DARK_GRAY)
+    with pytest.raises(ParameterError, match=r"one view would cast about 3e\+12 rays.*"
+                                             r"give a larger ray_spacing"):
+        ml.simulate(scene, ml.Ladar.covering(scene, bin_width=0.01, angles_deg=[0.0]),
+                    model="mesh")
+    path = tmp_path / "big.stl"
+    big.export(path)
+    code, _, err = _run(capsys, "simulate", path, "--bin-width", "0.01", "--angles-deg", "0",
+                        "-o", tmp_path / "b.npz")
+    assert code == 2 and "one view would cast" in err and len(err.splitlines()) == 1
+
+
 def test_stratified_sampling_is_reproducible_and_seeded():
     scene = ml.Scene.from_parts([ml.mesh.sphere((0, 0, 0), 0.5, 0, subdivisions=3)],
                                 [DARK_GRAY])
