@@ -300,7 +300,14 @@ class Scene:
     @classmethod
     def from_mesh(cls, mesh_or_path, material=None, *, materials=None, face_materials=None,
                   transform=None):
-        """A scene from anything trimesh loads (STL, OBJ, PLY, OFF, GLB/GLTF with parts).
+        """A scene from anything trimesh loads: STL, OBJ, PLY, OFF, GLB/GLTF with parts, zip
+        and tar archives, .gz/.bz2/.xz files, 3MF and DAE with their optional readers (see
+        :func:`meshladar.mesh.load_parts`). Only vertices, faces and part names are read;
+        vertices at the same position are merged (UV seams are not creases). The scene is a
+        3-D target: ``simulate(..., model="mesh")`` returns all of it.
+
+        Raises GeometryError (one line naming the file) for a file that is not a triangle
+        mesh: empty, junk, a point cloud, a 2-D drawing, a format whose reader is missing.
 
         Parameters
         ----------
