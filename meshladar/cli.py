@@ -428,45 +428,27 @@ def _cmd_bench(args) -> int:
     return 0
 
 
-def _positive_int(text: str):
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a positive integer; got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be a positive integer; got {text!r}")
-    return value
+def _number(parse, ok, what):
+    """An argparse type: ``parse(text)`` accepted when ``ok(value)``, else one message
+    naming what is valid."""
+    def convert(text: str):
+        try:
+            value = parse(text)
+        except ValueError:
+            value = None
+        if value is None or not ok(value):
+            raise argparse.ArgumentTypeError(f"must be a {what}; got {text!r}")
+        return value
+
+    convert.__name__ = what
+    return convert
 
 
-def _positive_float(text: str):
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a positive number; got {text!r}") from None
-    if not (value > 0 and math.isfinite(value)):
-        raise argparse.ArgumentTypeError(f"must be a positive finite number; got {text!r}")
-    return value
-
-
-def _nonnegative_int(text: str):
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a non-negative integer; got {text!r}") \
-            from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be a non-negative integer; got {text!r}")
-    return value
-
-
-def _finite_float(text: str):
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a number; got {text!r}") from None
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"must be a finite number; got {text!r}")
-    return value
+_positive_int = _number(int, lambda v: v >= 1, "positive integer")
+_nonnegative_int = _number(int, lambda v: v >= 0, "non-negative integer")
+_positive_float = _number(float, lambda v: v > 0 and math.isfinite(v),
+                          "positive finite number")
+_finite_float = _number(float, math.isfinite, "finite number")
 
 
 def _direction(text: str):
