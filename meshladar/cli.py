@@ -696,6 +696,9 @@ def main(argv=None) -> int:
     except MeshladarError as exc:
         print(f"meshladar: error: {exc}", file=sys.stderr)
         return 2
+    except ImportError as exc:       # an optional extra that is not installed: named there
+        print(f"meshladar: error: {exc}", file=sys.stderr)
+        return 2
     except OSError as exc:
         where = f" {exc.filename!r}" if getattr(exc, "filename", None) else ""
         print(f"meshladar: error:{where} {exc.strerror or exc}", file=sys.stderr)

@@ -402,3 +402,15 @@ def test_version_and_help_name_every_default(capsys):
         if action.option_strings and action.dest not in ("help", "output"):
             assert action.help and "default" in action.help, action.dest
     assert "--view-vectors" in text and "--receiver" in text and "--materials" in text
+
+
+def test_a_missing_optional_extra_is_one_line_naming_it(tmp_path, capsys, monkeypatch):
+    # a plain `pip install meshladar` has no matplotlib: reconstruct says what to install
+    box = tmp_path / "box.stl"
+    trimesh.creation.box(extents=(0.2, 0.2, 0.2)).export(box)
+    assert main(["simulate", str(box), "--angles-deg", "0,90", "-o", str(tmp_path / "b.npz"),
+                 "--quiet"]) == 0
+    monkeypatch.setitem(sys.modules, "matplotlib", None)          # import fails
+    code, _, err = _run(capsys, "reconstruct", tmp_path / "b.npz", "-o", tmp_path / "b.png")
+    assert code == 2 and err.strip() == ("meshladar: error: figures need matplotlib: pip "
+                                         "install 'meshladar[viz]'")

@@ -19,8 +19,10 @@ STYLE = {
 
 def use():
     """Apply the style and the non-interactive backend; returns matplotlib.pyplot."""
-    import matplotlib
-
+    try:
+        import matplotlib
+    except ImportError as exc:
+        raise ImportError("figures need matplotlib: pip install 'meshladar[viz]'") from exc
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
 
