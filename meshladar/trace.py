@@ -740,6 +740,22 @@ def _executor(jobs, executor, n_rays_total):
     return ProcessPoolExecutor(max_workers=int(jobs)), True
 
 
+def _largest_grid(geo, vectors, mode, spacing):
+    """The most rays any one view's grid holds (the grids of _ray_grid: the projected
+    hull's extent along u, and along v in 3-D, plus a spacing each side)."""
+    largest = 0.0
+    for start in range(0, len(vectors), 256):               # bounded memory
+        frames = [_frame(w) for w in vectors[start:start + 256]]
+        u = np.array([f[0] for f in frames])
+        su = geo.hull @ u.T
+        n = np.ceil((np.ptp(su, axis=0) + 2 * spacing) / spacing)
+        if mode == "3d":
+            tv = geo.hull @ np.array([f[1] for f in frames]).T
+            n = n * np.ceil((np.ptp(tv, axis=0) + 2 * spacing) / spacing)
+        largest = max(largest, float(n.max()))
+    return largest
+
+
 def _estimate_rays(geo, ladar, mode, spacing):
     extent = 2 * geo.radius / spacing + 2
     return ladar.n_views * (extent if mode == "slice" else extent * extent)
@@ -785,7 +801,7 @@ def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_b
     sampling, seed = _sampling(mode, sampling, seed)
     receivers = _receivers(receiver, ladar, mode, bool(weigh_with and weigh_with[1]))
     spacing = _spacing(ladar, mode, ray_spacing, rays_per_bin, geo.radius)
-    per_view = _estimate_rays(geo, ladar, mode, spacing) / ladar.n_views
+    per_view = _largest_grid(geo, ladar.view_vectors, mode, spacing)
     if per_view > MAX_RAYS_PER_VIEW:
         raise ParameterError(
             f"one view would cast about {per_view:.3g} rays (ray spacing {spacing:.3g} over "
