@@ -134,7 +134,12 @@ def bench_mesh(*, repeats=3, subdivisions=6, rays_per_view=1_000_000, views=16):
             emb.run(o, d, output=1)
 
     raw = statistics.median(time_call(raw_all, repeats=repeats))
+    # the same rays as raw: the regular grid; then the default stratified sampling, whose
+    # offsets cost a little per ray
     t1 = statistics.median(time_call(
+        lambda: simulate_mesh(scene, ladar, mode="3d", ray_spacing=spacing, jobs=1,
+                              sampling="regular"), repeats=repeats))
+    ts = statistics.median(time_call(
         lambda: simulate_mesh(scene, ladar, mode="3d", ray_spacing=spacing, jobs=1),
         repeats=repeats))
     from concurrent.futures import ProcessPoolExecutor
@@ -142,11 +147,12 @@ def bench_mesh(*, repeats=3, subdivisions=6, rays_per_view=1_000_000, views=16):
     with ProcessPoolExecutor(2) as pool:        # warm workers: the pool is reused in a run
         t2 = statistics.median(time_call(
             lambda: simulate_mesh(scene, ladar, mode="3d", ray_spacing=spacing,
-                                  executor=pool), repeats=1))
+                                  executor=pool, sampling="regular"), repeats=1))
     build = _build_split(8)
     return {"faces": len(geo.faces), "rays": n_rays, "views": views,
             "raw_mrays": n_rays / raw / 1e6, "pipeline_mrays": n_rays / t1 / 1e6,
-            "pipeline_over_raw": raw / t1,
+            "pipeline_over_raw": raw / t1, "stratified_mrays": n_rays / ts / 1e6,
+            "stratified_over_regular": t1 / ts,
             "two_core_mrays": n_rays / t2 / 1e6, "two_over_one": t1 / t2, **build}
 
 

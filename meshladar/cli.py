@@ -407,6 +407,8 @@ def _cmd_bench(args) -> int:
     print(f"  raw embreex cast (output=1)       {m['raw_mrays']:7.2f} Mrays/s")
     print(f"  pipeline, 1 process               {m['pipeline_mrays']:7.2f} Mrays/s "
           f"({100 * m['pipeline_over_raw']:.0f}% of raw)")
+    print(f"  pipeline, stratified sampling     {m['stratified_mrays']:7.2f} Mrays/s "
+          f"({100 * m['stratified_over_regular']:.0f}% of the regular grid's)")
     print(f"  pipeline, 2 processes             {m['two_core_mrays']:7.2f} Mrays/s "
           f"({m['two_over_one']:.2f}x one)")
     print(f"  Embree build, {m['build_faces']} triangles: embreex upload {m['upload_s']:.2f} s "
