@@ -238,11 +238,18 @@ def _ray_grid(geo, w, mode, spacing, z0_shifted, rng):
         for k in range(3):
             o[:, :, k] = S * u[k] + T * v[k]
     else:
+        # in float32 (Embree's precision, as the regular grid): S = s + δ·du, T = t + δ·dv
         du, dv = _stratified_offsets(s.size, t.size, rng)
-        S = s[:, None] + du * spacing
-        T = t[None, :] + dv * spacing
+        sp = np.float32(spacing)
+        S = du
+        S *= sp
+        S += s.astype(np.float32)[:, None]
+        T = dv
+        T *= sp
+        T += t.astype(np.float32)[None, :]
         for k in range(3):
-            o[:, :, k] = S * u[k] + T * v[k]
+            np.multiply(S, np.float32(u[k]), out=o[:, :, k])
+            o[:, :, k] += T * np.float32(v[k])
     for k in range(3):
         o[:, :, k] += np.float32(L * w[k])
     return o.reshape(-1, 3), L, u, v
@@ -266,12 +273,15 @@ def _stratified_offsets(ns, nt, rng):
     to it is right to O(log n / n) instead of O(n^-½). Each cell's offset stays uniform
     (η and ξ are uniform and independent), hence the expectation is exact.
     """
-    xi = rng.uniform(0.0, 1.0, ns)[:, None]               # one shift per column (along v)
-    eta = rng.uniform(0.0, 1.0, nt)[None, :]              # one shift per row (along u)
-    i = np.arange(ns)[:, None]
-    j = np.arange(nt)[None, :]
-    du = np.mod(xi + j * _GOLDEN, 1.0) - 0.5
-    dv = np.mod(eta + i * _GOLDEN, 1.0) - 0.5
+    xi = rng.uniform(0.0, 1.0, ns).astype(np.float32)     # one shift per column (along v)
+    eta = rng.uniform(0.0, 1.0, nt).astype(np.float32)    # one shift per row (along u)
+    # frac(kα) − ½ in float64, then float32 (offsets within a cell: float32 is plenty)
+    ku = (np.mod(np.arange(nt) * _GOLDEN, 1.0) - 0.5).astype(np.float32)
+    kv = (np.mod(np.arange(ns) * _GOLDEN, 1.0) - 0.5).astype(np.float32)
+    du = np.add.outer(xi, ku)                             # frac(ξ + jα) − ½ ∈ [−½, 1½) ...
+    du -= du >= np.float32(0.5)                           # ... wrapped into [−½, ½)
+    dv = np.add.outer(kv, eta)
+    dv -= dv >= np.float32(0.5)
     return du, dv
 
 
