@@ -269,25 +269,23 @@ def _cmd_simulate(args) -> int:
 
 
 def _check_output(output, suffixes, inputs):
-    """An output path must name a file of a known format and never an input."""
+    """An output path must never name an input, and must name a file of a known format."""
     import os
 
     from .errors import ParameterError
 
     if not output or os.path.basename(output) in ("", ".", ".."):
         raise ParameterError(f"-o: must name a file; got {output!r}")
+    for src in filter(None, inputs):
+        if os.path.abspath(src) == os.path.abspath(output) or (
+                os.path.exists(src) and os.path.exists(output)
+                and os.path.samefile(src, output)):
+            raise ParameterError(f"-o {output!r} is the input {src!r}: meshladar never "
+                                 "overwrites an input; choose another output name")
     ext = os.path.splitext(output)[1].lower()
     if ext not in suffixes:
         raise ParameterError(f"-o: the extension decides the format: one of "
                              f"{', '.join(suffixes)}; got {output!r}")
-    for src in inputs:
-        if src and os.path.exists(src) and os.path.exists(output) and \
-                os.path.samefile(src, output):
-            raise ParameterError(f"-o {output!r} is the input {src!r}: meshladar never "
-                                 "overwrites an input; choose another output name")
-        if src and os.path.abspath(src) == os.path.abspath(output):
-            raise ParameterError(f"-o {output!r} is the input {src!r}: meshladar never "
-                                 "overwrites an input; choose another output name")
 
 
 #: Image formats reconstruct writes (matplotlib's own writers; JPEG and TIFF through Pillow,

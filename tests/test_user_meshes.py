@@ -355,7 +355,7 @@ def test_no_command_overwrites_its_input(tmp_path, capsys):
     trimesh.creation.box(extents=(0.2, 0.2, 0.2)).export(box)
     before = box.read_bytes()
     code, _, err = _run(capsys, "simulate", box, "-o", box)
-    assert code == 2 and "the extension decides the format" in err
+    assert code == 2 and f"is the input {str(box)!r}" in err
     npz = tmp_path / "mine.npz"
     code, _, err = _run(capsys, "simulate", box, "-o", npz, "--angles-deg", "0,90", "--quiet")
     assert code == 0
@@ -380,6 +380,8 @@ def test_no_command_overwrites_its_input(tmp_path, capsys):
     code, _, _ = _run(capsys, "reconstruct", npz, "-o", tmp_path / "m.pdf", "--size", "16",
                       "--quiet")
     assert code == 0 and (tmp_path / "m.pdf").read_bytes()[:5] == b"%PDF-"
+    code, _, err = _run(capsys, "reconstruct", npz, "-o", npz)
+    assert code == 2 and "never overwrites an input" in err and npz.read_bytes() == sim
     code, _, err = _run(capsys, "reconstruct", npz, "-o", tmp_path / "m.xyz")
     assert code == 2 and "the extension decides the format" in err
     assert not (tmp_path / "m.xyz").exists()
