@@ -11,7 +11,6 @@ from __future__ import annotations
 import json
 import os
 import tempfile
-import zipfile
 
 import numpy as np
 
@@ -87,11 +86,20 @@ def load_result(path):
             arrays = {k: z[k] for k in z.files}
     except FileNotFoundError:
         raise ResultFileError(f"{path}: no such result file") from None
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
-        raise ResultFileError(f"{path}: not a readable result file ({exc})") from exc
+    except Exception as exc:  # noqa: BLE001 - a damaged or crafted file can fail anywhere in
+        # numpy's reader (zlib.error, SyntaxError in a header, BadZipFile, ...): all mean
+        # the same to the user
+        raise ResultFileError(f"{path}: not a readable result file "
+                              f"({type(exc).__name__}: {str(exc)[:160]})") from exc
     if "__meta__" not in arrays:
         raise ResultFileError(f"{path}: not a meshladar result (no metadata)")
-    meta = json.loads(str(arrays.pop("__meta__")))
+    try:
+        meta = json.loads(str(arrays.pop("__meta__")))
+    except (ValueError, RecursionError) as exc:
+        raise ResultFileError(f"{path}: damaged metadata (not JSON: {exc})") from exc
+    if not isinstance(meta, dict):
+        raise ResultFileError(f"{path}: damaged metadata (a JSON {type(meta).__name__}, not "
+                              "an object)")
     return arrays, meta
 
 

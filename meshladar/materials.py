@@ -27,7 +27,7 @@ from .brdf import SandfordRobertson
 from ._validate import check_real
 from .errors import MaterialFileError
 
-__all__ = ["DARK_GRAY", "ALUMINUM", "lambertian", "glint", "load_table", "parse_table"]
+__all__ = ["read_toml", "DARK_GRAY", "ALUMINUM", "lambertian", "glint", "load_table", "parse_table"]
 
 #: Dark gray paint at 1 µm: ρd = 0.032, ε = 0.877, b = 0.1, e = 0.17 (paper Sec. 4.B).
 DARK_GRAY = SandfordRobertson(rho_d=0.032, epsilon=0.877, b=0.1, e=0.17, name="dark_gray")
@@ -107,11 +107,22 @@ def load_table(path):
     Mapping[str, SandfordRobertson]
     """
     path = os.fspath(path)
+    return parse_table(read_toml(path, "material table", MaterialFileError), source=path)
+
+
+def read_toml(path, what, error):
+    """Parse a TOML file, turning every way it can fail into one ``error`` naming the file:
+    unreadable, not UTF-8, not TOML, nested too deeply, numbers too long to parse."""
     try:
         with open(path, "rb") as fh:
-            data = tomllib.load(fh)
+            return tomllib.load(fh)
     except OSError as exc:
-        raise MaterialFileError(f"{path}: cannot read material table ({exc.strerror})") from exc
+        raise error(f"{path}: cannot read {what} ({exc.strerror or exc})") from exc
+    except UnicodeDecodeError as exc:
+        raise error(f"{path}: not a {what}: not UTF-8 text (byte {exc.start})") from exc
     except tomllib.TOMLDecodeError as exc:
-        raise MaterialFileError(f"{path}: not valid TOML ({exc})") from exc
-    return parse_table(data, source=path)
+        raise error(f"{path}: not valid TOML ({exc})") from exc
+    except RecursionError as exc:
+        raise error(f"{path}: not a {what}: nested too deeply") from exc
+    except ValueError as exc:                 # e.g. an integer of more than 4300 digits
+        raise error(f"{path}: not a {what}: {str(exc)[:120]}") from exc

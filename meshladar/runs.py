@@ -87,8 +87,10 @@ class RunFolder:
     def _file(self, i):
         return os.path.join(self.path, f"chunk_{i:05d}.npz")
 
-    def load(self, i):
-        """Chunk i's arrays, or None when it is missing, unreadable or fails its checksum."""
+    def load(self, i, shapes=None):
+        """Chunk i's arrays, or None when it is missing, unreadable, fails its checksum, was
+        written for another chunk or job, or (with ``shapes``, name → expected shape) has
+        arrays of other shapes: such a chunk is recomputed, never used."""
         from .io import ResultFileError, load_result
 
         f = self._file(i)
@@ -98,7 +100,11 @@ class RunFolder:
             arrays, meta = load_result(f)
         except ResultFileError:
             return None
-        if meta.get("job") != self.digest or meta.get("sha256") != _array_digest(arrays):
+        if (meta.get("job") != self.digest or meta.get("chunk") != int(i)
+                or meta.get("sha256") != _array_digest(arrays)):
+            return None
+        if shapes is not None and any(
+                k not in arrays or arrays[k].shape != tuple(v) for k, v in shapes.items()):
             return None
         return arrays
 

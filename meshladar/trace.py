@@ -841,7 +841,9 @@ def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_b
                                                      back_faces, seed, weigh_with, receivers),
                            len(chunks))
         for k in range(len(chunks)):
-            arrays = folder.load(k)
+            n = len(chunks[k])
+            arrays = folder.load(k, {"values": (n, ladar.n_bins), "rays": (n,),
+                                     "backs": (n,)})
             if arrays is not None:
                 results[k] = (arrays["values"], arrays["rays"].tolist(),
                               arrays["backs"].tolist())

@@ -29,7 +29,6 @@ Spec format (all lengths in scene units)::
 from __future__ import annotations
 
 import os
-import tomllib
 from dataclasses import dataclass
 from importlib import resources
 
@@ -43,6 +42,7 @@ MATERIALS_TOML = resources.files(__name__) / "materials.toml"
 _SHAPE_FIELDS = {"disk": ("name", "kind", "center", "radius", "material"),
                  "ellipse": ("name", "kind", "center", "semi_axes", "angle_deg", "material")}
 _LADAR_FIELDS = ("bin_width", "n_bins", "bin_edges", "angles_deg")
+_SPEC_KEYS = ("name", "description", "ladar", "shape")
 
 
 def materials():
@@ -111,6 +111,11 @@ def _build(spec, source, overrides):
     from meshladar.errors import MeshladarError
 
     table = dict(materials())
+    extra = sorted(set(spec) - set(_SPEC_KEYS))
+    if extra:
+        raise _error(source, f"unknown key {extra[0]!r}; valid keys are {_SPEC_KEYS}")
+    if not isinstance(spec.get("ladar", {}), dict):
+        raise _error(source, f"[ladar] must be a table; got {spec['ladar']!r}")
     shapes_spec = spec.get("shape")
     if not isinstance(shapes_spec, list) or not shapes_spec:
         raise _error(source, "expected at least one [[shape]] table")
@@ -189,11 +194,7 @@ def load(name_or_path, *, materials=None):
     if not key.endswith(".toml") and not os.path.exists(key):
         raise _error(key, f"unknown phantom; packaged phantoms are {names()}, or give a "
                           "path to a .toml spec")
-    try:
-        with open(key, "rb") as fh:
-            spec = tomllib.load(fh)
-    except OSError as exc:
-        raise _error(key, f"cannot read phantom spec ({exc.strerror})") from exc
-    except tomllib.TOMLDecodeError as exc:
-        raise _error(key, f"not valid TOML ({exc})") from exc
-    return _build(spec, key, materials)
+    from meshladar.errors import PhantomSpecError
+    from meshladar.materials import read_toml
+
+    return _build(read_toml(key, "phantom spec", PhantomSpecError), key, materials)

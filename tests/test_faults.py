@@ -1,0 +1,126 @@
+"""Damaged and crafted files: swapped or bit-flipped chunks are recomputed, never used or
+crashed on; spec, table and result files that are not what they claim give one clear
+error naming the file."""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+
+import numpy as np
+import pytest
+
+import meshladar as ml
+from meshladar.errors import MaterialFileError, PhantomSpecError
+from meshladar.io import ResultFileError, load_result, save_result
+from meshladar.materials import ALUMINUM, DARK_GRAY, load_table
+
+PAIR = ml.Scene([ml.Disk((-0.3, 0.0), 0.4, DARK_GRAY), ml.Disk((0.4, 0.0), 0.3, ALUMINUM)])
+
+
+@pytest.fixture(scope="module")
+def finished_run(tmp_path_factory):
+    mesh = PAIR.tessellate(128)
+    ladar = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 12.0))     # 30 views: 4 chunks
+    run = tmp_path_factory.mktemp("run")
+    ref = ml.simulate(mesh, ladar, model="mesh", run_dir=run)
+    return mesh, ladar, run, ref
+
+
+def _copy_run(finished_run, tmp_path):
+    mesh, ladar, run, ref = finished_run
+    dst = tmp_path / "run"
+    shutil.copytree(run, dst)
+    return mesh, ladar, dst, ref, sorted(dst.glob("chunk_*.npz"))
+
+
+def test_swapped_and_copied_chunks_are_recomputed_not_used(finished_run, tmp_path):
+    mesh, ladar, run, ref, chunks = _copy_run(finished_run, tmp_path)
+    # chunk files verify themselves (checksum, job) but belong elsewhere: swap two, copy one
+    # over another; each names its own index, so all three are recomputed
+    a, b = chunks[0].read_bytes(), chunks[1].read_bytes()
+    chunks[0].write_bytes(b)
+    chunks[1].write_bytes(a)
+    shutil.copyfile(chunks[3], chunks[2])            # the last chunk has 6 views, not 8
+    got = ml.simulate(mesh, ladar, model="mesh", run_dir=run)
+    np.testing.assert_array_equal(got.values, ref.values)
+    for k, path in enumerate(chunks):
+        assert load_result(path)[1]["chunk"] == k
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_bit_flipped_chunks_are_recomputed_never_a_crash(finished_run, tmp_path, seed):
+    mesh, ladar, run, ref, chunks = _copy_run(finished_run, tmp_path)
+    rng = np.random.default_rng(seed)
+    for path in chunks:
+        data = bytearray(path.read_bytes())
+        for pos in rng.integers(0, len(data), 3):     # three single-bit flips per file
+            data[pos] ^= 1 << int(rng.integers(0, 8))
+        path.write_bytes(bytes(data))
+    got = ml.simulate(mesh, ladar, model="mesh", run_dir=run)
+    np.testing.assert_array_equal(got.values, ref.values)
+
+
+def test_a_chunk_of_the_wrong_shape_is_recomputed(finished_run, tmp_path):
+    from meshladar.runs import _array_digest
+
+    mesh, ladar, run, ref, chunks = _copy_run(finished_run, tmp_path)
+    arrays, meta = load_result(chunks[1])
+    arrays["values"] = arrays["values"][:, :-1]                   # one bin short
+    meta = {k: v for k, v in meta.items() if k != "meshladar_version"}
+    meta["sha256"] = _array_digest(arrays)                        # a consistent checksum
+    save_result(chunks[1], arrays, meta)
+    got = ml.simulate(mesh, ladar, model="mesh", run_dir=run)
+    np.testing.assert_array_equal(got.values, ref.values)
+
+
+@pytest.mark.parametrize("doc, message", [
+    ("[1, 2]", "damaged metadata (a JSON list, not an object)"),
+    ("null", "damaged metadata (a JSON NoneType, not an object)"),
+    ("{not json", "damaged metadata (not JSON"),
+    ("[" * 5000 + "]" * 5000, "damaged metadata"),
+])
+def test_result_files_with_damaged_metadata(tmp_path, doc, message):
+    path = tmp_path / "r.npz"
+    np.savez(path, values=np.zeros((2, 2)), __meta__=np.array(doc))
+    with pytest.raises(ResultFileError, match=r"r\.npz: " + re.escape(message)):
+        load_result(path)
+
+
+@pytest.mark.parametrize("content, message", [
+    (b"name = \"x\"\n\xff\xfe\n", "not UTF-8 text"),
+    (b"a = " + b"[" * 5000 + b"]" * 5000 + b"\n", "nested too deeply"),
+    (b"n_bins = " + b"9" * 5000 + b"\n", "not a phantom spec: "),
+    (b"[ladr]\nn_bins = 64\n[[shape]]\nkind = \"disk\"\ncenter = [0, 0]\nradius = 0.5\n"
+     b"material = \"dark_gray\"\n", "unknown key 'ladr'; valid keys are"),
+    (b"ladar = 3\n[[shape]]\nkind = \"disk\"\ncenter = [0, 0]\nradius = 0.5\n"
+     b"material = \"dark_gray\"\n", r"\[ladar\] must be a table; got 3"),
+])
+def test_phantom_specs_that_are_not_what_they_claim(tmp_path, content, message):
+    path = tmp_path / "spec.toml"
+    path.write_bytes(content)
+    with pytest.raises(PhantomSpecError, match=r"spec\.toml: .*" + message) as exc:
+        ml.phantoms.load(path)
+    assert "\n" not in str(exc.value)
+
+
+@pytest.mark.parametrize("content, message", [
+    (b"[paint]\nrho_d = 0.1\n\x80\n", "not UTF-8 text"),
+    (b"x = " + b"{a = " * 3000 + b"1" + b"}" * 3000 + b"\n", "nested too deeply"),
+])
+def test_material_tables_that_are_not_what_they_claim(tmp_path, content, message):
+    path = tmp_path / "mine.toml"
+    path.write_bytes(content)
+    with pytest.raises(MaterialFileError, match=r"mine\.toml: not a material table: " + message):
+        load_table(path)
+
+
+def test_a_broken_metadata_result_is_one_cli_line(tmp_path, capsys):
+    from meshladar.cli import main
+
+    path = tmp_path / "r.npz"
+    np.savez(path, values=np.zeros((2, 2)), __meta__=np.array(json.dumps([1])))
+    assert main(["reconstruct", str(path), "-o", str(tmp_path / "r.png")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "damaged metadata" in err
