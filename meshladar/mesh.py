@@ -24,6 +24,7 @@ import hashlib
 import io
 import math
 import os
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -333,6 +334,24 @@ def _read(where, source, suffix, head, size, *, resolver, default_name):
     raise first[0]
 
 
+#: trimesh makes node names unique with a random hexadecimal suffix (a glTF node with
+#: several primitives, unnamed nodes): such names change on every load.
+_RANDOM_SUFFIX = re.compile(r"(_[0-9a-f]{6}|[0-9a-f]{12})$")
+
+
+def _part_name(node, geometry, taken):
+    """A part's name that is the same on every load: the scene node's own name, or, when
+    trimesh made it unique with a random suffix, the geometry's (deterministic) name; a
+    repeat gets '#2', '#3', ... in scene order."""
+    name = geometry if _RANDOM_SUFFIX.search(node) else node
+    if name in taken:
+        k = 2
+        while f"{name}#{k}" in taken:
+            k += 1
+        name = f"{name}#{k}"
+    return name
+
+
 def _parts_of(loaded, where, default_name="mesh"):
     """(name, welded mesh) of each triangle mesh in a trimesh object, or a GeometryError
     saying what the object holds instead."""
@@ -344,9 +363,10 @@ def _parts_of(loaded, where, default_name="mesh"):
             transform, geom_name = loaded.graph[node]
             g = loaded.geometry[geom_name]
             if isinstance(g, trimesh.Trimesh) and len(g.faces):
-                m = _welded(g, f"{where}: part {node!r}")
+                name = _part_name(str(node), str(geom_name), {n for n, _ in out})
+                m = _welded(g, f"{where}: part {name!r}")
                 m.apply_transform(transform)
-                out.append((str(node), m))
+                out.append((name, m))
             else:
                 other.append(g)
         if not out:

@@ -1180,11 +1180,11 @@ def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-side
     rays = [x for r in results for x in r[1]]
     back = [x for r in results for x in r[2]]
     if not np.any(vals):
-        _warn_empty(scene, ladar, run, back_faces, sum(back))
+        _warn_empty(scene, ladar, run, back_faces, sum(back), geo.face_normals)
     return _sinogram(vals, ladar, ladar.bin_edges, run, normals, footprint, rays, back)
 
 
-def _warn_empty(scene, ladar, run, back_faces, back_hits):
+def _warn_empty(scene, ladar, run, back_faces, back_hits, face_normals):
     """One line saying that a run returned nothing, and the likely reasons."""
     import warnings
 
@@ -1203,6 +1203,12 @@ def _warn_empty(scene, ladar, run, back_faces, back_hits):
     elif back_faces == "ignore" and back_hits:
         reasons.append(f"{back_hits} rays hit the back of a face, which back_faces='ignore' "
                        "blanks (an open mesh seen from behind?)")
-    reasons.append(f"ray_spacing {run['ray_spacing']:.4g} may be too coarse for the target")
+    facing = max(float(np.max(np.abs(face_normals @ w))) for w in ladar.view_vectors)
+    if facing < _MIN_COS_FACET:
+        reasons.append("every face is edge-on to every view (a flat target seen in its own "
+                       "plane): views off that plane (view_vectors) see it")
+    else:
+        reasons.append(f"ray_spacing {run['ray_spacing']:.4g} may be too coarse for the "
+                       "target")
     warnings.warn("the sinogram is all zeros: no return reached any bin; " +
                   "; ".join(reasons), MeshladarWarning, stacklevel=4)

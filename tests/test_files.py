@@ -540,3 +540,48 @@ def test_recomputed_positions_weld_into_one_point():
                                                 process=False))
     (_, mesh), = loaded
     assert len(mesh.vertices) == 8 and mesh.is_watertight
+
+
+def _two_primitive_gltf(path):
+    """A glTF whose one node holds a mesh of two primitives: trimesh loads them as two
+    nodes, naming the second with a random suffix."""
+    import base64
+
+    pos = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [0, 1, 1]],
+                   np.float32)
+    idx = np.array([0, 1, 2], np.uint16)
+    blob = pos.tobytes() + idx.tobytes() + b"\x00\x00"
+    uri = "data:application/octet-stream;base64," + base64.b64encode(blob).decode()
+    views = [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
+             {"buffer": 0, "byteOffset": 36, "byteLength": 36},
+             {"buffer": 0, "byteOffset": 72, "byteLength": 6}]
+    acc = [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+            "min": [0, 0, 0], "max": [1, 1, 0]},
+           {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC3",
+            "min": [0, 0, 1], "max": [1, 1, 1]},
+           {"bufferView": 2, "componentType": 5123, "count": 3, "type": "SCALAR"}]
+    doc = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+           "nodes": [{"name": "hull", "mesh": 0}],
+           "meshes": [{"name": "hull", "primitives": [{"attributes": {"POSITION": 0},
+                                                       "indices": 2},
+                                                      {"attributes": {"POSITION": 1},
+                                                       "indices": 2}]}],
+           "buffers": [{"byteLength": len(blob), "uri": uri}], "bufferViews": views,
+           "accessors": acc}
+    path.write_text(json.dumps(doc))
+
+
+def test_part_names_are_the_same_on_every_load(tmp_path):
+    # trimesh names the second primitive's node with a random suffix ('hull_3fa2c1'): part
+    # names must not change between loads, or --coating PART=... cannot be repeated
+    path = tmp_path / "two.gltf"
+    _two_primitive_gltf(path)
+    names = [[p.name for p in ml.Scene.from_mesh(path, DARK_GRAY).parts] for _ in range(3)]
+    assert names[0] == names[1] == names[2] and len(names[0]) == 2
+    assert len(set(names[0])) == 2
+    from meshladar.mesh import _part_name
+
+    assert _part_name("0_33d0cd", "Truck_1", set()) == "Truck_1"
+    assert _part_name("geometry_06ec728accc3a", "geometry_1", set()) == "geometry_1"
+    assert _part_name("body", "geometry_0", set()) == "body"
+    assert _part_name("0_33d0cd", "Truck", {"Truck", "Truck#2"}) == "Truck#3"
