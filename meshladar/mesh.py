@@ -299,7 +299,7 @@ def _read(where, source, suffix, head, size, *, resolver, default_name):
         what = f"file format {_label(suffix)}" if suffix else "file format (no file suffix)"
         raise GeometryError(f"{where}: unknown {what}, and its content ({content}) is not "
                             f"a format trimesh reads either; readable formats: "
-                            f"{', '.join(sorted(formats | set(_COMPRESSED)))}")
+                            f"{', '.join(sorted((formats - set(_DRAWINGS)) | set(_COMPRESSED)))}")
     first = None
     for ftype in tries:
         reached_geometry = False
@@ -334,6 +334,8 @@ def _read(where, source, suffix, head, size, *, resolver, default_name):
     raise first[0]
 
 
+#: The module a pip package is imported as, where the two differ.
+_IMPORT_NAMES = {"pycollada": "collada"}
 #: trimesh makes node names unique with a random hexadecimal suffix (a glTF node with
 #: several primitives, unnamed nodes): such names change on every load.
 _RANDOM_SUFFIX = re.compile(r"(_[0-9a-f]{6}|[0-9a-f]{12})$")
@@ -390,11 +392,12 @@ def _describe(g):
 
     kind = type(g).__name__
     if isinstance(g, (trimesh.PointCloud, trimesh.Trimesh)):
-        return f"a point cloud ({len(g.vertices)} points, no faces)"
+        return f"a point cloud ({_count(len(g.vertices), 'point')}, no faces)"
     if kind == "Path2D":
-        return f"a 2-D drawing ({len(g.entities)} lines/curves)"
+        return f"a 2-D drawing ({_count(len(g.entities), 'line or curve', 'lines or curves')})"
     if kind == "Path3D":
-        return f"a 3-D path ({len(g.entities)} lines/curves, no faces)"
+        return (f"a 3-D path ({_count(len(g.entities), 'line or curve', 'lines or curves')}, "
+                "no faces)")
     return f"a {kind}"
 
 
@@ -456,6 +459,11 @@ def _welded(mesh, where):
     return trimesh.Trimesh(vertices=v, faces=f.astype(np.int64), process=False)
 
 
+def _count(n, one, many=None):
+    """'1 point', '2 points'."""
+    return f"{n} {one if n == 1 else (many or one + 's')}"
+
+
 def _readable_formats():
     """The formats this trimesh reads with what is installed ('stl_ascii' is an alias)."""
     import trimesh
@@ -465,8 +473,18 @@ def _readable_formats():
 
 def _needs(where, ftype, exc=None):
     """The message for a format whose optional reader is not installed."""
+    import importlib.util
+
     pkgs = _OPTIONAL_READERS.get(ftype) or _DRAWINGS.get(ftype)
-    if pkgs:
+    if pkgs:                       # name only what is missing (networkx may be there)
+        def installed(name):
+            try:
+                return importlib.util.find_spec(_IMPORT_NAMES.get(name, name)) is not None
+            except ImportError:                    # a dotted name whose parent is missing
+                return False
+
+        missing = [p for p in pkgs.split() if not installed(p)]
+        pkgs = " ".join(missing) or pkgs
         names = " and ".join(pkgs.split())
         return (f"{where}: reading {_label(ftype)} files needs the optional package"
                 f"{'s' if ' ' in pkgs else ''} {names}: pip install {pkgs}")

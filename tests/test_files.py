@@ -254,7 +254,9 @@ CORPUS = {
     "COLLADA": (_dae, Mesh(12, BOX_AREA) if _has("collada")
                 else Fails(r"needs the optional package pycollada: pip install pycollada")),
     "3MF": (_3mf, Mesh(12, BOX_AREA) if _has("lxml", "networkx")
-            else Fails(r"needs the optional packages lxml and networkx")),
+            else Fails(r"needs the optional package" + ("s lxml and networkx"
+                                                          if not _has("networkx")
+                                                          else " lxml: pip install lxml"))),
 }
 
 #: Face areas from coordinates stored as float32 (STL, GLB, binary PLY) or printed with 9
@@ -323,7 +325,7 @@ def test_multi_part_glb_keeps_each_part_where_it_was_placed(tmp_path):
 
 def test_not_a_mesh_in_memory_says_what_it_is():
     wire = trimesh.load_path(np.array([[0, 0, 0], [1, 0, 1], [1, 1, 2]], dtype=float))
-    with pytest.raises(GeometryError, match=r"^mesh: holds a 3-D path \(1 lines/curves, "
+    with pytest.raises(GeometryError, match=r"^mesh: holds a 3-D path \(1 line or curve, "
                                             r"no faces\), not a triangle mesh$"):
         ml.Scene.from_mesh(wire, DARK_GRAY)
     sc = trimesh.Scene()
