@@ -691,6 +691,7 @@ def main(argv=None) -> int:
     warnings.formatwarning = _one_line_warning
     parser = _parser()
     args = parser.parse_args(argv)
+    previous = _terminate_as_interrupt()
     try:
         return args.func(args)
     except MeshladarError as exc:
@@ -710,3 +711,23 @@ def main(argv=None) -> int:
                     "again to resume")
         print(f"meshladar: interrupted{hint}", file=sys.stderr)
         return 130
+    finally:
+        if previous is not None:
+            import signal
+
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _terminate_as_interrupt():
+    """SIGTERM stops a run as Ctrl-C does (workers cancelled, finished chunks kept, a
+    resume hint); returns the previous handler, or None off the main thread."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return None
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    return signal.signal(signal.SIGTERM, interrupt)

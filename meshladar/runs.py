@@ -49,15 +49,25 @@ class RunFolder:
     """
 
     def __init__(self, path, job: dict, n_chunks: int):
-        from . import __version__
-        from .io import write_text_atomic
-
         self.path = os.fspath(path)
         self.n_chunks = int(n_chunks)
         self.job = dict(job, n_chunks=self.n_chunks)
         self.digest = job_digest(self.job)
         os.makedirs(self.path, exist_ok=True)
+        self._lock = _lock(self.path)
+        try:
+            self._start()
+        except BaseException:
+            self.close()
+            raise
+
+    def _start(self):
+        """Clean temporaries and check (or write) the manifest, holding the lock."""
+        from . import __version__
+        from .io import write_text_atomic
+
         # temporaries of writes cut short by a kill: never under a final name, removed here
+        # (only while holding the lock, so never another run's in-flight files)
         for name in os.listdir(self.path):
             if name.startswith(".tmp-"):
                 try:
@@ -83,6 +93,21 @@ class RunFolder:
             write_text_atomic(manifest, json.dumps(
                 {"digest": self.digest, "job": _jsonable(self.job),
                  "meshladar_version": __version__}, indent=1, sort_keys=True))
+
+    def close(self):
+        """Release the folder for other runs (also when this object is collected)."""
+        lock, self._lock = getattr(self, "_lock", None), None
+        if lock is not None:
+            lock.close()
+
+    def __del__(self):
+        self.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
 
     def _file(self, i):
         return os.path.join(self.path, f"chunk_{i:05d}.npz")
@@ -117,6 +142,29 @@ class RunFolder:
 
     def done(self):
         return [i for i in range(self.n_chunks) if os.path.exists(self._file(i))]
+
+
+def _lock(path):
+    """An exclusive lock on the run folder (``.lock``, flock: released by the OS when the
+    process ends, however it ends); a folder in use by another run is refused."""
+    try:
+        import fcntl
+    except ImportError:                          # not POSIX: no locking
+        return None
+    fh = open(os.path.join(path, ".lock"), "a+")
+    try:
+        fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        fh.seek(0)
+        holder = fh.read().strip() or "another process"
+        fh.close()
+        raise RunFolderError(f"{path}: run folder in use by another run ({holder}); wait for "
+                             "it to finish, or use another folder") from None
+    fh.seek(0)
+    fh.truncate()
+    fh.write(f"pid {os.getpid()}")
+    fh.flush()
+    return fh
 
 
 def _jsonable(x):

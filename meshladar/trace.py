@@ -74,6 +74,8 @@ _MIN_RAYS_ACROSS = 128
 _ORIGIN_MARGIN = 0.01
 #: Views per task: enough work to amortise a task, few enough to balance two cores.
 _VIEWS_PER_TASK = 8
+#: Worker processes allowed per core (``jobs``): more only compete for the cores.
+_MAX_JOBS_PER_CORE = 4
 #: Resubmissions of a chunk whose task was cancelled (a worker lost with its data).
 _MAX_RETRIES = 3
 #: Occlusion rays toward a bistatic receiver start this far (relative to the scene's
@@ -741,13 +743,35 @@ def _executor(jobs, executor, n_rays_total):
         return executor, False
     if jobs is None:
         jobs = 1 if n_rays_total < 4e6 else (os.cpu_count() or 1)
+    cores = os.cpu_count() or 1
     if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)) or jobs < 1:
         raise ParameterError(f"jobs must be an integer >= 1; got {jobs!r}")
+    if jobs > _MAX_JOBS_PER_CORE * cores:
+        raise ParameterError(f"jobs must be at most {_MAX_JOBS_PER_CORE * cores} "
+                             f"({_MAX_JOBS_PER_CORE} per core on this {cores}-core machine: "
+                             f"more processes only compete for the cores); got {jobs}")
     if jobs == 1:
         return None, False
     from concurrent.futures import ProcessPoolExecutor
 
-    return ProcessPoolExecutor(max_workers=int(jobs)), True
+    return ProcessPoolExecutor(max_workers=int(jobs), initializer=_worker_init), True
+
+
+def _worker_init():
+    """In a worker process: die with the parent (Linux), so a killed run leaves no
+    workers behind; elsewhere a no-op."""
+    import signal
+    import sys
+
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        try:
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(1, int(signal.SIGKILL))           # PR_SET_PDEATHSIG
+        except (OSError, AttributeError):
+            pass
+    signal.signal(signal.SIGINT, signal.SIG_IGN)        # the parent handles Ctrl-C
 
 
 def _largest_grid(geo, vectors, mode, spacing):
@@ -881,8 +905,15 @@ def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_b
                             raise
                         futures[ex.submit(_job, geo, vectors, chunks[k], *args)] = k
                     break
+    except BaseException:
+        if own:                          # interrupted or failed: drop the queued chunks,
+            ex.shutdown(wait=False, cancel_futures=True)     # the workers exit with us
+            own = False
+        raise
     finally:
         bar.close()
+        if folder is not None:
+            folder.close()
         if own:
             ex.shutdown()
     run = {"mode": mode, "ray_spacing": spacing, "z0": z0, "sampling": sampling, "seed": seed,

@@ -124,3 +124,72 @@ def test_a_broken_metadata_result_is_one_cli_line(tmp_path, capsys):
     assert main(["reconstruct", str(path), "-o", str(tmp_path / "r.png")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "damaged metadata" in err
+
+
+# ------------------------------------------------------------------ runs, processes, signals
+
+def test_a_run_folder_in_use_is_refused_not_shared(tmp_path):
+    from meshladar.runs import RunFolder, RunFolderError
+
+    first = RunFolder(tmp_path, {"kind": "x"}, 3)
+    (tmp_path / ".tmp-inflight.npz").write_bytes(b"partial")     # the first run's write
+    with pytest.raises(RunFolderError, match=r"run folder in use by another run \(pid \d+\)"):
+        RunFolder(tmp_path, {"kind": "x"}, 3)
+    assert (tmp_path / ".tmp-inflight.npz").exists()            # not deleted by the second
+    first.close()
+    with RunFolder(tmp_path, {"kind": "x"}, 3):                  # free again: temporaries go
+        assert not (tmp_path / ".tmp-inflight.npz").exists()
+
+
+def test_jobs_are_bounded_by_the_cores():
+    import os
+
+    mesh = PAIR.tessellate(64)
+    ladar = ml.Ladar.paper(angles_deg=[0.0])
+    cores = os.cpu_count() or 1
+    with pytest.raises(ml.errors.ParameterError,
+                       match=rf"jobs must be at most {4 * cores} .*; got 100000"):
+        ml.simulate(mesh, ladar, model="mesh", jobs=100000)
+
+
+def _long_cli_run(tmp_path):
+    import subprocess
+    import sys
+
+    run = tmp_path / "run"
+    cmd = [sys.executable, "-m", "meshladar", "simulate", "disk_pair", "--model", "mesh",
+           "--segments", "512", "--views", "720", "--rays-per-bin", "16", "--jobs", "2",
+           "--run-dir", str(run), "-o", str(tmp_path / "r.npz"), "--quiet"]
+    return run, subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                 text=True)
+
+
+def _workers_once_a_chunk_is_saved(run, proc):
+    """The CLI's worker processes, once its first chunk file exists (an event, not a delay)."""
+    import time
+
+    psutil = pytest.importorskip("psutil")
+    while not list(run.glob("chunk_*.npz")):
+        assert proc.poll() is None, proc.communicate()[1]
+        time.sleep(0.05)
+    return psutil.Process(proc.pid).children(recursive=True)
+
+
+@pytest.mark.parametrize("sig", ["SIGTERM", "SIGKILL"])
+def test_a_stopped_run_takes_its_workers_with_it(tmp_path, sig):
+    import signal
+
+    psutil = pytest.importorskip("psutil")
+    run, proc = _long_cli_run(tmp_path)
+    workers = _workers_once_a_chunk_is_saved(run, proc)
+    assert len(workers) >= 2
+    proc.send_signal(getattr(signal, sig))
+    _, err = proc.communicate(timeout=120)
+    if sig == "SIGTERM":                       # like Ctrl-C: one line and a resume hint
+        assert proc.returncode == 130 and "Traceback" not in err
+        assert "interrupted; finished chunks are kept" in err
+    # the workers end with the run (SIGKILL: through the parent-death signal); the wait is
+    # a bound on a process exit that is already under way, not a synchronisation
+    gone, alive = psutil.wait_procs(workers, timeout=60)
+    assert not alive, [p.pid for p in alive]
+    assert list(run.glob("chunk_*.npz"))       # the chunks finished before the stop are kept
