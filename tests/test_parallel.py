@@ -104,3 +104,33 @@ def test_a_worker_lost_while_the_mesh_is_scattered_is_retried(job):
         got = ml.simulate(mesh, ladar, model="mesh", normals="smooth", executor=Flaky())
     assert len(calls) == 2                                    # failed once, then scattered
     np.testing.assert_array_equal(got.values, serial.values)
+
+
+def test_the_local_cluster_is_tls_secured_and_refuses_strangers():
+    from distributed import Client
+
+    with dask_executor(workers=1) as ex:
+        address = ex._client.scheduler.address
+        assert address.startswith("tls://127.0.0.1:")
+        assert ex.submit(sum, [1, 2]).result() == 3
+        # another local user without the temporary credentials cannot connect
+        with pytest.raises((TypeError, OSError, TimeoutError)):
+            Client(address, timeout=5)
+
+
+@pytest.mark.parametrize("address, message", [
+    ("not an address", "scheduler must be an address such as tcp://host:8786"),
+    ("udp://127.0.0.1:8786", "scheduler must be an address"),
+    ("tcp://", "scheduler must be an address"),
+    ("tcp://127.0.0.1:1", "no Dask scheduler answered at 'tcp://127.0.0.1:1'"),
+])
+def test_a_bad_scheduler_is_one_clear_error(address, message, tmp_path, capsys):
+    with pytest.raises(ml.errors.ParameterError, match=message):
+        with dask_executor(address, timeout=2):
+            pass
+    from meshladar.cli import main
+
+    code = main(["simulate", "disk", "--model", "mesh", "--views", "2", "--scheduler", address,
+                 "-o", str(tmp_path / "x.npz")])
+    err = capsys.readouterr().err
+    assert code == 2 and message in err and err.count("\n") == 1
