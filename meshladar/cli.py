@@ -112,14 +112,18 @@ def _load_scene(args):
 
             raise ParameterError(f"SCENE: no such mesh file {src!r}, and not a known phantom "
                                  f"({', '.join(phantoms.names())})")
-        if args.material not in table:
-            raise ParameterError(f"--material: unknown coating {args.material!r}; known: "
+        material = args.material or "dark_gray"
+        if material not in table:
+            raise ParameterError(f"--material: unknown coating {material!r}; known: "
                                  f"{sorted(table)}")
         per_part = {k: _coating(table, v) for k, v in (args.coating or {}).items()}
-        return (Scene.from_mesh(src, table[args.material], materials=per_part or None), None,
+        return (Scene.from_mesh(src, table[material], materials=per_part or None), None,
                 "mesh")
     from meshladar import phantoms
 
+    if args.material is not None:
+        raise ParameterError("--material colours a mesh's parts; a phantom's shapes have "
+                             "their own coatings: use --coating SHAPE=NAME")
     overrides = {k: _coating(table, v) for k, v in (args.coating or {}).items()}
     ph = phantoms.load(src, materials=overrides or None)
     return ph.scene, ph.ladar, "analytic"
@@ -230,7 +234,7 @@ def _cmd_simulate(args) -> int:
     from . import io
     from .forward import simulate
 
-    _check_output(args.output, (".npz",), [args.scene, args.materials])
+    _check_output(args.output, (".npz",), [args.scene, args.materials, args.run_dir])
     scene, default_ladar, default_model = _load_scene(args)
     model = args.model or default_model
     _check_applicable(args, model, default_ladar is not None)
@@ -274,8 +278,8 @@ def _check_output(output, suffixes, inputs):
 
     from .errors import ParameterError
 
-    if not output or os.path.basename(output) in ("", ".", ".."):
-        raise ParameterError(f"-o: must name a file; got {output!r}")
+    if not output or os.path.basename(output) in ("", ".", "..") or os.path.isdir(output):
+        raise ParameterError(f"-o: must name a file, not a folder; got {output!r}")
     for src in filter(None, inputs):
         if os.path.abspath(src) == os.path.abspath(output) or (
                 os.path.exists(src) and os.path.exists(output)
@@ -517,8 +521,9 @@ def _parser() -> argparse.ArgumentParser:
         q.add_argument("scene", help="a packaged phantom's name (disk, ellipse, disk_pair), a "
                                      "phantom spec (.toml) or any mesh file trimesh reads "
                                      "(STL, OBJ, PLY, OFF, GLB/GLTF, 3MF, DAE, zip...)")
-        q.add_argument("--material", default="dark_gray",
-                       help="coating of a mesh's parts (default: %(default)s)")
+        q.add_argument("--material", default=None,
+                       help="coating of a mesh's parts (default: dark_gray); a phantom's "
+                            "shapes take --coating")
         q.add_argument("--coating", type=_coatings, default=None, metavar="PART=NAME,...",
                        help="coating per phantom shape or mesh part, e.g. small=aluminum "
                             "(default: each shape's own, or --material)")

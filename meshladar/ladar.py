@@ -143,6 +143,7 @@ class Ladar:
                         np.array([0.0, 1.0]))
         if scene.is_mesh:
             lo, hi = scene.range_span(views.view_vectors)
+            _warn_off_axis(scene, views.view_vectors, hi - lo)
             lo, hi = lo - m, hi + m
             center = 0.5 * (lo + hi)
             span = max(hi - lo, 0.0)
@@ -181,3 +182,28 @@ class Ladar:
     def __repr__(self) -> str:
         return (f"Ladar(n_views={self.n_views}, n_bins={self.n_bins}, "
                 f"range=[{self.bin_edges[0]:g}, {self.bin_edges[-1]:g}])")
+
+
+#: A target whose every view sees it over less than this fraction of the shared range span
+#: is reported: its profiles would use few of the bins.
+_OFF_AXIS_FRACTION = 0.1
+
+
+def _warn_off_axis(scene, view_vectors, span):
+    """Warn when the target lies so far off the rotation axis that each view sees it over a
+    small part of the ranges all the views span together (bins are shared by every view)."""
+    pts = scene.hull_points()
+    depth = 0.0
+    for start in range(0, len(view_vectors), 256):
+        r = pts @ np.asarray(view_vectors[start:start + 256]).T
+        depth = max(depth, float(np.max(r.max(axis=0) - r.min(axis=0))))
+    if span > 0 and depth < _OFF_AXIS_FRACTION * span:
+        import warnings
+
+        from .errors import MeshladarWarning
+
+        warnings.warn(f"the target is far from the origin, the axis the views turn about: each "
+                      f"view sees it over at most {depth:.3g} of the {span:.3g} range units "
+                      f"the views span together ({100 * depth / span:.0f}% of the bins); "
+                      "centre it (a transform) or use fewer views", MeshladarWarning,
+                      stacklevel=3)

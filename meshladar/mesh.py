@@ -121,35 +121,54 @@ def _clean(part: MeshPart):
                      part.exact_normal), int(bad.sum()))
 
 
-def _signed_volume(part: MeshPart) -> float:
-    tri = part.triangles
-    return float(np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])).sum() / 6.0)
+def _bodies(part: MeshPart):
+    """Per connected body of a part (faces joined through shared vertices): whether it is
+    closed (every directed edge met once, and its reverse once) and its signed volume.
+    Vectorised, so a scan of 1e5 loose bodies costs no Python loop."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
 
-
-def _is_watertight(part: MeshPart) -> bool:
-    """Every undirected edge shared by exactly two faces, in opposite directions."""
     f = part.faces
-    e = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
-    directed = {tuple(x) for x in e.tolist()}
-    if len(directed) != len(e):
-        return False
-    return all((b, a) in directed for a, b in directed)
+    n = len(part.vertices)
+    a = np.concatenate([f[:, 0], f[:, 1], f[:, 2]])
+    b = np.concatenate([f[:, 1], f[:, 2], f[:, 0]])
+    graph = coo_matrix((np.ones(a.size, np.int8), (a, b)), shape=(n, n))
+    _, vertex_body = connected_components(graph, directed=False)
+    face_body = vertex_body[f[:, 0]]
+    bodies, face_body = np.unique(face_body, return_inverse=True)
+    code = a * n + b
+    uniq, count = np.unique(code, return_counts=True)
+    ok_edge = np.isin(b * n + a, uniq) & (count[np.searchsorted(uniq, code)] == 1)
+    edge_body = np.tile(face_body, 3)
+    open_edges = np.bincount(edge_body, weights=~ok_edge, minlength=bodies.size)
+    tri = part.triangles
+    vol = np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])) / 6.0
+    volume = np.bincount(face_body, weights=vol, minlength=bodies.size)
+    return open_edges == 0, volume
 
 
 def inspect_parts(parts):
-    """Clean parts and build the scene's mesh report."""
-    cleaned, dropped, watertight, inverted = [], 0, [], []
+    """Clean parts and build the scene's mesh report: ``watertight`` and ``inverted`` per
+    part (inverted: some closed body of it has negative volume, its faces wound inward),
+    ``inverted_bodies`` in all."""
+    cleaned, dropped, watertight, inverted, n_inverted = [], 0, [], [], 0
     for p in parts:
         q, k = _clean(p)
         cleaned.append(q)
         dropped += k
-        wt = _is_watertight(q) if len(q.faces) < 2_000_000 else None
-        watertight.append(wt)
-        inverted.append(bool(wt and _signed_volume(q) < 0))
+        if len(q.faces):
+            closed, volume = _bodies(q)
+            bad = int(np.count_nonzero(closed & (volume < 0)))
+        else:
+            closed, bad = np.array([False]), 0
+        watertight.append(bool(closed.all()))
+        inverted.append(bad > 0)
+        n_inverted += bad
     if not any(len(p.faces) for p in cleaned):
         raise GeometryError("the mesh scene has no faces (all degenerate or none given)")
     return cleaned, {"degenerate_faces": dropped, "watertight": watertight,
-                     "inverted": inverted, "faces": sum(len(p.faces) for p in cleaned)}
+                     "inverted": inverted, "inverted_bodies": n_inverted,
+                     "faces": sum(len(p.faces) for p in cleaned)}
 
 
 def part_from_trimesh(mesh, material_index, name="mesh", transform=None):

@@ -280,6 +280,12 @@ def fbp(sinogram, size=512, extent=1.0, *, filter="ramp", interpolation="linear"
     return Image(out, extent, (float(c[0]), float(c[1])), info)
 
 
+def _preprocessed(sinogram, step):
+    """The sinogram's info with ``step`` added to its record of preprocessing, in order."""
+    before = sinogram.info.get("preprocess")
+    return dict(sinogram.info, preprocess=step if not before else f"{before}, then {step}")
+
+
 def log_radiance(sinogram: Sinogram, *, floor=LOG_FLOOR) -> Sinogram:
     """The paper's Fig. 11(a) input: the logarithm of the binned radiance.
 
@@ -295,7 +301,7 @@ def log_radiance(sinogram: Sinogram, *, floor=LOG_FLOOR) -> Sinogram:
         m = floor * vmax
         out = np.log(np.maximum(sinogram.values, m) / m)
     return dataclasses.replace(sinogram, values=out,
-                               info=dict(sinogram.info, preprocess=f"log(floor={floor:g})"))
+                               info=_preprocessed(sinogram, f"log(floor={floor:g})"))
 
 
 def clip_radiance(sinogram: Sinogram, *, threshold=PAPER_CLIP) -> Sinogram:
@@ -303,5 +309,4 @@ def clip_radiance(sinogram: Sinogram, *, threshold=PAPER_CLIP) -> Sinogram:
     threshold = check_real("threshold", threshold, low=0.0, high=1.0, low_open=True)
     cap = threshold * float(sinogram.values.max(initial=0.0))
     return dataclasses.replace(sinogram, values=np.minimum(sinogram.values, cap),
-                               info=dict(sinogram.info,
-                                         preprocess=f"clip(threshold={threshold:g})"))
+                               info=_preprocessed(sinogram, f"clip(threshold={threshold:g})"))

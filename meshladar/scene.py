@@ -280,8 +280,10 @@ class Scene:
 
             from .errors import MeshladarWarning
 
-            warnings.warn(f"{len(inverted)} closed part(s) have inverted normals (faces wound "
-                          f"clockwise seen from outside), e.g. {inverted[0]!r}: they are "
+            n = report["inverted_bodies"]
+            warnings.warn(f"{n} closed bod{'y' if n == 1 else 'ies'} with inverted normals "
+                          f"(faces wound clockwise seen from outside), in part "
+                          f"{inverted[0]!r}{' and others' if len(inverted) > 1 else ''}: "
                           "traced two-sided by default, but back_faces='ignore' would blank "
                           "them (scene.report['inverted'])", MeshladarWarning, stacklevel=3)
         self = cls.__new__(cls)

@@ -803,7 +803,10 @@ def _receivers(receiver, ladar, mode, footprint):
                              f"({ladar.n_views}, 3); got shape {np.shape(receiver)}")
     r = np.broadcast_to(unit_vectors("receiver", receiver), (ladar.n_views, 3))
     if np.any(np.einsum("ij,ij->i", r, ladar.view_vectors) <= -1 + 1e-12):
-        raise ParameterError("receiver must not point exactly opposite the view (no return)")
+        k = int(np.argmax(np.einsum("ij,ij->i", r, ladar.view_vectors) <= -1 + 1e-12))
+        raise ParameterError(f"receiver must not point exactly opposite the view (no light "
+                             f"returns); got receiver {r[k].tolist()} for view {k}, "
+                             f"{ladar.view_vectors[k].tolist()}")
     if mode == "slice" and np.any(r[:, 2] != 0):
         raise ParameterError("in slice mode the receiver must lie in the x-y plane")
     if footprint:
@@ -1238,7 +1241,7 @@ def _warn_empty(scene, ladar, run, back_faces, back_hits, face_normals):
     if facing < _MIN_COS_FACET:
         reasons.append("every face is edge-on to every view (a flat target seen in its own "
                        "plane): views off that plane (view_vectors) see it")
-    else:
+    elif not reasons:
         reasons.append(f"ray_spacing {run['ray_spacing']:.4g} may be too coarse for the "
                        "target")
     warnings.warn("the sinogram is all zeros: no return reached any bin; " +

@@ -242,7 +242,7 @@ def test_mesh_checks_and_bad_input(tmp_path):
     scene = ml.Scene._from_parts([mlmesh.MeshPart(v, f, 0)], [DARK_GRAY])
     assert scene.report["degenerate_faces"] == 1 and scene.report["faces"] == 4
     assert scene.report["watertight"] == [True] and scene.report["inverted"] == [False]
-    with pytest.warns(ml.errors.MeshladarWarning, match=r"1 closed part\(s\) have inverted"):
+    with pytest.warns(ml.errors.MeshladarWarning, match=r"1 closed body with inverted"):
         inverted = ml.Scene._from_parts([mlmesh.MeshPart(v, f[:4, ::-1], 0)], [DARK_GRAY])
     assert inverted.report["inverted"] == [True]
     # back_faces="ignore" then blanks the part: an all-zero sinogram says why

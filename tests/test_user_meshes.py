@@ -97,6 +97,29 @@ def test_slice_mode_stays_the_default_for_the_paper_phantoms():
     assert any("all zeros" in m for m in messages)
 
 
+def test_an_inverted_body_inside_a_part_is_reported_and_its_loss_explained():
+    # one STL holding a box and, beside it, a box with its faces wound inward: the part's
+    # total volume cancels, but the second body is inverted
+    good = trimesh.creation.box(extents=(0.2, 0.2, 0.2))
+    bad = trimesh.creation.box(extents=(0.2, 0.2, 0.2))
+    bad.apply_translation([0.0, 0.5, 0.0])
+    bad.invert()
+    both = trimesh.Trimesh(np.vstack([good.vertices, bad.vertices]),
+                           np.vstack([good.faces, bad.faces + len(good.vertices)]),
+                           process=False)
+    with pytest.warns(MeshladarWarning, match=r"1 closed body with inverted normals"):
+        scene = ml.Scene.from_mesh(both, LAMBERT)
+    assert scene.report["inverted"] == [True] and scene.report["inverted_bodies"] == 1
+    assert scene.report["watertight"] == [True]
+    ladar = ml.Ladar.covering(scene, n_bins=32, angles_deg=[0.0, 90.0])
+    two = ml.simulate(scene, ladar, model="mesh")
+    ignore = ml.simulate(scene, ladar, model="mesh", back_faces="ignore")
+    # from 90° the inverted box hides the good one: blanked, the view returns nothing of it
+    assert two.total()[1] == pytest.approx(0.04 / math.pi, rel=1e-3)
+    assert ignore.total()[1] == 0.0 and ignore.total()[0] == pytest.approx(0.04 / math.pi,
+                                                                            rel=1e-3)
+
+
 # ------------------------------------------------------------------ bins where the target is
 
 def test_default_bins_cover_the_ranges_the_target_spans():
@@ -119,6 +142,11 @@ def test_default_bins_cover_the_ranges_the_target_spans():
     exact = [_lambert_total(box, w) for w in ladar.view_vectors]
     np.testing.assert_allclose(sino.total(), exact, rtol=1e-3)
     assert np.count_nonzero(sino.values.sum(axis=0)) > 200
+    # seen from all around, the part's ranges spread over ±1023 while each view sees 50:
+    # bins are shared by all views, so say so (one line) rather than return sparse profiles
+    with pytest.warns(MeshladarWarning, match=r"far from the origin.*each view sees it over "
+                                              r"at most 49.8 of the 2.05e\+03 range units"):
+        ml.Ladar.covering(scene, n_bins=512, angles_deg=np.arange(0.0, 360.0, 30.0))
     # the old default centred on the world origin would have used a handful of bins
     centred = ml.Ladar.centered(512, 2 * 1025.0 / 512, angles_deg=angles)
     old = ml.simulate(scene, centred, model="mesh")
@@ -417,3 +445,32 @@ def test_a_missing_optional_extra_is_one_line_naming_it(tmp_path, capsys, monkey
     code, _, err = _run(capsys, "reconstruct", tmp_path / "b.npz", "-o", tmp_path / "b.png")
     assert code == 2 and err.strip() == ("meshladar: error: figures need matplotlib: pip "
                                          "install 'meshladar[viz]'")
+
+
+def test_phantoms_refuse_material_and_outputs_must_be_files(tmp_path, capsys):
+    code, _, err = _run(capsys, "simulate", "disk_pair", "--material", "aluminum", "-o",
+                        tmp_path / "p.npz")
+    assert code == 2 and "--material colours a mesh's parts" in err
+    folder = tmp_path / "out.npz"
+    folder.mkdir()
+    code, _, err = _run(capsys, "simulate", "disk", "-o", folder)
+    assert code == 2 and "must name a file, not a folder" in err
+    code, _, err = _run(capsys, "simulate", "disk", "--model", "mesh", "--run-dir",
+                        tmp_path / "t.npz", "-o", tmp_path / "t.npz")
+    assert code == 2 and "never overwrites an input" in err
+
+
+def test_log_then_clip_records_both_steps():
+    sino = ml.Sinogram(np.arange(1.0, 9.0).reshape(2, 4), angles_deg=[0.0, 90.0],
+                       bin_edges=np.linspace(-1, 1, 5))
+    both = ml.clip_radiance(ml.log_radiance(sino), threshold=0.5)
+    assert both.info["preprocess"] == "log(floor=1e-06), then clip(threshold=0.5)"
+
+
+def test_a_bistatic_receiver_opposite_a_view_names_both():
+    scene = ml.Scene.from_parts([ml.mesh.sphere((0, 0, 0), 0.5, 0, subdivisions=2)],
+                                [DARK_GRAY])
+    ladar = ml.Ladar.covering(scene, n_bins=8, angles_deg=[0.0, 90.0])
+    with pytest.raises(ParameterError, match=r"got receiver \[0.0, -1.0, 0.0\] for view 1, "
+                                             r"\[6.12\d*e-17, 1.0, 0.0\]"):
+        ml.simulate(scene, ladar, model="mesh", receiver=[0, -1, 0])
