@@ -12,6 +12,11 @@ from .errors import ParameterError
 
 __all__: list[str] = []
 
+#: The largest array meshladar allocates on a user's say-so (4 GiB: a sixth of this
+#: project's 24 GiB machines); beyond it a request is refused before allocating, naming what
+#: to reduce, instead of dying in numpy's MemoryError or the kernel's OOM killer.
+MAX_ARRAY_BYTES = 4 * 2**30
+
 
 def check_real(name: str, value, *, low: float | None = None, high: float | None = None,
                low_open: bool = False, high_open: bool = False) -> float:
@@ -78,3 +83,12 @@ def unit_vectors(name: str, value) -> np.ndarray:
     if np.any(norm == 0):
         raise ParameterError(f"{name} must be non-zero direction vectors; got a zero vector")
     return a / norm
+
+
+def check_size(name: str, count, bytes_each: int, what: str, reduce: str) -> None:
+    """Refuse an allocation of ``count`` items of ``bytes_each`` over MAX_ARRAY_BYTES."""
+    need = float(count) * bytes_each
+    if need > MAX_ARRAY_BYTES:
+        raise ParameterError(f"{name}: {what} would need {need / 2**30:.3g} GiB, more than the "
+                             f"{MAX_ARRAY_BYTES / 2**30:g} GiB meshladar allocates at once; "
+                             f"{reduce}")

@@ -13,7 +13,8 @@ from functools import cached_property
 
 import numpy as np
 
-from ._validate import check_count, check_real, finite_array, readonly_copy, unit_vectors
+from ._validate import (check_count, check_real, check_size, finite_array, readonly_copy,
+                        unit_vectors)
 from .errors import ParameterError
 
 __all__ = ["Ladar", "PAPER_BIN_DIVISOR"]
@@ -80,6 +81,9 @@ class Ladar:
         if self.view_vectors is not None and len(self.view_vectors) != angles.size:
             raise ParameterError(f"angles_deg and view_vectors must have the same length; got "
                                  f"{angles.size} and {len(self.view_vectors)}")
+        check_size("ladar", angles.size * (edges.size - 1), 8,
+                   f"a sinogram of {angles.size} views x {edges.size - 1} bins",
+                   "use fewer views or bins")
         object.__setattr__(self, "angles_deg", readonly_copy(angles))
         object.__setattr__(self, "bin_edges", readonly_copy(edges))
         if self.view_vectors is None:
@@ -100,6 +104,7 @@ class Ladar:
         ``angles_deg`` defaults to the paper's 360 views at 1° (0, 1, ..., 359).
         """
         n = check_count("n_bins", n_bins)
+        check_size("n_bins", n, 8 * 360, f"{n} bins (a sinogram of 360 views)", "use fewer bins")
         w = check_real("bin_width", bin_width, low=0.0, low_open=True)
         c = check_real("center", center)
         edges = c + (np.arange(n + 1) - n / 2.0) * w
@@ -141,6 +146,8 @@ class Ladar:
         else:
             views = cls(np.arange(360.0) if angles_deg is None else angles_deg,
                         np.array([0.0, 1.0]))
+        if n is not None:
+            check_size("n_bins", n, 8 * views.n_views, f"{n} bins", "use fewer bins")
         if scene.is_mesh:
             lo, hi = scene.range_span(views.view_vectors)
             _warn_off_axis(scene, views.view_vectors, hi - lo)
@@ -161,6 +168,8 @@ class Ladar:
                 n = max(1, int(np.ceil(2 * half / w - 1e-9)))
             elif w is None:
                 w = 2 * half / n
+        check_size("bin_width", n, 8 * views.n_views, f"{n} bins of width {w:g}",
+                   "give wider bins")
         edges = center + (np.arange(n + 1) - n / 2.0) * w
         if view_vectors is not None:
             return cls(None, edges, view_vectors=views.view_vectors)

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._validate import check_count
+from ._validate import check_count, check_size
 from .errors import GeometryError, ParameterError
 
 __all__ = ["MeshPart", "load_parts", "part_from_trimesh", "prism", "sphere", "ellipsoid",
@@ -707,6 +707,7 @@ def prism(shape, segments, height, material_index, *, z0=0.0):
     and ±z on the caps.
     """
     n = check_count("segments", segments, 3)
+    check_size("segments", n, 400, f"a prism of {n} segments", "use fewer segments")
     t = 2 * math.pi * np.arange(n) / n
     ring = shape.boundary(t)                                 # (n, 2)
     lo, hi = z0 - height / 2, z0 + height / 2

@@ -28,7 +28,7 @@ import math
 
 import numpy as np
 
-from ._validate import check_real
+from ._validate import check_real, check_size
 from .ladar import Ladar
 from .scene import Scene
 from .siddon import PixelGrid
@@ -95,6 +95,11 @@ def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=N
     (cx, cy), radius = scene.bounding_circle()
     half = radius + 2 * pix
     n = int(math.ceil(2 * half / pix))
+    check_size("pixel_size", float(n) * n, 40, f"a {n} x {n} pixel grid (pixel size {pix:g})",
+               "give a larger pixel_size")
+    check_size("ray_spacing", float(math.ceil(2 * half / ds)), 8 * 8,
+               f"rays spaced {ds:g} over a scene {2 * half:g} across", "give a larger "
+               "ray_spacing")
     grid = PixelGrid(n, n, pix, (cx - n * pix / 2, cy - n * pix / 2))
     owner, normal = rasterize(scene, grid)
     mask = (owner >= 0).astype(np.float64)

@@ -31,7 +31,7 @@ from functools import cached_property
 import numpy as np
 from scipy import fft as sfft
 
-from ._validate import check_choice, check_count, check_real, finite_array
+from ._validate import check_choice, check_count, check_real, check_size, finite_array
 from .errors import MeshladarWarning, ParameterError
 from .sinogram import Sinogram
 
@@ -244,6 +244,7 @@ def fbp(sinogram, size=512, extent=1.0, *, filter="ramp", interpolation="linear"
                              "vectors off the x-y plane (3-D views), which a planar FBP "
                              "would silently misplace")
     size = check_count("size", size)
+    check_size("size", size * size, 8 * 3, f"a {size} x {size} image", "use a smaller size")
     extent = check_real("extent", extent, low=0.0, low_open=True)
     check_choice("filter", filter, FILTERS)
     check_choice("interpolation", interpolation, INTERPOLATIONS)

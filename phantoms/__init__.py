@@ -43,6 +43,8 @@ _SHAPE_FIELDS = {"disk": ("name", "kind", "center", "radius", "material"),
                  "ellipse": ("name", "kind", "center", "semi_axes", "angle_deg", "material")}
 _LADAR_FIELDS = ("bin_width", "n_bins", "bin_edges", "angles_deg")
 _SPEC_KEYS = ("name", "description", "ladar", "shape")
+#: Views a spec may ask for (a sinogram of 1e6 views x 512 bins is 4 GB).
+_MAX_VIEWS = 1e6
 
 
 def materials():
@@ -102,6 +104,10 @@ def _angles(spec, source):
                                  f"got {spec!r}")
         if not spec["step"] > 0:
             raise _error(source, f"[ladar] angles_deg step must be > 0; got {spec['step']!r}")
+        count = (spec["stop"] - spec["start"]) / spec["step"]
+        if not count <= _MAX_VIEWS:
+            raise _error(source, f"[ladar] angles_deg {spec!r} would make {count:.3g} views; "
+                                 f"at most {_MAX_VIEWS:.0e} (a larger step)")
         return np.arange(spec["start"], spec["stop"], spec["step"], dtype=np.float64)
     return spec
 

@@ -193,3 +193,32 @@ def test_a_stopped_run_takes_its_workers_with_it(tmp_path, sig):
     gone, alive = psutil.wait_procs(workers, timeout=60)
     assert not alive, [p.pid for p in alive]
     assert list(run.glob("chunk_*.npz"))       # the chunks finished before the stop are kept
+
+
+# ------------------------------------------------------------------ sizes refused up front
+
+@pytest.mark.parametrize("make, message", [
+    (lambda: ml.Ladar.centered(n_bins=10**10, bin_width=0.1), r"n_bins: 10000000000 bins"),
+    (lambda: ml.Ladar(np.arange(10**6), np.linspace(-1, 1, 10**4)),
+     r"ladar: a sinogram of 1000000 views x 9999 bins would need 74.5 GiB"),
+    (lambda: ml.fbp(ml.Sinogram(np.ones((4, 8)), angles_deg=[0, 90, 180, 270],
+                                bin_edges=np.linspace(-1, 1, 9)), size=100000),
+     r"size: a 100000 x 100000 image would need"),
+    (lambda: ml.simulate(PAIR, ml.Ladar.paper(angles_deg=[0.0]), model="pixel",
+                         pixel_size=1e-6), r"pixel_size: a \d+ x \d+ pixel grid"),
+    (lambda: PAIR.tessellate(10**8), r"segments: a prism of 100000000 segments"),
+    (lambda: ml.Ladar.covering(PAIR, bin_width=1e-12), r"bin_width: \d+ bins of width 1e-12"),
+])
+def test_sizes_beyond_memory_are_refused_before_allocating(make, message):
+    with pytest.raises(ml.errors.ParameterError, match=message + r".*GiB meshladar allocates "
+                                                             r"at once; "):
+        make()
+
+
+def test_a_spec_asking_for_too_many_views_is_refused(tmp_path):
+    path = tmp_path / "many.toml"
+    path.write_text('[ladar]\nangles_deg = { start = 0.0, stop = 360.0, step = 1e-12 }\n'
+                    '[[shape]]\nkind = "disk"\ncenter = [0, 0]\nradius = 0.5\n'
+                    'material = "dark_gray"\n')
+    with pytest.raises(PhantomSpecError, match=r"would make 3.6e\+14 views; at most 1e\+06"):
+        ml.phantoms.load(path)
