@@ -716,11 +716,28 @@ def main(argv=None) -> int:
                     "again to resume")
         print(f"meshladar: interrupted{hint}", file=sys.stderr)
         return 130
+    except Exception as exc:  # noqa: BLE001 - a bug of meshladar's own: say so in one line
+        path = _save_traceback()
+        print(f"meshladar: internal error ({type(exc).__name__}: "
+              f"{' '.join(str(exc).split())[:200]}); this is a bug in meshladar, please "
+              f"report it with the traceback in {path}", file=sys.stderr)
+        return 1
     finally:
         if previous is not None:
             import signal
 
             signal.signal(signal.SIGTERM, previous)
+
+
+def _save_traceback():
+    """Write the current exception's traceback to a new file; return its path."""
+    import tempfile
+    import traceback
+
+    fd, path = tempfile.mkstemp(prefix="meshladar-traceback-", suffix=".txt")
+    with open(fd, "w", encoding="utf-8") as fh:
+        traceback.print_exc(file=fh)
+    return path
 
 
 def _terminate_as_interrupt():

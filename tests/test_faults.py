@@ -222,3 +222,24 @@ def test_a_spec_asking_for_too_many_views_is_refused(tmp_path):
                     'material = "dark_gray"\n')
     with pytest.raises(PhantomSpecError, match=r"would make 3.6e\+14 views; at most 1e\+06"):
         ml.phantoms.load(path)
+
+
+def test_an_internal_bug_is_one_line_with_the_traceback_in_a_file(capsys, monkeypatch):
+    import re as _re
+
+    from meshladar import cli
+
+    def broken(args):
+        raise RuntimeError("the engine\ntripped")
+
+    monkeypatch.setattr(cli, "_cmd_demo", broken)
+    assert cli.main(["demo"]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "internal error (RuntimeError: the engine tripped)" in err
+    path = _re.search(r"traceback in (\S+\.txt)", err).group(1)
+    with open(path, encoding="utf-8") as fh:
+        text = fh.read()
+    assert "Traceback (most recent call last)" in text and "RuntimeError" in text
+    import os
+
+    os.remove(path)
