@@ -92,3 +92,10 @@ def check_size(name: str, count, bytes_each: int, what: str, reduce: str) -> Non
         raise ParameterError(f"{name}: {what} would need {need / 2**30:.3g} GiB, more than the "
                              f"{MAX_ARRAY_BYTES / 2**30:g} GiB meshladar allocates at once; "
                              f"{reduce}")
+
+
+def check_flag(name: str, value) -> bool:
+    """Return ``value`` if it is a bool (numpy's included), else raise."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ParameterError(f"{name} must be True or False; got {value!r}")
+    return bool(value)

@@ -418,6 +418,11 @@ class SandfordRobertson:
         w_i = unit_vectors("incident", incident)
         w_r = unit_vectors("reflected", reflected)
         n = unit_vectors("normal", normal)
+        try:
+            np.broadcast_shapes(w_i.shape, w_r.shape, n.shape)
+        except ValueError:
+            raise ParameterError(f"incident, reflected and normal must broadcast together; got "
+                                 f"shapes {w_i.shape}, {w_r.shape}, {n.shape}") from None
         cos_i, sin_i = _cos_sin_vec(w_i, n)
         cos_r, sin_r = _cos_sin_vec(w_r, n)
         half = w_i + w_r

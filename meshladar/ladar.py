@@ -19,6 +19,8 @@ from .errors import ParameterError
 
 __all__ = ["Ladar", "PAPER_BIN_DIVISOR"]
 
+#: angles_deg given with view_vectors must match their azimuths to this (degrees).
+_ANGLE_TOL_DEG = 1e-6
 #: The paper's range resolution is A/256 for a disk of radius A (Sec. 4.A).
 PAPER_BIN_DIVISOR = 256
 
@@ -59,9 +61,22 @@ class Ladar:
             if vec.ndim != 2 or len(vec) == 0:
                 raise ParameterError(f"view_vectors must have shape (n_views, 3); got "
                                      f"{vec.shape}")
+            azimuth = np.degrees(np.arctan2(vec[:, 1], vec[:, 0]))
             if self.angles_deg is None:
-                object.__setattr__(self, "angles_deg",
-                                   np.degrees(np.arctan2(vec[:, 1], vec[:, 0])))
+                object.__setattr__(self, "angles_deg", azimuth)
+            else:
+                given = finite_array("angles_deg", self.angles_deg)
+                if given.shape == azimuth.shape:
+                    # the same views, or a contradiction the forward models would read
+                    # differently (the analytic and pixel models use the angles)
+                    off = np.abs((given - azimuth + 180.0) % 360.0 - 180.0)
+                    off = np.where(np.hypot(vec[:, 0], vec[:, 1]) > 0, off, 0.0)
+                    if np.any(off > _ANGLE_TOL_DEG):
+                        k = int(np.argmax(off))
+                        raise ParameterError(
+                            f"angles_deg and view_vectors disagree: view {k} has angle "
+                            f"{float(given[k]):g} deg but vector {vec[k].tolist()} (azimuth "
+                            f"{float(azimuth[k]):g} deg); give one of them")
             object.__setattr__(self, "view_vectors", readonly_copy(vec))
         elif self.angles_deg is None:
             raise ParameterError("give angles_deg or view_vectors; got neither")

@@ -53,9 +53,9 @@ class Sinogram:
         values = finite_array("values", self.values)
         angles = finite_array("angles_deg", self.angles_deg)
         edges = finite_array("bin_edges", self.bin_edges)
-        if values.ndim != 2:
-            raise ParameterError(f"values must be a 2-D array (n_views, n_bins); got shape "
-                                 f"{values.shape}")
+        if values.ndim != 2 or 0 in values.shape:
+            raise ParameterError(f"values must be a 2-D array (n_views, n_bins) of at least one "
+                                 f"view and one bin; got shape {values.shape}")
         if angles.ndim != 1 or angles.size != values.shape[0]:
             raise ParameterError(f"angles_deg must have one angle per view (row of values): "
                                  f"{values.shape[0]}; got shape {angles.shape}")

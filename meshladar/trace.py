@@ -46,7 +46,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._validate import check_choice, check_real, unit_vectors
+from ._validate import check_choice, check_flag, check_real, unit_vectors
 from .errors import ParameterError
 from .ladar import Ladar
 from .scene import Scene
@@ -740,6 +740,9 @@ def _bin_one(r, cos_t, sin_t, mat, spread, materials, edges, area, footprint, bi
 def _executor(jobs, executor, n_rays_total):
     """The executor to use: the user's, or processes when it pays (embreex holds the GIL)."""
     if executor is not None:
+        if not callable(getattr(executor, "submit", None)):
+            raise ParameterError(f"executor must be a concurrent.futures.Executor (with "
+                                 f"submit); got {type(executor).__name__}")
         return executor, False
     if jobs is None:
         jobs = 1 if n_rays_total < 4e6 else (os.cpu_count() or 1)
@@ -836,6 +839,9 @@ def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_b
          jobs, executor, progress, weigh_with, receiver=None, run_dir=None, sampling=None):
     mode, geo, z0 = _options(scene, ladar, mode, normals, back_faces, z0)
     sampling, seed = _sampling(mode, sampling, seed)
+    check_flag("progress", progress)
+    if weigh_with is not None:
+        check_flag("footprint", weigh_with[1])
     receivers = _receivers(receiver, ladar, mode, bool(weigh_with and weigh_with[1]))
     spacing = _spacing(ladar, mode, ray_spacing, rays_per_bin, geo.radius)
     per_view = _largest_grid(geo, ladar.view_vectors, mode, spacing)
@@ -860,6 +866,8 @@ def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_b
     folder = None
     results = [None] * len(chunks)
     if run_dir is not None:
+        if not isinstance(run_dir, (str, os.PathLike)) or not os.fspath(run_dir):
+            raise ParameterError(f"run_dir must be a folder path; got {run_dir!r}")
         if weigh_with is None:
             raise ParameterError("run_dir is for streaming runs (simulate), not trace()")
         from .runs import RunFolder
@@ -1027,9 +1035,24 @@ def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None) -> Sin
     bin_edges : array_like, optional
         Other range bins (default the ladar's).
     """
+    if not isinstance(hits, Hits):
+        raise ParameterError(f"hits must be the Hits that meshladar.trace returns; got "
+                             f"{type(hits).__name__}")
+    check_flag("footprint", footprint)
     if footprint and hits.bistatic is not None:
         raise ParameterError("footprint binning is monostatic only; these hits are bistatic")
+    from .brdf import SandfordRobertson
+
+    if isinstance(materials, SandfordRobertson):
+        materials = [materials]                       # one coating for a one-material scene
+    if materials is not None and not isinstance(materials, (list, tuple)):
+        raise ParameterError(f"materials must be a list of coatings, one per material index; "
+                             f"got {type(materials).__name__}")
     mats = hits.materials if materials is None else tuple(materials)
+    for i, m in enumerate(mats):
+        if not isinstance(m, SandfordRobertson):
+            raise ParameterError(f"materials[{i}] must be a SandfordRobertson; got "
+                                 f"{type(m).__name__}")
     if len(mats) != len(hits.materials):
         raise ParameterError(f"materials must give {len(hits.materials)} coatings (one per "
                              f"material index); got {len(mats)}")

@@ -243,3 +243,64 @@ def test_an_internal_bug_is_one_line_with_the_traceback_in_a_file(capsys, monkey
     import os
 
     os.remove(path)
+
+
+# ------------------------------------------------------------------ the API's boundary
+
+_SPHERE = ml.Scene.from_parts([ml.mesh.sphere((0, 0, 0), 0.5, 0, subdivisions=2)], [DARK_GRAY])
+_LAD = ml.Ladar(np.array([0.0]), np.linspace(-0.6, 0.6, 9))
+_SINO = ml.Sinogram(np.ones((2, 4)), angles_deg=[0.0, 90.0], bin_edges=np.linspace(-1, 1, 5))
+
+#: Bad calls as a hurried user makes them, and the start of the one error each must give
+#: (a ParameterError, which is a ValueError, naming the argument). Grow this list.
+BAD_CALLS = {
+    "evaluate shapes": (lambda: DARK_GRAY.evaluate(np.ones((2, 3)), np.ones((3, 3)),
+                                                   np.ones((3, 3))),
+                        r"incident, reflected and normal must broadcast together; got "
+                        r"shapes \(2, 3\), \(3, 3\), \(3, 3\)"),
+    "executor string": (lambda: ml.simulate(_SPHERE, _LAD, model="mesh", executor="x"),
+                        r"executor must be a concurrent.futures.Executor"),
+    "weigh a string": (lambda: ml.weigh("hits"), r"hits must be the Hits"),
+    "weigh bad coating": (lambda: ml.weigh(ml.trace(_SPHERE, _LAD), ["x"]),
+                          r"materials\[0\] must be a SandfordRobertson; got str"),
+    "run_dir number": (lambda: ml.simulate(_SPHERE, _LAD, model="mesh", run_dir=123),
+                       r"run_dir must be a folder path; got 123"),
+    "no views": (lambda: ml.Sinogram(np.zeros((0, 4)), angles_deg=[],
+                                     bin_edges=np.linspace(-1, 1, 5)),
+                 r"values must be a 2-D array \(n_views, n_bins\) of at least one view and one "
+                 r"bin; got shape \(0, 4\)"),
+    "no bins": (lambda: ml.Sinogram(np.zeros((2, 0)), angles_deg=[0, 1], bin_edges=[0.0]),
+                r"values must be a 2-D array \(n_views, n_bins\) of at least one view and one "
+                r"bin; got shape \(2, 0\)"),
+    "angles and vectors disagree": (lambda: ml.Ladar([90.0], [0, 1], view_vectors=[[1, 0, 0]]),
+                                    r"angles_deg and view_vectors disagree: view 0 has angle "
+                                    r"90 deg"),
+    "progress string": (lambda: ml.simulate(_SPHERE, _LAD, model="mesh", progress="yes"),
+                        r"progress must be True or False; got 'yes'"),
+    "footprint string": (lambda: ml.simulate(_SPHERE, _LAD, model="mesh", footprint="no"),
+                         r"footprint must be True or False; got 'no'"),
+    "jobs float": (lambda: ml.simulate(_SPHERE, _LAD, model="mesh", jobs=2.5),
+                   r"jobs must be an integer >= 1; got 2.5"),
+    "seed float": (lambda: ml.simulate(_SPHERE, _LAD, model="mesh", seed=0.5),
+                   r"seed must be a non-negative integer; got 0.5"),
+    "fbp size string": (lambda: ml.fbp(_SINO, size="big"),
+                        r"size must be an integer >= 1; got 'big'"),
+    "ladar string": (lambda: ml.trace(_SPHERE, "ladar"),
+                     r"ladar must be a meshladar.Ladar; got str"),
+    "log floor nan": (lambda: ml.log_radiance(_SINO, floor=float("nan")),
+                      r"floor must be finite and in \(0, 1\]; got nan"),
+}
+
+
+@pytest.mark.parametrize("name", list(BAD_CALLS))
+def test_bad_calls_are_one_clear_error_naming_the_argument(name):
+    call, message = BAD_CALLS[name]
+    with pytest.raises(ml.errors.ParameterError, match="^" + message) as exc:
+        call()
+    assert isinstance(exc.value, ValueError) and "\n" not in str(exc.value)
+
+
+def test_one_coating_reweighs_a_one_material_scene():
+    hits = ml.trace(_SPHERE, _LAD)
+    np.testing.assert_array_equal(ml.weigh(hits, ALUMINUM).values,
+                                  ml.weigh(hits, [ALUMINUM]).values)
