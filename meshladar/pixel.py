@@ -29,6 +29,7 @@ import math
 import numpy as np
 
 from ._validate import check_real, check_size
+from .errors import ParameterError
 from .ladar import Ladar
 from .scene import Scene
 from .siddon import PixelGrid
@@ -92,6 +93,11 @@ def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=N
                      low_open=True)
     ds = check_real("ray_spacing", pix / 4 if ray_spacing is None else ray_spacing, low=0.0,
                     low_open=True)
+    smallest = min(min(sh.axes) for sh in scene.shapes)
+    if pix > 0.5 * smallest:
+        raise ParameterError(f"pixel_size must be at most {0.5 * smallest:g} (half the "
+                             f"smallest shape's semi-axis, {smallest:g}), so that every shape "
+                             f"covers pixels; got {pix:g}")
     (cx, cy), radius = scene.bounding_circle()
     half = radius + 2 * pix
     n = int(math.ceil(2 * half / pix))

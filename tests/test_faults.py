@@ -215,6 +215,18 @@ def test_sizes_beyond_memory_are_refused_before_allocating(make, message):
         make()
 
 
+def test_a_pixel_larger_than_the_shapes_is_refused(tmp_path, capsys):
+    # --pixel-size 1e9 once returned 9626 where about 2 is right
+    with pytest.raises(ml.errors.ParameterError, match=r"pixel_size must be at most 0.15 \(half "
+                                                       r"the smallest shape's semi-axis, 0.3\)"):
+        ml.simulate(PAIR, ml.Ladar.paper(angles_deg=[0.0]), model="pixel", pixel_size=1e9)
+    from meshladar.cli import main
+
+    assert main(["simulate", "disk", "--model", "pixel", "--pixel-size", "1e9", "-o",
+                 str(tmp_path / "d.npz")]) == 2
+    assert "pixel_size must be at most 0.4" in capsys.readouterr().err
+
+
 def test_a_spec_asking_for_too_many_views_is_refused(tmp_path):
     path = tmp_path / "many.toml"
     path.write_text('[ladar]\nangles_deg = { start = 0.0, stop = 360.0, step = 1e-12 }\n'
