@@ -166,12 +166,15 @@ def _long_cli_run(tmp_path):
 
 def _workers_once_a_chunk_is_saved(run, proc):
     """The CLI's worker processes, once its first chunk file exists (an event, not a delay)."""
-    import time
+    import subprocess
 
     psutil = pytest.importorskip("psutil")
     while not list(run.glob("chunk_*.npz")):
-        assert proc.poll() is None, proc.communicate()[1]
-        time.sleep(0.05)
+        try:                                   # poll for the file, failing at once if the
+            proc.wait(timeout=0.05)            # run ended without writing it
+        except subprocess.TimeoutExpired:
+            continue
+        raise AssertionError(proc.communicate()[1])
     return psutil.Process(proc.pid).children(recursive=True)
 
 
