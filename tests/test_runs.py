@@ -6,7 +6,6 @@ import os
 import signal
 import subprocess
 import sys
-import time
 
 import numpy as np
 import pytest
@@ -78,12 +77,15 @@ def _finish(proc, timeout=600):
     return proc.returncode, err
 
 
-def _wait_for_chunks(run, n, proc, timeout=120):
-    t0 = time.time()
+def _wait_for_chunks(run, n, proc):
+    """Until n chunk files exist (an event), failing at once if the run ends first; no
+    deadline, so a loaded machine only makes it slower."""
     while len(list(run.glob("chunk_*.npz"))) < n:
-        assert proc.poll() is None, _finish(proc)[1]
-        assert time.time() - t0 < timeout
-        time.sleep(0.05)
+        try:
+            proc.wait(timeout=0.05)
+        except subprocess.TimeoutExpired:
+            continue
+        raise AssertionError(_finish(proc)[1])
 
 
 def test_sigkill_mid_run_then_resume_gives_the_uninterrupted_result(tmp_path):
