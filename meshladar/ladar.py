@@ -164,8 +164,9 @@ class Ladar:
         if n is not None:
             check_size("n_bins", n, 8 * views.n_views, f"{n} bins", "use fewer bins")
         if scene.is_mesh:
-            lo, hi = scene.range_span(views.view_vectors)
-            _warn_off_axis(scene, views.view_vectors, hi - lo)
+            near, far = scene.view_ranges(views.view_vectors)
+            lo, hi = float(near.min()), float(far.max())
+            _warn_off_axis(float(np.max(far - near)), hi - lo)
             lo, hi = lo - m, hi + m
             center = 0.5 * (lo + hi)
             span = max(hi - lo, 0.0)
@@ -213,14 +214,10 @@ class Ladar:
 _OFF_AXIS_FRACTION = 0.1
 
 
-def _warn_off_axis(scene, view_vectors, span):
+def _warn_off_axis(depth, span):
     """Warn when the target lies so far off the rotation axis that each view sees it over a
-    small part of the ranges all the views span together (bins are shared by every view)."""
-    pts = scene.hull_points()
-    depth = 0.0
-    for start in range(0, len(view_vectors), 256):
-        r = pts @ np.asarray(view_vectors[start:start + 256]).T
-        depth = max(depth, float(np.max(r.max(axis=0) - r.min(axis=0))))
+    small part (``depth``, the deepest view's) of the ranges all the views span together
+    (bins are shared by every view)."""
     if span > 0 and depth < _OFF_AXIS_FRACTION * span:
         import warnings
 

@@ -425,19 +425,19 @@ class Scene:
             self._hull = hull
         return hull
 
-    def range_span(self, view_vectors) -> tuple[float, float]:
-        """(nearest, farthest) range r = −p·w that any point of the scene takes over the
-        views (n_views, 3) (DESIGN.md: range zero is the plane through the world origin
-        perpendicular to w, growing away from the ladar)."""
+    def view_ranges(self, view_vectors) -> tuple[np.ndarray, np.ndarray]:
+        """(nearest, farthest) range r = −p·w of the scene in each view, two (n_views,)
+        arrays (DESIGN.md: range zero is the plane through the world origin perpendicular
+        to w, growing away from the ladar)."""
         w = np.asarray(view_vectors, dtype=np.float64).reshape(-1, 3)
         if self._parts:
             pts = self.hull_points()
-            lo, hi = np.inf, -np.inf
+            lo, hi = np.empty(len(w)), np.empty(len(w))
             for start in range(0, len(w), 256):           # bounded memory: hull × 256 views
                 r = -(pts @ w[start:start + 256].T)
-                lo, hi = min(lo, float(r.min())), max(hi, float(r.max()))
+                lo[start:start + 256], hi[start:start + 256] = r.min(axis=0), r.max(axis=0)
             return lo, hi
-        lo, hi = np.inf, -np.inf
+        lo, hi = np.full(len(w), np.inf), np.full(len(w), -np.inf)
         for s in self._shapes:
             # an ellipse's support along −w: centre's range ∓ its half-width along w
             a, b = s.axes
@@ -445,8 +445,13 @@ class Scene:
             wx, wy = w[:, 0], w[:, 1]
             half = np.hypot(a * (ca * wx + sa * wy), b * (-sa * wx + ca * wy))
             rc = -(s.center[0] * wx + s.center[1] * wy)
-            lo, hi = min(lo, float((rc - half).min())), max(hi, float((rc + half).max()))
+            lo, hi = np.minimum(lo, rc - half), np.maximum(hi, rc + half)
         return lo, hi
+
+    def range_span(self, view_vectors) -> tuple[float, float]:
+        """(nearest, farthest) range any point of the scene takes over all the views."""
+        lo, hi = self.view_ranges(view_vectors)
+        return float(lo.min()), float(hi.max())
 
     def bounding_circle(self) -> tuple[tuple[float, float], float]:
         """A circle (centre, radius) in x-y containing every shape (about their box centre)."""
