@@ -42,12 +42,13 @@ from __future__ import annotations
 import math
 import os
 import time
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ._validate import check_choice, check_flag, check_real, unit_vectors
-from .errors import ParameterError
+from .errors import MeshladarWarning, ParameterError
 from .ladar import Ladar
 from .scene import Scene
 from .sinogram import Sinogram
@@ -101,7 +102,9 @@ class _Geometry:
         shifted = self.vertices - self.center
         self.radius = float(np.max(np.linalg.norm(shifted, axis=1)))
         self.shifted = np.ascontiguousarray(shifted)
-        self.shifted32 = np.ascontiguousarray(shifted, dtype=np.float32)
+        _check_scale(self.radius, np.abs(self.center).max())
+        # Embree's geometry is divided by this power of two (exact in float32): unit size
+        self.scale = 2.0 ** math.ceil(math.log2(self.radius)) if self.radius > 0 else 1.0
         self.faces32 = np.ascontiguousarray(self.faces, dtype=np.int32)
         tri = self.vertices[self.faces]
         cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
@@ -121,6 +124,27 @@ class _Geometry:
             raise ParameterError(f"normals='exact' needs parts tessellated from analytic shapes; "
                                  f"{missing[0]!r} has no exact normal (use 'flat' or 'smooth')")
         self.key = _digest(self.vertices, self.faces)
+
+
+#: Scene sizes (bounding radius, in scene units) the mesh engine traces: float32 ray origins
+#: and Embree's unit-size copy keep full precision across this range.
+SCENE_RADIUS_RANGE = (1e-30, 1e30)
+
+#: Beyond this ratio of the distance from the origin to the size, float64 ranges resolve the
+#: target to worse than ~1e-7 of its size (|c|·2⁻⁵³ against its radius).
+_FAR_RATIO = 1e9
+
+
+def _check_scale(radius, offset):
+    lo, hi = SCENE_RADIUS_RANGE
+    if not lo <= radius <= hi:
+        raise ParameterError(f"scene: the mesh's bounding radius is {radius:.3g} scene units; "
+                             f"the mesh engine traces sizes in [{lo:g}, {hi:g}]: rescale the "
+                             "mesh (e.g. to metres or millimetres)")
+    if offset > _FAR_RATIO * radius:
+        warnings.warn(f"the mesh (radius {radius:.3g}) lies {offset:.3g} from the origin: ranges "
+                      f"carry only ~{offset * 2.0 ** -53 / radius:.1g} of its size in float64; "
+                      "move it near the origin", MeshladarWarning, stacklevel=4)
 
 
 def _digest(v, f):
@@ -146,11 +170,34 @@ def _embree_scene(geo: _Geometry):
         # robust mode: watertight ray-triangle tests, so a ray through a shared edge (the
         # diagonal of a prism's side quad crosses the mid-height slice plane) cannot slip
         # between the two triangles
-        scene = rtcore_scene.EmbreeScene(robust=True)
-        TriangleMesh(scene, geo.shifted32, geo.faces32)
+        raw = rtcore_scene.EmbreeScene(robust=True)
+        TriangleMesh(raw, np.ascontiguousarray(geo.shifted / geo.scale, dtype=np.float32),
+                     geo.faces32)
+        scene = _Embree(raw, geo.scale)
         _EMBREE_CACHE.clear()                   # one scene per process is enough
         _EMBREE_CACHE[geo.key] = scene
     return scene
+
+
+class _Embree:
+    """An Embree scene built at unit size: origins in, distances out, in the scene's own
+    shifted units. Embree misses outright below ~1e-14 and above ~1e13 scene units, so the
+    geometry is divided by a power of two near its radius; a power of two scales float32
+    exactly, so origins and distances are the same numbers as an unscaled cast."""
+
+    def __init__(self, scene, scale: float):
+        self.scene = scene
+        self.scale = scale
+        self.inverse = np.float32(1.0 / scale)
+
+    def run(self, origins, directions, **kwargs):
+        if self.scale != 1.0:
+            origins = origins * self.inverse
+        res = self.scene.run(origins, directions, **kwargs)
+        if self.scale != 1.0 and isinstance(res, dict):
+            with np.errstate(over="ignore"):        # a miss's far distance: inf
+                res["tfar"] = res["tfar"] * np.float32(self.scale)
+        return res
 
 
 def _dot(a, w):
@@ -506,10 +553,6 @@ def _options(scene, ladar, mode, normals, back_faces, z0):
     if mode == "slice":
         lo, hi = float(geo.vertices[:, 2].min()), float(geo.vertices[:, 2].max())
         if not lo <= z0 <= hi:
-            import warnings
-
-            from .errors import MeshladarWarning
-
             warnings.warn(f"z0={z0:.6g} lies outside the target's heights [{lo:.6g}, "
                           f"{hi:.6g}]: the slice returns nothing", MeshladarWarning,
                           stacklevel=5)
@@ -1108,10 +1151,7 @@ def _simulate_tol(scene, ladar, tol, normals, footprint, max_rays, kwargs):
     feature dominates) or when the next run would take the rays cast past ``max_rays``;
     both warn with the estimate reached and what to change.
     """
-    import warnings
-
     from ._validate import check_real
-    from .errors import MeshladarWarning
 
     tol = check_real("tol", tol, low=0.0, high=1.0, low_open=True, high_open=True)
     max_rays = check_real("max_rays", TOL_MAX_RAYS if max_rays is None else max_rays,
@@ -1243,10 +1283,6 @@ def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-side
 
 def _warn_empty(scene, ladar, run, back_faces, back_hits, face_normals):
     """One line saying that a run returned nothing, and the likely reasons."""
-    import warnings
-
-    from .errors import MeshladarWarning
-
     lo, hi = scene.range_span(ladar.view_vectors)
     reasons = []
     if hi < ladar.bin_edges[0] or lo >= ladar.bin_edges[-1]:

@@ -84,6 +84,45 @@ def test_extreme_scales(scale):
     assert np.all(np.isfinite(image.values))
 
 
+@pytest.mark.parametrize("scale", [1e-25, 1e-15, 1e-9, 1e9, 1e15, 1e25])
+def test_meshes_at_any_scale_give_the_same_profile(scale):
+    # Embree alone misses a 1e-16 or 1e14 sphere outright; the engine traces a unit-size copy
+    # (a power-of-two scale, exact in float32), so the profile scales exactly as area does.
+    # A power-of-two scale factor keeps every float32 origin and vertex the same bits.
+    sphere = trimesh.creation.icosphere(subdivisions=2, radius=0.5)
+    base = ml.Scene.from_mesh(sphere, material=DARK_GRAY)
+    s = 2.0 ** round(math.log2(scale))
+    big = ml.Scene.from_mesh(trimesh.Trimesh(sphere.vertices * s, sphere.faces, process=False),
+                             material=DARK_GRAY)
+    lad = ml.Ladar.covering(base, n_bins=32, angles_deg=[0.0, 60.0])
+    lad_s = ml.Ladar(lad.angles_deg, lad.bin_edges * s)
+    ref = ml.simulate(base, lad, model="mesh", ray_spacing=0.02)
+    got = ml.simulate(big, lad_s, model="mesh", ray_spacing=0.02 * s)
+    assert np.all(np.isfinite(got.values))
+    # the same rays on the same float32 geometry: equal to float64 round-off of the scale
+    np.testing.assert_allclose(got.values, ref.values * s * s, rtol=1e-12)
+
+
+@pytest.mark.parametrize("radius", [1e-35, 1e35])
+def test_mesh_sizes_beyond_the_engine_are_refused(radius):
+    unit = trimesh.creation.icosphere(subdivisions=1)
+    sphere = trimesh.Trimesh(unit.vertices * radius, unit.faces, process=False)
+    scene = ml.Scene.from_mesh(sphere, material=DARK_GRAY)
+    lad = ml.Ladar(np.array([0.0]), np.linspace(-2 * radius, 2 * radius, 9))
+    with pytest.raises(ml.errors.ParameterError, match=r"bounding radius is .* the mesh engine "
+                                                       r"traces sizes in \[1e-30, 1e\+30\]"):
+        ml.simulate(scene, lad, model="mesh")
+
+
+def test_a_mesh_far_from_the_origin_for_its_size_warns():
+    sphere = trimesh.creation.icosphere(subdivisions=1, radius=1e-3)
+    sphere.apply_translation([1e7, 0.0, 0.0])
+    scene = ml.Scene.from_mesh(sphere, material=DARK_GRAY)
+    lad = ml.Ladar.covering(scene, n_bins=16, angles_deg=[0.0])
+    with pytest.warns(ml.errors.MeshladarWarning, match=r"lies 1e\+07 from the origin"):
+        ml.simulate(scene, lad, model="mesh")
+
+
 @pytest.mark.parametrize("n_bins", [1, 8192])
 def test_extreme_bin_counts(n_bins):
     scene = _pair(DARK_GRAY)
