@@ -26,6 +26,7 @@ def _pair(m):
     return ml.Scene([ml.Disk((-0.3, 0.0), 0.4, m), ml.Disk((0.4, 0.0), 0.3, ALUMINUM)])
 
 
+@pytest.mark.filterwarnings("ignore:.* views are too few")   # few views on purpose: speed
 @pytest.mark.parametrize("name", list(EXTREME_COATINGS))
 def test_extreme_coatings_in_every_model(name):
     scene = _pair(EXTREME_COATINGS[name]())
@@ -59,6 +60,7 @@ def test_grazing_facets():
                 assert sino.total()[0] == pytest.approx(expected, rel=0.06)
 
 
+@pytest.mark.filterwarnings("ignore:.* views are too few")   # few views on purpose: speed
 @pytest.mark.parametrize("scale", [1e-3, 1e4])
 def test_extreme_scales(scale):
     # lengths scale, bin integrals (per unit height) scale with them, F does not
@@ -123,6 +125,7 @@ def test_a_mesh_far_from_the_origin_for_its_size_warns():
         ml.simulate(scene, lad, model="mesh")
 
 
+@pytest.mark.filterwarnings("ignore:.* views are too few")   # few views on purpose: speed
 @pytest.mark.parametrize("n_bins", [1, 8192])
 def test_extreme_bin_counts(n_bins):
     scene = _pair(DARK_GRAY)

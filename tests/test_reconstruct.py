@@ -131,6 +131,42 @@ def test_partial_angular_coverage_warns():
         ml.fbp(sino, size=32, extent=1.0)
 
 
+@pytest.mark.parametrize("scale", [1e-300, 1e300, 2.0**1020])
+def test_any_magnitude_of_values_reconstructs_to_the_scaled_image(scale):
+    # values of 1e307 once gave a NaN image (the filter overflowed); filtering runs at unit
+    # scale, so the image scales exactly with the data up to float64's range
+    sino = disk_radon_sinogram((0.1, 0.0), 0.5, 64, 1.0, np.arange(0.0, 360.0, 3.0))
+    ref = ml.fbp(sino, size=48, extent=1.0).values
+    big = ml.Sinogram(sino.values * scale, angles_deg=sino.angles_deg,
+                      bin_edges=sino.bin_edges)
+    got = ml.fbp(big, size=48, extent=1.0).values
+    assert np.all(np.isfinite(got))
+    # same operations on values a power of two apart, then one product: round-off only
+    np.testing.assert_allclose(got / scale, ref, rtol=1e-12, atol=1e-12 * np.abs(ref).max())
+
+
+def test_an_image_beyond_float64_is_refused():
+    # bin integrals of 1e300 in bins 3e-12 wide: a Radon transform of 3e311
+    sino = disk_radon_sinogram((0.0, 0.0), 5e-11, 64, 1e-10, np.arange(0.0, 360.0, 3.0))
+    huge = ml.Sinogram(sino.values / sino.values.max() * 1e300, angles_deg=sino.angles_deg,
+                       bin_edges=sino.bin_edges)
+    with pytest.raises(ParameterError, match=r"sinogram: values up to 1e\+300 in bins 3.13e-12 "
+                                             r"wide give an image beyond float64's range"):
+        ml.fbp(huge, size=16, extent=1e-10)
+
+
+def test_views_too_few_for_the_bins_warn_with_the_number_needed():
+    disk = ml.phantoms.load("disk")
+    fine = ml.Ladar.centered(n_bins=1024, bin_width=2.4 / 1024, angles_deg=np.arange(0, 360, 8.0))
+    with pytest.warns(MeshladarWarning, match=r"45 views are too few for the 34\d bins across "
+                                              r"the target's returns: FBP samples the angles "
+                                              r"fully with about 5\d\d"):
+        ml.fbp(ml.simulate(disk.scene, fine), size=64, extent=1.2)
+    # the paper's own sampling (350 bins across, 360 views) reconstructs without a word
+    paper = ml.simulate(disk.scene, disk.ladar)
+    ml.fbp(paper, size=64, extent=1.0)                    # filterwarnings = error
+
+
 def test_view_weights_follow_uneven_spacing():
     # two half-circles sampled at different densities still give the uniform disk
     angles = np.concatenate([np.arange(0.0, 180.0, 0.5), np.arange(180.0, 360.0, 1.0)])
