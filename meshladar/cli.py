@@ -272,23 +272,23 @@ def _cmd_simulate(args) -> int:
     return 0
 
 
-def _check_output(output, suffixes, inputs):
+def _check_output(output, suffixes, inputs, flag="-o"):
     """An output path must never name an input, and must name a file of a known format."""
     import os
 
     from .errors import ParameterError
 
     if not output or os.path.basename(output) in ("", ".", "..") or os.path.isdir(output):
-        raise ParameterError(f"-o: must name a file, not a folder; got {output!r}")
+        raise ParameterError(f"{flag}: must name a file, not a folder; got {output!r}")
     for src in filter(None, inputs):
         if os.path.abspath(src) == os.path.abspath(output) or (
                 os.path.exists(src) and os.path.exists(output)
                 and os.path.samefile(src, output)):
-            raise ParameterError(f"-o {output!r} is the input {src!r}: meshladar never "
+            raise ParameterError(f"{flag} {output!r} is the input {src!r}: meshladar never "
                                  "overwrites an input; choose another output name")
     ext = os.path.splitext(output)[1].lower()
     if ext not in suffixes:
-        raise ParameterError(f"-o: the extension decides the format: one of "
+        raise ParameterError(f"{flag}: the extension decides the format: one of "
                              f"{', '.join(suffixes)}; got {output!r}")
 
 
@@ -349,7 +349,8 @@ def _cmd_view(args) -> int:
     from .errors import ParameterError
 
     if args.screenshot is not None:
-        _check_output(args.screenshot, (".png",), [args.scene, args.materials])
+        _check_output(args.screenshot, (".png",), [args.scene, args.materials],
+                      "--screenshot")
     scene, default_ladar, _ = _load_scene(args)
     if args.screenshot is None and not (os.environ.get("DISPLAY")
                                         or os.environ.get("WAYLAND_DISPLAY")):

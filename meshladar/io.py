@@ -58,9 +58,16 @@ def write_atomic(path, write):
 def _atomic(path, write):
     path = os.fspath(path)
     folder = os.path.dirname(os.path.abspath(path))
-    os.makedirs(folder, exist_ok=True)
-    mode = _new_file_mode(path)
-    fd, tmp = tempfile.mkstemp(dir=folder, prefix=".tmp-", suffix=os.path.basename(path))
+    name = os.path.basename(path)
+    try:
+        os.makedirs(folder, exist_ok=True)
+        _remove_stale_temporaries(folder)
+        mode = _new_file_mode(path)
+        # the writer's pid in the name: a temporary left by a killed process is recognised
+        # (and removed) by the next process writing into the same folder
+        fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".tmp-{os.getpid()}-", suffix=name)
+    except OSError as exc:
+        raise OSError(exc.errno, exc.strerror, path) from exc
     try:
         os.fchmod(fd, mode)
         with os.fdopen(fd, "wb") as fh:
@@ -68,10 +75,49 @@ def _atomic(path, write):
             fh.flush()
             os.fsync(fh.fileno())
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         if os.path.exists(tmp):
             os.unlink(tmp)
+        if isinstance(exc, OSError) and getattr(exc, "filename", None) in (tmp, None):
+            # a full disk or a lost permission: name the user's file, not the temporary
+            raise OSError(exc.errno, exc.strerror or str(exc), path) from exc
         raise
+
+
+#: Folders already swept of stale temporaries by this process (once each: a run folder
+#: of 1e5 chunks is listed once, not once per chunk).
+_SWEPT: set = set()
+
+
+def _remove_stale_temporaries(folder):
+    """Remove ``.tmp-<pid>-…`` files in ``folder`` whose writer is no longer alive."""
+    if folder in _SWEPT:
+        return
+    _SWEPT.add(folder)
+    try:
+        entries = os.listdir(folder)
+    except OSError:
+        return
+    for entry in entries:
+        pid = entry[len(".tmp-"):].split("-", 1)[0] if entry.startswith(".tmp-") else ""
+        if not pid.isdigit() or _alive(int(pid)):
+            continue
+        try:
+            os.remove(os.path.join(folder, entry))
+        except OSError:
+            pass
+
+
+def _alive(pid):
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:                 # another user's process: alive
+        return True
+    return True
 
 
 def write_text_atomic(path, text: str):

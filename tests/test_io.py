@@ -71,3 +71,54 @@ def test_truncated_and_pickled_sinogram_results_are_rejected(tmp_path):
              values=np.array([object()], dtype=object))
     with pytest.raises(ResultFileError, match="evil.npz: not a readable result file"):
         load_sinogram(evil)
+
+
+def test_temporaries_of_a_killed_writer_are_removed_by_the_next_write(tmp_path):
+    import subprocess
+    import sys
+
+    from meshladar import io
+
+    # a pid that has ended (a finished child), and this process's own (alive)
+    child = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                           capture_output=True, text=True, check=True)
+    dead = int(child.stdout)
+    stale = tmp_path / f".tmp-{dead}-abc123out.npz"
+    stale.write_bytes(b"x" * 1000)                        # what a SIGKILL mid-write leaves
+    live = tmp_path / f".tmp-{1}-def456other.npz"         # pid 1 is alive: never removed
+    live.write_bytes(b"y")
+    io._SWEPT.discard(str(tmp_path))
+    save_result(tmp_path / "out.npz", {"a": np.zeros(3)}, {})
+    assert not stale.exists() and live.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([live.name, "out.npz"])
+
+
+def test_a_failed_write_names_the_users_file_not_the_temporary(tmp_path):
+    import errno
+
+    from meshladar.io import write_atomic
+
+    def full_disk(fh):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    target = tmp_path / "out.bin"
+    with pytest.raises(OSError) as exc:
+        write_atomic(target, full_disk)
+    assert exc.value.errno == errno.ENOSPC and exc.value.filename == str(target)
+    assert list(tmp_path.iterdir()) == []                 # no temporary left behind
+    # a path through a file (not a folder): the error names what the user gave
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    with pytest.raises(OSError) as exc:
+        write_atomic(blocker / "out.bin", lambda fh: fh.write(b"1"))
+    assert exc.value.filename == str(blocker / "out.bin")
+
+
+def test_cli_output_through_a_file_is_one_line_naming_it(tmp_path, capsys):
+    from meshladar.cli import main
+
+    (tmp_path / "file").write_text("x")
+    out = tmp_path / "file" / "d.npz"
+    assert main(["simulate", "disk", "--views", "4", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and repr(str(out)) in err and ".tmp-" not in err

@@ -80,8 +80,14 @@ def face_returns(scene, w, *, segments=256):
 
 def _finish(plotter, off_screen, screenshot):
     if off_screen:
-        img = plotter.screenshot(screenshot, return_img=True)
+        img = plotter.screenshot(None, return_img=True)
         plotter.close()
+        if screenshot is not None:          # PNG written atomically (never half a file)
+            from matplotlib.image import imsave
+
+            from meshladar.io import write_atomic
+
+            write_atomic(screenshot, lambda fh: imsave(fh, img, format="png"))
         return img
     plotter.show(screenshot=screenshot)
     return plotter
