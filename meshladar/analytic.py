@@ -36,6 +36,7 @@ import math
 
 import numpy as np
 
+from ._validate import check_flag
 from .ladar import Ladar
 from .scene import Scene, Shape
 from .sinogram import Sinogram
@@ -199,7 +200,7 @@ def _shape_profile(g: _ShapeViews, views: np.ndarray, edges: np.ndarray, shadow_
     out += np.bincount(flat, weights=piece[ok], minlength=out.size).reshape(out.shape)
 
 
-def simulate_analytic(scene: Scene, ladar: Ladar) -> Sinogram:
+def simulate_analytic(scene: Scene, ladar: Ladar, *, progress=False) -> Sinogram:
     """Exact range profiles of a scene of disks and ellipses for views about the z axis.
 
     Parameters
@@ -208,6 +209,8 @@ def simulate_analytic(scene: Scene, ladar: Ladar) -> Sinogram:
         Non-overlapping disks and ellipses, each with its SR coating.
     ladar : Ladar
         Views (``angles_deg``) and range ``bin_edges``; monostatic.
+    progress : bool, keyword-only
+        A progress bar on stderr (on a terminal only) over shapes × views.
 
     Returns
     -------
@@ -227,20 +230,26 @@ def simulate_analytic(scene: Scene, ladar: Ladar) -> Sinogram:
     geoms = [_ShapeViews(s, phi) for s in scene.shapes]
     lo, hi = _occluders(geoms)
     values = np.zeros((n_views, n_bins))
+    from ._progress import Progress
+
     if len(geoms) == 1 and geoms[0].shape.is_circle:
         # view-independent shape: one profile per distinct centre range
         _, first, inverse = np.unique(geoms[0].r_c, return_index=True, return_inverse=True)
         sub = np.zeros((first.size, n_bins))
         geo = _ShapeViews(geoms[0].shape, phi[first])
-        _chunked(geo, np.arange(first.size), edges, lo[0][first], hi[0][first], sub)
+        bar = Progress(first.size, "profiles", enabled=check_flag("progress", progress))
+        _chunked(geo, np.arange(first.size), edges, lo[0][first], hi[0][first], sub, bar)
         values = sub[inverse.ravel()]
     else:
+        bar = Progress(len(geoms) * n_views, "shape views",
+                       enabled=check_flag("progress", progress))
         for g, L, H in zip(geoms, lo, hi):
-            _chunked(g, np.arange(n_views), edges, L, H, values)
+            _chunked(g, np.arange(n_views), edges, L, H, values, bar)
+    bar.close()
     return Sinogram(values, angles_deg=ladar.angles_deg, bin_edges=edges, model="analytic")
 
 
-def _chunked(g, views, edges, lo, hi, out):
+def _chunked(g, views, edges, lo, hi, out, bar):
     """Run _shape_profile over blocks of views that keep the piece count bounded."""
     span = 2.0 * max(g.a, g.b)
     width = float(np.min(np.diff(edges)))
@@ -248,3 +257,4 @@ def _chunked(g, views, edges, lo, hi, out):
     step = max(1, int(_MAX_PIECES // per_view))
     for i in range(0, views.size, step):
         _shape_profile(g, views[i:i + step], edges, lo, hi, out)
+        bar.update(min(step, views.size - i))

@@ -250,11 +250,11 @@ def _cmd_simulate(args) -> int:
         if args.footprint:
             opts["footprint"] = True
         opts["jobs"] = args.jobs
-        opts["progress"] = not args.quiet
         if args.run_dir is not None:
             opts["run_dir"] = args.run_dir
     elif model == "pixel" and args.pixel_size is not None:
         opts["pixel_size"] = args.pixel_size
+    opts["progress"] = not args.quiet
     if model == "mesh" and (args.scheduler or args.workers):
         from .parallel import dask_executor
 

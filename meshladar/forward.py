@@ -15,7 +15,7 @@ __all__ = ["simulate", "MODELS"]
 #: The forward models available in this version.
 MODELS = ("analytic", "mesh", "pixel")
 
-_OPTIONS = {"analytic": (), "pixel": ("pixel_size", "ray_spacing"),
+_OPTIONS = {"analytic": ("progress",), "pixel": ("pixel_size", "ray_spacing", "progress"),
             "mesh": ("mode", "normals", "back_faces", "z0", "ray_spacing", "rays_per_bin",
                      "footprint", "sampling", "seed", "receiver", "tol", "max_rays", "jobs",
                      "executor", "progress", "run_dir")}
@@ -29,14 +29,16 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
     scene : Scene
     ladar : Ladar
     model : str
-        ``"analytic"``: exact profiles of disks and ellipses (no faceting, no sampling).
+        ``"analytic"``: exact profiles of disks and ellipses (no faceting, no sampling;
+        option ``progress``).
         ``"mesh"``: triangle meshes ray-cast with Embree (options in
         :func:`meshladar.trace.simulate_mesh`: mode, normals, back_faces, z0, ray_spacing,
         rays_per_bin, footprint, sampling, seed, receiver, tol, max_rays, jobs, executor,
         progress, run_dir). A mesh is a 3-D target (``mode="3d"``) unless it was
         tessellated from the analytic shapes.
         ``"pixel"``: the paper's method, a rasterised surface traced with Siddon rays
-        (options ``pixel_size``, ``ray_spacing``; see :func:`meshladar.pixel.simulate_pixel`).
+        (options ``pixel_size``, ``ray_spacing``, ``progress``; see
+        :func:`meshladar.pixel.simulate_pixel`).
     **options
         Options of the chosen model; an option another model takes is an error.
 
@@ -71,7 +73,7 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
     else:
         from .analytic import simulate_analytic
 
-        sino = simulate_analytic(scene, ladar)
+        sino = simulate_analytic(scene, ladar, **options)
     if not np.any(sino.values):
         import warnings
 

@@ -28,7 +28,7 @@ import math
 
 import numpy as np
 
-from ._validate import check_real, check_size
+from ._validate import check_flag, check_real, check_size
 from .errors import ParameterError
 from .ladar import Ladar
 from .scene import Scene
@@ -72,7 +72,8 @@ def rasterize(scene: Scene, grid: PixelGrid):
     return owner, normal
 
 
-def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=None) -> Sinogram:
+def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=None,
+                   progress=False) -> Sinogram:
     """Range profiles by the paper's pixel method (see the module docstring).
 
     Parameters
@@ -82,6 +83,8 @@ def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=N
         Side of the square pixels; default the narrowest range bin.
     ray_spacing : float, optional
         Transverse distance between parallel rays; default pixel_size / 4.
+    progress : bool
+        A progress bar on stderr (on a terminal only) over the views.
 
     Returns
     -------
@@ -127,6 +130,9 @@ def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=N
 
     from . import _kernels
 
+    from ._progress import Progress
+
+    bar = Progress(ladar.n_views, "views", enabled=check_flag("progress", progress))
     chunk = max(1, 2_000_000 // n_rays)
     for v0 in range(0, ladar.n_views, chunk):
         v = np.arange(v0, min(v0 + chunk, ladar.n_views))
@@ -158,5 +164,7 @@ def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=N
         ok = (b >= 0) & (b < ladar.n_bins)
         values += np.bincount(view[ok] * ladar.n_bins + b[ok], weights=weight[ok],
                               minlength=values.size).reshape(values.shape)
+        bar.update(v.size)
+    bar.close()
     return Sinogram(values, angles_deg=ladar.angles_deg, bin_edges=edges, model="pixel",
                     info={"pixel_size": pix, "ray_spacing": ds, "n_rays": n_rays})

@@ -319,3 +319,38 @@ def test_one_coating_reweighs_a_one_material_scene():
     hits = ml.trace(_SPHERE, _LAD)
     np.testing.assert_array_equal(ml.weigh(hits, ALUMINUM).values,
                                   ml.weigh(hits, [ALUMINUM]).values)
+
+
+# ------------------------------------------------------------------ progress on every model
+
+class _Terminal:
+    """A stderr that says it is a terminal, so the progress bar draws into it."""
+
+    def __init__(self):
+        self.text = ""
+
+    def isatty(self):
+        return True
+
+    def write(self, s):
+        self.text += s
+
+    def flush(self):
+        pass
+
+
+@pytest.mark.parametrize("model, scene", [("analytic", PAIR), ("pixel", PAIR),
+                                          ("mesh", PAIR.tessellate(64))])
+def test_every_model_shows_progress_to_its_last_view(model, scene, monkeypatch):
+    import sys
+
+    ladar = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 30.0))
+    quiet = ml.simulate(scene, ladar, model=model)
+    term = _Terminal()
+    monkeypatch.setattr(sys, "stderr", term)
+    shown = ml.simulate(scene, ladar, model=model, progress=True)
+    np.testing.assert_array_equal(shown.values, quiet.values)     # the bar changes nothing
+    total = {"analytic": 2 * 12, "pixel": 12, "mesh": 12}[model]   # analytic: shapes x views
+    assert f"{total}/{total}" in term.text and term.text.endswith("\n")
+    with pytest.raises(ml.errors.ParameterError, match="progress must be True or False"):
+        ml.simulate(scene, ladar, model=model, progress="yes")
