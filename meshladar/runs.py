@@ -75,13 +75,26 @@ class RunFolder:
                 except OSError:
                     pass
         manifest = os.path.join(self.path, "manifest.json")
+        old, damage = None, None
         if os.path.exists(manifest):
             try:
                 with open(manifest, encoding="utf-8") as fh:
                     old = json.load(fh)
-            except (OSError, ValueError) as exc:
-                raise RunFolderError(f"{manifest}: unreadable manifest ({exc}); use another "
-                                     "folder or delete this one") from exc
+                if not (isinstance(old, dict) and isinstance(old.get("digest"), str)
+                        and isinstance(old.get("job", {}), dict)):
+                    raise ValueError(f"a JSON {type(old).__name__} without a job digest")
+            except (OSError, ValueError, RecursionError) as exc:
+                old, damage = None, " ".join(str(exc).split())[:120]
+        if old is None:
+            # no manifest, or a damaged one: the chunks name their job themselves, so the
+            # manifest is (re)written when they are this job's, and the folder refused when not
+            foreign = self._foreign_chunks()
+            if foreign:
+                what = (f"{manifest}: unreadable manifest ({damage})" if damage else
+                        f"{self.path}: no manifest")
+                raise RunFolderError(f"{what}, and {foreign} chunk files belong to another "
+                                     "job; use another folder")
+        if old is not None:
             if old.get("digest") != self.digest:
                 changed = sorted(k for k in set(old.get("job", {})) | set(self.job)
                                  if old.get("job", {}).get(k) != _jsonable(self.job.get(k)))
@@ -93,6 +106,20 @@ class RunFolder:
             write_text_atomic(manifest, json.dumps(
                 {"digest": self.digest, "job": _jsonable(self.job),
                  "meshladar_version": __version__}, indent=1, sort_keys=True))
+
+    def _foreign_chunks(self):
+        """How many readable chunk files in the folder were written for another job."""
+        from .io import ResultFileError, load_result
+
+        count = 0
+        for name in os.listdir(self.path):
+            if name.startswith("chunk_") and name.endswith(".npz"):
+                try:
+                    _, meta = load_result(os.path.join(self.path, name))
+                except ResultFileError:
+                    continue                    # unreadable: recomputed, not evidence
+                count += meta.get("job") != self.digest
+        return count
 
     def close(self):
         """Release the folder for other runs (also when this object is collected)."""

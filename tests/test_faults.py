@@ -75,6 +75,33 @@ def test_a_chunk_of_the_wrong_shape_is_recomputed(finished_run, tmp_path):
     np.testing.assert_array_equal(got.values, ref.values)
 
 
+@pytest.mark.parametrize("manifest", [b"{not json", b"[1, 2]", b"{}", b"\xff\xfe", None])
+def test_a_damaged_or_missing_manifest_is_rebuilt_from_the_chunks(finished_run, tmp_path,
+                                                                   manifest):
+    mesh, ladar, run, ref, chunks = _copy_run(finished_run, tmp_path)
+    stamps = [p.stat().st_mtime_ns for p in chunks]
+    if manifest is None:
+        (run / "manifest.json").unlink()
+    else:
+        (run / "manifest.json").write_bytes(manifest)
+    got = ml.simulate(mesh, ladar, model="mesh", run_dir=run)
+    np.testing.assert_array_equal(got.values, ref.values)
+    assert [p.stat().st_mtime_ns for p in chunks] == stamps       # every chunk reused
+    assert json.loads((run / "manifest.json").read_text())["digest"]
+
+
+def test_a_damaged_manifest_over_another_jobs_chunks_is_refused(finished_run, tmp_path):
+    from meshladar.runs import RunFolderError
+
+    mesh, ladar, run, ref, chunks = _copy_run(finished_run, tmp_path)
+    (run / "manifest.json").write_text("{oops")
+    other = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 30.0))
+    with pytest.raises(RunFolderError, match=r"unreadable manifest \(.*\), and 4 chunk files "
+                                             r"belong to another job; use another folder"):
+        ml.simulate(mesh, other, model="mesh", run_dir=run)
+    assert all(p.exists() for p in chunks)                      # nothing of theirs touched
+
+
 @pytest.mark.parametrize("doc, message", [
     ("[1, 2]", "damaged metadata (a JSON list, not an object)"),
     ("null", "damaged metadata (a JSON NoneType, not an object)"),
