@@ -184,7 +184,7 @@ class Ladar:
                 n = max(1, int(np.ceil(2 * half / w - 1e-9)))
             elif w is None:
                 w = 2 * half / n
-        check_size("bin_width", n, 8 * views.n_views, f"{n} bins of width {w:g}",
+        check_size("bin_width", n, 8 * views.n_views, f"{n:.4g} bins of width {w:g}",
                    "give wider bins")
         edges = center + (np.arange(n + 1) - n / 2.0) * w
         if view_vectors is not None:
