@@ -155,12 +155,15 @@ def _digest(v, f):
     return h.hexdigest()
 
 
+#: Embree scenes built in this process, most recent last, keyed by the geometry's content:
+#: alternating between a few meshes (a study, a comparison) reuses each one's BVH.
 _EMBREE_CACHE: dict = {}
+_EMBREE_CACHE_SIZE = 4
 
 
 def _embree_scene(geo: _Geometry):
     """The Embree scene of the geometry, built once per process (cached by content)."""
-    scene = _EMBREE_CACHE.get(geo.key)
+    scene = _EMBREE_CACHE.pop(geo.key, None)
     if scene is None:
         try:
             from embreex import rtcore_scene
@@ -174,8 +177,9 @@ def _embree_scene(geo: _Geometry):
         TriangleMesh(raw, np.ascontiguousarray(geo.shifted / geo.scale, dtype=np.float32),
                      geo.faces32)
         scene = _Embree(raw, geo.scale)
-        _EMBREE_CACHE.clear()                   # one scene per process is enough
-        _EMBREE_CACHE[geo.key] = scene
+        while len(_EMBREE_CACHE) >= _EMBREE_CACHE_SIZE:
+            del _EMBREE_CACHE[next(iter(_EMBREE_CACHE))]       # the least recently used
+    _EMBREE_CACHE[geo.key] = scene
     return scene
 
 

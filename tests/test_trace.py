@@ -394,3 +394,16 @@ def test_sphere_part_via_public_api_and_progress_is_quiet_off_a_terminal(capsys)
     # area πR² (the 1280-face icosphere's silhouette is 0.5% inside the sphere's)
     assert sino.info["mode"] == "3d"
     np.testing.assert_allclose(sino.total(), 0.5**2, rtol=0.01)
+
+
+def test_alternating_meshes_reuse_their_embree_scenes():
+    from meshladar.trace import _EMBREE_CACHE_SIZE, _embree_scene, _Geometry
+
+    scenes = [ml.Scene.from_parts([ml.mesh.sphere((0, 0, 0), 0.5 + 0.1 * k, 0, subdivisions=1)],
+                                  [DARK_GRAY]) for k in range(_EMBREE_CACHE_SIZE + 1)]
+    geos = [_Geometry(s, "flat") for s in scenes]
+    first = [_embree_scene(g) for g in geos[:2]]
+    assert [_embree_scene(g) for g in geos[:2] * 2] == first * 2     # built once each
+    for g in geos[2:]:                                # past the bound: the oldest goes
+        _embree_scene(g)
+    assert _embree_scene(geos[1]) is first[1] and _embree_scene(geos[0]) is not first[0]
