@@ -37,6 +37,7 @@ import math
 import numpy as np
 
 from ._validate import check_flag
+from .brdf import projected_weight
 from .ladar import Ladar
 from .scene import Scene, Shape
 from .sinogram import Sinogram
@@ -148,11 +149,9 @@ def _shape_profile(g: _ShapeViews, views: np.ndarray, edges: np.ndarray, shadow_
     n0 = np.hypot(a * np.sin(t0), b * np.cos(t0))            # |p'| at the top
     n_sil = np.hypot(a * np.sin(t1 + sigma * 0.5 * np.pi), b * np.cos(t1 + sigma * 0.5 * np.pi))
     pieces = [np.zeros((n_rows, 1)), end[:, None]]
-    if m.has_specular:
-        pieces.append(_grading(m.e * n0 / M, end))
-    sil_scale = min([x for x in ((m.b if m.has_diffuse and m.b > 0 else None),
-                                 (2.0 * m.e if m.has_specular else None)) if x is not None],
-                    default=None)
+    glint_scale, sil_scale = m.angular_scales
+    if glint_scale is not None:
+        pieces.append(_grading(glint_scale * n0 / M, end))
     if sil_scale is not None:
         pieces.append(np.maximum(end[:, None] - _grading(sil_scale * n_sil / K, end), 0.0))
     # uniform cap on piece width (slender ellipses: zeros of |p'| near the major-axis ends)
@@ -186,7 +185,7 @@ def _shape_profile(g: _ShapeViews, views: np.ndarray, edges: np.ndarray, shadow_
     n_t = np.hypot(a * np.sin(t), b * np.cos(t))
     cos_t = np.maximum(K[r][:, None] * np.cos(sg * tau - delta[r][:, None]) / n_t, 0.0)
     sin_t = M[r][:, None] * np.abs(np.sin(tau)) / n_t
-    w = m._core(cos_t, sin_t, cos_t, sin_t, cos_t, sin_t, True)
+    w = projected_weight(m, cos_t, sin_t)
     piece = (w * n_t) @ _GL_W * half
 
     # 5. bin and visibility of each piece from its midpoint

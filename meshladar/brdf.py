@@ -1,4 +1,11 @@
-"""The Sandford-Robertson (SR) BRDF, exact and numerically stable at every extreme.
+"""BRDFs: the protocol every forward model accepts, and the Sandford-Robertson (SR) model,
+exact and numerically stable at every extreme.
+
+The protocol (:class:`BRDF`): a coating defines ``projected(cos_theta, sin_theta)``, its
+monostatic weight F(θ; −θ)·cos θ, and inherits ``monostatic``; a bistatic receiver needs
+``bistatic`` as well. Built in: :class:`SandfordRobertson` (here), and
+:class:`~meshladar.brdfs.Lambertian`, :class:`~meshladar.brdfs.Phong`,
+:class:`~meshladar.brdfs.GGX` and :class:`~meshladar.brdfs.Tabulated`.
 
 The SR model (Jin & Levine 2009, Appendix A) splits reflection into a diffuse lobe
 (Eqs. A1-A4) and a specular glint lobe (Eqs. A5-A10), tied together by energy
@@ -43,6 +50,7 @@ from ._validate import check_choice, check_real, finite_array, unit_vectors
 from .errors import EnergyConservationWarning, ParameterError
 
 __all__ = [
+    "BRDF",
     "SandfordRobertson",
     "diffuse_shape",
     "diffuse_normalization",
@@ -234,8 +242,174 @@ def specular_normalization(theta, e):
 # The material.
 # --------------------------------------------------------------------------------------
 
+class BRDF:
+    """The BRDF protocol: what a coating must give for every forward model to use it.
+
+    A subclass defines :meth:`projected`, the monostatic weight F(θ; −θ)·cos θ of the
+    paper's Eq. 8 on arrays of (cos θ, sin θ) with cos θ ≥ 0 (0 below the horizon, finite
+    up to and including θ = π/2). Everything else derives from it: :meth:`monostatic` for
+    users, :meth:`value` (F itself) for the mesh engine. A bistatic receiver needs
+    :meth:`bistatic` too. ``kernel_params`` (a row for the compiled SR kernel) and
+    ``angular_scales`` (the narrowest features, for the analytic model's quadrature) are
+    optional speed and accuracy hints.
+
+    Examples
+    --------
+    >>> import numpy as np, meshladar as ml
+    >>> class Matte(ml.brdf.BRDF):
+    ...     def projected(self, cos_theta, sin_theta):
+    ...         return 0.3 / np.pi * np.maximum(cos_theta, 0.0)
+    >>> round(Matte().monostatic(0.0), 4)
+    0.0955
+    """
+
+    #: Row of the compiled SR kernel's material table, or None (the engine then calls
+    #: :meth:`value` on arrays: slower, same result).
+    kernel_params = None
+
+    #: (near normal, near grazing): the angular widths, in radians, of the fastest
+    #: variation of F·cos θ near θ = 0 and θ = π/2, or None where it is smooth. The analytic
+    #: model grades its quadrature panels to them.
+    angular_scales = (None, None)
+
+    name = None
+
+    def projected(self, cos_theta, sin_theta):
+        """F(θ; −θ)·cos θ in 1/sr for arrays cos θ ≥ 0 and sin θ = sqrt(1 − cos²θ) ≥ 0."""
+        raise NotImplementedError(f"{type(self).__name__} must define projected(cos_theta, "
+                                  "sin_theta), the monostatic F·cos θ")
+
+    def value(self, cos_theta, sin_theta):
+        """F(θ; −θ) in 1/sr: the projected weight over cos θ (cos(fl(π/2)) at the horizon),
+        0 below it."""
+        c = np.asarray(cos_theta, np.float64)
+        p = projected_weight(self, np.maximum(c, 0.0), sin_theta)
+        return np.where(c >= 0, p / np.maximum(c, _COS_HORIZON), 0.0)
+
+    def bistatic(self, cos_i, sin_i, cos_r, sin_r, cos_h, sin_h):
+        """F(w_i, w_r)·cos θr in 1/sr from the cosines and sines of θi, θr and the half
+        vector's polar angle; 0 below either horizon. Optional."""
+        raise ParameterError(f"{type(self).__name__} has no bistatic evaluation: define "
+                             "bistatic() to use it with a bistatic receiver")
+
+    def bistatic_value(self, cos_i, sin_i, cos_r, sin_r, cos_h, sin_h):
+        """F(w_i, w_r) in 1/sr (the bistatic weight over cos θr)."""
+        p = self.bistatic(cos_i, sin_i, cos_r, sin_r, cos_h, sin_h)
+        return np.where((cos_i >= 0) & (cos_r >= 0), p / np.maximum(cos_r, _COS_HORIZON), 0.0)
+
+    def monostatic(self, theta, *, projected=False):
+        """F(θ; −θ) (or F·cos θ with ``projected=True``) for incidence angles θ in radians,
+        0 below the horizon; a float for a scalar θ."""
+        c, s = _cos_sin(theta, "theta")
+        out = projected_weight(self, np.maximum(c, 0.0), s) if projected else self.value(c, s)
+        return _out(np.where(c >= 0, out, 0.0), theta)
+
+    def evaluate(self, incident, reflected, normal=(0.0, 0.0, 1.0), *, projected=False):
+        """F(w_i, w_r) for arbitrary (bistatic) directions, in 1/sr.
+
+        Parameters
+        ----------
+        incident : (..., 3) array_like
+            Direction from the surface toward the source; need not be unit length.
+        reflected : (..., 3) array_like
+            Direction from the surface toward the receiver.
+        normal : (..., 3) array_like, default +z
+            Outward surface normal. All three broadcast together.
+        projected : bool, keyword-only
+            Return F·cos θr, finite up to and including θr = π/2.
+
+        Returns
+        -------
+        (...) ndarray
+            0 where either direction is below the horizon.
+        """
+        w_i = unit_vectors("incident", incident)
+        w_r = unit_vectors("reflected", reflected)
+        n = unit_vectors("normal", normal)
+        try:
+            np.broadcast_shapes(w_i.shape, w_r.shape, n.shape)
+        except ValueError:
+            raise ParameterError(f"incident, reflected and normal must broadcast together; got "
+                                 f"shapes {w_i.shape}, {w_r.shape}, {n.shape}") from None
+        cos_i, sin_i = _cos_sin_vec(w_i, n)
+        cos_r, sin_r = _cos_sin_vec(w_r, n)
+        half = w_i + w_r
+        norm = np.linalg.norm(half, axis=-1)
+        # Opposite directions (both on the horizon): α = π/2
+        cos_a = _safe_divide(np.einsum("...k,...k->...", half, n), norm, 0.0)
+        sin_a = _safe_divide(np.linalg.norm(np.cross(half, n), axis=-1), norm, 1.0)
+        return self._evaluate_cs(cos_i, sin_i, cos_r, sin_r, cos_a, sin_a, projected)
+
+    def _evaluate_cs(self, cos_i, sin_i, cos_r, sin_r, cos_a, sin_a, projected):
+        if projected:
+            visible = (cos_i >= 0) & (cos_r >= 0)
+            return np.where(visible, self.bistatic(cos_i, sin_i, cos_r, sin_r, cos_a, sin_a),
+                            0.0)
+        return self.bistatic_value(cos_i, sin_i, cos_r, sin_r, cos_a, sin_a)
+
+    def evaluate_angles(self, theta_i, theta_r, delta_phi=0.0, *, projected=False):
+        """F for polar angles θi, θr and relative azimuth Δφ = φr − φi, in 1/sr.
+
+        Δφ = 0 with θr = θi is the monostatic geometry; Δφ = π with θr = θi is the mirror
+        (Snell) direction. Angles in radians, broadcast together.
+        """
+        ti = finite_array("theta_i", theta_i)
+        tr = finite_array("theta_r", theta_r)
+        dp = finite_array("delta_phi", delta_phi)
+        zero = np.zeros(np.broadcast(ti, tr, dp).shape)
+        w_i = np.stack([np.sin(ti) + zero, zero, np.cos(ti) + zero], axis=-1)
+        w_r = np.stack([np.sin(tr) * np.cos(dp) + zero, np.sin(tr) * np.sin(dp) + zero,
+                        np.cos(tr) + zero], axis=-1)
+        return _out(self.evaluate(w_i, w_r, projected=projected), theta_i, theta_r, delta_phi)
+
+    def describe(self) -> dict:
+        """A JSON-serialisable description: the model's name and its parameters."""
+        import dataclasses
+
+        params = ({f.name: getattr(self, f.name) for f in dataclasses.fields(self)
+                   if f.name != "name"} if dataclasses.is_dataclass(self) else {})
+        return {"model": type(self).__name__, "name": self.name,
+                **{k: v.tolist() if isinstance(v, np.ndarray) else v
+                   for k, v in params.items()}}
+
+
+#: The built-in models, whose outputs are trusted; a user's are checked (shape, finite, ≥ 0).
+_TRUSTED: set = set()
+
+
+def projected_weight(m, cos_theta, sin_theta):
+    """``m.projected(cos θ, sin θ)`` as a float64 array of the inputs' shape, checked for a
+    user's model: finite and non-negative, else a ParameterError naming the class."""
+    out = m.projected(cos_theta, sin_theta)
+    if type(m) in _TRUSTED:
+        return out
+    shape = np.broadcast(np.asarray(cos_theta), np.asarray(sin_theta)).shape
+    try:
+        out = np.broadcast_to(np.asarray(out, dtype=np.float64), shape)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{type(m).__name__}.projected must return real numbers of the "
+                             f"inputs' shape {shape}; got {type(out).__name__} of shape "
+                             f"{np.shape(out)}") from None
+    bad = ~np.isfinite(out) | (out < 0)
+    if bad.any():
+        k = np.flatnonzero(bad.ravel())[0]
+        raise ParameterError(f"{type(m).__name__}.projected must be finite and non-negative; "
+                             f"got {out.ravel()[k]!r} at cos theta = "
+                             f"{np.broadcast_to(cos_theta, shape).ravel()[k]!r}")
+    return out
+
+
+def check_brdf(name, value):
+    """``value`` if it follows the BRDF protocol, else a ParameterError naming ``name``."""
+    if not isinstance(value, BRDF):
+        raise ParameterError(f"{name} must be a meshladar.brdf.BRDF (SandfordRobertson, "
+                             f"Lambertian, Phong, GGX, Tabulated or a subclass); got "
+                             f"{type(value).__name__}")
+    return value
+
+
 @dataclass(frozen=True)
-class SandfordRobertson:
+class SandfordRobertson(BRDF):
     r"""Sandford-Robertson BRDF of a coating (paper Eqs. 1-4, A1-A10).
 
     ========  =====  ============  ======================================================  =====
@@ -372,6 +546,39 @@ class SandfordRobertson:
             out = out + (f_s_cos if projected else f_s_cos / np.maximum(cr, _COS_HORIZON))
         return np.where(visible, out, 0.0)
 
+    def projected(self, cos_theta, sin_theta):
+        """F(θ; −θ)·cos θ, the weight of the paper's Eq. 8: the specular term's 1/cos θ (A5)
+        cancels exactly, so this is finite up to and including θ = π/2, where it equals
+        ρs(π/2) e/(2π) for the glint lobe."""
+        return self._core(cos_theta, sin_theta, cos_theta, sin_theta, cos_theta, sin_theta,
+                          True)
+
+    def value(self, cos_theta, sin_theta):
+        return self._core(cos_theta, sin_theta, cos_theta, sin_theta, cos_theta, sin_theta,
+                          False)
+
+    def bistatic(self, cos_i, sin_i, cos_r, sin_r, cos_h, sin_h):
+        return self._core(cos_i, sin_i, cos_r, sin_r, cos_h, sin_h, True)
+
+    def bistatic_value(self, cos_i, sin_i, cos_r, sin_r, cos_h, sin_h):
+        return self._core(cos_i, sin_i, cos_r, sin_r, cos_h, sin_h, False)
+
+    def _evaluate_cs(self, cos_i, sin_i, cos_r, sin_r, cos_a, sin_a, projected):
+        return self._core(cos_i, sin_i, cos_r, sin_r, cos_a, sin_a, projected)
+
+    @property
+    def kernel_params(self):
+        """(rho_d, epsilon, b, e, G, has_diffuse, has_specular): the compiled kernel's row."""
+        return (self.rho_d, self.epsilon, self.b, self.e, self.G, float(self.has_diffuse),
+                float(self.has_specular))
+
+    @property
+    def angular_scales(self):
+        return (self.e if self.has_specular else None,
+                min([x for x in ((self.b if self.has_diffuse and self.b > 0 else None),
+                                 (2.0 * self.e if self.has_specular else None))
+                     if x is not None], default=None))
+
     def monostatic(self, theta, *, projected=False):
         """F(θ; −θ): the BRDF for a collocated transmitter and receiver, in 1/sr.
 
@@ -396,56 +603,8 @@ class SandfordRobertson:
         c, s = _cos_sin(theta, "theta")
         return _out(self._core(c, s, c, s, c, s, projected), theta)
 
-    def evaluate(self, incident, reflected, normal=(0.0, 0.0, 1.0), *, projected=False):
-        """F(w_i, w_r) for arbitrary (bistatic) directions, in 1/sr.
 
-        Parameters
-        ----------
-        incident : (..., 3) array_like
-            Direction from the surface toward the source; need not be unit length.
-        reflected : (..., 3) array_like
-            Direction from the surface toward the receiver.
-        normal : (..., 3) array_like, default +z
-            Outward surface normal. All three broadcast together.
-        projected : bool, keyword-only
-            Return F·cos θr, finite up to and including θr = π/2.
-
-        Returns
-        -------
-        (...) ndarray
-            0 where either direction is below the horizon.
-        """
-        w_i = unit_vectors("incident", incident)
-        w_r = unit_vectors("reflected", reflected)
-        n = unit_vectors("normal", normal)
-        try:
-            np.broadcast_shapes(w_i.shape, w_r.shape, n.shape)
-        except ValueError:
-            raise ParameterError(f"incident, reflected and normal must broadcast together; got "
-                                 f"shapes {w_i.shape}, {w_r.shape}, {n.shape}") from None
-        cos_i, sin_i = _cos_sin_vec(w_i, n)
-        cos_r, sin_r = _cos_sin_vec(w_r, n)
-        half = w_i + w_r
-        norm = np.linalg.norm(half, axis=-1)
-        # Opposite directions (both on the horizon): α = π/2, where h = 1 for every e.
-        cos_a = _safe_divide(np.einsum("...k,...k->...", half, n), norm, 0.0)
-        sin_a = _safe_divide(np.linalg.norm(np.cross(half, n), axis=-1), norm, 1.0)
-        return self._core(cos_i, sin_i, cos_r, sin_r, cos_a, sin_a, projected)
-
-    def evaluate_angles(self, theta_i, theta_r, delta_phi=0.0, *, projected=False):
-        """F for polar angles θi, θr and relative azimuth Δφ = φr − φi, in 1/sr.
-
-        Δφ = 0 with θr = θi is the monostatic geometry; Δφ = π with θr = θi is the mirror
-        (Snell) direction, where the glint lobe peaks. Angles in radians, broadcast together.
-        """
-        ti = finite_array("theta_i", theta_i)
-        tr = finite_array("theta_r", theta_r)
-        dp = finite_array("delta_phi", delta_phi)
-        zero = np.zeros(np.broadcast(ti, tr, dp).shape)
-        w_i = np.stack([np.sin(ti) + zero, zero, np.cos(ti) + zero], axis=-1)
-        w_r = np.stack([np.sin(tr) * np.cos(dp) + zero, np.sin(tr) * np.sin(dp) + zero,
-                        np.cos(tr) + zero], axis=-1)
-        return _out(self.evaluate(w_i, w_r, projected=projected), theta_i, theta_r, delta_phi)
+_TRUSTED.add(SandfordRobertson)
 
 
 def _cos_sin_vec(w, n):

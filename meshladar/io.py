@@ -165,8 +165,7 @@ def load_result(path):
 def describe_scene(scene) -> dict:
     """A JSON-serialisable description of a scene: shapes or mesh parts, and coatings."""
     def mat(m):
-        return {"name": m.name, "rho_d": m.rho_d, "epsilon": m.epsilon, "b": m.b, "e": m.e,
-                "lobes": m.lobes}
+        return m.describe()
 
     if scene.is_mesh:
         return {"kind": "mesh", "materials": [mat(m) for m in scene.materials],

@@ -29,6 +29,7 @@ import math
 import numpy as np
 
 from ._validate import check_flag, check_real, check_size
+from .brdf import projected_weight
 from .errors import ParameterError
 from .ladar import Ladar
 from .scene import Scene
@@ -159,7 +160,7 @@ def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=N
             sel = own == k
             c, s = cos_t[sel], sin_t[sel]
             arc = np.minimum(ds / np.maximum(c, 1e-300), arc_max[k])
-            weight[sel] = m._core(c, s, c, s, c, s, True) * arc
+            weight[sel] = projected_weight(m, c, s) * arc
         b = np.searchsorted(edges, rng, side="right") - 1
         ok = (b >= 0) & (b < ladar.n_bins)
         values += np.bincount(view[ok] * ladar.n_bins + b[ok], weights=weight[ok],

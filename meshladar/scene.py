@@ -16,7 +16,7 @@ import numpy as np
 from scipy import optimize
 
 from ._validate import check_real, finite_array
-from .brdf import SandfordRobertson
+from .brdf import BRDF, check_brdf
 from .errors import GeometryError, ParameterError
 
 __all__ = ["Shape", "Disk", "Ellipse", "Scene", "OVERLAP_RTOL"]
@@ -34,10 +34,7 @@ def _center(value):
 
 
 def _material(value):
-    if not isinstance(value, SandfordRobertson):
-        raise ParameterError(f"material must be a SandfordRobertson (see meshladar.materials); "
-                             f"got {type(value).__name__}")
-    return value
+    return check_brdf("material", value)
 
 
 class Shape:
@@ -45,7 +42,7 @@ class Shape:
     (A, B) and rotation ``angle`` (radians). Subclasses are frozen dataclasses."""
 
     center: tuple[float, float]
-    material: SandfordRobertson
+    material: BRDF
 
     @property
     def axes(self) -> tuple[float, float]:
@@ -99,7 +96,7 @@ class Ellipse(Shape):
         Semi-axes (A, B) > 0 along the ellipse's own x and y axes (A need not be the larger).
     angle_deg : float
         Rotation of the ellipse's A axis from the scene's x axis, counter-clockwise, degrees.
-    material : SandfordRobertson
+    material : BRDF
     name : str, optional
         A label (e.g. which part of a phantom); not part of equality.
     """
@@ -107,7 +104,7 @@ class Ellipse(Shape):
     center: tuple[float, float]
     semi_axes: tuple[float, float]
     angle_deg: float
-    material: SandfordRobertson
+    material: BRDF
     name: str | None = field(default=None, kw_only=True, compare=False)
 
     def __post_init__(self):
@@ -138,14 +135,14 @@ class Disk(Shape):
     center : (2,) float
         Centre (x, y) in scene units.
     radius : float > 0
-    material : SandfordRobertson
+    material : BRDF
     name : str, optional
         A label (e.g. "large" in the disk pair); not part of equality.
     """
 
     center: tuple[float, float]
     radius: float
-    material: SandfordRobertson
+    material: BRDF
     name: str | None = field(default=None, kw_only=True, compare=False)
 
     def __post_init__(self):
@@ -265,9 +262,7 @@ class Scene:
 
         mats = tuple(materials)
         for i, m in enumerate(mats):
-            if not isinstance(m, SandfordRobertson):
-                raise ParameterError(f"materials[{i}] must be a SandfordRobertson; got "
-                                     f"{type(m).__name__}")
+            check_brdf(f"materials[{i}]", m)
         for p in parts:
             if len(p.material) and (p.material.min() < 0 or p.material.max() >= len(mats)):
                 raise ParameterError(f"{p.name}: face material indices must be in "
@@ -314,7 +309,7 @@ class Scene:
         Parameters
         ----------
         mesh_or_path : trimesh.Trimesh, trimesh.Scene or path
-        material : SandfordRobertson, optional
+        material : BRDF, optional
             The coating of every part (unless ``materials`` names a part's own).
         materials : dict, optional
             Coating per part name (GLB/GLTF node names); parts not named take ``material``.
@@ -332,7 +327,7 @@ class Scene:
                                      f"{len(loaded)} parts (use materials={{part: m}})")
             if not isinstance(materials, (list, tuple)):
                 raise ParameterError("with face_materials, materials must be a list of "
-                                     "SandfordRobertson indexed by face_materials")
+                                     "BRDF indexed by face_materials")
             name, m = loaded[0]
             fm = np.asarray(face_materials)
             if fm.shape != (len(m.faces),) or not np.issubdtype(fm.dtype, np.integer):

@@ -572,7 +572,8 @@ def _job(geo, ladar_vectors, views, mode, spacing, z0_shifted, back_faces, seed,
     """Trace a chunk of views; return hits (weigh_with None) or binned values."""
     scene = _embree_scene(geo)
     if (weigh_with is not None and geo.normals == "flat" and receivers is None
-            and not weigh_with[1]):
+            and not weigh_with[1]
+            and all(m.kernel_params is not None for m in weigh_with[0])):
         return _fast_job(geo, scene, ladar_vectors, views, mode, spacing, z0_shifted,
                          back_faces, seed, edges, weigh_with[0], weigh_with[2])
     out = []
@@ -595,9 +596,9 @@ def _job(geo, ladar_vectors, views, mode, spacing, z0_shifted, back_faces, seed,
 
 
 def _material_table(materials):
-    """(n, 7) rows of (rho_d, epsilon, b, e, G, has_diffuse, has_specular)."""
-    return np.array([[m.rho_d, m.epsilon, m.b, m.e, m.G, float(m.has_diffuse),
-                      float(m.has_specular)] for m in materials])
+    """(n, 7) rows of (rho_d, epsilon, b, e, G, has_diffuse, has_specular): each
+    material's ``kernel_params`` (every material must have them for the compiled path)."""
+    return np.array([m.kernel_params for m in materials], dtype=np.float64)
 
 
 def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces, seed, edges,
@@ -668,16 +669,17 @@ def _weights(cos_t, sin_t, mat, materials, area, bi=None):
     """F·δA⊥ per hit, evaluated per material group (0 where either direction is below the
     horizon): monostatic F(θ; −θ), or bistatic F(w, w_r) from (cos, sin) of θr and α."""
     if len(materials) == 1 and bi is None:
-        return materials[0]._core(cos_t, sin_t, cos_t, sin_t, cos_t, sin_t, False) * area
+        return materials[0].value(cos_t, sin_t) * area
     wt = np.zeros(cos_t.size)
     for k in np.unique(mat):
         sel = mat == k
         c, s = cos_t[sel], sin_t[sel]
         if bi is None:
-            wt[sel] = materials[k]._core(c, s, c, s, c, s, False) * area
+            wt[sel] = materials[k].value(c, s) * area
         else:
             b = bi[sel]
-            wt[sel] = materials[k]._core(c, s, b[:, 0], b[:, 1], b[:, 2], b[:, 3], False) * area
+            wt[sel] = materials[k].bistatic_value(c, s, b[:, 0], b[:, 1], b[:, 2],
+                                                  b[:, 3]) * area
     return wt
 
 
@@ -1074,7 +1076,7 @@ def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None) -> Sin
     Parameters
     ----------
     hits : Hits
-    materials : sequence of SandfordRobertson, optional
+    materials : sequence of BRDF, optional
         Replacement coatings, one per material index of the traced scene (default: the
         scene's). A material sweep re-weighs the same hits.
     footprint : bool
@@ -1088,18 +1090,16 @@ def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None) -> Sin
     check_flag("footprint", footprint)
     if footprint and hits.bistatic is not None:
         raise ParameterError("footprint binning is monostatic only; these hits are bistatic")
-    from .brdf import SandfordRobertson
+    from .brdf import BRDF, check_brdf
 
-    if isinstance(materials, SandfordRobertson):
+    if isinstance(materials, BRDF):
         materials = [materials]                       # one coating for a one-material scene
     if materials is not None and not isinstance(materials, (list, tuple)):
         raise ParameterError(f"materials must be a list of coatings, one per material index; "
                              f"got {type(materials).__name__}")
     mats = hits.materials if materials is None else tuple(materials)
     for i, m in enumerate(mats):
-        if not isinstance(m, SandfordRobertson):
-            raise ParameterError(f"materials[{i}] must be a SandfordRobertson; got "
-                                 f"{type(m).__name__}")
+        check_brdf(f"materials[{i}]", m)
     if len(mats) != len(hits.materials):
         raise ParameterError(f"materials must give {len(hits.materials)} coatings (one per "
                              f"material index); got {len(mats)}")

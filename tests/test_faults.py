@@ -304,7 +304,8 @@ BAD_CALLS = {
                         r"executor must be a concurrent.futures.Executor"),
     "weigh a string": (lambda: ml.weigh("hits"), r"hits must be the Hits"),
     "weigh bad coating": (lambda: ml.weigh(ml.trace(_SPHERE, _LAD), ["x"]),
-                          r"materials\[0\] must be a SandfordRobertson; got str"),
+                          r"materials\[0\] must be a meshladar.brdf.BRDF \(SandfordRobertson, "
+                          r"Lambertian, Phong, GGX, Tabulated or a subclass\); got str"),
     "run_dir number": (lambda: ml.simulate(_SPHERE, _LAD, model="mesh", run_dir=123),
                        r"run_dir must be a folder path; got 123"),
     "no views": (lambda: ml.Sinogram(np.zeros((0, 4)), angles_deg=[],

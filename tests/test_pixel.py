@@ -77,5 +77,6 @@ def test_bad_options():
     with pytest.raises(ml.errors.ParameterError, match=r"pixel_size must be in \(0, inf\]"):
         ml.simulate(scene, PAPER, model="pixel", pixel_size=0.0)
     with pytest.raises(ml.errors.ParameterError, match=r"model 'pixel' takes options "
-                                                        r"\('pixel_size', 'ray_spacing'\)"):
+                                                        r"\('pixel_size', 'ray_spacing', "
+                                                        r"'progress'\)"):
         ml.simulate(scene, PAPER, model="pixel", tol=0.1)

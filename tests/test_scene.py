@@ -38,7 +38,7 @@ def test_shapes_are_frozen_values():
     (lambda: ml.Disk((0, 0), float("nan"), M), r"radius must be finite"),
     (lambda: ml.Disk((0, 0, 0), 1.0, M), r"center must be a point \(x, y\); got shape \(3,\)"),
     (lambda: ml.Disk((0, float("inf")), 1.0, M), r"center must be finite"),
-    (lambda: ml.Disk((0, 0), 1.0, "aluminum"), r"material must be a SandfordRobertson"),
+    (lambda: ml.Disk((0, 0), 1.0, "aluminum"), r"material must be a meshladar.brdf.BRDF"),
     (lambda: ml.Ellipse((0, 0), (0.6, 0.0), 0.0, M), r"semi_axes must be two positive"),
     (lambda: ml.Ellipse((0, 0), (0.6, 0.3), float("nan"), M), r"angle_deg must be finite"),
 ])
@@ -141,8 +141,8 @@ def test_simulate_validation():
     with pytest.raises(ParameterError, match=r"model must be one of \('analytic', 'mesh', "
                                              r"'pixel'\); got 'mesh2'"):
         ml.simulate(scene, lad, model="mesh2")
-    with pytest.raises(ParameterError, match=r"model 'analytic' takes options \(\); got "
-                                             r"'pixel_size'"):
+    with pytest.raises(ParameterError, match=r"model 'analytic' takes options "
+                                             r"\('progress',\); got 'pixel_size'"):
         ml.simulate(scene, lad, pixel_size=0.1)
     with pytest.raises(ParameterError, match=r"scene must be a meshladar.Scene; got list"):
         ml.simulate([scene], lad)
