@@ -3,9 +3,8 @@ exact and numerically stable at every extreme.
 
 The protocol (:class:`BRDF`): a coating defines ``projected(cos_theta, sin_theta)``, its
 monostatic weight F(θ; −θ)·cos θ, and inherits ``monostatic``; a bistatic receiver needs
-``bistatic`` as well. Built in: :class:`SandfordRobertson` (here), and
-:class:`~meshladar.brdfs.Lambertian`, :class:`~meshladar.brdfs.Phong`,
-:class:`~meshladar.brdfs.GGX` and :class:`~meshladar.brdfs.Tabulated`.
+``bistatic`` as well. Built in: :class:`SandfordRobertson`, :class:`Lambertian`,
+:class:`Phong`, :class:`GGX` (Mitsuba's rough conductor) and :class:`Tabulated` (measured).
 
 The SR model (Jin & Levine 2009, Appendix A) splits reflection into a diffuse lobe
 (Eqs. A1-A4) and a specular glint lobe (Eqs. A5-A10), tied together by energy
@@ -52,6 +51,10 @@ from .errors import EnergyConservationWarning, ParameterError
 __all__ = [
     "BRDF",
     "SandfordRobertson",
+    "Lambertian",
+    "Phong",
+    "GGX",
+    "Tabulated",
     "diffuse_shape",
     "diffuse_normalization",
     "glint_lobe",
@@ -380,6 +383,7 @@ _TRUSTED: set = set()
 def projected_weight(m, cos_theta, sin_theta):
     """``m.projected(cos θ, sin θ)`` as a float64 array of the inputs' shape, checked for a
     user's model: finite and non-negative, else a ParameterError naming the class."""
+    cos_theta = np.maximum(cos_theta, 0.0)             # the protocol's domain: cos θ >= 0
     out = m.projected(cos_theta, sin_theta)
     if type(m) in _TRUSTED:
         return out
@@ -394,8 +398,8 @@ def projected_weight(m, cos_theta, sin_theta):
     if bad.any():
         k = np.flatnonzero(bad.ravel())[0]
         raise ParameterError(f"{type(m).__name__}.projected must be finite and non-negative; "
-                             f"got {out.ravel()[k]!r} at cos theta = "
-                             f"{np.broadcast_to(cos_theta, shape).ravel()[k]!r}")
+                             f"got {float(out.ravel()[k]):.6g} at cos theta = "
+                             f"{float(np.broadcast_to(cos_theta, shape).ravel()[k]):.6g}")
     return out
 
 
@@ -611,3 +615,218 @@ def _cos_sin_vec(w, n):
     """cos and sin of the angle between unit vectors, sin from the cross product (accurate
     near 0 where sqrt(1 − cos²) is not)."""
     return (np.einsum("...k,...k->...", w, n), np.linalg.norm(np.cross(w, n), axis=-1))
+
+
+# --------------------------------------------------------------------------------------
+# More models on the protocol: Lambertian, Phong, GGX, tabulated.
+# --------------------------------------------------------------------------------------
+
+def _unit_interval(name, value):
+    return check_real(name, value, low=0.0, high=1.0)
+
+
+@dataclass(frozen=True)
+class Lambertian(BRDF):
+    """A perfectly diffuse coating: F = albedo/π in every direction.
+
+    ``albedo`` in [0, 1] is the hemispherical reflectance (∫ F cos θr dω = albedo).
+    Equal to ``SandfordRobertson(albedo, 0, 0, 1, lobes="diffuse")``, and traced by the
+    same compiled kernel.
+    """
+
+    albedo: float
+    name: str | None = field(default=None, kw_only=True, compare=False)
+
+    def __post_init__(self):
+        object.__setattr__(self, "albedo", _unit_interval("albedo", self.albedo))
+
+    def projected(self, cos_theta, sin_theta):
+        return self.albedo / math.pi * np.maximum(np.asarray(cos_theta, np.float64), 0.0)
+
+    def value(self, cos_theta, sin_theta):
+        c = np.asarray(cos_theta, np.float64)
+        return np.where(c >= 0, self.albedo / math.pi, 0.0)
+
+    def bistatic(self, cos_i, sin_i, cos_r, sin_r, cos_h, sin_h):
+        return np.where((cos_i >= 0) & (cos_r >= 0),
+                        self.albedo / math.pi * np.maximum(cos_r, 0.0), 0.0)
+
+    @property
+    def kernel_params(self):
+        # SR with b = 0 (g ≡ 1, G = 1), diffuse only: F = rho_d / π
+        return (self.albedo, 0.0, 0.0, 1.0, 1.0, 1.0, 0.0)
+
+
+@dataclass(frozen=True)
+class Phong(BRDF):
+    """The energy-normalised (modified) Phong BRDF, the lobe HELIOS++ and classic
+    graphics use::
+
+        F = kd/π + ks (n + 2)/(2π) cos^n ψ
+
+    with ψ the angle between the mirror direction of the source and the receiver (0 where
+    ψ > 90°). Monostatic, ψ = 2θ. ``kd + ks <= 1`` conserves energy; at normal incidence
+    the specular lobe reflects exactly ks. ``exponent`` n ≥ 0 (n = 0: a second diffuse
+    term; n = 1000: a lobe about 2.5° wide).
+    """
+
+    kd: float
+    ks: float
+    exponent: float
+    name: str | None = field(default=None, kw_only=True, compare=False)
+
+    def __post_init__(self):
+        object.__setattr__(self, "kd", _unit_interval("kd", self.kd))
+        object.__setattr__(self, "ks", _unit_interval("ks", self.ks))
+        object.__setattr__(self, "exponent", check_real("exponent", self.exponent, low=0.0,
+                                                        high=1e6))
+        if self.kd + self.ks > 1.0 + _ENERGY_SLACK:
+            raise ParameterError(f"kd + ks must be at most 1 (energy conservation); got "
+                                 f"kd + ks = {self.kd + self.ks:.6g}")
+
+    def _lobe(self, cos_psi):
+        n = self.exponent
+        c = np.asarray(cos_psi, np.float64)
+        lobe = np.zeros(c.shape)
+        np.power(c, n, out=lobe, where=c > 0)                    # 0 beyond ψ = 90°
+        return self.ks * (n + 2.0) / (2.0 * math.pi) * lobe
+
+    def projected(self, cos_theta, sin_theta):
+        c = np.maximum(np.asarray(cos_theta, np.float64), 0.0)
+        s = np.asarray(sin_theta, np.float64)
+        cos_2t = (c - s) * (c + s)                              # cos 2θ, exact near 45°
+        return (self.kd / math.pi + self._lobe(cos_2t)) * c
+
+    def bistatic(self, cos_i, sin_i, cos_r, sin_r, cos_h, sin_h):
+        ch = np.asarray(cos_h, np.float64)
+        ci = np.asarray(cos_i, np.float64)
+        cr = np.asarray(cos_r, np.float64)
+        # mirror m = 2(n·w_i)n − w_i;  m·w_r = 2 cos θi cos θr − w_i·w_r, and
+        # w_i·w_r = 2 cos²β − 1 with β the half angle: |w_i + w_r| = 2 cos β and
+        # n·(w_i + w_r) = cos θi + cos θr = 2 cos β cos θh, so cos β = (ci + cr)/(2 ch)
+        cb = np.where(ch > 0, (ci + cr) / (2.0 * np.where(ch > 0, ch, 1.0)), 0.0)
+        cos_psi = 2.0 * ci * cr - (2.0 * cb * cb - 1.0)
+        visible = (ci >= 0) & (cr >= 0)
+        return np.where(visible, (self.kd / math.pi + self._lobe(cos_psi)) * np.maximum(cr, 0),
+                        0.0)
+
+    @property
+    def angular_scales(self):
+        # the monostatic lobe cos^n(2θ) falls to 1/e at 2θ ≈ sqrt(2/n)
+        return (0.5 * math.sqrt(2.0 / self.exponent) if self.exponent > 0 else None, None)
+
+
+@dataclass(frozen=True)
+class GGX(BRDF):
+    """A rough conductor with the GGX (Trowbridge-Reitz) microfacet distribution and
+    separable Smith shadowing, as Mitsuba 3's ``roughconductor`` (``distribution="ggx"``)::
+
+        F = R D(h) G1(w_i) G1(w_r) / (4 cos θi cos θr)
+        D = α² / (π (α² cos²θh + sin²θh)²)
+        G1(w) = 2 cos θ / (cos θ + sqrt(cos²θ + α² sin²θ))
+
+    ``alpha`` in [1e-4, 1] is the roughness (Mitsuba's ``alpha``); ``reflectance`` R in
+    [0, 1] the Fresnel factor, taken constant (Mitsuba's ``specular_reflectance`` with a
+    perfect conductor; 1 by default). Monostatic, θh = θ and
+    F cos θ = R D(θ) cos θ / (cos θ + sqrt(cos²θ + α² sin²θ))², finite up to θ = π/2.
+    """
+
+    alpha: float
+    reflectance: float = 1.0
+    name: str | None = field(default=None, kw_only=True, compare=False)
+
+    def __post_init__(self):
+        object.__setattr__(self, "alpha", check_real("alpha", self.alpha, low=1e-4, high=1.0))
+        object.__setattr__(self, "reflectance",
+                           _unit_interval("reflectance", self.reflectance))
+
+    def _D(self, ch, sh):
+        a = self.alpha
+        d = np.hypot(a * ch, sh) ** 2
+        return a * a / (math.pi * d * d)
+
+    def _g1_over_2c(self, c, s):
+        """G1 / (2 cos θ) = 1 / (cos θ + sqrt(cos²θ + α² sin²θ)), finite at cos θ = 0."""
+        return 1.0 / (c + np.hypot(c, self.alpha * s))
+
+    def projected(self, cos_theta, sin_theta):
+        c = np.maximum(np.asarray(cos_theta, np.float64), 0.0)
+        s = np.asarray(sin_theta, np.float64)
+        return self.reflectance * self._D(c, s) * c * self._g1_over_2c(c, s) ** 2
+
+    def bistatic(self, cos_i, sin_i, cos_r, sin_r, cos_h, sin_h):
+        ci = np.maximum(np.asarray(cos_i, np.float64), 0.0)
+        cr = np.maximum(np.asarray(cos_r, np.float64), 0.0)
+        ch = np.maximum(np.asarray(cos_h, np.float64), 0.0)
+        # F cos θr = R D G1(i) G1(r) / (4 cos θi) = R D cos θr · g(i) · g(r), g = G1/(2 cos)
+        out = (self.reflectance * self._D(ch, np.asarray(sin_h, np.float64)) * cr
+               * self._g1_over_2c(ci, np.asarray(sin_i, np.float64))
+               * self._g1_over_2c(cr, np.asarray(sin_r, np.float64)))
+        return np.where((np.asarray(cos_i) >= 0) & (np.asarray(cos_r) >= 0), out, 0.0)
+
+    @property
+    def angular_scales(self):
+        return (self.alpha, None)
+
+
+@dataclass(frozen=True, eq=False)
+class Tabulated(BRDF):
+    """A measured monostatic BRDF: F(θ) sampled at angles ``theta_deg``.
+
+    ``theta_deg`` must increase strictly from 0 to 90 (degrees); ``values`` are F in 1/sr
+    (or, with ``projected=True``, F·cos θ: give that form when F grows toward grazing
+    incidence, as glossy coatings' does). Between samples F·cos θ is interpolated linearly
+    in θ. Monostatic only.
+    """
+
+    theta_deg: np.ndarray
+    values: np.ndarray
+    projected_values: bool = field(default=False, kw_only=True)
+    name: str | None = field(default=None, kw_only=True, compare=False)
+
+    def __post_init__(self):
+        t = np.array(finite_array("theta_deg", self.theta_deg))          # copies: the user's
+        v = np.array(finite_array("values", self.values))                # arrays stay theirs
+        if t.ndim != 1 or t.size < 2:
+            raise ParameterError(f"theta_deg must be a 1-D array of at least 2 angles; got "
+                                 f"shape {t.shape}")
+        if v.shape != t.shape:
+            raise ParameterError(f"values must have theta_deg's shape {t.shape}; got {v.shape}")
+        if t[0] != 0.0 or t[-1] != 90.0 or np.any(np.diff(t) <= 0):
+            raise ParameterError(f"theta_deg must increase strictly from 0 to 90 degrees; got "
+                                 f"{t[0]:g} ... {t[-1]:g}" + (" (not increasing)" if
+                                                             np.any(np.diff(t) <= 0) else ""))
+        if np.any(v < 0):
+            k = int(np.argmax(v < 0))
+            raise ParameterError(f"values must be non-negative; got {v[k]:g} at "
+                                 f"{t[k]:g} degrees")
+        weight = v.copy() if self.projected_values else v * np.cos(np.deg2rad(t))
+        if not self.projected_values:
+            weight[-1] = 0.0                                    # F cos θ at exactly 90°
+        for k, a in (("theta_deg", t), ("values", v), ("_weight", weight)):
+            a = np.array(a, dtype=np.float64)
+            a.flags.writeable = False
+            object.__setattr__(self, k, a)
+
+    def __eq__(self, other):
+        return (type(other) is Tabulated and np.array_equal(self.theta_deg, other.theta_deg)
+                and np.array_equal(self._weight, other._weight))
+
+    __hash__ = None
+
+    def projected(self, cos_theta, sin_theta):
+        c = np.maximum(np.asarray(cos_theta, np.float64), 0.0)
+        theta = np.degrees(np.arctan2(np.asarray(sin_theta, np.float64), c))
+        return np.interp(theta, self.theta_deg, self._weight)
+
+    @property
+    def angular_scales(self):
+        step = float(np.min(np.diff(np.deg2rad(self.theta_deg))))
+        return (step, step)
+
+    def describe(self) -> dict:
+        return {"model": "Tabulated", "name": self.name, "theta_deg": self.theta_deg.tolist(),
+                "values": self.values.tolist(), "projected_values": self.projected_values}
+
+
+_TRUSTED.update({Lambertian, Phong, GGX, Tabulated})

@@ -293,7 +293,7 @@ def test_extremes_grid_finite_nonnegative_without_warnings():
     theta = np.array(THETAS_EXTREME)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        with np.errstate(all="raise"):
+        with np.errstate(over="raise", divide="raise", invalid="raise"):
             for m in _extreme_materials():
                 for projected in (False, True):
                     f = m.monostatic(theta, projected=projected)
@@ -391,3 +391,161 @@ def test_value_type():
     for part in ("rho_d=0.032", "epsilon=0.877", "b=0.1", "e=0.17", "lobes='both'"):
         assert part in text
     assert E_MIN == 1e-12
+
+
+# ------------------------------------------------------------------ the BRDF protocol
+
+from meshladar.brdf import BRDF, GGX, Lambertian, Phong, Tabulated  # noqa: E402
+
+#: 2-D quadrature of smooth lobes over the hemisphere: scipy's dblquad reaches ~1e-12;
+#: this bound leaves room for the sharpest lobe (Phong n = 1000)
+ALBEDO_TOL = 1e-7
+
+MODELS = {
+    "lambertian": Lambertian(0.3),
+    "phong n=50": Phong(0.2, 0.7, 50),
+    "phong n=0": Phong(0.1, 0.4, 0),
+    "ggx 0.2": GGX(0.2),
+    "ggx 1e-4 R=0.9": GGX(1e-4, 0.9),
+    "tabulated": Tabulated([0.0, 30.0, 60.0, 90.0], [0.3, 0.2, 0.1, 0.05]),
+    "sr aluminum": ALUMINUM,
+}
+
+
+def _albedo_at_normal_incidence(m):
+    from scipy import integrate
+
+    val, _ = integrate.quad(lambda t: 2 * np.pi * math.sin(t)
+                            * m.evaluate_angles(0.0, t, 0.0, projected=True), 0.0,
+                            math.pi / 2, limit=400, epsabs=1e-13, epsrel=1e-12)
+    return val
+
+
+@pytest.mark.parametrize("name", list(MODELS))
+def test_every_model_is_finite_continuous_and_zero_below_the_horizon(name):
+    m = MODELS[name]
+    theta = np.concatenate([np.linspace(0.0, math.pi / 2, 2001), [math.pi / 2]])
+    with np.errstate(over="raise", divide="raise", invalid="raise"):
+        p = m.monostatic(theta, projected=True)
+        f = m.monostatic(theta)
+    assert np.all(np.isfinite(p)) and np.all(p >= 0) and np.all(np.isfinite(f))
+    assert m.monostatic(math.pi / 2 + 1e-9) == 0.0 and m.monostatic(math.pi) == 0.0
+    # F cos θ continuous up to and including π/2: the value there is the limit from below
+    near = m.monostatic(math.pi / 2 - 1e-9, projected=True)
+    assert abs(p[-1] - near) <= 1e-6 * np.max(p)
+    # F = projected / cos θ where cos θ > 0
+    np.testing.assert_allclose(f[:-2] * np.cos(theta[:-2]), p[:-2], rtol=1e-12, atol=1e-300)
+
+
+@pytest.mark.parametrize("name", [n for n in MODELS if n != "tabulated"])
+def test_the_bistatic_evaluation_at_coincident_directions_is_the_monostatic(name):
+    m = MODELS[name]
+    theta = np.linspace(0.0, math.pi / 2 - 1e-3, 97)
+    w = np.stack([np.sin(theta), np.zeros_like(theta), np.cos(theta)], -1)
+    np.testing.assert_allclose(m.evaluate(w, w, projected=True),
+                               m.monostatic(theta, projected=True), rtol=1e-11, atol=1e-15)
+
+
+@pytest.mark.parametrize("m, albedo", [
+    (Lambertian(0.3), 0.3),
+    (Phong(0.2, 0.7, 0), 0.9), (Phong(0.2, 0.7, 1), 0.9), (Phong(0.0, 0.7, 50), 0.7),
+    (Phong(0.1, 0.9, 1000), 1.0),
+])
+def test_hemispherical_albedo_at_normal_incidence_is_the_closed_form(m, albedo):
+    # Lambertian: albedo; normalised Phong: kd + ks exactly at normal incidence
+    assert _albedo_at_normal_incidence(m) == pytest.approx(albedo, rel=ALBEDO_TOL)
+
+
+@pytest.mark.parametrize("alpha", [0.05, 0.2, 0.5, 1.0])
+def test_ggx_against_its_closed_forms(alpha):
+    from scipy import integrate
+
+    m = GGX(alpha)
+    # D is a normalised distribution of microfacet normals: ∫ D cos θh dω = 1
+    D = lambda t: m._D(np.cos(t), np.sin(t))                          # noqa: E731
+    norm, _ = integrate.quad(lambda t: 2 * np.pi * D(t) * np.cos(t) * np.sin(t), 0,
+                             math.pi / 2, limit=400, epsrel=1e-12)
+    assert norm == pytest.approx(1.0, rel=1e-9)
+    # F(0) = D(0) G1(0)² / 4 = 1 / (4π α²)
+    assert m.monostatic(0.0) == pytest.approx(1.0 / (4 * math.pi * alpha**2), rel=1e-13)
+    # albedo at normal incidence through the half vector (θr = 2θh, dω_r = 4 cos θh dω_h):
+    # ∫ D(θh) G1(2θh) cos θh dω_h, an independent 1-D integral of the textbook G1
+    g1 = lambda t: 2 / (1 + np.sqrt(1 + alpha**2 * np.tan(t) ** 2))   # noqa: E731
+    ref, _ = integrate.quad(lambda t: 2 * np.pi * D(t) * g1(2 * t) * np.cos(t) * np.sin(t),
+                            0, math.pi / 4, limit=400, epsrel=1e-12)
+    assert _albedo_at_normal_incidence(m) == pytest.approx(ref, rel=ALBEDO_TOL)
+    # reciprocity: F(w_i, w_r) = F(w_r, w_i)
+    rng = np.random.default_rng(3)
+    a, b = rng.normal(size=(2, 50, 3))
+    a[:, 2], b[:, 2] = np.abs(a[:, 2]), np.abs(b[:, 2])
+    np.testing.assert_allclose(m.evaluate(a, b), m.evaluate(b, a), rtol=1e-12)
+
+
+def test_phong_monostatic_closed_form():
+    m = Phong(0.2, 0.7, 50)
+    theta = np.linspace(0.0, math.pi / 2, 91)
+    lobe = np.where(theta < math.pi / 4, np.cos(2 * theta), 0.0) ** 50
+    np.testing.assert_allclose(m.monostatic(theta), 0.2 / math.pi + 0.7 * 52 / (2 * math.pi)
+                               * lobe, rtol=1e-12)
+    with pytest.raises(ParameterError, match=r"kd \+ ks must be at most 1 .*; got kd \+ ks = 1.1"):
+        Phong(0.5, 0.6, 10)
+
+
+def test_tabulated_interpolates_a_measured_table_and_checks_it():
+    # SR aluminium's F cos θ sampled every 0.01°: the table reproduces it between samples
+    t = np.linspace(0.0, 90.0, 9001)
+    table = Tabulated(t, ALUMINUM.monostatic(np.deg2rad(t), projected=True),
+                      projected_values=True)
+    mid = np.deg2rad(t[:-1] + 0.005)
+    np.testing.assert_allclose(table.monostatic(mid, projected=True),
+                               ALUMINUM.monostatic(mid, projected=True), rtol=2e-3)
+    user = np.array([0.0, 90.0])
+    Tabulated(user, [1.0, 1.0])
+    assert user.flags.writeable and user.tolist() == [0.0, 90.0]        # not taken over
+    for args, message in [(([0, 45], [1, 1]), r"increase strictly from 0 to 90"),
+                          (([0, 90, 45], [1, 1, 1]), r"from 0 to 90 .*not increasing"),
+                          (([0, 90], [1, -1]), r"values must be non-negative; got -1 at 90"),
+                          (([0, 90], [1, np.nan]), r"values must be finite"),
+                          (([0, 90], [1, 1, 1]), r"values must have theta_deg's shape")]:
+        with pytest.raises(ParameterError, match=message):
+            Tabulated(*args)
+
+
+class _UserMatte(BRDF):
+    """A user's coating defining only the protocol's one required method."""
+
+    def projected(self, cos_theta, sin_theta):
+        return 0.3 / np.pi * cos_theta
+
+
+@pytest.mark.parametrize("model", ["analytic", "pixel", "mesh"])
+def test_a_users_model_works_in_every_forward_model(model):
+    from meshladar.materials import lambertian
+
+    def scene(m):
+        return ml.Scene([ml.Disk((-0.3, 0.0), 0.4, m), ml.Ellipse((0.4, 0.1), (0.3, 0.15),
+                                                                   30.0, m)])
+
+    ladar = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 45.0))
+    opts = {"pixel": {"pixel_size": 0.01}, "mesh": {}}.get(model, {})
+    results = []
+    for m in (_UserMatte(), Lambertian(0.3), lambertian(0.3)):
+        s = scene(m) if model != "mesh" else scene(m).tessellate(256)
+        results.append(ml.simulate(s, ladar, model=model, **opts).values)
+    # the same function through three paths (a user's arrays, Lambertian, SR with b = 0 in
+    # the compiled kernel): equal to round-off
+    np.testing.assert_allclose(results[0], results[1], rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(results[0], results[2], rtol=1e-12, atol=1e-15)
+
+
+def test_a_users_model_returning_nonsense_is_named():
+    class Broken(BRDF):
+        def projected(self, cos_theta, sin_theta):
+            return cos_theta - 0.5
+
+    scene = ml.Scene([ml.Disk((0.0, 0.0), 0.5, Broken())])
+    with pytest.raises(ParameterError, match=r"Broken.projected must be finite and "
+                                             r"non-negative; got -[\d.e-]+ at cos theta = 0.4\d+"):
+        ml.simulate(scene, ml.Ladar.paper(angles_deg=[0.0]))
+    with pytest.raises(ParameterError, match=r"Broken has no bistatic evaluation"):
+        Broken().evaluate([0, 0, 1], [0, 1, 1])
