@@ -99,3 +99,23 @@ def check_flag(name: str, value) -> bool:
     if not isinstance(value, (bool, np.bool_)):
         raise ParameterError(f"{name} must be True or False; got {value!r}")
     return bool(value)
+
+
+def check_path(name: str, value):
+    """``value`` as a path string (str or os.PathLike, not empty), else a ParameterError."""
+    import os
+
+    if isinstance(value, (str, os.PathLike)):
+        path = os.fspath(value)
+        if isinstance(path, str) and path:
+            return path
+    raise ParameterError(f"{name} must be a file path; got {value!r}")
+
+
+def check_sinogram(name: str, value):
+    """``value`` if it is a meshladar.Sinogram, else a ParameterError."""
+    from .sinogram import Sinogram
+
+    if not isinstance(value, Sinogram):
+        raise ParameterError(f"{name} must be a meshladar.Sinogram; got {type(value).__name__}")
+    return value

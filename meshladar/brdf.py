@@ -45,7 +45,7 @@ from functools import cached_property
 import numpy as np
 from scipy.special import xlogy
 
-from ._validate import check_choice, check_real, finite_array, unit_vectors
+from ._validate import check_choice, check_flag, check_real, finite_array, unit_vectors
 from .errors import EnergyConservationWarning, ParameterError
 
 __all__ = [
@@ -304,6 +304,7 @@ class BRDF:
         """F(θ; −θ) (or F·cos θ with ``projected=True``) for incidence angles θ in radians,
         0 below the horizon; a float for a scalar θ."""
         c, s = _cos_sin(theta, "theta")
+        check_flag("projected", projected)
         out = projected_weight(self, np.maximum(c, 0.0), s) if projected else self.value(c, s)
         return _out(np.where(c >= 0, out, 0.0), theta)
 
@@ -326,6 +327,7 @@ class BRDF:
         (...) ndarray
             0 where either direction is below the horizon.
         """
+        check_flag("projected", projected)
         w_i = unit_vectors("incident", incident)
         w_r = unit_vectors("reflected", reflected)
         n = unit_vectors("normal", normal)
@@ -605,7 +607,7 @@ class SandfordRobertson(BRDF):
             Same shape as ``theta``; a float for scalar input.
         """
         c, s = _cos_sin(theta, "theta")
-        return _out(self._core(c, s, c, s, c, s, projected), theta)
+        return _out(self._core(c, s, c, s, c, s, check_flag("projected", projected)), theta)
 
 
 _TRUSTED.add(SandfordRobertson)

@@ -62,6 +62,11 @@ def _cmd_materials(args) -> int:
 
 def _cmd_paper(args) -> int:
     """Reproduce the paper's Figs 5-11: PNGs, a saved result and the findings' numbers."""
+    from ._validate import check_size
+
+    _check_outdir(args.outdir)
+    check_size("--size", float(args.size) ** 2, 8 * 3, f"a {args.size} x {args.size} image",
+               "use a smaller --size")
     from meshladar.viz import paper
 
     paths, metrics = paper.reproduce(args.outdir, size=args.size)
@@ -73,6 +78,17 @@ def _cmd_paper(args) -> int:
     for p in paths:
         print(f"  wrote {p}")
     return 0
+
+
+def _check_outdir(outdir):
+    """An output folder: a folder (existing or not), not a file, not empty."""
+    import os
+
+    from .errors import ParameterError
+
+    if not outdir or (os.path.exists(outdir) and not os.path.isdir(outdir)):
+        raise ParameterError(f"outdir must name a folder; got {outdir!r}"
+                             + (" (a file)" if outdir and os.path.exists(outdir) else ""))
 
 
 def _coatings(text):
@@ -154,6 +170,11 @@ def _ladar(args, scene, default):
     from .ladar import Ladar
     from .mesh import fibonacci_sphere
 
+    from .errors import ParameterError
+
+    for flag, n in (("--views", args.views), ("--view-vectors", args.view_vectors)):
+        if n is not None and n > _MAX_VIEWS:
+            raise ParameterError(f"{flag}: at most {_MAX_VIEWS:.0e} views; got {n}")
     vectors = None if args.view_vectors is None else fibonacci_sphere(args.view_vectors)
     angles = args.angles_deg if args.angles_deg is not None else (
         np.arange(args.views) * (360.0 / args.views) if args.views else None)
@@ -372,6 +393,7 @@ def _cmd_study(args) -> int:
 
     import os
 
+    _check_outdir(args.outdir)
     result = studies.faceting_study(args.setting, progress=not args.quiet,
                                     run_dir=os.path.join(args.outdir, "run"))
     files = studies.save_study(result, args.outdir)
@@ -454,6 +476,11 @@ _nonnegative_int = _number(int, lambda v: v >= 0, "non-negative integer")
 _positive_float = _number(float, lambda v: v > 0 and math.isfinite(v),
                           "positive finite number")
 _finite_float = _number(float, math.isfinite, "finite number")
+_unit_fraction = _number(float, lambda v: 0 < v <= 1, "number in (0, 1]")
+
+#: The most views a command-line run asks for (as a phantom spec's ladar): a sinogram row
+#: per view, and each view's rays, are allocated before any work.
+_MAX_VIEWS = 10**6
 
 
 def _direction(text: str):
@@ -638,7 +665,7 @@ def _parser() -> argparse.ArgumentParser:
                      help="FBP filter (default: %(default)s)")
     rec.add_argument("--log", action="store_true",
                      help="log of the radiance (Fig. 11a) (default: off)")
-    rec.add_argument("--clip", type=_positive_float, default=None,
+    rec.add_argument("--clip", type=_unit_fraction, default=None,
                      help="clip at this fraction of the maximum (Fig. 11b: 0.008) (default: "
                           "off)")
     rec.add_argument("--quiet", action="store_true", help="no summary line (default: shown)")
@@ -651,7 +678,7 @@ def _parser() -> argparse.ArgumentParser:
                                "--material aluminum",
                         formatter_class=argparse.RawDescriptionHelpFormatter)
     scene_args(vw)
-    vw.add_argument("--view-angle", type=float, default=90.0,
+    vw.add_argument("--view-angle", type=_finite_float, default=90.0,
                     help="view angle about z in degrees (default: %(default)s)")
     vw.add_argument("--screenshot", default=None,
                     help="render off screen into this PNG (default: open a window)")

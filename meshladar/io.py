@@ -128,18 +128,35 @@ def write_text_atomic(path, text: str):
 def save_result(path, arrays: dict, meta: dict):
     """Save named float/int arrays and a JSON-serialisable ``meta`` dict atomically."""
     from . import __version__
+    from ._validate import check_path
+    from .errors import ParameterError
 
-    payload = {k: np.asarray(v) for k, v in arrays.items()}
-    if "__meta__" in payload:
-        raise ValueError("'__meta__' is reserved")
-    doc = dict(meta, meshladar_version=__version__)
-    payload["__meta__"] = np.array(json.dumps(doc, sort_keys=True))
+    path = check_path("path", path)
+    if os.path.isdir(path):
+        raise ParameterError(f"path must name a file, not a folder; got {path!r}")
+    if not isinstance(arrays, dict) or not isinstance(meta, dict):
+        raise ParameterError(f"arrays and meta must be dicts; got {type(arrays).__name__} and "
+                             f"{type(meta).__name__}")
+    payload = {}
+    for k, v in arrays.items():
+        a = np.asarray(v)
+        if not isinstance(k, str) or k == "__meta__" or a.dtype.hasobject:
+            raise ParameterError(f"arrays must map names (not '__meta__') to numeric arrays "
+                                 f"(loaded without pickle); got {k!r}: {a.dtype}")
+        payload[k] = a
+    try:
+        text = json.dumps(dict(meta, meshladar_version=__version__), sort_keys=True)
+    except (TypeError, ValueError) as exc:
+        raise ParameterError(f"meta must be JSON-serialisable; {exc}") from None
+    payload["__meta__"] = np.array(text)
     _atomic(path, lambda fh: np.savez_compressed(fh, **payload))
 
 
 def load_result(path):
     """Load a result saved by :func:`save_result`: (arrays dict, meta dict)."""
-    path = os.fspath(path)
+    from ._validate import check_path
+
+    path = check_path("path", path)
     try:
         with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
             arrays = {k: z[k] for k in z.files}
@@ -186,6 +203,9 @@ def save_sinogram(path, sino, *, scene=None, params=None):
     """Save a sinogram with everything needed to reconstruct and plot it: values, angles,
     bin edges, view vectors, the model and its info, a description of the scene and its
     coatings, the run's parameters, and meshladar's version. Atomic, no pickle."""
+    from ._validate import check_sinogram
+
+    check_sinogram("sino", sino)
     meta = {"kind": "sinogram", "model": sino.model, "info": _jsonable(sino.info),
             "scene": None if scene is None else describe_scene(scene),
             "params": _jsonable(params or {})}

@@ -150,6 +150,10 @@ class Ladar:
         the span). Views: ``angles_deg`` about z (default 0, 1, ..., 359) or
         ``view_vectors``.
         """
+        from .scene import Scene
+
+        if not isinstance(scene, Scene):
+            raise ParameterError(f"scene must be a meshladar.Scene; got {type(scene).__name__}")
         if bin_width is None and n_bins is None:
             raise ParameterError("give bin_width or n_bins (or both); got neither")
         m = check_real("margin", margin, low=0.0)

@@ -19,7 +19,6 @@ paper's table as ``meshladar.phantoms`` ``materials.toml``.
 
 from __future__ import annotations
 
-import os
 import tomllib
 from types import MappingProxyType
 
@@ -106,7 +105,9 @@ def load_table(path):
     -------
     Mapping[str, SandfordRobertson]
     """
-    path = os.fspath(path)
+    from ._validate import check_path
+
+    path = check_path("path", path)
     return parse_table(read_toml(path, "material table", MaterialFileError), source=path)
 
 

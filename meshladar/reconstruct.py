@@ -31,7 +31,8 @@ from functools import cached_property
 import numpy as np
 from scipy import fft as sfft
 
-from ._validate import check_choice, check_count, check_real, check_size, finite_array
+from ._validate import (check_choice, check_count, check_real, check_sinogram, check_size,
+                        finite_array)
 from .errors import MeshladarWarning, ParameterError
 from .sinogram import Sinogram
 
@@ -168,10 +169,14 @@ def resample_uniform(sino: Sinogram, n_bins=None) -> Sinogram:
 
     ``n_bins`` defaults to the span divided by the narrowest bin.
     """
+    check_sinogram("sino", sino)
     edges = sino.bin_edges
     span = edges[-1] - edges[0]
     if n_bins is None:
         n_bins = int(math.ceil(span / np.min(np.diff(edges)) - 1e-9))
+    n_bins = check_count("n_bins", n_bins)
+    check_size("n_bins", float(n_bins) * sino.n_views, 8 * 3,
+               f"{sino.n_views} views x {n_bins} bins", "use fewer bins")
     new = np.linspace(edges[0], edges[-1], int(n_bins) + 1)
     cum = np.concatenate([np.zeros((sino.n_views, 1)), np.cumsum(sino.values, axis=1)], axis=1)
     cum_new = np.stack([np.interp(new, edges, row) for row in cum])
@@ -183,6 +188,9 @@ def _view_weights(angles_deg):
     """Half of each view's share of the circle (trapezoid on the sorted, wrapped angles)."""
     a = np.mod(np.deg2rad(np.asarray(angles_deg)), 2 * math.pi)
     if a.size == 1:
+        warnings.warn("one view does not cover the circle: reflective FBP assumes views all "
+                      "around the scene; the image is that view's backprojection, streaks "
+                      "along its iso-range lines", MeshladarWarning, stacklevel=3)
         return np.array([math.pi])
     order = np.argsort(a, kind="stable")
     s = a[order]
@@ -328,6 +336,7 @@ def log_radiance(sinogram: Sinogram, *, floor=LOG_FLOOR) -> Sinogram:
     floor (empty bins included) map to 0, everything else to its log-ratio to the floor, so
     the result is ≥ 0 and finite. A floor of 1e-6 keeps six decades of dynamic range.
     """
+    check_sinogram("sinogram", sinogram)
     floor = check_real("floor", floor, low=0.0, high=1.0, low_open=True)
     vmax = float(sinogram.values.max(initial=0.0))
     if vmax <= 0:
@@ -341,6 +350,7 @@ def log_radiance(sinogram: Sinogram, *, floor=LOG_FLOOR) -> Sinogram:
 
 def clip_radiance(sinogram: Sinogram, *, threshold=PAPER_CLIP) -> Sinogram:
     """The paper's Fig. 11(b) input: radiance clipped at ``threshold`` × its maximum."""
+    check_sinogram("sinogram", sinogram)
     threshold = check_real("threshold", threshold, low=0.0, high=1.0, low_open=True)
     cap = threshold * float(sinogram.values.max(initial=0.0))
     return dataclasses.replace(sinogram, values=np.minimum(sinogram.values, cap),

@@ -33,7 +33,9 @@ def _center(value):
     return (float(c[0]), float(c[1]))
 
 
-def _material(value):
+def _material(value, name=None):
+    if name is not None and not isinstance(name, str):
+        raise ParameterError(f"name must be a string or None; got {name!r}")
     return check_brdf("material", value)
 
 
@@ -115,7 +117,7 @@ class Ellipse(Shape):
                                  f"{self.semi_axes!r}")
         object.__setattr__(self, "semi_axes", (float(axes[0]), float(axes[1])))
         object.__setattr__(self, "angle_deg", check_real("angle_deg", self.angle_deg))
-        _material(self.material)
+        _material(self.material, self.name)
 
     @property
     def axes(self) -> tuple[float, float]:
@@ -149,7 +151,7 @@ class Disk(Shape):
         object.__setattr__(self, "center", _center(self.center))
         object.__setattr__(self, "radius", check_real("radius", self.radius, low=0.0,
                                                       low_open=True))
-        _material(self.material)
+        _material(self.material, self.name)
 
     @property
     def axes(self) -> tuple[float, float]:
@@ -260,9 +262,18 @@ class Scene:
     def _from_parts(cls, parts, materials, shapes=()):
         from .mesh import inspect_parts
 
+        from .mesh import MeshPart
+
+        if not isinstance(materials, (list, tuple)) or not isinstance(parts, (list, tuple)):
+            raise ParameterError(f"parts and materials must be lists; got "
+                                 f"{type(parts).__name__} and {type(materials).__name__}")
         mats = tuple(materials)
         for i, m in enumerate(mats):
             check_brdf(f"materials[{i}]", m)
+        for i, p in enumerate(parts):
+            if not isinstance(p, MeshPart):
+                raise ParameterError(f"parts[{i}] must be a meshladar.mesh.MeshPart; got "
+                                     f"{type(p).__name__}")
         for p in parts:
             if len(p.material) and (p.material.min() < 0 or p.material.max() >= len(mats)):
                 raise ParameterError(f"{p.name}: face material indices must be in "
@@ -334,6 +345,9 @@ class Scene:
                 raise ParameterError(f"face_materials must be ({len(m.faces)},) integers; got "
                                      f"shape {fm.shape}, dtype {fm.dtype}")
             return cls._from_parts([part_from_trimesh(m, fm, name, transform)], materials)
+        if materials is not None and not isinstance(materials, dict):
+            raise ParameterError(f"materials must be a dict of part name -> coating; got "
+                                 f"{type(materials).__name__}")
         named = dict(materials or {})
         unknown = sorted(set(named) - {n for n, _ in loaded})
         if unknown:

@@ -12,7 +12,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ._validate import finite_array, readonly_copy
+from ._validate import finite_array, readonly_copy, unit_vectors
 from .errors import ParameterError
 
 __all__ = ["Sinogram"]
@@ -67,6 +67,10 @@ class Sinogram:
         object.__setattr__(self, "values", readonly_copy(values))
         object.__setattr__(self, "angles_deg", readonly_copy(angles))
         object.__setattr__(self, "bin_edges", readonly_copy(edges))
+        if not isinstance(self.info, dict):
+            raise ParameterError(f"info must be a dict; got {type(self.info).__name__}")
+        if not isinstance(self.model, str):
+            raise ParameterError(f"model must be a string; got {self.model!r}")
         object.__setattr__(self, "info", dict(self.info))
         if self.view_vectors is None:
             phi = np.deg2rad(angles)
@@ -76,6 +80,7 @@ class Sinogram:
             if vec.shape != (values.shape[0], 3):
                 raise ParameterError(f"view_vectors must have shape ({values.shape[0]}, 3); got "
                                      f"{vec.shape}")
+            vec = unit_vectors("view_vectors", vec)
         object.__setattr__(self, "view_vectors", readonly_copy(vec))
 
     @property

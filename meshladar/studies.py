@@ -117,6 +117,13 @@ def faceting_study(setting="quick", *, phantoms=None, coatings=None, progress=Fa
     if setting not in SETTINGS:
         raise ParameterError(f"setting must be one of {tuple(SETTINGS)}; got {setting!r}")
     cfg = SETTINGS[setting]
+    for arg, value in (("phantoms", phantoms), ("coatings", coatings)):
+        if value is not None and not isinstance(value, (list, tuple)):
+            raise ParameterError(f"{arg} must be a list of names; got {value!r}")
+    if run_dir is not None:
+        from ._validate import check_path
+
+        check_path("run_dir", run_dir)
     phantoms = list(PHANTOMS) if phantoms is None else list(phantoms)
     coatings = list(COATINGS) if coatings is None else list(coatings)
     ladar = Ladar.paper(angles_deg=np.arange(0.0, 360.0, 360.0 / cfg["views"]))
@@ -242,8 +249,13 @@ def save_study(result, outdir):
     import json
     import os
 
+    from ._validate import check_path
     from .io import save_result, write_text_atomic
 
+    if not isinstance(result, dict) or "rows" not in result:
+        raise ParameterError(f"result must be what faceting_study returns (a dict with rows); "
+                             f"got {type(result).__name__}")
+    outdir = check_path("outdir", outdir)
     os.makedirs(outdir, exist_ok=True)
     cols = ["phantom", "coating", "series", "segments", "normals", "rays_per_bin", "footprint",
             "pixel_size", "rel_l2", "rel_max", "image_rel_l2", "seconds", "analytic_seconds"]

@@ -917,6 +917,8 @@ def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_b
     if run_dir is not None:
         if not isinstance(run_dir, (str, os.PathLike)) or not os.fspath(run_dir):
             raise ParameterError(f"run_dir must be a folder path; got {run_dir!r}")
+        if os.path.exists(run_dir) and not os.path.isdir(run_dir):
+            raise ParameterError(f"run_dir must be a folder; {os.fspath(run_dir)!r} is a file")
         if weigh_with is None:
             raise ParameterError("run_dir is for streaming runs (simulate), not trace()")
         from .runs import RunFolder
@@ -1103,7 +1105,10 @@ def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None) -> Sin
     if len(mats) != len(hits.materials):
         raise ParameterError(f"materials must give {len(hits.materials)} coatings (one per "
                              f"material index); got {len(mats)}")
-    edges = hits.ladar.bin_edges if bin_edges is None else np.asarray(bin_edges, np.float64)
+    if bin_edges is None:
+        edges = hits.ladar.bin_edges
+    else:
+        edges = Ladar([0.0], bin_edges).bin_edges      # the ladar's own checks of edges
     order = np.argsort(hits.view, kind="stable")
     bounds = np.searchsorted(hits.view[order], np.arange(hits.ladar.n_views + 1))
     vals = np.zeros((hits.ladar.n_views, len(edges) - 1))

@@ -102,6 +102,13 @@ def _angles(spec, source):
         if unknown or not {"start", "stop", "step"} <= set(spec):
             raise _error(source, "[ladar] angles_deg must be a list or {start, stop, step}; "
                                  f"got {spec!r}")
+        from numbers import Real
+
+        bad = [k for k in ("start", "stop", "step") if isinstance(spec[k], bool)
+               or not isinstance(spec[k], Real)]
+        if bad:
+            raise _error(source, f"[ladar] angles_deg {bad[0]} must be a number; got "
+                                 f"{spec[bad[0]]!r}")
         if not spec["step"] > 0:
             raise _error(source, f"[ladar] angles_deg step must be > 0; got {spec['step']!r}")
         count = (spec["stop"] - spec["start"]) / spec["step"]
@@ -193,7 +200,14 @@ def load(name_or_path, *, materials=None):
     Phantom
         ``.scene`` and ``.ladar`` (the paper's set-up), ``.name``, ``.description``.
     """
-    key = os.fspath(name_or_path)
+    from meshladar._validate import check_path
+
+    key = check_path("name_or_path", name_or_path)
+    if materials is not None and not isinstance(materials, dict):
+        from meshladar.errors import ParameterError
+
+        raise ParameterError(f"materials must be a dict of shape name -> coating; got "
+                             f"{type(materials).__name__}")
     if key in names():
         with resources.as_file(resources.files(__name__) / f"{key}.toml") as p:
             return load(p, materials=materials)
