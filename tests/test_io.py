@@ -21,7 +21,7 @@ def test_round_trip(tmp_path):
 def test_failed_write_keeps_the_old_file(tmp_path):
     p = tmp_path / "r.npz"
     save_result(p, {"a": np.zeros(2)}, {"v": 1})
-    with pytest.raises(TypeError):
+    with pytest.raises(meshladar.errors.ParameterError, match="meta must be JSON-serialisable"):
         save_result(p, {"a": np.zeros(2)}, {"v": object()})        # not JSON: the save fails
     arrays, meta = load_result(p)
     assert meta["v"] == 1 and [f.name for f in tmp_path.iterdir()] == ["r.npz"]
