@@ -343,18 +343,18 @@ def _cmd_reconstruct(args) -> int:
     image = fbp(sino, size=args.size, extent=extent, filter=args.filter)
     from meshladar.viz import style
 
-    plt = style.use()
-    fig, ax = plt.subplots(figsize=(5.5, 4.6))
-    h = ax.imshow(image.values, extent=(-extent, extent, -extent, extent), origin="lower")
-    ax.set_xlabel("x [scene units]")
-    ax.set_ylabel("y [scene units]")
-    ax.set_title(f"FBP of {os.path.basename(args.result)} ({args.filter})")
-    fig.colorbar(h, ax=ax, label="reconstruction [radiance / area]")
-    fmt = os.path.splitext(args.output)[1].lower().lstrip(".")
-    try:
+    @style.styled
+    def draw():
+        fig, ax = style.use().subplots(figsize=(5.5, 4.6))
+        h = ax.imshow(image.values, extent=(-extent, extent, -extent, extent), origin="lower")
+        ax.set_xlabel("x [scene units]")
+        ax.set_ylabel("y [scene units]")
+        ax.set_title(f"FBP of {os.path.basename(args.result)} ({args.filter})")
+        fig.colorbar(h, ax=ax, label="reconstruction [radiance / area]")
+        fmt = os.path.splitext(args.output)[1].lower().lstrip(".")
         io.write_atomic(args.output, lambda fh: fig.savefig(fh, format=fmt))
-    finally:
-        plt.close(fig)
+
+    draw()
     io.save_result(data, {"image": image.values},
                    {"kind": "image", "extent": extent, "info": image.info,
                     "source": os.path.basename(args.result)})
@@ -721,10 +721,10 @@ def main(argv=None) -> int:
     """Run the command line; returns the exit status."""
     import warnings
 
-    warnings.formatwarning = _one_line_warning
     parser = _parser()
     args = parser.parse_args(argv)
     previous = _terminate_as_interrupt()
+    format_before, warnings.formatwarning = warnings.formatwarning, _one_line_warning
     try:
         return args.func(args)
     except MeshladarError as exc:
@@ -751,6 +751,7 @@ def main(argv=None) -> int:
               f"report it with the traceback in {path}", file=sys.stderr)
         return 1
     finally:
+        warnings.formatwarning = format_before           # a caller's own is left as it was
         if previous is not None:
             import signal
 

@@ -114,3 +114,25 @@ def test_bad_input_is_one_clear_line(tmp_path, args, message):
     assert res.returncode == 2, res.stderr
     assert "Traceback" not in res.stderr and message in res.stderr
     assert res.stderr.strip().count("\n") == 0 or "usage:" in res.stderr
+
+
+def test_the_command_line_and_figures_leave_a_sessions_state_as_it_was(tmp_path):
+    import warnings
+
+    import matplotlib
+
+    from meshladar.cli import main
+
+    backend = matplotlib.get_backend()
+    matplotlib.rcParams["font.size"] = 13.0
+    fmt = warnings.formatwarning
+    assert main(["simulate", "disk", "--views", "360", "-o", str(tmp_path / "d.npz"),
+                 "--quiet"]) == 0
+    assert main(["reconstruct", str(tmp_path / "d.npz"), "-o", str(tmp_path / "d.png"),
+                 "--size", "32", "--quiet"]) == 0
+    assert (tmp_path / "d.png").stat().st_size > 1000
+    # no backend switched, no rcParams or warning format left changed (a notebook's own)
+    assert matplotlib.get_backend() == backend
+    assert matplotlib.rcParams["font.size"] == 13.0
+    assert warnings.formatwarning is fmt
+    matplotlib.rcdefaults()

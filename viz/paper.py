@@ -85,6 +85,7 @@ def _caption(fig, text):
              fontsize=8)
 
 
+@style.styled
 def draw(result_path, outdir, *, dpi=None):
     """Draw Figs 5-11 as PNGs in ``outdir`` from a saved result; returns their paths.
 

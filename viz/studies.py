@@ -38,6 +38,7 @@ def _pareto(points):
     return front
 
 
+@style.styled
 def draw(outdir):
     """Write the study's figures into ``outdir``; returns their paths."""
     from meshladar import io

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["STYLE", "use"]
+__all__ = ["STYLE", "use", "styled"]
 
 STYLE = {
     "figure.dpi": 100,
@@ -18,13 +18,39 @@ STYLE = {
 
 
 def use():
-    """Apply the style and the non-interactive backend; returns matplotlib.pyplot."""
+    """Figures without pyplot: an object with pyplot's ``subplots`` and ``close`` that makes
+    plain ``matplotlib.figure.Figure`` objects, so drawing never switches the session's
+    backend (a notebook's inline backend stays). Style them inside :func:`styled`."""
     try:
-        import matplotlib
+        import matplotlib  # noqa: F401 (only whether it is installed)
     except ImportError as exc:
         raise ImportError("figures need matplotlib: pip install 'meshladar[viz]'") from exc
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
+    return _Figures()
 
-    plt.rcParams.update(STYLE)
-    return plt
+
+class _Figures:
+    @staticmethod
+    def subplots(nrows=1, ncols=1, *, figsize=None, squeeze=True, **kwargs):
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=figsize)
+        return fig, fig.subplots(nrows, ncols, squeeze=squeeze, **kwargs)
+
+    @staticmethod
+    def close(fig):
+        """Nothing to close: the figure belongs to no pyplot state and is collected."""
+
+
+def styled(func):
+    """Run ``func`` with meshladar's style in a ``matplotlib.rc_context``: the user's
+    rcParams are as they were afterwards."""
+    import functools
+
+    @functools.wraps(func)
+    def wrapper(*args, **kwargs):
+        import matplotlib
+
+        with matplotlib.rc_context(STYLE):
+            return func(*args, **kwargs)
+
+    return wrapper
