@@ -46,7 +46,7 @@ import numpy as np
 from scipy.special import xlogy
 
 from ._validate import check_choice, check_flag, check_real, finite_array, unit_vectors
-from .errors import EnergyConservationWarning, ParameterError
+from .errors import EnergyConservationWarning, ModelError, ParameterError
 
 __all__ = [
     "BRDF",
@@ -279,8 +279,8 @@ class BRDF:
 
     def projected(self, cos_theta, sin_theta):
         """F(θ; −θ)·cos θ in 1/sr for arrays cos θ ≥ 0 and sin θ = sqrt(1 − cos²θ) ≥ 0."""
-        raise NotImplementedError(f"{type(self).__name__} must define projected(cos_theta, "
-                                  "sin_theta), the monostatic F·cos θ")
+        raise ModelError(f"{type(self).__name__} must define projected(cos_theta, "
+                         "sin_theta), the monostatic F·cos θ (meshladar.brdf.BRDF)")
 
     def value(self, cos_theta, sin_theta):
         """F(θ; −θ) in 1/sr: the projected weight over cos θ (cos(fl(π/2)) at the horizon),
@@ -292,8 +292,8 @@ class BRDF:
     def bistatic(self, cos_i, sin_i, cos_r, sin_r, cos_h, sin_h):
         """F(w_i, w_r)·cos θr in 1/sr from the cosines and sines of θi, θr and the half
         vector's polar angle; 0 below either horizon. Optional."""
-        raise ParameterError(f"{type(self).__name__} has no bistatic evaluation: define "
-                             "bistatic() to use it with a bistatic receiver")
+        raise ModelError(f"{type(self).__name__} has no bistatic evaluation: define "
+                         "bistatic() to use it with a bistatic receiver")
 
     def bistatic_value(self, cos_i, sin_i, cos_r, sin_r, cos_h, sin_h):
         """F(w_i, w_r) in 1/sr (the bistatic weight over cos θr)."""
@@ -411,7 +411,15 @@ def check_brdf(name, value):
         raise ParameterError(f"{name} must be a meshladar.brdf.BRDF (SandfordRobertson, "
                              f"Lambertian, Phong, GGX, Tabulated or a subclass); got "
                              f"{type(value).__name__}")
+    if type(value).projected is BRDF.projected:
+        raise ModelError(f"{name}: {type(value).__name__} must define projected(cos_theta, "
+                         "sin_theta), the monostatic F·cos θ (meshladar.brdf.BRDF)")
     return value
+
+
+def _check_name(name):
+    if name is not None and not isinstance(name, str):
+        raise ParameterError(f"name must be a string or None; got {name!r}")
 
 
 @dataclass(frozen=True)
@@ -641,6 +649,7 @@ class Lambertian(BRDF):
 
     def __post_init__(self):
         object.__setattr__(self, "albedo", _unit_interval("albedo", self.albedo))
+        _check_name(self.name)
 
     def projected(self, cos_theta, sin_theta):
         return self.albedo / math.pi * np.maximum(np.asarray(cos_theta, np.float64), 0.0)
@@ -678,6 +687,7 @@ class Phong(BRDF):
     name: str | None = field(default=None, kw_only=True, compare=False)
 
     def __post_init__(self):
+        _check_name(self.name)
         object.__setattr__(self, "kd", _unit_interval("kd", self.kd))
         object.__setattr__(self, "ks", _unit_interval("ks", self.ks))
         object.__setattr__(self, "exponent", check_real("exponent", self.exponent, low=0.0,
@@ -738,6 +748,7 @@ class GGX(BRDF):
     name: str | None = field(default=None, kw_only=True, compare=False)
 
     def __post_init__(self):
+        _check_name(self.name)
         object.__setattr__(self, "alpha", check_real("alpha", self.alpha, low=1e-4, high=1.0))
         object.__setattr__(self, "reflectance",
                            _unit_interval("reflectance", self.reflectance))
@@ -787,6 +798,8 @@ class Tabulated(BRDF):
     name: str | None = field(default=None, kw_only=True, compare=False)
 
     def __post_init__(self):
+        _check_name(self.name)
+        check_flag("projected_values", self.projected_values)
         t = np.array(finite_array("theta_deg", self.theta_deg))          # copies: the user's
         v = np.array(finite_array("values", self.values))                # arrays stay theirs
         if t.ndim != 1 or t.size < 2:

@@ -12,6 +12,7 @@ __all__ = [
     "MaterialFileError",
     "GeometryError",
     "PhantomSpecError",
+    "ModelError",
     "MeshladarWarning",
     "EnergyConservationWarning",
 ]
@@ -35,6 +36,11 @@ class GeometryError(MeshladarError, ValueError):
 
 class PhantomSpecError(MeshladarError, ValueError):
     """A phantom spec (TOML) is unreadable or one of its fields is invalid."""
+
+
+class ModelError(MeshladarError, NotImplementedError):
+    """A BRDF lacks a method the run needs (``projected``; ``bistatic`` for a bistatic
+    receiver)."""
 
 
 class MeshladarWarning(UserWarning):

@@ -547,7 +547,7 @@ def test_a_users_model_returning_nonsense_is_named():
     with pytest.raises(ParameterError, match=r"Broken.projected must be finite and "
                                              r"non-negative; got -[\d.e-]+ at cos theta = 0.4\d+"):
         ml.simulate(scene, ml.Ladar.paper(angles_deg=[0.0]))
-    with pytest.raises(ParameterError, match=r"Broken has no bistatic evaluation"):
+    with pytest.raises(ml.errors.ModelError, match=r"Broken has no bistatic evaluation"):
         Broken().evaluate([0, 0, 1], [0, 1, 1])
 
 

@@ -37,11 +37,34 @@ def _pyvista():
 
 
 def _view_vector(view_angle_deg, view_vector):
+    from meshladar._validate import check_real, unit_vectors
+    from meshladar.errors import ParameterError
+
     if view_vector is not None:
-        w = np.asarray(view_vector, dtype=np.float64)
-        return w / np.linalg.norm(w)
-    phi = np.deg2rad(90.0 if view_angle_deg is None else float(view_angle_deg))
+        w = unit_vectors("view_vector", view_vector)
+        if w.shape != (3,):
+            raise ParameterError(f"view_vector must be one direction (x, y, z); got shape "
+                                 f"{w.shape}")
+        return w
+    angle = 90.0 if view_angle_deg is None else check_real("view_angle_deg", view_angle_deg)
+    phi = np.deg2rad(angle)
     return np.array([np.cos(phi), np.sin(phi), 0.0])
+
+
+def _check_view_options(scene, iso_ranges, window_size, segments):
+    from meshladar import Scene
+    from meshladar._validate import check_count
+    from meshladar.errors import ParameterError
+
+    if not isinstance(scene, Scene):
+        raise ParameterError(f"scene must be a meshladar.Scene; got {type(scene).__name__}")
+    check_count("iso_ranges", iso_ranges, low=0)
+    check_count("segments", segments, low=3)
+    if (not isinstance(window_size, (tuple, list)) or len(window_size) != 2
+            or not all(isinstance(n, (int, np.integer)) and not isinstance(n, bool)
+                       and 1 <= n <= 16384 for n in window_size)):
+        raise ParameterError(f"window_size must be (width, height) in pixels, each in "
+                             f"[1, 16384]; got {window_size!r}")
 
 
 def _mesh_scene(scene, segments):
@@ -119,8 +142,9 @@ def show_scene(scene, *, view_angle_deg=None, view_vector=None, ladar=None, segm
     camera : pyvista camera position, "view", or None
         "view" looks along the beam from the ladar; None (default) an oblique view.
     """
-    pv = _pyvista()
+    _check_view_options(scene, iso_ranges, window_size, segments)
     w = _view_vector(view_angle_deg, view_vector)
+    pv = _pyvista()
     mesh, ret, state = face_returns(scene, w, segments=segments)
     v = np.concatenate([p.vertices for p in mesh.parts])
     offs = np.cumsum([0] + [len(p.vertices) for p in mesh.parts])[:-1]
