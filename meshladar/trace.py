@@ -44,6 +44,7 @@ import os
 import time
 import warnings
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
@@ -224,19 +225,53 @@ def _frame(w):
 
 # ------------------------------------------------------------------ hits
 
+class _ViewHits(NamedTuple):
+    """One view's hits, as a worker returns them (ranges relative to the scene centre's
+    plane); the fields are :class:`Hits`' per-hit arrays for that view, plus its ``rays``
+    cast and ``back_face_hits`` counts."""
+
+    range: np.ndarray
+    cos_theta: np.ndarray
+    sin_theta: np.ndarray
+    material: np.ndarray
+    spread: np.ndarray
+    rays: int
+    back_face_hits: int
+    bistatic: np.ndarray | None
+    weight_factor: np.ndarray | None
+    curve: np.ndarray | None
+
+
 @dataclass(frozen=True, eq=False)
 class Hits:
     """First hits of every ray, per view: geometry only, no materials' BRDFs.
 
-    Arrays (k,) over hits: ``view`` (index into the views), ``range`` (float64),
-    ``cos_theta`` and ``sin_theta`` of the chosen normal against w (cos θ = −1 marks a
-    back-face hit that ``back_faces="ignore"`` blocks), ``material`` (index into
-    ``materials``), ``spread`` (k, 2): half-widths of the footprint's range interval along
-    the two transverse axes (0 for the second in slice mode).
-    Per view (n_views,): ``rays`` cast, ``back_face_hits``. Scalars: ``area`` (δA⊥ per
-    ray), ``mode``, ``normals``; ``ladar`` and ``materials`` as traced. With a bistatic
-    receiver, ``bistatic`` (k, 4) holds cos θr, sin θr, cos α, sin α (cos θr = −1 where the
-    occlusion ray toward the receiver is blocked).
+    Per hit, k hits in all (arrays frozen read-only in place):
+
+    ==================  ===========  =====================================================
+    field               shape        meaning
+    ==================  ===========  =====================================================
+    ``view``            (k,) int32   index into the ladar's views
+    ``range``           (k,)         range of the hit, −p·w (monostatic), scene units
+    ``cos_theta``       (k,)         cos θ of the chosen normal against w; −1 marks a
+                                     back-face hit that ``back_faces="ignore"`` blocks
+    ``sin_theta``       (k,)         sin θ ≥ 0
+    ``material``        (k,) int32   index into ``materials``
+    ``spread``          (k, 4)       footprint: range half-widths along the two
+                                     transverse axes (the second 0 in slice mode), and
+                                     the hit facet's own range interval relative to the
+                                     hit (≤ 0, ≥ 0)
+    ``bistatic``        (k, 4)       with a bistatic receiver: cos θr, sin θr, cos α,
+                                     sin α (cos θr = −1 where the receiver is occluded);
+                                     else None
+    ``weight_factor``   (k,)         shading normals' area factor (cos θs/cos θg), or None
+    ``curve``           (k, 4)       exact-normal slice footprints on curved surfaces, or
+                                     None
+    ==================  ===========  =====================================================
+
+    Per view (n_views,): ``rays`` cast and ``back_face_hits``. Scalars: ``area`` (δA⊥ per
+    ray), ``mode``, ``normals``; ``ladar`` and ``materials`` as traced; ``info`` the run's
+    parameters.
     """
 
     view: np.ndarray
@@ -256,6 +291,25 @@ class Hits:
     weight_factor: np.ndarray = None
     curve: np.ndarray = None
     info: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        k = self.view.shape[0] if np.ndim(self.view) == 1 else -1
+        expected = {"view": (k,), "range": (k,), "cos_theta": (k,), "sin_theta": (k,),
+                    "material": (k,), "spread": (k, 4), "bistatic": (k, 4),
+                    "weight_factor": (k,), "curve": (k, 4)}
+        for name, shape in expected.items():
+            a = getattr(self, name)
+            if a is None and name in ("bistatic", "weight_factor", "curve"):
+                continue
+            a = np.asarray(a)
+            if k < 0 or a.shape != shape:
+                raise ParameterError(f"Hits.{name} must have shape {shape}; got {a.shape}")
+            a.flags.writeable = False        # frozen in place: hits can be gigabytes
+            object.__setattr__(self, name, a)
+        for name in ("rays", "back_face_hits"):
+            a = np.asarray(getattr(self, name))
+            a.flags.writeable = False
+            object.__setattr__(self, name, a)
 
     @property
     def size(self) -> int:
@@ -430,8 +484,8 @@ def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=N
             spread[:, 1] = np.abs(_dot(n_geo, v)) / cg * 0.5 * spacing
         spread[:, 2] = np.minimum(tri_r.min(axis=1) - rng_rel, 0.0)
         spread[:, 3] = np.maximum(tri_r.max(axis=1) - rng_rel, 0.0)
-    return (rng_rel, cos_t, sin_t, geo.material[prim], spread, len(o), int(back.sum()), bi,
-            factor, curve)
+    return _ViewHits(rng_rel, cos_t, sin_t, geo.material[prim], spread, len(o),
+                     int(back.sum()), bi, factor, curve)
 
 
 #: A facet seen within this cosine of edge-on counts as seen at it: the float32 ray-facet
@@ -588,11 +642,11 @@ def _job(geo, ladar_vectors, views, mode, spacing, z0_shifted, back_faces, seed,
     materials, footprint, area = weigh_with
     vals = np.zeros((len(views), len(edges) - 1))
     for j, (i, h) in enumerate(zip(views, out)):
-        r = h[0] + _range_offset(geo.center, ladar_vectors[i],
+        r = h.range + _range_offset(geo.center, ladar_vectors[i],
                                  None if receivers is None else receivers[i])
-        vals[j] = _bin_one(r, h[1], h[2], h[3], h[4], materials, edges, area, footprint, h[7],
-                           h[8], h[9])
-    return vals, [h[5] for h in out], [h[6] for h in out]
+        vals[j] = _bin_one(r, h.cos_theta, h.sin_theta, h.material, h.spread, materials, edges,
+                           area, footprint, h.bistatic, h.weight_factor, h.curve)
+    return vals, [h.rays for h in out], [h.back_face_hits for h in out]
 
 
 def _material_table(materials):
@@ -1053,23 +1107,21 @@ def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0
     offsets = [_range_offset(geo.center, vectors[i],
                              None if receivers is None else receivers[i])
                for i in range(ladar.n_views)]
-    view = np.concatenate([np.full(h[0].size, i, np.int32) for i, h in enumerate(per_view)])
+    view = np.concatenate([np.full(h.range.size, i, np.int32) for i, h in enumerate(per_view)])
+
+    def joined(field):
+        parts = [getattr(h, field) for h in per_view]
+        return None if parts[0] is None else np.concatenate(parts)
+
     return Hits(view=view,
-                range=np.concatenate([h[0] + offsets[i] for i, h in enumerate(per_view)]),
-                cos_theta=np.concatenate([h[1] for h in per_view]),
-                sin_theta=np.concatenate([h[2] for h in per_view]),
-                material=np.concatenate([h[3] for h in per_view]),
-                spread=np.concatenate([h[4] for h in per_view]),
-                rays=np.array([h[5] for h in per_view]),
-                back_face_hits=np.array([h[6] for h in per_view]),
+                range=np.concatenate([h.range + offsets[i] for i, h in enumerate(per_view)]),
+                cos_theta=joined("cos_theta"), sin_theta=joined("sin_theta"),
+                material=joined("material"), spread=joined("spread"),
+                rays=np.array([h.rays for h in per_view]),
+                back_face_hits=np.array([h.back_face_hits for h in per_view]),
                 area=area, mode=run["mode"], normals=normals, ladar=ladar,
-                materials=tuple(scene.materials),
-                bistatic=None if receivers is None else np.concatenate([h[7] for h in per_view]),
-                weight_factor=None if per_view[0][8] is None else np.concatenate(
-                    [h[8] for h in per_view]),
-                curve=None if per_view[0][9] is None else np.concatenate(
-                    [h[9] for h in per_view]),
-                info=run)
+                materials=tuple(scene.materials), bistatic=joined("bistatic"),
+                weight_factor=joined("weight_factor"), curve=joined("curve"), info=run)
 
 
 def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None) -> Sinogram:

@@ -407,3 +407,19 @@ def test_alternating_meshes_reuse_their_embree_scenes():
     for g in geos[2:]:                                # past the bound: the oldest goes
         _embree_scene(g)
     assert _embree_scene(geos[1]) is first[1] and _embree_scene(geos[0]) is not first[0]
+
+
+def test_hits_are_a_frozen_record_of_named_arrays():
+    sphere = ml.Scene.from_parts([ml.mesh.sphere((0, 0, 0), 0.5, 0, subdivisions=2)],
+                                 [DARK_GRAY])
+    lad = ml.Ladar(np.array([0.0, 90.0]), np.linspace(-0.6, 0.6, 9))
+    hits = ml.trace(sphere, lad)
+    k = hits.size
+    assert k > 0 and hits.spread.shape == (k, 4) and hits.rays.shape == (2,)
+    for name in ("view", "range", "cos_theta", "sin_theta", "material", "spread", "rays"):
+        with pytest.raises(ValueError, match="read-only"):
+            getattr(hits, name)[0] = 0
+    import dataclasses
+
+    with pytest.raises(ParameterError, match=r"Hits.spread must have shape \(\d+, 4\); got"):
+        dataclasses.replace(hits, spread=np.zeros((k, 2)))
