@@ -16,6 +16,7 @@ import math
 import numba
 import numpy as np
 from numba import njit, prange
+from .precision import COS_HORIZON as _COS_HORIZON
 
 __all__ = ["backproject", "siddon_project", "siddon_backproject", "siddon_first_hits",
            "set_threads"]
@@ -216,7 +217,6 @@ def corner_normals(faces, face_normals, face_areas, ptr, face_of, cos_crease, ou
                 out[f, c, 2] = face_normals[f, 2]
 
 
-_COS_HORIZON = math.cos(math.pi / 2)
 
 
 @njit(cache=True)

@@ -47,6 +47,9 @@ from scipy.special import xlogy
 
 from ._validate import check_choice, check_flag, check_real, finite_array, unit_vectors
 from .errors import EnergyConservationWarning, ModelError, ParameterError
+from .precision import COS_HORIZON as _COS_HORIZON
+from .precision import E_MIN
+from .precision import ENERGY_SLACK as _ENERGY_SLACK
 
 __all__ = [
     "BRDF",
@@ -66,14 +69,7 @@ __all__ = [
 #: The lobe selections a :class:`SandfordRobertson` accepts.
 LOBES = ("both", "diffuse", "specular")
 
-#: Smallest accepted glint parameter e. The glint lobe peaks at h(0) = 1/e⁴ and the
-#: bistatic F_s at grazing reflection grows like 1/(e³ cos θr): below 1e-12 these approach
-#: float64 overflow (1e48 · 1.6e16 · ...), and no physical coating is that mirror-like.
-E_MIN = 1e-12
 
-#: cos(fl(π/2)): the cosine used in place of an exact 0 at the horizon when dividing by
-#: cos θr (A5), so F stays finite where a direction vector lies exactly in the surface.
-_COS_HORIZON = math.cos(math.pi / 2)
 
 #: Below this value of c = 1 − b², G(b) is summed as its Taylor series in c (A3 cancels
 #: catastrophically as b → 1); above, the closed form loses at most ~2 bits.
@@ -81,8 +77,6 @@ _G_SERIES_BELOW = 0.5
 #: Terms of that series: the tail after 64 terms is < 0.5**64 / (65·66) ≈ 1e-23 of G ≥ 1/2.
 _G_SERIES_TERMS = 64
 
-#: Relative slack on ρd + ε ≤ G(b) for rounding of the user's inputs; ρs is clipped at 0.
-_ENERGY_SLACK = 1e-12
 
 
 # --------------------------------------------------------------------------------------

@@ -16,11 +16,10 @@ import numpy as np
 from ._validate import (check_count, check_real, check_size, finite_array, readonly_copy,
                         unit_vectors)
 from .errors import ParameterError
+from .precision import ANGLE_TOL_DEG as _ANGLE_TOL_DEG
 
 __all__ = ["Ladar", "PAPER_BIN_DIVISOR"]
 
-#: angles_deg given with view_vectors must match their azimuths to this (degrees).
-_ANGLE_TOL_DEG = 1e-6
 #: The paper's range resolution is A/256 for a disk of radius A (Sec. 4.A).
 PAPER_BIN_DIVISOR = 256
 

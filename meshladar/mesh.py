@@ -31,6 +31,8 @@ import numpy as np
 
 from ._validate import check_count, check_size
 from .errors import GeometryError, ParameterError
+from .precision import DEGENERATE_AREA as _DEGENERATE_AREA
+from .precision import WELD_REL as _WELD_REL
 
 __all__ = ["MeshPart", "load_parts", "part_from_trimesh", "prism", "sphere", "ellipsoid",
            "fibonacci_sphere", "corner_normals", "CREASE_DEG"]
@@ -38,8 +40,6 @@ __all__ = ["MeshPart", "load_parts", "part_from_trimesh", "prism", "sphere", "el
 #: Vertex normals are averaged only over faces within this angle of each other, so the
 #: edges of a prism or a box stay sharp ("smooth" normals that respect creases).
 CREASE_DEG = 30.0
-#: Faces with area below this fraction of (bounding-box diagonal)² are degenerate.
-_DEGENERATE_AREA = 1e-14
 
 
 @dataclass(frozen=True, eq=False)
@@ -189,10 +189,6 @@ def part_from_trimesh(mesh, material_index, name="mesh", transform=None):
 _HEAD_BYTES = 1 << 16
 #: Longest piece of a reader's own message quoted in a GeometryError (characters).
 _MAX_REASON = 160
-#: Vertices of a loaded mesh are one point when their positions agree to this fraction of
-#: the mesh's size: far below any modelled feature, far above the float64 round-off of a
-#: position a file recomputes (a seam written as sin 2π ≈ 2e-16 rather than 0).
-_WELD_REL = 2.0 ** -40
 #: Single-file compression meshladar undoes itself with the standard library, then reads the
 #: inner file by its own suffix (or content): trimesh reads neither .gz nor .xz, and its
 #: .bz2 reader hides why the inner file failed.

@@ -35,6 +35,7 @@ from ._validate import (check_choice, check_count, check_real, check_sinogram, c
                         finite_array)
 from .errors import MeshladarWarning, ParameterError
 from .sinogram import Sinogram
+from .precision import UNIFORM_RTOL as _UNIFORM_RTOL
 
 __all__ = ["Image", "fbp", "fourier_filter", "log_radiance", "clip_radiance", "resample_uniform",
            "FILTERS", "INTERPOLATIONS", "LOG_FLOOR", "PAPER_CLIP"]
@@ -47,8 +48,6 @@ INTERPOLATIONS = ("linear", "nearest")
 LOG_FLOOR = 1e-6
 #: The paper's clipping threshold, as a fraction of the maximum (Fig. 11b).
 PAPER_CLIP = 0.008
-#: Relative non-uniformity of bin widths accepted as uniform (rounding of edges).
-_UNIFORM_RTOL = 1e-9
 #: A gap between consecutive views wider than this many times the median spacing warns that
 #: the views do not cover the circle.
 _GAP_FACTOR = 3.0

@@ -18,12 +18,10 @@ from scipy import optimize
 from ._validate import check_real, finite_array
 from .brdf import BRDF, check_brdf
 from .errors import GeometryError, ParameterError
+from .precision import OVERLAP_RTOL
 
 __all__ = ["Shape", "Disk", "Ellipse", "Scene", "OVERLAP_RTOL"]
 
-#: Relative tolerance of the overlap test: shapes whose boundaries interpenetrate by less
-#: than this fraction of their size count as touching (the paper's disk pair touches).
-OVERLAP_RTOL = 1e-9
 
 
 def _center(value):

@@ -53,6 +53,12 @@ from .errors import MeshladarWarning, ParameterError
 from .ladar import Ladar
 from .scene import Scene
 from .sinogram import Sinogram
+from .precision import FAR_RATIO as _FAR_RATIO
+from .precision import MIN_COS_FACET as _MIN_COS_FACET
+from .precision import ORIGIN_MARGIN as _ORIGIN_MARGIN
+from .precision import RECEIVER_LIFT as _RECEIVER_LIFT
+from .precision import REFINE_MIN_COS as _REFINE_MIN_COS
+from .precision import SCENE_RADIUS_RANGE
 
 __all__ = ["Hits", "trace", "weigh", "simulate_mesh", "first_hits", "occluded", "NORMALS",
            "MODES", "BACK_FACES", "SAMPLINGS"]
@@ -72,17 +78,12 @@ _DEFAULT_RAYS_PER_BIN = {"slice": 8.0, "3d": 1.0}
 MAX_RAYS_PER_VIEW = 5e7
 #: By default a 3-D grid has at least this many rays across the target's diameter.
 _MIN_RAYS_ACROSS = 128
-#: Rays start this far outside the bounding sphere (relative), so no face is behind them.
-_ORIGIN_MARGIN = 0.01
 #: Views per task: enough work to amortise a task, few enough to balance two cores.
 _VIEWS_PER_TASK = 8
 #: Worker processes allowed per core (``jobs``): more only compete for the cores.
 _MAX_JOBS_PER_CORE = 4
 #: Resubmissions of a chunk whose task was cancelled (a worker lost with its data).
 _MAX_RETRIES = 3
-#: Occlusion rays toward a bistatic receiver start this far (relative to the scene's
-#: radius) off the hit facet, above float32 round-off of the hit point (~1e-7 R).
-_RECEIVER_LIFT = 1e-5
 
 
 # ------------------------------------------------------------------ geometry held per job
@@ -127,13 +128,7 @@ class _Geometry:
         self.key = _digest(self.vertices, self.faces)
 
 
-#: Scene sizes (bounding radius, in scene units) the mesh engine traces: float32 ray origins
-#: and Embree's unit-size copy keep full precision across this range.
-SCENE_RADIUS_RANGE = (1e-30, 1e30)
 
-#: Beyond this ratio of the distance from the origin to the size, float64 ranges resolve the
-#: target to worse than ~1e-7 of its size (|c|·2⁻⁵³ against its radius).
-_FAR_RATIO = 1e9
 
 
 def _check_scale(radius, offset):
@@ -488,9 +483,6 @@ def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=N
                      int(back.sum()), bi, factor, curve)
 
 
-#: A facet seen within this cosine of edge-on counts as seen at it: the float32 ray-facet
-#: intersection is meaningless there, and it bounds a shading ray's area factor by 1e6.
-_MIN_COS_FACET = 1e-6
 
 
 def _shading_factor(cos_shading, cos_facet):
@@ -529,9 +521,6 @@ def _arc_factor(n, u, cos_t, rho, spacing):
     return np.where(finite, arc * np.maximum(cos_t, 0.0) / spacing, 1.0)
 
 
-#: Below this |n·w| the float64 plane intersection is ill-conditioned and Embree's float32
-#: distance is kept.
-_REFINE_MIN_COS = 1e-6
 
 
 def _refine_t(geo, prim, origins32, w, t32):

@@ -1,0 +1,79 @@
+"""Every precision constant and tolerance of the engine, in one place, each with its reason.
+
+Modules import these under their own (private) names; change one here and every use
+follows. Values are dimensionless unless a unit is named.
+"""
+
+from __future__ import annotations
+
+import math
+
+__all__ = [
+    "COS_HORIZON", "E_MIN", "ENERGY_SLACK", "ANGLE_TOL_DEG", "DEGENERATE_AREA", "WELD_REL",
+    "UNIFORM_RTOL", "OVERLAP_RTOL", "RECEIVER_LIFT", "MIN_COS_FACET", "REFINE_MIN_COS",
+    "ORIGIN_MARGIN", "SCENE_RADIUS_RANGE", "FAR_RATIO",
+]
+
+# -- BRDFs ----------------------------------------------------------------------------------
+
+#: cos(fl(π/2)) = 6.1e-17: the cosine used in place of an exact 0 at the horizon when
+#: dividing by cos θr (SR's A5, any model's F = F·cos θ / cos θ), so F stays finite where a
+#: direction lies exactly in the surface. The compiled kernel uses the same value.
+COS_HORIZON = math.cos(math.pi / 2)
+
+#: Smallest accepted SR glint parameter e. The glint lobe peaks at h(0) = 1/e⁴ and the
+#: bistatic F_s at grazing reflection grows like 1/(e³ cos θr): below 1e-12 these approach
+#: float64 overflow (1e48 · 1.6e16 · ...), and no physical coating is that mirror-like.
+E_MIN = 1e-12
+
+#: Relative slack on an energy bound (SR's ρd + ε ≤ G(b), Phong's kd + ks ≤ 1) for the
+#: rounding of a user's inputs.
+ENERGY_SLACK = 1e-12
+
+# -- scenes and meshes ----------------------------------------------------------------------
+
+#: angles_deg given with view_vectors must match their azimuths to this (degrees).
+ANGLE_TOL_DEG = 1e-6
+
+#: Faces with area below this fraction of (bounding-box diagonal)² are degenerate: relative,
+#: so a nanometre part and a 1e12-unit part lose the same faces (none of a sound mesh).
+DEGENERATE_AREA = 1e-14
+
+#: Vertices of a loaded mesh are one point when their positions agree to this fraction of
+#: the mesh's size: far below any modelled feature, far above the float64 round-off of a
+#: position a file recomputes (a seam written as sin 2π ≈ 2e-16 rather than 0).
+WELD_REL = 2.0 ** -40
+
+#: Relative tolerance of the analytic shapes' overlap test: boundaries that interpenetrate
+#: by less than this fraction of their size count as touching (the paper's disk pair).
+OVERLAP_RTOL = 1e-9
+
+# -- the mesh engine (Embree is float32) ----------------------------------------------------
+
+#: Rays start this far outside the bounding sphere (relative), so no face is behind them.
+ORIGIN_MARGIN = 0.01
+
+#: Occlusion rays toward a bistatic receiver start this far (relative to the scene's
+#: radius) off the hit facet, above float32 round-off of the hit point (~1e-7 R).
+RECEIVER_LIFT = 1e-5
+
+#: A facet seen within this cosine of edge-on counts as seen at it: the float32 ray-facet
+#: intersection is meaningless there, and it bounds a shading ray's area factor by 1e6.
+MIN_COS_FACET = 1e-6
+
+#: Below this |n·w| the float64 plane intersection is ill-conditioned and Embree's float32
+#: distance is kept.
+REFINE_MIN_COS = 1e-6
+
+#: Scene sizes (bounding radius, in scene units) the mesh engine traces: float32 ray origins
+#: and Embree's unit-size copy keep full precision across this range.
+SCENE_RADIUS_RANGE = (1e-30, 1e30)
+
+#: Beyond this ratio of the distance from the origin to the size, float64 ranges resolve the
+#: target to worse than ~1e-7 of its size (|c|·2⁻⁵³ against its radius): a warning.
+FAR_RATIO = 1e9
+
+# -- reconstruction -------------------------------------------------------------------------
+
+#: Relative non-uniformity of bin widths accepted as uniform (rounding of edges).
+UNIFORM_RTOL = 1e-9
