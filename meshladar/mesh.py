@@ -652,16 +652,12 @@ class _PrismNormal:
         self.center, self.axes, self.angle, self.lo, self.hi = center, axes, angle, lo, hi
 
     def __call__(self, p):
+        from .scene import ellipse_normal
+
         p = np.asarray(p, dtype=np.float64)
-        (cx, cy), (a, b) = self.center, self.axes
-        ca, sa = math.cos(self.angle), math.sin(self.angle)
-        dx, dy = p[:, 0] - cx, p[:, 1] - cy
-        xl, yl = ca * dx + sa * dy, -sa * dx + ca * dy
-        gx, gy = xl / a**2, yl / b**2
-        nx, ny = ca * gx - sa * gy, sa * gx + ca * gy
-        nn = np.hypot(nx, ny)
-        nn = np.where(nn > 0, nn, 1.0)
-        out = np.stack([nx / nn, ny / nn, np.zeros_like(nx)], -1)
+        a, b = self.axes
+        nx, ny = ellipse_normal(self.center, self.axes, self.angle, p[:, 0], p[:, 1])
+        out = np.stack([nx, ny, np.zeros_like(nx)], -1)
         eps = 1e-9 * max(a, b, self.hi - self.lo)
         top = np.abs(p[:, 2] - self.hi) < eps
         bottom = np.abs(p[:, 2] - self.lo) < eps
@@ -673,11 +669,12 @@ class _PrismNormal:
     def curvature_radius(self, p):
         """Radius of curvature of the cross-section at the points' eccentric angle (inf on
         the caps): (a² sin²t + b² cos²t)^(3/2) / (a b)."""
+        from .scene import to_frame
+
         p = np.asarray(p, dtype=np.float64)
         (cx, cy), (a, b) = self.center, self.axes
-        ca, sa = math.cos(self.angle), math.sin(self.angle)
-        dx, dy = p[:, 0] - cx, p[:, 1] - cy
-        t = np.arctan2((-sa * dx + ca * dy) / b, (ca * dx + sa * dy) / a)
+        xl, yl = to_frame(self.angle, p[:, 0] - cx, p[:, 1] - cy)
+        t = np.arctan2(yl / b, xl / a)
         rho = (a * a * np.sin(t) ** 2 + b * b * np.cos(t) ** 2) ** 1.5 / (a * b)
         eps = 1e-9 * max(a, b, self.hi - self.lo)
         cap = (np.abs(p[:, 2] - self.hi) < eps) | (np.abs(p[:, 2] - self.lo) < eps)

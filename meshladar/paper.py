@@ -41,7 +41,7 @@ from .brdf import SandfordRobertson
 from .forward import simulate
 from .ladar import Ladar
 from .reconstruct import clip_radiance, fbp, log_radiance
-from .scene import Disk, Ellipse, Scene
+from .scene import Disk, Ellipse, Scene, from_frame
 
 __all__ = ["FIGURES", "run", "disk_darkening", "ellipse_darkening", "ring_visibility",
            "IMAGE_SIZE", "IMAGE_EXTENT"]
@@ -121,10 +121,9 @@ def ellipse_darkening(image, ellipse, power):
     """(ends, sides) darkening of a reconstructed ellipse; see the module docstring."""
     a, b = ellipse.axes
     t = np.linspace(0.0, 2 * math.pi, 1440, endpoint=False)
-    ca, sa = math.cos(ellipse.angle), math.sin(ellipse.angle)
     nl = np.stack([b * np.cos(t), a * np.sin(t)], -1)
     nl /= np.linalg.norm(nl, axis=-1, keepdims=True)
-    n = np.stack([ca * nl[:, 0] - sa * nl[:, 1], sa * nl[:, 0] + ca * nl[:, 1]], -1)
+    n = np.stack(from_frame(ellipse.angle, nl[:, 0], nl[:, 1]), -1)
     p = ellipse.boundary(t)
     depths = np.linspace(0.03, 0.10, 8) * min(a, b)
     band = np.mean([image.sample(p - d * n) for d in depths], axis=0)

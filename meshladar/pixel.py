@@ -32,7 +32,7 @@ from ._validate import check_flag, check_real, check_size
 from .brdf import projected_weight
 from .errors import ParameterError
 from .ladar import Ladar
-from .scene import Scene
+from .scene import Scene, ellipse_normal
 from .siddon import PixelGrid
 from .sinogram import Sinogram
 
@@ -60,16 +60,9 @@ def rasterize(scene: Scene, grid: PixelGrid):
     normal = np.zeros(grid.shape + (2,))
     for k, shape in enumerate(scene.shapes):
         inside = shape.implicit(np.stack([xc, yc], -1)) < 1.0
-        a, b = shape.axes
-        ca, sa = math.cos(shape.angle), math.sin(shape.angle)
-        dxc, dyc = xc[inside] - shape.center[0], yc[inside] - shape.center[1]
-        xl = ca * dxc + sa * dyc
-        yl = -sa * dxc + ca * dyc
-        gxl, gyl = xl / a**2, yl / b**2
-        g = np.stack([ca * gxl - sa * gyl, sa * gxl + ca * gyl], -1)
-        gn = np.hypot(g[:, 0], g[:, 1])
+        nx, ny = ellipse_normal(shape.center, shape.axes, shape.angle, xc[inside], yc[inside])
         owner[inside] = k
-        normal[inside] = np.where(gn[:, None] > 0, g / np.where(gn > 0, gn, 1.0)[:, None], 0.0)
+        normal[inside] = np.stack([nx, ny], -1)
     return owner, normal
 
 

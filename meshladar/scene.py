@@ -37,6 +37,29 @@ def _material(value, name=None):
     return check_brdf("material", value)
 
 
+def to_frame(angle, dx, dy):
+    """World offsets (dx, dy) from an ellipse's centre in its own axes: rotated by −angle."""
+    ca, sa = math.cos(angle), math.sin(angle)
+    return ca * dx + sa * dy, -sa * dx + ca * dy
+
+
+def from_frame(angle, x, y):
+    """Vectors (x, y) in an ellipse's own axes back in the world: rotated by +angle."""
+    ca, sa = math.cos(angle), math.sin(angle)
+    return ca * x - sa * y, sa * x + ca * y
+
+
+def ellipse_normal(center, axes, angle, px, py):
+    """Unit outward normals (nx, ny) of the ellipse's level sets through the points (the
+    gradient of (x'/A)² + (y'/B)²); (0, 0) at the centre itself."""
+    a, b = axes
+    xl, yl = to_frame(angle, np.asarray(px) - center[0], np.asarray(py) - center[1])
+    nx, ny = from_frame(angle, xl / a**2, yl / b**2)
+    nn = np.hypot(nx, ny)
+    safe = np.where(nn > 0, nn, 1.0)
+    return np.where(nn > 0, nx / safe, 0.0), np.where(nn > 0, ny / safe, 0.0)
+
+
 class Shape:
     """Geometry shared by the analytic shapes: an ellipse with centre, semi-axes ``axes``
     (A, B) and rotation ``angle`` (radians). Subclasses are frozen dataclasses."""
@@ -63,17 +86,14 @@ class Shape:
     def boundary(self, t):
         """Points (..., 2) at eccentric angle ``t`` (radians): c + R (A cos t, B sin t)."""
         a, b = self.axes
-        ca, sa = math.cos(self.angle), math.sin(self.angle)
-        x, y = a * np.cos(t), b * np.sin(t)
-        return np.stack([self.center[0] + ca * x - sa * y, self.center[1] + sa * x + ca * y], -1)
+        x, y = from_frame(self.angle, a * np.cos(t), b * np.sin(t))
+        return np.stack([self.center[0] + x, self.center[1] + y], -1)
 
     def implicit(self, p):
         """(x'/A)² + (y'/B)² of points p (..., 2) in the shape's frame: < 1 inside."""
         a, b = self.axes
         d = np.asarray(p, dtype=np.float64) - np.asarray(self.center)
-        ca, sa = math.cos(self.angle), math.sin(self.angle)
-        x = ca * d[..., 0] + sa * d[..., 1]
-        y = -sa * d[..., 0] + ca * d[..., 1]
+        x, y = to_frame(self.angle, d[..., 0], d[..., 1])
         return (x / a) ** 2 + (y / b) ** 2
 
     def perimeter(self) -> float:
@@ -448,9 +468,9 @@ class Scene:
         for s in self._shapes:
             # an ellipse's support along −w: centre's range ∓ its half-width along w
             a, b = s.axes
-            ca, sa = np.cos(s.angle), np.sin(s.angle)
             wx, wy = w[:, 0], w[:, 1]
-            half = np.hypot(a * (ca * wx + sa * wy), b * (-sa * wx + ca * wy))
+            xl, yl = to_frame(s.angle, wx, wy)
+            half = np.hypot(a * xl, b * yl)
             rc = -(s.center[0] * wx + s.center[1] * wy)
             lo, hi = np.minimum(lo, rc - half), np.maximum(hi, rc + half)
         return lo, hi
