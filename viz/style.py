@@ -21,11 +21,16 @@ def use():
     """Figures without pyplot: an object with pyplot's ``subplots`` and ``close`` that makes
     plain ``matplotlib.figure.Figure`` objects, so drawing never switches the session's
     backend (a notebook's inline backend stays). Style them inside :func:`styled`."""
+    _matplotlib()
+    return _Figures()
+
+
+def _matplotlib():
     try:
-        import matplotlib  # noqa: F401 (only whether it is installed)
+        import matplotlib
     except ImportError as exc:
         raise ImportError("figures need matplotlib: pip install 'meshladar[viz]'") from exc
-    return _Figures()
+    return matplotlib
 
 
 class _Figures:
@@ -48,9 +53,7 @@ def styled(func):
 
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
-        import matplotlib
-
-        with matplotlib.rc_context(STYLE):
+        with _matplotlib().rc_context(STYLE):
             return func(*args, **kwargs)
 
     return wrapper
