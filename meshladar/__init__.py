@@ -13,7 +13,7 @@ from .ladar import Ladar
 from .reconstruct import Image, clip_radiance, fbp, log_radiance
 from .scene import Disk, Ellipse, Scene
 from .sinogram import Sinogram
-from .trace import Hits, trace, weigh
+from .raytrace import Hits, trace, weigh
 
 __version__ = "0.1.0"
 

@@ -244,7 +244,7 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
     """Monostatic, flat-normal weighing and binning of one view's Embree hits, fused:
     out[k] += F(θ)·area for each hit with range start + t − o·w in bin k (o the float32 origin
     as cast), t the hit distance recomputed in float64 against the face's plane (as
-    meshladar.trace._refine_t).
+    meshladar.raytrace._refine_t).
     ``params`` rows are (rho_d, epsilon, b, e, G, has_diffuse, has_specular) per material.
     Returns the number of back-face hits."""
     nb = edges.size - 1

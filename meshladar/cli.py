@@ -15,7 +15,7 @@ import numpy as np
 from .errors import MeshladarError
 from .forward import MODELS
 from .reconstruct import FILTERS
-from .trace import MODES, NORMALS, SAMPLINGS
+from .raytrace import MODES, NORMALS, SAMPLINGS
 
 __all__ = ["main"]
 

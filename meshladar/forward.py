@@ -32,7 +32,7 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
         ``"analytic"``: exact profiles of disks and ellipses (no faceting, no sampling;
         option ``progress``).
         ``"mesh"``: triangle meshes ray-cast with Embree (options in
-        :func:`meshladar.trace.simulate_mesh`: mode, normals, back_faces, z0, ray_spacing,
+        :func:`meshladar.raytrace.simulate_mesh`: mode, normals, back_faces, z0, ray_spacing,
         rays_per_bin, footprint, sampling, seed, receiver, tol, max_rays, jobs, executor,
         progress, run_dir). A mesh is a 3-D target (``mode="3d"``) unless it was
         tessellated from the analytic shapes.
@@ -57,7 +57,7 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
         raise ParameterError(f"model {model!r} takes options {_OPTIONS[model]}; got "
                              f"{unknown[0]!r}")
     if model == "mesh":
-        from .trace import simulate_mesh
+        from .raytrace import simulate_mesh
 
         return simulate_mesh(scene, ladar, **options)
     if not scene.shapes:

@@ -807,7 +807,7 @@ api("simulate.mesh.tol-budget-warns", lambda: _mesh_sim(tol=0.01, max_rays=1), "
 def _refuses_many_jobs():
     """True when a huge ``jobs`` is refused before any process starts."""
     from meshladar.errors import ParameterError
-    from meshladar.trace import _executor
+    from meshladar.raytrace import _executor
 
     try:
         ex, own = _executor(10**5, None, 1.0)

@@ -81,3 +81,17 @@ def test_cli_bad_arguments_exit_nonzero_without_traceback(args):
     res = _run("-m", "meshladar", *args, check=False)
     assert res.returncode == 2
     assert "Traceback" not in res.stderr and "error" in res.stderr
+
+
+def test_no_public_name_shadows_a_submodule():
+    # `import meshladar.trace as t` once returned the function: the engine module is
+    # meshladar.raytrace, and meshladar.trace is only the function
+    import importlib
+
+    import meshladar as ml
+
+    assert callable(ml.trace) and not isinstance(ml.trace, type(ml))
+    engine = importlib.import_module("meshladar.raytrace")
+    assert engine.trace is ml.trace
+    with pytest.raises(ModuleNotFoundError):
+        importlib.import_module("meshladar.trace")

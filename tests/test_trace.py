@@ -52,7 +52,7 @@ def test_sphere_3d_range_profile(material):
         assert row[0] > 0 and np.all(row[17:] == 0)
         # bins to 3% where the sphere returns more than 5% of the maximum, away from the rim
         # (θ < 75°): there the gray coating's F grows like 1/cos θ and point samples of that
-        # integrable singularity converge slowly (documented in meshladar.trace)
+        # integrable singularity converge slowly (documented in meshladar.raytrace)
         core = (expected > 0.05 * expected.max()) & (np.arange(32) < 13)
         np.testing.assert_allclose(row[core], expected[core], rtol=0.03)
         if material.is_lambertian:                  # no rim singularity: the total to 0.5%
@@ -397,7 +397,7 @@ def test_sphere_part_via_public_api_and_progress_is_quiet_off_a_terminal(capsys)
 
 
 def test_alternating_meshes_reuse_their_embree_scenes():
-    from meshladar.trace import _EMBREE_CACHE_SIZE, _embree_scene, _Geometry
+    from meshladar.raytrace import _EMBREE_CACHE_SIZE, _embree_scene, _Geometry
 
     scenes = [ml.Scene.from_parts([ml.mesh.sphere((0, 0, 0), 0.5 + 0.1 * k, 0, subdivisions=1)],
                                   [DARK_GRAY]) for k in range(_EMBREE_CACHE_SIZE + 1)]

@@ -218,7 +218,7 @@ def _fake_runs(monkeypatch, sequence):
     the knob's stopping logic without tracing."""
     import sys
 
-    trace = sys.modules["meshladar.trace"]        # the module (ml.trace is the function)
+    trace = sys.modules["meshladar.raytrace"]        # the mesh engine module
     calls = []
 
     def fake(scene, ladar, **kwargs):
@@ -241,7 +241,7 @@ def test_tol_stops_when_estimates_stop_falling_and_keeps_the_best(monkeypatch):
     with pytest.warns(MeshladarWarning, match=r"tol=1e-06 not reached: refinement stopped "
                                               r"converging.*try footprint=True, smooth or "
                                               r"exact normals, a looser tol"):
-        sino = sys.modules["meshladar.trace"]._simulate_tol(
+        sino = sys.modules["meshladar.raytrace"]._simulate_tol(
             scene, ladar, 1e-6, "flat", False, None,
             dict(mode=None, ray_spacing=None, rays_per_bin=None))
     assert calls == [1.0, 2.0, 4.0, 8.0]                      # stopped after the 4th run
@@ -260,7 +260,7 @@ def test_tol_respects_its_ray_budget(monkeypatch):
     # runs cast 1000, 4000, 16000 rays: a budget of 25000 stops before the 4th (64000)
     with pytest.warns(MeshladarWarning, match=r"past the budget max_rays=2.5e\+04.*raise "
                                               r"max_rays or loosen tol"):
-        sino = sys.modules["meshladar.trace"]._simulate_tol(
+        sino = sys.modules["meshladar.raytrace"]._simulate_tol(
             scene, ladar, 1e-6, None, None, 25000,
             dict(mode=None, ray_spacing=None, rays_per_bin=None))
     assert len(calls) == 3 and sino.info["rays_total"] == 21000

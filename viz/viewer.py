@@ -79,7 +79,7 @@ def face_returns(scene, w, *, segments=256):
     and a state: 0 lit, 1 shadowed (facing the ladar, but the ray from its centroid toward
     the ladar meets another face), 2 turned away. Returns (mesh scene, returns (m,),
     state (m,))."""
-    from meshladar.trace import occluded
+    from meshladar.raytrace import occluded
 
     mesh = _mesh_scene(scene, segments)
     v = np.concatenate([p.vertices for p in mesh.parts])
@@ -179,7 +179,7 @@ def show_scene(scene, *, view_angle_deg=None, view_vector=None, ladar=None, segm
         plotter.add_mesh(plane, style="wireframe", color="yellow", line_width=2,
                          lighting=False)
     if ladar is not None and show_hits:
-        from meshladar.trace import first_hits
+        from meshladar.raytrace import first_hits
 
         pts, _, rng = first_hits(mesh, w, ray_spacing=size / 150.0)
         k = np.searchsorted(ladar.bin_edges, rng, side="right") - 1
