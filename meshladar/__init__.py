@@ -18,7 +18,7 @@ from .raytrace import Hits, trace, weigh
 __version__ = "0.1.0"
 
 _LAZY_SUBPACKAGES = ("phantoms", "viz", "mesh", "studies", "io", "siddon", "parallel", "runs",
-                     "bench", "paper")
+                     "refine", "bench", "paper")
 
 
 def __getattr__(name):

@@ -145,7 +145,9 @@ def test_tol_that_cannot_be_met_warns_and_reports(monkeypatch):
     import sys
 
     # (the mesh engine module)
-    monkeypatch.setattr(sys.modules["meshladar.raytrace"], "_TOL_STEPS", 2)
+    from meshladar import refine
+
+    monkeypatch.setattr(refine, "_TOL_STEPS", 2)
     scene = ml.Scene([ml.Disk((0.0, 0.0), 0.5, DARK_GRAY)])
     lad = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 30.0))
     with pytest.warns(ml.errors.MeshladarWarning, match=r"tol=1e-06 not reached: "

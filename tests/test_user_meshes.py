@@ -216,9 +216,8 @@ def test_stratified_sampling_is_reproducible_and_seeded():
 def _fake_runs(monkeypatch, sequence):
     """simulate_mesh replaced by runs whose values follow ``sequence`` (one float per run):
     the knob's stopping logic without tracing."""
-    import sys
+    from meshladar import refine                     # the knob calls the model through it
 
-    trace = sys.modules["meshladar.raytrace"]        # the mesh engine module
     calls = []
 
     def fake(scene, ladar, **kwargs):
@@ -228,7 +227,7 @@ def _fake_runs(monkeypatch, sequence):
         return ml.Sinogram(vals, angles_deg=ladar.angles_deg, bin_edges=ladar.bin_edges,
                            model="mesh", info={"mode": "3d", "rays": 1000 * 4**k})
 
-    monkeypatch.setattr(trace, "simulate_mesh", fake)
+    monkeypatch.setattr(refine, "simulate_mesh", fake)
     return calls
 
 
@@ -241,7 +240,7 @@ def test_tol_stops_when_estimates_stop_falling_and_keeps_the_best(monkeypatch):
     with pytest.warns(MeshladarWarning, match=r"tol=1e-06 not reached: refinement stopped "
                                               r"converging.*try footprint=True, smooth or "
                                               r"exact normals, a looser tol"):
-        sino = sys.modules["meshladar.raytrace"]._simulate_tol(
+        sino = ml.refine.simulate_tol(
             scene, ladar, 1e-6, "flat", False, None,
             dict(mode=None, ray_spacing=None, rays_per_bin=None))
     assert calls == [1.0, 2.0, 4.0, 8.0]                      # stopped after the 4th run
@@ -260,7 +259,7 @@ def test_tol_respects_its_ray_budget(monkeypatch):
     # runs cast 1000, 4000, 16000 rays: a budget of 25000 stops before the 4th (64000)
     with pytest.warns(MeshladarWarning, match=r"past the budget max_rays=2.5e\+04.*raise "
                                               r"max_rays or loosen tol"):
-        sino = sys.modules["meshladar.raytrace"]._simulate_tol(
+        sino = ml.refine.simulate_tol(
             scene, ladar, 1e-6, None, None, 25000,
             dict(mode=None, ray_spacing=None, rays_per_bin=None))
     assert len(calls) == 3 and sino.info["rays_total"] == 21000
