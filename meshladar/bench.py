@@ -9,7 +9,8 @@ from __future__ import annotations
 import statistics
 import time
 
-__all__ = ["time_call", "bench_analytic", "bench_fbp"]
+__all__ = ["time_call", "bench_analytic", "bench_fbp", "bench_mesh", "bench_streaming",
+           "bench_dask", "report"]
 
 
 def time_call(fn, *, repeats=5):
@@ -246,3 +247,47 @@ def bench_dask(*, views=360, rays_per_view=1_000_000, subdivisions=6, workers=2)
     return {"views": views, "rays": serial.info["rays"], "serial_s": t_serial,
             "dask_s": t_dask, "speedup": t_serial / t_dask, "task_overhead_s": overhead,
             "identical": same}
+
+
+def report(*, repeats=5, full=False):
+    """The benchmark report, line by line (what ``meshladar bench`` prints): each model and
+    FBP timed against its peer in the same process; ``full`` adds streaming and Dask."""
+    yield (f"analytic model, 360 views x 512 bins (A/256), median of {repeats} runs after "
+           "one warm-up")
+    yield f"  {'case':<40} {'median [s]':>10} {'min [s]':>9} {'max [s]':>9}"
+    for row in bench_analytic(repeats=repeats):
+        yield (f"  {row['case']:<40} {row['median_s']:10.3f} {row['min_s']:9.3f} "
+               f"{row['max_s']:9.3f}")
+    try:
+        r = bench_fbp(repeats=repeats)
+    except ImportError as exc:
+        yield f"FBP vs scikit-image: skipped ({exc})"
+    else:
+        yield (f"FBP {r['shape'][0]} x {r['shape'][1]} -> {r['size']}^2, ramp, linear: "
+               f"meshladar {r['ours_s']:.3f} s, skimage.iradon {r['skimage_s']:.3f} s, "
+               f"speed-up {r['speedup']:.1f}x, max |difference| {r['max_diff_rel']:.1e} of max")
+    m = bench_mesh(repeats=repeats)
+    yield (f"mesh engine, {m['faces']} triangles, {m['views']} views x "
+           f"{m['rays'] // m['views']} rays (3-D grid), same rays in the same process:")
+    yield f"  raw embreex cast (output=1)       {m['raw_mrays']:7.2f} Mrays/s"
+    yield (f"  pipeline, 1 process               {m['pipeline_mrays']:7.2f} Mrays/s "
+           f"({100 * m['pipeline_over_raw']:.0f}% of raw)")
+    yield (f"  pipeline, stratified sampling     {m['stratified_mrays']:7.2f} Mrays/s "
+           f"({100 * m['stratified_over_regular']:.0f}% of the regular grid's)")
+    yield (f"  pipeline, 2 processes             {m['two_core_mrays']:7.2f} Mrays/s "
+           f"({m['two_over_one']:.2f}x one)")
+    yield (f"  Embree build, {m['build_faces']} triangles: embreex upload {m['upload_s']:.2f} s "
+           f"+ BVH {m['bvh_s']:.2f} s = {m['build_over_bvh']:.1f}x the BVH build")
+    if not full:
+        return
+    st = bench_streaming()
+    yield (f"streaming 360 views x 1e6 rays, 2 processes: {st['seconds']:.1f} s, "
+           f"{st['mrays']:.2f} Mrays/s, peak RSS {st['peak_rss_mb']:.0f} MB")
+    try:
+        d = bench_dask()
+    except ImportError as exc:
+        yield f"Dask: skipped ({exc})"
+    else:
+        yield (f"Dask, 2 local workers, {d['views']} views x 1e6 rays: {d['dask_s']:.1f} s "
+               f"vs serial {d['serial_s']:.1f} s = {d['speedup']:.2f}x; per-task overhead "
+               f"{1e3 * d['task_overhead_s']:.1f} ms; identical: {d['identical']}")

@@ -406,52 +406,10 @@ def _cmd_study(args) -> int:
 
 def _cmd_bench(args) -> int:
     """Time the forward models and FBP against their peers (median of several runs)."""
-    from .bench import bench_analytic
+    from .bench import report
 
-    print(f"analytic model, 360 views x 512 bins (A/256), median of {args.repeats} runs "
-          "after one warm-up")
-    print(f"  {'case':<40} {'median [s]':>10} {'min [s]':>9} {'max [s]':>9}")
-    for row in bench_analytic(repeats=args.repeats):
-        print(f"  {row['case']:<40} {row['median_s']:10.3f} {row['min_s']:9.3f} "
-              f"{row['max_s']:9.3f}")
-    from .bench import bench_fbp
-
-    try:
-        r = bench_fbp(repeats=args.repeats)
-    except ImportError as exc:
-        print(f"FBP vs scikit-image: skipped ({exc})")
-        return 0
-    print(f"FBP {r['shape'][0]} x {r['shape'][1]} -> {r['size']}^2, ramp, linear: "
-          f"meshladar {r['ours_s']:.3f} s, skimage.iradon {r['skimage_s']:.3f} s, "
-          f"speed-up {r['speedup']:.1f}x, max |difference| {r['max_diff_rel']:.1e} of max")
-    from .bench import bench_mesh, bench_streaming
-
-    m = bench_mesh(repeats=args.repeats)
-    print(f"mesh engine, {m['faces']} triangles, {m['views']} views x "
-          f"{m['rays'] // m['views']} rays (3-D grid), same rays in the same process:")
-    print(f"  raw embreex cast (output=1)       {m['raw_mrays']:7.2f} Mrays/s")
-    print(f"  pipeline, 1 process               {m['pipeline_mrays']:7.2f} Mrays/s "
-          f"({100 * m['pipeline_over_raw']:.0f}% of raw)")
-    print(f"  pipeline, stratified sampling     {m['stratified_mrays']:7.2f} Mrays/s "
-          f"({100 * m['stratified_over_regular']:.0f}% of the regular grid's)")
-    print(f"  pipeline, 2 processes             {m['two_core_mrays']:7.2f} Mrays/s "
-          f"({m['two_over_one']:.2f}x one)")
-    print(f"  Embree build, {m['build_faces']} triangles: embreex upload {m['upload_s']:.2f} s "
-          f"+ BVH {m['bvh_s']:.2f} s = {m['build_over_bvh']:.1f}x the BVH build")
-    if args.full:
-        st = bench_streaming()
-        print(f"streaming 360 views x 1e6 rays, 2 processes: {st['seconds']:.1f} s, "
-              f"{st['mrays']:.2f} Mrays/s, peak RSS {st['peak_rss_mb']:.0f} MB")
-        from .bench import bench_dask
-
-        try:
-            d = bench_dask()
-        except ImportError as exc:
-            print(f"Dask: skipped ({exc})")
-        else:
-            print(f"Dask, 2 local workers, {d['views']} views x 1e6 rays: {d['dask_s']:.1f} s "
-                  f"vs serial {d['serial_s']:.1f} s = {d['speedup']:.2f}x; per-task overhead "
-                  f"{1e3 * d['task_overhead_s']:.1f} ms; identical: {d['identical']}")
+    for line in report(repeats=args.repeats, full=args.full):
+        print(line, flush=True)
     return 0
 
 
