@@ -49,6 +49,9 @@ def test_shadowed_part_of_the_disk_pair_is_drawn_in_the_shadow_colour():
     img = viewer.show_scene(pair, view_angle_deg=90.0, show_rays=False, off_screen=True,
                             window_size=(400, 300))
     assert _is(img, viewer.SHADOW_COLOR).sum() == 0
+    # the headless EGL window is chosen for the call only: the environment is left as it was
+    if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        assert "VTK_DEFAULT_OPENGL_WINDOW" not in os.environ
 
 
 def test_lit_lambertian_sphere_is_brightest_at_its_centre(tmp_path):

@@ -27,13 +27,32 @@ BACK_COLOR = (0.15, 0.15, 0.35)
 
 
 def _pyvista():
-    if not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
-        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
     try:
         import pyvista as pv
     except ImportError as exc:
         raise ImportError("the viewer needs pyvista: pip install 'meshladar[viz]'") from exc
     return pv
+
+
+def _headless_window(func):
+    """Run a viewer entry point with VTK pointed at its EGL window when there is no
+    display, restoring the environment afterwards (a user's session is left as it was)."""
+    import functools
+
+    @functools.wraps(func)
+    def wrapper(*args, **kwargs):
+        key = "VTK_DEFAULT_OPENGL_WINDOW"
+        headless = not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY")
+        before = os.environ.get(key)
+        if headless and before is None:
+            os.environ[key] = "vtkEGLRenderWindow"
+        try:
+            return func(*args, **kwargs)
+        finally:
+            if headless and before is None:
+                os.environ.pop(key, None)
+
+    return wrapper
 
 
 def _view_vector(view_angle_deg, view_vector):
@@ -116,6 +135,7 @@ def _finish(plotter, off_screen, screenshot):
     return plotter
 
 
+@_headless_window
 def show_scene(scene, *, view_angle_deg=None, view_vector=None, ladar=None, segments=256,
                show_rays=True, show_hits=True, iso_ranges=6, log_scale=False,
                shadow_color=SHADOW_COLOR, back_color=BACK_COLOR, off_screen=False,
@@ -218,6 +238,7 @@ def _image_data(pv, image, z):
     return grid
 
 
+@_headless_window
 def show_slice(image, *, z=0.0, scene=None, clim=None, off_screen=False, screenshot=None,
                window_size=(800, 700), camera=None):
     """A reconstructed slice (an ``Image``) placed in 3-D at height ``z``, optionally with
@@ -239,6 +260,7 @@ def show_slice(image, *, z=0.0, scene=None, clim=None, off_screen=False, screens
     return _finish(plotter, off_screen, screenshot)
 
 
+@_headless_window
 def show_volume(images, zs, *, iso=None, off_screen=False, screenshot=None,
                 window_size=(800, 700), camera=None):
     """A stack of reconstructed slices at heights ``zs`` (increasing, evenly spaced) as a
