@@ -37,8 +37,9 @@ def bench_analytic(*, repeats=5):
     ladar = Ladar.paper()
 
     def pair(big, small):
-        return Scene([Disk((-0.3, 0.0), 0.4, big, name="large"),
-                      Disk((0.4, 0.0), 0.3, small, name="small")])
+        from . import phantoms
+
+        return phantoms.scene("disk_pair", large=big, small=small)
 
     cases = {
         "disk pair, gray + gray": pair(gray, gray),
@@ -73,11 +74,10 @@ def bench_fbp(*, n_bins=1024, size=1024, repeats=3, filter="ramp"):
                           "pip install 'meshladar[bench]'") from exc
     from . import forward, materials
     from .ladar import Ladar
+    from . import phantoms
     from .reconstruct import fbp
-    from .scene import Disk, Scene
 
-    scene = Scene([Disk((-0.3, 0.0), 0.4, materials.DARK_GRAY),
-                   Disk((0.4, 0.0), 0.3, materials.ALUMINUM)])
+    scene = phantoms.scene("disk_pair", large=materials.DARK_GRAY, small=materials.ALUMINUM)
     bw = 2.0 / n_bins
     ladar = Ladar(np.arange(360.0), (np.arange(n_bins + 1) - n_bins / 2 - 0.5) * bw)
     sino = forward.simulate(scene, ladar)

@@ -65,8 +65,9 @@ def _diffuse(b):
 
 
 def _pair(big, small):
-    return Scene([Disk((-0.3, 0.0), 0.4, big, name="large"),
-                  Disk((0.4, 0.0), 0.3, small, name="small")])
+    from . import phantoms
+
+    return phantoms.scene("disk_pair", large=big, small=small)
 
 
 def _panels():

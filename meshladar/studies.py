@@ -34,17 +34,21 @@ from .brdf import SandfordRobertson
 from .errors import EnergyConservationWarning, MeshladarWarning, ParameterError
 from .ladar import Ladar
 from .reconstruct import fbp
-from .scene import Disk, Ellipse, Scene
 
 __all__ = ["PHANTOMS", "COATINGS", "SETTINGS", "faceting_study", "convergence_orders",
            "study_scene"]
 
-#: The paper's phantoms, as builders taking a coating.
-PHANTOMS = {
-    "disk": lambda m: Scene([Disk((0.0, 0.0), 0.8, m)]),
-    "ellipse": lambda m: Scene([Ellipse((0.0, 0.0), (0.6, 0.3), 0.0, m)]),
-    "disk_pair": lambda m: Scene([Disk((-0.3, 0.0), 0.4, m), Disk((0.4, 0.0), 0.3, m)]),
-}
+def _phantom(name):
+    def build(coating):
+        from . import phantoms
+
+        return phantoms.scene(name, coating)
+
+    return build
+
+
+#: The paper's phantoms, as builders taking a coating (from the phantom library's specs).
+PHANTOMS = {name: _phantom(name) for name in ("disk", "ellipse", "disk_pair")}
 
 
 def _diffuse_b099():

@@ -34,7 +34,7 @@ from importlib import resources
 
 import numpy as np
 
-__all__ = ["Phantom", "load", "names", "materials", "MATERIALS_TOML"]
+__all__ = ["Phantom", "load", "scene", "names", "materials", "MATERIALS_TOML"]
 
 #: Path of the packaged coating table.
 MATERIALS_TOML = resources.files(__name__) / "materials.toml"
@@ -78,10 +78,10 @@ def _error(source, msg):
 
 
 def _resolve_material(value, table, where, source):
-    from meshladar.brdf import SandfordRobertson
+    from meshladar.brdf import BRDF
     from meshladar.materials import parse_table
 
-    if isinstance(value, SandfordRobertson):
+    if isinstance(value, BRDF):
         return value
     if isinstance(value, str):
         if value not in table:
@@ -93,7 +93,7 @@ def _resolve_material(value, table, where, source):
         except ValueError as exc:
             raise _error(source, str(exc).split(": ", 1)[-1]) from exc
     raise _error(source, f"{where}: material must be a name, an inline table or a "
-                         f"SandfordRobertson; got {value!r}")
+                         f"meshladar.brdf.BRDF; got {value!r}")
 
 
 def _angles(spec, source):
@@ -218,3 +218,21 @@ def load(name_or_path, *, materials=None):
     from meshladar.materials import read_toml
 
     return _build(read_toml(key, "phantom spec", PhantomSpecError), key, materials)
+
+
+def scene(name_or_path, coating=None, **coatings):
+    """The phantom's scene with ``coating`` on every shape, or coatings by shape name
+    (``scene("disk_pair", large=DARK_GRAY, small=ALUMINUM)``); the spec's own where neither
+    is given. The one source of the paper's phantoms for the engine, studies and tests."""
+    base = load(name_or_path)
+    shape_names = [s.name for s in base.scene.shapes]
+    unknown = sorted(set(coatings) - set(shape_names))
+    if unknown:
+        from meshladar.errors import ParameterError
+
+        raise ParameterError(f"no shape named {unknown[0]!r} in {base.name}; shapes are "
+                             f"{shape_names}")
+    chosen = {n: coatings.get(n, coating) for n in shape_names}
+    chosen = {n: m for n, m in chosen.items() if m is not None}
+    return load(name_or_path, materials=chosen).scene if chosen else base.scene
+

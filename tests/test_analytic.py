@@ -36,7 +36,7 @@ def _disk(m, center=(0.0, 0.0), radius=0.8):
 
 
 def _pair(big, small):
-    return ml.Scene([ml.Disk((-0.3, 0.0), 0.4, big), ml.Disk((0.4, 0.0), 0.3, small)])
+    return ml.phantoms.scene("disk_pair", large=big, small=small)
 
 
 def _assert_bins_close(got, ref):

@@ -23,7 +23,7 @@ EXTREME_COATINGS = {
 
 
 def _pair(m):
-    return ml.Scene([ml.Disk((-0.3, 0.0), 0.4, m), ml.Disk((0.4, 0.0), 0.3, ALUMINUM)])
+    return ml.phantoms.scene("disk_pair", large=m, small=ALUMINUM)
 
 
 @pytest.mark.filterwarnings("ignore:.* views are too few")   # few views on purpose: speed

@@ -16,7 +16,7 @@ from meshladar.errors import MaterialFileError, PhantomSpecError
 from meshladar.io import ResultFileError, load_result, save_result
 from meshladar.materials import ALUMINUM, DARK_GRAY, load_table
 
-PAIR = ml.Scene([ml.Disk((-0.3, 0.0), 0.4, DARK_GRAY), ml.Disk((0.4, 0.0), 0.3, ALUMINUM)])
+PAIR = ml.phantoms.scene("disk_pair", large=DARK_GRAY, small=ALUMINUM)
 
 
 @pytest.fixture(scope="module")

@@ -16,7 +16,7 @@ PAPER = ml.Ladar.paper()
 
 
 def _pair(big, small):
-    return ml.Scene([ml.Disk((-0.3, 0.0), 0.4, big), ml.Disk((0.4, 0.0), 0.3, small)])
+    return ml.phantoms.scene("disk_pair", large=big, small=small)
 
 
 def test_rasterized_boundary_and_normals():

@@ -14,7 +14,7 @@ import meshladar as ml
 from meshladar.materials import ALUMINUM, DARK_GRAY
 from meshladar.runs import RunFolderError
 
-PAIR = ml.Scene([ml.Disk((-0.3, 0.0), 0.4, DARK_GRAY), ml.Disk((0.4, 0.0), 0.3, ALUMINUM)])
+PAIR = ml.phantoms.scene("disk_pair", large=DARK_GRAY, small=ALUMINUM)
 
 
 def test_resume_reuses_verified_chunks_and_recomputes_corrupt_ones(tmp_path):
@@ -58,7 +58,7 @@ def test_a_different_job_is_refused(tmp_path):
 _JOB = """
 import sys, numpy as np, meshladar as ml
 from meshladar.materials import DARK_GRAY, ALUMINUM
-pair = ml.Scene([ml.Disk((-0.3, 0.0), 0.4, DARK_GRAY), ml.Disk((0.4, 0.0), 0.3, ALUMINUM)])
+pair = ml.phantoms.scene("disk_pair", large=DARK_GRAY, small=ALUMINUM)
 ladar = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 0.5))
 s = ml.simulate(pair.tessellate(512), ladar, model="mesh", rays_per_bin=16,
                 run_dir=sys.argv[1], jobs=1)

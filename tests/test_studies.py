@@ -115,7 +115,7 @@ def test_study_files(study, tmp_path):
                          ids=["gray_al", "al_gray"])
 @pytest.mark.parametrize("tol", [1e-2, 1e-3])
 def test_tol_knob_meets_the_accuracy_at_a_fair_cost(big, small, tol):
-    scene = ml.Scene([ml.Disk((-0.3, 0.0), 0.4, big), ml.Disk((0.4, 0.0), 0.3, small)])
+    scene = ml.phantoms.scene("disk_pair", large=big, small=small)
     ladar = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 10.0))
     exact = ml.simulate(scene, ladar)
     got = ml.simulate(scene, ladar, model="mesh", tol=tol)
@@ -142,9 +142,6 @@ def test_tol_that_cannot_be_met_warns_and_reports(monkeypatch):
     # dark gray alone stalls near silhouettes (see the study): within two refinements its
     # estimate rises again (measured 0.0065 then 0.0095), so the knob stops there, warns,
     # and reports the best run it made, not the last
-    import sys
-
-    # (the mesh engine module)
     from meshladar import refine
 
     monkeypatch.setattr(refine, "_TOL_STEPS", 2)

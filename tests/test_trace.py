@@ -15,7 +15,7 @@ from meshladar import mesh as mlmesh
 from meshladar.errors import GeometryError, ParameterError
 from meshladar.materials import ALUMINUM, DARK_GRAY, lambertian
 
-PAIR = ml.Scene([ml.Disk((-0.3, 0.0), 0.4, DARK_GRAY), ml.Disk((0.4, 0.0), 0.3, ALUMINUM)])
+PAIR = ml.phantoms.scene("disk_pair", large=DARK_GRAY, small=ALUMINUM)
 
 
 def _rel(a, b):

@@ -39,7 +39,7 @@ def _is(img, color, tol=0.08):
 def test_shadowed_part_of_the_disk_pair_is_drawn_in_the_shadow_colour():
     from meshladar.viz import viewer
 
-    pair = ml.Scene([ml.Disk((-0.3, 0.0), 0.4, DARK_GRAY), ml.Disk((0.4, 0.0), 0.3, ALUMINUM)])
+    pair = ml.phantoms.scene("disk_pair", large=DARK_GRAY, small=ALUMINUM)
     # from +x the small disk hides the large one's middle: a band of shadow colour
     img = viewer.show_scene(pair, view_angle_deg=0.0, show_rays=False, off_screen=True,
                             window_size=(400, 300))
