@@ -60,6 +60,28 @@ def ellipse_normal(center, axes, angle, px, py):
     return np.where(nn > 0, nx / safe, 0.0), np.where(nn > 0, ny / safe, 0.0)
 
 
+#: Convex hulls of recent meshes by content (the geometry's digests), most recent last: a
+#: new Scene of the same mesh (a coating sweep, a script run twice) skips the hull.
+_HULLS: dict = {}
+_HULL_CACHE_SIZE = 8
+
+
+def _convex_hull(v):
+    """The convex hull's vertices of points (n, 3), read-only; all the points when the hull
+    is degenerate (a flat sheet) or they are few."""
+    hull = v
+    if len(v) > 64:
+        from scipy.spatial import ConvexHull, QhullError
+
+        try:
+            hull = v[ConvexHull(v).vertices]
+        except (QhullError, ValueError):
+            hull = v
+    hull = np.ascontiguousarray(hull)
+    hull.flags.writeable = False
+    return hull
+
+
 class Shape:
     """Geometry shared by the analytic shapes: an ellipse with centre, semi-axes ``axes``
     (A, B) and rotation ``angle`` (radians). Subclasses are frozen dataclasses."""
@@ -438,17 +460,13 @@ class Scene:
             raise ParameterError("hull_points() is for mesh scenes")
         hull = self.__dict__.get("_hull")
         if hull is None:
-            v = np.concatenate([p.vertices for p in self._parts])
-            hull = v
-            if len(v) > 64:
-                from scipy.spatial import ConvexHull, QhullError
-
-                try:
-                    hull = v[ConvexHull(v).vertices]
-                except (QhullError, ValueError):
-                    hull = v
-            hull = np.ascontiguousarray(hull)
-            hull.flags.writeable = False
+            key = tuple(p.digest() for p in self._parts)
+            hull = _HULLS.pop(key, None)
+            if hull is None:
+                hull = _convex_hull(np.concatenate([p.vertices for p in self._parts]))
+                while len(_HULLS) >= _HULL_CACHE_SIZE:
+                    del _HULLS[next(iter(_HULLS))]              # the least recently used
+            _HULLS[key] = hull
             self._hull = hull
         return hull
 

@@ -150,3 +150,17 @@ def test_simulate_validation():
         ml.simulate(scene, {})
     out = ml.simulate(scene, lad)
     assert out.model == "analytic" and out.shape == (1, 1)
+
+
+def test_the_convex_hull_is_cached_by_mesh_content():
+    from scipy.spatial import ConvexHull
+
+    sphere = ml.mesh.sphere((0.0, 0.0, 0.0), 0.5, 0, subdivisions=3)
+    a = ml.Scene.from_parts([sphere], [M])
+    b = ml.Scene.from_parts([sphere], [M])             # a new Scene of the same mesh
+    assert b.hull_points() is a.hull_points()          # computed once, shared
+    v = sphere.vertices
+    np.testing.assert_array_equal(np.sort(a.hull_points(), axis=0),
+                                  np.sort(v[ConvexHull(v).vertices], axis=0))
+    moved = ml.mesh.sphere((1.0, 0.0, 0.0), 0.5, 0, subdivisions=3)
+    assert ml.Scene.from_parts([moved], [M]).hull_points() is not a.hull_points()
