@@ -94,6 +94,12 @@ def check_size(name: str, count, bytes_each: int, what: str, reduce: str) -> Non
                              f"{reduce}")
 
 
+def check_name(value) -> None:
+    """A label (``name=``) must be a string or None."""
+    if value is not None and not isinstance(value, str):
+        raise ParameterError(f"name must be a string or None; got {value!r}")
+
+
 def check_flag(name: str, value) -> bool:
     """Return ``value`` if it is a bool (numpy's included), else raise."""
     if not isinstance(value, (bool, np.bool_)):

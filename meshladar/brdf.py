@@ -45,7 +45,8 @@ from functools import cached_property
 import numpy as np
 from scipy.special import xlogy
 
-from ._validate import check_choice, check_flag, check_real, finite_array, unit_vectors
+from ._validate import (check_choice, check_flag, check_name, check_real, finite_array,
+                        unit_vectors)
 from .errors import EnergyConservationWarning, ModelError, ParameterError
 from .precision import COS_HORIZON as _COS_HORIZON
 from .precision import E_MIN
@@ -411,11 +412,6 @@ def check_brdf(name, value):
     return value
 
 
-def _check_name(name):
-    if name is not None and not isinstance(name, str):
-        raise ParameterError(f"name must be a string or None; got {name!r}")
-
-
 @dataclass(frozen=True)
 class SandfordRobertson(BRDF):
     r"""Sandford-Robertson BRDF of a coating (paper Eqs. 1-4, A1-A10).
@@ -470,8 +466,7 @@ class SandfordRobertson(BRDF):
             object.__setattr__(self, param, check_real(param, getattr(self, param),
                                                        low=low, high=high))
         check_choice("lobes", self.lobes, LOBES)
-        if self.name is not None and not isinstance(self.name, str):
-            raise ParameterError(f"name must be a string or None; got {self.name!r}")
+        check_name(self.name)
         G = self.G
         if self.has_specular:
             total = self.rho_d + self.epsilon
@@ -643,7 +638,7 @@ class Lambertian(BRDF):
 
     def __post_init__(self):
         object.__setattr__(self, "albedo", _unit_interval("albedo", self.albedo))
-        _check_name(self.name)
+        check_name(self.name)
 
     def projected(self, cos_theta, sin_theta):
         return self.albedo / math.pi * np.maximum(np.asarray(cos_theta, np.float64), 0.0)
@@ -664,8 +659,8 @@ class Lambertian(BRDF):
 
 @dataclass(frozen=True)
 class Phong(BRDF):
-    """The energy-normalised (modified) Phong BRDF, the lobe HELIOS++ and classic
-    graphics use::
+    """The energy-normalised modified Phong BRDF (Lafortune & Willems 1994), the Phong
+    family that lidar simulators such as HELIOS++ and classic graphics use::
 
         F = kd/π + ks (n + 2)/(2π) cos^n ψ
 
@@ -681,7 +676,7 @@ class Phong(BRDF):
     name: str | None = field(default=None, kw_only=True, compare=False)
 
     def __post_init__(self):
-        _check_name(self.name)
+        check_name(self.name)
         object.__setattr__(self, "kd", _unit_interval("kd", self.kd))
         object.__setattr__(self, "ks", _unit_interval("ks", self.ks))
         object.__setattr__(self, "exponent", check_real("exponent", self.exponent, low=0.0,
@@ -742,7 +737,7 @@ class GGX(BRDF):
     name: str | None = field(default=None, kw_only=True, compare=False)
 
     def __post_init__(self):
-        _check_name(self.name)
+        check_name(self.name)
         object.__setattr__(self, "alpha", check_real("alpha", self.alpha, low=1e-4, high=1.0))
         object.__setattr__(self, "reflectance",
                            _unit_interval("reflectance", self.reflectance))
@@ -792,7 +787,7 @@ class Tabulated(BRDF):
     name: str | None = field(default=None, kw_only=True, compare=False)
 
     def __post_init__(self):
-        _check_name(self.name)
+        check_name(self.name)
         check_flag("projected_values", self.projected_values)
         t = np.array(finite_array("theta_deg", self.theta_deg))          # copies: the user's
         v = np.array(finite_array("values", self.values))                # arrays stay theirs

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import optimize
 
-from ._validate import check_real, finite_array
+from ._validate import check_name, check_real, finite_array
 from .brdf import BRDF, check_brdf
 from .errors import GeometryError, ParameterError
 from .precision import OVERLAP_RTOL
@@ -32,8 +32,7 @@ def _center(value):
 
 
 def _material(value, name=None):
-    if name is not None and not isinstance(name, str):
-        raise ParameterError(f"name must be a string or None; got {name!r}")
+    check_name(name)
     return check_brdf("material", value)
 
 
