@@ -184,8 +184,11 @@ def _long_cli_run(tmp_path):
     import sys
 
     run = tmp_path / "run"
+    # 900 chunks: the workers' start-up (numba compilation) precedes the first chunk, so
+    # the work left after it must be long for the stop to land mid-run (720 views once
+    # finished between the first chunk file and the signal)
     cmd = [sys.executable, "-m", "meshladar", "simulate", "disk_pair", "--model", "mesh",
-           "--segments", "512", "--views", "720", "--rays-per-bin", "16", "--jobs", "2",
+           "--segments", "512", "--views", "7200", "--rays-per-bin", "16", "--jobs", "2",
            "--run-dir", str(run), "-o", str(tmp_path / "r.npz"), "--quiet"]
     return run, subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                  text=True)
