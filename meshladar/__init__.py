@@ -13,12 +13,13 @@ from .ladar import Ladar
 from .reconstruct import Image, clip_radiance, fbp, log_radiance
 from .scene import Disk, Ellipse, Scene
 from .sinogram import Sinogram
-from .raytrace import Hits, trace, weigh
+from .raytrace import Hits, trace
+from .weighing import weigh
 
 __version__ = "0.1.0"
 
-_LAZY_SUBPACKAGES = ("phantoms", "viz", "mesh", "studies", "io", "siddon", "parallel", "runs",
-                     "refine", "bench", "paper")
+_LAZY_SUBPACKAGES = ("phantoms", "viz", "mesh", "studies", "results", "siddon", "stream",
+                     "runs", "refine", "bench", "paper")
 
 
 def __getattr__(name):

@@ -17,6 +17,7 @@ import numba
 import numpy as np
 from numba import njit, prange
 from .precision import COS_HORIZON as _COS_HORIZON
+from .precision import SIDDON_NUDGE as _NUDGE
 
 __all__ = ["backproject", "siddon_project", "siddon_backproject", "siddon_first_hits",
            "set_threads"]
@@ -89,7 +90,7 @@ def _traverse(ox, oy, dx, dy, xmin, ymin, pix, nx, ny, idx, length):
     if a_hi <= a_lo:
         return 0, 0.0
     # entry pixel: from the point slightly inside along the ray
-    am = a_lo + 1e-12 * pix if a_hi - a_lo > 2e-12 * pix else 0.5 * (a_lo + a_hi)
+    am = a_lo + _NUDGE * pix if a_hi - a_lo > 2 * _NUDGE * pix else 0.5 * (a_lo + a_hi)
     px = ox + am * dx
     py = oy + am * dy
     i = min(max(int(math.floor((px - xmin) / pix)), 0), nx - 1)
@@ -166,25 +167,41 @@ def siddon_backproject(values, ox, oy, dx, dy, xmin, ymin, pix, out):
             flat[idx[t]] += length[t] * values[m]
 
 
+@njit(cache=True)
+def _first_hit(m, flat, ox, oy, dx, dy, xmin, ymin, pix, nx, ny, hit_pixel, hit_alpha):
+    """Ray m's first pixel with mask > 0 and the α of the middle of its traversal."""
+    idx = np.empty(nx + ny + 2, np.int64)
+    length = np.empty(nx + ny + 2, np.float64)
+    n, a0 = _traverse(ox[m], oy[m], dx[m], dy[m], xmin, ymin, pix, nx, ny, idx, length)
+    hit_pixel[m] = -1
+    hit_alpha[m] = np.nan
+    a = a0
+    for t in range(n):
+        if flat[idx[t]] > 0:
+            hit_pixel[m] = idx[t]
+            hit_alpha[m] = a + 0.5 * length[t]
+            return
+        a += length[t]
+
+
 @njit(parallel=True, cache=True)
 def siddon_first_hits(mask, ox, oy, dx, dy, xmin, ymin, pix, hit_pixel, hit_alpha):
     """For each ray, the first pixel along it with mask > 0 and the α of the middle of its
-    traversal (−1 and nan where the ray meets none)."""
+    traversal (−1 and nan where the ray meets none); rays in parallel."""
     ny, nx = mask.shape
     flat = mask.ravel()
     for m in prange(ox.size):
-        idx = np.empty(nx + ny + 2, np.int64)
-        length = np.empty(nx + ny + 2, np.float64)
-        n, a0 = _traverse(ox[m], oy[m], dx[m], dy[m], xmin, ymin, pix, nx, ny, idx, length)
-        hit_pixel[m] = -1
-        hit_alpha[m] = np.nan
-        a = a0
-        for t in range(n):
-            if flat[idx[t]] > 0:
-                hit_pixel[m] = idx[t]
-                hit_alpha[m] = a + 0.5 * length[t]
-                break
-            a += length[t]
+        _first_hit(m, flat, ox, oy, dx, dy, xmin, ymin, pix, nx, ny, hit_pixel, hit_alpha)
+
+
+@njit(cache=True)
+def siddon_first_hits_serial(mask, ox, oy, dx, dy, xmin, ymin, pix, hit_pixel, hit_alpha):
+    """:func:`siddon_first_hits` on one thread (in a worker process, see
+    :func:`meshladar.stream.in_worker`)."""
+    ny, nx = mask.shape
+    flat = mask.ravel()
+    for m in range(ox.size):
+        _first_hit(m, flat, ox, oy, dx, dy, xmin, ymin, pix, nx, ny, hit_pixel, hit_alpha)
 
 
 @njit(cache=True)

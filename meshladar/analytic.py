@@ -36,7 +36,6 @@ import math
 
 import numpy as np
 
-from ._validate import check_flag
 from .brdf import projected_weight
 from .ladar import Ladar
 from .scene import Scene, Shape
@@ -199,56 +198,81 @@ def _shape_profile(g: _ShapeViews, views: np.ndarray, edges: np.ndarray, shadow_
     out += np.bincount(flat, weights=piece[ok], minlength=out.size).reshape(out.shape)
 
 
-def simulate_analytic(scene: Scene, ladar: Ladar, *, progress=False) -> Sinogram:
+#: Views per chunk of a streaming run (:mod:`meshladar.stream`): each chunk is one
+#: vectorised pass, and enough chunks for progress, run folders and two workers.
+_VIEWS_PER_CHUNK = 32
+
+
+def simulate_analytic(scene: Scene, ladar: Ladar, *, jobs=None, executor=None, progress=False,
+                      run_dir=None) -> Sinogram:
     """Exact range profiles of a scene of disks and ellipses for views about the z axis.
 
     Parameters
     ----------
     scene : Scene
-        Non-overlapping disks and ellipses, each with its SR coating.
+        Non-overlapping disks and ellipses, each with its coating (any BRDF).
     ladar : Ladar
         Views (``angles_deg``) and range ``bin_edges``; monostatic.
-    progress : bool, keyword-only
-        A progress bar on stderr (on a terminal only) over shapes × views.
+    jobs, executor, progress, run_dir : keyword-only
+        Streaming options, as :func:`meshladar.simulate` (chunks of views on worker
+        processes or any executor, a progress bar over the views, a resumable run folder).
 
     Returns
     -------
     Sinogram
-        ``values[i, k]`` = ∫ F(θ) cos θ dl over the boundary points visible from view i whose
-        range lies in bin k: per unit height of the extruded phantom.
+        ``values[i, k]`` (n_views, n_bins) = ∫ F(θ) cos θ dl over the boundary points
+        visible from view i whose range lies in bin k: per unit height of the extruded
+        phantom.
 
     Notes
     -----
     A lone disk's profile depends on the view only through the range of its centre, so it
-    is computed once per distinct centre range (once for a centred disk). A material's lobes
-    are evaluated only where present: a Lambertian coating costs no specular evaluation.
+    is computed once per distinct centre range (once for a centred disk; the progress bar
+    then counts profiles). A material's lobes are evaluated only where present: a
+    Lambertian coating costs no specular evaluation.
     """
+    from .stream import run_chunks
+
     phi = np.deg2rad(ladar.angles_deg)
     edges = ladar.bin_edges
-    n_views, n_bins = ladar.n_views, ladar.n_bins
-    geoms = [_ShapeViews(s, phi) for s in scene.shapes]
-    lo, hi = _occluders(geoms)
-    values = np.zeros((n_views, n_bins))
-    from ._progress import Progress
-
-    if len(geoms) == 1 and geoms[0].shape.is_circle:
+    shapes = tuple(scene.shapes)
+    inverse, unit = None, "views"
+    if len(shapes) == 1 and shapes[0].is_circle:
         # view-independent shape: one profile per distinct centre range
-        _, first, inverse = np.unique(geoms[0].r_c, return_index=True, return_inverse=True)
-        sub = np.zeros((first.size, n_bins))
-        geo = _ShapeViews(geoms[0].shape, phi[first])
-        bar = Progress(first.size, "profiles", enabled=check_flag("progress", progress))
-        _chunked(geo, np.arange(first.size), edges, lo[0][first], hi[0][first], sub, bar)
-        values = sub[inverse.ravel()]
-    else:
-        bar = Progress(len(geoms) * n_views, "shape views",
-                       enabled=check_flag("progress", progress))
-        for g, L, H in zip(geoms, lo, hi):
-            _chunked(g, np.arange(n_views), edges, L, H, values, bar)
-    bar.close()
-    return Sinogram(values, angles_deg=ladar.angles_deg, bin_edges=edges, model="analytic")
+        r_c = _ShapeViews(shapes[0], phi).r_c
+        _, first, inverse = np.unique(r_c, return_index=True, return_inverse=True)
+        phi, unit = phi[first], "profiles"
+    job = None
+    if run_dir is not None:
+        from .runs import array_digest
+
+        job = {"kind": "simulate_analytic", "shapes": [repr(s) for s in shapes],
+               "phi": array_digest(phi), "bin_edges": array_digest(edges)}
+    results = run_chunks(_profiles, (shapes, phi, edges), phi.size,
+                         chunk_size=_VIEWS_PER_CHUNK, jobs=jobs, executor=executor,
+                         progress=progress, unit=unit, run_dir=run_dir, job=job,
+                         arrays={"values": (ladar.n_bins,)})
+    from .stream import joined
+
+    values = joined(results, "values")
+    if inverse is not None:
+        values = values[inverse.ravel()]
+    return Sinogram(values, angles_deg=ladar.angles_deg, bin_edges=edges, model="analytic",
+                    info={"radiometry": "paper"})
 
 
-def _chunked(g, views, edges, lo, hi, out, bar):
+def _profiles(payload, items):
+    """The stream's per-chunk job: the profiles of views ``phi[items]``."""
+    shapes, phi, edges = payload
+    geoms = [_ShapeViews(s, phi[items]) for s in shapes]
+    lo, hi = _occluders(geoms)
+    out = np.zeros((items.size, edges.size - 1))
+    for g, L, H in zip(geoms, lo, hi):
+        _chunked(g, np.arange(items.size), edges, L, H, out)
+    return {"values": out}
+
+
+def _chunked(g, views, edges, lo, hi, out):
     """Run _shape_profile over blocks of views that keep the piece count bounded."""
     span = 2.0 * max(g.a, g.b)
     width = float(np.min(np.diff(edges)))
@@ -256,4 +280,3 @@ def _chunked(g, views, edges, lo, hi, out, bar):
     step = max(1, int(_MAX_PIECES // per_view))
     for i in range(0, views.size, step):
         _shape_profile(g, views[i:i + step], edges, lo, hi, out)
-        bar.update(min(step, views.size - i))

@@ -118,7 +118,9 @@ def bench_mesh(*, repeats=3, subdivisions=6, rays_per_view=1_000_000, views=16):
     from . import materials
     from .ladar import Ladar
     from .mesh import fibonacci_sphere
-    from .raytrace import _embree_scene, _Geometry, _ray_grid, simulate_mesh
+    from .raytrace.embree import _embree_scene, _Geometry
+    from .raytrace.grid import _ray_grid
+    from .raytrace.model import simulate_mesh
 
     scene = _icosphere_scene(subdivisions, materials.DARK_GRAY)
     spacing = 1.0 / math.sqrt(rays_per_view)          # the sphere's 1 × 1 projected square
@@ -225,8 +227,8 @@ def bench_dask(*, views=360, rays_per_view=1_000_000, subdivisions=6, workers=2)
     from . import materials
     from .ladar import Ladar
     from .mesh import fibonacci_sphere
-    from .parallel import dask_executor
-    from .raytrace import simulate_mesh
+    from .stream import dask_executor
+    from .raytrace.model import simulate_mesh
 
     scene = _icosphere_scene(subdivisions, materials.DARK_GRAY)
     ladar = Ladar(None, np.linspace(-0.6, 0.6, 1025), view_vectors=fibonacci_sphere(views))

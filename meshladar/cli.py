@@ -14,6 +14,7 @@ import numpy as np
 
 from .errors import MeshladarError
 from .forward import MODELS
+from .ladar import MAX_VIEWS as _MAX_VIEWS
 from .reconstruct import FILTERS
 from .raytrace import MODES, NORMALS, SAMPLINGS
 
@@ -102,68 +103,17 @@ def _coatings(text):
     return out
 
 
-def _is_phantom(src):
-    """A packaged phantom's name or a phantom spec (.toml); anything else is a mesh file."""
-    from meshladar import phantoms
-
-    return src in phantoms.names() or src.lower().endswith(".toml")
+#: What the command line calls resolve()'s arguments, in its errors.
+_SCENE_LABELS = {"source": "SCENE", "material": "--material", "coatings": "--coating"}
 
 
 def _load_scene(args):
-    """(scene, default ladar or None, model default) from SCENE: phantom, spec or mesh.
-
-    Dispatch is on what SCENE is, not on a list of suffixes: a packaged phantom's name or a
-    ``.toml`` spec is a phantom; any other path goes to trimesh, which reads the format from
-    the file (archives, GLB/GLTF, 3MF, DAE... when their optional readers are installed)."""
-    import os
-
-    from .errors import ParameterError
-    from .scene import Scene
-
-    src = args.scene
-    table = _coating_table(args)
-    if not _is_phantom(src):
-        if not os.path.exists(src):
-            from meshladar import phantoms
-
-            raise ParameterError(f"SCENE: no such mesh file {src!r}, and not a known phantom "
-                                 f"({', '.join(phantoms.names())})")
-        material = args.material or "dark_gray"
-        if material not in table:
-            raise ParameterError(f"--material: unknown coating {material!r}; known: "
-                                 f"{sorted(table)}")
-        per_part = {k: _coating(table, v) for k, v in (args.coating or {}).items()}
-        return (Scene.from_mesh(src, table[material], materials=per_part or None), None,
-                "mesh")
+    """(scene, default ladar or None, default model) from SCENE: phantom, spec or mesh
+    (:func:`meshladar.phantoms.resolve`)."""
     from meshladar import phantoms
 
-    if args.material is not None:
-        raise ParameterError("--material colours a mesh's parts; a phantom's shapes have "
-                             "their own coatings: use --coating SHAPE=NAME")
-    overrides = {k: _coating(table, v) for k, v in (args.coating or {}).items()}
-    ph = phantoms.load(src, materials=overrides or None)
-    return ph.scene, ph.ladar, "analytic"
-
-
-def _coating_table(args=None):
-    """The packaged coatings, plus (overriding by name) a user's ``--materials`` table."""
-    from meshladar.phantoms import materials
-
-    table = dict(materials())
-    extra = getattr(args, "materials", None)
-    if extra is not None:
-        from .materials import load_table
-
-        table.update(load_table(extra))
-    return table
-
-
-def _coating(table, name):
-    from .errors import ParameterError
-
-    if name not in table:
-        raise ParameterError(f"--coating: unknown coating {name!r}; known: {sorted(table)}")
-    return table[name]
+    return phantoms.resolve(args.scene, material=args.material, coatings=args.coating,
+                            materials_file=args.materials, labels=_SCENE_LABELS)
 
 
 def _ladar(args, scene, default):
@@ -190,9 +140,7 @@ def _ladar(args, scene, default):
 _MESH_ONLY = {"--mode": "mode", "--z0": "z0", "--normals": "normals",
               "--ray-spacing": "ray_spacing", "--rays-per-bin": "rays_per_bin",
               "--sampling": "sampling", "--seed": "seed", "--footprint": "footprint",
-              "--receiver": "receiver", "--tol": "tol", "--max-rays": "max_rays",
-              "--jobs": "jobs", "--run-dir": "run_dir", "--scheduler": "scheduler",
-              "--workers": "workers"}
+              "--receiver": "receiver", "--tol": "tol", "--max-rays": "max_rays"}
 
 
 def _check_applicable(args, model, is_phantom):
@@ -252,7 +200,7 @@ def _summary(args, sino, ladar, model):
 
 def _cmd_simulate(args) -> int:
     """Simulate a scene's range profiles and save them (sinogram, scene, parameters)."""
-    from . import io
+    from . import results
     from .forward import simulate
 
     _check_output(args.output, (".npz",), [args.scene, args.materials, args.run_dir])
@@ -270,14 +218,14 @@ def _cmd_simulate(args) -> int:
                 opts[k] = getattr(args, k)
         if args.footprint:
             opts["footprint"] = True
-        opts["jobs"] = args.jobs
-        if args.run_dir is not None:
-            opts["run_dir"] = args.run_dir
     elif model == "pixel" and args.pixel_size is not None:
         opts["pixel_size"] = args.pixel_size
+    opts["jobs"] = args.jobs                 # the stream's options: every model takes them
+    if args.run_dir is not None:
+        opts["run_dir"] = args.run_dir
     opts["progress"] = not args.quiet
-    if model == "mesh" and (args.scheduler or args.workers):
-        from .parallel import dask_executor
+    if args.scheduler or args.workers:
+        from .stream import dask_executor
 
         with dask_executor(args.scheduler, workers=args.workers or 2) as ex:
             sino = simulate(scene, ladar, model=model, executor=ex,
@@ -287,7 +235,7 @@ def _cmd_simulate(args) -> int:
     params = {"scene": args.scene, "model": model, "options": {k: v for k, v in opts.items()
                                                                 if k != "progress"},
               "n_views": ladar.n_views, "n_bins": ladar.n_bins}
-    io.save_sinogram(args.output, sino, scene=scene, params=params)
+    results.save_sinogram(args.output, sino, scene=scene, params=params)
     if not args.quiet:
         print(_summary(args, sino, ladar, model))
     return 0
@@ -323,7 +271,7 @@ def _cmd_reconstruct(args) -> int:
     the extension of -o) and the image's values in OUTPUT.image.npz."""
     import os
 
-    from . import io
+    from . import results
     from .errors import ParameterError
     from .reconstruct import clip_radiance, fbp, log_radiance
 
@@ -334,7 +282,7 @@ def _cmd_reconstruct(args) -> int:
         raise ParameterError(f"-o {args.output!r} would write the image data to "
                              f"{data!r}, the input: meshladar never overwrites an input; "
                              "choose another output name")
-    sino, meta = io.load_sinogram(args.result)
+    sino, meta = results.load_sinogram(args.result)
     if args.log:
         sino = log_radiance(sino)
     if args.clip is not None:
@@ -352,10 +300,10 @@ def _cmd_reconstruct(args) -> int:
         ax.set_title(f"FBP of {os.path.basename(args.result)} ({args.filter})")
         fig.colorbar(h, ax=ax, label="reconstruction [radiance / area]")
         fmt = os.path.splitext(args.output)[1].lower().lstrip(".")
-        io.write_atomic(args.output, lambda fh: fig.savefig(fh, format=fmt))
+        results.write_atomic(args.output, lambda fh: fig.savefig(fh, format=fmt))
 
     draw()
-    io.save_result(data, {"image": image.values},
+    results.save_result(data, {"image": image.values},
                    {"kind": "image", "extent": extent, "info": image.info,
                     "source": os.path.basename(args.result)})
     if not args.quiet:
@@ -436,9 +384,6 @@ _positive_float = _number(float, lambda v: v > 0 and math.isfinite(v),
 _finite_float = _number(float, math.isfinite, "finite number")
 _unit_fraction = _number(float, lambda v: 0 < v <= 1, "number in (0, 1]")
 
-#: The most views a command-line run asks for (as a phantom spec's ladar): a sinogram row
-#: per view, and each view's rays, are allocated before any work.
-_MAX_VIEWS = 10**6
 
 
 def _direction(text: str):
@@ -593,16 +538,16 @@ def _parser() -> argparse.ArgumentParser:
     sim.add_argument("--pixel-size", type=_positive_float, default=None,
                      help="pixel size for --model pixel (default: a quarter bin)")
     sim.add_argument("--jobs", type=_positive_int, default=None,
-                     help="worker processes for the mesh model (default: 1 for small jobs, "
+                     help="worker processes, any model (default: 1; the mesh model uses "
                           "all cores from 4e6 rays)")
     sim.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                     help="run the mesh model on an existing Dask cluster (tcp://host:8786) "
+                     help="run on an existing Dask cluster (tcp://host:8786) "
                           "(default: local)")
     sim.add_argument("--workers", type=_positive_int, default=None,
-                     help="run the mesh model on a local Dask cluster of N processes "
+                     help="run on a local Dask cluster of N processes "
                           "(default: no Dask)")
     sim.add_argument("--run-dir", default=None,
-                     help="resumable run folder for the mesh model: finished chunks are kept "
+                     help="resumable run folder (any model): finished chunks are kept "
                           "there, and re-running the same command resumes (default: none)")
     sim.set_defaults(func=_cmd_simulate)
 

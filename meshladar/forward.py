@@ -15,7 +15,9 @@ __all__ = ["simulate", "MODELS"]
 #: The forward models available in this version.
 MODELS = ("analytic", "mesh", "pixel")
 
-_OPTIONS = {"analytic": ("progress",), "pixel": ("pixel_size", "ray_spacing", "progress"),
+#: Streaming options every model takes (:mod:`meshladar.stream`).
+_STREAM = ("jobs", "executor", "progress", "run_dir")
+_OPTIONS = {"analytic": _STREAM, "pixel": ("pixel_size", "ray_spacing") + _STREAM,
             "mesh": ("mode", "normals", "back_faces", "z0", "ray_spacing", "rays_per_bin",
                      "footprint", "sampling", "seed", "receiver", "tol", "max_rays", "jobs",
                      "executor", "progress", "run_dir")}
@@ -27,25 +29,55 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
     Parameters
     ----------
     scene : Scene
+        Analytic shapes (``Disk``, ``Ellipse``) or meshes (``Scene.from_mesh``).
     ladar : Ladar
-    model : str
-        ``"analytic"``: exact profiles of disks and ellipses (no faceting, no sampling;
-        option ``progress``).
-        ``"mesh"``: triangle meshes ray-cast with Embree (options in
-        :func:`meshladar.raytrace.simulate_mesh`: mode, normals, back_faces, z0, ray_spacing,
-        rays_per_bin, footprint, sampling, seed, receiver, tol, max_rays, jobs, executor,
-        progress, run_dir). A mesh is a 3-D target (``mode="3d"``) unless it was
-        tessellated from the analytic shapes.
+        Views (``angles_deg`` about z, or ``view_vectors``) and range ``bin_edges``.
+    model : {"analytic", "mesh", "pixel"}
+        ``"analytic"``: exact profiles of disks and ellipses (no faceting, no sampling).
+        ``"mesh"``: triangle meshes ray-cast with Embree; a mesh is a 3-D target
+        (``mode="3d"``) unless it was tessellated from the analytic shapes. Options of
+        :func:`meshladar.raytrace.simulate_mesh` (mode, normals, back_faces, z0,
+        ray_spacing, rays_per_bin, footprint, sampling, seed, receiver) and ``tol``.
         ``"pixel"``: the paper's method, a rasterised surface traced with Siddon rays
-        (options ``pixel_size``, ``ray_spacing``, ``progress``; see
-        :func:`meshladar.pixel.simulate_pixel`).
+        (options ``pixel_size``, ``ray_spacing``; :func:`meshladar.pixel.simulate_pixel`).
+    tol : float in (0, 1), optional, mesh model only
+        A relative L2 accuracy instead of a ray density: rays per bin (and segments, for
+        analytic scenes) double from 1 ray per bin and 256 segments until a refinement
+        check (successive runs' difference, extrapolated with the measured convergence
+        order) estimates the error at most ``tol``; defaults then become exact (analytic)
+        or smooth (mesh) normals and footprint binning. It stops early, keeping its best
+        run and warning why, when an estimate fails to fall or the next run would pass
+        ``max_rays`` (default ``refine.TOL_MAX_RAYS`` = 2e9). ``info`` holds ``chosen``,
+        ``error_estimate``, ``stopped`` and every ``refinement`` run
+        (:mod:`meshladar.refine`).
+    jobs : int, optional
+        Worker processes for chunks of views (every model; default 1, or one per core for
+        a mesh run of at least 4e6 rays).
+    executor : concurrent.futures.Executor, optional
+        Any executor to run the chunks on (threads, processes, a Dask cluster's from
+        :func:`meshladar.stream.dask_executor`); overrides ``jobs``.
+    progress : bool
+        A progress bar over the views, on a terminal only.
+    run_dir : path, optional
+        A run folder: each finished chunk of views is saved there (atomically, checksummed)
+        and the same job run again computes only what is missing (:mod:`meshladar.runs`).
     **options
-        Options of the chosen model; an option another model takes is an error.
+        The chosen model's own options; an option another model takes is an error.
 
     Returns
     -------
     Sinogram
-        ``values`` (n_views, n_bins) bin integrals of F(θ) cos θ dA (paper Eq. 8).
+        ``values`` (n_views, n_bins), float64: bin integrals of F(θ) cos θ dA (paper Eq. 8),
+        ``angles_deg`` (or ``view_vectors``), ``bin_edges``, ``model``, and ``info`` (the
+        convention and options the run used).
+
+    Examples
+    --------
+    >>> import numpy as np, meshladar as ml
+    >>> scene = ml.Scene([ml.Disk((0.0, 0.0), 0.8, ml.materials.DARK_GRAY)])
+    >>> ladar = ml.Ladar(angles_deg=np.arange(0.0, 360.0), bin_edges=np.linspace(-1, 1, 257))
+    >>> ml.simulate(scene, ladar).values.shape
+    (360, 256)
     """
     if not isinstance(scene, Scene):
         raise ParameterError(f"scene must be a meshladar.Scene; got {type(scene).__name__}")
@@ -57,7 +89,21 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
         raise ParameterError(f"model {model!r} takes options {_OPTIONS[model]}; got "
                              f"{unknown[0]!r}")
     if model == "mesh":
-        from .raytrace import simulate_mesh
+        tol, max_rays = options.pop("tol", None), options.pop("max_rays", None)
+        if tol is not None:
+            if options.get("run_dir") is not None:
+                raise ParameterError("run_dir and tol do not combine: the knob runs several "
+                                     "jobs")
+            from .refine import simulate_tol
+
+            normals, footprint = options.pop("normals", None), options.pop("footprint", None)
+            options.pop("run_dir", None)
+            options.setdefault("ray_spacing", None)
+            options.setdefault("rays_per_bin", None)
+            return simulate_tol(scene, ladar, tol, normals, footprint, max_rays, options)
+        if max_rays is not None:
+            raise ParameterError("max_rays is the budget of the tol knob; give tol too")
+        from .raytrace.model import simulate_mesh
 
         return simulate_mesh(scene, ladar, **options)
     if not scene.shapes:

@@ -17,11 +17,15 @@ from ._validate import (check_count, check_real, check_size, finite_array, reado
                         unit_vectors)
 from .errors import ParameterError
 from .precision import ANGLE_TOL_DEG as _ANGLE_TOL_DEG
+from .precision import COUNT_SLACK, SPAN_FLOOR
 
 __all__ = ["Ladar", "PAPER_BIN_DIVISOR"]
 
 #: The paper's range resolution is A/256 for a disk of radius A (Sec. 4.A).
 PAPER_BIN_DIVISOR = 256
+#: The most views a named set-up asks for (a command line's ``--views``, a phantom spec's
+#: ladar): a sinogram of 1e6 views x 512 bins is 4 GB, allocated before any work.
+MAX_VIEWS = 10**6
 
 
 @dataclass(frozen=True, eq=False)
@@ -174,17 +178,17 @@ class Ladar:
             center = 0.5 * (lo + hi)
             span = max(hi - lo, 0.0)
             if n is None:
-                n = max(1, int(np.ceil(span / w - 1e-9)) + 1)
+                n = max(1, int(np.ceil(span / w - COUNT_SLACK)) + 1)
             elif w is None:
                 # n bins whose centres run from the nearest to the farthest range
-                w = span / (n - 1) if n > 1 and span > 0 else max(span, 1e-12 * (
+                w = span / (n - 1) if n > 1 and span > 0 else max(span, SPAN_FLOOR * (
                     1.0 + abs(center)))
         else:
             c, radius = scene.bounding_circle()
             center = 0.0
             half = float(np.hypot(*c)) + radius + m
             if n is None:
-                n = max(1, int(np.ceil(2 * half / w - 1e-9)))
+                n = max(1, int(np.ceil(2 * half / w - COUNT_SLACK)))
             elif w is None:
                 w = 2 * half / n
         check_size("bin_width", n, 8 * views.n_views, f"{n:.4g} bins of width {w:g}",

@@ -13,27 +13,24 @@ material::
     lobes = "both"                                                         # optional
 
 ``load_table(path)`` reads one with the same validation as :class:`SandfordRobertson`,
-and an error names the file, the entry and the field. The phantom library ships the
-paper's table as ``meshladar.phantoms`` ``materials.toml``.
+and an error names the file, the entry and the field. The paper's coatings are such a
+table, ``materials.toml`` beside this module (:data:`TABLE_PATH`): the one source of their
+numbers, read once at import into :data:`PAPER`; ``DARK_GRAY`` and ``ALUMINUM`` are two of
+its entries, and the phantom library and the CLI name coatings from it.
 """
 
 from __future__ import annotations
 
 import tomllib
+from importlib import resources
 from types import MappingProxyType
 
 from .brdf import SandfordRobertson
 from ._validate import check_real
 from .errors import MaterialFileError
 
-__all__ = ["read_toml", "DARK_GRAY", "ALUMINUM", "lambertian", "glint", "load_table", "parse_table"]
-
-#: Dark gray paint at 1 µm: ρd = 0.032, ε = 0.877, b = 0.1, e = 0.17 (paper Sec. 4.B).
-DARK_GRAY = SandfordRobertson(rho_d=0.032, epsilon=0.877, b=0.1, e=0.17, name="dark_gray")
-
-#: Commercial aluminium at 1 µm: ρd = 0.047, ε = 0.53, b = 0.1, e = 0.007 (paper Sec. 4.B).
-#: Its monostatic F is about 651 sr⁻¹ at normal incidence and 0.04 sr⁻¹ five degrees off.
-ALUMINUM = SandfordRobertson(rho_d=0.047, epsilon=0.53, b=0.1, e=0.007, name="aluminum")
+__all__ = ["read_toml", "DARK_GRAY", "ALUMINUM", "PAPER", "TABLE_PATH", "lambertian", "glint",
+           "load_table", "parse_table"]
 
 _FIELDS = {"rho_d": float, "epsilon": float, "b": float, "e": float, "lobes": str,
            "description": str}
@@ -127,3 +124,16 @@ def read_toml(path, what, error):
         raise error(f"{path}: not a {what}: nested too deeply") from exc
     except ValueError as exc:                 # e.g. an integer of more than 4300 digits
         raise error(f"{path}: not a {what}: {str(exc)[:120]}") from exc
+
+
+#: The packaged table of the paper's coatings (Sec. 4.B at 1 µm, and Sec. 4.A's idealised
+#: surfaces).
+TABLE_PATH = resources.files(__package__) / "materials.toml"
+#: Its coatings, read once: a read-only mapping of name to :class:`SandfordRobertson`.
+PAPER = parse_table(tomllib.loads(TABLE_PATH.read_text(encoding="utf-8")),
+                    source=str(TABLE_PATH))
+#: Dark gray paint at 1 µm (paper Sec. 4.B): ρd = 0.032, ε = 0.877, b = 0.1, e = 0.17.
+DARK_GRAY = PAPER["dark_gray"]
+#: Commercial aluminium at 1 µm (paper Sec. 4.B): ρd = 0.047, ε = 0.53, b = 0.1, e = 0.007.
+#: Its monostatic F is about 651 sr⁻¹ at normal incidence and 0.04 sr⁻¹ five degrees off.
+ALUMINUM = PAPER["aluminum"]

@@ -33,6 +33,7 @@ from ._validate import check_count, check_size
 from .errors import GeometryError, ParameterError
 from .precision import DEGENERATE_AREA as _DEGENERATE_AREA
 from .precision import WELD_REL as _WELD_REL
+from .precision import CAP_REL
 
 __all__ = ["MeshPart", "load_parts", "part_from_trimesh", "prism", "sphere", "ellipsoid",
            "fibonacci_sphere", "corner_normals", "CREASE_DEG"]
@@ -658,7 +659,7 @@ class _PrismNormal:
         a, b = self.axes
         nx, ny = ellipse_normal(self.center, self.axes, self.angle, p[:, 0], p[:, 1])
         out = np.stack([nx, ny, np.zeros_like(nx)], -1)
-        eps = 1e-9 * max(a, b, self.hi - self.lo)
+        eps = CAP_REL * max(a, b, self.hi - self.lo)
         top = np.abs(p[:, 2] - self.hi) < eps
         bottom = np.abs(p[:, 2] - self.lo) < eps
         out[top | bottom] = 0.0
@@ -676,7 +677,7 @@ class _PrismNormal:
         xl, yl = to_frame(self.angle, p[:, 0] - cx, p[:, 1] - cy)
         t = np.arctan2(yl / b, xl / a)
         rho = (a * a * np.sin(t) ** 2 + b * b * np.cos(t) ** 2) ** 1.5 / (a * b)
-        eps = 1e-9 * max(a, b, self.hi - self.lo)
+        eps = CAP_REL * max(a, b, self.hi - self.lo)
         cap = (np.abs(p[:, 2] - self.hi) < eps) | (np.abs(p[:, 2] - self.lo) < eps)
         return np.where(cap, np.inf, rho)
 

@@ -28,13 +28,14 @@ import math
 
 import numpy as np
 
-from ._validate import check_flag, check_real, check_size
+from ._validate import check_real, check_size
 from .brdf import projected_weight
 from .errors import ParameterError
 from .ladar import Ladar
 from .scene import Scene, ellipse_normal
 from .siddon import PixelGrid
 from .sinogram import Sinogram
+from .precision import TINY
 
 __all__ = ["simulate_pixel", "rasterize"]
 
@@ -66,8 +67,13 @@ def rasterize(scene: Scene, grid: PixelGrid):
     return owner, normal
 
 
+#: A chunk of a streaming run holds at most this many views, and this many rays (memory).
+_VIEWS_PER_CHUNK = 32
+_RAYS_PER_CHUNK = 2_000_000
+
+
 def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=None,
-                   progress=False) -> Sinogram:
+                   jobs=None, executor=None, progress=False, run_dir=None) -> Sinogram:
     """Range profiles by the paper's pixel method (see the module docstring).
 
     Parameters
@@ -77,13 +83,15 @@ def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=N
         Side of the square pixels; default the narrowest range bin.
     ray_spacing : float, optional
         Transverse distance between parallel rays; default pixel_size / 4.
-    progress : bool
-        A progress bar on stderr (on a terminal only) over the views.
+    jobs, executor, progress, run_dir : keyword-only
+        Streaming options, as :func:`meshladar.simulate` (chunks of views on worker
+        processes or any executor, a progress bar over the views, a resumable run folder).
 
     Returns
     -------
     Sinogram
-        ``info`` holds ``pixel_size``, ``ray_spacing`` and ``n_rays`` per view.
+        ``values`` (n_views, n_bins) bin integrals (paper Eq. 8); ``info`` holds
+        ``radiometry``, ``pixel_size``, ``ray_spacing`` and ``n_rays`` per view.
     """
     width = float(np.min(np.diff(ladar.bin_edges)))
     pix = check_real("pixel_size", width if pixel_size is None else pixel_size, low=0.0,
@@ -109,56 +117,70 @@ def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=N
 
     n_rays = int(math.ceil(2 * half / ds))
     s_rel = (np.arange(n_rays) - (n_rays - 1) / 2) * ds          # about the scene centre
-    phi = np.deg2rad(ladar.angles_deg)
-    w = np.stack([np.cos(phi), np.sin(phi)], -1)
-    u = np.stack([-np.sin(phi), np.cos(phi)], -1)
-    r_c = -(w @ np.array([cx, cy]))
-    distance = 2 * half                                           # ladar side, past the grid
-    edges = ladar.bin_edges
-    values = np.zeros((ladar.n_views, ladar.n_bins))
-    flat_owner = owner.ravel()
-    flat_normal = normal.reshape(-1, 2)
-    materials = [s.material for s in scene.shapes]
     # the most arc one ray covers: sqrt(2 ρ δs) at a silhouette of curvature radius ρ
     arc_max = [math.sqrt(2.0 * max(sh.axes) ** 2 / min(sh.axes) * ds) for sh in scene.shapes]
+    payload = (mask, grid, owner.ravel(), normal.reshape(-1, 2),
+               tuple(s.material for s in scene.shapes), arc_max, s_rel, (cx, cy), 2 * half,
+               ds, np.deg2rad(ladar.angles_deg), ladar.bin_edges)
+    job = None
+    if run_dir is not None:
+        from .runs import array_digest
 
+        job = {"kind": "simulate_pixel", "shapes": [repr(s) for s in scene.shapes],
+               "pixel_size": pix, "ray_spacing": ds,
+               "angles_deg": array_digest(ladar.angles_deg),
+               "bin_edges": array_digest(ladar.bin_edges)}
+    from .stream import joined, run_chunks
+
+    results = run_chunks(_views, payload, ladar.n_views,
+                         chunk_size=max(1, min(_VIEWS_PER_CHUNK, _RAYS_PER_CHUNK // n_rays)), jobs=jobs, executor=executor,
+                         progress=progress, run_dir=run_dir, job=job,
+                         arrays={"values": (ladar.n_bins,)})
+    return Sinogram(joined(results, "values"), angles_deg=ladar.angles_deg,
+                    bin_edges=ladar.bin_edges, model="pixel",
+                    info={"radiometry": "paper", "pixel_size": pix, "ray_spacing": ds,
+                          "n_rays": n_rays})
+
+
+def _views(payload, views):
+    """The stream's per-chunk job: the profiles of views ``views``."""
     from . import _kernels
 
-    from ._progress import Progress
+    (mask, grid, flat_owner, flat_normal, materials, arc_max, s_rel, (cx, cy), distance, ds,
+     phi, edges) = payload
+    n_rays, n_bins = s_rel.size, edges.size - 1
+    w = np.stack([np.cos(phi[views]), np.sin(phi[views])], -1)
+    u = np.stack([-np.sin(phi[views]), np.cos(phi[views])], -1)
+    r_c = -(w @ np.array([cx, cy]))
+    # rays across the scene, starting `distance` toward the ladar (past the grid), along −w
+    o = (np.array([cx, cy])[None, None, :] + s_rel[None, :, None] * u[:, None, :]
+         + distance * w[:, None, :])
+    ox, oy = o[..., 0].ravel(), o[..., 1].ravel()
+    dx = np.repeat(-w[:, 0], n_rays)
+    dy = np.repeat(-w[:, 1], n_rays)
+    hit = np.empty(ox.size, np.int64)
+    alpha = np.empty(ox.size)
+    from .stream import in_worker
 
-    bar = Progress(ladar.n_views, "views", enabled=check_flag("progress", progress))
-    chunk = max(1, 2_000_000 // n_rays)
-    for v0 in range(0, ladar.n_views, chunk):
-        v = np.arange(v0, min(v0 + chunk, ladar.n_views))
-        # rays across the scene, starting `distance` toward the ladar, travelling along −w
-        o = (np.array([cx, cy])[None, None, :] + s_rel[None, :, None] * u[v][:, None, :]
-             + distance * w[v][:, None, :])
-        ox, oy = o[..., 0].ravel(), o[..., 1].ravel()
-        dx = np.repeat(-w[v, 0], n_rays)
-        dy = np.repeat(-w[v, 1], n_rays)
-        hit = np.empty(ox.size, np.int64)
-        alpha = np.empty(ox.size)
-        _kernels.siddon_first_hits(mask, ox, oy, dx, dy, *grid._args(), hit, alpha)
-        got = hit >= 0
-        view = np.repeat(v, n_rays)[got]
-        pixel_idx = hit[got]
-        # range of the hit: r = r_c − distance + α (the origin sits `distance` toward w)
-        rng = r_c[view] - distance + alpha[got]
-        cos_t = np.einsum("ij,ij->i", flat_normal[pixel_idx], w[view])
-        sin_t = np.abs(flat_normal[pixel_idx, 0] * w[view, 1] - flat_normal[pixel_idx, 1]
-                       * w[view, 0])
-        weight = np.zeros(view.size)
-        own = flat_owner[pixel_idx]
-        for k, m in enumerate(materials):
-            sel = own == k
-            c, s = cos_t[sel], sin_t[sel]
-            arc = np.minimum(ds / np.maximum(c, 1e-300), arc_max[k])
-            weight[sel] = projected_weight(m, c, s) * arc
-        b = np.searchsorted(edges, rng, side="right") - 1
-        ok = (b >= 0) & (b < ladar.n_bins)
-        values += np.bincount(view[ok] * ladar.n_bins + b[ok], weights=weight[ok],
-                              minlength=values.size).reshape(values.shape)
-        bar.update(v.size)
-    bar.close()
-    return Sinogram(values, angles_deg=ladar.angles_deg, bin_edges=edges, model="pixel",
-                    info={"pixel_size": pix, "ray_spacing": ds, "n_rays": n_rays})
+    first_hits = _kernels.siddon_first_hits_serial if in_worker() else _kernels.siddon_first_hits
+    first_hits(mask, ox, oy, dx, dy, *grid._args(), hit, alpha)
+    got = hit >= 0
+    view = np.repeat(np.arange(views.size), n_rays)[got]
+    pixel_idx = hit[got]
+    # range of the hit: r = r_c − distance + α (the origin sits `distance` toward w)
+    rng = r_c[view] - distance + alpha[got]
+    cos_t = np.einsum("ij,ij->i", flat_normal[pixel_idx], w[view])
+    sin_t = np.abs(flat_normal[pixel_idx, 0] * w[view, 1] - flat_normal[pixel_idx, 1]
+                   * w[view, 0])
+    weight = np.zeros(view.size)
+    own = flat_owner[pixel_idx]
+    for k, m in enumerate(materials):
+        sel = own == k
+        c, s = cos_t[sel], sin_t[sel]
+        arc = np.minimum(ds / np.maximum(c, TINY), arc_max[k])
+        weight[sel] = projected_weight(m, c, s) * arc
+    b = np.searchsorted(edges, rng, side="right") - 1
+    ok = (b >= 0) & (b < n_bins)
+    values = np.bincount(view[ok] * n_bins + b[ok], weights=weight[ok],
+                         minlength=views.size * n_bins).reshape(views.size, n_bins)
+    return {"values": values}

@@ -11,8 +11,32 @@ import math
 __all__ = [
     "COS_HORIZON", "E_MIN", "ENERGY_SLACK", "ANGLE_TOL_DEG", "DEGENERATE_AREA", "WELD_REL",
     "UNIFORM_RTOL", "OVERLAP_RTOL", "RECEIVER_LIFT", "MIN_COS_FACET", "REFINE_MIN_COS",
-    "ORIGIN_MARGIN", "SCENE_RADIUS_RANGE", "FAR_RATIO",
+    "ORIGIN_MARGIN", "SCENE_RADIUS_RANGE", "FAR_RATIO", "TINY", "COUNT_SLACK", "PARALLEL_SLACK",
+    "BOX_RATIO", "CAP_REL", "SIDDON_NUDGE", "SPAN_FLOOR",
 ]
+
+# -- arithmetic guards ------------------------------------------------------------------------
+#: A positive floor for a denominator that may be exactly 0 (a ray edge-on to its facet, an
+#: empty cell, an all-zero sinogram): far below any physical quantity and above float64's
+#: smallest normal (2.2e-308), so a 0 numerator still gives 0 and nothing else changes.
+TINY = 1e-300
+#: Slack when counting whole steps in a float ratio, ceil(span / width − slack): the rounding
+#: of an exact ratio (2.0000000000000004 bins) must not add a step.
+COUNT_SLACK = 1e-9
+#: Two unit vectors within this of parallel (1 − |a·b|, or |a × b|) are treated as parallel:
+#: a view along ±z has no horizontal frame axis; a receiver opposite the view gets no light.
+PARALLEL_SLACK = 1e-12
+#: A footprint trapezoid whose shorter half-width is below this fraction of the longer is a
+#: box (its CDF's 1/(4ab) would lose every digit).
+BOX_RATIO = 1e-12
+#: A point lies on an extruded shape's flat cap when its height is within this fraction of
+#: the shape's size of the cap.
+CAP_REL = 1e-9
+#: Siddon's entry point is nudged this fraction of a pixel into the grid, so the first pixel
+#: is the one the ray enters, not its neighbour across the boundary.
+SIDDON_NUDGE = 1e-12
+#: The width of a single bin covering a zero range span, relative to (1 + |centre|).
+SPAN_FLOOR = 1e-12
 
 # -- BRDFs ----------------------------------------------------------------------------------
 

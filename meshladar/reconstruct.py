@@ -36,6 +36,7 @@ from ._validate import (check_choice, check_count, check_real, check_sinogram, c
 from .errors import MeshladarWarning, ParameterError
 from .sinogram import Sinogram
 from .precision import UNIFORM_RTOL as _UNIFORM_RTOL
+from .precision import COUNT_SLACK
 
 __all__ = ["Image", "fbp", "fourier_filter", "log_radiance", "clip_radiance", "resample_uniform",
            "FILTERS", "INTERPOLATIONS", "LOG_FLOOR", "PAPER_CLIP"]
@@ -172,7 +173,7 @@ def resample_uniform(sino: Sinogram, n_bins=None) -> Sinogram:
     edges = sino.bin_edges
     span = edges[-1] - edges[0]
     if n_bins is None:
-        n_bins = int(math.ceil(span / np.min(np.diff(edges)) - 1e-9))
+        n_bins = int(math.ceil(span / np.min(np.diff(edges)) - COUNT_SLACK))
     n_bins = check_count("n_bins", n_bins)
     check_size("n_bins", float(n_bins) * sino.n_views, 8 * 3,
                f"{sino.n_views} views x {n_bins} bins", "use fewer bins")

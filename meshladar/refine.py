@@ -2,7 +2,8 @@
 its estimated relative L2 error meets ``tol``.
 
 It sits above the mesh model's entry point (:func:`meshladar.raytrace.simulate_mesh`), which
-it calls once per refinement; it knows nothing of rays or Embree.
+it calls once per refinement, and below :func:`meshladar.simulate`, which dispatches ``tol``
+here; it knows nothing of rays or Embree.
 """
 
 from __future__ import annotations
@@ -14,8 +15,9 @@ import warnings
 import numpy as np
 
 from .errors import MeshladarWarning, ParameterError
-from .raytrace import simulate_mesh
+from .raytrace.model import simulate_mesh
 from .sinogram import Sinogram
+from .precision import TINY
 
 __all__ = ["simulate_tol", "TOL_MAX_RAYS"]
 
@@ -87,7 +89,7 @@ def simulate_tol(scene, ladar, tol, normals, footprint, max_rays, kwargs):
                 if d1 > 0 and d0 > 0:
                     order = float(np.clip(math.log2(d0 / d1), *_ORDER_BOUNDS))
             factor = 2.0 ** -order / (1.0 - 2.0 ** -order)
-            est = d1 / max(np.linalg.norm(last[-1]), 1e-300) * factor
+            est = d1 / max(np.linalg.norm(last[-1]), TINY) * factor
             runs[-1]["error_estimate"] = est
             if best is not None and est >= best[0]:
                 tips = [t for t, use in (("footprint=True", not footprint),

@@ -18,7 +18,7 @@ import numpy as np
 
 from .errors import MeshladarError
 
-__all__ = ["RunFolder", "RunFolderError", "job_digest"]
+__all__ = ["RunFolder", "RunFolderError", "job_digest", "array_digest"]
 
 
 class RunFolderError(MeshladarError, ValueError):
@@ -28,6 +28,11 @@ class RunFolderError(MeshladarError, ValueError):
 def job_digest(job: dict) -> str:
     """A stable hash of a job description (JSON with sorted keys)."""
     return hashlib.sha256(json.dumps(job, sort_keys=True, default=str).encode()).hexdigest()
+
+
+def array_digest(a) -> str:
+    """The SHA-256 of one array's bytes (a job description's record of its large inputs)."""
+    return hashlib.sha256(np.ascontiguousarray(a).tobytes()).hexdigest()
 
 
 def _array_digest(arrays: dict) -> str:
@@ -64,7 +69,7 @@ class RunFolder:
     def _start(self):
         """Clean temporaries and check (or write) the manifest, holding the lock."""
         from . import __version__
-        from .io import write_text_atomic
+        from .results import write_text_atomic
 
         # temporaries of writes cut short by a kill: never under a final name, removed here
         # (only while holding the lock, so never another run's in-flight files)
@@ -109,7 +114,7 @@ class RunFolder:
 
     def _foreign_chunks(self):
         """How many readable chunk files in the folder were written for another job."""
-        from .io import ResultFileError, load_result
+        from .results import ResultFileError, load_result
 
         count = 0
         for name in os.listdir(self.path):
@@ -143,7 +148,7 @@ class RunFolder:
         """Chunk i's arrays, or None when it is missing, unreadable, fails its checksum, was
         written for another chunk or job, or (with ``shapes``, name → expected shape) has
         arrays of other shapes: such a chunk is recomputed, never used."""
-        from .io import ResultFileError, load_result
+        from .results import ResultFileError, load_result
 
         f = self._file(i)
         if not os.path.exists(f):
@@ -161,7 +166,7 @@ class RunFolder:
         return arrays
 
     def save(self, i, arrays: dict):
-        from .io import save_result
+        from .results import save_result
 
         arrays = {k: np.asarray(v) for k, v in arrays.items()}
         save_result(self._file(i), arrays, {"job": self.digest, "chunk": int(i),

@@ -34,6 +34,7 @@ from .brdf import SandfordRobertson
 from .errors import EnergyConservationWarning, MeshladarWarning, ParameterError
 from .ladar import Ladar
 from .reconstruct import fbp
+from .precision import TINY
 
 __all__ = ["PHANTOMS", "COATINGS", "SETTINGS", "faceting_study", "convergence_orders",
            "study_scene"]
@@ -108,15 +109,35 @@ def _errors(values, ref, ref_image, ladar, size):
 
 def faceting_study(setting="quick", *, phantoms=None, coatings=None, progress=False,
                    executor=None, run_dir=None):
-    """Run the sweep; returns a dict with ``rows`` (one dict per point), ``setting`` and
-    ``orders`` (see :func:`convergence_orders`), plus ``examples``: for each phantom and
-    coating, the analytic sinogram, a coarse flat mesh's (segments[1]) sinogram and both
-    FBP images, for the difference figures. ``executor`` (any concurrent.futures executor,
-    e.g. a Dask one) runs the mesh points' chunks of views; wall times then include it.
-    ``run_dir`` makes the study resumable: each finished point is kept there (checksummed),
-    and running the same study again computes only the missing points."""
+    """Run the faceting sweep against the analytic model.
+
+    Parameters
+    ----------
+    setting : {"quick", "full"}
+        The sweep's size (:data:`SETTINGS`): views, segments, rays per bin, pixel sizes and
+        image size. "quick" runs in about a minute on 2 cores.
+    phantoms, coatings : list of str, optional
+        Names from :data:`PHANTOMS` and :data:`COATINGS` (default all).
+    progress : bool
+        A progress bar over the study's points, on a terminal only.
+    executor : concurrent.futures.Executor, optional
+        Runs the mesh points' chunks of views (e.g. a Dask one); wall times include it.
+    run_dir : path, optional
+        Makes the study resumable: each finished point is kept there (checksummed), and
+        running the same study again computes only the missing points.
+
+    Returns
+    -------
+    dict
+        ``rows``: one dict per point (phantom, coating, series, segments, normals,
+        rays_per_bin, footprint, pixel_size, rel_l2, rel_max, image_rel_l2, seconds,
+        analytic_seconds);
+        ``setting``; ``orders`` (:func:`convergence_orders` of the rows); ``examples``: for
+        each phantom and coating, the analytic sinogram, a coarse flat mesh's
+        (``segments[1]``) sinogram and both FBP images, for the difference figures.
+    """
     from .forward import simulate
-    from ._progress import Progress
+    from .stream import Progress
 
     if setting not in SETTINGS:
         raise ParameterError(f"setting must be one of {tuple(SETTINGS)}; got {setting!r}")
@@ -224,13 +245,26 @@ def convergence_orders(rows, *, tail=3):
     less than 30%. ``break_at`` is the first resolution at which the error falls below half
     its coarsest value (where a series starts converging: large for flat facets on a narrow
     glint).
+
+    Parameters
+    ----------
+    rows : list of dict
+        :func:`faceting_study`'s ``rows``.
+    tail : int
+        Points in each fit.
+
+    Returns
+    -------
+    list of dict
+        One per phantom, coating and series: ``order``, ``break_at``, ``floor``,
+        ``finest_rel_l2``, ``coarsest_rel_l2``.
     """
     out = []
     keys = sorted({(r["phantom"], r["coating"], r["series"]) for r in rows})
     for ph, co, s in keys:
         sel = [r for r in rows if (r["phantom"], r["coating"], r["series"]) == (ph, co, s)]
         sel.sort(key=_resolution)
-        err = np.array([max(r["rel_l2"], 1e-300) for r in sel])
+        err = np.array([max(r["rel_l2"], TINY) for r in sel])
         x = np.log([_resolution(r) for r in sel])
         y = np.log(err)
         end = int(np.argmax(err <= 2.0 * err[-1])) + 1          # first point near the floor
@@ -247,14 +281,27 @@ def convergence_orders(rows, *, tail=3):
 
 
 def save_study(result, outdir):
-    """Write ``faceting.csv``, ``faceting.json`` and ``faceting_examples.npz`` atomically."""
+    """Write ``faceting.csv``, ``faceting.json`` and ``faceting_examples.npz`` atomically.
+
+    Parameters
+    ----------
+    result : dict
+        What :func:`faceting_study` returns.
+    outdir : path
+        The folder (created if missing); files already there are replaced atomically.
+
+    Returns
+    -------
+    list of str
+        The paths written.
+    """
     import csv
     import io as _io
     import json
     import os
 
     from ._validate import check_path
-    from .io import save_result, write_text_atomic
+    from .results import save_result, write_text_atomic
 
     if not isinstance(result, dict) or "rows" not in result:
         raise ParameterError(f"result must be what faceting_study returns (a dict with rows); "

@@ -2,8 +2,9 @@
 
 Installed as ``meshladar.phantoms``. Each phantom is a TOML file in this folder (``disk``,
 ``ellipse``, ``disk_pair``) holding its shapes, a coating per shape and the paper's ladar
-set-up; :func:`load` builds it. Coatings are named from ``materials.toml`` (or given inline
-as a table of SR parameters) and can be overridden per shape::
+set-up; :func:`load` builds it. Coatings are named from the engine's table
+(:data:`meshladar.materials.PAPER`, read from ``meshladar/materials.toml``), or given
+inline as a table of SR parameters, and can be overridden per shape::
 
     import meshladar as ml
     from meshladar import phantoms
@@ -34,31 +35,33 @@ from importlib import resources
 
 import numpy as np
 
-__all__ = ["Phantom", "load", "scene", "names", "materials", "MATERIALS_TOML"]
+from meshladar import materials as _materials
+from meshladar.ladar import MAX_VIEWS
 
-#: Path of the packaged coating table.
-MATERIALS_TOML = resources.files(__name__) / "materials.toml"
+__all__ = ["Phantom", "load", "scene", "names", "materials", "resolve", "is_phantom",
+           "MATERIALS_TOML"]
+
+#: Path of the packaged coating table (the engine's, :data:`meshladar.materials.TABLE_PATH`).
+MATERIALS_TOML = _materials.TABLE_PATH
 
 _SHAPE_FIELDS = {"disk": ("name", "kind", "center", "radius", "material"),
                  "ellipse": ("name", "kind", "center", "semi_axes", "angle_deg", "material")}
 _LADAR_FIELDS = ("bin_width", "n_bins", "bin_edges", "angles_deg")
 _SPEC_KEYS = ("name", "description", "ladar", "shape")
-#: Views a spec may ask for (a sinogram of 1e6 views x 512 bins is 4 GB).
-_MAX_VIEWS = 1e6
+#: Views a spec may ask for (the engine's limit).
+_MAX_VIEWS = MAX_VIEWS
 
 
 def materials():
-    """The packaged coating table as a read-only mapping of name to SandfordRobertson."""
-    from meshladar.materials import load_table
-
-    with resources.as_file(MATERIALS_TOML) as path:
-        return load_table(path)
+    """The packaged coating table as a read-only mapping of name to SandfordRobertson
+    (:data:`meshladar.materials.PAPER`)."""
+    return _materials.PAPER
 
 
 def names() -> list[str]:
     """Names of the packaged phantoms."""
     return sorted(p.name[:-5] for p in resources.files(__name__).iterdir()
-                  if p.name.endswith(".toml") and p.name != "materials.toml")
+                  if p.name.endswith(".toml"))
 
 
 @dataclass(frozen=True)
@@ -236,3 +239,66 @@ def scene(name_or_path, coating=None, **coatings):
     chosen = {n: m for n, m in chosen.items() if m is not None}
     return load(name_or_path, materials=chosen).scene if chosen else base.scene
 
+
+
+def is_phantom(source) -> bool:
+    """Whether ``source`` names a phantom (a packaged phantom's name or a ``.toml`` spec)
+    rather than a mesh file."""
+    return isinstance(source, str) and (source in names() or source.lower().endswith(".toml"))
+
+
+def resolve(source, *, material=None, coatings=None, materials_file=None, labels=None):
+    """A scene from what a user names: a packaged phantom, a phantom spec or a mesh file.
+
+    Dispatch is on what ``source`` is, not on a list of suffixes: a packaged phantom's name
+    or a ``.toml`` spec is a phantom; any other path goes to trimesh, which reads the format
+    from the file (archives, GLB/GLTF, 3MF, DAE... when their optional readers are
+    installed).
+
+    Parameters
+    ----------
+    source : str
+        A phantom's name (:func:`names`), a phantom spec (``.toml``) or a mesh file.
+    material : str, optional
+        A mesh's coating, by name (default "dark_gray"); a phantom's shapes have their own.
+    coatings : dict, optional
+        ``{part or shape name: coating name}`` overrides.
+    materials_file : path, optional
+        A TOML material table whose coatings join (and override by name) the packaged ones.
+    labels : dict, optional
+        What the caller calls ``source``, ``material`` and ``coatings`` in its errors (the
+        command line passes its flags).
+
+    Returns
+    -------
+    (Scene, Ladar or None, str)
+        The scene, the phantom's own ladar set-up (None for a mesh), and the model it is
+        simulated with by default ("analytic" for a phantom, "mesh" for a mesh).
+    """
+    from meshladar.errors import ParameterError
+    from meshladar.scene import Scene
+
+    lab = {"source": "source", "material": "material", "coatings": "coatings",
+           **(labels or {})}
+    table = dict(materials())
+    if materials_file is not None:
+        table.update(_materials.load_table(materials_file))
+
+    def coating(name, label):
+        if name not in table:
+            raise ParameterError(f"{label}: unknown coating {name!r}; known: {sorted(table)}")
+        return table[name]
+
+    if not is_phantom(source):
+        if not os.path.exists(source):
+            raise ParameterError(f"{lab['source']}: no such mesh file {source!r}, and not a "
+                                 f"known phantom ({', '.join(names())})")
+        base = coating("dark_gray" if material is None else material, lab["material"])
+        per_part = {k: coating(v, lab["coatings"]) for k, v in (coatings or {}).items()}
+        return Scene.from_mesh(source, base, materials=per_part or None), None, "mesh"
+    if material is not None:
+        raise ParameterError(f"{lab['material']} colours a mesh's parts; a phantom's shapes "
+                             f"have their own coatings: use {lab['coatings']} SHAPE=NAME")
+    overrides = {k: coating(v, lab["coatings"]) for k, v in (coatings or {}).items()}
+    ph = load(source, materials=overrides or None)
+    return ph.scene, ph.ladar, "analytic"

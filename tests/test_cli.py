@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import meshladar as ml
-from meshladar import io
+from meshladar import results
 
 SUBCOMMANDS = ["demo", "materials", "paper", "simulate", "reconstruct", "view", "study",
                "bench"]
@@ -25,7 +25,7 @@ def test_simulate_then_reconstruct_round_trip(tmp_path):
     res = _cli("simulate", "disk_pair", "-o", tmp_path / "pair.npz", "--coating",
                "small=aluminum", "--views", "36", check=True)
     assert "wrote" in res.stdout
-    sino, meta = io.load_sinogram(tmp_path / "pair.npz")
+    sino, meta = results.load_sinogram(tmp_path / "pair.npz")
     pair = ml.phantoms.load("disk_pair", materials={"small": "aluminum"})
     ladar = ml.Ladar(np.arange(36) * 10.0, pair.ladar.bin_edges)
     np.testing.assert_array_equal(sino.values, ml.simulate(pair.scene, ladar).values)
@@ -33,7 +33,7 @@ def test_simulate_then_reconstruct_round_trip(tmp_path):
     assert meta["params"]["model"] == "analytic" and meta["meshladar_version"]
     _cli("reconstruct", tmp_path / "pair.npz", "-o", tmp_path / "pair.png", "--size", "64",
          check=True)
-    img_arrays, img_meta = io.load_result(str(tmp_path / "pair.png")[:-4] + ".image.npz")
+    img_arrays, img_meta = results.load_result(str(tmp_path / "pair.png")[:-4] + ".image.npz")
     expected = ml.fbp(sino, size=64, extent=0.8)
     np.testing.assert_allclose(img_arrays["image"], expected.values, rtol=1e-12, atol=1e-12)
     assert (tmp_path / "pair.png").stat().st_size > 1000
@@ -52,7 +52,7 @@ def test_simulate_a_mesh_file_with_two_coatings(tmp_path):
     _cli("simulate", tmp_path / "obj.glb", "--material", "dark_gray", "--coating",
          "dome=aluminum", "--views", "12", "--bins", "128", "--bin-width", "0.01", "-o",
          tmp_path / "obj.npz", "--quiet", check=True)
-    sino, meta = io.load_sinogram(tmp_path / "obj.npz")
+    sino, meta = results.load_sinogram(tmp_path / "obj.npz")
     assert sino.shape == (12, 128) and sino.model == "mesh"
     names = {m["name"] for m in meta["scene"]["materials"]}
     assert names == {"dark_gray", "aluminum"}

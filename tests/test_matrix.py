@@ -202,19 +202,19 @@ def _truncated_stl(path):
 
 
 def _result(path):
-    ml.io.save_sinogram(path, _sino())
+    ml.results.save_sinogram(path, _sino())
 
 
 def _truncated_result(path):
     buf = path.with_suffix(".full")
-    ml.io.save_sinogram(buf, _sino())
+    ml.results.save_sinogram(buf, _sino())
     data = buf.read_bytes()
     path.write_bytes(data[: len(data) // 2])
     buf.unlink()
 
 
 def _image_result(path):
-    ml.io.save_result(path, {"image": np.ones((4, 4))}, {"kind": "image"})
+    ml.results.save_result(path, {"image": np.ones((4, 4))}, {"kind": "image"})
 
 
 def _deep_meta_result(path):
@@ -693,7 +693,7 @@ api("simulate.unknown-option", lambda: _mesh_sim(bogus=1), "error", "bogus")
 api("simulate.radiometry", lambda: _mesh_sim(radiometry="paper"), "error", "radiometry")
 api("simulate.segments", lambda: _mesh_sim(segments=64), "error", "segments")
 api("simulate.analytic-of-mesh", lambda: ml.simulate(_sphere(), _lad()), "error", "mesh")
-api("simulate.analytic.jobs", lambda: ml.simulate(_disk(), _lad(), jobs=1), "error", "jobs")
+api("simulate.analytic.jobs=0", lambda: ml.simulate(_disk(), _lad(), jobs=0), "error", "jobs")
 api("simulate.analytic.progress=str", lambda: ml.simulate(_disk(), _lad(), progress="yes"),
     "error", "progress")
 api("simulate.pixel.progress=None", lambda: ml.simulate(_disk(), _lad(), model="pixel",
@@ -807,7 +807,7 @@ api("simulate.mesh.tol-budget-warns", lambda: _mesh_sim(tol=0.01, max_rays=1), "
 def _refuses_many_jobs():
     """True when a huge ``jobs`` is refused before any process starts."""
     from meshladar.errors import ParameterError
-    from meshladar.raytrace import _executor
+    from meshladar.stream import _executor
 
     try:
         ex, own = _executor(10**5, None, 1.0)
@@ -985,7 +985,7 @@ api("resample_uniform.sino=str", lambda: _resample("x"), "error", "sino")
 
 
 def _load(path):
-    return ml.io.load_result(path)
+    return ml.results.load_result(path)
 
 
 _file_cases("io.load_result", "api", _load, ".npz",
@@ -994,32 +994,32 @@ _file_cases("io.load_result", "api", _load, ".npz",
              "no-meta": _no_meta_result, "pickled": _pickled_result,
              "deep-meta": _deep_meta_result}, ("bad.npz",))
 _file_cases("io.load_result", "api", _load, ".dat", {"result": _result}, (), expect="ok")
-api("io.load_result.None", lambda: ml.io.load_result(None), "error", ("path", "None"))
-api("io.load_result.int", lambda: ml.io.load_result(3), "error", ("path", "3"))
-_file_cases("io.load_sinogram", "api", lambda p: ml.io.load_sinogram(p), ".npz", {"image": _image_result, "no-meta": _no_meta_result}, ("bad.npz",))
-api("io.save_result.path=empty", lambda: ml.io.save_result("", {"a": np.ones(2)}, {}), "error",
+api("io.load_result.None", lambda: ml.results.load_result(None), "error", ("path", "None"))
+api("io.load_result.int", lambda: ml.results.load_result(3), "error", ("path", "3"))
+_file_cases("io.load_sinogram", "api", lambda p: ml.results.load_sinogram(p), ".npz", {"image": _image_result, "no-meta": _no_meta_result}, ("bad.npz",))
+api("io.save_result.path=empty", lambda: ml.results.save_result("", {"a": np.ones(2)}, {}), "error",
     "path")
-api("io.save_result.path=dir", lambda tmp: ml.io.save_result(tmp, {"a": np.ones(2)}, {}),
+api("io.save_result.path=dir", lambda tmp: ml.results.save_result(tmp, {"a": np.ones(2)}, {}),
     "error", ("path", "folder", "directory"))
-api("io.save_result.path=None", lambda: ml.io.save_result(None, {"a": np.ones(2)}, {}),
+api("io.save_result.path=None", lambda: ml.results.save_result(None, {"a": np.ones(2)}, {}),
     "error", "path")
-api("io.save_result.missing-folder", lambda tmp: ml.io.save_result(tmp / "a" / "r.npz",
+api("io.save_result.missing-folder", lambda tmp: ml.results.save_result(tmp / "a" / "r.npz",
                                                                    {"a": np.ones(2)}, {}),
     "ok")
-api("io.save_result.object-array", lambda tmp: ml.io.save_result(
+api("io.save_result.object-array", lambda tmp: ml.results.save_result(
     tmp / "r.npz", {"a": np.array([{}], dtype=object)}, {}), "error", ("a", "array"))
-api("io.save_result.meta-not-json", lambda tmp: ml.io.save_result(
+api("io.save_result.meta-not-json", lambda tmp: ml.results.save_result(
     tmp / "r.npz", {"a": np.ones(2)}, {"x": object()}), "error", "meta")
-api("io.save_result.reserved-key", lambda tmp: ml.io.save_result(
+api("io.save_result.reserved-key", lambda tmp: ml.results.save_result(
     tmp / "r.npz", {"__meta__": np.ones(2)}, {}), "error", "__meta__")
-api("io.save_result.arrays=str", lambda tmp: ml.io.save_result(tmp / "r.npz", "x", {}),
+api("io.save_result.arrays=str", lambda tmp: ml.results.save_result(tmp / "r.npz", "x", {}),
     "error", "arrays")
-api("io.save_result.meta=str", lambda tmp: ml.io.save_result(tmp / "r.npz", {}, "x"),
+api("io.save_result.meta=str", lambda tmp: ml.results.save_result(tmp / "r.npz", {}, "x"),
     "error", "meta")
-api("io.save_result.read-only", lambda tmp: ml.io.save_result(tmp / "ro" / "r.npz",
+api("io.save_result.read-only", lambda tmp: ml.results.save_result(tmp / "ro" / "r.npz",
                                                               {"a": np.ones(2)}, {}),
     "error", "/ro", setup=files({"ro": _read_only}), skip_root=True)
-api("io.save_sinogram.sino=str", lambda tmp: ml.io.save_sinogram(tmp / "r.npz", "x"), "error",
+api("io.save_sinogram.sino=str", lambda tmp: ml.results.save_sinogram(tmp / "r.npz", "x"), "error",
     "sino")
 
 # ------------------------------------------------------------------ coating tables
@@ -1308,12 +1308,12 @@ cli("simulate.--seed=huge", _MESH + ["--seed", "1" + "0" * 30], "ok", setup=_SPH
 # options that do not apply, or clash
 cli("simulate.--views+--angles-deg", _SIM + ["--angles-deg", "0,90"], "error",
     ("--views", "--angles-deg"))
-cli("simulate.analytic+--jobs", _SIM + ["--jobs", "2"], "error", "--jobs")
+cli("simulate.analytic+--jobs", _SIM + ["--jobs", "2"], "ok", check=_wrote("r.npz"))
 cli("simulate.analytic+--mode", _SIM + ["--mode", "3d"], "error", "--mode")
 cli("simulate.analytic+--pixel-size", _SIM + ["--pixel-size", "0.01"], "error",
     "--pixel-size")
-cli("simulate.analytic+--scheduler", _SIM + ["--scheduler", "tcp://x:1"], "error",
-    "--scheduler")
+cli("simulate.analytic+--scheduler", _SIM + ["--scheduler", "nonsense"], "error",
+    ("--scheduler", "scheduler"))
 cli("simulate.analytic+--view-vectors", _SIM[:-2] + ["--view-vectors", "10"], "error",
     ("--view-vectors", "view"))
 cli("simulate.mesh+--segments", _MESH + ["--segments", "64"], "error", "--segments",

@@ -3,7 +3,7 @@ old silhouette blow-up.
 
 "smooth" (interpolated vertex normals) and "exact" (the analytic sphere's normal) weigh each
 ray F(θs) cos θs · δA⊥ / cos θg, the Eq. 8 integrand over the facet area the ray stands for
-(``meshladar.raytrace._shading_factor``); "flat" weighs F(θg) δA⊥. References: the closed-form
+(``meshladar.raytrace.views._shading_factor``); "flat" weighs F(θg) δA⊥. References: the closed-form
 3-D sphere profile (Archimedes: a sphere has area 2πR per unit range, so
 P[k] = 2πR ∫_bin (F cos)(μ(r)) dr with μ = −r/R), computed here by graded Gauss-Legendre in θ
 and checked against adaptive quadrature in θ and in r; and, for meshes nobody here made,

@@ -95,3 +95,13 @@ def test_no_public_name_shadows_a_submodule():
     assert engine.trace is ml.trace
     with pytest.raises(ModuleNotFoundError):
         importlib.import_module("meshladar.trace")
+    # no submodule is shadowed by a public name, and none is named like the standard library
+    import pkgutil
+    import sys
+
+    for pkg in (ml, importlib.import_module("meshladar.raytrace")):
+        for mod in [m for m in pkgutil.iter_modules(pkg.__path__) if m.name != "__main__"]:
+            module = importlib.import_module(f"{pkg.__name__}.{mod.name}")
+            public = getattr(pkg, mod.name, module)
+            assert public is module, f"{pkg.__name__}.{mod.name} is not the module"
+            assert mod.name not in sys.stdlib_module_names, f"{mod.name} shadows the stdlib"

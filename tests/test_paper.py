@@ -7,7 +7,7 @@ import os
 import numpy as np
 import pytest
 
-from meshladar import io, paper
+from meshladar import paper, results
 
 
 @pytest.fixture(scope="module")
@@ -59,7 +59,7 @@ def test_figures_are_drawn_from_the_saved_result(tmp_path):
     from meshladar.viz import paper as vpaper
 
     path, metrics = vpaper.save_run(tmp_path, size=64)
-    arrays, meta = io.load_result(path)
+    arrays, meta = results.load_result(path)
     assert meta["metrics"] == metrics and meta["model"] == "analytic"
     assert arrays["image/disk_b0"].shape == (64, 64)
     paths = vpaper.draw(path, tmp_path / "figs", dpi=40)

@@ -10,12 +10,11 @@ import numpy as np
 import pytest
 
 import meshladar as ml
-from meshladar.materials import ALUMINUM, DARK_GRAY
 
 pytest.importorskip("distributed")
-from meshladar.parallel import dask_executor  # noqa: E402
+from meshladar.stream import dask_executor  # noqa: E402
 
-PAIR = ml.phantoms.scene("disk_pair", large=DARK_GRAY, small=ALUMINUM)
+from conftest import PAIR  # noqa: E402  (the shared disk pair)
 
 
 @pytest.fixture(scope="module")
@@ -43,6 +42,22 @@ def test_identical_results_on_every_executor(job):
             serial.values)
         hits = ml.trace(mesh, ladar, normals="smooth", executor=ex)
         np.testing.assert_array_equal(ml.weigh(hits).values, serial.values)
+
+
+@pytest.mark.parametrize("model", ["analytic", "pixel"])
+def test_every_model_runs_on_every_executor(model):
+    # the stream is shared by the forward models: chunks of views on threads, processes and
+    # Dask give the serial numbers bit for bit
+    ladar = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 4.0))
+    serial = ml.simulate(PAIR, ladar, model=model)
+    with ThreadPoolExecutor(2) as ex:
+        np.testing.assert_array_equal(ml.simulate(PAIR, ladar, model=model, executor=ex).values,
+                                      serial.values)
+    np.testing.assert_array_equal(ml.simulate(PAIR, ladar, model=model, jobs=2).values,
+                                  serial.values)
+    with dask_executor(workers=2) as ex:
+        np.testing.assert_array_equal(ml.simulate(PAIR, ladar, model=model, executor=ex).values,
+                                      serial.values)
 
 
 def test_a_killed_worker_does_not_change_the_answer(job):

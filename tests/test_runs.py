@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 import meshladar as ml
-from meshladar.materials import ALUMINUM, DARK_GRAY
+from meshladar.materials import ALUMINUM
 from meshladar.runs import RunFolderError
 
-PAIR = ml.phantoms.scene("disk_pair", large=DARK_GRAY, small=ALUMINUM)
+from conftest import PAIR  # noqa: E402  (the shared disk pair)
 
 
 def test_resume_reuses_verified_chunks_and_recomputes_corrupt_ones(tmp_path):
@@ -34,7 +34,7 @@ def test_resume_reuses_verified_chunks_and_recomputes_corrupt_ones(tmp_path):
     np.testing.assert_array_equal(again.values, ref.values)
     assert all((run / c).stat().st_mtime_ns == t for c, t in mtimes.items())
     # a chunk whose numbers were altered fails its checksum and is recomputed too
-    from meshladar.io import load_result, save_result
+    from meshladar.results import load_result, save_result
 
     arrays, meta = load_result(run / chunks[2])
     arrays["values"] = arrays["values"] * 2
@@ -100,7 +100,7 @@ def test_sigkill_mid_run_then_resume_gives_the_uninterrupted_result(tmp_path):
     from meshladar.runs import RunFolder
 
     for f in run.glob("chunk_*.npz"):
-        from meshladar.io import load_result
+        from meshladar.results import load_result
 
         load_result(f)                                           # every final file reads
     code, err = _finish(_start(run, tmp_path / "b.npy"))
@@ -129,3 +129,35 @@ def test_ctrl_c_stops_cleanly_and_says_how_to_resume(tmp_path):
     assert kept >= 3
     assert subprocess.run(cmd, capture_output=True, timeout=600).returncode == 0
     assert out.exists()
+
+
+@pytest.mark.parametrize("model, options", [("analytic", {}), ("pixel", {"pixel_size": 0.02})])
+def test_every_model_resumes_from_its_run_folder(model, options, tmp_path):
+    # the stream is shared: the analytic and pixel models resume exactly as the mesh model
+    ladar = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 3.0))        # 120 views
+    ref = ml.simulate(PAIR, ladar, model=model, **options)
+    run = tmp_path / "run"
+    first = ml.simulate(PAIR, ladar, model=model, run_dir=run, **options)
+    np.testing.assert_array_equal(first.values, ref.values)
+    chunks = sorted(p.name for p in run.glob("chunk_*.npz"))
+    assert len(chunks) >= 2
+    (run / chunks[0]).write_bytes(b"garbage")
+    kept = {c: (run / c).stat().st_mtime_ns for c in chunks[1:]}
+    again = ml.simulate(PAIR, ladar, model=model, run_dir=run, **options)
+    np.testing.assert_array_equal(again.values, ref.values)
+    assert all((run / c).stat().st_mtime_ns == t for c, t in kept.items())
+    # another coating is another job: refused, never mixed
+    other = ml.phantoms.scene("disk_pair", large=ALUMINUM, small=ALUMINUM)
+    with pytest.raises(RunFolderError, match="different job"):
+        ml.simulate(other, ladar, model=model, run_dir=run, **options)
+
+
+def test_a_lone_disk_resumes_its_distinct_profiles(tmp_path):
+    # a centred disk is one profile whatever the views: the run folder holds that one
+    disk = ml.Scene([ml.Disk((0.0, 0.0), 0.8, ALUMINUM)])
+    ladar = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 1.0))
+    sino = ml.simulate(disk, ladar, run_dir=tmp_path)
+    assert len(list(tmp_path.glob("chunk_*.npz"))) == 1
+    np.testing.assert_array_equal(sino.values, ml.simulate(disk, ladar).values)
+    np.testing.assert_array_equal(ml.simulate(disk, ladar, run_dir=tmp_path).values,
+                                  sino.values)

@@ -15,7 +15,7 @@ from meshladar import mesh as mlmesh
 from meshladar.errors import GeometryError, ParameterError
 from meshladar.materials import ALUMINUM, DARK_GRAY, lambertian
 
-PAIR = ml.phantoms.scene("disk_pair", large=DARK_GRAY, small=ALUMINUM)
+from conftest import PAIR  # noqa: E402  (the shared disk pair)
 
 
 def _rel(a, b):
@@ -147,8 +147,7 @@ def test_reweighing_cached_hits_equals_a_fresh_simulate():
     np.testing.assert_array_equal(ml.weigh(hits).values,
                                   ml.simulate(mesh, ladar, model="mesh",
                                               normals="smooth").values)
-    swapped = ml.Scene([ml.Disk((-0.3, 0.0), 0.4, ALUMINUM),
-                        ml.Disk((0.4, 0.0), 0.3, DARK_GRAY)]).tessellate(256)
+    swapped = ml.phantoms.scene("disk_pair", large=ALUMINUM, small=DARK_GRAY).tessellate(256)
     np.testing.assert_allclose(ml.weigh(hits, [ALUMINUM, DARK_GRAY]).values,
                                ml.simulate(swapped, ladar, model="mesh",
                                            normals="smooth").values, rtol=1e-12, atol=0)
@@ -228,8 +227,7 @@ def test_jobs_and_jitter_are_reproducible():
     assert not np.array_equal(a.values, c.values)
     # jittered and regular grids estimate the same totals; with a Lambertian coating every
     # ray carries ρd/π·δs, so the totals differ by at most the rays at the two silhouettes
-    lamb = ml.Scene([ml.Disk((-0.3, 0.0), 0.4, lambertian(0.5)),
-                     ml.Disk((0.4, 0.0), 0.3, lambertian(0.5))]).tessellate(256)
+    lamb = ml.phantoms.scene("disk_pair", lambertian(0.5)).tessellate(256)
     jit = ml.simulate(lamb, ladar, model="mesh", seed=5)
     reg = ml.simulate(lamb, ladar, model="mesh")
     spacing = reg.info["ray_spacing"]
@@ -353,7 +351,7 @@ def test_fused_flat_path_equals_trace_and_weigh(back_faces):
     mats = [DARK_GRAY, ALUMINUM, ml.SandfordRobertson(0.02, 0.3, 1 - 1e-12, 1e-4),
             ml.materials.glint(0.05), lambertian(0.3)]
     for m in mats:
-        scene = ml.Scene([ml.Disk((-0.3, 0.0), 0.4, m), ml.Disk((0.4, 0.0), 0.3, ALUMINUM)])
+        scene = ml.phantoms.scene("disk_pair", large=m, small=ALUMINUM)
         mesh = scene.tessellate(300)
         ladar = ml.Ladar.paper(angles_deg=[0.0, 77.0, 201.0])
         fast = ml.simulate(mesh, ladar, model="mesh", back_faces=back_faces)
@@ -397,7 +395,7 @@ def test_sphere_part_via_public_api_and_progress_is_quiet_off_a_terminal(capsys)
 
 
 def test_alternating_meshes_reuse_their_embree_scenes():
-    from meshladar.raytrace import _EMBREE_CACHE_SIZE, _embree_scene, _Geometry
+    from meshladar.raytrace.embree import _EMBREE_CACHE_SIZE, _embree_scene, _Geometry
 
     scenes = [ml.Scene.from_parts([ml.mesh.sphere((0, 0, 0), 0.5 + 0.1 * k, 0, subdivisions=1)],
                                   [DARK_GRAY]) for k in range(_EMBREE_CACHE_SIZE + 1)]

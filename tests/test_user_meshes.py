@@ -14,7 +14,7 @@ import pytest
 import trimesh
 
 import meshladar as ml
-from meshladar import io
+from meshladar import results
 from meshladar.cli import main
 from meshladar.errors import MeshladarWarning, ParameterError
 from meshladar.materials import DARK_GRAY, lambertian
@@ -291,7 +291,7 @@ def test_fbp_refuses_3d_views_and_preprocessing_keeps_them():
 def test_result_files_get_the_users_normal_permissions(tmp_path):
     mask = os.umask(0o022)
     try:
-        io.save_result(tmp_path / "r.npz", {"a": np.zeros(2)}, {})
+        results.save_result(tmp_path / "r.npz", {"a": np.zeros(2)}, {})
         mode = stat.S_IMODE(os.stat(tmp_path / "r.npz").st_mode)
     finally:
         os.umask(mask)
@@ -316,19 +316,19 @@ def test_cli_simulates_a_mesh_in_3d_and_says_how(tmp_path, capsys):
                  "rays cast", "4 views x 512 bins", "range 0 on the plane through the origin",
                  "paper radiometry"):
         assert word in out
-    sino, meta = io.load_sinogram(tmp_path / "two.npz")
+    sino, meta = results.load_sinogram(tmp_path / "two.npz")
     assert sino.info["mode"] == "3d" and sino.values.any()
     assert meta["params"]["model"] == "mesh"
     # view vectors, slice mode at a height, a receiver, a seed: the API's options
     code, out, _ = _run(capsys, "simulate", path, "-o", tmp_path / "vv.npz",
                         "--view-vectors", "6", "--bins", "64", "--seed", "4", "--quiet")
-    sino, _ = io.load_sinogram(tmp_path / "vv.npz")
+    sino, _ = results.load_sinogram(tmp_path / "vv.npz")
     assert code == 0 and sino.shape == (6, 64) and sino.info["seed"] == 4
     np.testing.assert_allclose(sino.view_vectors, ml.mesh.fibonacci_sphere(6), atol=1e-15)
     code, out, _ = _run(capsys, "simulate", path, "-o", tmp_path / "sl.npz", "--mode", "slice",
                         "--z0", "0.2", "--angles-deg", "0", "--ray-spacing", "0.001")
     assert code == 0 and "slice mode" in out and "z0 = 0.2" in out
-    sino, _ = io.load_sinogram(tmp_path / "sl.npz")
+    sino, _ = results.load_sinogram(tmp_path / "sl.npz")
     assert sino.info["ray_spacing"] == 0.001
     code, _, _ = _run(capsys, "simulate", path, "-o", tmp_path / "bi.npz", "--angles-deg", "0",
                       "--receiver", "1,0.2,0", "--quiet")
@@ -343,7 +343,7 @@ def test_cli_uses_a_users_own_coating_table(tmp_path, capsys):
     code, _, err = _run(capsys, "simulate", box, "--materials", table, "--material", "chalk",
                         "--angles-deg", "0", "-o", tmp_path / "b.npz", "--quiet")
     assert code == 0, err
-    sino, meta = io.load_sinogram(tmp_path / "b.npz")
+    sino, meta = results.load_sinogram(tmp_path / "b.npz")
     assert meta["scene"]["materials"][0]["name"] == "chalk"
     # a 0.2 x 0.2 face toward the ladar, Lambertian 0.9: 0.9/π · 0.04 (stratified: 1e-3)
     assert sino.total()[0] == pytest.approx(0.9 / math.pi * 0.04, rel=1e-3)
@@ -393,7 +393,7 @@ def test_no_command_overwrites_its_input(tmp_path, capsys):
                           "16")
     assert code == 0 and npz.read_bytes() == sim and box.read_bytes() == before
     assert (tmp_path / "mine.image.npz").exists() and "mine.image.npz" in out
-    image, meta = io.load_result(tmp_path / "mine.image.npz")
+    image, meta = results.load_result(tmp_path / "mine.image.npz")
     assert image["image"].shape == (16, 16) and meta["kind"] == "image"
     # an input named like the image data is refused, naming both paths
     img_in = tmp_path / "x.image.npz"

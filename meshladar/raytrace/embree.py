@@ -1,0 +1,129 @@
+"""Embree scenes of a mesh scene's triangles: the geometry a worker traces, built at unit
+size, and a per-process cache of scenes keyed by content."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+
+from ..errors import MeshladarWarning, ParameterError
+from ..precision import FAR_RATIO as _FAR_RATIO
+from ..precision import SCENE_RADIUS_RANGE
+from ..scene import Scene
+
+
+class _Geometry:
+    """Everything a worker needs to trace: float64 originals and float32 shifted copies."""
+
+    def __init__(self, scene: Scene, normals: str):
+        parts = scene.parts
+        offs = np.cumsum([0] + [len(p.vertices) for p in parts])
+        self.vertices = np.concatenate([p.vertices for p in parts])
+        self.faces = np.concatenate([p.faces + o for p, o in zip(parts, offs[:-1])])
+        self.material = np.concatenate([p.material for p in parts]).astype(np.int32)
+        self.part_of = np.concatenate([np.full(len(p.faces), i, np.int32)
+                                       for i, p in enumerate(parts)])
+        lo, hi = self.vertices.min(axis=0), self.vertices.max(axis=0)
+        self.center = 0.5 * (lo + hi)
+        shifted = self.vertices - self.center
+        self.radius = float(np.max(np.linalg.norm(shifted, axis=1)))
+        self.shifted = np.ascontiguousarray(shifted)
+        _check_scale(self.radius, np.abs(self.center).max())
+        # Embree's geometry is divided by this power of two (exact in float32): unit size
+        self.scale = 2.0 ** math.ceil(math.log2(self.radius)) if self.radius > 0 else 1.0
+        self.faces32 = np.ascontiguousarray(self.faces, dtype=np.int32)
+        tri = self.vertices[self.faces]
+        cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        self.face_normals = cross / np.linalg.norm(cross, axis=1)[:, None]
+        # each face's plane n·p = d in shifted coordinates (float64), for exact hit distances
+        self.plane_d = np.einsum("ij,ij->i", self.face_normals, shifted[self.faces[:, 0]])
+        self.hull = scene.hull_points() - self.center
+        self.normals = normals
+        self.corner = None
+        if normals == "smooth":
+            from ..mesh import corner_normals
+
+            self.corner = np.concatenate([corner_normals(p) for p in parts])
+        self.exact = [p.exact_normal for p in parts]
+        if normals == "exact" and any(e is None for e in self.exact):
+            missing = [p.name for p in parts if p.exact_normal is None]
+            raise ParameterError(f"normals='exact' needs parts tessellated from analytic shapes; "
+                                 f"{missing[0]!r} has no exact normal (use 'flat' or 'smooth')")
+        self.key = _digest(self.vertices, self.faces)
+
+
+
+def _check_scale(radius, offset):
+    lo, hi = SCENE_RADIUS_RANGE
+    if not lo <= radius <= hi:
+        raise ParameterError(f"scene: the mesh's bounding radius is {radius:.3g} scene units; "
+                             f"the mesh engine traces sizes in [{lo:g}, {hi:g}]: rescale the "
+                             "mesh (e.g. to metres or millimetres)")
+    if offset > _FAR_RATIO * radius:
+        warnings.warn(f"the mesh (radius {radius:.3g}) lies {offset:.3g} from the origin: ranges "
+                      f"carry only ~{offset * 2.0 ** -53 / radius:.1g} of its size in float64; "
+                      "move it near the origin", MeshladarWarning, stacklevel=4)
+
+
+
+def _digest(v, f):
+    import hashlib
+
+    h = hashlib.sha1(v.tobytes())
+    h.update(f.tobytes())
+    return h.hexdigest()
+
+
+#: Embree scenes built in this process, most recent last, keyed by the geometry's content:
+#: alternating between a few meshes (a study, a comparison) reuses each one's BVH.
+_EMBREE_CACHE: dict = {}
+
+
+_EMBREE_CACHE_SIZE = 4
+
+
+
+def _embree_scene(geo: _Geometry):
+    """The Embree scene of the geometry, built once per process (cached by content)."""
+    scene = _EMBREE_CACHE.pop(geo.key, None)
+    if scene is None:
+        try:
+            from embreex import rtcore_scene
+            from embreex.mesh_construction import TriangleMesh
+        except ImportError as exc:  # pragma: no cover - embreex is a core dependency
+            raise ImportError("the mesh model needs embreex: pip install embreex") from exc
+        # robust mode: watertight ray-triangle tests, so a ray through a shared edge (the
+        # diagonal of a prism's side quad crosses the mid-height slice plane) cannot slip
+        # between the two triangles
+        raw = rtcore_scene.EmbreeScene(robust=True)
+        TriangleMesh(raw, np.ascontiguousarray(geo.shifted / geo.scale, dtype=np.float32),
+                     geo.faces32)
+        scene = _Embree(raw, geo.scale)
+        while len(_EMBREE_CACHE) >= _EMBREE_CACHE_SIZE:
+            del _EMBREE_CACHE[next(iter(_EMBREE_CACHE))]       # the least recently used
+    _EMBREE_CACHE[geo.key] = scene
+    return scene
+
+
+
+class _Embree:
+    """An Embree scene built at unit size: origins in, distances out, in the scene's own
+    shifted units. Embree misses outright below ~1e-14 and above ~1e13 scene units, so the
+    geometry is divided by a power of two near its radius; a power of two scales float32
+    exactly, so origins and distances are the same numbers as an unscaled cast."""
+
+    def __init__(self, scene, scale: float):
+        self.scene = scene
+        self.scale = scale
+        self.inverse = np.float32(1.0 / scale)
+
+    def run(self, origins, directions, **kwargs):
+        if self.scale != 1.0:
+            origins = origins * self.inverse
+        res = self.scene.run(origins, directions, **kwargs)
+        if self.scale != 1.0 and isinstance(res, dict):
+            with np.errstate(over="ignore"):        # a miss's far distance: inf
+                res["tfar"] = res["tfar"] * np.float32(self.scale)
+        return res

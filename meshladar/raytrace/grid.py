@@ -1,0 +1,193 @@
+"""Ray grids: per view, orthographic rays over the target's projected hull, regular or
+stratified, and the defaults that size them."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._validate import check_choice, check_real
+from ..errors import ParameterError
+from ..precision import ORIGIN_MARGIN as _ORIGIN_MARGIN
+from ..precision import PARALLEL_SLACK
+
+
+MODES = ("slice", "3d")
+
+
+#: "regular": rays at cell centres (a midpoint rule: second order on smooth slice profiles,
+#: but it aliases on thin walls seen edge-on); "stratified": one ray per cell at a seeded
+#: random offset (unbiased areas; see _stratified_offsets).
+SAMPLINGS = ("regular", "stratified")
+
+
+#: Default rays per range-bin width: slice rows are cheap, 3-D grids are rays_per_bin² per
+#: bin area.
+_DEFAULT_RAYS_PER_BIN = {"slice": 8.0, "3d": 1.0}
+
+
+#: A view's rays are held in memory together (origins and Embree's results, ~50 bytes a
+#: ray): beyond this many a run is refused before it allocates (about 2.5 GB).
+MAX_RAYS_PER_VIEW = 5e7
+
+
+#: By default a 3-D grid has at least this many rays across the target's diameter.
+_MIN_RAYS_ACROSS = 128
+
+
+
+def _dot(a, w):
+    """Row-wise a·w for (k, 3) a, without BLAS (whose threads would oversubscribe the cores
+    that worker processes already share)."""
+    return a[:, 0] * w[0] + a[:, 1] * w[1] + a[:, 2] * w[2]
+
+
+
+def _frame(w):
+    """(u, v) completing w to a right-handed orthonormal frame; v = z for horizontal w."""
+    z = np.array([0.0, 0.0, 1.0])
+    u = np.cross(z, w)
+    n = np.linalg.norm(u)
+    if n < PARALLEL_SLACK:                                         # looking along ±z
+        u = np.array([1.0, 0.0, 0.0])
+    else:
+        u = u / n
+    return u, np.cross(w, u)
+
+
+
+def _ray_grid(geo, w, mode, spacing, z0_shifted, rng):
+    """Origins (n, 3) float32 in shifted coordinates, the start distance L, and (u, v).
+
+    Built component by component in float32 (Embree's precision): o = s u + t v + L w.
+    """
+    u, v = _frame(w)
+    L = (1.0 + _ORIGIN_MARGIN) * geo.radius + spacing
+    su = geo.hull @ u
+    s_lo, s_hi = su.min() - spacing, su.max() + spacing
+    ns = max(1, int(math.ceil((s_hi - s_lo) / spacing)))
+    s = s_lo + (np.arange(ns) + 0.5) * spacing
+    if mode == "slice":
+        t = np.array([z0_shifted])
+    else:
+        tv = geo.hull @ v
+        t_lo, t_hi = tv.min() - spacing, tv.max() + spacing
+        nt = max(1, int(math.ceil((t_hi - t_lo) / spacing)))
+        t = t_lo + (np.arange(nt) + 0.5) * spacing
+    o = np.empty((s.size, t.size, 3), dtype=np.float32)
+    if rng is None:
+        s32, t32 = s.astype(np.float32), t.astype(np.float32)
+        for k in range(3):
+            np.add.outer(s32 * np.float32(u[k]), t32 * np.float32(v[k]), out=o[:, :, k])
+    elif mode == "slice":
+        S = s[:, None] + rng.uniform(-0.5, 0.5, (s.size, t.size)) * spacing
+        T = np.broadcast_to(t[None, :], S.shape)
+        for k in range(3):
+            o[:, :, k] = S * u[k] + T * v[k]
+    else:
+        # in float32 (Embree's precision, as the regular grid): S = s + δ·du, T = t + δ·dv
+        du, dv = _stratified_offsets(s.size, t.size, rng)
+        sp = np.float32(spacing)
+        S = du
+        S *= sp
+        S += s.astype(np.float32)[:, None]
+        T = dv
+        T *= sp
+        T += t.astype(np.float32)[None, :]
+        for k in range(3):
+            np.multiply(S, np.float32(u[k]), out=o[:, :, k])
+            o[:, :, k] += T * np.float32(v[k])
+    for k in range(3):
+        o[:, :, k] += np.float32(L * w[k])
+    return o.reshape(-1, 3), L, u, v
+
+
+#: The golden ratio's conjugate: the Kronecker sequence frac(x + kα) is the most evenly
+#: spread sequence of its kind (its gaps take at most three lengths).
+_GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
+
+
+
+def _stratified_offsets(ns, nt, rng):
+    """Offsets in [−½, ½) of each ray from its cell centre, (ns, nt) along u and along v.
+
+    Every cell holds one ray uniformly distributed in it, so the expected number of rays
+    hitting any region is its projected area over δ²: the estimate of every area (a thin
+    wall seen edge-on, a sub-ray facet) is unbiased. Unlike independent jitter, the offsets
+    are correlated along rows and columns to cancel most of the noise at straight edges:
+    along each row (a run of cells across u at one v) the v offsets follow a randomly
+    shifted Kronecker sequence frac(η + iα), and along each column the u offsets
+    frac(ξ + jα), so the fraction of a row's rays that fall on one side of an edge parallel
+    to it is right to O(log n / n) instead of O(n^-½). Each cell's offset stays uniform
+    (η and ξ are uniform and independent), hence the expectation is exact.
+    """
+    xi = rng.uniform(0.0, 1.0, ns).astype(np.float32)     # one shift per column (along v)
+    eta = rng.uniform(0.0, 1.0, nt).astype(np.float32)    # one shift per row (along u)
+    # frac(kα) − ½ in float64, then float32 (offsets within a cell: float32 is plenty)
+    ku = (np.mod(np.arange(nt) * _GOLDEN, 1.0) - 0.5).astype(np.float32)
+    kv = (np.mod(np.arange(ns) * _GOLDEN, 1.0) - 0.5).astype(np.float32)
+    du = np.add.outer(xi, ku)                             # frac(ξ + jα) − ½ ∈ [−½, 1½) ...
+    du -= du >= np.float32(0.5)                           # ... wrapped into [−½, ½)
+    dv = np.add.outer(kv, eta)
+    dv -= dv >= np.float32(0.5)
+    return du, dv
+
+
+
+def _sampling(mode, sampling, seed):
+    """(sampling, seed used): stratified by default in 3-D (and whenever a seed is given),
+    regular in slice mode; seed 0 unless given."""
+    if sampling is None:
+        sampling = "stratified" if (mode == "3d" or seed is not None) else "regular"
+    check_choice("sampling", sampling, SAMPLINGS)
+    if sampling == "regular":
+        if seed is not None:
+            raise ParameterError(f"seed jitters the rays, so it needs sampling='stratified'; "
+                                 f"got seed={seed!r} with sampling='regular'")
+        return sampling, None
+    if seed is None:
+        return sampling, 0
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ParameterError(f"seed must be a non-negative integer; got {seed!r}")
+    return sampling, int(seed)
+
+
+
+def _spacing(ladar, mode, ray_spacing, rays_per_bin, radius):
+    if ray_spacing is not None and rays_per_bin is not None:
+        raise ParameterError("give ray_spacing or rays_per_bin, not both")
+    if ray_spacing is not None:
+        return check_real("ray_spacing", ray_spacing, low=0.0, low_open=True)
+    if rays_per_bin is not None:
+        rpb = check_real("rays_per_bin", rays_per_bin, low=0.0, low_open=True)
+        return float(np.min(np.diff(ladar.bin_edges))) / rpb
+    spacing = float(np.min(np.diff(ladar.bin_edges))) / _DEFAULT_RAYS_PER_BIN[mode]
+    if mode == "3d":
+        # bins much wider than the target (a target far off the rotation axis, seen from
+        # all around) must not leave it with a handful of rays
+        spacing = min(spacing, 2.0 * radius / _MIN_RAYS_ACROSS)
+    return spacing
+
+
+
+def _largest_grid(geo, vectors, mode, spacing):
+    """The most rays any one view's grid holds (the grids of _ray_grid: the projected
+    hull's extent along u, and along v in 3-D, plus a spacing each side)."""
+    largest = 0.0
+    for start in range(0, len(vectors), 256):               # bounded memory
+        frames = [_frame(w) for w in vectors[start:start + 256]]
+        u = np.array([f[0] for f in frames])
+        su = geo.hull @ u.T
+        n = np.ceil((np.ptp(su, axis=0) + 2 * spacing) / spacing)
+        if mode == "3d":
+            tv = geo.hull @ np.array([f[1] for f in frames]).T
+            n = n * np.ceil((np.ptp(tv, axis=0) + 2 * spacing) / spacing)
+        largest = max(largest, float(n.max()))
+    return largest
+
+
+
+def _estimate_rays(geo, ladar, mode, spacing):
+    extent = 2 * geo.radius / spacing + 2
+    return ladar.n_views * (extent if mode == "slice" else extent * extent)

@@ -1,0 +1,106 @@
+"""The mesh stage's records: :class:`Hits` (every view's first hits, geometry only) and
+one view's hits as a worker returns them."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import NamedTuple
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..ladar import Ladar
+
+__all__ = ["Hits"]
+
+
+class _ViewHits(NamedTuple):
+    """One view's hits, as a worker returns them (ranges relative to the scene centre's
+    plane); the fields are :class:`Hits`' per-hit arrays for that view, plus its ``rays``
+    cast and ``back_face_hits`` counts."""
+
+    range: np.ndarray
+    cos_theta: np.ndarray
+    sin_theta: np.ndarray
+    material: np.ndarray
+    spread: np.ndarray
+    rays: int
+    back_face_hits: int
+    bistatic: np.ndarray | None
+    weight_factor: np.ndarray | None
+    curve: np.ndarray | None
+
+
+
+@dataclass(frozen=True, eq=False)
+class Hits:
+    """First hits of every ray, per view: geometry only, no materials' BRDFs.
+
+    Per hit, k hits in all (arrays frozen read-only in place):
+
+    ==================  ===========  =====================================================
+    field               shape        meaning
+    ==================  ===========  =====================================================
+    ``view``            (k,) int32   index into the ladar's views
+    ``range``           (k,)         range of the hit, −p·w (monostatic), scene units
+    ``cos_theta``       (k,)         cos θ of the chosen normal against w; −1 marks a
+                                     back-face hit that ``back_faces="ignore"`` blocks
+    ``sin_theta``       (k,)         sin θ ≥ 0
+    ``material``        (k,) int32   index into ``materials``
+    ``spread``          (k, 4)       footprint: range half-widths along the two
+                                     transverse axes (the second 0 in slice mode), and
+                                     the hit facet's own range interval relative to the
+                                     hit (≤ 0, ≥ 0)
+    ``bistatic``        (k, 4)       with a bistatic receiver: cos θr, sin θr, cos α,
+                                     sin α (cos θr = −1 where the receiver is occluded);
+                                     else None
+    ``weight_factor``   (k,)         shading normals' area factor (cos θs/cos θg), or None
+    ``curve``           (k, 4)       exact-normal slice footprints on curved surfaces, or
+                                     None
+    ==================  ===========  =====================================================
+
+    Per view (n_views,): ``rays`` cast and ``back_face_hits``. Scalars: ``area`` (δA⊥ per
+    ray), ``mode``, ``normals``; ``ladar`` and ``materials`` as traced; ``info`` the run's
+    parameters.
+    """
+
+    view: np.ndarray
+    range: np.ndarray
+    cos_theta: np.ndarray
+    sin_theta: np.ndarray
+    material: np.ndarray
+    spread: np.ndarray
+    rays: np.ndarray
+    back_face_hits: np.ndarray
+    area: float
+    mode: str
+    normals: str
+    ladar: Ladar
+    materials: tuple
+    bistatic: np.ndarray = None
+    weight_factor: np.ndarray = None
+    curve: np.ndarray = None
+    info: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        k = self.view.shape[0] if np.ndim(self.view) == 1 else -1
+        expected = {"view": (k,), "range": (k,), "cos_theta": (k,), "sin_theta": (k,),
+                    "material": (k,), "spread": (k, 4), "bistatic": (k, 4),
+                    "weight_factor": (k,), "curve": (k, 4)}
+        for name, shape in expected.items():
+            a = getattr(self, name)
+            if a is None and name in ("bistatic", "weight_factor", "curve"):
+                continue
+            a = np.asarray(a)
+            if k < 0 or a.shape != shape:
+                raise ParameterError(f"Hits.{name} must have shape {shape}; got {a.shape}")
+            a.flags.writeable = False        # frozen in place: hits can be gigabytes
+            object.__setattr__(self, name, a)
+        for name in ("rays", "back_face_hits"):
+            a = np.asarray(getattr(self, name))
+            a.flags.writeable = False
+            object.__setattr__(self, name, a)
+
+    @property
+    def size(self) -> int:
+        return self.view.size

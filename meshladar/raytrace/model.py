@@ -1,0 +1,394 @@
+"""The mesh model's entry points: :func:`trace` (hits, geometry only), :func:`simulate_mesh`
+(trace and weigh in one streaming pass), and the viewer's queries :func:`first_hits` and
+:func:`occluded`. Each builds the geometry once and hands :mod:`meshladar.stream` a
+per-chunk job; weighing is :mod:`meshladar.weighing`'s."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from .._validate import check_choice, check_flag, check_real, unit_vectors
+from ..errors import MeshladarWarning, ParameterError
+from ..ladar import Ladar
+from ..precision import MIN_COS_FACET as _MIN_COS_FACET
+from ..precision import RECEIVER_LIFT as _RECEIVER_LIFT
+from ..scene import Scene
+from ..sinogram import Sinogram
+from ..weighing import _bin_one, _material_table, _sinogram
+from .embree import _embree_scene, _Geometry
+from .grid import (MAX_RAYS_PER_VIEW, MODES, _estimate_rays, _largest_grid, _ray_grid,
+                   _sampling, _spacing)
+from .hits import Hits
+from .views import BACK_FACES, NORMALS, _range_offset, _trace_view
+from ..precision import PARALLEL_SLACK
+
+__all__ = ["trace", "simulate_mesh", "first_hits", "occluded"]
+
+
+#: Views per task: enough work to amortise a task, few enough to balance two cores.
+_VIEWS_PER_TASK = 8
+
+
+
+def _options(scene, ladar, mode, normals, back_faces, z0):
+    if not isinstance(scene, Scene):
+        raise ParameterError(f"scene must be a meshladar.Scene; got {type(scene).__name__}")
+    if not isinstance(ladar, Ladar):
+        raise ParameterError(f"ladar must be a meshladar.Ladar; got {type(ladar).__name__}")
+    check_choice("normals", normals, NORMALS)
+    check_choice("back_faces", back_faces, BACK_FACES)
+    if mode is None:
+        # a mesh is a 3-D target; only a scene tessellated from the 2-D analytic shapes (the
+        # paper's phantoms) is an extruded slice by default
+        mode = "slice" if (scene.shapes and ladar.planar) else "3d"
+    check_choice("mode", mode, MODES)
+    if mode == "slice" and not ladar.planar:
+        raise ParameterError("mode='slice' needs views about the z axis (angles_deg); the "
+                             "ladar has view vectors off the x-y plane: use mode='3d'")
+    if not scene.is_mesh:
+        raise ParameterError("the mesh model needs a mesh scene: Scene.from_mesh(...) or "
+                             "scene.tessellate(segments=...)")
+    if z0 is not None and mode == "3d":
+        raise ParameterError(f"z0 places the slice plane of mode='slice'; got z0={z0!r} "
+                             "with mode='3d'")
+    geo = _Geometry(scene, normals)
+    if z0 is None:
+        z0 = float(geo.center[2])
+    z0 = check_real("z0", z0)
+    if mode == "slice":
+        lo, hi = float(geo.vertices[:, 2].min()), float(geo.vertices[:, 2].max())
+        if not lo <= z0 <= hi:
+            warnings.warn(f"z0={z0:.6g} lies outside the target's heights [{lo:.6g}, "
+                          f"{hi:.6g}]: the slice returns nothing", MeshladarWarning,
+                          stacklevel=5)
+    return mode, geo, z0
+
+
+
+def _job(geo, views, ladar_vectors, mode, spacing, z0_shifted, back_faces, seed, edges,
+         weigh_with, receivers=None):
+    """Trace a chunk of views (the stream's per-chunk job): the views' hits (``weigh_with``
+    None), or their binned values, rays and back-face hits as a dict of arrays."""
+    scene = _embree_scene(geo)
+    if (weigh_with is not None and geo.normals == "flat" and receivers is None
+            and not weigh_with[1]
+            and all(m.kernel_params is not None for m in weigh_with[0])):
+        return _fast_job(geo, scene, ladar_vectors, views, mode, spacing, z0_shifted,
+                         back_faces, seed, edges, weigh_with[0], weigh_with[2])
+    out = []
+    for i in views:
+        w = ladar_vectors[i]
+        w_r = None if receivers is None else receivers[i]
+        rng = None if seed is None else np.random.default_rng([seed, int(i)])
+        out.append(_trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng,
+                               w_r, footprint=weigh_with is None or weigh_with[1]))
+    if weigh_with is None:
+        return out
+    materials, footprint, area = weigh_with
+    vals = np.zeros((len(views), len(edges) - 1))
+    for j, (i, h) in enumerate(zip(views, out)):
+        r = h.range + _range_offset(geo.center, ladar_vectors[i],
+                                 None if receivers is None else receivers[i])
+        vals[j] = _bin_one(r, h.cos_theta, h.sin_theta, h.material, h.spread, materials, edges,
+                           area, footprint, h.bistatic, h.weight_factor, h.curve)
+    return {"values": vals, "rays": np.array([h.rays for h in out], np.int64),
+            "backs": np.array([h.back_face_hits for h in out], np.int64)}
+
+
+
+def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces, seed, edges,
+              materials, area):
+    """The common case fused in one compiled loop per view: monostatic, flat normals,
+    point binning (no per-hit arrays beyond Embree's own output)."""
+    from .. import _kernels
+
+    params = _material_table(materials)
+    vals = np.zeros((len(views), len(edges) - 1))
+    rays, backs = [], []
+    for j, i in enumerate(views):
+        w = vectors[i]
+        rng = None if seed is None else np.random.default_rng([seed, int(i)])
+        o, L, _, _ = _ray_grid(geo, w, mode, spacing, z0_shifted, rng)
+        res = scene.run(o, np.ascontiguousarray((-w)[None, :], dtype=np.float32), output=1)
+        start = _range_offset(geo.center, w, None)
+        backs.append(_kernels.bin_flat_hits(res["primID"], res["tfar"], o, geo.plane_d,
+                                            geo.face_normals, geo.material, params, w,
+                                            start, edges, area, back_faces == "ignore",
+                                            vals[j]))
+        rays.append(len(o))
+    return {"values": vals, "rays": np.array(rays, np.int64), "backs": np.array(backs, np.int64)}
+
+
+
+def first_hits(scene, view_vector, *, ray_spacing):
+    """First hits of one view's 3-D ray grid: (points (k, 3) float64 in scene coordinates,
+    global face index (k,), range (k,)). Faces are numbered part by part in scene order;
+    for the viewer (which faces are lit, where hits land)."""
+    if not isinstance(scene, Scene) or not scene.is_mesh:
+        raise ParameterError("first_hits needs a mesh scene")
+    w = unit_vectors("view_vector", view_vector)
+    if w.shape != (3,):
+        raise ParameterError(f"view_vector must be one (3,) direction; got shape {w.shape}")
+    spacing = check_real("ray_spacing", ray_spacing, low=0.0, low_open=True)
+    geo = _Geometry(scene, "flat")
+    emb = _embree_scene(geo)
+    o, L, _, _ = _ray_grid(geo, w, "3d", spacing, 0.0, None)
+    res = emb.run(o, np.ascontiguousarray((-w)[None, :], dtype=np.float32), output=1)
+    hit = res["primID"] >= 0
+    t = res["tfar"][hit].astype(np.float64)
+    p = o[hit].astype(np.float64) - t[:, None] * w + geo.center
+    return p, res["primID"][hit].astype(np.int64), -(p @ w)
+
+
+
+def occluded(scene, points, direction, *, lift=_RECEIVER_LIFT):
+    """Whether the ray from each point (k, 3) toward ``direction`` meets the scene; points
+    are lifted by ``lift`` × the scene's radius along the direction first (so a point on a
+    face does not hit that face)."""
+    if not isinstance(scene, Scene) or not scene.is_mesh:
+        raise ParameterError("occluded needs a mesh scene")
+    d = unit_vectors("direction", direction)
+    geo = _Geometry(scene, "flat")
+    emb = _embree_scene(geo)
+    p = np.asarray(points, dtype=np.float64) - geo.center + lift * geo.radius * d
+    return emb.run(np.ascontiguousarray(p, dtype=np.float32),
+                   np.ascontiguousarray(d[None, :], dtype=np.float32), query="OCCLUDED") != -1
+
+
+
+def _receivers(receiver, ladar, mode, footprint):
+    if receiver is None:
+        return None
+    if np.shape(receiver) not in ((3,), (ladar.n_views, 3)):
+        raise ParameterError(f"receiver must be a direction (3,) or one per view "
+                             f"({ladar.n_views}, 3); got shape {np.shape(receiver)}")
+    r = np.broadcast_to(unit_vectors("receiver", receiver), (ladar.n_views, 3))
+    if np.any(np.einsum("ij,ij->i", r, ladar.view_vectors) <= -1 + PARALLEL_SLACK):
+        k = int(np.argmax(np.einsum("ij,ij->i", r, ladar.view_vectors) <= -1 + PARALLEL_SLACK))
+        raise ParameterError(f"receiver must not point exactly opposite the view (no light "
+                             f"returns); got receiver {r[k].tolist()} for view {k}, "
+                             f"{ladar.view_vectors[k].tolist()}")
+    if mode == "slice" and np.any(r[:, 2] != 0):
+        raise ParameterError("in slice mode the receiver must lie in the x-y plane")
+    if footprint:
+        raise ParameterError("footprint binning is monostatic only; use footprint=False with "
+                             "a bistatic receiver")
+    return np.ascontiguousarray(r)
+
+
+
+def _job_description(geo, scene, ladar, mode, spacing, z0, back_faces, seed, weigh_with,
+                     receivers):
+    """Everything that determines a streaming run's result, for its run folder."""
+    from ..runs import array_digest as digest
+
+    mats, footprint, area = weigh_with
+    return {"kind": "simulate_mesh", "geometry": geo.key, "normals": geo.normals,
+            "materials": [repr(m) for m in mats], "view_vectors": digest(ladar.view_vectors),
+            "bin_edges": digest(ladar.bin_edges), "n_views": ladar.n_views, "mode": mode,
+            "ray_spacing": spacing, "z0": z0, "back_faces": back_faces, "seed": seed,
+            "footprint": bool(footprint), "receivers": None if receivers is None
+            else digest(receivers)}
+
+
+
+def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_bin, seed,
+         jobs, executor, progress, weigh_with, receiver=None, run_dir=None, sampling=None):
+    mode, geo, z0 = _options(scene, ladar, mode, normals, back_faces, z0)
+    sampling, seed = _sampling(mode, sampling, seed)
+    if weigh_with is not None:
+        check_flag("footprint", weigh_with[1])
+    receivers = _receivers(receiver, ladar, mode, bool(weigh_with and weigh_with[1]))
+    spacing = _spacing(ladar, mode, ray_spacing, rays_per_bin, geo.radius)
+    per_view = _largest_grid(geo, ladar.view_vectors, mode, spacing)
+    if per_view > MAX_RAYS_PER_VIEW:
+        raise ParameterError(
+            f"one view would cast about {per_view:.3g} rays (ray spacing {spacing:.3g} over "
+            f"a target {2 * geo.radius:.3g} across), more than the {MAX_RAYS_PER_VIEW:.0e} a "
+            "view may hold in memory; give a larger ray_spacing (or fewer rays_per_bin, "
+            "or wider bins)")
+    area = spacing if mode == "slice" else spacing * spacing
+    if weigh_with is not None:
+        weigh_with = (weigh_with[0], weigh_with[1], area)
+    z0_shifted = z0 - float(geo.center[2])
+    check_flag("progress", progress)
+    from ..stream import run_chunks
+
+    job = None
+    if run_dir is not None:
+        job = _job_description(geo, scene, ladar, mode, spacing, z0, back_faces, seed,
+                               weigh_with, receivers)
+    results = run_chunks(
+        _job, geo, ladar.n_views, chunk_size=_VIEWS_PER_TASK,
+        args=(np.asarray(ladar.view_vectors, dtype=np.float64), mode, spacing, z0_shifted,
+              back_faces, seed, ladar.bin_edges, weigh_with, receivers),
+        jobs=jobs, executor=executor, progress=progress, unit="views",
+        work=_estimate_rays(geo, ladar, mode, spacing), run_dir=run_dir, job=job,
+        arrays={"values": (ladar.n_bins,), "rays": (), "backs": ()})
+    run = {"mode": mode, "ray_spacing": spacing, "z0": z0, "sampling": sampling, "seed": seed,
+           "receiver": receivers}
+    return geo, run, area, results
+
+
+def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0=None,
+          ray_spacing=None, rays_per_bin=None, sampling=None, seed=None, receiver=None,
+          jobs=None, executor=None, progress=False) -> Hits:
+    """Trace every view once and keep the hits (geometry only): re-weigh them with
+    :func:`weigh` for any coating without tracing again.
+
+    Parameters
+    ----------
+    scene : Scene
+        A mesh scene (``Scene.from_mesh``, ``Scene.tessellate``).
+    ladar : Ladar
+        Views (angles about z, or view vectors) and range bins.
+    mode : {"slice", "3d"}, optional
+        "3d" (default for meshes): a square grid of rays per view over the whole target.
+        "slice": one row of rays in the plane z = z0, values per unit height (the default
+        only for scenes tessellated from the 2-D analytic shapes, the paper's phantoms).
+    normals : {"flat", "smooth", "exact"}
+    back_faces : {"two-sided", "ignore"}
+    z0 : float, optional
+        Slice plane, slice mode only (default the scene's mid-height).
+    ray_spacing, rays_per_bin : float, optional
+        Ray spacing, or rays per range-bin width (default 8 in slice mode; in 3-D 1, and
+        at least 128 rays across the target's diameter).
+    sampling : {"stratified", "regular"}, optional
+        Where each ray sits in its cell of the grid. "stratified" (default in 3-D, and
+        whenever ``seed`` is given): at a seeded random offset, so every area (a thin wall
+        seen edge-on) is estimated without bias; "regular" (default in slice mode): at the
+        cell centre, a midpoint rule that can alias on thin walls.
+    seed : int, optional
+        Seed of the stratified offsets (default 0), reproducible per view.
+    receiver : (3,) or (n_views, 3) array_like, optional
+        Bistatic receiver direction(s) from the scene (default: collocated, monostatic).
+        Each hit then casts one occlusion ray toward the receiver, F is the bistatic SR
+        BRDF, and range is half the two-way path, r = −p·(w + w_r)/2.
+    jobs : int, optional
+        Worker processes (embreex holds the GIL during casts, so threads do not help).
+        Default: 1 for small jobs, all cores from 4e6 rays.
+    executor : concurrent.futures.Executor, optional
+        Any executor (e.g. a Dask client's) to run chunks of views on; overrides ``jobs``.
+    progress : bool
+        A progress bar on a terminal.
+
+    Returns
+    -------
+    Hits
+        k hits in all: per hit ``view`` (k,), ``range`` (k,), ``cos_theta`` and
+        ``sin_theta`` (k,), ``material`` (k,), ``spread`` (k, 4), and ``bistatic``,
+        ``weight_factor``, ``curve`` where they apply; per view ``rays`` and
+        ``back_face_hits`` (n_views,); ``area`` (δA⊥ per ray), ``mode``, ``normals``,
+        ``ladar``, ``materials`` and ``info`` (see :class:`Hits`). Arrays are read-only.
+
+    Examples
+    --------
+    >>> hits = ml.trace(scene, ladar)                        # geometry only, traced once
+    >>> for m in (ml.materials.DARK_GRAY, ml.materials.ALUMINUM):
+    ...     sino = ml.weigh(hits, [m])                        # any coating, no new trace
+    """
+    geo, run, area, results = _run(
+        scene, ladar, mode=mode, normals=normals, back_faces=back_faces, z0=z0,
+        ray_spacing=ray_spacing, rays_per_bin=rays_per_bin, seed=seed, jobs=jobs,
+        executor=executor, progress=progress, weigh_with=None, receiver=receiver,
+        sampling=sampling)
+    receivers = run["receiver"]
+    per_view = [h for res in results for h in res]
+    vectors = ladar.view_vectors
+    offsets = [_range_offset(geo.center, vectors[i],
+                             None if receivers is None else receivers[i])
+               for i in range(ladar.n_views)]
+    view = np.concatenate([np.full(h.range.size, i, np.int32) for i, h in enumerate(per_view)])
+
+    def joined(field):
+        parts = [getattr(h, field) for h in per_view]
+        return None if parts[0] is None else np.concatenate(parts)
+
+    return Hits(view=view,
+                range=np.concatenate([h.range + offsets[i] for i, h in enumerate(per_view)]),
+                cos_theta=joined("cos_theta"), sin_theta=joined("sin_theta"),
+                material=joined("material"), spread=joined("spread"),
+                rays=np.array([h.rays for h in per_view]),
+                back_face_hits=np.array([h.back_face_hits for h in per_view]),
+                area=area, mode=run["mode"], normals=normals, ladar=ladar,
+                materials=tuple(scene.materials), bistatic=joined("bistatic"),
+                weight_factor=joined("weight_factor"), curve=joined("curve"), info=run)
+
+
+
+def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-sided", z0=None,
+                  ray_spacing=None, rays_per_bin=None, footprint=None, sampling=None,
+                  seed=None, receiver=None, jobs=None, executor=None, progress=False,
+                  run_dir=None) -> Sinogram:
+    """Trace and weigh in one streaming pass.
+
+    Each chunk of views is binned and its hits dropped, so memory stays bounded whatever
+    the number of views and rays. An analytic scene is tessellated first (1024 segments
+    per shape, see :meth:`Scene.tessellate`). The accuracy knob (``tol``, ``max_rays``) is
+    :func:`meshladar.simulate`'s, which refines runs of this function
+    (:mod:`meshladar.refine`).
+
+    Parameters
+    ----------
+    scene, ladar : Scene, Ladar
+    mode, normals, back_faces, z0, ray_spacing, rays_per_bin, sampling, seed, receiver,
+    jobs, executor, progress
+        As :func:`trace` (default normals "flat").
+    footprint : bool, optional
+        As :func:`meshladar.weigh` (default False: point binning).
+    run_dir : path, optional
+        Makes the run resumable and loss-free (:mod:`meshladar.runs`): each finished chunk
+        of views is saved there atomically with a checksum, and running the same job again
+        reuses them and computes only what is missing.
+
+    Returns
+    -------
+    Sinogram
+        ``values`` (n_views, n_bins) bin integrals of F(θ) cos θ dA (paper Eq. 8), model
+        "mesh"; ``info`` records radiometry, mode, normals, footprint, ray_spacing,
+        sampling, seed, rays cast and back-face hits per view.
+    """
+    normals = "flat" if normals is None else normals
+    footprint = False if footprint is None else footprint
+    if isinstance(scene, Scene) and not scene.is_mesh:
+        scene = scene.tessellate(1024)
+    geo, run, area, results = _run(
+        scene, ladar, mode=mode, normals=normals, back_faces=back_faces, z0=z0,
+        ray_spacing=ray_spacing, rays_per_bin=rays_per_bin, seed=seed, jobs=jobs,
+        executor=executor, progress=progress, weigh_with=(tuple(scene.materials), footprint),
+        receiver=receiver, run_dir=run_dir, sampling=sampling)
+    from ..stream import joined
+
+    vals, rays, back = (joined(results, k) for k in ("values", "rays", "backs"))
+    if not np.any(vals):
+        _warn_empty(scene, ladar, run, back_faces, int(back.sum()), geo.face_normals)
+    return _sinogram(vals, ladar, ladar.bin_edges, run, normals, footprint, rays, back)
+
+
+
+def _warn_empty(scene, ladar, run, back_faces, back_hits, face_normals):
+    """One line saying that a run returned nothing, and the likely reasons."""
+    lo, hi = scene.range_span(ladar.view_vectors)
+    reasons = []
+    if hi < ladar.bin_edges[0] or lo >= ladar.bin_edges[-1]:
+        reasons.append(f"the target spans ranges [{lo:.6g}, {hi:.6g}], outside the bins "
+                       f"[{ladar.bin_edges[0]:.6g}, {ladar.bin_edges[-1]:.6g}]")
+    if run["mode"] == "slice":
+        reasons.append(f"the slice z0 = {run['z0']:.6g} may miss the target (mode='3d' "
+                       "returns all of it)")
+    if back_faces == "ignore" and any(scene.report.get("inverted", [])):
+        reasons.append("the scene has inverted parts and back_faces='ignore' blanks them")
+    elif back_faces == "ignore" and back_hits:
+        reasons.append(f"{back_hits} rays hit the back of a face, which back_faces='ignore' "
+                       "blanks (an open mesh seen from behind?)")
+    facing = max(float(np.max(np.abs(face_normals @ w))) for w in ladar.view_vectors)
+    if facing < _MIN_COS_FACET:
+        reasons.append("every face is edge-on to every view (a flat target seen in its own "
+                       "plane): views off that plane (view_vectors) see it")
+    elif not reasons:
+        reasons.append(f"ray_spacing {run['ray_spacing']:.4g} may be too coarse for the "
+                       "target")
+    warnings.warn("the sinogram is all zeros: no return reached any bin; " +
+                  "; ".join(reasons), MeshladarWarning, stacklevel=4)

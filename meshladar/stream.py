@@ -1,0 +1,339 @@
+"""Streaming runs, the same for every forward model: chunks of views, executors (processes,
+threads, Dask), retries, run folders and progress.
+
+A forward model hands :func:`run_chunks` a per-chunk job ``fn(payload, items, *args)``: a
+module-level function (so processes and Dask can pickle it), the data every chunk needs
+(``payload``: a mesh's geometry, a scene's shapes), and the number of items (views, or a lone
+disk's distinct profiles). It knows nothing of meshes or shapes. Chunks run here, on a pool
+of ``jobs`` worker processes, or on any ``concurrent.futures`` executor (a
+``ThreadPoolExecutor``, or a Dask cluster's, see :func:`dask_executor`)::
+
+    from meshladar.stream import dask_executor
+    with dask_executor("tcp://scheduler:8786") as ex:      # an existing cluster
+        sino = ml.simulate(scene, ladar, model="mesh", executor=ex)
+    with dask_executor(workers=2) as ex:     # a local cluster on loopback, TLS-secured
+        ...
+
+With a Dask executor the payload is scattered to every worker once (not sent with each
+task); a chunk whose worker was lost is sent again, with the payload itself, up to
+``_MAX_RETRIES`` times. Workers need meshladar installed in the same version.
+
+With ``run_dir`` a run is resumable and loss-free (:mod:`meshladar.runs`): each finished
+chunk is saved atomically with a checksum, and the same job run again computes only what is
+missing. A progress bar (``progress=True``) is drawn on a terminal only.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+import time
+
+import numpy as np
+
+from .errors import ParameterError
+
+__all__ = ["run_chunks", "joined", "dask_executor", "Progress"]
+
+#: Worker processes allowed per core (``jobs``): more only compete for the cores.
+_MAX_JOBS_PER_CORE = 4
+#: Resubmissions of a chunk whose task was cancelled (a worker lost with its data).
+_MAX_RETRIES = 3
+#: Estimated work (rays) from which ``jobs=None`` starts a process per core.
+_PARALLEL_FROM = 4e6
+
+
+class Progress:
+    """``Progress(total, unit, enabled=True)``; ``update(n)``; ``close()``.
+
+    Draws to stderr only when enabled and stderr is a TTY (quiet in pipes, logs and CI).
+    """
+
+    def __init__(self, total, unit="items", *, enabled=True, stream=None):
+        self.stream = sys.stderr if stream is None else stream
+        self.enabled = bool(enabled) and hasattr(self.stream, "isatty") and self.stream.isatty()
+        self.total, self.unit, self.done = int(total), unit, 0
+        self.start = time.monotonic()
+        self._last = 0.0
+
+    def update(self, n=1):
+        self.done += n
+        if not self.enabled:
+            return
+        now = time.monotonic()
+        if now - self._last < 0.1 and self.done < self.total:
+            return
+        self._last = now
+        frac = self.done / max(self.total, 1)
+        bar = "#" * int(30 * frac)
+        rate = self.done / max(now - self.start, 1e-9)
+        eta = (self.total - self.done) / rate if rate > 0 else 0.0
+        self.stream.write(f"\r[{bar:<30}] {self.done}/{self.total} {self.unit} "
+                          f"{rate:.1f}/s eta {eta:.0f}s")
+        self.stream.flush()
+
+    def close(self):
+        if self.enabled:
+            self.stream.write("\n")
+            self.stream.flush()
+
+
+def _chunks(n, size):
+    return [np.arange(i, min(i + size, n)) for i in range(0, n, size)]
+
+
+def _executor(jobs, executor, work):
+    """The executor to use: the user's, or worker processes when the work (rays) pays for
+    them (embreex holds the GIL, so threads would not help it)."""
+    if executor is not None:
+        if not callable(getattr(executor, "submit", None)):
+            raise ParameterError(f"executor must be a concurrent.futures.Executor (with "
+                                 f"submit); got {type(executor).__name__}")
+        return executor, False
+    if jobs is None:
+        jobs = 1 if work < _PARALLEL_FROM else (os.cpu_count() or 1)
+    cores = os.cpu_count() or 1
+    if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)) or jobs < 1:
+        raise ParameterError(f"jobs must be an integer >= 1; got {jobs!r}")
+    if jobs > _MAX_JOBS_PER_CORE * cores:
+        raise ParameterError(f"jobs must be at most {_MAX_JOBS_PER_CORE * cores} "
+                             f"({_MAX_JOBS_PER_CORE} per core on this {cores}-core machine: "
+                             f"more processes only compete for the cores); got {jobs}")
+    if jobs == 1:
+        return None, False
+    from concurrent.futures import ProcessPoolExecutor
+
+    return ProcessPoolExecutor(max_workers=int(jobs), initializer=_worker_init), True
+
+
+#: True in a worker process of this module's pools (see :func:`in_worker`).
+_IN_WORKER = False
+
+
+def in_worker() -> bool:
+    """Whether this process is a worker forked by :func:`run_chunks`' own pool. A job runs
+    its compiled kernels serially there: the workers already share the cores, and a child
+    forked after an OpenMP kernel ran in its parent aborts when it starts one itself."""
+    return _IN_WORKER
+
+
+def _worker_init():
+    """In a worker process: die with the parent (Linux), so a killed run leaves no
+    workers behind; elsewhere a no-op."""
+    import signal
+
+    global _IN_WORKER
+    _IN_WORKER = True
+
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        try:
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(1, int(signal.SIGKILL))           # PR_SET_PDEATHSIG
+        except (OSError, AttributeError):
+            pass
+    signal.signal(signal.SIGINT, signal.SIG_IGN)        # the parent handles Ctrl-C
+
+
+def _scatter(ex, payload):
+    """On a Dask executor, the payload shipped once to every worker (a future standing for
+    it); elsewhere the payload itself. A worker lost while it is being scattered is retried
+    like a lost chunk; if scattering keeps failing, every task carries the payload."""
+    scatter = getattr(getattr(ex, "_client", None), "scatter", None)
+    if scatter is None:
+        return payload
+    from concurrent.futures import CancelledError
+
+    for _ in range(_MAX_RETRIES):
+        try:
+            return scatter(payload, broadcast=True, hash=False)
+        except (OSError, TimeoutError, CancelledError):   # distributed's CommClosedError is
+            continue                                      # an OSError
+    return payload
+
+
+def check_run_dir(run_dir):
+    """``run_dir`` as a path, refused early (before any work) if it cannot be a folder."""
+    if not isinstance(run_dir, (str, os.PathLike)) or not os.fspath(run_dir):
+        raise ParameterError(f"run_dir must be a folder path; got {run_dir!r}")
+    if os.path.exists(run_dir) and not os.path.isdir(run_dir):
+        raise ParameterError(f"run_dir must be a folder; {os.fspath(run_dir)!r} is a file")
+    return run_dir
+
+
+def run_chunks(fn, payload, n_items, *, chunk_size, args=(), jobs=None, executor=None,
+               progress=False, unit="views", work=0.0, run_dir=None, job=None, arrays=None):
+    """Run ``fn(payload, items, *args)`` over chunks of ``range(n_items)``.
+
+    Parameters
+    ----------
+    fn : callable
+        The per-chunk job, a module-level function; ``items`` is an int array of the
+        chunk's item indices.
+    payload : object
+        What every chunk needs, sent to each worker once where the executor allows.
+    n_items, chunk_size : int
+        Items in all and per chunk.
+    args : tuple
+        Further arguments of every call (sent with each task).
+    jobs : int, optional
+        Worker processes; default 1 unless ``work`` is at least 4e6 (then one per core).
+    executor : concurrent.futures.Executor, optional
+        Any executor; overrides ``jobs``.
+    progress : bool
+        A progress bar over the items, on a terminal only.
+    unit : str
+        The items' name in the bar.
+    work : float
+        Estimated work (rays) for the default ``jobs``.
+    run_dir : path, optional
+        A run folder for resumable runs; needs ``job`` and ``arrays``.
+    job : dict
+        Everything that determines the result (its digest names the folder's job).
+    arrays : dict
+        ``{name: trailing shape}`` of the arrays each chunk returns as a dict, each with
+        one row per item: ``{"values": (n_bins,)}``.
+
+    Returns
+    -------
+    list
+        Each chunk's result, in chunk order.
+    """
+    from ._validate import check_flag
+
+    check_flag("progress", progress)
+    if run_dir is not None:
+        check_run_dir(run_dir)
+    chunks = _chunks(int(n_items), int(chunk_size))
+    ex, own = _executor(jobs, executor, work)
+    bar = Progress(n_items, unit, enabled=progress)
+    results = [None] * len(chunks)
+    folder = None
+    try:
+        if run_dir is not None:
+            from .runs import RunFolder
+
+            folder = RunFolder(run_dir, dict(job, views_per_chunk=int(chunk_size)),
+                               len(chunks))
+            for k, items in enumerate(chunks):
+                saved = folder.load(k, {name: (len(items),) + tuple(shape)
+                                        for name, shape in arrays.items()})
+                if saved is not None:
+                    results[k] = saved
+                    bar.update(len(items))
+
+        def keep(k, res):
+            results[k] = res
+            if folder is not None:
+                folder.save(k, res)
+            bar.update(len(chunks[k]))
+
+        todo = [k for k in range(len(chunks)) if results[k] is None]
+        if ex is None or not todo:
+            for k in todo:
+                keep(k, fn(payload, chunks[k], *args))
+        else:
+            shared = _scatter(ex, payload)
+            futures = {ex.submit(fn, shared, chunks[k], *args): k for k in todo}
+            from concurrent.futures import CancelledError, as_completed
+
+            retries = {}
+            while futures:
+                for f in as_completed(list(futures)):
+                    k = futures.pop(f)
+                    try:
+                        keep(k, f.result())
+                    except CancelledError:
+                        # a lost worker took the scattered payload (or the task) with it:
+                        # send the chunk again with the payload itself, a bounded number of
+                        # times
+                        retries[k] = retries.get(k, 0) + 1
+                        if retries[k] > _MAX_RETRIES:
+                            raise
+                        futures[ex.submit(fn, payload, chunks[k], *args)] = k
+                    break
+    except BaseException:
+        if own:                          # interrupted or failed: drop the queued chunks,
+            ex.shutdown(wait=False, cancel_futures=True)     # the workers exit with us
+            own = False
+        raise
+    finally:
+        bar.close()
+        if folder is not None:
+            folder.close()
+        if own:
+            ex.shutdown()
+    return results
+
+
+def joined(results, name):
+    """One array of all chunks' ``name`` rows (each chunk's result a dict of arrays)."""
+    return np.concatenate([np.asarray(r[name]) for r in results])
+
+
+#: Address schemes of a Dask scheduler.
+_SCHEMES = ("tcp", "tls", "ucx", "ws", "wss")
+@contextlib.contextmanager
+def dask_executor(address=None, *, workers=2, threads_per_worker=1, timeout=10.0,
+                  security=None):
+    """A ``concurrent.futures`` executor on a Dask cluster, closed on exit.
+
+    Parameters
+    ----------
+    address : str, optional
+        The scheduler of an existing cluster (``tcp://host:8786``, ``tls://...``). Without it
+        a ``distributed.LocalCluster`` of ``workers`` processes is started on 127.0.0.1,
+        secured with TLS and temporary credentials (``Security.temporary()``): Dask moves
+        pickles, so an open local cluster would let any user of a shared host who connects
+        during the run execute code as you. Only this process holds the credentials.
+    workers, threads_per_worker : int
+        The local cluster's size (embreex holds the GIL while casting: one thread each).
+    timeout : float
+        Seconds to wait for an existing scheduler to answer.
+    security : distributed.security.Security, optional
+        Credentials for an existing TLS cluster.
+
+    An existing scheduler is trusted completely: whoever controls it, or can connect to an
+    unsecured one, can run code in this process. Connect only to clusters you control, with
+    TLS (``tls://`` and ``security=``) on a shared network.
+    """
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError as exc:
+        raise ImportError("Dask execution needs distributed: pip install 'meshladar[dask]'") \
+            from exc
+    from .errors import ParameterError
+
+    cluster = None
+    if address is None:
+        try:
+            from distributed.security import Security
+
+            sec = Security.temporary()
+        except ImportError as exc:
+            raise ImportError("a local Dask cluster is secured with TLS, which needs "
+                              "cryptography: pip install 'meshladar[dask]'") from exc
+        cluster = LocalCluster(n_workers=int(workers), threads_per_worker=int(threads_per_worker),
+                               processes=True, host="127.0.0.1", dashboard_address=None,
+                               security=sec, protocol="tls://")
+        client = Client(cluster, security=sec)
+    else:
+        scheme = address.split("://", 1)[0] if isinstance(address, str) else None
+        if scheme not in _SCHEMES or "://" not in address or not address.split("://", 1)[1]:
+            raise ParameterError(f"scheduler must be an address such as tcp://host:8786 "
+                                 f"(schemes {', '.join(_SCHEMES)}); got {address!r}")
+        try:
+            client = Client(address, timeout=timeout, security=security)
+        except (OSError, TimeoutError, ValueError, TypeError) as exc:
+            raise ParameterError(f"scheduler: no Dask scheduler answered at {address!r} "
+                                 f"within {timeout:g} s ({type(exc).__name__}: "
+                                 f"{str(exc).splitlines()[0][:120] if str(exc) else ''})") \
+                from exc
+    try:
+        yield client.get_executor(pure=False)
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
