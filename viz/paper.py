@@ -26,7 +26,7 @@ RESULT_NAME = "paper_result.npz"
 
 def save_run(outdir, *, size=None):
     """Run the paper's experiments and save them to ``outdir/paper_result.npz``."""
-    from meshladar import io, paper
+    from meshladar import paper, results
 
     kwargs = {} if size is None else {"size": size}
     res = paper.run(**kwargs)
@@ -39,7 +39,7 @@ def save_run(outdir, *, size=None):
             "size": res["size"], "figures": {str(k): v for k, v in paper.FIGURES.items()},
             "model": "analytic"}
     path = os.path.join(outdir, RESULT_NAME)
-    io.save_result(path, arrays, meta)
+    results.save_result(path, arrays, meta)
     return path, res["metrics"]
 
 
@@ -91,10 +91,10 @@ def draw(result_path, outdir, *, dpi=None):
 
     ``dpi`` overrides the style's resolution (the README's thumbnails use 55).
     """
-    from meshladar import io
+    from meshladar import results
 
     plt = style.use()
-    arrays, meta = io.load_result(result_path)
+    arrays, meta = results.load_result(result_path)
     os.makedirs(outdir, exist_ok=True)
     extent = meta["extent"]
     caps = meta["captions"]

@@ -41,7 +41,7 @@ def _pareto(points):
 @style.styled
 def draw(outdir):
     """Write the study's figures into ``outdir``; returns their paths."""
-    from meshladar import io
+    from meshladar import results
 
     plt = style.use()
     with open(os.path.join(outdir, "faceting.json"), encoding="utf-8") as fh:
@@ -102,7 +102,7 @@ def draw(outdir):
     fig.tight_layout()
     save(fig, "error_vs_segments.png")
 
-    arrays, meta = io.load_result(os.path.join(outdir, "faceting_examples.npz"))
+    arrays, meta = results.load_result(os.path.join(outdir, "faceting_examples.npz"))
     edges = arrays["bin_edges"]
     angles = arrays["angles_deg"]
     for key, info in meta["examples"].items():

@@ -127,7 +127,7 @@ def _finish(plotter, off_screen, screenshot):
         if screenshot is not None:          # PNG written atomically (never half a file)
             from matplotlib.image import imsave
 
-            from meshladar.io import write_atomic
+            from meshladar.results import write_atomic
 
             write_atomic(screenshot, lambda fh: imsave(fh, img, format="png"))
         return img
