@@ -11,7 +11,8 @@ from .brdf import SandfordRobertson
 from .forward import simulate
 from .ladar import Ladar
 from .reconstruct import Image, clip_radiance, fbp, log_radiance
-from .scene import Disk, Ellipse, Scene
+from .scene import Scene
+from .shapes import Disk, Ellipse
 from .sinogram import Sinogram
 from .raytrace import Hits, trace
 from .weighing import weigh

@@ -38,7 +38,8 @@ import numpy as np
 
 from .brdf import projected_weight
 from .ladar import Ladar
-from .scene import Scene, Shape
+from .scene import Scene
+from .shapes import Shape
 from .sinogram import Sinogram
 
 __all__ = ["simulate_analytic", "GL_NODES", "PANEL_MAX"]

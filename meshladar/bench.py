@@ -31,7 +31,8 @@ def bench_analytic(*, repeats=5):
     """
     from . import forward, materials
     from .ladar import Ladar
-    from .scene import Disk, Ellipse, Scene
+    from .scene import Scene
+    from .shapes import Disk, Ellipse
 
     gray, al = materials.DARK_GRAY, materials.ALUMINUM
     ladar = Ladar.paper()

@@ -93,11 +93,18 @@ class MeshPart:
         return self.vertices[self.faces]
 
     def face_normals_areas(self):
-        """Unit face normals (m, 3) and areas (m,), in float64."""
-        tri = self.triangles
-        cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-        norm = np.linalg.norm(cross, axis=1)
-        return cross / np.where(norm > 0, norm, 1.0)[:, None], 0.5 * norm
+        """Unit face normals (m, 3) and areas (m,), in float64: computed once per part (the
+        part is immutable) and returned read-only."""
+        cached = self.__dict__.get("_normals_areas")
+        if cached is None:
+            tri = self.triangles
+            cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+            norm = np.linalg.norm(cross, axis=1)
+            cached = (cross / np.where(norm > 0, norm, 1.0)[:, None], 0.5 * norm)
+            for a in cached:
+                a.flags.writeable = False
+            object.__setattr__(self, "_normals_areas", cached)
+        return cached
 
     def digest(self) -> str:
         """Content hash of the geometry (vertices and faces)."""
@@ -653,7 +660,7 @@ class _PrismNormal:
         self.center, self.axes, self.angle, self.lo, self.hi = center, axes, angle, lo, hi
 
     def __call__(self, p):
-        from .scene import ellipse_normal
+        from .shapes import ellipse_normal
 
         p = np.asarray(p, dtype=np.float64)
         a, b = self.axes
@@ -670,7 +677,7 @@ class _PrismNormal:
     def curvature_radius(self, p):
         """Radius of curvature of the cross-section at the points' eccentric angle (inf on
         the caps): (a² sin²t + b² cos²t)^(3/2) / (a b)."""
-        from .scene import to_frame
+        from .shapes import to_frame
 
         p = np.asarray(p, dtype=np.float64)
         (cx, cy), (a, b) = self.center, self.axes

@@ -41,7 +41,8 @@ from .brdf import SandfordRobertson
 from .forward import simulate
 from .ladar import Ladar
 from .reconstruct import clip_radiance, fbp, log_radiance
-from .scene import Disk, Ellipse, Scene, from_frame
+from .scene import Scene
+from .shapes import Disk, Ellipse, from_frame
 
 __all__ = ["FIGURES", "run", "disk_darkening", "ellipse_darkening", "ring_visibility",
            "IMAGE_SIZE", "IMAGE_EXTENT"]

@@ -32,7 +32,8 @@ from ._validate import check_real, check_size
 from .brdf import projected_weight
 from .errors import ParameterError
 from .ladar import Ladar
-from .scene import Scene, ellipse_normal
+from .scene import Scene
+from .shapes import ellipse_normal
 from .siddon import PixelGrid
 from .sinogram import Sinogram
 from .precision import TINY

@@ -421,3 +421,19 @@ def test_hits_are_a_frozen_record_of_named_arrays():
 
     with pytest.raises(ParameterError, match=r"Hits.spread must have shape \(\d+, 4\); got"):
         dataclasses.replace(hits, spread=np.zeros((k, 2)))
+
+
+def test_a_views_hits_are_a_frozen_record_too():
+    # the record a worker returns for one view: named fields, shapes checked, read-only
+    from meshladar.raytrace.hits import ViewHits
+
+    k = 5
+    h = ViewHits(np.zeros(k), np.ones(k), np.zeros(k), np.zeros(k, np.int32), np.zeros((k, 4)),
+                 rays=10, back_face_hits=0)
+    assert h.bistatic is None and h.rays == 10
+    with pytest.raises(ValueError, match="read-only"):
+        h.range[0] = 1.0
+    with pytest.raises(ParameterError, match=r"ViewHits.curve must have shape \(5, 4\); "
+                                             r"got \(5, 3\)"):
+        ViewHits(np.zeros(k), np.ones(k), np.zeros(k), np.zeros(k, np.int32),
+                 np.zeros((k, 4)), 10, 0, curve=np.zeros((k, 3)))

@@ -34,9 +34,8 @@ class _Geometry:
         # Embree's geometry is divided by this power of two (exact in float32): unit size
         self.scale = 2.0 ** math.ceil(math.log2(self.radius)) if self.radius > 0 else 1.0
         self.faces32 = np.ascontiguousarray(self.faces, dtype=np.int32)
-        tri = self.vertices[self.faces]
-        cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-        self.face_normals = cross / np.linalg.norm(cross, axis=1)[:, None]
+        # the parts' own face normals (computed once per part, whatever the calls)
+        self.face_normals = np.concatenate([p.face_normals_areas()[0] for p in parts])
         # each face's plane n·p = d in shifted coordinates (float64), for exact hit distances
         self.plane_d = np.einsum("ij,ij->i", self.face_normals, shifted[self.faces[:, 0]])
         self.hull = scene.hull_points() - self.center

@@ -4,20 +4,22 @@ one view's hits as a worker returns them."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import NamedTuple
 
 import numpy as np
 
 from ..errors import ParameterError
 from ..ladar import Ladar
 
-__all__ = ["Hits"]
+__all__ = ["Hits", "ViewHits"]
 
 
-class _ViewHits(NamedTuple):
-    """One view's hits, as a worker returns them (ranges relative to the scene centre's
-    plane); the fields are :class:`Hits`' per-hit arrays for that view, plus its ``rays``
-    cast and ``back_face_hits`` counts."""
+@dataclass(frozen=True, eq=False)
+class ViewHits:
+    """One view's hits, as a worker returns them: k hits, ranges relative to the plane
+    through the scene's (shifted) centre. The per-hit fields are :class:`Hits`' for that
+    view, with the same shapes ((k,), or (k, 4) for ``spread``, ``bistatic`` and ``curve``;
+    the last three may be None), frozen read-only; ``rays`` cast and ``back_face_hits`` are
+    the view's counts."""
 
     range: np.ndarray
     cos_theta: np.ndarray
@@ -26,10 +28,36 @@ class _ViewHits(NamedTuple):
     spread: np.ndarray
     rays: int
     back_face_hits: int
-    bistatic: np.ndarray | None
-    weight_factor: np.ndarray | None
-    curve: np.ndarray | None
+    bistatic: np.ndarray | None = None
+    weight_factor: np.ndarray | None = None
+    curve: np.ndarray | None = None
 
+    def __post_init__(self):
+        _freeze(self, np.shape(self.range)[0] if np.ndim(self.range) == 1 else -1,
+                "ViewHits")
+
+
+#: Per-hit fields of the hit records and their shapes (k hits); the optional ones may be None.
+_FIELDS = {"view": (1,), "range": (1,), "cos_theta": (1,), "sin_theta": (1,),
+           "material": (1,), "spread": (1, 4), "bistatic": (1, 4), "weight_factor": (1,),
+           "curve": (1, 4)}
+_OPTIONAL = ("bistatic", "weight_factor", "curve")
+
+
+def _freeze(record, k, kind):
+    """Check every per-hit field's shape against k hits and make it read-only in place."""
+    for name, shape in _FIELDS.items():
+        if not hasattr(record, name):
+            continue
+        a = getattr(record, name)
+        if a is None and name in _OPTIONAL:
+            continue
+        a = np.asarray(a)
+        want = (k,) + shape[1:]
+        if k < 0 or a.shape != want:
+            raise ParameterError(f"{kind}.{name} must have shape {want}; got {a.shape}")
+        a.flags.writeable = False        # frozen in place: hits can be gigabytes
+        object.__setattr__(record, name, a)
 
 
 @dataclass(frozen=True, eq=False)
@@ -83,19 +111,7 @@ class Hits:
     info: dict = field(default_factory=dict)
 
     def __post_init__(self):
-        k = self.view.shape[0] if np.ndim(self.view) == 1 else -1
-        expected = {"view": (k,), "range": (k,), "cos_theta": (k,), "sin_theta": (k,),
-                    "material": (k,), "spread": (k, 4), "bistatic": (k, 4),
-                    "weight_factor": (k,), "curve": (k, 4)}
-        for name, shape in expected.items():
-            a = getattr(self, name)
-            if a is None and name in ("bistatic", "weight_factor", "curve"):
-                continue
-            a = np.asarray(a)
-            if k < 0 or a.shape != shape:
-                raise ParameterError(f"Hits.{name} must have shape {shape}; got {a.shape}")
-            a.flags.writeable = False        # frozen in place: hits can be gigabytes
-            object.__setattr__(self, name, a)
+        _freeze(self, np.shape(self.view)[0] if np.ndim(self.view) == 1 else -1, "Hits")
         for name in ("rays", "back_face_hits"):
             a = np.asarray(getattr(self, name))
             a.flags.writeable = False

@@ -9,7 +9,7 @@ from ..precision import MIN_COS_FACET as _MIN_COS_FACET
 from ..precision import RECEIVER_LIFT as _RECEIVER_LIFT
 from ..precision import REFINE_MIN_COS as _REFINE_MIN_COS
 from .grid import _dot, _ray_grid
-from .hits import _ViewHits
+from .hits import ViewHits
 from ..precision import TINY
 
 
@@ -112,7 +112,7 @@ def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=N
             spread[:, 1] = np.abs(_dot(n_geo, v)) / cg * 0.5 * spacing
         spread[:, 2] = np.minimum(tri_r.min(axis=1) - rng_rel, 0.0)
         spread[:, 3] = np.maximum(tri_r.max(axis=1) - rng_rel, 0.0)
-    return _ViewHits(rng_rel, cos_t, sin_t, geo.material[prim], spread, len(o),
+    return ViewHits(rng_rel, cos_t, sin_t, geo.material[prim], spread, len(o),
                      int(back.sum()), bi, factor, curve)
 
 
