@@ -40,8 +40,11 @@ __all__ = ["run_chunks", "joined", "dask_executor", "Progress"]
 _MAX_JOBS_PER_CORE = 4
 #: Resubmissions of a chunk whose task was cancelled (a worker lost with its data).
 _MAX_RETRIES = 3
-#: Estimated work (rays) from which ``jobs=None`` starts a process per core.
+#: Estimated work (rays) from which ``jobs=None`` starts a process per core (a process
+#: pool costs 0.4-1.5 s to start: about 4e6 rays of one core's work).
 _PARALLEL_FROM = 4e6
+#: The same for threads, which cost next to nothing to start.
+_THREADS_FROM = 2e5
 
 
 class Progress:
@@ -83,25 +86,32 @@ def _chunks(n, size):
     return [np.arange(i, min(i + size, n)) for i in range(0, n, size)]
 
 
-def _executor(jobs, executor, work):
-    """The executor to use: the user's, or worker processes when the work (rays) pays for
-    them (embreex holds the GIL, so threads would not help it)."""
+def _executor(jobs, executor, work, n_chunks, threads=False):
+    """The executor to use: the user's; else a pool of ``jobs`` threads (a job whose
+    compiled loop releases the GIL) or worker processes (one that holds it, as embreex's
+    cast does); else none. By default a pool is started only when the work (rays) pays for
+    it, with at most one worker per chunk: a single view never starts one."""
     if executor is not None:
         if not callable(getattr(executor, "submit", None)):
             raise ParameterError(f"executor must be a concurrent.futures.Executor (with "
                                  f"submit); got {type(executor).__name__}")
         return executor, False
-    if jobs is None:
-        jobs = 1 if work < _PARALLEL_FROM else (os.cpu_count() or 1)
     cores = os.cpu_count() or 1
+    if jobs is None:
+        start = _THREADS_FROM if threads else _PARALLEL_FROM
+        jobs = 1 if work < start else max(1, min(cores, n_chunks))
     if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)) or jobs < 1:
         raise ParameterError(f"jobs must be an integer >= 1; got {jobs!r}")
     if jobs > _MAX_JOBS_PER_CORE * cores:
         raise ParameterError(f"jobs must be at most {_MAX_JOBS_PER_CORE * cores} "
                              f"({_MAX_JOBS_PER_CORE} per core on this {cores}-core machine: "
-                             f"more processes only compete for the cores); got {jobs}")
+                             f"more workers only compete for the cores); got {jobs}")
     if jobs == 1:
         return None, False
+    if threads:
+        from concurrent.futures import ThreadPoolExecutor
+
+        return ThreadPoolExecutor(max_workers=int(jobs)), True
     from concurrent.futures import ProcessPoolExecutor
 
     return ProcessPoolExecutor(max_workers=int(jobs), initializer=_worker_init), True
@@ -164,7 +174,8 @@ def check_run_dir(run_dir):
 
 
 def run_chunks(fn, payload, n_items, *, chunk_size, args=(), jobs=None, executor=None,
-               progress=False, unit="views", work=0.0, run_dir=None, job=None, arrays=None):
+               progress=False, unit="views", work=0.0, run_dir=None, job=None, arrays=None,
+               threads=False):
     """Run ``fn(payload, items, *args)`` over chunks of ``range(n_items)``.
 
     Parameters
@@ -179,7 +190,8 @@ def run_chunks(fn, payload, n_items, *, chunk_size, args=(), jobs=None, executor
     args : tuple
         Further arguments of every call (sent with each task).
     jobs : int, optional
-        Worker processes; default 1 unless ``work`` is at least 4e6 (then one per core).
+        Workers (threads or processes); default 1, or one per core (at most one per chunk)
+        once ``work`` pays for the pool (2e5 rays for threads, 4e6 for processes).
     executor : concurrent.futures.Executor, optional
         Any executor; overrides ``jobs``.
     progress : bool
@@ -188,6 +200,9 @@ def run_chunks(fn, payload, n_items, *, chunk_size, args=(), jobs=None, executor
         The items' name in the bar.
     work : float
         Estimated work (rays) for the default ``jobs``.
+    threads : bool
+        Whether ``fn`` releases the GIL, so that ``jobs`` are threads sharing the payload
+        (no pickling, no per-process rebuild) rather than processes.
     run_dir : path, optional
         A run folder for resumable runs; needs ``job`` and ``arrays``.
     job : dict
@@ -207,7 +222,7 @@ def run_chunks(fn, payload, n_items, *, chunk_size, args=(), jobs=None, executor
     if run_dir is not None:
         check_run_dir(run_dir)
     chunks = _chunks(int(n_items), int(chunk_size))
-    ex, own = _executor(jobs, executor, work)
+    ex, own = _executor(jobs, executor, work, len(chunks), threads)
     bar = Progress(n_items, unit, enabled=progress)
     results = [None] * len(chunks)
     folder = None

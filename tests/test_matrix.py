@@ -810,7 +810,7 @@ def _refuses_many_jobs():
     from meshladar.stream import _executor
 
     try:
-        ex, own = _executor(10**5, None, 1.0)
+        ex, own = _executor(10**5, None, 1.0, 1)
     except ParameterError:
         return True
     if own:
