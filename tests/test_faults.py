@@ -179,16 +179,34 @@ def test_jobs_are_bounded_by_the_cores():
         ml.simulate(mesh, ladar, model="mesh", jobs=100000)
 
 
+#: The command line, held after its first saved chunk until a signal arrives: the stop
+#: always lands mid-run, whatever the machine's load (an event, not a margin of work).
+_HELD_CLI = """
+import signal, sys
+from meshladar import runs
+from meshladar.cli import main
+
+save = runs.RunFolder.save
+
+
+def held(self, i, arrays):
+    save(self, i, arrays)
+    while True:                     # until a signal's handler raises (SIGTERM: an interrupt)
+        signal.pause()
+
+
+runs.RunFolder.save = held
+sys.exit(main(sys.argv[1:]))
+"""
+
+
 def _long_cli_run(tmp_path):
     import subprocess
     import sys
 
     run = tmp_path / "run"
-    # 900 chunks: the workers' start-up (numba compilation) precedes the first chunk, so
-    # the work left after it must be long for the stop to land mid-run (720 views once
-    # finished between the first chunk file and the signal)
-    cmd = [sys.executable, "-m", "meshladar", "simulate", "disk_pair", "--model", "mesh",
-           "--segments", "512", "--views", "7200", "--rays-per-bin", "16", "--jobs", "2",
+    cmd = [sys.executable, "-c", _HELD_CLI, "simulate", "disk_pair", "--model", "mesh",
+           "--segments", "512", "--views", "720", "--rays-per-bin", "16", "--jobs", "2",
            "--run-dir", str(run), "-o", str(tmp_path / "r.npz"), "--quiet"]
     return run, subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                  text=True)
