@@ -255,7 +255,7 @@ def _sr_monostatic(c, s, rho_d, eps, b, e, G, diffuse, specular):
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, params,
                   w, start, edges, area, ignore_back, out):
     """Monostatic, flat-normal weighing and binning of one view's Embree hits, fused:

@@ -104,13 +104,32 @@ def _icosphere_scene(subdivisions, material):
                              [material])
 
 
+def interleaved(fns, *, repeats=3):
+    """Median wall time (s) of each of ``fns`` (a dict of name → callable), run in rounds
+    (one call of each per round, after one warm-up round) so that a shared machine's load
+    falls on all of them alike."""
+    for fn in fns.values():
+        fn()
+    times = {k: [] for k in fns}
+    for _ in range(repeats):
+        for k, fn in fns.items():
+            t0 = time.perf_counter()
+            fn()
+            times[k].append(time.perf_counter() - t0)
+    return {k: statistics.median(v) for k, v in times.items()}
+
+
 def bench_mesh(*, repeats=3, subdivisions=6, rays_per_view=1_000_000, views=16):
     """Mesh engine throughput against raw embreex on the same rays, and its build cost.
 
-    Returns a dict: ``raw_mrays``, ``pipeline_mrays`` (one process, rays → hits → weights
-    → bins), their ratio, ``two_core_mrays`` (2 worker processes) and its ratio to one core,
-    ``faces``, and the Embree build split for a 1.3M-triangle mesh (``upload_s``,
-    ``bvh_s``).
+    Everything is timed in rounds (:func:`interleaved`) in one process on the same rays.
+    Returns a dict: ``raw_mrays`` (embreex's run() alone), ``packet_mrays`` (the packet
+    backend's cast alone), ``pipeline_mrays`` (rays → hits → weights → bins, packets, one
+    thread, regular grid), ``embreex_pipeline_mrays`` (the same through embreex),
+    ``stratified_mrays``, ``two_thread_mrays`` (packets, 2 threads), their ratios,
+    ``packet_width``, and the build of a 1.3M-triangle mesh: embreex's upload and BVH
+    (``upload_s``, ``bvh_s``) against the packet backend's shared-buffer scene
+    (``packet_build_s``).
     """
     import math
 
@@ -119,6 +138,7 @@ def bench_mesh(*, repeats=3, subdivisions=6, rays_per_view=1_000_000, views=16):
     from . import materials
     from .ladar import Ladar
     from .mesh import fibonacci_sphere
+    from .raytrace import embree4
     from .raytrace.embree import _embree_scene, _Geometry
     from .raytrace.grid import _ray_grid
     from .raytrace.model import simulate_mesh
@@ -128,59 +148,67 @@ def bench_mesh(*, repeats=3, subdivisions=6, rays_per_view=1_000_000, views=16):
     vecs = fibonacci_sphere(views)
     ladar = Ladar(None, np.linspace(-0.6, 0.6, 513), view_vectors=vecs)
     geo = _Geometry(scene, "flat")
-    emb = _embree_scene(geo)
+    emb = _embree_scene(geo, "embreex")
+    pk = _embree_scene(geo, "packets")
     grids = [_ray_grid(geo, w, "3d", spacing, 0.0, None)[0] for w in vecs]
     dirs = [np.ascontiguousarray((-w)[None, :], dtype=np.float32) for w in vecs]
     n_rays = sum(len(o) for o in grids)
 
-    def raw_all():                   # the same rays, one embreex call per view
-        for o, d in zip(grids, dirs):
-            emb.run(o, d, output=1)
+    def cast(engine):                # the same rays, one call per view
+        def run():
+            for o, d in zip(grids, dirs):
+                engine.run(o, d, output=1)
+        return run
 
-    raw = statistics.median(time_call(raw_all, repeats=repeats))
-    # the same rays as raw: the regular grid; then the default stratified sampling, whose
-    # offsets cost a little per ray
-    t1 = statistics.median(time_call(
-        lambda: simulate_mesh(scene, ladar, mode="3d", ray_spacing=spacing, jobs=1,
-                              sampling="regular"), repeats=repeats))
-    ts = statistics.median(time_call(
-        lambda: simulate_mesh(scene, ladar, mode="3d", ray_spacing=spacing, jobs=1),
-        repeats=repeats))
-    from concurrent.futures import ProcessPoolExecutor
+    def pipeline(backend, jobs=1, sampling="regular"):
+        return lambda: simulate_mesh(scene, ladar, mode="3d", ray_spacing=spacing, jobs=jobs,
+                                     sampling=sampling, backend=backend)
 
-    with ProcessPoolExecutor(2) as pool:        # warm workers: the pool is reused in a run
-        t2 = statistics.median(time_call(
-            lambda: simulate_mesh(scene, ladar, mode="3d", ray_spacing=spacing,
-                                  executor=pool, sampling="regular"), repeats=1))
+    t = interleaved({"raw": cast(emb), "packet": cast(pk), "pipe": pipeline("packets"),
+                     "pipe_embreex": pipeline("embreex"),
+                     "stratified": pipeline("packets", sampling="stratified"),
+                     "two": pipeline("packets", jobs=2)}, repeats=repeats)
     build = _build_split(8)
+    m = {k: n_rays / v / 1e6 for k, v in t.items()}
     return {"faces": len(geo.faces), "rays": n_rays, "views": views,
-            "raw_mrays": n_rays / raw / 1e6, "pipeline_mrays": n_rays / t1 / 1e6,
-            "pipeline_over_raw": raw / t1, "stratified_mrays": n_rays / ts / 1e6,
-            "stratified_over_regular": t1 / ts,
-            "two_core_mrays": n_rays / t2 / 1e6, "two_over_one": t1 / t2, **build}
+            "packet_width": embree4.library().width,
+            "raw_mrays": m["raw"], "packet_mrays": m["packet"],
+            "packet_over_raw": t["raw"] / t["packet"],
+            "pipeline_mrays": m["pipe"], "pipeline_over_raw": t["raw"] / t["pipe"],
+            "embreex_pipeline_mrays": m["pipe_embreex"],
+            "stratified_mrays": m["stratified"],
+            "stratified_over_regular": t["pipe"] / t["stratified"],
+            "two_thread_mrays": m["two"], "two_over_one": t["pipe"] / t["two"],
+            "two_over_raw": t["raw"] / t["two"], **build}
 
 
 def _build_split(subdivisions):
-    """Embree build of an icosphere (8 subdivisions: 1.3M triangles): embreex's upload loop
-    against the BVH build (commit on the first query)."""
+    """Scene builds of an icosphere (8 subdivisions: 1.3M triangles): embreex's upload loop
+    against its BVH build (commit on the first query), and the packet backend's scene
+    (shared numpy buffers, then the same robust BVH build)."""
     import time as _time
 
     import numpy as np
 
     from .mesh import _icosphere
+    from .raytrace import embree4
 
     v, f = _icosphere(subdivisions)
     from embreex import rtcore_scene
     from embreex.mesh_construction import TriangleMesh
 
-    sc = rtcore_scene.EmbreeScene()
+    v32, f32 = np.ascontiguousarray(v, np.float32), np.ascontiguousarray(f, np.int32)
+    sc = rtcore_scene.EmbreeScene(robust=True)
     t0 = _time.perf_counter()
-    TriangleMesh(sc, np.ascontiguousarray(v, np.float32), np.ascontiguousarray(f, np.int32))
+    TriangleMesh(sc, v32, f32)
     t1 = _time.perf_counter()
     sc.run(np.array([[0, 0, 5]], np.float32), np.array([[0, 0, -1]], np.float32))
     t2 = _time.perf_counter()
+    embree4.Scene(v32, f32, robust=True).release()
+    t3 = _time.perf_counter()
     return {"build_faces": len(f), "upload_s": t1 - t0, "bvh_s": t2 - t1,
-            "build_over_bvh": (t2 - t0) / (t2 - t1)}
+            "build_over_bvh": (t2 - t0) / (t2 - t1), "packet_build_s": t3 - t2,
+            "packet_build_over_bvh": (t3 - t2) / (t2 - t1)}
 
 
 def bench_streaming(*, views=360, rays_per_view=1_000_000, subdivisions=6, jobs=2):
@@ -272,19 +300,23 @@ def report(*, repeats=5, full=False):
     m = bench_mesh(repeats=repeats)
     yield (f"mesh engine, {m['faces']} triangles, {m['views']} views x "
            f"{m['rays'] // m['views']} rays (3-D grid), same rays in the same process:")
-    yield f"  raw embreex cast (output=1)       {m['raw_mrays']:7.2f} Mrays/s"
-    yield (f"  pipeline, 1 process               {m['pipeline_mrays']:7.2f} Mrays/s "
-           f"({100 * m['pipeline_over_raw']:.0f}% of raw)")
-    yield (f"  pipeline, stratified sampling     {m['stratified_mrays']:7.2f} Mrays/s "
+    yield f"  raw embreex cast (output=1)        {m['raw_mrays']:7.2f} Mrays/s"
+    yield (f"  packet cast alone (width {m['packet_width']:2d})      {m['packet_mrays']:7.2f} "
+           f"Mrays/s ({m['packet_over_raw']:.2f}x raw embreex)")
+    yield (f"  pipeline, packets, 1 thread        {m['pipeline_mrays']:7.2f} Mrays/s "
+           f"({m['pipeline_over_raw']:.2f}x raw embreex)")
+    yield (f"  pipeline, embreex, 1 thread        {m['embreex_pipeline_mrays']:7.2f} Mrays/s")
+    yield (f"  pipeline, stratified sampling      {m['stratified_mrays']:7.2f} Mrays/s "
            f"({100 * m['stratified_over_regular']:.0f}% of the regular grid's)")
-    yield (f"  pipeline, 2 processes             {m['two_core_mrays']:7.2f} Mrays/s "
-           f"({m['two_over_one']:.2f}x one)")
-    yield (f"  Embree build, {m['build_faces']} triangles: embreex upload {m['upload_s']:.2f} s "
-           f"+ BVH {m['bvh_s']:.2f} s = {m['build_over_bvh']:.1f}x the BVH build")
+    yield (f"  pipeline, packets, 2 threads       {m['two_thread_mrays']:7.2f} Mrays/s "
+           f"({m['two_over_one']:.2f}x one, {m['two_over_raw']:.2f}x raw embreex)")
+    yield (f"  build, {m['build_faces']} triangles: embreex upload {m['upload_s']:.2f} s + BVH "
+           f"{m['bvh_s']:.2f} s = {m['build_over_bvh']:.1f}x the BVH; packet scene "
+           f"{m['packet_build_s']:.2f} s = {m['packet_build_over_bvh']:.2f}x the BVH")
     if not full:
         return
     st = bench_streaming()
-    yield (f"streaming 360 views x 1e6 rays, 2 processes: {st['seconds']:.1f} s, "
+    yield (f"streaming 360 views x 1e6 rays, 2 threads: {st['seconds']:.1f} s, "
            f"{st['mrays']:.2f} Mrays/s, peak RSS {st['peak_rss_mb']:.0f} MB")
     try:
         d = bench_dask()

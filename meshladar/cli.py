@@ -16,7 +16,7 @@ from .errors import MeshladarError
 from .forward import MODELS
 from .ladar import MAX_VIEWS as _MAX_VIEWS
 from .reconstruct import FILTERS
-from .raytrace import MODES, NORMALS, SAMPLINGS
+from .raytrace import BACKENDS, MODES, NORMALS, SAMPLINGS
 
 __all__ = ["main"]
 
@@ -140,7 +140,8 @@ def _ladar(args, scene, default):
 _MESH_ONLY = {"--mode": "mode", "--z0": "z0", "--normals": "normals",
               "--ray-spacing": "ray_spacing", "--rays-per-bin": "rays_per_bin",
               "--sampling": "sampling", "--seed": "seed", "--footprint": "footprint",
-              "--receiver": "receiver", "--tol": "tol", "--max-rays": "max_rays"}
+              "--receiver": "receiver", "--tol": "tol", "--max-rays": "max_rays",
+              "--backend": "backend"}
 
 
 def _check_applicable(args, model, is_phantom):
@@ -186,7 +187,7 @@ def _summary(args, sino, ladar, model):
     if model == "mesh":
         how += (f", {info.get('mode')} mode, {info.get('normals')} normals, "
                 f"{info.get('sampling')} sampling, ray spacing {info.get('ray_spacing'):.4g}, "
-                f"{info.get('rays', 0):,} rays cast")
+                f"{info.get('rays', 0):,} rays cast ({info.get('backend')} backend)")
         if info.get("mode") == "slice":
             how += f" (values per unit height at z0 = {info.get('z0'):g})"
         if "error_estimate" in info:
@@ -213,7 +214,7 @@ def _cmd_simulate(args) -> int:
         if not scene.is_mesh and args.tol is None:       # with --tol the knob tessellates
             scene = scene.tessellate(args.segments or 1024)
         for k in ("mode", "z0", "normals", "ray_spacing", "rays_per_bin", "sampling", "seed",
-                  "tol", "max_rays", "receiver"):
+                  "tol", "max_rays", "receiver", "backend"):
             if getattr(args, k) is not None:
                 opts[k] = getattr(args, k)
         if args.footprint:
@@ -517,6 +518,10 @@ def _parser() -> argparse.ArgumentParser:
     sim.add_argument("--rays-per-bin", type=_positive_float, default=None,
                      help="rays per range-bin width (default: 1 in 3d, at least 128 across "
                           "the target; 8 in slice)")
+    sim.add_argument("--backend", choices=BACKENDS, default=None,
+                     help="mesh model ray casting: packets (coherent packets, Embree 4 from "
+                          "the embreex wheel), embreex (one ray at a time, the reference) or "
+                          "auto (default: packets when they load)")
     sim.add_argument("--sampling", choices=SAMPLINGS, default=None,
                      help="rays at a seeded random offset in their cell (stratified: "
                           "unbiased) or at cell centres (default: stratified in 3d, regular "

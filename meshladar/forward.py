@@ -19,8 +19,8 @@ MODELS = ("analytic", "mesh", "pixel")
 _STREAM = ("jobs", "executor", "progress", "run_dir")
 _OPTIONS = {"analytic": _STREAM, "pixel": ("pixel_size", "ray_spacing") + _STREAM,
             "mesh": ("mode", "normals", "back_faces", "z0", "ray_spacing", "rays_per_bin",
-                     "footprint", "sampling", "seed", "receiver", "tol", "max_rays", "jobs",
-                     "executor", "progress", "run_dir")}
+                     "footprint", "sampling", "seed", "receiver", "tol", "max_rays", "backend",
+                     "jobs", "executor", "progress", "run_dir")}
 
 
 def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
@@ -37,7 +37,7 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
         ``"mesh"``: triangle meshes ray-cast with Embree; a mesh is a 3-D target
         (``mode="3d"``) unless it was tessellated from the analytic shapes. Options of
         :func:`meshladar.raytrace.simulate_mesh` (mode, normals, back_faces, z0,
-        ray_spacing, rays_per_bin, footprint, sampling, seed, receiver) and ``tol``.
+        ray_spacing, rays_per_bin, footprint, sampling, seed, receiver, backend) and ``tol``.
         ``"pixel"``: the paper's method, a rasterised surface traced with Siddon rays
         (options ``pixel_size``, ``ray_spacing``; :func:`meshladar.pixel.simulate_pixel`).
     tol : float in (0, 1), optional, mesh model only
@@ -51,8 +51,9 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
         ``error_estimate``, ``stopped`` and every ``refinement`` run
         (:mod:`meshladar.refine`).
     jobs : int, optional
-        Worker processes for chunks of views (every model; default 1, or one per core for
-        a mesh run of at least 4e6 rays).
+        Workers for chunks of views (every model; default 1). The mesh model's are threads
+        sharing one Embree scene (default one per core from 2e5 rays); the analytic and
+        pixel models' are processes.
     executor : concurrent.futures.Executor, optional
         Any executor to run the chunks on (threads, processes, a Dask cluster's from
         :func:`meshladar.stream.dask_executor`); overrides ``jobs``.

@@ -215,7 +215,7 @@ def _sinogram(vals, ladar, edges, run, normals, footprint, rays, back):
     info = {"radiometry": "paper", "mode": run["mode"], "normals": normals,
             "footprint": footprint, "ray_spacing": run["ray_spacing"],
             "sampling": run["sampling"], "seed": run["seed"], "rays": int(np.sum(rays)),
-            "back_face_hits": np.asarray(back).tolist()}
+            "back_face_hits": np.asarray(back).tolist(), "backend": run.get("backend")}
     if run["mode"] == "slice":
         info["z0"] = run["z0"]
     return Sinogram(vals, angles_deg=ladar.angles_deg, bin_edges=edges, model="mesh",

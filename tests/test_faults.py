@@ -205,9 +205,10 @@ def _long_cli_run(tmp_path):
     import sys
 
     run = tmp_path / "run"
-    cmd = [sys.executable, "-c", _HELD_CLI, "simulate", "disk_pair", "--model", "mesh",
-           "--segments", "512", "--views", "720", "--rays-per-bin", "16", "--jobs", "2",
-           "--run-dir", str(run), "-o", str(tmp_path / "r.npz"), "--quiet"]
+    # the pixel model: its --jobs are worker processes (the mesh model's are threads)
+    cmd = [sys.executable, "-c", _HELD_CLI, "simulate", "disk_pair", "--model", "pixel",
+           "--views", "720", "--jobs", "2", "--run-dir", str(run), "-o",
+           str(tmp_path / "r.npz"), "--quiet"]
     return run, subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                  text=True)
 

@@ -36,7 +36,8 @@ interval, not a point: along the transverse axis u the range changes at dr/du = 
 The ray's weight is spread over that interval (a box in slice mode; in 3-D the sum of the u
 and v boxes, a trapezoid), exactly as the flat facet would return it.
 
-Layout: :mod:`.embree` (the geometry a worker traces, Embree scenes and their cache),
+Layout: :mod:`.embree` (the geometry a worker traces, Embree scenes and their cache, the
+backends), :mod:`.embree4` (the packet backend: Embree 4 through ctypes and numba),
 :mod:`.grid` (ray grids and their defaults), :mod:`.views` (one view's hits and normals),
 :mod:`.hits` (the :class:`Hits` record), :mod:`.model` (the entry points :func:`trace`,
 :func:`simulate_mesh`, :func:`first_hits`, :func:`occluded`). Weighing and binning are
@@ -45,12 +46,13 @@ Layout: :mod:`.embree` (the geometry a worker traces, Embree scenes and their ca
 
 from __future__ import annotations
 
+from .embree import BACKENDS
 from .grid import MODES, SAMPLINGS
 from .hits import Hits
 from .views import BACK_FACES, NORMALS
 
 __all__ = ["Hits", "trace", "simulate_mesh", "first_hits", "occluded", "NORMALS", "MODES",
-           "BACK_FACES", "SAMPLINGS"]
+           "BACK_FACES", "SAMPLINGS", "BACKENDS"]
 
 #: The entry points import the weigh stage, which imports :class:`Hits` from this package:
 #: they are loaded on first use, so the records stay importable below the weigh stage.

@@ -4,10 +4,12 @@ size, and a per-process cache of scenes keyed by content."""
 from __future__ import annotations
 
 import math
+import threading
 import warnings
 
 import numpy as np
 
+from .._validate import check_choice
 from ..errors import MeshladarWarning, ParameterError
 from ..precision import FAR_RATIO as _FAR_RATIO
 from ..precision import SCENE_RADIUS_RANGE
@@ -75,36 +77,95 @@ def _digest(v, f):
     return h.hexdigest()
 
 
-#: Embree scenes built in this process, most recent last, keyed by the geometry's content:
-#: alternating between a few meshes (a study, a comparison) reuses each one's BVH.
+#: The mesh engine's ray casters. "packets": coherent packets of the CPU's native width,
+#: cast through the Embree 4 library that the embreex wheel ships (:mod:`.embree4`);
+#: "embreex": embreex's own run(), one ray at a time, the reference; "auto": packets when
+#: they load, else embreex (said once, in a warning).
+BACKENDS = ("auto", "packets", "embreex")
+_FALLBACK_SAID = False
+
+
+def resolve_backend(backend):
+    """The backend a run uses: "packets" or "embreex" (see :data:`BACKENDS`)."""
+    check_choice("backend", backend, BACKENDS)
+    if backend == "embreex":
+        return backend
+    from . import embree4
+
+    ok, why = embree4.available()
+    if ok:
+        return "packets"
+    if backend == "packets":
+        raise ParameterError(f"backend='packets' cannot load here ({why}); use "
+                             "backend='embreex' or 'auto'")
+    global _FALLBACK_SAID
+    if not _FALLBACK_SAID:
+        _FALLBACK_SAID = True
+        warnings.warn(f"the packet backend cannot load ({why}): the mesh engine casts with "
+                      "embreex, one ray at a time (backend='embreex'); the numbers are the "
+                      "same, slower", MeshladarWarning, stacklevel=4)
+    return "embreex"
+
+
+#: Embree scenes built in this process, most recent last, keyed by the geometry's content
+#: and the backend: alternating between a few meshes (a study, a comparison) reuses each
+#: one's BVH. Threads of one run share them (the lock guards the cache, not the casts).
 _EMBREE_CACHE: dict = {}
-
-
 _EMBREE_CACHE_SIZE = 4
+_CACHE_LOCK = threading.Lock()
 
 
+def _embree_scene(geo: _Geometry, backend: str = "embreex"):
+    """The Embree scene of the geometry for a resolved backend, built once per process."""
+    with _CACHE_LOCK:
+        key = (geo.key, backend)
+        scene = _EMBREE_CACHE.pop(key, None)
+        if scene is None:
+            unit = np.ascontiguousarray(geo.shifted / geo.scale, dtype=np.float32)
+            raw = _packet_scene(unit, geo.faces32) if backend == "packets" else \
+                _embreex_scene(unit, geo.faces32)
+            scene = _Embree(raw, geo.scale)
+            while len(_EMBREE_CACHE) >= _EMBREE_CACHE_SIZE:
+                del _EMBREE_CACHE[next(iter(_EMBREE_CACHE))]       # the least recently used
+        _EMBREE_CACHE[key] = scene
+        return scene
 
-def _embree_scene(geo: _Geometry):
-    """The Embree scene of the geometry, built once per process (cached by content)."""
-    scene = _EMBREE_CACHE.pop(geo.key, None)
-    if scene is None:
-        try:
-            from embreex import rtcore_scene
-            from embreex.mesh_construction import TriangleMesh
-        except ImportError as exc:  # pragma: no cover - embreex is a core dependency
-            raise ImportError("the mesh model needs embreex: pip install embreex") from exc
-        # robust mode: watertight ray-triangle tests, so a ray through a shared edge (the
-        # diagonal of a prism's side quad crosses the mid-height slice plane) cannot slip
-        # between the two triangles
-        raw = rtcore_scene.EmbreeScene(robust=True)
-        TriangleMesh(raw, np.ascontiguousarray(geo.shifted / geo.scale, dtype=np.float32),
-                     geo.faces32)
-        scene = _Embree(raw, geo.scale)
-        while len(_EMBREE_CACHE) >= _EMBREE_CACHE_SIZE:
-            del _EMBREE_CACHE[next(iter(_EMBREE_CACHE))]       # the least recently used
-    _EMBREE_CACHE[geo.key] = scene
-    return scene
 
+def _embreex_scene(vertices, faces):
+    try:
+        from embreex import rtcore_scene
+        from embreex.mesh_construction import TriangleMesh
+    except ImportError as exc:  # pragma: no cover - embreex is a core dependency
+        raise ImportError("the mesh model needs embreex: pip install embreex") from exc
+    # robust mode: watertight ray-triangle tests, so a ray through a shared edge (the
+    # diagonal of a prism's side quad crosses the mid-height slice plane) cannot slip
+    # between the two triangles
+    raw = rtcore_scene.EmbreeScene(robust=True)
+    TriangleMesh(raw, vertices, faces)
+    return raw
+
+
+class _Packets:
+    """A packet scene behind embreex's ``run`` interface (one direction per call), so every
+    path of the engine casts through either backend unchanged."""
+
+    def __init__(self, scene):
+        self.scene = scene
+
+    def run(self, origins, directions, output=None, query="INTERSECT"):
+        d = np.asarray(directions, dtype=np.float32).reshape(-1, 3)
+        if len(d) != 1:
+            raise ValueError("the packet backend casts one direction per call")
+        if query == "OCCLUDED":
+            return np.where(self.scene.occluded_grid(origins, d[0]), 0, -1)
+        prim, tfar, u, v = self.scene.cast_grid(origins, d[0], barycentrics=True)
+        return {"primID": prim, "tfar": tfar, "u": u, "v": v}
+
+
+def _packet_scene(vertices, faces):
+    from . import embree4
+
+    return _Packets(embree4.Scene(vertices, faces, robust=True))
 
 
 class _Embree:

@@ -17,7 +17,7 @@ from ..precision import RECEIVER_LIFT as _RECEIVER_LIFT
 from ..scene import Scene
 from ..sinogram import Sinogram
 from ..weighing import _bin_one, _material_table, _sinogram
-from .embree import _embree_scene, _Geometry
+from .embree import _embree_scene, _Geometry, resolve_backend
 from .grid import (MAX_RAYS_PER_VIEW, MODES, _estimate_rays, _largest_grid, _ray_grid,
                    _sampling, _spacing)
 from .hits import Hits
@@ -68,10 +68,10 @@ def _options(scene, ladar, mode, normals, back_faces, z0):
 
 
 def _job(geo, views, ladar_vectors, mode, spacing, z0_shifted, back_faces, seed, edges,
-         weigh_with, receivers=None):
+         weigh_with, receivers=None, backend="embreex"):
     """Trace a chunk of views (the stream's per-chunk job): the views' hits (``weigh_with``
     None), or their binned values, rays and back-face hits as a dict of arrays."""
-    scene = _embree_scene(geo)
+    scene = _embree_scene(geo, backend)
     if (weigh_with is not None and geo.normals == "flat" and receivers is None
             and not weigh_with[1]
             and all(m.kernel_params is not None for m in weigh_with[0])):
@@ -133,7 +133,7 @@ def first_hits(scene, view_vector, *, ray_spacing):
         raise ParameterError(f"view_vector must be one (3,) direction; got shape {w.shape}")
     spacing = check_real("ray_spacing", ray_spacing, low=0.0, low_open=True)
     geo = _Geometry(scene, "flat")
-    emb = _embree_scene(geo)
+    emb = _embree_scene(geo, resolve_backend("auto"))
     o, L, _, _ = _ray_grid(geo, w, "3d", spacing, 0.0, None)
     res = emb.run(o, np.ascontiguousarray((-w)[None, :], dtype=np.float32), output=1)
     hit = res["primID"] >= 0
@@ -151,7 +151,7 @@ def occluded(scene, points, direction, *, lift=_RECEIVER_LIFT):
         raise ParameterError("occluded needs a mesh scene")
     d = unit_vectors("direction", direction)
     geo = _Geometry(scene, "flat")
-    emb = _embree_scene(geo)
+    emb = _embree_scene(geo, resolve_backend("auto"))
     p = np.asarray(points, dtype=np.float64) - geo.center + lift * geo.radius * d
     return emb.run(np.ascontiguousarray(p, dtype=np.float32),
                    np.ascontiguousarray(d[None, :], dtype=np.float32), query="OCCLUDED") != -1
@@ -195,8 +195,10 @@ def _job_description(geo, scene, ladar, mode, spacing, z0, back_faces, seed, wei
 
 
 def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_bin, seed,
-         jobs, executor, progress, weigh_with, receiver=None, run_dir=None, sampling=None):
+         jobs, executor, progress, weigh_with, receiver=None, run_dir=None, sampling=None,
+         backend="auto"):
     mode, geo, z0 = _options(scene, ladar, mode, normals, back_faces, z0)
+    backend = resolve_backend(backend)
     sampling, seed = _sampling(mode, sampling, seed)
     if weigh_with is not None:
         check_flag("footprint", weigh_with[1])
@@ -223,18 +225,18 @@ def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_b
     results = run_chunks(
         _job, geo, ladar.n_views, chunk_size=_VIEWS_PER_TASK,
         args=(np.asarray(ladar.view_vectors, dtype=np.float64), mode, spacing, z0_shifted,
-              back_faces, seed, ladar.bin_edges, weigh_with, receivers),
+              back_faces, seed, ladar.bin_edges, weigh_with, receivers, backend),
         jobs=jobs, executor=executor, progress=progress, unit="views",
         work=_estimate_rays(geo, ladar, mode, spacing), run_dir=run_dir, job=job,
-        arrays={"values": (ladar.n_bins,), "rays": (), "backs": ()})
+        arrays={"values": (ladar.n_bins,), "rays": (), "backs": ()}, threads=True)
     run = {"mode": mode, "ray_spacing": spacing, "z0": z0, "sampling": sampling, "seed": seed,
-           "receiver": receivers}
+           "receiver": receivers, "backend": backend}
     return geo, run, area, results
 
 
 def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0=None,
           ray_spacing=None, rays_per_bin=None, sampling=None, seed=None, receiver=None,
-          jobs=None, executor=None, progress=False) -> Hits:
+          jobs=None, executor=None, progress=False, backend="auto") -> Hits:
     """Trace every view once and keep the hits (geometry only): re-weigh them with
     :func:`weigh` for any coating without tracing again.
 
@@ -267,12 +269,21 @@ def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0
         Each hit then casts one occlusion ray toward the receiver, F is the bistatic SR
         BRDF, and range is half the two-way path, r = −p·(w + w_r)/2.
     jobs : int, optional
-        Worker processes (embreex holds the GIL during casts, so threads do not help).
-        Default: 1 for small jobs, all cores from 4e6 rays.
+        Worker threads. Both backends release the GIL while they cast, so the threads of a
+        run share one Embree scene (nothing pickled, nothing rebuilt). Default: 1 below
+        2e5 rays in all, else one per core (at most one per chunk of 8 views).
     executor : concurrent.futures.Executor, optional
-        Any executor (e.g. a Dask client's) to run chunks of views on; overrides ``jobs``.
+        Any executor (e.g. a Dask client's, whose workers are processes on other machines)
+        to run chunks of views on; overrides ``jobs``.
     progress : bool
         A progress bar on a terminal.
+    backend : {"auto", "packets", "embreex"}
+        How rays are cast: "packets", coherent packets of the CPU's native width through
+        the Embree 4 library embreex ships (:mod:`meshladar.raytrace.embree4`); "embreex",
+        one ray at a time through embreex (the reference); "auto" (default), packets when
+        they load, else embreex with one warning saying so. Both give the same hits (a ray
+        exactly along an edge shared by two faces may report the other face). The result's
+        ``info["backend"]`` says which ran.
 
     Returns
     -------
@@ -293,7 +304,7 @@ def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0
         scene, ladar, mode=mode, normals=normals, back_faces=back_faces, z0=z0,
         ray_spacing=ray_spacing, rays_per_bin=rays_per_bin, seed=seed, jobs=jobs,
         executor=executor, progress=progress, weigh_with=None, receiver=receiver,
-        sampling=sampling)
+        sampling=sampling, backend=backend)
     receivers = run["receiver"]
     per_view = [h for res in results for h in res]
     vectors = ladar.view_vectors
@@ -321,7 +332,7 @@ def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0
 def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-sided", z0=None,
                   ray_spacing=None, rays_per_bin=None, footprint=None, sampling=None,
                   seed=None, receiver=None, jobs=None, executor=None, progress=False,
-                  run_dir=None) -> Sinogram:
+                  run_dir=None, backend="auto") -> Sinogram:
     """Trace and weigh in one streaming pass.
 
     Each chunk of views is binned and its hits dropped, so memory stays bounded whatever
@@ -334,7 +345,7 @@ def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-side
     ----------
     scene, ladar : Scene, Ladar
     mode, normals, back_faces, z0, ray_spacing, rays_per_bin, sampling, seed, receiver,
-    jobs, executor, progress
+    jobs, executor, progress, backend
         As :func:`trace` (default normals "flat").
     footprint : bool, optional
         As :func:`meshladar.weigh` (default False: point binning).
@@ -358,7 +369,7 @@ def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-side
         scene, ladar, mode=mode, normals=normals, back_faces=back_faces, z0=z0,
         ray_spacing=ray_spacing, rays_per_bin=rays_per_bin, seed=seed, jobs=jobs,
         executor=executor, progress=progress, weigh_with=(tuple(scene.materials), footprint),
-        receiver=receiver, run_dir=run_dir, sampling=sampling)
+        receiver=receiver, run_dir=run_dir, sampling=sampling, backend=backend)
     from ..stream import joined
 
     vals, rays, back = (joined(results, k) for k in ("values", "rays", "backs"))

@@ -1,0 +1,132 @@
+"""The packet backend (meshladar.raytrace.embree4): the Embree 4 library of the embreex
+wheel through ctypes, against embreex itself, the reference."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import meshladar as ml
+from meshladar.errors import MeshladarWarning, ParameterError
+from meshladar.materials import ALUMINUM, DARK_GRAY
+from meshladar.raytrace import embree4
+
+from conftest import PAIR  # noqa: E402  (the shared disk pair)
+
+#: Backends agree to float64 round-off where they report the same face: ranges are
+#: recomputed in float64 from the same float32 origin and face plane.
+SAME_HITS_RTOL = 1e-12
+
+
+def _sphere(subdivisions=4):
+    return ml.Scene.from_parts([ml.mesh.sphere((0.1, -0.2, 0.3), 0.5, 0,
+                                               subdivisions=subdivisions)], [DARK_GRAY])
+
+
+def test_the_library_is_embree_4_with_a_native_packet_width():
+    lib = embree4.library()
+    assert lib.version[0] == 4 and lib.width in (4, 8, 16) and lib.native[lib.width]
+    assert embree4.available() == (True, lib.path)
+
+
+def _assert_same_hits(a, b):
+    assert a.size == b.size > 0
+    for name in ("view", "material", "rays", "back_face_hits"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    for name in ("range", "cos_theta", "sin_theta", "spread", "bistatic", "weight_factor"):
+        x, y = getattr(a, name), getattr(b, name)
+        if x is None:
+            assert y is None
+            continue
+        np.testing.assert_allclose(x, y, rtol=SAME_HITS_RTOL, atol=1e-15)
+
+
+@pytest.mark.parametrize("options", [
+    {"normals": "flat"},
+    {"normals": "smooth"},                          # the hits' barycentrics
+    {"normals": "flat", "receiver": (0.6, 0.8, 0.0)},   # occlusion rays toward the receiver
+], ids=["flat", "smooth", "bistatic"])
+def test_packets_give_embreexs_hits_and_sinograms(options):
+    scene = _sphere()
+    ladar = ml.Ladar.covering(scene, n_bins=32, angles_deg=[0.0, 37.0, 145.0])
+    a = ml.trace(scene, ladar, backend="embreex", rays_per_bin=4, **options)
+    b = ml.trace(scene, ladar, backend="packets", rays_per_bin=4, **options)
+    assert a.info["backend"] == "embreex" and b.info["backend"] == "packets"
+    _assert_same_hits(a, b)
+    sa, sb = ml.weigh(a), ml.weigh(b)
+    np.testing.assert_allclose(sb.values, sa.values, rtol=SAME_HITS_RTOL,
+                               atol=SAME_HITS_RTOL * np.abs(sa.values).max())
+
+
+def test_the_streaming_paths_agree_too():
+    # the fused monostatic path (flat normals, point bins) and the slice mode of a phantom
+    mesh = PAIR.tessellate(256)
+    ladar = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 15.0))
+    for kwargs in ({}, {"footprint": True, "normals": "exact"}):
+        a = ml.simulate(mesh, ladar, model="mesh", backend="embreex", **kwargs)
+        b = ml.simulate(mesh, ladar, model="mesh", backend="packets", **kwargs)
+        assert b.info["backend"] == "packets"
+        np.testing.assert_allclose(b.values, a.values, rtol=SAME_HITS_RTOL,
+                                   atol=SAME_HITS_RTOL * np.abs(a.values).max())
+    scene = ml.Scene.from_parts([ml.mesh.sphere((0, 0, 0), 0.5, 0, subdivisions=3)],
+                                [ALUMINUM])
+    ladar = ml.Ladar.covering(scene, n_bins=16, view_vectors=ml.mesh.fibonacci_sphere(6))
+    a = ml.simulate(scene, ladar, model="mesh", backend="embreex")
+    b = ml.simulate(scene, ladar, model="mesh", backend="packets")
+    np.testing.assert_allclose(b.values, a.values, rtol=SAME_HITS_RTOL,
+                               atol=SAME_HITS_RTOL * np.abs(a.values).max())
+
+
+def test_threads_share_one_scene_and_give_the_serial_numbers():
+    scene = _sphere(3)
+    ladar = ml.Ladar.covering(scene, n_bins=32, angles_deg=np.arange(0.0, 360.0, 10.0))
+    one = ml.simulate(scene, ladar, model="mesh", jobs=1)
+    two = ml.simulate(scene, ladar, model="mesh", jobs=2)
+    np.testing.assert_array_equal(two.values, one.values)
+
+
+def test_a_backend_that_cannot_load_is_said_once_and_never_changes_the_numbers(monkeypatch):
+    from meshladar.raytrace import embree as engine
+
+    scene = _sphere(2)
+    ladar = ml.Ladar.covering(scene, n_bins=8, angles_deg=[0.0])
+    ref = ml.simulate(scene, ladar, model="mesh", backend="embreex")
+    monkeypatch.setattr(embree4, "_LIB", None)
+    monkeypatch.setattr(embree4, "_LIB_ERROR", "no Embree 4 library found (test)")
+    monkeypatch.setattr(engine, "_FALLBACK_SAID", False)
+    with pytest.warns(MeshladarWarning, match=r"the packet backend cannot load \(no Embree 4 "
+                                              r"library found \(test\)\): the mesh engine "
+                                              r"casts with embreex"):
+        got = ml.simulate(scene, ladar, model="mesh")
+    assert got.info["backend"] == "embreex"
+    np.testing.assert_array_equal(got.values, ref.values)
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")                    # said once, not on every call
+        ml.simulate(scene, ladar, model="mesh")
+    with pytest.raises(ParameterError, match=r"backend='packets' cannot load here \(no "
+                                             r"Embree 4 library found \(test\)\)"):
+        ml.simulate(scene, ladar, model="mesh", backend="packets")
+
+
+def test_an_unknown_backend_is_refused():
+    scene = _sphere(1)
+    with pytest.raises(ParameterError, match=r"backend must be one of \('auto', 'packets', "
+                                             r"'embreex'\); got 'optix'"):
+        ml.simulate(scene, ml.Ladar.covering(scene, n_bins=4, angles_deg=[0.0]),
+                    model="mesh", backend="optix")
+
+
+def test_a_wrong_library_path_is_a_reason_not_a_crash(tmp_path):
+    fake = tmp_path / "libembree4.so.4"
+    fake.write_bytes(b"not a shared library")
+    code = ("from meshladar.raytrace import embree4; ok, why = embree4.available(); "
+            "print(ok); print(why)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         env={"MESHLADAR_EMBREE4": str(fake), "PATH": ""}, check=True).stdout
+    ok, why = out.splitlines()[:2]
+    assert ok == "False" and str(fake) in why
