@@ -257,14 +257,21 @@ def _sr_monostatic(c, s, rho_d, eps, b, e, G, diffuse, specular):
 
 @njit(cache=True, nogil=True)
 def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, params,
-                  w, start, edges, area, ignore_back, out):
+                  w, start, edges, area, ignore_back, out, stamp, weight, tag):
     """Monostatic, flat-normal weighing and binning of one view's Embree hits, fused:
     out[k] += F(θ)·area for each hit with range start + t − o·w in bin k (o the float32 origin
     as cast), t the hit distance recomputed in float64 against the face's plane (as
-    meshladar.raytrace._refine_t).
+    meshladar.raytrace.views._refine_t).
     ``params`` rows are (rho_d, epsilon, b, e, G, has_diffuse, has_specular) per material.
+    With flat normals F·area is one number per face and view: it is evaluated at a face's
+    first hit and kept in ``weight`` (n_faces,), valid where ``stamp`` equals ``tag`` (a
+    number unique to the view), so the BRDF costs O(faces hit), not O(rays). The bin is
+    found in O(1) on uniform edges (a guess from the first and last edge, checked against
+    the edges exactly as a binary search would place the range), by bisection otherwise.
     Returns the number of back-face hits."""
     nb = edges.size - 1
+    e0 = edges[0]
+    inv = nb / (edges[nb] - edges[0])
     back = 0
     for i in range(prim.size):
         p = prim[i]
@@ -284,17 +291,23 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
         r = start + t - (origins[i, 0] * w[0] + origins[i, 1] * w[1] + origins[i, 2] * w[2])
         if r < edges[0] or r >= edges[nb]:
             continue
-        lo = 0
-        hi = nb
-        while hi - lo > 1:
-            mid = (lo + hi) // 2
-            if edges[mid] <= r:
-                lo = mid
-            else:
-                hi = mid
-        s = math.sqrt(max(1.0 - c * c, 0.0))
-        m = face_material[p]
-        f = _sr_monostatic(c, s, params[m, 0], params[m, 1], params[m, 2], params[m, 3],
-                           params[m, 4], params[m, 5] > 0.5, params[m, 6] > 0.5)
-        out[lo] += f * area
+        k = min(max(int((r - e0) * inv), 0), nb - 1)
+        if not (edges[k] <= r and r < edges[k + 1]):
+            lo = 0
+            hi = nb
+            while hi - lo > 1:
+                mid = (lo + hi) // 2
+                if edges[mid] <= r:
+                    lo = mid
+                else:
+                    hi = mid
+            k = lo
+        if stamp[p] != tag:
+            s = math.sqrt(max(1.0 - c * c, 0.0))
+            m = face_material[p]
+            weight[p] = _sr_monostatic(c, s, params[m, 0], params[m, 1], params[m, 2],
+                                       params[m, 3], params[m, 4], params[m, 5] > 0.5,
+                                       params[m, 6] > 0.5) * area
+            stamp[p] = tag
+        out[k] += weight[p]
     return back

@@ -105,6 +105,9 @@ def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces,
     from .. import _kernels
 
     params = _material_table(materials)
+    # each face's F·area for the view being binned (valid where stamp is the view's tag)
+    stamp = np.zeros(len(geo.faces), np.int64)
+    weight = np.empty(len(geo.faces))
     vals = np.zeros((len(views), len(edges) - 1))
     rays, backs = [], []
     for j, i in enumerate(views):
@@ -116,7 +119,7 @@ def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces,
         backs.append(_kernels.bin_flat_hits(res["primID"], res["tfar"], o, geo.plane_d,
                                             geo.face_normals, geo.material, params, w,
                                             start, edges, area, back_faces == "ignore",
-                                            vals[j]))
+                                            vals[j], stamp, weight, j + 1))
         rays.append(len(o))
     return {"values": vals, "rays": np.array(rays, np.int64), "backs": np.array(backs, np.int64)}
 
