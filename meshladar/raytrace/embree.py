@@ -56,6 +56,17 @@ class _Geometry:
 
 
 
+def geometry(scene: Scene, normals: str) -> _Geometry:
+    """The scene's traced geometry for a normal mode, built once per scene and mode: a
+    Scene's parts are immutable, so a second call (another view, another coating, the
+    viewer) reuses the concatenated arrays, face planes, hull and content digest."""
+    cache = scene.__dict__.setdefault("_geometries", {})
+    geo = cache.get(normals)
+    if geo is None:
+        geo = cache[normals] = _Geometry(scene, normals)
+    return geo
+
+
 def _check_scale(radius, offset):
     lo, hi = SCENE_RADIUS_RANGE
     if not lo <= radius <= hi:

@@ -17,7 +17,7 @@ from ..precision import RECEIVER_LIFT as _RECEIVER_LIFT
 from ..scene import Scene
 from ..sinogram import Sinogram
 from ..weighing import _bin_one, _material_table, _sinogram
-from .embree import _embree_scene, _Geometry, resolve_backend
+from .embree import _embree_scene, geometry, resolve_backend
 from .grid import (MAX_RAYS_PER_VIEW, MODES, _estimate_rays, _largest_grid, _ray_grid,
                    _sampling, _spacing)
 from .hits import Hits
@@ -53,7 +53,7 @@ def _options(scene, ladar, mode, normals, back_faces, z0):
     if z0 is not None and mode == "3d":
         raise ParameterError(f"z0 places the slice plane of mode='slice'; got z0={z0!r} "
                              "with mode='3d'")
-    geo = _Geometry(scene, normals)
+    geo = geometry(scene, normals)
     if z0 is None:
         z0 = float(geo.center[2])
     z0 = check_real("z0", z0)
@@ -135,7 +135,7 @@ def first_hits(scene, view_vector, *, ray_spacing):
     if w.shape != (3,):
         raise ParameterError(f"view_vector must be one (3,) direction; got shape {w.shape}")
     spacing = check_real("ray_spacing", ray_spacing, low=0.0, low_open=True)
-    geo = _Geometry(scene, "flat")
+    geo = geometry(scene, "flat")
     emb = _embree_scene(geo, resolve_backend("auto"))
     o, L, _, _ = _ray_grid(geo, w, "3d", spacing, 0.0, None)
     res = emb.run(o, np.ascontiguousarray((-w)[None, :], dtype=np.float32), output=1)
@@ -153,7 +153,7 @@ def occluded(scene, points, direction, *, lift=_RECEIVER_LIFT):
     if not isinstance(scene, Scene) or not scene.is_mesh:
         raise ParameterError("occluded needs a mesh scene")
     d = unit_vectors("direction", direction)
-    geo = _Geometry(scene, "flat")
+    geo = geometry(scene, "flat")
     emb = _embree_scene(geo, resolve_backend("auto"))
     p = np.asarray(points, dtype=np.float64) - geo.center + lift * geo.radius * d
     return emb.run(np.ascontiguousarray(p, dtype=np.float32),
