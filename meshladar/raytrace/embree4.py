@@ -82,6 +82,7 @@ import glob
 import importlib.util
 import os
 import sys
+import threading
 
 import numpy as np
 from numba import njit
@@ -207,6 +208,7 @@ class EmbreeLib:
                        16: prop(RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED)}
         # widest native packet; without AVX-512, rtcIntersect16 loops over single rays
         self.width = next((w for w in (16, 8, 4) if self.native[w]), 4)
+        _self_test(self)
 
     def check(self, what):
         err = self.rtcGetDeviceError(self.device)
@@ -215,13 +217,49 @@ class EmbreeLib:
             raise RuntimeError(f"Embree error {err} in {what}: {msg.decode(errors='replace')}")
 
 
+def _self_test(lib):
+    """Check the struct layouts this module relies on against the library itself, once:
+    one triangle (z = 0, corners (0,0), (1,0), (0,1)) and a packet of every width whose
+    lanes alternate between rays that hit it at known (t, u, v) and rays that miss, plus
+    the occlusion query. A library built with other layouts fails here, not later."""
+    v = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], np.float32)
+    f = np.array([[0, 1, 2]], np.uint32)
+    scene = Scene(v, f, lib=lib)
+    try:
+        for w in (4, 8, 16):
+            n = w + 3                                   # a full packet and a masked tail
+            k = np.arange(n)
+            x = np.where(k % 2 == 0, 0.25, 2.0).astype(np.float32)     # odd lanes miss
+            o = np.stack([x, np.full(n, 0.125, np.float32), np.full(n, 2.0 + k, np.float32)], 1)
+            prim, tfar, u, vv = scene.cast_grid(o, np.array([0, 0, -1], np.float32), width=w,
+                                                barycentrics=True)
+            hit = k % 2 == 0
+            blocked = scene.occluded_grid(o, np.array([0, 0, -1], np.float32), width=w)
+            if not (np.array_equal(prim, np.where(hit, 0, -1))
+                    and np.allclose(tfar[hit], 2.0 + k[hit])
+                    and np.allclose(u[hit], 0.25) and np.allclose(vv[hit], 0.125)
+                    and np.array_equal(blocked, hit)):
+                raise OSError(f"{lib.path}: Embree {'.'.join(map(str, lib.version))} does not "
+                              f"answer a {w}-wide packet as the layouts this module uses "
+                              "expect (a build with other options?)")
+    finally:
+        scene.release()
+
+
 _LIB = None
 _LIB_ERROR = None
+_LIB_LOCK = threading.Lock()
 
 
 def library():
     """The process-wide EmbreeLib (loaded and its device created on first use); raises
-    OSError, with the reason, when it cannot be loaded."""
+    OSError, with the reason, when it cannot be loaded (once per process: the reason is
+    kept)."""
+    with _LIB_LOCK:
+        return _load()
+
+
+def _load():
     global _LIB, _LIB_ERROR
     if _LIB is None:
         if _LIB_ERROR is not None:
