@@ -119,7 +119,7 @@ def interleaved(fns, *, repeats=3):
     return {k: statistics.median(v) for k, v in times.items()}
 
 
-def bench_mesh(*, repeats=3, subdivisions=6, rays_per_view=1_000_000, views=16):
+def bench_mesh(*, repeats=3, subdivisions=6, rays_per_view=1_000_000, views=16, build=True):
     """Mesh engine throughput against raw embreex on the same rays, and its build cost.
 
     Everything is timed in rounds (:func:`interleaved`) in one process on the same rays.
@@ -129,7 +129,7 @@ def bench_mesh(*, repeats=3, subdivisions=6, rays_per_view=1_000_000, views=16):
     ``stratified_mrays``, ``two_thread_mrays`` (packets, 2 threads), their ratios,
     ``packet_width``, and the build of a 1.3M-triangle mesh: embreex's upload and BVH
     (``upload_s``, ``bvh_s``) against the packet backend's shared-buffer scene
-    (``packet_build_s``).
+    (``packet_build_s``), unless ``build`` is False.
     """
     import math
 
@@ -168,7 +168,7 @@ def bench_mesh(*, repeats=3, subdivisions=6, rays_per_view=1_000_000, views=16):
                      "pipe_embreex": pipeline("embreex"),
                      "stratified": pipeline("packets", sampling="stratified"),
                      "two": pipeline("packets", jobs=2)}, repeats=repeats)
-    build = _build_split(8)
+    build = _build_split(8) if build else {}
     m = {k: n_rays / v / 1e6 for k, v in t.items()}
     return {"faces": len(geo.faces), "rays": n_rays, "views": views,
             "packet_width": embree4.library().width,
@@ -310,6 +310,12 @@ def report(*, repeats=5, full=False):
            f"({100 * m['stratified_over_regular']:.0f}% of the regular grid's)")
     yield (f"  pipeline, packets, 2 threads       {m['two_thread_mrays']:7.2f} Mrays/s "
            f"({m['two_over_one']:.2f}x one, {m['two_over_raw']:.2f}x raw embreex)")
+    for sub in (3, 8):                                 # 1.3k and 1.3M triangles
+        o = bench_mesh(repeats=2, subdivisions=sub, views=4, build=False)
+        yield (f"  {o['faces']:>8} triangles, 4 views: raw embreex {o['raw_mrays']:5.2f}, "
+               f"packet cast {o['packet_mrays']:5.2f} ({o['packet_over_raw']:.2f}x), "
+               f"pipeline {o['pipeline_mrays']:5.2f} ({o['pipeline_over_raw']:.2f}x), "
+               f"2 threads {o['two_thread_mrays']:5.2f} Mrays/s")
     yield (f"  build, {m['build_faces']} triangles: embreex upload {m['upload_s']:.2f} s + BVH "
            f"{m['bvh_s']:.2f} s = {m['build_over_bvh']:.1f}x the BVH; packet scene "
            f"{m['packet_build_s']:.2f} s = {m['packet_build_over_bvh']:.2f}x the BVH")

@@ -173,6 +173,25 @@ class _Packets:
         return {"primID": prim, "tfar": tfar, "u": u, "v": v}
 
 
+    def cast_bin_grid(self, plan, direction, spacing, scale, inverse, bins):
+        """One view from grid to bins in one compiled loop (see
+        :func:`.embree4.cast_bin_grid`): ``plan`` is :func:`.grid._grid_plan`'s,
+        ``bins`` the weigh-and-bin arguments from ``plane_d`` to ``tag``."""
+        from . import embree4
+
+        s, t, du, dv, u, v, L = plan
+        sc = self.scene
+        lib = sc.lib
+        empty = np.empty((0, 0), np.float32)
+        w = np.asarray(direction, dtype=np.float64)
+        return embree4.cast_bin_grid(
+            lib.intersect[lib.width], sc._live(), lib.width,
+            embree4.RTC_RAY_QUERY_FLAG_COHERENT, s.astype(np.float32), t.astype(np.float32),
+            empty if du is None else du, empty if dv is None else dv, np.float32(spacing),
+            u.astype(np.float32), v.astype(np.float32), (L * w).astype(np.float32),
+            (-w).astype(np.float32), np.float32(inverse), float(scale), *bins)
+
+
 def _packet_scene(vertices, faces):
     from . import embree4
 
@@ -189,6 +208,15 @@ class _Embree:
         self.scene = scene
         self.scale = scale
         self.inverse = np.float32(1.0 / scale)
+
+    @property
+    def fused(self):
+        """Whether the backend weighs and bins inside its cast (the packet backend)."""
+        return hasattr(self.scene, "cast_bin_grid")
+
+    def cast_bin_grid(self, plan, direction, spacing, bins):
+        return self.scene.cast_bin_grid(plan, direction, spacing, self.scale, self.inverse,
+                                        bins)
 
     def run(self, origins, directions, **kwargs):
         if self.scale != 1.0:

@@ -87,6 +87,8 @@ import threading
 import numpy as np
 from numba import njit
 
+from .._kernels import flat_hit
+
 __all__ = ["library", "available", "Scene"]
 
 # ---------------------------------------------------------------- constants (see docstring)
@@ -460,3 +462,69 @@ def occluded_grid(fn, scene, o, d, tmax, w, flags, out):
         m = min(w, n - start)
         for j in range(m):
             out[start + j] = f32[_TFAR * w + j] == -np.inf
+
+
+@njit(cache=True, nogil=True)
+def cast_bin_grid(fn, scene, w, flags, s, t, du, dv, sp, u, v, lw, d, inv_scale, scale,
+                  plane_d, face_normals, face_material, params, wv, start, edges, area,
+                  ignore_back, out, stamp, weight, tag):
+    """One view, grid to bins in one loop (monostatic, flat normals, point bins): each
+    packet's float32 origins are built as :func:`meshladar.raytrace.grid._ray_grid` builds
+    them (o = (S u + T v) + L w, S = s (+ δ du), T = t (+ δ dv) when ``du`` is not empty),
+    cast at unit size (× ``inv_scale``), and each hit weighed and binned by
+    :func:`meshladar._kernels.flat_hit` with Embree's distance scaled back (× ``scale``),
+    so the numbers are those of the unfused path; no per-ray array is made.
+    Returns (back-face hits, rays cast)."""
+    i32, f32, i64, base = _workspace()
+    _init_args(i32, i64, base, flags)
+    ns, nt = s.shape[0], t.shape[0]
+    n = ns * nt
+    jitter = du.shape[0] > 0
+    inv = (edges.size - 1) / (edges[edges.size - 1] - edges[0])
+    lanes = np.empty((w, 3), np.float32)
+    one = scale == 1.0
+    vi = _VALID_OFF // 4
+    back = 0
+    for first in range(0, n, w):
+        m = min(w, n - first)
+        for j in range(w):
+            r = first + j if j < m else first
+            a, b = r // nt, r % nt
+            if jitter:
+                S = np.float32(du[a, b] * sp) + s[a]
+                T = np.float32(dv[a, b] * sp) + t[b]
+            else:
+                S = s[a]
+                T = t[b]
+            for k in range(3):
+                lanes[j, k] = np.float32(np.float32(S * u[k]) + np.float32(T * v[k])) + lw[k]
+            ox, oy, oz = lanes[j, 0], lanes[j, 1], lanes[j, 2]
+            if not one:
+                ox, oy, oz = ox * inv_scale, oy * inv_scale, oz * inv_scale
+            f32[_ORG_X * w + j] = ox
+            f32[_ORG_Y * w + j] = oy
+            f32[_ORG_Z * w + j] = oz
+            f32[_TNEAR * w + j] = 0.0
+            f32[_DIR_X * w + j] = d[0]
+            f32[_DIR_Y * w + j] = d[1]
+            f32[_DIR_Z * w + j] = d[2]
+            f32[_TIME * w + j] = 0.0
+            f32[_TFAR * w + j] = np.inf
+            i32[_MASK * w + j] = -1
+            i32[_ID * w + j] = j
+            i32[_FLAGS * w + j] = 0
+            i32[vi + j] = -1 if j < m else 0
+            i32[_PRIMID * w + j] = -1
+            i32[_GEOMID * w + j] = -1
+            i32[_INSTID * w + j] = -1
+        fn(base + _VALID_OFF, scene, base, base + _ARGS_OFF)
+        for j in range(m):
+            if i32[_GEOMID * w + j] == -1:
+                continue
+            tf = f32[_TFAR * w + j]
+            if not one:
+                tf = np.float32(tf * scale)
+            back += flat_hit(i32[_PRIMID * w + j], tf, lanes[j, 0], lanes[j, 1], lanes[j, 2],
+                             plane_d, face_normals, face_material, params, wv, start, edges,
+                             inv, area, ignore_back, out, stamp, weight, tag)
+    return back, n

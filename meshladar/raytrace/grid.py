@@ -57,11 +57,13 @@ def _frame(w):
 
 
 
-def _ray_grid(geo, w, mode, spacing, z0_shifted, rng):
-    """Origins (n, 3) float32 in shifted coordinates, the start distance L, and (u, v).
-
-    Built component by component in float32 (Embree's precision): o = s u + t v + L w.
-    """
+def _grid_plan(geo, w, mode, spacing, z0_shifted, rng):
+    """The grid's recipe, for :func:`_ray_grid` and the packet backend's fused loop (which
+    builds the same float32 origins ray by ray): (s, t, du, dv, u, v, L) with s (ns,) and
+    t (nt,) the cell centres along u and v, and du, dv (ns, nt) float32 the stratified
+    offsets in 3-D (None on a regular grid, and in slice mode, whose offsets are drawn by
+    :func:`_ray_grid` itself). Ray (i, j) is o = S u + T v + L w, S = s_i (+ δ du_ij),
+    T = t_j (+ δ dv_ij), in that order of float32 operations."""
     u, v = _frame(w)
     L = (1.0 + _ORIGIN_MARGIN) * geo.radius + spacing
     su = geo.hull @ u
@@ -75,6 +77,18 @@ def _ray_grid(geo, w, mode, spacing, z0_shifted, rng):
         t_lo, t_hi = tv.min() - spacing, tv.max() + spacing
         nt = max(1, int(math.ceil((t_hi - t_lo) / spacing)))
         t = t_lo + (np.arange(nt) + 0.5) * spacing
+    du = dv = None
+    if rng is not None and mode == "3d":
+        du, dv = _stratified_offsets(s.size, t.size, rng)
+    return s, t, du, dv, u, v, L
+
+
+def _ray_grid(geo, w, mode, spacing, z0_shifted, rng):
+    """Origins (n, 3) float32 in shifted coordinates, the start distance L, and (u, v).
+
+    Built component by component in float32 (Embree's precision): o = s u + t v + L w.
+    """
+    s, t, du, dv, u, v, L = _grid_plan(geo, w, mode, spacing, z0_shifted, rng)
     o = np.empty((s.size, t.size, 3), dtype=np.float32)
     if rng is None:
         s32, t32 = s.astype(np.float32), t.astype(np.float32)
@@ -87,7 +101,6 @@ def _ray_grid(geo, w, mode, spacing, z0_shifted, rng):
             o[:, :, k] = S * u[k] + T * v[k]
     else:
         # in float32 (Embree's precision, as the regular grid): S = s + δ·du, T = t + δ·dv
-        du, dv = _stratified_offsets(s.size, t.size, rng)
         sp = np.float32(spacing)
         S = du
         S *= sp

@@ -18,8 +18,8 @@ from ..scene import Scene
 from ..sinogram import Sinogram
 from ..weighing import _bin_one, _material_table, _sinogram
 from .embree import _embree_scene, geometry, resolve_backend
-from .grid import (MAX_RAYS_PER_VIEW, MODES, _estimate_rays, _largest_grid, _ray_grid,
-                   _sampling, _spacing)
+from .grid import (MAX_RAYS_PER_VIEW, MODES, _estimate_rays, _grid_plan, _largest_grid,
+                   _ray_grid, _sampling, _spacing)
 from .hits import Hits
 from .views import BACK_FACES, NORMALS, _range_offset, _trace_view
 from ..precision import PARALLEL_SLACK
@@ -113,14 +113,20 @@ def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces,
     for j, i in enumerate(views):
         w = vectors[i]
         rng = None if seed is None else np.random.default_rng([seed, int(i)])
-        o, L, _, _ = _ray_grid(geo, w, mode, spacing, z0_shifted, rng)
-        res = scene.run(o, np.ascontiguousarray((-w)[None, :], dtype=np.float32), output=1)
         start = _range_offset(geo.center, w, None)
-        backs.append(_kernels.bin_flat_hits(res["primID"], res["tfar"], o, geo.plane_d,
-                                            geo.face_normals, geo.material, params, w,
-                                            start, edges, area, back_faces == "ignore",
-                                            vals[j], stamp, weight, j + 1))
-        rays.append(len(o))
+        bins = (geo.plane_d, geo.face_normals, geo.material, params, w, start, edges, area,
+                back_faces == "ignore", vals[j], stamp, weight, j + 1)
+        if scene.fused and (mode == "3d" or rng is None):
+            # packets: grid, cast, weigh and bin in one loop, no per-ray arrays
+            back, n = scene.cast_bin_grid(_grid_plan(geo, w, mode, spacing, z0_shifted, rng),
+                                          w, spacing, bins)
+        else:
+            o, L, _, _ = _ray_grid(geo, w, mode, spacing, z0_shifted, rng)
+            res = scene.run(o, np.ascontiguousarray((-w)[None, :], dtype=np.float32),
+                            output=1)
+            back, n = _kernels.bin_flat_hits(res["primID"], res["tfar"], o, *bins), len(o)
+        backs.append(back)
+        rays.append(n)
     return {"values": vals, "rays": np.array(rays, np.int64), "backs": np.array(backs, np.int64)}
 
 
