@@ -256,49 +256,6 @@ def _sr_monostatic(c, s, rho_d, eps, b, e, G, diffuse, specular):
 
 
 @njit(cache=True, nogil=True)
-def flat_hit(p, tf, ox, oy, oz, plane_d, face_normals, face_material, params, w, start, edges,
-             inv, area, ignore_back, out, stamp, weight, tag):
-    """Weigh and bin one monostatic flat-normal hit of face p (see :func:`bin_flat_hits`);
-    ``tf`` is Embree's distance, (ox, oy, oz) the float32 origin as cast, ``inv`` the number
-    of bins over the edges' span. Returns 1 for a back-face hit, else 0."""
-    nb = edges.size - 1
-    c = face_normals[p, 0] * w[0] + face_normals[p, 1] * w[1] + face_normals[p, 2] * w[2]
-    t = tf * 1.0
-    if abs(c) > 1e-6:
-        t = (plane_d[p] - (face_normals[p, 0] * ox + face_normals[p, 1] * oy
-                           + face_normals[p, 2] * oz)) / (-c)
-    back = 0
-    if c < 0.0:
-        back = 1
-        if ignore_back:
-            return back
-        c = -c
-    r = start + t - (ox * w[0] + oy * w[1] + oz * w[2])
-    if r < edges[0] or r >= edges[nb]:
-        return back
-    k = min(max(int((r - edges[0]) * inv), 0), nb - 1)
-    if not (edges[k] <= r and r < edges[k + 1]):
-        lo = 0
-        hi = nb
-        while hi - lo > 1:
-            mid = (lo + hi) // 2
-            if edges[mid] <= r:
-                lo = mid
-            else:
-                hi = mid
-        k = lo
-    if stamp[p] != tag:
-        s = math.sqrt(max(1.0 - c * c, 0.0))
-        m = face_material[p]
-        weight[p] = _sr_monostatic(c, s, params[m, 0], params[m, 1], params[m, 2],
-                                   params[m, 3], params[m, 4], params[m, 5] > 0.5,
-                                   params[m, 6] > 0.5) * area
-        stamp[p] = tag
-    out[k] += weight[p]
-    return back
-
-
-@njit(cache=True, nogil=True)
 def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, params,
                   w, start, edges, area, ignore_back, out, stamp, weight, tag):
     """Monostatic, flat-normal weighing and binning of one view's Embree hits, fused:
@@ -312,11 +269,45 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
     found in O(1) on uniform edges (a guess from the first and last edge, checked against
     the edges exactly as a binary search would place the range), by bisection otherwise.
     Returns the number of back-face hits."""
-    inv = (edges.size - 1) / (edges[edges.size - 1] - edges[0])
+    nb = edges.size - 1
+    e0 = edges[0]
+    inv = nb / (edges[nb] - edges[0])
     back = 0
     for i in range(prim.size):
-        if prim[i] >= 0:
-            back += flat_hit(prim[i], tfar[i], origins[i, 0], origins[i, 1], origins[i, 2],
-                             plane_d, face_normals, face_material, params, w, start, edges,
-                             inv, area, ignore_back, out, stamp, weight, tag)
+        p = prim[i]
+        if p < 0:
+            continue
+        c = face_normals[p, 0] * w[0] + face_normals[p, 1] * w[1] + face_normals[p, 2] * w[2]
+        t = tfar[i] * 1.0
+        if abs(c) > 1e-6:
+            t = (plane_d[p] - (face_normals[p, 0] * origins[i, 0]
+                               + face_normals[p, 1] * origins[i, 1]
+                               + face_normals[p, 2] * origins[i, 2])) / (-c)
+        if c < 0.0:
+            back += 1
+            if ignore_back:
+                continue
+            c = -c
+        r = start + t - (origins[i, 0] * w[0] + origins[i, 1] * w[1] + origins[i, 2] * w[2])
+        if r < edges[0] or r >= edges[nb]:
+            continue
+        k = min(max(int((r - e0) * inv), 0), nb - 1)
+        if not (edges[k] <= r and r < edges[k + 1]):
+            lo = 0
+            hi = nb
+            while hi - lo > 1:
+                mid = (lo + hi) // 2
+                if edges[mid] <= r:
+                    lo = mid
+                else:
+                    hi = mid
+            k = lo
+        if stamp[p] != tag:
+            s = math.sqrt(max(1.0 - c * c, 0.0))
+            m = face_material[p]
+            weight[p] = _sr_monostatic(c, s, params[m, 0], params[m, 1], params[m, 2],
+                                       params[m, 3], params[m, 4], params[m, 5] > 0.5,
+                                       params[m, 6] > 0.5) * area
+            stamp[p] = tag
+        out[k] += weight[p]
     return back

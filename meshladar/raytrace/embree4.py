@@ -87,7 +87,7 @@ import threading
 import numpy as np
 from numba import njit
 
-from .._kernels import flat_hit
+from .._kernels import bin_flat_hits
 
 __all__ = ["library", "available", "Scene"]
 
@@ -464,6 +464,11 @@ def occluded_grid(fn, scene, o, d, tmax, w, flags, out):
             out[start + j] = f32[_TFAR * w + j] == -np.inf
 
 
+#: Rays per block of hits handed to the weigh-and-bin kernel: small enough to stay in cache,
+#: large enough that the call costs nothing per ray.
+_BLOCK = 1024
+
+
 @njit(cache=True, nogil=True)
 def cast_bin_grid(fn, scene, w, flags, s, t, du, dv, sp, u, v, lw, d, inv_scale, scale,
                   plane_d, face_normals, face_material, params, wv, start, edges, area,
@@ -471,19 +476,22 @@ def cast_bin_grid(fn, scene, w, flags, s, t, du, dv, sp, u, v, lw, d, inv_scale,
     """One view, grid to bins in one loop (monostatic, flat normals, point bins): each
     packet's float32 origins are built as :func:`meshladar.raytrace.grid._ray_grid` builds
     them (o = (S u + T v) + L w, S = s (+ δ du), T = t (+ δ dv) when ``du`` is not empty),
-    cast at unit size (× ``inv_scale``), and each hit weighed and binned by
-    :func:`meshladar._kernels.flat_hit` with Embree's distance scaled back (× ``scale``),
-    so the numbers are those of the unfused path; no per-ray array is made.
-    Returns (back-face hits, rays cast)."""
+    cast at unit size (× ``inv_scale``), and the hits, with Embree's distance scaled back
+    (× ``scale``), are weighed and binned a cache-sized block at a time by
+    :func:`meshladar._kernels.bin_flat_hits`: the numbers of the unfused path, without
+    per-ray arrays. Returns (back-face hits, rays cast)."""
     i32, f32, i64, base = _workspace()
     _init_args(i32, i64, base, flags)
     ns, nt = s.shape[0], t.shape[0]
     n = ns * nt
     jitter = du.shape[0] > 0
-    inv = (edges.size - 1) / (edges[edges.size - 1] - edges[0])
-    lanes = np.empty((w, 3), np.float32)
     one = scale == 1.0
     vi = _VALID_OFF // 4
+    lanes = np.empty((w, 3), np.float32)
+    hit_prim = np.empty(_BLOCK + w, np.int32)
+    hit_t = np.empty(_BLOCK + w, np.float32)
+    hit_o = np.empty((_BLOCK + w, 3), np.float32)
+    held = 0
     back = 0
     for first in range(0, n, w):
         m = min(w, n - first)
@@ -522,9 +530,15 @@ def cast_bin_grid(fn, scene, w, flags, s, t, du, dv, sp, u, v, lw, d, inv_scale,
             if i32[_GEOMID * w + j] == -1:
                 continue
             tf = f32[_TFAR * w + j]
-            if not one:
-                tf = np.float32(tf * scale)
-            back += flat_hit(i32[_PRIMID * w + j], tf, lanes[j, 0], lanes[j, 1], lanes[j, 2],
-                             plane_d, face_normals, face_material, params, wv, start, edges,
-                             inv, area, ignore_back, out, stamp, weight, tag)
+            hit_prim[held] = i32[_PRIMID * w + j]
+            hit_t[held] = tf if one else np.float32(tf * scale)
+            hit_o[held, 0] = lanes[j, 0]
+            hit_o[held, 1] = lanes[j, 1]
+            hit_o[held, 2] = lanes[j, 2]
+            held += 1
+        if held >= _BLOCK or first + w >= n:
+            back += bin_flat_hits(hit_prim[:held], hit_t[:held], hit_o[:held], plane_d,
+                                  face_normals, face_material, params, wv, start, edges,
+                                  area, ignore_back, out, stamp, weight, tag)
+            held = 0
     return back, n
