@@ -742,6 +742,12 @@ api("simulate.mesh", lambda: _mesh_sim(), "ok",
 for _key, _v in {"x": "x", "int": 3, "empty": "", "upper": "3D"}.items():
     api(f"simulate.mesh.mode={_key}", lambda v=_v: _mesh_sim(mode=v), "error", "mode")
 api("simulate.mesh.mode=slice", lambda: _mesh_sim(mode="slice"), "ok", check=_finite)
+for _v in ("optix", "", None, 3):
+    api(f"simulate.mesh.backend={_v!r}", lambda v=_v: _mesh_sim(backend=v), "error", "backend")
+for _v in ("auto", "packets", "embreex"):
+    api(f"simulate.mesh.backend={_v}", lambda v=_v: _mesh_sim(backend=v), "ok", check=_finite)
+api("simulate.analytic.backend", lambda: ml.simulate(_disk(), _lad(), backend="packets"),
+    "error", "backend")
 for _key, _v in {"nan": nan, "inf": inf, "str": "x", "bool": True, "list": [0.0]}.items():
     api(f"simulate.mesh.z0={_key}", lambda v=_v: _mesh_sim(mode="slice", z0=v), "error", "z0")
 api("simulate.mesh.z0-with-3d", lambda: _mesh_sim(mode="3d", z0=0.1), "error", "z0")
@@ -1310,6 +1316,11 @@ cli("simulate.--views+--angles-deg", _SIM + ["--angles-deg", "0,90"], "error",
     ("--views", "--angles-deg"))
 cli("simulate.analytic+--jobs", _SIM + ["--jobs", "2"], "ok", check=_wrote("r.npz"))
 cli("simulate.analytic+--mode", _SIM + ["--mode", "3d"], "error", "--mode")
+cli("simulate.analytic+--backend", _SIM + ["--backend", "packets"], "error", "--backend")
+cli("simulate.--backend=optix", _MESH + ["--backend", "optix"], "error", "--backend",
+    setup=_SPHERE_FILE)
+cli("simulate.--backend=embreex", _MESH + ["--backend", "embreex"], "ok", setup=_SPHERE_FILE,
+    check=_wrote("r.npz"))
 cli("simulate.analytic+--pixel-size", _SIM + ["--pixel-size", "0.01"], "error",
     "--pixel-size")
 cli("simulate.analytic+--scheduler", _SIM + ["--scheduler", "nonsense"], "error",
