@@ -153,3 +153,23 @@ def test_the_fused_loop_gives_the_unfused_numbers_bit_for_bit(sampling, monkeypa
                                     backend="packets")
         assert fused.info["rays"] == plain.info["rays"] > 0
         np.testing.assert_array_equal(fused.values, plain.values)
+
+
+@pytest.mark.parametrize("sampling", ["regular", "stratified"])
+def test_one_big_view_splits_its_rows_over_threads(sampling):
+    # a single view is one chunk: its rows go to threads instead, each band with its own
+    # bins and weight cache, added in order (the one-thread numbers to rounding)
+    scene = _sphere(4)
+    ladar = ml.Ladar.covering(scene, n_bins=64, view_vectors=[[0.3, -0.4, 0.866]])
+    one = ml.simulate(scene, ladar, model="mesh", jobs=1, sampling=sampling,
+                      rays_per_bin=16)
+    for jobs in (2, 3):
+        many = ml.simulate(scene, ladar, model="mesh", jobs=jobs, sampling=sampling,
+                           rays_per_bin=16)
+        assert many.info["rays"] == one.info["rays"]
+        assert many.info["back_face_hits"] == one.info["back_face_hits"]
+        np.testing.assert_allclose(many.values, one.values, rtol=SAME_HITS_RTOL,
+                                   atol=SAME_HITS_RTOL * one.values.max())
+        again = ml.simulate(scene, ladar, model="mesh", jobs=jobs, sampling=sampling,
+                            rays_per_bin=16)
+        np.testing.assert_array_equal(again.values, many.values)     # reproducible

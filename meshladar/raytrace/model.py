@@ -5,6 +5,7 @@ per-chunk job; weighing is :mod:`meshladar.weighing`'s."""
 
 from __future__ import annotations
 
+import os
 import warnings
 
 import numpy as np
@@ -68,7 +69,7 @@ def _options(scene, ladar, mode, normals, back_faces, z0):
 
 
 def _job(geo, views, ladar_vectors, mode, spacing, z0_shifted, back_faces, seed, edges,
-         weigh_with, receivers=None, backend="embreex"):
+         weigh_with, receivers=None, backend="embreex", row_jobs=1):
     """Trace a chunk of views (the stream's per-chunk job): the views' hits (``weigh_with``
     None), or their binned values, rays and back-face hits as a dict of arrays."""
     scene = _embree_scene(geo, backend)
@@ -76,7 +77,7 @@ def _job(geo, views, ladar_vectors, mode, spacing, z0_shifted, back_faces, seed,
             and not weigh_with[1]
             and all(m.kernel_params is not None for m in weigh_with[0])):
         return _fast_job(geo, scene, ladar_vectors, views, mode, spacing, z0_shifted,
-                         back_faces, seed, edges, weigh_with[0], weigh_with[2])
+                         back_faces, seed, edges, weigh_with[0], weigh_with[2], row_jobs)
     out = []
     for i in views:
         w = ladar_vectors[i]
@@ -99,7 +100,7 @@ def _job(geo, views, ladar_vectors, mode, spacing, z0_shifted, back_faces, seed,
 
 
 def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces, seed, edges,
-              materials, area):
+              materials, area, row_jobs=1):
     """The common case fused in one compiled loop per view: monostatic, flat normals,
     point binning (no per-hit arrays beyond Embree's own output)."""
     from .. import _kernels
@@ -118,8 +119,11 @@ def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces,
                 back_faces == "ignore", vals[j], stamp, weight, j + 1)
         if scene.fused and (mode == "3d" or rng is None):
             # packets: grid, cast, weigh and bin in one loop, no per-ray arrays
-            back, n = scene.cast_bin_grid(_grid_plan(geo, w, mode, spacing, z0_shifted, rng),
-                                          w, spacing, bins)
+            plan = _grid_plan(geo, w, mode, spacing, z0_shifted, rng)
+            if row_jobs > 1:
+                back, n = _rows_on_threads(scene, plan, w, spacing, bins, row_jobs)
+            else:
+                back, n = scene.cast_bin_grid(plan, w, spacing, bins)
         else:
             o, L, _, _ = _ray_grid(geo, w, mode, spacing, z0_shifted, rng)
             res = scene.run(o, np.ascontiguousarray((-w)[None, :], dtype=np.float32),
@@ -129,6 +133,32 @@ def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces,
         rays.append(n)
     return {"values": vals, "rays": np.array(rays, np.int64), "backs": np.array(backs, np.int64)}
 
+
+
+def _rows_on_threads(scene, plan, w, spacing, bins, row_jobs):
+    """One big view's grid split into ``row_jobs`` bands of rows, cast on as many threads
+    (the fused loop releases the GIL), each band with its own bins and weight cache; the
+    bands' bins are added in order, so a given ``row_jobs`` always gives the same numbers
+    (and the one-thread numbers to rounding). Returns (back-face hits, rays cast)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    s, t, du, dv, u, v, L = plan
+    *head, out, stamp, weight, tag = bins
+    cuts = np.linspace(0, s.size, row_jobs + 1).astype(int)
+    parts = []
+    for a0, a1 in zip(cuts[:-1], cuts[1:]):
+        if a1 > a0:
+            band = (s[a0:a1], t, None if du is None else du[a0:a1],
+                    None if dv is None else dv[a0:a1], u, v, L)
+            parts.append((band, np.zeros_like(out), np.zeros_like(stamp),
+                          np.empty_like(weight)))
+    with ThreadPoolExecutor(len(parts)) as ex:
+        done = list(ex.map(lambda p: scene.cast_bin_grid(p[0], w, spacing,
+                                                         (*head, p[1], p[2], p[3], tag)),
+                           parts))
+    for _, band_out, _, _ in parts:
+        out += band_out
+    return sum(b for b, _ in done), sum(n for _, n in done)
 
 
 def first_hits(scene, view_vector, *, ray_spacing):
@@ -231,16 +261,32 @@ def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_b
     if run_dir is not None:
         job = _job_description(geo, scene, ladar, mode, spacing, z0, back_faces, seed,
                                weigh_with, receivers)
+    work = _estimate_rays(geo, ladar, mode, spacing)
     results = run_chunks(
         _job, geo, ladar.n_views, chunk_size=_VIEWS_PER_TASK,
         args=(np.asarray(ladar.view_vectors, dtype=np.float64), mode, spacing, z0_shifted,
-              back_faces, seed, ladar.bin_edges, weigh_with, receivers, backend),
+              back_faces, seed, ladar.bin_edges, weigh_with, receivers, backend,
+              _row_jobs(ladar.n_views, jobs, executor, work)),
         jobs=jobs, executor=executor, progress=progress, unit="views",
-        work=_estimate_rays(geo, ladar, mode, spacing), run_dir=run_dir, job=job,
+        work=work, run_dir=run_dir, job=job,
         arrays={"values": (ladar.n_bins,), "rays": (), "backs": ()}, threads=True)
     run = {"mode": mode, "ray_spacing": spacing, "z0": z0, "sampling": sampling, "seed": seed,
            "receiver": receivers, "backend": backend}
     return geo, run, area, results
+
+
+def _row_jobs(n_views, jobs, executor, work):
+    """Threads for the rows of a single view (the stream parallelises chunks of views):
+    ``jobs``, or one per core once the view is worth it; 1 with an executor or an invalid
+    ``jobs`` (which the stream then refuses)."""
+    from ..stream import _THREADS_FROM
+
+    if n_views != 1 or executor is not None:
+        return 1
+    if jobs is None:
+        return (os.cpu_count() or 1) if work >= _THREADS_FROM else 1
+    ok = isinstance(jobs, (int, np.integer)) and not isinstance(jobs, bool) and 1 <= jobs
+    return min(int(jobs), 4 * (os.cpu_count() or 1)) if ok else 1
 
 
 def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0=None,
