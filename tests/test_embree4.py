@@ -173,3 +173,25 @@ def test_one_big_view_splits_its_rows_over_threads(sampling):
         again = ml.simulate(scene, ladar, model="mesh", jobs=jobs, sampling=sampling,
                             rays_per_bin=16)
         np.testing.assert_array_equal(again.values, many.values)     # reproducible
+
+
+@pytest.mark.parametrize("backend", ["packets", "embreex"])
+def test_any_coating_takes_the_fused_path_with_the_general_paths_numbers(backend):
+    # coatings without a compiled kernel (Phong, GGX, a table, a user's model) have F·area
+    # evaluated per face and view before the cast: the numbers of trace + weigh, per hit
+    class Halfway(ml.brdf.BRDF):                     # a user's model: projected weight only
+        def projected(self, cos_theta, sin_theta):
+            return 0.3 * np.maximum(cos_theta, 0.0) ** 2
+
+    coatings = [ml.brdf.Phong(0.2, 0.7, 50), ml.brdf.GGX(alpha=0.3),
+                ml.brdf.Tabulated([0.0, 30.0, 60.0, 90.0], [0.3, 0.2, 0.1, 0.05]), Halfway()]
+    parts = [ml.mesh.sphere((0.6 * k, 0.0, 0.0), 0.25, k, subdivisions=3) for k in range(4)]
+    scene = ml.Scene.from_parts(parts, coatings)
+    ladar = ml.Ladar.covering(scene, n_bins=40, view_vectors=ml.mesh.fibonacci_sphere(3))
+    one_view = ml.Ladar.covering(scene, n_bins=40, view_vectors=[[0.2, 0.9, 0.3]])
+    for lad, jobs in ((ladar, 1), (ladar, 2), (one_view, 2)):   # 2 jobs on one view: rows
+        fused = ml.simulate(scene, lad, model="mesh", backend=backend, jobs=jobs)
+        general = ml.weigh(ml.trace(scene, lad, backend=backend))
+        assert fused.values.max() > 0
+        np.testing.assert_allclose(fused.values, general.values, rtol=SAME_HITS_RTOL,
+                                   atol=SAME_HITS_RTOL * general.values.max())

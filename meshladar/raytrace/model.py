@@ -74,8 +74,7 @@ def _job(geo, views, ladar_vectors, mode, spacing, z0_shifted, back_faces, seed,
     None), or their binned values, rays and back-face hits as a dict of arrays."""
     scene = _embree_scene(geo, backend)
     if (weigh_with is not None and geo.normals == "flat" and receivers is None
-            and not weigh_with[1]
-            and all(m.kernel_params is not None for m in weigh_with[0])):
+            and not weigh_with[1]):
         return _fast_job(geo, scene, ladar_vectors, views, mode, spacing, z0_shifted,
                          back_faces, seed, edges, weigh_with[0], weigh_with[2], row_jobs)
     out = []
@@ -102,10 +101,15 @@ def _job(geo, views, ladar_vectors, mode, spacing, z0_shifted, back_faces, seed,
 def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces, seed, edges,
               materials, area, row_jobs=1):
     """The common case fused in one compiled loop per view: monostatic, flat normals,
-    point binning (no per-hit arrays beyond Embree's own output)."""
+    point binning (no per-hit arrays beyond Embree's own output). With flat normals F·area
+    is one number per face and view: the compiled SR kernel evaluates it at a face's first
+    hit when every coating has ``kernel_params``; any other coating (Phong, GGX, a table,
+    a user's model) has it evaluated for all faces at once through its own ``value`` before
+    the view is cast."""
     from .. import _kernels
 
-    params = _material_table(materials)
+    compiled = all(m.kernel_params is not None for m in materials)
+    params = _material_table(materials) if compiled else np.zeros((len(materials), 7))
     # each face's F·area for the view being binned (valid where stamp is the view's tag)
     stamp = np.zeros(len(geo.faces), np.int64)
     weight = np.empty(len(geo.faces))
@@ -115,6 +119,9 @@ def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces,
         w = vectors[i]
         rng = None if seed is None else np.random.default_rng([seed, int(i)])
         start = _range_offset(geo.center, w, None)
+        if not compiled:
+            _face_weights(geo, materials, w, area, weight)
+            stamp[:] = j + 1                         # every face's weight is this view's
         bins = (geo.plane_d, geo.face_normals, geo.material, params, w, start, edges, area,
                 back_faces == "ignore", vals[j], stamp, weight, j + 1)
         if scene.fused and (mode == "3d" or rng is None):
@@ -135,9 +142,25 @@ def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces,
 
 
 
+def _face_weights(geo, materials, w, area, out):
+    """F(θ)·area of every face for view w, into out (n_faces,): θ between the face's flat
+    normal and w (either side: the kernel skips back faces that are ignored), each face's
+    coating evaluated through its ``value``, as the unfused path weighs a hit."""
+    n = geo.face_normals
+    c = np.abs(n[:, 0] * w[0] + n[:, 1] * w[1] + n[:, 2] * w[2])
+    s = np.sqrt(np.maximum(1.0 - c * c, 0.0))
+    if len(materials) == 1:
+        out[:] = materials[0].value(c, s) * area
+        return
+    for k, m in enumerate(materials):
+        sel = geo.material == k
+        out[sel] = m.value(c[sel], s[sel]) * area
+
+
 def _rows_on_threads(scene, plan, w, spacing, bins, row_jobs):
     """One big view's grid split into ``row_jobs`` bands of rows, cast on as many threads
-    (the fused loop releases the GIL), each band with its own bins and weight cache; the
+    (the fused loop releases the GIL), each band with its own bins and a copy of the weight
+    cache (weights already evaluated for the view stay valid); the
     bands' bins are added in order, so a given ``row_jobs`` always gives the same numbers
     (and the one-thread numbers to rounding). Returns (back-face hits, rays cast)."""
     from concurrent.futures import ThreadPoolExecutor
@@ -150,8 +173,7 @@ def _rows_on_threads(scene, plan, w, spacing, bins, row_jobs):
         if a1 > a0:
             band = (s[a0:a1], t, None if du is None else du[a0:a1],
                     None if dv is None else dv[a0:a1], u, v, L)
-            parts.append((band, np.zeros_like(out), np.zeros_like(stamp),
-                          np.empty_like(weight)))
+            parts.append((band, np.zeros_like(out), stamp.copy(), weight.copy()))
     with ThreadPoolExecutor(len(parts)) as ex:
         done = list(ex.map(lambda p: scene.cast_bin_grid(p[0], w, spacing,
                                                          (*head, p[1], p[2], p[3], tag)),
