@@ -88,8 +88,8 @@ def _chunks(n, size):
 
 def _executor(jobs, executor, work, n_chunks, threads=False):
     """The executor to use: the user's; else a pool of ``jobs`` threads (a job whose
-    compiled loop releases the GIL) or worker processes (one that holds it, as embreex's
-    cast does); else none. By default a pool is started only when the work (rays) pays for
+    compiled loop releases the GIL, as the mesh engine's casts do) or worker processes (one
+    that holds it: the analytic and pixel models' numpy); else none. By default a pool is started only when the work (rays) pays for
     it, with at most one worker per chunk: a single view never starts one."""
     if executor is not None:
         if not callable(getattr(executor, "submit", None)):
@@ -304,7 +304,8 @@ def dask_executor(address=None, *, workers=2, threads_per_worker=1, timeout=10.0
         pickles, so an open local cluster would let any user of a shared host who connects
         during the run execute code as you. Only this process holds the credentials.
     workers, threads_per_worker : int
-        The local cluster's size (embreex holds the GIL while casting: one thread each).
+        The local cluster's size: processes (the analytic and pixel models hold the GIL)
+        of one thread each by default.
     timeout : float
         Seconds to wait for an existing scheduler to answer.
     security : distributed.security.Security, optional
