@@ -311,3 +311,61 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
             stamp[p] = tag
         out[k] += weight[p]
     return back
+
+
+@njit(cache=True, nogil=True)
+def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, face_material,
+                    params, w, start, edges, area, ignore_back, min_cos_facet, out):
+    """Monostatic weighing and binning with smooth normals, as :func:`bin_flat_hits` with
+    flat ones: the shading normal interpolated from the face's ``corner`` normals (m, 3, 3)
+    with Embree's barycentrics (bu, bv), F of the SR coating at its angle, and the area
+    factor cos θs / max(|cos θg|, ``min_cos_facet``) of meshladar.raytrace.views.
+    _shading_factor, so each ray weighs F(θs)·area·factor (0 where the shading normal faces
+    away). Returns the number of back-face hits."""
+    nb = edges.size - 1
+    e0 = edges[0]
+    inv = nb / (edges[nb] - edges[0])
+    back = 0
+    for i in range(prim.size):
+        p = prim[i]
+        if p < 0:
+            continue
+        cg = face_normals[p, 0] * w[0] + face_normals[p, 1] * w[1] + face_normals[p, 2] * w[2]
+        t = tfar[i] * 1.0
+        if abs(cg) > 1e-6:
+            t = (plane_d[p] - (face_normals[p, 0] * origins[i, 0]
+                               + face_normals[p, 1] * origins[i, 1]
+                               + face_normals[p, 2] * origins[i, 2])) / (-cg)
+        a, b = bu[i] * 1.0, bv[i] * 1.0
+        nx = (1 - a - b) * corner[p, 0, 0] + a * corner[p, 1, 0] + b * corner[p, 2, 0]
+        ny = (1 - a - b) * corner[p, 0, 1] + a * corner[p, 1, 1] + b * corner[p, 2, 1]
+        nz = (1 - a - b) * corner[p, 0, 2] + a * corner[p, 1, 2] + b * corner[p, 2, 2]
+        norm = math.sqrt(nx * nx + ny * ny + nz * nz)
+        c = (nx / norm) * w[0] + (ny / norm) * w[1] + (nz / norm) * w[2]
+        if cg < 0.0:
+            back += 1
+            if ignore_back:
+                continue
+            c = -c
+        if c <= 0.0:
+            continue                                   # the shading normal faces away
+        r = start + t - (origins[i, 0] * w[0] + origins[i, 1] * w[1] + origins[i, 2] * w[2])
+        if r < edges[0] or r >= edges[nb]:
+            continue
+        k = min(max(int((r - e0) * inv), 0), nb - 1)
+        if not (edges[k] <= r and r < edges[k + 1]):
+            lo = 0
+            hi = nb
+            while hi - lo > 1:
+                mid = (lo + hi) // 2
+                if edges[mid] <= r:
+                    lo = mid
+                else:
+                    hi = mid
+            k = lo
+        s = math.sqrt(max(1.0 - c * c, 0.0))
+        m = face_material[p]
+        f = _sr_monostatic(c, s, params[m, 0], params[m, 1], params[m, 2], params[m, 3],
+                           params[m, 4], params[m, 5] > 0.5, params[m, 6] > 0.5)
+        out[k] += f * area * (c / max(abs(cg), min_cos_facet))
+    return back

@@ -195,3 +195,22 @@ def test_any_coating_takes_the_fused_path_with_the_general_paths_numbers(backend
         assert fused.values.max() > 0
         np.testing.assert_allclose(fused.values, general.values, rtol=SAME_HITS_RTOL,
                                    atol=SAME_HITS_RTOL * general.values.max())
+
+
+@pytest.mark.parametrize("back_faces", ["two-sided", "ignore"])
+def test_smooth_normals_take_a_compiled_loop_with_the_general_paths_numbers(back_faces):
+    # smooth normals with SR coatings are weighed and binned in one compiled loop from the
+    # cast's barycentrics: the numbers of trace + weigh (per-hit arrays in numpy)
+    parts = [ml.mesh.sphere((0.0, 0.0, 0.0), 0.4, 0, subdivisions=3),
+             ml.mesh.sphere((0.9, 0.1, 0.0), 0.3, 1, subdivisions=2)]
+    scene = ml.Scene.from_parts(parts, [ALUMINUM, DARK_GRAY])
+    ladar = ml.Ladar.covering(scene, n_bins=48, view_vectors=ml.mesh.fibonacci_sphere(9))
+    for backend in ("packets", "embreex"):
+        fast = ml.simulate(scene, ladar, model="mesh", normals="smooth", backend=backend,
+                           back_faces=back_faces)
+        general = ml.weigh(ml.trace(scene, ladar, normals="smooth", backend=backend,
+                                    back_faces=back_faces))
+        assert fast.values.max() > 0 and fast.info["rays"] == general.info["rays"]
+        assert fast.info["back_face_hits"] == general.info["back_face_hits"]
+        np.testing.assert_allclose(fast.values, general.values, rtol=SAME_HITS_RTOL,
+                                   atol=SAME_HITS_RTOL * general.values.max())

@@ -73,8 +73,9 @@ def _job(geo, views, ladar_vectors, mode, spacing, z0_shifted, back_faces, seed,
     """Trace a chunk of views (the stream's per-chunk job): the views' hits (``weigh_with``
     None), or their binned values, rays and back-face hits as a dict of arrays."""
     scene = _embree_scene(geo, backend)
-    if (weigh_with is not None and geo.normals == "flat" and receivers is None
-            and not weigh_with[1]):
+    if (weigh_with is not None and receivers is None and not weigh_with[1]
+            and (geo.normals == "flat" or geo.normals == "smooth"
+                 and all(m.kernel_params is not None for m in weigh_with[0]))):
         return _fast_job(geo, scene, ladar_vectors, views, mode, spacing, z0_shifted,
                          back_faces, seed, edges, weigh_with[0], weigh_with[2], row_jobs)
     out = []
@@ -100,8 +101,9 @@ def _job(geo, views, ladar_vectors, mode, spacing, z0_shifted, back_faces, seed,
 
 def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces, seed, edges,
               materials, area, row_jobs=1):
-    """The common case fused in one compiled loop per view: monostatic, flat normals,
-    point binning (no per-hit arrays beyond Embree's own output). With flat normals F·area
+    """The common cases in one compiled loop per view: monostatic, point binning, flat
+    normals (any coating) or smooth ones (coatings with a compiled kernel: SR, Lambertian),
+    no per-hit arrays beyond Embree's own output. With flat normals F·area
     is one number per face and view: the compiled SR kernel evaluates it at a face's first
     hit when every coating has ``kernel_params``; any other coating (Phong, GGX, a table,
     a user's model) has it evaluated for all faces at once through its own ``value`` before
@@ -119,6 +121,16 @@ def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces,
         w = vectors[i]
         rng = None if seed is None else np.random.default_rng([seed, int(i)])
         start = _range_offset(geo.center, w, None)
+        if geo.normals == "smooth":
+            o, L, _, _ = _ray_grid(geo, w, mode, spacing, z0_shifted, rng)
+            res = scene.run(o, np.ascontiguousarray((-w)[None, :], dtype=np.float32),
+                            output=1)
+            backs.append(_kernels.bin_smooth_hits(
+                res["primID"], res["tfar"], res["u"], res["v"], o, geo.plane_d,
+                geo.face_normals, geo.corner, geo.material, params, w, start, edges, area,
+                back_faces == "ignore", _MIN_COS_FACET, vals[j]))
+            rays.append(len(o))
+            continue
         if not compiled:
             _face_weights(geo, materials, w, area, weight)
             stamp[:] = j + 1                         # every face's weight is this view's
