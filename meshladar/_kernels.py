@@ -256,6 +256,37 @@ def _sr_monostatic(c, s, rho_d, eps, b, e, G, diffuse, specular):
 
 
 @njit(cache=True, nogil=True)
+def _hit_distance(p, c, tf, origins, i, plane_d, face_normals):
+    """Ray i's distance to face p, recomputed in float64 against the face's plane from the
+    float32 origin as cast (c = n·w); Embree's float32 ``tf`` where the plane is edge-on
+    (as meshladar.raytrace.views._refine_t)."""
+    if abs(c) <= 1e-6:
+        return tf * 1.0
+    return (plane_d[p] - (face_normals[p, 0] * origins[i, 0] + face_normals[p, 1] * origins[i, 1]
+                          + face_normals[p, 2] * origins[i, 2])) / (-c)
+
+
+@njit(cache=True, nogil=True)
+def _bin_of(r, edges, e0, inv):
+    """The bin k with edges[k] <= r < edges[k + 1] (r inside the edges): guessed in O(1)
+    from uniform edges (``inv`` bins per unit range from ``e0``), checked against the
+    edges, by bisection when the guess is off (non-uniform edges)."""
+    nb = edges.size - 1
+    k = min(max(int((r - e0) * inv), 0), nb - 1)
+    if edges[k] <= r and r < edges[k + 1]:
+        return k
+    lo = 0
+    hi = nb
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if edges[mid] <= r:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+@njit(cache=True, nogil=True)
 def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, params,
                   w, start, edges, area, ignore_back, out, stamp, weight, tag):
     """Monostatic, flat-normal weighing and binning of one view's Embree hits, fused:
@@ -278,11 +309,7 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
         if p < 0:
             continue
         c = face_normals[p, 0] * w[0] + face_normals[p, 1] * w[1] + face_normals[p, 2] * w[2]
-        t = tfar[i] * 1.0
-        if abs(c) > 1e-6:
-            t = (plane_d[p] - (face_normals[p, 0] * origins[i, 0]
-                               + face_normals[p, 1] * origins[i, 1]
-                               + face_normals[p, 2] * origins[i, 2])) / (-c)
+        t = _hit_distance(p, c, tfar[i], origins, i, plane_d, face_normals)
         if c < 0.0:
             back += 1
             if ignore_back:
@@ -291,17 +318,7 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
         r = start + t - (origins[i, 0] * w[0] + origins[i, 1] * w[1] + origins[i, 2] * w[2])
         if r < edges[0] or r >= edges[nb]:
             continue
-        k = min(max(int((r - e0) * inv), 0), nb - 1)
-        if not (edges[k] <= r and r < edges[k + 1]):
-            lo = 0
-            hi = nb
-            while hi - lo > 1:
-                mid = (lo + hi) // 2
-                if edges[mid] <= r:
-                    lo = mid
-                else:
-                    hi = mid
-            k = lo
+        k = _bin_of(r, edges, e0, inv)
         if stamp[p] != tag:
             s = math.sqrt(max(1.0 - c * c, 0.0))
             m = face_material[p]
@@ -331,11 +348,7 @@ def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, 
         if p < 0:
             continue
         cg = face_normals[p, 0] * w[0] + face_normals[p, 1] * w[1] + face_normals[p, 2] * w[2]
-        t = tfar[i] * 1.0
-        if abs(cg) > 1e-6:
-            t = (plane_d[p] - (face_normals[p, 0] * origins[i, 0]
-                               + face_normals[p, 1] * origins[i, 1]
-                               + face_normals[p, 2] * origins[i, 2])) / (-cg)
+        t = _hit_distance(p, cg, tfar[i], origins, i, plane_d, face_normals)
         a, b = bu[i] * 1.0, bv[i] * 1.0
         nx = (1 - a - b) * corner[p, 0, 0] + a * corner[p, 1, 0] + b * corner[p, 2, 0]
         ny = (1 - a - b) * corner[p, 0, 1] + a * corner[p, 1, 1] + b * corner[p, 2, 1]
@@ -352,17 +365,7 @@ def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, 
         r = start + t - (origins[i, 0] * w[0] + origins[i, 1] * w[1] + origins[i, 2] * w[2])
         if r < edges[0] or r >= edges[nb]:
             continue
-        k = min(max(int((r - e0) * inv), 0), nb - 1)
-        if not (edges[k] <= r and r < edges[k + 1]):
-            lo = 0
-            hi = nb
-            while hi - lo > 1:
-                mid = (lo + hi) // 2
-                if edges[mid] <= r:
-                    lo = mid
-                else:
-                    hi = mid
-            k = lo
+        k = _bin_of(r, edges, e0, inv)
         s = math.sqrt(max(1.0 - c * c, 0.0))
         m = face_material[p]
         f = _sr_monostatic(c, s, params[m, 0], params[m, 1], params[m, 2], params[m, 3],
