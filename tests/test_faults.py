@@ -233,10 +233,17 @@ def test_a_stopped_run_takes_its_workers_with_it(tmp_path, sig):
 
     psutil = pytest.importorskip("psutil")
     run, proc = _long_cli_run(tmp_path)
-    workers = _workers_once_a_chunk_is_saved(run, proc)
-    assert len(workers) >= 2
-    proc.send_signal(getattr(signal, sig))
-    _, err = proc.communicate(timeout=120)
+    try:
+        workers = _workers_once_a_chunk_is_saved(run, proc)
+        assert len(workers) >= 2
+        proc.send_signal(getattr(signal, sig))
+        _, err = proc.communicate(timeout=120)
+    finally:                                   # a failed assertion must not leave the held
+        if proc.poll() is None:                # run (and its workers) behind for good
+            for p in psutil.Process(proc.pid).children(recursive=True):
+                p.kill()
+            proc.kill()
+            proc.wait()
     if sig == "SIGTERM":                       # like Ctrl-C: one line and a resume hint
         assert proc.returncode == 130 and "Traceback" not in err
         assert "interrupted; finished chunks are kept" in err
