@@ -398,7 +398,8 @@ def _init_args(i32, i64, base, flags):
 
 @njit(cache=True, nogil=True, inline="always")
 def _load_packet(f32, i32, o, d, tmax, start, n, w):
-    """Fill the RTCRayW fields and valid mask for rays start..start+w (masked past n)."""
+    """Fill the RTCRayW fields, the valid mask and the hit's invalid ids for rays
+    start..start+w (masked past n)."""
     v = _VALID_OFF // 4
     for j in range(w):
         r = start + j
@@ -418,6 +419,9 @@ def _load_packet(f32, i32, o, d, tmax, start, n, w):
         i32[_ID * w + j] = j
         i32[_FLAGS * w + j] = 0
         i32[v + j] = -1 if ok else 0
+        i32[_PRIMID * w + j] = -1        # RTCHitW: geomID/primID invalid (the occlusion
+        i32[_GEOMID * w + j] = -1        # query ignores these; they lie inside the
+        i32[_INSTID * w + j] = -1        # workspace's reserve either way)
 
 
 @njit(cache=True, nogil=True)
@@ -430,10 +434,6 @@ def cast_grid(fn, scene, o, d, tmax, w, flags, prim, tfar, u, v):
     n = o.shape[0]
     for start in range(0, n, w):
         _load_packet(f32, i32, o, d, tmax, start, n, w)
-        for j in range(w):               # RTCHitW: geomID/primID = invalid
-            i32[_PRIMID * w + j] = -1
-            i32[_GEOMID * w + j] = -1
-            i32[_INSTID * w + j] = -1
         fn(base + _VALID_OFF, scene, base, base + _ARGS_OFF)
         m = min(w, n - start)
         for j in range(m):
@@ -486,8 +486,8 @@ def cast_bin_grid(fn, scene, w, flags, s, t, du, dv, sp, u, v, lw, d, inv_scale,
     n = ns * nt
     jitter = du.shape[0] > 0
     one = scale == 1.0
-    vi = _VALID_OFF // 4
-    lanes = np.empty((w, 3), np.float32)
+    lanes = np.empty((w, 3), np.float32)          # origins as built (for the ranges)
+    cast = np.empty((w, 3), np.float32)           # and as cast (at unit size)
     hit_prim = np.empty(_BLOCK + w, np.int32)
     hit_t = np.empty(_BLOCK + w, np.float32)
     hit_o = np.empty((_BLOCK + w, 3), np.float32)
@@ -495,9 +495,8 @@ def cast_bin_grid(fn, scene, w, flags, s, t, du, dv, sp, u, v, lw, d, inv_scale,
     back = 0
     for first in range(0, n, w):
         m = min(w, n - first)
-        for j in range(w):
-            r = first + j if j < m else first
-            a, b = r // nt, r % nt
+        for j in range(m):
+            a, b = (first + j) // nt, (first + j) % nt
             if jitter:
                 S = np.float32(du[a, b] * sp) + s[a]
                 T = np.float32(dv[a, b] * sp) + t[b]
@@ -506,25 +505,8 @@ def cast_bin_grid(fn, scene, w, flags, s, t, du, dv, sp, u, v, lw, d, inv_scale,
                 T = t[b]
             for k in range(3):
                 lanes[j, k] = np.float32(np.float32(S * u[k]) + np.float32(T * v[k])) + lw[k]
-            ox, oy, oz = lanes[j, 0], lanes[j, 1], lanes[j, 2]
-            if not one:
-                ox, oy, oz = ox * inv_scale, oy * inv_scale, oz * inv_scale
-            f32[_ORG_X * w + j] = ox
-            f32[_ORG_Y * w + j] = oy
-            f32[_ORG_Z * w + j] = oz
-            f32[_TNEAR * w + j] = 0.0
-            f32[_DIR_X * w + j] = d[0]
-            f32[_DIR_Y * w + j] = d[1]
-            f32[_DIR_Z * w + j] = d[2]
-            f32[_TIME * w + j] = 0.0
-            f32[_TFAR * w + j] = np.inf
-            i32[_MASK * w + j] = -1
-            i32[_ID * w + j] = j
-            i32[_FLAGS * w + j] = 0
-            i32[vi + j] = -1 if j < m else 0
-            i32[_PRIMID * w + j] = -1
-            i32[_GEOMID * w + j] = -1
-            i32[_INSTID * w + j] = -1
+                cast[j, k] = lanes[j, k] if one else lanes[j, k] * inv_scale
+        _load_packet(f32, i32, cast, d, np.float32(np.inf), 0, m, w)
         fn(base + _VALID_OFF, scene, base, base + _ARGS_OFF)
         for j in range(m):
             if i32[_GEOMID * w + j] == -1:

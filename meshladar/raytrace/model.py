@@ -17,7 +17,7 @@ from ..precision import MIN_COS_FACET as _MIN_COS_FACET
 from ..precision import RECEIVER_LIFT as _RECEIVER_LIFT
 from ..scene import Scene
 from ..sinogram import Sinogram
-from ..weighing import _bin_one, _material_table, _sinogram
+from ..weighing import _bin_one, _material_table, _sinogram, _weights
 from .embree import _embree_scene, geometry, resolve_backend
 from .grid import (MAX_RAYS_PER_VIEW, MODES, _estimate_rays, _grid_plan, _largest_grid,
                    _ray_grid, _sampling, _spacing)
@@ -156,17 +156,11 @@ def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces,
 
 def _face_weights(geo, materials, w, area, out):
     """F(θ)·area of every face for view w, into out (n_faces,): θ between the face's flat
-    normal and w (either side: the kernel skips back faces that are ignored), each face's
-    coating evaluated through its ``value``, as the unfused path weighs a hit."""
+    normal and w (either side: the kernel skips back faces that are ignored), weighed by
+    :func:`meshladar.weighing._weights` exactly as the unfused path weighs a hit."""
     n = geo.face_normals
     c = np.abs(n[:, 0] * w[0] + n[:, 1] * w[1] + n[:, 2] * w[2])
-    s = np.sqrt(np.maximum(1.0 - c * c, 0.0))
-    if len(materials) == 1:
-        out[:] = materials[0].value(c, s) * area
-        return
-    for k, m in enumerate(materials):
-        sel = geo.material == k
-        out[sel] = m.value(c[sel], s[sel]) * area
+    out[:] = _weights(c, np.sqrt(np.maximum(1.0 - c * c, 0.0)), geo.material, materials, area)
 
 
 def _rows_on_threads(scene, plan, w, spacing, bins, row_jobs):
@@ -313,14 +307,14 @@ def _row_jobs(n_views, jobs, executor, work):
     """Threads for the rows of a single view (the stream parallelises chunks of views):
     ``jobs``, or one per core once the view is worth it; 1 with an executor or an invalid
     ``jobs`` (which the stream then refuses)."""
-    from ..stream import _THREADS_FROM
+    from ..stream import _MAX_JOBS_PER_CORE, _THREADS_FROM
 
     if n_views != 1 or executor is not None:
         return 1
     if jobs is None:
         return (os.cpu_count() or 1) if work >= _THREADS_FROM else 1
     ok = isinstance(jobs, (int, np.integer)) and not isinstance(jobs, bool) and 1 <= jobs
-    return min(int(jobs), 4 * (os.cpu_count() or 1)) if ok else 1
+    return min(int(jobs), _MAX_JOBS_PER_CORE * (os.cpu_count() or 1)) if ok else 1
 
 
 def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0=None,
