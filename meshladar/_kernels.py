@@ -288,9 +288,9 @@ def _bin_of(r, edges, e0, inv):
 
 @njit(cache=True, nogil=True)
 def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, params,
-                  w, start, edges, area, ignore_back, out, stamp, weight, tag):
+                  w, start, edges, area, power, ignore_back, out, stamp, weight, tag):
     """Monostatic, flat-normal weighing and binning of one view's Embree hits, fused:
-    out[k] += F(θ)·area for each hit with range start + t − o·w in bin k (o the float32 origin
+    out[k] += F(θ)·area (``power``: F(θ)·cos θ·area, received power) for each hit with range start + t − o·w in bin k (o the float32 origin
     as cast), t the hit distance recomputed in float64 against the face's plane (as
     meshladar.raytrace.views._refine_t).
     ``params`` rows are (rho_d, epsilon, b, e, G, has_diffuse, has_specular) per material.
@@ -324,7 +324,7 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
             m = face_material[p]
             weight[p] = _sr_monostatic(c, s, params[m, 0], params[m, 1], params[m, 2],
                                        params[m, 3], params[m, 4], params[m, 5] > 0.5,
-                                       params[m, 6] > 0.5) * area
+                                       params[m, 6] > 0.5) * (area * c if power else area)
             stamp[p] = tag
         out[k] += weight[p]
     return back
@@ -332,13 +332,13 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
 
 @njit(cache=True, nogil=True)
 def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, face_material,
-                    params, w, start, edges, area, ignore_back, min_cos_facet, out):
+                    params, w, start, edges, area, power, ignore_back, min_cos_facet, out):
     """Monostatic weighing and binning with smooth normals, as :func:`bin_flat_hits` with
     flat ones: the shading normal interpolated from the face's ``corner`` normals (m, 3, 3)
     with Embree's barycentrics (bu, bv), F of the SR coating at its angle, and the area
     factor cos θs / max(|cos θg|, ``min_cos_facet``) of meshladar.raytrace.views.
-    _shading_factor, so each ray weighs F(θs)·area·factor (0 where the shading normal faces
-    away). Returns the number of back-face hits."""
+    _shading_factor, so each ray weighs F(θs)·area·factor (``power``: times cos θs; 0 where
+    the shading normal faces away). Returns the number of back-face hits."""
     nb = edges.size - 1
     e0 = edges[0]
     inv = nb / (edges[nb] - edges[0])
@@ -370,5 +370,6 @@ def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, 
         m = face_material[p]
         f = _sr_monostatic(c, s, params[m, 0], params[m, 1], params[m, 2], params[m, 3],
                            params[m, 4], params[m, 5] > 0.5, params[m, 6] > 0.5)
+        f = f * c if power else f
         out[k] += f * area * (c / max(abs(cg), min_cos_facet))
     return back

@@ -121,7 +121,7 @@ def _grading(scale, end):
 
 
 def _shape_profile(g: _ShapeViews, views: np.ndarray, edges: np.ndarray, shadow_lo, shadow_hi,
-                   out: np.ndarray):
+                   out: np.ndarray, power: bool = False):
     """Add shape g's visible returns for the given view indices to out (n_views, n_bins)."""
     m = g.shape.material
     a, b = g.a, g.b
@@ -177,7 +177,8 @@ def _shape_profile(g: _ShapeViews, views: np.ndarray, edges: np.ndarray, shadow_
     keep = tb > ta
     ta, tb, r = ta[keep], tb[keep], r[keep]
 
-    # 4. Gauss-Legendre on each piece; integrand F cos θ · |p'(t)| in t = t0 + σ τ
+    # 4. Gauss-Legendre on each piece; integrand F cos θ · |p'(t)| in t = t0 + σ τ (received
+    # power: F cos²θ · |p'(t)|, as smooth, on the same pieces)
     half = 0.5 * (tb - ta)
     tau = (0.5 * (ta + tb))[:, None] + half[:, None] * _GL_X[None, :]
     sg = sigma[r][:, None]
@@ -186,6 +187,8 @@ def _shape_profile(g: _ShapeViews, views: np.ndarray, edges: np.ndarray, shadow_
     cos_t = np.maximum(K[r][:, None] * np.cos(sg * tau - delta[r][:, None]) / n_t, 0.0)
     sin_t = M[r][:, None] * np.abs(np.sin(tau)) / n_t
     w = projected_weight(m, cos_t, sin_t)
+    if power:
+        w = w * cos_t
     piece = (w * n_t) @ _GL_W * half
 
     # 5. bin and visibility of each piece from its midpoint
@@ -204,8 +207,8 @@ def _shape_profile(g: _ShapeViews, views: np.ndarray, edges: np.ndarray, shadow_
 _VIEWS_PER_CHUNK = 32
 
 
-def simulate_analytic(scene: Scene, ladar: Ladar, *, jobs=None, executor=None, progress=False,
-                      run_dir=None) -> Sinogram:
+def simulate_analytic(scene: Scene, ladar: Ladar, *, radiometry="paper", jobs=None,
+                      executor=None, progress=False, run_dir=None) -> Sinogram:
     """Exact range profiles of a scene of disks and ellipses for views about the z axis.
 
     Parameters
@@ -214,6 +217,9 @@ def simulate_analytic(scene: Scene, ladar: Ladar, *, jobs=None, executor=None, p
         Non-overlapping disks and ellipses, each with its coating (any BRDF).
     ladar : Ladar
         Views (``angles_deg``) and range ``bin_edges``; monostatic.
+    radiometry : {"paper", "power"}
+        "paper" (default): Eq. 8, ∫ F cos θ dl; "power": received power, ∫ F cos²θ dl
+        (:mod:`meshladar.sensor`), as exact.
     jobs, executor, progress, run_dir : keyword-only
         Streaming options, as :func:`meshladar.simulate` (chunks of views on worker
         processes or any executor, a progress bar over the views, a resumable run folder).
@@ -221,9 +227,9 @@ def simulate_analytic(scene: Scene, ladar: Ladar, *, jobs=None, executor=None, p
     Returns
     -------
     Sinogram
-        ``values[i, k]`` (n_views, n_bins) = ∫ F(θ) cos θ dl over the boundary points
-        visible from view i whose range lies in bin k: per unit height of the extruded
-        phantom.
+        ``values[i, k]`` (n_views, n_bins) = ∫ F(θ) cos θ dl (power: ∫ F cos²θ dl) over the
+        boundary points visible from view i whose range lies in bin k: per unit height of
+        the extruded phantom.
 
     Notes
     -----
@@ -232,8 +238,10 @@ def simulate_analytic(scene: Scene, ladar: Ladar, *, jobs=None, executor=None, p
     then counts profiles). A material's lobes are evaluated only where present: a
     Lambertian coating costs no specular evaluation.
     """
+    from .sensor import check_radiometry
     from .stream import run_chunks
 
+    power = check_radiometry(radiometry)
     phi = np.deg2rad(ladar.angles_deg)
     edges = ladar.bin_edges
     shapes = tuple(scene.shapes)
@@ -247,9 +255,9 @@ def simulate_analytic(scene: Scene, ladar: Ladar, *, jobs=None, executor=None, p
     if run_dir is not None:
         from .runs import array_digest
 
-        job = {"kind": "simulate_analytic", "shapes": [repr(s) for s in shapes],
+        job = {"kind": "simulate_analytic", "radiometry": radiometry, "shapes": [repr(s) for s in shapes],
                "phi": array_digest(phi), "bin_edges": array_digest(edges)}
-    results = run_chunks(_profiles, (shapes, phi, edges), phi.size,
+    results = run_chunks(_profiles, (shapes, phi, edges, power), phi.size,
                          chunk_size=_VIEWS_PER_CHUNK, jobs=jobs, executor=executor,
                          progress=progress, unit=unit, run_dir=run_dir, job=job,
                          arrays={"values": (ladar.n_bins,)})
@@ -259,25 +267,25 @@ def simulate_analytic(scene: Scene, ladar: Ladar, *, jobs=None, executor=None, p
     if inverse is not None:
         values = values[inverse.ravel()]
     return Sinogram(values, angles_deg=ladar.angles_deg, bin_edges=edges, model="analytic",
-                    info={"radiometry": "paper"})
+                    info={"radiometry": radiometry})
 
 
 def _profiles(payload, items):
     """The stream's per-chunk job: the profiles of views ``phi[items]``."""
-    shapes, phi, edges = payload
+    shapes, phi, edges, power = payload
     geoms = [_ShapeViews(s, phi[items]) for s in shapes]
     lo, hi = _occluders(geoms)
     out = np.zeros((items.size, edges.size - 1))
     for g, L, H in zip(geoms, lo, hi):
-        _chunked(g, np.arange(items.size), edges, L, H, out)
+        _chunked(g, np.arange(items.size), edges, L, H, out, power)
     return {"values": out}
 
 
-def _chunked(g, views, edges, lo, hi, out):
+def _chunked(g, views, edges, lo, hi, out, power):
     """Run _shape_profile over blocks of views that keep the piece count bounded."""
     span = 2.0 * max(g.a, g.b)
     width = float(np.min(np.diff(edges)))
     per_view = 2 * (min(span / width, edges.size) + 2 * _GRADE_FACTORS.size + 40 + lo.shape[1])
     step = max(1, int(_MAX_PIECES // per_view))
     for i in range(0, views.size, step):
-        _shape_profile(g, views[i:i + step], edges, lo, hi, out)
+        _shape_profile(g, views[i:i + step], edges, lo, hi, out, power)

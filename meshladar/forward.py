@@ -17,8 +17,9 @@ MODELS = ("analytic", "mesh", "pixel")
 
 #: Streaming options every model takes (:mod:`meshladar.stream`).
 _STREAM = ("jobs", "executor", "progress", "run_dir")
-_OPTIONS = {"analytic": _STREAM, "pixel": ("pixel_size", "ray_spacing") + _STREAM,
-            "mesh": ("mode", "normals", "back_faces", "z0", "ray_spacing", "rays_per_bin",
+_OPTIONS = {"analytic": ("radiometry",) + _STREAM,
+            "pixel": ("pixel_size", "ray_spacing", "radiometry") + _STREAM,
+            "mesh": ("radiometry", "mode", "normals", "back_faces", "z0", "ray_spacing", "rays_per_bin",
                      "footprint", "sampling", "seed", "receiver", "tol", "max_rays", "backend",
                      "jobs", "executor", "progress", "run_dir")}
 
@@ -40,6 +41,10 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
         ray_spacing, rays_per_bin, footprint, sampling, seed, receiver, backend) and ``tol``.
         ``"pixel"``: the paper's method, a rasterised surface traced with Siddon rays
         (options ``pixel_size``, ``ray_spacing``; :func:`meshladar.pixel.simulate_pixel`).
+    radiometry : {"paper", "power"}, every model
+        "paper" (default): the paper's Eq. 8, bins of ∫ F(θ) cos θ dA; "power": the power a
+        receiver collects, ∫ F cos θ_i cos θ_r dA (monostatic ∫ F cos²θ dA), exact in the
+        analytic model (:mod:`meshladar.sensor`). ``info["radiometry"]`` records it.
     tol : float in (0, 1), optional, mesh model only
         A relative L2 accuracy instead of a ray density: rays per bin (and segments, for
         analytic scenes) double from 1 ray per bin and 256 segments until a refinement
@@ -68,7 +73,8 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
     Returns
     -------
     Sinogram
-        ``values`` (n_views, n_bins), float64: bin integrals of F(θ) cos θ dA (paper Eq. 8),
+        ``values`` (n_views, n_bins), float64: bin integrals of F(θ) cos θ dA (paper Eq. 8)
+        or of received power,
         ``angles_deg`` (or ``view_vectors``), ``bin_edges``, ``model``, and ``info`` (the
         convention and options the run used).
 

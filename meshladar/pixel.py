@@ -74,7 +74,8 @@ _RAYS_PER_CHUNK = 2_000_000
 
 
 def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=None,
-                   jobs=None, executor=None, progress=False, run_dir=None) -> Sinogram:
+                   radiometry="paper", jobs=None, executor=None, progress=False,
+                   run_dir=None) -> Sinogram:
     """Range profiles by the paper's pixel method (see the module docstring).
 
     Parameters
@@ -84,6 +85,9 @@ def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=N
         Side of the square pixels; default the narrowest range bin.
     ray_spacing : float, optional
         Transverse distance between parallel rays; default pixel_size / 4.
+    radiometry : {"paper", "power"}
+        "paper" (default): Eq. 8; "power": received power, one cos θ more per hit
+        (:mod:`meshladar.sensor`).
     jobs, executor, progress, run_dir : keyword-only
         Streaming options, as :func:`meshladar.simulate` (chunks of views on worker
         processes or any executor, a progress bar over the views, a resumable run folder).
@@ -94,6 +98,9 @@ def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=N
         ``values`` (n_views, n_bins) bin integrals (paper Eq. 8); ``info`` holds
         ``radiometry``, ``pixel_size``, ``ray_spacing`` and ``n_rays`` per view.
     """
+    from .sensor import check_radiometry
+
+    power = check_radiometry(radiometry)
     width = float(np.min(np.diff(ladar.bin_edges)))
     pix = check_real("pixel_size", width if pixel_size is None else pixel_size, low=0.0,
                      low_open=True)
@@ -122,12 +129,12 @@ def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=N
     arc_max = [math.sqrt(2.0 * max(sh.axes) ** 2 / min(sh.axes) * ds) for sh in scene.shapes]
     payload = (mask, grid, owner.ravel(), normal.reshape(-1, 2),
                tuple(s.material for s in scene.shapes), arc_max, s_rel, (cx, cy), 2 * half,
-               ds, np.deg2rad(ladar.angles_deg), ladar.bin_edges)
+               ds, np.deg2rad(ladar.angles_deg), ladar.bin_edges, power)
     job = None
     if run_dir is not None:
         from .runs import array_digest
 
-        job = {"kind": "simulate_pixel", "shapes": [repr(s) for s in scene.shapes],
+        job = {"kind": "simulate_pixel", "radiometry": radiometry, "shapes": [repr(s) for s in scene.shapes],
                "pixel_size": pix, "ray_spacing": ds,
                "angles_deg": array_digest(ladar.angles_deg),
                "bin_edges": array_digest(ladar.bin_edges)}
@@ -139,7 +146,7 @@ def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=N
                          arrays={"values": (ladar.n_bins,)})
     return Sinogram(joined(results, "values"), angles_deg=ladar.angles_deg,
                     bin_edges=ladar.bin_edges, model="pixel",
-                    info={"radiometry": "paper", "pixel_size": pix, "ray_spacing": ds,
+                    info={"radiometry": radiometry, "pixel_size": pix, "ray_spacing": ds,
                           "n_rays": n_rays})
 
 
@@ -148,7 +155,7 @@ def _views(payload, views):
     from . import _kernels
 
     (mask, grid, flat_owner, flat_normal, materials, arc_max, s_rel, (cx, cy), distance, ds,
-     phi, edges) = payload
+     phi, edges, power) = payload
     n_rays, n_bins = s_rel.size, edges.size - 1
     w = np.stack([np.cos(phi[views]), np.sin(phi[views])], -1)
     u = np.stack([-np.sin(phi[views]), np.cos(phi[views])], -1)
@@ -179,7 +186,7 @@ def _views(payload, views):
         sel = own == k
         c, s = cos_t[sel], sin_t[sel]
         arc = np.minimum(ds / np.maximum(c, TINY), arc_max[k])
-        weight[sel] = projected_weight(m, c, s) * arc
+        weight[sel] = projected_weight(m, c, s) * arc * (np.maximum(c, 0.0) if power else 1.0)
     b = np.searchsorted(edges, rng, side="right") - 1
     ok = (b >= 0) & (b < n_bins)
     values = np.bincount(view[ok] * n_bins + b[ok], weights=weight[ok],

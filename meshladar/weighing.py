@@ -12,25 +12,30 @@ from .ladar import Ladar
 from .raytrace.hits import Hits
 from .sinogram import Sinogram
 from .precision import BOX_RATIO, TINY
+from .sensor import check_radiometry
+from .brdf import projected_weight
 
 __all__ = ["weigh"]
 
 
-def _weights(cos_t, sin_t, mat, materials, area, bi=None):
-    """F·δA⊥ per hit, evaluated per material group (0 where either direction is below the
-    horizon): monostatic F(θ; −θ), or bistatic F(w, w_r) from (cos, sin) of θr and α."""
-    if len(materials) == 1 and bi is None:
-        return materials[0].value(cos_t, sin_t) * area
+def _weights(cos_t, sin_t, mat, materials, area, bi=None, power=False):
+    """F·δA⊥ per hit (``radiometry="paper"``, Eq. 8), or F·cos θr·δA⊥ (``power``: what a
+    receiver collects), evaluated per material group (0 where either direction is below the
+    horizon): monostatic F(θ; −θ) (under power the coating's finite F·cos θ), or bistatic
+    F(w, w_r) from (cos, sin) of θr and α (under power the coating's F·cos θr)."""
+    def one(m, c, s, b):
+        if b is None:
+            return projected_weight(m, c, s) * (c >= 0) if power else m.value(c, s)
+        args = (c, s, b[:, 0], b[:, 1], b[:, 2], b[:, 3])
+        return m.bistatic(*args) * (b[:, 0] >= 0) if power else m.bistatic_value(*args)
+
+    if len(materials) == 1:
+        return one(materials[0], cos_t, sin_t, bi) * area
     wt = np.zeros(cos_t.size)
     for k in np.unique(mat):
         sel = mat == k
-        c, s = cos_t[sel], sin_t[sel]
-        if bi is None:
-            wt[sel] = materials[k].value(c, s) * area
-        else:
-            b = bi[sel]
-            wt[sel] = materials[k].bistatic_value(c, s, b[:, 0], b[:, 1], b[:, 2],
-                                                  b[:, 3]) * area
+        wt[sel] = one(materials[k], cos_t[sel], sin_t[sel], None if bi is None else bi[sel]) \
+            * area
     return wt
 
 
@@ -95,10 +100,10 @@ def _curved_spread(r, wt, curve, edges):
 
 
 def _bin_one(r, cos_t, sin_t, mat, spread, materials, edges, area, footprint, bi=None,
-             factor=None, curve=None):
+             factor=None, curve=None, power=False):
     """One view's profile from its hits."""
     nb = len(edges) - 1
-    wt = _weights(cos_t, sin_t, mat, materials, area, bi)
+    wt = _weights(cos_t, sin_t, mat, materials, area, bi, power)
     if factor is not None:
         wt = wt * factor
     if footprint and curve is not None:
@@ -107,7 +112,7 @@ def _bin_one(r, cos_t, sin_t, mat, spread, materials, edges, area, footprint, bi
         flat = ~curved
         return out + _bin_one(r[flat], cos_t[flat], sin_t[flat], mat[flat], spread[flat],
                               materials, edges, area, True, None if bi is None else bi[flat],
-                              None)
+                              None, None, power)
     if not footprint:
         k = np.searchsorted(edges, r, side="right") - 1
         ok = (k >= 0) & (k < nb)
@@ -149,7 +154,8 @@ def _material_table(materials):
 
 
 
-def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None) -> Sinogram:
+def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None,
+          radiometry="paper") -> Sinogram:
     """Turn hits into a sinogram: F(θ)·δA⊥ per ray, binned by range.
 
     Parameters
@@ -162,19 +168,22 @@ def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None) -> Sin
         Spread each ray over the range interval its footprint covers on the hit facet.
     bin_edges : array_like, optional
         Other range bins (default the ladar's), increasing.
+    radiometry : {"paper", "power"}
+        "paper" (default): Eq. 8, Σ F(θ_hit)·δA⊥; "power": received power, Σ F·cos θr·δA⊥
+        (:mod:`meshladar.sensor`). The same hits serve both.
 
     Returns
     -------
     Sinogram
-        ``values`` (n_views, n_bins): per bin, Σ F(θ_hit)·δA⊥ over the rays whose first hit
-        lies in it (paper Eq. 8, ``info["radiometry"] = "paper"``), model "mesh"; ``info``
-        records mode, normals, footprint, ray spacing, sampling, seed, rays and back-face
-        hits.
+        ``values`` (n_views, n_bins): per bin, the weights of the rays whose first hit
+        lies in it, model "mesh"; ``info`` records the radiometry, mode, normals, footprint,
+        ray spacing, sampling, seed, rays and back-face hits.
     """
     if not isinstance(hits, Hits):
         raise ParameterError(f"hits must be the Hits that meshladar.trace returns; got "
                              f"{type(hits).__name__}")
     check_flag("footprint", footprint)
+    power = check_radiometry(radiometry)
     if footprint and hits.bistatic is not None:
         raise ParameterError("footprint binning is monostatic only; these hits are bistatic")
     from .brdf import BRDF, check_brdf
@@ -203,16 +212,16 @@ def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None) -> Sin
                            hits.material[sel], hits.spread[sel], mats, edges, hits.area,
                            footprint, None if hits.bistatic is None else hits.bistatic[sel],
                            None if hits.weight_factor is None else hits.weight_factor[sel],
-                           None if hits.curve is None else hits.curve[sel])
+                           None if hits.curve is None else hits.curve[sel], power)
     return _sinogram(vals, hits.ladar, edges, hits.info, hits.normals, footprint, hits.rays,
-                     hits.back_face_hits)
+                     hits.back_face_hits, radiometry)
 
 
 
-def _sinogram(vals, ladar, edges, run, normals, footprint, rays, back):
+def _sinogram(vals, ladar, edges, run, normals, footprint, rays, back, radiometry):
     """The mesh model's sinogram; its info says how it was made (mode, normals, sampling,
     rays) and under which convention (radiometry)."""
-    info = {"radiometry": "paper", "mode": run["mode"], "normals": normals,
+    info = {"radiometry": radiometry, "mode": run["mode"], "normals": normals,
             "footprint": footprint, "ray_spacing": run["ray_spacing"],
             "sampling": run["sampling"], "seed": run["seed"], "rays": int(np.sum(rays)),
             "back_face_hits": np.asarray(back).tolist(), "backend": run.get("backend")}

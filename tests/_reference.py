@@ -84,8 +84,9 @@ def ray_sample(scene, phi, edges, n_rays):
     return prof, ds, wmax
 
 
-def quad_profile(scene, phi, edges, *, n_scan=4000, epsrel=1e-12):
-    """Adaptive quadrature of P[k] = ∫ F cos θ dl over visible boundary points in bin k."""
+def quad_profile(scene, phi, edges, *, n_scan=4000, epsrel=1e-12, power=False):
+    """Adaptive quadrature of P[k] = ∫ F cos θ dl (``power``: ∫ F cos²θ dl, received power)
+    over visible boundary points in bin k."""
     w = np.array([math.cos(phi), math.sin(phi)])
     u = np.array([-w[1], w[0]])
     prof = np.zeros(len(edges) - 1)
@@ -118,7 +119,8 @@ def quad_profile(scene, phi, edges, *, n_scan=4000, epsrel=1e-12):
             n = _normal(sh, point(t))
             cos_t = max(float(n @ w), 0.0)
             theta = math.atan2(abs(n[0] * w[1] - n[1] * w[0]), cos_t)
-            return sh.material.monostatic(theta, projected=True) * speed(t)
+            extra = cos_t if power else 1.0
+            return sh.material.monostatic(theta, projected=True) * extra * speed(t)
 
         t = np.linspace(0, 2 * math.pi, n_scan + 1)
         bps = set()

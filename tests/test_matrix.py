@@ -690,7 +690,11 @@ for _key, _v in {"x": "x", "none": None, "int": 3, "upper": "MESH"}.items():
     api(f"simulate.model={_key}", lambda v=_v: ml.simulate(_disk(), _lad(), model=v), "error",
         "model")
 api("simulate.unknown-option", lambda: _mesh_sim(bogus=1), "error", "bogus")
-api("simulate.radiometry", lambda: _mesh_sim(radiometry="paper"), "error", "radiometry")
+api("simulate.radiometry=power", lambda: _mesh_sim(radiometry="power"), "ok",
+    check=lambda s: s.info["radiometry"] == "power")
+api("simulate.radiometry=watts", lambda: _mesh_sim(radiometry="watts"), "error", "radiometry")
+api("simulate.analytic.radiometry=None", lambda: ml.simulate(_disk(), _lad(), radiometry=None),
+    "error", "radiometry")
 api("simulate.segments", lambda: _mesh_sim(segments=64), "error", "segments")
 api("simulate.analytic-of-mesh", lambda: ml.simulate(_sphere(), _lad()), "error", "mesh")
 api("simulate.analytic.jobs=0", lambda: ml.simulate(_disk(), _lad(), jobs=0), "error", "jobs")

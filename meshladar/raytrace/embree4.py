@@ -472,7 +472,7 @@ _BLOCK = 1024
 @njit(cache=True, nogil=True)
 def cast_bin_grid(fn, scene, w, flags, s, t, du, dv, sp, u, v, lw, d, inv_scale, scale,
                   plane_d, face_normals, face_material, params, wv, start, edges, area,
-                  ignore_back, out, stamp, weight, tag):
+                  power, ignore_back, out, stamp, weight, tag):
     """One view, grid to bins in one loop (monostatic, flat normals, point bins): each
     packet's float32 origins are built as :func:`meshladar.raytrace.grid._ray_grid` builds
     them (o = (S u + T v) + L w, S = s (+ δ du), T = t (+ δ dv) when ``du`` is not empty),
@@ -521,6 +521,6 @@ def cast_bin_grid(fn, scene, w, flags, s, t, du, dv, sp, u, v, lw, d, inv_scale,
         if held >= _BLOCK or first + w >= n:
             back += bin_flat_hits(hit_prim[:held], hit_t[:held], hit_o[:held], plane_d,
                                   face_normals, face_material, params, wv, start, edges,
-                                  area, ignore_back, out, stamp, weight, tag)
+                                  area, power, ignore_back, out, stamp, weight, tag)
             held = 0
     return back, n

@@ -77,7 +77,8 @@ def _job(geo, views, ladar_vectors, mode, spacing, z0_shifted, back_faces, seed,
             and (geo.normals == "flat" or geo.normals == "smooth"
                  and all(m.kernel_params is not None for m in weigh_with[0]))):
         return _fast_job(geo, scene, ladar_vectors, views, mode, spacing, z0_shifted,
-                         back_faces, seed, edges, weigh_with[0], weigh_with[2], row_jobs)
+                         back_faces, seed, edges, weigh_with[0], weigh_with[2], row_jobs,
+                         weigh_with[3])
     out = []
     for i in views:
         w = ladar_vectors[i]
@@ -87,20 +88,20 @@ def _job(geo, views, ladar_vectors, mode, spacing, z0_shifted, back_faces, seed,
                                w_r, footprint=weigh_with is None or weigh_with[1]))
     if weigh_with is None:
         return out
-    materials, footprint, area = weigh_with
+    materials, footprint, area, power = weigh_with
     vals = np.zeros((len(views), len(edges) - 1))
     for j, (i, h) in enumerate(zip(views, out)):
         r = h.range + _range_offset(geo.center, ladar_vectors[i],
                                  None if receivers is None else receivers[i])
         vals[j] = _bin_one(r, h.cos_theta, h.sin_theta, h.material, h.spread, materials, edges,
-                           area, footprint, h.bistatic, h.weight_factor, h.curve)
+                           area, footprint, h.bistatic, h.weight_factor, h.curve, power)
     return {"values": vals, "rays": np.array([h.rays for h in out], np.int64),
             "backs": np.array([h.back_face_hits for h in out], np.int64)}
 
 
 
 def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces, seed, edges,
-              materials, area, row_jobs=1):
+              materials, area, row_jobs=1, power=False):
     """The common cases in one compiled loop per view: monostatic, point binning, flat
     normals (any coating) or smooth ones (coatings with a compiled kernel: SR, Lambertian),
     no per-hit arrays beyond Embree's own output. With flat normals F·area
@@ -128,14 +129,14 @@ def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces,
             backs.append(_kernels.bin_smooth_hits(
                 res["primID"], res["tfar"], res["u"], res["v"], o, geo.plane_d,
                 geo.face_normals, geo.corner, geo.material, params, w, start, edges, area,
-                back_faces == "ignore", _MIN_COS_FACET, vals[j]))
+                power, back_faces == "ignore", _MIN_COS_FACET, vals[j]))
             rays.append(len(o))
             continue
         if not compiled:
-            _face_weights(geo, materials, w, area, weight)
+            _face_weights(geo, materials, w, area, weight, power)
             stamp[:] = j + 1                         # every face's weight is this view's
         bins = (geo.plane_d, geo.face_normals, geo.material, params, w, start, edges, area,
-                back_faces == "ignore", vals[j], stamp, weight, j + 1)
+                power, back_faces == "ignore", vals[j], stamp, weight, j + 1)
         if scene.fused and (mode == "3d" or rng is None):
             # packets: grid, cast, weigh and bin in one loop, no per-ray arrays
             plan = _grid_plan(geo, w, mode, spacing, z0_shifted, rng)
@@ -154,13 +155,14 @@ def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces,
 
 
 
-def _face_weights(geo, materials, w, area, out):
+def _face_weights(geo, materials, w, area, out, power=False):
     """F(θ)·area of every face for view w, into out (n_faces,): θ between the face's flat
     normal and w (either side: the kernel skips back faces that are ignored), weighed by
     :func:`meshladar.weighing._weights` exactly as the unfused path weighs a hit."""
     n = geo.face_normals
     c = np.abs(n[:, 0] * w[0] + n[:, 1] * w[1] + n[:, 2] * w[2])
-    out[:] = _weights(c, np.sqrt(np.maximum(1.0 - c * c, 0.0)), geo.material, materials, area)
+    out[:] = _weights(c, np.sqrt(np.maximum(1.0 - c * c, 0.0)), geo.material, materials, area,
+                      power=power)
 
 
 def _rows_on_threads(scene, plan, w, spacing, bins, row_jobs):
@@ -251,8 +253,8 @@ def _job_description(geo, scene, ladar, mode, spacing, z0, back_faces, seed, wei
     """Everything that determines a streaming run's result, for its run folder."""
     from ..runs import array_digest as digest
 
-    mats, footprint, area = weigh_with
-    return {"kind": "simulate_mesh", "geometry": geo.key, "normals": geo.normals,
+    mats, footprint, area, power = weigh_with
+    return {"kind": "simulate_mesh", "radiometry": "power" if power else "paper", "geometry": geo.key, "normals": geo.normals,
             "materials": [repr(m) for m in mats], "view_vectors": digest(ladar.view_vectors),
             "bin_edges": digest(ladar.bin_edges), "n_views": ladar.n_views, "mode": mode,
             "ray_spacing": spacing, "z0": z0, "back_faces": back_faces, "seed": seed,
@@ -280,7 +282,7 @@ def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_b
             "or wider bins)")
     area = spacing if mode == "slice" else spacing * spacing
     if weigh_with is not None:
-        weigh_with = (weigh_with[0], weigh_with[1], area)
+        weigh_with = (weigh_with[0], weigh_with[1], area, weigh_with[2])
     z0_shifted = z0 - float(geo.center[2])
     check_flag("progress", progress)
     from ..stream import run_chunks
@@ -415,7 +417,7 @@ def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0
 def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-sided", z0=None,
                   ray_spacing=None, rays_per_bin=None, footprint=None, sampling=None,
                   seed=None, receiver=None, jobs=None, executor=None, progress=False,
-                  run_dir=None, backend="auto") -> Sinogram:
+                  run_dir=None, backend="auto", radiometry="paper") -> Sinogram:
     """Trace and weigh in one streaming pass.
 
     Each chunk of views is binned and its hits dropped, so memory stays bounded whatever
@@ -432,6 +434,9 @@ def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-side
         As :func:`trace` (default normals "flat").
     footprint : bool, optional
         As :func:`meshladar.weigh` (default False: point binning).
+    radiometry : {"paper", "power"}
+        "paper" (default): Eq. 8, Σ F(θ)·δA⊥ per bin; "power": received power,
+        Σ F·cos θr·δA⊥ (:mod:`meshladar.sensor`).
     run_dir : path, optional
         Makes the run resumable and loss-free (:mod:`meshladar.runs`): each finished chunk
         of views is saved there atomically with a checksum, and running the same job again
@@ -440,25 +445,30 @@ def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-side
     Returns
     -------
     Sinogram
-        ``values`` (n_views, n_bins) bin integrals of F(θ) cos θ dA (paper Eq. 8), model
-        "mesh"; ``info`` records radiometry, mode, normals, footprint, ray_spacing,
+        ``values`` (n_views, n_bins) bin integrals of F(θ) cos θ dA (paper Eq. 8) or of
+        F cos θ_i cos θ_r dA (power), model "mesh"; ``info`` records radiometry, mode, normals, footprint, ray_spacing,
         sampling, seed, rays cast and back-face hits per view.
     """
     normals = "flat" if normals is None else normals
     footprint = False if footprint is None else footprint
+    from ..sensor import check_radiometry
+
+    power = check_radiometry(radiometry)
     if isinstance(scene, Scene) and not scene.is_mesh:
         scene = scene.tessellate(1024)
     geo, run, area, results = _run(
         scene, ladar, mode=mode, normals=normals, back_faces=back_faces, z0=z0,
         ray_spacing=ray_spacing, rays_per_bin=rays_per_bin, seed=seed, jobs=jobs,
-        executor=executor, progress=progress, weigh_with=(tuple(scene.materials), footprint),
+        executor=executor, progress=progress,
+        weigh_with=(tuple(scene.materials), footprint, power),
         receiver=receiver, run_dir=run_dir, sampling=sampling, backend=backend)
     from ..stream import joined
 
     vals, rays, back = (joined(results, k) for k in ("values", "rays", "backs"))
     if not np.any(vals):
         _warn_empty(scene, ladar, run, back_faces, int(back.sum()), geo.face_normals)
-    return _sinogram(vals, ladar, ladar.bin_edges, run, normals, footprint, rays, back)
+    return _sinogram(vals, ladar, ladar.bin_edges, run, normals, footprint, rays, back,
+                     radiometry)
 
 
 
