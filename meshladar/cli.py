@@ -16,6 +16,7 @@ from .errors import MeshladarError
 from .forward import MODELS
 from .ladar import MAX_VIEWS as _MAX_VIEWS
 from .reconstruct import FILTERS
+from .sensor import RADIOMETRIES
 from .raytrace import BACKENDS, MODES, NORMALS, SAMPLINGS
 
 __all__ = ["main"]
@@ -221,6 +222,8 @@ def _cmd_simulate(args) -> int:
             opts["footprint"] = True
     elif model == "pixel" and args.pixel_size is not None:
         opts["pixel_size"] = args.pixel_size
+    if args.radiometry is not None:
+        opts["radiometry"] = args.radiometry
     opts["jobs"] = args.jobs                 # the stream's options: every model takes them
     if args.run_dir is not None:
         opts["run_dir"] = args.run_dir
@@ -486,6 +489,9 @@ def _parser() -> argparse.ArgumentParser:
     sim.add_argument("-o", "--output", required=True, help="result file (.npz)")
     sim.add_argument("--model", choices=MODELS, default=None,
                      help="forward model (default: analytic for phantoms, mesh for meshes)")
+    sim.add_argument("--radiometry", choices=RADIOMETRIES, default=None,
+                     help="paper: the paper's Eq. 8, ∫ F cos θ dA per bin (default); power: "
+                          "the power a receiver collects, ∫ F cos θi cos θr dA (every model)")
     sim.add_argument("--views", type=_positive_int, default=None,
                      help="number of views evenly over 360 degrees about z (default: the "
                           "phantom's, or 360)")

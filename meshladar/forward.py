@@ -19,9 +19,9 @@ MODELS = ("analytic", "mesh", "pixel")
 _STREAM = ("jobs", "executor", "progress", "run_dir")
 _OPTIONS = {"analytic": ("radiometry",) + _STREAM,
             "pixel": ("pixel_size", "ray_spacing", "radiometry") + _STREAM,
-            "mesh": ("radiometry", "mode", "normals", "back_faces", "z0", "ray_spacing", "rays_per_bin",
-                     "footprint", "sampling", "seed", "receiver", "tol", "max_rays", "backend",
-                     "jobs", "executor", "progress", "run_dir")}
+            "mesh": ("radiometry", "sensor", "mode", "normals", "back_faces", "z0",
+                     "ray_spacing", "rays_per_bin", "footprint", "sampling", "seed",
+                     "receiver", "tol", "max_rays", "backend") + _STREAM}
 
 
 def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
@@ -38,7 +38,9 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
         ``"mesh"``: triangle meshes ray-cast with Embree; a mesh is a 3-D target
         (``mode="3d"``) unless it was tessellated from the analytic shapes. Options of
         :func:`meshladar.raytrace.simulate_mesh` (mode, normals, back_faces, z0,
-        ray_spacing, rays_per_bin, footprint, sampling, seed, receiver, backend) and ``tol``.
+        ray_spacing, rays_per_bin, footprint, sampling, seed, receiver, backend, sensor)
+        and ``tol``. ``sensor`` (:class:`meshladar.sensor.Sensor`): a ladar at a finite
+        standoff, a beam, the atmosphere and the link budget (photoelectrons).
         ``"pixel"``: the paper's method, a rasterised surface traced with Siddon rays
         (options ``pixel_size``, ``ray_spacing``; :func:`meshladar.pixel.simulate_pixel`).
     radiometry : {"paper", "power"}, every model

@@ -15,9 +15,20 @@ Radiometry conventions (``radiometry=`` on every forward model and on :func:`wei
 
 from __future__ import annotations
 
-from ._validate import check_choice
+import math
+from dataclasses import dataclass, field
 
-__all__ = ["RADIOMETRIES"]
+import numpy as np
+
+from ._validate import check_choice, check_real, finite_array
+from .errors import ParameterError
+
+__all__ = ["RADIOMETRIES", "FloodBeam", "GaussianBeam", "Sensor", "SPEED_OF_LIGHT", "PLANCK"]
+
+#: Speed of light in vacuum, m/s (exact, SI).
+SPEED_OF_LIGHT = 299_792_458.0
+#: Planck's constant, J·s (exact, SI).
+PLANCK = 6.626_070_15e-34
 
 #: The radiometry conventions every forward model takes (module docstring).
 RADIOMETRIES = ("paper", "power")
@@ -27,3 +38,206 @@ def check_radiometry(radiometry) -> bool:
     """True for received power, False for the paper's Eq. 8; a ParameterError naming the
     choices otherwise."""
     return check_choice("radiometry", radiometry, RADIOMETRIES) == "power"
+
+
+def _optional_positive(name, value):
+    return None if value is None else check_real(name, value, low=0.0, low_open=True)
+
+
+@dataclass(frozen=True)
+class FloodBeam:
+    """A uniform flood: the same radiant intensity in every direction of its cone (at a
+    finite standoff the irradiance on a surface facing the sensor falls as (D/R)²), or the
+    same irradiance everywhere (sensor at infinity): today's default, the paper's.
+
+    Parameters
+    ----------
+    radius : float, optional
+        Radius (m, scene units) of the lit disk on the plane through the aim point normal to
+        the view: a top-hat of that radius (a cone of half-angle atan(radius/D) at standoff
+        D). None (default): unbounded. Needed for photoelectrons: the pulse's energy is
+        spread over π radius².
+    """
+
+    radius: float | None = None
+
+    def __post_init__(self):
+        object.__setattr__(self, "radius", _optional_positive("radius", self.radius))
+
+    def reference_fluence(self, energy, standoff):
+        """J/m² at the aim point for a pulse of ``energy`` J."""
+        if self.radius is None:
+            raise ParameterError("photoelectrons need the flood's extent: give "
+                                 "FloodBeam(radius=...) (m at the aim point), or a "
+                                 "GaussianBeam")
+        return energy / (math.pi * self.radius ** 2)
+
+    def relative(self, rho, z, standoff):
+        """Irradiance on a surface facing the sensor, relative to the aim point's, at
+        distance ``rho`` from the beam's axis and ``z`` along it (arrays)."""
+        if standoff is None:
+            inside = np.ones_like(rho, dtype=bool) if self.radius is None else \
+                rho <= self.radius
+            return inside.astype(np.float64)
+        r2 = rho * rho + z * z
+        out = standoff * standoff / r2
+        if self.radius is not None:
+            out = np.where(rho * standoff <= self.radius * z, out, 0.0)
+        return out
+
+    def describe(self):
+        return {"kind": "flood", "radius_m": self.radius}
+
+
+@dataclass(frozen=True)
+class GaussianBeam:
+    """A Gaussian spot: irradiance ∝ exp(−2ρ²/w(z)²) at distance ρ from the beam's axis,
+    with 1/e² radius w(z) = sqrt(waist² + (divergence·z)²) at distance z from the sensor.
+
+    Parameters
+    ----------
+    waist : float
+        1/e² intensity radius at the sensor (m, scene units); with the sensor at infinity,
+        the radius at the target (a collimated beam).
+    divergence : float
+        Far-field 1/e² half-angle (rad, ≥ 0; 0 for a collimated beam). Needs a finite
+        standoff.
+    offset : (2,) float
+        Pointing offset of the beam's axis at the aim point, along the view's transverse
+        axes (u, v) (m): u = z × w normalised (w the view vector), v = w × u.
+    """
+
+    waist: float
+    divergence: float = 0.0
+    offset: tuple = (0.0, 0.0)
+
+    def __post_init__(self):
+        object.__setattr__(self, "waist", check_real("waist", self.waist, low=0.0,
+                                                     low_open=True))
+        object.__setattr__(self, "divergence", check_real("divergence", self.divergence,
+                                                          low=0.0, high=1.0))
+        off = finite_array("offset", self.offset)
+        if off.shape != (2,):
+            raise ParameterError(f"offset must be two numbers (along u, v); got shape "
+                                 f"{off.shape}")
+        object.__setattr__(self, "offset", (float(off[0]), float(off[1])))
+
+    def radius(self, z):
+        """1/e² radius at distance z from the sensor (m)."""
+        return np.sqrt(self.waist ** 2 + (self.divergence * np.asarray(z, np.float64)) ** 2)
+
+    def reference_fluence(self, energy, standoff):
+        """Peak J/m² on the axis at the aim point's distance: 2E/(π w²)."""
+        w = self.waist if standoff is None else float(self.radius(standoff))
+        return 2.0 * energy / (math.pi * w * w)
+
+    def relative(self, rho, z, standoff):
+        """Irradiance relative to the axis at the aim point's distance."""
+        if standoff is None:
+            return np.exp(-2.0 * rho * rho / self.waist ** 2)
+        wz = self.radius(z)
+        w0 = float(self.radius(standoff))
+        return (w0 / wz) ** 2 * np.exp(-2.0 * rho * rho / (wz * wz))
+
+    def describe(self):
+        return {"kind": "gaussian", "waist_m": self.waist, "divergence_rad": self.divergence,
+                "offset_m": list(self.offset)}
+
+
+@dataclass(frozen=True)
+class Sensor:
+    """Where the ladar is and what it sends and collects (mesh model; ``sensor=``).
+
+    Parameters
+    ----------
+    standoff : float, optional
+        Distance D (m, scene units) from the sensor to the aim point. None (default): at
+        infinity, parallel rays (today's orthographic ladar). Finite: rays fan out from the
+        sensor at ``aim + D w``; ranges are true distances R from it, reported as R − D
+        (so range 0 is the aim point's distance and the bins of a ladar at infinity still
+        fit; the two-way time is 2R/c); each ray carries its cross-section at the hit, and
+        received power the receiver's (D/R)².
+    aim : (3,) float
+        The point the boresight passes through (default the origin, the axis the views turn
+        about).
+    beam : FloodBeam or GaussianBeam
+        The transmitted beam's pattern (default an unbounded flood).
+    extinction : float
+        Atmospheric extinction coefficient σ (1/m, ≥ 0): received power is multiplied by the
+        two-way transmission exp(−2σR).
+    pulse_energy : float, optional
+        Transmitted energy per pulse (J). With ``aperture_diameter`` and a finite standoff,
+        received power is counted in photoelectrons per bin.
+    aperture_diameter : float, optional
+        Receiver aperture diameter (m).
+    optics_transmission, quantum_efficiency : float in (0, 1]
+        Receive optics' transmission and the detector's quantum efficiency (default 1).
+    wavelength : float
+        m (default 1.064e-6, Nd:YAG): the photon energy hc/λ.
+    """
+
+    standoff: float | None = None
+    aim: tuple = (0.0, 0.0, 0.0)
+    beam: FloodBeam | GaussianBeam = field(default_factory=FloodBeam)
+    extinction: float = 0.0
+    pulse_energy: float | None = None
+    aperture_diameter: float | None = None
+    optics_transmission: float = 1.0
+    quantum_efficiency: float = 1.0
+    wavelength: float = 1.064e-6
+
+    def __post_init__(self):
+        object.__setattr__(self, "standoff", _optional_positive("standoff", self.standoff))
+        aim = finite_array("aim", self.aim)
+        if aim.shape != (3,):
+            raise ParameterError(f"aim must be a point (x, y, z); got shape {aim.shape}")
+        object.__setattr__(self, "aim", tuple(float(x) for x in aim))
+        if not isinstance(self.beam, (FloodBeam, GaussianBeam)):
+            raise ParameterError(f"beam must be a FloodBeam or a GaussianBeam; got "
+                                 f"{type(self.beam).__name__}")
+        if (self.standoff is None and isinstance(self.beam, GaussianBeam)
+                and self.beam.divergence > 0):
+            raise ParameterError(f"a beam's divergence ({self.beam.divergence:g} rad) needs a "
+                                 "finite standoff; with the sensor at infinity give the "
+                                 "spot's waist at the target and divergence=0")
+        object.__setattr__(self, "extinction", check_real("extinction", self.extinction,
+                                                          low=0.0))
+        if self.extinction > 0 and self.standoff is None:
+            raise ParameterError(f"extinction ({self.extinction:g} per m) needs a finite "
+                                 "standoff: the path through the air is the range from it")
+        for name in ("pulse_energy", "aperture_diameter"):
+            object.__setattr__(self, name, _optional_positive(name, getattr(self, name)))
+        for name in ("optics_transmission", "quantum_efficiency"):
+            object.__setattr__(self, name, check_real(name, getattr(self, name), low=0.0,
+                                                      high=1.0, low_open=True))
+        object.__setattr__(self, "wavelength", check_real("wavelength", self.wavelength,
+                                                          low=0.0, low_open=True))
+
+    @property
+    def counts_photons(self) -> bool:
+        """Whether received power comes out in photoelectrons (energy, aperture and a
+        finite standoff all given)."""
+        return (self.pulse_energy is not None and self.aperture_diameter is not None
+                and self.standoff is not None)
+
+    def photoelectrons_per_unit(self) -> float:
+        """Photoelectrons per unit of the power sinogram (m²/sr): the aim point's fluence
+        E_ref (J/m²) × the aperture's solid angle at D, π a²/4 / D² (sr) × optics ×
+        quantum efficiency ÷ the photon energy hc/λ (J)."""
+        if not self.counts_photons:
+            raise ParameterError("photoelectrons need pulse_energy (J), aperture_diameter (m) "
+                                 "and a finite standoff (m)")
+        fluence = self.beam.reference_fluence(self.pulse_energy, self.standoff)
+        solid = math.pi * self.aperture_diameter ** 2 / 4.0 / self.standoff ** 2
+        photon = PLANCK * SPEED_OF_LIGHT / self.wavelength
+        return fluence * solid * self.optics_transmission * self.quantum_efficiency / photon
+
+    def describe(self) -> dict:
+        """Every parameter, with its unit in its name (for result files)."""
+        return {"standoff_m": self.standoff, "aim_m": list(self.aim),
+                "beam": self.beam.describe(), "extinction_per_m": self.extinction,
+                "pulse_energy_J": self.pulse_energy,
+                "aperture_diameter_m": self.aperture_diameter,
+                "optics_transmission": self.optics_transmission,
+                "quantum_efficiency": self.quantum_efficiency,
+                "wavelength_m": self.wavelength}

@@ -100,12 +100,15 @@ def _curved_spread(r, wt, curve, edges):
 
 
 def _bin_one(r, cos_t, sin_t, mat, spread, materials, edges, area, footprint, bi=None,
-             factor=None, curve=None, power=False):
-    """One view's profile from its hits."""
+             factor=None, curve=None, power=False, receive=None):
+    """One view's profile from its hits (``receive``: the sensor's receiver factors,
+    applied under received power only)."""
     nb = len(edges) - 1
     wt = _weights(cos_t, sin_t, mat, materials, area, bi, power)
     if factor is not None:
         wt = wt * factor
+    if power and receive is not None:
+        wt = wt * receive
     if footprint and curve is not None:
         curved = curve[:, 3] > 0
         out = _curved_spread(r[curved], wt[curved], curve[curved], edges)
@@ -186,6 +189,9 @@ def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None,
     power = check_radiometry(radiometry)
     if footprint and hits.bistatic is not None:
         raise ParameterError("footprint binning is monostatic only; these hits are bistatic")
+    if footprint and hits.info.get("traced_with") is not None:
+        raise ParameterError("footprint binning is for parallel rays without a sensor; these "
+                             "hits were traced with one")
     from .brdf import BRDF, check_brdf
 
     if isinstance(materials, BRDF):
@@ -212,7 +218,8 @@ def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None,
                            hits.material[sel], hits.spread[sel], mats, edges, hits.area,
                            footprint, None if hits.bistatic is None else hits.bistatic[sel],
                            None if hits.weight_factor is None else hits.weight_factor[sel],
-                           None if hits.curve is None else hits.curve[sel], power)
+                           None if hits.curve is None else hits.curve[sel], power,
+                           None if hits.receive_factor is None else hits.receive_factor[sel])
     return _sinogram(vals, hits.ladar, edges, hits.info, hits.normals, footprint, hits.rays,
                      hits.back_face_hits, radiometry)
 
@@ -224,8 +231,19 @@ def _sinogram(vals, ladar, edges, run, normals, footprint, rays, back, radiometr
     info = {"radiometry": radiometry, "mode": run["mode"], "normals": normals,
             "footprint": footprint, "ray_spacing": run["ray_spacing"],
             "sampling": run["sampling"], "seed": run["seed"], "rays": int(np.sum(rays)),
-            "back_face_hits": np.asarray(back).tolist(), "backend": run.get("backend")}
+            "back_face_hits": np.asarray(back).tolist(), "backend": run.get("backend"),
+            "units": "length/sr (per unit height)" if run["mode"] == "slice" else "area/sr"}
     if run["mode"] == "slice":
         info["z0"] = run["z0"]
+    sensor = run.get("sensor")
+    if sensor is not None:
+        info["sensor"] = sensor.describe()
+        if sensor.counts_photons:
+            if radiometry != "power":
+                raise ParameterError("a sensor with pulse_energy and aperture_diameter counts "
+                                     "photoelectrons of received power: use "
+                                     "radiometry='power' (or drop them for Eq. 8)")
+            vals = vals * sensor.photoelectrons_per_unit()
+            info["units"] = "photoelectrons"
     return Sinogram(vals, angles_deg=ladar.angles_deg, bin_edges=edges, model="mesh",
                     view_vectors=None if ladar.planar else ladar.view_vectors, info=info)

@@ -157,19 +157,17 @@ def _embreex_scene(vertices, faces):
 
 
 class _Packets:
-    """A packet scene behind embreex's ``run`` interface (one direction per call), so every
-    path of the engine casts through either backend unchanged."""
+    """A packet scene behind embreex's ``run`` interface (one direction for all rays, or one
+    per ray), so every path of the engine casts through either backend unchanged."""
 
     def __init__(self, scene):
         self.scene = scene
 
     def run(self, origins, directions, output=None, query="INTERSECT"):
         d = np.asarray(directions, dtype=np.float32).reshape(-1, 3)
-        if len(d) != 1:
-            raise ValueError("the packet backend casts one direction per call")
         if query == "OCCLUDED":
-            return np.where(self.scene.occluded_grid(origins, d[0]), 0, -1)
-        prim, tfar, u, v = self.scene.cast_grid(origins, d[0], barycentrics=True)
+            return np.where(self.scene.occluded_grid(origins, d), 0, -1)
+        prim, tfar, u, v = self.scene.cast_grid(origins, d, barycentrics=True)
         return {"primID": prim, "tfar": tfar, "u": u, "v": v}
 
 
@@ -189,7 +187,7 @@ class _Packets:
             embree4.RTC_RAY_QUERY_FLAG_COHERENT, s.astype(np.float32), t.astype(np.float32),
             empty if du is None else du, empty if dv is None else dv, np.float32(spacing),
             u.astype(np.float32), v.astype(np.float32), (L * w).astype(np.float32),
-            (-w).astype(np.float32), np.float32(inverse), float(scale), *bins)
+            (-w).astype(np.float32)[None, :], np.float32(inverse), float(scale), *bins)
 
 
 def _packet_scene(vertices, faces):

@@ -338,13 +338,14 @@ class Scene:
 
     def cast_grid(self, origins, direction, *, width=None, coherent=True, tmax=np.inf,
                   barycentrics=False):
-        """First hits of rays from ``origins`` (n, 3) all along ``direction`` (3,):
+        """First hits of rays from ``origins`` (n, 3) all along ``direction`` (3,) (or each
+        along its own, (n, 3): coherent when neighbours are nearly parallel):
         ``prim`` (int32, -1 on a miss), ``tfar`` (float32, inf on a miss; distances in
         units of |direction|) and, with ``barycentrics``, the hits' ``u`` and ``v``
         (float32). Releases the GIL: callable from several threads."""
         w = width or self.lib.width
         o = np.ascontiguousarray(origins, dtype=np.float32)
-        d = np.ascontiguousarray(direction, dtype=np.float32).reshape(3)
+        d = _directions(direction, len(o))
         n = len(o)
         prim = np.empty(n, np.int32)
         tfar = np.empty(n, np.float32)
@@ -359,12 +360,22 @@ class Scene:
         """Whether each ray hits anything within ``tmax``: bool (n,)."""
         w = width or self.lib.width
         o = np.ascontiguousarray(origins, dtype=np.float32)
-        d = np.ascontiguousarray(direction, dtype=np.float32).reshape(3)
+        d = _directions(direction, len(o))
         out = np.empty(len(o), np.bool_)
         flags = RTC_RAY_QUERY_FLAG_COHERENT if coherent else RTC_RAY_QUERY_FLAG_INCOHERENT
         occluded_grid(self.lib.occluded[w], self._live(), o, d, np.float32(tmax), w,
                       flags, out)
         return out
+
+
+def _directions(direction, n):
+    """One direction (3,) or one per ray (n, 3), as the (k, 3) float32 the kernels read."""
+    d = np.ascontiguousarray(direction, dtype=np.float32)
+    d = d.reshape(1, 3) if d.size == 3 else d
+    if d.ndim != 2 or d.shape[1] != 3 or d.shape[0] not in (1, n):
+        raise ValueError(f"direction must be (3,) or one per ray ({n}, 3); got shape "
+                         f"{np.shape(direction)}")
+    return d
 
 
 # ----------------------------------------------------------------------- jitted kernels
@@ -399,20 +410,23 @@ def _init_args(i32, i64, base, flags):
 @njit(cache=True, nogil=True, inline="always")
 def _load_packet(f32, i32, o, d, tmax, start, n, w):
     """Fill the RTCRayW fields, the valid mask and the hit's invalid ids for rays
-    start..start+w (masked past n)."""
+    start..start+w (masked past n); ``d`` (1, 3) is every ray's direction, or (n, 3) one
+    per ray."""
     v = _VALID_OFF // 4
+    each = d.shape[0] > 1
     for j in range(w):
         r = start + j
         ok = r < n
         if not ok:
             r = start                    # harmless finite data in inactive lanes
+        k = r if each else 0
         f32[_ORG_X * w + j] = o[r, 0]
         f32[_ORG_Y * w + j] = o[r, 1]
         f32[_ORG_Z * w + j] = o[r, 2]
         f32[_TNEAR * w + j] = 0.0
-        f32[_DIR_X * w + j] = d[0]
-        f32[_DIR_Y * w + j] = d[1]
-        f32[_DIR_Z * w + j] = d[2]
+        f32[_DIR_X * w + j] = d[k, 0]
+        f32[_DIR_Y * w + j] = d[k, 1]
+        f32[_DIR_Z * w + j] = d[k, 2]
         f32[_TIME * w + j] = 0.0
         f32[_TFAR * w + j] = tmax
         i32[_MASK * w + j] = -1

@@ -31,6 +31,7 @@ class ViewHits:
     bistatic: np.ndarray | None = None
     weight_factor: np.ndarray | None = None
     curve: np.ndarray | None = None
+    receive_factor: np.ndarray | None = None
 
     def __post_init__(self):
         _freeze(self, np.shape(self.range)[0] if np.ndim(self.range) == 1 else -1,
@@ -40,8 +41,8 @@ class ViewHits:
 #: Per-hit fields of the hit records and their shapes (k hits); the optional ones may be None.
 _FIELDS = {"view": (1,), "range": (1,), "cos_theta": (1,), "sin_theta": (1,),
            "material": (1,), "spread": (1, 4), "bistatic": (1, 4), "weight_factor": (1,),
-           "curve": (1, 4)}
-_OPTIONAL = ("bistatic", "weight_factor", "curve")
+           "curve": (1, 4), "receive_factor": (1,)}
+_OPTIONAL = ("bistatic", "weight_factor", "curve", "receive_factor")
 
 
 def _freeze(record, k, kind):
@@ -82,9 +83,16 @@ class Hits:
     ``bistatic``        (k, 4)       with a bistatic receiver: cos θr, sin θr, cos α,
                                      sin α (cos θr = −1 where the receiver is occluded);
                                      else None
-    ``weight_factor``   (k,)         shading normals' area factor (cos θs/cos θg), or None
+    ``weight_factor``   (k,)         per-ray factor on F·``area``: shading normals' area
+                                     factor (cos θs/cos θg); with a sensor at finite
+                                     standoff D the ray's cross-section at the hit,
+                                     cos³α (R/D)², and the beam's relative irradiance;
+                                     or None
     ``curve``           (k, 4)       exact-normal slice footprints on curved surfaces, or
                                      None
+    ``receive_factor``  (k,)         with a sensor: what received power adds beyond
+                                     cos θr, the receiver's (D/R)² and the two-way
+                                     atmospheric transmission exp(−2σR); else None
     ==================  ===========  =====================================================
 
     Per view (n_views,): ``rays`` cast and ``back_face_hits``. Scalars: ``area`` (δA⊥ per
@@ -108,6 +116,7 @@ class Hits:
     bistatic: np.ndarray = None
     weight_factor: np.ndarray = None
     curve: np.ndarray = None
+    receive_factor: np.ndarray = None
     info: dict = field(default_factory=dict)
 
     def __post_init__(self):

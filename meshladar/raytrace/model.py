@@ -69,10 +69,13 @@ def _options(scene, ladar, mode, normals, back_faces, z0):
 
 
 def _job(geo, views, ladar_vectors, mode, spacing, z0_shifted, back_faces, seed, edges,
-         weigh_with, receivers=None, backend="embreex", row_jobs=1):
+         weigh_with, receivers=None, backend="embreex", row_jobs=1, sensor=None):
     """Trace a chunk of views (the stream's per-chunk job): the views' hits (``weigh_with``
     None), or their binned values, rays and back-face hits as a dict of arrays."""
     scene = _embree_scene(geo, backend)
+    if sensor is not None:
+        return _sensor_job(geo, scene, views, ladar_vectors, mode, spacing, z0_shifted,
+                           back_faces, seed, edges, weigh_with, sensor)
     if (weigh_with is not None and receivers is None and not weigh_with[1]
             and (geo.normals == "flat" or geo.normals == "smooth"
                  and all(m.kernel_params is not None for m in weigh_with[0]))):
@@ -98,6 +101,35 @@ def _job(geo, views, ladar_vectors, mode, spacing, z0_shifted, back_faces, seed,
     return {"values": vals, "rays": np.array([h.rays for h in out], np.int64),
             "backs": np.array([h.back_face_hits for h in out], np.int64)}
 
+
+
+def _sensor_job(geo, scene, views, vectors, mode, spacing, z0_shifted, back_faces, seed,
+                edges, weigh_with, sensor):
+    """:func:`_job` for a view seen by a sensor (finite standoff, a beam): hits from
+    :func:`meshladar.raytrace.perspective._trace_sensor_view`, weighed point by point."""
+    from .perspective import _trace_sensor_view
+
+    out = []
+    for i in views:
+        rng = None if seed is None else np.random.default_rng([seed, int(i)])
+        out.append(_trace_sensor_view(geo, scene, vectors[i], mode, spacing, z0_shifted,
+                                      back_faces, rng, sensor))
+    if weigh_with is None:
+        return out
+    materials, _, area, power = weigh_with
+    vals = np.zeros((len(views), len(edges) - 1))
+    for j, (i, h) in enumerate(zip(views, out)):
+        r = h.range + _sensor_offset(geo, vectors[i], sensor)
+        vals[j] = _bin_one(r, h.cos_theta, h.sin_theta, h.material, h.spread, materials, edges,
+                           area, False, None, h.weight_factor, None, power, h.receive_factor)
+    return {"values": vals, "rays": np.array([h.rays for h in out], np.int64),
+            "backs": np.array([h.back_face_hits for h in out], np.int64)}
+
+
+def _sensor_offset(geo, w, sensor):
+    """What the range of a sensor's hit is relative to: absolute (R − D) at a finite
+    standoff, the shifted centre's plane at infinity."""
+    return 0.0 if sensor.standoff is not None else _range_offset(geo.center, w, None)
 
 
 def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces, seed, edges,
@@ -263,10 +295,36 @@ def _job_description(geo, scene, ladar, mode, spacing, z0, back_faces, seed, wei
 
 
 
+def _check_sensor(sensor, receiver, footprint, mode):
+    """The sensor a job traces with: None for none, or for one that changes nothing (at
+    infinity, an unbounded flood: the compiled loops apply)."""
+    from ..sensor import FloodBeam, Sensor
+
+    if sensor is None:
+        return None
+    if not isinstance(sensor, Sensor):
+        raise ParameterError(f"sensor must be a meshladar.sensor.Sensor; got "
+                             f"{type(sensor).__name__}")
+    if receiver is not None:
+        raise ParameterError("a sensor is monostatic (its receiver sits with its "
+                             "transmitter); drop receiver or sensor")
+    if footprint:
+        raise ParameterError("footprint binning is for parallel rays without a sensor; use "
+                             "footprint=False with a sensor")
+    if sensor.standoff is not None and mode != "3d":
+        raise ParameterError("a sensor at a finite standoff needs mode='3d' (its rays fan "
+                             "out in both transverse directions)")
+    if sensor.standoff is None and isinstance(sensor.beam, FloodBeam) \
+            and sensor.beam.radius is None:
+        return None
+    return sensor
+
+
 def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_bin, seed,
          jobs, executor, progress, weigh_with, receiver=None, run_dir=None, sampling=None,
-         backend="auto"):
+         backend="auto", sensor=None):
     mode, geo, z0 = _options(scene, ladar, mode, normals, back_faces, z0)
+    traced_with = _check_sensor(sensor, receiver, bool(weigh_with and weigh_with[1]), mode)
     backend = resolve_backend(backend)
     sampling, seed = _sampling(mode, sampling, seed)
     if weigh_with is not None:
@@ -291,17 +349,19 @@ def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_b
     if run_dir is not None:
         job = _job_description(geo, scene, ladar, mode, spacing, z0, back_faces, seed,
                                weigh_with, receivers)
+        job["sensor"] = None if sensor is None else sensor.describe()
     work = _estimate_rays(geo, ladar, mode, spacing)
     results = run_chunks(
         _job, geo, ladar.n_views, chunk_size=_VIEWS_PER_TASK,
         args=(np.asarray(ladar.view_vectors, dtype=np.float64), mode, spacing, z0_shifted,
               back_faces, seed, ladar.bin_edges, weigh_with, receivers, backend,
-              _row_jobs(ladar.n_views, jobs, executor, work)),
+              _row_jobs(ladar.n_views, jobs, executor, work), traced_with),
         jobs=jobs, executor=executor, progress=progress, unit="views",
         work=work, run_dir=run_dir, job=job,
         arrays={"values": (ladar.n_bins,), "rays": (), "backs": ()}, threads=True)
     run = {"mode": mode, "ray_spacing": spacing, "z0": z0, "sampling": sampling, "seed": seed,
-           "receiver": receivers, "backend": backend}
+           "receiver": receivers, "backend": backend, "sensor": sensor,
+           "traced_with": traced_with}
     return geo, run, area, results
 
 
@@ -321,7 +381,7 @@ def _row_jobs(n_views, jobs, executor, work):
 
 def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0=None,
           ray_spacing=None, rays_per_bin=None, sampling=None, seed=None, receiver=None,
-          jobs=None, executor=None, progress=False, backend="auto") -> Hits:
+          jobs=None, executor=None, progress=False, backend="auto", sensor=None) -> Hits:
     """Trace every view once and keep the hits (geometry only): re-weigh them with
     :func:`weigh` for any coating without tracing again.
 
@@ -369,6 +429,10 @@ def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0
         they load, else embreex with one warning saying so. Both give the same hits (a ray
         exactly along an edge shared by two faces may report the other face). The result's
         ``info["backend"]`` says which ran.
+    sensor : meshladar.sensor.Sensor, optional
+        A sensor at a finite standoff (perspective rays, true distances) and/or a beam
+        pattern, atmosphere and link budget (:mod:`meshladar.sensor`). Monostatic, point
+        binning. Default: at infinity, an unbounded flood (the paper's ladar).
 
     Returns
     -------
@@ -389,13 +453,14 @@ def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0
         scene, ladar, mode=mode, normals=normals, back_faces=back_faces, z0=z0,
         ray_spacing=ray_spacing, rays_per_bin=rays_per_bin, seed=seed, jobs=jobs,
         executor=executor, progress=progress, weigh_with=None, receiver=receiver,
-        sampling=sampling, backend=backend)
+        sampling=sampling, backend=backend, sensor=sensor)
     receivers = run["receiver"]
     per_view = [h for res in results for h in res]
     vectors = ladar.view_vectors
+    sensed = run["traced_with"]
     offsets = [_range_offset(geo.center, vectors[i],
-                             None if receivers is None else receivers[i])
-               for i in range(ladar.n_views)]
+                             None if receivers is None else receivers[i]) if sensed is None
+               else _sensor_offset(geo, vectors[i], sensed) for i in range(ladar.n_views)]
     view = np.concatenate([np.full(h.range.size, i, np.int32) for i, h in enumerate(per_view)])
 
     def joined(field):
@@ -410,14 +475,15 @@ def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0
                 back_face_hits=np.array([h.back_face_hits for h in per_view]),
                 area=area, mode=run["mode"], normals=normals, ladar=ladar,
                 materials=tuple(scene.materials), bistatic=joined("bistatic"),
-                weight_factor=joined("weight_factor"), curve=joined("curve"), info=run)
+                weight_factor=joined("weight_factor"), curve=joined("curve"),
+                receive_factor=joined("receive_factor"), info=run)
 
 
 
 def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-sided", z0=None,
                   ray_spacing=None, rays_per_bin=None, footprint=None, sampling=None,
                   seed=None, receiver=None, jobs=None, executor=None, progress=False,
-                  run_dir=None, backend="auto", radiometry="paper") -> Sinogram:
+                  run_dir=None, backend="auto", radiometry="paper", sensor=None) -> Sinogram:
     """Trace and weigh in one streaming pass.
 
     Each chunk of views is binned and its hits dropped, so memory stays bounded whatever
@@ -437,6 +503,9 @@ def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-side
     radiometry : {"paper", "power"}
         "paper" (default): Eq. 8, Σ F(θ)·δA⊥ per bin; "power": received power,
         Σ F·cos θr·δA⊥ (:mod:`meshladar.sensor`).
+    sensor : meshladar.sensor.Sensor, optional
+        As :func:`trace`. With ``pulse_energy``, ``aperture_diameter`` and a standoff,
+        received power comes out in photoelectrons per bin (``info["units"]``).
     run_dir : path, optional
         Makes the run resumable and loss-free (:mod:`meshladar.runs`): each finished chunk
         of views is saved there atomically with a checksum, and running the same job again
@@ -461,7 +530,8 @@ def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-side
         ray_spacing=ray_spacing, rays_per_bin=rays_per_bin, seed=seed, jobs=jobs,
         executor=executor, progress=progress,
         weigh_with=(tuple(scene.materials), footprint, power),
-        receiver=receiver, run_dir=run_dir, sampling=sampling, backend=backend)
+        receiver=receiver, run_dir=run_dir, sampling=sampling, backend=backend,
+        sensor=sensor)
     from ..stream import joined
 
     vals, rays, back = (joined(results, k) for k in ("values", "rays", "backs"))

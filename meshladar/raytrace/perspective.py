@@ -1,0 +1,162 @@
+"""One view's hits seen by a :class:`meshladar.sensor.Sensor`: rays fanning out from a
+sensor at a finite standoff (or parallel rays, at infinity), each weighed by its
+cross-section at the hit and the beam's irradiance there, and the receiver's factors.
+
+Geometry of a perspective view. The sensor sits at S = aim + D w (D the standoff). Its rays
+pass through a square grid of spacing δ on the reference plane through the aim point
+normal to w (regular, or stratified exactly as the orthographic grid), covering the
+target's hull as projected from S. A ray through a grid point at distance D/cos α from S
+stands for the solid angle δΩ = δ² cos³α / D², so at distance R its cross-section is
+δA⊥ = δ² cos³α (R/D)². The per-ray weight on F·δ² is then
+
+* ``weight_factor`` = cos³α (R/D)² × the beam's irradiance at the hit relative to the aim
+  point's (flood: (D/R)²; Gaussian: (w(D)/w(z))² exp(−2ρ²/w(z)²)) [× the shading factor of
+  smooth or exact normals], and under received power also
+* ``receive_factor`` = (D/R)² exp(−2σR): the receiver's solid angle relative to the aim
+  point's, and the atmosphere's two-way transmission.
+
+As D → ∞, cos α → 1 and R/D → 1: the orthographic weights. Ranges are R − D (0 at the aim
+point's distance), exact in float64: the hit distance is recomputed against the hit face's
+plane from the sensor's float64 position along the float64 ray.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..precision import ORIGIN_MARGIN, REFINE_MIN_COS
+from .grid import _dot, _frame, _ray_grid, _stratified_offsets
+from .hits import ViewHits
+from .views import _shading_factor
+
+
+def _plane_grid(geo, w, spacing, rng, sensor_pos, standoff, aim):
+    """Cell centres (S, T) (n,) float64 on the reference plane (aim + S u + T v) covering
+    the hull as projected from the sensor, and (u, v)."""
+    u, v = _frame(w)
+    q = geo.hull - sensor_pos
+    depth = -(q @ w)                               # distance along the boresight
+    if np.min(depth) <= ORIGIN_MARGIN * geo.radius:
+        raise ParameterError(
+            f"standoff {standoff:g} puts the sensor inside the target's extent (the target "
+            f"reaches {standoff - float(np.min(depth)):.6g} toward it from the aim point): "
+            "give a larger standoff")
+    su = (q @ u) * standoff / depth + (sensor_pos - aim) @ u
+    tv = (q @ v) * standoff / depth + (sensor_pos - aim) @ v
+    axes = []
+    for c in (su, tv):
+        lo, hi = c.min() - spacing, c.max() + spacing
+        n = max(1, int(math.ceil((hi - lo) / spacing)))
+        axes.append(lo + (np.arange(n) + 0.5) * spacing)
+    s, t = axes
+    S = np.repeat(s, t.size).reshape(s.size, t.size)
+    T = np.tile(t, s.size).reshape(s.size, t.size)
+    if rng is not None:
+        du, dv = _stratified_offsets(s.size, t.size, rng)
+        S = S + du.astype(np.float64) * spacing
+        T = T + dv.astype(np.float64) * spacing
+    return S.ravel(), T.ravel(), u, v
+
+
+def _trace_sensor_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, sensor):
+    """Hits of one view seen by ``sensor``; ranges absolute (R − D at a finite standoff),
+    or relative to the plane through the shifted centre (at infinity), as
+    :func:`meshladar.raytrace.views._trace_view`'s."""
+    D = sensor.standoff
+    aim = np.asarray(sensor.aim, np.float64) - geo.center
+    if D is None:
+        o, L, u, v = _ray_grid(geo, w, mode, spacing, z0_shifted, rng)
+        d = np.ascontiguousarray((-w)[None, :], dtype=np.float32)
+        res = scene.run(o, d, output=1)
+        prim = res["primID"]
+        hit = prim >= 0
+        prim = prim[hit]
+        start = o[hit].astype(np.float64)           # each ray from its float32 origin
+        dirs = np.broadcast_to(-w, start.shape)
+        t32 = res["tfar"][hit].astype(np.float64)
+        n_rays, cos3 = len(o), 1.0
+        sensor_pos = None
+    else:
+        if mode != "3d":
+            raise ParameterError("a sensor at a finite standoff needs mode='3d' (its rays "
+                                 "fan out in both transverse directions)")
+        sensor_pos = aim + D * w
+        S, T, u, v = _plane_grid(geo, w, spacing, rng, sensor_pos, D, aim)
+        q = S[:, None] * u + T[:, None] * v - D * w
+        length = np.sqrt(S * S + T * T + D * D)
+        dirs_all = q / length[:, None]
+        # start each ray where it enters the target's bounding sphere (Embree's float32
+        # stays at the target's scale, however far the sensor)
+        t0_all = max(0.0, float(np.linalg.norm(sensor_pos)) - (1.0 + ORIGIN_MARGIN)
+                     * geo.radius - spacing)
+        o = np.ascontiguousarray(sensor_pos + t0_all * dirs_all, dtype=np.float32)
+        res = scene.run(o, np.ascontiguousarray(dirs_all, dtype=np.float32), output=1)
+        prim = res["primID"]
+        hit = prim >= 0
+        prim = prim[hit]
+        dirs = dirs_all[hit]
+        start = np.broadcast_to(sensor_pos, dirs.shape)
+        t32 = t0_all + res["tfar"][hit].astype(np.float64)
+        n_rays = len(o)
+        cos3 = (D / length[hit]) ** 3
+    # float64 distance from the ray's start to the hit face's plane
+    n_geo = geo.face_normals[prim]
+    denom = _rowdot(n_geo, dirs)
+    num = geo.plane_d[prim] - _rowdot(n_geo, start)
+    ok = np.abs(denom) > REFINE_MIN_COS
+    t = np.where(ok, num / np.where(ok, denom, 1.0), t32)
+    p = start + t[:, None] * dirs
+    toward = -dirs                                   # from the hit toward the sensor
+    cos_geo = _rowdot(n_geo, toward)
+    back = cos_geo < 0
+    if geo.normals == "flat":
+        n = n_geo
+    elif geo.normals == "smooth":
+        bu = res["u"][hit].astype(np.float64)[:, None]
+        bv = res["v"][hit].astype(np.float64)[:, None]
+        c = geo.corner[prim]
+        n = (1 - bu - bv) * c[:, 0] + bu * c[:, 1] + bv * c[:, 2]
+        n /= np.linalg.norm(n, axis=1, keepdims=True)
+    else:
+        n = np.empty((prim.size, 3))
+        part = geo.part_of[prim]
+        for k in np.unique(part):
+            sel = part == k
+            n[sel] = geo.exact[k](p[sel] + geo.center)
+    cos_t = _rowdot(n, toward)
+    if back_faces == "two-sided":
+        cos_t = np.where(back, -cos_t, cos_t)
+    sin_t = np.sqrt(np.maximum(1.0 - cos_t * cos_t, 0.0))
+    factor = np.ones(prim.size)
+    if geo.normals != "flat":
+        factor = _shading_factor(cos_t, cos_geo)
+    if back_faces == "ignore":
+        cos_t = np.where(back, -1.0, cos_t)
+    beam = sensor.beam
+    off = aim + beam.offset[0] * u + beam.offset[1] * v if hasattr(beam, "offset") else aim
+    if D is None:
+        rel = p - off
+        along = _dot(rel, w)
+        rho = np.linalg.norm(rel - along[:, None] * w, axis=1)
+        factor = factor * beam.relative(rho, None, None)
+        receive = None                              # (a sensor at infinity: no extinction)
+        rng_rel = t - _dot(start, w)                # r = −p·w relative to the shifted centre
+    else:
+        axis = off - sensor_pos
+        axis = axis / np.linalg.norm(axis)
+        rel = p - sensor_pos
+        z = _dot(rel, axis)
+        rho = np.linalg.norm(rel - z[:, None] * axis, axis=1)
+        R = t
+        factor = factor * cos3 * (R / D) ** 2 * beam.relative(rho, z, D)
+        receive = (D / R) ** 2 * np.exp(-2.0 * sensor.extinction * R)
+        rng_rel = R - D
+    return ViewHits(rng_rel, cos_t, sin_t, geo.material[prim], np.zeros((prim.size, 4)),
+                    n_rays, int(back.sum()), None, factor, None, receive)
+
+
+def _rowdot(a, b):
+    return a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2]
