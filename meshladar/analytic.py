@@ -267,7 +267,7 @@ def simulate_analytic(scene: Scene, ladar: Ladar, *, radiometry="paper", jobs=No
     if inverse is not None:
         values = values[inverse.ravel()]
     return Sinogram(values, angles_deg=ladar.angles_deg, bin_edges=edges, model="analytic",
-                    info={"radiometry": radiometry})
+                    info={"radiometry": radiometry, "units": "length/sr (per unit height)"})
 
 
 def _profiles(payload, items):

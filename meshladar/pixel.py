@@ -146,7 +146,8 @@ def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=N
                          arrays={"values": (ladar.n_bins,)})
     return Sinogram(joined(results, "values"), angles_deg=ladar.angles_deg,
                     bin_edges=ladar.bin_edges, model="pixel",
-                    info={"radiometry": radiometry, "pixel_size": pix, "ray_spacing": ds,
+                    info={"radiometry": radiometry, "units": "length/sr (per unit height)",
+                          "pixel_size": pix, "ray_spacing": ds,
                           "n_rays": n_rays})
 
 

@@ -366,3 +366,139 @@ def test_sensor_refuses_what_it_cannot_model():
         ml.simulate(scene, ladar, model="mesh", sensor=far, footprint=True)
     with pytest.raises(ml.errors.ParameterError, match="sensor"):
         ml.simulate(ml.Scene([ml.Disk((0, 0), 0.5, lambertian(0.5))]), ladar, sensor=far)
+
+
+# -- the receiver: pulses, responses, digitiser, noise -------------------------------------
+
+from meshladar.receiver import GaussianPulse, Noise, SampledPulse, Waveforms, receive  # noqa: E402
+
+#: energy through the bin spreading, convolutions and digitiser: rounding only
+ENERGY_RTOL = 1e-12
+
+
+def _power_sinogram():
+    return ml.simulate(ml.phantoms.scene("disk_pair", large=DARK_GRAY, small=ALUMINUM),
+                       ml.Ladar(np.arange(0.0, 360.0, 15.0),
+                                np.concatenate([[-0.9], np.linspace(-0.8, 0.8, 130),
+                                                [0.95]])),
+                       radiometry="power")
+
+
+@pytest.mark.parametrize("pulse, response, rate", [
+    (None, None, 1e10),
+    (GaussianPulse(fwhm=1e-9), None, 2e9),
+    (GaussianPulse(fwhm=1e-9), GaussianPulse(fwhm=0.3e-9), 5e9),
+    (SampledPulse([0.0, 1.0, 3.0, 2.0, 0.5], interval=0.25e-9, start=-0.5e-9),
+     GaussianPulse(fwhm=2e-9), 1e9),
+])
+def test_waveforms_conserve_energy(pulse, response, rate):
+    sino = _power_sinogram()
+    waves = receive(sino, sample_rate=rate, pulse=pulse, response=response)
+    np.testing.assert_allclose(waves.total(), sino.total(), rtol=ENERGY_RTOL)
+    assert np.all(waves.values >= 0)
+    np.testing.assert_allclose(np.diff(waves.time_edges), 1.0 / rate, rtol=1e-9)
+    assert waves.info["radiometry"] == "power" and waves.info["sample_rate_hz"] == rate
+
+
+def test_waveform_of_one_bin_is_the_pulse():
+    """A single narrow return at range r: the samples are the Gaussian pulse's integral
+    over each sample, centred at the two-way time 2(r + D)/c."""
+    from scipy.special import ndtr
+
+    c = ml.sensor.SPEED_OF_LIGHT
+    r, D, fwhm, rate = 0.3, 100.0, 2e-9, 4e9
+    edges = np.array([r - 1e-7, r + 1e-7])
+    sino = ml.Sinogram([[2.5]], angles_deg=[0.0], bin_edges=edges,
+                       info={"sensor": {"standoff_m": D}})
+    waves = receive(sino, sample_rate=rate, pulse=GaussianPulse(fwhm), oversample=64)
+    t0 = 2 * (r + D) / c
+    sigma = fwhm / (2 * math.sqrt(2 * math.log(2)))
+    expected = 2.5 * np.diff(ndtr((waves.time_edges - t0) / sigma))
+    # the return is a box of 0.67 ps and the fine grid 4 ps: both far below the pulse
+    np.testing.assert_allclose(waves.values[0], expected, atol=2e-3 * expected.max())
+    np.testing.assert_allclose(waves.range_edges, c * waves.time_edges / 2 - D, rtol=1e-15)
+
+
+def _photo_waves():
+    values = np.array([[0.0, 0.05, 1.0, 5.0, 50.0, 400.0]])
+    return Waveforms(values, time_edges=np.arange(7) * 1e-9, angles_deg=[0.0],
+                     view_vectors=[[1.0, 0.0, 0.0]], info={"units": "photoelectrons"})
+
+
+#: |z| of a sample mean or variance against its theory, over 6 samples: a Gaussian z
+#: beyond 5 has probability 6e-7 (the runs are seeded, so the test is deterministic)
+Z_MAX = 5.0
+
+
+@pytest.mark.parametrize("noise", [
+    Noise(),
+    Noise(speckle_cells=1.0),
+    Noise(speckle_cells=4.0, background_rate=2e8, dark_rate=5e7),
+    Noise(excess_noise_factor=3.0, gain=20.0),
+    Noise(speckle_cells=2.0, background_rate=1e8, excess_noise_factor=2.5, gain=10.0),
+], ids=["poisson", "speckle_M1", "speckle_background_dark", "apd", "all"])
+def test_noise_means_and_variances_match_goodman(noise):
+    """Means converge to the noiseless waveform (plus background), variances to
+    G²(F (s + b) + s²/M), each within its own sampling error (the variance's from the
+    sample's fourth moment)."""
+    waves = _photo_waves()
+    n = 100_000
+    draws = waves.realise(noise, n, seed=7)[:, 0, :]
+    mu = noise.mean(waves.values[0], waves.sample_interval)
+    var = noise.variance(waves.values[0], waves.sample_interval)
+    live = var > 0
+    z_mean = (draws.mean(0) - mu)[live] / np.sqrt(var[live] / n)
+    assert np.all(np.abs(z_mean) < Z_MAX), z_mean
+    dev = draws - draws.mean(0)
+    s2 = (dev ** 2).mean(0)
+    m4 = (dev ** 4).mean(0)
+    z_var = (s2 - var)[live] / np.sqrt((m4 - s2 ** 2)[live] / n)
+    assert np.all(np.abs(z_var) < Z_MAX), z_var
+    assert np.all(draws[:, ~live] == 0)
+
+
+def test_noise_is_seeded_and_quantised():
+    waves = _photo_waves()
+    noise = Noise(speckle_cells=3.0, background_rate=1e8, excess_noise_factor=2.0, gain=5.0,
+                  bits=10, full_scale=4000.0)
+    a = waves.realise(noise, 50, seed=11)
+    b = waves.realise(noise, 50, seed=11)
+    assert a.tobytes() == b.tobytes()
+    assert not np.array_equal(a, waves.realise(noise, 50, seed=12))
+    lsb = 4000.0 / 2 ** 10
+    np.testing.assert_allclose(a / lsb, np.round(a / lsb), atol=1e-9)
+    assert a.max() <= 4000.0 - lsb and a.min() >= 0.0
+
+
+def test_noise_needs_photoelectrons():
+    sino = _power_sinogram()
+    waves = receive(sino, sample_rate=2e9)
+    with pytest.raises(ml.errors.ParameterError, match="photoelectrons"):
+        waves.realise(Noise())
+    counted = waves.scaled(1e4)
+    draws = counted.realise(Noise(), 3, seed=0)
+    assert draws.shape == (3,) + waves.values.shape
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"speckle_cells": 0.5}, "speckle_cells"),
+    ({"excess_noise_factor": 0.9}, "excess_noise_factor"),
+    ({"bits": 8}, "both bits and full_scale"),
+    ({"bits": 0, "full_scale": 1.0}, "bits"),
+    ({"background_rate": -1.0}, "background_rate"),
+])
+def test_noise_checks_its_parameters(kwargs, match):
+    with pytest.raises(ml.errors.ParameterError, match=match):
+        Noise(**kwargs)
+
+
+def test_receive_checks_its_parameters():
+    sino = _power_sinogram()
+    with pytest.raises(ml.errors.ParameterError, match="sample_rate"):
+        receive(sino, sample_rate=0.0)
+    with pytest.raises(ml.errors.ParameterError, match="pulse must be"):
+        receive(sino, sample_rate=1e9, pulse=1e-9)
+    with pytest.raises(ml.errors.ParameterError, match="samples"):
+        SampledPulse([0.0, 0.0], interval=1e-9)
+    with pytest.raises(ml.errors.ParameterError, match="sample_rate"):
+        receive(sino, sample_rate=1e18)
