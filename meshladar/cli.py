@@ -137,12 +137,46 @@ def _ladar(args, scene, default):
     return Ladar.covering(scene, n_bins=512, angles_deg=angles, view_vectors=vectors)
 
 
+#: simulate's sensor options (flag, attribute): the mesh model's ``sensor``.
+_SENSOR_FLAGS = (("--standoff", "standoff"), ("--beam-waist", "beam_waist"),
+                 ("--beam-divergence", "beam_divergence"), ("--beam-offset", "beam_offset"),
+                 ("--flood-radius", "flood_radius"), ("--pulse-energy", "pulse_energy"),
+                 ("--aperture", "aperture"), ("--extinction", "extinction"),
+                 ("--wavelength", "wavelength"),
+                 ("--optics-transmission", "optics_transmission"),
+                 ("--quantum-efficiency", "quantum_efficiency"))
+
+
+def _sensor(args):
+    """The Sensor simulate's options describe, or None when none is given."""
+    from .errors import ParameterError
+    from .sensor import FloodBeam, GaussianBeam, Sensor
+
+    if all(getattr(args, a) is None for _, a in _SENSOR_FLAGS):
+        return None
+    gaussian = [f for f, a in _SENSOR_FLAGS[1:4] if getattr(args, a) is not None]
+    if gaussian and args.beam_waist is None:
+        raise ParameterError(f"{gaussian[0]} shapes a Gaussian beam: give --beam-waist too")
+    if gaussian and args.flood_radius is not None:
+        raise ParameterError("--flood-radius and --beam-waist both choose the beam; give one")
+    if args.beam_waist is not None:
+        beam = GaussianBeam(args.beam_waist, divergence=args.beam_divergence or 0.0,
+                            offset=args.beam_offset or (0.0, 0.0))
+    else:
+        beam = FloodBeam(args.flood_radius)
+    kw = {k: getattr(args, a) for k, a in (("standoff", "standoff"), ("extinction",
+          "extinction"), ("pulse_energy", "pulse_energy"), ("aperture_diameter", "aperture"),
+          ("wavelength", "wavelength"), ("optics_transmission", "optics_transmission"),
+          ("quantum_efficiency", "quantum_efficiency")) if getattr(args, a) is not None}
+    return Sensor(beam=beam, **kw)
+
+
 #: simulate's options that only the mesh model reads (flag -> attribute).
 _MESH_ONLY = {"--mode": "mode", "--z0": "z0", "--normals": "normals",
               "--ray-spacing": "ray_spacing", "--rays-per-bin": "rays_per_bin",
               "--sampling": "sampling", "--seed": "seed", "--footprint": "footprint",
               "--receiver": "receiver", "--tol": "tol", "--max-rays": "max_rays",
-              "--backend": "backend"}
+              "--backend": "backend", **{f: a for f, a in _SENSOR_FLAGS}}
 
 
 def _check_applicable(args, model, is_phantom):
@@ -220,6 +254,9 @@ def _cmd_simulate(args) -> int:
                 opts[k] = getattr(args, k)
         if args.footprint:
             opts["footprint"] = True
+        sensor = _sensor(args)
+        if sensor is not None:
+            opts["sensor"] = sensor
     elif model == "pixel" and args.pixel_size is not None:
         opts["pixel_size"] = args.pixel_size
     if args.radiometry is not None:
@@ -236,8 +273,9 @@ def _cmd_simulate(args) -> int:
                             **{k: v for k, v in opts.items() if k != "jobs"})
     else:
         sino = simulate(scene, ladar, model=model, **opts)
-    params = {"scene": args.scene, "model": model, "options": {k: v for k, v in opts.items()
-                                                                if k != "progress"},
+    params = {"scene": args.scene, "model": model,
+              "options": {k: (v.describe() if k == "sensor" else v) for k, v in opts.items()
+                          if k != "progress"},
               "n_views": ladar.n_views, "n_bins": ladar.n_bins}
     results.save_sinogram(args.output, sino, scene=scene, params=params)
     if not args.quiet:
@@ -315,6 +353,70 @@ def _cmd_reconstruct(args) -> int:
     return 0
 
 
+def _cmd_receive(args) -> int:
+    """Turn a saved sinogram's range bins into digitised waveforms (two-way time, the
+    transmitted pulse, the receiver's impulse response, the digitiser's rate), optionally
+    with noise realisations (photon counting, speckle, background and dark counts, APD
+    gain and excess noise, quantisation); save them, and a figure with --plot."""
+    import os
+
+    from . import results
+    from .errors import ParameterError
+    from .receiver import GaussianPulse, Noise, receive
+
+    _check_output(args.output, (".npz",), [args.result])
+    if args.plot is not None:
+        _check_output(args.plot, (".png",), [args.result, args.output], "--plot")
+    sino, _ = results.load_sinogram(args.result)
+    if sino.info.get("radiometry") != "power" and not args.quiet:
+        import warnings
+
+        from .errors import MeshladarWarning
+
+        warnings.warn(f"{args.result} holds {sino.info.get('radiometry', 'paper')!r} "
+                      "radiometry (Eq. 8), not the power a receiver collects: simulate with "
+                      "--radiometry power for a receiver's waveform", MeshladarWarning)
+    waves = receive(sino, sample_rate=args.sample_rate,
+                    pulse=None if args.pulse_fwhm is None else GaussianPulse(args.pulse_fwhm),
+                    response=None if args.response_fwhm is None
+                    else GaussianPulse(args.response_fwhm),
+                    standoff=args.standoff, oversample=args.oversample)
+    if args.scale is not None:
+        waves = waves.scaled(args.scale)
+    noise_flags = ("speckle_cells", "background_rate", "dark_rate", "excess_noise", "gain",
+                   "bits", "full_scale", "seed")
+    noise = draws = None
+    if args.realisations is None:
+        given = [a for a in noise_flags if getattr(args, a) is not None]
+        if given:
+            raise ParameterError(f"--{given[0].replace('_', '-')} shapes the noise: give "
+                                 "--realisations N too")
+    else:
+        kw = {k: getattr(args, a) for k, a in (
+            ("speckle_cells", "speckle_cells"), ("background_rate", "background_rate"),
+            ("dark_rate", "dark_rate"), ("excess_noise_factor", "excess_noise"),
+            ("gain", "gain"), ("bits", "bits"), ("full_scale", "full_scale"))
+            if getattr(args, a) is not None}
+        noise = Noise(**kw)
+        draws = waves.realise(noise, args.realisations, seed=args.seed)
+    params = {"source": os.path.basename(args.result), "seed": args.seed,
+              "realisations": args.realisations}
+    results.save_waveforms(args.output, waves, realisations=draws, noise=noise,
+                           params=params)
+    if args.plot is not None:
+        from meshladar.viz import waveforms as wf
+
+        wf.draw(waves, args.plot, realisations=draws, noise=noise)
+    if not args.quiet:
+        extra = "" if draws is None else f", {len(draws)} noise realisations"
+        print(f"{args.result}: {waves.values.shape[0]} views x {waves.values.shape[1]} "
+              f"samples at {args.sample_rate:g} Hz over two-way time "
+              f"[{waves.time_edges[0]:.6g}, {waves.time_edges[-1]:.6g}] s, units "
+              f"{waves.info.get('units')}{extra}; wrote {args.output}"
+              + ("" if args.plot is None else f" and {args.plot}"))
+    return 0
+
+
 def _cmd_view(args) -> int:
     """Show a scene in 3-D coloured by its return for one view (or save a screenshot)."""
     import os
@@ -387,6 +489,18 @@ _positive_float = _number(float, lambda v: v > 0 and math.isfinite(v),
                           "positive finite number")
 _finite_float = _number(float, math.isfinite, "finite number")
 _unit_fraction = _number(float, lambda v: 0 < v <= 1, "number in (0, 1]")
+_nonnegative_float = _number(float, lambda v: v >= 0 and math.isfinite(v),
+                             "non-negative finite number")
+
+
+def _pair(text: str):
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        values = ()
+    if len(values) != 2 or not all(math.isfinite(v) for v in values):
+        raise argparse.ArgumentTypeError(f"must be two finite numbers U,V; got {text!r}")
+    return values
 
 
 
@@ -492,6 +606,33 @@ def _parser() -> argparse.ArgumentParser:
     sim.add_argument("--radiometry", choices=RADIOMETRIES, default=None,
                      help="paper: the paper's Eq. 8, ∫ F cos θ dA per bin (default); power: "
                           "the power a receiver collects, ∫ F cos θi cos θr dA (every model)")
+    sens = sim.add_argument_group(
+        "sensor (mesh model; SI units: metres, seconds, joules)",
+        "a ladar at a finite standoff (perspective rays, ranges R - D), its beam, the "
+        "atmosphere and the link budget: with --pulse-energy, --aperture and --standoff, "
+        "received power (--radiometry power) is counted in photoelectrons per bin")
+    sens.add_argument("--standoff", type=_positive_float, default=None, metavar="M",
+                      help="distance D from the sensor to the origin (default: at infinity)")
+    sens.add_argument("--flood-radius", type=_positive_float, default=None, metavar="M",
+                      help="a top-hat flood of this radius at the origin (default: unbounded)")
+    sens.add_argument("--beam-waist", type=_positive_float, default=None, metavar="M",
+                      help="a Gaussian beam of this 1/e² radius at the sensor")
+    sens.add_argument("--beam-divergence", type=_nonnegative_float, default=None,
+                      metavar="RAD", help="its far-field 1/e² half-angle (default 0)")
+    sens.add_argument("--beam-offset", type=_pair, default=None, metavar="U,V",
+                      help="its pointing offset at the origin along the view's u, v (m)")
+    sens.add_argument("--pulse-energy", type=_positive_float, default=None, metavar="J",
+                      help="transmitted energy per pulse")
+    sens.add_argument("--aperture", type=_positive_float, default=None, metavar="M",
+                      help="receiver aperture diameter")
+    sens.add_argument("--extinction", type=_nonnegative_float, default=None, metavar="PER_M",
+                      help="atmospheric extinction coefficient (two-way exp(-2 sigma R))")
+    sens.add_argument("--wavelength", type=_positive_float, default=None, metavar="M",
+                      help="laser wavelength (default 1.064e-6)")
+    sens.add_argument("--optics-transmission", type=_unit_fraction, default=None,
+                      help="receive optics' transmission (default 1)")
+    sens.add_argument("--quantum-efficiency", type=_unit_fraction, default=None,
+                      help="detector quantum efficiency (default 1)")
     sim.add_argument("--views", type=_positive_int, default=None,
                      help="number of views evenly over 360 degrees about z (default: the "
                           "phantom's, or 360)")
@@ -584,6 +725,55 @@ def _parser() -> argparse.ArgumentParser:
                           "off)")
     rec.add_argument("--quiet", action="store_true", help="no summary line (default: shown)")
     rec.set_defaults(func=_cmd_reconstruct)
+
+    rc = sub.add_parser("receive", help="waveforms (and noise) from a saved sinogram",
+                        description=_cmd_receive.__doc__,
+                        epilog="examples:\n  meshladar simulate part.stl -o part.npz --model "
+                               "mesh --radiometry power --standoff 1000 --beam-waist 0.05 "
+                               "--beam-divergence 1e-4 --pulse-energy 1e-3 --aperture 0.1\n"
+                               "  meshladar receive part.npz -o part-waves.npz --sample-rate "
+                               "2e9 --pulse-fwhm 1e-9 --realisations 100 --speckle-cells 1 "
+                               "--seed 0 --plot part-waves.png",
+                        formatter_class=argparse.RawDescriptionHelpFormatter)
+    rc.add_argument("result", help="a sinogram written by meshladar simulate")
+    rc.add_argument("-o", "--output", required=True, help="waveforms file (.npz)")
+    rc.add_argument("--sample-rate", type=_positive_float, required=True, metavar="HZ",
+                    help="digitiser rate, samples per second")
+    rc.add_argument("--pulse-fwhm", type=_positive_float, default=None, metavar="S",
+                    help="Gaussian transmitted pulse, full width at half maximum (default: "
+                         "a Dirac pulse)")
+    rc.add_argument("--response-fwhm", type=_positive_float, default=None, metavar="S",
+                    help="Gaussian receiver impulse response (default: ideal)")
+    rc.add_argument("--standoff", type=_nonnegative_float, default=None, metavar="M",
+                    help="time origin t = 2(r + D)/c (default: the simulation's sensor's, "
+                         "else 0)")
+    rc.add_argument("--oversample", type=_positive_int, default=8,
+                    help="fine cells per sample for the convolutions (default: %(default)s)")
+    rc.add_argument("--scale", type=_positive_float, default=None, metavar="PE_PER_UNIT",
+                    help="photoelectrons per unit of the sinogram (when it was not simulated "
+                         "with --pulse-energy and --aperture)")
+    rc.add_argument("--realisations", type=_positive_int, default=None, metavar="N",
+                    help="draw N noise realisations (default: none)")
+    rc.add_argument("--seed", type=_nonnegative_int, default=None,
+                    help="seed of the noise (default: fresh entropy)")
+    rc.add_argument("--speckle-cells", type=_positive_float, default=None, metavar="M",
+                    help="speckle cells per resolution cell, >= 1 (default: no speckle)")
+    rc.add_argument("--background-rate", type=_nonnegative_float, default=None,
+                    metavar="PER_S", help="background photoelectrons per second")
+    rc.add_argument("--dark-rate", type=_nonnegative_float, default=None, metavar="PER_S",
+                    help="dark counts per second")
+    rc.add_argument("--excess-noise", type=_positive_float, default=None, metavar="F",
+                    help="APD excess noise factor, >= 1 (default 1)")
+    rc.add_argument("--gain", type=_positive_float, default=None,
+                    help="APD mean gain (default 1)")
+    rc.add_argument("--bits", type=_positive_int, default=None,
+                    help="digitiser bits (with --full-scale)")
+    rc.add_argument("--full-scale", type=_positive_float, default=None,
+                    help="digitiser full scale, output units (with --bits)")
+    rc.add_argument("--plot", default=None, metavar="PNG",
+                    help="a figure of a few views' waveforms with their noise band")
+    rc.add_argument("--quiet", action="store_true", help="no summary line (default: shown)")
+    rc.set_defaults(func=_cmd_receive)
 
     vw = sub.add_parser("view", help="3-D view of a scene coloured by its return",
                         description=_cmd_view.__doc__,

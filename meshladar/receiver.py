@@ -261,7 +261,8 @@ class Waveforms:
             raise ParameterError(
                 f"noise counts photoelectrons; these waveforms are in "
                 f"{self.info.get('units')!r}: simulate with a Sensor that has pulse_energy "
-                "and aperture_diameter, or convert with Waveforms.scaled(factor)")
+                "and aperture_diameter (the command line's --pulse-energy, --aperture), or "
+                "convert with Waveforms.scaled(factor) (receive's --scale)")
         from ._validate import check_size
 
         check_size("n", float(n) * self.values.size, 8, f"{n} realisations of "

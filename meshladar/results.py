@@ -16,8 +16,9 @@ import numpy as np
 
 from .errors import MeshladarError
 
-__all__ = ["save_result", "load_result", "write_atomic", "write_text_atomic", "save_sinogram", "load_sinogram",
-           "describe_scene", "ResultFileError"]
+__all__ = ["save_result", "load_result", "write_atomic", "write_text_atomic", "save_sinogram",
+           "load_sinogram", "save_waveforms", "load_waveforms", "describe_scene",
+           "ResultFileError"]
 
 
 class ResultFileError(MeshladarError, ValueError):
@@ -231,6 +232,47 @@ def load_sinogram(path):
     except ValueError as exc:
         raise ResultFileError(f"{os.fspath(path)}: invalid sinogram ({exc})") from exc
     return sino, meta
+
+
+def save_waveforms(path, waves, *, realisations=None, noise=None, params=None):
+    """Save waveforms (and, optionally, noise realisations (n, n_views, n_samples) and the
+    :class:`~meshladar.receiver.Noise` that drew them): values, time edges in s, range
+    edges in m, views, every parameter with its unit in ``meta["info"]``. Atomic, no
+    pickle."""
+    from .receiver import Noise, Waveforms
+
+    if not isinstance(waves, Waveforms):
+        from .errors import ParameterError
+
+        raise ParameterError(f"waves must be a meshladar.receiver.Waveforms; got "
+                             f"{type(waves).__name__}")
+    arrays = {"values": waves.values, "time_edges_s": waves.time_edges,
+              "range_edges_m": waves.range_edges, "angles_deg": waves.angles_deg,
+              "view_vectors": waves.view_vectors}
+    if realisations is not None:
+        arrays["realisations"] = np.asarray(realisations, dtype=np.float64)
+    meta = {"kind": "waveforms", "standoff_m": waves.standoff, "info": _jsonable(waves.info),
+            "noise": None if not isinstance(noise, Noise) else noise.describe(),
+            "params": _jsonable(params or {})}
+    save_result(path, arrays, meta)
+
+
+def load_waveforms(path):
+    """Load waveforms saved by :func:`save_waveforms`: (Waveforms, realisations or None,
+    meta)."""
+    from .receiver import Waveforms
+
+    arrays, meta = load_result(path)
+    if meta.get("kind") != "waveforms":
+        raise ResultFileError(f"{os.fspath(path)}: not a waveforms result (kind "
+                              f"{meta.get('kind')!r})")
+    try:
+        waves = Waveforms(arrays["values"], time_edges=arrays["time_edges_s"],
+                          angles_deg=arrays["angles_deg"], view_vectors=arrays["view_vectors"],
+                          standoff=meta.get("standoff_m", 0.0), info=meta.get("info", {}))
+    except (KeyError, ValueError) as exc:
+        raise ResultFileError(f"{os.fspath(path)}: invalid waveforms ({exc})") from exc
+    return waves, arrays.get("realisations"), meta
 
 
 def _jsonable(x):

@@ -1,0 +1,84 @@
+"""Waveform figures: a few views' noiseless waveforms against two-way time, with the band
+their noise realisations fill and one realisation drawn through it."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from . import style
+
+__all__ = ["draw"]
+
+
+@style.styled
+def draw(waves, path, *, realisations=None, noise=None, views=None, band=(5.0, 95.0),
+         dpi=150):
+    """Write a PNG of ``waves`` (:class:`meshladar.receiver.Waveforms`) to ``path``.
+
+    Parameters
+    ----------
+    realisations : (n, n_views, n_samples) array, optional
+        Noise realisations (:meth:`Waveforms.realise`): their ``band`` percentiles are
+        shaded around the expected waveform, and the first is drawn.
+    noise : meshladar.receiver.Noise, optional
+        The noise that drew them: the expected waveform is then its mean, gain × (signal +
+        background), in its output units.
+    views : sequence of int, optional
+        Which views (default up to four, spread over all).
+    band : (low, high) percentiles
+    """
+    from meshladar.errors import ParameterError
+    from meshladar.receiver import Waveforms
+
+    if not isinstance(waves, Waveforms):
+        raise ParameterError(f"waves must be a meshladar.receiver.Waveforms; got "
+                             f"{type(waves).__name__}")
+    n_views = waves.values.shape[0]
+    if views is None:
+        views = np.unique(np.linspace(0, n_views - 1, min(4, n_views)).round().astype(int))
+    views = [int(v) for v in views]
+    if not views or min(views) < 0 or max(views) >= n_views:
+        raise ParameterError(f"views must index the {n_views} views; got {views}")
+    if realisations is not None:
+        realisations = np.asarray(realisations, np.float64)
+        if realisations.ndim != 3 or realisations.shape[1:] != waves.values.shape:
+            raise ParameterError(f"realisations must have shape (n, {n_views}, "
+                                 f"{waves.values.shape[1]}); got {realisations.shape}")
+    plt = style.use()
+    fig, axes = plt.subplots(len(views), 1, figsize=(6.4, 1.9 * len(views) + 0.8),
+                             squeeze=False, sharex=True)
+    t_ns = waves.times * 1e9
+    units = waves.info.get("units") or "sinogram units"
+    if noise is not None:
+        expected = noise.mean(waves.values, waves.sample_interval)
+        units = units if noise.gain == 1 else f"{noise.gain:g} x {units}"
+        what = "expected: gain x (signal + background)"
+    else:
+        expected, what = waves.values, "noiseless"
+    for ax, v in zip(axes[:, 0], views):
+        if realisations is not None:
+            lo, hi = np.percentile(realisations[:, v, :], band, axis=0)
+            ax.fill_between(t_ns, lo, hi, step="mid", color="C0", alpha=0.25, lw=0,
+                            label=f"noise, {band[0]:g}-{band[1]:g} percentile")
+            ax.step(t_ns, realisations[0, v], where="mid", color="C0", lw=0.6,
+                    label="one realisation")
+        ax.step(t_ns, expected[v], where="mid", color="k", lw=1.0, label=what)
+        ax.set_ylabel(f"per sample\n({units})")
+        ax.text(0.01, 0.95, f"view {v}: {waves.angles_deg[v]:g} deg", transform=ax.transAxes,
+                va="top", ha="left")
+    axes[0, 0].legend(loc="upper right", fontsize=7, frameon=False)
+    axes[-1, 0].set_xlabel(f"two-way time (ns); sample interval "
+                           f"{waves.sample_interval * 1e9:.3g} ns")
+    top = axes[0, 0].secondary_xaxis(
+        "top", functions=(lambda t: t * 1e-9 * 299_792_458.0 / 2 - waves.standoff,
+                          lambda r: (r + waves.standoff) * 2 / 299_792_458.0 * 1e9))
+    top.set_xlabel("range r = ct/2 - standoff (m)")
+    fig.tight_layout()
+    path = os.fspath(path)
+    tmp = path + ".tmp.png"
+    fig.savefig(tmp, dpi=dpi)
+    os.replace(tmp, path)
+    plt.close(fig)
+    return path
