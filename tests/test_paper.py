@@ -71,3 +71,22 @@ def test_figures_are_drawn_from_the_saved_result(tmp_path):
         assert img.shape[0] > 100 and img.shape[1] > 200
         assert img[..., :3].std() > 0.05                       # not a blank canvas
     assert not list((tmp_path / "figs").glob("*.tmp*"))
+
+
+def test_received_power_darkens_even_a_lambertian_ellipse(result):
+    """The question the paper did not ask: with received power as the data (one cos θ more),
+    the Lambertian disk's surface band stays level (every boundary point sees the same
+    incidences), but the Lambertian ellipse's tapered ends darken (measured −0.64 at 256²,
+    −0.82 at 512², against +0.02 and −0.12 with Eq. 8), and glossy coatings darken more
+    (disk b = 0.99: −2.02 against −1.36)."""
+    m = result["metrics"]
+    assert abs(m["power.disk_b0.darkening"]) < 0.1 * abs(m["disk_b0.99.darkening"])
+    assert m["power.ellipse_b0.ends_darkening"] < -0.3
+    assert m["power.ellipse_b0.ends_darkening"] < m["ellipse_b0.ends_darkening"] - 0.3
+    assert m["power.ellipse_b0.ends_darkening"] < 2 * m["power.ellipse_b0.sides_darkening"]
+    assert m["power.disk_b0.99.darkening"] < 1.3 * m["disk_b0.99.darkening"]
+    assert m["power.ellipse_b0.99.ends_darkening"] < m["ellipse_b0.99.ends_darkening"]
+    # glints still hide the gray disk; log and clip still recover it
+    assert abs(m["power.pair_gray_al.visibility"]) < 0.1
+    assert m["power.pair_gray_al_log.visibility"] > 0.5
+    assert m["power.pair_gray_al_clip.visibility"] > 0.5
