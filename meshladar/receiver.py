@@ -288,6 +288,32 @@ class Waveforms:
             out = np.clip(np.floor(out / lsb + 0.5), 0, 2 ** noise.bits - 1) * lsb
         return out
 
+    def detection_probability(self, noise: Noise, threshold, n=1000, *, seed=None,
+                              chunk=100):
+        """Monte-Carlo detection statistics of a threshold detector on each view.
+
+        Returns a dict: ``detection`` (n_views,), the fraction of ``n`` noisy pulses in
+        which any sample of the view reaches ``threshold`` (output units); ``false_alarm``,
+        the fraction of samples that reach it in noise alone (background and dark counts,
+        the same gain and quantisation) over as many samples; ``threshold`` and ``n``.
+        Seeded; drawn ``chunk`` pulses at a time (bounded memory)."""
+        thr = check_real("threshold", threshold, low=0.0, low_open=True)
+        n = check_count("n", n)
+        chunk = check_count("chunk", chunk)
+        rng = np.random.default_rng(seed)
+        hits = np.zeros(self.values.shape[0])
+        alarms = 0
+        quiet = Waveforms(np.zeros_like(self.values), time_edges=self.time_edges,
+                          angles_deg=self.angles_deg, view_vectors=self.view_vectors,
+                          standoff=self.standoff, info=self.info)
+        for start in range(0, n, chunk):
+            k = min(chunk, n - start)
+            seeds = rng.integers(0, 2**63, 2)
+            hits += (self.realise(noise, k, seed=int(seeds[0])) >= thr).any(axis=2).sum(0)
+            alarms += int((quiet.realise(noise, k, seed=int(seeds[1])) >= thr).sum())
+        return {"detection": hits / n, "false_alarm": alarms / (n * self.values.size),
+                "threshold": thr, "n": n}
+
     def __repr__(self) -> str:
         return (f"Waveforms(n_views={self.values.shape[0]}, n_samples={self.values.shape[1]}, "
                 f"time=[{self.time_edges[0]:.6g}, {self.time_edges[-1]:.6g}] s, "

@@ -554,3 +554,20 @@ def test_cli_simulate_with_a_sensor_then_receive_with_noise(tmp_path):
     # noise options without realisations, and noise on relative units, are clear errors
     assert main(["receive", str(sino_path), "-o", str(tmp_path / "x.npz"), "--sample-rate",
                  "5e9", "--gain", "3"]) == 2
+
+
+def test_detection_probability_matches_the_poisson_tail():
+    """One sample of mean s and no other noise: a threshold k is reached with probability
+    P(N ≥ k) of Poisson(s); background alone (rate b per sample) raises a false alarm with
+    P(N ≥ k) of Poisson(b). Both within 5 binomial standard errors."""
+    from scipy.stats import poisson
+
+    s, b, k, n = 6.0, 0.5, 8, 20_000
+    waves = Waveforms([[s]], time_edges=[0.0, 1e-9], angles_deg=[0.0],
+                      view_vectors=[[1.0, 0.0, 0.0]], info={"units": "photoelectrons"})
+    noise = Noise(background_rate=b / 1e-9)
+    got = waves.detection_probability(noise, k, n, seed=5)
+    pd, pfa = poisson.sf(k - 1, s + b), poisson.sf(k - 1, b)
+    assert abs(got["detection"][0] - pd) < 5 * math.sqrt(pd * (1 - pd) / n)
+    assert abs(got["false_alarm"] - pfa) < 5 * math.sqrt(pfa * (1 - pfa) / n) + 1 / n
+    assert got == waves.detection_probability(noise, k, n, seed=5)      # seeded
