@@ -30,7 +30,7 @@ from ..errors import ParameterError
 from ..precision import ORIGIN_MARGIN, REFINE_MIN_COS
 from .grid import _dot, _frame, _ray_grid, _stratified_offsets
 from .hits import ViewHits
-from .views import _shading_factor
+from .views import _hit_normals, _shading_factor
 
 
 def _plane_grid(geo, w, spacing, rng, sensor_pos, standoff, aim):
@@ -112,20 +112,7 @@ def _trace_sensor_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng
     toward = -dirs                                   # from the hit toward the sensor
     cos_geo = _rowdot(n_geo, toward)
     back = cos_geo < 0
-    if geo.normals == "flat":
-        n = n_geo
-    elif geo.normals == "smooth":
-        bu = res["u"][hit].astype(np.float64)[:, None]
-        bv = res["v"][hit].astype(np.float64)[:, None]
-        c = geo.corner[prim]
-        n = (1 - bu - bv) * c[:, 0] + bu * c[:, 1] + bv * c[:, 2]
-        n /= np.linalg.norm(n, axis=1, keepdims=True)
-    else:
-        n = np.empty((prim.size, 3))
-        part = geo.part_of[prim]
-        for k in np.unique(part):
-            sel = part == k
-            n[sel] = geo.exact[k](p[sel] + geo.center)
+    n, _ = _hit_normals(geo, prim, res, hit, n_geo, lambda: p + geo.center)
     cos_t = _rowdot(n, toward)
     if back_faces == "two-sided":
         cos_t = np.where(back, -cos_t, cos_t)

@@ -34,25 +34,9 @@ def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=N
     t_hit = _refine_t(geo, prim, o[hit], w, res["tfar"][hit])
     cos_geo = _dot(n_geo, w)
     back = cos_geo < 0
-    if geo.normals == "flat":
-        n = n_geo
-    elif geo.normals == "smooth":
-        bu = res["u"][hit].astype(np.float64)[:, None]
-        bv = res["v"][hit].astype(np.float64)[:, None]
-        c = geo.corner[prim]
-        n = (1 - bu - bv) * c[:, 0] + bu * c[:, 1] + bv * c[:, 2]
-        n /= np.linalg.norm(n, axis=1, keepdims=True)
-    else:
-        p = (o[hit].astype(np.float64) - t_hit[:, None] * w) + geo.center
-        n = np.empty((prim.size, 3))
-        rho = np.full(prim.size, np.inf)
-        part = geo.part_of[prim]
-        for k in np.unique(part):
-            sel = part == k
-            n[sel] = geo.exact[k](p[sel])
-            radius = getattr(geo.exact[k], "curvature_radius", None)
-            if radius is not None and mode == "slice":
-                rho[sel] = radius(p[sel])
+    n, rho = _hit_normals(geo, prim, res, hit, n_geo,
+                          lambda: (o[hit].astype(np.float64) - t_hit[:, None] * w)
+                          + geo.center, mode == "slice")
     cos_t = _dot(n, w)
     if back_faces == "two-sided" and back.any():
         sign = np.where(back, -1.0, 1.0)
@@ -115,6 +99,33 @@ def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=N
     return ViewHits(rng_rel, cos_t, sin_t, geo.material[prim], spread, len(o),
                      int(back.sum()), bi, factor, curve)
 
+
+
+def _hit_normals(geo, prim, res, hit, n_geo, points, curvature=False):
+    """The normal of each hit as the geometry's ``normals`` asks: the face's (flat), the
+    corner normals interpolated with Embree's barycentrics (smooth), or the part's exact
+    normal at the hit points (scene coordinates, from ``points()``), with, for
+    ``curvature``, the exact surface's radius of curvature there (inf where unknown).
+    Returns (normals (k, 3), radii (k,) or None)."""
+    if geo.normals == "flat":
+        return n_geo, None
+    if geo.normals == "smooth":
+        bu = res["u"][hit].astype(np.float64)[:, None]
+        bv = res["v"][hit].astype(np.float64)[:, None]
+        c = geo.corner[prim]
+        n = (1 - bu - bv) * c[:, 0] + bu * c[:, 1] + bv * c[:, 2]
+        return n / np.linalg.norm(n, axis=1, keepdims=True), None
+    p = points()
+    n = np.empty((prim.size, 3))
+    rho = np.full(prim.size, np.inf)
+    part = geo.part_of[prim]
+    for k in np.unique(part):
+        sel = part == k
+        n[sel] = geo.exact[k](p[sel])
+        radius = getattr(geo.exact[k], "curvature_radius", None)
+        if radius is not None and curvature:
+            rho[sel] = radius(p[sel])
+    return n, rho
 
 
 def _shading_factor(cos_shading, cos_facet):
