@@ -608,7 +608,8 @@ def _parser() -> argparse.ArgumentParser:
                           "the power a receiver collects, ∫ F cos θi cos θr dA (every model)")
     sens = sim.add_argument_group(
         "sensor (mesh model; SI units: metres, seconds, joules)",
-        "a ladar at a finite standoff (perspective rays, ranges R - D), its beam, the "
+        "a ladar at a finite standoff (perspective rays, ranges R - D from the origin), its "
+        "beam, the "
         "atmosphere and the link budget: with --pulse-energy, --aperture and --standoff, "
         "received power (--radiometry power) is counted in photoelectrons per bin")
     sens.add_argument("--standoff", type=_positive_float, default=None, metavar="M",

@@ -153,10 +153,11 @@ class Sensor:
     standoff : float, optional
         Distance D (m, scene units) from the sensor to the aim point. None (default): at
         infinity, parallel rays (today's orthographic ladar). Finite: rays fan out from the
-        sensor at ``aim + D w``; ranges are true distances R from it, reported as R − D
-        (so range 0 is the aim point's distance and the bins of a ladar at infinity still
-        fit; the two-way time is 2R/c); each ray carries its cross-section at the hit, and
-        received power the receiver's (D/R)².
+        sensor at ``aim + D w``; ranges are true distances R from it, reported as
+        r = R − D − aim·w (R − D when aiming at the origin): the sensor's distance from the
+        plane through the origin is D + aim·w, so r tends to the ladar at infinity's −p·w
+        and its bins still fit; the two-way time is 2R/c = 2(r + D + aim·w)/c. Each ray
+        carries its cross-section at the hit, and received power the receiver's (D/R)².
     aim : (3,) float
         The point the boresight passes through (default the origin, the axis the views turn
         about).

@@ -127,7 +127,7 @@ def _sensor_job(geo, scene, views, vectors, mode, spacing, z0_shifted, back_face
 
 
 def _sensor_offset(geo, w, sensor):
-    """What the range of a sensor's hit is relative to: absolute (R − D) at a finite
+    """What the range of a sensor's hit is relative to: absolute (R − D − aim·w) at a finite
     standoff, the shifted centre's plane at infinity."""
     return 0.0 if sensor.standoff is not None else _range_offset(geo.center, w, None)
 

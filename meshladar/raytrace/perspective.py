@@ -15,8 +15,9 @@ stands for the solid angle δΩ = δ² cos³α / D², so at distance R its cross
 * ``receive_factor`` = (D/R)² exp(−2σR): the receiver's solid angle relative to the aim
   point's, and the atmosphere's two-way transmission.
 
-As D → ∞, cos α → 1 and R/D → 1: the orthographic weights. Ranges are R − D (0 at the aim
-point's distance), exact in float64: the hit distance is recomputed against the hit face's
+As D → ∞, cos α → 1 and R/D → 1: the orthographic weights. Ranges are R − D − aim·w (the
+sensor's distance from the plane through the origin is D + aim·w, so they tend to the
+orthographic −p·w), exact in float64: the hit distance is recomputed against the hit face's
 plane from the sensor's float64 position along the float64 ray.
 """
 
@@ -62,8 +63,8 @@ def _plane_grid(geo, w, spacing, rng, sensor_pos, standoff, aim):
 
 
 def _trace_sensor_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, sensor):
-    """Hits of one view seen by ``sensor``; ranges absolute (R − D at a finite standoff),
-    or relative to the plane through the shifted centre (at infinity), as
+    """Hits of one view seen by ``sensor``; ranges absolute (R − D − aim·w at a finite
+    standoff), or relative to the plane through the shifted centre (at infinity), as
     :func:`meshladar.raytrace.views._trace_view`'s."""
     D = sensor.standoff
     aim = np.asarray(sensor.aim, np.float64) - geo.center
@@ -140,7 +141,7 @@ def _trace_sensor_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng
         R = t
         factor = factor * cos3 * (R / D) ** 2 * beam.relative(rho, z, D)
         receive = (D / R) ** 2 * np.exp(-2.0 * sensor.extinction * R)
-        rng_rel = R - D
+        rng_rel = R - D - float((aim + geo.center) @ w)
     return ViewHits(rng_rel, cos_t, sin_t, geo.material[prim], np.zeros((prim.size, 4)),
                     n_rays, int(back.sum()), None, factor, None, receive)
 
