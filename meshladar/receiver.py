@@ -8,7 +8,9 @@ seeded noise realisations from one noiseless waveform.
 
 Time. A bin at range r (scene units, metres) returns at two-way time t = 2(r + D)/c, with D
 the sensor's standoff (recorded in the sinogram's ``info["sensor"]``), or D = 0 for a
-ladar at infinity (t then counts from the echo of range 0).
+ladar at infinity (t then counts from the echo of range 0). With the sensor aimed at a
+point other than the origin, t is the two-way time less 2 aim·w / c (ranges are
+R − D − aim·w, :class:`meshladar.sensor.Sensor`).
 
 Energy. Each bin's content is spread uniformly over its time interval on a fine grid
 (``oversample`` cells per digitiser sample), convolved with the pulse and the impulse
