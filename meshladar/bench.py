@@ -9,8 +9,8 @@ from __future__ import annotations
 import statistics
 import time
 
-__all__ = ["time_call", "bench_analytic", "bench_fbp", "bench_mesh", "bench_streaming",
-           "bench_dask", "report"]
+__all__ = ["time_call", "bench_analytic", "bench_fbp", "bench_mesh", "bench_sensor",
+           "bench_streaming", "bench_dask", "report"]
 
 
 def time_call(fn, *, repeats=5):
@@ -280,6 +280,43 @@ def bench_dask(*, views=360, rays_per_view=1_000_000, subdivisions=6, workers=2)
             "identical": same}
 
 
+def bench_sensor(*, subdivisions=6, rays_per_view=1_000_000, views=4, repeats=2):
+    """Received power of an aluminium icosphere: the ladar at infinity (the compiled loop)
+    against a sensor at a standoff of 100 radii (50 scene units) (perspective rays, weighed per hit in
+    numpy), interleaved; and the waveforms of 360 views (receive)."""
+    import math
+
+    import numpy as np
+
+    from . import materials
+    from .forward import simulate
+    from .ladar import Ladar
+    from .receiver import GaussianPulse, receive
+    from .sensor import Sensor
+
+    scene = _icosphere_scene(subdivisions, materials.ALUMINUM)
+    ladar = Ladar.covering(scene, n_bins=512, angles_deg=np.arange(float(views)))
+    spacing = 1.0 / math.sqrt(rays_per_view)           # the sphere is 1 across
+    far, near = {}, {}
+
+    def run(sensor, out):
+        def go():
+            out["sino"] = simulate(scene, ladar, model="mesh", radiometry="power",
+                                   sensor=sensor, ray_spacing=spacing, jobs=1)
+        return go
+
+    t = interleaved({"far": run(None, far), "near": run(Sensor(standoff=50.0), near)},
+                    repeats=repeats)
+    sino = simulate(scene, Ladar.covering(scene, n_bins=512), model="mesh",
+                    radiometry="power", rays_per_bin=1)
+    t_wave = time_call(lambda: receive(sino, sample_rate=20e9, pulse=GaussianPulse(1e-10)),
+                       repeats=repeats)
+    return {"faces": sum(len(p.faces) for p in scene.parts), "rays": far["sino"].info["rays"],
+            "far_mrays": far["sino"].info["rays"] / t["far"] / 1e6,
+            "near_mrays": near["sino"].info["rays"] / t["near"] / 1e6,
+            "receive_s": float(np.median(t_wave)), "receive_shape": sino.shape}
+
+
 def report(*, repeats=5, full=False):
     """The benchmark report, line by line (what ``meshladar bench`` prints): each model and
     FBP timed against its peer in the same process; ``full`` adds streaming and Dask."""
@@ -319,8 +356,24 @@ def report(*, repeats=5, full=False):
     yield (f"  build, {m['build_faces']} triangles: embreex upload {m['upload_s']:.2f} s + BVH "
            f"{m['bvh_s']:.2f} s = {m['build_over_bvh']:.1f}x the BVH; packet scene "
            f"{m['packet_build_s']:.2f} s = {m['packet_build_over_bvh']:.2f}x the BVH")
+    se = bench_sensor()
+    yield (f"received power, {se['faces']} triangles, {se['rays'] / 4:.3g} rays per view: at "
+           f"infinity (compiled loop) {se['far_mrays']:.2f} Mrays/s, sensor at a standoff "
+           f"(perspective, numpy) {se['near_mrays']:.2f} Mrays/s; waveforms of "
+           f"{se['receive_shape'][0]} views x {se['receive_shape'][1]} bins at 20 GHz "
+           f"{se['receive_s']:.3f} s")
     if not full:
         return
+    from . import peer
+
+    pt = peer.bench_time_to_accuracy()
+    if not pt["mitransient"]:
+        yield f"Mitsuba 3 + mitransient: skipped ({peer.available(reason=True)[1][:200]})"
+    else:
+        for target, tools in pt["time_to"].items():
+            yield (f"time to {target:g} relative L2, Lambertian {pt['faces']}-face sphere, "
+                   f"received power: meshladar {tools.get('meshladar') or float('nan'):.2f} s, "
+                   f"mitransient {tools.get('mitransient') or float('nan'):.2f} s")
     st = bench_streaming()
     yield (f"streaming 360 views x 1e6 rays, 2 threads: {st['seconds']:.1f} s, "
            f"{st['mrays']:.2f} Mrays/s, peak RSS {st['peak_rss_mb']:.0f} MB")
