@@ -25,8 +25,10 @@ class Sinogram:
     Parameters
     ----------
     values : (n_views, n_bins) array_like, float64
-        Bin integrals of F(θ) cos θ dA over the visible surface (DESIGN.md, paper Eq. 8):
-        scene units of area (length in 2D) times 1/sr.
+        Bin integrals over the visible surface: of F(θ) cos θ dA (DESIGN.md, paper Eq. 8,
+        ``info["radiometry"] = "paper"``) or of the received power F cos θ_i cos θ_r dA
+        (``"power"``), in scene units of area (length in 2D) times 1/sr, or photoelectrons
+        with a sensor that counts them (``info["units"]``).
     angles_deg : (n_views,) array_like, keyword-only
         View angles φ in degrees, about the z axis: the ladar looks from
         w = (cos φ, sin φ, 0) toward the scene; φ = 90° is the paper's Fig. 1.
