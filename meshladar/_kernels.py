@@ -373,3 +373,88 @@ def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, 
         f = f * c if power else f
         out[k] += f * area * (c / max(abs(cg), min_cos_facet))
     return back
+
+
+@njit(cache=True, nogil=True)
+def bin_sensor_hits(prim, t_cast, S, T, bu, bv, u, v, w, D, sensor_pos, range_offset,
+                    plane_d, face_normals, corner, smooth, face_material, params, beam,
+                    extinction, edges, area, power, ignore_back, min_cos_facet, refine_min_cos,
+                    out):
+    """Monostatic weighing and binning of one view seen by a sensor at standoff D, fused
+    (the numbers of meshladar.raytrace.perspective._trace_sensor_view then
+    meshladar.weighing._bin_one, without per-hit arrays): ray i leaves ``sensor_pos``
+    along q/|q|, q = S[i] u + T[i] v − D w; its hit distance R is recomputed in float64
+    against the hit face's plane (``t_cast`` where the plane is edge-on); its weight is
+    F·area × cos³α (R/D)² × the beam's relative irradiance (× the smooth normal's area
+    factor), and under ``power`` × cos θ (D/R)² exp(−2σR); its range R − ``range_offset``.
+    ``beam`` = (kind, radius or −1, waist, divergence, ax, ay, az): kind 0 a flood (a
+    top-hat of ``radius`` at distance D when ≥ 0), 1 a Gaussian of 1/e² radius
+    sqrt(waist² + (divergence z)²) about the axis (ax, ay, az) from the sensor. Returns
+    the number of back-face hits."""
+    nb = edges.size - 1
+    e0 = edges[0]
+    inv = nb / (edges[nb] - edges[0])
+    back = 0
+    kind = beam[0]
+    ax, ay, az = beam[4], beam[5], beam[6]
+    w_ref = math.sqrt(beam[2] * beam[2] + (beam[3] * D) ** 2)
+    for i in range(prim.size):
+        p = prim[i]
+        if p < 0:
+            continue
+        qx = S[i] * u[0] + T[i] * v[0] - D * w[0]
+        qy = S[i] * u[1] + T[i] * v[1] - D * w[1]
+        qz = S[i] * u[2] + T[i] * v[2] - D * w[2]
+        length = math.sqrt(S[i] * S[i] + T[i] * T[i] + D * D)
+        dx, dy, dz = qx / length, qy / length, qz / length
+        nx, ny, nz = face_normals[p, 0], face_normals[p, 1], face_normals[p, 2]
+        denom = nx * dx + ny * dy + nz * dz
+        if abs(denom) > refine_min_cos:
+            R = (plane_d[p] - (nx * sensor_pos[0] + ny * sensor_pos[1]
+                               + nz * sensor_pos[2])) / denom
+        else:
+            R = t_cast[i]
+        cg = -denom
+        if smooth:
+            a, b = bu[i] * 1.0, bv[i] * 1.0
+            sx = (1 - a - b) * corner[p, 0, 0] + a * corner[p, 1, 0] + b * corner[p, 2, 0]
+            sy = (1 - a - b) * corner[p, 0, 1] + a * corner[p, 1, 1] + b * corner[p, 2, 1]
+            sz = (1 - a - b) * corner[p, 0, 2] + a * corner[p, 1, 2] + b * corner[p, 2, 2]
+            norm = math.sqrt(sx * sx + sy * sy + sz * sz)
+            c = -((sx / norm) * dx + (sy / norm) * dy + (sz / norm) * dz)
+        else:
+            c = cg
+        if cg < 0.0:
+            back += 1
+            if ignore_back:
+                continue
+            c = -c
+        if c <= 0.0:
+            continue
+        r = R - range_offset
+        if r < edges[0] or r >= edges[nb]:
+            continue
+        k = _bin_of(r, edges, e0, inv)
+        px, py, pz = R * dx, R * dy, R * dz          # the hit relative to the sensor
+        z = px * ax + py * ay + pz * az
+        rx, ry, rz = px - z * ax, py - z * ay, pz - z * az
+        rho2 = rx * rx + ry * ry + rz * rz
+        if kind == 0:
+            rel = D * D / (rho2 + z * z)
+            if beam[1] >= 0.0 and math.sqrt(rho2) * D > beam[1] * z:
+                rel = 0.0
+        else:
+            wz2 = beam[2] * beam[2] + (beam[3] * z) ** 2
+            rel = w_ref * w_ref / wz2 * math.exp(-2.0 * rho2 / wz2)
+        factor = (D / length) ** 3 * (R / D) ** 2 * rel
+        if smooth:
+            factor *= c / max(abs(cg), min_cos_facet)
+        s = math.sqrt(max(1.0 - c * c, 0.0))
+        m = face_material[p]
+        f = _sr_monostatic(c, s, params[m, 0], params[m, 1], params[m, 2], params[m, 3],
+                           params[m, 4], params[m, 5] > 0.5, params[m, 6] > 0.5)
+        wt = f * area * factor
+        if power:
+            wt *= c * (D / R) ** 2 * math.exp(-2.0 * extinction * R)
+        out[k] += wt
+    return back

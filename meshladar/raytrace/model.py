@@ -107,8 +107,22 @@ def _sensor_job(geo, scene, views, vectors, mode, spacing, z0_shifted, back_face
                 edges, weigh_with, sensor):
     """:func:`_job` for a view seen by a sensor (finite standoff, a beam): hits from
     :func:`meshladar.raytrace.perspective._trace_sensor_view`, weighed point by point."""
-    from .perspective import _trace_sensor_view
+    from .perspective import _bin_sensor_view, _trace_sensor_view
 
+    if (weigh_with is not None and sensor.standoff is not None
+            and geo.normals in ("flat", "smooth")
+            and all(m.kernel_params is not None for m in weigh_with[0])):
+        materials, _, area, power = weigh_with
+        vals = np.zeros((len(views), len(edges) - 1))
+        rays, backs = [], []
+        for j, i in enumerate(views):
+            rng = None if seed is None else np.random.default_rng([seed, int(i)])
+            n, back = _bin_sensor_view(geo, scene, vectors[i], spacing, back_faces, rng,
+                                       sensor, materials, area, power, edges, vals[j])
+            rays.append(n)
+            backs.append(back)
+        return {"values": vals, "rays": np.array(rays, np.int64),
+                "backs": np.array(backs, np.int64)}
     out = []
     for i in views:
         rng = None if seed is None else np.random.default_rng([seed, int(i)])

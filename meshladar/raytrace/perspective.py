@@ -62,6 +62,61 @@ def _plane_grid(geo, w, spacing, rng, sensor_pos, standoff, aim):
     return S.ravel(), T.ravel(), u, v
 
 
+def _sensor_cast(geo, scene, w, spacing, rng, sensor, aim):
+    """Cast one view's rays from a sensor at a finite standoff: (sensor position, S, T,
+    u, v, |q| per ray, unit directions (n, 3), the start distance t0, float32 origins, the
+    cast's results), all in shifted coordinates."""
+    D = sensor.standoff
+    sensor_pos = aim + D * w
+    S, T, u, v = _plane_grid(geo, w, spacing, rng, sensor_pos, D, aim)
+    q = S[:, None] * u + T[:, None] * v - D * w
+    length = np.sqrt(S * S + T * T + D * D)
+    dirs = q / length[:, None]
+    # start each ray where it enters the target's bounding sphere (Embree's float32 stays
+    # at the target's scale, however far the sensor)
+    t0 = max(0.0, float(np.linalg.norm(sensor_pos)) - (1.0 + ORIGIN_MARGIN) * geo.radius
+             - spacing)
+    o = np.ascontiguousarray(sensor_pos + t0 * dirs, dtype=np.float32)
+    res = scene.run(o, np.ascontiguousarray(dirs, dtype=np.float32), output=1)
+    return sensor_pos, S, T, u, v, length, dirs, t0, o, res
+
+
+def _bin_sensor_view(geo, scene, w, spacing, back_faces, rng, sensor, materials, area, power,
+                     edges, out):
+    """One view seen by a sensor at a finite standoff, weighed and binned into ``out`` by
+    the compiled loop (:func:`meshladar._kernels.bin_sensor_hits`; flat or smooth normals,
+    coatings with ``kernel_params``): the numbers of :func:`_trace_sensor_view` then
+    weighing. Returns (rays cast, back-face hits)."""
+    from .. import _kernels
+    from ..precision import MIN_COS_FACET
+    from ..sensor import FloodBeam
+    from ..weighing import _material_table
+
+    aim = np.asarray(sensor.aim, np.float64) - geo.center
+    sensor_pos, S, T, u, v, _, _, t0, o, res = _sensor_cast(geo, scene, w, spacing, rng,
+                                                              sensor, aim)
+    beam = sensor.beam
+    off = aim if isinstance(beam, FloodBeam) else \
+        aim + beam.offset[0] * u + beam.offset[1] * v
+    axis = (off - sensor_pos) / np.linalg.norm(off - sensor_pos)
+    if isinstance(beam, FloodBeam):
+        spec = (0.0, -1.0 if beam.radius is None else beam.radius, 0.0, 0.0)
+    else:
+        spec = (1.0, -1.0, beam.waist, beam.divergence)
+    smooth = geo.normals == "smooth"
+    empty = np.zeros(0, np.float32)
+    back = _kernels.bin_sensor_hits(
+        res["primID"], t0 + res["tfar"].astype(np.float64), S, T,
+        res["u"] if smooth else empty, res["v"] if smooth else empty, u, v, w,
+        float(sensor.standoff), sensor_pos,
+        float(sensor.standoff) + float((aim + geo.center) @ w), geo.plane_d,
+        geo.face_normals, geo.corner if smooth else np.zeros((0, 3, 3)), smooth,
+        geo.material, _material_table(materials), np.array(spec + tuple(axis)),
+        float(sensor.extinction), edges, float(area), bool(power), back_faces == "ignore",
+        MIN_COS_FACET, REFINE_MIN_COS, out)
+    return len(o), back
+
+
 def _trace_sensor_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, sensor):
     """Hits of one view seen by ``sensor``; ranges absolute (R − D − aim·w at a finite
     standoff), or relative to the plane through the shifted centre (at infinity), as
@@ -84,17 +139,8 @@ def _trace_sensor_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng
         if mode != "3d":
             raise ParameterError("a sensor at a finite standoff needs mode='3d' (its rays "
                                  "fan out in both transverse directions)")
-        sensor_pos = aim + D * w
-        S, T, u, v = _plane_grid(geo, w, spacing, rng, sensor_pos, D, aim)
-        q = S[:, None] * u + T[:, None] * v - D * w
-        length = np.sqrt(S * S + T * T + D * D)
-        dirs_all = q / length[:, None]
-        # start each ray where it enters the target's bounding sphere (Embree's float32
-        # stays at the target's scale, however far the sensor)
-        t0_all = max(0.0, float(np.linalg.norm(sensor_pos)) - (1.0 + ORIGIN_MARGIN)
-                     * geo.radius - spacing)
-        o = np.ascontiguousarray(sensor_pos + t0_all * dirs_all, dtype=np.float32)
-        res = scene.run(o, np.ascontiguousarray(dirs_all, dtype=np.float32), output=1)
+        sensor_pos, S, T, u, v, length, dirs_all, t0_all, o, res = _sensor_cast(
+            geo, scene, w, spacing, rng, sensor, aim)
         prim = res["primID"]
         hit = prim >= 0
         prim = prim[hit]
