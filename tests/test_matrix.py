@@ -1422,6 +1422,52 @@ cli("simulate.-o=read-only", ["simulate", "disk", "-o", "{tmp}/ro/r.npz", "--qui
 cli("simulate.-o=under-a-file", ["simulate", "disk", "-o", "{tmp}/f.txt/r.npz", "--quiet"],
     "error", "f.txt", setup=files({"f.txt": b"x"}))
 
+# ------------------------------------------------------------------ sensor and receive
+for _flag in ("--standoff", "--beam-waist", "--pulse-energy", "--aperture", "--wavelength",
+              "--flood-radius"):
+    for _key in _FEW:
+        cli(f"simulate.{_flag}={_key}", _MESH + [_flag, _POS_BAD[_key]], "error", _flag,
+            setup=_SPHERE_FILE)
+for _flag in ("--extinction", "--beam-divergence"):
+    cli(f"simulate.{_flag}=neg", _MESH + [_flag, "-1"], "error", _flag, setup=_SPHERE_FILE)
+for _key, _v in {"one": "1", "nan": "nan,0", "str": "x,y"}.items():
+    cli(f"simulate.--beam-offset={_key}", _MESH + ["--beam-offset", _v], "error",
+        "--beam-offset", setup=_SPHERE_FILE)
+cli("simulate.--standoff+analytic", _SIM + ["--standoff", "10"], "error", "--standoff")
+cli("simulate.--standoff+slice", _MESH + ["--standoff", "10", "--mode", "slice"], "error",
+    "mode='3d'", setup=_SPHERE_FILE)
+cli("simulate.--standoff=inside", _MESH + ["--standoff", "0.1"], "error", "inside the target",
+    setup=_SPHERE_FILE)
+cli("simulate.--beam-divergence-alone", _MESH + ["--beam-divergence", "0.1"], "error",
+    "--beam-waist", setup=_SPHERE_FILE)
+cli("simulate.--pulse-energy+paper", _MESH + ["--standoff", "50", "--pulse-energy", "1e-3",
+                                             "--aperture", "0.1"], "error", "radiometry",
+    setup=_SPHERE_FILE)
+cli("simulate.--radiometry=x", _SIM + ["--radiometry", "x"], "error", "--radiometry")
+_RECV = ["receive", "{tmp}/r.npz", "-o", "{tmp}/w.npz", "--quiet", "--sample-rate", "1e10"]
+_file_cases("receive.result", "cli", lambda p: ["receive", p, "-o", "{tmp}/w.npz", "--quiet",
+                                                "--sample-rate", "1e10"], ".npz",
+            {"missing": None, "dir": DIR, "empty": b"", "junk": JUNK,
+             "pickled": _pickled_result, "image": _image_result}, ("bad.npz",))
+cli("receive.ok", _RECV, "ok", setup=_RESULT_FILE, check=_wrote("w.npz"))
+for _flag in ("--sample-rate", "--pulse-fwhm", "--realisations", "--speckle-cells"):
+    for _key in _FEW:
+        cli(f"receive.{_flag}={_key}", _RECV + [_flag, _POS_BAD[_key]], "error", _flag,
+            setup=_RESULT_FILE)
+cli("receive.--sample-rate=huge", _RECV + ["--sample-rate", "1e18"], "error",
+    "sample_rate", setup=_RESULT_FILE)
+cli("receive.noise-on-relative-units", _RECV + ["--realisations", "2"], "error",
+    "photoelectrons", setup=_RESULT_FILE)
+cli("receive.--gain-without-realisations", _RECV + ["--gain", "2"], "error", "--realisations",
+    setup=_RESULT_FILE)
+cli("receive.--speckle-cells=0.5", _RECV + ["--scale", "10", "--realisations", "2",
+                                           "--speckle-cells", "0.5"], "error", "speckle_cells",
+    setup=_RESULT_FILE)
+cli("receive.-o=input", ["receive", "{tmp}/r.npz", "-o", "{tmp}/r.npz", "--sample-rate",
+                         "1e10"], "error", "input", setup=_RESULT_FILE)
+cli("receive.--plot=input", _RECV + ["--plot", "{tmp}/r.npz"], "error", "--plot",
+    setup=_RESULT_FILE)
+
 # ------------------------------------------------------------------ reconstruct
 _file_cases("reconstruct.result", "cli", lambda p: ["reconstruct", p, "-o", "{tmp}/r.png",
                                                     "--quiet", "--size", "16"], ".npz",
