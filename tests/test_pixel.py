@@ -77,6 +77,7 @@ def test_bad_options():
     with pytest.raises(ml.errors.ParameterError, match=r"pixel_size must be in \(0, inf\]"):
         ml.simulate(scene, PAPER, model="pixel", pixel_size=0.0)
     with pytest.raises(ml.errors.ParameterError, match=r"model 'pixel' takes options "
-                                                        r"\('pixel_size', 'ray_spacing', 'jobs', "
+                                                        r"\('pixel_size', 'ray_spacing', "
+                                                        r"'radiometry', 'jobs', "
                                                         r"'executor', 'progress', 'run_dir'\)"):
         ml.simulate(scene, PAPER, model="pixel", tol=0.1)
