@@ -286,6 +286,17 @@ def _bin_of(r, edges, e0, inv):
     return lo
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _smooth_cos(corner, p, a, b, wx, wy, wz):
+    """cos θ of face p's shading normal, interpolated from its ``corner`` normals with
+    Embree's barycentrics (a, b) and normalised, against the direction (wx, wy, wz)."""
+    nx = (1 - a - b) * corner[p, 0, 0] + a * corner[p, 1, 0] + b * corner[p, 2, 0]
+    ny = (1 - a - b) * corner[p, 0, 1] + a * corner[p, 1, 1] + b * corner[p, 2, 1]
+    nz = (1 - a - b) * corner[p, 0, 2] + a * corner[p, 1, 2] + b * corner[p, 2, 2]
+    norm = math.sqrt(nx * nx + ny * ny + nz * nz)
+    return (nx / norm) * wx + (ny / norm) * wy + (nz / norm) * wz
+
+
 @njit(cache=True, nogil=True)
 def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, params,
                   w, start, edges, area, power, ignore_back, out, stamp, weight, tag):
@@ -349,12 +360,7 @@ def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, 
             continue
         cg = face_normals[p, 0] * w[0] + face_normals[p, 1] * w[1] + face_normals[p, 2] * w[2]
         t = _hit_distance(p, cg, tfar[i], origins, i, plane_d, face_normals)
-        a, b = bu[i] * 1.0, bv[i] * 1.0
-        nx = (1 - a - b) * corner[p, 0, 0] + a * corner[p, 1, 0] + b * corner[p, 2, 0]
-        ny = (1 - a - b) * corner[p, 0, 1] + a * corner[p, 1, 1] + b * corner[p, 2, 1]
-        nz = (1 - a - b) * corner[p, 0, 2] + a * corner[p, 1, 2] + b * corner[p, 2, 2]
-        norm = math.sqrt(nx * nx + ny * ny + nz * nz)
-        c = (nx / norm) * w[0] + (ny / norm) * w[1] + (nz / norm) * w[2]
+        c = _smooth_cos(corner, p, bu[i] * 1.0, bv[i] * 1.0, w[0], w[1], w[2])
         if cg < 0.0:
             back += 1
             if ignore_back:
@@ -416,12 +422,7 @@ def bin_sensor_hits(prim, t_cast, S, T, bu, bv, u, v, w, D, sensor_pos, range_of
             R = t_cast[i]
         cg = -denom
         if smooth:
-            a, b = bu[i] * 1.0, bv[i] * 1.0
-            sx = (1 - a - b) * corner[p, 0, 0] + a * corner[p, 1, 0] + b * corner[p, 2, 0]
-            sy = (1 - a - b) * corner[p, 0, 1] + a * corner[p, 1, 1] + b * corner[p, 2, 1]
-            sz = (1 - a - b) * corner[p, 0, 2] + a * corner[p, 1, 2] + b * corner[p, 2, 2]
-            norm = math.sqrt(sx * sx + sy * sy + sz * sz)
-            c = -((sx / norm) * dx + (sy / norm) * dy + (sz / norm) * dz)
+            c = _smooth_cos(corner, p, bu[i] * 1.0, bv[i] * 1.0, -dx, -dy, -dz)
         else:
             c = cg
         if cg < 0.0:

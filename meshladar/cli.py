@@ -617,23 +617,26 @@ def _parser() -> argparse.ArgumentParser:
     sens.add_argument("--flood-radius", type=_positive_float, default=None, metavar="M",
                       help="a top-hat flood of this radius at the origin (default: unbounded)")
     sens.add_argument("--beam-waist", type=_positive_float, default=None, metavar="M",
-                      help="a Gaussian beam of this 1/e² radius at the sensor")
+                      help="a Gaussian beam of this 1/e² radius at the sensor (default: "
+                           "a flood)")
     sens.add_argument("--beam-divergence", type=_nonnegative_float, default=None,
-                      metavar="RAD", help="its far-field 1/e² half-angle (default 0)")
+                      metavar="RAD", help="its far-field 1/e² half-angle (default: 0)")
     sens.add_argument("--beam-offset", type=_pair, default=None, metavar="U,V",
-                      help="its pointing offset at the origin along the view's u, v (m)")
+                      help="its pointing offset at the origin along the view's u, v (m) "
+                           "(default: 0,0)")
     sens.add_argument("--pulse-energy", type=_positive_float, default=None, metavar="J",
-                      help="transmitted energy per pulse")
+                      help="transmitted energy per pulse (default: none, relative units)")
     sens.add_argument("--aperture", type=_positive_float, default=None, metavar="M",
-                      help="receiver aperture diameter")
+                      help="receiver aperture diameter (default: none, relative units)")
     sens.add_argument("--extinction", type=_nonnegative_float, default=None, metavar="PER_M",
-                      help="atmospheric extinction coefficient (two-way exp(-2 sigma R))")
+                      help="atmospheric extinction coefficient, two-way exp(-2 sigma R) "
+                           "(default: 0)")
     sens.add_argument("--wavelength", type=_positive_float, default=None, metavar="M",
-                      help="laser wavelength (default 1.064e-6)")
+                      help="laser wavelength (default: 1.064e-6)")
     sens.add_argument("--optics-transmission", type=_unit_fraction, default=None,
-                      help="receive optics' transmission (default 1)")
+                      help="receive optics' transmission (default: 1)")
     sens.add_argument("--quantum-efficiency", type=_unit_fraction, default=None,
-                      help="detector quantum efficiency (default 1)")
+                      help="detector quantum efficiency (default: 1)")
     sim.add_argument("--views", type=_positive_int, default=None,
                      help="number of views evenly over 360 degrees about z (default: the "
                           "phantom's, or 360)")
@@ -751,8 +754,8 @@ def _parser() -> argparse.ArgumentParser:
     rc.add_argument("--oversample", type=_positive_int, default=8,
                     help="fine cells per sample for the convolutions (default: %(default)s)")
     rc.add_argument("--scale", type=_positive_float, default=None, metavar="PE_PER_UNIT",
-                    help="photoelectrons per unit of the sinogram (when it was not simulated "
-                         "with --pulse-energy and --aperture)")
+                    help="photoelectrons per unit of the sinogram, when it was not simulated "
+                         "with --pulse-energy and --aperture (default: none)")
     rc.add_argument("--realisations", type=_positive_int, default=None, metavar="N",
                     help="draw N noise realisations (default: none)")
     rc.add_argument("--seed", type=_nonnegative_int, default=None,
@@ -760,19 +763,21 @@ def _parser() -> argparse.ArgumentParser:
     rc.add_argument("--speckle-cells", type=_positive_float, default=None, metavar="M",
                     help="speckle cells per resolution cell, >= 1 (default: no speckle)")
     rc.add_argument("--background-rate", type=_nonnegative_float, default=None,
-                    metavar="PER_S", help="background photoelectrons per second")
+                    metavar="PER_S", help="background photoelectrons per second (default: 0)")
     rc.add_argument("--dark-rate", type=_nonnegative_float, default=None, metavar="PER_S",
-                    help="dark counts per second")
+                    help="dark counts per second (default: 0)")
     rc.add_argument("--excess-noise", type=_positive_float, default=None, metavar="F",
-                    help="APD excess noise factor, >= 1 (default 1)")
+                    help="APD excess noise factor, >= 1 (default: 1)")
     rc.add_argument("--gain", type=_positive_float, default=None,
-                    help="APD mean gain (default 1)")
+                    help="APD mean gain (default: 1)")
     rc.add_argument("--bits", type=_positive_int, default=None,
-                    help="digitiser bits (with --full-scale)")
+                    help="digitiser bits, with --full-scale (default: no quantisation)")
     rc.add_argument("--full-scale", type=_positive_float, default=None,
-                    help="digitiser full scale, output units (with --bits)")
+                    help="digitiser full scale in output units, with --bits (default: "
+                         "none)")
     rc.add_argument("--plot", default=None, metavar="PNG",
-                    help="a figure of a few views' waveforms with their noise band")
+                    help="a figure of a few views' waveforms with their noise band "
+                         "(default: none)")
     rc.add_argument("--quiet", action="store_true", help="no summary line (default: shown)")
     rc.set_defaults(func=_cmd_receive)
 

@@ -142,7 +142,8 @@ def test_simulate_validation():
                                              r"'pixel'\); got 'mesh2'"):
         ml.simulate(scene, lad, model="mesh2")
     with pytest.raises(ParameterError, match=r"model 'analytic' takes options "
-                                             r"\('jobs', 'executor', 'progress', 'run_dir'\); "
+                                             r"\('radiometry', 'jobs', 'executor', 'progress', "
+                                             r"'run_dir'\); "
                                              r"got 'pixel_size'"):
         ml.simulate(scene, lad, pixel_size=0.1)
     with pytest.raises(ParameterError, match=r"scene must be a meshladar.Scene; got list"):
