@@ -38,7 +38,7 @@ from .errors import ParameterError
 from .sensor import SPEED_OF_LIGHT
 from .sinogram import Sinogram
 
-__all__ = ["GaussianPulse", "SampledPulse", "Noise", "Waveforms", "receive"]
+__all__ = ["GaussianPulse", "SampledPulse", "Noise", "Waveforms", "receive", "draw_noise"]
 
 #: A Gaussian pulse or response is cut where it falls below exp(−CUT²/2) of its peak.
 _GAUSS_CUT = 8.0
@@ -192,6 +192,32 @@ class Noise:
                 "bits": self.bits, "full_scale": self.full_scale}
 
 
+def draw_noise(noise, signal, dwell, n, seed):
+    """``n`` realisations (n, *signal.shape) of ``noise`` on mean ``signal``
+    (photoelectrons per cell), each cell integrating background and dark counts over
+    ``dwell`` seconds (module docstring). Seeded through numpy's default generator."""
+    rng = np.random.default_rng(seed)
+    s = np.broadcast_to(np.maximum(signal, 0.0), (n,) + np.shape(signal))
+    if noise.speckle_cells is not None:
+        m = noise.speckle_cells
+        intensity = rng.gamma(m, 1.0, size=s.shape) * (s / m)
+    else:
+        intensity = s
+    b = (noise.background_rate + noise.dark_rate) * dwell
+    counts = rng.poisson(intensity + b).astype(np.float64)
+    f = noise.excess_noise_factor
+    if f > 1.0:
+        shape = counts / (f - 1.0)
+        out = np.where(counts > 0, rng.gamma(np.where(counts > 0, shape, 1.0),
+                                             noise.gain * (f - 1.0)), 0.0)
+    else:
+        out = noise.gain * counts
+    if noise.bits is not None:
+        lsb = noise.full_scale / 2.0 ** noise.bits
+        out = np.clip(np.floor(out / lsb + 0.5), 0, 2 ** noise.bits - 1) * lsb
+    return out
+
+
 @dataclass(frozen=True, eq=False)
 class Waveforms:
     """Sampled waveforms of many views: what a digitiser records per pulse.
@@ -269,26 +295,7 @@ class Waveforms:
 
         check_size("n", float(n) * self.values.size, 8, f"{n} realisations of "
                    f"{self.values.shape} samples", "draw fewer at a time")
-        rng = np.random.default_rng(seed)
-        s = np.broadcast_to(np.maximum(self.values, 0.0), (n,) + self.values.shape)
-        if noise.speckle_cells is not None:
-            m = noise.speckle_cells
-            intensity = rng.gamma(m, 1.0, size=s.shape) * (s / m)
-        else:
-            intensity = s
-        b = (noise.background_rate + noise.dark_rate) * self.sample_interval
-        counts = rng.poisson(intensity + b).astype(np.float64)
-        f = noise.excess_noise_factor
-        if f > 1.0:
-            shape = counts / (f - 1.0)
-            out = np.where(counts > 0, rng.gamma(np.where(counts > 0, shape, 1.0),
-                                                 noise.gain * (f - 1.0)), 0.0)
-        else:
-            out = noise.gain * counts
-        if noise.bits is not None:
-            lsb = noise.full_scale / 2.0 ** noise.bits
-            out = np.clip(np.floor(out / lsb + 0.5), 0, 2 ** noise.bits - 1) * lsb
-        return out
+        return draw_noise(noise, self.values, self.sample_interval, n, seed)
 
     def detection_probability(self, noise: Noise, threshold, n=1000, *, seed=None,
                               chunk=100):

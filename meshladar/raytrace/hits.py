@@ -32,6 +32,7 @@ class ViewHits:
     weight_factor: np.ndarray | None = None
     curve: np.ndarray | None = None
     receive_factor: np.ndarray | None = None
+    transverse: np.ndarray | None = None
 
     def __post_init__(self):
         _freeze(self, np.shape(self.range)[0] if np.ndim(self.range) == 1 else -1,
@@ -41,8 +42,8 @@ class ViewHits:
 #: Per-hit fields of the hit records and their shapes (k hits); the optional ones may be None.
 _FIELDS = {"view": (1,), "range": (1,), "cos_theta": (1,), "sin_theta": (1,),
            "material": (1,), "spread": (1, 4), "bistatic": (1, 4), "weight_factor": (1,),
-           "curve": (1, 4), "receive_factor": (1,)}
-_OPTIONAL = ("bistatic", "weight_factor", "curve", "receive_factor")
+           "curve": (1, 4), "receive_factor": (1,), "transverse": (1, 2)}
+_OPTIONAL = ("bistatic", "weight_factor", "curve", "receive_factor", "transverse")
 
 
 def _freeze(record, k, kind):

@@ -21,9 +21,10 @@ BACK_FACES = ("two-sided", "ignore")
 
 
 def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=None,
-                footprint=True):
+                footprint=True, transverse=False):
     """Hits of one view (range relative to the shifted centre's plane); with a bistatic
-    receiver direction w_r, one occlusion ray per hit toward it."""
+    receiver direction w_r, one occlusion ray per hit toward it; with ``transverse``, each
+    hit's coordinates along the view's (u, v) (its ray's, shifted)."""
     o, L, u, v = _ray_grid(geo, w, mode, spacing, z0_shifted, rng)
     d = np.ascontiguousarray((-w)[None, :], dtype=np.float32)
     res = scene.run(o, d, output=1)
@@ -96,8 +97,9 @@ def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=N
             spread[:, 1] = np.abs(_dot(n_geo, v)) / cg * 0.5 * spacing
         spread[:, 2] = np.minimum(tri_r.min(axis=1) - rng_rel, 0.0)
         spread[:, 3] = np.maximum(tri_r.max(axis=1) - rng_rel, 0.0)
+    across = np.stack([_dot(oh, u), _dot(oh, v)], -1) if transverse else None
     return ViewHits(rng_rel, cos_t, sin_t, geo.material[prim], spread, len(o),
-                     int(back.sum()), bi, factor, curve)
+                    int(back.sum()), bi, factor, curve, None, across)
 
 
 
