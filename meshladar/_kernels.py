@@ -459,3 +459,25 @@ def bin_sensor_hits(prim, t_cast, S, T, bu, bv, u, v, w, D, sensor_pos, range_of
             wt *= c * (D / R) ** 2 * math.exp(-2.0 * extinction * R)
         out[k] += wt
     return back
+
+
+@njit(parallel=True, cache=True)
+def backproject3d(q, wx, wy, wz, weight, r0, inv_dr, x, y, z, out):
+    """out[k, i, j] += Σ_v weight[v] · q_v(r), r = −(x_j wx_v + y_i wy_v + z_k wz_v): the
+    3-D backprojection over view directions. q : (n_views, n_bins) samples at
+    r0 + m/inv_dr, linearly interpolated, 0 outside."""
+    n_views, n_bins = q.shape
+    nz, ny, nx = z.size, y.size, x.size
+    for k in prange(nz):
+        for v in range(n_views):
+            wv = weight[v]
+            step = -wx[v] * inv_dr
+            for i in range(ny):
+                base = (-(y[i] * wy[v] + z[k] * wz[v]) - r0) * inv_dr
+                for j in range(nx):
+                    u = base + x[j] * step
+                    fk = math.floor(u)
+                    m = int(fk)
+                    if 0 <= m < n_bins - 1:
+                        f = u - fk
+                        out[k, i, j] += wv * (q[v, m] + f * (q[v, m + 1] - q[v, m]))
