@@ -112,7 +112,8 @@ def _grid(size, extent, center):
     return n, e, c, (base + c[0], base + c[1], base + c[2])
 
 
-def radon3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None) -> Volume:
+def radon3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None,
+            smooth=0.0) -> Volume:
     """Invert range profiles over the sphere of views (3-D Radon inversion, module
     docstring).
 
@@ -131,6 +132,11 @@ def radon3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None
     weights : (n_views,) array, optional
         Quadrature weight (solid angle) of each view; default 4π/n for n views, right for
         Fibonacci directions (:func:`sphere_weights` for other sets).
+    smooth : float
+        Standard deviation (in bins) of a Gaussian applied to each profile before its
+        second difference (default 0: none). The second difference amplifies sampling noise
+        and few views leave the planes of sharp returns uncancelled: 1-2 bins trade
+        resolution for a cleaner volume.
 
     Returns
     -------
@@ -158,7 +164,13 @@ def radon3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None
         wts = finite_array("weights", weights)
         if wts.shape != (sino.n_views,) or np.any(wts < 0):
             raise ParameterError(f"weights must be {sino.n_views} non-negative solid angles")
-    g = np.pad(sino.values / dr, ((0, 0), (1, 1)))              # zero beyond the bins
+    smooth = check_real("smooth", smooth, low=0.0)
+    g = sino.values / dr
+    if smooth > 0:
+        from scipy.ndimage import gaussian_filter1d
+
+        g = gaussian_filter1d(g, smooth, axis=1, mode="constant", truncate=4.0)
+    g = np.pad(g, ((0, 0), (1, 1)))                             # zero beyond the bins
     minus_g2 = -(g[:, 2:] - 2 * g[:, 1:-1] + g[:, :-2]) / (dr * dr)
     q = np.ascontiguousarray(minus_g2 / (8 * math.pi ** 2))
     out = np.zeros((n, n, n))
@@ -166,7 +178,8 @@ def radon3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None
     _kernels.backproject3d(q, np.ascontiguousarray(w[:, 0]), np.ascontiguousarray(w[:, 1]),
                            np.ascontiguousarray(w[:, 2]), wts, float(sino.bin_centers[0]),
                            1.0 / dr, x, y, z, out)
-    info = {"method": "radon3d", "filter": "second difference", "views": sino.n_views,
+    info = {"method": "radon3d", "filter": "second difference", "smooth_bins": smooth,
+            "views": sino.n_views,
             "radiometry": sino.info.get("radiometry"), "size": n, "extent": e,
             "center": c.tolist()}
     return Volume(out, x=x, y=y, z=z, info=info)

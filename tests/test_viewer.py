@@ -95,3 +95,24 @@ def test_volume_iso_surface_of_a_stack():
     assert (img[..., :3].sum(axis=-1) > 100).sum() > 500      # a cylinder was drawn
     with pytest.raises(ValueError, match="evenly spaced"):
         viewer.show_volume(images, np.r_[zs[:-1], 9.0], iso=0.5, off_screen=True)
+
+
+def test_show_volume_of_a_reconstructed_ball():
+    """A Volume (3-D Radon inversion of a uniform ball) draws as its default iso-surface."""
+    from meshladar.mesh import fibonacci_sphere
+    from meshladar.viz import viewer
+    from meshladar.volume import radon3d
+
+    a, W = 0.5, fibonacci_sphere(200)
+    edges = np.linspace(-1.0, 1.0, 49)
+    lo, hi = np.clip(edges[:-1], -a, a), np.clip(edges[1:], -a, a)
+    vals = np.broadcast_to(np.pi * (a * a * (hi - lo) - (hi ** 3 - lo ** 3) / 3), (200, 48))
+    sino = ml.Sinogram(vals, angles_deg=np.zeros(200), bin_edges=edges, view_vectors=W)
+    vol = radon3d(sino, size=32, extent=1.0)
+    surf = viewer.volume_surface(vol)
+    r = np.linalg.norm(np.asarray(surf.points), axis=1)
+    assert abs(np.median(r) - a) < 2.0 / 32                  # the ball's sphere
+    img = viewer.show_volume(vol, off_screen=True, window_size=(200, 200))
+    assert (img[..., :3].sum(axis=-1) > 100).sum() > 500
+    with pytest.raises(ValueError, match="zs"):
+        viewer.show_volume(vol, [0.0, 1.0], off_screen=True)

@@ -113,3 +113,43 @@ def test_volume_checks():
         radon3d(sino, size=0)
     with pytest.raises(ml.errors.ParameterError, match="values"):
         Volume(np.zeros((2, 2)), x=[0, 1], y=[0, 1], z=[0])
+
+
+#: a part of curved surfaces, 600 Fibonacci views, 64³: the iso-surface lies within this
+#: many voxels of the part's surface and covers it (measured means 1.4 and 1.0 voxels,
+#: 95th percentiles 2.0 and 1.4)
+SHAPE_MEAN_VOXELS = 2.0
+SHAPE_P95_VOXELS = 3.0
+
+
+def test_a_cad_part_reconstructs_to_its_shape():
+    """A capsule through a torus: 600 views over the sphere, received power, 3-D Radon
+    inversion; the default iso-surface (half the 99.9th percentile) lies on the part's
+    surface and covers all of it. (The angular sampling sets the sharpness: a volume n
+    voxels across needs ~4π(n/2)² / (2σ)² views for a smoothing of σ bins; with fewer views
+    the planes of sharp returns stay uncancelled.)"""
+    trimesh = pytest.importorskip("trimesh")
+    pytest.importorskip("pyvista")
+    from scipy.spatial import cKDTree
+
+    from meshladar.viz import viewer
+
+    cap = trimesh.creation.capsule(height=0.6, radius=0.15, count=[32, 32])
+    cap.apply_translation((0, 0, -0.3))
+    tor = trimesh.creation.torus(major_radius=0.35, minor_radius=0.08, major_sections=96,
+                                 minor_sections=32)
+    tor.apply_transform(trimesh.transformations.rotation_matrix(math.pi / 2, [1, 0, 0]))
+    tor.apply_translation((0, 0, 0.25))
+    part = trimesh.util.concatenate([cap, tor])
+    scene = ml.Scene.from_mesh(part, material=lambertian(0.5))
+    ladar = ml.Ladar(None, np.linspace(-0.8, 0.8, 65), view_vectors=fibonacci_sphere(600))
+    sino = ml.simulate(scene, ladar, model="mesh", radiometry="power", normals="smooth")
+    vol = radon3d(sino, size=64, extent=0.8, smooth=1.5)
+    surf = np.asarray(viewer.volume_surface(vol).points)
+    truth, _ = trimesh.sample.sample_surface_even(part, 50_000, seed=0)
+    voxel = 1.6 / 64
+    off, _ = cKDTree(truth).query(surf)            # iso-surface -> part
+    gap, _ = cKDTree(surf).query(truth)            # part -> iso-surface
+    for d in (off, gap):
+        assert d.mean() < SHAPE_MEAN_VOXELS * voxel
+        assert np.percentile(d, 95) < SHAPE_P95_VOXELS * voxel

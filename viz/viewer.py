@@ -17,8 +17,8 @@ import os
 
 import numpy as np
 
-__all__ = ["show_scene", "show_slice", "show_volume", "face_returns", "SHADOW_COLOR",
-           "BACK_COLOR"]
+__all__ = ["show_scene", "show_slice", "show_volume", "volume_surface", "volume_iso",
+           "face_returns", "SHADOW_COLOR", "BACK_COLOR"]
 
 #: Colour of faces that face the ladar but are shadowed by another part.
 SHADOW_COLOR = (1.0, 0.0, 1.0)
@@ -260,12 +260,46 @@ def show_slice(image, *, z=0.0, scene=None, clim=None, off_screen=False, screens
     return _finish(plotter, off_screen, screenshot)
 
 
-@_headless_window
-def show_volume(images, zs, *, iso=None, off_screen=False, screenshot=None,
-                window_size=(800, 700), camera=None):
-    """A stack of reconstructed slices at heights ``zs`` (increasing, evenly spaced) as a
-    volume rendering, or as the iso-surface at value ``iso``."""
+def volume_iso(volume):
+    """A default iso-value for a reconstructed volume: half its 99.9th percentile (the
+    bright surface shell, not the FBP side-lobes and noise around it)."""
+    v = np.asarray(volume.values)
+    return 0.5 * float(np.percentile(v, 99.9))
+
+
+def volume_surface(volume, iso=None):
+    """The iso-surface of a :class:`meshladar.volume.Volume` at ``iso`` (default
+    :func:`volume_iso`) as a pyvista mesh in scene coordinates."""
     pv = _pyvista()
+    dx, dy, dz = volume.spacing
+    grid = pv.ImageData(dimensions=(volume.x.size, volume.y.size, volume.z.size),
+                        spacing=(dx, dy, dz), origin=(volume.x[0], volume.y[0], volume.z[0]))
+    grid.point_data["reconstruction"] = np.asarray(volume.values).ravel(order="C")
+    return grid.contour([volume_iso(volume) if iso is None else iso],
+                        scalars="reconstruction")
+
+
+@_headless_window
+def show_volume(images, zs=None, *, iso=None, off_screen=False, screenshot=None,
+                window_size=(800, 700), camera=None):
+    """A stack of reconstructed slices at heights ``zs`` (increasing, evenly spaced), or a
+    :class:`meshladar.volume.Volume` (then ``zs`` is not given), as a volume rendering, or
+    as the iso-surface at value ``iso`` (for a Volume, by default at
+    :func:`volume_iso`)."""
+    pv = _pyvista()
+    from meshladar.volume import Volume
+
+    if isinstance(images, Volume):
+        if zs is not None:
+            raise ValueError("a Volume carries its own z; do not give zs")
+        plotter = pv.Plotter(off_screen=off_screen, window_size=window_size)
+        plotter.set_background("black")
+        plotter.add_mesh(volume_surface(images, iso), color="white", smooth_shading=True)
+        if camera is not None:
+            plotter.camera_position = camera
+        else:
+            plotter.view_isometric()
+        return _finish(plotter, off_screen, screenshot)
     zs = np.asarray(zs, dtype=np.float64)
     if len(images) != len(zs) or len(zs) < 2:
         raise ValueError(f"images and zs must have the same length >= 2; got {len(images)} "
