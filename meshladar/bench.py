@@ -10,7 +10,7 @@ import statistics
 import time
 
 __all__ = ["time_call", "bench_analytic", "bench_fbp", "bench_mesh", "bench_sensor",
-           "bench_streaming", "bench_dask", "report"]
+           "bench_tomography3d", "bench_streaming", "bench_dask", "report"]
 
 
 def time_call(fn, *, repeats=5):
@@ -317,6 +317,32 @@ def bench_sensor(*, subdivisions=6, rays_per_view=1_000_000, views=4, repeats=2)
             "receive_s": float(np.median(t_wave)), "receive_shape": sino.shape}
 
 
+def bench_tomography3d(*, views=200, size=128, subdivisions=6, jobs=2):
+    """3-D reflective tomography of an 82k-face sphere part: the range profiles of ``views``
+    Fibonacci directions (mesh model, received power, ``jobs`` threads), then their 3-D
+    Radon inversion onto ``size``³ voxels; wall times of each (after a warm-up)."""
+    from . import materials
+    from .forward import simulate
+    from .ladar import Ladar
+    from .mesh import fibonacci_sphere
+    from .volume import radon3d
+
+    import numpy as np
+
+    scene = _icosphere_scene(subdivisions, materials.DARK_GRAY)
+    ladar = Ladar(None, np.linspace(-0.55, 0.55, size + 1),
+                  view_vectors=fibonacci_sphere(views))
+    sino = simulate(scene, ladar, model="mesh", radiometry="power", jobs=jobs)
+    radon3d(sino, size=8, extent=0.55)                     # compile
+    t0 = time.perf_counter()
+    sino = simulate(scene, ladar, model="mesh", radiometry="power", jobs=jobs)
+    t1 = time.perf_counter()
+    radon3d(sino, size=size, extent=0.55)
+    t2 = time.perf_counter()
+    return {"faces": sum(len(p.faces) for p in scene.parts), "views": views, "size": size,
+            "rays": sino.info["rays"], "simulate_s": t1 - t0, "reconstruct_s": t2 - t1}
+
+
 def report(*, repeats=5, full=False):
     """The benchmark report, line by line (what ``meshladar bench`` prints): each model and
     FBP timed against its peer in the same process; ``full`` adds streaming and Dask."""
@@ -362,6 +388,10 @@ def report(*, repeats=5, full=False):
            f"(perspective, numpy) {se['near_mrays']:.2f} Mrays/s; waveforms of "
            f"{se['receive_shape'][0]} views x {se['receive_shape'][1]} bins at 20 GHz "
            f"{se['receive_s']:.3f} s")
+    tb = bench_tomography3d()
+    yield (f"3-D tomography, {tb['faces']} triangles, {tb['views']} views, {tb['size']}^3: "
+           f"profiles {tb['simulate_s']:.1f} s ({tb['rays']:,} rays, 2 threads), inversion "
+           f"{tb['reconstruct_s']:.1f} s, total {tb['simulate_s'] + tb['reconstruct_s']:.1f} s")
     if not full:
         return
     from . import peer

@@ -66,7 +66,9 @@ def test_analytic_power_matches_quadrature(name, scene):
     """Received power is as exact as Eq. 8 in the analytic model: shadows, glints and
     ellipses against independent adaptive quadrature of F cos²θ."""
     scene = scene()
-    views = [0.0, 37.0, 203.0] if name.startswith(("pair", "ellipse")) else [37.0]
+    # one view each (the quadrature reference is slow): the pair's at 0° has the small
+    # disk shadowing the large one
+    views = [0.0] if name.startswith("pair") else [37.0]
     ladar = ml.Ladar.paper(angles_deg=views)
     sino = ml.simulate(scene, ladar, radiometry="power")
     for i, phi in enumerate(views):
@@ -157,7 +159,7 @@ def test_bistatic_power_has_the_receivers_cosine():
 def test_pixel_power_total():
     """The pixel model under received power: a Lambertian disk returns ρ A / 2 in all
     (∫ (ρ/π) cos²a A da over the lit half), within the pixelation of its rim."""
-    A, rho, pix = 0.8, 0.7, 0.005
+    A, rho, pix = 0.8, 0.7, 0.01
     sino = ml.simulate(ml.Scene([ml.Disk((0, 0), A, lambertian(rho))]),
                        ml.Ladar.paper(angles_deg=[0.0, 17.0]), model="pixel",
                        pixel_size=pix, radiometry="power")
@@ -301,7 +303,7 @@ def test_photoelectrons_of_a_small_spot_on_a_lambertian_plate():
     sensor sends E ρ/π per steradian back, of which the aperture A_r at distance D collects
     E ρ A_r / (π D²): times the optics, the two-way atmosphere exp(−2σD) and the quantum
     efficiency, over hc/λ, photoelectrons."""
-    a, D, rho = 1.0, 200.0, 0.4
+    a, D, rho = 0.2, 200.0, 0.4
     E, diam, opt, qe, lam, sigma = 1e-6, 0.05, 0.7, 0.3, 1.55e-6, 1e-4
     sensor = ml.sensor.Sensor(standoff=D, beam=ml.sensor.GaussianBeam(waist=0.01,
                                                                      divergence=1e-4),
@@ -315,7 +317,8 @@ def test_photoelectrons_of_a_small_spot_on_a_lambertian_plate():
     photon = ml.sensor.PLANCK * ml.sensor.SPEED_OF_LIGHT / lam
     exact = E * rho * (math.pi * diam ** 2 / 4) / (math.pi * D ** 2) * opt * qe \
         * math.exp(-2 * sigma * D) / photon
-    # the spot (w(D) = 0.022) is sampled by ~1500 rays; its edge far inside the plate
+    # the spot (w(D) = 0.022) is sampled by ~1500 rays; its edge far inside the plate (the
+    # plate's radius 0.2 is 9 spot radii: exp(-2·81) of the energy misses it)
     np.testing.assert_allclose(sino.total(), exact, rtol=SPOT_RTOL)
     assert sino.info["units"] == "photoelectrons"
     with pytest.raises(ml.errors.ParameterError, match="radiometry='power'"):
