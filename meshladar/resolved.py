@@ -255,7 +255,8 @@ def resolve(scene, ladar, axes, *, motion=None, radiometry="paper", mode=None, n
     backend = resolve_backend(backend)
     sampling, seed = _sampling(mode, sampling, seed)
     spacing = _spacing(ladar, mode, ray_spacing, rays_per_bin, geo.radius)
-    if _largest_grid(geo, ladar.view_vectors, mode, spacing) > MAX_RAYS_PER_VIEW:
+    if _largest_grid(geo, ladar.view_vectors, mode, spacing,
+                     MAX_RAYS_PER_VIEW) > MAX_RAYS_PER_VIEW:
         raise ParameterError(f"one view would cast more than {MAX_RAYS_PER_VIEW:.0e} rays "
                              f"(ray spacing {spacing:.3g}); give a larger ray_spacing")
     area = spacing if mode == "slice" else spacing * spacing

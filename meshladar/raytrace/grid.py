@@ -184,9 +184,15 @@ def _spacing(ladar, mode, ray_spacing, rays_per_bin, radius):
 
 
 
-def _largest_grid(geo, vectors, mode, spacing):
+def _largest_grid(geo, vectors, mode, spacing, limit=None):
     """The most rays any one view's grid holds (the grids of _ray_grid: the projected
-    hull's extent along u, and along v in 3-D, plus a spacing each side)."""
+    hull's extent along u, and along v in 3-D, plus a spacing each side). With ``limit``,
+    an upper bound (the bounding sphere's grid) when that is within it: the exact count is
+    only needed to refuse a run."""
+    across = math.ceil((2 * geo.radius + 2 * spacing) / spacing) + 1
+    bound = float(across if mode == "slice" else across * across)
+    if limit is not None and bound <= limit:
+        return bound
     largest = 0.0
     for start in range(0, len(vectors), 256):               # bounded memory
         frames = [_frame(w) for w in vectors[start:start + 256]]

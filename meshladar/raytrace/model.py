@@ -345,7 +345,7 @@ def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_b
         check_flag("footprint", weigh_with[1])
     receivers = _receivers(receiver, ladar, mode, bool(weigh_with and weigh_with[1]))
     spacing = _spacing(ladar, mode, ray_spacing, rays_per_bin, geo.radius)
-    per_view = _largest_grid(geo, ladar.view_vectors, mode, spacing)
+    per_view = _largest_grid(geo, ladar.view_vectors, mode, spacing, MAX_RAYS_PER_VIEW)
     if per_view > MAX_RAYS_PER_VIEW:
         raise ParameterError(
             f"one view would cast about {per_view:.3g} rays (ray spacing {spacing:.3g} over "
