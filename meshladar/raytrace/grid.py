@@ -189,8 +189,8 @@ def _largest_grid(geo, vectors, mode, spacing, limit=None):
     hull's extent along u, and along v in 3-D, plus a spacing each side). With ``limit``,
     an upper bound (the bounding sphere's grid) when that is within it: the exact count is
     only needed to refuse a run."""
-    across = math.ceil((2 * geo.radius + 2 * spacing) / spacing) + 1
-    bound = float(across if mode == "slice" else across * across)
+    across = (2 * geo.radius + 2 * spacing) / spacing + 2.0        # float: may be inf
+    bound = across if mode == "slice" else across * across
     if limit is not None and bound <= limit:
         return bound
     largest = 0.0
