@@ -4,6 +4,7 @@ and conservation."""
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 import pytest
@@ -184,3 +185,21 @@ def test_resolve_checks_its_axes(axes, motion, match):
     ladar = ml.Ladar.covering(scene, n_bins=8, angles_deg=[0.0])
     with pytest.raises(ml.errors.ParameterError, match=match):
         resolve(scene, ladar, axes, motion=motion)
+
+
+def test_returns_figures(tmp_path):
+    pytest.importorskip("matplotlib")
+    from meshladar.viz import resolved as figures
+
+    scene = ml.Scene.from_mesh(trimesh.creation.icosphere(subdivisions=3),
+                               material=ALUMINUM)
+    ladar = ml.Ladar.covering(scene, n_bins=16, angles_deg=[0.0, 90.0])
+    rd = resolve(scene, ladar, [("range", ladar.bin_edges),
+                                ("doppler", np.linspace(-3e5, 3e5, 17))],
+                 motion=Motion(omega=(0.0, 0.0, 0.1)))
+    one = resolve(scene, ladar, [("cross_range", np.linspace(-1.1, 1.1, 23))])
+    for ret, log in ((rd, True), (one, False)):
+        path = figures.draw(ret, tmp_path / "f.png", log=log)
+        assert os.path.getsize(path) > 5_000
+    with pytest.raises(ml.errors.ParameterError, match="views"):
+        figures.draw(rd, tmp_path / "g.png", views=[5])

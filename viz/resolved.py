@@ -1,0 +1,65 @@
+"""Figures of resolved returns (:class:`meshladar.resolved.Returns`): a few views' profiles
+(one coordinate) or images (two: angle–angle, range–Doppler), with labelled axes and units."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from . import style
+
+__all__ = ["draw"]
+
+_LABELS = {"range": "range r = -p.w", "cross_range": "cross-range p.u",
+           "elevation": "elevation p.v", "doppler": "Doppler f_D"}
+
+
+@style.styled
+def draw(returns, path, *, views=None, log=False, dpi=150):
+    """Write a PNG of up to four views of ``returns`` to ``path``; ``log`` shows
+    log10 of the returns (glints next to diffuse parts). Returns the path."""
+    from meshladar.errors import ParameterError
+    from meshladar.resolved import Returns
+
+    if not isinstance(returns, Returns):
+        raise ParameterError(f"returns must be a meshladar.resolved.Returns; got "
+                             f"{type(returns).__name__}")
+    n_views = returns.values.shape[0]
+    if views is None:
+        views = np.unique(np.linspace(0, n_views - 1, min(4, n_views)).round().astype(int))
+    views = [int(v) for v in views]
+    if not views or min(views) < 0 or max(views) >= n_views:
+        raise ParameterError(f"views must index the {n_views} views; got {views}")
+    plt = style.use()
+    fig, axes = plt.subplots(1, len(views), figsize=(3.4 * len(views), 3.4), squeeze=False)
+    units = returns.info.get("units", "")
+    labels = [f"{_LABELS[a]} ({u})" for a, u in zip(returns.axes, returns.units)]
+    for ax, v in zip(axes[0], views):
+        vals = returns.values[v]
+        if log:
+            pos = vals[vals > 0]
+            floor = pos.min() if pos.size else 1.0
+            vals = np.log10(np.maximum(vals, floor))
+        w = returns.view_vectors[v]
+        title = f"view {v}: w = ({w[0]:.2f}, {w[1]:.2f}, {w[2]:.2f})"
+        if vals.ndim == 1:
+            e = returns.edges[0]
+            ax.stairs(vals, e, color="k")
+            ax.set_xlabel(labels[0])
+            ax.set_ylabel(("log10 " if log else "") + f"return per bin ({units})")
+        else:
+            e0, e1 = returns.edges
+            h = ax.pcolormesh(e1, e0, vals, cmap="magma", shading="flat")
+            ax.set_xlabel(labels[1])
+            ax.set_ylabel(labels[0])
+            fig.colorbar(h, ax=ax, fraction=0.046, pad=0.04,
+                         label=("log10 " if log else "") + f"return per cell ({units})")
+        ax.set_title(title, fontsize=8)
+    fig.tight_layout()
+    path = os.fspath(path)
+    tmp = path + ".tmp.png"
+    fig.savefig(tmp, dpi=dpi)
+    os.replace(tmp, path)
+    plt.close(fig)
+    return path
