@@ -395,8 +395,10 @@ def receive(sino: Sinogram, *, sample_rate, pulse=None, response=None, standoff=
             "standoff_m": D, "sample_rate_hz": fs, "oversample": m,
             "pulse": None if pulse is None else pulse.describe(),
             "response": None if response is None else response.describe(),
-            "time_origin": "two-way time t = 2 (r + standoff) / c, s",
-            "source_model": sino.model}
+            "time_origin": "two-way time t = 2 (r + standoff) / c, s (less 2 aim.w / c with "
+                           "a sensor aimed off the origin)",
+            "source_model": sino.model, "sensor": sino.info.get("sensor"),
+            "source_info": {k: v for k, v in sino.info.items() if k != "sensor"}}
     return Waveforms(samples, time_edges=(first + np.arange(last - first + 1)) / fs,
                      angles_deg=sino.angles_deg, view_vectors=sino.view_vectors,
                      standoff=D, info=info)

@@ -1,7 +1,8 @@
-"""Returns resolved in any linear coordinate of the hit, one or two at a time: range (the
+"""Returns resolved in any linear coordinate of the hit, one to three at a time: range (the
 sinogram's), cross-range and elevation (an angle–angle image per view), and Doppler for a
 moving target (a turntable's rotation and/or a translation); range–Doppler images, range-gated
-image stacks. Mesh model; the same streaming, executors, run folders and noise as range.
+image stacks (cross-range, elevation and range: a 3-D point return per view). Mesh model;
+the same streaming, executors, run folders and noise as range.
 
 Coordinates of a hit p (world coordinates, metres) in view w, with the view's transverse
 axes u = z × w / |z × w| (x when w is along ±z) and v = w × u:
@@ -84,9 +85,9 @@ _UNITS = {"range": "m", "cross_range": "m", "elevation": "m", "doppler": "Hz"}
 
 @dataclass(frozen=True, eq=False)
 class Returns:
-    """Returns of many views binned by one or two coordinates.
+    """Returns of many views binned by one to three coordinates.
 
-    ``values`` (n_views, n_0[, n_1]): per cell, the sum of the weights of the rays whose
+    ``values`` (n_views, n_0[, n_1[, n_2]]): per cell, the sum of the weights of the rays whose
     first hit lies in it (bin integrals, as a sinogram's); ``axes`` the coordinates' names
     (:data:`COORDINATES`), ``edges`` their bin edges (in ``units``); ``angles_deg`` and
     ``view_vectors`` the views; ``info`` the run's parameters (radiometry, units, motion).
@@ -135,11 +136,10 @@ class Returns:
         return self.values.reshape(self.values.shape[0], -1).sum(axis=1)
 
     def marginal(self, axis) -> np.ndarray:
-        """(n_views, n) the returns binned by ``axis`` alone (summed over the other)."""
+        """(n_views, n) the returns binned by ``axis`` alone (summed over the others)."""
         k = self._index(axis)
-        if len(self.axes) == 1:
-            return self.values
-        return self.values.sum(axis=2 - k)
+        others = tuple(1 + j for j in range(len(self.axes)) if j != k)
+        return self.values.sum(axis=others) if others else self.values
 
     def sinogram(self):
         """The range marginal as a :class:`~meshladar.sinogram.Sinogram`."""
@@ -165,8 +165,11 @@ class Returns:
         if self.info.get("units") != "photoelectrons":
             raise ParameterError(f"noise counts photoelectrons; these returns are in "
                                  f"{self.info.get('units')!r}: convert with scaled(factor)")
-        return draw_noise(noise, self.values, check_real("dwell", dwell, low=0.0),
-                          check_count("n", n), seed)
+        dwell = check_real("dwell", dwell, low=0.0)
+        if dwell == 0 and (noise.background_rate > 0 or noise.dark_rate > 0):
+            raise ParameterError("background and dark counts accumulate over each cell's "
+                                 "dwell time: give dwell (s), e.g. its range gate")
+        return draw_noise(noise, self.values, dwell, check_count("n", n), seed)
 
     def scaled(self, factor, units="photoelectrons") -> "Returns":
         f = check_real("factor", factor, low=0.0, low_open=True)
@@ -183,9 +186,9 @@ class Returns:
 def _check_axes(axes, motion):
     if isinstance(axes, dict):
         axes = list(axes.items())
-    if not isinstance(axes, (list, tuple)) or not 1 <= len(axes) <= 2:
-        raise ParameterError(f"axes must give one or two (name, bin_edges) pairs (or a dict "
-                             f"of them); got {axes!r}")
+    if not isinstance(axes, (list, tuple)) or not 1 <= len(axes) <= 3:
+        raise ParameterError(f"axes must give one to three (name, bin_edges) pairs (or a "
+                             f"dict of them); got {axes!r}")
     names, edges = [], []
     for item in axes:
         if not isinstance(item, (list, tuple)) or len(item) != 2:
@@ -210,11 +213,11 @@ def _check_axes(axes, motion):
     return tuple(names), tuple(edges)
 
 
-def resolve(scene, ladar, axes, *, motion=None, radiometry="paper", mode=None, normals="flat",
-            back_faces="two-sided", z0=None, ray_spacing=None, rays_per_bin=None,
-            sampling=None, seed=None, jobs=None, executor=None, progress=False, run_dir=None,
-            backend="auto") -> Returns:
-    """Returns of a mesh scene binned by one or two coordinates of each hit.
+def resolve(scene, ladar, axes, *, motion=None, radiometry="paper", sensor=None, mode=None,
+            normals="flat", back_faces="two-sided", z0=None, ray_spacing=None,
+            rays_per_bin=None, sampling=None, seed=None, jobs=None, executor=None,
+            progress=False, run_dir=None, backend="auto") -> Returns:
+    """Returns of a mesh scene binned by one to three coordinates of each hit.
 
     Parameters
     ----------
@@ -222,13 +225,17 @@ def resolve(scene, ladar, axes, *, motion=None, radiometry="paper", mode=None, n
         A mesh scene (an analytic one is tessellated, 1024 segments per shape) and the
         views; the ladar's range bins set the default ray density only.
     axes : sequence of (name, bin_edges), or a dict
-        One or two of :data:`COORDINATES` with their bin edges (m, or Hz for Doppler):
+        One to three of :data:`COORDINATES` with their bin edges (m, or Hz for Doppler):
         ``[("cross_range", e), ("elevation", e)]`` is an angle–angle image per view,
-        ``[("range", e), ("doppler", f)]`` a range–Doppler image.
+        ``[("range", e), ("doppler", f)]`` a range–Doppler image, and
+        ``[("cross_range", e), ("elevation", e), ("range", r)]`` a range-gated stack.
     motion : Motion, optional
         The target's rotation and translation (needed for ``"doppler"``).
     radiometry : {"paper", "power"}
         As :func:`meshladar.simulate`.
+    sensor : meshladar.sensor.Sensor, optional
+        As the mesh model's: a finite standoff (perspective rays, ranges R − D − aim·w),
+        a beam, extinction and the link budget (photoelectrons per cell).
     mode, normals, back_faces, z0, ray_spacing, rays_per_bin, sampling, seed, backend
         As :func:`meshladar.trace` (monostatic, point binning).
     jobs, executor, progress, run_dir
@@ -237,7 +244,8 @@ def resolve(scene, ladar, axes, *, motion=None, radiometry="paper", mode=None, n
     Returns
     -------
     Returns
-        ``values`` (n_views, n_0[, n_1]) with ``axes``, ``edges``, the views and ``info``.
+        ``values`` (n_views, n_0[, n_1[, n_2]]) with ``axes``, ``edges``, the views and
+        ``info``.
     """
     from .raytrace.embree import resolve_backend
     from .raytrace.grid import (MAX_RAYS_PER_VIEW, _estimate_rays, _largest_grid, _sampling,
@@ -247,11 +255,17 @@ def resolve(scene, ladar, axes, *, motion=None, radiometry="paper", mode=None, n
     from .sensor import check_radiometry
     from .stream import joined, run_chunks
 
+    from .raytrace.model import _check_sensor
+
     names, edges = _check_axes(axes, motion)
     power = check_radiometry(radiometry)
     if isinstance(scene, Scene) and not scene.is_mesh:
         scene = scene.tessellate(1024)
     mode, geo, z0 = _options(scene, ladar, mode, normals, back_faces, z0)
+    traced_with = _check_sensor(sensor, None, False, mode)
+    if sensor is not None and (sensor.extinction > 0 or sensor.counts_photons) and not power:
+        raise ParameterError("a sensor's extinction and photoelectrons are received power: "
+                             "use radiometry='power'")
     backend = resolve_backend(backend)
     sampling, seed = _sampling(mode, sampling, seed)
     spacing = _spacing(ladar, mode, ray_spacing, rays_per_bin, geo.radius)
@@ -270,12 +284,13 @@ def resolve(scene, ladar, axes, *, motion=None, radiometry="paper", mode=None, n
                "edges": [digest(e) for e in edges], "radiometry": radiometry,
                "motion": None if motion is None else motion.describe(),
                "view_vectors": digest(ladar.view_vectors), "mode": mode,
+               "sensor": None if sensor is None else sensor.describe(),
                "ray_spacing": spacing, "z0": z0, "back_faces": back_faces, "seed": seed}
     results = run_chunks(
         _resolve_job, geo, ladar.n_views, chunk_size=8,
         args=(np.asarray(ladar.view_vectors, np.float64), mode, spacing,
               z0 - float(geo.center[2]), back_faces, seed, tuple(scene.materials), area,
-              power, names, edges, motion, backend),
+              power, names, edges, motion, backend, traced_with),
         jobs=jobs, executor=executor, progress=progress, unit="views",
         work=_estimate_rays(geo, ladar, mode, spacing), run_dir=run_dir, job=job,
         arrays={"values": shape, "rays": ()}, threads=True)
@@ -284,15 +299,23 @@ def resolve(scene, ladar, axes, *, motion=None, radiometry="paper", mode=None, n
             "backend": backend, "units": ("length" if mode == "slice" else "area") + "/sr",
             "motion": None if motion is None else motion.describe(),
             "frame": "u = z x w / |z x w| (x for w along z), v = w x u"}
-    return Returns(joined(results, "values"), axes=names, edges=edges,
+    values = joined(results, "values")
+    if sensor is not None:
+        info["sensor"] = sensor.describe()
+        if sensor.counts_photons:
+            values = values * sensor.photoelectrons_per_unit()
+            info["units"] = "photoelectrons"
+    return Returns(values, axes=names, edges=edges,
                    angles_deg=ladar.angles_deg, view_vectors=ladar.view_vectors, info=info)
 
 
 def _resolve_job(geo, views, vectors, mode, spacing, z0_shifted, back_faces, seed, materials,
-                 area, power, names, edges, motion, backend):
+                 area, power, names, edges, motion, backend, sensor=None):
     """The stream's per-chunk job: each view's hits, weighed and binned by ``names``."""
     from .raytrace.embree import _embree_scene
     from .raytrace.grid import _frame
+    from .raytrace.model import _sensor_offset
+    from .raytrace.perspective import _trace_sensor_view
     from .raytrace.views import _trace_view
     from .weighing import _weights
 
@@ -303,19 +326,31 @@ def _resolve_job(geo, views, vectors, mode, spacing, z0_shifted, back_faces, see
     for j, i in enumerate(views):
         w = vectors[i]
         rng = None if seed is None else np.random.default_rng([seed, int(i)])
-        h = _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng,
-                        footprint=False, transverse=True)
+        if sensor is None:
+            h = _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng,
+                            footprint=False, transverse=True)
+            offset = -float(geo.center @ w)
+        else:
+            h = _trace_sensor_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng,
+                                   sensor)
+            offset = _sensor_offset(geo, w, sensor)
         rays[j] = h.rays
         wt = _weights(h.cos_theta, h.sin_theta, h.material, materials, area, power=power)
         if h.weight_factor is not None:
             wt = wt * h.weight_factor
+        if power and h.receive_factor is not None:
+            wt = wt * h.receive_factor
         u, v = _frame(w)
         s, t = h.transverse[:, 0], h.transverse[:, 1]
-        coords = {"range": h.range - float(geo.center @ w),
+        coords = {"range": h.range + offset,
                   "cross_range": s + float(geo.center @ u),
                   "elevation": t + float(geo.center @ v)}
         if "doppler" in names:
-            points = geo.center + s[:, None] * u + t[:, None] * v - h.range[:, None] * w
+            if sensor is None or sensor.standoff is None:
+                points = geo.center + s[:, None] * u + t[:, None] * v - h.range[:, None] * w
+            else:
+                # the hit point from its transverse coordinates and its true distance
+                points = _sensor_points(geo, w, u, v, s, t, h.range, sensor)
             coords["doppler"] = motion.doppler(points, w)
         flat = np.zeros(wt.size, np.int64)
         ok = wt != 0
@@ -326,3 +361,16 @@ def _resolve_job(geo, views, vectors, mode, spacing, z0_shifted, back_faces, see
         out[j] = np.bincount(flat[ok], weights=wt[ok],
                              minlength=int(np.prod(shape))).reshape(shape)
     return {"values": out, "rays": rays}
+
+
+def _sensor_points(geo, w, u, v, s, t, r, sensor):
+    """World hit points of a sensor view from their (u, v) coordinates s, t (shifted) and
+    ranges r = R − D − aim·w: p − c = s u + t v + a w with a fixed by |p − S| = R."""
+    aim = np.asarray(sensor.aim, np.float64)
+    S = aim - geo.center + sensor.standoff * w                    # the sensor, shifted
+    R = r + sensor.standoff + float(aim @ w)
+    q0 = s[:, None] * u + t[:, None] * v - S                       # p − S without its w part
+    b = q0 @ w
+    c = np.einsum("ij,ij->i", q0, q0) - R * R
+    a = -b - np.sqrt(np.maximum(b * b - c, 0.0))                   # the root toward the sensor
+    return geo.center + s[:, None] * u + t[:, None] * v + a[:, None] * w

@@ -165,7 +165,8 @@ class Sensor:
         The transmitted beam's pattern (default an unbounded flood).
     extinction : float
         Atmospheric extinction coefficient σ (1/m, ≥ 0): received power is multiplied by the
-        two-way transmission exp(−2σR).
+        two-way transmission exp(−2σR). Received power only: with ``radiometry="paper"``
+        (Eq. 8, no receiver) a non-zero extinction is an error.
     pulse_energy : float, optional
         Transmitted energy per pulse (J). With ``aperture_diameter`` and a finite standoff,
         received power is counted in photoelectrons per bin.

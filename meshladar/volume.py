@@ -29,7 +29,8 @@ import numpy as np
 from ._validate import check_count, check_real, finite_array, readonly_copy
 from .errors import ParameterError
 
-__all__ = ["Volume", "radon3d", "fbp_stack", "sphere_weights"]
+__all__ = ["Volume", "radon3d", "fbp_stack", "sphere_weights", "coverage_gap_deg",
+           "MAX_GAP_DEG"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -88,10 +89,29 @@ class Volume:
                 f"z=[{self.z[0]:.4g}, {self.z[-1]:.4g}], method={self.info.get('method')!r})")
 
 
+#: radon3d refuses view sets that leave a direction farther than this from every view (a
+#: cap unseen: the inversion formula needs the whole sphere of directions).
+MAX_GAP_DEG = 30.0
+
+
+def coverage_gap_deg(view_vectors) -> float:
+    """The largest angle (degrees) from any direction of the sphere to the nearest view
+    (estimated on 2e4 Fibonacci directions): small for views spread over the sphere, 90 for
+    a hemisphere or a plane of views."""
+    from scipy.spatial import cKDTree
+
+    from .mesh import fibonacci_sphere
+
+    w = np.asarray(view_vectors, np.float64)
+    chord, _ = cKDTree(w).query(fibonacci_sphere(20_000))
+    return float(np.degrees(2 * np.arcsin(min(1.0, chord.max() / 2))))
+
+
 def sphere_weights(view_vectors) -> np.ndarray:
-    """Quadrature weights over the sphere for arbitrary view directions: each view's share
-    of 4π by nearest direction (a spherical Voronoi cell estimated on 2e5 Fibonacci
-    points)."""
+    """Quadrature weights over the sphere for view directions covering it: each view's
+    share of 4π by nearest direction (a spherical Voronoi cell estimated on 2e5 Fibonacci
+    points). Views that leave part of the sphere unseen get its area too: right only for
+    sets that cover the sphere (:func:`coverage_gap_deg`)."""
     from scipy.spatial import cKDTree
 
     from .mesh import fibonacci_sphere
@@ -120,9 +140,9 @@ def radon3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None
     Parameters
     ----------
     sino : Sinogram
-        Range profiles with ``view_vectors`` spread over the sphere (or a hemisphere, then
-        with ``weights`` summing to 2π... the formula assumes the whole sphere) and uniform
-        bin widths.
+        Range profiles with ``view_vectors`` spread over the whole sphere (the inversion
+        formula integrates over all directions; a view set leaving a cap of more than
+        ``MAX_GAP_DEG`` unseen is refused) and uniform bin widths.
     size : int
         Voxels per side (default 128).
     extent : float, optional
@@ -131,7 +151,7 @@ def radon3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None
         The cube's centre.
     weights : (n_views,) array, optional
         Quadrature weight (solid angle) of each view; default 4π/n for n views, right for
-        Fibonacci directions (:func:`sphere_weights` for other sets).
+        Fibonacci directions (:func:`sphere_weights` for other sets covering the sphere).
     smooth : float
         Standard deviation (in bins) of a Gaussian applied to each profile before its
         second difference (default 0: none). The second difference amplifies sampling noise
@@ -154,6 +174,13 @@ def radon3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None
     if sino.n_bins < 3:
         raise ParameterError(f"radon3d needs at least 3 range bins; got {sino.n_bins}")
     dr = float(widths.mean())
+    gap = coverage_gap_deg(sino.view_vectors)
+    if gap > MAX_GAP_DEG:
+        raise ParameterError(
+            f"radon3d needs views over the whole sphere of directions; these leave a "
+            f"direction {gap:.0f} deg from every view (at most {MAX_GAP_DEG:g}): use views "
+            "such as meshladar.mesh.fibonacci_sphere(n) (views about the z axis: fbp, or "
+            "fbp_stack of elevation-resolved returns)")
     if extent is None:
         extent = float(max(abs(sino.bin_edges[0]), abs(sino.bin_edges[-1])))
     n, e, c, (x, y, z) = _grid(size, extent, center)
@@ -210,6 +237,9 @@ def fbp_stack(returns, *, size=256, extent=None, filter="ramp") -> Volume:
         vals = np.swapaxes(vals, 1, 2)                  # (views, elevation, range)
     el = returns.edges[returns.axes.index("elevation")]
     rng = returns.edges[returns.axes.index("range")]
+    if np.ptp(np.diff(el)) > 1e-9 * np.diff(el).mean():
+        raise ParameterError("fbp_stack needs evenly spaced elevation bins (the volume's z "
+                             "axis)")
     if extent is None:
         extent = float(max(abs(rng[0]), abs(rng[-1])))
     slices = []

@@ -238,6 +238,10 @@ def _sinogram(vals, ladar, edges, run, normals, footprint, rays, back, radiometr
     sensor = run.get("sensor")
     if sensor is not None:
         info["sensor"] = sensor.describe()
+        if sensor.extinction > 0 and radiometry != "power":
+            raise ParameterError(f"extinction ({sensor.extinction:g} per m) attenuates the "
+                                 "received power: use radiometry='power' (Eq. 8 has no "
+                                 "receiver; the paper convention ignores the atmosphere)")
         if sensor.counts_photons:
             if radiometry != "power":
                 raise ParameterError("a sensor with pulse_energy and aperture_diameter counts "

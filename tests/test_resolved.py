@@ -67,6 +67,42 @@ def test_doppler_of_a_translation_is_one_line():
     assert ret.values[0, 0] == 0 and ret.values[0, 2] == 0 and ret.values[0, 1] > 0
 
 
+def test_turntable_doppler_sign():
+    """A small sphere at +y on a turntable turning counter-clockwise (Ω = +ω z), seen from
+    +x: Ω × p = −ω y0 x, away from the ladar, so every return has f_D ≈ −2 ω y0 / λ < 0."""
+    om, y0, lam = 0.5, 2.0, 1e-6
+    ball = trimesh.creation.icosphere(subdivisions=3, radius=0.05)
+    ball.apply_translation((0.0, y0, 0.0))
+    scene = ml.Scene.from_mesh(ball, material=lambertian(0.5))
+    ladar = ml.Ladar(angles_deg=[0.0], bin_edges=np.linspace(-0.1, 0.1, 9))
+    f0 = -2 * om * y0 / lam
+    fe = np.linspace(-1.5 * abs(f0), 1.5 * abs(f0), 31)
+    ret = resolve(scene, ladar, [("doppler", fe)], motion=Motion(omega=(0.0, 0.0, om),
+                                                                 wavelength=lam))
+    prof = ret.values[0]
+    centre = np.sum(prof * ret.centers("doppler")) / prof.sum()
+    # the ball spans ±0.05 in x... its points' Doppler is −2ω(y)/λ, y within 0.05 of y0
+    assert abs(centre - f0) < 0.05 * abs(f0)
+    assert prof[ret.centers("doppler") > 0].sum() == 0
+
+
+def test_range_gated_image_stack():
+    """Three coordinates at once: cross-range × elevation × range; its marginals are the
+    two-coordinate images and the range profile."""
+    scene = ml.Scene.from_mesh(trimesh.creation.icosphere(subdivisions=3),
+                               material=ALUMINUM)
+    ladar = ml.Ladar.covering(scene, n_bins=8, angles_deg=[0.0, 50.0])
+    e = np.linspace(-1.1, 1.1, 12)
+    stack = resolve(scene, ladar, [("cross_range", e), ("elevation", e),
+                                   ("range", ladar.bin_edges)])
+    assert stack.values.shape == (2, 11, 11, 8)
+    image = resolve(scene, ladar, [("cross_range", e), ("elevation", e)])
+    np.testing.assert_allclose(stack.values.sum(axis=3), image.values, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(stack.marginal("range"),
+                               resolve(scene, ladar, [("range", ladar.bin_edges)]).values,
+                               rtol=1e-12, atol=1e-15)
+
+
 def test_plate_angle_angle_image_is_its_projected_shape():
     """A Lambertian square plate turned 30° about z, seen from x: its image in (cross-range,
     elevation) is the projected rectangle (cos 30° × 1 by 1) times F·(cell area), exactly 0
@@ -163,6 +199,8 @@ def test_resolved_noise_realisations():
     ret = resolve(scene, ladar, [("cross_range", np.linspace(-1, 1, 9))]).scaled(1e3)
     from meshladar.receiver import Noise
 
+    with pytest.raises(ml.errors.ParameterError, match="dwell"):
+        ret.realise(Noise(background_rate=1e6), 2, seed=1)
     draws = ret.realise(Noise(speckle_cells=2.0), 4000, seed=1)
     assert draws.shape == (4000,) + ret.values.shape
     # the mean of the draws converges to the image (Poisson + speckle, 4000 draws)
@@ -176,7 +214,9 @@ def test_resolved_noise_realisations():
     ([("doppler", [0.0, 1.0])], None, "needs motion"),
     ([("range", [0.0, 1.0]), ("range", [0.0, 1.0])], None, "different coordinates"),
     ([("range", [1.0, 0.0])], None, "strictly increasing"),
-    ([], None, "one or two"),
+    ([], None, "one to three"),
+    ([("range", [0, 1]), ("doppler", [0, 1]), ("elevation", [0, 1]),
+      ("cross_range", [0, 1])], Motion(), "one to three"),
     ([("range", [0.0, 1.0])], "spin", "motion must be"),
 ])
 def test_resolve_checks_its_axes(axes, motion, match):
@@ -203,3 +243,32 @@ def test_returns_figures(tmp_path):
         assert os.path.getsize(path) > 5_000
     with pytest.raises(ml.errors.ParameterError, match="views"):
         figures.draw(rd, tmp_path / "g.png", views=[5])
+
+
+def test_resolved_returns_with_a_sensor():
+    """A sensor at a standoff: the range marginal is simulate's with the same sensor; the
+    link budget's photoelectrons carry over; a far sensor's range–Doppler image approaches
+    the parallel-ray one (first order in size / standoff)."""
+    scene = ml.Scene.from_mesh(trimesh.creation.icosphere(subdivisions=4),
+                               material=lambertian(0.5))
+    ladar = ml.Ladar.covering(scene, n_bins=24, angles_deg=[0.0, 60.0])
+    motion = Motion(omega=(0.0, 0.0, 0.2), velocity=(0.5, 0.0, 0.0))
+    fe = np.linspace(-1.5e6, 1.5e6, 25)
+    axes = [("range", ladar.bin_edges), ("doppler", fe)]
+    sensor = ml.sensor.Sensor(standoff=50.0, pulse_energy=1e-3, aperture_diameter=0.1,
+                              beam=ml.sensor.FloodBeam(radius=2.0))
+    ret = resolve(scene, ladar, axes, motion=motion, radiometry="power", sensor=sensor)
+    sino = ml.simulate(scene, ladar, model="mesh", radiometry="power", sensor=sensor,
+                       backend="embreex")
+    np.testing.assert_allclose(ret.marginal("range"), sino.values, rtol=1e-9,
+                               atol=1e-12 * sino.values.max())
+    assert ret.info["units"] == "photoelectrons"
+    with pytest.raises(ml.errors.ParameterError, match="radiometry='power'"):
+        resolve(scene, ladar, axes, motion=motion, sensor=sensor)
+    errors = []
+    ref = resolve(scene, ladar, axes, motion=motion, radiometry="power").values
+    for D in (200.0, 800.0):
+        far = resolve(scene, ladar, axes, motion=motion, radiometry="power",
+                      sensor=ml.sensor.Sensor(standoff=D)).values
+        errors.append(np.linalg.norm(far - ref) / np.linalg.norm(ref))
+    assert errors[1] < 0.5 * errors[0] and errors[1] < 0.02, errors

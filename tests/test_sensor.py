@@ -244,10 +244,12 @@ def test_standoff_converges_to_the_orthographic_ladar_at_first_order():
         assert np.all((ratios > 1.7) & (ratios < 2.4)), (radiometry, errors)
 
 
-def _square_plate(half, albedo):
+def _square_plate(half, albedo, y0=0.0, z0=0.0):
+    """A square plate in the plane x = 0 facing +x, centred on (0, y0, z0)."""
     trimesh = pytest.importorskip("trimesh")
-    box = trimesh.Trimesh([[0, -half, -half], [0, half, -half], [0, half, half],
-                           [0, -half, half]], [[0, 1, 2], [0, 2, 3]], process=False)
+    box = trimesh.Trimesh([[0, y0 - half, z0 - half], [0, y0 + half, z0 - half],
+                           [0, y0 + half, z0 + half], [0, y0 - half, z0 + half]],
+                          [[0, 1, 2], [0, 2, 3]], process=False)
     return ml.Scene.from_mesh(box, material=lambertian(albedo))
 
 
@@ -257,13 +259,16 @@ SPOT_RTOL = 1e-3
 
 
 def test_gaussian_beam_at_infinity_integrates_the_spot():
-    """A collimated Gaussian spot of waist w, offset (du, dv), on a large square plate facing
-    the ladar: Eq. 8 gives (ρd/π) ∫∫ exp(−2ρ²/w²) dA over the plate, a product of erfs."""
+    """A collimated Gaussian spot of waist w, offset (du, dv), on a square plate facing the
+    ladar and off its axis: Eq. 8 gives (ρd/π) ∫∫ exp(−2ρ²/w²) dA over the plate, a
+    product of erf differences. The plate's corner sits near the spot, so a flipped sign
+    or swapped axes of the offset change the total."""
     from scipy.special import erf
 
-    half, w0, rho = 1.0, 0.3, 0.5
+    half, w0, rho = 0.5, 0.3, 0.5
     off = (0.2, -0.35)
-    scene = _square_plate(half, rho)
+    y0, z0 = 0.6, -0.7                 # the plate spans y in [0.1, 1.1], z in [-1.2, -0.2]
+    scene = _square_plate(half, rho, y0, z0)
     ladar = ml.Ladar(angles_deg=[0.0], bin_edges=[-0.1, 0.1])
     beam = ml.sensor.GaussianBeam(waist=w0, offset=off)
     sino = ml.simulate(scene, ladar, model="mesh", sensor=ml.sensor.Sensor(beam=beam),
@@ -271,11 +276,15 @@ def test_gaussian_beam_at_infinity_integrates_the_spot():
     # the view's transverse axes at φ = 0: u = z × w = (0, 1, 0), v = w × u = (0, 0, 1)
     k = math.sqrt(2) / w0
 
-    def line(c):
-        return w0 * math.sqrt(math.pi / 2) / 2 * (erf(k * (half - c)) + erf(k * (half + c)))
+    def line(centre, o):
+        return w0 * math.sqrt(math.pi / 2) / 2 * (erf(k * (centre + half - o))
+                                                 - erf(k * (centre - half - o)))
 
-    exact = rho / math.pi * line(off[0]) * line(off[1])
+    exact = rho / math.pi * line(y0, off[0]) * line(z0, off[1])
     np.testing.assert_allclose(sino.total(), exact, rtol=SPOT_RTOL)
+    for wrong in ((-off[0], off[1]), (off[1], off[0])):
+        assert abs(rho / math.pi * line(y0, wrong[0]) * line(z0, wrong[1]) - exact) \
+            > 10 * SPOT_RTOL * exact
 
 
 def test_gaussian_beam_at_standoff_matches_radial_quadrature():
@@ -323,6 +332,9 @@ def test_photoelectrons_of_a_small_spot_on_a_lambertian_plate():
     assert sino.info["units"] == "photoelectrons"
     with pytest.raises(ml.errors.ParameterError, match="radiometry='power'"):
         ml.simulate(scene, ladar, model="mesh", sensor=sensor, ray_spacing=0.001)
+    hazy = ml.sensor.Sensor(standoff=D, extinction=sigma)
+    with pytest.raises(ml.errors.ParameterError, match="extinction .* radiometry='power'"):
+        ml.simulate(scene, ladar, model="mesh", sensor=hazy, ray_spacing=0.001)
 
 
 @pytest.mark.parametrize("sensor", [
@@ -341,7 +353,8 @@ def test_sensor_compiled_loop_equals_trace_then_weigh(sensor, normals, back_face
                                material=ALUMINUM)
     ladar = ml.Ladar.covering(scene, n_bins=64, angles_deg=[0.0, 40.0])
     hits = ml.trace(scene, ladar, sensor=sensor, normals=normals, back_faces=back_faces)
-    for radiometry in ("paper", "power"):
+    # extinction attenuates received power only (with Eq. 8 it is an error)
+    for radiometry in ("power",) if sensor.extinction else ("paper", "power"):
         sino = ml.simulate(scene, ladar, model="mesh", radiometry=radiometry, sensor=sensor,
                            normals=normals, back_faces=back_faces)
         ref = ml.weigh(hits, radiometry=radiometry)

@@ -89,6 +89,11 @@ def test_fbp_stack_of_a_cylinder_matches_the_2d_disk():
 
 
 def test_sphere_weights_share_the_sphere():
+    from meshladar.volume import coverage_gap_deg
+
+    # the largest unseen angle: ~10.6° for 200 Fibonacci views, 90° for a hemisphere
+    assert coverage_gap_deg(fibonacci_sphere(200)) < 12.0
+    assert abs(coverage_gap_deg(fibonacci_sphere(400, hemisphere=True)) - 90.0) < 1.0
     w = sphere_weights(fibonacci_sphere(300))
     np.testing.assert_allclose(w.sum(), 4 * math.pi, rtol=1e-12)
     np.testing.assert_allclose(w, 4 * math.pi / 300, rtol=0.1)
@@ -102,7 +107,7 @@ def test_sphere_weights_share_the_sphere():
 
 
 def test_volume_checks():
-    sino = _ball_sinogram(0.5, n_views=20, n_bins=16)
+    sino = _ball_sinogram(0.5, n_views=60, n_bins=16)
     with pytest.raises(ml.errors.ParameterError, match="weights"):
         radon3d(sino, size=8, weights=np.ones(3))
     uneven = ml.Sinogram(sino.values[:, :3], angles_deg=sino.angles_deg,
@@ -113,6 +118,16 @@ def test_volume_checks():
         radon3d(sino, size=0)
     with pytest.raises(ml.errors.ParameterError, match="values"):
         Volume(np.zeros((2, 2)), x=[0, 1], y=[0, 1], z=[0])
+    # views that do not cover the sphere: a hemisphere, a plane of views (a 2-D sinogram)
+    hemi = fibonacci_sphere(300, hemisphere=True)
+    half = ml.Sinogram(np.ones((300, 16)), angles_deg=np.zeros(300),
+                       bin_edges=np.linspace(-1, 1, 17), view_vectors=hemi)
+    with pytest.raises(ml.errors.ParameterError, match="whole sphere"):
+        radon3d(half, size=8)
+    flat = ml.Sinogram(np.ones((36, 16)), angles_deg=np.arange(0.0, 360.0, 10.0),
+                       bin_edges=np.linspace(-1, 1, 17))
+    with pytest.raises(ml.errors.ParameterError, match="whole sphere"):
+        radon3d(flat, size=8)
 
 
 #: a part of curved surfaces, 600 Fibonacci views, 64³: the iso-surface lies within this

@@ -25,6 +25,9 @@ def draw(returns, path, *, views=None, log=False, dpi=150):
     if not isinstance(returns, Returns):
         raise ParameterError(f"returns must be a meshladar.resolved.Returns; got "
                              f"{type(returns).__name__}")
+    if len(returns.axes) > 2:
+        raise ParameterError(f"draw shows one or two coordinates; these returns have "
+                             f"{returns.axes}: draw a marginal (a Returns of fewer axes)")
     n_views = returns.values.shape[0]
     if views is None:
         views = np.unique(np.linspace(0, n_views - 1, min(4, n_views)).round().astype(int))

@@ -188,8 +188,9 @@ def _trace_sensor_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng
         factor = factor * cos3 * (R / D) ** 2 * beam.relative(rho, z, D)
         receive = (D / R) ** 2 * np.exp(-2.0 * sensor.extinction * R)
         rng_rel = R - D - float((aim + geo.center) @ w)
+    across = np.stack([_dot(p, u), _dot(p, v)], -1)       # shifted, as _trace_view's
     return ViewHits(rng_rel, cos_t, sin_t, geo.material[prim], np.zeros((prim.size, 4)),
-                    n_rays, int(back.sum()), None, factor, None, receive)
+                    n_rays, int(back.sum()), None, factor, None, receive, across)
 
 
 def _rowdot(a, b):
