@@ -330,7 +330,13 @@ def _cmd_reconstruct(args) -> int:
     if args.clip is not None:
         sino = clip_radiance(sino, threshold=args.clip)
     extent = args.extent or float(max(abs(sino.bin_edges[0]), abs(sino.bin_edges[-1])))
-    image = fbp(sino, size=args.size, extent=extent, filter=args.filter)
+    if not sino.planar:
+        # a margin, so that a target filling the bins does not sit on the cube's faces
+        return _reconstruct_3d(args, sino, args.extent or 1.15 * extent)
+    if args.smooth is not None:
+        raise ParameterError("--smooth applies to 3-D views (radon3d); this sinogram's views "
+                             "are about the z axis (use --filter)")
+    image = fbp(sino, size=args.size or 512, extent=extent, filter=args.filter or "ramp")
     from meshladar.viz import style
 
     @style.styled
@@ -339,7 +345,7 @@ def _cmd_reconstruct(args) -> int:
         h = ax.imshow(image.values, extent=(-extent, extent, -extent, extent), origin="lower")
         ax.set_xlabel("x [scene units]")
         ax.set_ylabel("y [scene units]")
-        ax.set_title(f"FBP of {os.path.basename(args.result)} ({args.filter})")
+        ax.set_title(f"FBP of {os.path.basename(args.result)} ({args.filter or 'ramp'})")
         fig.colorbar(h, ax=ax, label="reconstruction [radiance / area]")
         fmt = os.path.splitext(args.output)[1].lower().lstrip(".")
         results.write_atomic(args.output, lambda fh: fig.savefig(fh, format=fmt))
@@ -349,7 +355,8 @@ def _cmd_reconstruct(args) -> int:
                    {"kind": "image", "extent": extent, "info": image.info,
                     "source": os.path.basename(args.result)})
     if not args.quiet:
-        print(f"wrote {args.output} and {data} ({args.size}x{args.size}, extent {extent:g})")
+        size = args.size or 512
+        print(f"wrote {args.output} and {data} ({size}x{size}, extent {extent:g})")
     return 0
 
 
@@ -414,6 +421,56 @@ def _cmd_receive(args) -> int:
               f"[{waves.time_edges[0]:.6g}, {waves.time_edges[-1]:.6g}] s, units "
               f"{waves.info.get('units')}{extra}; wrote {args.output}"
               + ("" if args.plot is None else f" and {args.plot}"))
+    return 0
+
+
+def _reconstruct_3d(args, sino, extent) -> int:
+    """reconstruct for views over the sphere: the 3-D Radon inversion (meshladar.volume),
+    three central slices as the figure, the volume in OUTPUT.volume.npz."""
+    import os
+
+    from . import results
+    from .errors import ParameterError
+    from .volume import radon3d
+
+    if args.filter is not None:
+        raise ParameterError("--filter applies to FBP of views about the z axis; 3-D views "
+                             "are inverted with a second difference (use --smooth BINS)")
+    size = args.size or 128
+    vol = radon3d(sino, size=size, extent=extent, smooth=args.smooth or 0.0)
+    data = os.path.splitext(args.output)[0] + ".volume.npz"
+    if os.path.abspath(data) == os.path.abspath(args.result):
+        raise ParameterError(f"-o {args.output!r} would write the volume to the input "
+                             f"{data!r}; choose another output name")
+    from meshladar.viz import style
+
+    @style.styled
+    def draw():
+        fig, axes = style.use().subplots(1, 3, figsize=(12.5, 4.0))
+        fig.subplots_adjust(wspace=0.4, left=0.06, right=0.9)
+        k = size // 2
+        cuts = ((vol.values[k], vol.x, vol.y, "z = 0: x", "y"),
+                (vol.values[:, k, :], vol.x, vol.z, "y = 0: x", "z"),
+                (vol.values[:, :, k], vol.y, vol.z, "x = 0: y", "z"))
+        lim = float(np.percentile(np.abs(vol.values), 99.9)) or 1.0
+        for ax, (img, h, v, xl, yl) in zip(axes, cuts):
+            im = ax.imshow(img, extent=(h[0], h[-1], v[0], v[-1]), origin="lower",
+                           cmap="RdBu_r", vmin=-lim, vmax=lim)
+            ax.set_xlabel(f"{xl} [scene units]")
+            ax.set_ylabel(f"{yl} [scene units]")
+        fig.colorbar(im, ax=axes, label="reconstruction [return / volume]", fraction=0.02)
+        fig.suptitle(f"3-D Radon inversion of {os.path.basename(args.result)} "
+                     f"({sino.n_views} views, {size}^3)")
+        fmt = os.path.splitext(args.output)[1].lower().lstrip(".")
+        results.write_atomic(args.output, lambda fh: fig.savefig(fh, format=fmt))
+
+    draw()
+    results.save_result(data, {"values": vol.values, "x": vol.x, "y": vol.y, "z": vol.z},
+                        {"kind": "volume", "info": vol.info,
+                         "source": os.path.basename(args.result)})
+    if not args.quiet:
+        print(f"wrote {args.output} and {data} ({size}^3, extent {extent:g}, "
+              f"{sino.n_views} views)")
     return 0
 
 
@@ -771,12 +828,16 @@ def _parser() -> argparse.ArgumentParser:
     rec.add_argument("-o", "--output", required=True,
                      help="figure file: .png, .pdf, .svg, .jpg or .tif (the image's values go "
                           "to OUTPUT.image.npz beside it)")
-    rec.add_argument("--size", type=_positive_int, default=512,
-                     help="image size in pixels (default: %(default)s)")
+    rec.add_argument("--size", type=_positive_int, default=None,
+                     help="image size in pixels, or voxels per side for 3-D views (default: "
+                          "512, 128 in 3-D)")
+    rec.add_argument("--smooth", type=_nonnegative_float, default=None, metavar="BINS",
+                     help="3-D views: Gaussian smoothing of each profile before the inversion "
+                          "(default: 0)")
     rec.add_argument("--extent", type=_positive_float, default=None,
                      help="half-width of the image (default: the bins' reach)")
-    rec.add_argument("--filter", choices=FILTERS, default="ramp",
-                     help="FBP filter (default: %(default)s)")
+    rec.add_argument("--filter", choices=FILTERS, default=None,
+                     help="FBP filter (default: ramp)")
     rec.add_argument("--log", action="store_true",
                      help="log of the radiance (Fig. 11a) (default: off)")
     rec.add_argument("--clip", type=_unit_fraction, default=None,
