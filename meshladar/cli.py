@@ -383,8 +383,17 @@ def _cmd_receive(args) -> int:
         warnings.warn(f"{args.result} holds {sino.info.get('radiometry', 'paper')!r} "
                       "radiometry (Eq. 8), not the power a receiver collects: simulate with "
                       "--radiometry power for a receiver's waveform", MeshladarWarning)
-    waves = receive(sino, sample_rate=args.sample_rate,
-                    pulse=None if args.pulse_fwhm is None else GaussianPulse(args.pulse_fwhm),
+    if args.pulse_fwhm is not None and args.pulse_samples is not None:
+        raise ParameterError("--pulse-fwhm and --pulse-samples both give the pulse; give one")
+    if (args.pulse_samples is None) != (args.pulse_interval is None):
+        raise ParameterError("--pulse-samples needs --pulse-interval (s between samples), "
+                             "and the other way round")
+    pulse = None if args.pulse_fwhm is None else GaussianPulse(args.pulse_fwhm)
+    if args.pulse_samples is not None:
+        from .receiver import SampledPulse
+
+        pulse = SampledPulse(_read_samples(args.pulse_samples), args.pulse_interval)
+    waves = receive(sino, sample_rate=args.sample_rate, pulse=pulse,
                     response=None if args.response_fwhm is None
                     else GaussianPulse(args.response_fwhm),
                     standoff=args.standoff, oversample=args.oversample)
@@ -472,6 +481,22 @@ def _reconstruct_3d(args, sino, extent) -> int:
         print(f"wrote {args.output} and {data} ({size}^3, extent {extent:g}, "
               f"{sino.n_views} views)")
     return 0
+
+
+def _read_samples(path):
+    """A pulse's samples from a text file: numbers separated by commas, spaces or newlines
+    (# starts a comment)."""
+    from .errors import ParameterError
+
+    try:
+        with open(path, encoding="utf-8") as fh:
+            text = " ".join(line.split("#")[0] for line in fh)
+        values = [float(x) for x in text.replace(",", " ").split()]
+    except UnicodeDecodeError:
+        raise ParameterError(f"--pulse-samples {path!r}: not a text file of numbers") from None
+    except ValueError as exc:
+        raise ParameterError(f"--pulse-samples {path!r}: {exc}") from None
+    return values
 
 
 def _cmd_view(args) -> int:
@@ -862,6 +887,11 @@ def _parser() -> argparse.ArgumentParser:
     rc.add_argument("--pulse-fwhm", type=_positive_float, default=None, metavar="S",
                     help="Gaussian transmitted pulse, full width at half maximum (default: "
                          "a Dirac pulse)")
+    rc.add_argument("--pulse-samples", default=None, metavar="FILE",
+                    help="the pulse's own shape: a text file of power samples (commas, spaces "
+                         "or newlines), with --pulse-interval (default: none)")
+    rc.add_argument("--pulse-interval", type=_positive_float, default=None, metavar="S",
+                    help="seconds between --pulse-samples (default: none)")
     rc.add_argument("--response-fwhm", type=_positive_float, default=None, metavar="S",
                     help="Gaussian receiver impulse response (default: ideal)")
     rc.add_argument("--standoff", type=_nonnegative_float, default=None, metavar="M",

@@ -613,3 +613,29 @@ def test_detection_probability_matches_the_poisson_tail():
     assert abs(got["detection"][0] - pd) < 5 * math.sqrt(pd * (1 - pd) / n)
     assert abs(got["false_alarm"] - pfa) < 5 * math.sqrt(pfa * (1 - pfa) / n) + 1 / n
     assert got == waves.detection_probability(noise, k, n, seed=5)      # seeded
+
+
+def test_cli_receive_with_the_users_pulse_samples(tmp_path):
+    """--pulse-samples: the user's pulse from a text file; the waveform's energy is kept and
+    a missing interval, a file of junk and both pulse options are clear errors."""
+    from meshladar.cli import main
+
+    sino_path = tmp_path / "s.npz"
+    ml.results.save_sinogram(sino_path, _power_sinogram())
+    pulse = tmp_path / "pulse.txt"
+    pulse.write_text("# measured pulse\n0, 1, 3\n2 0.5\n")
+    out = tmp_path / "w.npz"
+    assert main(["receive", str(sino_path), "-o", str(out), "--sample-rate", "2e9",
+                 "--pulse-samples", str(pulse), "--pulse-interval", "2.5e-10",
+                 "--quiet"]) == 0
+    waves, _, _ = ml.results.load_waveforms(out)
+    np.testing.assert_allclose(waves.total(), _power_sinogram().total(), rtol=ENERGY_RTOL)
+    assert waves.info["pulse"]["kind"] == "samples"
+    junk = tmp_path / "junk.txt"
+    junk.write_text("1, two, 3\n")
+    for argv in (["--pulse-samples", str(pulse)],
+                 ["--pulse-samples", str(junk), "--pulse-interval", "1e-10"],
+                 ["--pulse-samples", str(pulse), "--pulse-interval", "1e-10",
+                  "--pulse-fwhm", "1e-9"]):
+        assert main(["receive", str(sino_path), "-o", str(tmp_path / "x.npz"),
+                     "--sample-rate", "2e9"] + argv) == 2
