@@ -1,0 +1,105 @@
+"""Iterative reconstruction (meshladar.iterative): the projector and its adjoint, SIRT and
+CGLS on an exact disk sinogram, weights, masks and warm starts."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from test_reconstruct import disk_radon_sinogram
+
+import meshladar as ml
+from meshladar.iterative import RangeProjector, cgls, sirt
+from meshladar.siddon import PixelGrid
+
+SIZE = 96
+CENTER, RADIUS = (0.1, 0.0), 0.4
+
+
+def _disk_image(size=SIZE):
+    c = np.linspace(-1 + 1 / size, 1 - 1 / size, size)
+    X, Y = np.meshgrid(c, c)
+    return (np.hypot(X - CENTER[0], Y - CENTER[1]) < RADIUS).astype(float)
+
+
+def _error(image):
+    truth = _disk_image(image.size)
+    return float(np.linalg.norm(image.values - truth) / np.linalg.norm(truth))
+
+
+def test_projector_adjoint_is_exact():
+    """⟨A x, y⟩ = ⟨x, Aᵀ y⟩ to rounding (Siddon's lengths both ways)."""
+    grid = PixelGrid.square(48, 1.0)
+    A = RangeProjector(grid, np.arange(0.0, 360.0, 12.0), np.linspace(-1, 1, 41),
+                       rays_per_bin=3)
+    rng = np.random.default_rng(0)
+    x, y = rng.random((48, 48)), rng.random((30, 40))
+    lhs, rhs = float(np.sum((A @ x) * y)), float(np.sum(x * (A.T @ y)))
+    assert abs(lhs - rhs) <= 1e-12 * abs(lhs)
+
+
+def test_projector_matches_the_exact_disk_sinogram():
+    """A applied to a pixelated disk gives its exact bin integrals within the pixelation
+    (measured 1.0% relative L2 at 128², 2% allowed at 96²)."""
+    sino = disk_radon_sinogram(CENTER, RADIUS, 96, 1.0, np.arange(0.0, 360.0, 5.0))
+    A = RangeProjector(PixelGrid.square(SIZE, 1.0), sino.angles_deg, sino.bin_edges)
+    got = A @ _disk_image()
+    assert np.linalg.norm(got - sino.values) / np.linalg.norm(sino.values) < 0.02
+
+
+@pytest.fixture(scope="module")
+def sparse():
+    """10° view spacing: 36 views."""
+    return disk_radon_sinogram(CENTER, RADIUS, 96, 1.0, np.arange(0.0, 360.0, 10.0))
+
+
+def test_sirt_beats_fbp_on_sparse_views(sparse):
+    """SIRT's residual falls at every step, the image stays non-negative, and at 10° view
+    spacing its error is well below FBP's (measured 0.12 against 0.30 at 128²)."""
+    img = sirt(sparse, size=SIZE, extent=1.0, n_iter=60)
+    r = img.info["residuals"]
+    assert np.all(np.diff(r) <= 1e-12) and r[-1] < 0.1 * r[0]
+    assert img.values.min() >= 0.0
+    fbp_err = _error(ml.fbp(sparse, size=SIZE, extent=1.0))
+    assert _error(img) < 0.6 * fbp_err, (_error(img), fbp_err)
+    assert img.info["method"] == "sirt" and img.info["iterations"] == 60
+
+
+def test_cgls_residual_never_grows(sparse):
+    img = cgls(sparse, size=SIZE, extent=1.0, n_iter=25)
+    r = img.info["residuals"]
+    assert np.all(np.diff(r) <= 1e-12) and r[-1] < 0.01
+    assert _error(img) < _error(ml.fbp(sparse, size=SIZE, extent=1.0))
+
+
+def test_weights_zero_drop_bins_and_mask_confines(sparse):
+    """A weight of 0 drops a bin: zeroing every other view's weights equals reconstructing
+    from the remaining views; a mask keeps pixels outside it at 0; the stopping rule ends
+    a run early and says so; a warm start from FBP starts nearer."""
+    w = np.ones(sparse.shape)
+    w[1::2] = 0.0
+    half = ml.Sinogram(sparse.values[0::2], angles_deg=sparse.angles_deg[0::2],
+                       bin_edges=sparse.bin_edges)
+    a = sirt(sparse, size=48, extent=1.0, n_iter=10, weights=w)
+    b = sirt(half, size=48, extent=1.0, n_iter=10)
+    np.testing.assert_allclose(a.values, b.values, rtol=1e-9, atol=1e-12)
+    c = np.linspace(-1 + 1 / 48, 1 - 1 / 48, 48)
+    X, Y = np.meshgrid(c, c)
+    mask = np.hypot(X, Y) < 0.6
+    m = cgls(sparse, size=48, extent=1.0, n_iter=10, mask=mask)
+    assert np.all(m.values[~mask] == 0) and m.values[mask].max() > 0.5
+    early = sirt(sparse, size=48, extent=1.0, n_iter=500, tol=1e-2)
+    assert early.info["stopped"] == "tol" and early.info["iterations"] < 500
+    cold = sirt(sparse, size=48, extent=1.0, n_iter=1)
+    warm = sirt(sparse, size=48, extent=1.0, n_iter=1, x0="fbp")
+    assert warm.info["residuals"][0] < cold.info["residuals"][0]
+
+
+def test_iterative_checks(sparse):
+    with pytest.raises(ml.errors.ParameterError, match="weights"):
+        sirt(sparse, size=16, weights=-np.ones(sparse.shape))
+    with pytest.raises(ml.errors.ParameterError, match="mask"):
+        cgls(sparse, size=16, mask=np.ones((3, 3), bool))
+    with pytest.raises(ml.errors.ParameterError, match="x0"):
+        sirt(sparse, size=16, x0="warm")
+    with pytest.raises(ml.errors.ParameterError, match="n_iter"):
+        cgls(sparse, size=16, n_iter=0)
