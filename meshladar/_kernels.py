@@ -153,6 +153,23 @@ def siddon_project(image, ox, oy, dx, dy, xmin, ymin, pix, out):
         out[m] = acc
 
 
+@njit(parallel=True, cache=True)
+def siddon_backproject_parallel(values, ox, oy, dx, dy, xmin, ymin, pix, parts):
+    """siddon_backproject over ``parts.shape[0]`` contiguous blocks of rays in parallel,
+    each into its own image parts[k] (sum them for the backprojection; the order of the
+    sum, hence the rounding, is fixed by the number of parts)."""
+    n_parts, ny, nx = parts.shape
+    n = ox.size
+    for k in prange(n_parts):
+        flat = parts[k].ravel()
+        idx = np.empty(nx + ny + 2, np.int64)
+        length = np.empty(nx + ny + 2, np.float64)
+        for m in range(k * n // n_parts, (k + 1) * n // n_parts):
+            c, _ = _traverse(ox[m], oy[m], dx[m], dy[m], xmin, ymin, pix, nx, ny, idx, length)
+            for t in range(c):
+                flat[idx[t]] += length[t] * values[m]
+
+
 @njit(cache=True)
 def siddon_backproject(values, ox, oy, dx, dy, xmin, ymin, pix, out):
     """out[pixel] += Σ_m length(ray m ∩ pixel) · values[m]: the exact adjoint of
@@ -481,3 +498,30 @@ def backproject3d(q, wx, wy, wz, weight, r0, inv_dr, x, y, z, out):
                     if 0 <= m < n_bins - 1:
                         f = u - fk
                         out[k, i, j] += wv * (q[v, m] + f * (q[v, m + 1] - q[v, m]))
+
+
+@njit(parallel=True, cache=True)
+def splat_project(image, cos_phi, sin_phi, weight, r0, inv_dr, x, y, out):
+    """The exact transpose of :func:`backproject` (linear interpolation): out[v, k] +=
+    weight[v] · image[i, j] · (the linear weight of sample k at r = −(x_j cos φ_v +
+    y_i sin φ_v)); parallel over views (each writes its own row)."""
+    n_views, n_bins = out.shape
+    ny, nx = image.shape
+    for v in prange(n_views):
+        c = cos_phi[v]
+        s = sin_phi[v]
+        wv = weight[v]
+        step = -c * inv_dr
+        for i in range(ny):
+            base = (-y[i] * s - r0) * inv_dr
+            for j in range(nx):
+                u = base + x[j] * step
+                fk = math.floor(u)
+                k = int(fk)
+                if 0 <= k < n_bins - 1:
+                    f = u - fk
+                    val = wv * image[i, j]
+                    out[v, k] += val * (1.0 - f)
+                    out[v, k + 1] += val * f
+                elif k == n_bins - 1 and u == fk:
+                    out[v, k] += wv * image[i, j]

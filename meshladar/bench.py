@@ -10,7 +10,7 @@ import statistics
 import time
 
 __all__ = ["time_call", "bench_analytic", "bench_fbp", "bench_mesh", "bench_sensor",
-           "bench_tomography3d", "bench_streaming", "bench_dask", "report"]
+           "bench_tomography3d", "bench_sirt", "bench_streaming", "bench_dask", "report"]
 
 
 def time_call(fn, *, repeats=5):
@@ -343,6 +343,44 @@ def bench_tomography3d(*, views=200, size=128, subdivisions=6, jobs=2):
             "rays": sino.info["rays"], "simulate_s": t1 - t0, "reconstruct_s": t2 - t1}
 
 
+def bench_sirt(*, size=512, n_views=360, iterations=50, skimage_iterations=2):
+    """SIRT of a 360 × 512 disk sinogram onto 512² (``iterations`` steps, the linear
+    projector pair) against scikit-image's ``iradon_sart`` on the same data (its time per
+    iteration, from ``skimage_iterations`` calls, times ``iterations``)."""
+    import numpy as np
+
+    from .iterative import sirt
+    from .sinogram import Sinogram
+
+    edges = np.linspace(-1.0, 1.0, size + 1)
+    phi = np.deg2rad(np.arange(n_views) * 360.0 / n_views)
+    a, c = 0.4, np.array([0.1, 0.0])
+
+    def prim(s):
+        s = np.clip(s, -a, a)
+        return s * np.sqrt(a * a - s * s) + a * a * np.arcsin(s / a)
+
+    rc = -(c[0] * np.cos(phi) + c[1] * np.sin(phi))
+    vals = prim(edges[None, 1:] - rc[:, None]) - prim(edges[None, :-1] - rc[:, None])
+    sino = Sinogram(vals, angles_deg=np.degrees(phi), bin_edges=edges)
+    sirt(sino, size=16, n_iter=1, projector="linear")                   # compile
+    t0 = time.perf_counter()
+    sirt(sino, size=size, extent=1.0, n_iter=iterations, projector="linear")
+    ours = time.perf_counter() - t0
+    try:
+        from skimage.transform import iradon_sart
+    except ImportError:
+        return {"ours_s": ours, "skimage_s": None, "iterations": iterations}
+    radon = (vals / (edges[1] - edges[0])).T.astype(np.float64)        # (positions, views)
+    t0 = time.perf_counter()
+    image = None
+    for _ in range(skimage_iterations):
+        image = iradon_sart(radon, theta=np.degrees(phi), image=image)
+    per = (time.perf_counter() - t0) / skimage_iterations
+    return {"ours_s": ours, "skimage_s": per * iterations, "iterations": iterations,
+            "size": size, "views": n_views}
+
+
 def report(*, repeats=5, full=False):
     """The benchmark report, line by line (what ``meshladar bench`` prints): each model and
     FBP timed against its peer in the same process; ``full`` adds streaming and Dask."""
@@ -388,6 +426,14 @@ def report(*, repeats=5, full=False):
            f"(perspective, numpy) {se['near_mrays']:.2f} Mrays/s; waveforms of "
            f"{se['receive_shape'][0]} views x {se['receive_shape'][1]} bins at 20 GHz "
            f"{se['receive_s']:.3f} s")
+    it = bench_sirt()
+    if it["skimage_s"] is None:
+        yield f"SIRT {it['iterations']} iterations 360 x 512 -> 512^2: {it['ours_s']:.1f} s"
+    else:
+        yield (f"SIRT {it['iterations']} iterations 360 x 512 -> 512^2 (linear projector): "
+               f"{it['ours_s']:.1f} s; skimage.iradon_sart {it['skimage_s']:.1f} s "
+               f"(per-iteration time x {it['iterations']}), speed-up "
+               f"{it['skimage_s'] / it['ours_s']:.1f}x")
     tb = bench_tomography3d()
     yield (f"3-D tomography, {tb['faces']} triangles, {tb['views']} views, {tb['size']}^3: "
            f"profiles {tb['simulate_s']:.1f} s ({tb['rays']:,} rays, 2 threads), inversion "

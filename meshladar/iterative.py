@@ -22,7 +22,7 @@ import numpy as np
 from ._validate import check_count, check_real, check_sinogram, finite_array
 from .errors import ParameterError
 
-__all__ = ["RangeProjector", "sirt", "cgls", "METHODS"]
+__all__ = ["RangeProjector", "LinearProjector", "sirt", "cgls", "METHODS", "PROJECTORS"]
 
 #: The iterative methods of this module.
 METHODS = ("sirt", "cgls")
@@ -77,6 +77,68 @@ class RangeProjector:
         return _Adjoint(self)
 
 
+class LinearProjector:
+    """The pixel-driven pair: Aᵀ is FBP's linear-interpolation backprojection (pixel area ×
+    the profile interpolated at each pixel centre's range), A its exact transpose (each
+    pixel's value times its area split between the two nearest bin centres). About ten
+    times faster than Siddon lines; needs uniform bins. Same interface as
+    :class:`RangeProjector`."""
+
+    def __init__(self, grid, angles_deg, bin_edges):
+        self.grid = grid
+        self.angles_deg = finite_array("angles_deg", angles_deg).ravel()
+        self.bin_edges = finite_array("bin_edges", bin_edges).ravel()
+        w = np.diff(self.bin_edges)
+        if np.ptp(w) > 1e-9 * w.mean():
+            raise ParameterError("the linear projector needs uniform range bins")
+        self.dr = float(w.mean())
+        self.n_views, self.n_bins = self.angles_deg.size, w.size
+        phi = np.deg2rad(self.angles_deg)
+        self.cos, self.sin = np.cos(phi), np.sin(phi)
+        p = grid.pixel_size
+        self.x = grid.origin[0] + (np.arange(grid.nx) + 0.5) * p
+        self.y = grid.origin[1] + (np.arange(grid.ny) + 0.5) * p
+        self.weight = np.full(self.n_views, p * p)
+        self.r0 = float(self.bin_edges[0] + 0.5 * self.dr)
+
+    @property
+    def shape(self):
+        return (self.n_views * self.n_bins, self.grid.nx * self.grid.ny)
+
+    def __matmul__(self, image):
+        from . import _kernels
+
+        out = np.zeros((self.n_views, self.n_bins))
+        _kernels.splat_project(np.ascontiguousarray(image, dtype=np.float64), self.cos,
+                               self.sin, self.weight, self.r0, 1.0 / self.dr, self.x,
+                               self.y, out)
+        return out
+
+    @property
+    def T(self):
+        return _LinearAdjoint(self)
+
+
+class _LinearAdjoint:
+    def __init__(self, forward):
+        self._f = forward
+
+    def __matmul__(self, values):
+        from . import _kernels
+
+        f = self._f
+        out = np.zeros(f.grid.shape)
+        _kernels.backproject(np.ascontiguousarray(values, dtype=np.float64).reshape(
+            f.n_views, f.n_bins), f.cos, f.sin, f.weight, f.r0, 1.0 / f.dr, f.x, f.y, False,
+            out)
+        return out
+
+
+#: The projector pairs (``projector=``): Siddon lines (exact lengths) or pixel-driven linear
+#: interpolation (faster).
+PROJECTORS = ("siddon", "linear")
+
+
 class _Adjoint:
     def __init__(self, forward):
         self._f = forward
@@ -90,7 +152,8 @@ class _Adjoint:
         return backproject(spread.ravel(), f.grid, f.rays)
 
 
-def _setup(sino, size, extent, center, weights, mask, x0, rays_per_bin, nonneg):
+def _setup(sino, size, extent, center, weights, mask, x0, rays_per_bin, nonneg,
+           projector="siddon"):
     from .reconstruct import Image, fbp
     from .siddon import PixelGrid
 
@@ -101,7 +164,12 @@ def _setup(sino, size, extent, center, weights, mask, x0, rays_per_bin, nonneg):
     size = check_count("size", size)
     extent = check_real("extent", extent, low=0.0, low_open=True)
     grid = PixelGrid.square(size, extent, center)
-    A = RangeProjector(grid, sino.angles_deg, sino.bin_edges, rays_per_bin)
+    from ._validate import check_choice
+
+    if check_choice("projector", projector, PROJECTORS) == "linear":
+        A = LinearProjector(grid, sino.angles_deg, sino.bin_edges)
+    else:
+        A = RangeProjector(grid, sino.angles_deg, sino.bin_edges, rays_per_bin)
     b = sino.values
     W = np.ones_like(b) if weights is None else finite_array("weights", weights)
     if W.shape != b.shape or np.any(W < 0):
@@ -137,7 +205,8 @@ def _norm(r, W):
 
 
 def sirt(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=50, x0=None, weights=None,
-         mask=None, nonneg=True, tol=None, rays_per_bin=2, progress=False):
+         mask=None, nonneg=True, tol=None, rays_per_bin=2, projector="siddon",
+         progress=False):
     """SIRT: x ← x + C Aᵀ W R (b − A x), R and C the inverse row and column sums of A
     (weighted by W), projected onto x ≥ 0 (``nonneg``) and the mask.
 
@@ -160,7 +229,10 @@ def sirt(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=50, x0=None, w
     tol : float, optional
         Stop when the weighted residual falls by less than ``tol`` (relative) in a step.
     rays_per_bin : int
-        Iso-range lines per bin in the projector.
+        Iso-range lines per bin in the Siddon projector.
+    projector : {"siddon", "linear"}
+        Siddon lines with exact pixel lengths (:class:`RangeProjector`), or the faster
+        pixel-driven linear-interpolation pair (:class:`LinearProjector`, uniform bins).
     progress : bool
         A progress bar over the iterations (on a terminal).
 
@@ -175,7 +247,7 @@ def sirt(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=50, x0=None, w
     n_iter = check_count("n_iter", n_iter)
     tol = None if tol is None else check_real("tol", tol, low=0.0, low_open=True)
     grid, A, b, W, M, x = _setup(sino, size, extent, center, weights, mask, x0,
-                                 rays_per_bin, nonneg)
+                                 rays_per_bin, nonneg, projector)
     rows = A @ (M * 1.0)                                   # row sums over allowed pixels
     R = np.where(rows > 0, 1.0 / np.where(rows > 0, rows, 1.0), 0.0) * W
     cols = (A.T @ W) * M                                   # column sums, weighted
@@ -199,13 +271,14 @@ def sirt(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=50, x0=None, w
     if bar is not None:
         bar.close()
     info = {"method": "sirt", "iterations": len(residuals), "residuals": residuals,
-            "stopped": stopped, "nonneg": bool(nonneg), "rays_per_bin": rays_per_bin,
+            "stopped": stopped, "nonneg": bool(nonneg), "projector": projector,
+            "rays_per_bin": rays_per_bin,
             "radiometry": sino.info.get("radiometry")}
     return _image(x, extent, center, info)
 
 
 def cgls(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=30, x0=None, weights=None,
-         mask=None, tol=None, rays_per_bin=2, progress=False):
+         mask=None, tol=None, rays_per_bin=2, projector="siddon", progress=False):
     """CGLS: conjugate gradients on the normal equations of min ‖W^½ (A x − b)‖ over the
     masked pixels (no non-negativity: CG's residual then never grows). Parameters as
     :func:`sirt`; ``info["residuals"]`` is non-increasing."""
@@ -214,7 +287,7 @@ def cgls(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=30, x0=None, w
     n_iter = check_count("n_iter", n_iter)
     tol = None if tol is None else check_real("tol", tol, low=0.0, low_open=True)
     grid, A, b, W, M, x = _setup(sino, size, extent, center, weights, mask, x0,
-                                 rays_per_bin, False)
+                                 rays_per_bin, False, projector)
     r = b - A @ x
     s = M * (A.T @ (W * r))
     p = s.copy()
@@ -243,6 +316,6 @@ def cgls(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=30, x0=None, w
     if bar is not None:
         bar.close()
     info = {"method": "cgls", "iterations": len(residuals), "residuals": residuals,
-            "stopped": stopped, "rays_per_bin": rays_per_bin,
+            "stopped": stopped, "projector": projector, "rays_per_bin": rays_per_bin,
             "radiometry": sino.info.get("radiometry")}
     return _image(x, extent, center, info)

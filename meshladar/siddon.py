@@ -124,6 +124,11 @@ def project(image, grid: PixelGrid, rays: Rays) -> np.ndarray:
     return out
 
 
+#: Blocks of rays backprojected in parallel, each into its own image (summed in a fixed
+#: order, so results do not depend on the number of cores).
+_BACKPROJECT_PARTS = 8
+
+
 def backproject(values, grid: PixelGrid, rays: Rays) -> np.ndarray:
     """The exact adjoint of :func:`project`: Σ_rays length · value into each pixel."""
     from . import _kernels
@@ -131,9 +136,11 @@ def backproject(values, grid: PixelGrid, rays: Rays) -> np.ndarray:
     v = np.ascontiguousarray(finite_array("values", values).ravel())
     if v.size != rays.size:
         raise ParameterError(f"values must have one entry per ray ({rays.size}); got {v.size}")
-    out = np.zeros(grid.shape)
-    _kernels.siddon_backproject(v, rays.ox, rays.oy, rays.dx, rays.dy, *grid._args(), out)
-    return out
+    n_parts = min(_BACKPROJECT_PARTS, max(1, rays.size // 4096))
+    parts = np.zeros((n_parts,) + grid.shape)
+    _kernels.siddon_backproject_parallel(v, rays.ox, rays.oy, rays.dx, rays.dy,
+                                         *grid._args(), parts)
+    return parts.sum(axis=0)
 
 
 class ParallelProjector:

@@ -103,3 +103,28 @@ def test_iterative_checks(sparse):
         sirt(sparse, size=16, x0="warm")
     with pytest.raises(ml.errors.ParameterError, match="n_iter"):
         cgls(sparse, size=16, n_iter=0)
+
+
+def test_linear_projector_pair(sparse):
+    """The pixel-driven pair: Aᵀ is FBP's linear-interpolation backprojection, A its exact
+    transpose; SIRT on it converges like Siddon's (measured 0.118 against 0.118 at 128²)."""
+    from meshladar.iterative import LinearProjector
+
+    grid = PixelGrid.square(48, 1.0)
+    A = LinearProjector(grid, np.arange(0.0, 360.0, 12.0), np.linspace(-1, 1, 41))
+    rng = np.random.default_rng(1)
+    x, y = rng.random((48, 48)), rng.random((30, 40))
+    lhs, rhs = float(np.sum((A @ x) * y)), float(np.sum(x * (A.T @ y)))
+    assert abs(lhs - rhs) <= 1e-12 * abs(lhs)
+    # conservation: a pixel inside the span of the bin centres puts its value × area into
+    # the bins whatever the view (the disk of radius 0.9 lies inside ±0.975)
+    c = np.linspace(-1 + 1 / 48, 1 - 1 / 48, 48)
+    X, Y = np.meshgrid(c, c)
+    inner = (np.hypot(X, Y) < 0.9).astype(float)
+    np.testing.assert_allclose((A @ inner).sum(axis=1), inner.sum() * (2.0 / 48) ** 2,
+                               rtol=1e-12)
+    lin = sirt(sparse, size=SIZE, extent=1.0, n_iter=60, projector="linear")
+    sid = sirt(sparse, size=SIZE, extent=1.0, n_iter=60)
+    assert abs(_error(lin) - _error(sid)) < 0.02 and lin.info["projector"] == "linear"
+    with pytest.raises(ml.errors.ParameterError, match="uniform range bins"):
+        LinearProjector(grid, [0.0], [0.0, 0.1, 0.3])
