@@ -128,3 +128,23 @@ def test_linear_projector_pair(sparse):
     assert abs(_error(lin) - _error(sid)) < 0.02 and lin.info["projector"] == "linear"
     with pytest.raises(ml.errors.ParameterError, match="uniform range bins"):
         LinearProjector(grid, [0.0], [0.0, 0.1, 0.3])
+
+
+def test_tv_at_10_degrees_beats_fbp_at_1_degree():
+    """The issue's goal: at 10° view spacing the TV-regularised image's error is below
+    FBP's at 1° (measured 0.092 against 0.104 at 128²)."""
+    from meshladar.iterative import tv_fista
+
+    size = 128
+    c = np.linspace(-1 + 1 / size, 1 - 1 / size, size)
+    X, Y = np.meshgrid(c, c)
+    truth = (np.hypot(X - CENTER[0], Y - CENTER[1]) < RADIUS).astype(float)
+
+    def err(values):
+        return float(np.linalg.norm(values - truth) / np.linalg.norm(truth))
+
+    fine = disk_radon_sinogram(CENTER, RADIUS, 128, 1.0, np.arange(0.0, 360.0, 1.0))
+    coarse = disk_radon_sinogram(CENTER, RADIUS, 128, 1.0, np.arange(0.0, 360.0, 10.0))
+    img = tv_fista(coarse, size=size, extent=1.0, n_iter=100)
+    assert err(img.values) < err(ml.fbp(fine, size=size, extent=1.0).values)
+    assert img.values.min() >= 0 and img.info["objective"][-1] < img.info["objective"][0]
