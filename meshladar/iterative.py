@@ -22,8 +22,8 @@ import numpy as np
 from ._validate import check_count, check_real, check_sinogram, finite_array
 from .errors import ParameterError
 
-__all__ = ["RangeProjector", "LinearProjector", "sirt", "cgls", "tv_fista", "METHODS",
-           "PROJECTORS"]
+__all__ = ["RangeProjector", "LinearProjector", "sirt", "cgls", "tv_fista", "glint_weights",
+           "METHODS", "PROJECTORS"]
 
 #: The iterative methods of this module.
 METHODS = ("sirt", "cgls", "tv_fista")
@@ -333,6 +333,20 @@ def cgls(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=30, x0=None, w
             "stopped": stopped, "projector": projector, "rays_per_bin": rays_per_bin,
             "radiometry": sino.info.get("radiometry")}
     return _image(x, extent, center, info)
+
+
+def glint_weights(sino, threshold=None, floor=0.0):
+    """Per-bin weights that drop (or down-weight to ``floor``) the bins brighter than
+    ``threshold`` × the sinogram's maximum (default the paper's clip level, 0.008): a
+    glint's few bright bins then stop hiding the diffuse parts, without clipping the data
+    the other bins fit. For :func:`sirt`, :func:`cgls` and :func:`tv_fista`."""
+    from .reconstruct import PAPER_CLIP
+
+    check_sinogram("sino", sino)
+    thr = check_real("threshold", PAPER_CLIP if threshold is None else threshold, low=0.0,
+                     high=1.0, low_open=True)
+    floor = check_real("floor", floor, low=0.0, high=1.0)
+    return np.where(sino.values <= thr * float(sino.values.max(initial=0.0)), 1.0, floor)
 
 
 def _grad(x):

@@ -148,3 +148,24 @@ def test_tv_at_10_degrees_beats_fbp_at_1_degree():
     img = tv_fista(coarse, size=size, extent=1.0, n_iter=100)
     assert err(img.values) < err(ml.fbp(fine, size=size, extent=1.0).values)
     assert img.values.min() >= 0 and img.info["objective"][-1] < img.info["objective"][0]
+
+
+def test_glint_weights_reveal_the_gray_disk():
+    """Fig. 10(a)'s set-up (gray large disk, aluminium small one): with the glint's bins
+    dropped by their weights — not clipped — SIRT shows the gray disk (visibility ≥ 0.9,
+    the issue's goal; measured 5.7 at 128², the aluminium ring being left only its faint
+    diffuse return), where plain SIRT hides it as FBP does (measured 0.006)."""
+    from meshladar import paper
+    from meshladar.iterative import glint_weights
+    from meshladar.materials import ALUMINUM, DARK_GRAY
+
+    scene = ml.phantoms.scene("disk_pair", large=DARK_GRAY, small=ALUMINUM)
+    sino = ml.simulate(scene, ml.Ladar.paper())
+    gray, al = scene.shapes
+    weights = glint_weights(sino)
+    assert 0 < weights.mean() < 1 and set(np.unique(weights)) == {0.0, 1.0}
+    seen = sirt(sino, size=128, extent=1.0, n_iter=60, weights=weights, projector="linear")
+    hidden = sirt(sino, size=128, extent=1.0, n_iter=60, projector="linear")
+    bw = float(np.diff(sino.bin_edges)[0])
+    assert paper.ring_visibility(seen, gray, al, bw) >= 0.9
+    assert paper.ring_visibility(hidden, gray, al, bw) < 0.1
