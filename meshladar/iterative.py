@@ -208,6 +208,34 @@ def _quiet_fbp(sino, size, extent, center):
         return fbp(sino, size=size, extent=extent, center=center).values
 
 
+class _Progress:
+    """An iterative run's bookkeeping: the residual history, the progress bar and the
+    stopping rule (stop when a step lowers the tracked value by less than ``tol``
+    relatively)."""
+
+    def __init__(self, n_iter, tol, progress):
+        from .stream import Progress
+
+        self.values, self.tol, self.stopped = [], tol, "n_iter"
+        self.bar = Progress(n_iter, "iterations") if progress else None
+
+    def step(self, value, tracked=None):
+        """Record a step; True when the run should stop."""
+        self.values.append(value)
+        tracked = self.values if tracked is None else tracked
+        if self.bar is not None:
+            self.bar.update(1)
+        if (self.tol is not None and len(tracked) > 1
+                and abs(tracked[-2] - tracked[-1]) < self.tol * tracked[-2]):
+            self.stopped = "tol"
+            return True
+        return False
+
+    def close(self):
+        if self.bar is not None:
+            self.bar.close()
+
+
 def _image(x, extent, center, info):
     from .reconstruct import Image
 
@@ -256,8 +284,6 @@ def sirt(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=50, x0=None, w
         ``info``: method, iterations, ``residuals`` (weighted ‖A x − b‖ per iteration,
         relative to ‖b‖), stopped ("n_iter" or "tol").
     """
-    from .stream import Progress
-
     n_iter = check_count("n_iter", n_iter)
     tol = None if tol is None else check_real("tol", tol, low=0.0, low_open=True)
     grid, A, b, W, M, x = _setup(sino, size, extent, center, weights, mask, x0,
@@ -267,25 +293,19 @@ def sirt(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=50, x0=None, w
     cols = (A.T @ W) * M                                   # column sums, weighted
     C = np.where(cols > 0, 1.0 / np.where(cols > 0, cols, 1.0), 0.0)
     bnorm = _norm(b, W) or 1.0
-    residuals, stopped = [], "n_iter"
-    bar = Progress(n_iter, "iterations") if progress else None
+    run = _Progress(n_iter, tol, progress)
     r = b - A @ x
-    for it in range(n_iter):
+    for _ in range(n_iter):
         x = x + C * (A.T @ (R * r))
         x *= M
         if nonneg:
             np.maximum(x, 0.0, out=x)
         r = b - A @ x
-        residuals.append(_norm(r, W) / bnorm)
-        if bar is not None:
-            bar.update(1)
-        if tol is not None and it > 0 and residuals[-2] - residuals[-1] < tol * residuals[-2]:
-            stopped = "tol"
+        if run.step(_norm(r, W) / bnorm):
             break
-    if bar is not None:
-        bar.close()
-    info = {"method": "sirt", "iterations": len(residuals), "residuals": residuals,
-            "stopped": stopped, "nonneg": bool(nonneg), "projector": projector,
+    run.close()
+    info = {"method": "sirt", "iterations": len(run.values), "residuals": run.values,
+            "stopped": run.stopped, "nonneg": bool(nonneg), "projector": projector,
             "rays_per_bin": rays_per_bin,
             "radiometry": sino.info.get("radiometry")}
     return _image(x, extent, center, info)
@@ -296,8 +316,6 @@ def cgls(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=30, x0=None, w
     """CGLS: conjugate gradients on the normal equations of min ‖W^½ (A x − b)‖ over the
     masked pixels (no non-negativity: CG's residual then never grows). Parameters as
     :func:`sirt`; ``info["residuals"]`` is non-increasing."""
-    from .stream import Progress
-
     n_iter = check_count("n_iter", n_iter)
     tol = None if tol is None else check_real("tol", tol, low=0.0, low_open=True)
     grid, A, b, W, M, x = _setup(sino, size, extent, center, weights, mask, x0,
@@ -307,11 +325,10 @@ def cgls(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=30, x0=None, w
     p = s.copy()
     gamma = float(np.sum(s * s))
     bnorm = _norm(b, W) or 1.0
-    residuals, stopped = [], "n_iter"
-    bar = Progress(n_iter, "iterations") if progress else None
-    for it in range(n_iter):
+    run = _Progress(n_iter, tol, progress)
+    for _ in range(n_iter):
         if gamma == 0:
-            stopped = "converged"
+            run.stopped = "converged"
             break
         q = A @ p
         alpha = gamma / float(np.sum(W * q * q))
@@ -321,16 +338,11 @@ def cgls(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=30, x0=None, w
         gamma_new = float(np.sum(s * s))
         p = s + (gamma_new / gamma) * p
         gamma = gamma_new
-        residuals.append(_norm(r, W) / bnorm)
-        if bar is not None:
-            bar.update(1)
-        if tol is not None and it > 0 and residuals[-2] - residuals[-1] < tol * residuals[-2]:
-            stopped = "tol"
+        if run.step(_norm(r, W) / bnorm):
             break
-    if bar is not None:
-        bar.close()
-    info = {"method": "cgls", "iterations": len(residuals), "residuals": residuals,
-            "stopped": stopped, "projector": projector, "rays_per_bin": rays_per_bin,
+    run.close()
+    info = {"method": "cgls", "iterations": len(run.values), "residuals": run.values,
+            "stopped": run.stopped, "projector": projector, "rays_per_bin": rays_per_bin,
             "radiometry": sino.info.get("radiometry")}
     return _image(x, extent, center, info)
 
@@ -408,8 +420,6 @@ def tv_fista(sino, size=256, extent=1.0, *, center=(0.0, 0.0), tv=0.005, n_iter=
     projector). ``info["residuals"]`` holds the data term, ``info["objective"]`` the whole
     objective per iteration (monotone only on average: FISTA is not a descent method).
     """
-    from .stream import Progress
-
     n_iter = check_count("n_iter", n_iter)
     tv = check_real("tv", tv, low=0.0)
     tol = None if tol is None else check_real("tol", tol, low=0.0, low_open=True)
@@ -426,9 +436,9 @@ def tv_fista(sino, size=256, extent=1.0, *, center=(0.0, 0.0), tv=0.005, n_iter=
     bnorm = _norm(b, W) or 1.0
     y, t = x.copy(), 1.0
     dual = None
-    residuals, objective, stopped = [], [], "n_iter"
-    bar = Progress(n_iter, "iterations") if progress else None
-    for it in range(n_iter):
+    objective = []
+    run = _Progress(n_iter, tol, progress)
+    for _ in range(n_iter):
         g = M * (A.T @ (W * (A @ y - b)))
         x_new, dual = _tv_prox(y - g / L, lam / L, nonneg, M, dual=dual)
         t_new = 0.5 * (1.0 + math.sqrt(1.0 + 4.0 * t * t))
@@ -436,17 +446,12 @@ def tv_fista(sino, size=256, extent=1.0, *, center=(0.0, 0.0), tv=0.005, n_iter=
         x, t = x_new, t_new
         r = A @ x - b
         gx, gy = _grad(x)
-        residuals.append(_norm(r, W) / bnorm)
         objective.append(0.5 * float(np.sum(W * r * r)) + lam * float(np.sum(np.hypot(gx, gy))))
-        if bar is not None:
-            bar.update(1)
-        if tol is not None and it > 0 and abs(objective[-2] - objective[-1]) < tol * objective[-2]:
-            stopped = "tol"
+        if run.step(_norm(r, W) / bnorm, objective):
             break
-    if bar is not None:
-        bar.close()
+    run.close()
     info = {"method": "tv_fista", "tv": tv, "lambda": lam, "lipschitz": L,
-            "iterations": len(residuals), "residuals": residuals, "objective": objective,
-            "stopped": stopped, "nonneg": bool(nonneg), "projector": projector,
+            "iterations": len(run.values), "residuals": run.values, "objective": objective,
+            "stopped": run.stopped, "nonneg": bool(nonneg), "projector": projector,
             "radiometry": sino.info.get("radiometry")}
     return _image(x, extent, center, info)

@@ -29,11 +29,7 @@ def draw(returns, path, *, views=None, log=False, dpi=150):
         raise ParameterError(f"draw shows one or two coordinates; these returns have "
                              f"{returns.axes}: draw a marginal (a Returns of fewer axes)")
     n_views = returns.values.shape[0]
-    if views is None:
-        views = np.unique(np.linspace(0, n_views - 1, min(4, n_views)).round().astype(int))
-    views = [int(v) for v in views]
-    if not views or min(views) < 0 or max(views) >= n_views:
-        raise ParameterError(f"views must index the {n_views} views; got {views}")
+    views = style.pick_views(n_views, views)
     plt = style.use()
     fig, axes = plt.subplots(1, len(views), figsize=(3.4 * len(views), 3.4), squeeze=False)
     units = returns.info.get("units", "")

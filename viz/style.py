@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["STYLE", "use", "styled"]
+__all__ = ["STYLE", "use", "styled", "pick_views"]
 
 STYLE = {
     "figure.dpi": 100,
@@ -57,3 +57,18 @@ def styled(func):
             return func(*args, **kwargs)
 
     return wrapper
+
+
+def pick_views(n_views, views=None, most=4):
+    """The views a figure shows: ``views`` checked against ``n_views``, or up to ``most``
+    spread over all of them."""
+    import numpy as np
+
+    from meshladar.errors import ParameterError
+
+    if views is None:
+        views = np.unique(np.linspace(0, n_views - 1, min(most, n_views)).round().astype(int))
+    views = [int(v) for v in views]
+    if not views or min(views) < 0 or max(views) >= n_views:
+        raise ParameterError(f"views must index the {n_views} views; got {views}")
+    return views

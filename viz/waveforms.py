@@ -36,11 +36,7 @@ def draw(waves, path, *, realisations=None, noise=None, views=None, band=(5.0, 9
         raise ParameterError(f"waves must be a meshladar.receiver.Waveforms; got "
                              f"{type(waves).__name__}")
     n_views = waves.values.shape[0]
-    if views is None:
-        views = np.unique(np.linspace(0, n_views - 1, min(4, n_views)).round().astype(int))
-    views = [int(v) for v in views]
-    if not views or min(views) < 0 or max(views) >= n_views:
-        raise ParameterError(f"views must index the {n_views} views; got {views}")
+    views = style.pick_views(n_views, views)
     if realisations is not None:
         realisations = np.asarray(realisations, np.float64)
         if realisations.ndim != 3 or realisations.shape[1:] != waves.values.shape:
