@@ -250,7 +250,7 @@ def resolve(scene, ladar, axes, *, motion=None, radiometry="paper", sensor=None,
     from .raytrace.embree import resolve_backend
     from .raytrace.grid import (MAX_RAYS_PER_VIEW, _estimate_rays, _largest_grid, _sampling,
                                 _spacing)
-    from .raytrace.model import _options, _row_jobs  # noqa: F401
+    from .raytrace.model import _options
     from .scene import Scene
     from .sensor import check_radiometry
     from .stream import joined, run_chunks
