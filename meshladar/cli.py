@@ -534,6 +534,11 @@ def _cmd_study(args) -> int:
         return _study_3d(args)
     if args.kind == "reconstruction":
         return _study_reconstruction(args)
+    if args.photons is not None:
+        from .errors import ParameterError
+
+        raise ParameterError(f"--photons is an option of the reconstruction study; the "
+                             f"{args.kind} study does not use it")
     result = studies.faceting_study(args.setting, progress=not args.quiet,
                                     run_dir=os.path.join(args.outdir, "run"))
     files = studies.save_study(result, args.outdir)
@@ -607,13 +612,14 @@ def _study_reconstruction(args) -> int:
 
     from . import results, study_reconstruction as study
 
-    rows, images = study.run(args.setting)
+    rows, images = study.run(args.setting, photons=args.photons)
     os.makedirs(args.outdir, exist_ok=True)
     path = os.path.join(args.outdir, "reconstruction.json")
     results.write_text_atomic(path, json.dumps({"setting": args.setting, "rows": rows},
                                                indent=2))
     buf = io.StringIO()
-    keys = ["phantom", "spacing_deg", "method", "error", "darkening", "visibility", "seconds"]
+    keys = ["phantom", "spacing_deg", "method", "photons", "error", "darkening", "visibility",
+            "seconds"]
     writer = csv.DictWriter(buf, fieldnames=keys)
     writer.writeheader()
     for r in rows:
@@ -1015,6 +1021,9 @@ def _parser() -> argparse.ArgumentParser:
                     default="quick", help="the full sweep (faceting: 360 views, segments to "
                                           "4096; tomography3d: 2000 views, 128^3) (default: "
                                           "the quick one)")
+    st.add_argument("--photons", type=_positive_float, default=None,
+                    help="reconstruction study: photon-counting noise with this many "
+                         "photoelectrons in each sinogram's brightest bin (default: none)")
     st.add_argument("--quiet", action="store_true", help="no progress bar (default: shown)")
     st.epilog += ("\n\nFinished study points are kept in OUTDIR/run: re-running the same "
                   "command resumes an interrupted study.")

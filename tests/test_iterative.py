@@ -185,3 +185,17 @@ def test_reconstruction_study_rows():
     assert all(np.isfinite(r["error"]) and r["seconds"] >= 0 for r in rows)
     assert "darkening" in by[("disk_b0.99", "tv")]
     assert len(study.report(rows)) == 7
+
+
+def test_reconstruction_study_with_photon_noise():
+    """Photon-counting noise in the study: seeded (the same rows twice), and it moves FBP's
+    image away from the noiseless one."""
+    from meshladar import study_reconstruction as study
+
+    kw = dict(methods=("fbp",), spacings=(10.0,))
+    clean, _ = study.run("quick", **kw)
+    noisy, _ = study.run("quick", photons=50.0, seed=3, **kw)
+    again, _ = study.run("quick", photons=50.0, seed=3, **kw)
+    assert [r["error"] for r in noisy] == [r["error"] for r in again]
+    assert all(n["photons"] == 50.0 for n in noisy)
+    assert any(abs(n["error"] - c["error"]) > 1e-3 for n, c in zip(noisy, clean))
