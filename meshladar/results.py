@@ -79,10 +79,26 @@ def _atomic(path, write):
     except BaseException as exc:
         if os.path.exists(tmp):
             os.unlink(tmp)
+        interrupt = _interrupt_behind(exc)
+        if interrupt is not None and interrupt is not exc:
+            # Ctrl-C inside a writer that then failed to close (zipfile: "can't close the
+            # ZIP file while there is an open writing handle"): the interrupt is the news
+            raise interrupt from None
         if isinstance(exc, OSError) and getattr(exc, "filename", None) in (tmp, None):
             # a full disk or a lost permission: name the user's file, not the temporary
             raise OSError(exc.errno, exc.strerror or str(exc), path) from exc
         raise
+
+
+def _interrupt_behind(exc):
+    """The KeyboardInterrupt ``exc`` is, or was raised while handling, else None."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return exc
+        seen.add(id(exc))
+        exc = exc.__context__
+    return None
 
 
 #: Folders already swept of stale temporaries by this process (once each: a run folder

@@ -122,3 +122,22 @@ def test_cli_output_through_a_file_is_one_line_naming_it(tmp_path, capsys):
     assert main(["simulate", "disk", "--views", "4", "-o", str(out)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and repr(str(out)) in err and ".tmp-" not in err
+
+
+def test_an_interrupt_inside_a_writer_stays_an_interrupt(tmp_path):
+    """Ctrl-C while numpy writes a zip member: zipfile's close then raises ValueError in
+    its cleanup; the write must still end as KeyboardInterrupt (a clean stop, a resume
+    hint), leave no temporary and not the half-written file."""
+    from meshladar.results import write_atomic
+
+    def writer(fh):
+        try:
+            fh.write(b"partial")
+            raise KeyboardInterrupt
+        finally:
+            raise ValueError("Can't close the ZIP file while there is an open writing handle")
+
+    target = tmp_path / "r.npz"
+    with pytest.raises(KeyboardInterrupt):
+        write_atomic(target, writer)
+    assert not target.exists() and list(tmp_path.iterdir()) == []
