@@ -423,7 +423,7 @@ def report(*, repeats=5, full=False):
     se = bench_sensor()
     yield (f"received power, {se['faces']} triangles, {se['rays'] / 4:.3g} rays per view: at "
            f"infinity (compiled loop) {se['far_mrays']:.2f} Mrays/s, sensor at a standoff "
-           f"(perspective, numpy) {se['near_mrays']:.2f} Mrays/s; waveforms of "
+           f"(perspective, compiled loop) {se['near_mrays']:.2f} Mrays/s; waveforms of "
            f"{se['receive_shape'][0]} views x {se['receive_shape'][1]} bins at 20 GHz "
            f"{se['receive_s']:.3f} s")
     it = bench_sirt()
