@@ -3,8 +3,6 @@
 
 from __future__ import annotations
 
-import os
-
 import numpy as np
 
 from . import style
@@ -56,9 +54,6 @@ def draw(returns, path, *, views=None, log=False, dpi=150):
                          label=("log10 " if log else "") + f"return per cell ({units})")
         ax.set_title(title, fontsize=8)
     fig.tight_layout()
-    path = os.fspath(path)
-    tmp = path + ".tmp.png"
-    fig.savefig(tmp, dpi=dpi)
-    os.replace(tmp, path)
+    path = style.save_png(fig, path, dpi)
     plt.close(fig)
     return path

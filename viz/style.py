@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["STYLE", "use", "styled", "pick_views"]
+__all__ = ["STYLE", "use", "styled", "pick_views", "save_png"]
 
 STYLE = {
     "figure.dpi": 100,
@@ -72,3 +72,15 @@ def pick_views(n_views, views=None, most=4):
     if not views or min(views) < 0 or max(views) >= n_views:
         raise ParameterError(f"views must index the {n_views} views; got {views}")
     return views
+
+
+def save_png(fig, path, dpi=150):
+    """Write ``fig`` as a PNG at ``path`` atomically (:func:`meshladar.results.write_atomic`:
+    a crash never leaves half a file or a stray temporary); returns the path."""
+    import os
+
+    from meshladar.results import write_atomic
+
+    path = os.fspath(path)
+    write_atomic(path, lambda fh: fig.savefig(fh, format="png", dpi=dpi))
+    return path

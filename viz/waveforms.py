@@ -3,8 +3,6 @@ their noise realisations fill and one realisation drawn through it."""
 
 from __future__ import annotations
 
-import os
-
 import numpy as np
 
 from . import style
@@ -67,14 +65,13 @@ def draw(waves, path, *, realisations=None, noise=None, views=None, band=(5.0, 9
     axes[0, 0].legend(loc="upper right", fontsize=7, frameon=False)
     axes[-1, 0].set_xlabel(f"two-way time (ns); sample interval "
                            f"{waves.sample_interval * 1e9:.3g} ns")
+    from meshladar.sensor import SPEED_OF_LIGHT as c
+
     top = axes[0, 0].secondary_xaxis(
-        "top", functions=(lambda t: t * 1e-9 * 299_792_458.0 / 2 - waves.standoff,
-                          lambda r: (r + waves.standoff) * 2 / 299_792_458.0 * 1e9))
+        "top", functions=(lambda t: t * 1e-9 * c / 2 - waves.standoff,
+                          lambda r: (r + waves.standoff) * 2 / c * 1e9))
     top.set_xlabel("range r = ct/2 - standoff (m)")
     fig.tight_layout()
-    path = os.fspath(path)
-    tmp = path + ".tmp.png"
-    fig.savefig(tmp, dpi=dpi)
-    os.replace(tmp, path)
+    path = style.save_png(fig, path, dpi)
     plt.close(fig)
     return path
