@@ -165,12 +165,7 @@ def _setup(sino, size, extent, center, weights, mask, x0, rays_per_bin, nonneg,
     size = check_count("size", size)
     extent = check_real("extent", extent, low=0.0, low_open=True)
     grid = PixelGrid.square(size, extent, center)
-    from ._validate import check_choice
-
-    if check_choice("projector", projector, PROJECTORS) == "linear":
-        A = LinearProjector(grid, sino.angles_deg, sino.bin_edges)
-    else:
-        A = RangeProjector(grid, sino.angles_deg, sino.bin_edges, rays_per_bin)
+    A = _projector(projector, grid, sino, rays_per_bin)
     b = sino.values
     W = np.ones_like(b) if weights is None else finite_array("weights", weights)
     if W.shape != b.shape or np.any(W < 0):
@@ -193,6 +188,27 @@ def _setup(sino, size, extent, center, weights, mask, x0, rays_per_bin, nonneg,
     if nonneg:
         x = np.maximum(x, 0.0)
     return grid, A, b, W, M, x
+
+
+def _projector(projector, grid, sino, rays_per_bin):
+    """A projector name, or a user's operator: anything with ``@``, ``.T`` and a ``grid``
+    equal to the image's (an ODL-like composition)."""
+    from ._validate import check_choice
+
+    if not isinstance(projector, str):
+        if not (hasattr(projector, "__matmul__") and hasattr(projector, "T")
+                and getattr(projector, "grid", None) == grid):
+            raise ParameterError(f"projector must be one of {PROJECTORS} or an operator with "
+                                 f"@, .T and .grid equal to the image grid {grid}; got "
+                                 f"{projector!r}")
+        return projector
+    if check_choice("projector", projector, PROJECTORS) == "linear":
+        return LinearProjector(grid, sino.angles_deg, sino.bin_edges)
+    return RangeProjector(grid, sino.angles_deg, sino.bin_edges, rays_per_bin)
+
+
+def _projector_name(projector):
+    return projector if isinstance(projector, str) else type(projector).__name__
 
 
 def _quiet_fbp(sino, size, extent, center):
@@ -272,9 +288,11 @@ def sirt(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=50, x0=None, w
         Stop when the weighted residual falls by less than ``tol`` (relative) in a step.
     rays_per_bin : int
         Iso-range lines per bin in the Siddon projector.
-    projector : {"siddon", "linear"}
-        Siddon lines with exact pixel lengths (:class:`RangeProjector`), or the faster
-        pixel-driven linear-interpolation pair (:class:`LinearProjector`, uniform bins).
+    projector : {"siddon", "linear"} or operator
+        Siddon lines with exact pixel lengths (:class:`RangeProjector`), the faster
+        pixel-driven linear-interpolation pair (:class:`LinearProjector`, uniform bins), or
+        any operator with ``@``, ``.T`` and a ``grid`` equal to the image's (e.g.
+        :class:`meshladar.compensation.SurfaceProjector`).
     progress : bool
         A progress bar over the iterations (on a terminal).
 
@@ -305,7 +323,7 @@ def sirt(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=50, x0=None, w
             break
     run.close()
     info = {"method": "sirt", "iterations": len(run.values), "residuals": run.values,
-            "stopped": run.stopped, "nonneg": bool(nonneg), "projector": projector,
+            "stopped": run.stopped, "nonneg": bool(nonneg), "projector": _projector_name(projector),
             "rays_per_bin": rays_per_bin,
             "radiometry": sino.info.get("radiometry")}
     return _image(x, extent, center, info)
@@ -342,7 +360,7 @@ def cgls(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=30, x0=None, w
             break
     run.close()
     info = {"method": "cgls", "iterations": len(run.values), "residuals": run.values,
-            "stopped": run.stopped, "projector": projector, "rays_per_bin": rays_per_bin,
+            "stopped": run.stopped, "projector": _projector_name(projector), "rays_per_bin": rays_per_bin,
             "radiometry": sino.info.get("radiometry")}
     return _image(x, extent, center, info)
 
@@ -452,6 +470,6 @@ def tv_fista(sino, size=256, extent=1.0, *, center=(0.0, 0.0), tv=0.005, n_iter=
     run.close()
     info = {"method": "tv_fista", "tv": tv, "lambda": lam, "lipschitz": L,
             "iterations": len(run.values), "residuals": run.values, "objective": objective,
-            "stopped": run.stopped, "nonneg": bool(nonneg), "projector": projector,
+            "stopped": run.stopped, "nonneg": bool(nonneg), "projector": _projector_name(projector),
             "radiometry": sino.info.get("radiometry")}
     return _image(x, extent, center, info)
