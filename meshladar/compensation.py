@@ -188,10 +188,15 @@ def _uniform(edges):
 
 def _segments(surface, H):
     """The kernels' segment arguments: centres, tangents, half-lengths, weights."""
+    from scipy.spatial import cKDTree
+
     p, n = surface.points, surface.normals
-    # one point per pixel the surface crosses: a surface at tangent t crosses
-    # |t_x| + |t_y| pixels per pixel length
-    half = 0.5 * surface.pixel_size / (np.abs(n[:, 0]) + np.abs(n[:, 1]))
+    # each segment reaches halfway to its two nearest neighbours along the surface
+    if p.shape[0] > 2:
+        d, _ = cKDTree(p).query(p, k=3)
+        half = np.minimum(0.25 * (d[:, 1] + d[:, 2]), surface.pixel_size)
+    else:
+        half = np.full(p.shape[0], 0.5 * surface.pixel_size)
     c = np.ascontiguousarray
     return (c(p[:, 0]), c(p[:, 1]), c(-n[:, 1]), c(n[:, 0]), half, c(H))
 

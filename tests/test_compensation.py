@@ -1,0 +1,191 @@
+"""BRDF and shadow compensation (meshladar.compensation): the segment projector against the
+exact disk sinogram, surface points and normals against the true circle, the shadow map
+against exact ray-disk geometry, and the compensated disk: no edge darkening, a uniform
+surface at the level ⟨h⟩ · length."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+import meshladar as ml
+from meshladar import _kernels, materials, paper
+from meshladar.brdf import Lambertian
+from meshladar.compensation import (Surface, SurfaceProjector, compensate, estimate_surface,
+                                    surface_weights)
+from meshladar.errors import ParameterError
+from meshladar.iterative import sirt
+from meshladar.ladar import Ladar
+from meshladar.scene import Scene
+from meshladar.shapes import Disk
+
+SIZE, R = 256, 0.8
+LADAR = Ladar(np.arange(0.0, 360.0, 1.0), Ladar.centered(256, 1.6 / 256).bin_edges)
+#: Exact segments tile the circle: the projector's only error is the chords' sag.
+SEGMENT_TOL = 0.012
+#: A compensated surface's level against ⟨h⟩ · length (measured 1-2 % at 256²).
+LEVEL_TOL = 0.06
+#: Angular non-uniformity (std / mean over 0.2 rad arcs) of a compensated ring (measured
+#: 0.02-0.04).
+UNIFORMITY_TOL = 0.08
+
+
+def _mean_weight(material, radiometry="paper"):
+    """⟨h⟩ = (1/π) ∫₀^{π/2} h(θ) dθ by adaptive quadrature."""
+    def h(t):
+        v = float(material.projected(np.cos(t), np.sin(t)))
+        return v * math.cos(t) if radiometry == "power" else v
+    return quad(h, 0.0, 0.5 * math.pi, limit=200)[0] / math.pi
+
+
+def _disk(material):
+    return ml.simulate(Scene([Disk((0.0, 0.0), R, material)]), LADAR)
+
+
+def _grid_xy(size=SIZE):
+    c = -1 + (np.arange(size) + 0.5) * 2 / size
+    return np.meshgrid(c, c)
+
+
+def _ring_stats(image):
+    """(∫ image over the ring band, angular std/mean over 0.2 rad arcs)."""
+    X, Y = _grid_xy(image.size)
+    band = np.abs(np.hypot(X, Y) - R) < 0.05
+    v, a = image.values[band], np.arctan2(Y, X)[band]
+    arcs = np.array([v[(a >= t) & (a < t + 0.2)].sum() for t in np.arange(-np.pi, 3.0, 0.2)])
+    return float(v.sum() * (2 / image.size) ** 2), float(arcs.std() / arcs.mean())
+
+
+def test_segment_projector_matches_the_exact_disk_sinogram():
+    """Uniform segments tiling the circle, each carrying ⟨h⟩ per unit length with view
+    weights h/⟨h⟩, reproduce the analytic Lambertian sinogram."""
+    m = Lambertian(1.0)
+    sino = _disk(m)
+    n = 1000
+    t = (np.arange(n) + 0.5) * 2 * np.pi / n
+    pts = R * np.stack([np.cos(t), np.sin(t)], 1)
+    surf = Surface(pts, np.zeros(n, int), np.zeros(n, int), pts / R, SIZE, 1.0, (0.0, 0.0))
+    H = surface_weights(surf, LADAR.angles_deg, m, blur_deg=0.0)
+    phi = np.deg2rad(LADAR.angles_deg)
+    arc = 2 * np.pi * R / n
+    out = np.zeros(sino.shape)
+    _kernels.surface_project(np.full(n, _mean_weight(m) * arc), pts[:, 0].copy(),
+                             pts[:, 1].copy(), -pts[:, 1] / R, pts[:, 0] / R,
+                             np.full(n, 0.5 * arc), H, np.cos(phi), np.sin(phi),
+                             LADAR.bin_edges[0], 1 / np.diff(LADAR.bin_edges)[0], out)
+    err = np.linalg.norm(out - sino.values) / np.linalg.norm(sino.values)
+    assert err < SEGMENT_TOL
+
+
+def test_projector_adjoint_is_exact():
+    sino = _disk(Lambertian(1.0))
+    surf = estimate_surface(ml.fbp(ml.log_radiance(sino), size=SIZE), sino, shadows=False)
+    H = surface_weights(surf, LADAR.angles_deg, Lambertian(1.0))
+    A = SurfaceProjector(surf, LADAR.angles_deg, LADAR.bin_edges, H)
+    rng = np.random.default_rng(0)
+    x, y = rng.random((SIZE, SIZE)), rng.random(sino.shape)
+    lhs, rhs = float(np.sum((A @ x) * y)), float(np.sum(x * (A.T @ y)))
+    assert abs(lhs - rhs) <= 1e-12 * abs(lhs)
+    assert np.all((A.T @ y)[~surf.mask] == 0)
+
+
+def test_surface_points_and_normals_follow_the_circle():
+    """Steger points lie within a bin of the circle, one per pixel it crosses, and the
+    normals point outward within a few degrees."""
+    sino = _disk(paper._diffuse(0.99))
+    surf = estimate_surface(ml.fbp(ml.log_radiance(sino), size=SIZE), sino)
+    rad = np.hypot(*surf.points.T)
+    assert np.all(np.abs(rad - R) < 1.6 / 256)
+    length = 2 * np.pi * R / (2 / SIZE)                    # circumference, pixels
+    assert 0.9 * length < rad.size < 1.3 * length
+    radial = surf.points / rad[:, None]
+    cos_err = np.sum(surf.normals * radial, axis=1)
+    assert np.all(cos_err > math.cos(math.radians(15)))
+    assert math.degrees(math.sqrt(np.mean(np.arccos(np.clip(cos_err, -1, 1)) ** 2))) < 5.0
+    # a convex disk shadows nothing it faces (a few glancing staircase rays allowed)
+    phi = np.deg2rad(LADAR.angles_deg)
+    front = surf.normals[:, :1] * np.cos(phi) + surf.normals[:, 1:] * np.sin(phi) > 0
+    assert (surf.shadowed & front).sum() / front.sum() < 0.03
+
+
+def test_shadow_map_matches_exact_geometry_on_the_disk_pair():
+    """For the paper's disk pair, 'another surface between the point and the ladar' from
+    the first reconstruction agrees with exact ray-disk intersection on ≥ 93 % of the
+    front-facing point-views (measured 96 %; the misses are a few spurious ridge points)."""
+    scene = paper._pair(materials.DARK_GRAY, materials.ALUMINUM)
+    sino = ml.simulate(scene, LADAR)
+    surf = estimate_surface(ml.fbp(ml.log_radiance(sino), size=SIZE), sino)
+    big, small = scene.shapes
+    phi = np.deg2rad(LADAR.angles_deg)
+    w = np.stack([np.cos(phi), np.sin(phi)], 1)
+
+    def blocked(p, disk):
+        oc = p - np.asarray(disk.center)
+        b = oc @ w.T
+        disc = b * b - (np.sum(oc * oc, axis=1)[:, None] - disk.radius ** 2)
+        return (disc > 0) & (-b - np.sqrt(np.maximum(disc, 0)) > 0)
+
+    on_big = (np.abs(np.hypot(*(surf.points - big.center).T) - big.radius)
+              < np.abs(np.hypot(*(surf.points - small.center).T) - small.radius))
+    truth = np.where(on_big[:, None], blocked(surf.points, small), blocked(surf.points, big))
+    front = surf.normals @ w.T > 0
+    assert ((surf.shadowed == truth) & front).sum() / front.sum() >= 0.93
+    assert (truth & front).sum() > 0.05 * front.sum()            # the test has shadows
+
+
+@pytest.mark.parametrize("material", [paper._diffuse(0.99), Lambertian(1.0)],
+                         ids=["b0.99", "lambert"])
+@pytest.mark.parametrize("method", ["sirt", "cgls"])
+def test_compensation_removes_edge_darkening(material, method):
+    """The issue's goal: the b = 0.99 disk's edge darkening (FBP −1.4) within ±0.2, and the
+    surface uniform at ⟨h⟩ · 2πR."""
+    sino = _disk(material)
+    power = float(sino.total().mean())
+    img = compensate(sino, material, size=SIZE, method=method,
+                     n_iter=100 if method == "sirt" else 30)
+    dark, _ = paper.disk_darkening(img, R, power)
+    assert abs(dark) <= 0.2
+    level, spread = _ring_stats(img)
+    assert abs(level / (_mean_weight(material) * 2 * np.pi * R) - 1) < LEVEL_TOL
+    assert spread < UNIFORMITY_TOL
+    assert img.info["method"] == "compensated" and img.info["radiometry"] == "paper"
+    assert img.info["residuals"][-1] < 0.2
+    assert abs(img.info["surface_shift"]) <= 1.6 / 256 + 1e-12
+    if not isinstance(material, Lambertian):
+        fbp_dark, _ = paper.disk_darkening(ml.fbp(sino, size=SIZE), R, power)
+        assert fbp_dark < -1.0
+
+
+def test_compensation_in_received_power():
+    """With radiometry='power' h gains a cos θ; the level is still ⟨h⟩ · 2πR."""
+    m = paper._diffuse(0.99)
+    sino = ml.simulate(Scene([Disk((0.0, 0.0), R, m)]), LADAR, radiometry="power")
+    img = compensate(sino, m, size=SIZE, method="sirt", n_iter=100)
+    level, spread = _ring_stats(img)
+    assert img.info["radiometry"] == "power"
+    assert abs(level / (_mean_weight(m, "power") * 2 * np.pi * R) - 1) < LEVEL_TOL
+    assert spread < UNIFORMITY_TOL
+
+
+def test_bad_input_is_named():
+    sino = _disk(Lambertian(1.0))
+    with pytest.raises(ParameterError, match="labels"):
+        compensate(sino, [Lambertian(1.0), Lambertian(0.5)], size=64)
+    with pytest.raises(ParameterError, match="method"):
+        compensate(sino, Lambertian(1.0), size=64, method="art")
+    with pytest.raises(ParameterError, match="first"):
+        estimate_surface(np.zeros((8, 8)), sino)
+    surf = estimate_surface(ml.fbp(sino, size=64), sino, shadows=False)
+    with pytest.raises(ParameterError, match="grid"):
+        compensate(sino, Lambertian(1.0), size=128, surface=surf)
+    with pytest.raises(ParameterError, match="projector"):
+        sirt(sino, size=128, projector=SurfaceProjector(
+            surf, LADAR.angles_deg, LADAR.bin_edges,
+            surface_weights(surf, LADAR.angles_deg, Lambertian(1.0))))
+    with pytest.raises(ParameterError, match="uniform"):
+        bad = Ladar(LADAR.angles_deg, np.r_[LADAR.bin_edges[:-1], LADAR.bin_edges[-1] + 0.1])
+        compensate(ml.simulate(Scene([Disk((0.0, 0.0), R, Lambertian(1.0))]), bad),
+                   Lambertian(1.0), size=64)
