@@ -618,8 +618,8 @@ def _study_reconstruction(args) -> int:
     results.write_text_atomic(path, json.dumps({"setting": args.setting, "rows": rows},
                                                indent=2))
     buf = io.StringIO()
-    keys = ["phantom", "spacing_deg", "method", "photons", "error", "darkening", "visibility",
-            "seconds"]
+    keys = ["phantom", "spacing_deg", "method", "photons", "error", "clutter", "darkening",
+            "visibility", "seconds"]
     writer = csv.DictWriter(buf, fieldnames=keys)
     writer.writeheader()
     for r in rows:
