@@ -100,8 +100,11 @@ def _ridges(values, sigma, threshold):
     d = {o: gaussian_filter(values, sigma, order=o) for o in
          ((0, 1), (1, 0), (0, 2), (2, 0), (1, 1))}
     gx, gy, hxx, hyy, hxy = d[0, 1], d[1, 0], d[0, 2], d[2, 0], d[1, 1]
-    low = 0.5 * (hxx + hyy) - np.hypot(0.5 * (hxx - hyy), hxy)
-    strength = np.maximum(-low, 0.0)
+    root = np.hypot(0.5 * (hxx - hyy), hxy)
+    low = 0.5 * (hxx + hyy) - root
+    high = 0.5 * (hxx + hyy) + root
+    # a ridge curves down across itself only; a blob (a point-like artefact) both ways
+    strength = np.where(high > 0.5 * low, np.maximum(-low, 0.0), 0.0)
     peak = float(strength.max(initial=0.0))
     if peak <= 0:
         raise ParameterError("first has no bright ridge: no surface to compensate")
@@ -272,15 +275,17 @@ def surface_weights(surface, angles_deg, material, *, labels=None, radiometry="p
 
 class SurfaceProjector:
     """A: image → (n_views, n_bins), the exact projector of a :class:`Surface` as straight
-    segments (one per surface pixel, through its point, along its tangent, as long as the
-    surface runs in that pixel), each weighted per view by ``H`` (:func:`surface_weights`)
-    and spread over the bins its range interval covers; ``A.T`` its exact adjoint (zero
-    off the surface). Image values are areal densities (a segment carries value × pixel
+    segments (one per surface pixel, through its point, along its tangent, halfway to its
+    neighbours), each weighted per view by ``H`` (:func:`surface_weights`) and spread over
+    the bins its range interval covers; ``A.T`` its exact adjoint (zero off the surface).
+    With ``smooth`` > 0 (pixels), the values are first averaged along the surface by a
+    Gaussian of that width (A S, adjoint Sᵀ Aᵀ). Image values are areal densities (a segment carries value × pixel
     area), as FBP's. Composes with :func:`~meshladar.iterative.sirt` and
     :func:`~meshladar.iterative.cgls` through ``projector=``."""
 
-    def __init__(self, surface, angles_deg, bin_edges, H):
+    def __init__(self, surface, angles_deg, bin_edges, H, smooth=0.0):
         self.surface = surface
+        self.smooth = _smoother(surface, check_real("smooth", smooth, low=0.0))
         self.grid = surface.grid
         self.angles_deg = finite_array("angles_deg", angles_deg).ravel()
         self.bin_edges = finite_array("bin_edges", bin_edges).ravel()
@@ -305,7 +310,10 @@ class SurfaceProjector:
     def __matmul__(self, image):
         from . import _kernels
 
-        v = np.ascontiguousarray(np.asarray(image, float)[self.surface.rows, self.surface.cols])
+        v = np.asarray(image, float)[self.surface.rows, self.surface.cols]
+        if self.smooth is not None:
+            v = self.smooth @ v
+        v = np.ascontiguousarray(v)
         out = np.zeros((self.n_views, self.n_bins))
         _kernels.surface_project(v, *self._args(), out)
         return out
@@ -326,9 +334,38 @@ class _SurfaceAdjoint:
         q = np.ascontiguousarray(np.asarray(values, float).reshape(f.n_views, f.n_bins))
         acc = np.zeros(f.surface.rows.size)
         _kernels.surface_backproject(q, *f._args(), acc)
+        if f.smooth is not None:
+            acc = f.smooth.T @ acc
         out = np.zeros(f.grid.shape)
         out[f.surface.rows, f.surface.cols] = acc
         return out
+
+
+def _subset(surface, keep):
+    import dataclasses
+
+    return dataclasses.replace(
+        surface, points=surface.points[keep], rows=surface.rows[keep],
+        cols=surface.cols[keep], normals=surface.normals[keep],
+        shadowed=None if surface.shadowed is None else surface.shadowed[keep])
+
+
+def _smoother(surface, width):
+    """The sparse operator that averages each surface point's value with its neighbours
+    within 2 ``width`` (pixels) under a Gaussian of that width, or None for 0: the solution
+    is then smooth along the surface by construction (x = S z)."""
+    if width == 0:
+        return None
+    from scipy.sparse import csr_matrix
+    from scipy.spatial import cKDTree
+
+    p = surface.points / surface.pixel_size
+    pairs = cKDTree(p).query_pairs(2.0 * width, output_type="ndarray")
+    i = np.r_[pairs[:, 0], pairs[:, 1], np.arange(len(p))]
+    j = np.r_[pairs[:, 1], pairs[:, 0], np.arange(len(p))]
+    d2 = np.sum((p[i] - p[j]) ** 2, axis=1)
+    S = csr_matrix((np.exp(-0.5 * d2 / width ** 2), (i, j)), shape=(len(p), len(p)))
+    return csr_matrix(S.multiply(1.0 / np.asarray(S.sum(axis=1))))
 
 
 def _uniform_fit(A, m, b, W):
@@ -338,7 +375,7 @@ def _uniform_fit(A, m, b, W):
     return c * m, float(np.sum(W * (b - c * Am) ** 2))
 
 
-def _settle(surface, sino, H, W, m):
+def _settle(surface, sino, H, W, m, smooth):
     """Shift every surface point along its normal by the one offset in ±1 bin that lets a
     uniform surface fit the data best. A first reconstruction puts a thin surface at the
     centre of the bin its returns pile into, up to half a bin off (inward on a convex
@@ -351,7 +388,7 @@ def _settle(surface, sino, H, W, m):
     best = None
     for shift in np.linspace(-1.0, 1.0, 9) * dr:
         s = dataclasses.replace(surface, points=surface.points + shift * surface.normals)
-        A = SurfaceProjector(s, sino.angles_deg, sino.bin_edges, H)
+        A = SurfaceProjector(s, sino.angles_deg, sino.bin_edges, H, smooth)
         x0, res = _uniform_fit(A, m, sino.values, W)
         if best is None or res < best[0]:
             best = (res, s, float(shift), A, x0)
@@ -364,7 +401,7 @@ SOLVERS = ("cgls", "sirt")
 
 def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first=None,
                labels=None, method="cgls", n_iter=30, weights=None, threshold=0.2,
-               sigma=1.0, shadows=True, blur_deg=1.0, surface=None, tol=None,
+               sigma=1.0, shadows=True, blur_deg=1.0, smooth=2.0, surface=None, tol=None,
                progress=False):
     """BRDF- and shadow-compensated reconstruction (see the module docstring).
 
@@ -388,6 +425,11 @@ def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first
         :func:`estimate_surface`.
     blur_deg : float
         Angular blur of h(θ), degrees, for the normals' uncertainty.
+    smooth : float
+        Width, pixels, of the Gaussian along the surface that the solution is built from
+        (x = S z, :class:`SurfaceProjector`): neighbouring surface points share their
+        ranges in most views, and without it the solution speckles along the surface.
+        0 solves for every point independently.
     surface : Surface, optional
         Use these surface pixels and normals instead of estimating them.
     tol, progress
@@ -425,12 +467,21 @@ def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first
         raise ParameterError("surface must be on the image grid (size, extent, center)")
     H = surface_weights(surface, sino.angles_deg, material, labels=labels,
                                radiometry=radiometry, blur_deg=blur_deg)
+    # a point no view sees (hidden behind another surface in all its front views: an
+    # artefact inside a shape) carries no data; drop it
+    seen = H.any(axis=1)
+    if not seen.all():
+        surface = _subset(surface, seen)
+        H = H[seen]
     W = np.ones(sino.shape) if weights is None else finite_array("weights", weights)
     m = surface.mask.astype(float)
-    surface, shift, A, x0 = _settle(surface, sino, H, W, m)
+    surface, shift, A, x0 = _settle(surface, sino, H, W, m, smooth)
     solve = cgls if method == "cgls" else sirt
     img = solve(sino, size=size, extent=extent, center=center, n_iter=n_iter, x0=x0,
                 weights=weights, mask=surface.mask, projector=A, tol=tol, progress=progress)
+    values = np.array(img.values)
+    if A.smooth is not None:                          # the solution is x = S z
+        values[surface.rows, surface.cols] = A.smooth @ values[surface.rows, surface.cols]
     phi = np.deg2rad(sino.angles_deg)
     front = (surface.normals[:, :1] * np.cos(phi) + surface.normals[:, 1:] * np.sin(phi)) > 0
     shadowed = 0.0 if surface.shadowed is None else float(
@@ -438,5 +489,5 @@ def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first
     info = dict(img.info, method="compensated", solver=method, radiometry=radiometry,
                 surface_pixels=int(surface.rows.size), shadowed_fraction=shadowed,
                 blur_deg=blur_deg, shadows=surface.shadowed is not None,
-                surface_shift=shift)
-    return type(img)(img.values, img.extent, img.center, info=info)
+                surface_shift=shift, smooth=smooth)
+    return type(img)(values, img.extent, img.center, info=info)

@@ -80,11 +80,16 @@ def test_segment_projector_matches_the_exact_disk_sinogram():
     assert err < SEGMENT_TOL
 
 
-def test_projector_adjoint_is_exact():
+@pytest.mark.parametrize("smooth", [0.0, 2.0])
+def test_projector_adjoint_is_exact(smooth):
+    """⟨A x, y⟩ = ⟨x, Aᵀ y⟩ to rounding, with and without smoothing along the surface; the
+    smoother averages (a uniform surface stays uniform)."""
     sino = _disk(Lambertian(1.0))
     surf = estimate_surface(ml.fbp(ml.log_radiance(sino), size=SIZE), sino, shadows=False)
     H = surface_weights(surf, LADAR.angles_deg, Lambertian(1.0))
-    A = SurfaceProjector(surf, LADAR.angles_deg, LADAR.bin_edges, H)
+    A = SurfaceProjector(surf, LADAR.angles_deg, LADAR.bin_edges, H, smooth)
+    if smooth:
+        assert np.allclose(A.smooth @ np.ones(surf.rows.size), 1.0, rtol=0, atol=1e-12)
     rng = np.random.default_rng(0)
     x, y = rng.random((SIZE, SIZE)), rng.random(sino.shape)
     lhs, rhs = float(np.sum((A @ x) * y)), float(np.sum(x * (A.T @ y)))
@@ -134,6 +139,30 @@ def test_shadow_map_matches_exact_geometry_on_the_disk_pair():
     front = surf.normals @ w.T > 0
     assert ((surf.shadowed == truth) & front).sum() / front.sum() >= 0.93
     assert (truth & front).sum() > 0.05 * front.sum()            # the test has shadows
+
+
+def test_shadow_awareness_drops_hidden_points_on_the_gray_pair():
+    """Fig. 9's gray pair: the shadow map drops ridge artefacts inside the disks (no view
+    sees them), so nothing is left off the surfaces (clutter 0.011 → 0 measured), and
+    the surfaces come out more even (surface error 0.54 → 0.49 measured)."""
+    from meshladar import study_reconstruction as study
+
+    lad = Ladar(np.arange(0.0, 360.0, 1.0), Ladar.centered(128, 1.6 / 128).bin_edges)
+    scene = paper._pair(materials.DARK_GRAY, materials.DARK_GRAY)
+    sino = ml.simulate(scene, lad)
+    ideal = study._ideal(scene, lad, 128)
+    points, band = study._bands(scene, 1.6 / 128, 128)
+    X, Y = _grid_xy(128)
+    (cx, cy), radius = scene.bounding_circle()
+    inside = np.hypot(X - cx, Y - cy) < 1.05 * radius
+    got = {}
+    for shadows in (True, False):
+        img = compensate(sino, materials.DARK_GRAY, size=128, method="sirt", n_iter=40,
+                         shadows=shadows)
+        got[shadows] = (study._error(img.values, ideal, points),
+                        study._clutter(img.values, band, inside))
+    assert got[True][1] < 0.002 < got[False][1]
+    assert got[True][0] < got[False][0] - 0.02
 
 
 @pytest.mark.parametrize("material", [paper._diffuse(0.99), Lambertian(1.0)],
