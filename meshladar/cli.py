@@ -604,7 +604,7 @@ def _study_3d(args) -> int:
 
 def _study_reconstruction(args) -> int:
     """The reconstruction study (meshladar.study_reconstruction): its table as CSV and JSON,
-    the 10° images of every method as a figure."""
+    the 1° and 10° images of every method as a figure."""
     import csv
     import io
     import json
@@ -630,15 +630,15 @@ def _study_reconstruction(args) -> int:
 
     @style.styled
     def draw():
-        phantoms = sorted({k[0] for k in images})
+        panels = [(ph, sp) for ph in sorted({k[0] for k in images}) for sp in (1.0, 10.0)]
         methods = list(study.METHODS)
-        fig, axes = style.use().subplots(len(phantoms), len(methods),
-                                         figsize=(2.0 * len(methods), 2.2 * len(phantoms)),
+        fig, axes = style.use().subplots(len(panels), len(methods),
+                                         figsize=(2.0 * len(methods), 2.2 * len(panels)),
                                          squeeze=False)
-        for i, ph in enumerate(phantoms):
+        for i, (ph, sp) in enumerate(panels):
             for j, m in enumerate(methods):
                 ax = axes[i, j]
-                img = images.get((ph, 10.0, m))
+                img = images.get((ph, sp, m))
                 if img is not None:
                     lim = float(np.percentile(np.abs(img), 99.5)) or 1.0
                     ax.imshow(img, origin="lower", cmap="RdBu_r", vmin=-lim, vmax=lim,
@@ -646,8 +646,8 @@ def _study_reconstruction(args) -> int:
                 ax.set_title(f"{m}", fontsize=8)
                 ax.set_xticks([])
                 ax.set_yticks([])
-            axes[i, 0].set_ylabel(ph, fontsize=8)
-        fig.suptitle("reconstructions at 10° view spacing")
+            axes[i, 0].set_ylabel(f"{ph}, {sp:g}°", fontsize=8)
+        fig.suptitle("reconstructions at 1° and 10° view spacing")
         fig.tight_layout()
         png = os.path.join(args.outdir, "reconstruction.png")
         results.write_atomic(png, lambda fh: fig.savefig(fh, format="png", dpi=150))

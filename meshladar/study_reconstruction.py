@@ -66,8 +66,14 @@ def _reconstruct(method, sino, size, n_iter, scene=None):
 
 def _compensated(sino, size, n_iter, scene):
     """BRDF compensation with the scene's coatings known: each surface pixel takes the
-    coating of the nearest boundary; bins brighter than the clip level are dropped when a
-    coating glints (a glint narrower than the normals' accuracy cannot be compensated)."""
+    coating of the nearest boundary. Where a coating glints (an SR glint narrower than
+    0.05 rad: narrower than the normals' accuracy, so it cannot be compensated), the bins
+    brighter than the clip level are dropped and the coatings' diffuse lobes compensated
+    (measured at 1° on the gray/aluminium pair: surface error 0.68 and gray-disk
+    visibility 2.3, against 4.0 and 0.07 compensating the whole BRDF)."""
+    import dataclasses
+
+    from .brdf import SandfordRobertson
     from .compensation import compensate
     from .iterative import glint_weights
 
@@ -76,10 +82,13 @@ def _compensated(sino, size, n_iter, scene):
     dist = [np.abs(np.hypot(X - sh.center[0], Y - sh.center[1]) - sh.radius)
             for sh in scene.shapes]
     labels = np.argmin(dist, axis=0)
-    glints = any(getattr(sh.material, "e", 1.0) < 0.05 and sh.material.has_specular
-                 for sh in scene.shapes)
-    return compensate(sino, [sh.material for sh in scene.shapes], labels=labels, size=size,
-                      method="sirt", n_iter=n_iter,
+    mats = [sh.material for sh in scene.shapes]
+    glints = any(isinstance(m, SandfordRobertson) and m.has_specular and m.e < 0.05
+                 for m in mats)
+    if glints:
+        mats = [dataclasses.replace(m, lobes="diffuse") if isinstance(m, SandfordRobertson)
+                and m.has_diffuse else m for m in mats]
+    return compensate(sino, mats, labels=labels, size=size, method="sirt", n_iter=n_iter,
                       weights=glint_weights(sino) if glints else None)
 
 
