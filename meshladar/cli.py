@@ -534,11 +534,13 @@ def _cmd_study(args) -> int:
         return _study_3d(args)
     if args.kind == "reconstruction":
         return _study_reconstruction(args)
-    if args.photons is not None:
-        from .errors import ParameterError
+    for flag, value in (("--photons", args.photons), ("--speckle", args.speckle),
+                        ("--background", args.background)):
+        if value is not None:
+            from .errors import ParameterError
 
-        raise ParameterError(f"--photons is an option of the reconstruction study; the "
-                             f"{args.kind} study does not use it")
+            raise ParameterError(f"{flag} is an option of the reconstruction study; the "
+                                 f"{args.kind} study does not use it")
     result = studies.faceting_study(args.setting, progress=not args.quiet,
                                     run_dir=os.path.join(args.outdir, "run"))
     files = studies.save_study(result, args.outdir)
@@ -612,14 +614,15 @@ def _study_reconstruction(args) -> int:
 
     from . import results, study_reconstruction as study
 
-    rows, images = study.run(args.setting, photons=args.photons)
+    rows, images = study.run(args.setting, photons=args.photons, speckle_cells=args.speckle,
+                             background=args.background or 0.0)
     os.makedirs(args.outdir, exist_ok=True)
     path = os.path.join(args.outdir, "reconstruction.json")
     results.write_text_atomic(path, json.dumps({"setting": args.setting, "rows": rows},
                                                indent=2))
     buf = io.StringIO()
-    keys = ["phantom", "spacing_deg", "method", "photons", "error", "clutter", "darkening",
-            "visibility", "seconds"]
+    keys = ["phantom", "spacing_deg", "method", "photons", "speckle_cells", "background",
+            "error", "clutter", "darkening", "visibility", "seconds"]
     writer = csv.DictWriter(buf, fieldnames=keys)
     writer.writeheader()
     for r in rows:
@@ -1024,6 +1027,12 @@ def _parser() -> argparse.ArgumentParser:
     st.add_argument("--photons", type=_positive_float, default=None,
                     help="reconstruction study: photon-counting noise with this many "
                          "photoelectrons in each sinogram's brightest bin (default: none)")
+    st.add_argument("--speckle", type=_positive_float, default=None, metavar="M",
+                    help="reconstruction study, with --photons: speckle of M >= 1 cells per "
+                         "bin (1: fully developed) (default: none)")
+    st.add_argument("--background", type=_positive_float, default=None, metavar="B",
+                    help="reconstruction study, with --photons: B background "
+                         "photoelectrons per bin, its mean subtracted (default: none)")
     st.add_argument("--quiet", action="store_true", help="no progress bar (default: shown)")
     st.epilog += ("\n\nFinished study points are kept in OUTDIR/run: re-running the same "
                   "command resumes an interrupted study.")

@@ -121,7 +121,7 @@ def _ridges(values, sigma, threshold):
     return rows, cols, tt[:, None] * n, n
 
 
-def estimate_surface(first, sino, *, threshold=0.2, sigma=1.0, shadows=True):
+def estimate_surface(first, sino, *, threshold=0.2, sigma=1.5, shadows=True):
     """Surface points and outward normals from a first reconstruction.
 
     Parameters
@@ -341,6 +341,49 @@ class _SurfaceAdjoint:
         return out
 
 
+def _backed(surface, H, sino, keep, share=0.5):
+    """For the points ``keep``: whether at least ``share`` of their strong views (weight ≥
+    ¼ of their largest) find returns in their bins (above the noise floor, or any count
+    in counted data)."""
+    from . import _kernels
+
+    sub = _subset(surface, keep)
+    h = H[keep]
+    strong = (h >= 0.25 * h.max(axis=1, keepdims=True)).astype(float)
+    # any count backs a point (at one photoelectron expected per bin, 63 % of its bins
+    # hold one); sparse noise counts do not line up along a point's sinusoid
+    lit = (sino.values > _noise_floor(sino, quanta=0.5) * float(np.abs(sino.values).max())
+           ).astype(float)
+    e0, inv_dr = _uniform(sino.bin_edges)
+    phi = np.deg2rad(sino.angles_deg)
+    hits = np.zeros(sub.rows.size)
+    args = _segments(sub, strong)
+    _kernels.surface_backproject(lit, *args, np.cos(phi), np.sin(phi), e0, inv_dr, hits)
+    return hits >= share * strong.sum(axis=1)
+
+
+def _noise_floor(sino, quanta=3.0):
+    """The data's noise floor relative to its maximum, and at least
+    :data:`~meshladar.reconstruct.LOG_FLOOR`: ``quanta`` quanta when the bins are whole
+    multiples of a quantum (counted photoelectrons, however scaled), else five robust
+    standard deviations of the bins (most bins hold no surface, so their median absolute
+    deviation is the noise)."""
+    from .reconstruct import LOG_FLOOR
+
+    v = sino.values
+    peak = float(np.abs(v).max(initial=0.0))
+    if peak == 0:
+        return LOG_FLOOR
+    nonzero = np.abs(v[v != 0])
+    quantum = float(nonzero.min())
+    steps = nonzero / quantum
+    if quantum < peak and np.mean(np.abs(steps - np.round(steps)) < 1e-6) > 0.99:
+        level = quanta * quantum
+    else:
+        level = 5.0 * 1.4826 * float(np.median(np.abs(v - np.median(v))))
+    return float(min(0.5, max(LOG_FLOOR, level / peak)))
+
+
 def _subset(surface, keep):
     import dataclasses
 
@@ -401,7 +444,7 @@ SOLVERS = ("cgls", "sirt")
 
 def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first=None,
                labels=None, method="cgls", n_iter=30, weights=None, threshold=0.2,
-               sigma=1.0, shadows=True, blur_deg=1.0, smooth=2.0, surface=None, tol=None,
+               sigma=1.5, shadows=True, blur_deg=1.0, smooth=2.0, surface=None, tol=None,
                progress=False):
     """BRDF- and shadow-compensated reconstruction (see the module docstring).
 
@@ -456,7 +499,8 @@ def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first
         if first is None:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", MeshladarWarning)   # few-views warning
-                first = fbp(log_radiance(sino), size=size, extent=extent, center=center)
+                first = fbp(log_radiance(sino, floor=_noise_floor(sino, 0.5)), size=size,
+                            extent=extent, center=center)
         surface = estimate_surface(first, sino, threshold=threshold, sigma=sigma,
                                    shadows=shadows)
     elif not isinstance(surface, Surface):
@@ -468,8 +512,15 @@ def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first
     H = surface_weights(surface, sino.angles_deg, material, labels=labels,
                                radiometry=radiometry, blur_deg=blur_deg)
     # a point no view sees (hidden behind another surface in all its front views: an
-    # artefact inside a shape) carries no data; drop it
-    seen = H.any(axis=1)
+    # artefact inside a shape) carries no data, one seen only at glancing incidence (total
+    # weight under 5 % of the median point's) would take any value, and a point the data
+    # does not back (a noise ridge: its strong views' bins mostly empty) is not a surface
+    total = H.sum(axis=1)
+    seen = total > 0.05 * float(np.median(total[total > 0])) if total.any() else total > 0
+    seen[seen] = _backed(surface, H, sino, seen)
+    if not seen.any():
+        raise ParameterError("no surface point of the first reconstruction is seen by the "
+                             "data; give first= or a lower threshold")
     if not seen.all():
         surface = _subset(surface, seen)
         H = H[seen]

@@ -149,13 +149,17 @@ def ellipse_darkening(image, ellipse, power):
 
 
 def ring_visibility(image, gray_disk, al_disk, bin_width):
-    """The gray disk's ring mean over the aluminium disk's (annuli of ±2 bins)."""
+    """The gray disk's ring mean over the aluminium disk's (annuli of ±2 bins); NaN when
+    the aluminium ring is exactly 0."""
 
     def ring(d):
         radii = d.radius + np.linspace(-2, 2, 17) * bin_width
         return image.radial_profile(radii, center=d.center).mean()
 
-    return float(ring(gray_disk) / ring(al_disk))
+    gray, al = float(ring(gray_disk)), float(ring(al_disk))
+    if al == 0.0:                      # no aluminium ring left: the ratio is undefined
+        return math.nan
+    return gray / al
 
 
 #: Panels measured again with received power (``radiometry="power"``) as the data: metrics

@@ -167,26 +167,43 @@ def _clutter(img, band, inside):
     return float(np.abs(img[inside & ~band]).sum()) / total if total > 0 else 0.0
 
 
-def _noisy(sino, photons, seed):
-    """The sinogram with photon-counting noise: scaled so that its brightest bin holds
-    ``photons`` photoelectrons, one Poisson draw (:func:`meshladar.receiver.draw_noise`),
+def _noisy(sino, photons, seed, speckle_cells=None, background=0.0):
+    """The sinogram as a photon-counting receiver sees it: scaled so that its brightest
+    bin holds ``photons`` photoelectrons, with speckle of ``speckle_cells`` cells per bin
+    and ``background`` photoelectrons per bin (:func:`meshladar.receiver.draw_noise`, one
+    seeded draw), the mean background subtracted (as a receiver that measured it would),
     scaled back."""
     import dataclasses
 
     from .receiver import Noise, draw_noise
 
     k = photons / float(sino.values.max())
-    counts = draw_noise(Noise(), sino.values * k, 0.0, 1, seed)[0]
+    noise = Noise(speckle_cells=speckle_cells, background_rate=background)
+    counts = draw_noise(noise, sino.values * k, 1.0, 1, seed)[0] - background
     return dataclasses.replace(sino, values=counts / k,
-                               info=dict(sino.info, photons_at_peak=photons))
+                               info=dict(sino.info, photons_at_peak=photons,
+                                         speckle_cells=speckle_cells,
+                                         background_per_bin=background))
 
 
-def run(setting="quick", *, methods=METHODS, spacings=SPACINGS, photons=None, seed=0):
+def run(setting="quick", *, methods=METHODS, spacings=SPACINGS, photons=None, seed=0,
+        speckle_cells=None, background=0.0):
     """Every (phantom, spacing, method): a dict row with ``error``, the phantom's metric
     (``darkening`` or ``visibility``) and ``seconds``; returns (rows, images) with images
     keyed by (phantom, spacing, method). With ``photons``, each sinogram carries
-    photon-counting noise with that many photoelectrons in its brightest bin (seeded)."""
+    photon-counting noise with that many photoelectrons in its brightest bin (seeded),
+    and optionally speckle (``speckle_cells`` M ≥ 1 per bin) and a ``background`` of
+    photoelectrons per bin (subtracted in the mean, its noise kept)."""
     from . import paper
+    from ._validate import check_real
+    from .errors import ParameterError
+
+    if photons is None and (speckle_cells is not None or background):
+        raise ParameterError("speckle_cells and background need photons (the signal's "
+                             "scale in photoelectrons)")
+    if photons is not None:
+        photons = check_real("photons", photons, low=0.0, low_open=True)
+    background = check_real("background", background, low=0.0)
     from .forward import simulate
     from .ladar import Ladar
 
@@ -204,7 +221,8 @@ def run(setting="quick", *, methods=METHODS, spacings=SPACINGS, photons=None, se
             ladar = Ladar(np.arange(0.0, 360.0, sp), bins)
             sino = simulate(scene, ladar)
             if photons is not None:
-                sino = _noisy(sino, photons, [seed, int(sp * 1000)])
+                sino = _noisy(sino, photons, [seed, int(sp * 1000)], speckle_cells,
+                              background)
             for method in methods:
                 from .reconstruct import clip_radiance, log_radiance
 
@@ -215,15 +233,17 @@ def run(setting="quick", *, methods=METHODS, spacings=SPACINGS, photons=None, se
                 img = _reconstruct(method, sino, size, n_iter, scene)
                 seconds = time.perf_counter() - t0
                 row = {"phantom": name, "spacing_deg": sp, "method": method,
-                       "photons": photons,
+                       "photons": photons, "speckle_cells": speckle_cells,
+                       "background": background,
                        "error": _error(img.values, ideal, points),
                        "clutter": _clutter(img.values, band, inside), "seconds": seconds}
                 if name.startswith("disk"):
                     row["darkening"] = paper.disk_darkening(img, 0.8, power)[0]
                 else:
                     gray, al = scene.shapes
-                    row["visibility"] = paper.ring_visibility(img, gray, al,
-                                                              float(np.diff(bins)[0]))
+                    vis = paper.ring_visibility(img, gray, al, float(np.diff(bins)[0]))
+                    # None where the aluminium ring is gone (the ratio is undefined)
+                    row["visibility"] = vis if np.isfinite(vis) else None
                 rows.append(row)
                 images[(name, sp, method)] = img.values
     return rows, images
@@ -237,7 +257,8 @@ def report(rows):
         metric = r.get("darkening", r.get("visibility"))
         kind = "dark" if "darkening" in r else "vis"
         err = "—" if r["error"] is None else f"{r['error']:.3f}"
+        metric = "—" if metric is None else f"{metric:.3f}"
         out.append(f"  {r['phantom']:<14} {r['spacing_deg']:>6g}° {r['method']:<11} "
-                   f"{err:>7} {r['clutter']:7.3f} {kind:>4} {metric:6.3f} "
+                   f"{err:>7} {r['clutter']:7.3f} {kind:>4} {metric:>6} "
                    f"{r['seconds']:8.2f}")
     return out

@@ -119,7 +119,7 @@ def test_surface_points_and_normals_follow_the_circle():
 def test_shadow_map_matches_exact_geometry_on_the_disk_pair():
     """For the paper's disk pair, 'another surface between the point and the ladar' from
     the first reconstruction agrees with exact ray-disk intersection on ≥ 93 % of the
-    front-facing point-views (measured 96 %; the misses are a few spurious ridge points)."""
+    front-facing point-views of the points on the true boundaries (measured 99 %)."""
     scene = paper._pair(materials.DARK_GRAY, materials.ALUMINUM)
     sino = ml.simulate(scene, LADAR)
     surf = estimate_surface(ml.fbp(ml.log_radiance(sino), size=SIZE), sino)
@@ -133,18 +133,23 @@ def test_shadow_map_matches_exact_geometry_on_the_disk_pair():
         disc = b * b - (np.sum(oc * oc, axis=1)[:, None] - disk.radius ** 2)
         return (disc > 0) & (-b - np.sqrt(np.maximum(disc, 0)) > 0)
 
-    on_big = (np.abs(np.hypot(*(surf.points - big.center).T) - big.radius)
-              < np.abs(np.hypot(*(surf.points - small.center).T) - small.radius))
+    d_big = np.abs(np.hypot(*(surf.points - big.center).T) - big.radius)
+    d_small = np.abs(np.hypot(*(surf.points - small.center).T) - small.radius)
+    on_big = d_big < d_small
     truth = np.where(on_big[:, None], blocked(surf.points, small), blocked(surf.points, big))
-    front = surf.normals @ w.T > 0
+    # judged on the points that lie on a true boundary (artefact points inside a disk are
+    # rightly hidden by their own disk, which the two-disk truth above does not model)
+    on_surface = np.minimum(d_big, d_small) < 2 * 1.6 / 256
+    assert on_surface.mean() > 0.8
+    front = (surf.normals @ w.T > 0) & on_surface[:, None]
     assert ((surf.shadowed == truth) & front).sum() / front.sum() >= 0.93
     assert (truth & front).sum() > 0.05 * front.sum()            # the test has shadows
 
 
 def test_shadow_awareness_drops_hidden_points_on_the_gray_pair():
     """Fig. 9's gray pair: the shadow map drops ridge artefacts inside the disks (no view
-    sees them), so nothing is left off the surfaces (clutter 0.011 → 0 measured), and
-    the surfaces come out more even (surface error 0.54 → 0.49 measured)."""
+    sees them), so nothing is left off the surfaces (clutter 0.018 → 0 measured), and
+    the surfaces come out more even (surface error 0.63 → 0.58 measured)."""
     from meshladar import study_reconstruction as study
 
     lad = Ladar(np.arange(0.0, 360.0, 1.0), Ladar.centered(128, 1.6 / 128).bin_edges)
@@ -218,3 +223,23 @@ def test_bad_input_is_named():
         bad = Ladar(LADAR.angles_deg, np.r_[LADAR.bin_edges[:-1], LADAR.bin_edges[-1] + 0.1])
         compensate(ml.simulate(Scene([Disk((0.0, 0.0), R, Lambertian(1.0))]), bad),
                    Lambertian(1.0), size=64)
+
+
+def test_compensation_with_photon_noise():
+    """1000 photoelectrons in the brightest bin, Poisson: the noise floor is read off the
+    counts' quantum, noise ridges are dropped because the data does not back them, and the
+    b = 0.99 disk still comes out without darkening at its level."""
+    from meshladar import study_reconstruction as study
+    from meshladar.compensation import _noise_floor
+
+    m = paper._diffuse(0.99)
+    clean = _disk(m)
+    noisy = study._noisy(clean, 1000.0, 7)
+    assert _noise_floor(clean) == pytest.approx(1e-6)
+    assert _noise_floor(noisy) == pytest.approx(3.0 / 1000.0, rel=0.2)   # three photons
+    img = compensate(noisy, m, size=SIZE, method="sirt", n_iter=100)
+    dark, _ = paper.disk_darkening(img, R, float(clean.total().mean()))
+    assert abs(dark) <= 0.2
+    level, spread = _ring_stats(img)
+    assert abs(level / (_mean_weight(m) * 2 * np.pi * R) - 1) < 2 * LEVEL_TOL
+    assert spread < 2 * UNIFORMITY_TOL
