@@ -404,18 +404,31 @@ def cgls(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=30, x0=None, w
     return _image(x, extent, center, info)
 
 
-def glint_weights(sino, threshold=None, floor=0.0):
+def glint_weights(sino, threshold=None, floor=0.0, max_share=0.1):
     """Per-bin weights that drop (or down-weight to ``floor``) the bins brighter than
     ``threshold`` × the sinogram's maximum (default the paper's clip level, 0.008): a
     glint's few bright bins then stop hiding the diffuse parts, without clipping the data
-    the other bins fit. For :func:`sirt`, :func:`cgls` and :func:`tv_fista`."""
+    the other bins fit. For :func:`sirt`, :func:`cgls` and :func:`tv_fista`.
+
+    A glint is a few bins: only when the bright bins are at most ``max_share`` of the bins
+    that hold returns (above the noise floor) are they dropped; otherwise the scene does
+    not glint and every weight is 1 (measured at 1° views: 2-4 % on the paper's glinting
+    pairs, 42-45 % on the diffuse disk and the gray pair)."""
+    from .compensation import _noise_floor
     from .reconstruct import PAPER_CLIP
 
     check_sinogram("sino", sino)
     thr = check_real("threshold", PAPER_CLIP if threshold is None else threshold, low=0.0,
                      high=1.0, low_open=True)
     floor = check_real("floor", floor, low=0.0, high=1.0)
-    return np.where(sino.values <= thr * float(sino.values.max(initial=0.0)), 1.0, floor)
+    max_share = check_real("max_share", max_share, low=0.0, high=1.0)
+    v = sino.values
+    peak = float(v.max(initial=0.0))
+    bright = v > thr * peak
+    returning = v > min(thr, _noise_floor(sino)) * peak
+    if bright.sum() > max_share * max(1, returning.sum()):
+        return np.ones_like(v)
+    return np.where(bright, floor, 1.0)
 
 
 def _grad(x):

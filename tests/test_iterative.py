@@ -254,3 +254,21 @@ def test_reconstruction_study_with_speckle_and_background():
     assert abs(noisy.values.sum() / sino.values.sum() - 1) < 0.05
     with pytest.raises(ParameterError, match="photons"):
         study.run("quick", methods=("fbp",), spacings=(10.0,), speckle_cells=1.0)
+
+
+def test_glint_weights_leave_a_scene_without_glints_alone():
+    """'No worse elsewhere': on the diffuse b = 0.99 disk (45 % of its returning bins are
+    above the clip level) glint weights are all 1, so weighted SIRT is plain SIRT; on the
+    glinting pair (2 %) they drop exactly the bright bins."""
+    from meshladar import study_reconstruction as study
+    from meshladar.iterative import glint_weights
+    from meshladar.ladar import Ladar
+
+    lad = Ladar(np.arange(0.0, 360.0, 5.0), Ladar.centered(128, 1.6 / 128).bin_edges)
+    disk = ml.simulate(study._phantoms()["disk_b0.99"], lad)
+    assert np.all(glint_weights(disk) == 1.0)
+    pair = ml.simulate(study._phantoms()["pair_gray_al"], lad)
+    w = glint_weights(pair)
+    assert np.array_equal(w == 0, pair.values > 0.008 * pair.values.max())
+    assert 0 < (w == 0).sum() < 0.1 * (pair.values > 0).sum()
+    assert np.all(glint_weights(pair, max_share=0.0) == 1.0)
