@@ -27,7 +27,8 @@ import numpy as np
 __all__ = ["METHODS", "SPACINGS", "run", "report"]
 
 #: Reconstruction methods compared (FBP and its paper preprocessings, iterative solvers).
-METHODS = ("fbp", "fbp_log", "fbp_clip", "sirt", "sirt_glint", "cgls", "tv", "compensated")
+METHODS = ("fbp", "fbp_log", "fbp_clip", "sirt", "sirt_glint", "sart", "cgls", "tv",
+           "compensated")
 #: View spacings in degrees.
 SPACINGS = (1.0, 5.0, 10.0, 20.0)
 #: Boundary samples per judged arc (720 per boundary: 4° arcs).
@@ -93,8 +94,10 @@ def _compensated(sino, size, n_iter, scene):
 
 
 def _iterate(method, sino, size, n_iter):
-    from .iterative import cgls, glint_weights, sirt, tv_fista
+    from .iterative import cgls, glint_weights, sart, sirt, tv_fista
 
+    if method == "sart":             # ten groups: a sweep moves about as far as ten SIRT steps
+        return sart(sino, size=size, n_iter=max(2, n_iter // 4), subsets=min(10, sino.n_views))
     if method == "sirt":
         return sirt(sino, size=size, n_iter=n_iter, projector="linear")
     if method == "sirt_glint":

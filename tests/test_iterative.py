@@ -272,3 +272,27 @@ def test_glint_weights_leave_a_scene_without_glints_alone():
     assert np.array_equal(w == 0, pair.values > 0.008 * pair.values.max())
     assert 0 < (w == 0).sum() < 0.1 * (pair.values > 0).sum()
     assert np.all(glint_weights(pair, max_share=0.0) == 1.0)
+
+
+def test_sart_is_sirt_in_one_group_and_faster_in_many():
+    """One group of views is SIRT exactly; ten groups reach in 3 sweeps an image error
+    SIRT needs far more iterations for (measured at 1° views, 96²: 0.14 after 3 sweeps,
+    SIRT 0.53 after 3 and 0.29 after 10)."""
+    from meshladar.errors import ParameterError
+    from meshladar.iterative import sart
+
+    full = disk_radon_sinogram(CENTER, RADIUS, 96, 1.0, np.arange(0.0, 360.0, 1.0))
+    one = sart(full, size=SIZE, n_iter=4, subsets=1)
+    same = sirt(full, size=SIZE, n_iter=4, projector="linear")
+    assert np.allclose(one.values, same.values, rtol=0, atol=1e-12 * same.values.max())
+    fast = sart(full, size=SIZE, n_iter=3)
+    assert fast.info["subsets"] == 10 and fast.info["method"] == "sart"
+    assert _error(fast) < 0.2 < _error(sirt(full, size=SIZE, n_iter=10, projector="linear"))
+    assert fast.values.min() >= 0.0
+    classic = sart(disk_radon_sinogram(CENTER, RADIUS, 96, 1.0, np.arange(0.0, 360.0, 30.0)),
+                   size=SIZE, n_iter=3, subsets=12, projector="siddon")
+    assert classic.info["subsets"] == 12 and np.isfinite(classic.values).all()
+    with pytest.raises(ParameterError, match="subsets"):
+        sart(full, size=SIZE, subsets=361)
+    with pytest.raises(ParameterError, match="relax"):
+        sart(full, size=SIZE, relax=2.0)
