@@ -237,7 +237,7 @@ def surface_weights(surface, angles_deg, material, *, labels=None, radiometry="p
     from .brdf import BRDF, check_brdf
     from .sensor import check_radiometry
 
-    radiometry = check_radiometry(radiometry)
+    radiometry = "power" if check_radiometry(radiometry) else "paper"
     blur_deg = check_real("blur_deg", blur_deg, low=0.0)
     mats = [material] if isinstance(material, BRDF) else list(material)
     for i, m in enumerate(mats):
