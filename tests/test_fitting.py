@@ -1,0 +1,162 @@
+"""Coatings from ladar data (meshladar.fitting): the coating kernel against the analytic
+model and against weigh on mesh hits, the coverage of the fitted intervals over seeded
+Poisson trials, identifiability failures, a user's own BRDF, and bad input."""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+
+import numpy as np
+import pytest
+
+import meshladar as ml
+from meshladar import materials, paper
+from meshladar.brdf import BRDF, SandfordRobertson
+from meshladar.errors import ParameterError
+from meshladar.fitting import IdentifiabilityWarning, coating_kernel, fit_coatings
+from meshladar.ladar import Ladar
+from meshladar.scene import Scene
+from meshladar.shapes import Disk
+
+PAIR = paper._pair(materials.DARK_GRAY, materials.ALUMINUM)
+LADAR = Ladar(np.arange(0.0, 360.0, 1.0), Ladar.centered(128, 1.6 / 128).bin_edges)
+#: Photoelectrons in the brightest bin (the aluminium glint) of the coverage trials.
+PEAK_PHOTONS = 1e5
+#: The kernel against the analytic model's exact profiles (measured 3e-4 at 8192 samples).
+KERNEL_TOL = 2e-3
+
+
+def _measured(values, ladar=LADAR, radiometry="paper"):
+    return ml.Sinogram(values, angles_deg=ladar.angles_deg, bin_edges=ladar.bin_edges,
+                       info={"radiometry": radiometry})
+
+
+@pytest.mark.parametrize("radiometry", ["paper", "power"])
+def test_kernel_matches_the_analytic_model(radiometry):
+    """Sampled boundaries, exact occlusion and the tabulated F cos θ reproduce the analytic
+    model's exact sinogram of the shadowed, glinting pair."""
+    exact = ml.simulate(PAIR, LADAR, radiometry=radiometry)
+    K = coating_kernel(PAIR, LADAR, radiometry=radiometry)
+    got = K.predict()
+    assert np.linalg.norm(got - exact.values) / np.linalg.norm(exact.values) < KERNEL_TOL
+    assert K.parts == ("large", "small") and K.source == "analytic"
+    # re-weighing for other coatings is linear in each part's table
+    swapped = K.predict([materials.ALUMINUM, materials.DARK_GRAY])
+    other = ml.simulate(paper._pair(materials.ALUMINUM, materials.DARK_GRAY), LADAR,
+                        radiometry=radiometry)
+    assert np.linalg.norm(swapped - other.values) / np.linalg.norm(other.values) < KERNEL_TOL
+
+
+def test_kernel_equals_weigh_on_mesh_hits():
+    """On traced hits the kernel is weigh's sum, up to the table's interpolation."""
+    mesh = PAIR.tessellate(256)
+    ladar = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 10.0))
+    hits = ml.trace(mesh, ladar)
+    for radiometry in ("paper", "power"):
+        ref = ml.weigh(hits, radiometry=radiometry).values
+        got = coating_kernel(hits, radiometry=radiometry).predict()
+        assert np.linalg.norm(got - ref) / np.linalg.norm(ref) < 1e-3
+
+
+def test_intervals_cover_the_truth_over_seeded_poisson_trials():
+    """The issue's goal: the gray/aluminium pair, 360 views, Poisson counts with 1e5
+    photoelectrons in the brightest bin; over 200 seeded trials every parameter's 95 %
+    interval holds the truth in ≥ 90 % of them, and the bias is below 0.25 σ (0.07 is the
+    sampling error of a 200-trial mean)."""
+    K = coating_kernel(PAIR, LADAR, samples=2048)
+    truth = K.predict()
+    k = PEAK_PHOTONS / truth.max()
+    true = np.array([getattr(m, n) for m in (materials.DARK_GRAY, materials.ALUMINUM)
+                     for n in ("rho_d", "epsilon", "b", "e")])
+    inside, z = [], []
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")                         # no warning in any trial
+        for seed in range(200):
+            counts = np.random.default_rng(seed).poisson(truth * k)
+            fit = fit_coatings(K, _measured(counts / k), noise="poisson", photons_per_unit=k)
+            lo, hi = fit.interval(0.95)
+            inside.append((lo <= true) & (true <= hi))
+            z.append((fit.estimate - true) / fit.stderr)
+    coverage = np.mean(inside, axis=0)
+    assert np.all(coverage >= 0.90), dict(zip(fit.names, coverage))
+    assert np.all(np.abs(np.mean(z, axis=0)) < 0.25), dict(zip(fit.names, np.mean(z, axis=0)))
+    assert all(v is True for v in fit.identifiable.values())
+    assert fit.names[0] == "large.rho_d" and fit.noise == "poisson"
+
+
+def test_gaussian_fit_bootstrap_and_report():
+    """Least squares with σ from the residuals, the aluminium disk's coating from a wrong
+    start (the gray disk's known); the parametric bootstrap's spread agrees with the
+    Fisher σ."""
+    K = coating_kernel(PAIR, LADAR, samples=2048)
+    truth = K.predict()
+    sigma = 1e-4 * truth.max()
+    y = truth + np.random.default_rng(5).normal(0.0, sigma, truth.shape)
+    start = {"small": SandfordRobertson(0.06, 0.5, 0.15, 0.01)}
+    fit = fit_coatings(K, _measured(y), parts=["small"], initial=start, bootstrap=20, seed=2)
+    assert fit.names == ("small.rho_d", "small.epsilon", "small.b", "small.e")
+    true = np.array([0.047, 0.53, 0.1, 0.007])
+    assert np.all(np.abs(fit.estimate - true) < 4 * fit.stderr)
+    spread = fit.bootstrap.std(axis=0)
+    assert np.all((spread > 0.6 * fit.stderr) & (spread < 1.6 * fit.stderr))
+    text = "\n".join(fit.report())
+    assert "small.e" in text and "95 % interval" in text
+    assert fit.predicted.shape == truth.shape
+
+
+def test_an_undetermined_parameter_is_named():
+    """A diffuse-only coating does not depend on ε: fitting it warns and says why; a part
+    the views never reach is flagged the same way."""
+    m = SandfordRobertson(0.4, 0.3, 0.5, 0.2, lobes="diffuse")
+    scene = Scene([Disk((0.0, 0.0), 0.5, m, name="disk")])
+    lad = Ladar(np.arange(0.0, 360.0, 5.0), Ladar.centered(64, 1.2 / 64).bin_edges)
+    y = coating_kernel(scene, lad).predict()
+    with pytest.warns(IdentifiabilityWarning, match=r"disk\.epsilon \(the data do not "
+                                                    r"depend on it\)"):
+        fit = fit_coatings(scene, _measured(y, lad), free=("rho_d", "epsilon", "b"))
+    assert fit.identifiable["disk.epsilon"] == "the data do not depend on it"
+    assert fit.identifiable["disk.rho_d"] is True
+    assert np.isinf(fit.stderr[1])
+    assert abs(fit.estimate[0] - 0.4) < 1e-6 and abs(fit.estimate[2] - 0.5) < 1e-6
+
+
+def test_a_users_own_brdf_is_fitted():
+    """Any dataclass BRDF with float fields fits the same way (here a cos^n model)."""
+    @dataclasses.dataclass(frozen=True)
+    class Sheen(BRDF):
+        albedo: float
+        n: float
+
+        def projected(self, cos_theta, sin_theta):
+            c = np.maximum(cos_theta, 0.0)
+            return self.albedo * (self.n + 1) / (2 * np.pi) * c ** self.n
+
+    scene = Scene([Disk((0.0, 0.0), 0.5, Sheen(0.6, 3.0), name="disk")])
+    lad = Ladar(np.arange(0.0, 360.0, 5.0), Ladar.centered(64, 1.2 / 64).bin_edges)
+    y = coating_kernel(scene, lad).predict()
+    fit = fit_coatings(scene, _measured(y, lad), initial={"disk": Sheen(0.3, 1.5)},
+                       bounds={"albedo": (0.0, 1.0), "n": (0.0, 50.0)})
+    assert fit.names == ("disk.albedo", "disk.n")
+    np.testing.assert_allclose(fit.estimate, [0.6, 3.0], rtol=1e-5)
+    assert isinstance(fit.materials[0], Sheen)
+
+
+def test_bad_input_is_named():
+    K = coating_kernel(PAIR, LADAR, samples=512)
+    y = _measured(K.predict())
+    with pytest.raises(ParameterError, match="photons_per_unit"):
+        fit_coatings(K, y, noise="poisson")
+    with pytest.raises(ParameterError, match="free parameters"):
+        fit_coatings(K, y, free=("roughness",))
+    with pytest.raises(ParameterError, match="bounds"):
+        fit_coatings(K, y, bounds={"b": (0.5, 0.5)})
+    with pytest.raises(ParameterError, match="part"):
+        fit_coatings(K, y, parts=["medium"])
+    with pytest.raises(ParameterError, match="shape"):
+        fit_coatings(K, _measured(K.predict()[:, :64], Ladar(LADAR.angles_deg,
+                                                                 LADAR.bin_edges[:65])))
+    with pytest.raises(ParameterError, match="noise"):
+        fit_coatings(K, y, noise="laplace")
+    with pytest.raises(ParameterError, match="geometry"):
+        coating_kernel("pair.stl", LADAR)
