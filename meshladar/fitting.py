@@ -38,7 +38,8 @@ from ._validate import check_choice, check_count, check_real
 from .errors import MeshladarWarning, ParameterError
 
 __all__ = ["CoatingKernel", "coating_kernel", "fit_coatings", "CoatingFit",
-           "IdentifiabilityWarning", "NOISE_MODELS", "SR_BOUNDS"]
+           "IdentifiabilityWarning", "design_views", "ViewDesign", "NOISE_MODELS",
+           "SR_BOUNDS"]
 
 #: θ samples of the tables on [0, π/2].
 GRID = 8193
@@ -396,6 +397,29 @@ def _materials(mats, params, x):
     return out
 
 
+def _jacobian(K, mats, params, x, base, scale, n_rows):
+    """∂(model)/∂(parameters), (n_rows, n): each parameter's table derivative by a one-sided
+    step into its bounds, through its part's matrix ``K[part]``."""
+    J = np.zeros((n_rows, len(params)))
+    if base is None:
+        return J
+    for p in sorted({q.part for q in params}):
+        cols = [i for i, prm in enumerate(params) if prm.part == p]
+        D = np.zeros((GRID, len(cols)))
+        for c, i in enumerate(cols):
+            prm = params[i]
+            h = 1e-7 * max(1.0, abs(x[i])) if prm.name != "e" else 1e-5 * max(x[i], 1e-4)
+            step = h if x[i] + h <= prm.high else -h
+            moved = np.array(x, dtype=float)
+            moved[i] = x[i] + step
+            try:
+                D[:, c] = (_table(_materials(mats, params, moved)[p]) - base[p]) / step
+            except ParameterError:
+                continue
+        J[:, cols] = (K[p] @ D) * scale
+    return J
+
+
 def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, initial=None,
                  noise="gaussian", photons_per_unit=None, speckle_cells=None, background=0.0,
                  bootstrap=0, seed=0, samples=8192, max_iter=50):
@@ -517,26 +541,7 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
         return m
 
     def jacobian(x):
-        J = np.zeros((data.size, len(params)))
-        base = tables(x)
-        for p in fitted_parts:
-            cols = [i for i, prm in enumerate(params) if prm.part == p]
-            D = np.zeros((GRID, len(cols)))
-            for c, i in enumerate(cols):
-                # a one-sided step into the bounds (forward unless at the upper bound)
-                prm = params[i]
-                h = 1e-7 * max(1.0, abs(x[i])) if prm.name != "e" else 1e-5 * max(x[i], 1e-4)
-                step = h if x[i] + h <= prm.high else -h
-                moved = x.copy()
-                moved[i] = x[i] + step
-                try:
-                    other = _table(_materials(mats, params, moved)[p])
-                except ParameterError:
-                    continue
-                if base is not None:
-                    D[:, c] = (other - base[p]) / step
-            J[:, cols] = (K[p] @ D) * scale
-        return J
+        return _jacobian(K, mats, params, x, tables(x), scale, data.size)
 
     def variance(m):
         if noise == "gaussian":
@@ -673,3 +678,102 @@ def _uncertainty(fisher, x, params, kernel):
                                           f"{params[other].name} (correlation "
                                           f"{corr[a, b_]:+.4f})")
     return cov, reasons
+
+
+# --------------------------------------------------------------------------- design
+
+
+@dataclass(frozen=True, eq=False)
+class ViewDesign:
+    """The result of :func:`design_views`.
+
+    Attributes
+    ----------
+    chosen : (budget,) int array
+        Indices of the chosen views, in the order the greedy search added them.
+    angles_deg : (n_views,) array
+        Every candidate view's angle.
+    information : (n_views,) array
+        Each candidate alone: log det of its scaled Fisher information (with a small
+        ridge), the view's own worth.
+    names : tuple of str
+    stderr_designed, stderr_uniform : (n,) arrays
+        Parameter σ from the chosen views and from ``budget`` evenly spaced views.
+    """
+
+    chosen: np.ndarray
+    angles_deg: np.ndarray
+    information: np.ndarray
+    names: tuple
+    stderr_designed: np.ndarray
+    stderr_uniform: np.ndarray
+    uniform: np.ndarray
+
+
+def design_views(geometry, budget, *, ladar=None, parts=None, free=None, materials=None,
+                 photons_per_unit=None, samples=4096):
+    """Which ``budget`` of the candidate views constrain the coatings best: greedy
+    D-optimal design on the Fisher information of Poisson counts (each step adds the view
+    that most raises log det F of the chosen set), compared with evenly spaced views.
+
+    Parameters
+    ----------
+    geometry : CoatingKernel, Scene or Hits
+        The candidates are its views (a Scene needs ``ladar``).
+    budget : int
+        Views to choose.
+    parts, free
+        As :func:`fit_coatings`.
+    materials : dict, optional
+        part → BRDF, the coatings the design is for (default the geometry's).
+    photons_per_unit : float, optional
+        Counts per unit of the sinogram (default: 1e5 counts in the brightest bin).
+    """
+    if isinstance(geometry, CoatingKernel):
+        kernel = geometry
+    else:
+        kernel = coating_kernel(geometry, ladar, samples=samples)
+    n_views = kernel.shape[0]
+    budget = check_count("budget", budget)
+    if budget > n_views:
+        raise ParameterError(f"budget must be at most the {n_views} candidate views; got "
+                             f"{budget}")
+    mats, params = _resolve_params(kernel, parts, free, None, materials)
+    x = np.array([float(getattr(mats[p.part], p.name)) for p in params])
+    m = kernel.predict(mats).ravel()
+    scale = (1e5 / float(m.max()) if photons_per_unit is None else
+             check_real("photons_per_unit", photons_per_unit, low=0.0, low_open=True))
+    parts_ = sorted({q.part for q in params})
+    base = {p: _table(mats[p]) for p in parts_}
+    J = _jacobian({p: kernel.matrices[p] for p in parts_}, mats, params, x, base, scale,
+                  m.size)
+    V = np.maximum(m * scale, 1e-9 * float(m.max()) * scale)
+    width = np.array([prm.high - prm.low if math.isfinite(prm.high - prm.low)
+                      else max(abs(v), 1e-12) for prm, v in zip(params, x)])
+    Js = J * width[None, :]                          # in units of each parameter's range
+    n_bins = kernel.shape[1]
+    per_view = np.einsum("vbi,vbj->vij", (Js / V[:, None]).reshape(n_views, n_bins, -1),
+                         Js.reshape(n_views, n_bins, -1))
+    total = per_view.sum(axis=0)
+    ridge = 1e-9 * float(np.trace(total)) / len(params) * np.eye(len(params))
+    information = np.array([np.linalg.slogdet(F + ridge)[1] for F in per_view])
+    chosen, F = [], ridge.copy()
+    for _ in range(budget):
+        best, gain = -1, -math.inf
+        for v in range(n_views):
+            if v in chosen:
+                continue
+            g = np.linalg.slogdet(F + per_view[v])[1]
+            if g > gain:
+                best, gain = v, g
+        chosen.append(best)
+        F = F + per_view[best]
+    uniform = np.round(np.arange(budget) * n_views / budget).astype(int)
+
+    def stderr(idx):
+        Fi = per_view[idx].sum(axis=0) + ridge
+        return np.sqrt(np.abs(np.diag(np.linalg.pinv(Fi)))) * width
+
+    names = tuple(f"{kernel.parts[p.part]}.{p.name}" for p in params)
+    return ViewDesign(np.array(chosen), np.asarray(kernel.angles_deg), information, names,
+                      stderr(chosen), stderr(uniform), uniform)

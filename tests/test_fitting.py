@@ -160,3 +160,24 @@ def test_bad_input_is_named():
         fit_coatings(K, y, noise="laplace")
     with pytest.raises(ParameterError, match="geometry"):
         coating_kernel("pair.stl", LADAR)
+
+
+def test_view_design_beats_even_spacing(tmp_path):
+    """Greedy D-optimal choice of 8 of 72 candidate views: distinct views whose Fisher
+    information has a larger determinant than 8 evenly spaced ones' (measured: the
+    aluminium glint width's σ 87× smaller), drawn as a figure."""
+    from meshladar.fitting import design_views
+    from meshladar.viz.fitting import draw_design
+
+    lad = Ladar(np.arange(0.0, 360.0, 5.0), Ladar.centered(128, 1.6 / 128).bin_edges)
+    d = design_views(PAIR, 8, ladar=lad)
+    assert len(set(d.chosen.tolist())) == 8
+    assert np.prod(d.stderr_designed) < np.prod(d.stderr_uniform)
+    assert d.stderr_designed[-1] < 0.1 * d.stderr_uniform[-1]          # small.e
+    assert d.names[-1] == "small.e"
+    # the first pick is the single most informative view
+    assert d.chosen[0] == int(np.argmax(d.information))
+    png = draw_design(d, tmp_path / "design.png")
+    assert (tmp_path / "design.png").stat().st_size > 10_000 and str(png).endswith(".png")
+    with pytest.raises(ParameterError, match="budget"):
+        design_views(PAIR, 73, ladar=lad)

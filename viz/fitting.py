@@ -1,0 +1,50 @@
+"""Figures of coating fits: the view design of :func:`meshladar.fitting.design_views`."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import style
+
+__all__ = ["draw_design"]
+
+
+@style.styled
+def draw_design(design, path, *, dpi=150):
+    """Write a PNG of a :class:`~meshladar.fitting.ViewDesign` to ``path``: each candidate
+    view's own information against its angle with the chosen views numbered in the order
+    they were added, and each parameter's σ from the chosen views against as many evenly
+    spaced ones (log scale). Returns the path."""
+    from meshladar.errors import ParameterError
+    from meshladar.fitting import ViewDesign
+
+    if not isinstance(design, ViewDesign):
+        raise ParameterError(f"design must be a meshladar.fitting.ViewDesign; got "
+                             f"{type(design).__name__}")
+    plt = style.use()
+    fig, (a, b) = plt.subplots(1, 2, figsize=(11.0, 3.8))
+    ang = design.angles_deg
+    order = np.argsort(ang)
+    a.plot(ang[order], design.information[order], color="0.4", lw=1,
+           label="each view alone")
+    a.plot(ang[design.uniform], design.information[design.uniform], "o", mfc="none",
+           color="tab:blue", label="evenly spaced")
+    a.plot(ang[design.chosen], design.information[design.chosen], "o", color="tab:red",
+           label="chosen")
+    for k, v in enumerate(design.chosen):
+        a.annotate(str(k + 1), (ang[v], design.information[v]), textcoords="offset points",
+                   xytext=(0, 6), ha="center", fontsize=7, color="tab:red")
+    a.set_xlabel("view angle (deg)")
+    a.set_ylabel("log det of the view's Fisher information")
+    a.set_title(f"{design.chosen.size} views chosen (D-optimal, greedy)")
+    a.legend(fontsize=7)
+    x = np.arange(len(design.names))
+    b.bar(x - 0.2, design.stderr_uniform, 0.4, color="tab:blue", label="evenly spaced")
+    b.bar(x + 0.2, design.stderr_designed, 0.4, color="tab:red", label="chosen")
+    b.set_yscale("log")
+    b.set_xticks(x)
+    b.set_xticklabels(design.names, rotation=45, ha="right", fontsize=7)
+    b.set_ylabel("parameter sigma")
+    b.legend(fontsize=7)
+    fig.tight_layout()
+    return style.save_png(fig, path, dpi)
