@@ -120,6 +120,35 @@ class CoatingKernel:
                                  f"part {list(self.parts)}; got {len(mats)}")
         return sum(self.contribution(i, m) for i, m in enumerate(mats))
 
+    def received(self, sample_rate, *, pulse=None, response=None, standoff=0.0,
+                 oversample=8):
+        """The kernel of the waveforms a digitiser records (:func:`meshladar.receive` with
+        these arguments, which is linear in the bins): each part's matrix composed with the
+        per-view map from bins to samples. ``bin_edges`` become the samples' time edges
+        (s) and :meth:`predict` gives waveform values; fit them with
+        :func:`fit_coatings` and the measured :class:`~meshladar.receiver.Waveforms`."""
+        from scipy.sparse import csr_matrix, identity, kron
+
+        from .receiver import receive
+        from .sinogram import Sinogram
+
+        if self.source.endswith("waveforms"):
+            raise ParameterError("this kernel already gives waveforms")
+        n_views, n_bins = self.shape
+        unit = Sinogram(np.eye(n_bins), angles_deg=np.zeros(n_bins),
+                        bin_edges=self.bin_edges, info={"radiometry": self.radiometry})
+        w = receive(unit, sample_rate=sample_rate, pulse=pulse, response=response,
+                    standoff=standoff, oversample=oversample)
+        R = np.array(w.values).T                                   # (samples, bins)
+        R[np.abs(R) < 1e-12 * float(np.abs(R).max(initial=0.0))] = 0.0
+        block = kron(identity(n_views, format="csr"), csr_matrix(R), format="csr")
+        return CoatingKernel(tuple(block @ m for m in self.matrices), self.parts,
+                             self.materials, (n_views, R.shape[0]), self.angles_deg,
+                             np.asarray(w.time_edges), self.radiometry,
+                             f"{self.source} waveforms",
+                             {**self.info, "sample_rate": float(sample_rate),
+                              "pulse": repr(pulse), "response": repr(response)})
+
     def sinogram(self, materials=None):
         """:meth:`predict` as a :class:`~meshladar.Sinogram`."""
         from .sinogram import Sinogram
@@ -430,8 +459,9 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
     geometry : CoatingKernel, Scene or Hits
         The traced geometry (:func:`coating_kernel`); a Scene of analytic shapes is traced
         on the measured sinogram's views and bins.
-    measured : Sinogram
-        The data (its ``info["radiometry"]`` picks the radiometry for a Scene).
+    measured : Sinogram or Waveforms
+        The data (its ``info["radiometry"]`` picks the radiometry for a Scene); waveforms
+        need a waveform kernel (:meth:`CoatingKernel.received`).
     parts : sequence, optional
         Parts (names or indices) whose coatings are fitted (default all); the others keep
         their coatings.
@@ -469,8 +499,16 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
     from ._validate import check_sinogram
     from .scene import Scene
 
-    check_sinogram("measured", measured)
+    from .receiver import Waveforms
+
+    waveforms = isinstance(measured, Waveforms)
+    if not waveforms:
+        check_sinogram("measured", measured)
     noise = check_choice("noise", noise, NOISE_MODELS)
+    if waveforms and not (isinstance(geometry, CoatingKernel)
+                          and geometry.source.endswith("waveforms")):
+        raise ParameterError("measured waveforms need the geometry as a waveform kernel: "
+                             "coating_kernel(...).received(sample_rate, pulse=...)")
     if isinstance(geometry, CoatingKernel):
         kernel = geometry
     elif isinstance(geometry, Scene):

@@ -181,3 +181,27 @@ def test_view_design_beats_even_spacing(tmp_path):
     assert (tmp_path / "design.png").stat().st_size > 10_000 and str(png).endswith(".png")
     with pytest.raises(ParameterError, match="budget"):
         design_views(PAIR, 73, ladar=lad)
+
+
+def test_coatings_from_waveforms():
+    """Waveforms of 2 ns pulses at 10 GHz: the received kernel equals receive() of the
+    kernel's sinogram, and the aluminium disk's coating is recovered from Poisson-counted
+    waveform samples."""
+    from meshladar.receiver import GaussianPulse, receive
+
+    lad = Ladar(np.arange(0.0, 360.0, 3.0), Ladar.centered(64, 1.6 / 64).bin_edges)
+    K = coating_kernel(PAIR, lad, samples=2048, radiometry="power")
+    pulse = GaussianPulse(5e-10)
+    KW = K.received(10e9, pulse=pulse)
+    ref = receive(K.sinogram(), sample_rate=10e9, pulse=pulse)
+    np.testing.assert_allclose(KW.predict(), ref.values, rtol=0,
+                               atol=1e-9 * np.abs(ref.values).max())
+    k = 1e5 / ref.values.max()
+    counts = np.random.default_rng(1).poisson(np.maximum(ref.values, 0) * k)
+    measured = dataclasses.replace(ref, values=counts / k)
+    fit = fit_coatings(KW, measured, parts=["small"], noise="poisson", photons_per_unit=k,
+                       initial={"small": SandfordRobertson(0.06, 0.5, 0.15, 0.01)})
+    true = np.array([0.047, 0.53, 0.1, 0.007])
+    assert np.all(np.abs(fit.estimate - true) < 4 * fit.stderr)
+    with pytest.raises(ParameterError, match="waveform kernel"):
+        fit_coatings(K, measured)
