@@ -205,3 +205,33 @@ def test_coatings_from_waveforms():
     assert np.all(np.abs(fit.estimate - true) < 4 * fit.stderr)
     with pytest.raises(ParameterError, match="waveform kernel"):
         fit_coatings(K, measured)
+
+
+def test_a_glint_never_seen_leaves_its_parameters_undetermined():
+    """The issue's example: a thin aluminium plate seen only 40-60° off its normal (and its
+    edges never face-on) never shows its glint, so the glint's width e and ε (which only
+    scales the glint, ρs = 1 − (ε + ρd) g/G) are named as undetermined, while ρd and b,
+    which shape the diffuse return, are fitted."""
+    import trimesh
+
+    from meshladar.mesh import part_from_trimesh
+
+    plate = part_from_trimesh(trimesh.creation.box((1.0, 1.0, 0.02)), 0, name="plate")
+    scene = Scene.from_parts([plate], [materials.ALUMINUM])
+    polar = np.deg2rad(np.repeat([40.0, 50.0, 60.0], 8))
+    az = np.deg2rad(np.tile(np.arange(8) * 45.0 + 22.5, 3))
+    views = np.stack([np.sin(polar) * np.cos(az), np.sin(polar) * np.sin(az),
+                      np.cos(polar)], axis=1)
+    lad = ml.Ladar.covering(scene, n_bins=64, view_vectors=views)
+    K = coating_kernel(ml.trace(scene, lad))
+    truth = K.predict()
+    k = 1e6 / truth.max()
+    counts = np.random.default_rng(3).poisson(truth * k)
+    measured = ml.Sinogram(counts / k, angles_deg=lad.angles_deg, bin_edges=lad.bin_edges,
+                           view_vectors=lad.view_vectors)
+    with pytest.warns(IdentifiabilityWarning) as caught:
+        fit = fit_coatings(K, measured, noise="poisson", photons_per_unit=k)
+    named = str(caught[0].message)
+    assert "epsilon" in named and ".e (" in named
+    assert fit.identifiable[f"{K.parts[0]}.rho_d"] is True
+    assert fit.identifiable[f"{K.parts[0]}.b"] is True
