@@ -64,7 +64,7 @@ def test_intervals_cover_the_truth_over_seeded_poisson_trials():
     photoelectrons in the brightest bin; over 200 seeded trials every parameter's 95 %
     interval holds the truth in ≥ 90 % of them, and the bias is below 0.25 σ (0.07 is the
     sampling error of a 200-trial mean)."""
-    K = coating_kernel(PAIR, LADAR, samples=2048)
+    K = coating_kernel(PAIR, LADAR, samples=1024)
     truth = K.predict()
     k = PEAK_PHOTONS / truth.max()
     true = np.array([getattr(m, n) for m in (materials.DARK_GRAY, materials.ALUMINUM)
