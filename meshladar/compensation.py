@@ -70,6 +70,13 @@ class Surface:
     center: tuple[float, float]
     shadowed: np.ndarray | None = None
 
+    def __repr__(self) -> str:
+        from ._summary import text
+
+        return text("Surface", ("points", int(self.points.shape[0])), ("size", self.size),
+                    ("extent", float(self.extent)),
+                    ("shadow_map", None if self.shadowed is None else self.shadowed.shape))
+
     @property
     def mask(self) -> np.ndarray:
         """The pixels holding surface points, as a (size, size) bool image."""

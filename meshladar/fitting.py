@@ -98,6 +98,21 @@ class CoatingKernel:
     source: str
     info: dict = field(default_factory=dict)
 
+    def _summary(self):
+        return (("parts", self.parts), ("shape", self.shape), ("source", self.source),
+                ("radiometry", self.radiometry),
+                ("nonzeros", int(sum(m.nnz for m in self.matrices))))
+
+    def __repr__(self) -> str:
+        from ._summary import text
+
+        return text("CoatingKernel", *self._summary())
+
+    def _repr_html_(self) -> str:
+        from ._summary import table
+
+        return table("CoatingKernel", *self._summary())
+
     def part_index(self, part) -> int:
         """A part's index from its name or index."""
         if isinstance(part, (int, np.integer)) and not isinstance(part, bool):
@@ -342,6 +357,23 @@ class CoatingFit:
     predicted: np.ndarray
     bootstrap: np.ndarray | None = None
     info: dict = field(default_factory=dict)
+
+    def _summary(self):
+        return (("noise", self.noise),
+                *((n, f"{v:.5g} ± {e:.3g}" + ("" if self.identifiable[n] is True
+                                               else " (undetermined)"))
+                  for n, v, e in zip(self.names, self.estimate, self.stderr)),
+                ("misfit", f"{self.deviance:.4g} on {self.dof} dof"))
+
+    def __repr__(self) -> str:
+        from ._summary import text
+
+        return text("CoatingFit", *self._summary())
+
+    def _repr_html_(self) -> str:
+        from ._summary import table
+
+        return table("CoatingFit", *self._summary())
 
     def interval(self, level=0.95):
         """(low, high) arrays: estimate ∓ z σ (normal approximation)."""

@@ -323,10 +323,21 @@ class Waveforms:
         return {"detection": hits / n, "false_alarm": alarms / (n * self.values.size),
                 "threshold": thr, "n": n}
 
+    def _summary(self):
+        return (("n_views", self.values.shape[0]), ("n_samples", self.values.shape[1]),
+                ("time_s", (float(self.time_edges[0]), float(self.time_edges[-1]))),
+                ("units", self.info.get("units")),
+                ("radiometry", self.info.get("radiometry")))
+
     def __repr__(self) -> str:
-        return (f"Waveforms(n_views={self.values.shape[0]}, n_samples={self.values.shape[1]}, "
-                f"time=[{self.time_edges[0]:.6g}, {self.time_edges[-1]:.6g}] s, "
-                f"units={self.info.get('units')!r})")
+        from ._summary import text
+
+        return text("Waveforms", *self._summary())
+
+    def _repr_html_(self) -> str:
+        from ._summary import table
+
+        return table("Waveforms", *self._summary())
 
 
 def receive(sino: Sinogram, *, sample_rate, pulse=None, response=None, standoff=None,

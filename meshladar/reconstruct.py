@@ -90,6 +90,27 @@ class Image:
     def size(self) -> int:
         return self.values.shape[0]
 
+    def _summary(self):
+        i = self.info
+        return (("size", self.size), ("extent", float(self.extent)),
+                ("center", tuple(float(c) for c in self.center)),
+                ("values", (float(self.values.min(initial=0.0)),
+                            float(self.values.max(initial=0.0)))),
+                ("method", i.get("method", "fbp" if "filter" in i else None)),
+                ("filter", i.get("filter")), ("input", i.get("preprocess")),
+                ("radiometry", i.get("radiometry")), ("n_views", i.get("n_views")),
+                ("iterations", i.get("iterations")))
+
+    def __repr__(self) -> str:
+        from ._summary import text
+
+        return text("Image", *self._summary())
+
+    def _repr_html_(self) -> str:
+        from ._summary import table
+
+        return table("Image", *self._summary())
+
     @property
     def shape(self):
         return self.values.shape
@@ -319,7 +340,7 @@ def fbp(sinogram, size=512, extent=1.0, *, filter="ramp", interpolation="linear"
                              "image beyond float64's range (1.8e308); rescale the values")
     info = {"filter": filter, "interpolation": interpolation, "n_views": sinogram.n_views,
             "n_bins": sinogram.n_bins, "resampled": resampled}
-    info.update({k: v for k, v in sinogram.info.items() if k == "preprocess"})
+    info.update({k: v for k, v in sinogram.info.items() if k in ("preprocess", "radiometry")})
     return Image(out, extent, (float(c[0]), float(c[1])), info)
 
 

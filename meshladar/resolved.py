@@ -177,10 +177,21 @@ class Returns:
                        angles_deg=self.angles_deg, view_vectors=self.view_vectors,
                        info=dict(self.info, units=units, scaled_by=f))
 
+    def _summary(self):
+        return (("n_views", self.values.shape[0]),
+                *((a, f"[{e[0]:.4g}, {e[-1]:.4g}] {u} in {e.size - 1}")
+                  for a, e, u in zip(self.axes, self.edges, self.units)),
+                ("units", self.info.get("units")), ("radiometry", self.info.get("radiometry")))
+
     def __repr__(self) -> str:
-        spans = ", ".join(f"{a} [{e[0]:.4g}, {e[-1]:.4g}] {u} in {e.size - 1}"
-                          for a, e, u in zip(self.axes, self.edges, self.units))
-        return f"Returns(n_views={self.values.shape[0]}, {spans})"
+        from ._summary import text
+
+        return text("Returns", *self._summary())
+
+    def _repr_html_(self) -> str:
+        from ._summary import table
+
+        return table("Returns", *self._summary())
 
 
 def _check_axes(axes, motion):

@@ -117,7 +117,20 @@ class Sinogram:
         """(n_views,) total return of each view: the sum of its bins."""
         return self.values.sum(axis=1)
 
+    def _summary(self):
+        return (("model", self.model), ("n_views", self.n_views), ("n_bins", self.n_bins),
+                ("range", (float(self.bin_edges[0]), float(self.bin_edges[-1]))),
+                ("max", float(self.values.max(initial=0.0))),
+                ("radiometry", self.info.get("radiometry")), ("units", self.info.get("units")),
+                ("views", None if self.planar else "3-D"),
+                ("preprocess", self.info.get("preprocess")))
+
     def __repr__(self) -> str:
-        return (f"Sinogram(model={self.model!r}, n_views={self.n_views}, n_bins={self.n_bins}, "
-                f"range=[{self.bin_edges[0]:g}, {self.bin_edges[-1]:g}], "
-                f"max={self.values.max(initial=0.0):.4g})")
+        from ._summary import text
+
+        return text("Sinogram", *self._summary())
+
+    def _repr_html_(self) -> str:
+        from ._summary import table
+
+        return table("Sinogram", *self._summary())

@@ -84,9 +84,21 @@ class Volume:
         pts = np.asarray(center, np.float64) + r[:, None, None] * d[None]
         return self.sample(pts.reshape(-1, 3)).reshape(r.size, -1).mean(axis=1)
 
+    def _summary(self):
+        return (("shape", self.shape), ("x", (float(self.x[0]), float(self.x[-1]))),
+                ("z", (float(self.z[0]), float(self.z[-1]))),
+                ("method", self.info.get("method")),
+                ("radiometry", self.info.get("radiometry")))
+
     def __repr__(self) -> str:
-        return (f"Volume(shape={self.shape}, x=[{self.x[0]:.4g}, {self.x[-1]:.4g}], "
-                f"z=[{self.z[0]:.4g}, {self.z[-1]:.4g}], method={self.info.get('method')!r})")
+        from ._summary import text
+
+        return text("Volume", *self._summary())
+
+    def _repr_html_(self) -> str:
+        from ._summary import table
+
+        return table("Volume", *self._summary())
 
 
 #: radon3d refuses view sets that leave a direction farther than this from every view (a

@@ -120,6 +120,24 @@ class Hits:
     receive_factor: np.ndarray = None
     info: dict = field(default_factory=dict)
 
+    def _summary(self):
+        return (("hits", int(np.shape(self.view)[0])), ("n_views", self.ladar.n_views),
+                ("mode", self.mode), ("normals", self.normals),
+                ("materials", len(self.materials)), ("area", float(self.area)),
+                ("bistatic", True if self.bistatic is not None else None),
+                ("sensor", "standoff" if self.receive_factor is not None else None),
+                ("back_face_hits", int(np.sum(self.back_face_hits)) or None))
+
+    def __repr__(self) -> str:
+        from .._summary import text
+
+        return text("Hits", *self._summary())
+
+    def _repr_html_(self) -> str:
+        from .._summary import table
+
+        return table("Hits", *self._summary())
+
     def __post_init__(self):
         _freeze(self, np.shape(self.view)[0] if np.ndim(self.view) == 1 else -1, "Hits")
         for name in ("rays", "back_face_hits"):

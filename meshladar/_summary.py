@@ -1,0 +1,40 @@
+"""Short reprs for results: a one-line summary (shape, model, range, units, conventions)
+instead of whole arrays, and the same as an HTML table for notebooks."""
+
+from __future__ import annotations
+
+import html
+
+__all__ = ["text", "table"]
+
+#: The longest repr a result gives (tested).
+MAX_REPR = 400
+
+
+def _fmt(v):
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    if isinstance(v, tuple) and v and all(isinstance(x, float) for x in v):
+        return "(" + ", ".join(f"{x:.4g}" for x in v) + ")"
+    return repr(v) if isinstance(v, str) else str(v)
+
+
+def _fields(fields):
+    return [(k, v) for k, v in fields if v is not None]
+
+
+def text(name, *fields):
+    """``Name(key=value, ...)`` of the (key, value) pairs that are not None, shortened to
+    :data:`MAX_REPR` characters."""
+    body = ", ".join(f"{k}={_fmt(v)}" for k, v in _fields(fields))
+    out = f"{name}({body})"
+    return out if len(out) <= MAX_REPR else out[:MAX_REPR - 4] + "...)"
+
+
+def table(name, *fields):
+    """The same pairs as an HTML table headed by ``name`` (a notebook's rich repr)."""
+    rows = "".join(f"<tr><th style='text-align:left'>{html.escape(str(k))}</th>"
+                   f"<td style='text-align:left'>{html.escape(_fmt(v))}</td></tr>"
+                   for k, v in _fields(fields))
+    return (f"<table><caption style='text-align:left'><b>{html.escape(name)}</b></caption>"
+            f"{rows}</table>")
