@@ -71,6 +71,23 @@ def test_figures_are_drawn_from_the_saved_result(tmp_path):
         assert img.shape[0] > 100 and img.shape[1] > 200
         assert img[..., :3].std() > 0.05                       # not a blank canvas
     assert not list((tmp_path / "figs").glob("*.tmp*"))
+    # picture content: no text overlaps another or leaves the figure; the reconstructed
+    # rings are not saturated (≥ 90 % of ring pixels inside the colour scale)
+    from meshladar.viz import style
+
+    @style.styled
+    def check():
+        for n, fig in vpaper.figures(arrays, meta):
+            assert style.overlapping_texts(fig) == [], n
+            for im in fig.axes[0].images[:1] + fig.axes[2].images[:1] if n > 5 else []:
+                vals = im.get_array()
+                c = -1 + (np.arange(64) + 0.5) * 2 / 64
+                X, Y = np.meshgrid(c, c)
+                if n == 6:
+                    ring = np.abs(np.hypot(X, Y) - 0.8) < 2 * 2 / 64
+                    assert np.mean(np.abs(vals[ring]) < im.norm.vmax) >= 0.9
+                assert im.norm.vmin == -im.norm.vmax              # symmetric about 0
+    check()
 
 
 def test_received_power_darkens_even_a_lambertian_ellipse(result):

@@ -6,9 +6,13 @@ Figures only load results, so restyling never means simulating again::
     paths = paper.reproduce("figures/")          # run, save figures/paper_result.npz, draw
     paths = paper.draw("figures/paper_result.npz", "figures/")   # redraw only
 
-Images take their grey levels from the shapes' interiors (0.5th-99.5th percentile, with
-headroom), so the interior pedestal and its darkening show while the bright surface ring
-saturates.
+Reconstructions are signed, so images use a diverging map symmetric about zero, with
+limits from robust percentiles of the whole image: ±(99.9th percentile of |value|), so the
+bright surface ring is not saturated, on a symmetric-log scale that stays linear within the
+95th percentile of |value| (the interior and background artifacts each figure is about).
+Outside the shapes (beyond 8 % of their size) a white veil fades FBP's streaks, which
+are real but are not what the figures are about. Centre slices sit beside every
+reconstruction, as in the paper's Fig. 6(c).
 """
 
 from __future__ import annotations
@@ -43,13 +47,21 @@ def save_run(outdir, *, size=None):
     return path, res["metrics"]
 
 
+#: The colour scale: ±(this percentile of |value|) over the whole image ...
+TOP_PERCENTILE = 99.9
+#: ... linear within ±(this percentile of |value| inside the shapes), logarithmic beyond.
+LINEAR_PERCENTILE = 99.0
+#: Opacity of the white veil over the image outside the shapes.
+FADE = 0.7
+
+
 def _inside(shape, outlines, extent, shrink=0.97):
     """Pixels inside the panel's shapes, shrunk to leave out the bright surface ring."""
     n = shape[0]
     c = -extent + (np.arange(n) + 0.5) * 2 * extent / n
     X, Y = np.meshgrid(c, c)
     mask = np.zeros(shape, bool)
-    for o in outlines:
+    for o in outlines or ():
         ca, sa = np.cos(o["angle"]), np.sin(o["angle"])
         dx, dy = X - o["center"][0], Y - o["center"][1]
         xl, yl = ca * dx + sa * dy, -sa * dx + ca * dy
@@ -57,61 +69,99 @@ def _inside(shape, outlines, extent, shrink=0.97):
     return mask
 
 
-def _limits(img, mask=None):
-    """Grey levels set by the shapes' interiors (the surface ring saturates), so the
-    interior pedestal and its darkening show; the whole image when no outline is known."""
-    vals = img[mask] if mask is not None and mask.any() else img
-    lo, hi = np.percentile(vals, [0.5, 99.5])
-    if mask is not None and mask.any():
-        span = max(hi - lo, 1e-300)
-        hi = hi + 0.5 * span                      # room above the interior for the ring
-    return (lo, hi) if hi > lo else (img.min(), img.max() + 1e-300)
+def norm(img, inside=None):
+    """The colour normalisation of a signed reconstruction: symmetric about 0 up to the
+    whole image's robust top (the surface ring is not saturated), linear within the
+    interior's robust scale (``inside``: the shapes' interiors, where the darkening and
+    streaks are) and logarithmic beyond it."""
+    from matplotlib.colors import Normalize, SymLogNorm
+
+    a = np.abs(np.asarray(img, dtype=float))
+    top = float(np.percentile(a, TOP_PERCENTILE)) or float(a.max()) or 1.0
+    core = a[inside] if inside is not None and inside.any() else a
+    lin = float(np.percentile(core, LINEAR_PERCENTILE))
+    if lin <= 0 or lin >= 0.3 * top:
+        return Normalize(-top, top)
+    return SymLogNorm(lin, linscale=2.0, vmin=-top, vmax=top, base=10)
 
 
-def _image_panel(fig, ax, img, extent, title, outlines=None):
-    lo, hi = _limits(img, None if outlines is None else _inside(img.shape, outlines, extent))
-    h = ax.imshow(img, extent=(-extent, extent, -extent, extent), vmin=lo, vmax=hi,
-                  interpolation="nearest")
+def _units(key):
+    if key.endswith("_log"):
+        return "reconstruction of log(radiance / floor) [1 / area]"
+    if key.endswith("_clip"):
+        return "reconstruction of clipped radiance [radiance / area]"
+    return "reconstruction [radiance / area]"
+
+
+def _image_panel(fig, ax, img, extent, title, key="", outlines=None):
+    h = ax.imshow(img, extent=(-extent, extent, -extent, extent),
+                  norm=norm(img, _inside(img.shape, outlines, extent)),
+                  cmap="RdBu_r", interpolation="nearest")
     ax.set_xlabel("x [scene units]")
     ax.set_ylabel("y [scene units]")
-    ax.set_title(title)
-    fig.colorbar(h, ax=ax, shrink=0.8, label="reconstruction [radiance / area]")
+    if outlines:
+        # outside the shapes (beyond 8 % of their size) FBP's streaks are drawn faded:
+        # still there, no longer the loudest thing in the picture
+        veil = np.zeros(img.shape + (4,))
+        veil[..., :3] = 1.0
+        veil[..., 3] = np.where(_inside(img.shape, outlines, extent, 1.08), 0.0, FADE)
+        ax.imshow(veil, extent=(-extent, extent, -extent, extent), interpolation="nearest")
+    ax.set_title(title, fontsize=8)
+    bar = fig.colorbar(h, ax=ax, shrink=0.8)
+    bar.set_label(_units(key), fontsize=7)
+    n = h.norm
+    if hasattr(n, "linthresh"):                   # the scale's landmarks, nothing crowded
+        ticks = [n.vmin, -n.linthresh, 0.0, n.linthresh, n.vmax]
+        bar.set_ticks(ticks, labels=[f"{t:.2g}" for t in ticks])
+    bar.ax.tick_params(labelsize=7)
+    return h
+
+
+def _slices(ax, arrays, keys, extent, outlines, tags="ab"):
+    """Centre slices (y = 0) of the panels' reconstructions on one axis, symmetric-log
+    with the images' linear range."""
+    lines = ("-", ":")
+    tops = []
+    for key, ls, tag in zip(keys, lines, tags):
+        img = arrays[f"image/{key}"]
+        n = img.shape[0]
+        x = -extent + (np.arange(n) + 0.5) * 2 * extent / n
+        row = 0.5 * (img[n // 2] + img[n // 2 - 1])
+        ax.plot(x, row, ls, color="k", lw=0.8, label=f"({tag})")
+        tops.append(norm(img, _inside(img.shape, outlines.get(key), extent)))
+    lin = min(getattr(t, "linthresh", t.vmax) for t in tops)
+    top = max(t.vmax for t in tops)
+    ax.set_ylim(-top, top)
+    if lin < 0.3 * top:
+        ax.set_yscale("symlog", linthresh=lin, linscale=2.0)
+        ticks = [-top, -lin, 0.0, lin, top]
+        ax.set_yticks(ticks, labels=[f"{t:.2g}" for t in ticks])
+    ax.tick_params(labelsize=7)
+    ax.set_xlabel("x [scene units] (y = 0)")
+    ax.set_ylabel("centre slice (symmetric log)")
+    ax.legend(frameon=False, fontsize=7)
 
 
 def _caption(fig, text):
     import textwrap
 
-    fig.text(0.5, 0.01, "\n".join(textwrap.wrap(text, 120)), ha="center", va="bottom",
+    width = int(fig.get_figwidth() * 15)            # characters that fit at 8 pt
+    fig.text(0.5, 0.01, "\n".join(textwrap.wrap(text, width)), ha="center", va="bottom",
              fontsize=8)
 
 
-@style.styled
-def draw(result_path, outdir, *, dpi=None):
-    """Draw Figs 5-11 as PNGs in ``outdir`` from a saved result; returns their paths.
-
-    ``dpi`` overrides the style's resolution (the README's thumbnails use 55).
-    """
-    from meshladar import results
-
+def figures(arrays, meta):
+    """Yield (figure number, matplotlib Figure) for Figs 5-11 of a loaded result (inside
+    :func:`meshladar.viz.style.styled`); :func:`draw` saves them."""
     plt = style.use()
-    arrays, meta = results.load_result(result_path)
-    os.makedirs(outdir, exist_ok=True)
     extent = meta["extent"]
     caps = meta["captions"]
     met = meta["metrics"]
     outl = meta.get("outlines", {})
     edges = arrays["bin_edges"]
-    paths = []
-
-    def save(fig, n):
-        p = os.path.join(outdir, f"fig{n:02d}.png")
-        fig.savefig(p + ".tmp.png", **({} if dpi is None else {"dpi": dpi}))
-        os.replace(p + ".tmp.png", p)
-        plt.close(fig)
-        paths.append(p)
 
     # Fig. 5: range profiles of the diffuse disk (view-independent), b = 0 and 0.99
-    fig, ax = plt.subplots(figsize=(6.0, 3.8))
+    fig, ax = plt.subplots(figsize=(7.0, 4.2))
     width = float(np.min(np.diff(edges)))
     for key, ls in (("disk_b0", "-"), ("disk_b0.99", ":")):
         prof = arrays[f"sino/{key}"][0]
@@ -121,42 +171,17 @@ def draw(result_path, outdir, *, dpi=None):
     ax.set_yscale("log")
     ax.set_xlabel("range bin from the disk top (bin width A/256)")
     ax.set_ylabel("binned radiance / bin width [1/sr]")
-    ax.set_title("Fig. 5 — range profile of a diffuse disk (A = 0.8, ρd = 1)")
-    ax.legend(frameon=False)
-    fig.subplots_adjust(bottom=0.22)
+    ax.set_title("Fig. 5 — range profile of a diffuse disk (A = 0.8, ρd = 1)", fontsize=10)
+    ax.legend(frameon=False, fontsize=8)
+    fig.subplots_adjust(bottom=0.25)
     _caption(fig, "b = 0.99 returns more from the disk centre (near bins) and less from the "
                   "periphery than the Lambertian b = 0; the lower half is shadowed.")
-    save(fig, 5)
-
-    # Fig. 6: reconstructions and centre slices
-    fig, axes = plt.subplots(1, 3, figsize=(13.5, 4.2))
-    for ax, key in zip(axes[:2], ("disk_b0", "disk_b0.99")):
-        _image_panel(fig, ax, arrays[f"image/{key}"], extent,
-                     f"{caps[key]}\ndarkening {met[f'{key}.darkening']:+.2f}",
-                     outlines=outl.get(key))
-    size = arrays["image/disk_b0"].shape[0]
-    x = -extent + (np.arange(size) + 0.5) * 2 * extent / size
-    row = size // 2
-    for key, ls in (("disk_b0", "-"), ("disk_b0.99", ":")):
-        img = arrays[f"image/{key}"]
-        ax_slice = axes[2]
-        ax_slice.plot(x, 0.5 * (img[row] + img[row - 1]), ls, color="k", label=caps[key])
-    inner = np.abs(x) < 0.95 * 0.8
-    lo = min(arrays[f"image/{k}"][row][inner].min() for k in ("disk_b0", "disk_b0.99"))
-    axes[2].set_xlim(-0.9, 0.9)
-    axes[2].set_ylim(1.5 * lo, -1.5 * lo)
-    axes[2].set_xlabel("x [scene units] (y = 0)")
-    axes[2].set_ylabel("reconstruction [radiance / area]")
-    axes[2].set_title("Fig. 6(c) — centre slices")
-    axes[2].legend(frameon=False, fontsize=7)
-    fig.suptitle("Fig. 6 — diffuse disk reconstructions (360 views, A/256 bins)")
-    fig.subplots_adjust(bottom=0.2, wspace=0.45)
-    _caption(fig, "Lambertian: a clean ring (flat interior, the centre dip is a sampling "
-                  "artifact). b = 0.99: the interior darkens toward the surface "
-                  "(the beam-hardening analogue).")
-    save(fig, 6)
+    yield 5, fig
 
     texts = {
+        6: ("Lambertian: a clean ring (flat interior, the centre dip is a sampling "
+            "artifact). b = 0.99: the interior darkens toward the surface (the "
+            "beam-hardening analogue)."),
         7: ("darkening concentrates at the tapered ends for b = 0.99 "
             f"(ends {met['ellipse_b0.99.ends_darkening']:+.2f}, sides "
             f"{met['ellipse_b0.99.sides_darkening']:+.2f})."),
@@ -171,9 +196,10 @@ def draw(result_path, outdir, *, dpi=None):
              "gray disk back.").format(met["pair_gray_al_log.visibility"],
                                        met["pair_gray_al_clip.visibility"]),
     }
-    for n in (7, 8, 9, 10, 11):
+    for n in (6, 7, 8, 9, 10, 11):
         title, keys = meta["figures"][str(n)]
-        fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.4))
+        fig, axes = plt.subplots(1, 3, figsize=(15.0, 4.6),
+                                 gridspec_kw={"width_ratios": [1, 1, 0.9]})
         for ax, key, tag in zip(axes, keys, "ab"):
             extra = ""
             if f"{key}.visibility" in met:
@@ -181,11 +207,32 @@ def draw(result_path, outdir, *, dpi=None):
             elif f"{key}.darkening" in met:
                 extra = f"\ndarkening {met[f'{key}.darkening']:+.2f}"
             _image_panel(fig, ax, arrays[f"image/{key}"], extent,
-                         f"({tag}) {caps[key]}{extra}", outlines=outl.get(key))
-        fig.suptitle(f"Fig. {n} — {title}")
-        fig.subplots_adjust(bottom=0.2, wspace=0.35)
+                         f"({tag}) {caps[key]}{extra}", key, outl.get(key))
+        _slices(axes[2], arrays, keys, extent, outl)
+        axes[2].set_xlim(-0.95, 0.95)
+        axes[2].set_title("(c) centre slices", fontsize=8)
+        fig.suptitle(f"Fig. {n} — {title}", fontsize=11)
+        fig.subplots_adjust(left=0.05, right=0.97, bottom=0.22, top=0.84, wspace=0.45)
         _caption(fig, texts[n])
-        save(fig, n)
+        yield n, fig
+
+
+@style.styled
+def draw(result_path, outdir, *, dpi=None):
+    """Draw Figs 5-11 as PNGs in ``outdir`` from a saved result; returns their paths.
+
+    ``dpi`` overrides the style's resolution (150; the README's thumbnails use 70).
+    """
+    from meshladar import results
+
+    plt = style.use()
+    arrays, meta = results.load_result(result_path)
+    os.makedirs(outdir, exist_ok=True)
+    paths = []
+    for n, fig in figures(arrays, meta):
+        paths.append(style.save_png(fig, os.path.join(outdir, f"fig{n:02d}.png"),
+                                    dpi if dpi is not None else 150))
+        plt.close(fig)
     return paths
 
 

@@ -84,3 +84,38 @@ def save_png(fig, path, dpi=150):
     path = os.fspath(path)
     write_atomic(path, lambda fh: fig.savefig(fh, format="png", dpi=dpi))
     return path
+
+
+def overlapping_texts(fig):
+    """The pairs of visible, non-empty texts of ``fig`` whose drawn bounding boxes overlap
+    (titles, labels, tick labels, legends, captions), as (text, text) strings, and each
+    text cut off by the figure's edge as (text, "<outside the figure>")."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.text import Text
+
+    if fig.canvas is None or not hasattr(fig.canvas, "get_renderer"):
+        FigureCanvasAgg(fig)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    hidden = set()                       # tick labels of ticks outside the view: not drawn
+    for ax in fig.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            lo, hi = sorted(axis.get_view_interval())
+            eps = 1e-9 * max(abs(lo), abs(hi), 1.0)
+            for tick in axis.get_major_ticks() + axis.get_minor_ticks():
+                if not lo - eps <= tick.get_loc() <= hi + eps:
+                    hidden.update((id(tick.label1), id(tick.label2)))
+    texts = [t for t in fig.findobj(Text) if t.get_visible() and t.get_text().strip()
+             and t.get_alpha() != 0 and id(t) not in hidden]
+    boxes = [t.get_window_extent(renderer) for t in texts]
+    frame = fig.bbox
+    out = [(t.get_text(), "<outside the figure>") for t, b in zip(texts, boxes)
+           if b.x0 < frame.x0 - 0.5 or b.x1 > frame.x1 + 0.5 or b.y0 < frame.y0 - 0.5
+           or b.y1 > frame.y1 + 0.5]
+    for i in range(len(texts)):
+        for j in range(i + 1, len(texts)):
+            a, b = boxes[i], boxes[j]
+            if (a.x0 < b.x1 - 0.5 and b.x0 < a.x1 - 0.5 and a.y0 < b.y1 - 0.5
+                    and b.y0 < a.y1 - 0.5):
+                out.append((texts[i].get_text(), texts[j].get_text()))
+    return out
