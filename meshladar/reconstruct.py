@@ -90,6 +90,12 @@ class Image:
     def size(self) -> int:
         return self.values.shape[0]
 
+    def plot(self, *, y=None):
+        """A quick look (:func:`meshladar.viz.quick.image`): a matplotlib Figure."""
+        from .viz.quick import image
+
+        return image(self, y=y)
+
     def _summary(self):
         i = self.info
         return (("size", self.size), ("extent", float(self.extent)),

@@ -117,6 +117,12 @@ class Sinogram:
         """(n_views,) total return of each view: the sum of its bins."""
         return self.values.sum(axis=1)
 
+    def plot(self, *, log=False):
+        """A quick look (:func:`meshladar.viz.quick.sinogram`): a matplotlib Figure."""
+        from .viz.quick import sinogram
+
+        return sinogram(self, log=log)
+
     def _summary(self):
         return (("model", self.model), ("n_views", self.n_views), ("n_bins", self.n_bins),
                 ("range", (float(self.bin_edges[0]), float(self.bin_edges[-1]))),

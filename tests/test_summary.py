@@ -49,3 +49,25 @@ def test_reprs_state_conventions(results):
     assert "small.rho_d=" in repr(results["CoatingFit"])
     log = ml.fbp(ml.log_radiance(results["Sinogram"]), size=64)
     assert "input='log(floor=1e-06)'" in repr(log)
+
+
+def test_quick_looks(results, tmp_path):
+    """Sinogram.plot() and Image.plot() return labelled Figures without pyplot state:
+    units and radiometry on the colour bar, log input said so, no text overlapping or cut
+    off, a colour scale symmetric about zero for the signed image."""
+    from meshladar.viz import style
+
+    sino = results["Sinogram"]
+    fig = sino.plot(log=True)
+    labels = " ".join(t.get_text() for t in fig.findobj(lambda a: hasattr(a, "get_text")))
+    assert "radiometry power" in labels and "length/sr" in labels
+    assert style.overlapping_texts(fig) == []
+    img = ml.fbp(ml.log_radiance(sino), size=128)
+    fig = img.plot()
+    assert style.overlapping_texts(fig) == []
+    im = fig.axes[0].images[0]
+    assert im.norm.vmin == -im.norm.vmax
+    labels = " ".join(t.get_text() for t in fig.findobj(lambda a: hasattr(a, "get_text")))
+    assert "log input" in labels and "of log(floor=1e-06)" in labels
+    fig.savefig(tmp_path / "quick.png")
+    assert (tmp_path / "quick.png").stat().st_size > 5000

@@ -1,0 +1,85 @@
+"""Quick looks at results: ``Sinogram.plot()`` and ``Image.plot()`` return a matplotlib
+Figure (no pyplot state is touched, so a notebook shows it and a script saves it with
+``fig.savefig``), labelled with the result's units and conventions."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import style
+
+__all__ = ["sinogram", "image"]
+
+
+@style.styled
+def sinogram(sino, *, log=False):
+    """The sinogram as an image, views against range, and the views' totals beside it;
+    ``log`` shows log10 of the values (glints next to diffuse parts)."""
+    from matplotlib.colors import LogNorm
+
+    plt = style.use()
+    fig, (a, b) = plt.subplots(1, 2, figsize=(10.0, 4.0),
+                               gridspec_kw={"width_ratios": [2.2, 1]})
+    v = sino.values
+    units = sino.info.get("units", "")
+    rad = sino.info.get("radiometry", "paper")
+    pos = v[v > 0]
+    norm = LogNorm(max(pos.min(), pos.max() * 1e-8), pos.max()) if log and pos.size else None
+    e = sino.bin_edges
+    h = a.imshow(v, aspect="auto", origin="lower", interpolation="nearest", cmap="magma",
+                 norm=norm, extent=(e[0], e[-1], 0, sino.n_views))
+    a.set_xlabel("range r = -p.w")
+    a.set_ylabel("view")
+    a.set_title(f"{sino.model} sinogram, {sino.n_views} views x {sino.n_bins} bins",
+                fontsize=9)
+    bar = fig.colorbar(h, ax=a, shrink=0.85)
+    bar.set_label(f"return per bin ({units}; radiometry {rad})", fontsize=7)
+    bar.ax.tick_params(labelsize=7)
+    b.plot(np.arange(sino.n_views), sino.total(), color="k", lw=0.8)
+    b.set_xlabel("view")
+    b.set_ylabel(f"total return ({units})", fontsize=8)
+    b.set_title("each view's total", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+@style.styled
+def image(img, *, y=None):
+    """The image on a diverging map symmetric about zero (the paper figures' scale:
+    :func:`meshladar.viz.paper.norm`) and its slice along x at ``y`` (default the centre)
+    beside it."""
+    from .paper import norm
+
+    plt = style.use()
+    fig, (a, b) = plt.subplots(1, 2, figsize=(10.0, 4.2),
+                               gridspec_kw={"width_ratios": [1.25, 1]})
+    v = img.values
+    x0, y0 = img.center
+    ext = img.extent
+    n = norm(v)
+    h = a.imshow(v, origin="lower", cmap="RdBu_r", norm=n, interpolation="nearest",
+                 extent=(x0 - ext, x0 + ext, y0 - ext, y0 + ext))
+    info = img.info
+    what = info.get("method", "fbp" if "filter" in info else "image")
+    inp = info.get("preprocess")
+    a.set_title(f"{what}" + (f" of {inp}" if inp else "") + f", {img.size}^2", fontsize=9)
+    a.set_xlabel("x")
+    a.set_ylabel("y")
+    bar = fig.colorbar(h, ax=a, shrink=0.85)
+    label = "reconstruction of log input" if inp and inp.startswith("log") else \
+        "reconstruction [radiance / area]"
+    bar.set_label(label, fontsize=7)
+    if hasattr(n, "linthresh"):
+        ticks = [n.vmin, -n.linthresh, 0.0, n.linthresh, n.vmax]
+        bar.set_ticks(ticks, labels=[f"{t:.2g}" for t in ticks])
+    bar.ax.tick_params(labelsize=7)
+    yy = y0 if y is None else float(y)
+    row = int(np.clip(np.floor((yy - (y0 - ext)) / img.pixel_size), 0, img.size - 1))
+    b.plot(img.x, v[row], color="k", lw=0.8)
+    if hasattr(n, "linthresh"):
+        b.set_yscale("symlog", linthresh=n.linthresh, linscale=2.0)
+    b.set_xlabel(f"x (y = {img.y[row]:.3g})")
+    b.set_ylabel("value")
+    b.set_title("slice", fontsize=9)
+    fig.tight_layout()
+    return fig
