@@ -109,6 +109,13 @@ def test_study_files(study, tmp_path):
                      "error_vs_segments.png", "pareto.png"]
     for p in figs:
         assert mpimg.imread(p)[..., :3].std() > 0.02            # drawn, not blank
+    from meshladar.viz import style
+
+    @style.styled
+    def no_crowding():
+        for name, fig in vstudies.figures(tmp_path):
+            assert style.overlapping_texts(fig) == [], name
+    no_crowding()
 
 
 @pytest.mark.parametrize("big, small", [(DARK_GRAY, ALUMINUM), (ALUMINUM, DARK_GRAY)],

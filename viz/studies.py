@@ -38,9 +38,20 @@ def _pareto(points):
     return front
 
 
-@style.styled
-def draw(outdir):
-    """Write the study's figures into ``outdir``; returns their paths."""
+def _log_ticks(ax):
+    """Log axes with a few labelled decades and unlabelled minor ticks (narrow spans
+    otherwise crowd their minor labels into each other)."""
+    from matplotlib.ticker import LogLocator, NullFormatter
+
+    for axis in (ax.xaxis, ax.yaxis):
+        if axis.get_scale() == "log":
+            axis.set_major_locator(LogLocator(numticks=4))
+            axis.set_minor_formatter(NullFormatter())
+
+
+def figures(outdir):
+    """Yield (file name, matplotlib Figure) for the study saved in ``outdir`` (inside
+    :func:`meshladar.viz.style.styled`); :func:`draw` saves them."""
     from meshladar import results
 
     plt = style.use()
@@ -49,14 +60,6 @@ def draw(outdir):
     rows = doc["rows"]
     phantoms = sorted({r["phantom"] for r in rows})
     coatings = sorted({r["coating"] for r in rows})
-    paths = []
-
-    def save(fig, name):
-        p = os.path.join(outdir, name)
-        fig.savefig(p + ".tmp.png")
-        os.replace(p + ".tmp.png", p)
-        plt.close(fig)
-        paths.append(p)
 
     shape = (len(phantoms), len(coatings))
     fig, axes = plt.subplots(*shape, figsize=(3.2 * shape[1], 2.8 * shape[0]), squeeze=False)
@@ -73,13 +76,14 @@ def draw(outdir):
             ax.plot(*zip(*front), "k-", lw=0.8)
             ax.set_xscale("log")
             ax.set_yscale("log")
+            _log_ticks(ax)
             ax.set_title(f"{ph}, {co}")
             ax.set_xlabel("wall time [s]")
             ax.set_ylabel("relative L2 error")
     axes[0, 0].legend(fontsize=6, frameon=False)
     fig.suptitle(f"Faceting study ({doc['setting']}): error against time, Pareto fronts")
     fig.tight_layout()
-    save(fig, "pareto.png")
+    yield "pareto.png", fig
 
     fig, axes = plt.subplots(*shape, figsize=(3.2 * shape[1], 2.8 * shape[0]), squeeze=False)
     for i, ph in enumerate(phantoms):
@@ -94,13 +98,14 @@ def draw(outdir):
                               color=color, ms=3, label=label)
             n = np.array([8.0, 4096.0])
             ax.loglog(n, 0.5 * (n / 64.0) ** -2.0, "k:", lw=0.8, label="N⁻²")
+            _log_ticks(ax)
             ax.set_title(f"{ph}, {co}")
             ax.set_xlabel("segments N")
             ax.set_ylabel("relative L2 error")
     axes[0, 0].legend(fontsize=6, frameon=False)
     fig.suptitle("Error against tessellation segments")
     fig.tight_layout()
-    save(fig, "error_vs_segments.png")
+    yield "error_vs_segments.png", fig
 
     arrays, meta = results.load_result(os.path.join(outdir, "faceting_examples.npz"))
     edges = arrays["bin_edges"]
@@ -124,5 +129,15 @@ def draw(outdir):
         fig.colorbar(h, ax=axes[1], label="image difference")
         fig.suptitle(f"{key}: what a coarse flat mesh gets wrong")
         fig.tight_layout()
-        save(fig, f"difference_{key.replace('/', '_')}.png")
+        yield f"difference_{key.replace('/', '_')}.png", fig
+
+
+@style.styled
+def draw(outdir):
+    """Write the study's figures into ``outdir`` atomically; returns their paths."""
+    plt = style.use()
+    paths = []
+    for name, fig in figures(outdir):
+        paths.append(style.save_png(fig, os.path.join(outdir, name)))
+        plt.close(fig)
     return paths
