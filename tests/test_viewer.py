@@ -116,3 +116,41 @@ def test_show_volume_of_a_reconstructed_ball():
     assert (img[..., :3].sum(axis=-1) > 100).sum() > 500
     with pytest.raises(ValueError, match="zs"):
         viewer.show_volume(vol, [0.0, 1.0], off_screen=True)
+
+
+def test_colour_bars_are_titled_and_apart():
+    """With a ladar the scene shows two quantities, the return and the hits' range bin:
+    two titled colour bars that do not overlap; a slice's bar says what it shows."""
+    from meshladar.viz import viewer
+
+    pair = ml.phantoms.scene("disk_pair")
+    ladar = ml.Ladar.paper(angles_deg=[90.0])
+    viewer.show_scene(pair, ladar=ladar, off_screen=True, window_size=(300, 240))
+    bars = list(viewer.last_scalar_bars)
+    assert sorted(t for t, _ in bars) == ["F cos(theta) [1/sr]", "first hits: range bin"]
+    (_, a), (_, b) = bars
+    assert a[3] <= b[1] or b[3] <= a[1] or a[2] <= b[0] or b[2] <= a[0]      # apart
+    sino = ml.simulate(pair, ml.Ladar(np.arange(0.0, 360.0, 1.0),
+                                      ml.Ladar.centered(64, 1.6 / 64).bin_edges))
+    viewer.show_slice(ml.fbp(ml.log_radiance(sino), size=64), off_screen=True,
+                      window_size=(200, 200))
+    assert [t for t, _ in viewer.last_scalar_bars] == ["reconstruction of log input"]
+
+
+def test_volume_default_is_a_surface_not_fog():
+    """A stack of disks drawn by default: the iso-surface at half the robust peak (a solid
+    cylinder whose pixels are bright), not a grey fog; render='volume' is a windowed
+    volume rendering."""
+    from meshladar.viz import viewer
+
+    x = np.linspace(-1, 1, 32)
+    X, Y = np.meshgrid(x, x)
+    zs = np.linspace(-0.5, 0.5, 8)
+    images = [ml.Image(3.0 * (np.hypot(X, Y) < 0.5), 1.0) for _ in zs]
+    img = viewer.show_volume(images, zs, off_screen=True, window_size=(200, 200))
+    assert (img[..., :3].sum(axis=-1) > 300).sum() > 500
+    img = viewer.show_volume(images, zs, render="volume", off_screen=True,
+                             window_size=(200, 200))
+    assert img[..., :3].std() > 5
+    with pytest.raises(ValueError, match="render"):
+        viewer.show_volume(images, zs, render="fog", off_screen=True)

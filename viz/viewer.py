@@ -120,7 +120,25 @@ def face_returns(scene, w, *, segments=256):
     return mesh, np.where(state == 0, ret, 0.0), state
 
 
+#: The colour bars of the last figure drawn: (title, (x0, y0, x1, y1) in viewport units),
+#: for checks that they are titled and do not overlap.
+last_scalar_bars = []
+
+
+def _bar(title, slot=0):
+    """scalar_bar_args for a titled vertical colour bar in one of two fixed slots at the
+    right edge (0: lower, 1: upper), so two bars never overlap."""
+    return {"title": title, "vertical": True, "position_x": 0.84,
+            "position_y": 0.06 + 0.48 * slot, "width": 0.08, "height": 0.38,
+            "title_font_size": 12, "label_font_size": 10, "n_labels": 4, "fmt": "%.3g"}
+
+
 def _finish(plotter, off_screen, screenshot):
+    last_scalar_bars.clear()
+    for bar in plotter.scalar_bars.values():
+        x, y = bar.GetPosition()
+        w, h = bar.GetPosition2()
+        last_scalar_bars.append((bar.GetTitle() or "", (x, y, x + w, y + h)))
     if off_screen:
         img = plotter.screenshot(None, return_img=True)
         plotter.close()
@@ -183,8 +201,8 @@ def show_scene(scene, *, view_angle_deg=None, view_vector=None, ladar=None, segm
         pd.cell_data["return"] = np.log10(np.maximum(vals, 1e-12)) if log_scale else vals
         plotter.add_mesh(pd, scalars="return", cmap="gray", lighting=False,
                          show_scalar_bar=True,
-                         scalar_bar_args={"title": "log10 F cos(theta) [1/sr]" if log_scale
-                                          else "F cos(theta) [1/sr]"})
+                         scalar_bar_args=_bar("log10 F cos(theta) [1/sr]" if log_scale
+                                              else "F cos(theta) [1/sr]", 0))
     if (state == 1).any():
         plotter.add_mesh(poly(state == 1), color=shadow_color, lighting=False)
     if (state == 2).any():
@@ -206,7 +224,8 @@ def show_scene(scene, *, view_angle_deg=None, view_vector=None, ladar=None, segm
         cloud = pv.PolyData(pts)
         cloud.point_data["range bin"] = k
         plotter.add_mesh(cloud, scalars="range bin", cmap="viridis", point_size=3,
-                         render_points_as_spheres=False, lighting=False)
+                         render_points_as_spheres=False, lighting=False,
+                         scalar_bar_args=_bar("first hits: range bin", 1))
         if iso_ranges:
             edges = ladar.bin_edges
             inside = edges[(edges >= rng.min()) & (edges <= rng.max())] if rng.size else []
@@ -247,7 +266,11 @@ def show_slice(image, *, z=0.0, scene=None, clim=None, off_screen=False, screens
     plotter = pv.Plotter(off_screen=off_screen, window_size=window_size)
     plotter.set_background("black")
     grid = _image_data(pv, image, z)
-    plotter.add_mesh(grid, scalars="reconstruction", cmap="gray", lighting=False, clim=clim)
+    inp = image.info.get("preprocess") or ""
+    plotter.add_mesh(grid, scalars="reconstruction", cmap="gray", lighting=False, clim=clim,
+                     scalar_bar_args=_bar("reconstruction of log input" if
+                                          inp.startswith("log") else
+                                          "reconstruction [radiance / area]", 0))
     if scene is not None:
         mesh = _mesh_scene(scene, 128)
         for p in mesh.parts:
@@ -280,15 +303,18 @@ def volume_surface(volume, iso=None):
 
 
 @_headless_window
-def show_volume(images, zs=None, *, iso=None, off_screen=False, screenshot=None,
-                window_size=(800, 700), camera=None):
+def show_volume(images, zs=None, *, iso=None, render="iso", off_screen=False,
+                screenshot=None, window_size=(800, 700), camera=None):
     """A stack of reconstructed slices at heights ``zs`` (increasing, evenly spaced), or a
-    :class:`meshladar.volume.Volume` (then ``zs`` is not given), as a volume rendering, or
-    as the iso-surface at value ``iso`` (for a Volume, by default at
-    :func:`volume_iso`)."""
+    :class:`meshladar.volume.Volume` (then ``zs`` is not given), as the iso-surface at value
+    ``iso`` (default: for a Volume :func:`volume_iso`, for a stack half its 99.5th
+    percentile, where the bright surfaces are), or with ``render="volume"`` (stacks) as a
+    volume rendering with a robust window and a sigmoid opacity."""
     pv = _pyvista()
     from meshladar.volume import Volume
 
+    if render not in ("iso", "volume"):
+        raise ValueError(f"render must be 'iso' or 'volume'; got {render!r}")
     if isinstance(images, Volume):
         if zs is not None:
             raise ValueError("a Volume carries its own z; do not give zs")
@@ -315,10 +341,20 @@ def show_volume(images, zs=None, *, iso=None, off_screen=False, screenshot=None,
     grid.point_data["reconstruction"] = vol.ravel(order="C")
     plotter = pv.Plotter(off_screen=off_screen, window_size=window_size)
     plotter.set_background("black")
-    if iso is not None:
-        plotter.add_mesh(grid.contour([iso], scalars="reconstruction"), color="white")
+    if render == "volume":
+        # a robust window and a sigmoid opacity: the surfaces glow, the noise stays clear
+        vals = vol[vol > 0]
+        top = float(np.percentile(vals, 99.5)) if vals.size else 1.0
+        plotter.add_volume(grid, scalars="reconstruction", cmap="magma", opacity="sigmoid",
+                           clim=(0.0, top), scalar_bar_args=_bar("reconstruction", 0))
     else:
-        plotter.add_volume(grid, scalars="reconstruction", cmap="gray")
+        if iso is None:                   # half the robust peak: the bright surfaces
+            vals = vol[vol > 0]
+            iso = 0.5 * float(np.percentile(vals, 99.5)) if vals.size else 0.0
+        plotter.add_mesh(grid.contour([iso], scalars="reconstruction"), color="white",
+                         smooth_shading=True)
     if camera is not None:
         plotter.camera_position = camera
+    else:
+        plotter.view_isometric()
     return _finish(plotter, off_screen, screenshot)
