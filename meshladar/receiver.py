@@ -323,6 +323,15 @@ class Waveforms:
         return {"detection": hits / n, "false_alarm": alarms / (n * self.values.size),
                 "threshold": thr, "n": n}
 
+    def plot(self, *, noise=None, realisations=8, seed=0, views=None):
+        """A quick look (:func:`meshladar.viz.waveforms.figure`): a few views' waveforms,
+        with ``noise`` the band of ``realisations`` draws around the expected waveform;
+        a matplotlib Figure."""
+        from .viz.waveforms import figure
+
+        draws = None if noise is None else self.realise(noise, realisations, seed=seed)
+        return figure(self, realisations=draws, noise=noise, views=views)
+
     def _summary(self):
         return (("n_views", self.values.shape[0]), ("n_samples", self.values.shape[1]),
                 ("time_s", (float(self.time_edges[0]), float(self.time_edges[-1]))),

@@ -71,3 +71,45 @@ def test_quick_looks(results, tmp_path):
     assert "log input" in labels and "of log(floor=1e-06)" in labels
     fig.savefig(tmp_path / "quick.png")
     assert (tmp_path / "quick.png").stat().st_size > 5000
+
+
+def test_profile_against_a_closed_form_and_waveform_quick_look():
+    """The analytic check as a picture: the Lambertian disk's profile against its closed
+    form (Eq. 8: ρ/π ∫ cos² over the arc, per bin; identical to rounding), and the
+    waveforms' quick look with a noise band."""
+    from meshladar.brdf import Lambertian
+    from meshladar.receiver import Noise
+    from meshladar.scene import Scene
+    from meshladar.shapes import Disk
+    from meshladar.viz import quick, style
+
+    R = 0.5
+    lad = Ladar([90.0], Ladar.centered(64, 1.2 / 64).bin_edges)
+    sino = ml.simulate(Scene([Disk((0.0, 0.0), R, Lambertian(1.0))]), lad)
+
+    def closed(edges):
+        # a point at range r = −R cos θ has weight (1/π) cos θ per length R dθ, two sides:
+        # ∫ (2R/π) cos θ dθ from the bin's θ-interval = (2R/π) Δ sin θ
+        c = np.clip(-edges / R, 0.0, 1.0)
+        s = np.sqrt(1.0 - c * c)
+        return (2 * R / np.pi) * np.abs(np.diff(s))
+
+    np.testing.assert_allclose(sino.values[0], closed(lad.bin_edges), rtol=0, atol=1e-12)
+    fig = quick.profile(sino, closed, label="closed form")
+    assert style.overlapping_texts(fig) == []
+    assert "relative L2 difference" in fig.axes[1].get_title()
+    waves = results_waves()
+    fig = waves.plot(noise=Noise(), realisations=4)
+    assert style.overlapping_texts(fig) == []
+    assert any(c.__class__.__name__ == "FillBetweenPolyCollection" or
+               c.__class__.__name__ == "PolyCollection" for c in fig.axes[0].collections)
+
+
+def results_waves():
+    from meshladar.receiver import GaussianPulse, receive
+
+    pair = paper._pair(materials.DARK_GRAY, materials.ALUMINUM)
+    lad = Ladar(np.arange(0.0, 360.0, 30.0), Ladar.centered(128, 1.6 / 128).bin_edges)
+    sino = ml.simulate(pair, lad, radiometry="power")
+    w = receive(sino, sample_rate=20e9, pulse=GaussianPulse(1e-10))
+    return w.scaled(1e4 / w.values.max(), units="photoelectrons")

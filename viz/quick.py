@@ -8,7 +8,7 @@ import numpy as np
 
 from . import style
 
-__all__ = ["sinogram", "image"]
+__all__ = ["sinogram", "image", "profile"]
 
 
 @style.styled
@@ -81,5 +81,42 @@ def image(img, *, y=None):
     b.set_xlabel(f"x (y = {img.y[row]:.3g})")
     b.set_ylabel("value")
     b.set_title("slice", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+@style.styled
+def profile(sino, reference, *, view=0, label="closed form"):
+    """One view's range profile against a reference (an array of the view's bin values,
+    or a callable of the bin edges giving them, e.g. a closed form), with their difference
+    relative to the reference's peak below: the picture of an analytic check."""
+    plt = style.use()
+    got = np.asarray(sino.values[view], dtype=float)
+    e = sino.bin_edges
+    ref = np.asarray(reference(e) if callable(reference) else reference, dtype=float)
+    if ref.shape != got.shape:
+        from meshladar.errors import ParameterError
+
+        raise ParameterError(f"reference must give the view's {got.size} bins; got shape "
+                             f"{ref.shape}")
+    fig, (a, b) = plt.subplots(2, 1, figsize=(7.0, 5.0), sharex=True,
+                               gridspec_kw={"height_ratios": [2.2, 1]})
+    a.stairs(got, e, color="k", lw=1.0, label=f"{sino.model} model")
+    a.stairs(ref, e, color="C1", lw=1.0, ls="--", label=label)
+    units = sino.info.get("units", "")
+    a.set_ylabel(f"return per bin ({units})", fontsize=8)
+    a.set_title(f"view {view} ({sino.angles_deg[view]:g} deg): profile against {label}",
+                fontsize=9)
+    a.legend(frameon=False, fontsize=8)
+    peak = float(np.abs(ref).max()) or 1.0
+    rel = (got - ref) / peak
+    b.stairs(rel, e, color="C3", lw=0.8)
+    b.axhline(0.0, color="0.5", lw=0.5)
+    lim = max(1e-3, 1.2 * float(np.abs(rel).max()))     # a per-mille window at least:
+    b.set_ylim(-lim, lim)                                # rounding-level noise stays flat
+    err = float(np.linalg.norm(got - ref) / (np.linalg.norm(ref) or 1.0))
+    b.set_ylabel("difference / peak", fontsize=8)
+    b.set_xlabel("range r = -p.w")
+    b.set_title(f"relative L2 difference {err:.2g}", fontsize=8)
     fig.tight_layout()
     return fig

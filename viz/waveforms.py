@@ -7,13 +7,24 @@ import numpy as np
 
 from . import style
 
-__all__ = ["draw"]
+__all__ = ["draw", "figure"]
 
 
 @style.styled
 def draw(waves, path, *, realisations=None, noise=None, views=None, band=(5.0, 95.0),
          dpi=150):
-    """Write a PNG of ``waves`` (:class:`meshladar.receiver.Waveforms`) to ``path``.
+    """Write a PNG of :func:`figure` to ``path``; returns the path."""
+    plt = style.use()
+    fig = figure(waves, realisations=realisations, noise=noise, views=views, band=band)
+    path = style.save_png(fig, path, dpi)
+    plt.close(fig)
+    return path
+
+
+@style.styled
+def figure(waves, *, realisations=None, noise=None, views=None, band=(5.0, 95.0)):
+    """A matplotlib Figure of ``waves`` (:class:`meshladar.receiver.Waveforms`;
+    ``Waveforms.plot()``).
 
     Parameters
     ----------
@@ -71,7 +82,9 @@ def draw(waves, path, *, realisations=None, noise=None, views=None, band=(5.0, 9
         "top", functions=(lambda t: t * 1e-9 * c / 2 - waves.standoff,
                           lambda r: (r + waves.standoff) * 2 / c * 1e9))
     top.set_xlabel("range r = ct/2 - standoff (m)")
+    from matplotlib.ticker import MaxNLocator
+
+    # no label in the corners, where the left axis's top label sits
+    top.xaxis.set_major_locator(MaxNLocator(5, prune="both"))
     fig.tight_layout()
-    path = style.save_png(fig, path, dpi)
-    plt.close(fig)
-    return path
+    return fig
