@@ -593,8 +593,7 @@ def _study_3d(args) -> int:
         fig.suptitle(f"3-D reflective tomography, z = 0 slices ({views} views, {size}^3)")
         fig.tight_layout()
         png = os.path.join(args.outdir, "tomography3d.png")
-        results.write_atomic(png, lambda fh: fig.savefig(fh, format="png", dpi=150))
-        return png
+        return style.save_png(fig, png)
 
     png = draw()
     print(f"3-D tomography study ({args.setting}: {views} views, {size}^3 voxels)")
@@ -653,8 +652,7 @@ def _study_reconstruction(args) -> int:
         fig.suptitle("reconstructions at 1° and 10° view spacing")
         fig.tight_layout()
         png = os.path.join(args.outdir, "reconstruction.png")
-        results.write_atomic(png, lambda fh: fig.savefig(fh, format="png", dpi=150))
-        return png
+        return style.save_png(fig, png)
 
     png = draw()
     print(f"reconstruction study ({args.setting})")

@@ -359,6 +359,8 @@ def _backed(surface, H, sino, keep, share=0.5):
     strong = (h >= 0.25 * h.max(axis=1, keepdims=True)).astype(float)
     # any count backs a point (at one photoelectron expected per bin, 63 % of its bins
     # hold one); sparse noise counts do not line up along a point's sinusoid
+    from .reconstruct import _noise_floor
+
     lit = (sino.values > _noise_floor(sino, quanta=0.5) * float(np.abs(sino.values).max())
            ).astype(float)
     e0, inv_dr = _uniform(sino.bin_edges)
@@ -369,26 +371,19 @@ def _backed(surface, H, sino, keep, share=0.5):
     return hits >= share * strong.sum(axis=1)
 
 
-def _noise_floor(sino, quanta=3.0):
-    """The data's noise floor relative to its maximum, and at least
-    :data:`~meshladar.reconstruct.LOG_FLOOR`: ``quanta`` quanta when the bins are whole
-    multiples of a quantum (counted photoelectrons, however scaled), else five robust
-    standard deviations of the bins (most bins hold no surface, so their median absolute
-    deviation is the noise)."""
-    from .reconstruct import LOG_FLOOR
+def first_image(sino, size, extent=1.0, center=(0.0, 0.0)):
+    """The default first reconstruction: FBP of the log radiance, its floor at half a
+    count (or above the noise) so weak surfaces next to glints show and noise does not
+    (FBP's few-views warning is for FBP's own output, not for this intermediate)."""
+    import warnings
 
-    v = sino.values
-    peak = float(np.abs(v).max(initial=0.0))
-    if peak == 0:
-        return LOG_FLOOR
-    nonzero = np.abs(v[v != 0])
-    quantum = float(nonzero.min())
-    steps = nonzero / quantum
-    if quantum < peak and np.mean(np.abs(steps - np.round(steps)) < 1e-6) > 0.99:
-        level = quanta * quantum
-    else:
-        level = 5.0 * 1.4826 * float(np.median(np.abs(v - np.median(v))))
-    return float(min(0.5, max(LOG_FLOOR, level / peak)))
+    from .errors import MeshladarWarning
+    from .reconstruct import _noise_floor, fbp, log_radiance
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MeshladarWarning)
+        return fbp(log_radiance(sino, floor=_noise_floor(sino, 0.5)), size=size,
+                   extent=extent, center=center)
 
 
 def _subset(surface, keep):
@@ -492,11 +487,7 @@ def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first
         surface_pixels, shadowed_fraction (of front-facing point-views), blur_deg,
         surface_shift (the offset along the normals, scene units).
     """
-    import warnings
-
-    from .errors import MeshladarWarning
     from .iterative import cgls, sirt
-    from .reconstruct import fbp, log_radiance
 
     check_sinogram("sino", sino)
     method = check_choice("method", method, SOLVERS)
@@ -504,10 +495,7 @@ def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first
     radiometry = sino.info.get("radiometry", "paper")
     if surface is None:
         if first is None:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", MeshladarWarning)   # few-views warning
-                first = fbp(log_radiance(sino, floor=_noise_floor(sino, 0.5)), size=size,
-                            extent=extent, center=center)
+            first = first_image(sino, size, extent, center)
         surface = estimate_surface(first, sino, threshold=threshold, sigma=sigma,
                                    shadows=shadows)
     elif not isinstance(surface, Surface):

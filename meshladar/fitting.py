@@ -404,6 +404,8 @@ class CoatingFit:
 
 
 def _resolve_params(kernel, parts, free, bounds, initial):
+    from .brdf import SandfordRobertson
+
     mats = list(kernel.materials)
     if initial is not None:
         for key, m in dict(initial).items():
@@ -425,15 +427,15 @@ def _resolve_params(kernel, parts, free, bounds, initial):
                 raise ParameterError(f"free parameters of part {kernel.parts[p]!r} must be "
                                      f"among {list(names)}; got {bad}")
             names = want
-        elif type(m).__name__ == "SandfordRobertson":
+        elif isinstance(m, SandfordRobertson):
             names = tuple(n for n in ("rho_d", "epsilon", "b", "e")
                           if not (m.lobes == "diffuse" and n in ("epsilon", "e")))
         if not names:
             raise ParameterError(f"part {kernel.parts[p]!r}: {type(m).__name__} has no float "
                                  "dataclass fields to fit; give free=")
         for n in names:
-            lo, hi = SR_BOUNDS.get(n, (-math.inf, math.inf)) if type(m).__name__ == \
-                "SandfordRobertson" else (-math.inf, math.inf)
+            lo, hi = SR_BOUNDS.get(n, (-math.inf, math.inf)) if isinstance(
+                m, SandfordRobertson) else (-math.inf, math.inf)
             if bounds is not None:
                 for key in (f"{kernel.parts[p]}.{n}", f"{p}.{n}", n):
                     if key in bounds:

@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from ._validate import check_count, check_real, check_sinogram, finite_array
+from ._validate import check_choice, check_count, check_real, check_sinogram, finite_array
 from .errors import ParameterError
 
 __all__ = ["RangeProjector", "LinearProjector", "sirt", "sart", "cgls", "tv_fista",
@@ -204,7 +204,7 @@ def _setup(sino, size, extent, center, weights, mask, x0, rays_per_bin, nonneg,
     size = check_count("size", size)
     extent = check_real("extent", extent, low=0.0, low_open=True)
     grid = PixelGrid.square(size, extent, center)
-    A = _projector(projector, grid, sino, rays_per_bin)
+    A = None if projector is None else _projector(projector, grid, sino, rays_per_bin)
     b = sino.values
     W = np.ones_like(b) if weights is None else finite_array("weights", weights)
     if W.shape != b.shape or np.any(W < 0):
@@ -232,8 +232,6 @@ def _setup(sino, size, extent, center, weights, mask, x0, rays_per_bin, nonneg,
 def _projector(projector, grid, sino, rays_per_bin):
     """A projector name, or a user's operator: anything with ``@``, ``.T`` and a ``grid``
     equal to the image's (an ODL-like composition)."""
-    from ._validate import check_choice
-
     if not isinstance(projector, str):
         if not (hasattr(projector, "__matmul__") and hasattr(projector, "T")
                 and getattr(projector, "grid", None) == grid):
@@ -388,8 +386,10 @@ def sart(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=10, subsets=No
     if not isinstance(projector, str):
         raise ParameterError("sart builds one projector per group of views: give projector "
                              f"as one of {PROJECTORS}")
+    check_choice("projector", projector, PROJECTORS)
+    # one projector per group below, none for the whole set
     grid, _, b, W, M, x = _setup(sino, size, extent, center, weights, mask, x0,
-                                 rays_per_bin, nonneg, projector)
+                                 rays_per_bin, nonneg, None)
     n_views = b.shape[0]
     n_sub = max(1, n_views // 36) if subsets is None else check_count("subsets", subsets)
     if n_sub > n_views:
@@ -473,8 +473,7 @@ def glint_weights(sino, threshold=None, floor=0.0, max_share=0.1):
     that hold returns (above the noise floor) are they dropped; otherwise the scene does
     not glint and every weight is 1 (measured at 1° views: 2-4 % on the paper's glinting
     pairs, 42-45 % on the diffuse disk and the gray pair)."""
-    from .compensation import _noise_floor
-    from .reconstruct import PAPER_CLIP
+    from .reconstruct import PAPER_CLIP, _noise_floor
 
     check_sinogram("sino", sino)
     thr = check_real("threshold", PAPER_CLIP if threshold is None else threshold, low=0.0,

@@ -356,6 +356,26 @@ def _preprocessed(sinogram, step):
     return dict(sinogram.info, preprocess=step if not before else f"{before}, then {step}")
 
 
+def _noise_floor(sino, quanta=3.0):
+    """The data's noise floor relative to its maximum, and at least
+    :data:`~meshladar.reconstruct.LOG_FLOOR`: ``quanta`` quanta when the bins are whole
+    multiples of a quantum (counted photoelectrons, however scaled), else five robust
+    standard deviations of the bins (most bins hold no surface, so their median absolute
+    deviation is the noise)."""
+    v = sino.values
+    peak = float(np.abs(v).max(initial=0.0))
+    if peak == 0:
+        return LOG_FLOOR
+    nonzero = np.abs(v[v != 0])
+    quantum = float(nonzero.min())
+    steps = nonzero / quantum
+    if quantum < peak and np.mean(np.abs(steps - np.round(steps)) < 1e-6) > 0.99:
+        level = quanta * quantum
+    else:
+        level = 5.0 * 1.4826 * float(np.median(np.abs(v - np.median(v))))
+    return float(min(0.5, max(LOG_FLOOR, level / peak)))
+
+
 def log_radiance(sinogram: Sinogram, *, floor=LOG_FLOOR) -> Sinogram:
     """The paper's Fig. 11(a) input: the logarithm of the binned radiance.
 

@@ -165,17 +165,12 @@ def find_shapes(sino, *, size=512, extent=1.0, center=(0.0, 0.0), kind="disk", f
         points.
     """
     from .brdf import SandfordRobertson
-    from .compensation import _noise_floor, estimate_surface
-    from .errors import MeshladarWarning
-    from .reconstruct import fbp, log_radiance
+    from .compensation import estimate_surface, first_image
     from .shapes import Disk, Ellipse
 
     kind = check_choice("kind", kind, SHAPE_KINDS)
     if first is None:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", MeshladarWarning)
-            first = fbp(log_radiance(sino, floor=_noise_floor(sino, 0.5)), size=size,
-                        extent=extent, center=center)
+        first = first_image(sino, size, extent, center)
     surface = estimate_surface(first, sino, shadows=False)
     dr = float(np.mean(np.diff(sino.bin_edges)))
     tol = check_real("tol_bins", tol_bins, low=0.0, low_open=True) * dr
