@@ -230,7 +230,7 @@ def test_compensation_with_photon_noise():
     counts' quantum, noise ridges are dropped because the data does not back them, and the
     b = 0.99 disk still comes out without darkening at its level."""
     from meshladar import study_reconstruction as study
-    from meshladar.compensation import _noise_floor
+    from meshladar.reconstruct import _noise_floor
 
     m = paper._diffuse(0.99)
     clean = _disk(m)
