@@ -499,6 +499,19 @@ def _read_samples(path):
     return values
 
 
+def _window_size(text):
+    """argparse type for WxH in pixels."""
+    parts = text.lower().split("x")
+    try:
+        size = tuple(int(p) for p in parts)
+    except ValueError:
+        size = ()
+    if len(size) != 2 or not all(1 <= n <= 16384 for n in size):
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not WIDTHxHEIGHT in pixels, each 1-16384 (e.g. 1200x900)")
+    return size
+
+
 def _cmd_view(args) -> int:
     """Show a scene in 3-D coloured by its return for one view (or save a screenshot)."""
     import os
@@ -516,7 +529,7 @@ def _cmd_view(args) -> int:
 
     viewer.show_scene(scene, view_angle_deg=args.view_angle, ladar=default_ladar,
                       off_screen=args.screenshot is not None, screenshot=args.screenshot,
-                      log_scale=args.log)
+                      log_scale=args.log, window_size=args.size, camera=args.camera)
     if args.screenshot and not args.quiet:
         print(f"wrote {args.screenshot}")
     return 0
@@ -1006,6 +1019,11 @@ def _parser() -> argparse.ArgumentParser:
                     help="render off screen into this PNG (default: open a window)")
     vw.add_argument("--log", action="store_true",
                     help="colour by log10 of the return (default: linear)")
+    vw.add_argument("--size", type=_window_size, default=(900, 700), metavar="WxH",
+                    help="window or screenshot size in pixels (default: 900x700)")
+    vw.add_argument("--camera", choices=("oblique", "view"), default="oblique",
+                    help="oblique: beside and above the ladar; view: along the beam from "
+                         "the ladar (default: %(default)s)")
     vw.set_defaults(func=_cmd_view)
 
     st = sub.add_parser("study", help="faceting-vs-analytic study into a folder",

@@ -69,6 +69,13 @@ def test_view_writes_a_screenshot(tmp_path):
 
     img = mpimg.imread(tmp_path / "v.png")
     assert img.shape[0] > 100 and img[..., :3].std() > 0.05
+    # at a chosen size, from the ladar's view
+    _cli("view", "disk_pair", "--size", "320x200", "--camera", "view", "--screenshot",
+         tmp_path / "s.png", check=True)
+    assert mpimg.imread(tmp_path / "s.png").shape[:2] == (200, 320)
+    res = _cli("view", "disk_pair", "--size", "320by200", "--screenshot", tmp_path / "t.png")
+    assert res.returncode == 2 and "--size" in res.stderr and "WIDTHxHEIGHT" in res.stderr
+    assert not (tmp_path / "t.png").exists()
 
 
 @pytest.mark.parametrize("sub", SUBCOMMANDS)

@@ -137,6 +137,40 @@ def test_colour_bars_are_titled_and_apart():
     assert [t for t, _ in viewer.last_scalar_bars] == ["reconstruction of log input"]
 
 
+def test_legend_names_the_flat_colours_clear_of_the_bars_and_text_is_legible():
+    """The flat colours (shadowed, turned away, beam, iso-range planes) are named in a
+    legend that overlaps no colour bar; the bars' titles and labels are drawn light on the
+    black background (they were black on black: present in VTK, invisible on screen)."""
+    from meshladar.viz import viewer
+
+    pair = ml.phantoms.scene("disk_pair", large=DARK_GRAY, small=ALUMINUM)
+    w, h = 600, 480
+    img = viewer.show_scene(pair, view_angle_deg=0.0, ladar=ml.Ladar.paper(),
+                            off_screen=True, window_size=(w, h))
+    labels, box = viewer.last_legend
+    assert labels == ["shadowed by another part", "turned away from the ladar",
+                      "ladar beam and ray grid", "iso-range planes (bin edges)"]
+    for _, bar in viewer.last_scalar_bars:
+        assert box[2] <= bar[0] or bar[2] <= box[0] or box[3] <= bar[1] or bar[3] <= box[1]
+    # light text right of each bar (its labels) and above it (its title)
+    for _, (x0, y0, x1, y1) in viewer.last_scalar_bars:
+        labels_px = img[int((1 - y1) * h):int((1 - y0) * h), int(x1 * w):, :3]
+        title_px = img[max(0, int((1 - y1) * h) - 30):int((1 - y1) * h),
+                       int((x0 - 0.1) * w):, :3]
+        assert (labels_px.min(axis=-1) > 150).sum() > 20
+        assert (title_px.min(axis=-1) > 150).sum() > 20
+    # the legend's text is white whatever its swatch (the dark blue was unreadable)
+    x0, y0, x1, y1 = box
+    legend_px = img[int((1 - y1) * h):int((1 - y0) * h), int(x0 * w):int(x1 * w), :3]
+    assert (legend_px.min(axis=-1) > 200).sum() > 200
+    # no ladar, no rays: nothing flat to name but the shadows and the far sides
+    viewer.show_scene(pair, view_angle_deg=90.0, show_rays=False, off_screen=True,
+                      window_size=(200, 160))
+    assert viewer.last_legend[0] == ["turned away from the ladar"]
+    with pytest.raises(ml.errors.ParameterError, match="camera"):
+        viewer.show_scene(pair, camera="top", off_screen=True)
+
+
 def test_volume_default_is_a_surface_not_fog():
     """A stack of disks drawn by default: the iso-surface at half the robust peak (a solid
     cylinder whose pixels are bright), not a grey fog; render='volume' is a windowed

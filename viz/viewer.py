@@ -18,10 +18,14 @@ import os
 import numpy as np
 
 __all__ = ["show_scene", "show_slice", "show_volume", "volume_surface", "volume_iso",
-           "face_returns", "SHADOW_COLOR", "BACK_COLOR"]
+           "face_returns", "SHADOW_COLOR", "BACK_COLOR", "CAMERAS", "last_scalar_bars",
+           "last_legend"]
 
 #: Colour of faces that face the ladar but are shadowed by another part.
 SHADOW_COLOR = (1.0, 0.0, 1.0)
+#: Named camera placements of show_scene: "oblique" beside and above the ladar (default),
+#: "view" along the beam from the ladar.
+CAMERAS = ("oblique", "view")
 #: Colour of faces turned away from the ladar.
 BACK_COLOR = (0.15, 0.15, 0.35)
 
@@ -70,7 +74,7 @@ def _view_vector(view_angle_deg, view_vector):
     return np.array([np.cos(phi), np.sin(phi), 0.0])
 
 
-def _check_view_options(scene, iso_ranges, window_size, segments):
+def _check_view_options(scene, iso_ranges, window_size, segments, camera=None):
     from meshladar import Scene
     from meshladar._validate import check_count
     from meshladar.errors import ParameterError
@@ -84,6 +88,9 @@ def _check_view_options(scene, iso_ranges, window_size, segments):
                        and 1 <= n <= 16384 for n in window_size)):
         raise ParameterError(f"window_size must be (width, height) in pixels, each in "
                              f"[1, 16384]; got {window_size!r}")
+    if isinstance(camera, str) and camera not in CAMERAS:
+        raise ParameterError(f"camera must be one of {', '.join(CAMERAS)} or a pyvista "
+                             f"camera position; got {camera!r}")
 
 
 def _mesh_scene(scene, segments):
@@ -123,6 +130,9 @@ def face_returns(scene, w, *, segments=256):
 #: The colour bars of the last figure drawn: (title, (x0, y0, x1, y1) in viewport units),
 #: for checks that they are titled and do not overlap.
 last_scalar_bars = []
+#: The legend of the last figure drawn: (labels, (x0, y0, x1, y1) in viewport units), or
+#: None when it had none.
+last_legend = None
 
 
 def _bar(title, slot=0):
@@ -130,15 +140,50 @@ def _bar(title, slot=0):
     right edge (0: lower, 1: upper), so two bars never overlap."""
     return {"title": title, "vertical": True, "position_x": 0.84,
             "position_y": 0.06 + 0.48 * slot, "width": 0.08, "height": 0.38,
-            "title_font_size": 12, "label_font_size": 10, "n_labels": 4, "fmt": "%.3g"}
+            "title_font_size": 12, "label_font_size": 10, "n_labels": 4, "fmt": "%.3g",
+            "color": "white"}             # the backgrounds are black
+
+
+def _legend(plotter, entries):
+    """A legend of the flat colours drawn, ``entries`` [(label, colour)], in the top-left
+    corner, clear of the colour bars' slots at the right edge."""
+    if not entries:
+        return
+    height = 0.05 * len(entries)
+    legend = plotter.add_legend(labels=[list(e) for e in entries],
+                                bcolor=(0.12, 0.12, 0.12), size=(0.36, height),
+                                loc="upper left", face="none", background_opacity=0.8)
+    from vtkmodules.vtkCommonDataModel import vtkImageData
+
+    # VTK colours an entry's text as its symbol: white text, and the colour as an icon
+    for i, (_, colour) in enumerate(entries):
+        icon = vtkImageData()
+        icon.SetDimensions(16, 16, 1)
+        icon.AllocateScalars(3, 3)                  # VTK_UNSIGNED_CHAR, RGB
+        pixels = icon.GetPointData().GetScalars()
+        rgb = [int(round(255 * c)) for c in colour]
+        for k in range(16 * 16):
+            pixels.SetTuple3(k, *rgb)
+        legend.SetEntryIcon(i, icon)
+        legend.SetEntryColor(i, 1.0, 1.0, 1.0)
+    return legend
 
 
 def _finish(plotter, off_screen, screenshot):
+    global last_legend
     last_scalar_bars.clear()
     for bar in plotter.scalar_bars.values():
+        bar.SetVerticalTitleSeparation(12)       # the title clear of the top label
         x, y = bar.GetPosition()
         w, h = bar.GetPosition2()
         last_scalar_bars.append((bar.GetTitle() or "", (x, y, x + w, y + h)))
+    last_legend = None
+    legend = getattr(plotter, "legend", None)
+    if legend is not None:
+        x, y = legend.GetPosition()
+        w, h = legend.GetPosition2()
+        labels = [legend.GetEntryString(i) for i in range(legend.GetNumberOfEntries())]
+        last_legend = (labels, (x, y, x + w, y + h))
     if off_screen:
         img = plotter.screenshot(None, return_img=True)
         plotter.close()
@@ -177,10 +222,14 @@ def show_scene(scene, *, view_angle_deg=None, view_vector=None, ladar=None, segm
         Colour lit faces by log10 of their return (glints next to diffuse coatings).
     off_screen, screenshot, window_size :
         See the module docstring.
-    camera : pyvista camera position, "view", or None
-        "view" looks along the beam from the ladar; None (default) an oblique view.
+    camera : "oblique", "view" or a pyvista camera position
+        "view" looks along the beam from the ladar; "oblique" (default, also None) from
+        beside and above the ladar, so the lit side and the shadows both show.
+
+    A legend in the top-left corner names the flat colours drawn (shadowed, turned away,
+    beam and ray grid, iso-range planes); colour bars sit at the right edge.
     """
-    _check_view_options(scene, iso_ranges, window_size, segments)
+    _check_view_options(scene, iso_ranges, window_size, segments, camera)
     w = _view_vector(view_angle_deg, view_vector)
     pv = _pyvista()
     mesh, ret, state = face_returns(scene, w, segments=segments)
@@ -195,6 +244,7 @@ def show_scene(scene, *, view_angle_deg=None, view_vector=None, ladar=None, segm
         return pv.PolyData(v, cells)
 
     lit = state == 0
+    legend = []
     if lit.any():
         pd = poly(lit)
         vals = ret[lit]
@@ -205,8 +255,10 @@ def show_scene(scene, *, view_angle_deg=None, view_vector=None, ladar=None, segm
                                               else "F cos(theta) [1/sr]", 0))
     if (state == 1).any():
         plotter.add_mesh(poly(state == 1), color=shadow_color, lighting=False)
+        legend.append(("shadowed by another part", shadow_color))
     if (state == 2).any():
         plotter.add_mesh(poly(state == 2), color=back_color, lighting=False)
+        legend.append(("turned away from the ladar", back_color))
     center = 0.5 * (v.min(axis=0) + v.max(axis=0))
     size = float(np.ptp(v, axis=0).max())
     if show_rays:
@@ -216,6 +268,7 @@ def show_scene(scene, *, view_angle_deg=None, view_vector=None, ladar=None, segm
                          j_size=1.1 * size, i_resolution=1, j_resolution=1)
         plotter.add_mesh(plane, style="wireframe", color="yellow", line_width=2,
                          lighting=False)
+        legend.append(("ladar beam and ray grid", (1.0, 1.0, 0.0)))
     if ladar is not None and show_hits:
         from meshladar.raytrace import first_hits
 
@@ -233,10 +286,12 @@ def show_scene(scene, *, view_angle_deg=None, view_vector=None, ladar=None, segm
                 plane = pv.Plane(center=center - (r + center @ w) * w, direction=w,
                                  i_size=size, j_size=size, i_resolution=1, j_resolution=1)
                 plotter.add_mesh(plane, color="cyan", opacity=0.08, lighting=False)
+            if len(inside):
+                legend.append(("iso-range planes (bin edges)", (0.0, 1.0, 1.0)))
     if camera == "view":                     # look along the beam, from the ladar
         camera = [tuple(center + 2.5 * size * w), tuple(center),
                   (0.0, 0.0, 1.0) if abs(w[2]) < 0.9 else (0.0, 1.0, 0.0)]
-    if camera is None:                       # oblique: beside and above the ladar
+    if camera is None or camera == "oblique":   # beside and above the ladar
         side = np.cross([0.0, 0.0, 1.0], w)
         side = side / np.linalg.norm(side) if np.linalg.norm(side) > 1e-9 else \
             np.array([1.0, 0.0, 0.0])
@@ -244,6 +299,7 @@ def show_scene(scene, *, view_angle_deg=None, view_vector=None, ladar=None, segm
         camera = [tuple(center + 2.8 * size * eye / np.linalg.norm(eye)), tuple(center),
                   (0.0, 0.0, 1.0)]
     plotter.camera_position = camera
+    _legend(plotter, legend)
     return _finish(plotter, off_screen, screenshot)
 
 
@@ -277,6 +333,7 @@ def show_slice(image, *, z=0.0, scene=None, clim=None, off_screen=False, screens
             cells = np.hstack([np.full((len(p.faces), 1), 3), p.faces]).ravel()
             plotter.add_mesh(pv.PolyData(p.vertices, cells), style="wireframe",
                              color="orange", opacity=0.3, lighting=False)
+        _legend(plotter, [("scene (wireframe)", (1.0, 0.65, 0.0))])
     c = (float(image.center[0]), float(image.center[1]), float(z))
     plotter.camera_position = camera if camera is not None else [
         (c[0], c[1], c[2] + 4.0 * image.extent), c, (0.0, 1.0, 0.0)]
