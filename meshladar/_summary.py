@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import html
 
-__all__ = ["text", "table"]
+__all__ = ["text", "table", "listing", "material_name"]
 
 #: The longest repr a result gives (tested).
 MAX_REPR = 400
@@ -38,3 +38,16 @@ def table(name, *fields):
                    for k, v in _fields(fields))
     return (f"<table><caption style='text-align:left'><b>{html.escape(name)}</b></caption>"
             f"{rows}</table>")
+
+
+def listing(items, most=4):
+    """``a, b, c, d, ... (+n more)``: a short list of names for a summary."""
+    items = [str(i) for i in items]
+    more = len(items) - most
+    return ", ".join(items[:most]) + (f", ... (+{more} more)" if more > 0 else "")
+
+
+def material_name(material):
+    """A coating's name, or its class for an unnamed BRDF."""
+    return getattr(material, "name", None) or type(material).__name__
+

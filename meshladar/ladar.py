@@ -211,9 +211,30 @@ class Ladar:
     def bin_centers(self) -> np.ndarray:
         return 0.5 * (self.bin_edges[1:] + self.bin_edges[:-1])
 
+    def _summary(self):
+        width = np.diff(self.bin_edges)
+        uniform = bool(np.ptp(width) <= 1e-9 * width.mean())
+        if self.planar:
+            a = np.asarray(self.angles_deg, dtype=np.float64)
+            step = np.diff(a)
+            views = (f"about z, {a[0]:.4g} to {a[-1]:.4g} deg"
+                     + (f" every {step[0]:.4g}" if a.size > 1 and
+                        np.ptp(step) <= 1e-9 * max(abs(step[0]), 1.0) else ""))
+        else:
+            views = "3-D directions"
+        return (("n_views", self.n_views), ("n_bins", self.n_bins),
+                ("range", (float(self.bin_edges[0]), float(self.bin_edges[-1]))),
+                ("bin_width", float(width[0]) if uniform else "uneven"), ("views", views))
+
     def __repr__(self) -> str:
-        return (f"Ladar(n_views={self.n_views}, n_bins={self.n_bins}, "
-                f"range=[{self.bin_edges[0]:g}, {self.bin_edges[-1]:g}])")
+        from ._summary import text
+
+        return text("Ladar", *self._summary())
+
+    def _repr_html_(self) -> str:
+        from ._summary import table
+
+        return table("Ladar", *self._summary())
 
 
 #: A target whose every view sees it over less than this fraction of the shared range span

@@ -87,6 +87,17 @@ class MeshPart:
             a.flags.writeable = False
             object.__setattr__(self, name, a)
 
+    def __repr__(self) -> str:
+        from ._summary import text
+
+        lo, hi = (self.vertices.min(axis=0), self.vertices.max(axis=0)) if len(
+            self.vertices) else (np.zeros(3), np.zeros(3))
+        return text("MeshPart", ("name", self.name), ("vertices", len(self.vertices)),
+                    ("faces", len(self.faces)),
+                    ("materials", tuple(int(m) for m in np.unique(self.material))),
+                    ("bounds", f"[{', '.join(f'{a:.4g}' for a in lo)}] to "
+                               f"[{', '.join(f'{b:.4g}' for b in hi)}]"))
+
     @property
     def triangles(self) -> np.ndarray:
         """(m, 3, 3) vertex coordinates of each face."""

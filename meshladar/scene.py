@@ -322,8 +322,33 @@ class Scene:
         r = float(np.max(np.hypot(*(pts - c).T) + rad))
         return (float(c[0]), float(c[1])), r
 
-    def __repr__(self) -> str:
+    def _summary(self):
+        from ._summary import listing, material_name
+
+        mats = listing(dict.fromkeys(material_name(m) for m in self.materials))
         if self._parts:
-            return (f"Scene(mesh: {len(self._parts)} parts, {self._report.get('faces')} faces, "
-                    f"{len(self._materials)} materials)")
-        return f"Scene({list(self._shapes)!r})"
+            lo, hi = self.bounds()
+            rep = self._report
+            return (("kind", "mesh"),
+                    ("parts", listing(f"{p.name} ({len(p.faces)} faces)" for p in self._parts)),
+                    ("faces", rep.get("faces")), ("materials", mats),
+                    ("bounds", f"[{', '.join(f'{a:.4g}' for a in lo)}] to "
+                               f"[{', '.join(f'{b:.4g}' for b in hi)}]"),
+                    ("watertight", all(rep.get("watertight") or [False])),
+                    ("inverted_bodies", rep.get("inverted_bodies") or None))
+        (cx, cy), r = self.bounding_circle()
+        return (("kind", "analytic"),
+                ("shapes", listing(f"{s.name or type(s).__name__}: {type(s).__name__}"
+                                   for s in self._shapes)),
+                ("materials", mats), ("bounding_circle", f"center ({cx:.4g}, {cy:.4g}), "
+                                                         f"radius {r:.4g}"))
+
+    def __repr__(self) -> str:
+        from ._summary import text
+
+        return text("Scene", *self._summary())
+
+    def _repr_html_(self) -> str:
+        from ._summary import table
+
+        return table("Scene", *self._summary())

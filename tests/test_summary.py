@@ -113,3 +113,30 @@ def results_waves():
     sino = ml.simulate(pair, lad, radiometry="power")
     w = receive(sino, sample_rate=20e9, pulse=GaussianPulse(1e-10))
     return w.scaled(1e4 / w.values.max(), units="photoelectrons")
+
+
+def test_inputs_summarise_too():
+    """Scene, Ladar and MeshPart summarise (kind, parts, faces, coatings, bounds; views and
+    bins) instead of dumping vertex arrays: a 1.3M-face mesh's repr is as short as a disk's,
+    and a scene of 40 shapes lists a few and counts the rest."""
+    big = ml.Scene.from_parts([ml.mesh.sphere((0, 0, 0), 0.5, 0, subdivisions=6)],
+                              materials=[materials.ALUMINUM])
+    text = repr(big)
+    assert len(text) <= MAX_REPR and "array(" not in text
+    assert "kind='mesh'" in text and "faces=81920" in text and "materials='aluminum'" in text
+    assert "bounds='[-0.5, -0.5, -0.5] to [0.5, 0.5, 0.5]'" in text and "watertight=True" in text
+    part = repr(big.parts[0])
+    assert part.startswith("MeshPart(name='sphere'") and "faces=81920" in part
+    assert len(part) <= MAX_REPR
+    many = ml.Scene([ml.Disk((0.1 * k, 0.0), 0.04, materials.DARK_GRAY, name=f"d{k}")
+                     for k in range(40)])
+    text = repr(many)
+    assert "kind='analytic'" in text and "(+36 more)" in text and len(text) <= MAX_REPR
+    assert "<table>" in many._repr_html_() and "Scene" in many._repr_html_()
+    lad = repr(Ladar.paper())
+    assert lad == ("Ladar(n_views=360, n_bins=512, range=(-0.8, 0.8), bin_width=0.003125, "
+                   "views='about z, 0 to 359 deg every 1')")
+    sphere = Ladar(None, np.linspace(-1, 1, 5), view_vectors=ml.mesh.fibonacci_sphere(10))
+    assert "views='3-D directions'" in repr(sphere) and "<table>" in sphere._repr_html_()
+    uneven = Ladar([0.0, 10.0, 30.0], [0.0, 1.0, 3.0])
+    assert "bin_width='uneven'" in repr(uneven) and "every" not in repr(uneven)
