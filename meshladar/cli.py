@@ -584,31 +584,9 @@ def _study_3d(args) -> int:
            "rays_per_bin": rpb, "metrics": metrics}
     path = os.path.join(args.outdir, "tomography3d.json")
     results.write_text_atomic(path, json.dumps(doc, indent=2, sort_keys=True))
-    from meshladar.viz import style
+    from meshladar.viz import studies as vstudies
 
-    @style.styled
-    def draw():
-        keys = list(volumes)
-        fig, axes = style.use().subplots(2, (len(keys) + 1) // 2,
-                                         figsize=(3.0 * ((len(keys) + 1) // 2), 6.2),
-                                         squeeze=False)
-        for ax, key in zip(axes.ravel(), keys):
-            v = volumes[key]
-            mid = v.values[v.values.shape[0] // 2]
-            lim = float(np.percentile(np.abs(mid), 99.5)) or 1.0
-            ax.imshow(mid, extent=(v.x[0], v.x[-1], v.y[0], v.y[-1]), cmap="RdBu_r",
-                      vmin=-lim, vmax=lim, origin="lower")
-            ax.set_title(key.replace("_", " "), fontsize=8)
-            ax.set_xticks([])
-            ax.set_yticks([])
-        for ax in axes.ravel()[len(keys):]:
-            ax.set_axis_off()
-        fig.suptitle(f"3-D reflective tomography, z = 0 slices ({views} views, {size}^3)")
-        fig.tight_layout()
-        png = os.path.join(args.outdir, "tomography3d.png")
-        return style.save_png(fig, png)
-
-    png = draw()
+    (png,) = vstudies.draw_tomography3d(volumes, args.outdir, views, size)
     print(f"3-D tomography study ({args.setting}: {views} views, {size}^3 voxels)")
     for key, value in metrics.items():
         print(f"  {key:<42} {value:10.4f}")
@@ -641,33 +619,9 @@ def _study_reconstruction(args) -> int:
         writer.writerow({k: r.get(k, "") for k in keys})
     table = os.path.join(args.outdir, "reconstruction.csv")
     results.write_text_atomic(table, buf.getvalue())
-    from meshladar.viz import style
+    from meshladar.viz import studies as vstudies
 
-    @style.styled
-    def draw():
-        panels = [(ph, sp) for ph in sorted({k[0] for k in images}) for sp in (1.0, 10.0)]
-        methods = list(study.METHODS)
-        fig, axes = style.use().subplots(len(panels), len(methods),
-                                         figsize=(2.0 * len(methods), 2.2 * len(panels)),
-                                         squeeze=False)
-        for i, (ph, sp) in enumerate(panels):
-            for j, m in enumerate(methods):
-                ax = axes[i, j]
-                img = images.get((ph, sp, m))
-                if img is not None:
-                    lim = float(np.percentile(np.abs(img), 99.5)) or 1.0
-                    ax.imshow(img, origin="lower", cmap="RdBu_r", vmin=-lim, vmax=lim,
-                              extent=(-1, 1, -1, 1))
-                ax.set_title(f"{m}", fontsize=8)
-                ax.set_xticks([])
-                ax.set_yticks([])
-            axes[i, 0].set_ylabel(f"{ph}, {sp:g}°", fontsize=8)
-        fig.suptitle("reconstructions at 1° and 10° view spacing")
-        fig.tight_layout()
-        png = os.path.join(args.outdir, "reconstruction.png")
-        return style.save_png(fig, png)
-
-    png = draw()
+    (png,) = vstudies.draw_reconstruction(images, args.outdir)
     print(f"reconstruction study ({args.setting})")
     print("\n".join(study.report(rows)))
     print(f"  wrote {path}\n  wrote {table}\n  wrote {png}")

@@ -172,3 +172,46 @@ def test_tol_validation():
         ml.simulate(scene, lad, model="mesh", tol=0.0)
     with pytest.raises(ml.errors.ParameterError, match="tol chooses the ray density"):
         ml.simulate(scene, lad, model="mesh", tol=0.01, rays_per_bin=4)
+
+
+def test_reconstruction_and_3d_study_figures(tmp_path):
+    """The reconstruction and 3-D studies' figures (drawn by viz, not the CLI): one panel per
+    method and spacing, or per volume; signed images on a scale symmetric about zero whose
+    top is not below the image's 99.9th |value| percentile (the ring is not saturated);
+    no text overlapping or cut off; the PNGs written."""
+    import matplotlib.image as mpimg
+
+    from meshladar import study_reconstruction as study
+    from meshladar.viz import studies as vstudies, style
+    from meshladar.volume import Volume
+
+    rng = np.random.default_rng(1)
+    x = np.linspace(-1, 1, 48)
+    X, Y = np.meshgrid(x, x)
+    ring = np.exp(-((np.hypot(X, Y) - 0.5) / 0.05) ** 2)
+    images = {(ph, sp, m): 50 * ring + rng.normal(0, 1, ring.shape)
+              for ph in ("b099_disk", "gray_al_pair") for sp in (1.0, 5.0, 10.0)
+              for m in study.METHODS}
+    del images[("gray_al_pair", 10.0, "compensated")]            # a method that failed
+    vols = {k: Volume(np.stack([ring] * 4), x=x, y=x, z=np.arange(4.0))
+            for k in ("lambertian", "b099", "glint", "pair_plain", "pair_log")}
+
+    @style.styled
+    def check():
+        (name, fig), = vstudies.reconstruction_figures(images)
+        assert name == "reconstruction.png"
+        panels = [ax for ax in fig.axes if ax.images]
+        assert len(panels) == 2 * 2 * len(study.METHODS) - 1
+        for ax in panels:
+            im = ax.images[0]
+            data = np.asarray(im.get_array())
+            assert im.norm.vmin == -im.norm.vmax
+            assert im.norm.vmax >= np.percentile(np.abs(data), 99.9) * (1 - 1e-9)
+        assert style.overlapping_texts(fig) == []
+        (name, fig), = vstudies.tomography3d_figures(vols, 600, 48)
+        assert name == "tomography3d.png" and sum(bool(a.images) for a in fig.axes) == 5
+        assert style.overlapping_texts(fig) == []
+    check()
+    for path in (vstudies.draw_reconstruction(images, tmp_path)
+                 + vstudies.draw_tomography3d(vols, tmp_path, 600, 48)):
+        assert mpimg.imread(path)[..., :3].std() > 0.02

@@ -1,4 +1,6 @@
-"""Figures of the faceting study, drawn from its saved files (``meshladar.studies``).
+"""Figures of the studies: the faceting study, drawn from its saved files
+(``meshladar.studies``), and the reconstruction and 3-D tomography studies, drawn from
+their images (``meshladar.study_reconstruction``, ``meshladar.paper.run_3d``).
 
 ``draw(outdir)`` reads ``faceting.json`` and ``faceting_examples.npz`` from ``outdir`` and
 writes:
@@ -20,7 +22,8 @@ import numpy as np
 
 from . import style
 
-__all__ = ["draw"]
+__all__ = ["draw", "figures", "reconstruction_figures", "draw_reconstruction",
+           "tomography3d_figures", "draw_tomography3d"]
 
 _SERIES_STYLE = {"position": ("exact normals", "C0"), "normal": ("flat normals", "C3"),
                  "smooth": ("smooth normals", "C2"), "rays": ("rays, point", "C1"),
@@ -134,10 +137,87 @@ def figures(outdir):
 
 @style.styled
 def draw(outdir):
-    """Write the study's figures into ``outdir`` atomically; returns their paths."""
+    """Write the faceting study's figures into ``outdir`` atomically; returns their
+    paths."""
+    return _save_all(figures(outdir), outdir)
+
+
+def _signed_panel(ax, img, extent):
+    """A signed reconstruction on the paper figures' scale (:func:`meshladar.viz.paper.norm`:
+    symmetric about 0, the surfaces unsaturated), without ticks."""
+    from .paper import norm
+
+    ax.imshow(img, origin="lower", cmap="RdBu_r", norm=norm(img), extent=extent,
+              interpolation="nearest")
+    ax.set_xticks([])
+    ax.set_yticks([])
+
+
+def reconstruction_figures(images, methods=None, spacings=(1.0, 10.0)):
+    """Yield ("reconstruction.png", Figure): every method's image (columns) of every
+    phantom at each view spacing (rows), from the reconstruction study's
+    ``images[(phantom, spacing_deg, method)]``; each panel on its own symmetric scale."""
+    from meshladar import study_reconstruction as study
+
+    plt = style.use()
+    methods = list(study.METHODS if methods is None else methods)
+    panels = [(ph, sp) for ph in sorted({k[0] for k in images}) for sp in spacings]
+    fig, axes = plt.subplots(len(panels), len(methods),
+                             figsize=(1.6 * len(methods), 1.75 * len(panels) + 0.6),
+                             squeeze=False)
+    for i, (ph, sp) in enumerate(panels):
+        for j, m in enumerate(methods):
+            ax = axes[i, j]
+            img = images.get((ph, sp, m))
+            if img is None:
+                ax.set_axis_off()
+            else:
+                _signed_panel(ax, img, (-1, 1, -1, 1))
+            if i == 0:
+                ax.set_title(m.replace("_", " "), fontsize=8)
+        axes[i, 0].set_ylabel(f"{ph.replace('_', ' ')}\n{sp:g}° spacing", fontsize=7)
+    fig.suptitle("Each method's reconstruction (signed, symmetric scale per panel)",
+                 fontsize=10)
+    fig.tight_layout()
+    yield "reconstruction.png", fig
+
+
+def tomography3d_figures(volumes, views, size):
+    """Yield ("tomography3d.png", Figure): the z = 0 slice of every volume of the 3-D
+    study (``meshladar.paper.run_3d``), on the paper figures' symmetric scale."""
+    plt = style.use()
+    keys = list(volumes)
+    cols = (len(keys) + 1) // 2
+    fig, axes = plt.subplots(2, cols, figsize=(2.6 * cols, 5.8), squeeze=False)
+    for ax, key in zip(axes.ravel(), keys):
+        v = volumes[key]
+        mid = v.values[v.values.shape[0] // 2]
+        _signed_panel(ax, mid, (v.x[0], v.x[-1], v.y[0], v.y[-1]))
+        ax.set_title(key.replace("_", " "), fontsize=8)
+    for ax in axes.ravel()[len(keys):]:
+        ax.set_axis_off()
+    fig.suptitle(f"3-D reflective tomography: z = 0 slices ({views} views, {size}³ voxels)",
+                 fontsize=10)
+    fig.tight_layout()
+    yield "tomography3d.png", fig
+
+
+def _save_all(figs, outdir):
     plt = style.use()
     paths = []
-    for name, fig in figures(outdir):
+    for name, fig in figs:
         paths.append(style.save_png(fig, os.path.join(outdir, name)))
         plt.close(fig)
     return paths
+
+
+@style.styled
+def draw_reconstruction(images, outdir, **kwargs):
+    """Write :func:`reconstruction_figures` into ``outdir`` atomically; returns the paths."""
+    return _save_all(reconstruction_figures(images, **kwargs), outdir)
+
+
+@style.styled
+def draw_tomography3d(volumes, outdir, views, size):
+    """Write :func:`tomography3d_figures` into ``outdir`` atomically; returns the paths."""
+    return _save_all(tomography3d_figures(volumes, views, size), outdir)
