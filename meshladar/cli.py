@@ -337,20 +337,14 @@ def _cmd_reconstruct(args) -> int:
         raise ParameterError("--smooth applies to 3-D views (radon3d); this sinogram's views "
                              "are about the z axis (use --filter)")
     image = fbp(sino, size=args.size or 512, extent=extent, filter=args.filter or "ramp")
-    from meshladar.viz import style
+    from meshladar.viz import quick
 
-    @style.styled
-    def draw():
-        fig, ax = style.use().subplots(figsize=(5.5, 4.6))
-        h = ax.imshow(image.values, extent=(-extent, extent, -extent, extent), origin="lower")
-        ax.set_xlabel("x [scene units]")
-        ax.set_ylabel("y [scene units]")
-        ax.set_title(f"FBP of {os.path.basename(args.result)} ({args.filter or 'ramp'})")
-        fig.colorbar(h, ax=ax, label="reconstruction [radiance / area]")
-        fmt = os.path.splitext(args.output)[1].lower().lstrip(".")
-        results.write_atomic(args.output, lambda fh: fig.savefig(fh, format=fmt))
-
-    draw()
+    # the quick look's symmetric scale, log input labelled as such, and a centre slice
+    prep = sino.info.get("preprocess")
+    fig = quick.image(image, title=f"FBP of {os.path.basename(args.result)}"
+                      + (f", {prep}" if prep else "") + f" ({args.filter or 'ramp'} filter)")
+    fmt = os.path.splitext(args.output)[1].lower().lstrip(".")
+    results.write_atomic(args.output, lambda fh: fig.savefig(fh, format=fmt, dpi=150))
     results.save_result(data, {"image": image.values},
                    {"kind": "image", "extent": extent, "info": image.info,
                     "source": os.path.basename(args.result)})

@@ -781,6 +781,13 @@ class ViewDesign:
     stderr_uniform: np.ndarray
     uniform: np.ndarray
 
+    def plot(self):
+        """A quick look (:func:`meshladar.viz.fitting.design_figure`): a matplotlib
+        Figure."""
+        from .viz.fitting import design_figure
+
+        return design_figure(self)
+
 
 def design_views(geometry, budget, *, ladar=None, parts=None, free=None, materials=None,
                  photons_per_unit=None, samples=4096):

@@ -181,6 +181,12 @@ def test_view_design_beats_even_spacing(tmp_path):
     assert d.chosen[0] == int(np.argmax(d.information))
     png = draw_design(d, tmp_path / "design.png")
     assert (tmp_path / "design.png").stat().st_size > 10_000 and str(png).endswith(".png")
+    from meshladar.viz import style
+
+    fig = d.plot()                         # the quick look: the same figure, not saved
+    assert style.overlapping_texts(fig) == []
+    labels = [t.get_text() for t in fig.axes[0].texts]
+    assert labels == [str(k + 1) for k in range(8)]          # chosen views, numbered
     with pytest.raises(ParameterError, match="budget"):
         design_views(PAIR, 73, ladar=lad)
 

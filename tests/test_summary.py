@@ -103,6 +103,15 @@ def test_profile_against_a_closed_form_and_waveform_quick_look():
     assert style.overlapping_texts(fig) == []
     assert any(c.__class__.__name__ == "FillBetweenPolyCollection" or
                c.__class__.__name__ == "PolyCollection" for c in fig.axes[0].collections)
+    # 1e8 photoelectrons: engineering labels ("50 M"), no "1e8" offset text for the top
+    # axis's labels to cover
+    big = waves.scaled(1e4)
+    fig = big.plot(noise=Noise(), realisations=4)
+    assert style.overlapping_texts(fig) == []
+    for ax in fig.axes:
+        if ax.get_ylabel():
+            assert ax.yaxis.get_offset_text().get_text() == ""
+            assert any(t.get_text().endswith(" M") for t in ax.get_yticklabels())
 
 
 def results_waves():

@@ -6,15 +6,21 @@ import numpy as np
 
 from . import style
 
-__all__ = ["draw_design"]
+__all__ = ["design_figure", "draw_design"]
 
 
 @style.styled
 def draw_design(design, path, *, dpi=150):
-    """Write a PNG of a :class:`~meshladar.fitting.ViewDesign` to ``path``: each candidate
-    view's own information against its angle with the chosen views numbered in the order
-    they were added, and each parameter's σ from the chosen views against as many evenly
-    spaced ones (log scale). Returns the path."""
+    """Write :func:`design_figure` as a PNG to ``path`` atomically; returns the path."""
+    return style.save_png(design_figure(design), path, dpi)
+
+
+@style.styled
+def design_figure(design):
+    """A :class:`~meshladar.fitting.ViewDesign` as a matplotlib Figure (no pyplot state):
+    each candidate view's own information against its angle with the chosen views numbered
+    in the order they were added, and each parameter's σ from the chosen views against as
+    many evenly spaced ones (log scale)."""
     from meshladar.errors import ParameterError
     from meshladar.fitting import ViewDesign
 
@@ -47,4 +53,4 @@ def draw_design(design, path, *, dpi=150):
     b.set_ylabel("parameter sigma")
     b.legend(fontsize=7)
     fig.tight_layout()
-    return style.save_png(fig, path, dpi)
+    return fig

@@ -44,10 +44,10 @@ def sinogram(sino, *, log=False):
 
 
 @style.styled
-def image(img, *, y=None):
+def image(img, *, y=None, title=None):
     """The image on a diverging map symmetric about zero (the paper figures' scale:
     :func:`meshladar.viz.paper.norm`) and its slice along x at ``y`` (default the centre)
-    beside it."""
+    beside it; ``title`` replaces the image panel's (method, input, size)."""
     from .paper import norm
 
     plt = style.use()
@@ -62,9 +62,10 @@ def image(img, *, y=None):
     info = img.info
     what = info.get("method", "fbp" if "filter" in info else "image")
     inp = info.get("preprocess")
-    a.set_title(f"{what}" + (f" of {inp}" if inp else "") + f", {img.size}^2", fontsize=9)
-    a.set_xlabel("x")
-    a.set_ylabel("y")
+    a.set_title(title or (f"{what}" + (f" of {inp}" if inp else "") + f", {img.size}^2"),
+                fontsize=9)
+    a.set_xlabel("x [scene units]")
+    a.set_ylabel("y [scene units]")
     bar = fig.colorbar(h, ax=a, shrink=0.85)
     label = "reconstruction of log input" if inp and inp.startswith("log") else \
         "reconstruction [radiance / area]"

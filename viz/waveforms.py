@@ -71,6 +71,10 @@ def figure(waves, *, realisations=None, noise=None, views=None, band=(5.0, 95.0)
                     label="one realisation")
         ax.step(t_ns, expected[v], where="mid", color="k", lw=1.0, label=what)
         ax.set_ylabel(f"per sample\n({units})")
+        if np.abs(ax.get_ylim()).max() >= 1e4:   # "20 M", not a "1e7" offset under the top axis
+            from matplotlib.ticker import EngFormatter
+
+            ax.yaxis.set_major_formatter(EngFormatter(sep=" "))
         ax.text(0.01, 0.95, f"view {v}: {waves.angles_deg[v]:g} deg", transform=ax.transAxes,
                 va="top", ha="left")
     axes[0, 0].legend(loc="upper right", fontsize=7, frameon=False)
