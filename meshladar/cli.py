@@ -445,29 +445,12 @@ def _reconstruct_3d(args, sino, extent) -> int:
     if os.path.abspath(data) == os.path.abspath(args.result):
         raise ParameterError(f"-o {args.output!r} would write the volume to the input "
                              f"{data!r}; choose another output name")
-    from meshladar.viz import style
+    from meshladar.viz import quick
 
-    @style.styled
-    def draw():
-        fig, axes = style.use().subplots(1, 3, figsize=(12.5, 4.0))
-        fig.subplots_adjust(wspace=0.4, left=0.06, right=0.9)
-        k = size // 2
-        cuts = ((vol.values[k], vol.x, vol.y, "z = 0: x", "y"),
-                (vol.values[:, k, :], vol.x, vol.z, "y = 0: x", "z"),
-                (vol.values[:, :, k], vol.y, vol.z, "x = 0: y", "z"))
-        lim = float(np.percentile(np.abs(vol.values), 99.9)) or 1.0
-        for ax, (img, h, v, xl, yl) in zip(axes, cuts):
-            im = ax.imshow(img, extent=(h[0], h[-1], v[0], v[-1]), origin="lower",
-                           cmap="RdBu_r", vmin=-lim, vmax=lim)
-            ax.set_xlabel(f"{xl} [scene units]")
-            ax.set_ylabel(f"{yl} [scene units]")
-        fig.colorbar(im, ax=axes, label="reconstruction [return / volume]", fraction=0.02)
-        fig.suptitle(f"3-D Radon inversion of {os.path.basename(args.result)} "
-                     f"({sino.n_views} views, {size}^3)")
-        fmt = os.path.splitext(args.output)[1].lower().lstrip(".")
-        results.write_atomic(args.output, lambda fh: fig.savefig(fh, format=fmt))
-
-    draw()
+    fig = quick.volume(vol, title=f"3-D Radon inversion of {os.path.basename(args.result)} "
+                                  f"({sino.n_views} views, {size}^3)")
+    fmt = os.path.splitext(args.output)[1].lower().lstrip(".")
+    results.write_atomic(args.output, lambda fh: fig.savefig(fh, format=fmt, dpi=150))
     results.save_result(data, {"values": vol.values, "x": vol.x, "y": vol.y, "z": vol.z},
                         {"kind": "volume", "info": vol.info,
                          "source": os.path.basename(args.result)})

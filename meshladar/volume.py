@@ -88,7 +88,15 @@ class Volume:
         return (("shape", self.shape), ("x", (float(self.x[0]), float(self.x[-1]))),
                 ("z", (float(self.z[0]), float(self.z[-1]))),
                 ("method", self.info.get("method")),
-                ("radiometry", self.info.get("radiometry")))
+                ("radiometry", self.info.get("radiometry")),
+                ("input", self.info.get("preprocess")))
+
+    def plot(self, *, title=None):
+        """A quick look (:func:`meshladar.viz.quick.volume`): three central slices, a
+        matplotlib Figure."""
+        from .viz.quick import volume
+
+        return volume(self, title=title)
 
     def __repr__(self) -> str:
         from ._summary import text
@@ -221,6 +229,8 @@ def radon3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None
             "views": sino.n_views,
             "radiometry": sino.info.get("radiometry"), "size": n, "extent": e,
             "center": c.tolist()}
+    if sino.info.get("preprocess"):
+        info["preprocess"] = sino.info["preprocess"]
     return Volume(out, x=x, y=y, z=z, info=info)
 
 
@@ -262,5 +272,7 @@ def fbp_stack(returns, *, size=256, extent=None, filter="ramp") -> Volume:
     first = slices[0]
     info = {"method": "fbp_stack", "filter": filter, "views": vals.shape[0],
             "radiometry": returns.info.get("radiometry"), "slices": el.size - 1}
+    if returns.info.get("preprocess"):
+        info["preprocess"] = returns.info["preprocess"]
     return Volume(np.stack([s.values for s in slices]), x=first.x, y=first.y,
                   z=0.5 * (el[1:] + el[:-1]), info=info)

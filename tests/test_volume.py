@@ -188,3 +188,17 @@ def test_reconstruct_command_inverts_3d_views(tmp_path):
     assert out.stat().st_size > 10_000
     assert main(["reconstruct", str(path), "-o", str(tmp_path / "f.png"), "--filter",
                  "hann"]) == 2
+    # the figure is Volume.plot's: three slices on one scale symmetric about zero, log
+    # input labelled, nothing overlapping
+    from meshladar.viz import style
+
+    logged = radon3d(ml.log_radiance(_ball_sinogram(0.6, n_views=200, n_bins=64)),
+                        size=32, extent=1.0)
+    assert logged.info["preprocess"].startswith("log") and "input='log" in repr(logged)
+    fig = logged.plot()
+    panels = [ax for ax in fig.axes if ax.images]
+    assert len(panels) == 3 and len({id(ax.images[0].norm) for ax in panels}) == 1
+    norm = panels[0].images[0].norm
+    assert norm.vmin == -norm.vmax
+    assert any("reconstruction of log input" in ax.get_ylabel() for ax in fig.axes)
+    assert style.overlapping_texts(fig) == []

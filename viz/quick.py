@@ -8,7 +8,7 @@ import numpy as np
 
 from . import style
 
-__all__ = ["sinogram", "image", "profile"]
+__all__ = ["sinogram", "image", "volume", "profile"]
 
 
 @style.styled
@@ -83,6 +83,38 @@ def image(img, *, y=None, title=None):
     b.set_ylabel("value")
     b.set_title("slice", fontsize=9)
     fig.tight_layout()
+    return fig
+
+
+@style.styled
+def volume(vol, *, title=None):
+    """Three central slices of a :class:`meshladar.volume.Volume` (z = 0, y = 0, x = 0) on one
+    colour scale, symmetric about zero as the images' (:func:`meshladar.viz.paper.norm`);
+    log input is labelled as such."""
+    from .paper import norm
+
+    plt = style.use()
+    fig, axes = plt.subplots(1, 3, figsize=(12.5, 4.0))
+    fig.subplots_adjust(wspace=0.4, left=0.06, right=0.88, top=0.85, bottom=0.14)
+    v = np.asarray(vol.values)
+    kz, ky, kx = (n // 2 for n in v.shape)
+    cuts = ((v[kz], vol.x, vol.y, f"z = {vol.z[kz]:.3g}", "x", "y"),
+            (v[:, ky, :], vol.x, vol.z, f"y = {vol.y[ky]:.3g}", "x", "z"),
+            (v[:, :, kx], vol.y, vol.z, f"x = {vol.x[kx]:.3g}", "y", "z"))
+    n = norm(v)
+    for ax, (img, h, w, cut, xl, yl) in zip(axes, cuts):
+        im = ax.imshow(img, extent=(h[0], h[-1], w[0], w[-1]), origin="lower",
+                       cmap="RdBu_r", norm=n, interpolation="nearest")
+        ax.set_title(f"slice {cut}", fontsize=9)
+        ax.set_xlabel(f"{xl} [scene units]")
+        ax.set_ylabel(f"{yl} [scene units]")
+    inp = vol.info.get("preprocess") or ""
+    bar = fig.colorbar(im, ax=list(axes), fraction=0.02)
+    bar.set_label("reconstruction of log input" if inp.startswith("log") else
+                  "reconstruction [return / volume]", fontsize=8)
+    bar.ax.tick_params(labelsize=7)
+    fig.suptitle(title or f"{vol.info.get('method', 'volume')}, "
+                 f"{'x'.join(str(s) for s in v.shape[::-1])} voxels", fontsize=10)
     return fig
 
 
