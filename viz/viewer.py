@@ -8,7 +8,10 @@ libgl1-mesa-dri), so nothing needs Xvfb.
 
 Colours: lit faces by their return F(θ)·cos θ for the chosen view (monostatic, grey scale,
 lighting off so the colour is the value), faces that face the ladar but are hidden by
-another part in ``shadow_color``, faces turned away in ``back_color``.
+another part in ``shadow_color``, faces turned away in ``back_color``; with a ladar, the
+first hits as points coloured by range bin (viridis) and iso-range planes in cyan; the
+beam and the ray grid's footprint in yellow. Each quantity has one titled colour bar in a
+fixed slot at the right edge; a legend at the top left names the flat colours drawn.
 """
 
 from __future__ import annotations
