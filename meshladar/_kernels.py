@@ -18,6 +18,8 @@ import numpy as np
 from numba import njit, prange
 from .precision import COS_HORIZON as _COS_HORIZON
 from .precision import SIDDON_NUDGE as _NUDGE
+from .precision import BOX_RATIO as _BOX_RATIO
+from .precision import TINY as _TINY
 
 __all__ = ["backproject", "siddon_project", "siddon_backproject", "siddon_first_hits",
            "set_threads"]
@@ -314,9 +316,67 @@ def _smooth_cos(corner, p, a, b, wx, wy, wz):
     return (nx / norm) * wx + (ny / norm) * wy + (nz / norm) * wz
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _fp_cdf(x, a, b, box):
+    """CDF at x of the footprint's range offset A + B, A ~ U(−a, a), B ~ U(−b, b) (a box
+    when ``box``): meshladar.weighing._box_cdf and _trap_cdf, one value at a time."""
+    if box:
+        return min(max((x + a) / (2 * a if a > 0 else 1.0), 0.0), 1.0)
+    num = _half_sq(x + a + b) - _half_sq(x + a - b) - _half_sq(x - a + b) + _half_sq(x - a - b)
+    return min(max(num / (4 * a * b if a * b > 0 else 1.0), 0.0), 1.0)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _half_sq(y):
+    return 0.5 * max(y, 0.0) ** 2
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _clipped_bin(x, edges, e0, inv):
+    """searchsorted(edges, x, "right") − 1 clipped to the bins (as weighing._bin_one)."""
+    nb = edges.size - 1
+    if x < edges[0]:
+        return 0
+    if x >= edges[nb]:
+        return nb - 1
+    return _bin_of(x, edges, e0, inv)
+
+
+@njit(cache=True, nogil=True)
+def _spread_hit(out, r, r_rel, wt, fp, p, edges, e0, inv):
+    """Add one hit's weight over the bins its footprint's ranges cover, as
+    meshladar.weighing._bin_one with ``footprint``: ``fp[p]`` holds face p's half-widths
+    along u and v and its own range interval (min, max) for the view; the offsets are
+    clipped to the facet's interval, and a box or trapezoid CDF splits the weight."""
+    s0, s1 = fp[p, 0], fp[p, 1]
+    a = max(s0, s1)
+    b = min(s0, s1)
+    lo_c = max(-(a + b), min(fp[p, 2] - r_rel, 0.0))
+    hi_c = min(a + b, max(fp[p, 3] - r_rel, 0.0))
+    nb = edges.size - 1
+    if a <= 0 or hi_c <= lo_c:                      # a point: its own bin
+        if edges[0] <= r and r < edges[nb]:
+            out[_bin_of(r, edges, e0, inv)] += wt
+        return
+    if not (r + hi_c >= edges[0] and r + lo_c < edges[nb]) or wt == 0:
+        return
+    k0 = _clipped_bin(r + lo_c, edges, e0, inv)
+    k1 = _clipped_bin(r + hi_c, edges, e0, inv)
+    box = b <= _BOX_RATIO * max(a, _TINY)
+    mass = _fp_cdf(hi_c, a, b, box) - _fp_cdf(lo_c, a, b, box)
+    if mass <= 0:
+        mass = 1.0
+    for k in range(k0, k1 + 1):
+        lo = max(edges[k] - r, lo_c)
+        hi = min(edges[k + 1] - r, hi_c)
+        frac = (_fp_cdf(hi, a, b, box) - _fp_cdf(lo, a, b, box)) if hi > lo else 0.0
+        out[k] += wt * (frac / mass)
+
+
 @njit(cache=True, nogil=True)
 def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, params,
-                  w, start, edges, area, power, ignore_back, out, stamp, weight, tag):
+                  w, start, edges, area, power, ignore_back, out, stamp, weight, tag,
+                  footprint):
     """Monostatic, flat-normal weighing and binning of one view's Embree hits, fused:
     out[k] += F(θ)·area (``power``: F(θ)·cos θ·area, received power) for each hit with range start + t − o·w in bin k (o the float32 origin
     as cast), t the hit distance recomputed in float64 against the face's plane (as
@@ -327,10 +387,13 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
     number unique to the view), so the BRDF costs O(faces hit), not O(rays). The bin is
     found in O(1) on uniform edges (a guess from the first and last edge, checked against
     the edges exactly as a binary search would place the range), by bisection otherwise.
+    ``footprint`` (n_faces, 4), when not empty, spreads each hit over its footprint's
+    ranges (:func:`_spread_hit`) instead of binning it at a point.
     Returns the number of back-face hits."""
     nb = edges.size - 1
     e0 = edges[0]
     inv = nb / (edges[nb] - edges[0])
+    spread = footprint.shape[0] > 0
     back = 0
     for i in range(prim.size):
         p = prim[i]
@@ -343,10 +406,10 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
             if ignore_back:
                 continue
             c = -c
-        r = start + t - (origins[i, 0] * w[0] + origins[i, 1] * w[1] + origins[i, 2] * w[2])
-        if r < edges[0] or r >= edges[nb]:
+        r_rel = t - (origins[i, 0] * w[0] + origins[i, 1] * w[1] + origins[i, 2] * w[2])
+        r = start + r_rel
+        if not spread and (r < edges[0] or r >= edges[nb]):
             continue
-        k = _bin_of(r, edges, e0, inv)
         if stamp[p] != tag:
             s = math.sqrt(max(1.0 - c * c, 0.0))
             m = face_material[p]
@@ -354,7 +417,10 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
                                        params[m, 3], params[m, 4], params[m, 5] > 0.5,
                                        params[m, 6] > 0.5) * (area * c if power else area)
             stamp[p] = tag
-        out[k] += weight[p]
+        if spread:
+            _spread_hit(out, r, r_rel, weight[p], footprint, p, edges, e0, inv)
+        else:
+            out[_bin_of(r, edges, e0, inv)] += weight[p]
     return back
 
 

@@ -214,3 +214,47 @@ def test_smooth_normals_take_a_compiled_loop_with_the_general_paths_numbers(back
         assert fast.info["back_face_hits"] == general.info["back_face_hits"]
         np.testing.assert_allclose(fast.values, general.values, rtol=SAME_HITS_RTOL,
                                    atol=SAME_HITS_RTOL * general.values.max())
+
+
+@pytest.mark.parametrize("mode", ["3d", "slice"])
+def test_footprints_take_the_fused_loop_with_the_general_paths_numbers(mode, monkeypatch):
+    # footprint binning with flat normals (any coating, either radiometry, back faces
+    # two-sided or ignored, regular or stratified rays, views on threads or one view's rows)
+    # is weighed and spread in the compiled loop, from one footprint row per face and
+    # view: the numbers of trace + weigh(footprint=True), and the per-hit path is not taken
+    from meshladar.raytrace import model
+
+    plate = ml.mesh.MeshPart(np.array([[-0.5, -0.4, -0.3], [0.5, -0.4, 0.2], [0.5, 0.4, 0.3],
+                                       [-0.5, 0.4, -0.2]]), np.array([[0, 1, 2], [0, 2, 3]]),
+                             1, name="plate")                 # open: seen from both sides
+    parts = [ml.mesh.sphere((0.0, 0.0, 0.0), 0.3, 0, subdivisions=3), plate]
+    for coatings in ([ALUMINUM, DARK_GRAY], [ml.brdf.GGX(alpha=0.3), DARK_GRAY]):
+        scene = ml.Scene.from_parts(parts, coatings)
+        vectors = ml.mesh.fibonacci_sphere(5) if mode == "3d" else None
+        ladar = ml.Ladar.covering(scene, n_bins=40, view_vectors=vectors,
+                                  angles_deg=None if vectors is not None else [0, 70, 200])
+        for backend in ("packets", "embreex"):
+            for options in ({}, {"back_faces": "ignore", "radiometry": "power"},
+                            {"sampling": "stratified", "seed": 4, "jobs": 2}):
+                general = ml.weigh(ml.trace(scene, ladar, mode=mode, backend=backend,
+                                            rays_per_bin=3, **{k: v for k, v in
+                                                               options.items()
+                                                               if k != "radiometry"}),
+                                   footprint=True,
+                                   radiometry=options.get("radiometry", "paper"))
+                with monkeypatch.context() as m:
+                    m.setattr(model, "_bin_one", None)           # the per-hit path is not used
+                    fused = ml.simulate(scene, ladar, model="mesh", mode=mode,
+                                        backend=backend, footprint=True, rays_per_bin=3,
+                                        **options)
+                assert fused.values.max() > 0 and fused.info["footprint"] is True
+                assert fused.info["back_face_hits"] == general.info["back_face_hits"]
+                assert sum(general.info["back_face_hits"]) > 0
+                np.testing.assert_allclose(fused.values, general.values, rtol=SAME_HITS_RTOL,
+                                           atol=SAME_HITS_RTOL * general.values.max())
+    one_view = ml.Ladar.covering(scene, n_bins=40, view_vectors=[[0.2, 0.9, 0.3]])
+    if mode == "3d":                                   # one view's rows on two threads
+        rows = ml.simulate(scene, one_view, model="mesh", footprint=True, jobs=2)
+        one = ml.simulate(scene, one_view, model="mesh", footprint=True, jobs=1)
+        np.testing.assert_allclose(rows.values, one.values, rtol=SAME_HITS_RTOL,
+                                   atol=SAME_HITS_RTOL * one.values.max())

@@ -486,8 +486,9 @@ _BLOCK = 1024
 @njit(cache=True, nogil=True)
 def cast_bin_grid(fn, scene, w, flags, s, t, du, dv, sp, u, v, lw, d, inv_scale, scale,
                   plane_d, face_normals, face_material, params, wv, start, edges, area,
-                  power, ignore_back, out, stamp, weight, tag):
-    """One view, grid to bins in one loop (monostatic, flat normals, point bins): each
+                  power, ignore_back, out, stamp, weight, tag, footprint):
+    """One view, grid to bins in one loop (monostatic, flat normals, point or footprint
+    bins): each
     packet's float32 origins are built as :func:`meshladar.raytrace.grid._ray_grid` builds
     them (o = (S u + T v) + L w, S = s (+ δ du), T = t (+ δ dv) when ``du`` is not empty),
     cast at unit size (× ``inv_scale``), and the hits, with Embree's distance scaled back
@@ -535,6 +536,7 @@ def cast_bin_grid(fn, scene, w, flags, s, t, du, dv, sp, u, v, lw, d, inv_scale,
         if held >= _BLOCK or first + w >= n:
             back += bin_flat_hits(hit_prim[:held], hit_t[:held], hit_o[:held], plane_d,
                                   face_normals, face_material, params, wv, start, edges,
-                                  area, power, ignore_back, out, stamp, weight, tag)
+                                  area, power, ignore_back, out, stamp, weight, tag,
+                                  footprint)
             held = 0
     return back, n

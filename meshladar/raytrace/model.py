@@ -19,11 +19,12 @@ from ..scene import Scene
 from ..sinogram import Sinogram
 from ..weighing import _bin_one, _material_table, _sinogram, _weights
 from .embree import _embree_scene, geometry, resolve_backend
-from .grid import (MAX_RAYS_PER_VIEW, MODES, _estimate_rays, _grid_plan, _largest_grid,
-                   _ray_grid, _sampling, _spacing)
+from .grid import (MAX_RAYS_PER_VIEW, MODES, _dot, _estimate_rays, _frame, _grid_plan,
+                   _largest_grid, _ray_grid, _sampling, _spacing)
 from .hits import Hits
 from .views import BACK_FACES, NORMALS, _range_offset, _trace_view
 from ..precision import PARALLEL_SLACK
+from ..precision import TINY
 
 __all__ = ["trace", "simulate_mesh", "first_hits", "occluded"]
 
@@ -76,12 +77,12 @@ def _job(geo, views, ladar_vectors, mode, spacing, z0_shifted, back_faces, seed,
     if sensor is not None:
         return _sensor_job(geo, scene, views, ladar_vectors, mode, spacing, z0_shifted,
                            back_faces, seed, edges, weigh_with, sensor)
-    if (weigh_with is not None and receivers is None and not weigh_with[1]
-            and (geo.normals == "flat" or geo.normals == "smooth"
+    if (weigh_with is not None and receivers is None
+            and (geo.normals == "flat" or geo.normals == "smooth" and not weigh_with[1]
                  and all(m.kernel_params is not None for m in weigh_with[0]))):
         return _fast_job(geo, scene, ladar_vectors, views, mode, spacing, z0_shifted,
                          back_faces, seed, edges, weigh_with[0], weigh_with[2], row_jobs,
-                         weigh_with[3])
+                         weigh_with[3], weigh_with[1])
     out = []
     for i in views:
         w = ladar_vectors[i]
@@ -147,14 +148,15 @@ def _sensor_offset(geo, w, sensor):
 
 
 def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces, seed, edges,
-              materials, area, row_jobs=1, power=False):
-    """The common cases in one compiled loop per view: monostatic, point binning, flat
-    normals (any coating) or smooth ones (coatings with a compiled kernel: SR, Lambertian),
-    no per-hit arrays beyond Embree's own output. With flat normals F·area
-    is one number per face and view: the compiled SR kernel evaluates it at a face's first
-    hit when every coating has ``kernel_params``; any other coating (Phong, GGX, a table,
-    a user's model) has it evaluated for all faces at once through its own ``value`` before
-    the view is cast."""
+              materials, area, row_jobs=1, power=False, footprint=False):
+    """The common cases in one compiled loop per view: monostatic, flat normals (any
+    coating; point or footprint binning) or smooth ones (coatings with a compiled kernel:
+    SR, Lambertian; point binning), no per-hit arrays beyond Embree's own output. With flat
+    normals F·area is one number per face and view: the compiled SR kernel evaluates it at
+    a face's first hit when every coating has ``kernel_params``; any other coating (Phong,
+    GGX, a table, a user's model) has it evaluated for all faces at once through its own
+    ``value`` before the view is cast. A footprint's extent is also one row per face and
+    view (:func:`_face_footprints`)."""
     from .. import _kernels
 
     compiled = all(m.kernel_params is not None for m in materials)
@@ -163,11 +165,14 @@ def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces,
     stamp = np.zeros(len(geo.faces), np.int64)
     weight = np.empty(len(geo.faces))
     vals = np.zeros((len(views), len(edges) - 1))
+    fp = np.zeros((len(geo.faces) if footprint else 0, 4))
     rays, backs = [], []
     for j, i in enumerate(views):
         w = vectors[i]
         rng = None if seed is None else np.random.default_rng([seed, int(i)])
         start = _range_offset(geo.center, w, None)
+        if footprint:
+            _face_footprints(geo, w, mode, spacing, fp)
         if geo.normals == "smooth":
             o, L, _, _ = _ray_grid(geo, w, mode, spacing, z0_shifted, rng)
             res = scene.run(o, np.ascontiguousarray((-w)[None, :], dtype=np.float32),
@@ -182,7 +187,7 @@ def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces,
             _face_weights(geo, materials, w, area, weight, power)
             stamp[:] = j + 1                         # every face's weight is this view's
         bins = (geo.plane_d, geo.face_normals, geo.material, params, w, start, edges, area,
-                power, back_faces == "ignore", vals[j], stamp, weight, j + 1)
+                power, back_faces == "ignore", vals[j], stamp, weight, j + 1, fp)
         if scene.fused and (mode == "3d" or rng is None):
             # packets: grid, cast, weigh and bin in one loop, no per-ray arrays
             plan = _grid_plan(geo, w, mode, spacing, z0_shifted, rng)
@@ -199,6 +204,22 @@ def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces,
         rays.append(n)
     return {"values": vals, "rays": np.array(rays, np.int64), "backs": np.array(backs, np.int64)}
 
+
+
+def _face_footprints(geo, w, mode, spacing, out):
+    """Each face's footprint for view w, into out (n_faces, 4): the range half-widths a ray
+    cell spreads over along the grid's u and v (v only in 3-D), and the face's own range
+    interval (min, max of its corners' −p·w), in the same float64 operations as the
+    per-hit footprint of :func:`meshladar.raytrace.views._trace_view`."""
+    u, v = _frame(w)
+    n = geo.face_normals
+    cg = np.maximum(np.abs(_dot(n, w)), TINY)
+    out[:, 0] = np.abs(_dot(n, u)) / cg * 0.5 * spacing
+    out[:, 1] = np.abs(_dot(n, v)) / cg * 0.5 * spacing if mode == "3d" else 0.0
+    r = -(geo.shifted[:, 0] * w[0] + geo.shifted[:, 1] * w[1] + geo.shifted[:, 2] * w[2])
+    corners = r[geo.faces]
+    out[:, 2] = corners.min(axis=1)
+    out[:, 3] = corners.max(axis=1)
 
 
 def _face_weights(geo, materials, w, area, out, power=False):
@@ -220,7 +241,7 @@ def _rows_on_threads(scene, plan, w, spacing, bins, row_jobs):
     from concurrent.futures import ThreadPoolExecutor
 
     s, t, du, dv, u, v, L = plan
-    *head, out, stamp, weight, tag = bins
+    *head, out, stamp, weight, tag, fp = bins
     cuts = np.linspace(0, s.size, row_jobs + 1).astype(int)
     parts = []
     for a0, a1 in zip(cuts[:-1], cuts[1:]):
@@ -230,7 +251,7 @@ def _rows_on_threads(scene, plan, w, spacing, bins, row_jobs):
             parts.append((band, np.zeros_like(out), stamp.copy(), weight.copy()))
     with ThreadPoolExecutor(len(parts)) as ex:
         done = list(ex.map(lambda p: scene.cast_bin_grid(p[0], w, spacing,
-                                                         (*head, p[1], p[2], p[3], tag)),
+                                                         (*head, p[1], p[2], p[3], tag, fp)),
                            parts))
     for _, band_out, _, _ in parts:
         out += band_out
