@@ -426,16 +426,19 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
 
 @njit(cache=True, nogil=True)
 def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, face_material,
-                    params, w, start, edges, area, power, ignore_back, min_cos_facet, out):
+                    params, w, start, edges, area, power, ignore_back, min_cos_facet, out,
+                    footprint):
     """Monostatic weighing and binning with smooth normals, as :func:`bin_flat_hits` with
     flat ones: the shading normal interpolated from the face's ``corner`` normals (m, 3, 3)
     with Embree's barycentrics (bu, bv), F of the SR coating at its angle, and the area
     factor cos θs / max(|cos θg|, ``min_cos_facet``) of meshladar.raytrace.views.
     _shading_factor, so each ray weighs F(θs)·area·factor (``power``: times cos θs; 0 where
-    the shading normal faces away). Returns the number of back-face hits."""
+    the shading normal faces away); ``footprint`` as in :func:`bin_flat_hits` (the flat
+    facet's extent). Returns the number of back-face hits."""
     nb = edges.size - 1
     e0 = edges[0]
     inv = nb / (edges[nb] - edges[0])
+    spread = footprint.shape[0] > 0
     back = 0
     for i in range(prim.size):
         p = prim[i]
@@ -451,16 +454,20 @@ def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, 
             c = -c
         if c <= 0.0:
             continue                                   # the shading normal faces away
-        r = start + t - (origins[i, 0] * w[0] + origins[i, 1] * w[1] + origins[i, 2] * w[2])
-        if r < edges[0] or r >= edges[nb]:
+        r_rel = t - (origins[i, 0] * w[0] + origins[i, 1] * w[1] + origins[i, 2] * w[2])
+        r = start + r_rel
+        if not spread and (r < edges[0] or r >= edges[nb]):
             continue
-        k = _bin_of(r, edges, e0, inv)
         s = math.sqrt(max(1.0 - c * c, 0.0))
         m = face_material[p]
         f = _sr_monostatic(c, s, params[m, 0], params[m, 1], params[m, 2], params[m, 3],
                            params[m, 4], params[m, 5] > 0.5, params[m, 6] > 0.5)
         f = f * c if power else f
-        out[k] += f * area * (c / max(abs(cg), min_cos_facet))
+        wt = f * area * (c / max(abs(cg), min_cos_facet))
+        if spread:
+            _spread_hit(out, r, r_rel, wt, footprint, p, edges, e0, inv)
+        else:
+            out[_bin_of(r, edges, e0, inv)] += wt
     return back
 
 

@@ -216,19 +216,23 @@ def test_smooth_normals_take_a_compiled_loop_with_the_general_paths_numbers(back
                                    atol=SAME_HITS_RTOL * general.values.max())
 
 
-@pytest.mark.parametrize("mode", ["3d", "slice"])
-def test_footprints_take_the_fused_loop_with_the_general_paths_numbers(mode, monkeypatch):
-    # footprint binning with flat normals (any coating, either radiometry, back faces
-    # two-sided or ignored, regular or stratified rays, views on threads or one view's rows)
-    # is weighed and spread in the compiled loop, from one footprint row per face and
-    # view: the numbers of trace + weigh(footprint=True), and the per-hit path is not taken
+@pytest.mark.parametrize("mode, normals", [("3d", "flat"), ("slice", "flat"),
+                                           ("3d", "smooth")])
+def test_footprints_take_the_fused_loop_with_the_general_paths_numbers(mode, normals,
+                                                                       monkeypatch):
+    # footprint binning with flat normals (any coating) or smooth ones (SR coatings), either
+    # radiometry, back faces two-sided or ignored, regular or stratified rays, views on
+    # threads or one view's rows, is weighed and spread in the compiled loop, from one
+    # footprint row per face and view: the numbers of trace + weigh(footprint=True), and
+    # the per-hit path is not taken
     from meshladar.raytrace import model
 
     plate = ml.mesh.MeshPart(np.array([[-0.5, -0.4, -0.3], [0.5, -0.4, 0.2], [0.5, 0.4, 0.3],
                                        [-0.5, 0.4, -0.2]]), np.array([[0, 1, 2], [0, 2, 3]]),
                              1, name="plate")                 # open: seen from both sides
     parts = [ml.mesh.sphere((0.0, 0.0, 0.0), 0.3, 0, subdivisions=3), plate]
-    for coatings in ([ALUMINUM, DARK_GRAY], [ml.brdf.GGX(alpha=0.3), DARK_GRAY]):
+    for coatings in ([ALUMINUM, DARK_GRAY], [ml.brdf.GGX(alpha=0.3), DARK_GRAY])[
+            :1 if normals == "smooth" else 2]:
         scene = ml.Scene.from_parts(parts, coatings)
         vectors = ml.mesh.fibonacci_sphere(5) if mode == "3d" else None
         ladar = ml.Ladar.covering(scene, n_bins=40, view_vectors=vectors,
@@ -237,7 +241,8 @@ def test_footprints_take_the_fused_loop_with_the_general_paths_numbers(mode, mon
             for options in ({}, {"back_faces": "ignore", "radiometry": "power"},
                             {"sampling": "stratified", "seed": 4, "jobs": 2}):
                 general = ml.weigh(ml.trace(scene, ladar, mode=mode, backend=backend,
-                                            rays_per_bin=3, **{k: v for k, v in
+                                            normals=normals, rays_per_bin=3,
+                                            **{k: v for k, v in
                                                                options.items()
                                                                if k != "radiometry"}),
                                    footprint=True,
@@ -245,8 +250,8 @@ def test_footprints_take_the_fused_loop_with_the_general_paths_numbers(mode, mon
                 with monkeypatch.context() as m:
                     m.setattr(model, "_bin_one", None)           # the per-hit path is not used
                     fused = ml.simulate(scene, ladar, model="mesh", mode=mode,
-                                        backend=backend, footprint=True, rays_per_bin=3,
-                                        **options)
+                                        normals=normals, backend=backend, footprint=True,
+                                        rays_per_bin=3, **options)
                 assert fused.values.max() > 0 and fused.info["footprint"] is True
                 assert fused.info["back_face_hits"] == general.info["back_face_hits"]
                 assert sum(general.info["back_face_hits"]) > 0

@@ -78,7 +78,7 @@ def _job(geo, views, ladar_vectors, mode, spacing, z0_shifted, back_faces, seed,
         return _sensor_job(geo, scene, views, ladar_vectors, mode, spacing, z0_shifted,
                            back_faces, seed, edges, weigh_with, sensor)
     if (weigh_with is not None and receivers is None
-            and (geo.normals == "flat" or geo.normals == "smooth" and not weigh_with[1]
+            and (geo.normals == "flat" or geo.normals == "smooth"
                  and all(m.kernel_params is not None for m in weigh_with[0]))):
         return _fast_job(geo, scene, ladar_vectors, views, mode, spacing, z0_shifted,
                          back_faces, seed, edges, weigh_with[0], weigh_with[2], row_jobs,
@@ -149,9 +149,9 @@ def _sensor_offset(geo, w, sensor):
 
 def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces, seed, edges,
               materials, area, row_jobs=1, power=False, footprint=False):
-    """The common cases in one compiled loop per view: monostatic, flat normals (any
-    coating; point or footprint binning) or smooth ones (coatings with a compiled kernel:
-    SR, Lambertian; point binning), no per-hit arrays beyond Embree's own output. With flat
+    """The common cases in one compiled loop per view: monostatic, point or footprint
+    binning, flat normals (any coating) or smooth ones (coatings with a compiled kernel:
+    SR, Lambertian), no per-hit arrays beyond Embree's own output. With flat
     normals F·area is one number per face and view: the compiled SR kernel evaluates it at
     a face's first hit when every coating has ``kernel_params``; any other coating (Phong,
     GGX, a table, a user's model) has it evaluated for all faces at once through its own
@@ -180,7 +180,7 @@ def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces,
             backs.append(_kernels.bin_smooth_hits(
                 res["primID"], res["tfar"], res["u"], res["v"], o, geo.plane_d,
                 geo.face_normals, geo.corner, geo.material, params, w, start, edges, area,
-                power, back_faces == "ignore", _MIN_COS_FACET, vals[j]))
+                power, back_faces == "ignore", _MIN_COS_FACET, vals[j], fp))
             rays.append(len(o))
             continue
         if not compiled:
