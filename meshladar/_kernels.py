@@ -425,6 +425,40 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
 
 
 @njit(cache=True, nogil=True)
+def bin_bistatic_hits(prim, tfar, origins, blocked, plane_d, face_normals, w, wr, start,
+                      edges, ignore_back, out, weight):
+    """Bistatic (receiver direction ``wr``), flat-normal binning of one view's hits, fused:
+    ``weight`` holds each face's F·area for the pair (w, wr) (0 where either direction is
+    below the face's horizon), ``blocked`` whether the ray from the hit toward the receiver
+    meets the scene. A hit at p = o − t w has range start + ((t − o·w) − p·wr)/2, the
+    two-way path, as meshladar.raytrace.views._trace_view. Returns the back-face hits."""
+    nb = edges.size - 1
+    e0 = edges[0]
+    inv = nb / (edges[nb] - edges[0])
+    back = 0
+    for i in range(prim.size):
+        p = prim[i]
+        if p < 0:
+            continue
+        c = face_normals[p, 0] * w[0] + face_normals[p, 1] * w[1] + face_normals[p, 2] * w[2]
+        t = _hit_distance(p, c, tfar[i], origins, i, plane_d, face_normals)
+        if c < 0.0:
+            back += 1
+            if ignore_back:
+                continue
+        if blocked[i]:
+            continue
+        ox, oy, oz = origins[i, 0] * 1.0, origins[i, 1] * 1.0, origins[i, 2] * 1.0
+        r_rel = t - (ox * w[0] + oy * w[1] + oz * w[2])
+        px, py, pz = ox - t * w[0], oy - t * w[1], oz - t * w[2]
+        r = start + 0.5 * (r_rel + -(px * wr[0] + py * wr[1] + pz * wr[2]))
+        if r < edges[0] or r >= edges[nb]:
+            continue
+        out[_bin_of(r, edges, e0, inv)] += weight[p]
+    return back
+
+
+@njit(cache=True, nogil=True)
 def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, face_material,
                     params, w, start, edges, area, power, ignore_back, min_cos_facet, out,
                     footprint):

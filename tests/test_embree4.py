@@ -263,3 +263,47 @@ def test_footprints_take_the_fused_loop_with_the_general_paths_numbers(mode, nor
         one = ml.simulate(scene, one_view, model="mesh", footprint=True, jobs=1)
         np.testing.assert_allclose(rows.values, one.values, rtol=SAME_HITS_RTOL,
                                    atol=SAME_HITS_RTOL * one.values.max())
+
+
+@pytest.mark.parametrize("mode", ["3d", "slice"])
+def test_bistatic_views_take_the_fused_loop_with_the_references_numbers(mode, monkeypatch):
+    # a receiver off the ladar's axis (flat normals, any coating, either radiometry, back
+    # faces two-sided or ignored, views on threads or one view's rows): each face's weight
+    # for the pair of directions before the cast, each hit's occlusion ray toward the
+    # receiver cast in packets inside the loop; the numbers of embreex's per-hit path
+    from meshladar.raytrace import model
+
+    plate = ml.mesh.MeshPart(np.array([[-0.5, -0.4, -0.3], [0.5, -0.4, 0.2], [0.5, 0.4, 0.3],
+                                       [-0.5, 0.4, -0.2]]), np.array([[0, 1, 2], [0, 2, 3]]),
+                             1, name="plate")
+    parts = [ml.mesh.sphere((0.0, 0.0, 0.0), 0.3, 0, subdivisions=3),
+             ml.mesh.sphere((0.5, 0.3, 0.1), 0.2, 0, subdivisions=3), plate]
+    receiver = (0.6, 0.8, 0.0) if mode == "slice" else (0.3, 0.5, 0.81)
+    for coatings in ([ALUMINUM, DARK_GRAY], [ml.brdf.GGX(alpha=0.3), DARK_GRAY]):
+        scene = ml.Scene.from_parts(parts, coatings)
+        vectors = ml.mesh.fibonacci_sphere(5) if mode == "3d" else None
+        ladar = ml.Ladar.covering(scene, n_bins=64, view_vectors=vectors,
+                                  angles_deg=None if vectors is not None else [0, 70, 200])
+        hits = ml.trace(scene, ladar, mode=mode, receiver=receiver, backend="embreex",
+                        rays_per_bin=3)
+        assert ((hits.bistatic[:, 0] == -1) & (hits.cos_theta > 0)).sum() > 100  # shadowed
+        for options in ({}, {"back_faces": "ignore", "radiometry": "power"}, {"jobs": 2}):
+            trace_options = {k: v for k, v in options.items() if k != "radiometry"}
+            ref = ml.weigh(ml.trace(scene, ladar, mode=mode, receiver=receiver,
+                                    backend="embreex", rays_per_bin=3, **trace_options),
+                           radiometry=options.get("radiometry", "paper"))
+            with monkeypatch.context() as m:
+                m.setattr(model, "_bin_one", None)           # the per-hit path is not used
+                fused = ml.simulate(scene, ladar, model="mesh", mode=mode,
+                                    receiver=receiver, backend="packets", rays_per_bin=3,
+                                    **options)
+            assert fused.values.max() > 0
+            assert fused.info["back_face_hits"] == ref.info["back_face_hits"]
+            np.testing.assert_allclose(fused.values, ref.values, rtol=SAME_HITS_RTOL,
+                                       atol=SAME_HITS_RTOL * ref.values.max())
+    if mode == "3d":                                   # one view's rows on two threads
+        one_view = ml.Ladar.covering(scene, n_bins=40, view_vectors=[[0.2, 0.9, 0.3]])
+        rows = ml.simulate(scene, one_view, model="mesh", receiver=receiver, jobs=2)
+        one = ml.simulate(scene, one_view, model="mesh", receiver=receiver, jobs=1)
+        np.testing.assert_allclose(rows.values, one.values, rtol=SAME_HITS_RTOL,
+                                   atol=SAME_HITS_RTOL * one.values.max())

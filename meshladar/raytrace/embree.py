@@ -171,10 +171,11 @@ class _Packets:
         return {"primID": prim, "tfar": tfar, "u": u, "v": v}
 
 
-    def cast_bin_grid(self, plan, direction, spacing, scale, inverse, bins):
+    def cast_bin_grid(self, plan, direction, spacing, scale, inverse, bins, receiver=None):
         """One view from grid to bins in one compiled loop (see
         :func:`.embree4.cast_bin_grid`): ``plan`` is :func:`.grid._grid_plan`'s,
-        ``bins`` the weigh-and-bin arguments from ``plane_d`` to ``tag``."""
+        ``bins`` the weigh-and-bin arguments from ``plane_d`` to ``footprint``;
+        ``receiver`` (direction, lift) makes the view bistatic."""
         from . import embree4
 
         s, t, du, dv, u, v, L = plan
@@ -187,7 +188,10 @@ class _Packets:
             embree4.RTC_RAY_QUERY_FLAG_COHERENT, s.astype(np.float32), t.astype(np.float32),
             empty if du is None else du, empty if dv is None else dv, np.float32(spacing),
             u.astype(np.float32), v.astype(np.float32), (L * w).astype(np.float32),
-            (-w).astype(np.float32)[None, :], np.float32(inverse), float(scale), *bins)
+            (-w).astype(np.float32)[None, :], np.float32(inverse), float(scale), *bins,
+            lib.occluded[lib.width],
+            np.empty(0) if receiver is None else np.asarray(receiver[0], np.float64),
+            0.0 if receiver is None else float(receiver[1]))
 
 
 def _packet_scene(vertices, faces):
@@ -212,9 +216,9 @@ class _Embree:
         """Whether the backend weighs and bins inside its cast (the packet backend)."""
         return hasattr(self.scene, "cast_bin_grid")
 
-    def cast_bin_grid(self, plan, direction, spacing, bins):
+    def cast_bin_grid(self, plan, direction, spacing, bins, receiver=None):
         return self.scene.cast_bin_grid(plan, direction, spacing, self.scale, self.inverse,
-                                        bins)
+                                        bins, receiver)
 
     def run(self, origins, directions, **kwargs):
         if self.scale != 1.0:

@@ -83,6 +83,11 @@ def _job(geo, views, ladar_vectors, mode, spacing, z0_shifted, back_faces, seed,
         return _fast_job(geo, scene, ladar_vectors, views, mode, spacing, z0_shifted,
                          back_faces, seed, edges, weigh_with[0], weigh_with[2], row_jobs,
                          weigh_with[3], weigh_with[1])
+    if (weigh_with is not None and receivers is not None and geo.normals == "flat"
+            and scene.fused and (mode == "3d" or seed is None)):
+        return _fast_job(geo, scene, ladar_vectors, views, mode, spacing, z0_shifted,
+                         back_faces, seed, edges, weigh_with[0], weigh_with[2], row_jobs,
+                         weigh_with[3], receivers=receivers)
     out = []
     for i in views:
         w = ladar_vectors[i]
@@ -148,7 +153,7 @@ def _sensor_offset(geo, w, sensor):
 
 
 def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces, seed, edges,
-              materials, area, row_jobs=1, power=False, footprint=False):
+              materials, area, row_jobs=1, power=False, footprint=False, receivers=None):
     """The common cases in one compiled loop per view: monostatic, point or footprint
     binning, flat normals (any coating) or smooth ones (coatings with a compiled kernel:
     SR, Lambertian), no per-hit arrays beyond Embree's own output. With flat
@@ -156,7 +161,10 @@ def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces,
     a face's first hit when every coating has ``kernel_params``; any other coating (Phong,
     GGX, a table, a user's model) has it evaluated for all faces at once through its own
     ``value`` before the view is cast. A footprint's extent is also one row per face and
-    view (:func:`_face_footprints`)."""
+    view (:func:`_face_footprints`). Bistatic views (``receivers``, flat normals, the
+    packet backend's fused loop) have every face's weight for the pair of directions
+    evaluated before the cast too (:func:`_face_bistatic_weights`); the loop casts each
+    hit's occlusion ray toward the receiver."""
     from .. import _kernels
 
     compiled = all(m.kernel_params is not None for m in materials)
@@ -170,7 +178,8 @@ def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces,
     for j, i in enumerate(views):
         w = vectors[i]
         rng = None if seed is None else np.random.default_rng([seed, int(i)])
-        start = _range_offset(geo.center, w, None)
+        w_r = None if receivers is None else receivers[i]
+        start = _range_offset(geo.center, w, w_r)
         if footprint:
             _face_footprints(geo, w, mode, spacing, fp)
         if geo.normals == "smooth":
@@ -183,7 +192,13 @@ def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces,
                 power, back_faces == "ignore", _MIN_COS_FACET, vals[j], fp))
             rays.append(len(o))
             continue
-        if not compiled:
+        receiver = None
+        if w_r is not None:
+            _face_bistatic_weights(geo, materials, w, w_r, area, weight, power,
+                                   back_faces == "ignore")
+            stamp[:] = j + 1
+            receiver = (w_r, _RECEIVER_LIFT * geo.radius)
+        elif not compiled:
             _face_weights(geo, materials, w, area, weight, power)
             stamp[:] = j + 1                         # every face's weight is this view's
         bins = (geo.plane_d, geo.face_normals, geo.material, params, w, start, edges, area,
@@ -192,9 +207,10 @@ def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces,
             # packets: grid, cast, weigh and bin in one loop, no per-ray arrays
             plan = _grid_plan(geo, w, mode, spacing, z0_shifted, rng)
             if row_jobs > 1:
-                back, n = _rows_on_threads(scene, plan, w, spacing, bins, row_jobs)
+                back, n = _rows_on_threads(scene, plan, w, spacing, bins, row_jobs,
+                                           receiver)
             else:
-                back, n = scene.cast_bin_grid(plan, w, spacing, bins)
+                back, n = scene.cast_bin_grid(plan, w, spacing, bins, receiver)
         else:
             o, L, _, _ = _ray_grid(geo, w, mode, spacing, z0_shifted, rng)
             res = scene.run(o, np.ascontiguousarray((-w)[None, :], dtype=np.float32),
@@ -222,6 +238,32 @@ def _face_footprints(geo, w, mode, spacing, out):
     out[:, 3] = corners.max(axis=1)
 
 
+def _face_bistatic_weights(geo, materials, w, w_r, area, out, power, ignore_back):
+    """F·area of every face for the ladar along w and the receiver along w_r, into out
+    (n_faces,), in the float64 operations :func:`meshladar.raytrace.views._trace_view` and
+    :func:`meshladar.weighing._weights` apply to each hit of the face (flat normals: the
+    same for all of them; the normal turned toward the ladar unless back faces are
+    ignored, which weigh 0). A hit whose receiver ray is blocked weighs 0, in the loop."""
+    n = geo.face_normals
+    cos_t = _dot(n, w)
+    back = cos_t < 0
+    if not ignore_back:
+        sign = np.where(back, -1.0, 1.0)
+        n = n * sign[:, None]
+        cos_t = cos_t * sign
+    sin_t = np.sqrt(np.maximum(1.0 - cos_t * cos_t, 0.0))
+    if ignore_back:
+        cos_t = np.where(back, -1.0, cos_t)
+    cos_r = _dot(n, w_r)
+    sin_r = np.linalg.norm(np.cross(n, w_r), axis=1)
+    half = (w + w_r) / np.linalg.norm(w + w_r)
+    cos_a = _dot(n, half)
+    sin_a = np.linalg.norm(np.cross(n, half), axis=1)
+    cos_r = np.where(ignore_back & back, -1.0, cos_r)
+    bi = np.stack([cos_r, sin_r, cos_a, sin_a], -1)
+    out[:] = _weights(cos_t, sin_t, geo.material, materials, area, bi, power=power)
+
+
 def _face_weights(geo, materials, w, area, out, power=False):
     """F(θ)·area of every face for view w, into out (n_faces,): θ between the face's flat
     normal and w (either side: the kernel skips back faces that are ignored), weighed by
@@ -232,7 +274,7 @@ def _face_weights(geo, materials, w, area, out, power=False):
                       power=power)
 
 
-def _rows_on_threads(scene, plan, w, spacing, bins, row_jobs):
+def _rows_on_threads(scene, plan, w, spacing, bins, row_jobs, receiver=None):
     """One big view's grid split into ``row_jobs`` bands of rows, cast on as many threads
     (the fused loop releases the GIL), each band with its own bins and a copy of the weight
     cache (weights already evaluated for the view stay valid); the
@@ -251,7 +293,8 @@ def _rows_on_threads(scene, plan, w, spacing, bins, row_jobs):
             parts.append((band, np.zeros_like(out), stamp.copy(), weight.copy()))
     with ThreadPoolExecutor(len(parts)) as ex:
         done = list(ex.map(lambda p: scene.cast_bin_grid(p[0], w, spacing,
-                                                         (*head, p[1], p[2], p[3], tag, fp)),
+                                                         (*head, p[1], p[2], p[3], tag, fp),
+                                                         receiver),
                            parts))
     for _, band_out, _, _ in parts:
         out += band_out
