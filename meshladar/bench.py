@@ -182,6 +182,46 @@ def bench_mesh(*, repeats=3, subdivisions=6, rays_per_view=1_000_000, views=16, 
             "two_over_raw": t["raw"] / t["two"], **build}
 
 
+def bench_fused(*, repeats=2, subdivisions=6, rays_per_view=1_000_000, views=4):
+    """The cases the compiled loop took over from per-hit arrays, against the per-hit path
+    (``trace`` + ``weigh``, the same packets cast), on the same rays in interleaved rounds,
+    one thread: footprint binning, and a bistatic receiver 60° off the ladar (aluminium
+    82k-face sphere; flat normals). Returns Mrays/s and the ratios."""
+    import math
+
+    import numpy as np
+
+    from . import materials
+    from .ladar import Ladar
+    from .mesh import fibonacci_sphere
+    from .raytrace.model import simulate_mesh, trace
+    from .weighing import weigh
+
+    scene = _icosphere_scene(subdivisions, materials.ALUMINUM)
+    spacing = 1.0 / math.sqrt(rays_per_view)
+    ladar = Ladar(None, np.linspace(-0.6, 0.6, 513), view_vectors=fibonacci_sphere(views))
+    w = ladar.view_vectors
+    # a receiver 60° from each view, about the view's own horizontal axis
+    side = np.cross(w, [0.0, 0.0, 1.0])
+    side /= np.maximum(np.linalg.norm(side, axis=1, keepdims=True), 1e-12)
+    receiver = 0.5 * w + (math.sqrt(3) / 2) * side
+    run = {"mode": "3d", "ray_spacing": spacing, "jobs": 1, "backend": "packets"}
+
+    t = interleaved({
+        "footprint": lambda: simulate_mesh(scene, ladar, footprint=True, **run),
+        "footprint_hits": lambda: weigh(trace(scene, ladar, **run), footprint=True),
+        "bistatic": lambda: simulate_mesh(scene, ladar, receiver=receiver, **run),
+        "bistatic_hits": lambda: weigh(trace(scene, ladar, receiver=receiver, **run)),
+        "point": lambda: simulate_mesh(scene, ladar, **run)}, repeats=repeats)
+    rays = simulate_mesh(scene, ladar, **run).info["rays"]
+    n = float(np.sum(rays))
+    m = {k: n / v / 1e6 for k, v in t.items()}
+    return {"faces": 20 * 4 ** subdivisions, "rays": int(n), **{f"{k}_mrays": v
+                                                              for k, v in m.items()},
+            "footprint_speedup": t["footprint_hits"] / t["footprint"],
+            "bistatic_speedup": t["bistatic_hits"] / t["bistatic"]}
+
+
 def _build_split(subdivisions):
     """Scene builds of an icosphere (8 subdivisions: 1.3M triangles): embreex's upload loop
     against its BVH build (commit on the first query), and the packet backend's scene
@@ -476,6 +516,12 @@ def report(*, repeats=5, full=False):
                f"packet cast {o['packet_mrays']:5.2f} ({o['packet_over_raw']:.2f}x), "
                f"pipeline {o['pipeline_mrays']:5.2f} ({o['pipeline_over_raw']:.2f}x), "
                f"2 threads {o['two_thread_mrays']:5.2f} Mrays/s")
+    fu = bench_fused()
+    yield (f"  compiled loop against per-hit arrays, {fu['faces']} triangles, 4 views x 1e6 "
+           f"rays, 1 thread: footprint bins {fu['footprint_mrays']:.2f} against "
+           f"{fu['footprint_hits_mrays']:.2f} Mrays/s ({fu['footprint_speedup']:.1f}x), "
+           f"bistatic {fu['bistatic_mrays']:.2f} against {fu['bistatic_hits_mrays']:.2f} "
+           f"({fu['bistatic_speedup']:.1f}x); point bins {fu['point_mrays']:.2f}")
     yield (f"  build, {m['build_faces']} triangles: embreex upload {m['upload_s']:.2f} s + BVH "
            f"{m['bvh_s']:.2f} s = {m['build_over_bvh']:.1f}x the BVH; packet scene "
            f"{m['packet_build_s']:.2f} s = {m['packet_build_over_bvh']:.2f}x the BVH")
