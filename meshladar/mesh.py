@@ -157,7 +157,11 @@ def _bodies(part: MeshPart):
     bodies, face_body = np.unique(face_body, return_inverse=True)
     code = a * n + b
     uniq, count = np.unique(code, return_counts=True)
-    ok_edge = np.isin(b * n + a, uniq) & (count[np.searchsorted(uniq, code)] == 1)
+    # each directed edge once, and its reverse present (a lookup in the sorted codes:
+    # np.isin sorts both arrays again, 8 s at 1.3M faces)
+    rev = b * n + a
+    at = np.minimum(np.searchsorted(uniq, rev), uniq.size - 1)
+    ok_edge = (uniq[at] == rev) & (count[np.searchsorted(uniq, code)] == 1)
     edge_body = np.tile(face_body, 3)
     open_edges = np.bincount(edge_body, weights=~ok_edge, minlength=bodies.size)
     tri = part.triangles

@@ -194,8 +194,9 @@ def _largest_grid(geo, vectors, mode, spacing, limit=None):
     if limit is not None and bound <= limit:
         return bound
     largest = 0.0
-    for start in range(0, len(vectors), 256):               # bounded memory
-        frames = [_frame(w) for w in vectors[start:start + 256]]
+    block = max(1, min(256, int(4e6 // max(len(geo.hull), 1))))   # bounded memory
+    for start in range(0, len(vectors), block):
+        frames = [_frame(w) for w in vectors[start:start + block]]
         u = np.array([f[0] for f in frames])
         su = geo.hull @ u.T
         n = np.ceil((np.ptp(su, axis=0) + 2 * spacing) / spacing)
