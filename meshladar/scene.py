@@ -64,14 +64,22 @@ def _outside_extremes(v):
     from .mesh import fibonacci_sphere
 
     dirs = fibonacci_sphere(_FILTER_DIRECTIONS)
-    ext = np.unique(np.argmax(v @ dirs.T, axis=0))
+    step = 1 << 15                                      # bounded memory
+    best = np.full(len(dirs), -np.inf)
+    arg = np.zeros(len(dirs), np.int64)
+    for a in range(0, len(v), step):                    # each direction's extreme point
+        proj = v[a:a + step] @ dirs.T
+        k = np.argmax(proj, axis=0)
+        top = proj[k, np.arange(len(dirs))]
+        better = top > best
+        best[better], arg[better] = top[better], a + k[better]
+    ext = np.unique(arg)
     try:
         eq = ConvexHull(v[ext]).equations               # a·x + b <= 0 inside
     except (QhullError, ValueError):
         return v
     tol = 1e-9 * float(np.ptp(v, axis=0).max() + np.abs(v).max())
     keep = np.zeros(len(v), bool)
-    step = 1 << 15                                      # bounded memory
     for a in range(0, len(v), step):
         keep[a:a + step] = (v[a:a + step] @ eq[:, :3].T + eq[:, 3]).max(axis=1) > -tol
     keep[ext] = True

@@ -273,6 +273,7 @@ def test_bistatic_views_take_the_fused_loop_with_the_references_numbers(mode, mo
     # receiver cast in packets inside the loop; the numbers of embreex's per-hit path
     from meshladar.raytrace import model
 
+    monkeypatch.setattr(model, "_FACE_BLOCK", 1000)        # the face weights in blocks
     plate = ml.mesh.MeshPart(np.array([[-0.5, -0.4, -0.3], [0.5, -0.4, 0.2], [0.5, 0.4, 0.3],
                                        [-0.5, 0.4, -0.2]]), np.array([[0, 1, 2], [0, 2, 3]]),
                              1, name="plate")

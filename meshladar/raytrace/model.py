@@ -238,13 +238,25 @@ def _face_footprints(geo, w, mode, spacing, out):
     out[:, 3] = corners.max(axis=1)
 
 
+#: Faces per block of the per-view face weights (bounded temporaries on huge meshes).
+_FACE_BLOCK = 1 << 16
+
+
 def _face_bistatic_weights(geo, materials, w, w_r, area, out, power, ignore_back):
     """F·area of every face for the ladar along w and the receiver along w_r, into out
     (n_faces,), in the float64 operations :func:`meshladar.raytrace.views._trace_view` and
     :func:`meshladar.weighing._weights` apply to each hit of the face (flat normals: the
     same for all of them; the normal turned toward the ladar unless back faces are
-    ignored, which weigh 0). A hit whose receiver ray is blocked weighs 0, in the loop."""
-    n = geo.face_normals
+    ignored, which weigh 0). A hit whose receiver ray is blocked weighs 0, in the loop.
+    In blocks of faces: a handful of temporaries per face, not per mesh."""
+    step = _FACE_BLOCK
+    for a in range(0, len(geo.face_normals), step):
+        out[a:a + step] = _bistatic_weights(geo.face_normals[a:a + step],
+                                            geo.material[a:a + step], materials, w, w_r,
+                                            area, power, ignore_back)
+
+
+def _bistatic_weights(n, material, materials, w, w_r, area, power, ignore_back):
     cos_t = _dot(n, w)
     back = cos_t < 0
     if not ignore_back:
@@ -261,7 +273,7 @@ def _face_bistatic_weights(geo, materials, w, w_r, area, out, power, ignore_back
     sin_a = np.linalg.norm(np.cross(n, half), axis=1)
     cos_r = np.where(ignore_back & back, -1.0, cos_r)
     bi = np.stack([cos_r, sin_r, cos_a, sin_a], -1)
-    out[:] = _weights(cos_t, sin_t, geo.material, materials, area, bi, power=power)
+    return _weights(cos_t, sin_t, material, materials, area, bi, power=power)
 
 
 def _face_weights(geo, materials, w, area, out, power=False):
