@@ -22,7 +22,7 @@ from conftest import PAIR  # noqa: E402  (the shared disk pair)
 @pytest.fixture(scope="module")
 def finished_run(tmp_path_factory):
     mesh = PAIR.tessellate(128)
-    ladar = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 12.0))     # 30 views: 4 chunks
+    ladar = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 11.25))    # 32 views: 4 chunks
     run = tmp_path_factory.mktemp("run")
     ref = ml.simulate(mesh, ladar, model="mesh", run_dir=run)
     return mesh, ladar, run, ref

@@ -33,6 +33,14 @@ __all__ = ["trace", "simulate_mesh", "first_hits", "occluded"]
 _VIEWS_PER_TASK = 8
 
 
+def _views_per_task(n_views):
+    """Views per chunk: :data:`_VIEWS_PER_TASK`, but a quarter of the views when they are
+    fewer than 32, so a handful of big views still spreads over the threads (8 views of
+    1e6 rays were one chunk, hence one thread). It depends on the views alone, so a run
+    folder's chunks are the same on any machine."""
+    return int(min(_VIEWS_PER_TASK, max(1, n_views // 4)))
+
+
 
 def _options(scene, ladar, mode, normals, back_faces, z0):
     if not isinstance(scene, Scene):
@@ -442,7 +450,7 @@ def _run(scene, ladar, *, mode, normals, back_faces, z0, ray_spacing, rays_per_b
         job["sensor"] = None if sensor is None else sensor.describe()
     work = _estimate_rays(geo, ladar, mode, spacing)
     results = run_chunks(
-        _job, geo, ladar.n_views, chunk_size=_VIEWS_PER_TASK,
+        _job, geo, ladar.n_views, chunk_size=_views_per_task(ladar.n_views),
         args=(np.asarray(ladar.view_vectors, dtype=np.float64), mode, spacing, z0_shifted,
               back_faces, seed, ladar.bin_edges, weigh_with, receivers, backend,
               _row_jobs(ladar.n_views, jobs, executor, work), traced_with),
