@@ -220,8 +220,11 @@ def _summary(args, sino, ladar, model):
     info = sino.info
     how = f"{model} model"
     if model == "mesh":
+        rec = info.get("receiver")
         how += (f", {info.get('mode')} mode, {info.get('normals')} normals, "
                 f"{info.get('sampling')} sampling, ray spacing {info.get('ray_spacing'):.4g}, "
+                f"{'footprint' if info.get('footprint') else 'point'} bins, "
+                + ("monostatic" if rec is None else "bistatic receiver") + ", "
                 f"{info.get('rays', 0):,} rays cast ({info.get('backend')} backend)")
         if info.get("mode") == "slice":
             how += f" (values per unit height at z0 = {info.get('z0'):g})"

@@ -235,6 +235,11 @@ def _sinogram(vals, ladar, edges, run, normals, footprint, rays, back, radiometr
             "units": "length/sr (per unit height)" if run["mode"] == "slice" else "area/sr"}
     if run["mode"] == "slice":
         info["z0"] = run["z0"]
+    receiver = run.get("receiver")
+    if receiver is not None:                 # bistatic: the receiver's direction(s)
+        rows = np.unique(np.asarray(receiver, dtype=np.float64), axis=0)
+        info["receiver"] = rows[0].tolist() if len(rows) == 1 else \
+            np.asarray(receiver, dtype=np.float64).tolist()
     sensor = run.get("sensor")
     if sensor is not None:
         info["sensor"] = sensor.describe()

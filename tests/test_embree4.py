@@ -253,6 +253,7 @@ def test_footprints_take_the_fused_loop_with_the_general_paths_numbers(mode, nor
                                         normals=normals, backend=backend, footprint=True,
                                         rays_per_bin=3, **options)
                 assert fused.values.max() > 0 and fused.info["footprint"] is True
+                assert "receiver" not in fused.info                       # monostatic
                 assert fused.info["back_face_hits"] == general.info["back_face_hits"]
                 assert sum(general.info["back_face_hits"]) > 0
                 np.testing.assert_allclose(fused.values, general.values, rtol=SAME_HITS_RTOL,
@@ -299,6 +300,9 @@ def test_bistatic_views_take_the_fused_loop_with_the_references_numbers(mode, mo
                                     receiver=receiver, backend="packets", rays_per_bin=3,
                                     **options)
             assert fused.values.max() > 0
+            # the result says it is bistatic, and toward where
+            np.testing.assert_allclose(fused.info["receiver"],
+                                       np.array(receiver) / np.linalg.norm(receiver))
             assert fused.info["back_face_hits"] == ref.info["back_face_hits"]
             np.testing.assert_allclose(fused.values, ref.values, rtol=SAME_HITS_RTOL,
                                        atol=SAME_HITS_RTOL * ref.values.max())
