@@ -29,6 +29,8 @@ def _weights(cos_t, sin_t, mat, materials, area, bi=None, power=False):
         args = (c, s, b[:, 0], b[:, 1], b[:, 2], b[:, 3])
         return m.bistatic(*args) * (b[:, 0] >= 0) if power else m.bistatic_value(*args)
 
+    if bi is not None and not power:
+        _warn_grazing_receiver(cos_t, bi[:, 0])
     if len(materials) == 1:
         return one(materials[0], cos_t, sin_t, bi) * area
     wt = np.zeros(cos_t.size)
@@ -38,6 +40,29 @@ def _weights(cos_t, sin_t, mat, materials, area, bi=None, power=False):
             * area
     return wt
 
+
+
+#: Below this cos θr a lit surface is edge-on to the receiver: under Eq. 8 a bistatic
+#: weight is F, whose specular term grows as 1/cos θr (1e6 times its value at 60° here).
+GRAZING_RECEIVER_COS = 1e-6
+
+
+def _warn_grazing_receiver(cos_t, cos_r):
+    """Warn when surfaces facing the ladar are edge-on to the receiver under
+    radiometry="paper" (the mesh engine's fused loop checks faces, the per-hit path hits):
+    there F
+    (not F·cos θr) is weighed, and its 1/cos θr makes a flat facet parallel to the
+    receiver's direction dominate the profile without bound (received power is finite)."""
+    if np.any((cos_t > 0) & (cos_r >= 0) & (cos_r < GRAZING_RECEIVER_COS)):
+        import warnings
+
+        from .errors import MeshladarWarning
+
+        warnings.warn("surfaces facing the ladar lie edge-on to the receiver (cos θr < "
+                      "1e-6): under radiometry='paper' a bistatic return weighs F, which "
+                      "grows as 1/cos θr there, so they dominate the profile; "
+                      "radiometry='power' (received power, F·cos θr) is finite",
+                      MeshladarWarning, stacklevel=4)
 
 
 def _box_cdf(x, h):

@@ -12,7 +12,7 @@ from scipy import integrate
 
 import meshladar as ml
 from meshladar import mesh as mlmesh
-from meshladar.errors import GeometryError, ParameterError
+from meshladar.errors import GeometryError, MeshladarWarning, ParameterError
 from meshladar.materials import ALUMINUM, DARK_GRAY, lambertian
 
 from conftest import PAIR  # noqa: E402  (the shared disk pair)
@@ -437,3 +437,20 @@ def test_a_views_hits_are_a_frozen_record_too():
                                              r"got \(5, 3\)"):
         ViewHits(np.zeros(k), np.ones(k), np.zeros(k), np.zeros(k, np.int32),
                  np.zeros((k, 4)), 10, 0, curve=np.zeros((k, 3)))
+
+
+@pytest.mark.parametrize("backend", ["packets", "embreex"])
+def test_a_receiver_edge_on_to_a_lit_face_is_said_under_eq8(backend):
+    """A cube seen along x with the receiver along y: its +x face is lit and exactly edge-on
+    to the receiver. Under Eq. 8 (radiometry='paper') the bistatic weight is F, whose
+    specular term grows as 1/cos θr: that face outweighs everything by ~1e16, which is
+    said; received power (F·cos θr) is finite and silent."""
+    cube = trimesh.creation.box(extents=(0.5, 0.5, 0.5))
+    scene = ml.Scene.from_mesh(cube, ALUMINUM)
+    lad = ml.Ladar(None, np.linspace(-0.6, 0.6, 65), view_vectors=[[1.0, 0.0, 0.0]])
+    with pytest.warns(MeshladarWarning, match="edge-on to the receiver"):
+        paper = ml.simulate(scene, lad, model="mesh", receiver=(0.0, 1.0, 0.0),
+                            backend=backend)
+    power = ml.simulate(scene, lad, model="mesh", receiver=(0.0, 1.0, 0.0),
+                        radiometry="power", backend=backend)
+    assert paper.values.max() > 1e12 * power.values.max() > 0
