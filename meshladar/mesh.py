@@ -155,17 +155,26 @@ def _bodies(part: MeshPart):
     _, vertex_body = connected_components(graph, directed=False)
     face_body = vertex_body[f[:, 0]]
     bodies, face_body = np.unique(face_body, return_inverse=True)
-    code = a * n + b
-    uniq, count = np.unique(code, return_counts=True)
-    # each directed edge once, and its reverse present (a lookup in the sorted codes:
-    # np.isin sorts both arrays again, 8 s at 1.3M faces)
-    rev = b * n + a
-    at = np.minimum(np.searchsorted(uniq, rev), uniq.size - 1)
-    ok_edge = (uniq[at] == rev) & (count[np.searchsorted(uniq, code)] == 1)
+    # a closed, consistently wound body meets each undirected edge exactly twice, once in
+    # each direction: one sort of the undirected edges finds them (np.isin of the directed
+    # codes against their reverses took 8 s at 1.3M faces)
+    forward = a < b
+    undirected = np.where(forward, a, b) * n + np.where(forward, b, a)
+    order = np.argsort(undirected, kind="stable")
+    u = undirected[order]
+    start = np.flatnonzero(np.r_[True, u[1:] != u[:-1]])
+    length = np.diff(np.r_[start, u.size])
+    f_sorted = forward[order]
+    # a run of exactly two, one forward and one backward
+    run_ok = (length == 2) & (f_sorted[start] != f_sorted[np.minimum(start + 1, u.size - 1)])
+    ok_edge = np.empty(u.size, bool)
+    ok_edge[order] = np.repeat(run_ok, length)
     edge_body = np.tile(face_body, 3)
     open_edges = np.bincount(edge_body, weights=~ok_edge, minlength=bodies.size)
-    tri = part.triangles
-    vol = np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])) / 6.0
+    # signed volume from the normals and areas the part caches: (p0·n) area / 3 per face
+    normals, areas = part.face_normals_areas()
+    p0 = part.vertices[f[:, 0]]
+    vol = np.einsum("ij,ij->i", p0, normals) * areas / 3.0
     volume = np.bincount(face_body, weights=vol, minlength=bodies.size)
     return open_edges == 0, volume
 
