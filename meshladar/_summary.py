@@ -34,7 +34,8 @@ def text(name, *fields):
 def table(name, *fields):
     """The same pairs as an HTML table headed by ``name`` (a notebook's rich repr)."""
     rows = "".join(f"<tr><th style='text-align:left'>{html.escape(str(k))}</th>"
-                   f"<td style='text-align:left'>{html.escape(_fmt(v))}</td></tr>"
+                   f"<td style='text-align:left'>"
+                   f"{html.escape(v if isinstance(v, str) else _fmt(v))}</td></tr>"
                    for k, v in _fields(fields))
     return (f"<table><caption style='text-align:left'><b>{html.escape(name)}</b></caption>"
             f"{rows}</table>")

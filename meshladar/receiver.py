@@ -334,7 +334,8 @@ class Waveforms:
 
     def _summary(self):
         return (("n_views", self.values.shape[0]), ("n_samples", self.values.shape[1]),
-                ("time_s", (float(self.time_edges[0]), float(self.time_edges[-1]))),
+                ("time", f"{self.time_edges[0] * 1e9:.7g} to {self.time_edges[-1] * 1e9:.7g}"
+                         " ns (two-way)"),
                 ("units", self.info.get("units")),
                 ("radiometry", self.info.get("radiometry")))
 

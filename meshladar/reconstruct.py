@@ -104,8 +104,8 @@ class Image:
                             float(self.values.max(initial=0.0)))),
                 ("method", i.get("method", "fbp" if "filter" in i else None)),
                 ("filter", i.get("filter")), ("input", i.get("preprocess")),
-                ("radiometry", i.get("radiometry")), ("n_views", i.get("n_views")),
-                ("iterations", i.get("iterations")))
+                ("radiometry", i.get("radiometry")), ("input_units", i.get("input_units")),
+                ("n_views", i.get("n_views")), ("iterations", i.get("iterations")))
 
     def __repr__(self) -> str:
         from ._summary import text
@@ -347,6 +347,8 @@ def fbp(sinogram, size=512, extent=1.0, *, filter="ramp", interpolation="linear"
     info = {"filter": filter, "interpolation": interpolation, "n_views": sinogram.n_views,
             "n_bins": sinogram.n_bins, "resampled": resampled}
     info.update({k: v for k, v in sinogram.info.items() if k in ("preprocess", "radiometry")})
+    if sinogram.info.get("units"):
+        info["input_units"] = sinogram.info["units"]
     return Image(out, extent, (float(c[0]), float(c[1])), info)
 
 
@@ -391,8 +393,9 @@ def log_radiance(sinogram: Sinogram, *, floor=LOG_FLOOR) -> Sinogram:
     else:
         m = floor * vmax
         out = np.log(np.maximum(sinogram.values, m) / m)
-    return dataclasses.replace(sinogram, values=out,
-                               info=_preprocessed(sinogram, f"log(floor={floor:g})"))
+    info = _preprocessed(sinogram, f"log(floor={floor:g})")
+    info["units"] = "dimensionless (natural log of the ratio to the floor)"
+    return dataclasses.replace(sinogram, values=out, info=info)
 
 
 def clip_radiance(sinogram: Sinogram, *, threshold=PAPER_CLIP) -> Sinogram:

@@ -128,7 +128,8 @@ class Sinogram:
                 ("range", (float(self.bin_edges[0]), float(self.bin_edges[-1]))),
                 ("max", float(self.values.max(initial=0.0))),
                 ("radiometry", self.info.get("radiometry")), ("units", self.info.get("units")),
-                ("views", None if self.planar else "3-D"),
+                ("views", "about z, w = (cos φ, sin φ, 0)" if self.planar else
+                 "3-D directions w"), ("ranges", "r = −p·w"),
                 ("preprocess", self.info.get("preprocess")))
 
     def __repr__(self) -> str:

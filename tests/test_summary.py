@@ -49,6 +49,13 @@ def test_reprs_state_conventions(results):
     assert "small.rho_d=" in repr(results["CoatingFit"])
     log = ml.fbp(ml.log_radiance(results["Sinogram"]), size=64)
     assert "input='log(floor=1e-06)'" in repr(log)
+    assert "input_units='dimensionless" in repr(log)              # log input has no unit
+    assert "input_units='area/sr'" in repr(ml.fbp(results["Sinogram"], size=64)) or \
+        "input_units='length/sr" in repr(ml.fbp(results["Sinogram"], size=64))
+    assert "views='about z, w = (cos φ, sin φ, 0)'" in repr(results["Sinogram"])
+    assert " ns (two-way)'" in repr(results["Waveforms"])
+    html = results["Sinogram"]._repr_html_()
+    assert "<td style='text-align:left'>analytic</td>" in html   # strings without quotes
 
 
 def test_quick_looks(results, tmp_path):

@@ -148,7 +148,7 @@ def test_legend_names_the_flat_colours_clear_of_the_bars_and_text_is_legible():
     img = viewer.show_scene(pair, view_angle_deg=0.0, ladar=ml.Ladar.paper(),
                             off_screen=True, window_size=(w, h))
     labels, box = viewer.last_legend
-    assert labels == ["shadowed by another part", "turned away from the ladar",
+    assert labels == ["shadowed (another face in the way)", "turned away from the ladar",
                       "ladar beam and ray grid", "iso-range planes (bin edges)"]
     for _, bar in viewer.last_scalar_bars:
         assert box[2] <= bar[0] or bar[2] <= box[0] or box[3] <= bar[1] or bar[3] <= box[1]

@@ -8,7 +8,7 @@ libgl1-mesa-dri), so nothing needs Xvfb.
 
 Colours: lit faces by their return F(θ)·cos θ for the chosen view (monostatic, grey scale,
 lighting off so the colour is the value), faces that face the ladar but are hidden by
-another part in ``shadow_color``, faces turned away in ``back_color``; with a ladar, the
+another face (of this part or another) in ``shadow_color``, faces turned away in ``back_color``; with a ladar, the
 first hits as points coloured by range bin (viridis) and iso-range planes in cyan; the
 beam and the ray grid's footprint in yellow. Each quantity has one titled colour bar in a
 fixed slot at the right edge; a legend at the top left names the flat colours drawn.
@@ -24,7 +24,7 @@ __all__ = ["show_scene", "show_slice", "show_volume", "volume_surface", "volume_
            "face_returns", "SHADOW_COLOR", "BACK_COLOR", "CAMERAS", "last_scalar_bars",
            "last_legend"]
 
-#: Colour of faces that face the ladar but are shadowed by another part.
+#: Colour of faces that face the ladar but are shadowed by another face.
 SHADOW_COLOR = (1.0, 0.0, 1.0)
 #: Named camera placements of show_scene: "oblique" beside and above the ladar (default),
 #: "view" along the beam from the ladar.
@@ -141,7 +141,7 @@ last_legend = None
 def _bar(title, slot=0):
     """scalar_bar_args for a titled vertical colour bar in one of two fixed slots at the
     right edge (0: lower, 1: upper), so two bars never overlap."""
-    return {"title": title, "vertical": True, "position_x": 0.84,
+    return {"title": title, "vertical": True, "position_x": 0.8,
             "position_y": 0.06 + 0.48 * slot, "width": 0.08, "height": 0.38,
             "title_font_size": 12, "label_font_size": 10, "n_labels": 4, "fmt": "%.3g",
             "color": "white"}             # the backgrounds are black
@@ -154,7 +154,7 @@ def _legend(plotter, entries):
         return
     height = 0.05 * len(entries)
     legend = plotter.add_legend(labels=[list(e) for e in entries],
-                                bcolor=(0.12, 0.12, 0.12), size=(0.36, height),
+                                bcolor=(0.12, 0.12, 0.12), size=(0.44, height),
                                 loc="upper left", face="none", background_opacity=0.8)
     from vtkmodules.vtkCommonDataModel import vtkImageData
 
@@ -165,8 +165,9 @@ def _legend(plotter, entries):
         icon.AllocateScalars(3, 3)                  # VTK_UNSIGNED_CHAR, RGB
         pixels = icon.GetPointData().GetScalars()
         rgb = [int(round(255 * c)) for c in colour]
-        for k in range(16 * 16):
-            pixels.SetTuple3(k, *rgb)
+        for k in range(16 * 16):                    # a light frame: dark colours show too
+            edge = k % 16 in (0, 15) or k // 16 in (0, 15)
+            pixels.SetTuple3(k, *((220, 220, 220) if edge else rgb))
         legend.SetEntryIcon(i, icon)
         legend.SetEntryColor(i, 1.0, 1.0, 1.0)
     return legend
@@ -258,15 +259,17 @@ def show_scene(scene, *, view_angle_deg=None, view_vector=None, ladar=None, segm
                                               else "F cos(theta) [1/sr]", 0))
     if (state == 1).any():
         plotter.add_mesh(poly(state == 1), color=shadow_color, lighting=False)
-        legend.append(("shadowed by another part", shadow_color))
+        legend.append(("shadowed (another face in the way)", shadow_color))
     if (state == 2).any():
         plotter.add_mesh(poly(state == 2), color=back_color, lighting=False)
         legend.append(("turned away from the ladar", back_color))
     center = 0.5 * (v.min(axis=0) + v.max(axis=0))
     size = float(np.ptp(v, axis=0).max())
     if show_rays:
-        plotter.add_mesh(pv.Arrow(start=center + 0.9 * size * w, direction=-w,
-                                  scale=0.5 * size), color="yellow", lighting=False)
+        if camera != "view":       # seen end-on from the ladar the arrow is a disc: omitted
+            # outside the scene's extent, so it covers none of it
+            plotter.add_mesh(pv.Arrow(start=center + 1.25 * size * w, direction=-w,
+                                      scale=0.4 * size), color="yellow", lighting=False)
         plane = pv.Plane(center=center + 0.8 * size * w, direction=w, i_size=1.1 * size,
                          j_size=1.1 * size, i_resolution=1, j_resolution=1)
         plotter.add_mesh(plane, style="wireframe", color="yellow", line_width=2,
