@@ -117,8 +117,9 @@ class Sinogram:
         """(n_views,) total return of each view: the sum of its bins."""
         return self.values.sum(axis=1)
 
-    def plot(self, *, log=False):
-        """A quick look (:func:`meshladar.viz.quick.sinogram`): a matplotlib Figure."""
+    def plot(self, *, log=None):
+        """A quick look (:func:`meshladar.viz.quick.sinogram`): a matplotlib Figure; ``log``
+        (default: when the values span more than three decades) a log colour scale."""
         from .viz.quick import sinogram
 
         return sinogram(self, log=log)

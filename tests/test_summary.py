@@ -67,8 +67,17 @@ def test_quick_looks(results, tmp_path):
     sino = results["Sinogram"]
     fig = sino.plot(log=True)
     labels = " ".join(t.get_text() for t in fig.findobj(lambda a: hasattr(a, "get_text")))
-    assert "radiometry power" in labels and "length/sr" in labels
+    assert "power radiometry" in labels and "length/sr" in labels
+    assert "view angle φ [deg]" in labels and "[scene units]" in labels
     assert style.overlapping_texts(fig) == []
+    assert fig.dpi == 150                        # a user's fig.savefig is at 150 dpi too
+    # by default the scale is logarithmic when the values span more than three decades
+    # (the glint next to the gray disk), with empty bins in the lowest colour, not white
+    im = sino.plot().axes[0].images[0]
+    assert im.norm.__class__.__name__ == "LogNorm"
+    assert tuple(im.cmap.get_bad()[:3]) == tuple(im.cmap(0.0)[:3])
+    flat = ml.Sinogram(np.ones((3, 4)), angles_deg=[0, 10, 20], bin_edges=np.arange(5.0))
+    assert flat.plot().axes[0].images[0].norm.__class__.__name__ == "Normalize"
     img = ml.fbp(ml.log_radiance(sino), size=128)
     fig = img.plot()
     assert style.overlapping_texts(fig) == []

@@ -12,9 +12,13 @@ __all__ = ["sinogram", "image", "volume", "profile"]
 
 
 @style.styled
-def sinogram(sino, *, log=False):
+def sinogram(sino, *, log=None):
     """The sinogram as an image, views against range, and the views' totals beside it;
-    ``log`` shows log10 of the values (glints next to diffuse parts)."""
+    ``log`` shows the values on a log scale (glints next to diffuse parts); by default
+    when the positive values span more than three decades. Views about z are placed at
+    their angles in degrees (when evenly spaced), other view sets by index; empty bins
+    take the scale's lowest colour."""
+    import matplotlib
     from matplotlib.colors import LogNorm
 
     plt = style.use()
@@ -24,20 +28,34 @@ def sinogram(sino, *, log=False):
     units = sino.info.get("units", "")
     rad = sino.info.get("radiometry", "paper")
     pos = v[v > 0]
+    if log is None:
+        log = bool(pos.size) and pos.max() > 1e3 * pos.min()
     norm = LogNorm(max(pos.min(), pos.max() * 1e-8), pos.max()) if log and pos.size else None
+    magma = matplotlib.colormaps["magma"]
+    cmap = magma.with_extremes(bad=magma(0.0))  # zeros on a log scale: the lowest colour
     e = sino.bin_edges
-    h = a.imshow(v, aspect="auto", origin="lower", interpolation="nearest", cmap="magma",
-                 norm=norm, extent=(e[0], e[-1], 0, sino.n_views))
-    a.set_xlabel("range r = -p.w")
-    a.set_ylabel("view")
-    a.set_title(f"{sino.model} sinogram, {sino.n_views} views x {sino.n_bins} bins",
-                fontsize=9)
+    ang = np.asarray(sino.angles_deg, dtype=float)
+    step = np.diff(ang)
+    by_angle = sino.planar and ang.size > 1 and np.ptp(step) <= 1e-9 * max(abs(step[0]), 1.0) \
+        and step[0] > 0
+    if by_angle:
+        ys, ylabel = (ang[0] - step[0] / 2, ang[-1] + step[0] / 2), "view angle φ [deg]"
+        x_views = ang
+    else:
+        ys, ylabel = (-0.5, sino.n_views - 0.5), "view (index)"
+        x_views = np.arange(sino.n_views)
+    h = a.imshow(v, aspect="auto", origin="lower", interpolation="nearest", cmap=cmap,
+                 norm=norm, extent=(e[0], e[-1], *ys))
+    a.set_xlabel("range r = −p·w [scene units]")
+    a.set_ylabel(ylabel)
+    a.set_title(f"{sino.model} sinogram, {sino.n_views} views × {sino.n_bins} bins"
+                + (", log scale" if log else ""), fontsize=9)
     bar = fig.colorbar(h, ax=a, shrink=0.85)
-    bar.set_label(f"return per bin ({units}; radiometry {rad})", fontsize=7)
+    bar.set_label(f"return per bin [{units}]\n{rad} radiometry", fontsize=8)
     bar.ax.tick_params(labelsize=7)
-    b.plot(np.arange(sino.n_views), sino.total(), color="k", lw=0.8)
-    b.set_xlabel("view")
-    b.set_ylabel(f"total return ({units})", fontsize=8)
+    b.plot(x_views, sino.total(), color="k", lw=0.8)
+    b.set_xlabel(ylabel)
+    b.set_ylabel(f"total return [{units}]", fontsize=8)
     b.set_title("each view's total", fontsize=9)
     fig.tight_layout()
     return fig

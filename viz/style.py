@@ -6,7 +6,7 @@ __all__ = ["STYLE", "use", "styled", "pick_views", "save_png"]
 
 STYLE = {
     "figure.dpi": 100,
-    "savefig.dpi": 110,
+    "savefig.dpi": 150,
     "font.size": 9,
     "axes.titlesize": 9,
     "axes.labelsize": 9,
@@ -38,7 +38,7 @@ class _Figures:
     def subplots(nrows=1, ncols=1, *, figsize=None, squeeze=True, **kwargs):
         from matplotlib.figure import Figure
 
-        fig = Figure(figsize=figsize)
+        fig = Figure(figsize=figsize, dpi=STYLE["savefig.dpi"])   # a user's savefig too
         return fig, fig.subplots(nrows, ncols, squeeze=squeeze, **kwargs)
 
     @staticmethod
