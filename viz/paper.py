@@ -117,29 +117,46 @@ def _image_panel(fig, ax, img, extent, title, key="", outlines=None):
     return h
 
 
+#: Rows averaged about y = 0 for a slice: the rings cross them at right angles and stay
+#: sharp, the streaks that run every way average down.
+_SLICE_ROWS = 8
+
+
 def _slices(ax, arrays, keys, extent, outlines, tags="ab"):
-    """Centre slices (y = 0) of the panels' reconstructions on one axis, symmetric-log
-    with the images' linear range."""
+    """Centre slices (y = 0) of the panels' reconstructions on one axis, each divided by
+    its own image's colour-scale top (so a log-input and a radiance image compare, and
+    both read on the images' scales), symmetric-log with the images' linear range, over
+    the shapes' extent along x."""
     lines = ("-", ":")
-    tops = []
-    for key, ls, tag in zip(keys, lines, tags):
+    colours = ("k", "C3")
+    lins, xs = [], []
+    for key, ls, colour, tag in zip(keys, lines, colours, tags):
         img = arrays[f"image/{key}"]
         n = img.shape[0]
         x = -extent + (np.arange(n) + 0.5) * 2 * extent / n
-        row = 0.5 * (img[n // 2] + img[n // 2 - 1])
-        ax.plot(x, row, ls, color="k", lw=0.8, label=f"({tag})")
-        tops.append(norm(img, _inside(img.shape, outlines.get(key), extent)))
-    lin = min(getattr(t, "linthresh", t.vmax) for t in tops)
-    top = max(t.vmax for t in tops)
-    ax.set_ylim(-top, top)
-    if lin < 0.3 * top:
+        row = img[n // 2 - _SLICE_ROWS // 2:n // 2 + _SLICE_ROWS // 2].mean(axis=0)
+        t = norm(img, _inside(img.shape, outlines.get(key), extent))
+        ax.plot(x, row / t.vmax, ls, color=colour, lw=0.8, label=f"({tag})")
+        lins.append(getattr(t, "linthresh", t.vmax) / t.vmax)
+        for o in outlines.get(key) or ():
+            half = max(o["axes"])
+            xs += [o["center"][0] - half, o["center"][0] + half]
+    lin = min(lins)
+    ax.set_ylim(-1.05, 1.05)
+    if lin < 0.3:
         ax.set_yscale("symlog", linthresh=lin, linscale=2.0)
-        ticks = [-top, -lin, 0.0, lin, top]
+        ticks = [-1.0, -lin, 0.0, lin, 1.0]
         ax.set_yticks(ticks, labels=[f"{t:.2g}" for t in ticks])
+    if xs:                                    # the shapes and a margin: their rings, inside
+        lo, hi = min(xs), max(xs)
+        pad = 0.15 * (hi - lo)
+        ax.set_xlim(max(lo - pad, -extent), min(hi + pad, extent))
+    else:
+        ax.set_xlim(-0.95 * extent, 0.95 * extent)
     ax.tick_params(labelsize=7)
-    ax.set_xlabel("x [scene units] (y = 0)")
-    ax.set_ylabel("centre slice (symmetric log)")
-    ax.legend(frameon=False, fontsize=7)
+    ax.set_xlabel(f"x [scene units] (mean of the {_SLICE_ROWS} rows about y = 0)")
+    ax.set_ylabel("centre slice / its image's scale top")
+    ax.legend(loc="lower right", frameon=True, framealpha=0.9, fontsize=7)
 
 
 def _caption(fig, text):
@@ -209,8 +226,7 @@ def figures(arrays, meta):
             _image_panel(fig, ax, arrays[f"image/{key}"], extent,
                          f"({tag}) {caps[key]}{extra}", key, outl.get(key))
         _slices(axes[2], arrays, keys, extent, outl)
-        axes[2].set_xlim(-0.95, 0.95)
-        axes[2].set_title("(c) centre slices", fontsize=8)
+        axes[2].set_title("(c) centre slices, each on its image's scale", fontsize=8)
         fig.suptitle(f"Fig. {n} — {title}", fontsize=11)
         fig.subplots_adjust(left=0.05, right=0.97, bottom=0.22, top=0.84, wspace=0.45)
         _caption(fig, texts[n])
@@ -221,7 +237,7 @@ def figures(arrays, meta):
 def draw(result_path, outdir, *, dpi=None):
     """Draw Figs 5-11 as PNGs in ``outdir`` from a saved result; returns their paths.
 
-    ``dpi`` overrides the style's resolution (150; the README's thumbnails use 70).
+    ``dpi`` overrides the style's resolution (150, as the README's copies).
     """
     from meshladar import results
 
