@@ -35,6 +35,14 @@ def _stored_text(cell):
     return None
 
 
+@pytest.fixture(autouse=True)
+def _close_figures():
+    yield
+    import matplotlib.pyplot as plt
+
+    plt.close("all")                     # the notebooks' pyplot figures (the 3-D views)
+
+
 @pytest.fixture(scope="module")
 def rendering():
     from test_viewer import _SMOKE
@@ -62,9 +70,6 @@ def _run(name, tmp_path, monkeypatch):
             last = ast.Expression(tree.body.pop().value)
         exec(compile(tree, name, "exec"), ns)
         values.append(eval(compile(last, name, "eval"), ns) if last else None)
-    import matplotlib.pyplot as plt
-
-    plt.close("all")
     return ns, values
 
 
@@ -78,6 +83,33 @@ def test_notebooks_are_stored_with_outputs_and_no_errors():
         assert "error" not in kinds, name
         pictures = sum("image/png" in o.get("data", {}) for c in cells for o in c["outputs"])
         assert pictures >= 1, name
+
+
+def _figures_as_stored(cells, values):
+    """Each cell whose value is a matplotlib Figure stored a picture of the size the code
+    draws today (the inline backend's tight bounding box at the figure's dpi), within 2 %:
+    a notebook drawn before a change of figure size or resolution fails here."""
+    import base64
+    import io
+
+    from matplotlib.figure import Figure
+    from PIL import Image
+
+    checked = 0
+    for cell, value in zip(cells, values):
+        if not isinstance(value, Figure):
+            continue
+        stored = [o["data"]["image/png"] for o in cell.get("outputs", [])
+                  if "image/png" in o.get("data", {})]
+        assert stored, _source(cell)
+        old = Image.open(io.BytesIO(base64.b64decode(stored[0]))).size
+        buf = io.BytesIO()
+        value.savefig(buf, format="png", bbox_inches="tight")
+        new = Image.open(io.BytesIO(buf.getvalue())).size
+        assert all(abs(a - b) <= 0.02 * b for a, b in zip(old, new)), (_source(cell), old,
+                                                                     new)
+        checked += 1
+    return checked
 
 
 def _same_as_stored(cells, values, expression):
@@ -101,6 +133,7 @@ def test_paper_tour(tmp_path, monkeypatch, rendering):
     assert ns["profile_error"] < 1e-12                 # the closed form, to rounding
     assert ns["shot"].shape == (600, 800, 3)
     cells = _cells("01_paper_tour.ipynb")
+    assert _figures_as_stored(cells, values) == 4
     _same_as_stored(cells, values, "visibility")
     _same_as_stored(cells, values, "ladar")
     assert _stored_text(cells[0]).startswith("Scene(kind='analytic'")
@@ -114,6 +147,7 @@ def test_your_mesh_and_sensor(tmp_path, monkeypatch, rendering):
     assert 1.0 < ns["mean_ratio"] < 1.01
     assert ns["draws"].shape == (200,) + ns["waves"].values.shape
     cells = _cells("02_your_mesh_and_sensor.ipynb")
+    assert _figures_as_stored(cells, values) == 3
     _same_as_stored(cells, values, "part")
     assert list(tmp_path.iterdir()) == []              # it writes nothing
 
@@ -125,4 +159,5 @@ def test_coatings_from_data(tmp_path, monkeypatch):
     # the chosen views pin the glint width far better than evenly spaced ones
     assert ns["gain"]["small.e"] > 10
     cells = _cells("03_coatings_from_data.ipynb")
+    assert _figures_as_stored(cells, values) == 1
     _same_as_stored(cells, values, "gain")
