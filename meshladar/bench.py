@@ -222,6 +222,32 @@ def bench_fused(*, repeats=2, subdivisions=6, rays_per_view=1_000_000, views=4):
             "bistatic_speedup": t["bistatic_hits"] / t["bistatic"]}
 
 
+def bench_single_view(*, subdivisions=6, rays=100_000, calls=30):
+    """End-to-end time of one view of ``rays`` rays on a cached mesh (82k faces), default
+    options (rows on threads from 5e4 rays) and one thread: medians of ``calls`` calls."""
+    import math
+
+    import numpy as np
+
+    from . import materials
+    from .ladar import Ladar
+    from .raytrace.model import simulate_mesh
+
+    scene = _icosphere_scene(subdivisions, materials.DARK_GRAY)
+    ladar = Ladar(None, np.linspace(-0.6, 0.6, 513), view_vectors=[[0.3, -0.4, 0.866]])
+    spacing = 1.0 / math.sqrt(rays)
+    out = {}
+    for name, jobs in (("default", None), ("one_thread", 1)):
+        simulate_mesh(scene, ladar, ray_spacing=spacing, jobs=jobs)
+        ts = []
+        for _ in range(calls):
+            t0 = time.perf_counter()
+            sino = simulate_mesh(scene, ladar, ray_spacing=spacing, jobs=jobs)
+            ts.append(time.perf_counter() - t0)
+        out[f"{name}_ms"] = 1e3 * statistics.median(ts)
+    return {"rays": int(sino.info["rays"]), **out}
+
+
 def _build_split(subdivisions):
     """Scene builds of an icosphere (8 subdivisions: 1.3M triangles): embreex's upload loop
     against its BVH build (commit on the first query), and the packet backend's scene
@@ -522,6 +548,10 @@ def report(*, repeats=5, full=False):
            f"{fu['footprint_hits_mrays']:.2f} Mrays/s ({fu['footprint_speedup']:.1f}x), "
            f"bistatic {fu['bistatic_mrays']:.2f} against {fu['bistatic_hits_mrays']:.2f} "
            f"({fu['bistatic_speedup']:.1f}x); point bins {fu['point_mrays']:.2f}")
+    sv = bench_single_view()
+    yield (f"  one view of {sv['rays']:,} rays on a cached mesh, end to end: "
+           f"{sv['default_ms']:.1f} ms (default: its rows on threads), "
+           f"{sv['one_thread_ms']:.1f} ms on one thread")
     yield (f"  build, {m['build_faces']} triangles: embreex upload {m['upload_s']:.2f} s + BVH "
            f"{m['bvh_s']:.2f} s = {m['build_over_bvh']:.1f}x the BVH; packet scene "
            f"{m['packet_build_s']:.2f} s = {m['packet_build_over_bvh']:.2f}x the BVH")
