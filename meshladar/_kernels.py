@@ -285,6 +285,16 @@ def _hit_distance(p, c, tf, origins, i, plane_d, face_normals):
                           + face_normals[p, 2] * origins[i, 2])) / (-c)
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _face_hit(p, tf, origins, i, w, plane_d, face_normals):
+    """Ray i's hit on face p seen along w: (c, t, r) with c = n·w the flat normal's cosine
+    (negative on a back face), t the float64 distance (:func:`_hit_distance`) and
+    r = t − o·w its range relative to the shifted centre's plane."""
+    c = face_normals[p, 0] * w[0] + face_normals[p, 1] * w[1] + face_normals[p, 2] * w[2]
+    t = _hit_distance(p, c, tf, origins, i, plane_d, face_normals)
+    return c, t, t - (origins[i, 0] * w[0] + origins[i, 1] * w[1] + origins[i, 2] * w[2])
+
+
 @njit(cache=True, nogil=True)
 def _bin_of(r, edges, e0, inv):
     """The bin k with edges[k] <= r < edges[k + 1] (r inside the edges): guessed in O(1)
@@ -399,14 +409,12 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
         p = prim[i]
         if p < 0:
             continue
-        c = face_normals[p, 0] * w[0] + face_normals[p, 1] * w[1] + face_normals[p, 2] * w[2]
-        t = _hit_distance(p, c, tfar[i], origins, i, plane_d, face_normals)
+        c, t, r_rel = _face_hit(p, tfar[i], origins, i, w, plane_d, face_normals)
         if c < 0.0:
             back += 1
             if ignore_back:
                 continue
             c = -c
-        r_rel = t - (origins[i, 0] * w[0] + origins[i, 1] * w[1] + origins[i, 2] * w[2])
         r = start + r_rel
         if not spread and (r < edges[0] or r >= edges[nb]):
             continue
@@ -440,17 +448,16 @@ def bin_bistatic_hits(prim, tfar, origins, blocked, plane_d, face_normals, w, wr
         p = prim[i]
         if p < 0:
             continue
-        c = face_normals[p, 0] * w[0] + face_normals[p, 1] * w[1] + face_normals[p, 2] * w[2]
-        t = _hit_distance(p, c, tfar[i], origins, i, plane_d, face_normals)
+        c, t, r_rel = _face_hit(p, tfar[i], origins, i, w, plane_d, face_normals)
         if c < 0.0:
             back += 1
             if ignore_back:
                 continue
         if blocked[i]:
             continue
-        ox, oy, oz = origins[i, 0] * 1.0, origins[i, 1] * 1.0, origins[i, 2] * 1.0
-        r_rel = t - (ox * w[0] + oy * w[1] + oz * w[2])
-        px, py, pz = ox - t * w[0], oy - t * w[1], oz - t * w[2]
+        px = origins[i, 0] * 1.0 - t * w[0]
+        py = origins[i, 1] * 1.0 - t * w[1]
+        pz = origins[i, 2] * 1.0 - t * w[2]
         r = start + 0.5 * (r_rel + -(px * wr[0] + py * wr[1] + pz * wr[2]))
         if r < edges[0] or r >= edges[nb]:
             continue
@@ -478,8 +485,7 @@ def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, 
         p = prim[i]
         if p < 0:
             continue
-        cg = face_normals[p, 0] * w[0] + face_normals[p, 1] * w[1] + face_normals[p, 2] * w[2]
-        t = _hit_distance(p, cg, tfar[i], origins, i, plane_d, face_normals)
+        cg, t, r_rel = _face_hit(p, tfar[i], origins, i, w, plane_d, face_normals)
         c = _smooth_cos(corner, p, bu[i] * 1.0, bv[i] * 1.0, w[0], w[1], w[2])
         if cg < 0.0:
             back += 1
@@ -488,7 +494,6 @@ def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, 
             c = -c
         if c <= 0.0:
             continue                                   # the shading normal faces away
-        r_rel = t - (origins[i, 0] * w[0] + origins[i, 1] * w[1] + origins[i, 2] * w[2])
         r = start + r_rel
         if not spread and (r < edges[0] or r >= edges[nb]):
             continue

@@ -87,7 +87,7 @@ import threading
 import numpy as np
 from numba import njit
 
-from .._kernels import _hit_distance, bin_bistatic_hits, bin_flat_hits
+from .._kernels import _face_hit, bin_bistatic_hits, bin_flat_hits
 
 __all__ = ["library", "available", "Scene"]
 
@@ -488,8 +488,7 @@ def _occlude_block(occ, scene, w, i32, f32, base, prim, tf, o, n, plane_d, face_
     of meshladar.raytrace.views._trace_view. Fills blocked[:n]."""
     for i in range(n):
         p = prim[i]
-        c = face_normals[p, 0] * wv[0] + face_normals[p, 1] * wv[1] + face_normals[p, 2] * wv[2]
-        t = _hit_distance(p, c, tf[i], o, i, plane_d, face_normals)
+        c, t, _ = _face_hit(p, tf[i], o, i, wv, plane_d, face_normals)
         sign = -1.0 if c < 0.0 else 1.0
         for k in range(3):
             q = np.float32((o[i, k] * 1.0 - t * wv[k]) + lift * (face_normals[p, k] * sign))
