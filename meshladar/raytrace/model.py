@@ -22,7 +22,7 @@ from .embree import _embree_scene, geometry, resolve_backend
 from .grid import (MAX_RAYS_PER_VIEW, MODES, _dot, _estimate_rays, _frame, _grid_plan,
                    _largest_grid, _ray_grid, _sampling, _spacing)
 from .hits import Hits
-from .views import BACK_FACES, NORMALS, _range_offset, _trace_view
+from .views import BACK_FACES, NORMALS, _bistatic_angles, _range_offset, _trace_view
 from ..precision import PARALLEL_SLACK
 from ..precision import TINY
 
@@ -274,13 +274,7 @@ def _bistatic_weights(n, material, materials, w, w_r, area, power, ignore_back):
     sin_t = np.sqrt(np.maximum(1.0 - cos_t * cos_t, 0.0))
     if ignore_back:
         cos_t = np.where(back, -1.0, cos_t)
-    cos_r = _dot(n, w_r)
-    sin_r = np.linalg.norm(np.cross(n, w_r), axis=1)
-    half = (w + w_r) / np.linalg.norm(w + w_r)
-    cos_a = _dot(n, half)
-    sin_a = np.linalg.norm(np.cross(n, half), axis=1)
-    cos_r = np.where(ignore_back & back, -1.0, cos_r)
-    bi = np.stack([cos_r, sin_r, cos_a, sin_a], -1)
+    bi = _bistatic_angles(n, w, w_r, ignore_back & back)
     return _weights(cos_t, sin_t, material, materials, area, bi, power=power)
 
 

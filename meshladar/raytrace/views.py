@@ -71,13 +71,7 @@ def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=N
         o2 = np.ascontiguousarray(p + lift * n_geo, dtype=np.float32)
         blocked = scene.run(o2, np.ascontiguousarray(w_r[None, :], dtype=np.float32),
                             query="OCCLUDED") != -1
-        cos_r = _dot(n, w_r)
-        sin_r = np.linalg.norm(np.cross(n, w_r), axis=1)
-        half = (w + w_r) / np.linalg.norm(w + w_r)
-        cos_a = _dot(n, half)
-        sin_a = np.linalg.norm(np.cross(n, half), axis=1)
-        cos_r = np.where(blocked | (back_faces == "ignore") & back, -1.0, cos_r)
-        bi = np.stack([cos_r, sin_r, cos_a, sin_a], -1)
+        bi = _bistatic_angles(n, w, w_r, blocked | (back_faces == "ignore") & back)
         # range from the two-way path: r = −p·(w + w_r)/2 (monostatic: −p·w)
         rng_extra = -_dot(p, w_r)
     # footprint: range spread along u and v on the flat facet, and the facet's own range
@@ -101,6 +95,19 @@ def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=N
     return ViewHits(rng_rel, cos_t, sin_t, geo.material[prim], spread, len(o),
                     int(back.sum()), bi, factor, curve, None, across)
 
+
+
+def _bistatic_angles(n, w, w_r, hidden):
+    """(k, 4) rows (cos θr, sin θr, cos α, sin α) of normals n (k, 3) for the ladar along
+    w and the receiver along w_r (α to the half vector), cos θr = −1 where ``hidden`` (the
+    receiver cannot see the point, or its face is an ignored back face)."""
+    cos_r = _dot(n, w_r)
+    sin_r = np.linalg.norm(np.cross(n, w_r), axis=1)
+    half = (w + w_r) / np.linalg.norm(w + w_r)
+    cos_a = _dot(n, half)
+    sin_a = np.linalg.norm(np.cross(n, half), axis=1)
+    cos_r = np.where(hidden, -1.0, cos_r)
+    return np.stack([cos_r, sin_r, cos_a, sin_a], -1)
 
 
 def _hit_normals(geo, prim, res, hit, n_geo, points, curvature=False):
