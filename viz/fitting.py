@@ -10,7 +10,7 @@ __all__ = ["design_figure", "draw_design"]
 
 
 @style.styled
-def draw_design(design, path, *, dpi=150):
+def draw_design(design, path, *, dpi=None):
     """Write :func:`design_figure` as a PNG to ``path`` atomically; returns the path."""
     return style.save_png(design_figure(design), path, dpi)
 

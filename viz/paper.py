@@ -241,15 +241,10 @@ def draw(result_path, outdir, *, dpi=None):
     """
     from meshladar import results
 
-    plt = style.use()
     arrays, meta = results.load_result(result_path)
     os.makedirs(outdir, exist_ok=True)
-    paths = []
-    for n, fig in figures(arrays, meta):
-        paths.append(style.save_png(fig, os.path.join(outdir, f"fig{n:02d}.png"),
-                                    dpi if dpi is not None else 150))
-        plt.close(fig)
-    return paths
+    return style.save_all(((f"fig{n:02d}.png", fig) for n, fig in figures(arrays, meta)),
+                          outdir, dpi)
 
 
 def reproduce(outdir, *, size=None):

@@ -14,7 +14,7 @@ _LABELS = {"range": "range r = -p.w", "cross_range": "cross-range p.u",
 
 
 @style.styled
-def draw(returns, path, *, views=None, log=False, dpi=150):
+def draw(returns, path, *, views=None, log=False, dpi=None):
     """Write a PNG of up to four views of ``returns`` to ``path``; ``log`` shows
     log10 of the returns (glints next to diffuse parts). Returns the path."""
     from meshladar.errors import ParameterError

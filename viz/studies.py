@@ -139,7 +139,7 @@ def figures(outdir):
 def draw(outdir):
     """Write the faceting study's figures into ``outdir`` atomically; returns their
     paths."""
-    return _save_all(figures(outdir), outdir)
+    return style.save_all(figures(outdir), outdir)
 
 
 def _signed_panel(ax, img, extent):
@@ -202,22 +202,13 @@ def tomography3d_figures(volumes, views, size):
     yield "tomography3d.png", fig
 
 
-def _save_all(figs, outdir):
-    plt = style.use()
-    paths = []
-    for name, fig in figs:
-        paths.append(style.save_png(fig, os.path.join(outdir, name)))
-        plt.close(fig)
-    return paths
-
-
 @style.styled
 def draw_reconstruction(images, outdir, **kwargs):
     """Write :func:`reconstruction_figures` into ``outdir`` atomically; returns the paths."""
-    return _save_all(reconstruction_figures(images, **kwargs), outdir)
+    return style.save_all(reconstruction_figures(images, **kwargs), outdir)
 
 
 @style.styled
 def draw_tomography3d(volumes, outdir, views, size):
     """Write :func:`tomography3d_figures` into ``outdir`` atomically; returns the paths."""
-    return _save_all(tomography3d_figures(volumes, views, size), outdir)
+    return style.save_all(tomography3d_figures(volumes, views, size), outdir)

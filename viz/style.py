@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["STYLE", "use", "styled", "pick_views", "save_png"]
+__all__ = ["STYLE", "use", "styled", "pick_views", "save_png", "save_all"]
 
 STYLE = {
     "figure.dpi": 100,
@@ -74,7 +74,15 @@ def pick_views(n_views, views=None, most=4):
     return views
 
 
-def save_png(fig, path, dpi=150):
+def save_all(named_figures, outdir, dpi=None):
+    """Write each (file name, Figure) of ``named_figures`` into ``outdir`` with
+    :func:`save_png`; returns the paths."""
+    import os
+
+    return [save_png(fig, os.path.join(outdir, name), dpi) for name, fig in named_figures]
+
+
+def save_png(fig, path, dpi=None):
     """Write ``fig`` as a PNG at ``path`` atomically (:func:`meshladar.results.write_atomic`:
     a crash never leaves half a file or a stray temporary); returns the path."""
     import os
@@ -82,6 +90,7 @@ def save_png(fig, path, dpi=150):
     from meshladar.results import write_atomic
 
     path = os.fspath(path)
+    dpi = STYLE["savefig.dpi"] if dpi is None else dpi
     write_atomic(path, lambda fh: fig.savefig(fh, format="png", dpi=dpi))
     return path
 

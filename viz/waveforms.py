@@ -12,7 +12,7 @@ __all__ = ["draw", "figure"]
 
 @style.styled
 def draw(waves, path, *, realisations=None, noise=None, views=None, band=(5.0, 95.0),
-         dpi=150):
+         dpi=None):
     """Write a PNG of :func:`figure` to ``path``; returns the path."""
     plt = style.use()
     fig = figure(waves, realisations=realisations, noise=noise, views=views, band=band)
