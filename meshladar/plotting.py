@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import importlib
 
-__all__ = ["plot"]
+__all__ = ["plot", "viz"]
 
 #: record class name -> (module of meshladar.viz, function drawing it)
 _DRAWERS = {
@@ -39,9 +39,14 @@ def plot(record, **options):
         raise TypeError(f"no quick look for a {kind}; records with one: "
                         f"{tuple(sorted(_DRAWERS))}")
     module, name = _DRAWERS[kind]
+    return getattr(viz(module), name)(record, **options)
+
+
+def viz(module: str):
+    """The drawing module ``meshladar.viz.<module>`` (the command line's figures: the
+    paper's, the studies', the viewer), imported on first use; a missing extra is named."""
     try:
-        viz = importlib.import_module(f"meshladar.viz.{module}")
+        return importlib.import_module(f"meshladar.viz.{module}")
     except ImportError as exc:  # matplotlib or pyvista absent
         raise ImportError("plotting needs the viz extra: pip install 'meshladar[viz]'"
                           ) from exc
-    return getattr(viz, name)(record, **options)

@@ -303,7 +303,7 @@ def test_an_internal_bug_is_one_line_with_the_traceback_in_a_file(capsys, monkey
     def broken(args):
         raise RuntimeError("the engine\ntripped")
 
-    monkeypatch.setattr(cli, "_cmd_demo", broken)
+    monkeypatch.setitem(cli.COMMANDS, "demo", broken)
     assert cli.main(["demo"]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "internal error (RuntimeError: the engine tripped)" in err

@@ -425,9 +425,10 @@ def test_version_and_help_name_every_default(capsys):
         main(["simulate", "--help"])
     text = " ".join(capsys.readouterr().out.split())
     # every option of simulate has help text, and each optional one names its default
-    from meshladar.cli import _parser
+    from meshladar.cli import COMMANDS
+    from meshladar.cli.parser import build_parser
 
-    sim = _parser()._subparsers._group_actions[0].choices["simulate"]
+    sim = build_parser(COMMANDS)._subparsers._group_actions[0].choices["simulate"]
     for action in sim._actions:
         if action.option_strings and action.dest not in ("help", "output"):
             assert action.help and "default" in action.help, action.dest

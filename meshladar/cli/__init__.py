@@ -1,0 +1,89 @@
+"""The ``meshladar`` command line.
+
+Errors from bad input print one line (``meshladar: error: ...``) and exit with status 2;
+they never show a traceback. Layout: :mod:`.parser` (generated from
+:mod:`meshladar.options` for ``simulate``), :mod:`.types` (the flags' value checkers),
+:mod:`.checks` (output paths), and the command bodies in :mod:`.simulate`,
+:mod:`.reconstruct` (``reconstruct``, ``receive``) and :mod:`.commands` (the rest); each
+body only calls the API.
+"""
+
+from __future__ import annotations
+
+import signal
+import sys
+import tempfile
+import threading
+import traceback
+import warnings
+
+from ..errors import MeshladarError
+from .commands import cmd_bench, cmd_demo, cmd_materials, cmd_paper, cmd_study, cmd_view
+from .parser import build_parser
+from .reconstruct import cmd_receive, cmd_reconstruct
+from .simulate import cmd_simulate
+
+__all__ = ["main", "COMMANDS"]
+
+#: Each command's function, looked up when the command runs.
+COMMANDS = {"demo": cmd_demo, "materials": cmd_materials, "paper": cmd_paper,
+            "simulate": cmd_simulate, "reconstruct": cmd_reconstruct,
+            "receive": cmd_receive, "view": cmd_view, "study": cmd_study,
+            "bench": cmd_bench}
+
+
+def _one_line_warning(message, category, filename, lineno, line=None):
+    return f"meshladar: warning: {message}\n"
+
+
+def main(argv=None) -> int:
+    """Run the command line; returns the exit status."""
+    args = build_parser(COMMANDS).parse_args(argv)
+    previous = _terminate_as_interrupt()
+    format_before, warnings.formatwarning = warnings.formatwarning, _one_line_warning
+    try:
+        return COMMANDS[args.command](args)
+    except (MeshladarError, ImportError) as exc:  # ImportError: a missing extra, named there
+        print(f"meshladar: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        where = f" {exc.filename!r}" if getattr(exc, "filename", None) else ""
+        print(f"meshladar: error:{where} {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        hint = ""
+        if getattr(args, "run_dir", None):
+            hint = (f"; finished chunks are kept in {args.run_dir}: run the same command "
+                    "again to resume")
+        print(f"meshladar: interrupted{hint}", file=sys.stderr)
+        return 130
+    except Exception as exc:  # noqa: BLE001 - a bug of meshladar's own: say so in one line
+        path = _save_traceback()
+        print(f"meshladar: internal error ({type(exc).__name__}: "
+              f"{' '.join(str(exc).split())[:200]}); this is a bug in meshladar, please "
+              f"report it with the traceback in {path}", file=sys.stderr)
+        return 1
+    finally:
+        warnings.formatwarning = format_before           # a caller's own is left as it was
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _save_traceback():
+    """Write the current exception's traceback to a new file; return its path."""
+    fd, path = tempfile.mkstemp(prefix="meshladar-traceback-", suffix=".txt")
+    with open(fd, "w", encoding="utf-8") as fh:
+        traceback.print_exc(file=fh)
+    return path
+
+
+def _interrupt(signum, frame):
+    raise KeyboardInterrupt
+
+
+def _terminate_as_interrupt():
+    """SIGTERM stops a run as Ctrl-C does (workers cancelled, finished chunks kept, a
+    resume hint); returns the previous handler, or None off the main thread."""
+    if threading.current_thread() is not threading.main_thread():
+        return None
+    return signal.signal(signal.SIGTERM, _interrupt)

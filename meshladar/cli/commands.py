@@ -1,0 +1,166 @@
+"""The command line's small commands: demo, materials, paper, view, study, bench. Each body
+only calls the API (and :mod:`meshladar.plotting`'s door for figures)."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+
+import numpy as np
+
+from .. import bench, materials, paper, phantoms, plotting, results, studies
+from .. import study_reconstruction as study
+from .._validate import check_size
+from ..errors import ParameterError
+from .checks import check_outdir, check_output
+from .simulate import load_scene
+
+__all__ = ["cmd_demo", "cmd_materials", "cmd_paper", "cmd_view", "cmd_study", "cmd_bench",
+           "DEMO_ANGLES_DEG"]
+
+DEMO_ANGLES_DEG = (0.0, 1.0, 5.0, 10.0, 30.0, 60.0, 85.0, 90.0)
+
+
+def cmd_demo(args) -> int:
+    """Print the paper's two coatings' monostatic BRDF at a few incidence angles."""
+    angles = np.array(args.angles_deg, dtype=np.float64)
+    theta = np.deg2rad(angles)
+    print("Sandford-Robertson BRDF, monostatic (collocated ladar), paper coatings at 1 um")
+    for m in (materials.DARK_GRAY, materials.ALUMINUM):
+        print(f"\n{m.name}: rho_d={m.rho_d:g} epsilon={m.epsilon:g} b={m.b:g} e={m.e:g}"
+              f"  G(b)={m.G:.6f}")
+        print(f"  {'theta [deg]':>11}  {'F [1/sr]':>12}  {'F cos(theta) [1/sr]':>20}"
+              f"  {'rho_s(theta)':>12}")
+        f = m.monostatic(theta)
+        fc = m.monostatic(theta, projected=True)
+        rs = m.specular_reflectance(theta)
+        for row in zip(angles, f, fc, rs):
+            print(f"  {row[0]:11.3f}  {row[1]:12.6g}  {row[2]:20.6g}  {row[3]:12.6f}")
+    return 0
+
+
+def cmd_materials(args) -> int:
+    """List a coating table (the packaged one by default)."""
+    table = phantoms.materials() if args.table is None else materials.load_table(args.table)
+    print(f"{'name':<14} {'lobes':<9} {'rho_d':>7} {'epsilon':>8} {'b':>6} {'e':>7}"
+          f" {'G(b)':>8} {'F(0) [1/sr]':>12}")
+    for name, m in table.items():
+        print(f"{name:<14} {m.lobes:<9} {m.rho_d:7.4g} {m.epsilon:8.4g} {m.b:6.4g} {m.e:7.4g}"
+              f" {m.G:8.5f} {m.monostatic(0.0):12.5g}")
+    return 0
+
+
+def cmd_paper(args) -> int:
+    """Reproduce the paper's Figs 5-11: PNGs, a saved result and the findings' numbers."""
+    check_outdir(args.outdir)
+    check_size("--size", float(args.size) ** 2, 8 * 3, f"a {args.size} x {args.size} image",
+               "use a smaller --size")
+    paths, metrics = plotting.viz("paper").reproduce(args.outdir, size=args.size)
+    print(f"Jin & Levine (2009) Figs 5-11 reproduced in {args.outdir}/ "
+          "(analytic model, 360 views, A/256 bins)")
+    print(f"  {'finding':<42} {'value':>10}")
+    for key, value in metrics.items():
+        print(f"  {key:<42} {value:10.4f}")
+    for p in paths:
+        print(f"  wrote {p}")
+    return 0
+
+
+def cmd_view(args) -> int:
+    """Show a scene in 3-D coloured by its return for one view (or save a screenshot)."""
+    if args.screenshot is not None:
+        check_output(args.screenshot, (".png",), [args.scene, args.materials],
+                     "--screenshot")
+    scene, default_ladar, _ = load_scene(args)
+    if args.screenshot is None and not (os.environ.get("DISPLAY")
+                                        or os.environ.get("WAYLAND_DISPLAY")):
+        raise ParameterError("no display to open a window on: use --screenshot PNG")
+    plotting.viz("viewer").show_scene(
+        scene, view_angle_deg=args.view_angle, ladar=default_ladar,
+        off_screen=args.screenshot is not None, screenshot=args.screenshot,
+        log_scale=args.log, window_size=args.size, camera=args.camera)
+    if args.screenshot and not args.quiet:
+        print(f"wrote {args.screenshot}")
+    return 0
+
+
+def cmd_study(args) -> int:
+    """Run a study and write its table (CSV/JSON), results and figures into a folder."""
+    check_outdir(args.outdir)
+    if args.kind == "tomography3d":
+        return _study_3d(args)
+    if args.kind == "reconstruction":
+        return _study_reconstruction(args)
+    for flag, value in (("--photons", args.photons), ("--speckle", args.speckle),
+                        ("--background", args.background)):
+        if value is not None:
+            raise ParameterError(f"{flag} is an option of the reconstruction study; the "
+                                 f"{args.kind} study does not use it")
+    result = studies.faceting_study(args.setting, progress=not args.quiet,
+                                    run_dir=os.path.join(args.outdir, "run"))
+    files = studies.save_study(result, args.outdir)
+    figs = plotting.viz("studies").draw(args.outdir)
+    print(studies.report(result))
+    for p in files + figs:
+        print(f"  wrote {p}")
+    return 0
+
+
+#: The 3-D study's settings: (views, voxels per side, smoothing in bins, rays per bin).
+_STUDY_3D = {"quick": (600, 64, 1.0, 1.0), "full": (2000, 128, 1.0, 2.0)}
+
+
+def _study_3d(args) -> int:
+    """The paper's findings in 3-D (meshladar.paper.run_3d): metrics as JSON, central slices
+    of every volume as a PNG."""
+    views, size, smooth, rpb = _STUDY_3D[args.setting]
+    metrics, volumes = paper.run_3d(views=views, size=size, smooth=smooth,
+                                    rays_per_bin=rpb)
+    os.makedirs(args.outdir, exist_ok=True)
+    doc = {"setting": args.setting, "views": views, "size": size, "smooth_bins": smooth,
+           "rays_per_bin": rpb, "metrics": metrics}
+    path = os.path.join(args.outdir, "tomography3d.json")
+    results.write_text_atomic(path, json.dumps(doc, indent=2, sort_keys=True))
+    (png,) = plotting.viz("studies").draw_tomography3d(volumes, args.outdir, views, size)
+    print(f"3-D tomography study ({args.setting}: {views} views, {size}^3 voxels)")
+    for key, value in metrics.items():
+        print(f"  {key:<42} {value:10.4f}")
+    print(f"  wrote {path}\n  wrote {png}")
+    return 0
+
+
+#: The reconstruction study's table columns.
+_STUDY_COLUMNS = ["phantom", "spacing_deg", "method", "photons", "speckle_cells",
+                  "background", "error", "clutter", "darkening", "visibility", "seconds"]
+
+
+def _study_reconstruction(args) -> int:
+    """The reconstruction study (meshladar.study_reconstruction): its table as CSV and JSON,
+    the 1° and 10° images of every method as a figure."""
+    rows, images = study.run(args.setting, photons=args.photons, speckle_cells=args.speckle,
+                             background=args.background or 0.0)
+    os.makedirs(args.outdir, exist_ok=True)
+    path = os.path.join(args.outdir, "reconstruction.json")
+    results.write_text_atomic(path, json.dumps({"setting": args.setting, "rows": rows},
+                                               indent=2))
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, fieldnames=_STUDY_COLUMNS)
+    writer.writeheader()
+    for r in rows:
+        writer.writerow({k: r.get(k, "") for k in _STUDY_COLUMNS})
+    table = os.path.join(args.outdir, "reconstruction.csv")
+    results.write_text_atomic(table, buf.getvalue())
+    (png,) = plotting.viz("studies").draw_reconstruction(images, args.outdir)
+    print(f"reconstruction study ({args.setting})")
+    print("\n".join(study.report(rows)))
+    print(f"  wrote {path}\n  wrote {table}\n  wrote {png}")
+    return 0
+
+
+def cmd_bench(args) -> int:
+    """Time the forward models and FBP against their peers (median of several runs)."""
+    for line in bench.report(repeats=args.repeats, full=args.full):
+        print(line, flush=True)
+    return 0

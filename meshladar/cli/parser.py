@@ -1,0 +1,270 @@
+"""The command line's parser. ``simulate``'s model, sensor and stream flags are generated
+from :mod:`meshladar.options` (the table :func:`meshladar.simulate` reads); the other
+commands' few flags are written here."""
+
+from __future__ import annotations
+
+import argparse
+
+from .. import __version__
+from ..options import MODELS, OPTIONS, SENSOR_OPTIONS
+from ..reconstruct import FILTERS
+from .types import (KIND_TYPES, angle_list, coatings, nonnegative_float, nonnegative_int,
+                    positive_float, positive_int, unit_fraction, window_size)
+
+__all__ = ["build_parser"]
+
+_RAW = argparse.RawDescriptionHelpFormatter
+_EPILOG = ("examples:\n  meshladar demo\n  meshladar demo --angles-deg 0,2,4\n"
+           "  meshladar materials\n  meshladar materials my_coatings.toml\n"
+           "  meshladar paper paper-figures/\n"
+           "  meshladar simulate disk_pair -o pair.npz --coating small=aluminum\n"
+           "  meshladar reconstruct pair.npz -o pair.png\n"
+           "  meshladar view disk_pair --view-angle 0 --screenshot view.png\n"
+           "  meshladar study faceting study/\n  meshladar bench")
+_SIMULATE_EPILOG = (
+    "examples:\n  meshladar simulate disk_pair -o pair.npz --coating small=aluminum\n"
+    "  meshladar simulate part.stl --material aluminum --views 90 -o part.npz\n"
+    "  meshladar simulate part.stl --view-vectors 200 --normals smooth -o part3d.npz\n"
+    "  meshladar simulate part.stl --mode slice --z0 0.1 -o slice.npz\n"
+    "  meshladar simulate disk_pair --model mesh --tol 1e-2 -o mesh.npz\n\n"
+    "Range r = -p.w is zero on the plane through the origin facing the ladar and grows "
+    "away from it. A mesh is a 3-D target: the whole of it returns (values are areas x "
+    "1/sr); --mode slice gives one slice per unit height.")
+_RECEIVE_EPILOG = (
+    "examples:\n  meshladar simulate part.stl -o part.npz --model mesh --radiometry power "
+    "--standoff 1000 --beam-waist 0.05 --beam-divergence 1e-4 --pulse-energy 1e-3 "
+    "--aperture 0.1\n  meshladar receive part.npz -o part-waves.npz --sample-rate 2e9 "
+    "--pulse-fwhm 1e-9 --realisations 100 --speckle-cells 1 --seed 0 --plot "
+    "part-waves.png")
+
+
+def _add_option(group, o):
+    """One :class:`meshladar.options.Option` as a flag of ``group``."""
+    if o.kind == "flag":
+        group.add_argument(o.cli_flag, dest=o.name, action="store_true", help=o.help_text)
+    elif o.kind == "choice":
+        group.add_argument(o.cli_flag, dest=o.name, choices=o.choices, default=None,
+                           help=o.help_text)
+    else:
+        group.add_argument(o.cli_flag, dest=o.name, type=KIND_TYPES[o.kind], default=None,
+                           metavar=o.metavar, help=o.help_text)
+
+
+def _scene_args(q):
+    q.add_argument("scene", help="a packaged phantom's name (disk, ellipse, disk_pair), a "
+                                 "phantom spec (.toml) or any mesh file trimesh reads "
+                                 "(STL, OBJ, PLY, OFF, GLB/GLTF, 3MF, DAE, zip...)")
+    q.add_argument("--material", default=None,
+                   help="coating of a mesh's parts (default: dark_gray); a phantom's "
+                        "shapes take --coating")
+    q.add_argument("--coating", type=coatings, default=None, metavar="PART=NAME,...",
+                   help="coating per phantom shape or mesh part, e.g. small=aluminum "
+                        "(default: each shape's own, or --material)")
+    q.add_argument("--materials", default=None, metavar="TABLE.toml",
+                   help="your own coating table: its names can be used by --material "
+                        "and --coating (default: only the packaged coatings)")
+    q.add_argument("--quiet", action="store_true",
+                   help="no progress bar or summary (default: shown)")
+
+
+def _sub(sub, name, commands, help, epilog):
+    return sub.add_parser(name, help=help, description=commands[name].__doc__,
+                          epilog=epilog, formatter_class=_RAW)
+
+
+def _simple(sub, commands):
+    d = _sub(sub, "demo", commands, "print the paper's coatings' monostatic BRDF",
+             "example:\n  meshladar demo --angles-deg 0,1,5,45,90")
+    d.add_argument("--angles-deg", type=angle_list,
+                   default=[0.0, 1.0, 5.0, 10.0, 30.0, 60.0, 85.0, 90.0],
+                   help="incidence angles in degrees, comma-separated (default: %(default)s)")
+    m = _sub(sub, "materials", commands, "list a coating table",
+             "examples:\n  meshladar materials\n  meshladar materials mine.toml")
+    m.add_argument("table", nargs="?", default=None,
+                   help="a TOML material table (default: the packaged paper coatings)")
+    pp = _sub(sub, "paper", commands, "reproduce the paper's Figs 5-11 into a folder",
+              "example:\n  meshladar paper paper-figures/")
+    pp.add_argument("outdir", help="folder for the PNGs and paper_result.npz")
+    pp.add_argument("--size", type=positive_int, default=512,
+                    help="reconstruction size in pixels (default: %(default)s)")
+
+
+def _simulate(sub, commands):
+    sim = _sub(sub, "simulate", commands, "simulate range profiles and save them",
+               _SIMULATE_EPILOG)
+    _scene_args(sim)
+    sim.add_argument("-o", "--output", required=True, help="result file (.npz)")
+    sim.add_argument("--model", choices=MODELS, default=None,
+                     help="forward model (default: analytic for phantoms, mesh for meshes)")
+    sens = sim.add_argument_group(
+        "sensor (mesh model; SI units: metres, seconds, joules)",
+        "a ladar at a finite standoff (perspective rays, ranges R - D from the origin), its "
+        "beam, the atmosphere and the link budget: with --pulse-energy, --aperture and "
+        "--standoff, received power (--radiometry power) is counted in photoelectrons per "
+        "bin")
+    for o in SENSOR_OPTIONS:
+        _add_option(sens, o)
+    sim.add_argument("--views", type=positive_int, default=None,
+                     help="number of views evenly over 360 degrees about z (default: the "
+                          "phantom's, or 360)")
+    sim.add_argument("--angles-deg", type=angle_list, default=None,
+                     help="view angles about z in degrees, comma-separated (default: "
+                          "from --views)")
+    sim.add_argument("--view-vectors", type=positive_int, default=None, metavar="N",
+                     help="N view directions spread evenly over the sphere (mesh model) "
+                          "(default: views about z)")
+    sim.add_argument("--bins", type=positive_int, default=None,
+                     help="number of range bins (default: the phantom's, or 512 covering "
+                          "the ranges the target spans over the views)")
+    sim.add_argument("--bin-width", type=positive_float, default=None,
+                     help="range bin width in scene units (default: from --bins)")
+    sim.add_argument("--segments", type=positive_int, default=None,
+                     help="tessellation of an analytic phantom for --model mesh (default: "
+                          "1024)")
+    for o in OPTIONS:
+        if o.cli:
+            _add_option(sim, o)
+    sim.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                     help="run on an existing Dask cluster (tcp://host:8786) "
+                          "(default: local)")
+    sim.add_argument("--workers", type=positive_int, default=None,
+                     help="run on a local Dask cluster of N processes "
+                          "(default: no Dask)")
+
+
+def _reconstruct(sub, commands):
+    rec = _sub(sub, "reconstruct", commands, "FBP of a saved sinogram into a PNG",
+               "examples:\n  meshladar reconstruct pair.npz -o pair.png\n"
+               "  meshladar reconstruct pair.npz -o pair-log.png --log")
+    rec.add_argument("result", help="a result file written by meshladar simulate")
+    rec.add_argument("-o", "--output", required=True,
+                     help="figure file: .png, .pdf, .svg, .jpg or .tif (the image's values go "
+                          "to OUTPUT.image.npz beside it)")
+    rec.add_argument("--size", type=positive_int, default=None,
+                     help="image size in pixels, or voxels per side for 3-D views (default: "
+                          "512, 128 in 3-D)")
+    rec.add_argument("--smooth", type=nonnegative_float, default=None, metavar="BINS",
+                     help="3-D views: Gaussian smoothing of each profile before the inversion "
+                          "(default: 0)")
+    rec.add_argument("--extent", type=positive_float, default=None,
+                     help="half-width of the image (default: the bins' reach)")
+    rec.add_argument("--filter", choices=FILTERS, default=None,
+                     help="FBP filter (default: ramp)")
+    rec.add_argument("--log", action="store_true",
+                     help="log of the radiance (Fig. 11a) (default: off)")
+    rec.add_argument("--clip", type=unit_fraction, default=None,
+                     help="clip at this fraction of the maximum (Fig. 11b: 0.008) (default: "
+                          "off)")
+    rec.add_argument("--quiet", action="store_true", help="no summary line (default: shown)")
+
+
+#: receive's flags: (flag, type, metavar, help); every default is None.
+_RECEIVE_FLAGS = (
+    ("--pulse-fwhm", positive_float, "S", "Gaussian transmitted pulse, full width at half "
+     "maximum (default: a Dirac pulse)"),
+    ("--pulse-samples", None, "FILE", "the pulse's own shape: a text file of power samples "
+     "(commas, spaces or newlines), with --pulse-interval (default: none)"),
+    ("--pulse-interval", positive_float, "S", "seconds between --pulse-samples (default: "
+     "none)"),
+    ("--response-fwhm", positive_float, "S", "Gaussian receiver impulse response (default: "
+     "ideal)"),
+    ("--standoff", nonnegative_float, "M", "time origin t = 2(r + D)/c (default: the "
+     "simulation's sensor's, else 0)"),
+    ("--scale", positive_float, "PE_PER_UNIT", "photoelectrons per unit of the sinogram, "
+     "when it was not simulated with --pulse-energy and --aperture (default: none)"),
+    ("--realisations", positive_int, "N", "draw N noise realisations (default: none)"),
+    ("--seed", nonnegative_int, None, "seed of the noise (default: fresh entropy)"),
+    ("--speckle-cells", positive_float, "M", "speckle cells per resolution cell, >= 1 "
+     "(default: no speckle)"),
+    ("--background-rate", nonnegative_float, "PER_S", "background photoelectrons per second "
+     "(default: 0)"),
+    ("--dark-rate", nonnegative_float, "PER_S", "dark counts per second (default: 0)"),
+    ("--excess-noise", positive_float, "F", "APD excess noise factor, >= 1 (default: 1)"),
+    ("--gain", positive_float, None, "APD mean gain (default: 1)"),
+    ("--bits", positive_int, None, "digitiser bits, with --full-scale (default: no "
+     "quantisation)"),
+    ("--full-scale", positive_float, None, "digitiser full scale in output units, with "
+     "--bits (default: none)"),
+    ("--plot", None, "PNG", "a figure of a few views' waveforms with their noise band "
+     "(default: none)"),
+)
+
+
+def _receive(sub, commands):
+    rc = _sub(sub, "receive", commands, "waveforms (and noise) from a saved sinogram",
+              _RECEIVE_EPILOG)
+    rc.add_argument("result", help="a sinogram written by meshladar simulate")
+    rc.add_argument("-o", "--output", required=True, help="waveforms file (.npz)")
+    rc.add_argument("--sample-rate", type=positive_float, required=True, metavar="HZ",
+                    help="digitiser rate, samples per second")
+    rc.add_argument("--oversample", type=positive_int, default=8,
+                    help="fine cells per sample for the convolutions (default: %(default)s)")
+    for flag, kind, metavar, text in _RECEIVE_FLAGS:
+        rc.add_argument(flag, type=kind, default=None, metavar=metavar, help=text)
+    rc.add_argument("--quiet", action="store_true", help="no summary line (default: shown)")
+
+
+def _view(sub, commands):
+    vw = _sub(sub, "view", commands, "3-D view of a scene coloured by its return",
+              "examples:\n  meshladar view disk_pair --view-angle 0 --screenshot pair.png\n"
+              "  meshladar view part.glb --material aluminum")
+    _scene_args(vw)
+    vw.add_argument("--view-angle", type=KIND_TYPES["finite_float"], default=90.0,
+                    help="view angle about z in degrees (default: %(default)s)")
+    vw.add_argument("--screenshot", default=None,
+                    help="render off screen into this PNG (default: open a window)")
+    vw.add_argument("--log", action="store_true",
+                    help="colour by log10 of the return (default: linear)")
+    vw.add_argument("--size", type=window_size, default=(900, 700), metavar="WxH",
+                    help="window or screenshot size in pixels (default: 900x700)")
+    vw.add_argument("--camera", choices=("oblique", "view"), default="oblique",
+                    help="oblique: beside and above the ladar; view: along the beam from "
+                         "the ladar (default: %(default)s)")
+
+
+def _study(sub, commands):
+    st = _sub(sub, "study", commands, "faceting-vs-analytic study into a folder",
+              "examples:\n  meshladar study faceting study/\n"
+              "  meshladar study faceting study-full/ --full\n\nFinished study points are "
+              "kept in OUTDIR/run: re-running the same command resumes an interrupted "
+              "study.")
+    st.add_argument("kind", choices=["faceting", "tomography3d", "reconstruction"],
+                    help="which study: faceting (forward models against the analytic one), "
+                         "tomography3d (the paper's findings in 3-D) or reconstruction "
+                         "(FBP and iterative methods against view spacing)")
+    st.add_argument("outdir", help="folder for faceting.csv/json, results and figures")
+    st.add_argument("--full", dest="setting", action="store_const", const="full",
+                    default="quick", help="the full sweep (faceting: 360 views, segments to "
+                                          "4096; tomography3d: 2000 views, 128^3) (default: "
+                                          "the quick one)")
+    st.add_argument("--photons", type=positive_float, default=None,
+                    help="reconstruction study: photon-counting noise with this many "
+                         "photoelectrons in each sinogram's brightest bin (default: none)")
+    st.add_argument("--speckle", type=positive_float, default=None, metavar="M",
+                    help="reconstruction study, with --photons: speckle of M >= 1 cells per "
+                         "bin (1: fully developed) (default: none)")
+    st.add_argument("--background", type=positive_float, default=None, metavar="B",
+                    help="reconstruction study, with --photons: B background "
+                         "photoelectrons per bin, its mean subtracted (default: none)")
+    st.add_argument("--quiet", action="store_true", help="no progress bar (default: shown)")
+    bch = _sub(sub, "bench", commands, "time the forward models (median of several runs)",
+               "example:\n  meshladar bench --repeats 7")
+    bch.add_argument("--repeats", type=positive_int, default=5,
+                     help="timed runs per case after one warm-up (default: %(default)s)")
+    bch.add_argument("--full", action="store_true",
+                     help="also the streaming run: 360 views x 1e6 rays (about a minute) "
+                          "(default: off)")
+
+
+def build_parser(commands) -> argparse.ArgumentParser:
+    """The parser of every command; ``commands`` maps each command's name to its function
+    (its docstring is the command's description)."""
+    p = argparse.ArgumentParser(
+        prog="meshladar", description="Mesh-based ladar simulation and reflection tomography.",
+        epilog=_EPILOG, formatter_class=_RAW)
+    p.add_argument("--version", action="version", version=f"meshladar {__version__}")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for add in (_simple, _simulate, _reconstruct, _receive, _view, _study):
+        add(sub, commands)
+    return p

@@ -1,0 +1,165 @@
+"""``meshladar reconstruct`` (FBP or the 3-D inversion of a saved sinogram) and
+``meshladar receive`` (waveforms and noise from a saved sinogram)."""
+
+from __future__ import annotations
+
+import os
+import warnings
+
+from .. import plotting, results
+from ..errors import MeshladarWarning, ParameterError
+from ..receiver import GaussianPulse, Noise, SampledPulse, receive
+from ..reconstruct import clip_radiance, fbp, log_radiance
+from ..volume import radon3d
+from .checks import check_not_input, check_output
+
+__all__ = ["cmd_reconstruct", "cmd_receive", "IMAGE_SUFFIXES"]
+
+#: Image formats reconstruct writes (matplotlib's own writers; JPEG and TIFF through Pillow,
+#: a dependency of matplotlib).
+IMAGE_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg", ".tif", ".tiff")
+
+
+def _save_figure(fig, output):
+    fmt = os.path.splitext(output)[1].lower().lstrip(".")
+    results.write_atomic(output, lambda fh: fig.savefig(fh, format=fmt, dpi=150))
+
+
+def cmd_reconstruct(args) -> int:
+    """Reconstruct a saved sinogram by FBP: a figure (PNG, PDF, SVG, JPEG or TIFF, chosen by
+    the extension of -o) and the image's values in OUTPUT.image.npz."""
+    check_output(args.output, IMAGE_SUFFIXES, [args.result])
+    data = os.path.splitext(args.output)[0] + ".image.npz"
+    check_not_input(args.output, data, args.result, "image data")
+    sino, meta = results.load_sinogram(args.result)
+    if args.log:
+        sino = log_radiance(sino)
+    if args.clip is not None:
+        sino = clip_radiance(sino, threshold=args.clip)
+    extent = args.extent or float(max(abs(sino.bin_edges[0]), abs(sino.bin_edges[-1])))
+    if not sino.planar:
+        # a margin, so that a target filling the bins does not sit on the cube's faces
+        return _reconstruct_3d(args, sino, args.extent or 1.15 * extent)
+    if args.smooth is not None:
+        raise ParameterError("--smooth applies to 3-D views (radon3d); this sinogram's views "
+                             "are about the z axis (use --filter)")
+    image = fbp(sino, size=args.size or 512, extent=extent, filter=args.filter or "ramp")
+    # the quick look's symmetric scale, log input labelled as such, and a centre slice
+    prep = sino.info.get("preprocess")
+    fig = plotting.viz("quick").image(image, title=f"FBP of {os.path.basename(args.result)}"
+                                         + (f", {prep}" if prep else "")
+                                         + f" ({args.filter or 'ramp'} filter)")
+    _save_figure(fig, args.output)
+    results.save_result(data, {"image": image.values},
+                        {"kind": "image", "extent": extent, "info": image.info,
+                         "source": os.path.basename(args.result)})
+    if not args.quiet:
+        size = args.size or 512
+        print(f"wrote {args.output} and {data} ({size}x{size}, extent {extent:g})")
+    return 0
+
+
+def _reconstruct_3d(args, sino, extent) -> int:
+    """reconstruct for views over the sphere: the 3-D Radon inversion (meshladar.volume),
+    three central slices as the figure, the volume in OUTPUT.volume.npz."""
+    if args.filter is not None:
+        raise ParameterError("--filter applies to FBP of views about the z axis; 3-D views "
+                             "are inverted with a second difference (use --smooth BINS)")
+    size = args.size or 128
+    vol = radon3d(sino, size=size, extent=extent, smooth=args.smooth or 0.0)
+    data = os.path.splitext(args.output)[0] + ".volume.npz"
+    if os.path.abspath(data) == os.path.abspath(args.result):
+        raise ParameterError(f"-o {args.output!r} would write the volume to the input "
+                             f"{data!r}; choose another output name")
+    fig = plotting.viz("quick").volume(
+        vol, title=f"3-D Radon inversion of {os.path.basename(args.result)} "
+                   f"({sino.n_views} views, {size}^3)")
+    _save_figure(fig, args.output)
+    results.save_result(data, {"values": vol.values, "x": vol.x, "y": vol.y, "z": vol.z},
+                        {"kind": "volume", "info": vol.info,
+                         "source": os.path.basename(args.result)})
+    if not args.quiet:
+        print(f"wrote {args.output} and {data} ({size}^3, extent {extent:g}, "
+              f"{sino.n_views} views)")
+    return 0
+
+
+def read_samples(path):
+    """A pulse's samples from a text file: numbers separated by commas, spaces or newlines
+    (# starts a comment)."""
+    try:
+        with open(path, encoding="utf-8") as fh:
+            text = " ".join(line.split("#")[0] for line in fh)
+        values = [float(x) for x in text.replace(",", " ").split()]
+    except UnicodeDecodeError:
+        raise ParameterError(f"--pulse-samples {path!r}: not a text file of numbers") from None
+    except ValueError as exc:
+        raise ParameterError(f"--pulse-samples {path!r}: {exc}") from None
+    return values
+
+
+#: receive's noise flags (argparse attribute → Noise field); --seed shapes the draws too.
+_NOISE_FIELDS = {"speckle_cells": "speckle_cells", "background_rate": "background_rate",
+                 "dark_rate": "dark_rate", "excess_noise": "excess_noise_factor",
+                 "gain": "gain", "bits": "bits", "full_scale": "full_scale"}
+
+
+def _pulse(args):
+    if args.pulse_fwhm is not None and args.pulse_samples is not None:
+        raise ParameterError("--pulse-fwhm and --pulse-samples both give the pulse; give one")
+    if (args.pulse_samples is None) != (args.pulse_interval is None):
+        raise ParameterError("--pulse-samples needs --pulse-interval (s between samples), "
+                             "and the other way round")
+    if args.pulse_samples is not None:
+        return SampledPulse(read_samples(args.pulse_samples), args.pulse_interval)
+    return None if args.pulse_fwhm is None else GaussianPulse(args.pulse_fwhm)
+
+
+def _noise(args, waves):
+    """(noise, draws), both None without --realisations."""
+    if args.realisations is None:
+        given = [a for a in (*_NOISE_FIELDS, "seed") if getattr(args, a) is not None]
+        if given:
+            raise ParameterError(f"--{given[0].replace('_', '-')} shapes the noise: give "
+                                 "--realisations N too")
+        return None, None
+    noise = Noise(**{field: getattr(args, a) for a, field in _NOISE_FIELDS.items()
+                     if getattr(args, a) is not None})
+    return noise, waves.realise(noise, args.realisations, seed=args.seed)
+
+
+def cmd_receive(args) -> int:
+    """Turn a saved sinogram's range bins into digitised waveforms (two-way time, the
+    transmitted pulse, the receiver's impulse response, the digitiser's rate), optionally
+    with noise realisations (photon counting, speckle, background and dark counts, APD
+    gain and excess noise, quantisation); save them, and a figure with --plot."""
+    check_output(args.output, (".npz",), [args.result])
+    if args.plot is not None:
+        check_output(args.plot, (".png",), [args.result, args.output], "--plot")
+    sino, _ = results.load_sinogram(args.result)
+    if sino.info.get("radiometry") != "power" and not args.quiet:
+        warnings.warn(f"{args.result} holds {sino.info.get('radiometry', 'paper')!r} "
+                      "radiometry (Eq. 8), not the power a receiver collects: simulate with "
+                      "--radiometry power for a receiver's waveform", MeshladarWarning)
+    pulse = _pulse(args)
+    waves = receive(sino, sample_rate=args.sample_rate, pulse=pulse,
+                    response=None if args.response_fwhm is None
+                    else GaussianPulse(args.response_fwhm),
+                    standoff=args.standoff, oversample=args.oversample)
+    if args.scale is not None:
+        waves = waves.scaled(args.scale)
+    noise, draws = _noise(args, waves)
+    params = {"source": os.path.basename(args.result), "seed": args.seed,
+              "realisations": args.realisations}
+    results.save_waveforms(args.output, waves, realisations=draws, noise=noise,
+                           params=params)
+    if args.plot is not None:
+        plotting.viz("waveforms").draw(waves, args.plot, realisations=draws, noise=noise)
+    if not args.quiet:
+        extra = "" if draws is None else f", {len(draws)} noise realisations"
+        print(f"{args.result}: {waves.values.shape[0]} views x {waves.values.shape[1]} "
+              f"samples at {args.sample_rate:g} Hz over two-way time "
+              f"[{waves.time_edges[0]:.6g}, {waves.time_edges[-1]:.6g}] s, units "
+              f"{waves.info.get('units')}{extra}; wrote {args.output}"
+              + ("" if args.plot is None else f" and {args.plot}"))
+    return 0

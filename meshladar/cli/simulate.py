@@ -1,0 +1,163 @@
+"""``meshladar simulate``: a scene's range profiles, saved with the scene and parameters.
+
+The model options' flags, checks and "does not apply" errors come from
+:mod:`meshladar.options`, the table :func:`meshladar.simulate` reads too."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import phantoms, results
+from ..errors import ParameterError
+from ..forward import simulate
+from ..ladar import MAX_VIEWS, Ladar
+from ..mesh import fibonacci_sphere
+from ..options import OPTIONS, SENSOR_OPTIONS
+from ..sensor import FloodBeam, GaussianBeam, Sensor
+from ..stream import dask_executor
+from .checks import check_output
+
+__all__ = ["cmd_simulate", "load_scene", "SCENE_LABELS"]
+
+#: What the command line calls phantoms.resolve()'s arguments, in its errors.
+SCENE_LABELS = {"source": "SCENE", "material": "--material", "coatings": "--coating"}
+_BEAM = ("flood_radius", "beam_waist", "beam_divergence", "beam_offset")
+
+
+def load_scene(args):
+    """(scene, default ladar or None, default model) from SCENE: phantom, spec or mesh
+    (:func:`meshladar.phantoms.resolve`, the command line's source loader)."""
+    return phantoms.resolve(args.scene, material=args.material, coatings=args.coating,
+                            materials_file=args.materials, labels=SCENE_LABELS)
+
+
+def _ladar(args, scene, default):
+    for flag, n in (("--views", args.views), ("--view-vectors", args.view_vectors)):
+        if n is not None and n > MAX_VIEWS:
+            raise ParameterError(f"{flag}: at most {MAX_VIEWS:.0e} views; got {n}")
+    vectors = None if args.view_vectors is None else fibonacci_sphere(args.view_vectors)
+    angles = args.angles_deg if args.angles_deg is not None else (
+        np.arange(args.views) * (360.0 / args.views) if args.views else None)
+    if args.bins or args.bin_width:
+        return Ladar.covering(scene, n_bins=args.bins, bin_width=args.bin_width,
+                              angles_deg=angles, view_vectors=vectors)
+    if default is not None and vectors is None:
+        return default if angles is None else Ladar(angles, default.bin_edges)
+    return Ladar.covering(scene, n_bins=512, angles_deg=angles, view_vectors=vectors)
+
+
+def _sensor(args):
+    """The Sensor the sensor flags describe, or None when none is given."""
+    if all(getattr(args, o.name) is None for o in SENSOR_OPTIONS):
+        return None
+    gaussian = [o.cli_flag for o in SENSOR_OPTIONS if o.name in _BEAM[1:]
+                and getattr(args, o.name) is not None]
+    if gaussian and args.beam_waist is None:
+        raise ParameterError(f"{gaussian[0]} shapes a Gaussian beam: give --beam-waist too")
+    if gaussian and args.flood_radius is not None:
+        raise ParameterError("--flood-radius and --beam-waist both choose the beam; give one")
+    if args.beam_waist is not None:
+        beam = GaussianBeam(args.beam_waist, divergence=args.beam_divergence or 0.0,
+                            offset=args.beam_offset or (0.0, 0.0))
+    else:
+        beam = FloodBeam(args.flood_radius)
+    kw = {o.name: getattr(args, o.name) for o in SENSOR_OPTIONS
+          if o.name not in _BEAM and getattr(args, o.name) is not None}
+    return Sensor(beam=beam, **kw)
+
+
+def _given(args, attr):
+    v = getattr(args, attr, None)
+    return v is not None and v is not False
+
+
+def check_applicable(args, model, is_phantom):
+    """Options that do not apply to this run are errors, never silently ignored: which
+    model takes which option is the options table's."""
+    exclusive = [("--views", "views"), ("--angles-deg", "angles_deg"),
+                 ("--view-vectors", "view_vectors")]
+    named = [flag for flag, attr in exclusive if _given(args, attr)]
+    if len(named) > 1:
+        raise ParameterError(f"{named[0]} and {named[1]} both choose the views; give one")
+    for o in OPTIONS + SENSOR_OPTIONS:
+        if o.cli and model not in o.models and _given(args, o.name):
+            owner = " or ".join(o.models)
+            raise ParameterError(f"{o.cli_flag} is an option of the {owner} model; the "
+                                 f"{model} model does not use it (add --model "
+                                 f"{o.models[0]})")
+    if _given(args, "segments") and not (is_phantom and model == "mesh"):
+        raise ParameterError("--segments tessellates an analytic phantom for --model mesh; "
+                             "it does not apply here")
+    if _given(args, "z0") and args.mode != "slice" and not (is_phantom and args.mode is None):
+        raise ParameterError("--z0 places the slice plane: it needs --mode slice")
+    if _given(args, "seed") and args.sampling == "regular":
+        raise ParameterError("--seed jitters the rays: it needs --sampling stratified, not "
+                             "regular")
+    if _given(args, "max_rays") and not _given(args, "tol"):
+        raise ParameterError("--max-rays bounds the work of --tol; give --tol too")
+    if _given(args, "jobs") and (_given(args, "scheduler") or _given(args, "workers")):
+        raise ParameterError("--jobs runs local processes; with --scheduler or --workers "
+                             "Dask runs the work: give one")
+
+
+def _summary(args, sino, ladar, model):
+    """One line: what was simulated, how (mode, normals, sampling, rays, bins) and where."""
+    info = sino.info
+    how = f"{model} model"
+    if model == "mesh":
+        rec = info.get("receiver")
+        how += (f", {info.get('mode')} mode, {info.get('normals')} normals, "
+                f"{info.get('sampling')} sampling, ray spacing {info.get('ray_spacing'):.4g}, "
+                f"{'footprint' if info.get('footprint') else 'point'} bins, "
+                + ("monostatic" if rec is None else "bistatic receiver") + ", "
+                f"{info.get('rays', 0):,} rays cast ({info.get('backend')} backend)")
+        if info.get("mode") == "slice":
+            how += f" (values per unit height at z0 = {info.get('z0'):g})"
+        if "error_estimate" in info:
+            how += f", estimated error {info['error_estimate']:.2g}"
+    return (f"{args.scene}: {how}; {ladar.n_views} views x {ladar.n_bins} bins over range "
+            f"[{ladar.bin_edges[0]:.6g}, {ladar.bin_edges[-1]:.6g}] (range 0 on the plane "
+            f"through the origin facing the ladar); {info.get('radiometry', 'paper')} "
+            f"radiometry; total return per view {sino.total().mean():.6g}; wrote "
+            f"{args.output}")
+
+
+def _model_options(args, model):
+    """simulate's options from the flags: every table option of ``model`` that was given."""
+    opts = {o.name: getattr(args, o.name) for o in OPTIONS
+            if o.cli and model in o.models and o.group == "model" and _given(args, o.name)}
+    if model == "mesh":
+        sensor = _sensor(args)
+        if sensor is not None:
+            opts["sensor"] = sensor
+    opts["jobs"] = args.jobs                 # the stream's options: every model takes them
+    if args.run_dir is not None:
+        opts["run_dir"] = args.run_dir
+    opts["progress"] = not args.quiet
+    return opts
+
+
+def cmd_simulate(args) -> int:
+    """Simulate a scene's range profiles and save them (sinogram, scene, parameters)."""
+    check_output(args.output, (".npz",), [args.scene, args.materials, args.run_dir])
+    scene, default_ladar, default_model = load_scene(args)
+    model = args.model or default_model
+    check_applicable(args, model, default_ladar is not None)
+    ladar = _ladar(args, scene, default_ladar)
+    if model == "mesh" and not scene.is_mesh and args.tol is None:  # --tol tessellates
+        scene = scene.tessellate(args.segments or 1024)
+    opts = _model_options(args, model)
+    if args.scheduler or args.workers:
+        with dask_executor(args.scheduler, workers=args.workers or 2) as ex:
+            sino = simulate(scene, ladar, model=model, executor=ex,
+                            **{k: v for k, v in opts.items() if k != "jobs"})
+    else:
+        sino = simulate(scene, ladar, model=model, **opts)
+    params = {"scene": args.scene, "model": model,
+              "options": {k: (v.describe() if k == "sensor" else v) for k, v in opts.items()
+                          if k != "progress"},
+              "n_views": ladar.n_views, "n_bins": ladar.n_bins}
+    results.save_sinogram(args.output, sino, scene=scene, params=params)
+    if not args.quiet:
+        print(_summary(args, sino, ladar, model))
+    return 0

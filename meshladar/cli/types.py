@@ -1,0 +1,104 @@
+"""The command line's value checkers (argparse ``type=`` functions): each accepts a text or
+raises one message naming what is valid."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+__all__ = ["KIND_TYPES", "positive_int", "nonnegative_int", "positive_float",
+           "finite_float", "unit_fraction", "nonnegative_float", "pair", "direction",
+           "angle_list", "window_size", "coatings"]
+
+
+def _number(parse, ok, what):
+    """An argparse type: ``parse(text)`` accepted when ``ok(value)``, else one message
+    naming what is valid."""
+    def convert(text: str):
+        try:
+            value = parse(text)
+        except ValueError:
+            value = None
+        if value is None or not ok(value):
+            raise argparse.ArgumentTypeError(f"must be a {what}; got {text!r}")
+        return value
+
+    convert.__name__ = what
+    return convert
+
+
+positive_int = _number(int, lambda v: v >= 1, "positive integer")
+nonnegative_int = _number(int, lambda v: v >= 0, "non-negative integer")
+positive_float = _number(float, lambda v: v > 0 and math.isfinite(v),
+                         "positive finite number")
+finite_float = _number(float, math.isfinite, "finite number")
+unit_fraction = _number(float, lambda v: 0 < v <= 1, "number in (0, 1]")
+nonnegative_float = _number(float, lambda v: v >= 0 and math.isfinite(v),
+                            "non-negative finite number")
+
+
+def pair(text: str):
+    """Two finite numbers ``U,V``."""
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        values = ()
+    if len(values) != 2 or not all(math.isfinite(v) for v in values):
+        raise argparse.ArgumentTypeError(f"must be two finite numbers U,V; got {text!r}")
+    return values
+
+
+def direction(text: str):
+    """A direction ``X,Y,Z``: three finite numbers, not all zero."""
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        values = []
+    if len(values) != 3 or not all(math.isfinite(v) for v in values) or \
+            not any(values):
+        raise argparse.ArgumentTypeError(f"must be a direction X,Y,Z (three finite numbers, "
+                                         f"not all zero); got {text!r}")
+    return values
+
+
+def angle_list(text: str):
+    """Comma-separated finite angles in degrees."""
+    try:
+        values = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"must be comma-separated numbers in degrees; got {text!r}") from None
+    if not values or not all(math.isfinite(v) for v in values):
+        raise argparse.ArgumentTypeError(f"must be finite numbers in degrees; got {text!r}")
+    return values
+
+
+def window_size(text):
+    """WxH in pixels."""
+    parts = text.lower().split("x")
+    try:
+        size = tuple(int(p) for p in parts)
+    except ValueError:
+        size = ()
+    if len(size) != 2 or not all(1 <= n <= 16384 for n in size):
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not WIDTHxHEIGHT in pixels, each 1-16384 (e.g. 1200x900)")
+    return size
+
+
+def coatings(text):
+    """'part=name,part=name' → dict (names from the coating table)."""
+    out = {}
+    for item in filter(None, (x.strip() for x in text.split(","))):
+        if "=" not in item:
+            raise argparse.ArgumentTypeError(f"must be PART=COATING pairs; got {item!r}")
+        k, v = item.split("=", 1)
+        out[k.strip()] = v.strip()
+    return out
+
+
+#: :class:`meshladar.options.Option` kinds → the checker that parses them.
+KIND_TYPES = {"positive_float": positive_float, "nonnegative_float": nonnegative_float,
+              "finite_float": finite_float, "unit_fraction": unit_fraction,
+              "positive_int": positive_int, "nonnegative_int": nonnegative_int,
+              "direction": direction, "pair": pair, "path": str}
