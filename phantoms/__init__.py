@@ -6,7 +6,6 @@ set-up; :func:`load` builds it. Coatings are named from the engine's table
 (:data:`meshladar.materials.PAPER`, read from ``meshladar/materials.toml``), or given
 inline as a table of SR parameters, and can be overridden per shape::
 
-    import meshladar as ml
     from meshladar import phantoms
     pair = phantoms.load("disk_pair", materials={"large": "dark_gray", "small": "aluminum"})
     sino = ml.simulate(pair.scene, pair.ladar)
@@ -35,8 +34,14 @@ from importlib import resources
 
 import numpy as np
 
+import meshladar as ml
 from meshladar import materials as _materials
+from meshladar._validate import check_path
+from meshladar.brdf import BRDF
+from meshladar.errors import MeshladarError, ParameterError, PhantomSpecError
 from meshladar.ladar import MAX_VIEWS
+from meshladar.materials import parse_table, read_toml
+from meshladar.scene import Scene
 
 __all__ = ["Phantom", "load", "scene", "names", "materials", "resolve", "is_phantom",
            "MATERIALS_TOML"]
@@ -75,14 +80,11 @@ class Phantom:
 
 
 def _error(source, msg):
-    from meshladar.errors import PhantomSpecError
 
     return PhantomSpecError(f"{source}: {msg}")
 
 
 def _resolve_material(value, table, where, source):
-    from meshladar.brdf import BRDF
-    from meshladar.materials import parse_table
 
     if isinstance(value, BRDF):
         return value
@@ -123,8 +125,6 @@ def _angles(spec, source):
 
 
 def _build(spec, source, overrides):
-    import meshladar as ml
-    from meshladar.errors import MeshladarError
 
     table = dict(materials())
     extra = sorted(set(spec) - set(_SPEC_KEYS))
@@ -203,11 +203,9 @@ def load(name_or_path, *, materials=None):
     Phantom
         ``.scene`` and ``.ladar`` (the paper's set-up), ``.name``, ``.description``.
     """
-    from meshladar._validate import check_path
 
     key = check_path("name_or_path", name_or_path)
     if materials is not None and not isinstance(materials, dict):
-        from meshladar.errors import ParameterError
 
         raise ParameterError(f"materials must be a dict of shape name -> coating; got "
                              f"{type(materials).__name__}")
@@ -217,8 +215,6 @@ def load(name_or_path, *, materials=None):
     if not key.endswith(".toml") and not os.path.exists(key):
         raise _error(key, f"unknown phantom; packaged phantoms are {names()}, or give a "
                           "path to a .toml spec")
-    from meshladar.errors import PhantomSpecError
-    from meshladar.materials import read_toml
 
     return _build(read_toml(key, "phantom spec", PhantomSpecError), key, materials)
 
@@ -231,7 +227,6 @@ def scene(name_or_path, coating=None, **coatings):
     shape_names = [s.name for s in base.scene.shapes]
     unknown = sorted(set(coatings) - set(shape_names))
     if unknown:
-        from meshladar.errors import ParameterError
 
         raise ParameterError(f"no shape named {unknown[0]!r} in {base.name}; shapes are "
                              f"{shape_names}")
@@ -275,8 +270,6 @@ def resolve(source, *, material=None, coatings=None, materials_file=None, labels
         The scene, the phantom's own ladar set-up (None for a mesh), and the model it is
         simulated with by default ("analytic" for a phantom, "mesh" for a mesh).
     """
-    from meshladar.errors import ParameterError
-    from meshladar.scene import Scene
 
     lab = {"source": "source", "material": "material", "coatings": "coatings",
            **(labels or {})}
