@@ -2,7 +2,8 @@
 
 * no import of a meshladar module inside a function (optional heavy packages are imported
   lazily; they are not meshladar modules), except in the one door to ``viz/``
-  (``meshladar/plotting.py``) and the lazy name table (``meshladar/__init__.py``);
+  (``meshladar/plotting.py``), the lazy name table (``meshladar/__init__.py``) and a
+  module's ``__getattr__`` (a deprecated alias, loaded when it is used);
 * no ``from x import _name`` across packages (a package is a folder of ``meshladar/``;
   the foundation's private modules ``_validate`` and ``_summary`` are meant to be shared);
 * no module over :data:`MAX_MODULE_LINES` lines;
@@ -140,7 +141,8 @@ def _function_breaches(rel, node, text):
 def _inner_imports(rel, path, tree):
     out = []
     for fn in ast.walk(tree):
-        if not isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef)):
+        if not isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef)) \
+                or fn.name == "__getattr__":
             continue
         for node in ast.walk(fn):
             if isinstance(node, ast.ImportFrom):

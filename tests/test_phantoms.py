@@ -85,3 +85,15 @@ def test_spec_from_file_simulates(tmp_path):
         beta = phi - t
         width = 2 * np.hypot(a * np.sin(beta), b * np.cos(beta))
         assert sino.total()[i] == pytest.approx(width / np.pi, rel=1e-12)
+
+
+def test_the_old_source_loader_name_warns_and_still_loads():
+    # phantoms.resolve became the command line's source loader; the old name works for a
+    # release, warning with the new one's name
+    from meshladar.cli.sources import load_source
+
+    with pytest.warns(DeprecationWarning, match="load_source"):
+        old = ml.phantoms.resolve
+    assert old is load_source
+    scene, ladar, model = old("disk_pair")
+    assert model == "analytic" and ladar.n_views == 360 and len(scene.shapes) == 2

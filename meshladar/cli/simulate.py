@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import phantoms, results
+from .. import results
 from ..errors import ParameterError
 from ..forward import simulate
 from ..ladar import MAX_VIEWS, Ladar
@@ -16,18 +16,19 @@ from ..options import OPTIONS, SENSOR_OPTIONS
 from ..sensor import FloodBeam, GaussianBeam, Sensor
 from ..stream import dask_executor
 from .checks import check_output
+from .sources import load_source
 
 __all__ = ["cmd_simulate", "load_scene", "SCENE_LABELS"]
 
-#: What the command line calls phantoms.resolve()'s arguments, in its errors.
+#: What the command line calls load_source()'s arguments, in its errors.
 SCENE_LABELS = {"source": "SCENE", "material": "--material", "coatings": "--coating"}
 _BEAM = ("flood_radius", "beam_waist", "beam_divergence", "beam_offset")
 
 
 def load_scene(args):
     """(scene, default ladar or None, default model) from SCENE: phantom, spec or mesh
-    (:func:`meshladar.phantoms.resolve`, the command line's source loader)."""
-    return phantoms.resolve(args.scene, material=args.material, coatings=args.coating,
+    (:func:`meshladar.cli.sources.load_source`)."""
+    return load_source(args.scene, material=args.material, coatings=args.coating,
                             materials_file=args.materials, labels=SCENE_LABELS)
 
 
