@@ -254,13 +254,14 @@ class SurfaceProjector(Projector):
         if H.shape != (surface.rows.size, self.n_views):
             raise ParameterError(f"H must be ({surface.rows.size}, {self.n_views}); got "
                                  f"{H.shape}")
-        # image values are areal densities: a segment carries value × pixel area
-        self.H = np.ascontiguousarray(H * self.grid.pixel_size ** 2)
+        # image values are areal densities: a segment carries value × pixel area (the view
+        # weights are ``view_weights``: ``H`` is the operator's adjoint, as scipy's)
+        self.view_weights = np.ascontiguousarray(H * self.grid.pixel_size ** 2)
         phi = np.deg2rad(self.angles_deg)
         self.cos, self.sin = np.cos(phi), np.sin(phi)
 
     def _args(self):
-        return (*_segments(self.surface, self.H), self.cos, self.sin, self.e0, self.inv_dr)
+        return (*_segments(self.surface, self.view_weights), self.cos, self.sin, self.e0, self.inv_dr)
 
     def _forward(self, image):
         v = np.asarray(image, float)[self.surface.rows, self.surface.cols]
