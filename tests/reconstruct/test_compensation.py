@@ -170,6 +170,7 @@ def test_shadow_awareness_drops_hidden_points_on_the_gray_pair():
 
 @pytest.mark.parametrize("material", [paper._diffuse(0.99), Lambertian(1.0)],
                          ids=["b0.99", "lambert"])
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["sirt", "cgls"])
 def test_compensation_removes_edge_darkening(material, method):
     """The issue's goal: the b = 0.99 disk's edge darkening (FBP −1.4) within ±0.2, and the
@@ -223,6 +224,7 @@ def test_bad_input_is_named():
                    Lambertian(1.0), size=64)
 
 
+@pytest.mark.slow
 def test_compensation_with_photon_noise():
     """1000 photoelectrons in the brightest bin, Poisson: the noise floor is read off the
     counts' quantum, noise ridges are dropped because the data does not back them, and the

@@ -116,6 +116,7 @@ def test_linear_projector_pair(sparse):
         LinearProjector(grid, [0.0], [0.0, 0.1, 0.3])
 
 
+@pytest.mark.slow
 def test_tv_at_10_degrees_beats_fbp_at_1_degree():
     """The issue's goal: at 10° view spacing the TV-regularised image's error is below
     FBP's at 1° (measured 0.092 against 0.104 at 128²)."""
@@ -136,6 +137,7 @@ def test_tv_at_10_degrees_beats_fbp_at_1_degree():
     assert img.values.min() >= 0 and img.info["objective"][-1] < img.info["objective"][0]
 
 
+@pytest.mark.slow
 def test_glint_weights_reveal_the_gray_disk():
     """Fig. 10(a)'s set-up (gray large disk, aluminium small one): with the glint's bins
     dropped by their weights — not clipped — SIRT shows the gray disk (visibility ≥ 0.9,
@@ -157,6 +159,7 @@ def test_glint_weights_reveal_the_gray_disk():
     assert paper.ring_visibility(hidden, gray, al, bw) < 0.1
 
 
+@pytest.mark.slow
 def test_reconstruction_study_rows():
     """The study's rows for one spacing and three methods: every row has its error, its
     phantom's metric and a time; FBP of the pair hides the gray disk, glint weights show

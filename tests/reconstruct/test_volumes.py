@@ -38,6 +38,7 @@ def _ball_sinogram(a, n_views=400, n_bins=128):
                        bin_edges=edges, view_vectors=W)
 
 
+@pytest.mark.slow
 def test_uniform_ball_inverts_to_the_ball():
     a = 0.6
     vol = fbp3d(_ball_sinogram(a), size=96, extent=1.0)
@@ -51,6 +52,7 @@ def test_uniform_ball_inverts_to_the_ball():
     assert vol.info["method"] == "radon3d" and vol.shape == (96, 96, 96)
 
 
+@pytest.mark.slow
 def test_lambertian_sphere_shell_peaks_at_its_radius():
     """A Lambertian sphere's range profiles from 200 Fibonacci views: the reconstruction's
     spherical mean peaks at R (within one voxel) and is far smaller away from the shell."""
@@ -68,6 +70,7 @@ def test_lambertian_sphere_shell_peaks_at_its_radius():
     assert prof.max() > 5 * np.abs(prof[(r > 0.7)]).max()
 
 
+@pytest.mark.slow
 def test_fbp_slices_of_a_cylinder_matches_the_2d_disk():
     """A Lambertian cylinder seen from views about its axis, resolved in elevation and range:
     each slice (per unit height) is the 2-D reconstruction of the disk, here compared with
@@ -138,6 +141,7 @@ SHAPE_MEAN_VOXELS = 2.0
 SHAPE_P95_VOXELS = 3.0
 
 
+@pytest.mark.slow
 def test_a_cad_part_reconstructs_to_its_shape():
     """A capsule through a torus: 600 views over the sphere, received power, 3-D Radon
     inversion; the default iso-surface (half the 99.9th percentile) lies on the part's
