@@ -18,12 +18,15 @@ from __future__ import annotations
 
 import functools
 import math
+import threading
 
 __all__ = ["backproject", "backproject3d", "splat_project", "surface_project",
            "surface_backproject", "surface_shadows", "set_threads"]
 
 #: numba's parallel range once compiled (plain ``range`` until then)
 prange = range
+#: one thread binds the compiled loops; the others wait for it
+_BINDING = threading.Lock()
 
 
 class _Deferred:
@@ -37,7 +40,9 @@ class _Deferred:
 
     def __call__(self, *args):
         if self.compiled is None:
-            _compile_all()
+            with _BINDING:
+                if self.compiled is None:
+                    _compile_all()
         return self.compiled(*args)
 
 
@@ -54,10 +59,10 @@ def _compile_all():
     space = globals()
     space["prange"] = numba.prange
     loops = {name: v for name, v in space.items() if isinstance(v, _Deferred)}
-    for loop in loops.values():
-        loop.compiled = numba.njit(**loop.options)(loop.py_func)
-    for name, loop in loops.items():
-        space[name] = loop.compiled
+    compiled = {name: numba.njit(**loop.options)(loop.py_func) for name, loop in loops.items()}
+    space.update(compiled)              # the loops that call a helper find it compiled
+    for name, loop in loops.items():    # only then may other threads skip the lock
+        loop.compiled = compiled[name]
 
 
 def set_threads(n: int | None):

@@ -168,9 +168,9 @@ def test_shadow_awareness_drops_hidden_points_on_the_gray_pair():
     assert got[True][0] < got[False][0] - 0.02
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("material", [paper._diffuse(0.99), Lambertian(1.0)],
                          ids=["b0.99", "lambert"])
-@pytest.mark.slow
 @pytest.mark.parametrize("method", ["sirt", "cgls"])
 def test_compensation_removes_edge_darkening(material, method):
     """The issue's goal: the b = 0.99 disk's edge darkening (FBP −1.4) within ±0.2, and the
