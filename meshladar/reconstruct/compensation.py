@@ -148,9 +148,9 @@ def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first
     labels : (size, size) int array, optional
         Each pixel's index into ``material``.
     method : {"cgls", "sirt"}
-        The solver (:mod:`meshladar.iterative`), ``n_iter`` iterations, warm start zero.
+        The solver (:mod:`meshladar.reconstruct.iterative`), ``n_iter`` iterations, warm start zero.
     weights : (n_views, n_bins) array, optional
-        Per-bin data weights (e.g. :func:`~meshladar.iterative.glint_weights`).
+        Per-bin data weights (e.g. :func:`~meshladar.reconstruct.iterative.glint_weights`).
     threshold, sigma, shadows
         :func:`estimate_surface`.
     blur_deg : float
@@ -163,7 +163,7 @@ def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first
     surface : Surface, optional
         Use these surface pixels and normals instead of estimating them.
     tol, progress
-        As :func:`~meshladar.iterative.sirt`.
+        As :func:`~meshladar.reconstruct.iterative.sirt`.
 
     Returns
     -------
@@ -182,7 +182,7 @@ def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first
         surface = estimate_surface(first, sino, threshold=threshold, sigma=sigma,
                                    shadows=shadows)
     elif not isinstance(surface, Surface):
-        raise ParameterError(f"surface must be a meshladar.compensation.Surface; got "
+        raise ParameterError(f"surface must be a meshladar.reconstruct.surface.Surface; got "
                              f"{type(surface).__name__}")
     if (surface.size, surface.extent, tuple(surface.center)) != (
             size, float(extent), tuple(float(c) for c in center)):

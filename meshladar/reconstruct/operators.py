@@ -261,7 +261,8 @@ class SurfaceProjector(Projector):
         self.cos, self.sin = np.cos(phi), np.sin(phi)
 
     def _args(self):
-        return (*_segments(self.surface, self.view_weights), self.cos, self.sin, self.e0, self.inv_dr)
+        return (*_segments(self.surface, self.view_weights), self.cos, self.sin, self.e0,
+                self.inv_dr)
 
     def _forward(self, image):
         v = np.asarray(image, float)[self.surface.rows, self.surface.cols]

@@ -1,5 +1,5 @@
-"""BRDF and shadow compensation (meshladar.reconstruct.compensation): the segment projector against the
-exact disk sinogram, surface points and normals against the true circle, the shadow map
+"""BRDF and shadow compensation (meshladar.reconstruct.compensation): the segment projector
+against the exact disk sinogram, surface points and normals against the true circle, the shadow map
 against exact ray-disk geometry, and the compensated disk: no edge darkening, a uniform
 surface at the level ⟨h⟩ · length."""
 

@@ -1,5 +1,5 @@
-"""Iterative reconstruction (meshladar.reconstruct.iterative): the projector and its adjoint, SIRT and
-CGLS on an exact disk sinogram, weights, masks and warm starts."""
+"""Iterative reconstruction (meshladar.reconstruct.iterative): the projector, SIRT and CGLS
+on an exact disk sinogram, weights, masks and warm starts."""
 
 from __future__ import annotations
 

@@ -24,8 +24,8 @@ EDGES = np.linspace(-1.0, 1.0, 41)                   # 40 bins symmetric about 0
 #: Both sides of ⟨A x, y⟩ = ⟨x, Aᵀ y⟩ add the same products x_i A_ij y_j (A ≥ 0, x, y > 0,
 #: so no cancellation) in different orders: they differ by rounding only, at most about
 #: n·eps relative for n terms in the worst case and ~√n·eps in practice (n ≲ 1e5 here:
-#: bound 2e-11, measured at most 2.6e-16). 1e-12 leaves a hundred times the measured room and
-#: still catches any wrong weight, a dropped bin or a missed view.
+#: bound 2e-11, measured at most 2.6e-16). 1e-12 is thousands of times the measured
+#: rounding and still catches any wrong weight, a dropped bin or a missed view.
 ADJOINT_RTOL = 1e-12
 
 

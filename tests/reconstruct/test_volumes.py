@@ -1,5 +1,5 @@
-"""3-D reflective tomography (meshladar.reconstruct.volumes): the 3-D Radon inversion's normalisation on a
-uniform ball, a Lambertian sphere's shell, and stacked 2-D slices."""
+"""3-D reflective tomography (meshladar.reconstruct.volumes): the 3-D Radon inversion's
+normalisation on a uniform ball, a Lambertian sphere's shell, and stacked 2-D slices."""
 
 from __future__ import annotations
 
