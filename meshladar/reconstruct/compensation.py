@@ -70,7 +70,7 @@ def first_image(sino, size, extent=1.0, center=(0.0, 0.0)):
     (FBP's few-views warning is for FBP's own output, not for this intermediate)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MeshladarWarning)
-        return fbp(log_radiance(sino, floor=noise_floor(sino, 0.5)), size=size,
+        return fbp(log_radiance(sino, floor=noise_floor(sino, quanta=0.5)), size=size,
                    extent=extent, center=center)
 
 

@@ -262,7 +262,7 @@ def _preprocessed(sinogram, step):
     return dict(sinogram.info, preprocess=step if not before else f"{before}, then {step}")
 
 
-def noise_floor(sino, quanta=3.0):
+def noise_floor(sino, *, quanta=3.0):
     """The data's noise floor relative to its maximum, and at least
     :data:`~meshladar.reconstruct.LOG_FLOOR`: ``quanta`` quanta when the bins are whole
     multiples of a quantum (counted photoelectrons, however scaled), else five robust
@@ -282,7 +282,7 @@ def noise_floor(sino, quanta=3.0):
     return float(min(0.5, max(LOG_FLOOR, level / peak)))
 
 
-def quiet_fbp(sino, size, extent, center):
+def quiet_fbp(sino, size, extent, *, center=(0.0, 0.0)):
     """FBP's image values, its warning about too few views silenced: for a starting point
     or a scale of another method (iterative, compensation), where the warning about FBP's
     own output does not apply."""

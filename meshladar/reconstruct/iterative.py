@@ -81,7 +81,7 @@ def _setup(sino, image, start, rays_per_bin, projector="siddon"):
     if x0 is None:
         x = np.zeros((size, size))
     elif isinstance(x0, str) and x0 == "fbp":
-        x = np.array(quiet_fbp(sino, size, extent, center))
+        x = np.array(quiet_fbp(sino, size, extent, center=center))
     elif isinstance(x0, Image):
         x = np.array(x0.values)
     else:
@@ -309,7 +309,7 @@ def cgls(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=30, x0=None, w
     return _image(x, extent, center, info)
 
 
-def glint_weights(sino, threshold=None, floor=0.0, max_share=0.1):
+def glint_weights(sino, *, threshold=None, floor=0.0, max_share=0.1):
     """Per-bin weights that drop (or down-weight to ``floor``) the bins brighter than
     ``threshold`` × the sinogram's maximum (default the paper's clip level, 0.008): a
     glint's few bright bins then stop hiding the diffuse parts, without clipping the data
@@ -403,7 +403,8 @@ def tv_fista(sino, size=256, extent=1.0, *, center=(0.0, 0.0), tv=0.005, n_iter=
         v = M * (A.T @ (W * (A @ v)))
         L = float(np.linalg.norm(v))
         v /= L if L > 0 else 1.0
-    scale = float(np.percentile(np.abs(quiet_fbp(sino, size, extent, center)), 99)) or 1.0
+    first = quiet_fbp(sino, size, extent, center=center)
+    scale = float(np.percentile(np.abs(first), 99)) or 1.0
     lam = tv * L * scale
     bnorm = _norm(b, W) or 1.0
     y, t = x.copy(), 1.0
