@@ -1,5 +1,5 @@
-"""3-D reflective tomography (meshladar.volume): the 3-D Radon inversion's normalisation on a
-uniform ball, a Lambertian sphere's shell, and stacked 2-D slices."""
+"""3-D reflective tomography (meshladar.reconstruct.volumes): the 3-D Radon inversion's
+normalisation on a uniform ball, a Lambertian sphere's shell, and stacked 2-D slices."""
 
 from __future__ import annotations
 
@@ -12,7 +12,8 @@ import meshladar as ml
 from meshladar.materials import lambertian
 from meshladar.mesh import fibonacci_sphere
 from meshladar.resolved import resolve
-from meshladar.volume import Volume, fbp_stack, radon3d, sphere_weights
+from meshladar.images import Volume
+from meshladar.reconstruct.volumes import fbp3d, fbp_slices, sphere_weights
 
 #: the ball's interior: −g'' is exactly 2π on every bin inside, so the reconstruction is 1
 #: to rounding (measured 1.0000); the quadrature over 400 Fibonacci directions decides the
@@ -37,9 +38,10 @@ def _ball_sinogram(a, n_views=400, n_bins=128):
                        bin_edges=edges, view_vectors=W)
 
 
+@pytest.mark.slow
 def test_uniform_ball_inverts_to_the_ball():
     a = 0.6
-    vol = radon3d(_ball_sinogram(a), size=96, extent=1.0)
+    vol = fbp3d(_ball_sinogram(a), size=96, extent=1.0)
     inside = vol.radial_profile(np.linspace(0.0, 0.9 * a, 10))
     np.testing.assert_allclose(inside, 1.0, rtol=BALL_RTOL)
     outside = vol.radial_profile(np.linspace(1.15 * a, 1.5 * a, 8))
@@ -50,6 +52,7 @@ def test_uniform_ball_inverts_to_the_ball():
     assert vol.info["method"] == "radon3d" and vol.shape == (96, 96, 96)
 
 
+@pytest.mark.slow
 def test_lambertian_sphere_shell_peaks_at_its_radius():
     """A Lambertian sphere's range profiles from 200 Fibonacci views: the reconstruction's
     spherical mean peaks at R (within one voxel) and is far smaller away from the shell."""
@@ -58,7 +61,7 @@ def test_lambertian_sphere_shell_peaks_at_its_radius():
     scene = ml.Scene.from_mesh(trimesh.creation.icosphere(subdivisions=5, radius=R),
                                material=lambertian(0.5))
     ladar = ml.Ladar(None, np.linspace(-1.0, 1.0, 97), view_vectors=fibonacci_sphere(200))
-    vol = radon3d(ml.simulate(scene, ladar, model="mesh", normals="smooth"), size=96,
+    vol = fbp3d(ml.simulate(scene, ladar, model="mesh", normals="smooth"), size=96,
                   extent=1.0)
     r = np.linspace(0.0, 0.8, 161)
     prof = vol.radial_profile(r)
@@ -67,7 +70,8 @@ def test_lambertian_sphere_shell_peaks_at_its_radius():
     assert prof.max() > 5 * np.abs(prof[(r > 0.7)]).max()
 
 
-def test_fbp_stack_of_a_cylinder_matches_the_2d_disk():
+@pytest.mark.slow
+def test_fbp_slices_of_a_cylinder_matches_the_2d_disk():
     """A Lambertian cylinder seen from views about its axis, resolved in elevation and range:
     each slice (per unit height) is the 2-D reconstruction of the disk, here compared with
     the exact analytic disk's FBP (faceting and sampling: measured 2.4% relative L2)."""
@@ -78,7 +82,7 @@ def test_fbp_stack_of_a_cylinder_matches_the_2d_disk():
     ladar = ml.Ladar(np.arange(0.0, 360.0, 2.0), np.linspace(-0.64, 0.64, 129))
     ret = resolve(scene, ladar, [("elevation", np.linspace(-0.3, 0.3, 4)),
                                  ("range", ladar.bin_edges)], rays_per_bin=4)
-    vol = fbp_stack(ret, size=128, extent=0.64)
+    vol = fbp_slices(ret, size=128, extent=0.64)
     assert vol.shape == (3, 128, 128)
     np.testing.assert_allclose(vol.z, [-0.2, 0.0, 0.2], atol=1e-15)
     disk = ml.fbp(ml.simulate(ml.Scene([ml.Disk((0.0, 0.0), R, lambertian(0.5))]), ladar),
@@ -89,7 +93,7 @@ def test_fbp_stack_of_a_cylinder_matches_the_2d_disk():
 
 
 def test_sphere_weights_share_the_sphere():
-    from meshladar.volume import coverage_gap_deg
+    from meshladar.reconstruct.volumes import coverage_gap_deg
 
     # the largest unseen angle: ~10.6° for 200 Fibonacci views, 90° for a hemisphere
     assert coverage_gap_deg(fibonacci_sphere(200)) < 12.0
@@ -109,13 +113,13 @@ def test_sphere_weights_share_the_sphere():
 def test_volume_checks():
     sino = _ball_sinogram(0.5, n_views=60, n_bins=16)
     with pytest.raises(ml.errors.ParameterError, match="weights"):
-        radon3d(sino, size=8, weights=np.ones(3))
+        fbp3d(sino, size=8, weights=np.ones(3))
     uneven = ml.Sinogram(sino.values[:, :3], angles_deg=sino.angles_deg,
                          bin_edges=[0.0, 0.1, 0.3, 0.4], view_vectors=sino.view_vectors)
     with pytest.raises(ml.errors.ParameterError, match="uniform range bins"):
-        radon3d(uneven, size=8)
+        fbp3d(uneven, size=8)
     with pytest.raises(ml.errors.ParameterError, match="size"):
-        radon3d(sino, size=0)
+        fbp3d(sino, size=0)
     with pytest.raises(ml.errors.ParameterError, match="values"):
         Volume(np.zeros((2, 2)), x=[0, 1], y=[0, 1], z=[0])
     # views that do not cover the sphere: a hemisphere, a plane of views (a 2-D sinogram)
@@ -123,11 +127,11 @@ def test_volume_checks():
     half = ml.Sinogram(np.ones((300, 16)), angles_deg=np.zeros(300),
                        bin_edges=np.linspace(-1, 1, 17), view_vectors=hemi)
     with pytest.raises(ml.errors.ParameterError, match="whole sphere"):
-        radon3d(half, size=8)
+        fbp3d(half, size=8)
     flat = ml.Sinogram(np.ones((36, 16)), angles_deg=np.arange(0.0, 360.0, 10.0),
                        bin_edges=np.linspace(-1, 1, 17))
     with pytest.raises(ml.errors.ParameterError, match="whole sphere"):
-        radon3d(flat, size=8)
+        fbp3d(flat, size=8)
 
 
 #: a part of curved surfaces, 600 Fibonacci views, 64³: the iso-surface lies within this
@@ -137,6 +141,7 @@ SHAPE_MEAN_VOXELS = 2.0
 SHAPE_P95_VOXELS = 3.0
 
 
+@pytest.mark.slow
 def test_a_cad_part_reconstructs_to_its_shape():
     """A capsule through a torus: 600 views over the sphere, received power, 3-D Radon
     inversion; the default iso-surface (half the 99.9th percentile) lies on the part's
@@ -159,7 +164,7 @@ def test_a_cad_part_reconstructs_to_its_shape():
     scene = ml.Scene.from_mesh(part, material=lambertian(0.5))
     ladar = ml.Ladar(None, np.linspace(-0.8, 0.8, 65), view_vectors=fibonacci_sphere(600))
     sino = ml.simulate(scene, ladar, model="mesh", radiometry="power", normals="smooth")
-    vol = radon3d(sino, size=64, extent=0.8, smooth=1.5)
+    vol = fbp3d(sino, size=64, extent=0.8, smooth=1.5)
     surf = np.asarray(viewer.volume_surface(vol).points)
     truth, _ = trimesh.sample.sample_surface_even(part, 50_000, seed=0)
     voxel = 1.6 / 64
@@ -192,7 +197,7 @@ def test_reconstruct_command_inverts_3d_views(tmp_path):
     # input labelled, nothing overlapping
     from meshladar.viz import style
 
-    logged = radon3d(ml.log_radiance(_ball_sinogram(0.6, n_views=200, n_bins=64)),
+    logged = fbp3d(ml.log_radiance(_ball_sinogram(0.6, n_views=200, n_bins=64)),
                         size=32, extent=1.0)
     assert logged.info["preprocess"].startswith("log") and "input='log" in repr(logged)
     fig = logged.plot()
@@ -202,3 +207,17 @@ def test_reconstruct_command_inverts_3d_views(tmp_path):
     assert norm.vmin == -norm.vmax
     assert any("reconstruction of log input" in ax.get_ylabel() for ax in fig.axes)
     assert style.overlapping_texts(fig) == []
+
+
+def test_old_names_warn_and_name_the_new_ones():
+    """radon3d and fbp_stack are deprecated aliases (one release) of fbp3d and fbp_slices:
+    they warn, naming the new function, and return its result."""
+    from meshladar.reconstruct import volumes
+
+    sino = _ball_sinogram(0.5, n_views=200, n_bins=32)
+    with pytest.warns(DeprecationWarning, match="fbp3d"):
+        old = volumes.radon3d(sino, size=8, extent=1.0)
+    np.testing.assert_array_equal(old.values, fbp3d(sino, size=8, extent=1.0).values)
+    with pytest.warns(DeprecationWarning, match="fbp_slices"):
+        with pytest.raises(ml.errors.ParameterError, match="fbp_slices needs Returns"):
+            volumes.fbp_stack(sino)

@@ -1,4 +1,4 @@
-"""Reconstruction: filtered backprojection of reflective sinograms, and glint preprocessing.
+"""Filtered backprojection of reflective sinograms, and glint preprocessing.
 
 ``fbp`` treats ``values / bin_width`` as the Radon transform of an image along iso-range
 lines (DESIGN.md) and inverts it over the full circle of views:
@@ -16,8 +16,8 @@ times a window (shepp-logan, cosine, hamming, hann), on projections zero-padded 
 power of two ≥ 2 n_bins (no wrap-around). With bins of unit width, views 180° − φ, and
 pixel centres on skimage's grid, ``fbp`` equals iradon's output for 360° data.
 
-Images: ``image[i, j]`` is the value at (x_j, y_i), pixel centres
-c + (−extent + (k + ½) 2 extent/size) increasing along both axes.
+Images (:class:`meshladar.images.Image`): ``image[i, j]`` is the value at (x_j, y_i), pixel
+centres c + (−extent + (k + ½) 2 extent/size) increasing along both axes.
 """
 
 from __future__ import annotations
@@ -25,21 +25,21 @@ from __future__ import annotations
 import dataclasses
 import math
 import warnings
-from dataclasses import dataclass, field
-from functools import cached_property
 
 import numpy as np
 from scipy import fft as sfft
 
-from ._validate import (check_choice, check_count, check_real, check_sinogram, check_size,
-                        finite_array)
-from .errors import MeshladarWarning, ParameterError
-from .sinogram import Sinogram
-from .precision import UNIFORM_RTOL as _UNIFORM_RTOL
-from .precision import COUNT_SLACK
+from .._validate import (check_choice, check_count, check_real, check_sinogram, check_size,
+                         finite_array)
+from ..errors import MeshladarWarning, ParameterError
+from ..images import Image, pixel_centres
+from ..precision import COUNT_SLACK
+from ..precision import UNIFORM_RTOL as _UNIFORM_RTOL
+from ..sinogram import Sinogram
+from ._kernels import backproject
 
 __all__ = ["Image", "fbp", "fourier_filter", "log_radiance", "clip_radiance", "resample_uniform",
-           "FILTERS", "INTERPOLATIONS", "LOG_FLOOR", "PAPER_CLIP"]
+           "noise_floor", "quiet_fbp", "FILTERS", "INTERPOLATIONS", "LOG_FLOOR", "PAPER_CLIP"]
 
 #: Filter windows, scikit-image's names.
 FILTERS = ("ramp", "shepp-logan", "cosine", "hamming", "hann")
@@ -58,110 +58,6 @@ _GAP_FACTOR = 3.0
 #: paper's figures: 350 bins across, 360 views), 18 % at 6. Beyond this ratio (streaks of a
 #: quarter of the peak and more) fbp warns.
 _UNDERSAMPLED_RATIO = 8.0
-
-
-@dataclass(frozen=True, eq=False)
-class Image:
-    """A reconstructed image on a square pixel grid.
-
-    Parameters
-    ----------
-    values : (size, size) float64
-        ``values[i, j]`` is the value at (x[j], y[i]); read-only.
-    extent : float
-        Half-width of the square, scene units.
-    center : (2,) float
-        Centre (x, y) of the square.
-    info : dict
-        How it was made (filter, interpolation, preprocessing).
-    """
-
-    values: np.ndarray
-    extent: float
-    center: tuple[float, float] = (0.0, 0.0)
-    info: dict = field(default_factory=dict)
-
-    def __post_init__(self):
-        v = np.array(self.values, dtype=np.float64, copy=True)
-        v.flags.writeable = False
-        object.__setattr__(self, "values", v)
-
-    @property
-    def size(self) -> int:
-        return self.values.shape[0]
-
-    def plot(self, *, y=None):
-        """A quick look (:func:`meshladar.viz.quick.image`): a matplotlib Figure."""
-        from .viz.quick import image
-
-        return image(self, y=y)
-
-    def _summary(self):
-        i = self.info
-        return (("size", self.size), ("extent", float(self.extent)),
-                ("center", tuple(float(c) for c in self.center)),
-                ("values", (float(self.values.min(initial=0.0)),
-                            float(self.values.max(initial=0.0)))),
-                ("method", i.get("method", "fbp" if "filter" in i else None)),
-                ("filter", i.get("filter")), ("input", i.get("preprocess")),
-                ("radiometry", i.get("radiometry")), ("input_units", i.get("input_units")),
-                ("n_views", i.get("n_views")), ("iterations", i.get("iterations")))
-
-    def __repr__(self) -> str:
-        from ._summary import text
-
-        return text("Image", *self._summary())
-
-    def _repr_html_(self) -> str:
-        from ._summary import table
-
-        return table("Image", *self._summary())
-
-    @property
-    def shape(self):
-        return self.values.shape
-
-    @property
-    def pixel_size(self) -> float:
-        return 2.0 * self.extent / self.size
-
-    @cached_property
-    def x(self) -> np.ndarray:
-        """(size,) pixel-centre x coordinates (columns), increasing."""
-        return self.center[0] + _centres(self.size, self.extent)
-
-    @cached_property
-    def y(self) -> np.ndarray:
-        """(size,) pixel-centre y coordinates (rows), increasing."""
-        return self.center[1] + _centres(self.size, self.extent)
-
-    def __getitem__(self, key):
-        return self.values[key]
-
-    def __array__(self, dtype=None, copy=None):
-        return self.values if dtype is None else self.values.astype(dtype)
-
-    def sample(self, points):
-        """Bilinear interpolation at points (..., 2) (x, y); 0 outside the grid."""
-        from scipy.ndimage import map_coordinates
-
-        p = np.asarray(points, dtype=np.float64)
-        col = (p[..., 0] - self.x[0]) / self.pixel_size
-        row = (p[..., 1] - self.y[0]) / self.pixel_size
-        return map_coordinates(self.values, [row.ravel(), col.ravel()], order=1,
-                               mode="constant", cval=0.0).reshape(p.shape[:-1])
-
-    def radial_profile(self, radii, *, center=None, n_angles=720):
-        """Mean over angle of the image on circles of the given radii about ``center``."""
-        c = np.asarray(self.center if center is None else center, dtype=np.float64)
-        a = np.linspace(0.0, 2 * math.pi, n_angles, endpoint=False)
-        r = np.asarray(radii, dtype=np.float64)
-        pts = c + np.stack([np.cos(a), np.sin(a)], -1)[None, :, :] * r[:, None, None]
-        return self.sample(pts).mean(axis=1)
-
-
-def _centres(size, extent):
-    return -extent + (np.arange(size) + 0.5) * (2.0 * extent / size)
 
 
 def fourier_filter(n_padded, filter="ramp"):
@@ -294,6 +190,42 @@ def fbp(sinogram, size=512, extent=1.0, *, filter="ramp", interpolation="linear"
     >>> disk = phantoms.load("disk")
     >>> image = ml.fbp(ml.simulate(disk.scene, disk.ladar), size=256, extent=1.0)
     """
+    size, extent, c = _check_fbp(sinogram, size, extent, filter, interpolation, center)
+    widths = sinogram.bin_widths
+    resampled = bool(np.ptp(widths) > _UNIFORM_RTOL * widths.mean())
+    if resampled:
+        sinogram = resample_uniform(sinogram)
+    dr = float(np.mean(sinogram.bin_widths))
+    weights = _view_weights(sinogram.angles_deg)
+    _check_view_sampling(sinogram)
+    # bin integrals of any magnitude (1e-300 to 1e307): filtered at unit scale (a power of
+    # two, exact), the scale and 1/dr² applied once at the end
+    peak = float(np.max(np.abs(sinogram.values)))
+    scale = 2.0 ** math.floor(math.log2(peak)) if peak > 0 else 1.0
+    q = _filtered(sinogram.values / scale, filter)
+
+    phi = np.deg2rad(sinogram.angles_deg)
+    xs = c[0] + pixel_centres(int(size), extent)
+    ys = c[1] + pixel_centres(int(size), extent)
+    out = np.zeros((int(size), int(size)))
+    backproject(q, np.cos(phi), np.sin(phi), weights, float(sinogram.bin_centers[0]),
+                1.0 / dr, xs, ys, interpolation == "nearest", out)
+    with np.errstate(over="ignore"):
+        out *= scale / dr
+        out /= dr
+    if not np.all(np.isfinite(out)):
+        raise ParameterError(f"sinogram: values up to {peak:.3g} in bins {dr:.3g} wide give an "
+                             "image beyond float64's range (1.8e308); rescale the values")
+    info = {"filter": filter, "interpolation": interpolation, "n_views": sinogram.n_views,
+            "n_bins": sinogram.n_bins, "resampled": resampled}
+    info.update({k: v for k, v in sinogram.info.items() if k in ("preprocess", "radiometry")})
+    if sinogram.info.get("units"):
+        info["input_units"] = sinogram.info["units"]
+    return Image(out, extent, (float(c[0]), float(c[1])), info)
+
+
+def _check_fbp(sinogram, size, extent, filter, interpolation, center):
+    """Refuse what :func:`fbp` cannot reconstruct; returns (size, extent, centre array)."""
     if not isinstance(sinogram, Sinogram):
         raise ParameterError(f"sinogram must be a meshladar.Sinogram; got "
                              f"{type(sinogram).__name__}")
@@ -310,46 +242,18 @@ def fbp(sinogram, size=512, extent=1.0, *, filter="ramp", interpolation="linear"
     c = finite_array("center", center)
     if c.shape != (2,):
         raise ParameterError(f"center must be a point (x, y); got shape {c.shape}")
-    widths = sinogram.bin_widths
-    resampled = bool(np.ptp(widths) > _UNIFORM_RTOL * widths.mean())
-    if resampled:
-        sinogram = resample_uniform(sinogram)
-    dr = float(np.mean(sinogram.bin_widths))
-    weights = _view_weights(sinogram.angles_deg)
-    _check_view_sampling(sinogram)
-    # bin integrals of any magnitude (1e-300 to 1e307): filtered at unit scale (a power of
-    # two, exact), the scale and 1/dr² applied once at the end
-    peak = float(np.max(np.abs(sinogram.values)))
-    scale = 2.0 ** math.floor(math.log2(peak)) if peak > 0 else 1.0
+    return size, extent, c
 
-    # filter: zero-pad to a power of two >= 2 n_bins (no wrap-around), as scikit-image
-    n = sinogram.n_bins
+
+def _filtered(values, filter):
+    """Each view's profile filtered with :func:`fourier_filter`, zero-padded to a power of
+    two >= 2 n_bins (no wrap-around), as scikit-image."""
+    n = values.shape[1]
     n_pad = max(64, int(2 ** math.ceil(math.log2(2 * n))))
     response = fourier_filter(n_pad, filter)
     # full complex FFT: the windows are not exactly symmetric (scikit-image keeps the real part)
-    spectrum = sfft.fft(sinogram.values / scale, n=n_pad, axis=1)
-    q = np.ascontiguousarray(np.real(sfft.ifft(spectrum * response, axis=1))[:, :n])
-
-    from . import _kernels
-
-    phi = np.deg2rad(sinogram.angles_deg)
-    xs = c[0] + _centres(int(size), extent)
-    ys = c[1] + _centres(int(size), extent)
-    out = np.zeros((int(size), int(size)))
-    _kernels.backproject(q, np.cos(phi), np.sin(phi), weights, float(sinogram.bin_centers[0]),
-                         1.0 / dr, xs, ys, interpolation == "nearest", out)
-    with np.errstate(over="ignore"):
-        out *= scale / dr
-        out /= dr
-    if not np.all(np.isfinite(out)):
-        raise ParameterError(f"sinogram: values up to {peak:.3g} in bins {dr:.3g} wide give an "
-                             "image beyond float64's range (1.8e308); rescale the values")
-    info = {"filter": filter, "interpolation": interpolation, "n_views": sinogram.n_views,
-            "n_bins": sinogram.n_bins, "resampled": resampled}
-    info.update({k: v for k, v in sinogram.info.items() if k in ("preprocess", "radiometry")})
-    if sinogram.info.get("units"):
-        info["input_units"] = sinogram.info["units"]
-    return Image(out, extent, (float(c[0]), float(c[1])), info)
+    spectrum = sfft.fft(values, n=n_pad, axis=1)
+    return np.ascontiguousarray(np.real(sfft.ifft(spectrum * response, axis=1))[:, :n])
 
 
 def _preprocessed(sinogram, step):
@@ -358,7 +262,7 @@ def _preprocessed(sinogram, step):
     return dict(sinogram.info, preprocess=step if not before else f"{before}, then {step}")
 
 
-def _noise_floor(sino, quanta=3.0):
+def noise_floor(sino, *, quanta=3.0):
     """The data's noise floor relative to its maximum, and at least
     :data:`~meshladar.reconstruct.LOG_FLOOR`: ``quanta`` quanta when the bins are whole
     multiples of a quantum (counted photoelectrons, however scaled), else five robust
@@ -376,6 +280,15 @@ def _noise_floor(sino, quanta=3.0):
     else:
         level = 5.0 * 1.4826 * float(np.median(np.abs(v - np.median(v))))
     return float(min(0.5, max(LOG_FLOOR, level / peak)))
+
+
+def quiet_fbp(sino, size, extent, *, center=(0.0, 0.0)):
+    """FBP's image values, its warning about too few views silenced: for a starting point
+    or a scale of another method (iterative, compensation), where the warning about FBP's
+    own output does not apply."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MeshladarWarning)
+        return fbp(sino, size=size, extent=extent, center=center).values
 
 
 def log_radiance(sinogram: Sinogram, *, floor=LOG_FLOOR) -> Sinogram:

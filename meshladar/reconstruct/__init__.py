@@ -1,0 +1,24 @@
+"""Reconstruction: images and volumes from sinograms.
+
+* :mod:`~meshladar.reconstruct.fbp2d` — filtered backprojection of views about the z axis
+  (:func:`fbp`), its filters and resampling, and the paper's log/clip preprocessing;
+* :mod:`~meshladar.reconstruct.volumes` — 3-D inversion over the sphere of views
+  (:func:`~meshladar.reconstruct.volumes.fbp3d`) and stacked slices
+  (:func:`~meshladar.reconstruct.volumes.fbp_slices`);
+* :mod:`~meshladar.reconstruct.operators` — the projectors as scipy ``LinearOperator``\\ s;
+* :mod:`~meshladar.reconstruct.iterative` — SIRT, SART, CGLS and TV-FISTA on them;
+* :mod:`~meshladar.reconstruct.surface` and :mod:`~meshladar.reconstruct.compensation` —
+  surface estimation and BRDF/shadow-compensated reconstruction.
+
+This package face imports only the light 2-D FBP (numba compiles on first use); the other
+modules load when imported.
+"""
+
+from __future__ import annotations
+
+from ..images import Image
+from .fbp2d import (FILTERS, INTERPOLATIONS, LOG_FLOOR, PAPER_CLIP, clip_radiance, fbp,
+                    fourier_filter, log_radiance, noise_floor, quiet_fbp, resample_uniform)
+
+__all__ = ["Image", "fbp", "fourier_filter", "log_radiance", "clip_radiance", "resample_uniform",
+           "noise_floor", "quiet_fbp", "FILTERS", "INTERPOLATIONS", "LOG_FLOOR", "PAPER_CLIP"]

@@ -1,0 +1,207 @@
+"""BRDF compensation: reconstruct the surface as if it returned light equally to every view.
+
+A surface point's return depends on the view through its BRDF and its normal: the weight
+h(θ) = F(θ; −θ) cos θ (``radiometry="paper"``, Eq. 8; times another cos θ for received
+power) falls to 0 at glancing incidence, is 0 from behind, and is 0 where another surface
+shadows it. FBP assumes every view sees every pixel equally, and the missing glancing and
+hidden views are what darkens the inside of a reconstructed boundary (the paper's Sec. 4.A)
+and draws the crossed shadow streaks (Sec. 4.C).
+
+Compensation puts that view dependence into the projector instead:
+
+1. a first reconstruction (default: FBP of the log radiance, where weak surfaces show next
+   to glints) gives sub-pixel surface points and normals (Steger's ridge detector: across
+   a bright thin ridge the Hessian's most negative eigenvector), turned outward by the
+   data (the side from which the views see returns), then moved together along their
+   normals by the offset (within ±1 bin) that fits the data best;
+2. :func:`surface_weights` evaluates, per surface pixel and view, h(θ) / ⟨h⟩ (⟨h⟩ the mean
+   of h over all directions in the plane), 0 from behind and, with ``shadows``, 0 where the
+   ray to the ladar crosses another surface of the first reconstruction;
+3. :class:`SurfaceProjector` projects those points as short straight segments with those
+   weights, and :func:`compensate` solves for the image with it (CGLS or SIRT of
+   :mod:`meshladar.reconstruct.iterative`), masked to the surface pixels.
+
+The result is in FBP's units: a surface of line density 1 reads ⟨h⟩ per unit length, as a
+reflector that returned its view-averaged power to every view would under FBP. The
+coatings must be known (``material``: one BRDF, or several with a label image).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+
+import numpy as np
+
+from .._validate import check_choice, check_count, check_sinogram, finite_array
+from ..errors import MeshladarWarning, ParameterError
+from ._kernels import surface_backproject
+from .fbp2d import fbp, log_radiance, noise_floor
+from .iterative import cgls, sirt
+from .operators import SurfaceProjector
+from .surface import Surface, _segments, _subset, _uniform, estimate_surface, surface_weights
+
+__all__ = ["Surface", "estimate_surface", "surface_weights", "SurfaceProjector", "compensate",
+           "first_image", "SOLVERS"]
+
+
+def _backed(surface, H, sino, keep, share=0.5):
+    """For the points ``keep``: whether at least ``share`` of their strong views (weight ≥
+    ¼ of their largest) find returns in their bins (above the noise floor, or any count
+    in counted data)."""
+    sub = _subset(surface, keep)
+    h = H[keep]
+    strong = (h >= 0.25 * h.max(axis=1, keepdims=True)).astype(float)
+    # any count backs a point (at one photoelectron expected per bin, 63 % of its bins
+    # hold one); sparse noise counts do not line up along a point's sinusoid
+    lit = (sino.values > noise_floor(sino, quanta=0.5) * float(np.abs(sino.values).max())
+           ).astype(float)
+    e0, inv_dr = _uniform(sino.bin_edges)
+    phi = np.deg2rad(sino.angles_deg)
+    hits = np.zeros(sub.rows.size)
+    args = _segments(sub, strong)
+    surface_backproject(lit, *args, np.cos(phi), np.sin(phi), e0, inv_dr, hits)
+    return hits >= share * strong.sum(axis=1)
+
+
+def first_image(sino, size, extent=1.0, center=(0.0, 0.0)):
+    """The default first reconstruction: FBP of the log radiance, its floor at half a
+    count (or above the noise) so weak surfaces next to glints show and noise does not
+    (FBP's few-views warning is for FBP's own output, not for this intermediate)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MeshladarWarning)
+        return fbp(log_radiance(sino, floor=noise_floor(sino, quanta=0.5)), size=size,
+                   extent=extent, center=center)
+
+
+def _seen(surface, H, sino):
+    """(surface, H) kept to the points the data sees and backs. A point no view sees
+    (hidden behind another surface in all its front views: an artefact inside a shape)
+    carries no data, one seen only at glancing incidence (total weight under 5 % of the
+    median point's) would take any value, and a point the data does not back (a noise
+    ridge: its strong views' bins mostly empty) is not a surface."""
+    total = H.sum(axis=1)
+    seen = total > 0.05 * float(np.median(total[total > 0])) if total.any() else total > 0
+    seen[seen] = _backed(surface, H, sino, seen)
+    if not seen.any():
+        raise ParameterError("no surface point of the first reconstruction is seen by the "
+                             "data; give first= or a lower threshold")
+    if not seen.all():
+        surface = _subset(surface, seen)
+        H = H[seen]
+    return surface, H
+
+
+def _shadowed_fraction(surface, sino):
+    """The shadowed share of the front-facing point-views (0 without a shadow map)."""
+    phi = np.deg2rad(sino.angles_deg)
+    front = (surface.normals[:, :1] * np.cos(phi) + surface.normals[:, 1:] * np.sin(phi)) > 0
+    return 0.0 if surface.shadowed is None else float(
+        (surface.shadowed & front).sum() / max(1, front.sum()))
+
+
+def _uniform_fit(A, m, b, W):
+    """(x0, weighted residual) of the best uniform surface c·m."""
+    Am = A @ m
+    c = float(np.sum(W * Am * b)) / (float(np.sum(W * Am * Am)) or 1.0)
+    return c * m, float(np.sum(W * (b - c * Am) ** 2))
+
+
+def _settle(surface, sino, H, W, m, smooth):
+    """Shift every surface point along its normal by the one offset in ±1 bin that lets a
+    uniform surface fit the data best. A first reconstruction puts a thin surface at the
+    centre of the bin its returns pile into, up to half a bin off (inward on a convex
+    surface); the projector is exact, so that offset shows as a residual. Returns
+    (surface, shift, projector, uniform start): the uniform start keeps the solvers from
+    speckling along the surface, where neighbouring points share their ranges."""
+    dr = float(np.mean(np.diff(sino.bin_edges)))
+    best = None
+    for shift in np.linspace(-1.0, 1.0, 9) * dr:
+        s = dataclasses.replace(surface, points=surface.points + shift * surface.normals)
+        A = SurfaceProjector(s, sino.angles_deg, sino.bin_edges, H, smooth)
+        x0, res = _uniform_fit(A, m, sino.values, W)
+        if best is None or res < best[0]:
+            best = (res, s, float(shift), A, x0)
+    return best[1:]
+
+
+#: Solvers for :func:`compensate`.
+SOLVERS = ("cgls", "sirt")
+
+
+def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first=None,
+               labels=None, method="cgls", n_iter=30, weights=None, threshold=0.2,
+               sigma=1.5, shadows=True, blur_deg=1.0, smooth=2.0, surface=None, tol=None,
+               progress=False):
+    """BRDF- and shadow-compensated reconstruction (see the module docstring).
+
+    Parameters
+    ----------
+    sino : Sinogram
+        Views about z, uniform bins; its ``info["radiometry"]`` picks h(θ).
+    material : BRDF or sequence of BRDFs
+        The coatings (with ``labels`` when several).
+    size, extent, center
+        The image grid.
+    first : Image, optional
+        The first reconstruction on that grid (default FBP of the log radiance).
+    labels : (size, size) int array, optional
+        Each pixel's index into ``material``.
+    method : {"cgls", "sirt"}
+        The solver (:mod:`meshladar.reconstruct.iterative`), ``n_iter`` iterations, warm start zero.
+    weights : (n_views, n_bins) array, optional
+        Per-bin data weights (e.g. :func:`~meshladar.reconstruct.iterative.glint_weights`).
+    threshold, sigma, shadows
+        :func:`estimate_surface`.
+    blur_deg : float
+        Angular blur of h(θ), degrees, for the normals' uncertainty.
+    smooth : float
+        Width, pixels, of the Gaussian along the surface that the solution is built from
+        (x = S z, :class:`SurfaceProjector`): neighbouring surface points share their
+        ranges in most views, and without it the solution speckles along the surface.
+        0 solves for every point independently.
+    surface : Surface, optional
+        Use these surface pixels and normals instead of estimating them.
+    tol, progress
+        As :func:`~meshladar.reconstruct.iterative.sirt`.
+
+    Returns
+    -------
+    Image
+        ``info``: method "compensated", solver, iterations, residuals, radiometry,
+        surface_pixels, shadowed_fraction (of front-facing point-views), blur_deg,
+        surface_shift (the offset along the normals, scene units).
+    """
+    check_sinogram("sino", sino)
+    method = check_choice("method", method, SOLVERS)
+    size = check_count("size", size)
+    radiometry = sino.info.get("radiometry", "paper")
+    if surface is None:
+        if first is None:
+            first = first_image(sino, size, extent, center)
+        surface = estimate_surface(first, sino, threshold=threshold, sigma=sigma,
+                                   shadows=shadows)
+    elif not isinstance(surface, Surface):
+        raise ParameterError(f"surface must be a meshladar.reconstruct.surface.Surface; got "
+                             f"{type(surface).__name__}")
+    if (surface.size, surface.extent, tuple(surface.center)) != (
+            size, float(extent), tuple(float(c) for c in center)):
+        raise ParameterError("surface must be on the image grid (size, extent, center)")
+    H = surface_weights(surface, sino.angles_deg, material, labels=labels,
+                      radiometry=radiometry, blur_deg=blur_deg)
+    surface, H = _seen(surface, H, sino)
+    W = np.ones(sino.shape) if weights is None else finite_array("weights", weights)
+    m = surface.mask.astype(float)
+    surface, shift, A, x0 = _settle(surface, sino, H, W, m, smooth)
+    solve = cgls if method == "cgls" else sirt
+    img = solve(sino, size=size, extent=extent, center=center, n_iter=n_iter, x0=x0,
+                weights=weights, mask=surface.mask, projector=A, tol=tol, progress=progress)
+    values = np.array(img.values)
+    if A.smooth is not None:                          # the solution is x = S z
+        values[surface.rows, surface.cols] = A.smooth @ values[surface.rows, surface.cols]
+    info = dict(img.info, method="compensated", solver=method, radiometry=radiometry,
+                surface_pixels=int(surface.rows.size),
+                shadowed_fraction=_shadowed_fraction(surface, sino),
+                blur_deg=blur_deg, shadows=surface.shadowed is not None,
+                surface_shift=shift, smooth=smooth)
+    return type(img)(values, img.extent, img.center, info=info)

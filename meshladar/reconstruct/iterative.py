@@ -1,0 +1,430 @@
+"""Iterative reconstruction on the projectors of :mod:`meshladar.reconstruct.operators`: SIRT,
+SART and CGLS, with non-negativity,
+per-bin weights, a mask, a warm start from FBP, a stopping rule and progress.
+
+The data model is FBP's (DESIGN.md): a sinogram's ``values / bin_width`` are line integrals
+of the image along the iso-range lines −p·w = r. A projector
+(:class:`~meshladar.reconstruct.operators.RangeProjector`, Siddon's exact pixel lengths;
+:class:`~meshladar.reconstruct.operators.LinearProjector`, the pixel-driven pair) is that
+operator A on a pixel grid with its exact adjoint Aᵀ, so ``A @ image`` is directly
+comparable with ``sino.values``.
+
+``sirt`` solves min ‖W^½ (A x − b)‖ (Landweber with SIRT's row and column scaling, so each
+step is a weighted average that needs no step size), ``cgls`` the same least-squares
+problem by conjugate gradients (its residual never grows). Weights W ≥ 0 per bin let a user
+down-weight glint bins or shadow-gapped views instead of clipping them; 0 drops a bin.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from .._validate import check_choice, check_count, check_real, check_sinogram, finite_array
+from ..errors import ParameterError
+from ..images import Image
+from ..siddon import PixelGrid
+from ..stream import Progress
+from .fbp2d import PAPER_CLIP, noise_floor, quiet_fbp
+from .operators import PROJECTORS, LinearProjector, RangeProjector
+
+__all__ = ["RangeProjector", "LinearProjector", "sirt", "sart", "cgls", "tv_fista",
+           "glint_weights", "ImageGrid", "METHODS", "PROJECTORS"]
+
+#: The iterative methods of this module.
+METHODS = ("sirt", "sart", "cgls", "tv_fista")
+
+
+class ImageGrid(NamedTuple):
+    """The square image grid of a reconstruction: ``size`` pixels a side, half-width
+    ``extent``, centred on ``center`` (as :func:`meshladar.fbp`)."""
+
+    size: int
+    extent: float
+    center: tuple
+
+
+class _Start(NamedTuple):
+    """Where a solver starts: the warm start ``x0``, the per-bin ``weights``, the ``mask``
+    and whether the image is kept non-negative."""
+
+    x0: object
+    weights: object
+    mask: object
+    nonneg: bool
+
+
+def _setup(sino, image, start, rays_per_bin, projector="siddon"):
+    """(grid, A, b, W, M, x): the solvers' problem. ``image`` an :class:`ImageGrid`,
+    ``start`` a :class:`_Start`; ``projector`` None builds no operator."""
+    size, extent, center = image
+    weights, mask, x0, nonneg = start.weights, start.mask, start.x0, start.nonneg
+    check_sinogram("sino", sino)
+    if not sino.planar:
+        raise ParameterError("iterative reconstruction needs views about the z axis; this "
+                             "sinogram has 3-D view vectors (meshladar.reconstruct.fbp3d)")
+    size = check_count("size", size)
+    extent = check_real("extent", extent, low=0.0, low_open=True)
+    grid = PixelGrid.square(size, extent, center)
+    A = None if projector is None else _projector(projector, grid, sino, rays_per_bin)
+    b = sino.values
+    W = np.ones_like(b) if weights is None else finite_array("weights", weights)
+    if W.shape != b.shape or np.any(W < 0):
+        raise ParameterError(f"weights must be non-negative, one per bin {b.shape}; got "
+                             f"shape {W.shape}")
+    M = np.ones((size, size)) if mask is None else np.asarray(mask, dtype=bool).astype(float)
+    if M.shape != (size, size):
+        raise ParameterError(f"mask must be a ({size}, {size}) array; got {M.shape}")
+    if x0 is None:
+        x = np.zeros((size, size))
+    elif isinstance(x0, str) and x0 == "fbp":
+        x = np.array(quiet_fbp(sino, size, extent, center=center))
+    elif isinstance(x0, Image):
+        x = np.array(x0.values)
+    else:
+        x = np.array(finite_array("x0", x0))
+    if x.shape != (size, size):
+        raise ParameterError(f"x0 must be None, 'fbp', an Image or a ({size}, {size}) array")
+    x *= M
+    if nonneg:
+        x = np.maximum(x, 0.0)
+    return grid, A, b, W, M, x
+
+
+def _projector(projector, grid, sino, rays_per_bin):
+    """A projector name, or a user's operator: anything with ``@``, ``.T`` and a ``grid``
+    equal to the image's (an ODL-like composition)."""
+    if not isinstance(projector, str):
+        if not (hasattr(projector, "__matmul__") and hasattr(projector, "T")
+                and getattr(projector, "grid", None) == grid):
+            raise ParameterError(f"projector must be one of {PROJECTORS} or an operator with "
+                                 f"@, .T and .grid equal to the image grid {grid}; got "
+                                 f"{projector!r}")
+        return projector
+    if check_choice("projector", projector, PROJECTORS) == "linear":
+        return LinearProjector(grid, sino.angles_deg, sino.bin_edges)
+    return RangeProjector(grid, sino.angles_deg, sino.bin_edges, rays_per_bin)
+
+
+def _projector_name(projector):
+    return projector if isinstance(projector, str) else type(projector).__name__
+
+
+class _Progress:
+    """An iterative run's bookkeeping: the residual history, the progress bar and the
+    stopping rule (stop when a step lowers the tracked value by less than ``tol``
+    relatively)."""
+
+    def __init__(self, n_iter, tol, progress):
+        self.values, self.tol, self.stopped = [], tol, "n_iter"
+        self.bar = Progress(n_iter, "iterations") if progress else None
+
+    def step(self, value, tracked=None):
+        """Record a step; True when the run should stop."""
+        self.values.append(value)
+        tracked = self.values if tracked is None else tracked
+        if self.bar is not None:
+            self.bar.update(1)
+        if (self.tol is not None and len(tracked) > 1
+                and abs(tracked[-2] - tracked[-1]) < self.tol * tracked[-2]):
+            self.stopped = "tol"
+            return True
+        return False
+
+    def close(self):
+        if self.bar is not None:
+            self.bar.close()
+
+
+def _image(x, extent, center, info):
+    return Image(x, extent, tuple(float(c) for c in center), info=info)
+
+
+def _norm(r, W):
+    return float(np.sqrt(np.sum(W * r * r)))
+
+
+def sirt(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=50, x0=None, weights=None,
+         mask=None, nonneg=True, tol=None, rays_per_bin=2, projector="siddon",
+         progress=False):
+    """SIRT: x ← x + C Aᵀ W R (b − A x), R and C the inverse row and column sums of A
+    (weighted by W), projected onto x ≥ 0 (``nonneg``) and the mask.
+
+    Parameters
+    ----------
+    sino : Sinogram
+        Views about z; ``values`` bin integrals (any radiometry, log or clipped input).
+    size, extent, center
+        The image grid, as :func:`meshladar.fbp`.
+    n_iter : int
+        Most iterations.
+    x0 : None, "fbp", Image or array
+        Warm start (default zeros).
+    weights : (n_views, n_bins) array, optional
+        Per-bin weights ≥ 0 (glint bins down-weighted, 0 drops a bin).
+    mask : (size, size) bool array, optional
+        Pixels allowed to be non-zero.
+    nonneg : bool
+        Project onto x ≥ 0 after each step.
+    tol : float, optional
+        Stop when the weighted residual falls by less than ``tol`` (relative) in a step.
+    rays_per_bin : int
+        Iso-range lines per bin in the Siddon projector.
+    projector : {"siddon", "linear"} or operator
+        Siddon lines with exact pixel lengths (:class:`RangeProjector`), the faster
+        pixel-driven linear-interpolation pair (:class:`LinearProjector`, uniform bins), or
+        any operator with ``@``, ``.T`` and a ``grid`` equal to the image's (e.g.
+        :class:`meshladar.reconstruct.operators.SurfaceProjector`).
+    progress : bool
+        A progress bar over the iterations (on a terminal).
+
+    Returns
+    -------
+    Image
+        ``info``: method, iterations, ``residuals`` (weighted ‖A x − b‖ per iteration,
+        relative to ‖b‖), stopped ("n_iter" or "tol").
+    """
+    n_iter = check_count("n_iter", n_iter)
+    tol = None if tol is None else check_real("tol", tol, low=0.0, low_open=True)
+    grid, A, b, W, M, x = _setup(sino, ImageGrid(size, extent, center),
+                                 _Start(x0, weights, mask, nonneg), rays_per_bin, projector)
+    rows = A @ (M * 1.0)                                   # row sums over allowed pixels
+    R = np.where(rows > 0, 1.0 / np.where(rows > 0, rows, 1.0), 0.0) * W
+    cols = (A.T @ W) * M                                   # column sums, weighted
+    C = np.where(cols > 0, 1.0 / np.where(cols > 0, cols, 1.0), 0.0)
+    bnorm = _norm(b, W) or 1.0
+    run = _Progress(n_iter, tol, progress)
+    r = b - A @ x
+    for _ in range(n_iter):
+        x = x + C * (A.T @ (R * r))
+        x *= M
+        if nonneg:
+            np.maximum(x, 0.0, out=x)
+        r = b - A @ x
+        if run.step(_norm(r, W) / bnorm):
+            break
+    run.close()
+    info = {"method": "sirt", "iterations": len(run.values), "residuals": run.values,
+            "stopped": run.stopped, "nonneg": bool(nonneg), "projector": _projector_name(projector),
+            "rays_per_bin": rays_per_bin,
+            "radiometry": sino.info.get("radiometry")}
+    return _image(x, extent, center, info)
+
+
+def sart(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=10, subsets=None,
+         relax=1.0, x0=None, weights=None, mask=None, nonneg=True, tol=None, rays_per_bin=2,
+         projector="linear", progress=False):
+    """SART in ordered subsets (OS-SART, as ASTRA's and TIGRE's): each iteration sweeps the
+    views in ``subsets`` interleaved groups, and after each group takes SIRT's scaled step
+    on that group alone (x ← x + λ C_s A_sᵀ W_s R_s (b_s − A_s x), then x ≥ 0 and the mask).
+    One sweep costs what one SIRT iteration costs and, with s groups, moves about as far as
+    s SIRT iterations. ``subsets`` defaults to one group per 36 views (10 for 360 views;
+    ``subsets=n_views`` is classic one-view SART); ``relax`` is λ in (0, 2). Other
+    parameters and ``info`` as :func:`sirt`; ``residuals`` are gathered over each sweep
+    (each group's residual just before its step, as ordered-subset methods report it, at
+    no extra projection)."""
+    n_iter = check_count("n_iter", n_iter)
+    tol = None if tol is None else check_real("tol", tol, low=0.0, low_open=True)
+    relax = check_real("relax", relax, low=0.0, high=2.0, low_open=True, high_open=True)
+    if not isinstance(projector, str):
+        raise ParameterError("sart builds one projector per group of views: give projector "
+                             f"as one of {PROJECTORS}")
+    check_choice("projector", projector, PROJECTORS)
+    # one projector per group below, none for the whole set
+    grid, _, b, W, M, x = _setup(sino, ImageGrid(size, extent, center),
+                                 _Start(x0, weights, mask, nonneg), rays_per_bin, None)
+    n_views = b.shape[0]
+    n_sub = max(1, n_views // 36) if subsets is None else check_count("subsets", subsets)
+    if n_sub > n_views:
+        raise ParameterError(f"subsets must be at most the number of views ({n_views}); "
+                             f"got {n_sub}")
+    groups = []
+    for k in range(n_sub):
+        idx = np.arange(k, n_views, n_sub)
+        part = dataclasses.replace(sino, values=b[idx], angles_deg=sino.angles_deg[idx],
+                                   view_vectors=sino.view_vectors[idx])
+        As = _projector(projector, grid, part, rays_per_bin)
+        rows = As @ (M * 1.0)
+        R = np.where(rows > 0, 1.0 / np.where(rows > 0, rows, 1.0), 0.0) * W[idx]
+        cols = (As.T @ W[idx]) * M
+        C = np.where(cols > 0, relax / np.where(cols > 0, cols, 1.0), 0.0)
+        groups.append((idx, As, R, C))
+    bnorm = _norm(b, W) or 1.0
+    run = _Progress(n_iter, tol, progress)
+    for _ in range(n_iter):
+        gathered = 0.0
+        for idx, As, R, C in groups:
+            r = b[idx] - As @ x
+            gathered += float(np.sum(W[idx] * r * r))
+            x = x + C * (As.T @ (R * r))
+            x *= M
+            if nonneg:
+                np.maximum(x, 0.0, out=x)
+        if run.step(math.sqrt(gathered) / bnorm):
+            break
+    run.close()
+    info = {"method": "sart", "subsets": n_sub, "relax": relax,
+            "iterations": len(run.values), "residuals": run.values, "stopped": run.stopped,
+            "nonneg": bool(nonneg), "projector": projector, "rays_per_bin": rays_per_bin,
+            "radiometry": sino.info.get("radiometry")}
+    return _image(x, extent, center, info)
+
+
+def cgls(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=30, x0=None, weights=None,
+         mask=None, tol=None, rays_per_bin=2, projector="siddon", progress=False):
+    """CGLS: conjugate gradients on the normal equations of min ‖W^½ (A x − b)‖ over the
+    masked pixels (no non-negativity: CG's residual then never grows). Parameters as
+    :func:`sirt`; ``info["residuals"]`` is non-increasing."""
+    n_iter = check_count("n_iter", n_iter)
+    tol = None if tol is None else check_real("tol", tol, low=0.0, low_open=True)
+    grid, A, b, W, M, x = _setup(sino, ImageGrid(size, extent, center),
+                                 _Start(x0, weights, mask, False), rays_per_bin, projector)
+    r = b - A @ x
+    s = M * (A.T @ (W * r))
+    p = s.copy()
+    gamma = float(np.sum(s * s))
+    bnorm = _norm(b, W) or 1.0
+    run = _Progress(n_iter, tol, progress)
+    for _ in range(n_iter):
+        if gamma == 0:
+            run.stopped = "converged"
+            break
+        q = A @ p
+        alpha = gamma / float(np.sum(W * q * q))
+        x = x + alpha * p
+        r = r - alpha * q
+        s = M * (A.T @ (W * r))
+        gamma_new = float(np.sum(s * s))
+        p = s + (gamma_new / gamma) * p
+        gamma = gamma_new
+        if run.step(_norm(r, W) / bnorm):
+            break
+    run.close()
+    info = {"method": "cgls", "iterations": len(run.values), "residuals": run.values,
+            "stopped": run.stopped, "projector": _projector_name(projector), "rays_per_bin": rays_per_bin,
+            "radiometry": sino.info.get("radiometry")}
+    return _image(x, extent, center, info)
+
+
+def glint_weights(sino, *, threshold=None, floor=0.0, max_share=0.1):
+    """Per-bin weights that drop (or down-weight to ``floor``) the bins brighter than
+    ``threshold`` × the sinogram's maximum (default the paper's clip level, 0.008): a
+    glint's few bright bins then stop hiding the diffuse parts, without clipping the data
+    the other bins fit. For :func:`sirt`, :func:`cgls` and :func:`tv_fista`.
+
+    A glint is a few bins: only when the bright bins are at most ``max_share`` of the bins
+    that hold returns (above the noise floor) are they dropped; otherwise the scene does
+    not glint and every weight is 1 (measured at 1° views: 2-4 % on the paper's glinting
+    pairs, 42-45 % on the diffuse disk and the gray pair)."""
+    check_sinogram("sino", sino)
+    thr = check_real("threshold", PAPER_CLIP if threshold is None else threshold, low=0.0,
+                     high=1.0, low_open=True)
+    floor = check_real("floor", floor, low=0.0, high=1.0)
+    max_share = check_real("max_share", max_share, low=0.0, high=1.0)
+    v = sino.values
+    peak = float(v.max(initial=0.0))
+    bright = v > thr * peak
+    returning = v > min(thr, noise_floor(sino)) * peak
+    if bright.sum() > max_share * max(1, returning.sum()):
+        return np.ones_like(v)
+    return np.where(bright, floor, 1.0)
+
+
+def _grad(x):
+    """Forward differences (zero at the far edges)."""
+    gx = np.zeros_like(x)
+    gy = np.zeros_like(x)
+    gx[:, :-1] = x[:, 1:] - x[:, :-1]
+    gy[:-1, :] = x[1:, :] - x[:-1, :]
+    return gx, gy
+
+
+def _div(px, py):
+    """The negative adjoint of _grad."""
+    d = np.zeros_like(px)
+    d[:, 0] += px[:, 0]
+    d[:, 1:] += px[:, 1:] - px[:, :-1]
+    d[:, -1] -= px[:, -1]
+    d[0, :] += py[0, :]
+    d[1:, :] += py[1:, :] - py[:-1, :]
+    d[-1, :] -= py[-1, :]
+    return d
+
+
+def _tv_prox(z, mu, nonneg, mask, n_inner=20, dual=None):
+    """argmin_x ½‖x − z‖² + μ TV(x) over x ≥ 0 (``nonneg``) and the mask: Beck and
+    Teboulle's fast gradient projection on the dual (isotropic TV). Returns (x, dual)."""
+    def project(v):
+        v = v * mask
+        return np.maximum(v, 0.0) if nonneg else v
+
+    px, py = (np.zeros_like(z), np.zeros_like(z)) if dual is None else dual
+    rx, ry = px, py
+    t = 1.0
+    for _ in range(n_inner):
+        x = project(z + mu * _div(rx, ry))
+        gx, gy = _grad(x)
+        qx, qy = rx + gx / (8.0 * mu), ry + gy / (8.0 * mu)
+        norm = np.maximum(1.0, np.hypot(qx, qy))
+        qx, qy = qx / norm, qy / norm
+        t_new = 0.5 * (1.0 + math.sqrt(1.0 + 4.0 * t * t))
+        rx = qx + (t - 1.0) / t_new * (qx - px)
+        ry = qy + (t - 1.0) / t_new * (qy - py)
+        px, py, t = qx, qy, t_new
+    return project(z + mu * _div(px, py)), (px, py)
+
+
+def tv_fista(sino, size=256, extent=1.0, *, center=(0.0, 0.0), tv=0.005, n_iter=100,
+             x0="fbp", weights=None, mask=None, nonneg=True, tol=None, rays_per_bin=2,
+             projector="linear", progress=False):
+    """Total-variation regularised reconstruction by FISTA:
+    min ½‖W^½ (A x − b)‖² + λ TV(x) over x ≥ 0 and the mask, each step a gradient step on
+    the data term (step 1/L, L = ‖W^½ A‖² by power iteration) and the TV proximal map
+    (:func:`_tv_prox`, dual fast gradient projection).
+
+    ``tv`` sets λ relative to the image's scale: λ = tv · L · s with s the 99th percentile
+    of |FBP image|, so each step smooths away jumps below about tv × s (the default 0.005:
+    half a per cent of the image's level; on an exact disk sinogram at 10° view spacing
+    the error is then 0.092, below FBP's 0.104 at 1°). Other parameters as :func:`sirt` (default warm start from FBP, linear
+    projector). ``info["residuals"]`` holds the data term, ``info["objective"]`` the whole
+    objective per iteration (monotone only on average: FISTA is not a descent method).
+    """
+    n_iter = check_count("n_iter", n_iter)
+    tv = check_real("tv", tv, low=0.0)
+    tol = None if tol is None else check_real("tol", tol, low=0.0, low_open=True)
+    grid, A, b, W, M, x = _setup(sino, ImageGrid(size, extent, center),
+                                 _Start(x0, weights, mask, nonneg), rays_per_bin, projector)
+    rng = np.random.default_rng(0)
+    v = rng.random(grid.shape) * M
+    for _ in range(15):                                    # power iteration: ‖W^½ A‖²
+        v = M * (A.T @ (W * (A @ v)))
+        L = float(np.linalg.norm(v))
+        v /= L if L > 0 else 1.0
+    first = quiet_fbp(sino, size, extent, center=center)
+    scale = float(np.percentile(np.abs(first), 99)) or 1.0
+    lam = tv * L * scale
+    bnorm = _norm(b, W) or 1.0
+    y, t = x.copy(), 1.0
+    dual = None
+    objective = []
+    run = _Progress(n_iter, tol, progress)
+    for _ in range(n_iter):
+        g = M * (A.T @ (W * (A @ y - b)))
+        x_new, dual = _tv_prox(y - g / L, lam / L, nonneg, M, dual=dual)
+        t_new = 0.5 * (1.0 + math.sqrt(1.0 + 4.0 * t * t))
+        y = x_new + (t - 1.0) / t_new * (x_new - x)
+        x, t = x_new, t_new
+        r = A @ x - b
+        gx, gy = _grad(x)
+        objective.append(0.5 * float(np.sum(W * r * r)) + lam * float(np.sum(np.hypot(gx, gy))))
+        if run.step(_norm(r, W) / bnorm, objective):
+            break
+    run.close()
+    info = {"method": "tv_fista", "tv": tv, "lambda": lam, "lipschitz": L,
+            "iterations": len(run.values), "residuals": run.values, "objective": objective,
+            "stopped": run.stopped, "nonneg": bool(nonneg), "projector": _projector_name(projector),
+            "radiometry": sino.info.get("radiometry")}
+    return _image(x, extent, center, info)

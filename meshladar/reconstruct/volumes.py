@@ -1,0 +1,216 @@
+"""3-D reflective tomography: volumes from range profiles over the sphere of views, and from
+elevation-resolved returns by stacking 2-D FBP slices.
+
+A range profile of view w is a set of plane integrals: bin k holds the return of the surface
+between the planes −p·w = r_k and r_{k+1}. Divided by the bin width it samples the 3-D
+Radon transform g(w, s) = ∫ f δ(s − x·w) dx of the surface's return density f at s = −r.
+The 3-D inversion formula is local:
+
+    f(x) = −1/(8π²) ∫_{S²} ∂²g/∂s² (w, x·w) dw,
+
+so :func:`fbp3d` takes each profile's second difference (the three-point stencil, exact on
+quadratics: a uniform ball's g = π(a² − s²) gives −g'' = 2π inside, and the ball back),
+and backprojects over the views with quadrature weights (4π/n each for the Fibonacci
+directions of ``meshladar.mesh.fibonacci_sphere``; a solid-angle Voronoi weight otherwise).
+A uniform ball of value 1 reconstructs to 1 inside (tests/reconstruct/test_volumes.py).
+
+:func:`fbp_slices` reconstructs from returns resolved in elevation and range for views about
+the z axis (:func:`meshladar.resolved.resolve`): each elevation row, per unit height, is a
+2-D sinogram of that slice, reconstructed by :func:`meshladar.fbp`.
+
+``radon3d`` and ``fbp_stack`` are the old names of :func:`fbp3d` and :func:`fbp_slices`
+(``radon3d`` named the transform it inverts): deprecated aliases for one release.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import warnings
+
+import numpy as np
+from scipy.ndimage import gaussian_filter1d
+from scipy.spatial import cKDTree
+
+from .._validate import check_count, check_real, check_sinogram, check_size, finite_array
+from ..errors import ParameterError
+from ..images import Volume
+from ..mesh import fibonacci_sphere
+from ..resolved import Returns
+from ..sinogram import Sinogram
+from ._kernels import backproject3d
+from .fbp2d import fbp
+
+__all__ = ["Volume", "fbp3d", "fbp_slices", "sphere_weights", "coverage_gap_deg",
+           "MAX_GAP_DEG", "radon3d", "fbp_stack"]
+
+
+#: fbp3d refuses view sets that leave a direction farther than this from every view (a
+#: cap unseen: the inversion formula needs the whole sphere of directions).
+MAX_GAP_DEG = 30.0
+
+
+def coverage_gap_deg(view_vectors) -> float:
+    """The largest angle (degrees) from any direction of the sphere to the nearest view
+    (estimated on 2e4 Fibonacci directions): small for views spread over the sphere, 90 for
+    a hemisphere or a plane of views."""
+    w = np.asarray(view_vectors, np.float64)
+    chord, _ = cKDTree(w).query(fibonacci_sphere(20_000))
+    return float(np.degrees(2 * np.arcsin(min(1.0, chord.max() / 2))))
+
+
+def sphere_weights(view_vectors) -> np.ndarray:
+    """Quadrature weights over the sphere for view directions covering it: each view's
+    share of 4π by nearest direction (a spherical Voronoi cell estimated on 2e5 Fibonacci
+    points). Views that leave part of the sphere unseen get its area too: right only for
+    sets that cover the sphere (:func:`coverage_gap_deg`)."""
+    w = np.asarray(view_vectors, np.float64)
+    probe = fibonacci_sphere(200_000)
+    _, owner = cKDTree(w).query(probe)
+    return np.bincount(owner, minlength=len(w)) * (4 * math.pi / probe.shape[0])
+
+
+def _grid(size, extent, center):
+    n = check_count("size", size)
+    e = check_real("extent", extent, low=0.0, low_open=True)
+    c = finite_array("center", center)
+    if c.shape != (3,):
+        raise ParameterError(f"center must be a point (x, y, z); got shape {c.shape}")
+    base = -e + (np.arange(n) + 0.5) * (2 * e / n)
+    return n, e, c, (base + c[0], base + c[1], base + c[2])
+
+
+def fbp3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None,
+            smooth=0.0) -> Volume:
+    """Invert range profiles over the sphere of views (3-D Radon inversion, module
+    docstring).
+
+    Parameters
+    ----------
+    sino : Sinogram
+        Range profiles with ``view_vectors`` spread over the whole sphere (the inversion
+        formula integrates over all directions; a view set leaving a cap of more than
+        ``MAX_GAP_DEG`` unseen is refused) and uniform bin widths.
+    size : int
+        Voxels per side (default 128).
+    extent : float, optional
+        Half-width of the cube (default the bins' reach).
+    center : (3,) float
+        The cube's centre.
+    weights : (n_views,) array, optional
+        Quadrature weight (solid angle) of each view; default 4π/n for n views, right for
+        Fibonacci directions (:func:`sphere_weights` for other sets covering the sphere).
+    smooth : float
+        Standard deviation (in bins) of a Gaussian applied to each profile before its
+        second difference (default 0: none). The second difference amplifies sampling noise
+        and few views leave the planes of sharp returns uncancelled: 1-2 bins trade
+        resolution for a cleaner volume.
+
+    Returns
+    -------
+    Volume
+        The surface's return density (per unit volume): values integrate, over a thin shell
+        around the surface, to its return per unit area.
+    """
+    check_sinogram("sino", sino)
+    widths = np.diff(sino.bin_edges)
+    if np.ptp(widths) > 1e-6 * widths.mean():
+        raise ParameterError("fbp3d needs uniform range bins")
+    if sino.n_bins < 3:
+        raise ParameterError(f"fbp3d needs at least 3 range bins; got {sino.n_bins}")
+    dr = float(widths.mean())
+    gap = coverage_gap_deg(sino.view_vectors)
+    if gap > MAX_GAP_DEG:
+        raise ParameterError(
+            f"fbp3d needs views over the whole sphere of directions; these leave a "
+            f"direction {gap:.0f} deg from every view (at most {MAX_GAP_DEG:g}): use views "
+            "such as meshladar.mesh.fibonacci_sphere(n) (views about the z axis: fbp, or "
+            "fbp_slices of elevation-resolved returns)")
+    if extent is None:
+        extent = float(max(abs(sino.bin_edges[0]), abs(sino.bin_edges[-1])))
+    n, e, c, (x, y, z) = _grid(size, extent, center)
+    check_size("size", float(n) ** 3, 8 * 2, f"a {n}^3 volume", "give a smaller size")
+    if weights is None:
+        wts = np.full(sino.n_views, 4 * math.pi / sino.n_views)
+    else:
+        wts = finite_array("weights", weights)
+        if wts.shape != (sino.n_views,) or np.any(wts < 0):
+            raise ParameterError(f"weights must be {sino.n_views} non-negative solid angles")
+    smooth = check_real("smooth", smooth, low=0.0)
+    g = sino.values / dr
+    if smooth > 0:
+        g = gaussian_filter1d(g, smooth, axis=1, mode="constant", truncate=4.0)
+    g = np.pad(g, ((0, 0), (1, 1)))                             # zero beyond the bins
+    minus_g2 = -(g[:, 2:] - 2 * g[:, 1:-1] + g[:, :-2]) / (dr * dr)
+    q = np.ascontiguousarray(minus_g2 / (8 * math.pi ** 2))
+    out = np.zeros((n, n, n))
+    w = sino.view_vectors
+    backproject3d(q, np.ascontiguousarray(w[:, 0]), np.ascontiguousarray(w[:, 1]),
+                  np.ascontiguousarray(w[:, 2]), wts, float(sino.bin_centers[0]), 1.0 / dr,
+                  x, y, z, out)
+    info = {"method": "radon3d", "filter": "second difference", "smooth_bins": smooth,
+            "views": sino.n_views,
+            "radiometry": sino.info.get("radiometry"), "size": n, "extent": e,
+            "center": c.tolist()}
+    if sino.info.get("preprocess"):
+        info["preprocess"] = sino.info["preprocess"]
+    return Volume(out, x=x, y=y, z=z, info=info)
+
+
+def fbp_slices(returns, *, size=256, extent=None, filter="ramp") -> Volume:
+    """Slices from returns resolved in elevation and range (views about the z axis): each
+    elevation row per unit height is a 2-D sinogram, reconstructed by FBP; the slices stack
+    at the elevation bins' centres.
+
+    Parameters
+    ----------
+    returns : meshladar.resolved.Returns
+        With axes ("elevation", "range") (either order) and views about the z axis.
+    size, extent, filter
+        As :func:`meshladar.fbp`, per slice.
+    """
+    if not isinstance(returns, Returns) or set(returns.axes) != {"elevation", "range"}:
+        raise ParameterError("fbp_slices needs Returns resolved in ('elevation', 'range')")
+    if np.any(returns.view_vectors[:, 2] != 0):
+        raise ParameterError("fbp_slices needs views about the z axis (elevation is z)")
+    vals = returns.values
+    if returns.axes[0] == "range":
+        vals = np.swapaxes(vals, 1, 2)                  # (views, elevation, range)
+    el = returns.edges[returns.axes.index("elevation")]
+    rng = returns.edges[returns.axes.index("range")]
+    if np.ptp(np.diff(el)) > 1e-9 * np.diff(el).mean():
+        raise ParameterError("fbp_slices needs evenly spaced elevation bins (the volume's z "
+                             "axis)")
+    if extent is None:
+        extent = float(max(abs(rng[0]), abs(rng[-1])))
+    slices = []
+    for k in range(el.size - 1):
+        s = Sinogram(vals[:, k, :] / (el[k + 1] - el[k]), angles_deg=returns.angles_deg,
+                     bin_edges=rng, model="mesh", info=returns.info)
+        slices.append(fbp(s, size=size, extent=extent, filter=filter))
+    first = slices[0]
+    info = {"method": "fbp_stack", "filter": filter, "views": vals.shape[0],
+            "radiometry": returns.info.get("radiometry"), "slices": el.size - 1}
+    if returns.info.get("preprocess"):
+        info["preprocess"] = returns.info["preprocess"]
+    return Volume(np.stack([s.values for s in slices]), x=first.x, y=first.y,
+                  z=0.5 * (el[1:] + el[:-1]), info=info)
+
+
+def _renamed(new, old):
+    """``new`` under its old name ``old``, warning that the name is deprecated."""
+    @functools.wraps(new)
+    def alias(*args, **kwargs):
+        warnings.warn(f"meshladar {old} is deprecated (one release): use "
+                      f"meshladar.reconstruct.{new.__name__}", DeprecationWarning, stacklevel=2)
+        return new(*args, **kwargs)
+
+    alias.__name__ = alias.__qualname__ = old
+    alias.__doc__ = f"Deprecated alias of :func:`{new.__name__}` (one release)."
+    return alias
+
+
+#: Deprecated alias of :func:`fbp3d` (one release).
+radon3d = _renamed(fbp3d, "radon3d")
+#: Deprecated alias of :func:`fbp_slices` (one release).
+fbp_stack = _renamed(fbp_slices, "fbp_stack")
