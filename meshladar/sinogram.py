@@ -53,20 +53,21 @@ class RecordInfo(dict):
 
 def split_info(record, info, *, keep_none=False) -> dict:
     """Move the typed keys of ``info`` (a mapping) onto ``record``'s fields of the same name
-    (a frozen dataclass with ``radiometry`` and ``units``), refuse a conflict, and set
+    (a frozen dataclass with ``radiometry`` and ``units``) and set
     ``record.info`` to the merged read-only :class:`RecordInfo`. Returns the provenance (the
     free-form rest) as a new dict. With ``keep_none`` an unset typed field still shows in
     ``info`` as None (the waveforms' info always held both keys)."""
     if not isinstance(info, Mapping):
         raise ParameterError(f"info must be a dict; got {type(info).__name__}")
+    # dataclasses.replace hands both the old fields and the old info: a record's own
+    # RecordInfo yields to a field given anew (replace(sino, units=...)), a new info dict
+    # overrides the old field (replace(sino, info=dict(sino.info, units=...)), as before)
+    field_wins = isinstance(info, RecordInfo)
     rest = dict(info)
     merged = {}
     for key in TYPED_INFO_KEYS:
         given, old = getattr(record, key), rest.pop(key, None)
-        if given is not None and old is not None and given != old:
-            raise ParameterError(f"{key} is given twice and differs: {key}={given!r} and "
-                                 f"info[{key!r}]={old!r}")
-        value = given if given is not None else old
+        value = given if given is not None and (field_wins or old is None) else old
         if value is not None and not isinstance(value, str):
             raise ParameterError(f"{key} must be a string or None; got {value!r}")
         object.__setattr__(record, key, value)
