@@ -34,7 +34,7 @@ def test_resume_reuses_verified_chunks_and_recomputes_corrupt_ones(tmp_path):
     np.testing.assert_array_equal(again.values, ref.values)
     assert all((run / c).stat().st_mtime_ns == t for c, t in mtimes.items())
     # a chunk whose numbers were altered fails its checksum and is recomputed too
-    from meshladar.results import load_result, save_result
+    from meshladar.io import load_result, save_result
 
     arrays, meta = load_result(run / chunks[2])
     arrays["values"] = arrays["values"] * 2
@@ -100,7 +100,7 @@ def test_sigkill_mid_run_then_resume_gives_the_uninterrupted_result(tmp_path):
     from meshladar.runs import RunFolder
 
     for f in run.glob("chunk_*.npz"):
-        from meshladar.results import load_result
+        from meshladar.io import load_result
 
         load_result(f)                                           # every final file reads
     code, err = _finish(_start(run, tmp_path / "b.npy"))

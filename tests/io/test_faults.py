@@ -13,7 +13,7 @@ import pytest
 
 import meshladar as ml
 from meshladar.errors import MaterialFileError, PhantomSpecError
-from meshladar.results import ResultFileError, load_result, save_result
+from meshladar.io import ResultFileError, load_result, save_result
 from meshladar.materials import ALUMINUM, DARK_GRAY, load_table
 
 from conftest import PAIR  # noqa: E402  (the shared disk pair)

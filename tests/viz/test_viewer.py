@@ -42,12 +42,12 @@ def test_shadowed_part_of_the_disk_pair_is_drawn_in_the_shadow_colour():
     pair = ml.phantoms.scene("disk_pair", large=DARK_GRAY, small=ALUMINUM)
     # from +x the small disk hides the large one's middle: a band of shadow colour
     img = viewer.show_scene(pair, view_angle_deg=0.0, show_rays=False, off_screen=True,
-                            window_size=(400, 300))
+                            window_size=(400, 300)).image
     shadow = _is(img, viewer.SHADOW_COLOR)
     assert shadow.sum() > 1000
     # from +y nothing is shadowed
     img = viewer.show_scene(pair, view_angle_deg=90.0, show_rays=False, off_screen=True,
-                            window_size=(400, 300))
+                            window_size=(400, 300)).image
     assert _is(img, viewer.SHADOW_COLOR).sum() == 0
     # the headless EGL window is chosen for the call only: the environment is left as it was
     if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
@@ -61,7 +61,7 @@ def test_lit_lambertian_sphere_is_brightest_at_its_centre(tmp_path):
                                  [lambertian(1.0)])
     shot = tmp_path / "sphere.png"
     img = viewer.show_scene(sphere, view_vector=[0, 0, 1], show_rays=False, off_screen=True,
-                            screenshot=shot, window_size=(300, 300), camera="view")
+                            screenshot=shot, window_size=(300, 300), camera="view").image
     assert shot.is_file()
     gray = img[..., :3].astype(float).sum(axis=-1)
     # F cos θ = cos θ/π peaks where the normal faces the ladar: the sphere's centre (the
@@ -78,7 +78,7 @@ def test_slice_sits_at_its_position():
     values = np.zeros((64, 64))
     values[32, 50] = 1.0                      # a bright pixel at x ≈ +0.58, y ≈ 0
     image = ml.Image(values, 1.0)
-    img = viewer.show_slice(image, z=0.3, off_screen=True, window_size=(300, 300))
+    img = viewer.show_slice(image, z=0.3, off_screen=True, window_size=(300, 300)).image
     gray = img[..., :3].astype(float).sum(axis=-1)
     i, j = np.unravel_index(np.argmax(gray), gray.shape)
     assert j > 150 + 40 and abs(i - 150) < 20      # right of centre, on the x axis
@@ -91,7 +91,8 @@ def test_volume_iso_surface_of_a_stack():
     X, Y = np.meshgrid(x, x)
     zs = np.linspace(-0.5, 0.5, 8)
     images = [ml.Image((np.hypot(X, Y) < 0.5).astype(float), 1.0) for _ in zs]
-    img = viewer.show_volume(images, zs, iso=0.5, off_screen=True, window_size=(200, 200))
+    img = viewer.show_volume(images, zs, iso=0.5, off_screen=True,
+                             window_size=(200, 200)).image
     assert (img[..., :3].sum(axis=-1) > 100).sum() > 500      # a cylinder was drawn
     with pytest.raises(ValueError, match="evenly spaced"):
         viewer.show_volume(images, np.r_[zs[:-1], 9.0], iso=0.5, off_screen=True)
@@ -112,7 +113,7 @@ def test_show_volume_of_a_reconstructed_ball():
     surf = viewer.volume_surface(vol)
     r = np.linalg.norm(np.asarray(surf.points), axis=1)
     assert abs(np.median(r) - a) < 2.0 / 32                  # the ball's sphere
-    img = viewer.show_volume(vol, off_screen=True, window_size=(200, 200))
+    img = viewer.show_volume(vol, off_screen=True, window_size=(200, 200)).image
     assert (img[..., :3].sum(axis=-1) > 100).sum() > 500
     with pytest.raises(ValueError, match="zs"):
         viewer.show_volume(vol, [0.0, 1.0], off_screen=True)
@@ -125,16 +126,16 @@ def test_colour_bars_are_titled_and_apart():
 
     pair = ml.phantoms.scene("disk_pair")
     ladar = ml.Ladar.paper(angles_deg=[90.0])
-    viewer.show_scene(pair, ladar=ladar, off_screen=True, window_size=(300, 240))
-    bars = list(viewer.last_scalar_bars)
+    shown = viewer.show_scene(pair, ladar=ladar, off_screen=True, window_size=(300, 240))
+    bars = list(shown.scalar_bars)
     assert sorted(t for t, _ in bars) == ["F cos(theta) [1/sr]", "first hits: range bin"]
     (_, a), (_, b) = bars
     assert a[3] <= b[1] or b[3] <= a[1] or a[2] <= b[0] or b[2] <= a[0]      # apart
     sino = ml.simulate(pair, ml.Ladar(np.arange(0.0, 360.0, 1.0),
                                       ml.Ladar.centered(64, 1.6 / 64).bin_edges))
-    viewer.show_slice(ml.fbp(ml.log_radiance(sino), size=64), off_screen=True,
-                      window_size=(200, 200))
-    assert [t for t, _ in viewer.last_scalar_bars] == ["reconstruction of log input"]
+    shown = viewer.show_slice(ml.fbp(ml.log_radiance(sino), size=64), off_screen=True,
+                              window_size=(200, 200))
+    assert [t for t, _ in shown.scalar_bars] == ["reconstruction of log input"]
 
 
 def test_legend_names_the_flat_colours_clear_of_the_bars_and_text_is_legible():
@@ -145,15 +146,16 @@ def test_legend_names_the_flat_colours_clear_of_the_bars_and_text_is_legible():
 
     pair = ml.phantoms.scene("disk_pair", large=DARK_GRAY, small=ALUMINUM)
     w, h = 600, 480
-    img = viewer.show_scene(pair, view_angle_deg=0.0, ladar=ml.Ladar.paper(),
-                            off_screen=True, window_size=(w, h))
-    labels, box = viewer.last_legend
-    assert labels == ["shadowed (another face in the way)", "turned away from the ladar",
+    shown = viewer.show_scene(pair, view_angle_deg=0.0, ladar=ml.Ladar.paper(),
+                              off_screen=True, window_size=(w, h))
+    img = shown.image
+    labels, box = shown.legend.labels, shown.legend.box
+    assert list(labels) == ["shadowed (another face in the way)", "turned away from the ladar",
                       "ladar beam and ray grid", "iso-range planes (bin edges)"]
-    for _, bar in viewer.last_scalar_bars:
+    for _, bar in shown.scalar_bars:
         assert box[2] <= bar[0] or bar[2] <= box[0] or box[3] <= bar[1] or bar[3] <= box[1]
     # light text right of each bar (its labels) and above it (its title)
-    for _, (x0, y0, x1, y1) in viewer.last_scalar_bars:
+    for _, (x0, y0, x1, y1) in shown.scalar_bars:
         labels_px = img[int((1 - y1) * h):int((1 - y0) * h), int(x1 * w):, :3]
         title_px = img[max(0, int((1 - y1) * h) - 30):int((1 - y1) * h),
                        int((x0 - 0.1) * w):, :3]
@@ -164,9 +166,11 @@ def test_legend_names_the_flat_colours_clear_of_the_bars_and_text_is_legible():
     legend_px = img[int((1 - y1) * h):int((1 - y0) * h), int(x0 * w):int(x1 * w), :3]
     assert (legend_px.min(axis=-1) > 200).sum() > 200
     # no ladar, no rays: nothing flat to name but the shadows and the far sides
-    viewer.show_scene(pair, view_angle_deg=90.0, show_rays=False, off_screen=True,
-                      window_size=(200, 160))
-    assert viewer.last_legend[0] == ["turned away from the ladar"]
+    quiet = viewer.show_scene(pair, view_angle_deg=90.0, show_rays=False, off_screen=True,
+                              window_size=(200, 160))
+    assert list(quiet.legend.labels) == ["turned away from the ladar"]
+    # np.asarray of what was shown is its image (ax.imshow(shown) keeps working)
+    assert np.asarray(quiet).shape == (160, 200, 3)
     with pytest.raises(ml.errors.ParameterError, match="camera"):
         viewer.show_scene(pair, camera="top", off_screen=True)
 
@@ -181,10 +185,10 @@ def test_volume_default_is_a_surface_not_fog():
     X, Y = np.meshgrid(x, x)
     zs = np.linspace(-0.5, 0.5, 8)
     images = [ml.Image(3.0 * (np.hypot(X, Y) < 0.5), 1.0) for _ in zs]
-    img = viewer.show_volume(images, zs, off_screen=True, window_size=(200, 200))
+    img = viewer.show_volume(images, zs, off_screen=True, window_size=(200, 200)).image
     assert (img[..., :3].sum(axis=-1) > 300).sum() > 500
     img = viewer.show_volume(images, zs, render="volume", off_screen=True,
-                             window_size=(200, 200))
+                             window_size=(200, 200)).image
     assert img[..., :3].std() > 5
     with pytest.raises(ValueError, match="render"):
         viewer.show_volume(images, zs, render="fog", off_screen=True)
