@@ -147,7 +147,6 @@ class RunFolder:
         """Chunk i's arrays, or None when it is missing, unreadable, fails its checksum, was
         written for another chunk or job, or (with ``shapes``, name → expected shape) has
         arrays of other shapes: such a chunk is recomputed, never used."""
-
         f = self._file(i)
         if not os.path.exists(f):
             return None
