@@ -28,8 +28,8 @@ def sinogram(sino, *, log=None):
     fig, (a, b) = plt.subplots(1, 2, figsize=(10.0, 4.0),
                                gridspec_kw={"width_ratios": [2.2, 1]})
     v = sino.values
-    units = sino.info.get("units", "")
-    rad = sino.info.get("radiometry", "paper")
+    units = sino.units or ""
+    rad = sino.radiometry or "paper"
     pos = v[v > 0]
     if log is None:
         log = bool(pos.size) and pos.max() > 1e3 * pos.min()
@@ -151,7 +151,7 @@ def profile(sino, reference, *, view=0, label="closed form"):
                                gridspec_kw={"height_ratios": [2.2, 1]})
     a.stairs(got, e, color="k", lw=1.0, label=f"{sino.model} model")
     a.stairs(ref, e, color="C1", lw=1.0, ls="--", label=label)
-    units = sino.info.get("units", "")
+    units = sino.units or ""
     a.set_ylabel(f"return per bin ({units})", fontsize=8)
     a.set_title(f"view {view} ({sino.angles_deg[view]:g} deg): profile against {label}",
                 fontsize=9)

@@ -56,7 +56,7 @@ def figure(waves, *, realisations=None, noise=None, views=None, band=(5.0, 95.0)
     fig, axes = plt.subplots(len(views), 1, figsize=(6.4, 1.9 * len(views) + 0.8),
                              squeeze=False, sharex=True)
     t_ns = waves.times * 1e9
-    units = waves.info.get("units") or "sinogram units"
+    units = waves.units or "sinogram units"
     if noise is not None:
         expected = noise.mean(waves.values, waves.sample_interval)
         units = units if noise.gain == 1 else f"{noise.gain:g} x {units}"
