@@ -227,6 +227,7 @@ def _workers_once_a_chunk_is_saved(run, proc):
     return psutil.Process(proc.pid).children(recursive=True)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sig", ["SIGTERM", "SIGKILL"])
 def test_a_stopped_run_takes_its_workers_with_it(tmp_path, sig):
     import signal

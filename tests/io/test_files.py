@@ -394,6 +394,7 @@ print(json.dumps({"loaded": out, "pil_imports": NoPIL.attempts}))
 """
 
 
+@pytest.mark.slow
 def test_textured_meshes_load_without_pillow(tmp_path):
     paths = [_textured_obj(tmp_path, "box"), _textured_obj(tmp_path, "lost", mtl=False),
              _textured_ply(tmp_path), _two_part_glb(tmp_path / "parts.glb")]

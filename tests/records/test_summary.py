@@ -58,6 +58,7 @@ def test_reprs_state_conventions(results):
     assert "<td style='text-align:left'>analytic</td>" in html   # strings without quotes
 
 
+@pytest.mark.slow
 def test_quick_looks(results, tmp_path):
     """Sinogram.plot() and Image.plot() return labelled Figures without pyplot state:
     units and radiometry on the colour bar, log input said so, no text overlapping or cut

@@ -88,6 +88,7 @@ def _wait_for_chunks(run, n, proc):
         raise AssertionError(_finish(proc)[1])
 
 
+@pytest.mark.slow
 def test_sigkill_mid_run_then_resume_gives_the_uninterrupted_result(tmp_path):
     run = tmp_path / "run"
     proc = _start(run, tmp_path / "a.npy")
@@ -112,6 +113,7 @@ def test_sigkill_mid_run_then_resume_gives_the_uninterrupted_result(tmp_path):
     np.testing.assert_array_equal(np.load(tmp_path / "b.npy"), np.load(tmp_path / "c.npy"))
 
 
+@pytest.mark.slow
 def test_ctrl_c_stops_cleanly_and_says_how_to_resume(tmp_path):
     out = tmp_path / "r.npz"
     run = tmp_path / "run"

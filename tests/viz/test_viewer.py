@@ -98,6 +98,7 @@ def test_volume_iso_surface_of_a_stack():
         viewer.show_volume(images, np.r_[zs[:-1], 9.0], iso=0.5, off_screen=True)
 
 
+@pytest.mark.slow
 def test_show_volume_of_a_reconstructed_ball():
     """A Volume (3-D Radon inversion of a uniform ball) draws as its default iso-surface."""
     from meshladar.mesh import fibonacci_sphere
