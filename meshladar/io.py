@@ -14,7 +14,7 @@ import tempfile
 
 import numpy as np
 
-from . import __version__
+from ._version import __version__
 from ._validate import check_path
 from .errors import MeshladarError, ParameterError
 from .noise import Noise

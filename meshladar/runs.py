@@ -16,7 +16,7 @@ import os
 
 import numpy as np
 
-from . import __version__
+from ._version import __version__
 from .errors import MeshladarError
 from .io import ResultFileError, load_result, save_result, write_text_atomic
 

@@ -136,3 +136,9 @@ def test_no_import_circle_and_the_old_modules_are_aliases():
     with pytest.raises(ParameterError, match="Sinogram"):
         check_sinogram("sino", np.ones((2, 3)))
     assert check_sinogram("sino", _sino()) is not None
+
+
+def test_the_foundations_version_is_the_packages():
+    from meshladar._version import __version__
+
+    assert __version__ == ml.__version__
