@@ -12,9 +12,7 @@ import pytest
 import meshladar as ml
 from meshladar.materials import ALUMINUM, DARK_GRAY, lambertian
 
-_SMOKE = ("from meshladar.viz import viewer; pv = viewer._pyvista(); "
-          "p = pv.Plotter(off_screen=True, window_size=(64, 48)); p.add_mesh(pv.Sphere()); "
-          "img = p.screenshot(return_img=True); assert img.shape == (48, 64, 3)")
+from _rendering import _SMOKE  # noqa: E402  (tests/, on the path with the conftest)
 
 
 @pytest.fixture(scope="module", autouse=True)
