@@ -55,8 +55,8 @@ def split_info(record, info, *, keep_none=False) -> dict:
     """Move the typed keys of ``info`` (a mapping) onto ``record``'s fields of the same name
     (a frozen dataclass with ``radiometry`` and ``units``) and set
     ``record.info`` to the merged read-only :class:`RecordInfo`. Returns the provenance (the
-    free-form rest) as a new dict. With ``keep_none`` an unset typed field still shows in
-    ``info`` as None (the waveforms' info always held both keys)."""
+    free-form rest) as a new dict. An unset typed field shows in ``info`` as None when the
+    given info held the key, or with ``keep_none`` (the waveforms' info always held both)."""
     if not isinstance(info, Mapping):
         raise ParameterError(f"info must be a dict; got {type(info).__name__}")
     # dataclasses.replace hands both the old fields and the old info: a record's own
@@ -66,12 +66,13 @@ def split_info(record, info, *, keep_none=False) -> dict:
     rest = dict(info)
     merged = {}
     for key in TYPED_INFO_KEYS:
+        present = key in rest
         given, old = getattr(record, key), rest.pop(key, None)
         value = given if given is not None and (field_wins or old is None) else old
         if value is not None and not isinstance(value, str):
             raise ParameterError(f"{key} must be a string or None; got {value!r}")
         object.__setattr__(record, key, value)
-        if value is not None or keep_none:
+        if value is not None or keep_none or present:
             merged[key] = value
     object.__setattr__(record, "info", RecordInfo(rest, **merged))
     return rest
