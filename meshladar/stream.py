@@ -42,7 +42,7 @@ from .errors import ParameterError
 from .runs import RunFolder
 
 __all__ = ["run_chunks", "joined", "dask_executor", "Progress", "choose_executor",
-           "check_run_dir", "in_worker", "MAX_JOBS_PER_CORE", "THREADS_FROM"]
+           "check_run_dir", "in_worker", "MAX_JOBS_PER_CORE", "THREADS_FROM", "PARALLEL_FROM"]
 
 #: Worker processes allowed per core (``jobs``): more only compete for the cores.
 MAX_JOBS_PER_CORE = 4
@@ -50,7 +50,7 @@ MAX_JOBS_PER_CORE = 4
 _MAX_RETRIES = 3
 #: Estimated work (rays) from which ``jobs=None`` starts a process per core (a process
 #: pool costs 0.4-1.5 s to start: about 4e6 rays of one core's work).
-_PARALLEL_FROM = 4e6
+PARALLEL_FROM = 4e6
 #: The same for threads, which cost next to nothing to start: from 5e4 rays a view's rows
 #: on two threads pay (a 1e5-ray view of an 82k-face sphere: 15-18 ms against 24-30 ms).
 THREADS_FROM = 5e4
@@ -110,7 +110,7 @@ def choose_executor(jobs, executor, work, n_chunks, *, threads=False):
         return executor, False
     cores = os.cpu_count() or 1
     if jobs is None:
-        start = THREADS_FROM if threads else _PARALLEL_FROM
+        start = THREADS_FROM if threads else PARALLEL_FROM
         jobs = 1 if work < start else max(1, min(cores, n_chunks))
     if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)) or jobs < 1:
         raise ParameterError(f"jobs must be an integer >= 1; got {jobs!r}")
@@ -195,13 +195,13 @@ def run_chunks(fn, payload, n_items, *, chunk_size, args=(), jobs=None, executor
         Further arguments of every call (sent with each task).
     jobs : int, optional
         Workers (threads or processes); default 1, or one per core (at most one per chunk)
-        once ``work`` pays for the pool (2e5 rays for threads, 4e6 for processes).
+        once ``work`` reaches :data:`THREADS_FROM` (threads) or :data:`PARALLEL_FROM` rays.
     executor : concurrent.futures.Executor, optional
         Any executor; overrides ``jobs``.
     progress : bool
         A progress bar over the items, on a terminal only.
     unit : str
-        The items' name in the bar.
+        The items' name in the bar (default "views").
     work : float
         Estimated work (rays) for the default ``jobs``.
     threads : bool
