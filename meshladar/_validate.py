@@ -4,6 +4,7 @@ cleaned value. Messages name the argument, the value received and what is valid.
 from __future__ import annotations
 
 import math
+import os
 from numbers import Real
 
 import numpy as np
@@ -109,8 +110,6 @@ def check_flag(name: str, value) -> bool:
 
 def check_path(name: str, value):
     """``value`` as a path string (str or os.PathLike, not empty), else a ParameterError."""
-    import os
-
     if isinstance(value, (str, os.PathLike)):
         path = os.fspath(value)
         if isinstance(path, str) and path:
@@ -119,9 +118,12 @@ def check_path(name: str, value):
 
 
 def check_sinogram(name: str, value):
-    """``value`` if it is a meshladar.Sinogram, else a ParameterError."""
-    from .sinogram import Sinogram
+    """``value`` if it is a meshladar.Sinogram, else a ParameterError.
 
-    if not isinstance(value, Sinogram):
+    Kept for the importers of one release; new code uses
+    :func:`meshladar.sinogram.check_sinogram`. The foundation does not import the record
+    (no import circle): the class is recognised by its qualified name along the MRO."""
+    if not any(c.__module__ == "meshladar.sinogram" and c.__qualname__ == "Sinogram"
+               for c in type(value).__mro__):
         raise ParameterError(f"{name} must be a meshladar.Sinogram; got {type(value).__name__}")
     return value

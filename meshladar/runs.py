@@ -16,9 +16,11 @@ import os
 
 import numpy as np
 
+from ._version import __version__
 from .errors import MeshladarError
+from .io import ResultFileError, load_result, save_result, write_text_atomic
 
-__all__ = ["RunFolder", "RunFolderError", "job_digest", "array_digest"]
+__all__ = ["RunFolder", "RunFolderError", "job_digest", "array_digest", "chunk_digest"]
 
 
 class RunFolderError(MeshladarError, ValueError):
@@ -35,7 +37,9 @@ def array_digest(a) -> str:
     return hashlib.sha256(np.ascontiguousarray(a).tobytes()).hexdigest()
 
 
-def _array_digest(arrays: dict) -> str:
+def chunk_digest(arrays: dict) -> str:
+    """The SHA-256 of a chunk's named arrays (names, dtypes, shapes and bytes, in name
+    order): the checksum a chunk file records and is verified against."""
     h = hashlib.sha256()
     for k in sorted(arrays):
         a = np.ascontiguousarray(arrays[k])
@@ -68,9 +72,6 @@ class RunFolder:
 
     def _start(self):
         """Clean temporaries and check (or write) the manifest, holding the lock."""
-        from . import __version__
-        from .results import write_text_atomic
-
         # temporaries of writes cut short by a kill: never under a final name, removed here
         # (only while holding the lock, so never another run's in-flight files)
         for name in os.listdir(self.path):
@@ -114,8 +115,6 @@ class RunFolder:
 
     def _foreign_chunks(self):
         """How many readable chunk files in the folder were written for another job."""
-        from .results import ResultFileError, load_result
-
         count = 0
         for name in os.listdir(self.path):
             if name.startswith("chunk_") and name.endswith(".npz"):
@@ -148,8 +147,6 @@ class RunFolder:
         """Chunk i's arrays, or None when it is missing, unreadable, fails its checksum, was
         written for another chunk or job, or (with ``shapes``, name → expected shape) has
         arrays of other shapes: such a chunk is recomputed, never used."""
-        from .results import ResultFileError, load_result
-
         f = self._file(i)
         if not os.path.exists(f):
             return None
@@ -158,7 +155,7 @@ class RunFolder:
         except ResultFileError:
             return None
         if (meta.get("job") != self.digest or meta.get("chunk") != int(i)
-                or meta.get("sha256") != _array_digest(arrays)):
+                or meta.get("sha256") != chunk_digest(arrays)):
             return None
         if shapes is not None and any(
                 k not in arrays or arrays[k].shape != tuple(v) for k, v in shapes.items()):
@@ -166,11 +163,10 @@ class RunFolder:
         return arrays
 
     def save(self, i, arrays: dict):
-        from .results import save_result
 
         arrays = {k: np.asarray(v) for k, v in arrays.items()}
         save_result(self._file(i), arrays, {"job": self.digest, "chunk": int(i),
-                                            "sha256": _array_digest(arrays)})
+                                            "sha256": chunk_digest(arrays)})
 
     def done(self):
         return [i for i in range(self.n_chunks) if os.path.exists(self._file(i))]
@@ -201,3 +197,7 @@ def _lock(path):
 
 def _jsonable(x):
     return json.loads(json.dumps(x, sort_keys=True, default=str))
+
+
+#: The old private name (tests imported it); use :func:`chunk_digest`.
+_array_digest = chunk_digest

@@ -7,15 +7,82 @@ integrated over range bin k, ``[bin_edges[k], bin_edges[k + 1])``.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
 
+from . import plotting
+from ._summary import table, text
 from ._validate import finite_array, readonly_copy, unit_vectors
 from .errors import ParameterError
 
-__all__ = ["Sinogram"]
+__all__ = ["Sinogram", "RecordInfo", "TYPED_INFO_KEYS", "check_sinogram", "split_info"]
+
+#: The record keys that were undeclared ``info`` entries and are now typed fields of
+#: :class:`Sinogram` and :class:`~meshladar.waveforms.Waveforms`; ``info[key]`` still reads
+#: them for one release.
+TYPED_INFO_KEYS = ("radiometry", "units")
+
+
+class RecordInfo(dict):
+    """A read-only view of a record's ``info``: its free-form provenance merged with its typed
+    fields (``radiometry``, ``units``), so that ``info["radiometry"]`` keeps reading the field
+    for one release (the habit of trimesh's ``MassProperties.__getitem__``). Mutation raises
+    TypeError; it pickles and JSON-encodes as a plain dict."""
+
+    __slots__ = ()
+
+    def _read_only(self, *args, **kwargs):
+        raise TypeError("a record's info is read-only; build a new record with "
+                        "info=dict(record.info, key=value)")
+
+    __setitem__ = __delitem__ = _read_only
+    update = pop = popitem = clear = setdefault = __ior__ = _read_only
+
+    def __reduce__(self):
+        return (RecordInfo, (dict(self),))
+
+    def __copy__(self):
+        return self
+
+    def __deepcopy__(self, memo):
+        return self
+
+
+def split_info(record, info, *, keep_none=False) -> dict:
+    """Move the typed keys of ``info`` (a mapping) onto ``record``'s fields of the same name
+    (a frozen dataclass with ``radiometry`` and ``units``) and set
+    ``record.info`` to the merged read-only :class:`RecordInfo`. Returns the provenance (the
+    free-form rest) as a new dict. An unset typed field shows in ``info`` as None when the
+    given info held the key, or with ``keep_none`` (the waveforms' info always held both)."""
+    if not isinstance(info, Mapping):
+        raise ParameterError(f"info must be a dict; got {type(info).__name__}")
+    # dataclasses.replace hands both the old fields and the old info: a record's own
+    # RecordInfo yields to a field given anew (replace(sino, units=...)), a new info dict
+    # overrides the old field (replace(sino, info=dict(sino.info, units=...)), as before)
+    field_wins = isinstance(info, RecordInfo)
+    rest = dict(info)
+    merged = {}
+    for key in TYPED_INFO_KEYS:
+        present = key in rest
+        given, old = getattr(record, key), rest.pop(key, None)
+        value = given if given is not None and (field_wins or old is None) else old
+        if value is not None and not isinstance(value, str):
+            raise ParameterError(f"{key} must be a string or None; got {value!r}")
+        object.__setattr__(record, key, value)
+        if value is not None or keep_none or present:
+            merged[key] = value
+    object.__setattr__(record, "info", RecordInfo(rest, **merged))
+    return rest
+
+
+def check_sinogram(name: str, value):
+    """``value`` if it is a meshladar.Sinogram, else a ParameterError."""
+    if not isinstance(value, Sinogram):
+        raise ParameterError(f"{name} must be a meshladar.Sinogram; got {type(value).__name__}")
+    return value
 
 
 @dataclass(frozen=True, eq=False)
@@ -26,9 +93,9 @@ class Sinogram:
     ----------
     values : (n_views, n_bins) array_like, float64
         Bin integrals over the visible surface: of F(θ) cos θ dA (DESIGN.md, paper Eq. 8,
-        ``info["radiometry"] = "paper"``) or of the received power F cos θ_i cos θ_r dA
+        ``radiometry="paper"``) or of the received power F cos θ_i cos θ_r dA
         (``"power"``), in scene units of area (length in 2D) times 1/sr, or photoelectrons
-        with a sensor that counts them (``info["units"]``).
+        with a sensor that counts them (``units``).
     angles_deg : (n_views,) array_like, keyword-only
         View angles φ in degrees, about the z axis: the ladar looks from
         w = (cos φ, sin φ, 0) toward the scene; φ = 90° is the paper's Fig. 1.
@@ -39,7 +106,15 @@ class Sinogram:
     view_vectors : (n_views, 3) array_like, keyword-only, optional
         The view directions when they are not all about the z axis (mesh model).
     info : dict, keyword-only
-        Free-form metadata (run parameters, error estimates); not compared.
+        Free-form provenance (run parameters, error estimates); not compared. Stored as a
+        read-only :class:`RecordInfo` that also shows the typed fields below, so
+        ``info["radiometry"]`` still reads for one release; a ``"radiometry"`` or
+        ``"units"`` key given here fills the field of that name.
+    radiometry : str, keyword-only, optional
+        The convention of the values: ``"paper"`` (Eq. 8) or ``"power"``; None when unknown
+        (measured data).
+    units : str, keyword-only, optional
+        The values' units when not the convention's own (``"photoelectrons"``).
 
     All arrays are stored as read-only float64 copies.
     """
@@ -50,6 +125,8 @@ class Sinogram:
     model: str = field(default="measured", kw_only=True)
     info: dict = field(default_factory=dict, kw_only=True)
     view_vectors: np.ndarray = field(default=None, kw_only=True, repr=False)
+    radiometry: str | None = field(default=None, kw_only=True)
+    units: str | None = field(default=None, kw_only=True)
 
     def __post_init__(self):
         values = finite_array("values", self.values)
@@ -69,11 +146,9 @@ class Sinogram:
         object.__setattr__(self, "values", readonly_copy(values))
         object.__setattr__(self, "angles_deg", readonly_copy(angles))
         object.__setattr__(self, "bin_edges", readonly_copy(edges))
-        if not isinstance(self.info, dict):
-            raise ParameterError(f"info must be a dict; got {type(self.info).__name__}")
+        split_info(self, self.info)
         if not isinstance(self.model, str):
             raise ParameterError(f"model must be a string; got {self.model!r}")
-        object.__setattr__(self, "info", dict(self.info))
         if self.view_vectors is None:
             phi = np.deg2rad(angles)
             vec = np.stack([np.cos(phi), np.sin(phi), np.zeros_like(phi)], axis=-1)
@@ -117,28 +192,28 @@ class Sinogram:
         """(n_views,) total return of each view: the sum of its bins."""
         return self.values.sum(axis=1)
 
-    def plot(self, *, log=None):
-        """A quick look (:func:`meshladar.viz.quick.sinogram`): a matplotlib Figure; ``log``
-        (default: when the values span more than three decades) a log colour scale."""
-        from .viz.quick import sinogram
+    @property
+    def provenance(self) -> dict:
+        """The free-form part of :attr:`info` (without the typed fields), as a new dict."""
+        return {k: v for k, v in self.info.items() if k not in TYPED_INFO_KEYS}
 
-        return sinogram(self, log=log)
+    def plot(self, *, log=None):
+        """A quick look (:func:`meshladar.viz.quick.sinogram`, through
+        :mod:`meshladar.plotting`): a matplotlib Figure; ``log`` (default: when the values
+        span more than three decades) a log colour scale."""
+        return plotting.plot(self, log=log)
 
     def _summary(self):
         return (("model", self.model), ("n_views", self.n_views), ("n_bins", self.n_bins),
                 ("range", (float(self.bin_edges[0]), float(self.bin_edges[-1]))),
                 ("max", float(self.values.max(initial=0.0))),
-                ("radiometry", self.info.get("radiometry")), ("units", self.info.get("units")),
+                ("radiometry", self.radiometry), ("units", self.units),
                 ("views", "about z, w = (cos φ, sin φ, 0)" if self.planar else
                  "3-D directions w"), ("ranges", "r = −p·w"),
                 ("preprocess", self.info.get("preprocess")))
 
     def __repr__(self) -> str:
-        from ._summary import text
-
         return text("Sinogram", *self._summary())
 
     def _repr_html_(self) -> str:
-        from ._summary import table
-
         return table("Sinogram", *self._summary())

@@ -27,25 +27,35 @@ from __future__ import annotations
 
 import contextlib
 import os
+import signal
 import sys
 import time
+from collections.abc import Callable
+from concurrent.futures import (CancelledError, ProcessPoolExecutor, ThreadPoolExecutor,
+                                as_completed)
+from typing import NamedTuple
 
 import numpy as np
 
+from ._validate import check_flag
 from .errors import ParameterError
+from .runs import RunFolder
 
-__all__ = ["run_chunks", "joined", "dask_executor", "Progress"]
+__all__ = ["run_chunks", "joined", "dask_executor", "Progress", "choose_executor",
+           "check_run_dir", "in_worker", "MAX_JOBS_PER_CORE", "THREADS_FROM", "PARALLEL_FROM"]
 
 #: Worker processes allowed per core (``jobs``): more only compete for the cores.
-_MAX_JOBS_PER_CORE = 4
+MAX_JOBS_PER_CORE = 4
 #: Resubmissions of a chunk whose task was cancelled (a worker lost with its data).
 _MAX_RETRIES = 3
 #: Estimated work (rays) from which ``jobs=None`` starts a process per core (a process
 #: pool costs 0.4-1.5 s to start: about 4e6 rays of one core's work).
-_PARALLEL_FROM = 4e6
+PARALLEL_FROM = 4e6
 #: The same for threads, which cost next to nothing to start: from 5e4 rays a view's rows
 #: on two threads pay (a 1e5-ray view of an 82k-face sphere: 15-18 ms against 24-30 ms).
-_THREADS_FROM = 5e4
+THREADS_FROM = 5e4
+#: The old private names (raytrace/model imported them).
+_MAX_JOBS_PER_CORE, _THREADS_FROM = MAX_JOBS_PER_CORE, THREADS_FROM
 
 
 class Progress:
@@ -87,11 +97,12 @@ def _chunks(n, size):
     return [np.arange(i, min(i + size, n)) for i in range(0, n, size)]
 
 
-def _executor(jobs, executor, work, n_chunks, threads=False):
-    """The executor to use: the user's; else a pool of ``jobs`` threads (a job whose
-    compiled loop releases the GIL, as the mesh engine's casts do) or worker processes (one
-    that holds it: the analytic and pixel models' numpy); else none. By default a pool is started only when the work (rays) pays for
-    it, with at most one worker per chunk: a single view never starts one."""
+def choose_executor(jobs, executor, work, n_chunks, *, threads=False):
+    """The executor to use, and whether it is this call's own (to shut down): the user's;
+    else a pool of ``jobs`` threads (a job whose compiled loop releases the GIL, as the mesh
+    engine's casts do) or worker processes (one that holds it: the analytic and pixel
+    models' numpy); else none. By default a pool is started only when the work (rays) pays
+    for it, with at most one worker per chunk: a single view never starts one."""
     if executor is not None:
         if not callable(getattr(executor, "submit", None)):
             raise ParameterError(f"executor must be a concurrent.futures.Executor (with "
@@ -99,22 +110,18 @@ def _executor(jobs, executor, work, n_chunks, threads=False):
         return executor, False
     cores = os.cpu_count() or 1
     if jobs is None:
-        start = _THREADS_FROM if threads else _PARALLEL_FROM
+        start = THREADS_FROM if threads else PARALLEL_FROM
         jobs = 1 if work < start else max(1, min(cores, n_chunks))
     if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)) or jobs < 1:
         raise ParameterError(f"jobs must be an integer >= 1; got {jobs!r}")
-    if jobs > _MAX_JOBS_PER_CORE * cores:
-        raise ParameterError(f"jobs must be at most {_MAX_JOBS_PER_CORE * cores} "
-                             f"({_MAX_JOBS_PER_CORE} per core on this {cores}-core machine: "
+    if jobs > MAX_JOBS_PER_CORE * cores:
+        raise ParameterError(f"jobs must be at most {MAX_JOBS_PER_CORE * cores} "
+                             f"({MAX_JOBS_PER_CORE} per core on this {cores}-core machine: "
                              f"more workers only compete for the cores); got {jobs}")
     if jobs == 1:
         return None, False
     if threads:
-        from concurrent.futures import ThreadPoolExecutor
-
         return ThreadPoolExecutor(max_workers=int(jobs)), True
-    from concurrent.futures import ProcessPoolExecutor
-
     return ProcessPoolExecutor(max_workers=int(jobs), initializer=_worker_init), True
 
 
@@ -132,8 +139,6 @@ def in_worker() -> bool:
 def _worker_init():
     """In a worker process: die with the parent (Linux), so a killed run leaves no
     workers behind; elsewhere a no-op."""
-    import signal
-
     global _IN_WORKER
     _IN_WORKER = True
 
@@ -155,8 +160,6 @@ def _scatter(ex, payload):
     scatter = getattr(getattr(ex, "_client", None), "scatter", None)
     if scatter is None:
         return payload
-    from concurrent.futures import CancelledError
-
     for _ in range(_MAX_RETRIES):
         try:
             return scatter(payload, broadcast=True, hash=False)
@@ -192,13 +195,13 @@ def run_chunks(fn, payload, n_items, *, chunk_size, args=(), jobs=None, executor
         Further arguments of every call (sent with each task).
     jobs : int, optional
         Workers (threads or processes); default 1, or one per core (at most one per chunk)
-        once ``work`` pays for the pool (2e5 rays for threads, 4e6 for processes).
+        once ``work`` reaches :data:`THREADS_FROM` (threads) or :data:`PARALLEL_FROM` rays.
     executor : concurrent.futures.Executor, optional
         Any executor; overrides ``jobs``.
     progress : bool
         A progress bar over the items, on a terminal only.
     unit : str
-        The items' name in the bar.
+        The items' name in the bar (default "views").
     work : float
         Estimated work (rays) for the default ``jobs``.
     threads : bool
@@ -217,28 +220,18 @@ def run_chunks(fn, payload, n_items, *, chunk_size, args=(), jobs=None, executor
     list
         Each chunk's result, in chunk order.
     """
-    from ._validate import check_flag
-
     check_flag("progress", progress)
     if run_dir is not None:
         check_run_dir(run_dir)
     chunks = _chunks(int(n_items), int(chunk_size))
-    ex, own = _executor(jobs, executor, work, len(chunks), threads)
+    ex, own = choose_executor(jobs, executor, work, len(chunks), threads=threads)
     bar = Progress(n_items, unit, enabled=progress)
     results = [None] * len(chunks)
     folder = None
     try:
         if run_dir is not None:
-            from .runs import RunFolder
-
-            folder = RunFolder(run_dir, dict(job, views_per_chunk=int(chunk_size)),
-                               len(chunks))
-            for k, items in enumerate(chunks):
-                saved = folder.load(k, {name: (len(items),) + tuple(shape)
-                                        for name, shape in arrays.items()})
-                if saved is not None:
-                    results[k] = saved
-                    bar.update(len(items))
+            folder = RunFolder(run_dir, dict(job, views_per_chunk=int(chunk_size)), len(chunks))
+            _resume(folder, chunks, arrays, results, bar)
 
         def keep(k, res):
             results[k] = res
@@ -251,25 +244,7 @@ def run_chunks(fn, payload, n_items, *, chunk_size, args=(), jobs=None, executor
             for k in todo:
                 keep(k, fn(payload, chunks[k], *args))
         else:
-            shared = _scatter(ex, payload)
-            futures = {ex.submit(fn, shared, chunks[k], *args): k for k in todo}
-            from concurrent.futures import CancelledError, as_completed
-
-            retries = {}
-            while futures:
-                for f in as_completed(list(futures)):
-                    k = futures.pop(f)
-                    try:
-                        keep(k, f.result())
-                    except CancelledError:
-                        # a lost worker took the scattered payload (or the task) with it:
-                        # send the chunk again with the payload itself, a bounded number of
-                        # times
-                        retries[k] = retries.get(k, 0) + 1
-                        if retries[k] > _MAX_RETRIES:
-                            raise
-                        futures[ex.submit(fn, payload, chunks[k], *args)] = k
-                    break
+            _on_executor(ex, _Tasks(fn, payload, chunks, args), todo, keep)
     except BaseException:
         if own:                          # interrupted or failed: drop the queued chunks,
             ex.shutdown(wait=False, cancel_futures=True)     # the workers exit with us
@@ -282,6 +257,45 @@ def run_chunks(fn, payload, n_items, *, chunk_size, args=(), jobs=None, executor
         if own:
             ex.shutdown()
     return results
+
+
+def _resume(folder, chunks, arrays, results, bar):
+    """Fill ``results`` with the chunks the run folder already holds (verified)."""
+    for k, items in enumerate(chunks):
+        saved = folder.load(k, {name: (len(items),) + tuple(shape)
+                                for name, shape in arrays.items()})
+        if saved is not None:
+            results[k] = saved
+            bar.update(len(items))
+
+
+class _Tasks(NamedTuple):
+    """What every chunk's task is made of: ``fn(payload, chunks[k], *args)``."""
+
+    fn: Callable
+    payload: object
+    chunks: list
+    args: tuple
+
+
+def _on_executor(ex, tasks, todo, keep):
+    """Run the chunks ``todo`` on ``ex``, ``keep(k, result)`` as each completes."""
+    shared = _scatter(ex, tasks.payload)
+    futures = {ex.submit(tasks.fn, shared, tasks.chunks[k], *tasks.args): k for k in todo}
+    retries = {}
+    while futures:
+        for f in as_completed(list(futures)):
+            k = futures.pop(f)
+            try:
+                keep(k, f.result())
+            except CancelledError:
+                # a lost worker took the scattered payload (or the task) with it: send the
+                # chunk again with the payload itself, a bounded number of times
+                retries[k] = retries.get(k, 0) + 1
+                if retries[k] > _MAX_RETRIES:
+                    raise
+                futures[ex.submit(tasks.fn, tasks.payload, tasks.chunks[k], *tasks.args)] = k
+            break
 
 
 def joined(results, name):
@@ -321,8 +335,6 @@ def dask_executor(address=None, *, workers=2, threads_per_worker=1, timeout=10.0
     except ImportError as exc:
         raise ImportError("Dask execution needs distributed: pip install 'meshladar[dask]'") \
             from exc
-    from .errors import ParameterError
-
     cluster = None
     if address is None:
         try:
@@ -354,3 +366,7 @@ def dask_executor(address=None, *, workers=2, threads_per_worker=1, timeout=10.0
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+#: The old private name (a test imported it); use :func:`choose_executor`.
+_executor = choose_executor

@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from meshladar.errors import ParameterError
+from meshladar.fitting import ViewDesign
+
 from . import style
 
 __all__ = ["design_figure", "draw_design"]
@@ -21,9 +24,6 @@ def design_figure(design):
     each candidate view's own information against its angle with the chosen views numbered
     in the order they were added, and each parameter's σ from the chosen views against as
     many evenly spaced ones (log scale)."""
-    from meshladar.errors import ParameterError
-    from meshladar.fitting import ViewDesign
-
     if not isinstance(design, ViewDesign):
         raise ParameterError(f"design must be a meshladar.fitting.ViewDesign; got "
                              f"{type(design).__name__}")

@@ -21,6 +21,9 @@ import os
 
 import numpy as np
 
+from meshladar import io as mlio
+from meshladar import paper
+
 from . import style
 
 __all__ = ["reproduce", "draw", "save_run", "RESULT_NAME"]
@@ -30,8 +33,6 @@ RESULT_NAME = "paper_result.npz"
 
 def save_run(outdir, *, size=None):
     """Run the paper's experiments and save them to ``outdir/paper_result.npz``."""
-    from meshladar import paper, results
-
     kwargs = {} if size is None else {"size": size}
     res = paper.run(**kwargs)
     arrays = {f"sino/{k}": v for k, v in res["sinograms"].items()}
@@ -43,7 +44,7 @@ def save_run(outdir, *, size=None):
             "size": res["size"], "figures": {str(k): v for k, v in paper.FIGURES.items()},
             "model": "analytic"}
     path = os.path.join(outdir, RESULT_NAME)
-    results.save_result(path, arrays, meta)
+    mlio.save_result(path, arrays, meta)
     return path, res["metrics"]
 
 
@@ -239,9 +240,7 @@ def draw(result_path, outdir, *, dpi=None):
 
     ``dpi`` overrides the style's resolution (150, as the README's copies).
     """
-    from meshladar import results
-
-    arrays, meta = results.load_result(result_path)
+    arrays, meta = mlio.load_result(result_path)
     os.makedirs(outdir, exist_ok=True)
     return style.save_all(((f"fig{n:02d}.png", fig) for n, fig in figures(arrays, meta)),
                           outdir, dpi)

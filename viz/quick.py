@@ -6,7 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from meshladar.errors import ParameterError
+
 from . import style
+from .paper import norm
 
 __all__ = ["sinogram", "image", "volume", "profile"]
 
@@ -25,8 +28,8 @@ def sinogram(sino, *, log=None):
     fig, (a, b) = plt.subplots(1, 2, figsize=(10.0, 4.0),
                                gridspec_kw={"width_ratios": [2.2, 1]})
     v = sino.values
-    units = sino.info.get("units", "")
-    rad = sino.info.get("radiometry", "paper")
+    units = sino.units or ""
+    rad = sino.radiometry or "paper"
     pos = v[v > 0]
     if log is None:
         log = bool(pos.size) and pos.max() > 1e3 * pos.min()
@@ -66,8 +69,6 @@ def image(img, *, y=None, title=None):
     """The image on a diverging map symmetric about zero (the paper figures' scale:
     :func:`meshladar.viz.paper.norm`) and its slice along x at ``y`` (default the centre)
     beside it; ``title`` replaces the image panel's (method, input, size)."""
-    from .paper import norm
-
     plt = style.use()
     fig, (a, b) = plt.subplots(1, 2, figsize=(10.0, 4.2),
                                gridspec_kw={"width_ratios": [1.25, 1]})
@@ -109,8 +110,6 @@ def volume(vol, *, title=None):
     """Three central slices of a :class:`meshladar.volume.Volume` (z = 0, y = 0, x = 0) on one
     colour scale, symmetric about zero as the images' (:func:`meshladar.viz.paper.norm`);
     log input is labelled as such."""
-    from .paper import norm
-
     plt = style.use()
     fig, axes = plt.subplots(1, 3, figsize=(12.5, 4.0))
     fig.subplots_adjust(wspace=0.4, left=0.06, right=0.88, top=0.85, bottom=0.14)
@@ -146,15 +145,13 @@ def profile(sino, reference, *, view=0, label="closed form"):
     e = sino.bin_edges
     ref = np.asarray(reference(e) if callable(reference) else reference, dtype=float)
     if ref.shape != got.shape:
-        from meshladar.errors import ParameterError
-
         raise ParameterError(f"reference must give the view's {got.size} bins; got shape "
                              f"{ref.shape}")
     fig, (a, b) = plt.subplots(2, 1, figsize=(7.0, 5.0), sharex=True,
                                gridspec_kw={"height_ratios": [2.2, 1]})
     a.stairs(got, e, color="k", lw=1.0, label=f"{sino.model} model")
     a.stairs(ref, e, color="C1", lw=1.0, ls="--", label=label)
-    units = sino.info.get("units", "")
+    units = sino.units or ""
     a.set_ylabel(f"return per bin ({units})", fontsize=8)
     a.set_title(f"view {view} ({sino.angles_deg[view]:g} deg): profile against {label}",
                 fontsize=9)

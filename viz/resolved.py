@@ -5,6 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from meshladar.errors import ParameterError
+from meshladar.resolved import Returns
+
 from . import style
 
 __all__ = ["draw"]
@@ -17,9 +20,6 @@ _LABELS = {"range": "range r = -p.w", "cross_range": "cross-range p.u",
 def draw(returns, path, *, views=None, log=False, dpi=None):
     """Write a PNG of up to four views of ``returns`` to ``path``; ``log`` shows
     log10 of the returns (glints next to diffuse parts). Returns the path."""
-    from meshladar.errors import ParameterError
-    from meshladar.resolved import Returns
-
     if not isinstance(returns, Returns):
         raise ParameterError(f"returns must be a meshladar.resolved.Returns; got "
                              f"{type(returns).__name__}")

@@ -20,7 +20,11 @@ import os
 
 import numpy as np
 
+from meshladar import io as mlio
+from meshladar import study_reconstruction as study
+
 from . import style
+from .paper import norm
 
 __all__ = ["draw", "figures", "reconstruction_figures", "draw_reconstruction",
            "tomography3d_figures", "draw_tomography3d"]
@@ -55,8 +59,6 @@ def _log_ticks(ax):
 def figures(outdir):
     """Yield (file name, matplotlib Figure) for the study saved in ``outdir`` (inside
     :func:`meshladar.viz.style.styled`); :func:`draw` saves them."""
-    from meshladar import results
-
     plt = style.use()
     with open(os.path.join(outdir, "faceting.json"), encoding="utf-8") as fh:
         doc = json.load(fh)
@@ -110,7 +112,7 @@ def figures(outdir):
     fig.tight_layout()
     yield "error_vs_segments.png", fig
 
-    arrays, meta = results.load_result(os.path.join(outdir, "faceting_examples.npz"))
+    arrays, meta = mlio.load_result(os.path.join(outdir, "faceting_examples.npz"))
     edges = arrays["bin_edges"]
     angles = arrays["angles_deg"]
     for key, info in meta["examples"].items():
@@ -145,8 +147,6 @@ def draw(outdir):
 def _signed_panel(ax, img, extent):
     """A signed reconstruction on the paper figures' scale (:func:`meshladar.viz.paper.norm`:
     symmetric about 0, the surfaces unsaturated), without ticks."""
-    from .paper import norm
-
     ax.imshow(img, origin="lower", cmap="RdBu_r", norm=norm(img), extent=extent,
               interpolation="nearest")
     ax.set_xticks([])
@@ -157,8 +157,6 @@ def reconstruction_figures(images, methods=None, spacings=(1.0, 10.0)):
     """Yield ("reconstruction.png", Figure): every method's image (columns) of every
     phantom at each view spacing (rows), from the reconstruction study's
     ``images[(phantom, spacing_deg, method)]``; each panel on its own symmetric scale."""
-    from meshladar import study_reconstruction as study
-
     plt = style.use()
     methods = list(study.METHODS if methods is None else methods)
     panels = [(ph, sp) for ph in sorted({k[0] for k in images}) for sp in spacings]

@@ -2,6 +2,14 @@
 
 from __future__ import annotations
 
+import functools
+import os
+
+import numpy as np
+
+from meshladar.errors import ParameterError
+from meshladar.io import write_atomic
+
 __all__ = ["STYLE", "use", "styled", "pick_views", "save_png", "save_all"]
 
 STYLE = {
@@ -49,8 +57,6 @@ class _Figures:
 def styled(func):
     """Run ``func`` with meshladar's style in a ``matplotlib.rc_context``: the user's
     rcParams are as they were afterwards."""
-    import functools
-
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
         with _matplotlib().rc_context(STYLE):
@@ -62,10 +68,6 @@ def styled(func):
 def pick_views(n_views, views=None, most=4):
     """The views a figure shows: ``views`` checked against ``n_views``, or up to ``most``
     spread over all of them."""
-    import numpy as np
-
-    from meshladar.errors import ParameterError
-
     if views is None:
         views = np.unique(np.linspace(0, n_views - 1, min(most, n_views)).round().astype(int))
     views = [int(v) for v in views]
@@ -77,18 +79,12 @@ def pick_views(n_views, views=None, most=4):
 def save_all(named_figures, outdir, dpi=None):
     """Write each (file name, Figure) of ``named_figures`` into ``outdir`` with
     :func:`save_png`; returns the paths."""
-    import os
-
     return [save_png(fig, os.path.join(outdir, name), dpi) for name, fig in named_figures]
 
 
 def save_png(fig, path, dpi=None):
-    """Write ``fig`` as a PNG at ``path`` atomically (:func:`meshladar.results.write_atomic`:
+    """Write ``fig`` as a PNG at ``path`` atomically (:func:`meshladar.io.write_atomic`:
     a crash never leaves half a file or a stray temporary); returns the path."""
-    import os
-
-    from meshladar.results import write_atomic
-
     path = os.fspath(path)
     dpi = STYLE["savefig.dpi"] if dpi is None else dpi
     write_atomic(path, lambda fh: fig.savefig(fh, format="png", dpi=dpi))

@@ -12,17 +12,30 @@ another face (of this part or another) in ``shadow_color``, faces turned away in
 first hits as points coloured by range bin (viridis) and iso-range planes in cyan; the
 beam and the ray grid's footprint in yellow. Each quantity has one titled colour bar in a
 fixed slot at the right edge; a legend at the top left names the flat colours drawn.
+
+Each entry point returns a :class:`Shown` record: the image (off screen) or the plotter
+(on a desktop), with the figure's legend and colour bars (their titles and boxes); no
+module state is kept between calls. ``np.asarray(shown)`` is the image, so
+``ax.imshow(shown)`` keeps working.
 """
 
 from __future__ import annotations
 
-import os
+from typing import NamedTuple
 
 import numpy as np
 
+from meshladar import Scene
+from meshladar._validate import check_count, check_real, unit_vectors
+from meshladar.errors import ParameterError
+from meshladar.raytrace import first_hits, occluded
+from meshladar.volume import Volume
+
+from ._frame import Legend, ScalarBar, Shown, _bar, _finish, _headless_window, _legend, _pyvista
+
 __all__ = ["show_scene", "show_slice", "show_volume", "volume_surface", "volume_iso",
-           "face_returns", "SHADOW_COLOR", "BACK_COLOR", "CAMERAS", "last_scalar_bars",
-           "last_legend"]
+           "face_returns", "SHADOW_COLOR", "BACK_COLOR", "CAMERAS", "Shown", "Legend",
+           "ScalarBar"]
 
 #: Colour of faces that face the ladar but are shadowed by another face.
 SHADOW_COLOR = (1.0, 0.0, 1.0)
@@ -33,39 +46,7 @@ CAMERAS = ("oblique", "view")
 BACK_COLOR = (0.15, 0.15, 0.35)
 
 
-def _pyvista():
-    try:
-        import pyvista as pv
-    except ImportError as exc:
-        raise ImportError("the viewer needs pyvista: pip install 'meshladar[viz]'") from exc
-    return pv
-
-
-def _headless_window(func):
-    """Run a viewer entry point with VTK pointed at its EGL window when there is no
-    display, restoring the environment afterwards (a user's session is left as it was)."""
-    import functools
-
-    @functools.wraps(func)
-    def wrapper(*args, **kwargs):
-        key = "VTK_DEFAULT_OPENGL_WINDOW"
-        headless = not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY")
-        before = os.environ.get(key)
-        if headless and before is None:
-            os.environ[key] = "vtkEGLRenderWindow"
-        try:
-            return func(*args, **kwargs)
-        finally:
-            if headless and before is None:
-                os.environ.pop(key, None)
-
-    return wrapper
-
-
 def _view_vector(view_angle_deg, view_vector):
-    from meshladar._validate import check_real, unit_vectors
-    from meshladar.errors import ParameterError
-
     if view_vector is not None:
         w = unit_vectors("view_vector", view_vector)
         if w.shape != (3,):
@@ -78,10 +59,6 @@ def _view_vector(view_angle_deg, view_vector):
 
 
 def _check_view_options(scene, iso_ranges, window_size, segments, camera=None):
-    from meshladar import Scene
-    from meshladar._validate import check_count
-    from meshladar.errors import ParameterError
-
     if not isinstance(scene, Scene):
         raise ParameterError(f"scene must be a meshladar.Scene; got {type(scene).__name__}")
     check_count("iso_ranges", iso_ranges, low=0)
@@ -108,12 +85,8 @@ def face_returns(scene, w, *, segments=256):
     and a state: 0 lit, 1 shadowed (facing the ladar, but the ray from its centroid toward
     the ladar meets another face), 2 turned away. Returns (mesh scene, returns (m,),
     state (m,))."""
-    from meshladar.raytrace import occluded
-
     mesh = _mesh_scene(scene, segments)
-    v = np.concatenate([p.vertices for p in mesh.parts])
-    offs = np.cumsum([0] + [len(p.vertices) for p in mesh.parts])[:-1]
-    f = np.concatenate([p.faces + o for p, o in zip(mesh.parts, offs)])
+    v, f = _joined(mesh)
     mat = np.concatenate([p.material for p in mesh.parts])
     tri = v[f]
     n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
@@ -128,78 +101,6 @@ def face_returns(scene, w, *, segments=256):
         sel = mat == k
         ret[sel] = m.monostatic(np.arccos(np.clip(cos_t[sel], -1, 1)), projected=True)
     return mesh, np.where(state == 0, ret, 0.0), state
-
-
-#: The colour bars of the last figure drawn: (title, (x0, y0, x1, y1) in viewport units),
-#: for checks that they are titled and do not overlap.
-last_scalar_bars = []
-#: The legend of the last figure drawn: (labels, (x0, y0, x1, y1) in viewport units), or
-#: None when it had none.
-last_legend = None
-
-
-def _bar(title, slot=0):
-    """scalar_bar_args for a titled vertical colour bar in one of two fixed slots at the
-    right edge (0: lower, 1: upper), so two bars never overlap."""
-    return {"title": title, "vertical": True, "position_x": 0.8,
-            "position_y": 0.06 + 0.48 * slot, "width": 0.08, "height": 0.38,
-            "title_font_size": 12, "label_font_size": 10, "n_labels": 4, "fmt": "%.3g",
-            "color": "white"}             # the backgrounds are black
-
-
-def _legend(plotter, entries):
-    """A legend of the flat colours drawn, ``entries`` [(label, colour)], in the top-left
-    corner, clear of the colour bars' slots at the right edge."""
-    if not entries:
-        return
-    height = 0.05 * len(entries)
-    legend = plotter.add_legend(labels=[list(e) for e in entries],
-                                bcolor=(0.12, 0.12, 0.12), size=(0.44, height),
-                                loc="upper left", face="none", background_opacity=0.8)
-    from vtkmodules.vtkCommonDataModel import vtkImageData
-
-    # VTK colours an entry's text as its symbol: white text, and the colour as an icon
-    for i, (_, colour) in enumerate(entries):
-        icon = vtkImageData()
-        icon.SetDimensions(16, 16, 1)
-        icon.AllocateScalars(3, 3)                  # VTK_UNSIGNED_CHAR, RGB
-        pixels = icon.GetPointData().GetScalars()
-        rgb = [int(round(255 * c)) for c in colour]
-        for k in range(16 * 16):                    # a light frame: dark colours show too
-            edge = k % 16 in (0, 15) or k // 16 in (0, 15)
-            pixels.SetTuple3(k, *((220, 220, 220) if edge else rgb))
-        legend.SetEntryIcon(i, icon)
-        legend.SetEntryColor(i, 1.0, 1.0, 1.0)
-    return legend
-
-
-def _finish(plotter, off_screen, screenshot):
-    global last_legend
-    last_scalar_bars.clear()
-    for bar in plotter.scalar_bars.values():
-        bar.SetVerticalTitleSeparation(12)       # the title clear of the top label
-        x, y = bar.GetPosition()
-        w, h = bar.GetPosition2()
-        last_scalar_bars.append((bar.GetTitle() or "", (x, y, x + w, y + h)))
-    last_legend = None
-    legend = getattr(plotter, "legend", None)
-    if legend is not None:
-        x, y = legend.GetPosition()
-        w, h = legend.GetPosition2()
-        labels = [legend.GetEntryString(i) for i in range(legend.GetNumberOfEntries())]
-        last_legend = (labels, (x, y, x + w, y + h))
-    if off_screen:
-        img = plotter.screenshot(None, return_img=True)
-        plotter.close()
-        if screenshot is not None:          # PNG written atomically (never half a file)
-            from matplotlib.image import imsave
-
-            from meshladar.results import write_atomic
-
-            write_atomic(screenshot, lambda fh: imsave(fh, img, format="png"))
-        return img
-    plotter.show(screenshot=screenshot)
-    return plotter
 
 
 @_headless_window
@@ -237,11 +138,41 @@ def show_scene(scene, *, view_angle_deg=None, view_vector=None, ladar=None, segm
     w = _view_vector(view_angle_deg, view_vector)
     pv = _pyvista()
     mesh, ret, state = face_returns(scene, w, segments=segments)
-    v = np.concatenate([p.vertices for p in mesh.parts])
-    offs = np.cumsum([0] + [len(p.vertices) for p in mesh.parts])[:-1]
-    f = np.concatenate([p.faces + o for p, o in zip(mesh.parts, offs)])
+    v, _ = _joined(mesh)
     plotter = pv.Plotter(off_screen=off_screen, window_size=window_size)
     plotter.set_background("black")
+    legend = _draw_faces(plotter, pv, mesh, ret, state, log_scale=log_scale,
+                         colors=(shadow_color, back_color))
+    frame = _Frame(0.5 * (v.min(axis=0) + v.max(axis=0)), float(np.ptp(v, axis=0).max()), w)
+    if show_rays:
+        legend += _draw_rays(plotter, pv, frame, arrow=camera != "view")
+    if ladar is not None and show_hits:
+        legend += _draw_hits(plotter, pv, mesh, ladar, frame, iso_ranges)
+    plotter.camera_position = _camera_position(camera, frame)
+    _legend(plotter, legend)
+    return _finish(plotter, off_screen, screenshot)
+
+
+class _Frame(NamedTuple):
+    """Where the scene sits: its box ``center`` (3,), ``size`` (largest side) and the view
+    ``w`` (3,)."""
+
+    center: np.ndarray
+    size: float
+    w: np.ndarray
+
+
+def _joined(mesh):
+    """All parts' vertices (n, 3) and faces (m, 3) in one numbering."""
+    v = np.concatenate([p.vertices for p in mesh.parts])
+    offs = np.cumsum([0] + [len(p.vertices) for p in mesh.parts])[:-1]
+    return v, np.concatenate([p.faces + o for p, o in zip(mesh.parts, offs)])
+
+
+def _draw_faces(plotter, pv, mesh, ret, state, *, log_scale, colors):
+    """Lit faces by their return (grey, a colour bar), shadowed and turned-away faces in
+    ``colors`` (shadow, back); returns the legend's entries."""
+    v, f = _joined(mesh)
 
     def poly(sel):
         cells = np.hstack([np.full((sel.sum(), 1), 3), f[sel]]).ravel()
@@ -257,56 +188,63 @@ def show_scene(scene, *, view_angle_deg=None, view_vector=None, ladar=None, segm
                          show_scalar_bar=True,
                          scalar_bar_args=_bar("log10 F cos(theta) [1/sr]" if log_scale
                                               else "F cos(theta) [1/sr]", 0))
-    if (state == 1).any():
-        plotter.add_mesh(poly(state == 1), color=shadow_color, lighting=False)
-        legend.append(("shadowed (another face in the way)", shadow_color))
-    if (state == 2).any():
-        plotter.add_mesh(poly(state == 2), color=back_color, lighting=False)
-        legend.append(("turned away from the ladar", back_color))
-    center = 0.5 * (v.min(axis=0) + v.max(axis=0))
-    size = float(np.ptp(v, axis=0).max())
-    if show_rays:
-        if camera != "view":       # seen end-on from the ladar the arrow is a disc: omitted
-            # outside the scene's extent, so it covers none of it
-            plotter.add_mesh(pv.Arrow(start=center + 1.25 * size * w, direction=-w,
-                                      scale=0.4 * size), color="yellow", lighting=False)
-        plane = pv.Plane(center=center + 0.8 * size * w, direction=w, i_size=1.1 * size,
-                         j_size=1.1 * size, i_resolution=1, j_resolution=1)
-        plotter.add_mesh(plane, style="wireframe", color="yellow", line_width=2,
-                         lighting=False)
-        legend.append(("ladar beam and ray grid", (1.0, 1.0, 0.0)))
-    if ladar is not None and show_hits:
-        from meshladar.raytrace import first_hits
+    for k, colour, label in ((1, colors[0], "shadowed (another face in the way)"),
+                             (2, colors[1], "turned away from the ladar")):
+        if (state == k).any():
+            plotter.add_mesh(poly(state == k), color=colour, lighting=False)
+            legend.append((label, colour))
+    return legend
 
-        pts, _, rng = first_hits(mesh, w, ray_spacing=size / 150.0)
-        k = np.searchsorted(ladar.bin_edges, rng, side="right") - 1
-        cloud = pv.PolyData(pts)
-        cloud.point_data["range bin"] = k
-        plotter.add_mesh(cloud, scalars="range bin", cmap="viridis", point_size=3,
-                         render_points_as_spheres=False, lighting=False,
-                         scalar_bar_args=_bar("first hits: range bin", 1))
-        if iso_ranges:
-            edges = ladar.bin_edges
-            inside = edges[(edges >= rng.min()) & (edges <= rng.max())] if rng.size else []
-            for r in np.asarray(inside)[:: max(1, len(inside) // iso_ranges)][:iso_ranges]:
-                plane = pv.Plane(center=center - (r + center @ w) * w, direction=w,
-                                 i_size=size, j_size=size, i_resolution=1, j_resolution=1)
-                plotter.add_mesh(plane, color="cyan", opacity=0.08, lighting=False)
-            if len(inside):
-                legend.append(("iso-range planes (bin edges)", (0.0, 1.0, 1.0)))
+
+def _draw_rays(plotter, pv, frame, *, arrow):
+    """The beam (an arrow, unless seen end-on) and the ray grid's footprint, in yellow."""
+    center, size, w = frame
+    if arrow:          # seen end-on from the ladar the arrow is a disc: omitted
+        # outside the scene's extent, so it covers none of it
+        plotter.add_mesh(pv.Arrow(start=center + 1.25 * size * w, direction=-w,
+                                  scale=0.4 * size), color="yellow", lighting=False)
+    plane = pv.Plane(center=center + 0.8 * size * w, direction=w, i_size=1.1 * size,
+                     j_size=1.1 * size, i_resolution=1, j_resolution=1)
+    plotter.add_mesh(plane, style="wireframe", color="yellow", line_width=2, lighting=False)
+    return [("ladar beam and ray grid", (1.0, 1.0, 0.0))]
+
+
+def _draw_hits(plotter, pv, mesh, ladar, frame, iso_ranges):
+    """First hits coloured by range bin (a colour bar) and up to ``iso_ranges`` iso-range
+    planes at the ladar's bin edges; returns the legend's entries."""
+    center, size, w = frame
+    pts, _, rng = first_hits(mesh, w, ray_spacing=size / 150.0)
+    k = np.searchsorted(ladar.bin_edges, rng, side="right") - 1
+    cloud = pv.PolyData(pts)
+    cloud.point_data["range bin"] = k
+    plotter.add_mesh(cloud, scalars="range bin", cmap="viridis", point_size=3,
+                     render_points_as_spheres=False, lighting=False,
+                     scalar_bar_args=_bar("first hits: range bin", 1))
+    if not iso_ranges:
+        return []
+    edges = ladar.bin_edges
+    inside = edges[(edges >= rng.min()) & (edges <= rng.max())] if rng.size else []
+    for r in np.asarray(inside)[:: max(1, len(inside) // iso_ranges)][:iso_ranges]:
+        plane = pv.Plane(center=center - (r + center @ w) * w, direction=w,
+                         i_size=size, j_size=size, i_resolution=1, j_resolution=1)
+        plotter.add_mesh(plane, color="cyan", opacity=0.08, lighting=False)
+    return [("iso-range planes (bin edges)", (0.0, 1.0, 1.0))] if len(inside) else []
+
+
+def _camera_position(camera, frame):
+    """A pyvista camera position for ``camera`` ("view", "oblique", None or a position)."""
+    center, size, w = frame
     if camera == "view":                     # look along the beam, from the ladar
-        camera = [tuple(center + 2.5 * size * w), tuple(center),
-                  (0.0, 0.0, 1.0) if abs(w[2]) < 0.9 else (0.0, 1.0, 0.0)]
+        return [tuple(center + 2.5 * size * w), tuple(center),
+                (0.0, 0.0, 1.0) if abs(w[2]) < 0.9 else (0.0, 1.0, 0.0)]
     if camera is None or camera == "oblique":   # beside and above the ladar
         side = np.cross([0.0, 0.0, 1.0], w)
         side = side / np.linalg.norm(side) if np.linalg.norm(side) > 1e-9 else \
             np.array([1.0, 0.0, 0.0])
         eye = w + 0.9 * side + np.array([0.0, 0.0, 0.7])
-        camera = [tuple(center + 2.8 * size * eye / np.linalg.norm(eye)), tuple(center),
-                  (0.0, 0.0, 1.0)]
-    plotter.camera_position = camera
-    _legend(plotter, legend)
-    return _finish(plotter, off_screen, screenshot)
+        return [tuple(center + 2.8 * size * eye / np.linalg.norm(eye)), tuple(center),
+                (0.0, 0.0, 1.0)]
+    return camera
 
 
 def _image_data(pv, image, z):
@@ -374,8 +312,6 @@ def show_volume(images, zs=None, *, iso=None, render="iso", off_screen=False,
     percentile, where the bright surfaces are), or with ``render="volume"`` (stacks) as a
     volume rendering with a robust window and a sigmoid opacity."""
     pv = _pyvista()
-    from meshladar.volume import Volume
-
     if render not in ("iso", "volume"):
         raise ValueError(f"render must be 'iso' or 'volume'; got {render!r}")
     if isinstance(images, Volume):

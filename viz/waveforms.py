@@ -5,6 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from meshladar.errors import ParameterError
+from meshladar.sensor import SPEED_OF_LIGHT as c
+from meshladar.waveforms import Waveforms
+
 from . import style
 
 __all__ = ["draw", "figure"]
@@ -23,7 +27,7 @@ def draw(waves, path, *, realisations=None, noise=None, views=None, band=(5.0, 9
 
 @style.styled
 def figure(waves, *, realisations=None, noise=None, views=None, band=(5.0, 95.0)):
-    """A matplotlib Figure of ``waves`` (:class:`meshladar.receiver.Waveforms`;
+    """A matplotlib Figure of ``waves`` (:class:`meshladar.waveforms.Waveforms`;
     ``Waveforms.plot()``).
 
     Parameters
@@ -31,18 +35,15 @@ def figure(waves, *, realisations=None, noise=None, views=None, band=(5.0, 95.0)
     realisations : (n, n_views, n_samples) array, optional
         Noise realisations (:meth:`Waveforms.realise`): their ``band`` percentiles are
         shaded around the expected waveform, and the first is drawn.
-    noise : meshladar.receiver.Noise, optional
+    noise : meshladar.noise.Noise, optional
         The noise that drew them: the expected waveform is then its mean, gain × (signal +
         background), in its output units.
     views : sequence of int, optional
         Which views (default up to four, spread over all).
     band : (low, high) percentiles
     """
-    from meshladar.errors import ParameterError
-    from meshladar.receiver import Waveforms
-
     if not isinstance(waves, Waveforms):
-        raise ParameterError(f"waves must be a meshladar.receiver.Waveforms; got "
+        raise ParameterError(f"waves must be a meshladar.waveforms.Waveforms; got "
                              f"{type(waves).__name__}")
     n_views = waves.values.shape[0]
     views = style.pick_views(n_views, views)
@@ -55,7 +56,7 @@ def figure(waves, *, realisations=None, noise=None, views=None, band=(5.0, 95.0)
     fig, axes = plt.subplots(len(views), 1, figsize=(6.4, 1.9 * len(views) + 0.8),
                              squeeze=False, sharex=True)
     t_ns = waves.times * 1e9
-    units = waves.info.get("units") or "sinogram units"
+    units = waves.units or "sinogram units"
     if noise is not None:
         expected = noise.mean(waves.values, waves.sample_interval)
         units = units if noise.gain == 1 else f"{noise.gain:g} x {units}"
@@ -80,8 +81,6 @@ def figure(waves, *, realisations=None, noise=None, views=None, band=(5.0, 95.0)
     axes[0, 0].legend(loc="upper right", fontsize=7, frameon=False)
     axes[-1, 0].set_xlabel(f"two-way time (ns); sample interval "
                            f"{waves.sample_interval * 1e9:.3g} ns")
-    from meshladar.sensor import SPEED_OF_LIGHT as c
-
     top = axes[0, 0].secondary_xaxis(
         "top", functions=(lambda t: t * 1e-9 * c / 2 - waves.standoff,
                           lambda r: (r + waves.standoff) * 2 / c * 1e9))

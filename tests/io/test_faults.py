@@ -13,7 +13,7 @@ import pytest
 
 import meshladar as ml
 from meshladar.errors import MaterialFileError, PhantomSpecError
-from meshladar.results import ResultFileError, load_result, save_result
+from meshladar.io import ResultFileError, load_result, save_result
 from meshladar.materials import ALUMINUM, DARK_GRAY, load_table
 
 from conftest import PAIR  # noqa: E402  (the shared disk pair)
@@ -63,13 +63,13 @@ def test_bit_flipped_chunks_are_recomputed_never_a_crash(finished_run, tmp_path,
 
 
 def test_a_chunk_of_the_wrong_shape_is_recomputed(finished_run, tmp_path):
-    from meshladar.runs import _array_digest
+    from meshladar.runs import chunk_digest
 
     mesh, ladar, run, ref, chunks = _copy_run(finished_run, tmp_path)
     arrays, meta = load_result(chunks[1])
     arrays["values"] = arrays["values"][:, :-1]                   # one bin short
     meta = {k: v for k, v in meta.items() if k != "meshladar_version"}
-    meta["sha256"] = _array_digest(arrays)                        # a consistent checksum
+    meta["sha256"] = chunk_digest(arrays)                        # a consistent checksum
     save_result(chunks[1], arrays, meta)
     got = ml.simulate(mesh, ladar, model="mesh", run_dir=run)
     np.testing.assert_array_equal(got.values, ref.values)
@@ -227,6 +227,7 @@ def _workers_once_a_chunk_is_saved(run, proc):
     return psutil.Process(proc.pid).children(recursive=True)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sig", ["SIGTERM", "SIGKILL"])
 def test_a_stopped_run_takes_its_workers_with_it(tmp_path, sig):
     import signal

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import meshladar
-from meshladar.results import ResultFileError, load_result, save_result, write_text_atomic
+from meshladar.io import ResultFileError, load_result, save_result, write_text_atomic
 
 
 def test_round_trip(tmp_path):
@@ -52,7 +52,7 @@ def test_write_text_atomic(tmp_path):
 
 def test_truncated_and_pickled_sinogram_results_are_rejected(tmp_path):
     import meshladar as ml
-    from meshladar.results import load_sinogram, save_sinogram
+    from meshladar.io import load_sinogram, save_sinogram
 
     sino = ml.simulate(ml.Scene([ml.Disk((0, 0), 0.5, ml.materials.DARK_GRAY)]),
                        ml.Ladar.paper(angles_deg=[0.0, 90.0]))
@@ -77,7 +77,7 @@ def test_temporaries_of_a_killed_writer_are_removed_by_the_next_write(tmp_path):
     import subprocess
     import sys
 
-    from meshladar import results
+    from meshladar import io as mlio
 
     # a pid that has ended (a finished child), and this process's own (alive)
     child = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
@@ -87,7 +87,7 @@ def test_temporaries_of_a_killed_writer_are_removed_by_the_next_write(tmp_path):
     stale.write_bytes(b"x" * 1000)                        # what a SIGKILL mid-write leaves
     live = tmp_path / f".tmp-{1}-def456other.npz"         # pid 1 is alive: never removed
     live.write_bytes(b"y")
-    results._SWEPT.discard(str(tmp_path))
+    mlio._SWEPT.discard(str(tmp_path))
     save_result(tmp_path / "out.npz", {"a": np.zeros(3)}, {})
     assert not stale.exists() and live.exists()
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted([live.name, "out.npz"])
@@ -96,7 +96,7 @@ def test_temporaries_of_a_killed_writer_are_removed_by_the_next_write(tmp_path):
 def test_a_failed_write_names_the_users_file_not_the_temporary(tmp_path):
     import errno
 
-    from meshladar.results import write_atomic
+    from meshladar.io import write_atomic
 
     def full_disk(fh):
         raise OSError(errno.ENOSPC, "No space left on device")
@@ -128,7 +128,7 @@ def test_an_interrupt_inside_a_writer_stays_an_interrupt(tmp_path):
     """Ctrl-C while numpy writes a zip member: zipfile's close then raises ValueError in
     its cleanup; the write must still end as KeyboardInterrupt (a clean stop, a resume
     hint), leave no temporary and not the half-written file."""
-    from meshladar.results import write_atomic
+    from meshladar.io import write_atomic
 
     def writer(fh):
         try:

@@ -21,7 +21,7 @@ def results():
                      info={"method": "sirt", "iterations": 50, "radiometry": "power"})
     hits = ml.trace(pair.tessellate(64), ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 30.0)))
     from meshladar.fitting import coating_kernel, fit_coatings
-    from meshladar.receiver import GaussianPulse, receive
+    from meshladar.waveforms import GaussianPulse, receive
 
     kernel = coating_kernel(pair, Ladar(lad.angles_deg[::10], lad.bin_edges), samples=512)
     fit = fit_coatings(kernel, kernel.sinogram(), parts=["small"], free=("rho_d",))
@@ -58,6 +58,7 @@ def test_reprs_state_conventions(results):
     assert "<td style='text-align:left'>analytic</td>" in html   # strings without quotes
 
 
+@pytest.mark.slow
 def test_quick_looks(results, tmp_path):
     """Sinogram.plot() and Image.plot() return labelled Figures without pyplot state:
     units and radiometry on the colour bar, log input said so, no text overlapping or cut
@@ -94,7 +95,7 @@ def test_profile_against_a_closed_form_and_waveform_quick_look():
     form (Eq. 8: ρ/π ∫ cos² over the arc, per bin; identical to rounding), and the
     waveforms' quick look with a noise band."""
     from meshladar.brdf import Lambertian
-    from meshladar.receiver import Noise
+    from meshladar.noise import Noise
     from meshladar.scene import Scene
     from meshladar.shapes import Disk
     from meshladar.viz import quick, style
@@ -131,7 +132,7 @@ def test_profile_against_a_closed_form_and_waveform_quick_look():
 
 
 def results_waves():
-    from meshladar.receiver import GaussianPulse, receive
+    from meshladar.waveforms import GaussianPulse, receive
 
     pair = paper._pair(materials.DARK_GRAY, materials.ALUMINUM)
     lad = Ladar(np.arange(0.0, 360.0, 30.0), Ladar.centered(128, 1.6 / 128).bin_edges)

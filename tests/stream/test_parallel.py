@@ -24,6 +24,7 @@ def job():
     return mesh, ladar, ml.simulate(mesh, ladar, model="mesh", normals="smooth", jobs=1)
 
 
+@pytest.mark.slow
 def test_identical_results_on_every_executor(job):
     mesh, ladar, serial = job
     # each chunk of views is computed by the same code whatever runs it, and chunks write
@@ -44,6 +45,7 @@ def test_identical_results_on_every_executor(job):
         np.testing.assert_array_equal(ml.weigh(hits).values, serial.values)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model", ["analytic", "pixel"])
 def test_every_model_runs_on_every_executor(model):
     # the stream is shared by the forward models: chunks of views on threads, processes and
@@ -60,6 +62,7 @@ def test_every_model_runs_on_every_executor(model):
                                       serial.values)
 
 
+@pytest.mark.slow
 def test_a_killed_worker_does_not_change_the_answer(job):
     mesh, _, _ = job
     ladar = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 1.0))
@@ -96,6 +99,7 @@ def test_a_killed_worker_does_not_change_the_answer(job):
     np.testing.assert_array_equal(got.values, serial.values)
 
 
+@pytest.mark.slow
 def test_a_worker_lost_while_the_mesh_is_scattered_is_retried(job):
     from distributed.comm.core import CommClosedError
 
@@ -137,7 +141,8 @@ def test_the_local_cluster_is_tls_secured_and_refuses_strangers():
     ("not an address", "scheduler must be an address such as tcp://host:8786"),
     ("udp://127.0.0.1:8786", "scheduler must be an address"),
     ("tcp://", "scheduler must be an address"),
-    ("tcp://127.0.0.1:1", "no Dask scheduler answered at 'tcp://127.0.0.1:1'"),
+    pytest.param("tcp://127.0.0.1:1", "no Dask scheduler answered at 'tcp://127.0.0.1:1'",
+                 marks=pytest.mark.slow),         # waits out the connection timeout
 ])
 def test_a_bad_scheduler_is_one_clear_error(address, message, tmp_path, capsys):
     with pytest.raises(ml.errors.ParameterError, match=message):

@@ -34,7 +34,7 @@ def test_resume_reuses_verified_chunks_and_recomputes_corrupt_ones(tmp_path):
     np.testing.assert_array_equal(again.values, ref.values)
     assert all((run / c).stat().st_mtime_ns == t for c, t in mtimes.items())
     # a chunk whose numbers were altered fails its checksum and is recomputed too
-    from meshladar.results import load_result, save_result
+    from meshladar.io import load_result, save_result
 
     arrays, meta = load_result(run / chunks[2])
     arrays["values"] = arrays["values"] * 2
@@ -88,6 +88,7 @@ def _wait_for_chunks(run, n, proc):
         raise AssertionError(_finish(proc)[1])
 
 
+@pytest.mark.slow
 def test_sigkill_mid_run_then_resume_gives_the_uninterrupted_result(tmp_path):
     run = tmp_path / "run"
     proc = _start(run, tmp_path / "a.npy")
@@ -100,7 +101,7 @@ def test_sigkill_mid_run_then_resume_gives_the_uninterrupted_result(tmp_path):
     from meshladar.runs import RunFolder
 
     for f in run.glob("chunk_*.npz"):
-        from meshladar.results import load_result
+        from meshladar.io import load_result
 
         load_result(f)                                           # every final file reads
     code, err = _finish(_start(run, tmp_path / "b.npy"))
@@ -112,6 +113,7 @@ def test_sigkill_mid_run_then_resume_gives_the_uninterrupted_result(tmp_path):
     np.testing.assert_array_equal(np.load(tmp_path / "b.npy"), np.load(tmp_path / "c.npy"))
 
 
+@pytest.mark.slow
 def test_ctrl_c_stops_cleanly_and_says_how_to_resume(tmp_path):
     out = tmp_path / "r.npz"
     run = tmp_path / "run"

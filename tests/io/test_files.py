@@ -27,7 +27,8 @@ import pytest
 import trimesh
 
 import meshladar as ml
-from meshladar import cli, results
+from meshladar import cli
+from meshladar import io as mlio
 from meshladar.errors import GeometryError
 from meshladar.materials import DARK_GRAY
 from meshladar.mesh import MeshPart, corner_normals
@@ -299,7 +300,7 @@ def test_cli_simulates_or_prints_one_error_line(tmp_path, case, capsys):
     captured = capsys.readouterr()
     if isinstance(expected, Mesh):
         assert code == 0 and captured.err == ""
-        sino, meta = results.load_sinogram(out)
+        sino, meta = mlio.load_sinogram(out)
         assert sino.values.shape == (4, 16) and meta["params"]["model"] == "mesh"
         assert np.all(np.isfinite(sino.values)) and np.all(sino.total() > 0)
         return
@@ -393,6 +394,7 @@ print(json.dumps({"loaded": out, "pil_imports": NoPIL.attempts}))
 """
 
 
+@pytest.mark.slow
 def test_textured_meshes_load_without_pillow(tmp_path):
     paths = [_textured_obj(tmp_path, "box"), _textured_obj(tmp_path, "lost", mtl=False),
              _textured_ply(tmp_path), _two_part_glb(tmp_path / "parts.glb")]

@@ -1,0 +1,302 @@
+"""Result files (formerly ``meshladar.results``): saving and loading results: atomic writes, no pickle.
+
+Results are ``.npz`` archives of plain arrays plus a JSON document (parameters, metrics,
+version) stored as a string array under the key ``"__meta__"``. Files are written to a
+temporary name in the destination folder and renamed over the target, so a crash never
+leaves a half-written result, and loaded with ``allow_pickle=False``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+
+import numpy as np
+
+from ._version import __version__
+from ._validate import check_path
+from .errors import MeshladarError, ParameterError
+from .noise import Noise
+from .sinogram import Sinogram, check_sinogram
+from .waveforms import Waveforms
+
+__all__ = ["save_result", "load_result", "write_atomic", "write_text_atomic", "save_sinogram",
+           "load_sinogram", "save_waveforms", "load_waveforms", "describe_scene",
+           "ResultFileError"]
+
+
+class ResultFileError(MeshladarError, ValueError):
+    """A result file is missing, unreadable, or not a meshladar result."""
+
+
+def _new_file_mode(path):
+    """The permissions an ordinary ``open(path, "w")`` would give: the existing file's, or
+    0o666 less the user's umask (mkstemp's temporaries are 0o600)."""
+    try:
+        return os.stat(path).st_mode & 0o7777
+    except OSError:
+        return 0o666 & ~_umask()
+
+
+def _umask():
+    """The process's umask, read without changing it where the system says it (Linux);
+    elsewhere set and restored at once."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def write_atomic(path, write):
+    """Write a file atomically: ``write(fh)`` fills a temporary beside ``path`` (binary
+    mode), which is renamed over ``path`` once complete, with the user's normal
+    permissions."""
+    _atomic(path, write)
+
+
+def _atomic(path, write):
+    path = os.fspath(path)
+    folder = os.path.dirname(os.path.abspath(path))
+    name = os.path.basename(path)
+    try:
+        os.makedirs(folder, exist_ok=True)
+        _remove_stale_temporaries(folder)
+        mode = _new_file_mode(path)
+        # the writer's pid in the name: a temporary left by a killed process is recognised
+        # (and removed) by the next process writing into the same folder
+        fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".tmp-{os.getpid()}-", suffix=name)
+    except OSError as exc:
+        raise OSError(exc.errno, exc.strerror, path) from exc
+    try:
+        os.fchmod(fd, mode)
+        with os.fdopen(fd, "wb") as fh:
+            write(fh)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException as exc:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        interrupt = _interrupt_behind(exc)
+        if interrupt is not None and interrupt is not exc:
+            # Ctrl-C inside a writer that then failed to close (zipfile: "can't close the
+            # ZIP file while there is an open writing handle"): the interrupt is the news
+            raise interrupt from None
+        if isinstance(exc, OSError) and getattr(exc, "filename", None) in (tmp, None):
+            # a full disk or a lost permission: name the user's file, not the temporary
+            raise OSError(exc.errno, exc.strerror or str(exc), path) from exc
+        raise
+
+
+def _interrupt_behind(exc):
+    """The KeyboardInterrupt ``exc`` is, or was raised while handling, else None."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return exc
+        seen.add(id(exc))
+        exc = exc.__context__
+    return None
+
+
+#: Folders already swept of stale temporaries by this process (once each: a run folder
+#: of 1e5 chunks is listed once, not once per chunk).
+_SWEPT: set = set()
+
+
+def _remove_stale_temporaries(folder):
+    """Remove ``.tmp-<pid>-…`` files in ``folder`` whose writer is no longer alive."""
+    if folder in _SWEPT:
+        return
+    _SWEPT.add(folder)
+    try:
+        entries = os.listdir(folder)
+    except OSError:
+        return
+    for entry in entries:
+        pid = entry[len(".tmp-"):].split("-", 1)[0] if entry.startswith(".tmp-") else ""
+        if not pid.isdigit() or _alive(int(pid)):
+            continue
+        try:
+            os.remove(os.path.join(folder, entry))
+        except OSError:
+            pass
+
+
+def _alive(pid):
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:                 # another user's process: alive
+        return True
+    return True
+
+
+def write_text_atomic(path, text: str):
+    """Write a text file atomically (UTF-8)."""
+    _atomic(path, lambda fh: fh.write(text.encode("utf-8")))
+
+
+def save_result(path, arrays: dict, meta: dict):
+    """Save named float/int arrays and a JSON-serialisable ``meta`` dict atomically."""
+    path = check_path("path", path)
+    if os.path.isdir(path):
+        raise ParameterError(f"path must name a file, not a folder; got {path!r}")
+    if not isinstance(arrays, dict) or not isinstance(meta, dict):
+        raise ParameterError(f"arrays and meta must be dicts; got {type(arrays).__name__} and "
+                             f"{type(meta).__name__}")
+    payload = {}
+    for k, v in arrays.items():
+        a = np.asarray(v)
+        if not isinstance(k, str) or k == "__meta__" or a.dtype.hasobject:
+            raise ParameterError(f"arrays must map names (not '__meta__') to numeric arrays "
+                                 f"(loaded without pickle); got {k!r}: {a.dtype}")
+        payload[k] = a
+    try:
+        text = json.dumps(dict(meta, meshladar_version=__version__), sort_keys=True)
+    except (TypeError, ValueError) as exc:
+        raise ParameterError(f"meta must be JSON-serialisable; {exc}") from None
+    payload["__meta__"] = np.array(text)
+    _atomic(path, lambda fh: np.savez_compressed(fh, **payload))
+
+
+def load_result(path):
+    """Load a result saved by :func:`save_result`: (arrays dict, meta dict)."""
+    path = check_path("path", path)
+    try:
+        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
+            arrays = {k: z[k] for k in z.files}
+    except FileNotFoundError:
+        raise ResultFileError(f"{path}: no such result file") from None
+    except Exception as exc:  # noqa: BLE001 - a damaged or crafted file can fail anywhere in
+        # numpy's reader (zlib.error, SyntaxError in a header, BadZipFile, ...): all mean
+        # the same to the user
+        raise ResultFileError(f"{path}: not a readable result file "
+                              f"({type(exc).__name__}: {str(exc)[:160]})") from exc
+    if "__meta__" not in arrays:
+        raise ResultFileError(f"{path}: not a meshladar result (no metadata)")
+    try:
+        meta = json.loads(str(arrays.pop("__meta__")))
+    except (ValueError, RecursionError) as exc:
+        raise ResultFileError(f"{path}: damaged metadata (not JSON: {exc})") from exc
+    if not isinstance(meta, dict):
+        raise ResultFileError(f"{path}: damaged metadata (a JSON {type(meta).__name__}, not "
+                              "an object)")
+    return arrays, meta
+
+
+def describe_scene(scene) -> dict:
+    """A JSON-serialisable description of a scene: shapes or mesh parts, and coatings."""
+    def mat(m):
+        return m.describe()
+
+    if scene.is_mesh:
+        return {"kind": "mesh", "materials": [mat(m) for m in scene.materials],
+                "parts": [{"name": p.name, "faces": int(len(p.faces)),
+                           "vertices": int(len(p.vertices)), "digest": p.digest()}
+                          for p in scene.parts], "report": {
+                    k: v for k, v in scene.report.items()}}
+    shapes = []
+    for s in scene.shapes:
+        shapes.append({"type": type(s).__name__, "name": s.name, "center": list(s.center),
+                       "semi_axes": list(s.axes), "angle_deg": float(getattr(s, "angle_deg",
+                                                                             0.0)),
+                       "material": mat(s.material)})
+    return {"kind": "analytic", "shapes": shapes}
+
+
+def save_sinogram(path, sino, *, scene=None, params=None):
+    """Save a sinogram with everything needed to reconstruct and plot it: values, angles,
+    bin edges, view vectors, the model and its info, a description of the scene and its
+    coatings, the run's parameters, and meshladar's version. Atomic, no pickle.
+
+    The typed fields ``radiometry`` and ``units`` are written inside ``meta["info"]``, as
+    before they were fields: files read both ways."""
+    check_sinogram("sino", sino)
+    meta = {"kind": "sinogram", "model": sino.model, "info": _jsonable(sino.info),
+            "scene": None if scene is None else describe_scene(scene),
+            "params": _jsonable(params or {})}
+    save_result(path, {"values": sino.values, "angles_deg": sino.angles_deg,
+                       "bin_edges": sino.bin_edges, "view_vectors": sino.view_vectors}, meta)
+
+
+def load_sinogram(path):
+    """Load a sinogram saved by :func:`save_sinogram`: (Sinogram, meta). ``radiometry``
+    and ``units`` in the stored info fill the record's typed fields."""
+    arrays, meta = load_result(path)
+    if meta.get("kind") != "sinogram":
+        raise ResultFileError(f"{os.fspath(path)}: not a sinogram result (kind "
+                              f"{meta.get('kind')!r})")
+    missing = [k for k in ("values", "angles_deg", "bin_edges") if k not in arrays]
+    if missing:
+        raise ResultFileError(f"{os.fspath(path)}: sinogram result lacks {missing[0]!r}")
+    try:
+        sino = Sinogram(arrays["values"], angles_deg=arrays["angles_deg"],
+                        bin_edges=arrays["bin_edges"], model=meta.get("model", "measured"),
+                        info=meta.get("info", {}), view_vectors=arrays.get("view_vectors"))
+    except ValueError as exc:
+        raise ResultFileError(f"{os.fspath(path)}: invalid sinogram ({exc})") from exc
+    return sino, meta
+
+
+def save_waveforms(path, waves, *, realisations=None, noise=None, params=None):
+    """Save waveforms (and, optionally, noise realisations (n, n_views, n_samples) and the
+    :class:`~meshladar.noise.Noise` that drew them): values, time edges in s, range
+    edges in m, views, every parameter with its unit in ``meta["info"]``. Atomic, no
+    pickle."""
+    if not isinstance(waves, Waveforms):
+        raise ParameterError(f"waves must be a meshladar.waveforms.Waveforms; got "
+                             f"{type(waves).__name__}")
+    arrays = {"values": waves.values, "time_edges_s": waves.time_edges,
+              "range_edges_m": waves.range_edges, "angles_deg": waves.angles_deg,
+              "view_vectors": waves.view_vectors}
+    if realisations is not None:
+        arrays["realisations"] = np.asarray(realisations, dtype=np.float64)
+    meta = {"kind": "waveforms", "standoff_m": waves.standoff, "info": _jsonable(waves.info),
+            "noise": None if not isinstance(noise, Noise) else noise.describe(),
+            "params": _jsonable(params or {})}
+    save_result(path, arrays, meta)
+
+
+def load_waveforms(path):
+    """Load waveforms saved by :func:`save_waveforms`: (Waveforms, realisations or None,
+    meta)."""
+    arrays, meta = load_result(path)
+    if meta.get("kind") != "waveforms":
+        raise ResultFileError(f"{os.fspath(path)}: not a waveforms result (kind "
+                              f"{meta.get('kind')!r})")
+    try:
+        waves = Waveforms(arrays["values"], time_edges=arrays["time_edges_s"],
+                          angles_deg=arrays["angles_deg"], view_vectors=arrays["view_vectors"],
+                          standoff=meta.get("standoff_m", 0.0), info=meta.get("info", {}))
+    except (KeyError, ValueError) as exc:
+        raise ResultFileError(f"{os.fspath(path)}: invalid waveforms ({exc})") from exc
+    return waves, arrays.get("realisations"), meta
+
+
+def _jsonable(x):
+    """Plain JSON types for metadata (numpy scalars and arrays become numbers and lists;
+    anything else its repr)."""
+    if isinstance(x, dict):
+        return {str(k): _jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_jsonable(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return _jsonable(x.tolist())
+    if isinstance(x, (np.integer,)):
+        return int(x)
+    if isinstance(x, (np.floating,)):
+        return float(x)
+    if x is None or isinstance(x, (bool, int, float, str)):
+        return x
+    return repr(x)

@@ -1,0 +1,116 @@
+"""The receiver's noise (Goodman's statistics) and its seeded draws.
+
+Per sample of mean signal s (photoelectrons) and background b = (background_rate +
+dark_rate)·Δt: the speckled intensity I ~ Gamma(M, s/M) for M speckle cells per resolution
+cell (variance s²/M); the photoelectron count N ~ Poisson(I + b); an APD of mean gain G and
+excess noise factor F multiplies N by a gamma-distributed gain (mean GN, variance
+G²N(F − 1)); the digitiser rounds to ``bits`` over ``full_scale``. So the mean is G(s + b)
+and the variance G²(F(s + b) + s²/M) (before quantisation). Samples are independent: one
+speckle cell per sample. :meth:`meshladar.waveforms.Waveforms.realise` draws them on a
+noiseless waveform.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._validate import check_count, check_real
+from .errors import ParameterError
+
+__all__ = ["Noise", "draw_noise"]
+
+
+@dataclass(frozen=True)
+class Noise:
+    """The receiver's noise (module docstring).
+
+    Parameters
+    ----------
+    speckle_cells : float, optional
+        M, speckle cells per resolution cell (≥ 1; 1 is fully developed speckle); None: no
+        speckle.
+    background_rate, dark_rate : float
+        Background (sky, scattered light) and dark counts, photoelectrons per second.
+    excess_noise_factor : float
+        APD excess noise factor F ≥ 1 (1: a noiseless gain).
+    gain : float
+        Mean gain G (output units per photoelectron).
+    bits : int, optional
+        Digitiser resolution; with ``full_scale`` (output units), samples are rounded to
+        full_scale / 2**bits and clipped to [0, full_scale).
+    full_scale : float, optional
+    """
+
+    speckle_cells: float | None = None
+    background_rate: float = 0.0
+    dark_rate: float = 0.0
+    excess_noise_factor: float = 1.0
+    gain: float = 1.0
+    bits: int | None = None
+    full_scale: float | None = None
+
+    def __post_init__(self):
+        if self.speckle_cells is not None:
+            object.__setattr__(self, "speckle_cells", check_real(
+                "speckle_cells", self.speckle_cells, low=1.0))
+        for name in ("background_rate", "dark_rate"):
+            object.__setattr__(self, name, check_real(name, getattr(self, name), low=0.0))
+        object.__setattr__(self, "excess_noise_factor", check_real(
+            "excess_noise_factor", self.excess_noise_factor, low=1.0))
+        object.__setattr__(self, "gain", check_real("gain", self.gain, low=0.0,
+                                                    low_open=True))
+        if (self.bits is None) != (self.full_scale is None):
+            raise ParameterError("quantisation needs both bits and full_scale; got "
+                                 f"bits={self.bits!r}, full_scale={self.full_scale!r}")
+        if self.bits is not None:
+            object.__setattr__(self, "bits", check_count("bits", self.bits))
+            if self.bits > 32:
+                raise ParameterError(f"bits must be at most 32; got {self.bits}")
+            object.__setattr__(self, "full_scale", check_real(
+                "full_scale", self.full_scale, low=0.0, low_open=True))
+
+    def mean(self, signal, dt):
+        """Expected output per sample for mean signal (photoelectrons), before
+        quantisation."""
+        return self.gain * (signal + (self.background_rate + self.dark_rate) * dt)
+
+    def variance(self, signal, dt):
+        """Variance per sample, before quantisation: G² (F (s + b) + s²/M)."""
+        b = (self.background_rate + self.dark_rate) * dt
+        speckle = 0.0 if self.speckle_cells is None else signal ** 2 / self.speckle_cells
+        return self.gain ** 2 * (self.excess_noise_factor * (signal + b) + speckle)
+
+    def describe(self):
+        return {"speckle_cells": self.speckle_cells,
+                "background_rate_per_s": self.background_rate,
+                "dark_rate_per_s": self.dark_rate,
+                "excess_noise_factor": self.excess_noise_factor, "gain": self.gain,
+                "bits": self.bits, "full_scale": self.full_scale}
+
+
+def draw_noise(noise, signal, dwell, n, seed):
+    """``n`` realisations (n, *signal.shape) of ``noise`` on mean ``signal``
+    (photoelectrons per cell), each cell integrating background and dark counts over
+    ``dwell`` seconds (module docstring). Seeded through numpy's default generator."""
+    rng = np.random.default_rng(seed)
+    s = np.broadcast_to(np.maximum(signal, 0.0), (n,) + np.shape(signal))
+    if noise.speckle_cells is not None:
+        m = noise.speckle_cells
+        intensity = rng.gamma(m, 1.0, size=s.shape) * (s / m)
+    else:
+        intensity = s
+    b = (noise.background_rate + noise.dark_rate) * dwell
+    counts = rng.poisson(intensity + b).astype(np.float64)
+    f = noise.excess_noise_factor
+    if f > 1.0:
+        shape = counts / (f - 1.0)
+        out = np.where(counts > 0, rng.gamma(np.where(counts > 0, shape, 1.0),
+                                             noise.gain * (f - 1.0)), 0.0)
+    else:
+        out = noise.gain * counts
+    if noise.bits is not None:
+        lsb = noise.full_scale / 2.0 ** noise.bits
+        out = np.clip(np.floor(out / lsb + 0.5), 0, 2 ** noise.bits - 1) * lsb
+    return out

@@ -1,0 +1,325 @@
+"""What the receiver records: a sinogram's bins turned into time waveforms (the transmitted
+pulse, the receiver's impulse response, a digitiser), and noise realisations of them
+(photon counting, speckle, background and dark counts, APD excess noise, quantisation).
+
+Trace once, receive many times: :func:`receive` works on any :class:`Sinogram` (best one of
+received power, ``radiometry="power"``), and :meth:`Waveforms.realise` draws any number of
+seeded noise realisations from one noiseless waveform.
+
+Time. A bin at range r (scene units, metres) returns at two-way time t = 2(r + D)/c, with D
+the sensor's standoff (recorded in the sinogram's ``info["sensor"]``), or D = 0 for a
+ladar at infinity (t then counts from the echo of range 0). With the sensor aimed at a
+point other than the origin, t is the two-way time less 2 aim·w / c (ranges are
+R − D − aim·w, :class:`meshladar.sensor.Sensor`).
+
+Energy. Each bin's content is spread uniformly over its time interval on a fine grid
+(``oversample`` cells per digitiser sample), convolved with the pulse and the impulse
+response (each normalised to unit area on that grid), and summed into digitiser samples:
+every step conserves the total, so a view's samples sum to its bins (to rounding, 1e-12).
+
+Noise: :class:`meshladar.noise.Noise` (Goodman's statistics; its module docstring).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import plotting
+from ._summary import table, text
+from ._validate import check_count, check_real, check_size, finite_array, readonly_copy
+from .errors import ParameterError
+from .noise import Noise, draw_noise
+from .sensor import SPEED_OF_LIGHT
+from .sinogram import TYPED_INFO_KEYS, Sinogram, check_sinogram, split_info
+
+__all__ = ["GaussianPulse", "SampledPulse", "Waveforms", "receive"]
+
+#: A Gaussian pulse or response is cut where it falls below exp(−CUT²/2) of its peak.
+_GAUSS_CUT = 8.0
+#: FWHM = 2 sqrt(2 ln 2) σ
+_FWHM_PER_SIGMA = 2.0 * math.sqrt(2.0 * math.log(2.0))
+
+
+@dataclass(frozen=True)
+class GaussianPulse:
+    """A Gaussian pulse (or impulse response) of full width at half maximum ``fwhm`` (s),
+    centred on t = 0, unit area."""
+
+    fwhm: float
+
+    def __post_init__(self):
+        object.__setattr__(self, "fwhm", check_real("fwhm", self.fwhm, low=0.0,
+                                                    low_open=True))
+
+    @property
+    def support(self):
+        """(start, end) in s outside which it is zero."""
+        h = _GAUSS_CUT * self.fwhm / _FWHM_PER_SIGMA
+        return -h, h
+
+    def cdf(self, t):
+        from scipy.special import ndtr
+
+        return ndtr(np.asarray(t, np.float64) * _FWHM_PER_SIGMA / self.fwhm)
+
+    def describe(self):
+        return {"kind": "gaussian", "fwhm_s": self.fwhm}
+
+
+@dataclass(frozen=True)
+class SampledPulse:
+    """A user's pulse shape (or impulse response): ``samples`` ≥ 0 of its power at
+    ``interval`` (s) spacing from ``start`` (s), held constant over each interval;
+    normalised to unit area here."""
+
+    samples: np.ndarray
+    interval: float
+    start: float = 0.0
+
+    def __post_init__(self):
+        x = finite_array("samples", self.samples)
+        if x.ndim != 1 or x.size == 0 or np.any(x < 0) or not np.any(x > 0):
+            raise ParameterError("samples must be a non-empty 1-D array of non-negative "
+                                 "numbers, not all zero")
+        object.__setattr__(self, "samples", readonly_copy(x / x.sum()))
+        object.__setattr__(self, "interval", check_real("interval", self.interval, low=0.0,
+                                                        low_open=True))
+        object.__setattr__(self, "start", check_real("start", self.start))
+
+    @property
+    def support(self):
+        return self.start, self.start + self.interval * self.samples.size
+
+    def cdf(self, t):
+        edges = self.start + self.interval * np.arange(self.samples.size + 1)
+        return np.interp(t, edges, np.concatenate([[0.0], np.cumsum(self.samples)]))
+
+    def describe(self):
+        return {"kind": "samples", "interval_s": self.interval, "start_s": self.start,
+                "samples": self.samples.tolist()}
+
+
+def _check_shape(name, value):
+    if value is not None and not isinstance(value, (GaussianPulse, SampledPulse)):
+        raise ParameterError(f"{name} must be a GaussianPulse, a SampledPulse or None; got "
+                             f"{type(value).__name__}")
+    return value
+
+
+def _kernel(shape, dt):
+    """Unit-sum kernel of ``shape`` on cells of width dt: index 0 is the cell [k0 dt,
+    (k0 + 1) dt); returns (kernel, k0)."""
+    if shape is None:
+        return np.ones(1), 0
+    lo, hi = shape.support
+    k0, k1 = math.floor(lo / dt), math.ceil(hi / dt)
+    cdf = shape.cdf(np.arange(k0, k1 + 1) * dt)
+    kern = np.diff(cdf)
+    return kern / kern.sum(), k0
+
+
+@dataclass(frozen=True, eq=False)
+class Waveforms:
+    """Sampled waveforms of many views: what a digitiser records per pulse.
+
+    ``values`` (n_views, n_samples): the signal in each sample (its integral over the
+    sample: photoelectrons when the sinogram counted them, else the sinogram's units);
+    ``time_edges`` (n_samples + 1,) in s, two-way time; ``range_edges`` the same edges as
+    range r = c t / 2 − D (scene units, metres); ``angles_deg``, ``view_vectors`` the views;
+    ``radiometry``, ``units``: typed fields (as :class:`~meshladar.sinogram.Sinogram`'s);
+    ``info``: free-form provenance (standoff, pulse, response, sample rate), read-only, that
+    also shows the typed fields (``info["units"]`` reads for one release).
+    """
+
+    values: np.ndarray
+    time_edges: np.ndarray = field(kw_only=True)
+    angles_deg: np.ndarray = field(kw_only=True)
+    view_vectors: np.ndarray = field(kw_only=True)
+    standoff: float = field(default=0.0, kw_only=True)
+    info: dict = field(default_factory=dict, kw_only=True)
+    radiometry: str | None = field(default=None, kw_only=True)
+    units: str | None = field(default=None, kw_only=True)
+
+    def __post_init__(self):
+        v = finite_array("values", self.values)
+        t = finite_array("time_edges", self.time_edges)
+        if v.ndim != 2 or t.shape != (v.shape[1] + 1,) or np.any(np.diff(t) <= 0):
+            raise ParameterError(f"values must be (n_views, n_samples) and time_edges "
+                                 f"n_samples + 1 increasing times; got {v.shape} and "
+                                 f"{t.shape}")
+        object.__setattr__(self, "values", readonly_copy(v))
+        object.__setattr__(self, "time_edges", readonly_copy(t))
+        object.__setattr__(self, "angles_deg", readonly_copy(self.angles_deg))
+        object.__setattr__(self, "view_vectors", readonly_copy(self.view_vectors))
+        split_info(self, self.info, keep_none=True)
+
+    @property
+    def sample_interval(self) -> float:
+        """Δt, s."""
+        return float(self.time_edges[1] - self.time_edges[0])
+
+    @property
+    def times(self) -> np.ndarray:
+        """(n_samples,) sample centres, s."""
+        return 0.5 * (self.time_edges[1:] + self.time_edges[:-1])
+
+    @property
+    def range_edges(self) -> np.ndarray:
+        """Sample edges as range, c t / 2 − D (m)."""
+        return SPEED_OF_LIGHT * self.time_edges / 2.0 - self.standoff
+
+    def total(self) -> np.ndarray:
+        return self.values.sum(axis=1)
+
+    def scaled(self, factor, units="photoelectrons") -> "Waveforms":
+        """The same waveforms times ``factor`` (e.g. photoelectrons per unit of a relative
+        power sinogram), in ``units``."""
+        f = check_real("factor", factor, low=0.0, low_open=True)
+        return Waveforms(self.values * f, time_edges=self.time_edges,
+                         angles_deg=self.angles_deg, view_vectors=self.view_vectors,
+                         standoff=self.standoff, info=dict(self.provenance, scaled_by=f),
+                         radiometry=self.radiometry, units=units)
+
+    @property
+    def provenance(self) -> dict:
+        """The free-form part of :attr:`info` (without the typed fields), as a new dict."""
+        return {k: v for k, v in self.info.items() if k not in TYPED_INFO_KEYS}
+
+    def realise(self, noise: Noise, n=1, *, seed=None) -> np.ndarray:
+        """``n`` noise realisations, (n, n_views, n_samples), in the noise's output units
+        (gain × photoelectrons, quantised if asked). Seeded: the same seed gives the same
+        bits. The waveforms must count photoelectrons (a sensor with ``pulse_energy`` and
+        ``aperture_diameter``, or :meth:`scaled`)."""
+        if not isinstance(noise, Noise):
+            raise ParameterError(f"noise must be a meshladar.noise.Noise; got "
+                                 f"{type(noise).__name__}")
+        n = check_count("n", n)
+        if self.units != "photoelectrons":
+            raise ParameterError(
+                f"noise counts photoelectrons; these waveforms are in "
+                f"{self.units!r}: simulate with a Sensor that has pulse_energy "
+                "and aperture_diameter (the command line's --pulse-energy, --aperture), or "
+                "convert with Waveforms.scaled(factor) (receive's --scale)")
+        check_size("n", float(n) * self.values.size, 8, f"{n} realisations of "
+                   f"{self.values.shape} samples", "draw fewer at a time")
+        return draw_noise(noise, self.values, self.sample_interval, n, seed)
+
+    def detection_probability(self, noise: Noise, threshold, n=1000, *, seed=None,
+                              chunk=100):
+        """Monte-Carlo detection statistics of a threshold detector on each view.
+
+        Returns a dict: ``detection`` (n_views,), the fraction of ``n`` noisy pulses in
+        which any sample of the view reaches ``threshold`` (output units); ``false_alarm``,
+        the fraction of samples that reach it in noise alone (background and dark counts,
+        the same gain and quantisation) over as many samples; ``threshold`` and ``n``.
+        Seeded; drawn ``chunk`` pulses at a time (bounded memory)."""
+        thr = check_real("threshold", threshold, low=0.0, low_open=True)
+        n = check_count("n", n)
+        chunk = check_count("chunk", chunk)
+        rng = np.random.default_rng(seed)
+        hits = np.zeros(self.values.shape[0])
+        alarms = 0
+        quiet = Waveforms(np.zeros_like(self.values), time_edges=self.time_edges,
+                          angles_deg=self.angles_deg, view_vectors=self.view_vectors,
+                          standoff=self.standoff, info=self.info)
+        for start in range(0, n, chunk):
+            k = min(chunk, n - start)
+            seeds = rng.integers(0, 2**63, 2)
+            hits += (self.realise(noise, k, seed=int(seeds[0])) >= thr).any(axis=2).sum(0)
+            alarms += int((quiet.realise(noise, k, seed=int(seeds[1])) >= thr).sum())
+        return {"detection": hits / n, "false_alarm": alarms / (n * self.values.size),
+                "threshold": thr, "n": n}
+
+    def plot(self, *, noise=None, realisations=8, seed=0, views=None):
+        """A quick look (:func:`meshladar.viz.waveforms.figure`, through :mod:`meshladar.plotting`): a few views' waveforms,
+        with ``noise`` the band of ``realisations`` draws around the expected waveform;
+        a matplotlib Figure."""
+        draws = None if noise is None else self.realise(noise, realisations, seed=seed)
+        return plotting.plot(self, realisations=draws, noise=noise, views=views)
+
+    def _summary(self):
+        return (("n_views", self.values.shape[0]), ("n_samples", self.values.shape[1]),
+                ("time", f"{self.time_edges[0] * 1e9:.7g} to {self.time_edges[-1] * 1e9:.7g}"
+                         " ns (two-way)"),
+                ("units", self.units), ("radiometry", self.radiometry))
+
+    def __repr__(self) -> str:
+        return text("Waveforms", *self._summary())
+
+    def _repr_html_(self) -> str:
+        return table("Waveforms", *self._summary())
+
+
+def receive(sino: Sinogram, *, sample_rate, pulse=None, response=None, standoff=None,
+            oversample=8) -> Waveforms:
+    """The waveforms a digitiser records from a sinogram's range bins.
+
+    Parameters
+    ----------
+    sino : Sinogram
+        Range profiles, best of received power (``radiometry="power"``); in photoelectrons
+        when simulated with a :class:`~meshladar.sensor.Sensor` that counts them.
+    sample_rate : float
+        Digitiser rate, Hz (samples per second).
+    pulse : GaussianPulse or SampledPulse, optional
+        The transmitted pulse's power against time (default: none, a Dirac pulse).
+    response : GaussianPulse or SampledPulse, optional
+        The receiver's impulse response (default: none, ideal).
+    standoff : float, optional
+        D (m) for the time origin t = 2(r + D)/c; default the sinogram's sensor's, else 0.
+    oversample : int
+        Fine cells per digitiser sample for the convolutions (default 8).
+
+    Returns
+    -------
+    Waveforms
+        Each view's samples; they sum to its bins (module docstring).
+    """
+    check_sinogram("sino", sino)
+    fs = check_real("sample_rate", sample_rate, low=0.0, low_open=True)
+    pulse = _check_shape("pulse", pulse)
+    response = _check_shape("response", response)
+    m = check_count("oversample", oversample)
+    if standoff is None:
+        standoff = (sino.info.get("sensor") or {}).get("standoff_m") or 0.0
+    D = check_real("standoff", standoff, low=0.0)
+    t_edges = 2.0 * (sino.bin_edges + D) / SPEED_OF_LIGHT
+    dt = 1.0 / (fs * m)
+    kp, p0 = _kernel(pulse, dt)
+    kr, r0 = _kernel(response, dt)
+    # the digitiser's window: whole samples from the first bin's start (less the kernels'
+    # lead) to the last bin's end (plus their tails)
+    first = math.floor((t_edges[0] / dt + p0 + r0) / m)
+    last = math.ceil((t_edges[-1] / dt + p0 + r0 + kp.size + kr.size) / m)
+    n_fine = (last - first) * m
+    check_size("sample_rate", float(n_fine) * sino.n_views, 8 * 3,
+               f"{n_fine} fine cells per view ({last - first} samples)",
+               "give a lower sample_rate or fewer bins")
+    fine_edges = (first * m + np.arange(n_fine + 1)) * dt
+    # each bin spread uniformly over its time interval: a piecewise-linear CDF per view
+    cum = np.concatenate([np.zeros((sino.n_views, 1)), np.cumsum(sino.values, axis=1)], 1)
+    # the kernels shift the signal by (p0 + r0) cells: deposit at the shifted edges
+    shifted = fine_edges - (p0 + r0) * dt
+    fine = np.empty((sino.n_views, n_fine))
+    for i in range(sino.n_views):
+        fine[i] = np.diff(np.interp(shifted, t_edges, cum[i]))
+    kernel = np.convolve(kp, kr)
+    from scipy.signal import convolve
+
+    # (the window's tail holds the whole kernel, so nothing is cut; an FFT's rounding can
+    # leave −1e-17 where there is no signal: clipped)
+    out = np.maximum(convolve(fine, kernel[None, :], mode="full")[:, :n_fine], 0.0)
+    samples = out.reshape(sino.n_views, last - first, m).sum(axis=2)
+    info = {"standoff_m": D, "sample_rate_hz": fs, "oversample": m,
+            "pulse": None if pulse is None else pulse.describe(),
+            "response": None if response is None else response.describe(),
+            "time_origin": "two-way time t = 2 (r + standoff) / c, s (less 2 aim.w / c with "
+                           "a sensor aimed off the origin)",
+            "source_model": sino.model, "sensor": sino.info.get("sensor"),
+            "source_info": {k: v for k, v in sino.info.items() if k != "sensor"}}
+    return Waveforms(samples, time_edges=(first + np.arange(last - first + 1)) / fs,
+                     angles_deg=sino.angles_deg, view_vectors=sino.view_vectors,
+                     standoff=D, info=info, radiometry=sino.radiometry, units=sino.units)

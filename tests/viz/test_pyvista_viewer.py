@@ -1,0 +1,193 @@
+"""The pyvista viewer, rendered off screen for real; the pictures' content is checked."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import meshladar as ml
+from meshladar.materials import ALUMINUM, DARK_GRAY, lambertian
+
+from _rendering import _SMOKE  # noqa: E402  (tests/, on the path with the conftest)
+
+
+@pytest.fixture(scope="module", autouse=True)
+def rendering():
+    # VTK segfaults instead of raising when off-screen rendering is missing: probe in a
+    # subprocess and turn a crash into a clear message
+    res = subprocess.run([sys.executable, "-c", _SMOKE], capture_output=True, text=True,
+                         timeout=300)
+    if res.returncode != 0:
+        msg = ("off-screen rendering does not work here (exit code "
+               f"{res.returncode}): install Debian's libegl1 and libgl1-mesa-dri "
+               "(.ci/run does)\n" + res.stderr[-2000:])
+        if os.environ.get("CI"):
+            pytest.fail(msg)
+        pytest.skip(msg)
+
+
+def _is(img, color, tol=0.08):
+    return np.all(np.abs(img[..., :3] / 255.0 - np.asarray(color)) < tol, axis=-1)
+
+
+def test_shadowed_part_of_the_disk_pair_is_drawn_in_the_shadow_colour():
+    from meshladar.viz import viewer
+
+    pair = ml.phantoms.scene("disk_pair", large=DARK_GRAY, small=ALUMINUM)
+    # from +x the small disk hides the large one's middle: a band of shadow colour
+    img = viewer.show_scene(pair, view_angle_deg=0.0, show_rays=False, off_screen=True,
+                            window_size=(400, 300)).image
+    shadow = _is(img, viewer.SHADOW_COLOR)
+    assert shadow.sum() > 1000
+    # from +y nothing is shadowed
+    img = viewer.show_scene(pair, view_angle_deg=90.0, show_rays=False, off_screen=True,
+                            window_size=(400, 300)).image
+    assert _is(img, viewer.SHADOW_COLOR).sum() == 0
+    # the headless EGL window is chosen for the call only: the environment is left as it was
+    if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        assert "VTK_DEFAULT_OPENGL_WINDOW" not in os.environ
+
+
+def test_lit_lambertian_sphere_is_brightest_at_its_centre(tmp_path):
+    from meshladar.viz import viewer
+
+    sphere = ml.Scene.from_parts([ml.mesh.sphere((0, 0, 0), 0.5, 0, subdivisions=4)],
+                                 [lambertian(1.0)])
+    shot = tmp_path / "sphere.png"
+    img = viewer.show_scene(sphere, view_vector=[0, 0, 1], show_rays=False, off_screen=True,
+                            screenshot=shot, window_size=(300, 300), camera="view").image
+    assert shot.is_file()
+    gray = img[..., :3].astype(float).sum(axis=-1)
+    # F cos θ = cos θ/π peaks where the normal faces the ladar: the sphere's centre (the
+    # brightest facets, within 2% of the maximum, gather around it: their centroid)
+    ii, jj = np.nonzero(gray >= 0.98 * gray.max())
+    assert abs(ii.mean() - 150) < 8 and abs(jj.mean() - 150) < 8
+    # and falls off toward the limb
+    assert gray[150, 150] > gray[150, 150 + 60] > gray[150, 150 + 90]
+
+
+def test_slice_sits_at_its_position():
+    from meshladar.viz import viewer
+
+    values = np.zeros((64, 64))
+    values[32, 50] = 1.0                      # a bright pixel at x ≈ +0.58, y ≈ 0
+    image = ml.Image(values, 1.0)
+    img = viewer.show_slice(image, z=0.3, off_screen=True, window_size=(300, 300)).image
+    gray = img[..., :3].astype(float).sum(axis=-1)
+    i, j = np.unravel_index(np.argmax(gray), gray.shape)
+    assert j > 150 + 40 and abs(i - 150) < 20      # right of centre, on the x axis
+
+
+def test_volume_iso_surface_of_a_stack():
+    from meshladar.viz import viewer
+
+    x = np.linspace(-1, 1, 32)
+    X, Y = np.meshgrid(x, x)
+    zs = np.linspace(-0.5, 0.5, 8)
+    images = [ml.Image((np.hypot(X, Y) < 0.5).astype(float), 1.0) for _ in zs]
+    img = viewer.show_volume(images, zs, iso=0.5, off_screen=True,
+                             window_size=(200, 200)).image
+    assert (img[..., :3].sum(axis=-1) > 100).sum() > 500      # a cylinder was drawn
+    with pytest.raises(ValueError, match="evenly spaced"):
+        viewer.show_volume(images, np.r_[zs[:-1], 9.0], iso=0.5, off_screen=True)
+
+
+@pytest.mark.slow
+def test_show_volume_of_a_reconstructed_ball():
+    """A Volume (3-D Radon inversion of a uniform ball) draws as its default iso-surface."""
+    from meshladar.mesh import fibonacci_sphere
+    from meshladar.viz import viewer
+    from meshladar.volume import radon3d
+
+    a, W = 0.5, fibonacci_sphere(200)
+    edges = np.linspace(-1.0, 1.0, 49)
+    lo, hi = np.clip(edges[:-1], -a, a), np.clip(edges[1:], -a, a)
+    vals = np.broadcast_to(np.pi * (a * a * (hi - lo) - (hi ** 3 - lo ** 3) / 3), (200, 48))
+    sino = ml.Sinogram(vals, angles_deg=np.zeros(200), bin_edges=edges, view_vectors=W)
+    vol = radon3d(sino, size=32, extent=1.0)
+    surf = viewer.volume_surface(vol)
+    r = np.linalg.norm(np.asarray(surf.points), axis=1)
+    assert abs(np.median(r) - a) < 2.0 / 32                  # the ball's sphere
+    img = viewer.show_volume(vol, off_screen=True, window_size=(200, 200)).image
+    assert (img[..., :3].sum(axis=-1) > 100).sum() > 500
+    with pytest.raises(ValueError, match="zs"):
+        viewer.show_volume(vol, [0.0, 1.0], off_screen=True)
+
+
+def test_colour_bars_are_titled_and_apart():
+    """With a ladar the scene shows two quantities, the return and the hits' range bin:
+    two titled colour bars that do not overlap; a slice's bar says what it shows."""
+    from meshladar.viz import viewer
+
+    pair = ml.phantoms.scene("disk_pair")
+    ladar = ml.Ladar.paper(angles_deg=[90.0])
+    shown = viewer.show_scene(pair, ladar=ladar, off_screen=True, window_size=(300, 240))
+    bars = list(shown.scalar_bars)
+    assert sorted(t for t, _ in bars) == ["F cos(theta) [1/sr]", "first hits: range bin"]
+    (_, a), (_, b) = bars
+    assert a[3] <= b[1] or b[3] <= a[1] or a[2] <= b[0] or b[2] <= a[0]      # apart
+    sino = ml.simulate(pair, ml.Ladar(np.arange(0.0, 360.0, 1.0),
+                                      ml.Ladar.centered(64, 1.6 / 64).bin_edges))
+    shown = viewer.show_slice(ml.fbp(ml.log_radiance(sino), size=64), off_screen=True,
+                              window_size=(200, 200))
+    assert [t for t, _ in shown.scalar_bars] == ["reconstruction of log input"]
+
+
+def test_legend_names_the_flat_colours_clear_of_the_bars_and_text_is_legible():
+    """The flat colours (shadowed, turned away, beam, iso-range planes) are named in a
+    legend that overlaps no colour bar; the bars' titles and labels are drawn light on the
+    black background (they were black on black: present in VTK, invisible on screen)."""
+    from meshladar.viz import viewer
+
+    pair = ml.phantoms.scene("disk_pair", large=DARK_GRAY, small=ALUMINUM)
+    w, h = 600, 480
+    shown = viewer.show_scene(pair, view_angle_deg=0.0, ladar=ml.Ladar.paper(),
+                              off_screen=True, window_size=(w, h))
+    img = shown.image
+    labels, box = shown.legend.labels, shown.legend.box
+    assert list(labels) == ["shadowed (another face in the way)", "turned away from the ladar",
+                      "ladar beam and ray grid", "iso-range planes (bin edges)"]
+    for _, bar in shown.scalar_bars:
+        assert box[2] <= bar[0] or bar[2] <= box[0] or box[3] <= bar[1] or bar[3] <= box[1]
+    # light text right of each bar (its labels) and above it (its title)
+    for _, (x0, y0, x1, y1) in shown.scalar_bars:
+        labels_px = img[int((1 - y1) * h):int((1 - y0) * h), int(x1 * w):, :3]
+        title_px = img[max(0, int((1 - y1) * h) - 30):int((1 - y1) * h),
+                       int((x0 - 0.1) * w):, :3]
+        assert (labels_px.min(axis=-1) > 150).sum() > 20
+        assert (title_px.min(axis=-1) > 150).sum() > 20
+    # the legend's text is white whatever its swatch (the dark blue was unreadable)
+    x0, y0, x1, y1 = box
+    legend_px = img[int((1 - y1) * h):int((1 - y0) * h), int(x0 * w):int(x1 * w), :3]
+    assert (legend_px.min(axis=-1) > 200).sum() > 200
+    # no ladar, no rays: nothing flat to name but the shadows and the far sides
+    quiet = viewer.show_scene(pair, view_angle_deg=90.0, show_rays=False, off_screen=True,
+                              window_size=(200, 160))
+    assert list(quiet.legend.labels) == ["turned away from the ladar"]
+    # np.asarray of what was shown is its image (ax.imshow(shown) keeps working)
+    assert np.asarray(quiet).shape == (160, 200, 3)
+    with pytest.raises(ml.errors.ParameterError, match="camera"):
+        viewer.show_scene(pair, camera="top", off_screen=True)
+
+
+def test_volume_default_is_a_surface_not_fog():
+    """A stack of disks drawn by default: the iso-surface at half the robust peak (a solid
+    cylinder whose pixels are bright), not a grey fog; render='volume' is a windowed
+    volume rendering."""
+    from meshladar.viz import viewer
+
+    x = np.linspace(-1, 1, 32)
+    X, Y = np.meshgrid(x, x)
+    zs = np.linspace(-0.5, 0.5, 8)
+    images = [ml.Image(3.0 * (np.hypot(X, Y) < 0.5), 1.0) for _ in zs]
+    img = viewer.show_volume(images, zs, off_screen=True, window_size=(200, 200)).image
+    assert (img[..., :3].sum(axis=-1) > 300).sum() > 500
+    img = viewer.show_volume(images, zs, render="volume", off_screen=True,
+                             window_size=(200, 200)).image
+    assert img[..., :3].std() > 5
+    with pytest.raises(ValueError, match="render"):
+        viewer.show_volume(images, zs, render="fog", off_screen=True)

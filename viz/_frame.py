@@ -1,0 +1,138 @@
+"""The frame every viewer figure shares: pyvista on demand, a headless EGL window, titled
+colour bars in fixed slots, the legend of flat colours, and the :class:`Shown` record an
+entry point returns (image or plotter, legend, colour bars) instead of module state."""
+
+from __future__ import annotations
+
+import functools
+import os
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from meshladar.io import write_atomic
+
+__all__ = ["Shown", "Legend", "ScalarBar"]
+
+
+def _pyvista():
+    try:
+        import pyvista as pv
+    except ImportError as exc:
+        raise ImportError("the viewer needs pyvista: pip install 'meshladar[viz]'") from exc
+    return pv
+
+
+def _headless_window(func):
+    """Run a viewer entry point with VTK pointed at its EGL window when there is no
+    display, restoring the environment afterwards (a user's session is left as it was)."""
+
+    @functools.wraps(func)
+    def wrapper(*args, **kwargs):
+        key = "VTK_DEFAULT_OPENGL_WINDOW"
+        headless = not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY")
+        before = os.environ.get(key)
+        if headless and before is None:
+            os.environ[key] = "vtkEGLRenderWindow"
+        try:
+            return func(*args, **kwargs)
+        finally:
+            if headless and before is None:
+                os.environ.pop(key, None)
+
+    return wrapper
+
+
+class ScalarBar(NamedTuple):
+    """A colour bar drawn: its ``title`` and ``box`` (x0, y0, x1, y1) in viewport units."""
+
+    title: str
+    box: tuple
+
+
+class Legend(NamedTuple):
+    """The legend drawn: its ``labels`` (top to bottom) and ``box`` (x0, y0, x1, y1) in
+    viewport units."""
+
+    labels: tuple
+    box: tuple
+
+
+@dataclass(frozen=True, eq=False)
+class Shown:
+    """What a viewer entry point drew: ``image`` (height, width, 3) off screen (else None),
+    ``plotter`` on a desktop (else None), its ``legend`` (None without one) and its
+    ``scalar_bars``, for checks that they are titled and do not overlap."""
+
+    image: np.ndarray | None
+    plotter: object
+    legend: Legend | None
+    scalar_bars: tuple
+
+    def __array__(self, dtype=None, copy=None):
+        if self.image is None:
+            raise TypeError("shown on a desktop: no image (give off_screen=True)")
+        return np.asarray(self.image, dtype=dtype)
+
+
+def _bar(title, slot=0):
+    """scalar_bar_args for a titled vertical colour bar in one of two fixed slots at the
+    right edge (0: lower, 1: upper), so two bars never overlap."""
+    return {"title": title, "vertical": True, "position_x": 0.8,
+            "position_y": 0.06 + 0.48 * slot, "width": 0.08, "height": 0.38,
+            "title_font_size": 12, "label_font_size": 10, "n_labels": 4, "fmt": "%.3g",
+            "color": "white"}             # the backgrounds are black
+
+
+def _legend(plotter, entries):
+    """A legend of the flat colours drawn, ``entries`` [(label, colour)], in the top-left
+    corner, clear of the colour bars' slots at the right edge."""
+    if not entries:
+        return
+    height = 0.05 * len(entries)
+    legend = plotter.add_legend(labels=[list(e) for e in entries],
+                                bcolor=(0.12, 0.12, 0.12), size=(0.44, height),
+                                loc="upper left", face="none", background_opacity=0.8)
+    from vtkmodules.vtkCommonDataModel import vtkImageData
+
+    # VTK colours an entry's text as its symbol: white text, and the colour as an icon
+    for i, (_, colour) in enumerate(entries):
+        icon = vtkImageData()
+        icon.SetDimensions(16, 16, 1)
+        icon.AllocateScalars(3, 3)                  # VTK_UNSIGNED_CHAR, RGB
+        pixels = icon.GetPointData().GetScalars()
+        rgb = [int(round(255 * c)) for c in colour]
+        for k in range(16 * 16):                    # a light frame: dark colours show too
+            edge = k % 16 in (0, 15) or k // 16 in (0, 15)
+            pixels.SetTuple3(k, *((220, 220, 220) if edge else rgb))
+        legend.SetEntryIcon(i, icon)
+        legend.SetEntryColor(i, 1.0, 1.0, 1.0)
+    return legend
+
+
+def _box(actor):
+    x, y = actor.GetPosition()
+    w, h = actor.GetPosition2()
+    return (x, y, x + w, y + h)
+
+
+def _finish(plotter, off_screen, screenshot):
+    bars = []
+    for bar in plotter.scalar_bars.values():
+        bar.SetVerticalTitleSeparation(12)       # the title clear of the top label
+        bars.append(ScalarBar(bar.GetTitle() or "", _box(bar)))
+    legend = getattr(plotter, "legend", None)
+    if legend is not None:
+        legend = Legend(tuple(legend.GetEntryString(i)
+                              for i in range(legend.GetNumberOfEntries())), _box(legend))
+    if off_screen:
+        img = plotter.screenshot(None, return_img=True)
+        plotter.close()
+        if screenshot is not None:          # PNG written atomically (never half a file)
+            from matplotlib.image import imsave
+
+            write_atomic(screenshot, lambda fh: imsave(fh, img, format="png"))
+        return Shown(img, None, legend, tuple(bars))
+    plotter.show(screenshot=screenshot)
+    return Shown(None, plotter, legend, tuple(bars))
