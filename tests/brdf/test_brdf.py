@@ -518,7 +518,8 @@ class _UserMatte(BRDF):
         return 0.3 / np.pi * cos_theta
 
 
-@pytest.mark.parametrize("model", ["analytic", "pixel", pytest.param("mesh", marks=pytest.mark.slow)])
+@pytest.mark.parametrize("model", ["analytic", "pixel",
+                                   pytest.param("mesh", marks=pytest.mark.slow)])
 def test_a_users_model_works_in_every_forward_model(model):
     from meshladar.materials import lambertian
 
