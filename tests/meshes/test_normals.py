@@ -214,6 +214,7 @@ def _errors(sphere_runs, references, coating, normals):
     return [rel_l2(sphere_runs[k, coating, normals], references[coating]) for k in SUBDIVISIONS]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("coating", list(COATINGS))
 def test_smooth_error_falls_as_the_icosphere_is_refined(sphere_runs, references, coating):
     err = _errors(sphere_runs, references, coating, "smooth")
@@ -237,6 +238,7 @@ def test_smooth_error_falls_as_the_icosphere_is_refined(sphere_runs, references,
         assert all(f <= floor_ratio * s for f, s in zip(floor, err)), (floor, err)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("normals", NORMALS)
 @pytest.mark.parametrize("coating", list(COATINGS))
 def test_no_bin_exceeds_the_sphere_bound(sphere_runs, coating, normals):
@@ -264,6 +266,7 @@ def test_no_bin_exceeds_the_sphere_bound(sphere_runs, coating, normals):
                                                                      ratio.shape))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("coating", list(COATINGS))
 def test_smooth_is_never_much_worse_than_flat(sphere_runs, references, coating):
     smooth = _errors(sphere_runs, references, coating, "smooth")
@@ -286,6 +289,7 @@ def icosphere_1280_hits():
     return ml.trace(scene, ladar, normals="smooth", rays_per_bin=8)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("coating", list(COATINGS))
 def test_no_silhouette_blow_up_on_a_1280_face_icosphere(icosphere_1280_hits, coating):
     material = COATINGS[coating]

@@ -378,6 +378,7 @@ def test_cli_analytic_refuses_mesh_options(capsys, tmp_path):
     assert code == 2 and "--normals is an option of the mesh model" in err
 
 
+@pytest.mark.slow
 def test_no_command_overwrites_its_input(tmp_path, capsys):
     box = tmp_path / "mine.stl"
     trimesh.creation.box(extents=(0.2, 0.2, 0.2)).export(box)

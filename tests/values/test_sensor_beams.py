@@ -62,6 +62,7 @@ def test_lambertian_disk_closed_form(radiometry):
     ("pair_gray_al", lambda: ml.phantoms.scene("disk_pair", large=DARK_GRAY,
                                                small=ALUMINUM)),
 ])
+@pytest.mark.slow
 def test_analytic_power_matches_quadrature(name, scene):
     """Received power is as exact as Eq. 8 in the analytic model: shadows, glints and
     ellipses against independent adaptive quadrature of F cos²θ."""
@@ -81,6 +82,7 @@ def test_analytic_power_matches_quadrature(name, scene):
 SPHERE_TOL = 3e-3
 
 
+@pytest.mark.slow
 def test_lambertian_sphere_power_is_the_textbook_square_law():
     """A Lambertian sphere's received-power profile: the cap at depth r from the top holds
     2 (ρ/π) π R² ∫ cos²a sin a da, so a bin holds (2/3) ρ R² [c³] with c = 1 − r/R: the
@@ -124,6 +126,7 @@ def test_mesh_power_fused_equals_trace_then_weigh(normals, backend, coating):
     assert np.all(power <= paper * (1 + 1e-12)) and power.sum() < paper.sum()
 
 
+@pytest.mark.slow
 def test_bistatic_power_at_the_ladar_is_monostatic_power():
     """A receiver collocated with the ladar, through the bistatic path (occlusion rays,
     bistatic BRDF), gives the monostatic numbers under both conventions."""
@@ -196,6 +199,7 @@ PLATE_BIN_RTOL = 3e-3
 PLATE_TOTAL_RTOL = 3e-4
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("radiometry", ["paper", "power"])
 def test_standoff_plate_closed_form(radiometry):
     """A Lambertian disk plate facing a sensor at standoff D: the point at distance ρ from
