@@ -12,14 +12,15 @@ are stated in :mod:`meshladar.brdf.base`.
 
 from __future__ import annotations
 
-from .base import MODELS, BRDF, check_brdf, is_builtin, projected_weight
-from .ggx import GGX
-from .lambertian import Lambertian
-from .phong import Phong
-from .sandford_robertson import (E_MIN, LOBES, KernelRow, SandfordRobertson,
+# in this order, which is the order the models register in (MODELS, messages)
+from .base import MODELS, BRDF, check_brdf, is_builtin, projected_weight  # isort: skip
+from .sandford_robertson import (E_MIN, LOBES, KernelRow, SandfordRobertson,  # isort: skip
                                  diffuse_normalization, diffuse_shape, glint_lobe,
                                  specular_normalization)
-from .tabulated import Tabulated
+from .lambertian import Lambertian  # isort: skip
+from .phong import Phong  # isort: skip
+from .ggx import GGX  # isort: skip
+from .tabulated import Tabulated  # isort: skip
 
 __all__ = [
     "BRDF",

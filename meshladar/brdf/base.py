@@ -229,9 +229,8 @@ def projected_weight(m, cos_theta, sin_theta):
 def check_brdf(name, value):
     """``value`` if it follows the BRDF protocol, else a ParameterError naming ``name``."""
     if not isinstance(value, BRDF):
-        raise ParameterError(f"{name} must be a meshladar.brdf.BRDF (SandfordRobertson, "
-                             f"Lambertian, Phong, GGX, Tabulated or a subclass); got "
-                             f"{type(value).__name__}")
+        raise ParameterError(f"{name} must be a meshladar.brdf.BRDF ({', '.join(MODELS)} "
+                             f"or a subclass); got {type(value).__name__}")
     if type(value).projected is BRDF.projected:
         raise ModelError(f"{name}: {type(value).__name__} must define projected(cos_theta, "
                          "sin_theta), the monostatic F·cos θ (meshladar.brdf.BRDF)")
