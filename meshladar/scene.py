@@ -167,7 +167,8 @@ class Scene:
             if fm.shape != (len(m.faces),) or not np.issubdtype(fm.dtype, np.integer):
                 raise ParameterError(f"face_materials must be ({len(m.faces)},) integers; got "
                                      f"shape {fm.shape}, dtype {fm.dtype}")
-            return cls._from_parts([part_from_trimesh(m, fm, name, transform)], materials)
+            part = part_from_trimesh(m, fm, name=name, transform=transform)
+            return cls._from_parts([part], materials)
         if materials is not None and not isinstance(materials, dict):
             raise ParameterError(f"materials must be a dict of part name -> coating; got "
                                  f"{type(materials).__name__}")
@@ -184,7 +185,7 @@ class Scene:
                                      f"materials={{{name!r}: ...}}")
             if coat not in mats:
                 mats.append(coat)
-            parts.append(part_from_trimesh(m, mats.index(coat), name, transform))
+            parts.append(part_from_trimesh(m, mats.index(coat), name=name, transform=transform))
         return cls._from_parts(parts, mats)
 
     @classmethod
@@ -201,7 +202,8 @@ class Scene:
             if coat not in mats:
                 mats.append(coat)
             for name, m in load_parts(mesh):
-                parts.append(part_from_trimesh(m, mats.index(coat), f"{k}:{name}", transform))
+                parts.append(part_from_trimesh(m, mats.index(coat), name=f"{k}:{name}",
+                                                   transform=transform))
         return cls._from_parts(parts, mats)
 
     def tessellate(self, segments=256, *, height=1.0, z0=0.0):

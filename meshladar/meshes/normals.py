@@ -21,7 +21,7 @@ __all__ = ["corner_normals", "CREASE_DEG"]
 CREASE_DEG = 30.0
 
 
-def corner_normals(part: MeshPart, crease_deg=CREASE_DEG):
+def corner_normals(part: MeshPart, *, crease_deg=CREASE_DEG):
     """(m, 3, 3) unit normal at each face corner: the area-weighted mean of the normals of
     the faces around that corner's point that lie within ``crease_deg`` of the face's own
     normal (so shared smooth edges blend and creases stay sharp).

@@ -106,7 +106,7 @@ class MeshPart:
         return h.hexdigest()
 
 
-def part_from_trimesh(mesh, material_index, name="mesh", transform=None):
+def part_from_trimesh(mesh, material_index, *, name="mesh", transform=None):
     """A MeshPart from a trimesh.Trimesh (optionally transformed by a 4×4 matrix)."""
     v = np.asarray(mesh.vertices, dtype=np.float64)
     if transform is not None:

@@ -38,7 +38,7 @@ def _numpy_corner_normals(part, crease_deg):
 def test_the_compiled_loop_equals_numpy_sums_on_a_prism_with_creases(crease_deg):
     disk = ml.Disk((0.1, -0.2), 0.5, ml.materials.DARK_GRAY)
     part = ml.meshes.prism(disk, 16, 0.4, 0)          # sides 22.5° apart: no tie at 30°
-    got = corner_normals(part, crease_deg)
+    got = corner_normals(part, crease_deg=crease_deg)
     np.testing.assert_allclose(got, _numpy_corner_normals(part, crease_deg), rtol=ORDER_RTOL,
                                atol=ORDER_RTOL)
     # the side faces meet the caps at 90°: sharp at 30°, blended at 100°
