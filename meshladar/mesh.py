@@ -12,13 +12,15 @@ from __future__ import annotations
 import importlib
 
 from . import meshes
-from .meshes import (MeshPart, convex_hull, ellipsoid, fibonacci_sphere, inspect_parts,
-                     load_parts, part_from_trimesh, prism, sphere)
+from .meshes import (MeshPart, convex_hull, ellipsoid, fibonacci_sphere, icosphere,
+                     inspect_parts, load_parts, part_from_trimesh, prism, sphere)
 
 __all__ = ["MeshPart", "load_parts", "part_from_trimesh", "prism", "sphere", "ellipsoid",
-           "fibonacci_sphere", "corner_normals", "CREASE_DEG", "inspect_parts", "convex_hull"]
+           "fibonacci_sphere", "icosphere", "corner_normals", "CREASE_DEG", "inspect_parts",
+           "convex_hull"]
 
-#: The old module's private helpers: name -> the meshladar.meshes submodule holding it now.
+#: The old module's private helpers: name -> the meshladar.meshes submodule holding it now
+#: (``_icosphere`` is now the public ``icosphere``).
 _MOVED = {"_clean": "checks", "_bodies": "checks", "_read_file": "formats", "_read": "formats",
           "_part_name": "formats", "_parts_of": "formats", "_describe": "formats",
           "_not_a_mesh": "formats", "_welded": "formats", "_sniff": "archives",
@@ -26,10 +28,12 @@ _MOVED = {"_clean": "checks", "_bodies": "checks", "_read_file": "formats", "_re
           "_members": "archives", "_needs": "archives", "_readable_formats": "archives",
           "_one_line": "archives", "_printable": "archives", "_point_index": "part",
           "_PrismNormal": "primitives", "_EllipsoidNormal": "primitives",
-          "_icosphere": "primitives", "corner_normals": "normals", "CREASE_DEG": "normals"}
+          "corner_normals": "normals", "CREASE_DEG": "normals"}
 
 
 def __getattr__(name):
+    if name == "_icosphere":
+        return icosphere
     if name in _MOVED:
         return getattr(importlib.import_module(f"{meshes.__name__}.{_MOVED[name]}"), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

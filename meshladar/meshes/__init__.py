@@ -12,7 +12,8 @@ module             holds
 ``formats``        :func:`load_parts`: files, trimesh objects (``archives``: sniffing,
                    decompression, archive listings, messages)
 ``checks``         :func:`inspect_parts`: degenerate faces, watertight bodies, signed volumes
-``primitives``     :func:`prism`, :func:`ellipsoid`, :func:`sphere`, :func:`fibonacci_sphere`
+``primitives``     :func:`prism`, :func:`ellipsoid`, :func:`sphere`, :func:`icosphere`,
+                   :func:`fibonacci_sphere`
 ``hull``           :func:`convex_hull`
 ``normals``        :func:`corner_normals`, :data:`CREASE_DEG` (compiled twin
                    ``_normals_kernel``; imported on first use, it loads numba)
@@ -32,10 +33,11 @@ from .checks import inspect_parts
 from .formats import load_parts
 from .hull import convex_hull
 from .part import MeshPart, part_from_trimesh
-from .primitives import ellipsoid, fibonacci_sphere, prism, sphere
+from .primitives import ellipsoid, fibonacci_sphere, icosphere, prism, sphere
 
 __all__ = ["MeshPart", "load_parts", "part_from_trimesh", "prism", "sphere", "ellipsoid",
-           "fibonacci_sphere", "corner_normals", "CREASE_DEG", "inspect_parts", "convex_hull"]
+           "fibonacci_sphere", "icosphere", "corner_normals", "CREASE_DEG", "inspect_parts",
+           "convex_hull"]
 
 #: Names reached lazily (their module imports numba): name -> submodule.
 _LAZY = {"corner_normals": "normals", "CREASE_DEG": "normals", "normals": None,

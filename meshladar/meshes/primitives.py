@@ -15,7 +15,7 @@ from ..shapes import ellipse_normal, to_frame
 from .directions import fibonacci_sphere
 from .part import MeshPart
 
-__all__ = ["prism", "sphere", "ellipsoid", "fibonacci_sphere"]
+__all__ = ["prism", "sphere", "ellipsoid", "icosphere", "fibonacci_sphere"]
 
 
 class _PrismNormal:
@@ -88,7 +88,9 @@ def prism(shape, segments, height, material_index, *, z0=0.0):
                     exact_normal)
 
 
-def _icosphere(subdivisions):
+def icosphere(subdivisions):
+    """Vertices (n, 3) float64 and faces (m, 3) of the unit icosphere (radius 1 about the
+    origin, 20·4^subdivisions faces), as trimesh builds it."""
     import trimesh
 
     subdivisions = check_count("subdivisions", subdivisions, 0)
@@ -104,7 +106,7 @@ def ellipsoid(center, semi_axes, material_index, *, subdivisions=4, name="ellips
     if c.shape != (3,) or ax.shape != (3,) or np.any(ax <= 0) or not np.all(np.isfinite(ax)):
         raise ParameterError(f"ellipsoid needs a 3-D center and three positive semi_axes; got "
                              f"{center!r}, {semi_axes!r}")
-    v, f = _icosphere(subdivisions)
+    v, f = icosphere(subdivisions)
     return MeshPart(c + v * ax, f, material_index, name, _EllipsoidNormal(c, ax))
 
 
