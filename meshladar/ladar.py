@@ -8,16 +8,19 @@ origin, growing away from the ladar). Range bins are given by strictly increasin
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
 
+from ._summary import table, text
 from ._validate import (check_count, check_real, check_size, finite_array, readonly_copy,
                         unit_vectors)
-from .errors import ParameterError
+from .errors import MeshladarWarning, ParameterError
 from .precision import ANGLE_TOL_DEG as _ANGLE_TOL_DEG
 from .precision import COUNT_SLACK, SPAN_FLOOR
+from .scene import Scene
 
 __all__ = ["Ladar", "PAPER_BIN_DIVISOR"]
 
@@ -153,8 +156,6 @@ class Ladar:
         the span). Views: ``angles_deg`` about z (default 0, 1, ..., 359) or
         ``view_vectors``.
         """
-        from .scene import Scene
-
         if not isinstance(scene, Scene):
             raise ParameterError(f"scene must be a meshladar.Scene; got {type(scene).__name__}")
         if bin_width is None and n_bins is None:
@@ -227,13 +228,9 @@ class Ladar:
                 ("bin_width", float(width[0]) if uniform else "uneven"), ("views", views))
 
     def __repr__(self) -> str:
-        from ._summary import text
-
         return text("Ladar", *self._summary())
 
     def _repr_html_(self) -> str:
-        from ._summary import table
-
         return table("Ladar", *self._summary())
 
 
@@ -247,10 +244,6 @@ def _warn_off_axis(depth, span):
     small part (``depth``, the deepest view's) of the ranges all the views span together
     (bins are shared by every view)."""
     if span > 0 and depth < _OFF_AXIS_FRACTION * span:
-        import warnings
-
-        from .errors import MeshladarWarning
-
         warnings.warn(f"the target is far from the origin, the axis the views turn about: each "
                       f"view sees it over at most {depth:.3g} of the {span:.3g} range units "
                       f"the views span together ({100 * depth / span:.0f}% of the bins); "

@@ -26,7 +26,7 @@ from importlib import resources
 from types import MappingProxyType
 
 from .brdf import SandfordRobertson
-from ._validate import check_real
+from ._validate import check_path, check_real
 from .errors import MaterialFileError
 
 __all__ = ["read_toml", "DARK_GRAY", "ALUMINUM", "PAPER", "TABLE_PATH", "lambertian", "glint",
@@ -102,8 +102,6 @@ def load_table(path):
     -------
     Mapping[str, SandfordRobertson]
     """
-    from ._validate import check_path
-
     path = check_path("path", path)
     return parse_table(read_toml(path, "material table", MaterialFileError), source=path)
 

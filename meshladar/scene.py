@@ -7,83 +7,21 @@ overlapping shapes is not the union of their boundaries, so overlapping shapes r
 
 from __future__ import annotations
 
+import warnings
+from functools import cached_property
+
 import numpy as np
 
+from ._summary import listing, material_name, table, text
+from ._validate import check_real
 from .brdf import check_brdf
-from .errors import GeometryError, ParameterError
+from .errors import GeometryError, MeshladarWarning, ParameterError
+from .meshes import MeshPart, convex_hull, inspect_parts, load_parts, part_from_trimesh, prism
 from .precision import OVERLAP_RTOL
 from .shapes import Disk, Ellipse, Shape, _overlap, to_frame
 
 __all__ = ["Shape", "Disk", "Ellipse", "Scene", "OVERLAP_RTOL"]
 
-
-
-#: Convex hulls of recent meshes by content (the geometry's digests), most recent last: a
-#: new Scene of the same mesh (a coating sweep, a script run twice) skips the hull.
-_HULLS: dict = {}
-_HULL_CACHE_SIZE = 8
-
-
-#: Above this many points the hull is found in two steps: the points strictly inside the
-#: polytope of their extremes along :data:`_FILTER_DIRECTIONS` directions are dropped
-#: first (Akl–Toussaint), in O(points × facets).
-_HULL_FILTER_ABOVE = 100_000
-#: Qhull runs on at most this many points (it takes ~10 s on 655k points of a sphere, all
-#: on the hull); beyond, the filtered points themselves are the answer: a superset of the
-#: hull's vertices, so every extreme of a linear or perspective function is the same.
-_QHULL_MAX = 200_000
-_FILTER_DIRECTIONS = 64
-
-
-def _convex_hull(v):
-    """Points (n, 3) that include every vertex of their convex hull (exactly the hull's
-    vertices unless they are very many, see :data:`_QHULL_MAX`), read-only; all the points
-    when the hull is degenerate (a flat sheet) or they are few."""
-    from scipy.spatial import ConvexHull, QhullError
-
-    hull = v
-    if len(v) > _HULL_FILTER_ABOVE:
-        hull = _outside_extremes(v)
-    if 64 < len(hull) <= _QHULL_MAX:
-        try:
-            hull = hull[ConvexHull(hull).vertices]
-        except (QhullError, ValueError):
-            pass
-    hull = np.ascontiguousarray(hull)
-    hull.flags.writeable = False
-    return hull
-
-
-def _outside_extremes(v):
-    """The points of v not strictly inside the convex polytope of their extremes along
-    :data:`_FILTER_DIRECTIONS` directions: every vertex of v's hull is among them (the
-    polytope lies inside the hull, so a hull vertex cannot be inside it). A tolerance of
-    1e-9 of the points' extent keeps points on the polytope's faces."""
-    from scipy.spatial import ConvexHull, QhullError
-
-    from .mesh import fibonacci_sphere
-
-    dirs = fibonacci_sphere(_FILTER_DIRECTIONS)
-    step = 1 << 15                                      # bounded memory
-    best = np.full(len(dirs), -np.inf)
-    arg = np.zeros(len(dirs), np.int64)
-    for a in range(0, len(v), step):                    # each direction's extreme point
-        proj = v[a:a + step] @ dirs.T
-        k = np.argmax(proj, axis=0)
-        top = proj[k, np.arange(len(dirs))]
-        better = top > best
-        best[better], arg[better] = top[better], a + k[better]
-    ext = np.unique(arg)
-    try:
-        eq = ConvexHull(v[ext]).equations               # a·x + b <= 0 inside
-    except (QhullError, ValueError):
-        return v
-    tol = 1e-9 * float(np.ptp(v, axis=0).max() + np.abs(v).max())
-    keep = np.zeros(len(v), bool)
-    for a in range(0, len(v), step):
-        keep[a:a + step] = (v[a:a + step] @ eq[:, :3].T + eq[:, 3]).max(axis=1) > -tol
-    keep[ext] = True
-    return v[keep]
 
 
 class Scene:
@@ -155,10 +93,6 @@ class Scene:
     # -- mesh scenes ------------------------------------------------------------------------
     @classmethod
     def _from_parts(cls, parts, materials, shapes=()):
-        from .mesh import inspect_parts
-
-        from .mesh import MeshPart
-
         if not isinstance(materials, (list, tuple)) or not isinstance(parts, (list, tuple)):
             raise ParameterError(f"parts and materials must be lists; got "
                                  f"{type(parts).__name__} and {type(materials).__name__}")
@@ -167,7 +101,7 @@ class Scene:
             check_brdf(f"materials[{i}]", m)
         for i, p in enumerate(parts):
             if not isinstance(p, MeshPart):
-                raise ParameterError(f"parts[{i}] must be a meshladar.mesh.MeshPart; got "
+                raise ParameterError(f"parts[{i}] must be a meshladar.meshes.MeshPart; got "
                                      f"{type(p).__name__}")
         for p in parts:
             if len(p.material) and (p.material.min() < 0 or p.material.max() >= len(mats)):
@@ -177,10 +111,6 @@ class Scene:
         cleaned, report = inspect_parts(parts)
         inverted = [p.name for p, bad in zip(cleaned, report["inverted"]) if bad]
         if inverted:
-            import warnings
-
-            from .errors import MeshladarWarning
-
             n = report["inverted_bodies"]
             warnings.warn(f"{n} closed bod{'y' if n == 1 else 'ies'} with inverted normals "
                           f"(faces wound clockwise seen from outside), in part "
@@ -196,8 +126,8 @@ class Scene:
 
     @classmethod
     def from_parts(cls, parts, materials):
-        """A mesh scene from :class:`meshladar.mesh.MeshPart` objects (e.g.
-        ``meshladar.mesh.sphere(center, radius, 0, subdivisions=5)``) and their materials."""
+        """A mesh scene from :class:`meshladar.meshes.MeshPart` objects (e.g.
+        ``meshladar.meshes.sphere(center, radius, 0, subdivisions=5)``) and their materials."""
         return cls._from_parts(list(parts), materials)
 
     @classmethod
@@ -205,7 +135,7 @@ class Scene:
                   transform=None):
         """A scene from anything trimesh loads: STL, OBJ, PLY, OFF, GLB/GLTF with parts, zip
         and tar archives, .gz/.bz2/.xz files, 3MF and DAE with their optional readers (see
-        :func:`meshladar.mesh.load_parts`). Only vertices, faces and part names are read;
+        :func:`meshladar.meshes.load_parts`). Only vertices, faces and part names are read;
         vertices at the same position are merged (UV seams are not creases). The scene is a
         3-D target: ``simulate(..., model="mesh")`` returns all of it.
 
@@ -224,8 +154,6 @@ class Scene:
         transform : (4, 4) array, optional
             Applied to every part.
         """
-        from .mesh import load_parts, part_from_trimesh
-
         loaded = load_parts(mesh_or_path)
         if face_materials is not None:
             if len(loaded) != 1:
@@ -239,7 +167,8 @@ class Scene:
             if fm.shape != (len(m.faces),) or not np.issubdtype(fm.dtype, np.integer):
                 raise ParameterError(f"face_materials must be ({len(m.faces)},) integers; got "
                                      f"shape {fm.shape}, dtype {fm.dtype}")
-            return cls._from_parts([part_from_trimesh(m, fm, name, transform)], materials)
+            part = part_from_trimesh(m, fm, name=name, transform=transform)
+            return cls._from_parts([part], materials)
         if materials is not None and not isinstance(materials, dict):
             raise ParameterError(f"materials must be a dict of part name -> coating; got "
                                  f"{type(materials).__name__}")
@@ -256,15 +185,13 @@ class Scene:
                                      f"materials={{{name!r}: ...}}")
             if coat not in mats:
                 mats.append(coat)
-            parts.append(part_from_trimesh(m, mats.index(coat), name, transform))
+            parts.append(part_from_trimesh(m, mats.index(coat), name=name, transform=transform))
         return cls._from_parts(parts, mats)
 
     @classmethod
     def from_meshes(cls, items):
         """A scene of several meshes: items of (mesh_or_path, material) or
         (mesh_or_path, material, transform)."""
-        from .mesh import load_parts, part_from_trimesh
-
         mats, parts = [], []
         for k, item in enumerate(items):
             if not isinstance(item, (tuple, list)) or len(item) not in (2, 3):
@@ -275,19 +202,16 @@ class Scene:
             if coat not in mats:
                 mats.append(coat)
             for name, m in load_parts(mesh):
-                parts.append(part_from_trimesh(m, mats.index(coat), f"{k}:{name}", transform))
+                parts.append(part_from_trimesh(m, mats.index(coat), name=f"{k}:{name}",
+                                                   transform=transform))
         return cls._from_parts(parts, mats)
 
     def tessellate(self, segments=256, *, height=1.0, z0=0.0):
         """This analytic scene as a mesh scene: each disk/ellipse extruded to a prism of
         ``height`` centred on z = z0 with ``segments`` boundary vertices. The parts keep the
         shapes' exact normals (``normals="exact"`` when tracing)."""
-        from .mesh import prism
-
         if self.is_mesh:
             raise ParameterError("tessellate needs an analytic scene; this one is a mesh")
-        from ._validate import check_real
-
         height = check_real("height", height, low=0.0, low_open=True)
         z0 = check_real("z0", z0)
         mats = list(self.materials)
@@ -314,17 +238,14 @@ class Scene:
         position (a range, a ray grid's extent) is attained at one of them."""
         if not self._parts:
             raise ParameterError("hull_points() is for mesh scenes")
-        hull = self.__dict__.get("_hull")
-        if hull is None:
-            key = tuple(p.digest() for p in self._parts)
-            hull = _HULLS.pop(key, None)
-            if hull is None:
-                hull = _convex_hull(np.concatenate([p.vertices for p in self._parts]))
-                while len(_HULLS) >= _HULL_CACHE_SIZE:
-                    del _HULLS[next(iter(_HULLS))]              # the least recently used
-            _HULLS[key] = hull
-            self._hull = hull
-        return hull
+        return self._hull
+
+    @cached_property
+    def _hull(self) -> np.ndarray:
+        # one part: the part's own hull, shared by every scene of it (a coating sweep)
+        if len(self._parts) == 1:
+            return self._parts[0].hull_points
+        return convex_hull(np.concatenate([p.vertices for p in self._parts]))
 
     def view_ranges(self, view_vectors) -> tuple[np.ndarray, np.ndarray]:
         """(nearest, farthest) range r = −p·w of the scene in each view, two (n_views,)
@@ -371,8 +292,6 @@ class Scene:
         return (float(c[0]), float(c[1])), r
 
     def _summary(self):
-        from ._summary import listing, material_name
-
         mats = listing(dict.fromkeys(material_name(m) for m in self.materials))
         if self._parts:
             lo, hi = self.bounds()
@@ -392,11 +311,7 @@ class Scene:
                                                          f"radius {r:.4g}"))
 
     def __repr__(self) -> str:
-        from ._summary import text
-
         return text("Scene", *self._summary())
 
     def _repr_html_(self) -> str:
-        from ._summary import table
-
         return table("Scene", *self._summary())

@@ -67,7 +67,7 @@ def test_a_flat_sheet_returns_its_area_from_any_view_off_its_plane():
     sheet = trimesh.Trimesh([[-0.5, -0.5, 0], [0.5, -0.5, 0], [0.5, 0.5, 0], [-0.5, 0.5, 0]],
                             [[0, 1, 2], [0, 2, 3]])
     scene = ml.Scene.from_mesh(sheet, LAMBERT)
-    views = ml.mesh.fibonacci_sphere(7)
+    views = ml.meshes.fibonacci_sphere(7)
     sino = ml.simulate(scene, ml.Ladar.covering(scene, n_bins=64, view_vectors=views),
                        model="mesh")
     # two-sided open sheet of area 1: ρd/π |n·w|; only ~50 rays across it at 64 bins, and
@@ -194,7 +194,7 @@ def test_a_ray_grid_too_large_for_memory_is_refused_before_it_is_made(tmp_path, 
 
 
 def test_stratified_sampling_is_reproducible_and_seeded():
-    scene = ml.Scene.from_parts([ml.mesh.sphere((0, 0, 0), 0.5, 0, subdivisions=3)],
+    scene = ml.Scene.from_parts([ml.meshes.sphere((0, 0, 0), 0.5, 0, subdivisions=3)],
                                 [DARK_GRAY])
     ladar = ml.Ladar.covering(scene, n_bins=64, angles_deg=[0.0, 50.0])
     a = ml.simulate(scene, ladar, model="mesh")
@@ -232,7 +232,7 @@ def _fake_runs(monkeypatch, sequence):
 
 
 def test_tol_stops_when_estimates_stop_falling_and_keeps_the_best(monkeypatch):
-    scene = ml.Scene.from_parts([ml.mesh.sphere((0, 0, 0), 0.5, 0, subdivisions=2)],
+    scene = ml.Scene.from_parts([ml.meshes.sphere((0, 0, 0), 0.5, 0, subdivisions=2)],
                                 [DARK_GRAY])
     ladar = ml.Ladar.covering(scene, n_bins=8, angles_deg=[0.0])
     # differences 0.1, 0.05 (falling), then 0.4: the third estimate is worse than the second
@@ -250,7 +250,7 @@ def test_tol_stops_when_estimates_stop_falling_and_keeps_the_best(monkeypatch):
 
 
 def test_tol_respects_its_ray_budget(monkeypatch):
-    scene = ml.Scene.from_parts([ml.mesh.sphere((0, 0, 0), 0.5, 0, subdivisions=2)],
+    scene = ml.Scene.from_parts([ml.meshes.sphere((0, 0, 0), 0.5, 0, subdivisions=2)],
                                 [DARK_GRAY])
     ladar = ml.Ladar.covering(scene, n_bins=8, angles_deg=[0.0])
     with pytest.raises(ParameterError, match="max_rays is the budget of the tol knob"):
@@ -266,7 +266,7 @@ def test_tol_respects_its_ray_budget(monkeypatch):
 
 
 def test_tol_on_a_real_run_reports_how_it_stopped():
-    scene = ml.Scene.from_parts([ml.mesh.sphere((0, 0, 0), 0.5, 0, subdivisions=3)],
+    scene = ml.Scene.from_parts([ml.meshes.sphere((0, 0, 0), 0.5, 0, subdivisions=3)],
                                 [LAMBERT])
     ladar = ml.Ladar.covering(scene, n_bins=32, angles_deg=[0.0, 90.0])
     sino = ml.simulate(scene, ladar, model="mesh", tol=0.05)
@@ -277,7 +277,7 @@ def test_tol_on_a_real_run_reports_how_it_stopped():
 # ------------------------------------------------------------------ nothing silently wrong
 
 def test_fbp_refuses_3d_views_and_preprocessing_keeps_them():
-    views = ml.mesh.fibonacci_sphere(4)
+    views = ml.meshes.fibonacci_sphere(4)
     sino = ml.Sinogram(np.ones((4, 8)), angles_deg=np.zeros(4), bin_edges=np.linspace(-1, 1, 9),
                        view_vectors=views)
     with pytest.raises(ParameterError, match="view vectors off the x-y plane"):
@@ -324,7 +324,7 @@ def test_cli_simulates_a_mesh_in_3d_and_says_how(tmp_path, capsys):
                         "--view-vectors", "6", "--bins", "64", "--seed", "4", "--quiet")
     sino, _ = results.load_sinogram(tmp_path / "vv.npz")
     assert code == 0 and sino.shape == (6, 64) and sino.info["seed"] == 4
-    np.testing.assert_allclose(sino.view_vectors, ml.mesh.fibonacci_sphere(6), atol=1e-15)
+    np.testing.assert_allclose(sino.view_vectors, ml.meshes.fibonacci_sphere(6), atol=1e-15)
     code, out, _ = _run(capsys, "simulate", path, "-o", tmp_path / "sl.npz", "--mode", "slice",
                         "--z0", "0.2", "--angles-deg", "0", "--ray-spacing", "0.001")
     assert code == 0 and "slice mode" in out and "z0 = 0.2" in out
@@ -378,6 +378,7 @@ def test_cli_analytic_refuses_mesh_options(capsys, tmp_path):
     assert code == 2 and "--normals is an option of the mesh model" in err
 
 
+@pytest.mark.slow
 def test_no_command_overwrites_its_input(tmp_path, capsys):
     box = tmp_path / "mine.stl"
     trimesh.creation.box(extents=(0.2, 0.2, 0.2)).export(box)
@@ -468,7 +469,7 @@ def test_log_then_clip_records_both_steps():
 
 
 def test_a_bistatic_receiver_opposite_a_view_names_both():
-    scene = ml.Scene.from_parts([ml.mesh.sphere((0, 0, 0), 0.5, 0, subdivisions=2)],
+    scene = ml.Scene.from_parts([ml.meshes.sphere((0, 0, 0), 0.5, 0, subdivisions=2)],
                                 [DARK_GRAY])
     ladar = ml.Ladar.covering(scene, n_bins=8, angles_deg=[0.0, 90.0])
     with pytest.raises(ParameterError, match=r"got receiver \[0.0, -1.0, 0.0\] for view 1, "

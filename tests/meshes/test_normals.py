@@ -73,7 +73,7 @@ NORMALS = ("flat", "smooth", "exact")
 #: carried 1.09 times dark_gray's silhouette bin (error 0.166 at 81920 faces, not 0.016).
 RAYS_PER_BIN = 16
 N_VIEWS = 3
-VIEWS = ml.mesh.fibonacci_sphere(N_VIEWS)
+VIEWS = ml.meshes.fibonacci_sphere(N_VIEWS)
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(24)
 #: A dense θ grid for maxima of F cos θ: steps of 4e-6 rad, far below the narrowest lobe
@@ -150,7 +150,7 @@ def local_bound(material, radius, edges, widen):
 @functools.lru_cache(maxsize=None)
 def edge_angle(subdivisions):
     """The largest angle an edge of the icosphere subtends at its centre."""
-    part = ml.mesh.sphere((0.0, 0.0, 0.0), R, 0, subdivisions=subdivisions)
+    part = ml.meshes.sphere((0.0, 0.0, 0.0), R, 0, subdivisions=subdivisions)
     tri = part.vertices[part.faces]
     chord = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max()
     return 2 * math.asin(chord / (2 * R))
@@ -194,7 +194,7 @@ def sphere_runs():
     """Sinograms of every (subdivisions, coating, normals), two at a time: each simulate
     sends its chunk of views to a process (the engine's executor API; embreex holds the GIL,
     so the two threads mostly wait)."""
-    parts = {k: ml.mesh.sphere((0.0, 0.0, 0.0), R, 0, subdivisions=k) for k in SUBDIVISIONS}
+    parts = {k: ml.meshes.sphere((0.0, 0.0, 0.0), R, 0, subdivisions=k) for k in SUBDIVISIONS}
     scenes = {(k, c): ml.Scene.from_parts([parts[k]], [m])
               for k in SUBDIVISIONS for c, m in COATINGS.items()}
     jobs = [(k, c, n) for k in reversed(SUBDIVISIONS) for n in NORMALS for c in COATINGS]
@@ -214,6 +214,7 @@ def _errors(sphere_runs, references, coating, normals):
     return [rel_l2(sphere_runs[k, coating, normals], references[coating]) for k in SUBDIVISIONS]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("coating", list(COATINGS))
 def test_smooth_error_falls_as_the_icosphere_is_refined(sphere_runs, references, coating):
     err = _errors(sphere_runs, references, coating, "smooth")
@@ -237,6 +238,7 @@ def test_smooth_error_falls_as_the_icosphere_is_refined(sphere_runs, references,
         assert all(f <= floor_ratio * s for f, s in zip(floor, err)), (floor, err)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("normals", NORMALS)
 @pytest.mark.parametrize("coating", list(COATINGS))
 def test_no_bin_exceeds_the_sphere_bound(sphere_runs, coating, normals):
@@ -264,6 +266,7 @@ def test_no_bin_exceeds_the_sphere_bound(sphere_runs, coating, normals):
                                                                      ratio.shape))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("coating", list(COATINGS))
 def test_smooth_is_never_much_worse_than_flat(sphere_runs, references, coating):
     smooth = _errors(sphere_runs, references, coating, "smooth")
@@ -280,12 +283,13 @@ def test_smooth_is_never_much_worse_than_flat(sphere_runs, references, coating):
 
 @pytest.fixture(scope="module")
 def icosphere_1280_hits():
-    part = ml.mesh.sphere((0.0, 0.0, 0.0), R, 0, subdivisions=3)
+    part = ml.meshes.sphere((0.0, 0.0, 0.0), R, 0, subdivisions=3)
     scene = ml.Scene.from_parts([part], [DARK_GRAY])
-    ladar = ml.Ladar(None, EDGES, view_vectors=ml.mesh.fibonacci_sphere(8))
+    ladar = ml.Ladar(None, EDGES, view_vectors=ml.meshes.fibonacci_sphere(8))
     return ml.trace(scene, ladar, normals="smooth", rays_per_bin=8)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("coating", list(COATINGS))
 def test_no_silhouette_blow_up_on_a_1280_face_icosphere(icosphere_1280_hits, coating):
     material = COATINGS[coating]
@@ -349,7 +353,7 @@ def _centred(path, material):
 
 def test_real_meshes_flat_against_smooth():
     meshes = _pyvista_meshes()
-    views = ml.mesh.fibonacci_sphere(6)
+    views = ml.meshes.fibonacci_sphere(6)
     old_failed = False
     for name, path in meshes.items():
         scene = _centred(path, ALUMINUM)

@@ -157,14 +157,14 @@ def test_simulate_validation():
 def test_the_convex_hull_is_cached_by_mesh_content():
     from scipy.spatial import ConvexHull
 
-    sphere = ml.mesh.sphere((0.0, 0.0, 0.0), 0.5, 0, subdivisions=3)
+    sphere = ml.meshes.sphere((0.0, 0.0, 0.0), 0.5, 0, subdivisions=3)
     a = ml.Scene.from_parts([sphere], [M])
     b = ml.Scene.from_parts([sphere], [M])             # a new Scene of the same mesh
     assert b.hull_points() is a.hull_points()          # computed once, shared
     v = sphere.vertices
     np.testing.assert_array_equal(np.sort(a.hull_points(), axis=0),
                                   np.sort(v[ConvexHull(v).vertices], axis=0))
-    moved = ml.mesh.sphere((1.0, 0.0, 0.0), 0.5, 0, subdivisions=3)
+    moved = ml.meshes.sphere((1.0, 0.0, 0.0), 0.5, 0, subdivisions=3)
     assert ml.Scene.from_parts([moved], [M]).hull_points() is not a.hull_points()
 
 
@@ -175,18 +175,18 @@ def test_a_large_meshs_hull_points_keep_every_extreme(monkeypatch):
     direction is the same number, and interior points are gone."""
     from scipy.spatial import ConvexHull
 
-    from meshladar import scene as scene_module
+    from meshladar.meshes import hull as hull_module
 
     rng = np.random.default_rng(0)
-    sphere = ml.mesh.sphere((0.2, -0.1, 0.3), 0.5, 0, subdivisions=4)
+    sphere = ml.meshes.sphere((0.2, -0.1, 0.3), 0.5, 0, subdivisions=4)
     inside = (0.2, -0.1, 0.3) + rng.normal(size=(20000, 3)) * 0.08      # well inside
     v = np.vstack([sphere.vertices, inside])
     truth = v[ConvexHull(v).vertices]
-    dirs = ml.mesh.fibonacci_sphere(500)
+    dirs = ml.meshes.fibonacci_sphere(500)
     for qhull_max in (200_000, 1000):             # Qhull on the kept points; or not at all
-        monkeypatch.setattr(scene_module, "_HULL_FILTER_ABOVE", 1000)
-        monkeypatch.setattr(scene_module, "_QHULL_MAX", qhull_max)
-        got = scene_module._convex_hull(v)
+        monkeypatch.setattr(hull_module, "_HULL_FILTER_ABOVE", 1000)
+        monkeypatch.setattr(hull_module, "_QHULL_MAX", qhull_max)
+        got = hull_module.convex_hull(v)
         np.testing.assert_array_equal((got @ dirs.T).max(axis=0), (truth @ dirs.T).max(axis=0))
         np.testing.assert_array_equal((got @ dirs.T).min(axis=0), (truth @ dirs.T).min(axis=0))
         assert len(got) < len(sphere.vertices) + 100                # the interior is dropped

@@ -1,0 +1,46 @@
+"""The compiled twin of :mod:`meshladar.brdf.sandford_robertson` (numba): the monostatic SR
+BRDF per hit, for the engine's compiled binning loops, and the material table they read.
+
+numba is imported here, at the top; the pure-numpy model module stays light, and only the
+compiled stages import this file. Each coating's row is its ``kernel_params``
+(:class:`~meshladar.brdf.sandford_robertson.KernelRow`); :func:`material_table` stacks them.
+The tests hold :func:`sr_monostatic` to :meth:`SandfordRobertson.value` to 1e-13 on a grid
+through 90° (tests/brdf/test_sandford_robertson_kernel.py).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..precision import COS_HORIZON as _COS_HORIZON
+from .sandford_robertson import KernelRow
+
+__all__ = ["sr_monostatic", "material_table", "KernelRow"]
+
+
+@njit(cache=True)
+def sr_monostatic(c, s, rho_d, eps, b, e, G, diffuse, specular):
+    """F(θ; −θ) of meshladar.brdf.SandfordRobertson from cos θ ≥ 0 and sin θ: the same
+    expressions as SandfordRobertson._core (tests hold the two to 1e-13)."""
+    den = math.hypot(c, b * s)
+    g = (c / den) ** 2 if den > 0.0 else 1.0                      # A2
+    out = 0.0
+    if diffuse:
+        out += rho_d / (math.pi * G * G) * g * g                   # A1
+    if specular:
+        rho_s = max(1.0 - (eps + rho_d) / G * g, 0.0)              # A8
+        d = math.hypot(e * c, s) ** 2                              # 1/sqrt(h(α)), A6
+        k = (1.0 - e) * (1.0 + e)
+        kc = k * c
+        h_scaled = kc + (2.0 * e * e + kc * kc) / math.hypot(2.0 * e, kc)   # 2e²H, A9
+        out += rho_s * (2.0 * e * e / (d * d * h_scaled)) / (4.0 * math.pi) / max(c, _COS_HORIZON)
+    return out
+
+
+def material_table(materials):
+    """(n, 7) float64 rows of (rho_d, epsilon, b, e, G, has_diffuse, has_specular): each
+    material's ``kernel_params`` (every material must have them for the compiled path)."""
+    return np.array([m.kernel_params for m in materials], dtype=np.float64)

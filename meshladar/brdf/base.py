@@ -1,0 +1,248 @@
+"""The BRDF protocol every forward model accepts, the registry of built-in models, and the
+helpers the models share.
+
+A coating defines ``projected(cos_theta, sin_theta)``, its monostatic weight F(θ; −θ)·cos θ,
+and inherits ``monostatic``; a bistatic receiver needs ``bistatic`` as well. Built-in models
+register themselves by subclassing with ``builtin=True`` (``class GGX(BRDF, builtin=True)``):
+:data:`MODELS` maps their names to their classes, and their outputs are trusted, while a
+user's model is checked (shape, finite, ≥ 0) by :func:`projected_weight`.
+
+Conventions
+-----------
+* Angles are polar angles from the outward surface normal, in radians. Directions point
+  away from the surface (toward the source, toward the receiver).
+* Every function here depends on an angle only through its cosine and the magnitude of its
+  sine: it is even and 2π-periodic in θ. Where a direction is below the horizon
+  (cos θ < 0) the BRDF is exactly 0. At the horizon itself (cos θ = 0, reachable with
+  direction vectors) F is evaluated as at θ = fl(π/2), whose cosine is 6.1e-17, so it stays
+  finite; the projected weight F·cos θr is continuous up to and including θr = π/2.
+* BRDF values are in 1/sr.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from types import MappingProxyType
+
+import numpy as np
+
+from .._validate import check_flag, check_real, finite_array, unit_vectors
+from ..errors import ModelError, ParameterError
+from ..precision import COS_HORIZON as _COS_HORIZON
+
+__all__ = ["BRDF", "MODELS", "is_builtin", "projected_weight", "check_brdf"]
+
+#: The built-in models by class name, filled by each model's file as it is defined
+#: (``class Name(BRDF, builtin=True)``); read-only.
+_REGISTRY: dict = {}
+MODELS = MappingProxyType(_REGISTRY)
+
+
+def is_builtin(model) -> bool:
+    """True when ``model`` is an instance of a registered built-in model (not a subclass
+    of one): its outputs are trusted and not checked."""
+    return MODELS.get(type(model).__name__) is type(model)
+
+
+def _safe_divide(num, den, fill):
+    """num / den where den > 0, ``fill`` where den == 0, without a numpy warning."""
+    num, den = np.broadcast_arrays(np.asarray(num, np.float64), np.asarray(den, np.float64))
+    out = np.full(num.shape, fill, dtype=np.float64)
+    np.divide(num, den, out=out, where=den > 0)
+    return out
+
+
+def _cos_sin(theta, name):
+    t = finite_array(name, theta)
+    return np.cos(t), np.abs(np.sin(t))
+
+
+def _out(value, *inputs):
+    """Scalar in, scalar out: a Python float when every input was 0-d."""
+    if all(np.ndim(x) == 0 for x in inputs):
+        return float(value)
+    return value
+
+
+class BRDF:
+    """The BRDF protocol: what a coating must give for every forward model to use it.
+
+    A subclass defines :meth:`projected`, the monostatic weight F(θ; −θ)·cos θ of the
+    paper's Eq. 8 on arrays of (cos θ, sin θ) with cos θ ≥ 0 (0 below the horizon, finite
+    up to and including θ = π/2). Everything else derives from it: :meth:`monostatic` for
+    users, :meth:`value` (F itself) for the mesh engine. A bistatic receiver needs
+    :meth:`bistatic` too. ``kernel_params`` (a row for the compiled SR kernel) and
+    ``angular_scales`` (the narrowest features, for the analytic model's quadrature) are
+    optional speed and accuracy hints.
+
+    A built-in model registers itself in :data:`MODELS` by subclassing with
+    ``builtin=True``; a user's subclass is not registered, and its outputs are checked.
+
+    Examples
+    --------
+    >>> import numpy as np, meshladar as ml
+    >>> class Matte(ml.brdf.BRDF):
+    ...     def projected(self, cos_theta, sin_theta):
+    ...         return 0.3 / np.pi * np.maximum(cos_theta, 0.0)
+    >>> round(Matte().monostatic(0.0), 4)
+    0.0955
+    """
+
+    #: Row of the compiled SR kernel's material table, or None (the engine then calls
+    #: :meth:`value` on arrays: slower, same result).
+    kernel_params = None
+
+    #: (near normal, near grazing): the angular widths, in radians, of the fastest
+    #: variation of F·cos θ near θ = 0 and θ = π/2, or None where it is smooth. The analytic
+    #: model grades its quadrature panels to them.
+    angular_scales = (None, None)
+
+    name = None
+
+    def __init_subclass__(cls, /, *, builtin=False, **kwargs):
+        super().__init_subclass__(**kwargs)
+        if builtin:
+            _REGISTRY[cls.__name__] = cls
+
+    def projected(self, cos_theta, sin_theta):
+        """F(θ; −θ)·cos θ in 1/sr for arrays cos θ ≥ 0 and sin θ = sqrt(1 − cos²θ) ≥ 0."""
+        raise ModelError(f"{type(self).__name__} must define projected(cos_theta, "
+                         "sin_theta), the monostatic F·cos θ (meshladar.brdf.BRDF)")
+
+    def value(self, cos_theta, sin_theta):
+        """F(θ; −θ) in 1/sr: the projected weight over cos θ (cos(fl(π/2)) at the horizon),
+        0 below it."""
+        c = np.asarray(cos_theta, np.float64)
+        p = projected_weight(self, np.maximum(c, 0.0), sin_theta)
+        return np.where(c >= 0, p / np.maximum(c, _COS_HORIZON), 0.0)
+
+    def bistatic(self, cos_i, sin_i, cos_r, sin_r, cos_h, sin_h):
+        """F(w_i, w_r)·cos θr in 1/sr from the cosines and sines of θi, θr and the half
+        vector's polar angle; 0 below either horizon. Optional."""
+        raise ModelError(f"{type(self).__name__} has no bistatic evaluation: define "
+                         "bistatic() to use it with a bistatic receiver")
+
+    def bistatic_value(self, cos_i, sin_i, cos_r, sin_r, cos_h, sin_h):
+        """F(w_i, w_r) in 1/sr (the bistatic weight over cos θr)."""
+        p = self.bistatic(cos_i, sin_i, cos_r, sin_r, cos_h, sin_h)
+        return np.where((cos_i >= 0) & (cos_r >= 0), p / np.maximum(cos_r, _COS_HORIZON), 0.0)
+
+    def monostatic(self, theta, *, projected=False):
+        """F(θ; −θ) (or F·cos θ with ``projected=True``) for incidence angles θ in radians,
+        0 below the horizon; a float for a scalar θ."""
+        c, s = _cos_sin(theta, "theta")
+        check_flag("projected", projected)
+        out = projected_weight(self, np.maximum(c, 0.0), s) if projected else self.value(c, s)
+        return _out(np.where(c >= 0, out, 0.0), theta)
+
+    def evaluate(self, incident, reflected, normal=(0.0, 0.0, 1.0), *, projected=False):
+        """F(w_i, w_r) for arbitrary (bistatic) directions, in 1/sr.
+
+        Parameters
+        ----------
+        incident : (..., 3) array_like
+            Direction from the surface toward the source; need not be unit length.
+        reflected : (..., 3) array_like
+            Direction from the surface toward the receiver.
+        normal : (..., 3) array_like, default +z
+            Outward surface normal. All three broadcast together.
+        projected : bool, keyword-only
+            Return F·cos θr, finite up to and including θr = π/2.
+
+        Returns
+        -------
+        (...) ndarray
+            0 where either direction is below the horizon.
+        """
+        check_flag("projected", projected)
+        w_i = unit_vectors("incident", incident)
+        w_r = unit_vectors("reflected", reflected)
+        n = unit_vectors("normal", normal)
+        try:
+            np.broadcast_shapes(w_i.shape, w_r.shape, n.shape)
+        except ValueError:
+            raise ParameterError(f"incident, reflected and normal must broadcast together; got "
+                                 f"shapes {w_i.shape}, {w_r.shape}, {n.shape}") from None
+        cos_i, sin_i = _cos_sin_vec(w_i, n)
+        cos_r, sin_r = _cos_sin_vec(w_r, n)
+        half = w_i + w_r
+        norm = np.linalg.norm(half, axis=-1)
+        # Opposite directions (both on the horizon): α = π/2
+        cos_a = _safe_divide(np.einsum("...k,...k->...", half, n), norm, 0.0)
+        sin_a = _safe_divide(np.linalg.norm(np.cross(half, n), axis=-1), norm, 1.0)
+        return self._evaluate_cs(cos_i, sin_i, cos_r, sin_r, cos_a, sin_a, projected)
+
+    def _evaluate_cs(self, cos_i, sin_i, cos_r, sin_r, cos_a, sin_a, projected):
+        if projected:
+            visible = (cos_i >= 0) & (cos_r >= 0)
+            return np.where(visible, self.bistatic(cos_i, sin_i, cos_r, sin_r, cos_a, sin_a),
+                            0.0)
+        return self.bistatic_value(cos_i, sin_i, cos_r, sin_r, cos_a, sin_a)
+
+    def evaluate_angles(self, theta_i, theta_r, delta_phi=0.0, *, projected=False):
+        """F for polar angles θi, θr and relative azimuth Δφ = φr − φi, in 1/sr.
+
+        Δφ = 0 with θr = θi is the monostatic geometry; Δφ = π with θr = θi is the mirror
+        (Snell) direction. Angles in radians, broadcast together.
+        """
+        ti = finite_array("theta_i", theta_i)
+        tr = finite_array("theta_r", theta_r)
+        dp = finite_array("delta_phi", delta_phi)
+        zero = np.zeros(np.broadcast(ti, tr, dp).shape)
+        w_i = np.stack([np.sin(ti) + zero, zero, np.cos(ti) + zero], axis=-1)
+        w_r = np.stack([np.sin(tr) * np.cos(dp) + zero, np.sin(tr) * np.sin(dp) + zero,
+                        np.cos(tr) + zero], axis=-1)
+        return _out(self.evaluate(w_i, w_r, projected=projected), theta_i, theta_r, delta_phi)
+
+    def describe(self) -> dict:
+        """A JSON-serialisable description: the model's name and its parameters."""
+        params = ({f.name: getattr(self, f.name) for f in dataclasses.fields(self)
+                   if f.name != "name"} if dataclasses.is_dataclass(self) else {})
+        return {"model": type(self).__name__, "name": self.name,
+                **{k: v.tolist() if isinstance(v, np.ndarray) else v
+                   for k, v in params.items()}}
+
+
+def projected_weight(m, cos_theta, sin_theta):
+    """``m.projected(cos θ, sin θ)`` as a float64 array of the inputs' shape, checked for a
+    user's model: finite and non-negative, else a ParameterError naming the class."""
+    cos_theta = np.maximum(cos_theta, 0.0)             # the protocol's domain: cos θ >= 0
+    out = m.projected(cos_theta, sin_theta)
+    if is_builtin(m):
+        return out
+    shape = np.broadcast(np.asarray(cos_theta), np.asarray(sin_theta)).shape
+    try:
+        out = np.broadcast_to(np.asarray(out, dtype=np.float64), shape)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{type(m).__name__}.projected must return real numbers of the "
+                             f"inputs' shape {shape}; got {type(out).__name__} of shape "
+                             f"{np.shape(out)}") from None
+    bad = ~np.isfinite(out) | (out < 0)
+    if bad.any():
+        k = np.flatnonzero(bad.ravel())[0]
+        raise ParameterError(f"{type(m).__name__}.projected must be finite and non-negative; "
+                             f"got {float(out.ravel()[k]):.6g} at cos theta = "
+                             f"{float(np.broadcast_to(cos_theta, shape).ravel()[k]):.6g}")
+    return out
+
+
+def check_brdf(name, value):
+    """``value`` if it follows the BRDF protocol, else a ParameterError naming ``name``."""
+    if not isinstance(value, BRDF):
+        raise ParameterError(f"{name} must be a meshladar.brdf.BRDF ({', '.join(MODELS)} "
+                             f"or a subclass); got {type(value).__name__}")
+    if type(value).projected is BRDF.projected:
+        raise ModelError(f"{name}: {type(value).__name__} must define projected(cos_theta, "
+                         "sin_theta), the monostatic F·cos θ (meshladar.brdf.BRDF)")
+    return value
+
+
+def _cos_sin_vec(w, n):
+    """cos and sin of the angle between unit vectors, sin from the cross product (accurate
+    near 0 where sqrt(1 − cos²) is not)."""
+    return (np.einsum("...k,...k->...", w, n), np.linalg.norm(np.cross(w, n), axis=-1))
+
+
+def _unit_interval(name, value):
+    return check_real(name, value, low=0.0, high=1.0)
+

@@ -1,0 +1,76 @@
+"""A rough conductor with the GGX (Trowbridge-Reitz) microfacet distribution, as Mitsuba 3's
+``roughconductor``."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .._validate import check_name, check_real
+from .base import BRDF, _unit_interval
+
+__all__ = ["GGX"]
+
+
+@dataclass(frozen=True)
+class GGX(BRDF, builtin=True):
+    """A rough conductor with the GGX (Trowbridge-Reitz) microfacet distribution and
+    separable Smith shadowing, as Mitsuba 3's ``roughconductor`` (``distribution="ggx"``)::
+
+        F = R D(h) G1(w_i) G1(w_r) / (4 cos θi cos θr)
+        D = α² / (π (α² cos²θh + sin²θh)²)
+        G1(w) = 2 cos θ / (cos θ + sqrt(cos²θ + α² sin²θ))
+
+    ===========  =====  ============  ==================================================
+    name         unit   valid range   meaning
+    ===========  =====  ============  ==================================================
+    alpha        1      [1e-4, 1]     roughness α of D (Mitsuba's ``alpha``)
+    reflectance  1      [0, 1]        constant Fresnel factor R (default 1)
+    name         -      any str       a label for tables and reprs; not in equality
+    ===========  =====  ============  ==================================================
+
+    ``alpha`` in [1e-4, 1] is the roughness (Mitsuba's ``alpha``); ``reflectance`` R in
+    [0, 1] the Fresnel factor, taken constant (Mitsuba's ``specular_reflectance`` with a
+    perfect conductor; 1 by default). Monostatic, θh = θ and
+    F cos θ = R D(θ) cos θ / (cos θ + sqrt(cos²θ + α² sin²θ))², finite up to θ = π/2.
+    """
+
+    alpha: float
+    reflectance: float = 1.0
+    name: str | None = field(default=None, kw_only=True, compare=False)
+
+    def __post_init__(self):
+        check_name(self.name)
+        object.__setattr__(self, "alpha", check_real("alpha", self.alpha, low=1e-4, high=1.0))
+        object.__setattr__(self, "reflectance",
+                           _unit_interval("reflectance", self.reflectance))
+
+    def _D(self, ch, sh):
+        a = self.alpha
+        d = np.hypot(a * ch, sh) ** 2
+        return a * a / (math.pi * d * d)
+
+    def _g1_over_2c(self, c, s):
+        """G1 / (2 cos θ) = 1 / (cos θ + sqrt(cos²θ + α² sin²θ)), finite at cos θ = 0."""
+        return 1.0 / (c + np.hypot(c, self.alpha * s))
+
+    def projected(self, cos_theta, sin_theta):
+        c = np.maximum(np.asarray(cos_theta, np.float64), 0.0)
+        s = np.asarray(sin_theta, np.float64)
+        return self.reflectance * self._D(c, s) * c * self._g1_over_2c(c, s) ** 2
+
+    def bistatic(self, cos_i, sin_i, cos_r, sin_r, cos_h, sin_h):
+        ci = np.maximum(np.asarray(cos_i, np.float64), 0.0)
+        cr = np.maximum(np.asarray(cos_r, np.float64), 0.0)
+        ch = np.maximum(np.asarray(cos_h, np.float64), 0.0)
+        # F cos θr = R D G1(i) G1(r) / (4 cos θi) = R D cos θr · g(i) · g(r), g = G1/(2 cos)
+        out = (self.reflectance * self._D(ch, np.asarray(sin_h, np.float64)) * cr
+               * self._g1_over_2c(ci, np.asarray(sin_i, np.float64))
+               * self._g1_over_2c(cr, np.asarray(sin_r, np.float64)))
+        return np.where((np.asarray(cos_i) >= 0) & (np.asarray(cos_r) >= 0), out, 0.0)
+
+    @property
+    def angular_scales(self):
+        return (self.alpha, None)

@@ -1,0 +1,85 @@
+"""A measured monostatic BRDF, tabulated in angle."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .._validate import check_flag, check_name, finite_array
+from ..errors import ParameterError
+from .base import BRDF
+
+__all__ = ["Tabulated"]
+
+
+@dataclass(frozen=True, eq=False)
+class Tabulated(BRDF, builtin=True):
+    """A measured monostatic BRDF: F(θ) sampled at angles ``theta_deg``.
+
+    ================  =====  ==================  ========================================
+    name              unit   valid range         meaning
+    ================  =====  ==================  ========================================
+    theta_deg         deg    0 ... 90, strictly  sample angles from the normal
+                             increasing
+    values            1/sr   >= 0, finite        F at each angle (or F·cos θ)
+    projected_values  -      bool                ``values`` are F·cos θ, not F
+    name              -      any str             a label; not in equality
+    ================  =====  ==================  ========================================
+
+    ``theta_deg`` must increase strictly from 0 to 90 (degrees); ``values`` are F in 1/sr
+    (or, with ``projected=True``, F·cos θ: give that form when F grows toward grazing
+    incidence, as glossy coatings' does). Between samples F·cos θ is interpolated linearly
+    in θ. Monostatic only.
+    """
+
+    theta_deg: np.ndarray
+    values: np.ndarray
+    projected_values: bool = field(default=False, kw_only=True)
+    name: str | None = field(default=None, kw_only=True, compare=False)
+
+    def __post_init__(self):
+        check_name(self.name)
+        check_flag("projected_values", self.projected_values)
+        t = np.array(finite_array("theta_deg", self.theta_deg))          # copies: the user's
+        v = np.array(finite_array("values", self.values))                # arrays stay theirs
+        if t.ndim != 1 or t.size < 2:
+            raise ParameterError(f"theta_deg must be a 1-D array of at least 2 angles; got "
+                                 f"shape {t.shape}")
+        if v.shape != t.shape:
+            raise ParameterError(f"values must have theta_deg's shape {t.shape}; got {v.shape}")
+        if t[0] != 0.0 or t[-1] != 90.0 or np.any(np.diff(t) <= 0):
+            raise ParameterError(f"theta_deg must increase strictly from 0 to 90 degrees; got "
+                                 f"{t[0]:g} ... {t[-1]:g}" + (" (not increasing)" if
+                                                             np.any(np.diff(t) <= 0) else ""))
+        if np.any(v < 0):
+            k = int(np.argmax(v < 0))
+            raise ParameterError(f"values must be non-negative; got {v[k]:g} at "
+                                 f"{t[k]:g} degrees")
+        weight = v.copy() if self.projected_values else v * np.cos(np.deg2rad(t))
+        if not self.projected_values:
+            weight[-1] = 0.0                                    # F cos θ at exactly 90°
+        for k, a in (("theta_deg", t), ("values", v), ("_weight", weight)):
+            a = np.array(a, dtype=np.float64)
+            a.flags.writeable = False
+            object.__setattr__(self, k, a)
+
+    def __eq__(self, other):
+        return (type(other) is Tabulated and np.array_equal(self.theta_deg, other.theta_deg)
+                and np.array_equal(self._weight, other._weight))
+
+    __hash__ = None
+
+    def projected(self, cos_theta, sin_theta):
+        c = np.maximum(np.asarray(cos_theta, np.float64), 0.0)
+        theta = np.degrees(np.arctan2(np.asarray(sin_theta, np.float64), c))
+        return np.interp(theta, self.theta_deg, self._weight)
+
+    @property
+    def angular_scales(self):
+        step = float(np.min(np.diff(np.deg2rad(self.theta_deg))))
+        return (step, step)
+
+    def describe(self) -> dict:
+        return {"model": "Tabulated", "name": self.name, "theta_deg": self.theta_deg.tolist(),
+                "values": self.values.tolist(), "projected_values": self.projected_values}

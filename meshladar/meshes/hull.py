@@ -1,0 +1,71 @@
+"""Convex hulls of mesh vertices: the points every extreme of a linear (or perspective)
+function of position is attained at, found once per part or scene.
+
+Above :data:`_HULL_FILTER_ABOVE` points the hull is found in two steps: the points strictly
+inside the polytope of their extremes along :data:`_FILTER_DIRECTIONS` directions are
+dropped first (Akl–Toussaint); Qhull then runs on at most :data:`_QHULL_MAX` points.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import ConvexHull, QhullError
+
+from .directions import fibonacci_sphere
+
+__all__ = ["convex_hull"]
+
+#: Above this many points the hull is found in two steps: the points strictly inside the
+#: polytope of their extremes along :data:`_FILTER_DIRECTIONS` directions are dropped
+#: first (Akl–Toussaint), in O(points × facets).
+_HULL_FILTER_ABOVE = 100_000
+#: Qhull runs on at most this many points (it takes ~10 s on 655k points of a sphere, all
+#: on the hull); beyond, the filtered points themselves are the answer: a superset of the
+#: hull's vertices, so every extreme of a linear or perspective function is the same.
+_QHULL_MAX = 200_000
+_FILTER_DIRECTIONS = 64
+
+
+def convex_hull(v):
+    """Points (n, 3) that include every vertex of their convex hull (exactly the hull's
+    vertices unless they are very many, see :data:`_QHULL_MAX`), read-only; all the points
+    when the hull is degenerate (a flat sheet) or they are few."""
+    hull = v
+    if len(v) > _HULL_FILTER_ABOVE:
+        hull = _outside_extremes(v)
+    if 64 < len(hull) <= _QHULL_MAX:
+        try:
+            hull = hull[ConvexHull(hull).vertices]
+        except (QhullError, ValueError):
+            pass
+    hull = np.ascontiguousarray(hull)
+    hull.flags.writeable = False
+    return hull
+
+
+def _outside_extremes(v):
+    """The points of v not strictly inside the convex polytope of their extremes along
+    :data:`_FILTER_DIRECTIONS` directions: every vertex of v's hull is among them (the
+    polytope lies inside the hull, so a hull vertex cannot be inside it). A tolerance of
+    1e-9 of the points' extent keeps points on the polytope's faces."""
+    dirs = fibonacci_sphere(_FILTER_DIRECTIONS)
+    step = 1 << 15                                      # bounded memory
+    best = np.full(len(dirs), -np.inf)
+    arg = np.zeros(len(dirs), np.int64)
+    for a in range(0, len(v), step):                    # each direction's extreme point
+        proj = v[a:a + step] @ dirs.T
+        k = np.argmax(proj, axis=0)
+        top = proj[k, np.arange(len(dirs))]
+        better = top > best
+        best[better], arg[better] = top[better], a + k[better]
+    ext = np.unique(arg)
+    try:
+        eq = ConvexHull(v[ext]).equations               # a·x + b <= 0 inside
+    except (QhullError, ValueError):
+        return v
+    tol = 1e-9 * float(np.ptp(v, axis=0).max() + np.abs(v).max())
+    keep = np.zeros(len(v), bool)
+    for a in range(0, len(v), step):
+        keep[a:a + step] = (v[a:a + step] @ eq[:, :3].T + eq[:, 3]).max(axis=1) > -tol
+    keep[ext] = True
+    return v[keep]

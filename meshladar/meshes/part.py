@@ -1,0 +1,130 @@
+"""The :class:`MeshPart` record: one triangle mesh of a scene (vertices, faces, a material
+index per face, and optionally the exact normal of the analytic shape it approximates), with
+the geometry derived from it once (face normals and areas, convex hull), and the helpers that
+build one from a trimesh object.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from .._summary import text
+from ..errors import GeometryError, ParameterError
+from .hull import convex_hull
+
+__all__ = ["MeshPart", "part_from_trimesh"]
+
+
+@dataclass(frozen=True, eq=False)
+class MeshPart:
+    """One triangle mesh of a scene.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+    faces : (m, 3) int64, counter-clockwise seen from outside (outward normals)
+    material : int or (m,) int
+        Index into the scene's material list, for all faces or per face.
+    name : str
+    exact_normal : callable, optional
+        Maps points (k, 3) to the unit outward normals (k, 3) of the smooth surface the mesh
+        approximates (set by the tessellation of analytic shapes: ``normals="exact"``).
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    material: np.ndarray
+    name: str = "mesh"
+    exact_normal: object = field(default=None, repr=False)
+
+    def __post_init__(self):
+        v = np.asarray(self.vertices, dtype=np.float64)
+        f = np.asarray(self.faces)
+        if v.ndim != 2 or v.shape[1] != 3:
+            raise GeometryError(f"{self.name}: vertices must have shape (n, 3); got {v.shape}")
+        if not np.all(np.isfinite(v)):
+            bad = int(np.argwhere(~np.isfinite(v))[0][0])
+            raise GeometryError(f"{self.name}: vertices must be finite; got {v[bad].tolist()} "
+                                f"at vertex {bad}")
+        if f.ndim != 2 or f.shape[1] != 3 or (f.size and not np.issubdtype(f.dtype, np.integer)):
+            raise GeometryError(f"{self.name}: faces must be an (m, 3) integer array; got "
+                                f"shape {f.shape}, dtype {f.dtype}")
+        f = f.astype(np.int64)
+        if f.size and (f.min() < 0 or f.max() >= len(v)):
+            raise GeometryError(f"{self.name}: faces index vertices 0..{len(v) - 1}; got "
+                                f"{int(f.min())}..{int(f.max())}")
+        mat = np.broadcast_to(np.asarray(self.material, dtype=np.int64), (len(f),)).copy()
+        for name, a in (("vertices", v), ("faces", f), ("material", mat)):
+            a = np.ascontiguousarray(a)
+            a.flags.writeable = False
+            object.__setattr__(self, name, a)
+
+    def __repr__(self) -> str:
+        lo, hi = (self.vertices.min(axis=0), self.vertices.max(axis=0)) if len(
+            self.vertices) else (np.zeros(3), np.zeros(3))
+        return text("MeshPart", ("name", self.name), ("vertices", len(self.vertices)),
+                    ("faces", len(self.faces)),
+                    ("materials", tuple(int(m) for m in np.unique(self.material))),
+                    ("bounds", f"[{', '.join(f'{a:.4g}' for a in lo)}] to "
+                               f"[{', '.join(f'{b:.4g}' for b in hi)}]"))
+
+    @property
+    def triangles(self) -> np.ndarray:
+        """(m, 3, 3) vertex coordinates of each face."""
+        return self.vertices[self.faces]
+
+    def face_normals_areas(self):
+        """Unit face normals (m, 3) and areas (m,), in float64: computed once per part (the
+        part is immutable) and returned read-only."""
+        cached = self.__dict__.get("_normals_areas")
+        if cached is None:
+            tri = self.triangles
+            cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+            norm = np.linalg.norm(cross, axis=1)
+            cached = (cross / np.where(norm > 0, norm, 1.0)[:, None], 0.5 * norm)
+            for a in cached:
+                a.flags.writeable = False
+            object.__setattr__(self, "_normals_areas", cached)
+        return cached
+
+    @cached_property
+    def hull_points(self) -> np.ndarray:
+        """(k, 3) points that include every vertex of this part's convex hull, read-only
+        (:func:`~meshladar.meshes.hull.convex_hull`): computed once per part, so every scene
+        built from the same part shares it."""
+        return convex_hull(self.vertices)
+
+    def digest(self) -> str:
+        """Content hash of the geometry (vertices and faces)."""
+        h = hashlib.sha1()
+        h.update(self.vertices.tobytes())
+        h.update(self.faces.tobytes())
+        return h.hexdigest()
+
+
+def part_from_trimesh(mesh, material_index, *, name="mesh", transform=None):
+    """A MeshPart from a trimesh.Trimesh (optionally transformed by a 4×4 matrix)."""
+    v = np.asarray(mesh.vertices, dtype=np.float64)
+    if transform is not None:
+        t = np.asarray(transform, dtype=np.float64)
+        if t.shape != (4, 4) or not np.all(np.isfinite(t)):
+            raise ParameterError(f"transform must be a finite 4x4 matrix; got shape {t.shape}")
+        v = v @ t[:3, :3].T + t[:3, 3]
+    return MeshPart(v, np.asarray(mesh.faces), material_index, name)
+
+
+def _point_index(vertices):
+    """((n,) int64, k): each vertex's index among the k distinct positions, by exact float
+    equality (-0.0 equals 0.0), numbered in lexicographic order of the positions."""
+    v = np.asarray(vertices, dtype=np.float64)
+    order = np.lexsort(v.T[::-1])
+    s = v[order]
+    new = np.ones(len(v), dtype=bool)
+    new[1:] = np.any(s[1:] != s[:-1], axis=1)
+    out = np.empty(len(v), dtype=np.int64)
+    out[order] = np.cumsum(new) - 1
+    return out, int(new.sum())

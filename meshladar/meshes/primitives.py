@@ -1,0 +1,116 @@
+"""Tessellations of analytic shapes (disks and ellipses extruded to prisms, ellipsoids and
+spheres), with the exact normals of the surfaces they approximate, and view directions spread
+over the sphere."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._validate import check_count, check_size
+from ..errors import ParameterError
+from ..precision import CAP_REL
+from ..shapes import ellipse_normal, to_frame
+from .directions import fibonacci_sphere
+from .part import MeshPart
+
+__all__ = ["prism", "sphere", "ellipsoid", "icosphere", "fibonacci_sphere"]
+
+
+class _PrismNormal:
+    """Exact outward normal of an extruded ellipse (x-y gradient of its implicit function
+    on the sides, ±z on the caps). A plain class, so that parts pickle to worker processes."""
+
+    def __init__(self, center, axes, angle, lo, hi):
+        self.center, self.axes, self.angle, self.lo, self.hi = center, axes, angle, lo, hi
+
+    def __call__(self, p):
+        p = np.asarray(p, dtype=np.float64)
+        a, b = self.axes
+        nx, ny = ellipse_normal(self.center, self.axes, self.angle, p[:, 0], p[:, 1])
+        out = np.stack([nx, ny, np.zeros_like(nx)], -1)
+        eps = CAP_REL * max(a, b, self.hi - self.lo)
+        top = np.abs(p[:, 2] - self.hi) < eps
+        bottom = np.abs(p[:, 2] - self.lo) < eps
+        out[top | bottom] = 0.0
+        out[top, 2] = 1.0
+        out[bottom, 2] = -1.0
+        return out
+
+    def curvature_radius(self, p):
+        """Radius of curvature of the cross-section at the points' eccentric angle (inf on
+        the caps): (a² sin²t + b² cos²t)^(3/2) / (a b)."""
+        p = np.asarray(p, dtype=np.float64)
+        (cx, cy), (a, b) = self.center, self.axes
+        xl, yl = to_frame(self.angle, p[:, 0] - cx, p[:, 1] - cy)
+        t = np.arctan2(yl / b, xl / a)
+        rho = (a * a * np.sin(t) ** 2 + b * b * np.cos(t) ** 2) ** 1.5 / (a * b)
+        eps = CAP_REL * max(a, b, self.hi - self.lo)
+        cap = (np.abs(p[:, 2] - self.hi) < eps) | (np.abs(p[:, 2] - self.lo) < eps)
+        return np.where(cap, np.inf, rho)
+
+
+class _EllipsoidNormal:
+    """Exact outward normal of an ellipsoid: the gradient of Σ ((x − c)_i / a_i)²."""
+
+    def __init__(self, center, axes):
+        self.center, self.axes = np.asarray(center), np.asarray(axes)
+
+    def __call__(self, p):
+        g = (np.asarray(p, dtype=np.float64) - self.center) / self.axes**2
+        return g / np.linalg.norm(g, axis=-1, keepdims=True)
+
+
+def prism(shape, segments, height, material_index, *, z0=0.0):
+    """A disk/ellipse extruded to a prism of ``height`` centred on z = z0, with ``segments``
+    vertices on the exact boundary (uniform in the eccentric angle) and flat caps.
+
+    The part's ``exact_normal`` is the shape's own outward normal (in x-y) for side points
+    and ±z on the caps.
+    """
+    n = check_count("segments", segments, 3)
+    check_size("segments", n, 400, f"a prism of {n} segments", "use fewer segments")
+    t = 2 * math.pi * np.arange(n) / n
+    ring = shape.boundary(t)                                 # (n, 2)
+    lo, hi = z0 - height / 2, z0 + height / 2
+    v = np.concatenate([np.c_[ring, np.full(n, lo)], np.c_[ring, np.full(n, hi)],
+                        [[shape.center[0], shape.center[1], lo],
+                         [shape.center[0], shape.center[1], hi]]])
+    i = np.arange(n)
+    j = (i + 1) % n
+    side = np.concatenate([np.c_[i, j, n + j], np.c_[i, n + j, n + i]])
+    bottom = np.c_[np.full(n, 2 * n), j, i]
+    top = np.c_[np.full(n, 2 * n + 1), n + i, n + j]
+    faces = np.concatenate([side, bottom, top])
+    exact_normal = _PrismNormal(shape.center, shape.axes, shape.angle, lo, hi)
+    return MeshPart(v, faces, material_index, shape.name or type(shape).__name__.lower(),
+                    exact_normal)
+
+
+def icosphere(subdivisions):
+    """Vertices (n, 3) float64 and faces (m, 3) of the unit icosphere (radius 1 about the
+    origin, 20·4^subdivisions faces), as trimesh builds it."""
+    import trimesh
+
+    subdivisions = check_count("subdivisions", subdivisions, 0)
+    m = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)
+    return np.asarray(m.vertices, dtype=np.float64), np.asarray(m.faces)
+
+
+def ellipsoid(center, semi_axes, material_index, *, subdivisions=4, name="ellipsoid"):
+    """A tessellated ellipsoid (a scaled icosphere: 20·4^subdivisions faces) whose
+    ``exact_normal`` is the ellipsoid's own (the gradient of Σ (x_i/a_i)²)."""
+    c = np.asarray(center, dtype=np.float64)
+    ax = np.asarray(semi_axes, dtype=np.float64)
+    if c.shape != (3,) or ax.shape != (3,) or np.any(ax <= 0) or not np.all(np.isfinite(ax)):
+        raise ParameterError(f"ellipsoid needs a 3-D center and three positive semi_axes; got "
+                             f"{center!r}, {semi_axes!r}")
+    v, f = icosphere(subdivisions)
+    return MeshPart(c + v * ax, f, material_index, name, _EllipsoidNormal(c, ax))
+
+
+def sphere(center, radius, material_index, *, subdivisions=4, name="sphere"):
+    """A tessellated sphere (icosphere: 20·4^subdivisions faces) with its exact normals."""
+    return ellipsoid(center, (radius, radius, radius), material_index,
+                     subdivisions=subdivisions, name=name)
