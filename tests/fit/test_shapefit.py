@@ -14,7 +14,7 @@ from meshladar import materials, paper
 from meshladar.errors import ParameterError
 from meshladar.ladar import Ladar
 from meshladar.scene import Scene
-from meshladar.shapefit import find_shapes, fit_scene
+from meshladar.fit import find_shapes, fit_scene
 from meshladar.shapes import Ellipse
 
 BINS = 128

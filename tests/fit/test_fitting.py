@@ -14,7 +14,7 @@ import meshladar as ml
 from meshladar import materials, paper
 from meshladar.brdf import BRDF, SandfordRobertson
 from meshladar.errors import ParameterError
-from meshladar.fitting import IdentifiabilityWarning, coating_kernel, fit_coatings
+from meshladar.fit import IdentifiabilityWarning, coating_kernel, fit_coatings
 from meshladar.ladar import Ladar
 from meshladar.scene import Scene
 from meshladar.shapes import Disk
@@ -168,7 +168,7 @@ def test_view_design_beats_even_spacing(tmp_path):
     """Greedy D-optimal choice of 8 of 72 candidate views: distinct views whose Fisher
     information has a larger determinant than 8 evenly spaced ones' (measured: the
     aluminium glint width's σ 87× smaller), drawn as a figure."""
-    from meshladar.fitting import design_views
+    from meshladar.fit import design_views
     from meshladar.viz.fitting import draw_design
 
     lad = Ladar(np.arange(0.0, 360.0, 5.0), Ladar.centered(128, 1.6 / 128).bin_edges)
