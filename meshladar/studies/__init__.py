@@ -8,7 +8,7 @@ The faceting study's names are re-exported here, as ``meshladar.studies`` was th
 
 from __future__ import annotations
 
-from .faceting import (COATINGS, PHANTOMS, SETTINGS, _resolution,  # noqa: F401
+from .faceting import (COATINGS, PHANTOMS, SETTINGS,
                        convergence_orders, faceting_study, report, save_study, study_scene)
 
 __all__ = ["PHANTOMS", "COATINGS", "SETTINGS", "faceting_study", "convergence_orders",

@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 import meshladar as ml
-from meshladar import materials, paper
+from meshladar import materials
+from meshladar.studies import paper
 from meshladar.brdf import BRDF, SandfordRobertson
 from meshladar.errors import ParameterError
 from meshladar.fit import IdentifiabilityWarning, coating_kernel, fit_coatings

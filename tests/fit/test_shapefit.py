@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 import meshladar as ml
-from meshladar import materials, paper
+from meshladar import materials
+from meshladar.studies import paper
 from meshladar.errors import ParameterError
 from meshladar.ladar import Ladar
 from meshladar.scene import Scene

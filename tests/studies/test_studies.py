@@ -9,6 +9,7 @@ import pytest
 
 import meshladar as ml
 from meshladar import studies
+from meshladar.studies import faceting
 from meshladar.materials import ALUMINUM, DARK_GRAY, lambertian
 
 
@@ -39,7 +40,7 @@ def study():
 
 def _series(study, coating, series):
     rows = [r for r in study["rows"] if r["coating"] == coating and r["series"] == series]
-    return sorted(rows, key=studies._resolution)
+    return sorted(rows, key=faceting._resolution)
 
 
 def test_study_separates_the_error_sources(study):
@@ -81,6 +82,7 @@ def test_study_resumes_from_its_run_folder(tmp_path, monkeypatch):
         raise AssertionError("a finished study point was computed again")
 
     monkeypatch.setattr(sys.modules["meshladar.forward"], "simulate", forbidden)
+    monkeypatch.setattr(faceting, "simulate", forbidden)
     again = studies.faceting_study("quick", phantoms=["disk"], coatings=["aluminum"],
                                    run_dir=tmp_path)
     assert again["rows"] == first["rows"]
@@ -181,7 +183,7 @@ def test_reconstruction_and_3d_study_figures(tmp_path):
     no text overlapping or cut off; the PNGs written."""
     import matplotlib.image as mpimg
 
-    from meshladar import study_reconstruction as study
+    from meshladar.studies import reconstruction as study
     from meshladar.viz import studies as vstudies, style
     from meshladar.volume import Volume
 

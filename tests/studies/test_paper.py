@@ -7,7 +7,8 @@ import os
 import numpy as np
 import pytest
 
-from meshladar import paper, results
+from meshladar import results
+from meshladar.studies import paper
 
 
 @pytest.fixture(scope="module")
