@@ -49,6 +49,7 @@ def test_kernel_matches_the_analytic_model(radiometry):
     assert np.linalg.norm(swapped - other.values) / np.linalg.norm(other.values) < KERNEL_TOL
 
 
+@pytest.mark.slow
 def test_kernel_equals_weigh_on_mesh_hits():
     """On traced hits the kernel is weigh's sum, up to the table's interpolation."""
     mesh = PAIR.tessellate(256)
@@ -60,6 +61,7 @@ def test_kernel_equals_weigh_on_mesh_hits():
         assert np.linalg.norm(got - ref) / np.linalg.norm(ref) < 1e-3
 
 
+@pytest.mark.slow
 def test_intervals_cover_the_truth_over_seeded_poisson_trials():
     """The issue's goal: the gray/aluminium pair, 360 views of 64 bins, Poisson counts with
     1e5 photoelectrons in the brightest bin; over 200 seeded trials every parameter's 95 %
@@ -88,6 +90,7 @@ def test_intervals_cover_the_truth_over_seeded_poisson_trials():
     assert fit.names[0] == "large.rho_d" and fit.noise == "poisson"
 
 
+@pytest.mark.slow
 def test_gaussian_fit_bootstrap_and_report():
     """Least squares with σ from the residuals, the aluminium disk's coating from a wrong
     start (the gray disk's known); the parametric bootstrap's spread agrees with the

@@ -31,6 +31,7 @@ def _sino(scene, step=2.0, noise=1e-3, seed=0):
                        info={"radiometry": "paper"})
 
 
+@pytest.mark.slow
 def test_the_disk_pair_is_found():
     """RANSAC circles on the ridge points of the log-radiance FBP: the glinting pair's two
     disks (noise a millionth of the glint: the gray disk is a hundredth of it), largest first, centres within 0.2 bins and radii within half a bin (measured
@@ -55,6 +56,7 @@ def test_an_ellipse_is_found():
     assert se.shape == (5,) and rms < DR
 
 
+@pytest.mark.slow
 def test_coatings_on_found_geometry_carry_its_error():
     """The paper's proposal end to end on the gray pair: shapes, radii refined against the
     data, coatings; every coating parameter gets the geometry's share of its uncertainty

@@ -90,6 +90,7 @@ def sphere(renderer):
             "closed": peer.sphere_power_profile(edges, 1.0, RHO, -1.0)}
 
 
+@pytest.mark.slow
 def test_meshladar_and_mitransient_agree_on_a_lambertian_sphere(sphere):
     assert sphere["faces"] == 81920
     assert sphere["info"]["variant"] == "llvm_ad_mono" and sphere["info"]["spp"] == 100
@@ -100,11 +101,13 @@ def test_meshladar_and_mitransient_agree_on_a_lambertian_sphere(sphere):
     assert sphere["mitransient"].sum() == pytest.approx(sphere["exact"].sum(), rel=3e-5)
 
 
+@pytest.mark.slow
 def test_both_tools_match_the_exact_profile_of_the_faceted_mesh(sphere):
     assert _rel(sphere["meshladar"], sphere["exact"]) < SAMPLING_TOL
     assert _rel(sphere["mitransient"], sphere["exact"]) < SAMPLING_TOL
 
 
+@pytest.mark.slow
 def test_both_tools_match_the_closed_form_for_a_lambertian_sphere(sphere):
     # P(d) = (ρ/π) cos²θ · 2πR with cos θ = 1 − d/R: 2ρR(1 − d/R)², total 2ρR²/3
     closed = sphere["closed"]
@@ -168,6 +171,7 @@ def test_importing_meshladar_and_its_peer_module_loads_no_renderer():
 _BAD_LLVM = ["/nonexistent/libLLVM.so"] + sorted(glob.glob("/usr/lib/*-linux-gnu/libLLVM-15.so.1"))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("libllvm", _BAD_LLVM)
 def test_available_says_no_instead_of_crashing_with_an_unusable_libllvm(libllvm):
     # the probe runs in a child process, so neither a raise nor an abort reaches the caller
