@@ -28,7 +28,7 @@ from dataclasses import fields
 import numpy as np
 
 from .. import materials
-from .. import phantoms as _phantoms
+from .. import phantoms as _specs
 from .._validate import check_real
 from ..brdf import Lambertian, SandfordRobertson
 from ..compensation import compensate
@@ -55,7 +55,7 @@ _SETTINGS = {"quick": (128, 128, 40), "full": (256, 256, 100)}
 
 
 def _phantoms():
-    return {"disk_b0.99": _phantoms.scene("disk", paper._diffuse(0.99)),
+    return {"disk_b0.99": _specs.scene("disk", paper._diffuse(0.99)),
             "pair_gray_al": paper._pair(materials.DARK_GRAY, materials.ALUMINUM)}
 
 
