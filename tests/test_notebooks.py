@@ -125,6 +125,7 @@ def _same_as_stored(cells, values, expression):
     assert squeeze(_stored_text(cells[k])) == squeeze(repr(values[k])), expression
 
 
+@pytest.mark.slow
 def test_paper_tour(tmp_path, monkeypatch, rendering):
     ns, values = _run("01_paper_tour.ipynb", tmp_path, monkeypatch)
     vis = ns["visibility"]
@@ -139,6 +140,7 @@ def test_paper_tour(tmp_path, monkeypatch, rendering):
     assert _stored_text(cells[0]).startswith("Scene(kind='analytic'")
 
 
+@pytest.mark.slow
 def test_your_mesh_and_sensor(tmp_path, monkeypatch, rendering):
     ns, values = _run("02_your_mesh_and_sensor.ipynb", tmp_path, monkeypatch)
     assert ns["sino"].model == "mesh" and ns["sino"].info["radiometry"] == "power"
@@ -152,6 +154,7 @@ def test_your_mesh_and_sensor(tmp_path, monkeypatch, rendering):
     assert list(tmp_path.iterdir()) == []              # it writes nothing
 
 
+@pytest.mark.slow
 def test_coatings_from_data(tmp_path, monkeypatch):
     ns, values = _run("03_coatings_from_data.ipynb", tmp_path, monkeypatch)
     low, high = ns["fit"].interval(0.95)

@@ -1,5 +1,5 @@
 """Peer validation of the received-power radiometry (``radiometry="power"``) against an
-independent renderer, Mitsuba 3 + mitransient (:mod:`meshladar.peer`), and against exact
+independent renderer, Mitsuba 3 + mitransient (:mod:`meshladar.studies.peer`), and against exact
 references: the closed form for a Lambertian sphere and the exact bin integrals of the same
 faceted mesh.
 
@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 import meshladar as ml
-from meshladar import peer
+from meshladar.studies import peer
 from meshladar.materials import lambertian
 
 #: meshladar against mitransient, relative L2 over the profile (the brief's bar). Both see
@@ -90,6 +90,7 @@ def sphere(renderer):
             "closed": peer.sphere_power_profile(edges, 1.0, RHO, -1.0)}
 
 
+@pytest.mark.slow
 def test_meshladar_and_mitransient_agree_on_a_lambertian_sphere(sphere):
     assert sphere["faces"] == 81920
     assert sphere["info"]["variant"] == "llvm_ad_mono" and sphere["info"]["spp"] == 100
@@ -100,11 +101,13 @@ def test_meshladar_and_mitransient_agree_on_a_lambertian_sphere(sphere):
     assert sphere["mitransient"].sum() == pytest.approx(sphere["exact"].sum(), rel=3e-5)
 
 
+@pytest.mark.slow
 def test_both_tools_match_the_exact_profile_of_the_faceted_mesh(sphere):
     assert _rel(sphere["meshladar"], sphere["exact"]) < SAMPLING_TOL
     assert _rel(sphere["mitransient"], sphere["exact"]) < SAMPLING_TOL
 
 
+@pytest.mark.slow
 def test_both_tools_match_the_closed_form_for_a_lambertian_sphere(sphere):
     # P(d) = (ρ/π) cos²θ · 2πR with cos θ = 1 − d/R: 2ρR(1 − d/R)², total 2ρR²/3
     closed = sphere["closed"]
@@ -156,7 +159,7 @@ def test_uneven_bins_are_refused_before_mitsuba_is_loaded():
 
 
 def test_importing_meshladar_and_its_peer_module_loads_no_renderer():
-    code = ("import sys, meshladar, meshladar.peer; "
+    code = ("import sys, meshladar, meshladar.studies.peer; "
             "print([m for m in ('mitsuba', 'drjit', 'mitransient') if m in sys.modules])")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, timeout=120).stdout
@@ -168,10 +171,11 @@ def test_importing_meshladar_and_its_peer_module_loads_no_renderer():
 _BAD_LLVM = ["/nonexistent/libLLVM.so"] + sorted(glob.glob("/usr/lib/*-linux-gnu/libLLVM-15.so.1"))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("libllvm", _BAD_LLVM)
 def test_available_says_no_instead_of_crashing_with_an_unusable_libllvm(libllvm):
     # the probe runs in a child process, so neither a raise nor an abort reaches the caller
-    code = "from meshladar import peer; print(peer.available(reason=True))"
+    code = "from meshladar.studies import peer; print(peer.available(reason=True))"
     env = dict(os.environ, DRJIT_LIBLLVM_PATH=libllvm)
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          env=env, timeout=400)

@@ -11,10 +11,11 @@ import numpy as np
 import pytest
 
 import meshladar as ml
-from meshladar import materials, paper
+from meshladar import materials
+from meshladar.studies import paper
 from meshladar.brdf import BRDF, SandfordRobertson
 from meshladar.errors import ParameterError
-from meshladar.fitting import IdentifiabilityWarning, coating_kernel, fit_coatings
+from meshladar.fit import IdentifiabilityWarning, coating_kernel, fit_coatings
 from meshladar.ladar import Ladar
 from meshladar.scene import Scene
 from meshladar.shapes import Disk
@@ -48,6 +49,7 @@ def test_kernel_matches_the_analytic_model(radiometry):
     assert np.linalg.norm(swapped - other.values) / np.linalg.norm(other.values) < KERNEL_TOL
 
 
+@pytest.mark.slow
 def test_kernel_equals_weigh_on_mesh_hits():
     """On traced hits the kernel is weigh's sum, up to the table's interpolation."""
     mesh = PAIR.tessellate(256)
@@ -59,6 +61,7 @@ def test_kernel_equals_weigh_on_mesh_hits():
         assert np.linalg.norm(got - ref) / np.linalg.norm(ref) < 1e-3
 
 
+@pytest.mark.slow
 def test_intervals_cover_the_truth_over_seeded_poisson_trials():
     """The issue's goal: the gray/aluminium pair, 360 views of 64 bins, Poisson counts with
     1e5 photoelectrons in the brightest bin; over 200 seeded trials every parameter's 95 %
@@ -87,6 +90,7 @@ def test_intervals_cover_the_truth_over_seeded_poisson_trials():
     assert fit.names[0] == "large.rho_d" and fit.noise == "poisson"
 
 
+@pytest.mark.slow
 def test_gaussian_fit_bootstrap_and_report():
     """Least squares with σ from the residuals, the aluminium disk's coating from a wrong
     start (the gray disk's known); the parametric bootstrap's spread agrees with the
@@ -168,7 +172,7 @@ def test_view_design_beats_even_spacing(tmp_path):
     """Greedy D-optimal choice of 8 of 72 candidate views: distinct views whose Fisher
     information has a larger determinant than 8 evenly spaced ones' (measured: the
     aluminium glint width's σ 87× smaller), drawn as a figure."""
-    from meshladar.fitting import design_views
+    from meshladar.fit import design_views
     from meshladar.viz.fitting import draw_design
 
     lad = Ladar(np.arange(0.0, 360.0, 5.0), Ladar.centered(128, 1.6 / 128).bin_edges)

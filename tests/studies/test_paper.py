@@ -7,7 +7,8 @@ import os
 import numpy as np
 import pytest
 
-from meshladar import paper, results
+from meshladar import results
+from meshladar.studies import paper
 
 
 @pytest.fixture(scope="module")
@@ -16,6 +17,7 @@ def result():
     return paper.run(size=256)
 
 
+@pytest.mark.slow
 def test_lambertian_disk_is_not_darkened(result):
     m = result["metrics"]
     # ≈ 0 (measured +0.06): a tenth of the b = 0.99 effect at most
@@ -23,6 +25,7 @@ def test_lambertian_disk_is_not_darkened(result):
     assert abs(m["disk_e1.darkening"]) < 0.1 * abs(m["disk_b0.99.darkening"])
 
 
+@pytest.mark.slow
 def test_glancing_loss_darkens_the_interior_boundary(result):
     m = result["metrics"]
     assert m["disk_b0.99.darkening"] < -0.8                       # measured −1.36
@@ -31,6 +34,7 @@ def test_glancing_loss_darkens_the_interior_boundary(result):
     assert m["disk_e0.007.darkening_width"] < 0.5 * m["disk_b0.99.darkening_width"]
 
 
+@pytest.mark.slow
 def test_ellipse_darkening_concentrates_at_the_tapered_ends(result):
     m = result["metrics"]
     assert m["ellipse_b0.99.ends_darkening"] < -1.5                     # measured −3.8
@@ -39,6 +43,7 @@ def test_ellipse_darkening_concentrates_at_the_tapered_ends(result):
         assert abs(m[k]) < 0.1 * abs(m["ellipse_b0.99.ends_darkening"])
 
 
+@pytest.mark.slow
 def test_glints_hide_the_gray_disk_and_log_or_clip_recover_it(result):
     m = result["metrics"]
     for k in ("pair_gray_al.visibility", "pair_al_gray.visibility"):
@@ -47,6 +52,7 @@ def test_glints_hide_the_gray_disk_and_log_or_clip_recover_it(result):
     assert m["pair_gray_al_clip.visibility"] > 0.5                 # measured 0.72
 
 
+@pytest.mark.slow
 def test_shadowing_leaves_range_gaps(result):
     # the pair's sinogram has empty bins between the disks' returns at views along x
     sino = result["sinograms"]["pair_gray_gray"]
@@ -55,6 +61,7 @@ def test_shadowing_leaves_range_gaps(result):
     assert np.any(row[lit.min():lit.max()] == 0)
 
 
+@pytest.mark.slow
 def test_figures_are_drawn_from_the_saved_result(tmp_path):
     from meshladar.viz import paper as vpaper
 
@@ -90,6 +97,7 @@ def test_figures_are_drawn_from_the_saved_result(tmp_path):
     check()
 
 
+@pytest.mark.slow
 def test_received_power_darkens_even_a_lambertian_ellipse(result):
     """The question the paper did not ask: with received power as the data (one cos θ more),
     the Lambertian disk's surface band stays level (every boundary point sees the same
@@ -115,6 +123,7 @@ def result_3d():
     return paper.run_3d(views=600, size=64, smooth=1.0, rays_per_bin=1.0)[0]
 
 
+@pytest.mark.slow
 def test_the_findings_hold_in_3d(result_3d):
     """The paper's findings, measured in 3-D (spheres seen from 600 directions over the
     sphere, 64³): glancing loss darkens the b = 0.99 sphere's inner shell well below the
@@ -128,3 +137,14 @@ def test_the_findings_hold_in_3d(result_3d):
     assert m["3d.pair_gray_al_log.visibility"] > 1.5 * m["3d.pair_gray_al.visibility"]
     assert m["3d.pair_gray_al_clip.visibility"] > 1.5 * m["3d.pair_gray_al.visibility"]
     assert m["3d.pair.shadow_streaks"] > 0.3
+
+
+def test_the_panels_are_built_from_the_phantom_specs():
+    """Every figure's panels exist, and the lone disk, the ellipse and the pair are the
+    phantom library's (radius A = 0.8; semi-axes 0.6 × 0.3; the touching pair)."""
+    panels = paper._panels()
+    assert {k for _, keys in paper.FIGURES.values() for k in keys} <= set(panels)
+    disk = panels["disk_b0"][0].shapes[0]
+    assert disk.radius == 0.8 and tuple(disk.center) == (0.0, 0.0)
+    assert tuple(panels["ellipse_b0"][0].shapes[0].axes) == (0.6, 0.3)
+    assert [s.name for s in panels["pair_gray_al"][0].shapes] == ["large", "small"]

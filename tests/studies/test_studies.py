@@ -9,6 +9,7 @@ import pytest
 
 import meshladar as ml
 from meshladar import studies
+from meshladar.studies import faceting
 from meshladar.materials import ALUMINUM, DARK_GRAY, lambertian
 
 
@@ -39,9 +40,10 @@ def study():
 
 def _series(study, coating, series):
     rows = [r for r in study["rows"] if r["coating"] == coating and r["series"] == series]
-    return sorted(rows, key=studies._resolution)
+    return sorted(rows, key=faceting._resolution)
 
 
+@pytest.mark.slow
 def test_study_separates_the_error_sources(study):
     # normal faceting: at equal segments exact normals beat flat ones for a glossy coating
     flat = _series(study, "aluminum", "normal")
@@ -60,6 +62,7 @@ def test_study_separates_the_error_sources(study):
     assert flat[-1]["image_rel_l2"] < flat[0]["image_rel_l2"]
 
 
+@pytest.mark.slow
 def test_glint_regime_breaks_flat_facets_until_n_exceeds_pi_over_e(study):
     orders = {(o["coating"], o["series"]): o for o in study["orders"]}
     flat = orders[("aluminum", "normal")]
@@ -71,6 +74,7 @@ def test_glint_regime_breaks_flat_facets_until_n_exceeds_pi_over_e(study):
     assert pos["break_at"] <= 128 and pos["order"] > 1.3
 
 
+@pytest.mark.slow
 def test_study_resumes_from_its_run_folder(tmp_path, monkeypatch):
     import sys
 
@@ -81,6 +85,7 @@ def test_study_resumes_from_its_run_folder(tmp_path, monkeypatch):
         raise AssertionError("a finished study point was computed again")
 
     monkeypatch.setattr(sys.modules["meshladar.forward"], "simulate", forbidden)
+    monkeypatch.setattr(faceting, "simulate", forbidden)
     again = studies.faceting_study("quick", phantoms=["disk"], coatings=["aluminum"],
                                    run_dir=tmp_path)
     assert again["rows"] == first["rows"]
@@ -91,6 +96,7 @@ def test_study_resumes_from_its_run_folder(tmp_path, monkeypatch):
                                run_dir=tmp_path)
 
 
+@pytest.mark.slow
 def test_study_files(study, tmp_path):
     paths = studies.save_study(study, tmp_path)
     assert [p.split("/")[-1] for p in paths] == ["faceting.csv", "faceting.json",
@@ -174,6 +180,7 @@ def test_tol_validation():
         ml.simulate(scene, lad, model="mesh", tol=0.01, rays_per_bin=4)
 
 
+@pytest.mark.slow
 def test_reconstruction_and_3d_study_figures(tmp_path):
     """The reconstruction and 3-D studies' figures (drawn by viz, not the CLI): one panel per
     method and spacing, or per volume; signed images on a scale symmetric about zero whose
@@ -181,7 +188,7 @@ def test_reconstruction_and_3d_study_figures(tmp_path):
     no text overlapping or cut off; the PNGs written."""
     import matplotlib.image as mpimg
 
-    from meshladar import study_reconstruction as study
+    from meshladar.studies import reconstruction as study
     from meshladar.viz import studies as vstudies, style
     from meshladar.volume import Volume
 

@@ -10,11 +10,12 @@ import numpy as np
 import pytest
 
 import meshladar as ml
-from meshladar import materials, paper
+from meshladar import materials
+from meshladar.studies import paper
 from meshladar.errors import ParameterError
 from meshladar.ladar import Ladar
 from meshladar.scene import Scene
-from meshladar.shapefit import find_shapes, fit_scene
+from meshladar.fit import find_shapes, fit_scene
 from meshladar.shapes import Ellipse
 
 BINS = 128
@@ -30,6 +31,7 @@ def _sino(scene, step=2.0, noise=1e-3, seed=0):
                        info={"radiometry": "paper"})
 
 
+@pytest.mark.slow
 def test_the_disk_pair_is_found():
     """RANSAC circles on the ridge points of the log-radiance FBP: the glinting pair's two
     disks (noise a millionth of the glint: the gray disk is a hundredth of it), largest first, centres within 0.2 bins and radii within half a bin (measured
@@ -54,6 +56,7 @@ def test_an_ellipse_is_found():
     assert se.shape == (5,) and rms < DR
 
 
+@pytest.mark.slow
 def test_coatings_on_found_geometry_carry_its_error():
     """The paper's proposal end to end on the gray pair: shapes, radii refined against the
     data, coatings; every coating parameter gets the geometry's share of its uncertainty

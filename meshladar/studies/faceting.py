@@ -24,32 +24,39 @@ flat facets miss it entirely below that.
 
 from __future__ import annotations
 
+import csv
+import functools
+import io as _io
+import json
+import os
 import time
 import warnings
+from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
-from . import materials as _materials
-from .brdf import SandfordRobertson
-from .errors import EnergyConservationWarning, MeshladarWarning, ParameterError
-from .ladar import Ladar
-from .reconstruct import fbp
-from .precision import TINY
+from .. import __version__
+from .. import phantoms as _phantoms
+from .. import materials as _materials
+from .._validate import check_path
+from ..brdf import SandfordRobertson
+from ..errors import EnergyConservationWarning, MeshladarWarning, ParameterError
+from ..forward import simulate
+from ..ladar import Ladar
+from ..precision import TINY
+from ..reconstruct import fbp
+from ..results import save_result, write_text_atomic
+from ..runs import RunFolder
+from ..sinogram import Sinogram
+from ..stream import Progress
 
 __all__ = ["PHANTOMS", "COATINGS", "SETTINGS", "faceting_study", "convergence_orders",
            "study_scene"]
 
-def _phantom(name):
-    def build(coating):
-        from . import phantoms
-
-        return phantoms.scene(name, coating)
-
-    return build
-
-
 #: The paper's phantoms, as builders taking a coating (from the phantom library's specs).
-PHANTOMS = {name: _phantom(name) for name in ("disk", "ellipse", "disk_pair")}
+PHANTOMS = {name: functools.partial(_phantoms.scene, name)
+            for name in ("disk", "ellipse", "disk_pair")}
 
 
 def _diffuse_b099():
@@ -98,7 +105,6 @@ def _fbp(sino, size):
 def _errors(values, ref, ref_image, ladar, size):
     diff = values - ref.values
     norm = np.linalg.norm(ref.values)
-    from .sinogram import Sinogram
 
     image = _fbp(Sinogram(values, angles_deg=ladar.angles_deg, bin_edges=ladar.bin_edges), size)
     return {"rel_l2": float(np.linalg.norm(diff) / norm),
@@ -136,9 +142,6 @@ def faceting_study(setting="quick", *, phantoms=None, coatings=None, progress=Fa
         each phantom and coating, the analytic sinogram, a coarse flat mesh's
         (``segments[1]``) sinogram and both FBP images, for the difference figures.
     """
-    from .forward import simulate
-    from .stream import Progress
-
     if setting not in SETTINGS:
         raise ParameterError(f"setting must be one of {tuple(SETTINGS)}; got {setting!r}")
     cfg = SETTINGS[setting]
@@ -146,68 +149,30 @@ def faceting_study(setting="quick", *, phantoms=None, coatings=None, progress=Fa
         if value is not None and not isinstance(value, (list, tuple)):
             raise ParameterError(f"{arg} must be a list of names; got {value!r}")
     if run_dir is not None:
-        from ._validate import check_path
-
         check_path("run_dir", run_dir)
     phantoms = list(PHANTOMS) if phantoms is None else list(phantoms)
     coatings = list(COATINGS) if coatings is None else list(coatings)
     ladar = Ladar.paper(angles_deg=np.arange(0.0, 360.0, 360.0 / cfg["views"]))
-    size = cfg["image_size"]
-    seg, rpb, dense = cfg["segments"], cfg["rays_per_bin"], cfg["dense_rays"]
-    plan = ([("position", n, "exact", dense, True, None) for n in seg]
-            + [("normal", n, "flat", dense, True, None) for n in seg]
-            + [("smooth", n, "smooth", dense, True, None) for n in seg]
-            + [("rays", seg[-1], "exact", r, False, None) for r in rpb]
-            + [("rays_footprint", seg[-1], "exact", r, True, None) for r in rpb]
-            + [("pixel", None, None, None, None, p) for p in cfg["pixel_sizes"]])
-    rows, examples = [], {}
-    bar = Progress(len(phantoms) * len(coatings) * len(plan), "study points",
-                   enabled=progress)
+    plan = _plan(cfg)
+    n_points = len(phantoms) * len(coatings) * len(plan)
+    bar = Progress(n_points, "study points", enabled=progress)
     folder = None
     if run_dir is not None:
-        from . import __version__
-        from .runs import RunFolder
-
         folder = RunFolder(run_dir, {"kind": "faceting_study", "setting": setting,
                                      "config": cfg, "phantoms": phantoms,
                                      "coatings": coatings, "version": __version__},
-                           len(phantoms) * len(coatings) * len(plan))
+                           n_points)
+    rows, examples = [], {}
     index = 0
     for ph in phantoms:
         for co in coatings:
-            scene = study_scene(ph, co)
-            ref = ref_image = None
-            meshes = {}
-            for series, n, normals, r, foot, pix in plan:
-                row = {"phantom": ph, "coating": co, "series": series, "segments": n,
-                       "normals": normals, "rays_per_bin": r, "footprint": foot,
-                       "pixel_size": pix}
-                example = series == "normal" and n == seg[1]
+            run = _Run(study_scene(ph, co), ladar, cfg["image_size"], executor, {}, {})
+            for pt in plan:
+                row = {"phantom": ph, "coating": co, **pt._asdict()}
+                example = pt.series == "normal" and pt.segments == cfg["segments"][1]
                 saved = folder.load(index) if folder is not None else None
                 if saved is None:
-                    if ref is None:
-                        t0 = time.perf_counter()
-                        ref = simulate(scene, ladar)
-                        t_ref = time.perf_counter() - t0
-                        ref_image = _fbp(ref, size)
-                    t0 = time.perf_counter()
-                    if series == "pixel":
-                        sino = simulate(scene, ladar, model="pixel", pixel_size=pix)
-                    else:
-                        if n not in meshes:
-                            meshes[n] = scene.tessellate(n)
-                        par = {"executor": executor} if executor is not None else {"jobs": 1}
-                        sino = simulate(meshes[n], ladar, model="mesh", normals=normals,
-                                        rays_per_bin=r, footprint=foot, **par)
-                    dt = time.perf_counter() - t0
-                    err = _errors(sino.values, ref, ref_image, ladar, size)
-                    saved = {k: np.float64(v) for k, v in err.items()}
-                    saved["seconds"] = np.float64(dt)
-                    saved["analytic_seconds"] = np.float64(t_ref)
-                    if example:
-                        saved.update({"analytic": ref.values, "mesh": sino.values,
-                                      "analytic_image": ref_image.values,
-                                      "mesh_image": _fbp(sino, size).values})
+                    saved = _measure(run, pt, example)
                     if folder is not None:
                         folder.save(index, saved)
                 row.update({k: float(saved[k]) for k in ("rel_l2", "rel_max", "image_rel_l2",
@@ -217,13 +182,84 @@ def faceting_study(setting="quick", *, phantoms=None, coatings=None, progress=Fa
                     examples[f"{ph}/{co}"] = {k: np.asarray(saved[k]) for k in
                                               ("analytic", "mesh", "analytic_image",
                                                "mesh_image")}
-                    examples[f"{ph}/{co}"]["segments"] = n
+                    examples[f"{ph}/{co}"]["segments"] = pt.segments
                 index += 1
                 bar.update()
     bar.close()
     return {"setting": setting, "config": cfg, "rows": rows,
             "orders": convergence_orders(rows), "examples": examples,
             "bin_edges": ladar.bin_edges, "angles_deg": ladar.angles_deg}
+
+
+class _Point(NamedTuple):
+    """One point of a series: the row's settings."""
+
+    series: str
+    segments: int | None
+    normals: str | None
+    rays_per_bin: int | None
+    footprint: bool | None
+    pixel_size: float | None
+
+
+@dataclass(frozen=True)
+class _Run:
+    """A phantom and coating's points: the scene, the ladar, the image size, the executor,
+    and the meshes and the analytic reference, each made on first need."""
+
+    scene: object
+    ladar: object
+    size: int
+    executor: object
+    meshes: dict
+    reference: dict
+
+
+def _plan(cfg):
+    seg, rpb, dense = cfg["segments"], cfg["rays_per_bin"], cfg["dense_rays"]
+    return ([_Point("position", n, "exact", dense, True, None) for n in seg]
+            + [_Point("normal", n, "flat", dense, True, None) for n in seg]
+            + [_Point("smooth", n, "smooth", dense, True, None) for n in seg]
+            + [_Point("rays", seg[-1], "exact", r, False, None) for r in rpb]
+            + [_Point("rays_footprint", seg[-1], "exact", r, True, None) for r in rpb]
+            + [_Point("pixel", None, None, None, None, p) for p in cfg["pixel_sizes"]])
+
+
+def _reference(run):
+    """The analytic sinogram, its FBP image and its time, computed once per run."""
+    if not run.reference:
+        t0 = time.perf_counter()
+        ref = simulate(run.scene, run.ladar)
+        t_ref = time.perf_counter() - t0
+        run.reference.update(sino=ref, seconds=t_ref, image=_fbp(ref, run.size))
+    return run.reference
+
+
+def _simulate_point(run, pt):
+    if pt.series == "pixel":
+        return simulate(run.scene, run.ladar, model="pixel", pixel_size=pt.pixel_size)
+    if pt.segments not in run.meshes:
+        run.meshes[pt.segments] = run.scene.tessellate(pt.segments)
+    par = {"executor": run.executor} if run.executor is not None else {"jobs": 1}
+    return simulate(run.meshes[pt.segments], run.ladar, model="mesh", normals=pt.normals,
+                    rays_per_bin=pt.rays_per_bin, footprint=pt.footprint, **par)
+
+
+def _measure(run, pt, example):
+    """A point's errors and times (and, for the example, its sinograms and images)."""
+    ref = _reference(run)
+    t0 = time.perf_counter()
+    sino = _simulate_point(run, pt)
+    dt = time.perf_counter() - t0
+    err = _errors(sino.values, ref["sino"], ref["image"], run.ladar, run.size)
+    saved = {k: np.float64(v) for k, v in err.items()}
+    saved["seconds"] = np.float64(dt)
+    saved["analytic_seconds"] = np.float64(ref["seconds"])
+    if example:
+        saved.update({"analytic": ref["sino"].values, "mesh": sino.values,
+                      "analytic_image": ref["image"].values,
+                      "mesh_image": _fbp(sino, run.size).values})
+    return saved
 
 
 def _resolution(row):
@@ -295,14 +331,6 @@ def save_study(result, outdir):
     list of str
         The paths written.
     """
-    import csv
-    import io as _io
-    import json
-    import os
-
-    from ._validate import check_path
-    from .results import save_result, write_text_atomic
-
     if not isinstance(result, dict) or "rows" not in result:
         raise ParameterError(f"result must be what faceting_study returns (a dict with rows); "
                              f"got {type(result).__name__}")

@@ -1,0 +1,154 @@
+"""The coating fit's solver: the linear-in-tables model of the fitted rows, the noise
+model's variance, and iteratively reweighted least squares (the score equations
+Σ (d − m)/V(m) ∂m/∂p = 0 are the maximum-likelihood ones for V(m) = m and
+V(m) = m + m²/M)."""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from ..errors import ParameterError
+from ._params import _jacobian, _materials
+from .kernels import _table
+
+
+@dataclass(frozen=True, eq=False)
+class Problem:
+    """A fit's data and fixed parts, restricted to the rows a fitted part reaches.
+
+    ``K`` maps each fitted part to its kernel matrix on those rows; ``data`` and ``fixed``
+    are the counts (or values) and the fixed parts' model there, ``y_all`` and
+    ``fixed_all`` the same on every row; ``noise`` is "gaussian" or "poisson", ``M`` the
+    speckle cells (None: Poisson)."""
+
+    K: dict
+    mats: tuple
+    params: tuple
+    fitted_parts: tuple
+    rows: np.ndarray
+    data: np.ndarray
+    fixed: np.ndarray
+    y_all: np.ndarray
+    fixed_all: np.ndarray
+    scale: float
+    noise: str
+    M: float | None
+    low: np.ndarray
+    high: np.ndarray
+    max_iter: int
+
+
+class Model:
+    """The model values and Jacobian of a :class:`Problem` at parameters x; the last few
+    tables are kept, as the solver asks for the model and its Jacobian at one point."""
+
+    def __init__(self, problem):
+        self.problem = problem
+        self._cache = {}
+
+    def tables(self, x):
+        """Each fitted part's table at x (None outside the model's valid set)."""
+        pr = self.problem
+        key = tuple(np.asarray(x, float))
+        if key not in self._cache:
+            try:
+                ms = _materials(pr.mats, pr.params, x)
+                self._cache[key] = {p: _table(ms[p]) for p in pr.fitted_parts}
+            except ParameterError:
+                self._cache[key] = None
+            if len(self._cache) > 8:
+                self._cache.pop(next(iter(self._cache)))
+        return self._cache[key]
+
+    def values(self, x):
+        """The model on the fitted rows (None outside the valid set)."""
+        pr = self.problem
+        t = self.tables(x)
+        if t is None:
+            return None
+        m = pr.fixed.copy()
+        for p in pr.fitted_parts:
+            m += (pr.K[p] @ t[p]) * pr.scale
+        return m
+
+    def jacobian(self, x):
+        pr = self.problem
+        return _jacobian(pr.K, pr.mats, pr.params, x, self.tables(x), pr.scale,
+                         pr.data.size)
+
+
+def variance(m, noise, M):
+    """The noise model's variance of counts with mean ``m`` (ones for Gaussian)."""
+    if noise == "gaussian":
+        return np.ones_like(m)
+    v = np.maximum(m, 0.0) + (0.0 if M is None else np.maximum(m, 0.0) ** 2 / M)
+    return np.maximum(v, 1e-3 * max(1.0, float(np.median(v[v > 0])) if (v > 0).any()
+                                      else 1.0))
+
+
+def _residual(model, y, sw, z):
+    mz = model.values(z)
+    if mz is None:                           # outside the model's valid set
+        return np.full(y.size, 1e6 * (np.abs(y).max() + 1.0)) * sw
+    return (mz - y) * sw
+
+
+def _weighted_jacobian(model, sw, z):
+    return model.jacobian(z) * sw[:, None]
+
+
+def solve(model, y, x_start):
+    """IRLS from ``x_start`` to data ``y``: (x, model values, solver evaluations)."""
+    pr = model.problem
+    x = x_start.copy()
+    iterations = 0
+    m = model.values(x)
+    if m is None:
+        raise ParameterError("the starting coatings are invalid (initial=)")
+    for _ in range(pr.max_iter):
+        V = variance(m, pr.noise, pr.M)
+        sw = 1.0 / np.sqrt(V)
+        sol = least_squares(functools.partial(_residual, model, y, sw), x,
+                            jac=functools.partial(_weighted_jacobian, model, sw),
+                            bounds=(pr.low, pr.high), x_scale="jac", method="trf",
+                            max_nfev=200)
+        iterations += sol.nfev
+        dx = np.abs(sol.x - x)
+        x = sol.x
+        m = model.values(x)
+        if pr.noise == "gaussian":
+            break
+        if _settled(sol.jac, dx, x, len(pr.params)):
+            break
+    return x, m, iterations
+
+
+def _settled(Jw, dx, x, n):
+    """Converged when the reweighting moves no parameter by 1 % of its σ."""
+    try:
+        sd = np.sqrt(np.abs(np.diag(np.linalg.pinv(Jw.T @ Jw))))
+    except np.linalg.LinAlgError:
+        sd = np.full(n, np.inf)
+    return bool(np.all(dx <= 0.01 * sd + 1e-12 * np.abs(x)))
+
+
+def bootstrap(model, m, x, *, count, seed, sigma2):
+    """Parametric-bootstrap refits: (count, n) estimates from data drawn from the fitted
+    model values ``m`` (Gaussian with σ², Poisson, or negative binomial)."""
+    pr = model.problem
+    rng = np.random.default_rng(seed)
+    boots = np.empty((count, len(pr.params)))
+    for b in range(count):
+        if pr.noise == "gaussian":
+            y = m + rng.normal(0.0, math.sqrt(sigma2), m.size)
+        elif pr.M is None:
+            y = rng.poisson(np.maximum(m, 0.0)).astype(float)
+        else:
+            y = rng.poisson(rng.gamma(pr.M, np.maximum(m, 0.0) / pr.M)).astype(float)
+        boots[b] = solve(model, y, x)[0]
+    return boots

@@ -1,0 +1,266 @@
+"""Coatings from ladar data: fit BRDF parameters of chosen parts to a measured sinogram,
+the geometry known (a :class:`~meshladar.fit.kernels.CoatingKernel`), with uncertainties
+and an identifiability report.
+
+:func:`fit_coatings` minimises the misfit over the free parameters within bounds: least
+squares (``noise="gaussian"``, σ estimated from the residuals) or the Poisson or speckle
+(negative binomial, M cells) likelihood of photoelectron counts, by iteratively reweighted
+least squares (the score equations Σ (d − m)/V(m) ∂m/∂p = 0 are the maximum-likelihood ones
+for V(m) = m and V(m) = m + m²/M). The covariance is the inverse Fisher information
+(Jᵀ V⁻¹ J)⁻¹, optionally checked by a parametric bootstrap; the report names the
+parameters the data cannot determine (no effect on the data, or an uncertainty beyond
+their range, or a near-perfect correlation with another) and warns.
+
+The solver lives in :mod:`._irls`, the parameters in :mod:`._params`, the covariance and
+identifiability in :mod:`._identify`.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.stats import norm
+
+from .._summary import table as _html_table
+from .._summary import text as _text
+from .._validate import check_choice, check_count, check_real, check_sinogram
+from ..errors import MeshladarWarning, ParameterError
+from ..ladar import Ladar
+from ..receiver import Waveforms
+from ..scene import Scene
+from . import _irls
+from ._identify import _correlation, _misfit, _uncertainty
+from ._params import _materials, _resolve_params
+from .kernels import CoatingKernel, _table, coating_kernel
+
+__all__ = ["fit_coatings", "CoatingFit", "IdentifiabilityWarning", "NOISE_MODELS"]
+
+#: Noise models of :func:`fit_coatings`.
+NOISE_MODELS = ("gaussian", "poisson")
+
+
+class IdentifiabilityWarning(MeshladarWarning):
+    """A fitted parameter that the data cannot determine."""
+
+
+@dataclass(frozen=True, eq=False)
+class CoatingFit:
+    """The result of :func:`fit_coatings`.
+
+    Attributes
+    ----------
+    names : tuple of str
+        "part.parameter" of each free parameter.
+    estimate, stderr : (n,) arrays
+    covariance, correlation : (n, n) arrays
+        From the Fisher information at the estimate.
+    materials : tuple of BRDF
+        Every part's coating with the estimates in.
+    identifiable : dict
+        name → True, or the reason the data cannot determine it.
+    noise, deviance, dof, iterations, predicted
+        The noise model, the misfit (χ² for Gaussian, deviance for counts), degrees of
+        freedom, solver iterations, the fitted sinogram values.
+    bootstrap : (n_boot, n) array or None
+        Parametric-bootstrap estimates.
+    """
+
+    names: tuple
+    estimate: np.ndarray
+    stderr: np.ndarray
+    covariance: np.ndarray
+    correlation: np.ndarray
+    materials: tuple
+    identifiable: dict
+    noise: str
+    deviance: float
+    dof: int
+    iterations: int
+    predicted: np.ndarray
+    bootstrap: np.ndarray | None = None
+    info: dict = field(default_factory=dict)
+
+    def _summary(self):
+        return (("noise", self.noise),
+                *((n, f"{v:.5g} ± {e:.3g}" + ("" if self.identifiable[n] is True
+                                               else " (undetermined)"))
+                  for n, v, e in zip(self.names, self.estimate, self.stderr)),
+                ("misfit", f"{self.deviance:.4g} on {self.dof} dof"))
+
+    def __repr__(self) -> str:
+        return _text("CoatingFit", *self._summary())
+
+    def _repr_html_(self) -> str:
+        return _html_table("CoatingFit", *self._summary())
+
+    def interval(self, level=0.95):
+        """(low, high) arrays: estimate ∓ z σ (normal approximation)."""
+        level = check_real("level", level, low=0.0, high=1.0, low_open=True, high_open=True)
+        z = float(norm.ppf(0.5 + 0.5 * level))
+        return self.estimate - z * self.stderr, self.estimate + z * self.stderr
+
+    def report(self):
+        """The fit as text lines: each parameter ± σ, its 95 % interval, and whether the
+        data determine it."""
+        lo, hi = self.interval()
+        out = [f"  coating fit ({self.noise}; misfit {self.deviance:.4g} on {self.dof} "
+               f"degrees of freedom, {self.iterations} iterations)",
+               f"  {'parameter':<26} {'estimate':>11} {'± σ':>10} {'95 % interval':>24}"]
+        for i, n in enumerate(self.names):
+            ok = self.identifiable[n]
+            note = "" if ok is True else f"  NOT DETERMINED: {ok}"
+            out.append(f"  {n:<26} {self.estimate[i]:11.5g} {self.stderr[i]:10.3g} "
+                       f"[{lo[i]:10.5g}, {hi[i]:10.5g}]{note}")
+        strong = [(self.names[i], self.names[j], self.correlation[i, j])
+                  for i in range(len(self.names)) for j in range(i + 1, len(self.names))
+                  if abs(self.correlation[i, j]) > 0.9]
+        for a, b, r in strong:
+            out.append(f"  correlation {a} ~ {b}: {r:+.3f}")
+        return out
+
+def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, initial=None,
+                 noise="gaussian", photons_per_unit=None, speckle_cells=None, background=0.0,
+                 bootstrap=0, seed=0, samples=8192, max_iter=50):
+    """Fit coating parameters of chosen parts to a measured sinogram, the geometry known.
+
+    Parameters
+    ----------
+    geometry : CoatingKernel, Scene or Hits
+        The traced geometry (:func:`coating_kernel`); a Scene of analytic shapes is traced
+        on the measured sinogram's views and bins.
+    measured : Sinogram or Waveforms
+        The data (its ``info["radiometry"]`` picks the radiometry for a Scene); waveforms
+        need a waveform kernel (:meth:`CoatingKernel.received`).
+    parts : sequence, optional
+        Parts (names or indices) whose coatings are fitted (default all); the others keep
+        their coatings.
+    free : sequence or dict, optional
+        Parameter names to fit (dataclass fields of each part's BRDF; default all four SR
+        parameters, or ρd and b of a diffuse-only SR coating, or every float field of
+        another BRDF); a dict gives them per part.
+    bounds : dict, optional
+        "part.param", "index.param" or "param" → (low, high) (default SR's valid ranges;
+        unbounded for other models).
+    initial : dict, optional
+        part → BRDF to start from (default the geometry's own coatings).
+    noise : {"gaussian", "poisson"}
+        Least squares with σ from the residuals, or photoelectron counts: Poisson, or with
+        ``speckle_cells`` M the negative binomial of M speckle cells per bin.
+    photons_per_unit : float
+        Counts per unit of ``measured.values`` (required for ``"poisson"``).
+    background : float
+        Known mean background counts per bin (``"poisson"``), not subtracted from the data.
+    bootstrap : int
+        Parametric-bootstrap refits (0: none): noise drawn from the fitted model.
+    seed : int
+        The bootstrap's seed.
+    max_iter : int
+        Most outer (reweighting) iterations.
+
+    Returns
+    -------
+    CoatingFit
+        Warns :class:`IdentifiabilityWarning` naming any parameter the data cannot
+        determine.
+    """
+    waveforms = isinstance(measured, Waveforms)
+    if not waveforms:
+        check_sinogram("measured", measured)
+    noise = check_choice("noise", noise, NOISE_MODELS)
+    kernel = _kernel_for(geometry, measured, waveforms=waveforms, samples=samples)
+    scale, M, background = _noise_options(noise, photons_per_unit, speckle_cells, background)
+    bootstrap = check_count("bootstrap", bootstrap, low=0)
+    max_iter = check_count("max_iter", max_iter)
+    mats, params = _resolve_params(kernel, parts, free, bounds, initial)
+    problem = _problem(kernel, measured, mats, params,
+                       _Options(noise, scale, M, background, max_iter))
+    x0 = np.clip([float(getattr(mats[p.part], p.name)) for p in params], problem.low,
+                 problem.high)
+    model = _irls.Model(problem)
+    x, m, iterations = _irls.solve(model, problem.data, x0)
+    V = _irls.variance(m, noise, M)
+    J = model.jacobian(x)
+    fit = _misfit(problem, m, V, J)
+    full = problem.fixed_all.copy()
+    full[problem.rows] = m
+    cov, ident = _uncertainty(fit.fisher, x, params, kernel)
+    stderr, corr = _correlation(cov)
+    names = tuple(f"{kernel.parts[p.part]}.{p.name}" for p in params)
+    ident = {names[i]: v for i, v in enumerate(ident)}
+    boots = (_irls.bootstrap(model, m, x, count=bootstrap, seed=seed, sigma2=fit.sigma2)
+             if bootstrap else None)
+    bad = {n: why for n, why in ident.items() if why is not True}
+    if bad:
+        warnings.warn("the data cannot determine " + "; ".join(
+            f"{n} ({why})" for n, why in bad.items()), IdentifiabilityWarning, stacklevel=2)
+    return CoatingFit(names, x, stderr, cov, corr, tuple(_materials(mats, params, x)), ident,
+                      noise if M is None else f"negative binomial (M = {M:g})", fit.misfit,
+                      fit.dof, iterations, (full / scale).reshape(kernel.shape), boots,
+                      {"photons_per_unit": scale if noise == "poisson" else None,
+                       "radiometry": kernel.radiometry, "source": kernel.source})
+
+
+def _kernel_for(geometry, measured, *, waveforms, samples):
+    """The coating kernel of ``geometry`` on the measured views and bins, checked."""
+    if waveforms and not (isinstance(geometry, CoatingKernel)
+                          and geometry.source.endswith("waveforms")):
+        raise ParameterError("measured waveforms need the geometry as a waveform kernel: "
+                             "coating_kernel(...).received(sample_rate, pulse=...)")
+    if isinstance(geometry, CoatingKernel):
+        kernel = geometry
+    elif isinstance(geometry, Scene):
+        kernel = coating_kernel(geometry, Ladar(measured.angles_deg, measured.bin_edges),
+                                radiometry=measured.info.get("radiometry", "paper"),
+                                samples=samples)
+    else:
+        kernel = coating_kernel(geometry, radiometry=measured.info.get("radiometry", "paper"))
+    if measured.values.shape != kernel.shape:
+        raise ParameterError(f"measured has shape {measured.values.shape}; the geometry's "
+                             f"views and bins give {kernel.shape}")
+    return kernel
+
+
+def _noise_options(noise, photons_per_unit, speckle_cells, background):
+    """(counts per unit, speckle cells or None, background), checked for ``noise``."""
+    if noise == "poisson":
+        if photons_per_unit is None:
+            raise ParameterError("noise='poisson' needs photons_per_unit (counts per unit "
+                                 "of the measured values)")
+        scale = check_real("photons_per_unit", photons_per_unit, low=0.0, low_open=True)
+        M = None if speckle_cells is None else check_real("speckle_cells", speckle_cells,
+                                                          low=1.0)
+        background = check_real("background", background, low=0.0)
+        return scale, M, background
+    if speckle_cells is not None or background:
+        raise ParameterError("speckle_cells and background belong to noise='poisson'")
+    return 1.0, None, background
+
+
+@dataclass(frozen=True)
+class _Options:
+    noise: str
+    scale: float
+    M: float | None
+    background: float
+    max_iter: int
+
+
+def _problem(kernel, measured, mats, params, opts):
+    """The fit restricted to the rows a fitted part reaches (only those depend on the
+    parameters), the fixed parts' model added in."""
+    data = measured.values.ravel() * opts.scale
+    fixed_parts = sorted({i for i in range(len(mats))} - {p.part for p in params})
+    fixed = np.zeros(data.size)
+    for p in fixed_parts:
+        fixed += kernel.matrices[p] @ _table(mats[p])
+    fixed = fixed * opts.scale + (opts.background if opts.noise == "poisson" else 0.0)
+    low = np.array([p.low for p in params])
+    high = np.array([p.high for p in params])
+    fitted_parts = sorted({q.part for q in params})
+    rows = np.flatnonzero(sum(np.diff(kernel.matrices[p].indptr) for p in fitted_parts))
+    K = {p: kernel.matrices[p][rows] for p in fitted_parts}
+    return _irls.Problem(K, tuple(mats), tuple(params), tuple(fitted_parts), rows,
+                         data[rows], fixed[rows], data, fixed, opts.scale, opts.noise,
+                         opts.M, low, high, opts.max_iter)

@@ -1,0 +1,133 @@
+"""View design: which of the candidate views constrain the coatings best (greedy
+D-optimal design on the Fisher information of Poisson counts)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import plotting
+from .._validate import check_count, check_real
+from ..errors import ParameterError
+from ._params import _jacobian, _resolve_params
+from .kernels import CoatingKernel, _table, coating_kernel
+
+__all__ = ["ViewDesign", "design_views"]
+
+
+@dataclass(frozen=True, eq=False)
+class ViewDesign:
+    """The result of :func:`design_views`.
+
+    Attributes
+    ----------
+    chosen : (budget,) int array
+        Indices of the chosen views, in the order the greedy search added them.
+    angles_deg : (n_views,) array
+        Every candidate view's angle.
+    information : (n_views,) array
+        Each candidate alone: log det of its scaled Fisher information (with a small
+        ridge), the view's own worth.
+    names : tuple of str
+    stderr_designed, stderr_uniform : (n,) arrays
+        Parameter σ from the chosen views and from ``budget`` evenly spaced views.
+    """
+
+    chosen: np.ndarray
+    angles_deg: np.ndarray
+    information: np.ndarray
+    names: tuple
+    stderr_designed: np.ndarray
+    stderr_uniform: np.ndarray
+    uniform: np.ndarray
+
+    def plot(self, **options):
+        """A quick look (:func:`meshladar.viz.fitting.design_figure`, through
+        :mod:`meshladar.plotting`): a matplotlib Figure."""
+        return plotting.plot(self, **options)
+
+
+def design_views(geometry, budget, *, ladar=None, parts=None, free=None, materials=None,
+                 photons_per_unit=None, samples=4096):
+    """Which ``budget`` of the candidate views constrain the coatings best: greedy
+    D-optimal design on the Fisher information of Poisson counts (each step adds the view
+    that most raises log det F of the chosen set), compared with evenly spaced views.
+
+    Parameters
+    ----------
+    geometry : CoatingKernel, Scene or Hits
+        The candidates are its views (a Scene needs ``ladar``).
+    budget : int
+        Views to choose.
+    parts, free
+        As :func:`fit_coatings`.
+    materials : dict, optional
+        part → BRDF, the coatings the design is for (default the geometry's).
+    photons_per_unit : float, optional
+        Counts per unit of the sinogram (default: 1e5 counts in the brightest bin).
+    """
+    if isinstance(geometry, CoatingKernel):
+        kernel = geometry
+    else:
+        kernel = coating_kernel(geometry, ladar, samples=samples)
+    n_views = kernel.shape[0]
+    budget = check_count("budget", budget)
+    if budget > n_views:
+        raise ParameterError(f"budget must be at most the {n_views} candidate views; got "
+                             f"{budget}")
+    mats, params = _resolve_params(kernel, parts, free, None, materials)
+    x = np.array([float(getattr(mats[p.part], p.name)) for p in params])
+    m = kernel.predict(mats).ravel()
+    scale = (1e5 / float(m.max()) if photons_per_unit is None else
+             check_real("photons_per_unit", photons_per_unit, low=0.0, low_open=True))
+    width = np.array([prm.high - prm.low if math.isfinite(prm.high - prm.low)
+                      else max(abs(v), 1e-12) for prm, v in zip(params, x)])
+    per_view = _per_view_fisher(kernel, (mats, params, x), m, scale, width)
+    total = per_view.sum(axis=0)
+    ridge = 1e-9 * float(np.trace(total)) / len(params) * np.eye(len(params))
+    information = np.array([np.linalg.slogdet(F + ridge)[1] for F in per_view])
+    chosen = _greedy(per_view, ridge, budget)
+    uniform = np.round(np.arange(budget) * n_views / budget).astype(int)
+    names = tuple(f"{kernel.parts[p.part]}.{p.name}" for p in params)
+    return ViewDesign(np.array(chosen), np.asarray(kernel.angles_deg), information, names,
+                      _stderr(per_view, chosen, ridge, width),
+                      _stderr(per_view, uniform, ridge, width), uniform)
+
+
+def _per_view_fisher(kernel, at, m, scale, width):
+    """(n_views, n, n): each view's Fisher information of Poisson counts (model values
+    ``m``) at ``at`` = (coatings, parameters, values), in units of each parameter's range
+    ``width``."""
+    mats, params, x = at
+    n_views, n_bins = kernel.shape
+    parts_ = sorted({q.part for q in params})
+    base = {p: _table(mats[p]) for p in parts_}
+    J = _jacobian({p: kernel.matrices[p] for p in parts_}, mats, params, x, base, scale,
+                  m.size)
+    V = np.maximum(m * scale, 1e-9 * float(m.max()) * scale)
+    Js = J * width[None, :]                          # in units of each parameter's range
+    return np.einsum("vbi,vbj->vij", (Js / V[:, None]).reshape(n_views, n_bins, -1),
+                     Js.reshape(n_views, n_bins, -1))
+
+
+def _greedy(per_view, ridge, budget):
+    """Views added one at a time, each the one that most raises log det F."""
+    chosen, F = [], ridge.copy()
+    for _ in range(budget):
+        best, gain = -1, -math.inf
+        for v in range(per_view.shape[0]):
+            if v in chosen:
+                continue
+            g = np.linalg.slogdet(F + per_view[v])[1]
+            if g > gain:
+                best, gain = v, g
+        chosen.append(best)
+        F = F + per_view[best]
+    return chosen
+
+
+def _stderr(per_view, idx, ridge, width):
+    Fi = per_view[idx].sum(axis=0) + ridge
+    return np.sqrt(np.abs(np.diag(np.linalg.pinv(Fi)))) * width

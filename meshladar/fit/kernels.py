@@ -1,0 +1,257 @@
+"""Coating kernels: the geometry of a scene under a ladar, traced once and re-weighed for
+any coatings.
+
+:class:`CoatingKernel` keeps it as, per part, a sparse matrix from the part's monostatic
+BRDF F(θ; −θ) tabulated on a fine grid of incidence angles (the projected weight F cos θ,
+finite to the horizon; linear interpolation, 8193 points on [0, π/2]: 1.9e-4 rad, fine for
+a 0.007 rad glint) to the sinogram's bins; any coating is then a matrix-vector product
+(milliseconds), and a parameter's derivative is the product with the derivative of its
+table.
+
+* From analytic shapes (:func:`coating_kernel` on a :class:`~meshladar.Scene`): each
+  boundary sampled densely at arc-length weights, front-facing and unshadowed points
+  binned by range (exact ray-ellipse occlusion); the weight is F cos θ dl (``"paper"``) or
+  F cos² θ dl (``"power"``). Agrees with the analytic model's exact profiles to 0.5 %.
+* From mesh hits (:func:`coating_kernel` on :class:`~meshladar.raytrace.hits.Hits`): each
+  hit binned at its range with the weights :func:`~meshladar.weigh` gives it, per material
+  index; equal to ``weigh`` to the table's interpolation.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.sparse import csr_matrix, identity, kron
+
+from .._summary import table as _html_table
+from .._summary import text as _text
+from .._validate import check_count
+from ..brdf import projected_weight
+from ..errors import ParameterError
+from ..precision import TINY
+from ..raytrace.hits import Hits
+from ..receiver import receive
+from ..scene import Scene
+from ..sensor import check_radiometry
+from ..shapes import from_frame, to_frame
+from ..sinogram import Sinogram
+
+__all__ = ["CoatingKernel", "coating_kernel", "GRID"]
+
+#: θ samples of the tables on [0, π/2].
+GRID = 8193
+_THETA = np.linspace(0.0, 0.5 * math.pi, GRID)
+
+
+def _table(material):
+    """The projected weight F(θ; −θ) cos θ on the θ grid (1/sr; finite up to the horizon,
+    where F itself is not)."""
+    return np.asarray(projected_weight(material, np.cos(_THETA), np.sin(_THETA)), dtype=float)
+
+
+@dataclass(frozen=True, eq=False)
+class CoatingKernel:
+    """The geometry of a scene under a ladar, ready to be re-weighed for any coatings.
+
+    Attributes
+    ----------
+    matrices : tuple of scipy.sparse.csr_matrix
+        Per part, (n_views · n_bins, GRID): the sinogram is Σ_p matrices[p] @ P_p(θ grid),
+        P = F cos θ the part's projected monostatic weight.
+    parts : tuple of str
+        Part names (shape names or ``"material <i>"``).
+    materials : tuple of BRDF
+        Each part's coating as traced (the default starting point of a fit).
+    shape : (n_views, n_bins)
+    angles_deg, bin_edges : arrays
+    radiometry : str
+    source : str
+        "analytic" or "mesh".
+    """
+
+    matrices: tuple
+    parts: tuple
+    materials: tuple
+    shape: tuple
+    angles_deg: np.ndarray
+    bin_edges: np.ndarray
+    radiometry: str
+    source: str
+    info: dict = field(default_factory=dict)
+
+    def _summary(self):
+        return (("parts", self.parts), ("shape", self.shape), ("source", self.source),
+                ("radiometry", self.radiometry),
+                ("nonzeros", int(sum(m.nnz for m in self.matrices))))
+
+    def __repr__(self) -> str:
+        return _text("CoatingKernel", *self._summary())
+
+    def _repr_html_(self) -> str:
+        return _html_table("CoatingKernel", *self._summary())
+
+    def part_index(self, part) -> int:
+        """A part's index from its name or index."""
+        if isinstance(part, (int, np.integer)) and not isinstance(part, bool):
+            if 0 <= part < len(self.parts):
+                return int(part)
+        elif part in self.parts:
+            return self.parts.index(part)
+        raise ParameterError(f"part must be one of {list(self.parts)} or an index below "
+                             f"{len(self.parts)}; got {part!r}")
+
+    def contribution(self, part, material) -> np.ndarray:
+        """One part's sinogram values (n_views, n_bins) with ``material``."""
+        return (self.matrices[self.part_index(part)] @ _table(material)).reshape(self.shape)
+
+    def predict(self, materials=None) -> np.ndarray:
+        """The sinogram values with ``materials`` (one per part; default as traced)."""
+        mats = self.materials if materials is None else tuple(materials)
+        if len(mats) != len(self.parts):
+            raise ParameterError(f"materials must give {len(self.parts)} coatings, one per "
+                                 f"part {list(self.parts)}; got {len(mats)}")
+        return sum(self.contribution(i, m) for i, m in enumerate(mats))
+
+    def received(self, sample_rate, *, pulse=None, response=None, standoff=0.0,
+                 oversample=8):
+        """The kernel of the waveforms a digitiser records (:func:`meshladar.receive` with
+        these arguments, which is linear in the bins): each part's matrix composed with the
+        per-view map from bins to samples. ``bin_edges`` become the samples' time edges
+        (s) and :meth:`predict` gives waveform values; fit them with
+        :func:`fit_coatings` and the measured :class:`~meshladar.receiver.Waveforms`."""
+        if self.source.endswith("waveforms"):
+            raise ParameterError("this kernel already gives waveforms")
+        n_views, n_bins = self.shape
+        unit = Sinogram(np.eye(n_bins), angles_deg=np.zeros(n_bins),
+                        bin_edges=self.bin_edges, info={"radiometry": self.radiometry})
+        w = receive(unit, sample_rate=sample_rate, pulse=pulse, response=response,
+                    standoff=standoff, oversample=oversample)
+        R = np.array(w.values).T                                   # (samples, bins)
+        R[np.abs(R) < 1e-12 * float(np.abs(R).max(initial=0.0))] = 0.0
+        block = kron(identity(n_views, format="csr"), csr_matrix(R), format="csr")
+        return CoatingKernel(tuple(block @ m for m in self.matrices), self.parts,
+                             self.materials, (n_views, R.shape[0]), self.angles_deg,
+                             np.asarray(w.time_edges), self.radiometry,
+                             f"{self.source} waveforms",
+                             {**self.info, "sample_rate": float(sample_rate),
+                              "pulse": repr(pulse), "response": repr(response)})
+
+    def sinogram(self, materials=None):
+        """:meth:`predict` as a :class:`~meshladar.Sinogram`."""
+        return Sinogram(self.predict(materials), angles_deg=self.angles_deg,
+                        bin_edges=self.bin_edges, model=f"kernel ({self.source})",
+                        info={"radiometry": self.radiometry, **self.info})
+
+
+def _interp_matrix(rows, theta, omega, n_rows):
+    """The sparse (n_rows, GRID) matrix putting weight ω at angle θ into row ``rows`` by
+    linear interpolation on the θ grid."""
+    u = np.clip(theta, 0.0, 0.5 * math.pi) / (_THETA[1] - _THETA[0])
+    j = np.minimum(np.floor(u).astype(np.int64), GRID - 2)
+    f = u - j
+    r = np.concatenate([rows, rows])
+    c = np.concatenate([j, j + 1])
+    v = np.concatenate([omega * (1.0 - f), omega * f])
+    return csr_matrix((v, (r, c)), shape=(n_rows, GRID))
+
+
+def _ray_blocked(p, w, shape):
+    """(N, V) bool: does the ray p + s w, s > 0, cross the ellipse ``shape``?"""
+    a, b = shape.axes
+    d = p - np.asarray(shape.center)
+    qx, qy = to_frame(shape.angle, d[:, 0], d[:, 1])
+    dx, dy = to_frame(shape.angle, w[:, 0], w[:, 1])
+    qx, qy, dx, dy = qx[:, None] / a, qy[:, None] / b, dx[None, :] / a, dy[None, :] / b
+    A = dx * dx + dy * dy
+    B = qx * dx + qy * dy
+    C = qx * qx + qy * qy - 1.0
+    disc = B * B - A * C
+    far = (-B + np.sqrt(np.maximum(disc, 0.0))) / A
+    return (disc > 0) & (far > 0) & (C > 0)
+
+
+def _analytic_kernel(scene, ladar, radiometry, samples):
+    edges = ladar.bin_edges
+    n_views, n_bins = ladar.n_views, edges.size - 1
+    phi = np.deg2rad(ladar.angles_deg)
+    w = np.stack([np.cos(phi), np.sin(phi)], axis=1)
+    mats, names = [], []
+    for i, shape in enumerate(scene.shapes):
+        a, b = shape.axes
+        t = (np.arange(samples) + 0.5) * (2.0 * math.pi / samples)
+        p = shape.boundary(t)
+        speed = np.hypot(a * np.sin(t), b * np.cos(t))
+        dl = speed * (2.0 * math.pi / samples)
+        nx, ny = from_frame(shape.angle, b * np.cos(t), a * np.sin(t))
+        n = np.stack([nx, ny], axis=1) / np.hypot(nx, ny)[:, None]
+        c = n @ w.T                                               # (N, V)
+        ok = c > 0
+        for j, other in enumerate(scene.shapes):
+            if j != i:
+                ok &= ~_ray_blocked(p, w, other)
+        r = -(p @ w.T)
+        k = np.searchsorted(edges, r, side="right") - 1
+        ok &= (k >= 0) & (k < n_bins)
+        si, vi = np.nonzero(ok)
+        cos_t = c[si, vi]
+        omega = dl[si] * (1.0 if radiometry == "paper" else cos_t)          # × F cos θ
+        mats.append(_interp_matrix(vi * n_bins + k[si, vi], np.arccos(np.minimum(cos_t, 1.0)),
+                                   omega, n_views * n_bins))
+        names.append(shape.name if shape.name is not None else f"shape {i}")
+    if len(set(names)) != len(names):
+        names = [f"{nm} ({i})" for i, nm in enumerate(names)]
+    return CoatingKernel(tuple(mats), tuple(names), tuple(s.material for s in scene.shapes),
+                         (n_views, n_bins), ladar.angles_deg, edges, radiometry, "analytic",
+                         {"samples_per_shape": samples, "units": "length/sr"})
+
+
+def _mesh_kernel(hits, radiometry):
+    if hits.bistatic is not None:
+        raise ParameterError("coating kernels are monostatic; these hits are bistatic")
+    edges = hits.ladar.bin_edges
+    n_views, n_bins = hits.ladar.n_views, edges.size - 1
+    k = np.searchsorted(edges, hits.range, side="right") - 1
+    ok = (hits.cos_theta >= 0) & (k >= 0) & (k < n_bins)
+    # weigh's F·δA⊥ (paper) or F cos θ·δA⊥ (power) as ω × the table's F cos θ
+    omega = np.full(hits.view.size, float(hits.area))
+    if hits.weight_factor is not None:
+        omega = omega * hits.weight_factor
+    if radiometry == "power":
+        if hits.receive_factor is not None:
+            omega = omega * hits.receive_factor
+    else:
+        omega = omega / np.maximum(hits.cos_theta, TINY)
+    theta = np.arctan2(hits.sin_theta, np.maximum(hits.cos_theta, 0.0))
+    rows = hits.view.astype(np.int64) * n_bins + k
+    mats = []
+    for m in range(len(hits.materials)):
+        sel = ok & (hits.material == m)
+        mats.append(_interp_matrix(rows[sel], theta[sel], omega[sel], n_views * n_bins))
+    names = tuple(getattr(m, "name", None) or f"material {i}"
+                  for i, m in enumerate(hits.materials))
+    if len(set(names)) != len(names):
+        names = tuple(f"material {i}" for i in range(len(names)))
+    return CoatingKernel(tuple(mats), names, tuple(hits.materials), (n_views, n_bins),
+                         hits.ladar.angles_deg, edges, radiometry, "mesh",
+                         {"mode": hits.mode, "normals": hits.normals})
+
+
+def coating_kernel(geometry, ladar=None, *, radiometry="paper", samples=8192):
+    """The :class:`CoatingKernel` of analytic shapes (``geometry`` a Scene of disks and
+    ellipses, with ``ladar``) or of traced mesh hits (``geometry`` the
+    :class:`~meshladar.raytrace.hits.Hits` of :func:`meshladar.trace`; monostatic, point
+    binning). ``samples`` per analytic boundary."""
+    radiometry = "power" if check_radiometry(radiometry) else "paper"
+    if isinstance(geometry, Hits):
+        return _mesh_kernel(geometry, radiometry)
+    if isinstance(geometry, Scene):
+        if ladar is None:
+            raise ParameterError("an analytic scene's kernel needs the ladar (views, bins)")
+        if not all(hasattr(s, "axes") for s in geometry.shapes):
+            raise ParameterError("coating_kernel takes analytic shapes (Disk, Ellipse) or "
+                                 "mesh Hits; trace a mesh scene with meshladar.trace first")
+        return _analytic_kernel(geometry, ladar, radiometry, check_count("samples", samples))
+    raise ParameterError(f"geometry must be a Scene of analytic shapes or Hits; got "
+                         f"{type(geometry).__name__}")

@@ -1,0 +1,384 @@
+"""Unknown geometry, the paper's proposal: reconstruct, segment the surfaces, fit the shapes,
+then the coatings, and say how the geometry's errors carry into the coatings.
+
+:func:`find_shapes` takes the surface points of a first reconstruction
+(:func:`meshladar.compensation.estimate_surface`: sub-pixel ridge points of the log-radiance
+FBP) and finds circles among them by RANSAC (three points define a circle; the circle with
+the most points within ``tol`` wins, its points are removed, repeat), each refined by
+geometric least squares; with ``kind="ellipse"`` each connected group of points is fitted
+as an ellipse (Fitzgibbon's direct least-squares fit, then geometric refinement), so
+ellipses must not touch. Every shape
+comes with its standard errors from the fit's residuals.
+
+:func:`fit_scene` builds the scene from those shapes, fits the coatings
+(:func:`meshladar.fit.coatings.fit_coatings`) and refits with each geometry parameter moved by
+its standard error: the shifts are the coatings' sensitivity to the geometry, and their
+root sum of squares the geometry's share of each coating parameter's uncertainty.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import least_squares
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+from .._validate import check_choice, check_count, check_real
+from ..brdf import SandfordRobertson
+from ..compensation import estimate_surface, first_image
+from ..errors import ParameterError
+from ..ladar import Ladar
+from ..scene import Scene
+from ..shapes import Disk, Ellipse
+from .coatings import fit_coatings
+from .kernels import coating_kernel
+
+__all__ = ["find_shapes", "fit_scene", "SceneFit", "SHAPE_KINDS"]
+
+#: Shapes :func:`find_shapes` fits.
+SHAPE_KINDS = ("disk", "ellipse")
+
+
+def _circle_lsq(p):
+    """Geometric least-squares circle (centre, radius, covariance of (cx, cy, r))."""
+    x, y = p[:, 0], p[:, 1]
+    A = np.stack([x, y, np.ones_like(x)], axis=1)            # Kåsa's algebraic start
+    c = np.linalg.lstsq(A, x * x + y * y, rcond=None)[0]
+    cx, cy = 0.5 * c[0], 0.5 * c[1]
+    r = math.sqrt(max(c[2] + cx * cx + cy * cy, 1e-300))
+    sol = least_squares(lambda q: np.hypot(x - q[0], y - q[1]) - q[2], [cx, cy, r])
+    dof = max(1, p.shape[0] - 3)
+    s2 = float(np.sum(sol.fun ** 2)) / dof
+    cov = s2 * np.linalg.pinv(sol.jac.T @ sol.jac)
+    return sol.x, cov, float(math.sqrt(s2))
+
+
+def _ellipse_lsq(p):
+    """(centre, semi-axes, angle_deg, covariance of the five, rms): Fitzgibbon's direct fit
+    refined by geometric least squares on the distance to the ellipse (sampled)."""
+    x, y = p[:, 0] - p[:, 0].mean(), p[:, 1] - p[:, 1].mean()
+    D = np.stack([x * x, x * y, y * y, x, y, np.ones_like(x)], axis=1)
+    S = D.T @ D
+    C = np.zeros((6, 6))
+    C[0, 2] = C[2, 0] = 2.0
+    C[1, 1] = -1.0
+    try:
+        w, v = np.linalg.eig(np.linalg.solve(S, C))
+    except np.linalg.LinAlgError:
+        raise ParameterError("the surface points do not determine an ellipse") from None
+    a = np.real(v[:, np.argmax(np.real(w))])
+    A_, B_, C_, D_, E_, F_ = a
+    den = B_ * B_ - 4 * A_ * C_
+    x0 = (2 * C_ * D_ - B_ * E_) / den
+    y0 = (2 * A_ * E_ - B_ * D_) / den
+    theta = 0.5 * math.atan2(-B_, C_ - A_)
+    num = 2 * (A_ * E_ * E_ + C_ * D_ * D_ - B_ * D_ * E_ + den * F_)
+    root = math.hypot(A_ - C_, B_)
+    ax1 = math.sqrt(abs(num * ((A_ + C_) + root))) / abs(den)
+    ax2 = math.sqrt(abs(num * ((A_ + C_) - root))) / abs(den)
+    start = [x0 + p[:, 0].mean(), y0 + p[:, 1].mean(), ax1, ax2, theta]
+
+    def resid(q):
+        cx, cy, a1, a2, t = q
+        c, s = math.cos(t), math.sin(t)
+        u = (p[:, 0] - cx) * c + (p[:, 1] - cy) * s
+        v_ = -(p[:, 0] - cx) * s + (p[:, 1] - cy) * c
+        ang = np.arctan2(v_ / a2, u / a1)                   # nearest by eccentric angle
+        return np.hypot(u - a1 * np.cos(ang), v_ - a2 * np.sin(ang))
+
+    sol = least_squares(resid, start)
+    dof = max(1, p.shape[0] - 5)
+    s2 = float(np.sum(sol.fun ** 2)) / dof
+    cov = s2 * np.linalg.pinv(sol.jac.T @ sol.jac)
+    return sol.x, cov, float(math.sqrt(s2))
+
+
+def _components(points, reach, min_points):
+    """Index arrays of the connected groups of points (neighbours within ``reach``) with at
+    least ``min_points`` points."""
+
+    pairs = cKDTree(points).query_pairs(reach, output_type="ndarray")
+    n = points.shape[0]
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    _, label = connected_components(graph, directed=False)
+    return [np.flatnonzero(label == k) for k in np.unique(label)
+            if np.count_nonzero(label == k) >= min_points]
+
+
+def _ransac_circles(points, tol, min_points, max_shapes, seed):
+    rng = np.random.default_rng(seed)
+    left = np.arange(points.shape[0])
+    found = []
+    while left.size >= min_points and len(found) < max_shapes:
+        p = points[left]
+        best = None
+        for _ in range(400):
+            i, j, k = rng.choice(p.shape[0], 3, replace=False)
+            (ax, ay), (bx, by), (cx_, cy_) = p[i], p[j], p[k]
+            d = 2 * (ax * (by - cy_) + bx * (cy_ - ay) + cx_ * (ay - by))
+            if abs(d) < 1e-12:
+                continue
+            ux = ((ax * ax + ay * ay) * (by - cy_) + (bx * bx + by * by) * (cy_ - ay)
+                  + (cx_ * cx_ + cy_ * cy_) * (ay - by)) / d
+            uy = ((ax * ax + ay * ay) * (cx_ - bx) + (bx * bx + by * by) * (ax - cx_)
+                  + (cx_ * cx_ + cy_ * cy_) * (bx - ax)) / d
+            r = math.hypot(ax - ux, ay - uy)
+            inl = np.abs(np.hypot(p[:, 0] - ux, p[:, 1] - uy) - r) < tol
+            if best is None or inl.sum() > best.sum():
+                best = inl
+        if best is None or best.sum() < min_points:
+            break
+        q, _, _ = _circle_lsq(p[best])                       # refine, then re-collect
+        inl = np.abs(np.hypot(p[:, 0] - q[0], p[:, 1] - q[1]) - q[2]) < tol
+        found.append(left[inl])
+        left = left[~inl]
+    return found
+
+
+def find_shapes(sino, *, size=512, extent=1.0, center=(0.0, 0.0), kind="disk", first=None,
+                tol_bins=1.5, min_share=0.05, max_shapes=8, seed=0, material=None):
+    """Shapes found in a sinogram's first reconstruction.
+
+    Parameters
+    ----------
+    sino : Sinogram
+        Views about z, uniform bins.
+    size, extent, center
+        The first reconstruction's grid (default FBP of the log radiance).
+    kind : {"disk", "ellipse"}
+    first : Image, optional
+        The first reconstruction.
+    tol_bins : float
+        A surface point belongs to a shape within this many range bins of it.
+    min_share : float
+        A shape needs at least this share of the surface points.
+    material : BRDF, optional
+        The coating the shapes carry (default a neutral SR start for fitting).
+
+    Returns
+    -------
+    list of (shape, standard errors, rms distance)
+        Shapes (:class:`~meshladar.Disk` or :class:`~meshladar.Ellipse`, named "shape 0",
+        "shape 1", ... by decreasing size), the standard errors of their parameters
+        ((cx, cy, r) or (cx, cy, A, B, angle in radians)), and the rms distance of their
+        points.
+    """
+
+    kind = check_choice("kind", kind, SHAPE_KINDS)
+    if first is None:
+        first = first_image(sino, size, extent, center)
+    surface = estimate_surface(first, sino, shadows=False)
+    dr = float(np.mean(np.diff(sino.bin_edges)))
+    tol = check_real("tol_bins", tol_bins, low=0.0, low_open=True) * dr
+    n = surface.points.shape[0]
+    min_points = max(10, int(check_real("min_share", min_share, low=0.0, high=1.0) * n))
+    max_shapes = check_count("max_shapes", max_shapes)
+    if kind == "disk":
+        groups = _ransac_circles(surface.points, tol, min_points, max_shapes, seed)
+    else:
+        groups = _components(surface.points, 2.5 * surface.pixel_size, min_points)
+        groups = sorted(groups, key=len, reverse=True)[:max_shapes]
+    if not groups:
+        raise ParameterError("no shape found among the first reconstruction's surface "
+                             "points; give first= or a coarser tol_bins")
+    mat = material if material is not None else SandfordRobertson(0.05, 0.7, 0.2, 0.1)
+    out = []
+    for g in groups:
+        p = surface.points[g]
+        if kind == "disk":
+            q, cov, rms = _circle_lsq(p)
+            shape = Disk((q[0], q[1]), q[2], mat)
+            size_ = q[2]
+        else:
+            q, cov, rms = _ellipse_lsq(p)
+            shape = Ellipse((q[0], q[1]), (q[2], q[3]), math.degrees(q[4]), mat)
+            size_ = q[2] * q[3]
+        out.append((size_, shape, np.sqrt(np.abs(np.diag(cov))), rms))
+    out.sort(key=lambda t: -t[0])
+    return [(dataclasses.replace(s, name=f"shape {i}"), se, rms)
+            for i, (_, s, se, rms) in enumerate(out)]
+
+
+@dataclass(frozen=True, eq=False)
+class SceneFit:
+    """The result of :func:`fit_scene`.
+
+    Attributes
+    ----------
+    scene : Scene
+        The found shapes with the fitted coatings.
+    shapes : list
+        :func:`find_shapes`'s (shape, standard errors, rms).
+    fit : CoatingFit
+        The coatings, the geometry taken as found.
+    geometry_shift : (n_geometry, n_coating) array
+        Change of each coating estimate when one geometry parameter moves by its standard
+        error (rows named in ``geometry_names``).
+    geometry_stderr : (n_coating,) array
+        Their root sum of squares: the geometry's share of each coating's uncertainty.
+    """
+
+    scene: object
+    shapes: list
+    fit: object
+    geometry_names: tuple
+    geometry_shift: np.ndarray
+    geometry_stderr: np.ndarray
+    info: dict = field(default_factory=dict)
+
+    def report(self):
+        out = ["  shapes found:"]
+        for s, se, rms in self.shapes:
+            axes = s.axes
+            out.append(f"    {s.name}: centre ({s.center[0]:.4f}, {s.center[1]:.4f}), "
+                       f"semi-axes ({axes[0]:.4f}, {axes[1]:.4f}); σ {np.round(se, 5)}, "
+                       f"rms {rms:.2g}")
+        out += self.fit.report()
+        out.append(f"  {'parameter':<26} {'σ (noise)':>10} {'σ (geometry)':>13}")
+        for i, n in enumerate(self.fit.names):
+            out.append(f"  {n:<26} {self.fit.stderr[i]:10.3g} {self.geometry_stderr[i]:13.3g}")
+        return out
+
+
+def fit_scene(sino, *, kind="disk", size=512, extent=1.0, center=(0.0, 0.0), first=None,
+              noise="gaussian", photons_per_unit=None, speckle_cells=None, samples=4096,
+              **find):
+    """Shapes, then coatings, from a sinogram alone; see the module docstring.
+    ``noise``, ``photons_per_unit``, ``speckle_cells`` as
+    :func:`~meshladar.fit.coatings.fit_coatings`; other keywords go to :func:`find_shapes`."""
+
+    shapes = find_shapes(sino, kind=kind, size=size, extent=extent, center=center,
+                         first=first, **find)
+    ladar = Ladar(sino.angles_deg, sino.bin_edges)
+    radiometry = sino.info.get("radiometry", "paper")
+    kw = dict(noise=noise, photons_per_unit=photons_per_unit, speckle_cells=speckle_cells)
+
+    def fit_with(parts):
+        kernel = coating_kernel(_scene(parts), ladar, radiometry=radiometry,
+                                samples=samples)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")            # reported by the main fit below
+            return fit_coatings(kernel, sino, **kw)
+
+    shapes = _refine_sizes(shapes, sino, ladar, radiometry, samples)
+    scene = _scene([s for s, _, _ in shapes])
+    shapes = [(t, se, rms) for t, (_, se, rms) in zip(scene.shapes, shapes)]
+    kernel = coating_kernel(scene, ladar, radiometry=radiometry, samples=samples)
+    start = _start(kernel, sino.values)
+    fit = fit_coatings(kernel, sino, initial=start, **kw)
+    kw["initial"] = dict(enumerate(fit.materials))
+    names, shifts = [], []
+    fields = ("cx", "cy", "r") if kind == "disk" else ("cx", "cy", "A", "B", "angle")
+    for i, (s, se, _) in enumerate(shapes):
+        for j, f in enumerate(fields):
+            moved = _moved(s, f, se[j])
+            others = [t for k, (t, _, _) in enumerate(shapes) if k != i]
+            parts = others[:i] + [moved] + others[i:]
+            refit = fit_with(parts)
+            names.append(f"{s.name}.{f}")
+            shifts.append(refit.estimate - fit.estimate)
+    shifts = np.array(shifts)
+    found = Scene([dataclasses.replace(s, material=m)
+                   for (s, _, _), m in zip(shapes, fit.materials)])
+    return SceneFit(found, shapes, fit, tuple(names), shifts,
+                    np.sqrt(np.sum(shifts ** 2, axis=0)), {"kind": kind})
+
+
+#: The starting grid of :func:`fit_scene`: glint widths and diffuse narrowness tried per
+#: part, two passes over the parts.
+_E_GRID = (0.003, 0.007, 0.015, 0.03, 0.07, 0.15, 0.3, 0.6)
+_B_GRID = (0.1, 0.5, 0.9)
+
+
+def _start(kernel, y):
+    """Starting coatings: per part in turn, the (e, b) of the grid whose prediction fits
+    best (χ² with a variance of the prediction plus 1 % of the peak), ρd and ε neutral."""
+    mats = [SandfordRobertson(0.05, 0.7, 0.2, 0.1) for _ in kernel.parts]
+    parts = [kernel.contribution(i, m) for i, m in enumerate(mats)]
+    floor = 0.01 * float(np.abs(y).max())
+    for _ in range(2):
+        for i in range(len(mats)):
+            rest = sum(parts[:i] + parts[i + 1:]) if len(parts) > 1 else 0.0
+            best = None
+            for e in _E_GRID:
+                for b in _B_GRID:
+                    try:
+                        m = SandfordRobertson(0.05, 0.7, b, e)
+                    except ParameterError:
+                        continue
+                    c = kernel.contribution(i, m)
+                    # the level is free: scale ρd and ε together by the best amplitude
+                    pred = rest + c
+                    chi = float(np.sum((y - pred) ** 2 / (np.abs(pred) + floor)))
+                    if best is None or chi < best[0]:
+                        best = (chi, m, c)
+            mats[i], parts[i] = best[1], best[2]
+    return dict(enumerate(mats))
+
+
+def _refine_sizes(shapes, sino, ladar, radiometry, samples):
+    """Each disk's radius moved by the offset within ±1 range bin whose scene fits the data
+    best with the best starting coatings (:func:`_start`): a first reconstruction puts a
+    thin convex surface up to half a bin inside, and a glint's bin needs its surface to a
+    fraction of a bin. Ellipses are kept as found."""
+
+    dr = float(np.mean(np.diff(sino.bin_edges)))
+    y = sino.values
+    floor = 0.01 * float(np.abs(y).max())
+    shapes = list(shapes)
+    for i, (s, se, rms) in enumerate(shapes):
+        if not isinstance(s, Disk):
+            continue
+        best = None
+        for off in np.linspace(-1.0, 1.0, 9) * dr:
+            trial = [t for t, _, _ in shapes]
+            trial[i] = dataclasses.replace(s, radius=s.radius + off)
+            try:
+                kernel = coating_kernel(_scene(trial), ladar, radiometry=radiometry,
+                                        samples=min(samples, 2048))
+            except Exception:                      # noqa: BLE001 (a degenerate trial)
+                continue
+            start = _start(kernel, y)
+            pred = kernel.predict([start[j] for j in range(len(trial))])
+            chi = float(np.sum((y - pred) ** 2 / (np.abs(pred) + floor)))
+            if best is None or chi < best[0]:
+                best = (chi, trial[i])
+        shapes[i] = (best[1], se, rms)
+    return shapes
+
+
+def _scene(shapes):
+    """A Scene of the shapes, disks that overlap by a sliver (fitted shapes that touch in
+    truth) shrunk to touching."""
+
+    shapes = list(shapes)
+    for i in range(len(shapes)):
+        for j in range(i + 1, len(shapes)):
+            a, b = shapes[i], shapes[j]
+            if isinstance(a, Disk) and isinstance(b, Disk):
+                gap = math.dist(a.center, b.center) - a.radius - b.radius
+                if gap < 0:
+                    cut = 0.5 * (-gap) * (1 + 1e-9) + 1e-12
+                    shapes[i] = a = dataclasses.replace(a, radius=a.radius - cut)
+                    shapes[j] = dataclasses.replace(b, radius=b.radius - cut)
+    return Scene(shapes)
+
+
+def _moved(shape, field_, by):
+    if field_ == "cx":
+        return dataclasses.replace(shape, center=(shape.center[0] + by, shape.center[1]))
+    if field_ == "cy":
+        return dataclasses.replace(shape, center=(shape.center[0], shape.center[1] + by))
+    if field_ == "r":
+        return dataclasses.replace(shape, radius=shape.radius + by)
+    if field_ in ("A", "B"):
+        a, b = shape.semi_axes
+        return dataclasses.replace(shape, semi_axes=(a + by, b) if field_ == "A" else
+                                   (a, b + by))
+    return dataclasses.replace(shape, angle_deg=shape.angle_deg + math.degrees(by))

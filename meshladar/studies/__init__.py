@@ -1,0 +1,15 @@
+"""Studies built on the engine: faceting against the exact profiles (:mod:`.faceting`),
+reconstruction methods (:mod:`.reconstruction`), the paper's experiments (:mod:`.paper`),
+the peer renderer Mitsuba 3 + mitransient (:mod:`.peer`) and ``meshladar bench``
+(:mod:`.bench`, :mod:`.bench_mesh`, :mod:`.timing`).
+
+The faceting study's names are re-exported here, as ``meshladar.studies`` was that module.
+"""
+
+from __future__ import annotations
+
+from .faceting import (COATINGS, PHANTOMS, SETTINGS,
+                       convergence_orders, faceting_study, report, save_study, study_scene)
+
+__all__ = ["PHANTOMS", "COATINGS", "SETTINGS", "faceting_study", "convergence_orders",
+           "study_scene", "save_study", "report"]

@@ -1,0 +1,45 @@
+"""Timing helpers of the benchmarks: medians of several runs in one process, and the
+icosphere the mesh benchmarks trace."""
+
+from __future__ import annotations
+
+import statistics
+import time
+
+from ..mesh import sphere
+from ..scene import Scene
+
+__all__ = ["time_call", "interleaved", "icosphere_scene"]
+
+
+def time_call(fn, *, repeats=5):
+    """Wall times (s) of ``repeats`` calls of ``fn()`` after one warm-up call."""
+    fn()
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return times
+
+
+def interleaved(fns, *, repeats=3):
+    """Median wall time (s) of each of ``fns`` (a dict of name → callable), run in rounds
+    (one call of each per round, after one warm-up round) so that a shared machine's load
+    falls on all of them alike."""
+    for fn in fns.values():
+        fn()
+    times = {k: [] for k in fns}
+    for _ in range(repeats):
+        for k, fn in fns.items():
+            t0 = time.perf_counter()
+            fn()
+            times[k].append(time.perf_counter() - t0)
+    return {k: statistics.median(v) for k, v in times.items()}
+
+
+def icosphere_scene(subdivisions, material):
+    """A one-part scene: a sphere of radius 0.5 at the origin, ``subdivisions`` times
+    subdivided (6: 81,920 faces), in ``material``."""
+    return Scene.from_parts([sphere((0.0, 0.0, 0.0), 0.5, 0, subdivisions=subdivisions)],
+                             [material])
