@@ -50,9 +50,7 @@ def _resolve(path: pathlib.Path, module: str | None, level: int) -> str:
     rel = path.relative_to(ROOT).with_suffix("")
     parts = list(rel.parts)
     parts[0] = {"phantoms": "meshladar.phantoms", "viz": "meshladar.viz"}.get(parts[0], parts[0])
-    parts = ".".join(parts).split(".")
-    if path.name == "__init__.py":
-        parts = parts[:-1]
+    parts = ".".join(parts).split(".")     # a package's __init__ counts as a module in it
     base = parts[:len(parts) - level]
     return ".".join(base + ([module] if module else []))
 
