@@ -46,22 +46,22 @@ backends), :mod:`.embree4` (the packet backend: Embree 4 through ctypes and numb
 
 from __future__ import annotations
 
+import importlib
+
 from .embree import BACKENDS
 from .grid import MODES, SAMPLINGS
-from .hits import Hits
+from ..hits import Hits
 from .views import BACK_FACES, NORMALS
 
 __all__ = ["Hits", "trace", "simulate_mesh", "first_hits", "occluded", "NORMALS", "MODES",
            "BACK_FACES", "SAMPLINGS", "BACKENDS"]
 
-#: The entry points import the weigh stage, which imports :class:`Hits` from this package:
-#: they are loaded on first use, so the records stay importable below the weigh stage.
+#: The entry points moved to :mod:`meshladar.forward.mesh` (layer 7); they stay reachable
+#: here by name for one release, loaded on first use (no import of a layer above).
 _ENTRY_POINTS = ("trace", "simulate_mesh", "first_hits", "occluded")
 
 
 def __getattr__(name):
     if name in _ENTRY_POINTS:
-        from . import model
-
-        return getattr(model, name)
+        return getattr(importlib.import_module("meshladar.forward.mesh"), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

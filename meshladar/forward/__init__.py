@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._validate import check_choice
-from .errors import ParameterError
-from .ladar import Ladar
-from .scene import Scene
-from .sinogram import Sinogram
+from .._validate import check_choice
+from ..errors import ParameterError
+from ..ladar import Ladar
+from ..scene import Scene
+from ..sinogram import Sinogram
 
 __all__ = ["simulate", "MODELS"]
 
@@ -112,7 +112,7 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
             return simulate_tol(scene, ladar, tol, normals, footprint, max_rays, options)
         if max_rays is not None:
             raise ParameterError("max_rays is the budget of the tol knob; give tol too")
-        from .raytrace.model import simulate_mesh
+        from .mesh import simulate_mesh
 
         return simulate_mesh(scene, ladar, **options)
     if not scene.shapes:
@@ -132,7 +132,7 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
     if not np.any(sino.values):
         import warnings
 
-        from .errors import MeshladarWarning
+        from ..errors import MeshladarWarning
 
         lo, hi = scene.range_span(ladar.view_vectors)
         warnings.warn(f"the sinogram is all zeros: the scene spans ranges [{lo:.6g}, "

@@ -4,16 +4,18 @@ never the tracer's entry points, so a material sweep re-weighs cached hits witho
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
-from ._validate import check_flag
-from .errors import ParameterError
-from .ladar import Ladar
-from .raytrace.hits import Hits
-from .sinogram import Sinogram
-from .precision import BOX_RATIO, TINY
-from .sensor import check_radiometry
-from .brdf import projected_weight
+from .._validate import check_flag
+from ..errors import MeshladarWarning, ParameterError
+from ..ladar import Ladar
+from ..hits import Hits
+from ..sinogram import Sinogram
+from ..precision import BOX_RATIO, TINY
+from ..sensor import check_radiometry
+from ..brdf import BRDF, check_brdf, projected_weight
 
 __all__ = ["weigh"]
 
@@ -54,10 +56,6 @@ def _warn_grazing_receiver(cos_t, cos_r):
     (not F·cos θr) is weighed, and its 1/cos θr makes a flat facet parallel to the
     receiver's direction dominate the profile without bound (received power is finite)."""
     if np.any((cos_t > 0) & (cos_r >= 0) & (cos_r < GRAZING_RECEIVER_COS)):
-        import warnings
-
-        from .errors import MeshladarWarning
-
         warnings.warn("surfaces facing the ladar lie edge-on to the receiver (cos θr < "
                       "1e-6): under radiometry='paper' a bistatic return weighs F, which "
                       "grows as 1/cos θr there, so they dominate the profile; "
@@ -217,8 +215,6 @@ def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None,
     if footprint and hits.info.get("traced_with") is not None:
         raise ParameterError("footprint binning is for parallel rays without a sensor; these "
                              "hits were traced with one")
-    from .brdf import BRDF, check_brdf
-
     if isinstance(materials, BRDF):
         materials = [materials]                       # one coating for a one-material scene
     if materials is not None and not isinstance(materials, (list, tuple)):
@@ -281,3 +277,11 @@ def _sinogram(vals, ladar, edges, run, normals, footprint, rays, back, radiometr
             info["units"] = "photoelectrons"
     return Sinogram(vals, angles_deg=ladar.angles_deg, bin_edges=edges, model="mesh",
                     view_vectors=None if ladar.planar else ladar.view_vectors, info=info)
+
+
+#: Public names of the stage's helpers for the forward models (the underscored names stay
+#: for one release, for the importers that still use them).
+weights = _weights
+bin_one = _bin_one
+material_table = _material_table
+sinogram_of = _sinogram

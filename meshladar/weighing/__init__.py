@@ -1,0 +1,16 @@
+"""The weigh stage (DESIGN.md layer 5): every weight and every binning of first hits.
+
+:mod:`.weigh` (per-hit weights F·δA⊥, point/footprint/curved bins, :func:`weigh` of cached
+:class:`~meshladar.hits.Hits`), :mod:`.faces` (per-face weights and footprints of a view,
+for the fused loops), :mod:`.sensor_view` (a perspective view binned by the compiled loop),
+:mod:`._kernels` (the compiled binning loops). It imports the :class:`Hits` record and the
+ray-casting stage below it, never the forward models' entry points."""
+
+from __future__ import annotations
+
+from .weigh import (GRAZING_RECEIVER_COS, _bin_one, _box_cdf, _curved_spread,
+                    _material_table, _sinogram, _trap_cdf, _warn_grazing_receiver, _weights,
+                    bin_one, material_table, sinogram_of, weigh, weights)
+
+__all__ = ["weigh", "weights", "bin_one", "material_table", "sinogram_of",
+           "GRAZING_RECEIVER_COS"]
