@@ -90,7 +90,7 @@ def test_threads_share_one_scene_and_give_the_serial_numbers():
 
 
 def test_a_backend_that_cannot_load_is_said_once_and_never_changes_the_numbers(monkeypatch):
-    from meshladar.raytrace import embree as engine
+    from meshladar.raytrace import backends as engine
 
     scene = _sphere(2)
     ladar = ml.Ladar.covering(scene, n_bins=8, angles_deg=[0.0])
@@ -273,8 +273,9 @@ def test_bistatic_views_take_the_fused_loop_with_the_references_numbers(mode, mo
     # for the pair of directions before the cast, each hit's occlusion ray toward the
     # receiver cast in packets inside the loop; the numbers of embreex's per-hit path
     from meshladar.raytrace import model
+    from meshladar.weighing import faces
 
-    monkeypatch.setattr(model, "_FACE_BLOCK", 1000)        # the face weights in blocks
+    monkeypatch.setattr(faces, "_FACE_BLOCK", 1000)        # the face weights in blocks
     plate = ml.mesh.MeshPart(np.array([[-0.5, -0.4, -0.3], [0.5, -0.4, 0.2], [0.5, 0.4, 0.3],
                                        [-0.5, 0.4, -0.2]]), np.array([[0, 1, 2], [0, 2, 3]]),
                              1, name="plate")

@@ -19,6 +19,7 @@ from ..scene import Scene
 from ..sinogram import Sinogram
 from ..weighing import _bin_one, _material_table, _sinogram, _weights
 from ..raytrace.perspective import _trace_sensor_view
+from ..weighing.fused import cast_bin_grid
 from ..weighing.faces import (_face_bistatic_weights, _face_footprints, _face_weights,
                               face_bistatic_weights, face_footprints, face_weights)
 from ..raytrace.embree import _embree_scene, geometry, resolve_backend
@@ -224,7 +225,7 @@ def _fast_job(geo, scene, vectors, views, mode, spacing, z0_shifted, back_faces,
                 back, n = _rows_on_threads(scene, plan, w, spacing, bins, row_jobs,
                                            receiver)
             else:
-                back, n = scene.cast_bin_grid(plan, w, spacing, bins, receiver)
+                back, n = cast_bin_grid(scene, plan, w, spacing, bins, receiver)
         else:
             o, L, _, _ = _ray_grid(geo, w, mode, spacing, z0_shifted, rng)
             res = scene.run(o, np.ascontiguousarray((-w)[None, :], dtype=np.float32),
@@ -254,7 +255,7 @@ def _rows_on_threads(scene, plan, w, spacing, bins, row_jobs, receiver=None):
                     None if dv is None else dv[a0:a1], u, v, L)
             parts.append((band, np.zeros_like(out), stamp.copy(), weight.copy()))
     with ThreadPoolExecutor(len(parts)) as ex:
-        done = list(ex.map(lambda p: scene.cast_bin_grid(p[0], w, spacing,
+        done = list(ex.map(lambda p: cast_bin_grid(scene, p[0], w, spacing,
                                                          (*head, p[1], p[2], p[3], tag, fp),
                                                          receiver),
                            parts))

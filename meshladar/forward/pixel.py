@@ -153,7 +153,7 @@ def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=N
 
 def _views(payload, views):
     """The stream's per-chunk job: the profiles of views ``views``."""
-    from .. import _kernels
+    from . import _siddon_kernels as _kernels  # numba: loaded when a ray is traced
 
     (mask, grid, flat_owner, flat_normal, materials, arc_max, s_rel, (cx, cy), distance, ds,
      phi, edges, power) = payload

@@ -114,7 +114,7 @@ def parallel_rays(angles_deg, positions, *, distance):
 
 def project(image, grid: PixelGrid, rays: Rays) -> np.ndarray:
     """Line integrals Σ length · image of each ray through the grid: (n_rays,)."""
-    from .. import _kernels
+    from . import _siddon_kernels as _kernels  # numba: loaded when a ray is traced
 
     img = np.ascontiguousarray(finite_array("image", image))
     if img.shape != grid.shape:
@@ -131,7 +131,7 @@ _BACKPROJECT_PARTS = 8
 
 def backproject(values, grid: PixelGrid, rays: Rays) -> np.ndarray:
     """The exact adjoint of :func:`project`: Σ_rays length · value into each pixel."""
-    from .. import _kernels
+    from . import _siddon_kernels as _kernels  # numba: loaded when a ray is traced
 
     v = np.ascontiguousarray(finite_array("values", values).ravel())
     if v.size != rays.size:
