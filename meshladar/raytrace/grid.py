@@ -4,6 +4,7 @@ stratified, and the defaults that size them."""
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -57,6 +58,18 @@ def _frame(w):
 
 
 
+class GridPlan(NamedTuple):
+    """A view's ray grid as :func:`_grid_plan` describes it (flat, for the compiled loop)."""
+
+    s: np.ndarray
+    t: np.ndarray
+    du: np.ndarray | None
+    dv: np.ndarray | None
+    u: np.ndarray
+    v: np.ndarray
+    L: float
+
+
 def _grid_plan(geo, w, mode, spacing, z0_shifted, rng):
     """The grid's recipe, for :func:`_ray_grid` and the packet backend's fused loop (which
     builds the same float32 origins ray by ray): (s, t, du, dv, u, v, L) with s (ns,) and
@@ -80,7 +93,7 @@ def _grid_plan(geo, w, mode, spacing, z0_shifted, rng):
     du = dv = None
     if rng is not None and mode == "3d":
         du, dv = _stratified_offsets(s.size, t.size, rng)
-    return s, t, du, dv, u, v, L
+    return GridPlan(s, t, du, dv, u, v, L)
 
 
 def _ray_grid(geo, w, mode, spacing, z0_shifted, rng):

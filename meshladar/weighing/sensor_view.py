@@ -16,12 +16,15 @@ from .weigh import _material_table
 __all__ = ["bin_sensor_view"]
 
 
-def _bin_sensor_view(geo, scene, w, spacing, back_faces, rng, sensor, materials, area, power,
-                     edges, out):
-    """One view seen by a sensor at a finite standoff, weighed and binned into ``out`` by
-    the compiled loop (:func:`meshladar.bin_sensor_hits`; flat or smooth normals,
-    coatings with ``kernel_params``): the numbers of :func:`_trace_sensor_view` then
-    weighing. Returns (rays cast, back-face hits)."""
+def bin_sensor_view(plan, weighing, scene, w, rng, out):
+    """One view seen by the plan's sensor at a finite standoff, weighed and binned into
+    ``out`` by the compiled loop (:func:`._kernels.bin_sensor_hits`; flat or smooth
+    normals, coatings with ``kernel_params``): the numbers of
+    :func:`meshladar.raytrace.perspective._trace_sensor_view` then weighing. Returns
+    (rays cast, back-face hits)."""
+    geo, sensor, spacing = plan.geo, plan.traced_with, plan.spacing
+    back_faces, materials, area = plan.back_faces, weighing.materials, plan.area
+    power, edges = weighing.power, weighing.edges[0]
     aim = np.asarray(sensor.aim, np.float64) - geo.center
     sensor_pos, S, T, u, v, _, _, t0, o, res = _sensor_cast(geo, scene, w, spacing, rng,
                                                               sensor, aim)
@@ -46,5 +49,3 @@ def _bin_sensor_view(geo, scene, w, spacing, back_faces, rng, sensor, materials,
         MIN_COS_FACET, REFINE_MIN_COS, out)
     return len(o), back
 
-
-bin_sensor_view = _bin_sensor_view
