@@ -40,7 +40,10 @@ from ..brdf import projected_weight
 from ..ladar import Ladar
 from ..scene import Scene
 from ..shapes import Shape
+from ..runs import array_digest
+from ..sensor import check_radiometry
 from ..sinogram import Sinogram
+from ..stream import joined, run_chunks
 
 __all__ = ["simulate_analytic", "GL_NODES", "PANEL_MAX"]
 
@@ -238,9 +241,6 @@ def simulate_analytic(scene: Scene, ladar: Ladar, *, radiometry="paper", jobs=No
     then counts profiles). A material's lobes are evaluated only where present: a
     Lambertian coating costs no specular evaluation.
     """
-    from ..sensor import check_radiometry
-    from ..stream import run_chunks
-
     power = check_radiometry(radiometry)
     phi = np.deg2rad(ladar.angles_deg)
     edges = ladar.bin_edges
@@ -253,16 +253,12 @@ def simulate_analytic(scene: Scene, ladar: Ladar, *, radiometry="paper", jobs=No
         phi, unit = phi[first], "profiles"
     job = None
     if run_dir is not None:
-        from ..runs import array_digest
-
         job = {"kind": "simulate_analytic", "radiometry": radiometry, "shapes": [repr(s) for s in shapes],
                "phi": array_digest(phi), "bin_edges": array_digest(edges)}
     results = run_chunks(_profiles, (shapes, phi, edges, power), phi.size,
                          chunk_size=_VIEWS_PER_CHUNK, jobs=jobs, executor=executor,
                          progress=progress, unit=unit, run_dir=run_dir, job=job,
                          arrays={"values": (ladar.n_bins,)})
-    from ..stream import joined
-
     values = joined(results, "values")
     if inverse is not None:
         values = values[inverse.ravel()]

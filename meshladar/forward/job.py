@@ -28,11 +28,14 @@ import numpy as np
 from ..precision import MIN_COS_FACET, RECEIVER_LIFT
 from ..raytrace.backends import backend as get_backend
 from ..raytrace.embree import embree_scene
-from ..raytrace.grid import _grid_plan, _ray_grid
-from ..raytrace.perspective import _trace_sensor_view
+from ..raytrace.grid import grid_plan as _grid_plan
+from ..raytrace.grid import ray_grid as _ray_grid
+from ..raytrace.perspective import trace_sensor_view as _trace_sensor_view
 from ..raytrace.plan import TracePlan
-from ..raytrace.views import _range_offset, _trace_view
-from ..weighing import _bin_one, _material_table
+from ..raytrace.views import range_offset as _range_offset
+from ..raytrace.views import trace_view as _trace_view
+from ..weighing import bin_one as _bin_one
+from ..weighing import material_table as _material_table
 from ..weighing.faces import face_bistatic_weights, face_footprints, face_weights
 from ..weighing.fused import cast_bin_grid
 from ..weighing.record import Weighing

@@ -18,17 +18,18 @@ from ..precision import MIN_COS_FACET as _MIN_COS_FACET
 from ..precision import RECEIVER_LIFT as _RECEIVER_LIFT
 from ..scene import Scene
 from ..sinogram import Sinogram
-from ..raytrace.embree import _embree_scene, geometry, resolve_backend
+from ..raytrace.embree import embree_scene as _embree_scene
+from ..raytrace.embree import geometry, resolve_backend
 from ..hits import Hits
 from ..raytrace.plan import plan_trace
-from ..weighing import _sinogram
+from ..weighing import sinogram_of as _sinogram
 from ..runs import array_digest as digest
 from ..sensor import check_radiometry
 from ..stream import _MAX_JOBS_PER_CORE, _THREADS_FROM, joined, run_chunks
 from ..weighing.record import Weighing
 from .job import mesh_job, plan_job, sensor_offset
-from ..raytrace.grid import _ray_grid
-from ..raytrace.views import _range_offset
+from ..raytrace.grid import ray_grid as _ray_grid
+from ..raytrace.views import range_offset as _range_offset
 
 __all__ = ["trace", "simulate_mesh", "first_hits", "occluded"]
 
@@ -333,4 +334,4 @@ def _warn_empty(scene, ladar, run, back_faces, back_hits, face_normals):
         reasons.append(f"ray_spacing {run['ray_spacing']:.4g} may be too coarse for the "
                        "target")
     warnings.warn("the sinogram is all zeros: no return reached any bin; " +
-                  "; ".join(reasons), MeshladarWarning, stacklevel=4)
+                  "; ".join(reasons), MeshladarWarning, stacklevel=5)

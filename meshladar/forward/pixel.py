@@ -35,7 +35,10 @@ from ..ladar import Ladar
 from ..scene import Scene
 from ..shapes import ellipse_normal
 from .siddon import PixelGrid
+from ..runs import array_digest
+from ..sensor import check_radiometry
 from ..sinogram import Sinogram
+from ..stream import in_worker, joined, run_chunks
 from ..precision import TINY
 
 __all__ = ["simulate_pixel", "rasterize"]
@@ -98,8 +101,6 @@ def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=N
         ``values`` (n_views, n_bins) bin integrals (paper Eq. 8); ``info`` holds
         ``radiometry``, ``pixel_size``, ``ray_spacing`` and ``n_rays`` per view.
     """
-    from ..sensor import check_radiometry
-
     power = check_radiometry(radiometry)
     width = float(np.min(np.diff(ladar.bin_edges)))
     pix = check_real("pixel_size", width if pixel_size is None else pixel_size, low=0.0,
@@ -132,14 +133,10 @@ def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=N
                ds, np.deg2rad(ladar.angles_deg), ladar.bin_edges, power)
     job = None
     if run_dir is not None:
-        from ..runs import array_digest
-
         job = {"kind": "simulate_pixel", "radiometry": radiometry, "shapes": [repr(s) for s in scene.shapes],
                "pixel_size": pix, "ray_spacing": ds,
                "angles_deg": array_digest(ladar.angles_deg),
                "bin_edges": array_digest(ladar.bin_edges)}
-    from ..stream import joined, run_chunks
-
     results = run_chunks(_views, payload, ladar.n_views,
                          chunk_size=max(1, min(_VIEWS_PER_CHUNK, _RAYS_PER_CHUNK // n_rays)), jobs=jobs, executor=executor,
                          progress=progress, run_dir=run_dir, job=job,
@@ -169,8 +166,6 @@ def _views(payload, views):
     dy = np.repeat(-w[:, 1], n_rays)
     hit = np.empty(ox.size, np.int64)
     alpha = np.empty(ox.size)
-    from ..stream import in_worker
-
     first_hits = _kernels.siddon_first_hits_serial if in_worker() else _kernels.siddon_first_hits
     first_hits(mask, ox, oy, dx, dy, *grid._args(), hit, alpha)
     got = hit >= 0

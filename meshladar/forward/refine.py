@@ -14,6 +14,7 @@ import warnings
 
 import numpy as np
 
+from .._validate import check_real
 from ..errors import MeshladarWarning, ParameterError
 from .mesh import simulate_mesh
 from ..sinogram import Sinogram
@@ -46,8 +47,6 @@ def simulate_tol(scene, ladar, tol, normals, footprint, max_rays, kwargs):
     feature dominates) or when the next run would take the rays cast past ``max_rays``;
     both warn with the estimate reached and what to change.
     """
-    from .._validate import check_real
-
     tol = check_real("tol", tol, low=0.0, high=1.0, low_open=True, high_open=True)
     max_rays = check_real("max_rays", TOL_MAX_RAYS if max_rays is None else max_rays,
                           low=1.0)
@@ -83,22 +82,10 @@ def simulate_tol(scene, ladar, tol, normals, footprint, max_rays, kwargs):
                      "rays": sino.info["rays"], "seconds": time.perf_counter() - t0})
         last = (last + [sino.values])[-3:]
         if len(last) >= 2:
-            d1 = np.linalg.norm(last[-1] - last[-2])
-            if len(last) >= 3:
-                d0 = np.linalg.norm(last[-2] - last[-3])
-                if d1 > 0 and d0 > 0:
-                    order = float(np.clip(math.log2(d0 / d1), *_ORDER_BOUNDS))
-            factor = 2.0 ** -order / (1.0 - 2.0 ** -order)
-            est = d1 / max(np.linalg.norm(last[-1]), TINY) * factor
+            est, order = _estimate(last, order)
             runs[-1]["error_estimate"] = est
             if best is not None and est >= best[0]:
-                tips = [t for t, use in (("footprint=True", not footprint),
-                                         ("smooth or exact normals", normals == "flat"))
-                        if use] + ["a looser tol"]
-                why = (f"refinement stopped converging (estimate {est:.2g} after "
-                       f"{best[0]:.2g}): sampling noise or a singular feature dominates "
-                       "(a glint spot or silhouette narrower than the ray spacing); try "
-                       + ", ".join(tips))
+                why = _stalled(est, best[0], footprint, normals)
                 break
             best = (est, sino, len(runs) - 1)
             if est <= tol:
@@ -115,7 +102,7 @@ def simulate_tol(scene, ladar, tol, normals, footprint, max_rays, kwargs):
         warnings.warn(f"tol={tol:g} not reached: {why}; returning the run with estimated "
                       f"error {est:.2g} ({runs[k]['rays_per_bin']:g} rays per bin"
                       + (f", {runs[k]['segments']} segments" if tessellate else "") + ")",
-                      MeshladarWarning, stacklevel=3)
+                      MeshladarWarning, stacklevel=4)
     info = dict(sino.info, tol=tol, error_estimate=est, convergence_order=order,
                 max_rays=max_rays, rays_total=spent, stopped=why or "tol reached",
                 chosen={"segments": runs[k]["segments"],
@@ -125,3 +112,26 @@ def simulate_tol(scene, ladar, tol, normals, footprint, max_rays, kwargs):
     return Sinogram(sino.values, angles_deg=sino.angles_deg, bin_edges=sino.bin_edges,
                     model="mesh", info=info,
                     view_vectors=None if ladar.planar else ladar.view_vectors)
+
+
+def _estimate(last, order):
+    """The latest run's estimated relative error from the last two (or three) runs'
+    values, and the convergence order measured from three: (estimate, order)."""
+    d1 = np.linalg.norm(last[-1] - last[-2])
+    if len(last) >= 3:
+        d0 = np.linalg.norm(last[-2] - last[-3])
+        if d1 > 0 and d0 > 0:
+            order = float(np.clip(math.log2(d0 / d1), *_ORDER_BOUNDS))
+    factor = 2.0 ** -order / (1.0 - 2.0 ** -order)
+    return d1 / max(np.linalg.norm(last[-1]), TINY) * factor, order
+
+
+def _stalled(est, best, footprint, normals):
+    """Why refinement stopped converging, and what to try."""
+    tips = [t for t, use in (("footprint=True", not footprint),
+                             ("smooth or exact normals", normals == "flat"))
+            if use] + ["a looser tol"]
+    return (f"refinement stopped converging (estimate {est:.2g} after "
+            f"{best:.2g}): sampling noise or a singular feature dominates "
+            "(a glint spot or silhouette narrower than the ray spacing); try "
+            + ", ".join(tips))

@@ -79,7 +79,7 @@ def resolve_backend(name):
                 warnings.warn(f"the packet backend cannot load ({why}): the mesh engine "
                               "casts with embreex, one ray at a time (backend='embreex'); "
                               "the numbers are the same, slower", MeshladarWarning,
-                              stacklevel=4)
+                              stacklevel=7)
             return candidate
         if name != "auto":
             raise ParameterError(f"backend={name!r} cannot load here ({reason}); use "

@@ -3,6 +3,7 @@ size, and a per-process cache of scenes keyed by content."""
 
 from __future__ import annotations
 
+import hashlib
 import math
 import threading
 import warnings
@@ -12,6 +13,7 @@ import numpy as np
 from ..errors import MeshladarWarning, ParameterError
 from ..precision import FAR_RATIO as _FAR_RATIO
 from ..precision import SCENE_RADIUS_RANGE
+from ..mesh import corner_normals
 from ..scene import Scene
 from .backends import BACKENDS, resolve_backend
 from .backends import backend as get_backend
@@ -45,8 +47,6 @@ class _Geometry:
         self.normals = normals
         self.corner = None
         if normals == "smooth":
-            from ..mesh import corner_normals
-
             self.corner = np.concatenate([corner_normals(p) for p in parts])
         self.exact = [p.exact_normal for p in parts]
         if normals == "exact" and any(e is None for e in self.exact):
@@ -82,8 +82,6 @@ def _check_scale(radius, offset):
 
 
 def _digest(v, f):
-    import hashlib
-
     h = hashlib.sha1(v.tobytes())
     h.update(f.tobytes())
     return h.hexdigest()

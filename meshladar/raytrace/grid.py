@@ -224,3 +224,10 @@ def _largest_grid(geo, vectors, mode, spacing, limit=None):
 def _estimate_rays(geo, ladar, mode, spacing):
     extent = 2 * geo.radius / spacing + 2
     return ladar.n_views * (extent if mode == "slice" else extent * extent)
+
+
+# public names for the stages above (weighing, forward): the view's frame and grids
+dot = _dot
+frame = _frame
+grid_plan = _grid_plan
+ray_grid = _ray_grid

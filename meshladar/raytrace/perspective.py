@@ -159,3 +159,8 @@ def _trace_sensor_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng
 
 def _rowdot(a, b):
     return a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2]
+
+
+# public names for the stages above (weighing, forward)
+trace_sensor_view = _trace_sensor_view
+sensor_cast = _sensor_cast

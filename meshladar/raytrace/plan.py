@@ -118,7 +118,7 @@ def check_scene(scene, ladar, mode, normals, back_faces, z0):
         if not lo <= z0 <= hi:
             warnings.warn(f"z0={z0:.6g} lies outside the target's heights [{lo:.6g}, "
                           f"{hi:.6g}]: the slice returns nothing", MeshladarWarning,
-                          stacklevel=6)
+                          stacklevel=7)
     return mode, geo, z0
 
 

@@ -194,3 +194,9 @@ def _refine_t(geo, prim, origins32, w, t32):
 def _range_offset(center, w, w_r):
     """−c·w (monostatic) or −c·(w + w_r)/2 (bistatic): the range of the shifted origin."""
     return -float(center @ w) if w_r is None else -0.5 * float(center @ (w + w_r))
+
+
+# public names for the stages above (weighing, forward)
+trace_view = _trace_view
+range_offset = _range_offset
+bistatic_angles = _bistatic_angles

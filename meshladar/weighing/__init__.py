@@ -8,9 +8,15 @@ ray-casting stage below it, never the forward models' entry points."""
 
 from __future__ import annotations
 
-from .weigh import (GRAZING_RECEIVER_COS, _bin_one, _box_cdf, _curved_spread,
-                    _material_table, _sinogram, _trap_cdf, _warn_grazing_receiver, _weights,
-                    bin_one, material_table, sinogram_of, weigh, weights)
+from . import weigh as _weigh
+from .record import Weighing
+from .weigh import (GRAZING_RECEIVER_COS, bin_one, material_table, sinogram_of, weigh,
+                    weights)
 
-__all__ = ["weigh", "weights", "bin_one", "material_table", "sinogram_of",
+# the old module's private names, for the importers that still use them (one release)
+_weights, _bin_one, _material_table, _sinogram = weights, bin_one, material_table, sinogram_of
+_box_cdf, _trap_cdf, _curved_spread = _weigh._box_cdf, _weigh._trap_cdf, _weigh._curved_spread
+_warn_grazing_receiver = _weigh._warn_grazing_receiver
+
+__all__ = ["weigh", "Weighing", "weights", "bin_one", "material_table", "sinogram_of",
            "GRAZING_RECEIVER_COS"]

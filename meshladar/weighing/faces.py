@@ -8,8 +8,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..precision import TINY
-from ..raytrace.grid import _dot, _frame
-from ..raytrace.views import _bistatic_angles
+from ..raytrace.grid import dot as _dot
+from ..raytrace.grid import frame as _frame
+from ..raytrace.views import bistatic_angles as _bistatic_angles
 from .weigh import _weights
 
 __all__ = ["face_footprints", "face_weights", "face_bistatic_weights"]

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..raytrace.grid import _frame
+from ..raytrace.grid import frame as _frame
 from .weigh import _weights
 
 __all__ = ["bin_resolved"]

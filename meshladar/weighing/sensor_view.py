@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..precision import MIN_COS_FACET, REFINE_MIN_COS
-from ..raytrace.perspective import _sensor_cast
+from ..raytrace.perspective import sensor_cast as _sensor_cast
 from ..sensor import FloodBeam
 from ._kernels import bin_sensor_hits
 from .weigh import _material_table
@@ -48,4 +48,3 @@ def bin_sensor_view(plan, weighing, scene, w, rng, out):
         float(sensor.extinction), edges, float(area), bool(power), back_faces == "ignore",
         MIN_COS_FACET, REFINE_MIN_COS, out)
     return len(o), back
-
