@@ -31,7 +31,7 @@ from ..raytrace.embree import embree_scene
 from ..raytrace.grid import grid_plan as _grid_plan
 from ..raytrace.grid import ray_grid as _ray_grid
 from ..raytrace.perspective import trace_sensor_view as _trace_sensor_view
-from ..raytrace.plan import TracePlan
+from ..raytrace.plan import TracePlan, View
 from ..raytrace.views import range_offset as _range_offset
 from ..raytrace.views import trace_view as _trace_view
 from ..weighing import bin_one as _bin_one
@@ -64,16 +64,6 @@ class MeshJob:
     vectors: np.ndarray
     stage: Stage
     row_jobs: int = 1
-
-
-class View(NamedTuple):
-    """One view of a chunk: its slot in the chunk, its index, direction, receiver, rng."""
-
-    slot: int
-    index: int
-    w: np.ndarray
-    w_r: np.ndarray | None
-    rng: np.random.Generator | None
 
 
 @dataclass(eq=False)
@@ -117,12 +107,9 @@ def sensor_offset(geo, w, sensor):
 
 def _trace(job, scene, view, footprint=True, transverse=False):
     """One view's hits, through parallel rays or the plan's sensor."""
-    p = job.plan
-    if p.traced_with is not None:
-        return _trace_sensor_view(p.geo, scene, view.w, p.mode, p.spacing, p.z0_shifted,
-                                  p.back_faces, view.rng, p.traced_with)
-    return _trace_view(p.geo, scene, view.w, p.mode, p.spacing, p.z0_shifted, p.back_faces,
-                       view.rng, view.w_r, footprint=footprint, transverse=transverse)
+    if job.plan.traced_with is not None:
+        return _trace_sensor_view(job.plan, scene, view)
+    return _trace_view(job.plan, scene, view, footprint=footprint, transverse=transverse)
 
 
 def _offset(job, view):
@@ -145,11 +132,13 @@ def _per_hit_stage(job, scene, view, chunk):
     if sensed:
         chunk.values[view.slot] = _bin_one(
             r, h.cos_theta, h.sin_theta, h.material, h.spread, wg.materials, wg.edges[0],
-            job.plan.area, False, None, h.weight_factor, None, wg.power, h.receive_factor)
+            job.plan.area, footprint=False, factor=h.weight_factor, power=wg.power,
+            receive=h.receive_factor)
     else:
         chunk.values[view.slot] = _bin_one(
             r, h.cos_theta, h.sin_theta, h.material, h.spread, wg.materials, wg.edges[0],
-            job.plan.area, wg.footprint, h.bistatic, h.weight_factor, h.curve, wg.power)
+            job.plan.area, footprint=wg.footprint, bi=h.bistatic, factor=h.weight_factor,
+            curve=h.curve, power=wg.power)
     return h.rays, h.back_face_hits
 
 

@@ -307,8 +307,8 @@ def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-side
     run = _run_info(plan)
     if not np.any(vals):
         _warn_empty(scene, ladar, run, back_faces, int(back.sum()), plan.geo.face_normals)
-    return _sinogram(vals, ladar, ladar.bin_edges, run, normals, footprint, rays, back,
-                     radiometry)
+    return _sinogram(vals, ladar, ladar.bin_edges, run, normals=normals, footprint=footprint,
+                     rays=rays, back=back, radiometry=radiometry)
 
 
 def _warn_empty(scene, ladar, run, back_faces, back_hits, face_normals):

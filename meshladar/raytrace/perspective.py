@@ -81,10 +81,13 @@ def _sensor_cast(geo, scene, w, spacing, rng, sensor, aim):
     return sensor_pos, S, T, u, v, length, dirs, t0, o, res
 
 
-def _trace_sensor_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, sensor):
-    """Hits of one view seen by ``sensor``; ranges absolute (R − D − aim·w at a finite
-    standoff), or relative to the plane through the shifted centre (at infinity), as
+def _trace_sensor_view(plan, scene, view):
+    """Hits of one view of a :class:`~meshladar.raytrace.plan.TracePlan` seen by its
+    sensor (``plan.traced_with``); ranges absolute (R − D − aim·w at a finite standoff), or
+    relative to the plane through the shifted centre (at infinity), as
     :func:`meshladar.raytrace.views._trace_view`'s."""
+    geo, mode, spacing, z0_shifted = plan.geo, plan.mode, plan.spacing, plan.z0_shifted
+    back_faces, sensor, w, rng = plan.back_faces, plan.traced_with, view.w, view.rng
     D = sensor.standoff
     aim = np.asarray(sensor.aim, np.float64) - geo.center
     if D is None:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -25,7 +26,7 @@ from .grid import (MAX_RAYS_PER_VIEW, MODES, _estimate_rays, _largest_grid, _sam
                    _spacing)
 from .views import BACK_FACES, NORMALS
 
-__all__ = ["TracePlan", "plan_trace", "check_scene", "check_sensor", "check_receivers"]
+__all__ = ["TracePlan", "View", "plan_trace", "check_scene", "check_sensor", "check_receivers"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -84,6 +85,17 @@ class TracePlan:
     @property
     def ignore_back(self) -> bool:
         return self.back_faces == "ignore"
+
+
+class View(NamedTuple):
+    """One view of a chunk: its slot in the chunk, its index, its direction w (3,), its
+    bistatic receiver w_r (3,) or None, and its seeded rng (None: a regular grid)."""
+
+    slot: int
+    index: int
+    w: np.ndarray
+    w_r: np.ndarray | None
+    rng: np.random.Generator | None
 
 
 def check_scene(scene, ladar, mode, normals, back_faces, z0):

@@ -20,11 +20,14 @@ BACK_FACES = ("two-sided", "ignore")
 
 
 
-def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=None,
-                footprint=True, transverse=False):
-    """Hits of one view (range relative to the shifted centre's plane); with a bistatic
-    receiver direction w_r, one occlusion ray per hit toward it; with ``transverse``, each
-    hit's coordinates along the view's (u, v) (its ray's, shifted)."""
+def _trace_view(plan, scene, view, footprint=True, transverse=False):
+    """Hits of one view (range relative to the shifted centre's plane) of a
+    :class:`~meshladar.raytrace.plan.TracePlan`; ``view`` (a
+    :class:`~meshladar.raytrace.plan.View`) gives its direction w, receiver w_r and rng.
+    With a bistatic receiver direction w_r, one occlusion ray per hit toward it; with
+    ``transverse``, each hit's coordinates along the view's (u, v) (its ray's, shifted)."""
+    geo, mode, spacing, z0_shifted = plan.geo, plan.mode, plan.spacing, plan.z0_shifted
+    back_faces, w, w_r, rng = plan.back_faces, view.w, view.w_r, view.rng
     o, L, u, v = _ray_grid(geo, w, mode, spacing, z0_shifted, rng)
     d = np.ascontiguousarray((-w)[None, :], dtype=np.float32)
     res = scene.run(o, d, output=1)

@@ -14,7 +14,8 @@ from .weigh import (GRAZING_RECEIVER_COS, bin_one, material_table, sinogram_of, 
                     weights)
 
 # the old module's private names, for the importers that still use them (one release)
-_weights, _bin_one, _material_table, _sinogram = weights, bin_one, material_table, sinogram_of
+_weights, _material_table = weights, material_table
+_bin_one, _sinogram = _weigh._bin_one, _weigh._sinogram
 _box_cdf, _trap_cdf, _curved_spread = _weigh._box_cdf, _weigh._trap_cdf, _weigh._curved_spread
 _warn_grazing_receiver = _weigh._warn_grazing_receiver
 

@@ -122,10 +122,14 @@ def _curved_spread(r, wt, curve, edges):
 
 
 
-def _bin_one(r, cos_t, sin_t, mat, spread, materials, edges, area, footprint, bi=None,
-             factor=None, curve=None, power=False, receive=None):
-    """One view's profile from its hits (``receive``: the sensor's receiver factors,
-    applied under received power only)."""
+def bin_one(r, cos_t, sin_t, mat, spread, materials, edges, area, *, footprint=False,
+            bi=None, factor=None, curve=None, power=False, receive=None):
+    """One view's profile (n_bins,) from its k hits: ranges ``r``, ``cos_t``/``sin_t`` of
+    incidence, material ids ``mat``, footprints ``spread`` (k, 4), the coatings, bin
+    edges and δA⊥; binned at a point or over the footprint; ``bi`` (k, 4) the bistatic
+    angles, ``factor`` a per-hit weight factor, ``curve`` (k, 4) curved footprints,
+    ``power`` received power, ``receive`` the sensor's receiver factors (applied under
+    received power only)."""
     nb = len(edges) - 1
     wt = _weights(cos_t, sin_t, mat, materials, area, bi, power)
     if factor is not None:
@@ -136,9 +140,9 @@ def _bin_one(r, cos_t, sin_t, mat, spread, materials, edges, area, footprint, bi
         curved = curve[:, 3] > 0
         out = _curved_spread(r[curved], wt[curved], curve[curved], edges)
         flat = ~curved
-        return out + _bin_one(r[flat], cos_t[flat], sin_t[flat], mat[flat], spread[flat],
-                              materials, edges, area, True, None if bi is None else bi[flat],
-                              None, None, power)
+        return out + bin_one(r[flat], cos_t[flat], sin_t[flat], mat[flat], spread[flat],
+                             materials, edges, area, footprint=True,
+                             bi=None if bi is None else bi[flat], power=power)
     if not footprint:
         k = np.searchsorted(edges, r, side="right") - 1
         ok = (k >= 0) & (k < nb)
@@ -235,20 +239,24 @@ def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None,
     vals = np.zeros((hits.ladar.n_views, len(edges) - 1))
     for i in range(hits.ladar.n_views):
         sel = order[bounds[i]:bounds[i + 1]]
-        vals[i] = _bin_one(hits.range[sel], hits.cos_theta[sel], hits.sin_theta[sel],
-                           hits.material[sel], hits.spread[sel], mats, edges, hits.area,
-                           footprint, None if hits.bistatic is None else hits.bistatic[sel],
-                           None if hits.weight_factor is None else hits.weight_factor[sel],
-                           None if hits.curve is None else hits.curve[sel], power,
-                           None if hits.receive_factor is None else hits.receive_factor[sel])
-    return _sinogram(vals, hits.ladar, edges, hits.info, hits.normals, footprint, hits.rays,
-                     hits.back_face_hits, radiometry)
+        vals[i] = bin_one(hits.range[sel], hits.cos_theta[sel], hits.sin_theta[sel],
+                          hits.material[sel], hits.spread[sel], mats, edges, hits.area,
+                          footprint=footprint,
+                          bi=None if hits.bistatic is None else hits.bistatic[sel],
+                          factor=None if hits.weight_factor is None else hits.weight_factor[sel],
+                          curve=None if hits.curve is None else hits.curve[sel], power=power,
+                          receive=None if hits.receive_factor is None
+                          else hits.receive_factor[sel])
+    return sinogram_of(vals, hits.ladar, edges, hits.info, normals=hits.normals,
+                       footprint=footprint, rays=hits.rays, back=hits.back_face_hits,
+                       radiometry=radiometry)
 
 
 
-def _sinogram(vals, ladar, edges, run, normals, footprint, rays, back, radiometry):
-    """The mesh model's sinogram; its info says how it was made (mode, normals, sampling,
-    rays) and under which convention (radiometry)."""
+def sinogram_of(vals, ladar, edges, run, *, normals, footprint, rays, back, radiometry):
+    """The mesh model's sinogram of binned ``vals`` (n_views, n_bins); its info says how it
+    was made (``run``: mode, spacing, sampling, seed, receiver, sensor; normals, footprint,
+    rays and back-face hits per view) and under which convention (radiometry)."""
     info = {"radiometry": radiometry, "mode": run["mode"], "normals": normals,
             "footprint": footprint, "ray_spacing": run["ray_spacing"],
             "sampling": run["sampling"], "seed": run["seed"], "rays": int(np.sum(rays)),
@@ -282,6 +290,6 @@ def _sinogram(vals, ladar, edges, run, normals, footprint, rays, back, radiometr
 #: Public names of the stage's helpers for the forward models (the underscored names stay
 #: for one release, for the importers that still use them).
 weights = _weights
-bin_one = _bin_one
+_bin_one = bin_one
+_sinogram = sinogram_of
 material_table = _material_table
-sinogram_of = _sinogram
