@@ -1,9 +1,12 @@
 """The weigh stage (DESIGN.md layer 5): every weight and every binning of first hits.
 
-:mod:`.weigh` (per-hit weights F·δA⊥, point/footprint/curved bins, :func:`weigh` of cached
-:class:`~meshladar.hits.Hits`), :mod:`.faces` (per-face weights and footprints of a view,
-for the fused loops), :mod:`.sensor_view` (a perspective view binned by the compiled loop),
-:mod:`._kernels` (the compiled binning loops). It imports the :class:`Hits` record and the
+:mod:`.record` (the :class:`Weighing` record, whose ``check(plan)`` refuses every
+inapplicable combination before the first ray), :mod:`.weigh` (per-hit weights F·δA⊥,
+point/footprint/curved bins, :func:`weigh` of cached :class:`~meshladar.hits.Hits`),
+:mod:`.faces` (per-face weights and footprints of a view, for the compiled loops),
+:mod:`.resolved` (binning by one to three coordinates), :mod:`.sensor_view` (a perspective
+view binned by the compiled loop), :mod:`.fused` (the packet backend's cast-weigh-bin
+loop), :mod:`._kernels` and :mod:`._fused_kernels` (the compiled loops). It imports the :class:`Hits` record and the
 ray-casting stage below it, never the forward models' entry points."""
 
 from __future__ import annotations

@@ -67,6 +67,7 @@ SCENES = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(SCENES))
 def test_bins_match_independent_adaptive_quadrature(name):
     scene = SCENES[name]()

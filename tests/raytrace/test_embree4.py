@@ -272,6 +272,7 @@ def test_footprints_take_the_fused_loop_with_the_general_paths_numbers(mode, nor
                                    atol=SAME_HITS_RTOL * one.values.max())
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("mode", ["3d", "slice"])
 def test_bistatic_views_take_the_fused_loop_with_the_references_numbers(mode, monkeypatch):
     # a receiver off the ladar's axis (flat normals, any coating, either radiometry, back
