@@ -70,6 +70,16 @@ class GridPlan(NamedTuple):
     L: float
 
 
+class RayGrid(NamedTuple):
+    """A view's rays as :func:`_ray_grid` builds them: float32 origins (n, 3) in shifted
+    coordinates, the start distance L and the view's transverse axes u, v."""
+
+    origins: np.ndarray
+    L: float
+    u: np.ndarray
+    v: np.ndarray
+
+
 def _grid_plan(geo, w, mode, spacing, z0_shifted, rng):
     """The grid's recipe, for :func:`_ray_grid` and the packet backend's fused loop (which
     builds the same float32 origins ray by ray): (s, t, du, dv, u, v, L) with s (ns,) and
@@ -126,7 +136,7 @@ def _ray_grid(geo, w, mode, spacing, z0_shifted, rng):
             o[:, :, k] += T * np.float32(v[k])
     for k in range(3):
         o[:, :, k] += np.float32(L * w[k])
-    return o.reshape(-1, 3), L, u, v
+    return RayGrid(o.reshape(-1, 3), L, u, v)
 
 
 #: The golden ratio's conjugate: the Kronecker sequence frac(x + kα) is the most evenly

@@ -24,13 +24,14 @@ plane from the sensor's float64 position along the float64 ray.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from ..errors import ParameterError
 from ..precision import ORIGIN_MARGIN, REFINE_MIN_COS
 from .grid import _dot, _frame, _ray_grid, _stratified_offsets
-from .hits import ViewHits
+from ..hits import ViewHits
 from .views import _hit_normals, _shading_factor
 
 
@@ -62,10 +63,26 @@ def _plane_grid(geo, w, spacing, rng, sensor_pos, standoff, aim):
     return S.ravel(), T.ravel(), u, v
 
 
+class SensorCast(NamedTuple):
+    """One view's rays cast from a sensor at a finite standoff, in shifted coordinates:
+    the sensor's position, each ray's grid coordinates S, T (n,) on the reference plane
+    along u, v, its length |q| to the plane, its unit direction (n, 3), the start distance
+    t0, the float32 origins as cast and Embree's results."""
+
+    sensor_pos: np.ndarray
+    S: np.ndarray
+    T: np.ndarray
+    u: np.ndarray
+    v: np.ndarray
+    length: np.ndarray
+    dirs: np.ndarray
+    t0: float
+    origins: np.ndarray
+    res: dict
+
+
 def _sensor_cast(geo, scene, w, spacing, rng, sensor, aim):
-    """Cast one view's rays from a sensor at a finite standoff: (sensor position, S, T,
-    u, v, |q| per ray, unit directions (n, 3), the start distance t0, float32 origins, the
-    cast's results), all in shifted coordinates."""
+    """Cast one view's rays from a sensor at a finite standoff: a :class:`SensorCast`."""
     D = sensor.standoff
     sensor_pos = aim + D * w
     S, T, u, v = _plane_grid(geo, w, spacing, rng, sensor_pos, D, aim)
@@ -78,7 +95,7 @@ def _sensor_cast(geo, scene, w, spacing, rng, sensor, aim):
              - spacing)
     o = np.ascontiguousarray(sensor_pos + t0 * dirs, dtype=np.float32)
     res = scene.run(o, np.ascontiguousarray(dirs, dtype=np.float32), output=1)
-    return sensor_pos, S, T, u, v, length, dirs, t0, o, res
+    return SensorCast(sensor_pos, S, T, u, v, length, dirs, t0, o, res)
 
 
 def _trace_sensor_view(plan, scene, view):
@@ -106,8 +123,10 @@ def _trace_sensor_view(plan, scene, view):
         if mode != "3d":
             raise ParameterError("a sensor at a finite standoff needs mode='3d' (its rays "
                                  "fan out in both transverse directions)")
-        sensor_pos, S, T, u, v, length, dirs_all, t0_all, o, res = _sensor_cast(
-            geo, scene, w, spacing, rng, sensor, aim)
+        cast = _sensor_cast(geo, scene, w, spacing, rng, sensor, aim)
+        sensor_pos, S, T, u, v = cast.sensor_pos, cast.S, cast.T, cast.u, cast.v
+        length, dirs_all, t0_all, o, res = cast.length, cast.dirs, cast.t0, cast.origins, \
+            cast.res
         prim = res["primID"]
         hit = prim >= 0
         prim = prim[hit]

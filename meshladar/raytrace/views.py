@@ -9,7 +9,7 @@ from ..precision import MIN_COS_FACET as _MIN_COS_FACET
 from ..precision import RECEIVER_LIFT as _RECEIVER_LIFT
 from ..precision import REFINE_MIN_COS as _REFINE_MIN_COS
 from .grid import _dot, _ray_grid
-from .hits import ViewHits
+from ..hits import ViewHits
 from ..precision import TINY
 
 

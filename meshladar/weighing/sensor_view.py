@@ -26,8 +26,9 @@ def bin_sensor_view(plan, weighing, scene, w, rng, out):
     back_faces, materials, area = plan.back_faces, weighing.materials, plan.area
     power, edges = weighing.power, weighing.edges[0]
     aim = np.asarray(sensor.aim, np.float64) - geo.center
-    sensor_pos, S, T, u, v, _, _, t0, o, res = _sensor_cast(geo, scene, w, spacing, rng,
-                                                              sensor, aim)
+    cast = _sensor_cast(geo, scene, w, spacing, rng, sensor, aim)
+    sensor_pos, S, T, u, v = cast.sensor_pos, cast.S, cast.T, cast.u, cast.v
+    t0, o, res = cast.t0, cast.origins, cast.res
     beam = sensor.beam
     off = aim if isinstance(beam, FloodBeam) else \
         aim + beam.offset[0] * u + beam.offset[1] * v
