@@ -16,7 +16,8 @@ from typing import Callable
 from .._validate import check_choice
 from ..errors import MeshladarWarning, ParameterError
 
-__all__ = ["BACKENDS", "Backend", "REGISTRY", "register", "backend", "resolve_backend"]
+__all__ = ["BACKENDS", "Backend", "REGISTRY", "register", "backend", "choices",
+           "resolve_backend"]
 
 #: The ``backend=`` choices; "auto" takes the first of :data:`PREFERENCE` that loads.
 BACKENDS = ("auto", "packets", "embreex")
@@ -62,6 +63,11 @@ def backend(name: str) -> Backend:
     return REGISTRY[name]
 
 
+def choices() -> tuple:
+    """The ``backend=`` names: "auto", the built-in backends and any registered one."""
+    return ("auto",) + tuple(dict.fromkeys((*BUILTIN, *REGISTRY)))
+
+
 _FALLBACK_SAID = False
 
 
@@ -69,7 +75,7 @@ def resolve_backend(name):
     """The backend a run uses, by name: ``name`` itself when it loads, "auto" the first of
     :data:`PREFERENCE` that loads (warning once per process when it falls back)."""
     global _FALLBACK_SAID
-    check_choice("backend", name, BACKENDS)
+    check_choice("backend", name, choices())
     why = None
     for candidate in (PREFERENCE if name == "auto" else (name,)):
         ok, reason = backend(candidate).available()
