@@ -43,12 +43,12 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
         ``"analytic"``: exact profiles of disks and ellipses (no faceting, no sampling).
         ``"mesh"``: triangle meshes ray-cast with Embree; a mesh is a 3-D target
         (``mode="3d"``) unless it was tessellated from the analytic shapes. Options of
-        :func:`meshladar.raytrace.simulate_mesh` (mode, normals, back_faces, z0,
+        :func:`meshladar.forward.mesh.simulate_mesh` (mode, normals, back_faces, z0,
         ray_spacing, rays_per_bin, footprint, sampling, seed, receiver, backend, sensor)
         and ``tol``. ``sensor`` (:class:`meshladar.sensor.Sensor`): a ladar at a finite
         standoff, a beam, the atmosphere and the link budget (photoelectrons).
         ``"pixel"``: the paper's method, a rasterised surface traced with Siddon rays
-        (options ``pixel_size``, ``ray_spacing``; :func:`meshladar.pixel.simulate_pixel`).
+        (options ``pixel_size``, ``ray_spacing``; :func:`meshladar.forward.pixel.simulate_pixel`).
     radiometry : {"paper", "power"}, every model
         "paper" (default): the paper's Eq. 8, bins of ∫ F(θ) cos θ dA; "power": the power a
         receiver collects, ∫ F cos θ_i cos θ_r dA (monostatic ∫ F cos²θ dA), exact in the
@@ -62,7 +62,7 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
         run and warning why, when an estimate fails to fall or the next run would pass
         ``max_rays`` (default ``refine.TOL_MAX_RAYS`` = 2e9). ``info`` holds ``chosen``,
         ``error_estimate``, ``stopped`` and every ``refinement`` run
-        (:mod:`meshladar.refine`).
+        (:mod:`meshladar.forward.refine`).
     jobs : int, optional
         Workers for chunks of views (every model; default 1). The mesh model's are threads
         sharing one Embree scene (default one per core from 2e5 rays); the analytic and

@@ -1,7 +1,10 @@
 """The mesh model's entry points: :func:`trace` (hits, geometry only), :func:`simulate_mesh`
 (trace and weigh in one streaming pass), and the viewer's queries :func:`first_hits` and
-:func:`occluded`. Each builds the geometry once and hands :mod:`meshladar.stream` a
-per-chunk job; weighing is :mod:`meshladar.weighing`'s."""
+:func:`occluded`. Each validates once at the boundary (a
+:class:`~meshladar.raytrace.plan.TracePlan`, and a :class:`~meshladar.weighing.Weighing`
+checked against it before the first ray), then hands :mod:`meshladar.stream` the one
+per-chunk job (:mod:`.job`); :func:`run_plan` is shared with resolved returns
+(:mod:`.resolve`)."""
 
 from __future__ import annotations
 
@@ -262,7 +265,7 @@ def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-side
     the number of views and rays. An analytic scene is tessellated first (1024 segments
     per shape, see :meth:`Scene.tessellate`). The accuracy knob (``tol``, ``max_rays``) is
     :func:`meshladar.simulate`'s, which refines runs of this function
-    (:mod:`meshladar.refine`).
+    (:mod:`meshladar.forward.refine`).
 
     Parameters
     ----------

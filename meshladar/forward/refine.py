@@ -1,7 +1,7 @@
 """The accuracy knob (``simulate(..., model="mesh", tol=...)``): refine a model's run until
 its estimated relative L2 error meets ``tol``.
 
-It sits above the mesh model's entry point (:func:`meshladar.raytrace.simulate_mesh`), which
+It sits above the mesh model's entry point (:func:`meshladar.forward.mesh.simulate_mesh`), which
 it calls once per refinement, and below :func:`meshladar.simulate`, which dispatches ``tol``
 here; it knows nothing of rays or Embree.
 """

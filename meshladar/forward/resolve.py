@@ -64,7 +64,7 @@ def _check_axes(axes, motion):
         raise ParameterError("the doppler axis needs motion=Motion(omega=..., velocity=...); "
                              f"got motion={motion!r}")
     if motion is not None and not isinstance(motion, Motion):
-        raise ParameterError(f"motion must be a meshladar.resolved.Motion; got "
+        raise ParameterError(f"motion must be a meshladar.motion.Motion; got "
                              f"{type(motion).__name__}")
     return tuple(names), tuple(edges)
 
