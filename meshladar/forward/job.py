@@ -57,13 +57,15 @@ class Stage(NamedTuple):
 @dataclass(frozen=True, eq=False)
 class MeshJob:
     """Everything a chunk needs, decided once: the plan, the weighing (None: keep hits),
-    the views, the stage, and threads for one view's rows."""
+    the views, the stage, threads for one view's rows, and whether the backend's fused
+    loop casts the grids."""
 
     plan: TracePlan
     weighing: Weighing | None
     vectors: np.ndarray
     stage: Stage
     row_jobs: int = 1
+    fused: bool = False
 
 
 @dataclass(eq=False)
@@ -210,7 +212,7 @@ def _flat_stage(job, scene, view, chunk):
         face_weights(p.geo, wg.materials, view.w, p.area, chunk.weight, wg.power)
         chunk.stamp[:] = view.slot + 1               # every face's weight is this view's
     bins = _bins(job, view, chunk, start)
-    if _fused(p):
+    if job.fused:
         # packets: grid, cast, weigh and bin in one loop, no per-ray arrays
         grid = _grid_plan(p.geo, view.w, p.mode, p.spacing, p.z0_shifted, view.rng)
         if job.row_jobs > 1:
@@ -282,7 +284,8 @@ def plan_job(plan, weighing, vectors, row_jobs=1) -> MeshJob:
     """The chunk job of a plan and a weighing (None: keep hits), its stage chosen once."""
     return MeshJob(plan=plan, weighing=weighing,
                    vectors=np.asarray(vectors, dtype=np.float64),
-                   stage=STAGES[_stage_name(plan, weighing)], row_jobs=row_jobs)
+                   stage=STAGES[_stage_name(plan, weighing)], row_jobs=row_jobs,
+                   fused=_fused(plan))
 
 
 def _chunk(job, n_views):
