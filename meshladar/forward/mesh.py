@@ -120,7 +120,14 @@ def run_plan(plan, weighing, ladar, streaming, description=None, chunk_size=None
         chunk_size=chunk_size or _views_per_task(ladar.n_views), args=(job,),
         jobs=streaming.jobs, executor=streaming.executor, progress=streaming.progress,
         unit="views", work=plan.rays, run_dir=streaming.run_dir, job=description,
-        arrays={"values": shape, "rays": (), "backs": ()}, threads=True)
+        arrays=_CHUNK_ARRAYS[weighing is not None and weighing.resolved](shape),
+        threads=True)
+
+
+#: The arrays a run folder's chunk must hold (resolved returns' folders hold no back-face
+#: counts: their chunks from before stay valid).
+_CHUNK_ARRAYS = {False: lambda shape: {"values": shape, "rays": (), "backs": ()},
+                 True: lambda shape: {"values": shape, "rays": ()}}
 
 
 def _run(scene, ladar, options, streaming, weighing=None):
