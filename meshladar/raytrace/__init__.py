@@ -36,32 +36,35 @@ interval, not a point: along the transverse axis u the range changes at dr/du = 
 The ray's weight is spread over that interval (a box in slice mode; in 3-D the sum of the u
 and v boxes, a trapezoid), exactly as the flat facet would return it.
 
-Layout: :mod:`.embree` (the geometry a worker traces, Embree scenes and their cache, the
-backends), :mod:`.embree4` (the packet backend: Embree 4 through ctypes and numba),
-:mod:`.grid` (ray grids and their defaults), :mod:`.views` (one view's hits and normals),
-:mod:`.hits` (the :class:`Hits` record), :mod:`.model` (the entry points :func:`trace`,
-:func:`simulate_mesh`, :func:`first_hits`, :func:`occluded`). Weighing and binning are
-:mod:`meshladar.weighing`'s; chunks, executors and run folders :mod:`meshladar.stream`'s.
+Layout (this stage only casts; DESIGN.md layer 4): :mod:`.plan` (the :class:`TracePlan`
+record, built and validated once by :func:`plan_trace`), :mod:`.grid` (ray grids and their
+defaults), :mod:`.views` (one view's parallel rays → :class:`~meshladar.hits.ViewHits`),
+:mod:`.perspective` (a sensor's rays), :mod:`.embree` (the geometry a worker traces and
+the per-process cache of Embree scenes), :mod:`.backends` (the backend registry), with
+:mod:`.packets` (+ :mod:`.embree4`, :mod:`.embree4_ctypes`: the packet library through
+ctypes and numba) and :mod:`.embreex_backend` registering themselves. Weights and bins are
+:mod:`meshladar.weighing`'s; the entry points :func:`trace`, :func:`simulate_mesh`,
+:func:`first_hits`, :func:`occluded` and the per-chunk job :mod:`meshladar.forward`'s.
 """
 
 from __future__ import annotations
 
+import importlib
+
 from .embree import BACKENDS
 from .grid import MODES, SAMPLINGS
-from .hits import Hits
+from ..hits import Hits
 from .views import BACK_FACES, NORMALS
 
 __all__ = ["Hits", "trace", "simulate_mesh", "first_hits", "occluded", "NORMALS", "MODES",
            "BACK_FACES", "SAMPLINGS", "BACKENDS"]
 
-#: The entry points import the weigh stage, which imports :class:`Hits` from this package:
-#: they are loaded on first use, so the records stay importable below the weigh stage.
+#: The entry points moved to :mod:`meshladar.forward.mesh` (layer 7); they stay reachable
+#: here by name for one release, loaded on first use (no import of a layer above).
 _ENTRY_POINTS = ("trace", "simulate_mesh", "first_hits", "occluded")
 
 
 def __getattr__(name):
     if name in _ENTRY_POINTS:
-        from . import model
-
-        return getattr(model, name)
+        return getattr(importlib.import_module("meshladar.forward.mesh"), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -3,17 +3,20 @@ size, and a per-process cache of scenes keyed by content."""
 
 from __future__ import annotations
 
+import hashlib
 import math
 import threading
 import warnings
 
 import numpy as np
 
-from .._validate import check_choice
 from ..errors import MeshladarWarning, ParameterError
 from ..precision import FAR_RATIO as _FAR_RATIO
 from ..precision import SCENE_RADIUS_RANGE
+from ..mesh import corner_normals
 from ..scene import Scene
+from .backends import BACKENDS, resolve_backend
+from .backends import backend as get_backend
 
 
 class _Geometry:
@@ -44,8 +47,6 @@ class _Geometry:
         self.normals = normals
         self.corner = None
         if normals == "smooth":
-            from ..mesh import corner_normals
-
             self.corner = np.concatenate([corner_normals(p) for p in parts])
         self.exact = [p.exact_normal for p in parts]
         if normals == "exact" and any(e is None for e in self.exact):
@@ -81,8 +82,6 @@ def _check_scale(radius, offset):
 
 
 def _digest(v, f):
-    import hashlib
-
     h = hashlib.sha1(v.tobytes())
     h.update(f.tobytes())
     return h.hexdigest()
@@ -92,32 +91,6 @@ def _digest(v, f):
 #: cast through the Embree 4 library that the embreex wheel ships (:mod:`.embree4`);
 #: "embreex": embreex's own run(), one ray at a time, the reference; "auto": packets when
 #: they load, else embreex (said once, in a warning).
-BACKENDS = ("auto", "packets", "embreex")
-_FALLBACK_SAID = False
-
-
-def resolve_backend(backend):
-    """The backend a run uses: "packets" or "embreex" (see :data:`BACKENDS`)."""
-    check_choice("backend", backend, BACKENDS)
-    if backend == "embreex":
-        return backend
-    from . import embree4
-
-    ok, why = embree4.available()
-    if ok:
-        return "packets"
-    if backend == "packets":
-        raise ParameterError(f"backend='packets' cannot load here ({why}); use "
-                             "backend='embreex' or 'auto'")
-    global _FALLBACK_SAID
-    if not _FALLBACK_SAID:
-        _FALLBACK_SAID = True
-        warnings.warn(f"the packet backend cannot load ({why}): the mesh engine casts with "
-                      "embreex, one ray at a time (backend='embreex'); the numbers are the "
-                      "same, slower", MeshladarWarning, stacklevel=4)
-    return "embreex"
-
-
 #: Embree scenes built in this process, most recent last, keyed by the geometry's content
 #: and the backend: alternating between a few meshes (a study, a comparison) reuses each
 #: one's BVH. Threads of one run share them (the lock guards the cache, not the casts).
@@ -133,71 +106,12 @@ def _embree_scene(geo: _Geometry, backend: str = "embreex"):
         scene = _EMBREE_CACHE.pop(key, None)
         if scene is None:
             unit = np.ascontiguousarray(geo.shifted / geo.scale, dtype=np.float32)
-            raw = _packet_scene(unit, geo.faces32) if backend == "packets" else \
-                _embreex_scene(unit, geo.faces32)
+            raw = get_backend(backend).build(unit, geo.faces32)
             scene = _Embree(raw, geo.scale)
             while len(_EMBREE_CACHE) >= _EMBREE_CACHE_SIZE:
                 del _EMBREE_CACHE[next(iter(_EMBREE_CACHE))]       # the least recently used
         _EMBREE_CACHE[key] = scene
         return scene
-
-
-def _embreex_scene(vertices, faces):
-    try:
-        from embreex import rtcore_scene
-        from embreex.mesh_construction import TriangleMesh
-    except ImportError as exc:  # pragma: no cover - embreex is a core dependency
-        raise ImportError("the mesh model needs embreex: pip install embreex") from exc
-    # robust mode: watertight ray-triangle tests, so a ray through a shared edge (the
-    # diagonal of a prism's side quad crosses the mid-height slice plane) cannot slip
-    # between the two triangles
-    raw = rtcore_scene.EmbreeScene(robust=True)
-    TriangleMesh(raw, vertices, faces)
-    return raw
-
-
-class _Packets:
-    """A packet scene behind embreex's ``run`` interface (one direction for all rays, or one
-    per ray), so every path of the engine casts through either backend unchanged."""
-
-    def __init__(self, scene):
-        self.scene = scene
-
-    def run(self, origins, directions, output=None, query="INTERSECT"):
-        d = np.asarray(directions, dtype=np.float32).reshape(-1, 3)
-        if query == "OCCLUDED":
-            return np.where(self.scene.occluded_grid(origins, d), 0, -1)
-        prim, tfar, u, v = self.scene.cast_grid(origins, d, barycentrics=True)
-        return {"primID": prim, "tfar": tfar, "u": u, "v": v}
-
-
-    def cast_bin_grid(self, plan, direction, spacing, scale, inverse, bins, receiver=None):
-        """One view from grid to bins in one compiled loop (see
-        :func:`.embree4.cast_bin_grid`): ``plan`` is :func:`.grid._grid_plan`'s,
-        ``bins`` the weigh-and-bin arguments from ``plane_d`` to ``footprint``;
-        ``receiver`` (direction, lift) makes the view bistatic."""
-        from . import embree4
-
-        s, t, du, dv, u, v, L = plan
-        sc = self.scene
-        lib = sc.lib
-        empty = np.empty((0, 0), np.float32)
-        w = np.asarray(direction, dtype=np.float64)
-        return embree4.cast_bin_grid(
-            lib.intersect[lib.width], sc._live(), lib.width,
-            embree4.RTC_RAY_QUERY_FLAG_COHERENT, s.astype(np.float32), t.astype(np.float32),
-            empty if du is None else du, empty if dv is None else dv, np.float32(spacing),
-            u.astype(np.float32), v.astype(np.float32), (L * w).astype(np.float32),
-            (-w).astype(np.float32)[None, :], np.float32(inverse), float(scale), *bins,
-            lib.occluded[lib.width],
-            np.empty(0) if receiver is None else np.asarray(receiver[0], np.float64),
-            0.0 if receiver is None else float(receiver[1]))
-
-
-def _packet_scene(vertices, faces):
-    from . import embree4
-
-    return _Packets(embree4.Scene(vertices, faces, robust=True))
 
 
 class _Embree:
@@ -213,12 +127,9 @@ class _Embree:
 
     @property
     def fused(self):
-        """Whether the backend weighs and bins inside its cast (the packet backend)."""
-        return hasattr(self.scene, "cast_bin_grid")
-
-    def cast_bin_grid(self, plan, direction, spacing, bins, receiver=None):
-        return self.scene.cast_bin_grid(plan, direction, spacing, self.scale, self.inverse,
-                                        bins, receiver)
+        """Whether the weigh stage's fused loop can cast with this scene (the packet
+        backend's, :mod:`meshladar.weighing.fused`)."""
+        return getattr(self.scene, "fused", False)
 
     def run(self, origins, directions, **kwargs):
         if self.scale != 1.0:
@@ -228,3 +139,9 @@ class _Embree:
             with np.errstate(over="ignore"):        # a miss's far distance: inf
                 res["tfar"] = res["tfar"] * np.float32(self.scale)
         return res
+
+
+#: The scene a worker casts with, public for the stages above (forward, weighing).
+EmbreeScene = _Embree
+Geometry = _Geometry
+embree_scene = _embree_scene

@@ -4,6 +4,7 @@ stratified, and the defaults that size them."""
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -57,6 +58,28 @@ def _frame(w):
 
 
 
+class GridPlan(NamedTuple):
+    """A view's ray grid as :func:`_grid_plan` describes it (flat, for the compiled loop)."""
+
+    s: np.ndarray
+    t: np.ndarray
+    du: np.ndarray | None
+    dv: np.ndarray | None
+    u: np.ndarray
+    v: np.ndarray
+    L: float
+
+
+class RayGrid(NamedTuple):
+    """A view's rays as :func:`_ray_grid` builds them: float32 origins (n, 3) in shifted
+    coordinates, the start distance L and the view's transverse axes u, v."""
+
+    origins: np.ndarray
+    L: float
+    u: np.ndarray
+    v: np.ndarray
+
+
 def _grid_plan(geo, w, mode, spacing, z0_shifted, rng):
     """The grid's recipe, for :func:`_ray_grid` and the packet backend's fused loop (which
     builds the same float32 origins ray by ray): (s, t, du, dv, u, v, L) with s (ns,) and
@@ -80,7 +103,7 @@ def _grid_plan(geo, w, mode, spacing, z0_shifted, rng):
     du = dv = None
     if rng is not None and mode == "3d":
         du, dv = _stratified_offsets(s.size, t.size, rng)
-    return s, t, du, dv, u, v, L
+    return GridPlan(s, t, du, dv, u, v, L)
 
 
 def _ray_grid(geo, w, mode, spacing, z0_shifted, rng):
@@ -113,7 +136,7 @@ def _ray_grid(geo, w, mode, spacing, z0_shifted, rng):
             o[:, :, k] += T * np.float32(v[k])
     for k in range(3):
         o[:, :, k] += np.float32(L * w[k])
-    return o.reshape(-1, 3), L, u, v
+    return RayGrid(o.reshape(-1, 3), L, u, v)
 
 
 #: The golden ratio's conjugate: the Kronecker sequence frac(x + kα) is the most evenly
@@ -211,3 +234,10 @@ def _largest_grid(geo, vectors, mode, spacing, limit=None):
 def _estimate_rays(geo, ladar, mode, spacing):
     extent = 2 * geo.radius / spacing + 2
     return ladar.n_views * (extent if mode == "slice" else extent * extent)
+
+
+# public names for the stages above (weighing, forward): the view's frame and grids
+dot = _dot
+frame = _frame
+grid_plan = _grid_plan
+ray_grid = _ray_grid

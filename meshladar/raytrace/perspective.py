@@ -24,13 +24,14 @@ plane from the sensor's float64 position along the float64 ray.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from ..errors import ParameterError
 from ..precision import ORIGIN_MARGIN, REFINE_MIN_COS
 from .grid import _dot, _frame, _ray_grid, _stratified_offsets
-from .hits import ViewHits
+from ..hits import ViewHits
 from .views import _hit_normals, _shading_factor
 
 
@@ -62,10 +63,26 @@ def _plane_grid(geo, w, spacing, rng, sensor_pos, standoff, aim):
     return S.ravel(), T.ravel(), u, v
 
 
+class SensorCast(NamedTuple):
+    """One view's rays cast from a sensor at a finite standoff, in shifted coordinates:
+    the sensor's position, each ray's grid coordinates S, T (n,) on the reference plane
+    along u, v, its length |q| to the plane, its unit direction (n, 3), the start distance
+    t0, the float32 origins as cast and Embree's results."""
+
+    sensor_pos: np.ndarray
+    S: np.ndarray
+    T: np.ndarray
+    u: np.ndarray
+    v: np.ndarray
+    length: np.ndarray
+    dirs: np.ndarray
+    t0: float
+    origins: np.ndarray
+    res: dict
+
+
 def _sensor_cast(geo, scene, w, spacing, rng, sensor, aim):
-    """Cast one view's rays from a sensor at a finite standoff: (sensor position, S, T,
-    u, v, |q| per ray, unit directions (n, 3), the start distance t0, float32 origins, the
-    cast's results), all in shifted coordinates."""
+    """Cast one view's rays from a sensor at a finite standoff: a :class:`SensorCast`."""
     D = sensor.standoff
     sensor_pos = aim + D * w
     S, T, u, v = _plane_grid(geo, w, spacing, rng, sensor_pos, D, aim)
@@ -78,49 +95,16 @@ def _sensor_cast(geo, scene, w, spacing, rng, sensor, aim):
              - spacing)
     o = np.ascontiguousarray(sensor_pos + t0 * dirs, dtype=np.float32)
     res = scene.run(o, np.ascontiguousarray(dirs, dtype=np.float32), output=1)
-    return sensor_pos, S, T, u, v, length, dirs, t0, o, res
+    return SensorCast(sensor_pos, S, T, u, v, length, dirs, t0, o, res)
 
 
-def _bin_sensor_view(geo, scene, w, spacing, back_faces, rng, sensor, materials, area, power,
-                     edges, out):
-    """One view seen by a sensor at a finite standoff, weighed and binned into ``out`` by
-    the compiled loop (:func:`meshladar._kernels.bin_sensor_hits`; flat or smooth normals,
-    coatings with ``kernel_params``): the numbers of :func:`_trace_sensor_view` then
-    weighing. Returns (rays cast, back-face hits)."""
-    from .. import _kernels
-    from ..precision import MIN_COS_FACET
-    from ..sensor import FloodBeam
-    from ..weighing import _material_table
-
-    aim = np.asarray(sensor.aim, np.float64) - geo.center
-    sensor_pos, S, T, u, v, _, _, t0, o, res = _sensor_cast(geo, scene, w, spacing, rng,
-                                                              sensor, aim)
-    beam = sensor.beam
-    off = aim if isinstance(beam, FloodBeam) else \
-        aim + beam.offset[0] * u + beam.offset[1] * v
-    axis = (off - sensor_pos) / np.linalg.norm(off - sensor_pos)
-    if isinstance(beam, FloodBeam):
-        spec = (0.0, -1.0 if beam.radius is None else beam.radius, 0.0, 0.0)
-    else:
-        spec = (1.0, -1.0, beam.waist, beam.divergence)
-    smooth = geo.normals == "smooth"
-    empty = np.zeros(0, np.float32)
-    back = _kernels.bin_sensor_hits(
-        res["primID"], t0 + res["tfar"].astype(np.float64), S, T,
-        res["u"] if smooth else empty, res["v"] if smooth else empty, u, v, w,
-        float(sensor.standoff), sensor_pos,
-        float(sensor.standoff) + float((aim + geo.center) @ w), geo.plane_d,
-        geo.face_normals, geo.corner if smooth else np.zeros((0, 3, 3)), smooth,
-        geo.material, _material_table(materials), np.array(spec + tuple(axis)),
-        float(sensor.extinction), edges, float(area), bool(power), back_faces == "ignore",
-        MIN_COS_FACET, REFINE_MIN_COS, out)
-    return len(o), back
-
-
-def _trace_sensor_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, sensor):
-    """Hits of one view seen by ``sensor``; ranges absolute (R − D − aim·w at a finite
-    standoff), or relative to the plane through the shifted centre (at infinity), as
+def _trace_sensor_view(plan, scene, view):
+    """Hits of one view of a :class:`~meshladar.raytrace.plan.TracePlan` seen by its
+    sensor (``plan.traced_with``); ranges absolute (R − D − aim·w at a finite standoff), or
+    relative to the plane through the shifted centre (at infinity), as
     :func:`meshladar.raytrace.views._trace_view`'s."""
+    geo, mode, spacing, z0_shifted = plan.geo, plan.mode, plan.spacing, plan.z0_shifted
+    back_faces, sensor, w, rng = plan.back_faces, plan.traced_with, view.w, view.rng
     D = sensor.standoff
     aim = np.asarray(sensor.aim, np.float64) - geo.center
     if D is None:
@@ -139,8 +123,10 @@ def _trace_sensor_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng
         if mode != "3d":
             raise ParameterError("a sensor at a finite standoff needs mode='3d' (its rays "
                                  "fan out in both transverse directions)")
-        sensor_pos, S, T, u, v, length, dirs_all, t0_all, o, res = _sensor_cast(
-            geo, scene, w, spacing, rng, sensor, aim)
+        cast = _sensor_cast(geo, scene, w, spacing, rng, sensor, aim)
+        sensor_pos, S, T, u, v = cast.sensor_pos, cast.S, cast.T, cast.u, cast.v
+        length, dirs_all, t0_all, o, res = cast.length, cast.dirs, cast.t0, cast.origins, \
+            cast.res
         prim = res["primID"]
         hit = prim >= 0
         prim = prim[hit]
@@ -195,3 +181,8 @@ def _trace_sensor_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng
 
 def _rowdot(a, b):
     return a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2]
+
+
+# public names for the stages above (weighing, forward)
+trace_sensor_view = _trace_sensor_view
+sensor_cast = _sensor_cast

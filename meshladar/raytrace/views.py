@@ -9,7 +9,7 @@ from ..precision import MIN_COS_FACET as _MIN_COS_FACET
 from ..precision import RECEIVER_LIFT as _RECEIVER_LIFT
 from ..precision import REFINE_MIN_COS as _REFINE_MIN_COS
 from .grid import _dot, _ray_grid
-from .hits import ViewHits
+from ..hits import ViewHits
 from ..precision import TINY
 
 
@@ -20,11 +20,14 @@ BACK_FACES = ("two-sided", "ignore")
 
 
 
-def _trace_view(geo, scene, w, mode, spacing, z0_shifted, back_faces, rng, w_r=None,
-                footprint=True, transverse=False):
-    """Hits of one view (range relative to the shifted centre's plane); with a bistatic
-    receiver direction w_r, one occlusion ray per hit toward it; with ``transverse``, each
-    hit's coordinates along the view's (u, v) (its ray's, shifted)."""
+def _trace_view(plan, scene, view, footprint=True, transverse=False):
+    """Hits of one view (range relative to the shifted centre's plane) of a
+    :class:`~meshladar.raytrace.plan.TracePlan`; ``view`` (a
+    :class:`~meshladar.raytrace.plan.View`) gives its direction w, receiver w_r and rng.
+    With a bistatic receiver direction w_r, one occlusion ray per hit toward it; with
+    ``transverse``, each hit's coordinates along the view's (u, v) (its ray's, shifted)."""
+    geo, mode, spacing, z0_shifted = plan.geo, plan.mode, plan.spacing, plan.z0_shifted
+    back_faces, w, w_r, rng = plan.back_faces, view.w, view.w_r, view.rng
     o, L, u, v = _ray_grid(geo, w, mode, spacing, z0_shifted, rng)
     d = np.ascontiguousarray((-w)[None, :], dtype=np.float32)
     res = scene.run(o, d, output=1)
@@ -194,3 +197,9 @@ def _refine_t(geo, prim, origins32, w, t32):
 def _range_offset(center, w, w_r):
     """−c·w (monostatic) or −c·(w + w_r)/2 (bistatic): the range of the shifted origin."""
     return -float(center @ w) if w_r is None else -0.5 * float(center @ (w + w_r))
+
+
+# public names for the stages above (weighing, forward)
+trace_view = _trace_view
+range_offset = _range_offset
+bistatic_angles = _bistatic_angles

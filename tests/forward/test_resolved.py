@@ -11,7 +11,8 @@ import pytest
 
 import meshladar as ml
 from meshladar.materials import ALUMINUM, lambertian
-from meshladar.resolved import Motion, resolve
+from meshladar.forward.resolve import resolve
+from meshladar.motion import Motion
 
 trimesh = pytest.importorskip("trimesh")
 

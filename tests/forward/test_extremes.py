@@ -144,7 +144,7 @@ def test_extreme_bin_counts(n_bins):
     assert np.all(np.isfinite(image.values))
 
 
-@pytest.mark.parametrize("n_views", [1, 3600])
+@pytest.mark.parametrize("n_views", [1, pytest.param(3600, marks=pytest.mark.slow)])
 def test_extreme_view_counts(n_views):
     scene = _pair(ALUMINUM)
     angles = np.arange(n_views) * (360.0 / n_views)

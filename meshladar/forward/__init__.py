@@ -2,13 +2,19 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
-from ._validate import check_choice
-from .errors import ParameterError
-from .ladar import Ladar
-from .scene import Scene
-from .sinogram import Sinogram
+from .._validate import check_choice
+from ..errors import MeshladarWarning, ParameterError
+from ..ladar import Ladar
+from ..scene import Scene
+from ..sinogram import Sinogram
+from .analytic import simulate_analytic
+from .mesh import simulate_mesh
+from .pixel import simulate_pixel
+from .refine import simulate_tol
 
 __all__ = ["simulate", "MODELS"]
 
@@ -37,12 +43,12 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
         ``"analytic"``: exact profiles of disks and ellipses (no faceting, no sampling).
         ``"mesh"``: triangle meshes ray-cast with Embree; a mesh is a 3-D target
         (``mode="3d"``) unless it was tessellated from the analytic shapes. Options of
-        :func:`meshladar.raytrace.simulate_mesh` (mode, normals, back_faces, z0,
+        :func:`meshladar.forward.mesh.simulate_mesh` (mode, normals, back_faces, z0,
         ray_spacing, rays_per_bin, footprint, sampling, seed, receiver, backend, sensor)
         and ``tol``. ``sensor`` (:class:`meshladar.sensor.Sensor`): a ladar at a finite
         standoff, a beam, the atmosphere and the link budget (photoelectrons).
         ``"pixel"``: the paper's method, a rasterised surface traced with Siddon rays
-        (options ``pixel_size``, ``ray_spacing``; :func:`meshladar.pixel.simulate_pixel`).
+        (options ``pixel_size``, ``ray_spacing``; :func:`meshladar.forward.pixel.simulate_pixel`).
     radiometry : {"paper", "power"}, every model
         "paper" (default): the paper's Eq. 8, bins of ∫ F(θ) cos θ dA; "power": the power a
         receiver collects, ∫ F cos θ_i cos θ_r dA (monostatic ∫ F cos²θ dA), exact in the
@@ -56,7 +62,7 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
         run and warning why, when an estimate fails to fall or the next run would pass
         ``max_rays`` (default ``refine.TOL_MAX_RAYS`` = 2e9). ``info`` holds ``chosen``,
         ``error_estimate``, ``stopped`` and every ``refinement`` run
-        (:mod:`meshladar.refine`).
+        (:mod:`meshladar.forward.refine`).
     jobs : int, optional
         Workers for chunks of views (every model; default 1). The mesh model's are threads
         sharing one Embree scene (default one per core from 2e5 rays); the analytic and
@@ -88,6 +94,11 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
     >>> ml.simulate(scene, ladar).values.shape
     (360, 256)
     """
+    _check_call(scene, ladar, model, options)
+    return _RUNNERS[model](scene, ladar, options)
+
+
+def _check_call(scene, ladar, model, options):
     if not isinstance(scene, Scene):
         raise ParameterError(f"scene must be a meshladar.Scene; got {type(scene).__name__}")
     if not isinstance(ladar, Ladar):
@@ -97,46 +108,47 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
     if unknown:
         raise ParameterError(f"model {model!r} takes options {_OPTIONS[model]}; got "
                              f"{unknown[0]!r}")
-    if model == "mesh":
-        tol, max_rays = options.pop("tol", None), options.pop("max_rays", None)
-        if tol is not None:
-            if options.get("run_dir") is not None:
-                raise ParameterError("run_dir and tol do not combine: the knob runs several "
-                                     "jobs")
-            from .refine import simulate_tol
 
-            normals, footprint = options.pop("normals", None), options.pop("footprint", None)
-            options.pop("run_dir", None)
-            options.setdefault("ray_spacing", None)
-            options.setdefault("rays_per_bin", None)
-            return simulate_tol(scene, ladar, tol, normals, footprint, max_rays, options)
-        if max_rays is not None:
-            raise ParameterError("max_rays is the budget of the tol knob; give tol too")
-        from .raytrace.model import simulate_mesh
 
-        return simulate_mesh(scene, ladar, **options)
-    if not scene.shapes:
-        raise ParameterError(f"model {model!r} needs analytic shapes (Disk, Ellipse); this "
-                             "scene is a mesh: use model='mesh'")
-    if not ladar.planar:
-        raise ParameterError(f"model {model!r} needs views about the z axis; the ladar has "
-                             "view vectors off the x-y plane")
-    if model == "pixel":
-        from .pixel import simulate_pixel
+def _run_mesh(scene, ladar, options):
+    """The mesh model: one run, or the accuracy knob's refinement (``tol``)."""
+    tol, max_rays = options.pop("tol", None), options.pop("max_rays", None)
+    if tol is not None:
+        if options.get("run_dir") is not None:
+            raise ParameterError("run_dir and tol do not combine: the knob runs several "
+                                 "jobs")
+        normals, footprint = options.pop("normals", None), options.pop("footprint", None)
+        options.pop("run_dir", None)
+        options.setdefault("ray_spacing", None)
+        options.setdefault("rays_per_bin", None)
+        return simulate_tol(scene, ladar, tol, normals, footprint, max_rays, options)
+    if max_rays is not None:
+        raise ParameterError("max_rays is the budget of the tol knob; give tol too")
+    return simulate_mesh(scene, ladar, **options)
 
-        sino = simulate_pixel(scene, ladar, **options)
-    else:
-        from .analytic import simulate_analytic
 
-        sino = simulate_analytic(scene, ladar, **options)
-    if not np.any(sino.values):
-        import warnings
+def _planar(simulate_model, model):
+    """A 2-D model's runner: analytic shapes and views about z only; says so when the
+    sinogram is all zeros."""
+    def run(scene, ladar, options):
+        if not scene.shapes:
+            raise ParameterError(f"model {model!r} needs analytic shapes (Disk, Ellipse); "
+                                 "this scene is a mesh: use model='mesh'")
+        if not ladar.planar:
+            raise ParameterError(f"model {model!r} needs views about the z axis; the ladar "
+                                 "has view vectors off the x-y plane")
+        sino = simulate_model(scene, ladar, **options)
+        if not np.any(sino.values):
+            lo, hi = scene.range_span(ladar.view_vectors)
+            warnings.warn(f"the sinogram is all zeros: the scene spans ranges [{lo:.6g}, "
+                          f"{hi:.6g}] over these views (its lit side the nearer half), the "
+                          f"bins cover [{ladar.bin_edges[0]:.6g}, "
+                          f"{ladar.bin_edges[-1]:.6g}]", MeshladarWarning, stacklevel=3)
+        return sino
 
-        from .errors import MeshladarWarning
+    return run
 
-        lo, hi = scene.range_span(ladar.view_vectors)
-        warnings.warn(f"the sinogram is all zeros: the scene spans ranges [{lo:.6g}, "
-                      f"{hi:.6g}] over these views (its lit side the nearer half), the bins "
-                      f"cover [{ladar.bin_edges[0]:.6g}, {ladar.bin_edges[-1]:.6g}]",
-                      MeshladarWarning, stacklevel=2)
-    return sino
+
+#: The forward models' runners by name (a new model registers here and in MODELS).
+_RUNNERS = {"analytic": _planar(simulate_analytic, "analytic"),
+            "pixel": _planar(simulate_pixel, "pixel"), "mesh": _run_mesh}

@@ -9,8 +9,8 @@ import pytest
 
 import meshladar as ml
 from meshladar.materials import DARK_GRAY, lambertian
-from meshladar.pixel import rasterize
-from meshladar.siddon import PixelGrid
+from meshladar.forward.pixel import rasterize
+from meshladar.forward.siddon import PixelGrid
 
 PAPER = ml.Ladar.paper()
 

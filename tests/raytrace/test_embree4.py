@@ -7,6 +7,8 @@ import subprocess
 import sys
 import warnings
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -90,7 +92,7 @@ def test_threads_share_one_scene_and_give_the_serial_numbers():
 
 
 def test_a_backend_that_cannot_load_is_said_once_and_never_changes_the_numbers(monkeypatch):
-    from meshladar.raytrace import embree as engine
+    from meshladar.raytrace import backends as engine
 
     scene = _sphere(2)
     ladar = ml.Ladar.covering(scene, n_bins=8, angles_deg=[0.0])
@@ -136,7 +138,10 @@ def test_the_fused_loop_gives_the_unfused_numbers_bit_for_bit(sampling, monkeypa
     # grid, cast, weigh and bin in one loop build the same float32 origins and bin the
     # same hits as the path through per-ray arrays: equal, not merely close; the far,
     # large sphere makes Embree's unit-size copy a real rescaling
+    from meshladar.raytrace.backends import REGISTRY, backend
     from meshladar.raytrace.embree import _Embree
+
+    backend("packets")                                       # registered on first use
 
     for centre, radius in (((0.0, 0.0, 0.0), 0.5), ((1e3, -2e3, 5e2), 37.0)):
         scene = ml.Scene.from_parts([ml.mesh.sphere(centre, radius, 0, subdivisions=4)],
@@ -149,6 +154,7 @@ def test_the_fused_loop_gives_the_unfused_numbers_bit_for_bit(sampling, monkeypa
                                 backend="packets")
             with monkeypatch.context() as m:
                 m.setattr(_Embree, "fused", property(lambda self: False))
+                m.setitem(REGISTRY, "packets", replace(REGISTRY["packets"], fused=False))
                 plain = ml.simulate(scene, ladar, model="mesh", sampling=sampling,
                                     backend="packets")
         assert fused.info["rays"] == plain.info["rays"] > 0
@@ -225,7 +231,7 @@ def test_footprints_take_the_fused_loop_with_the_general_paths_numbers(mode, nor
     # threads or one view's rows, is weighed and spread in the compiled loop, from one
     # footprint row per face and view: the numbers of trace + weigh(footprint=True), and
     # the per-hit path is not taken
-    from meshladar.raytrace import model
+    from meshladar.forward import job as model
 
     plate = ml.mesh.MeshPart(np.array([[-0.5, -0.4, -0.3], [0.5, -0.4, 0.2], [0.5, 0.4, 0.3],
                                        [-0.5, 0.4, -0.2]]), np.array([[0, 1, 2], [0, 2, 3]]),
@@ -266,15 +272,17 @@ def test_footprints_take_the_fused_loop_with_the_general_paths_numbers(mode, nor
                                    atol=SAME_HITS_RTOL * one.values.max())
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("mode", ["3d", "slice"])
 def test_bistatic_views_take_the_fused_loop_with_the_references_numbers(mode, monkeypatch):
     # a receiver off the ladar's axis (flat normals, any coating, either radiometry, back
     # faces two-sided or ignored, views on threads or one view's rows): each face's weight
     # for the pair of directions before the cast, each hit's occlusion ray toward the
     # receiver cast in packets inside the loop; the numbers of embreex's per-hit path
-    from meshladar.raytrace import model
+    from meshladar.forward import job as model
+    from meshladar.weighing import faces
 
-    monkeypatch.setattr(model, "_FACE_BLOCK", 1000)        # the face weights in blocks
+    monkeypatch.setattr(faces, "_FACE_BLOCK", 1000)        # the face weights in blocks
     plate = ml.mesh.MeshPart(np.array([[-0.5, -0.4, -0.3], [0.5, -0.4, 0.2], [0.5, 0.4, 0.3],
                                        [-0.5, 0.4, -0.2]]), np.array([[0, 1, 2], [0, 2, 3]]),
                              1, name="plate")

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from meshladar.errors import ParameterError
-from meshladar.siddon import ParallelProjector, PixelGrid, Rays, backproject, project
+from meshladar.forward.siddon import ParallelProjector, PixelGrid, Rays, backproject, project
 
 
 def _square_chord(phi, s, half):

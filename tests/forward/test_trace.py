@@ -425,7 +425,7 @@ def test_hits_are_a_frozen_record_of_named_arrays():
 
 def test_a_views_hits_are_a_frozen_record_too():
     # the record a worker returns for one view: named fields, shapes checked, read-only
-    from meshladar.raytrace.hits import ViewHits
+    from meshladar.hits import ViewHits
 
     k = 5
     h = ViewHits(np.zeros(k), np.ones(k), np.zeros(k), np.zeros(k, np.int32), np.zeros((k, 4)),

@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import math
+import pathlib
+import sys
 
 import numpy as np
 import pytest
-from _reference import quad_profile, ray_sample
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))  # tests/_reference.py
+from _reference import quad_profile, ray_sample  # noqa: E402
 from scipy import integrate
 
 import meshladar as ml
@@ -64,6 +67,7 @@ SCENES = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(SCENES))
 def test_bins_match_independent_adaptive_quadrature(name):
     scene = SCENES[name]()

@@ -4,16 +4,18 @@ never the tracer's entry points, so a material sweep re-weighs cached hits witho
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
-from ._validate import check_flag
-from .errors import ParameterError
-from .ladar import Ladar
-from .raytrace.hits import Hits
-from .sinogram import Sinogram
-from .precision import BOX_RATIO, TINY
-from .sensor import check_radiometry
-from .brdf import projected_weight
+from .._validate import check_flag
+from ..errors import MeshladarWarning, ParameterError
+from ..ladar import Ladar
+from ..hits import Hits
+from ..sinogram import Sinogram
+from ..precision import BOX_RATIO, TINY
+from ..sensor import check_radiometry
+from ..brdf import BRDF, check_brdf, projected_weight
 
 __all__ = ["weigh"]
 
@@ -54,10 +56,6 @@ def _warn_grazing_receiver(cos_t, cos_r):
     (not F·cos θr) is weighed, and its 1/cos θr makes a flat facet parallel to the
     receiver's direction dominate the profile without bound (received power is finite)."""
     if np.any((cos_t > 0) & (cos_r >= 0) & (cos_r < GRAZING_RECEIVER_COS)):
-        import warnings
-
-        from .errors import MeshladarWarning
-
         warnings.warn("surfaces facing the ladar lie edge-on to the receiver (cos θr < "
                       "1e-6): under radiometry='paper' a bistatic return weighs F, which "
                       "grows as 1/cos θr there, so they dominate the profile; "
@@ -124,10 +122,14 @@ def _curved_spread(r, wt, curve, edges):
 
 
 
-def _bin_one(r, cos_t, sin_t, mat, spread, materials, edges, area, footprint, bi=None,
-             factor=None, curve=None, power=False, receive=None):
-    """One view's profile from its hits (``receive``: the sensor's receiver factors,
-    applied under received power only)."""
+def bin_one(r, cos_t, sin_t, mat, spread, materials, edges, area, *, footprint=False,
+            bi=None, factor=None, curve=None, power=False, receive=None):
+    """One view's profile (n_bins,) from its k hits: ranges ``r``, ``cos_t``/``sin_t`` of
+    incidence, material ids ``mat``, footprints ``spread`` (k, 4), the coatings, bin
+    edges and δA⊥; binned at a point or over the footprint; ``bi`` (k, 4) the bistatic
+    angles, ``factor`` a per-hit weight factor, ``curve`` (k, 4) curved footprints,
+    ``power`` received power, ``receive`` the sensor's receiver factors (applied under
+    received power only)."""
     nb = len(edges) - 1
     wt = _weights(cos_t, sin_t, mat, materials, area, bi, power)
     if factor is not None:
@@ -138,9 +140,9 @@ def _bin_one(r, cos_t, sin_t, mat, spread, materials, edges, area, footprint, bi
         curved = curve[:, 3] > 0
         out = _curved_spread(r[curved], wt[curved], curve[curved], edges)
         flat = ~curved
-        return out + _bin_one(r[flat], cos_t[flat], sin_t[flat], mat[flat], spread[flat],
-                              materials, edges, area, True, None if bi is None else bi[flat],
-                              None, None, power)
+        return out + bin_one(r[flat], cos_t[flat], sin_t[flat], mat[flat], spread[flat],
+                             materials, edges, area, footprint=True,
+                             bi=None if bi is None else bi[flat], power=power)
     if not footprint:
         k = np.searchsorted(edges, r, side="right") - 1
         ok = (k >= 0) & (k < nb)
@@ -217,8 +219,6 @@ def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None,
     if footprint and hits.info.get("traced_with") is not None:
         raise ParameterError("footprint binning is for parallel rays without a sensor; these "
                              "hits were traced with one")
-    from .brdf import BRDF, check_brdf
-
     if isinstance(materials, BRDF):
         materials = [materials]                       # one coating for a one-material scene
     if materials is not None and not isinstance(materials, (list, tuple)):
@@ -239,20 +239,24 @@ def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None,
     vals = np.zeros((hits.ladar.n_views, len(edges) - 1))
     for i in range(hits.ladar.n_views):
         sel = order[bounds[i]:bounds[i + 1]]
-        vals[i] = _bin_one(hits.range[sel], hits.cos_theta[sel], hits.sin_theta[sel],
-                           hits.material[sel], hits.spread[sel], mats, edges, hits.area,
-                           footprint, None if hits.bistatic is None else hits.bistatic[sel],
-                           None if hits.weight_factor is None else hits.weight_factor[sel],
-                           None if hits.curve is None else hits.curve[sel], power,
-                           None if hits.receive_factor is None else hits.receive_factor[sel])
-    return _sinogram(vals, hits.ladar, edges, hits.info, hits.normals, footprint, hits.rays,
-                     hits.back_face_hits, radiometry)
+        vals[i] = bin_one(hits.range[sel], hits.cos_theta[sel], hits.sin_theta[sel],
+                          hits.material[sel], hits.spread[sel], mats, edges, hits.area,
+                          footprint=footprint,
+                          bi=None if hits.bistatic is None else hits.bistatic[sel],
+                          factor=None if hits.weight_factor is None else hits.weight_factor[sel],
+                          curve=None if hits.curve is None else hits.curve[sel], power=power,
+                          receive=None if hits.receive_factor is None
+                          else hits.receive_factor[sel])
+    return sinogram_of(vals, hits.ladar, edges, hits.info, normals=hits.normals,
+                       footprint=footprint, rays=hits.rays, back=hits.back_face_hits,
+                       radiometry=radiometry)
 
 
 
-def _sinogram(vals, ladar, edges, run, normals, footprint, rays, back, radiometry):
-    """The mesh model's sinogram; its info says how it was made (mode, normals, sampling,
-    rays) and under which convention (radiometry)."""
+def sinogram_of(vals, ladar, edges, run, *, normals, footprint, rays, back, radiometry):
+    """The mesh model's sinogram of binned ``vals`` (n_views, n_bins); its info says how it
+    was made (``run``: mode, spacing, sampling, seed, receiver, sensor; normals, footprint,
+    rays and back-face hits per view) and under which convention (radiometry)."""
     info = {"radiometry": radiometry, "mode": run["mode"], "normals": normals,
             "footprint": footprint, "ray_spacing": run["ray_spacing"],
             "sampling": run["sampling"], "seed": run["seed"], "rays": int(np.sum(rays)),
@@ -281,3 +285,11 @@ def _sinogram(vals, ladar, edges, run, normals, footprint, rays, back, radiometr
             info["units"] = "photoelectrons"
     return Sinogram(vals, angles_deg=ladar.angles_deg, bin_edges=edges, model="mesh",
                     view_vectors=None if ladar.planar else ladar.view_vectors, info=info)
+
+
+#: Public names of the stage's helpers for the forward models (the underscored names stay
+#: for one release, for the importers that still use them).
+weights = _weights
+_bin_one = bin_one
+_sinogram = sinogram_of
+material_table = _material_table

@@ -1,0 +1,322 @@
+"""The mesh model's one per-chunk job: cast, then weigh, fused or per hit as decided once.
+
+:func:`plan_job` looks at a :class:`~meshladar.raytrace.plan.TracePlan` and a
+:class:`~meshladar.weighing.Weighing` (or none: keep the hits) once and picks the view
+stage; :func:`mesh_job` is the function the stream runs on every chunk of views: it builds
+the chunk's state (its bins, and the per-face weight cache the compiled loops read), then
+runs the chosen stage on each view. The stages:
+
+* ``hits``: each view's :class:`~meshladar.hits.ViewHits` (:func:`meshladar.trace`);
+* ``per_hit``: hits weighed and binned in numpy (any normals, coating, receiver, sensor);
+* ``flat``: flat normals, monostatic: F·δA⊥ one number per face and view, binned by the
+  compiled loop (in the fused cast-weigh-bin loop on a fused backend);
+* ``smooth``: smooth normals, coatings with a compiled kernel, binned by the compiled loop;
+* ``bistatic``: flat normals, a receiver, a fused backend: per-face bistatic weights and
+  occlusion rays cast in the fused loop;
+* ``sensor``: a sensor at a finite standoff, flat or smooth normals, compiled coatings;
+* ``resolved``: hits weighed and binned by one to three coordinates (resolved returns).
+"""
+
+from __future__ import annotations
+
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from typing import Callable, NamedTuple
+
+import numpy as np
+
+from ..precision import MIN_COS_FACET, RECEIVER_LIFT
+from ..raytrace.backends import backend as get_backend
+from ..raytrace.embree import embree_scene
+from ..raytrace.grid import grid_plan as _grid_plan
+from ..raytrace.grid import ray_grid as _ray_grid
+from ..raytrace.perspective import trace_sensor_view as _trace_sensor_view
+from ..raytrace.plan import TracePlan, View
+from ..raytrace.views import range_offset as _range_offset
+from ..raytrace.views import trace_view as _trace_view
+from ..weighing import bin_one as _bin_one
+from ..weighing import material_table as _material_table
+from ..weighing.faces import face_bistatic_weights, face_footprints, face_weights
+from ..weighing.fused import cast_bin_grid
+from ..weighing.record import Weighing
+from ..weighing.resolved import bin_resolved
+
+__all__ = ["MeshJob", "plan_job", "mesh_job", "sensor_offset"]
+
+
+class Stage(NamedTuple):
+    """A view stage: ``run(job, scene, view, chunk)`` casts (and weighs) one view into
+    ``chunk``, returning (rays cast, back-face hits); ``faces``: it reads the per-face
+    weight cache."""
+
+    name: str
+    run: Callable
+    faces: bool = False
+
+
+@dataclass(frozen=True, eq=False)
+class MeshJob:
+    """Everything a chunk needs, decided once: the plan, the weighing (None: keep hits),
+    the views, the stage, threads for one view's rows, and whether the backend's fused
+    loop casts the grids."""
+
+    plan: TracePlan
+    weighing: Weighing | None
+    vectors: np.ndarray
+    stage: Stage
+    row_jobs: int = 1
+    fused: bool = False
+
+
+@dataclass(eq=False)
+class Chunk:
+    """A chunk's output and working state: bins (or hits), and the compiled loops' per-face
+    weight cache (``stamp`` tags the faces whose ``weight`` is the current view's)."""
+
+    values: np.ndarray | None
+    hits: list
+    params: np.ndarray | None = None
+    stamp: np.ndarray | None = None
+    weight: np.ndarray | None = None
+    footprints: np.ndarray | None = None
+
+
+class FlatBins(NamedTuple):
+    """The compiled binning loop's arguments after the hits (flat, for numba)."""
+
+    plane_d: np.ndarray
+    face_normals: np.ndarray
+    face_material: np.ndarray
+    params: np.ndarray
+    w: np.ndarray
+    start: float
+    edges: np.ndarray
+    area: float
+    power: bool
+    ignore_back: bool
+    out: np.ndarray
+    stamp: np.ndarray
+    weight: np.ndarray
+    tag: int
+    footprint: np.ndarray
+
+
+def sensor_offset(geo, w, sensor):
+    """What the range of a sensor's hit is relative to: absolute (R − D − aim·w) at a finite
+    standoff, the shifted centre's plane at infinity."""
+    return 0.0 if sensor.standoff is not None else _range_offset(geo.center, w, None)
+
+
+def _trace(job, scene, view, footprint=True, transverse=False):
+    """One view's hits, through parallel rays or the plan's sensor."""
+    if job.plan.traced_with is not None:
+        return _trace_sensor_view(job.plan, scene, view)
+    return _trace_view(job.plan, scene, view, footprint=footprint, transverse=transverse)
+
+
+def _offset(job, view):
+    p = job.plan
+    if p.traced_with is not None:
+        return sensor_offset(p.geo, view.w, p.traced_with)
+    return _range_offset(p.geo.center, view.w, view.w_r)
+
+
+def _hits_stage(job, scene, view, chunk):
+    h = _trace(job, scene, view)
+    chunk.hits.append(h)
+    return h.rays, h.back_face_hits
+
+
+def _per_hit_stage(job, scene, view, chunk):
+    wg, sensed = job.weighing, job.plan.traced_with is not None
+    h = _trace(job, scene, view, footprint=wg.footprint)
+    r = h.range + _offset(job, view)
+    if sensed:
+        chunk.values[view.slot] = _bin_one(
+            r, h.cos_theta, h.sin_theta, h.material, h.spread, wg.materials, wg.edges[0],
+            job.plan.area, footprint=False, factor=h.weight_factor, power=wg.power,
+            receive=h.receive_factor)
+    else:
+        chunk.values[view.slot] = _bin_one(
+            r, h.cos_theta, h.sin_theta, h.material, h.spread, wg.materials, wg.edges[0],
+            job.plan.area, footprint=wg.footprint, bi=h.bistatic, factor=h.weight_factor,
+            curve=h.curve, power=wg.power)
+    return h.rays, h.back_face_hits
+
+
+def _resolved_stage(job, scene, view, chunk):
+    h = _trace(job, scene, view, footprint=False, transverse=True)
+    offset = -float(job.plan.geo.center @ view.w) if job.plan.traced_with is None \
+        else _offset(job, view)
+    bin_resolved(h, view.w, offset, job.plan, job.weighing, chunk.values[view.slot])
+    return h.rays, 0
+
+
+def _sensor_stage(job, scene, view, chunk):
+    # numba compiles on first use (meshladar/__init__ imports the mesh model eagerly)
+    from ..weighing.sensor_view import bin_sensor_view
+
+    n, back = bin_sensor_view(job.plan, job.weighing, scene, view.w, view.rng,
+                              chunk.values[view.slot])
+    return n, back
+
+
+def _bins(job, view, chunk, start):
+    p, wg = job.plan, job.weighing
+    return FlatBins(p.geo.plane_d, p.geo.face_normals, p.geo.material, chunk.params, view.w,
+                    start, wg.edges[0], p.area, wg.power, p.ignore_back,
+                    chunk.values[view.slot], chunk.stamp, chunk.weight, view.slot + 1,
+                    chunk.footprints)
+
+
+def _cast(job, scene, view):
+    """One view's parallel rays cast one at a time: (origins, Embree's results)."""
+    p = job.plan
+    o, _, _, _ = _ray_grid(p.geo, view.w, p.mode, p.spacing, p.z0_shifted, view.rng)
+    return o, scene.run(o, np.ascontiguousarray((-view.w)[None, :], dtype=np.float32),
+                        output=1)
+
+
+def _smooth_stage(job, scene, view, chunk):
+    from ..weighing._kernels import bin_smooth_hits   # numba: compiled on first use
+
+    p, wg = job.plan, job.weighing
+    start = _range_offset(p.geo.center, view.w, None)
+    if wg.footprint:
+        face_footprints(p.geo, view.w, p.mode, p.spacing, chunk.footprints)
+    o, res = _cast(job, scene, view)
+    back = bin_smooth_hits(
+        res["primID"], res["tfar"], res["u"], res["v"], o, p.geo.plane_d,
+        p.geo.face_normals, p.geo.corner, p.geo.material, chunk.params, view.w, start,
+        wg.edges[0], p.area, wg.power, p.ignore_back, MIN_COS_FACET,
+        chunk.values[view.slot], chunk.footprints)
+    return len(o), back
+
+
+def _flat_stage(job, scene, view, chunk):
+    """Flat normals, monostatic or (fused backends) bistatic: each face's weight for the
+    view before the cast where the compiled kernel cannot evaluate it at a hit."""
+    from ..weighing._kernels import bin_flat_hits     # numba: compiled on first use
+
+    p, wg = job.plan, job.weighing
+    start = _range_offset(p.geo.center, view.w, view.w_r)
+    if wg.footprint:
+        face_footprints(p.geo, view.w, p.mode, p.spacing, chunk.footprints)
+    receiver = None
+    if view.w_r is not None:
+        face_bistatic_weights(p.geo, wg.materials, view.w, view.w_r, p.area, chunk.weight,
+                              wg.power, p.ignore_back)
+        chunk.stamp[:] = view.slot + 1
+        receiver = (view.w_r, RECEIVER_LIFT * p.geo.radius)
+    elif not wg.compiled:
+        face_weights(p.geo, wg.materials, view.w, p.area, chunk.weight, wg.power)
+        chunk.stamp[:] = view.slot + 1               # every face's weight is this view's
+    bins = _bins(job, view, chunk, start)
+    if job.fused:
+        # packets: grid, cast, weigh and bin in one loop, no per-ray arrays
+        grid = _grid_plan(p.geo, view.w, p.mode, p.spacing, p.z0_shifted, view.rng)
+        if job.row_jobs > 1:
+            return _rows_on_threads(scene, grid, view.w, p.spacing, bins, job.row_jobs,
+                                    receiver)[::-1]
+        back, n = cast_bin_grid(scene, grid, view.w, p.spacing, bins, receiver)
+        return n, back
+    o, res = _cast(job, scene, view)
+    return len(o), bin_flat_hits(res["primID"], res["tfar"], o, *bins)
+
+
+def _rows_on_threads(scene, grid, w, spacing, bins, row_jobs, receiver=None):
+    """One big view's grid split into ``row_jobs`` bands of rows, cast on as many threads
+    (the fused loop releases the GIL), each band with its own bins and a copy of the weight
+    cache (weights already evaluated for the view stay valid); the
+    bands' bins are added in order, so a given ``row_jobs`` always gives the same numbers
+    (and the one-thread numbers to rounding). Returns (back-face hits, rays cast)."""
+    cuts = np.linspace(0, grid.s.size, row_jobs + 1).astype(int)
+    parts = []
+    for a0, a1 in zip(cuts[:-1], cuts[1:]):
+        if a1 > a0:
+            band = grid._replace(s=grid.s[a0:a1],
+                                 du=None if grid.du is None else grid.du[a0:a1],
+                                 dv=None if grid.dv is None else grid.dv[a0:a1])
+            parts.append((band, bins._replace(out=np.zeros_like(bins.out),
+                                              stamp=bins.stamp.copy(),
+                                              weight=bins.weight.copy())))
+    with ThreadPoolExecutor(len(parts)) as ex:
+        done = list(ex.map(lambda p: cast_bin_grid(scene, p[0], w, spacing, p[1], receiver),
+                           parts))
+    for _, band in parts:
+        bins.out[...] += band.out
+    return sum(b for b, _ in done), sum(n for _, n in done)
+
+
+def _fused(plan):
+    """Whether the backend's fused loop casts the plan's grids (a regular slice row or any
+    3-D grid: stratified slice offsets are drawn by the per-ray grid)."""
+    return get_backend(plan.backend).fused and (plan.mode == "3d" or plan.seed is None)
+
+
+STAGES = {s.name: s for s in (
+    Stage("hits", _hits_stage), Stage("per_hit", _per_hit_stage),
+    Stage("resolved", _resolved_stage), Stage("sensor", _sensor_stage),
+    Stage("smooth", _smooth_stage, faces=True), Stage("flat", _flat_stage, faces=True),
+    Stage("bistatic", _flat_stage, faces=True))}
+
+
+def _stage_name(plan, weighing):
+    if weighing is None:
+        return "hits"
+    if weighing.resolved:
+        return "resolved"
+    normals, compiled = plan.normals, weighing.compiled
+    if plan.traced_with is not None:
+        fast = plan.traced_with.standoff is not None and normals in ("flat", "smooth") \
+            and compiled
+        return "sensor" if fast else "per_hit"
+    if plan.receivers is None and normals == "flat":
+        return "flat"
+    if plan.receivers is None and normals == "smooth" and compiled:
+        return "smooth"
+    if plan.receivers is not None and normals == "flat" and _fused(plan):
+        return "bistatic"
+    return "per_hit"
+
+
+def plan_job(plan, weighing, vectors, row_jobs=1) -> MeshJob:
+    """The chunk job of a plan and a weighing (None: keep hits), its stage chosen once."""
+    return MeshJob(plan=plan, weighing=weighing,
+                   vectors=np.asarray(vectors, dtype=np.float64),
+                   stage=STAGES[_stage_name(plan, weighing)], row_jobs=row_jobs,
+                   fused=_fused(plan))
+
+
+def _chunk(job, n_views):
+    geo, wg = job.plan.geo, job.weighing
+    if wg is None:
+        return Chunk(values=None, hits=[])
+    shape = tuple(e.size - 1 for e in wg.edges)
+    chunk = Chunk(values=np.zeros((n_views,) + shape), hits=[])
+    if job.stage.faces:
+        chunk.params = _material_table(wg.materials) if wg.compiled else \
+            np.zeros((len(wg.materials), 7))
+        chunk.stamp = np.zeros(len(geo.faces), np.int64)
+        chunk.weight = np.empty(len(geo.faces))
+        chunk.footprints = np.zeros((len(geo.faces) if wg.footprint else 0, 4))
+    return chunk
+
+
+def mesh_job(geo, views, job):
+    """The stream's per-chunk job (``run_chunks(mesh_job, geo, ..., args=(job,))``): the
+    views' hits (a list of :class:`~meshladar.hits.ViewHits`) when ``job.weighing`` is
+    None, else ``{"values", "rays", "backs"}`` arrays."""
+    scene = embree_scene(geo, job.plan.backend)
+    chunk = _chunk(job, len(views))
+    seed, receivers = job.plan.seed, job.plan.receivers
+    rays = np.zeros(len(views), np.int64)
+    backs = np.zeros(len(views), np.int64)
+    for j, i in enumerate(views):
+        view = View(slot=j, index=int(i), w=job.vectors[i],
+                    w_r=None if receivers is None else receivers[i],
+                    rng=None if seed is None else np.random.default_rng([seed, int(i)]))
+        rays[j], backs[j] = job.stage.run(job, scene, view, chunk)
+    if job.weighing is None:
+        return chunk.hits
+    return {"values": chunk.values, "rays": rays, "backs": backs}

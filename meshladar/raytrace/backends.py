@@ -1,0 +1,94 @@
+"""The ray-casting backends, chosen from a registry (no ``if backend == ...`` chains).
+
+Each backend module fills :data:`REGISTRY` with a :class:`Backend` when it is imported:
+:mod:`.packets` (coherent Embree 4 packets through ctypes and numba) and
+:mod:`.embreex_backend` (embreex, one ray at a time: the reference). A new backend (a GPU
+one) is a module that calls :func:`register`; :data:`BUILTIN` names the modules loaded on
+first use, so numba and embreex load only when a ray is cast."""
+
+from __future__ import annotations
+
+import importlib
+import warnings
+from dataclasses import dataclass
+from typing import Callable
+
+from .._validate import check_choice
+from ..errors import MeshladarWarning, ParameterError
+
+__all__ = ["BACKENDS", "Backend", "REGISTRY", "register", "backend", "choices",
+           "resolve_backend"]
+
+#: The ``backend=`` choices; "auto" takes the first of :data:`PREFERENCE` that loads.
+BACKENDS = ("auto", "packets", "embreex")
+#: "auto"'s order of preference.
+PREFERENCE = ("packets", "embreex")
+#: The built-in backends' modules, imported on first use (they register themselves).
+BUILTIN = {"packets": "meshladar.raytrace.packets",
+           "embreex": "meshladar.raytrace.embreex_backend"}
+
+
+@dataclass(frozen=True)
+class Backend:
+    """One way to cast rays.
+
+    ``build(vertices, faces)`` makes a raw scene of float32 (n, 3) vertices at unit size and
+    int32 (m, 3) faces, with embreex's ``run(origins, directions, output=, query=)``
+    interface; ``available()`` says (True, where) or (False, why); ``fused`` whether the
+    weigh stage's fused loop (:mod:`meshladar.weighing.fused`) can cast with its scenes."""
+
+    name: str
+    build: Callable
+    available: Callable
+    fused: bool = False
+
+
+#: Backends by name, filled by the backend modules themselves.
+REGISTRY: dict = {}
+
+
+def register(entry: Backend) -> Backend:
+    """Add (or replace) a backend in :data:`REGISTRY`; returns it."""
+    REGISTRY[entry.name] = entry
+    return entry
+
+
+def backend(name: str) -> Backend:
+    """The registered backend ``name``, its module imported on first use."""
+    if name not in REGISTRY and name in BUILTIN:
+        importlib.import_module(BUILTIN[name])
+    if name not in REGISTRY:
+        raise ParameterError(f"backend must be one of {tuple(REGISTRY) or PREFERENCE}; "
+                             f"got {name!r}")
+    return REGISTRY[name]
+
+
+def choices() -> tuple:
+    """The ``backend=`` names: "auto", the built-in backends and any registered one."""
+    return ("auto",) + tuple(dict.fromkeys((*BUILTIN, *REGISTRY)))
+
+
+_FALLBACK_SAID = False
+
+
+def resolve_backend(name):
+    """The backend a run uses, by name: ``name`` itself when it loads, "auto" the first of
+    :data:`PREFERENCE` that loads (warning once per process when it falls back)."""
+    global _FALLBACK_SAID
+    check_choice("backend", name, choices())
+    why = None
+    for candidate in (PREFERENCE if name == "auto" else (name,)):
+        ok, reason = backend(candidate).available()
+        if ok:
+            if why is not None and not _FALLBACK_SAID:
+                _FALLBACK_SAID = True
+                warnings.warn(f"the packet backend cannot load ({why}): the mesh engine "
+                              "casts with embreex, one ray at a time (backend='embreex'); "
+                              "the numbers are the same, slower", MeshladarWarning,
+                              stacklevel=7)
+            return candidate
+        if name != "auto":
+            raise ParameterError(f"backend={name!r} cannot load here ({reason}); use "
+                                 "backend='embreex' or 'auto'")
+        why = reason
+    raise ParameterError(f"no ray-casting backend loads here ({why})")

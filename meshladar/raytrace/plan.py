@@ -1,0 +1,214 @@
+"""The trace plan (:class:`TracePlan`): everything about a run's geometry, built and
+validated once at the API boundary (:func:`plan_trace`), then trusted by every per-chunk
+job. Geometry only: which rays (mode, spacing, slice plane, sampling, seed), which hits
+(normals, back faces), who receives (collocated, bistatic receivers, a sensor), how they
+are cast (backend) and how many (the estimate the stream and the threads are sized by).
+Weights are the weigh stage's (:class:`meshladar.weighing.Weighing`, checked against a
+plan before the first ray)."""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from .._validate import check_choice, check_real, unit_vectors
+from ..errors import MeshladarWarning, ParameterError
+from ..ladar import Ladar
+from ..precision import ORIGIN_MARGIN, PARALLEL_SLACK
+from ..scene import Scene
+from ..sensor import FloodBeam, Sensor
+from .backends import resolve_backend
+from .embree import Geometry, geometry
+from .grid import (MAX_RAYS_PER_VIEW, MODES, _estimate_rays, _largest_grid, _sampling,
+                   _spacing)
+from .views import BACK_FACES, NORMALS
+
+__all__ = ["TracePlan", "View", "plan_trace", "check_scene", "check_sensor", "check_receivers"]
+
+
+@dataclass(frozen=True, eq=False)
+class TracePlan:
+    """A run's geometry, validated once.
+
+    Attributes
+    ----------
+    geo : Geometry
+        The scene's triangles as a worker traces them (shifted, float32 copies).
+    mode : {"slice", "3d"}
+    normals, back_faces : str
+    z0 : float
+        The slice plane (scene coordinates; the scene's mid-height in 3-D).
+    spacing : float
+        Ray spacing δ; ``area`` is δ (slice, per unit height) or δ² (3-D).
+    sampling : {"regular", "stratified"}
+    seed : int or None
+    receivers : (n_views, 3) float64 or None
+        Bistatic receiver directions (None: monostatic).
+    sensor : Sensor or None
+        The sensor as given (results record it).
+    traced_with : Sensor or None
+        The sensor the job traces with: None where it changes nothing (at infinity, an
+        unbounded flood: parallel rays and the compiled loops apply).
+    backend : str
+        The resolved backend ("packets", "embreex").
+    rays : float
+        The run's estimated rays (sizes threads and progress).
+    """
+
+    geo: Geometry
+    mode: str
+    normals: str
+    back_faces: str
+    z0: float
+    spacing: float
+    sampling: str
+    seed: int | None
+    receivers: np.ndarray | None
+    sensor: Sensor | None
+    traced_with: Sensor | None
+    backend: str
+    rays: float
+
+    @property
+    def area(self) -> float:
+        """δA⊥ of one ray: δ in slice mode (per unit height), δ² in 3-D."""
+        return self.spacing if self.mode == "slice" else self.spacing * self.spacing
+
+    @property
+    def z0_shifted(self) -> float:
+        """The slice plane relative to the geometry's centre (as the grids are built)."""
+        return self.z0 - float(self.geo.center[2])
+
+    @property
+    def ignore_back(self) -> bool:
+        return self.back_faces == "ignore"
+
+
+class View(NamedTuple):
+    """One view of a chunk: its slot in the chunk, its index, its direction w (3,), its
+    bistatic receiver w_r (3,) or None, and its seeded rng (None: a regular grid)."""
+
+    slot: int
+    index: int
+    w: np.ndarray
+    w_r: np.ndarray | None
+    rng: np.random.Generator | None
+
+
+def check_scene(scene, ladar, mode, normals, back_faces, z0):
+    """(mode, geometry, z0) of a mesh run, after the scene, ladar, normals, back faces,
+    mode and slice plane are checked (a slice plane off the target warns)."""
+    if not isinstance(scene, Scene):
+        raise ParameterError(f"scene must be a meshladar.Scene; got {type(scene).__name__}")
+    if not isinstance(ladar, Ladar):
+        raise ParameterError(f"ladar must be a meshladar.Ladar; got {type(ladar).__name__}")
+    check_choice("normals", normals, NORMALS)
+    check_choice("back_faces", back_faces, BACK_FACES)
+    if mode is None:
+        # a mesh is a 3-D target; only a scene tessellated from the 2-D analytic shapes (the
+        # paper's phantoms) is an extruded slice by default
+        mode = "slice" if (scene.shapes and ladar.planar) else "3d"
+    check_choice("mode", mode, MODES)
+    if mode == "slice" and not ladar.planar:
+        raise ParameterError("mode='slice' needs views about the z axis (angles_deg); the "
+                             "ladar has view vectors off the x-y plane: use mode='3d'")
+    if not scene.is_mesh:
+        raise ParameterError("the mesh model needs a mesh scene: Scene.from_mesh(...) or "
+                             "scene.tessellate(segments=...)")
+    if z0 is not None and mode == "3d":
+        raise ParameterError(f"z0 places the slice plane of mode='slice'; got z0={z0!r} "
+                             "with mode='3d'")
+    geo = geometry(scene, normals)
+    if z0 is None:
+        z0 = float(geo.center[2])
+    z0 = check_real("z0", z0)
+    if mode == "slice":
+        lo, hi = float(geo.vertices[:, 2].min()), float(geo.vertices[:, 2].max())
+        if not lo <= z0 <= hi:
+            warnings.warn(f"z0={z0:.6g} lies outside the target's heights [{lo:.6g}, "
+                          f"{hi:.6g}]: the slice returns nothing", MeshladarWarning,
+                          stacklevel=7)
+    return mode, geo, z0
+
+
+def check_sensor(sensor, receiver, mode):
+    """The sensor a job traces with (None for none, or for one that changes nothing: at
+    infinity, an unbounded flood), after its type, its monostatic receiver and its mode
+    are checked."""
+    if sensor is None:
+        return None
+    if not isinstance(sensor, Sensor):
+        raise ParameterError(f"sensor must be a meshladar.sensor.Sensor; got "
+                             f"{type(sensor).__name__}")
+    if receiver is not None:
+        raise ParameterError("a sensor is monostatic (its receiver sits with its "
+                             "transmitter); drop receiver or sensor")
+    if sensor.standoff is not None and mode != "3d":
+        raise ParameterError("a sensor at a finite standoff needs mode='3d' (its rays fan "
+                             "out in both transverse directions)")
+    if sensor.standoff is None and isinstance(sensor.beam, FloodBeam) \
+            and sensor.beam.radius is None:
+        return None
+    return sensor
+
+
+def check_receivers(receiver, ladar, mode):
+    """Bistatic receivers (n_views, 3), or None for a collocated (monostatic) ladar."""
+    if receiver is None:
+        return None
+    if np.shape(receiver) not in ((3,), (ladar.n_views, 3)):
+        raise ParameterError(f"receiver must be a direction (3,) or one per view "
+                             f"({ladar.n_views}, 3); got shape {np.shape(receiver)}")
+    r = np.broadcast_to(unit_vectors("receiver", receiver), (ladar.n_views, 3))
+    opposite = np.einsum("ij,ij->i", r, ladar.view_vectors) <= -1 + PARALLEL_SLACK
+    if np.any(opposite):
+        k = int(np.argmax(opposite))
+        raise ParameterError(f"receiver must not point exactly opposite the view (no light "
+                             f"returns); got receiver {r[k].tolist()} for view {k}, "
+                             f"{ladar.view_vectors[k].tolist()}")
+    if mode == "slice" and np.any(r[:, 2] != 0):
+        raise ParameterError("in slice mode the receiver must lie in the x-y plane")
+    return np.ascontiguousarray(r)
+
+
+def _check_standoff(geo, ladar, sensor):
+    """A sensor at a finite standoff must lie outside the target seen from every view
+    (the test each perspective view's grid makes, made for all views before any ray)."""
+    if sensor is None or sensor.standoff is None:
+        return
+    aim = np.asarray(sensor.aim, np.float64) - geo.center
+    for w in np.asarray(ladar.view_vectors, np.float64):
+        depth = -((geo.hull - (aim + sensor.standoff * w)) @ w)
+        if np.min(depth) <= ORIGIN_MARGIN * geo.radius:
+            raise ParameterError(
+                f"standoff {sensor.standoff:g} puts the sensor inside the target's extent "
+                f"(the target reaches {sensor.standoff - float(np.min(depth)):.6g} toward "
+                "it from the aim point): give a larger standoff")
+
+
+def plan_trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0=None,
+               ray_spacing=None, rays_per_bin=None, sampling=None, seed=None,
+               receiver=None, backend="auto", sensor=None) -> TracePlan:
+    """The :class:`TracePlan` of a mesh run, every geometric option checked (the messages
+    name the argument, the value and what is valid); nothing is cast."""
+    mode, geo, z0 = check_scene(scene, ladar, mode, normals, back_faces, z0)
+    traced_with = check_sensor(sensor, receiver, mode)
+    backend = resolve_backend(backend)
+    sampling, seed = _sampling(mode, sampling, seed)
+    receivers = check_receivers(receiver, ladar, mode)
+    spacing = _spacing(ladar, mode, ray_spacing, rays_per_bin, geo.radius)
+    per_view = _largest_grid(geo, ladar.view_vectors, mode, spacing, MAX_RAYS_PER_VIEW)
+    if per_view > MAX_RAYS_PER_VIEW:
+        raise ParameterError(
+            f"one view would cast about {per_view:.3g} rays (ray spacing {spacing:.3g} over "
+            f"a target {2 * geo.radius:.3g} across), more than the {MAX_RAYS_PER_VIEW:.0e} a "
+            "view may hold in memory; give a larger ray_spacing (or fewer rays_per_bin, "
+            "or wider bins)")
+    _check_standoff(geo, ladar, traced_with)
+    return TracePlan(geo=geo, mode=mode, normals=normals, back_faces=back_faces, z0=z0,
+                     spacing=spacing, sampling=sampling, seed=seed, receivers=receivers,
+                     sensor=sensor, traced_with=traced_with, backend=backend,
+                     rays=_estimate_rays(geo, ladar, mode, spacing))

@@ -1,0 +1,125 @@
+"""Returns binned by one to three coordinates of each hit (:class:`Returns`), the record
+that :func:`meshladar.forward.resolve.resolve` makes: range (the sinogram's), cross-range,
+elevation and Doppler."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ._summary import table, text
+from ._validate import check_count, check_real, finite_array, readonly_copy
+from .errors import ParameterError
+from .receiver import Noise, draw_noise
+from .sinogram import Sinogram
+
+__all__ = ["COORDINATES", "Returns"]
+
+#: The coordinates a view's returns can be binned by (:mod:`meshladar.forward.resolve`).
+COORDINATES = ("range", "cross_range", "elevation", "doppler")
+
+_UNITS = {"range": "m", "cross_range": "m", "elevation": "m", "doppler": "Hz"}
+
+
+@dataclass(frozen=True, eq=False)
+class Returns:
+    """Returns of many views binned by one to three coordinates.
+
+    ``values`` (n_views, n_0[, n_1[, n_2]]): per cell, the sum of the weights of the rays whose
+    first hit lies in it (bin integrals, as a sinogram's); ``axes`` the coordinates' names
+    (:data:`COORDINATES`), ``edges`` their bin edges (in ``units``); ``angles_deg`` and
+    ``view_vectors`` the views; ``info`` the run's parameters (radiometry, units, motion).
+    """
+
+    values: np.ndarray
+    axes: tuple = field(kw_only=True)
+    edges: tuple = field(kw_only=True)
+    angles_deg: np.ndarray = field(kw_only=True)
+    view_vectors: np.ndarray = field(kw_only=True)
+    info: dict = field(default_factory=dict, kw_only=True)
+
+    def __post_init__(self):
+        v = finite_array("values", self.values)
+        edges = tuple(readonly_copy(finite_array(f"edges[{i}]", e))
+                      for i, e in enumerate(self.edges))
+        if v.ndim != 1 + len(self.axes) or len(edges) != len(self.axes) or any(
+                e.shape != (n + 1,) for e, n in zip(edges, v.shape[1:])):
+            raise ParameterError(f"values must be (n_views, one size per axis) with edges one "
+                                 f"longer per axis; got {v.shape}, axes {self.axes}")
+        object.__setattr__(self, "values", readonly_copy(v))
+        object.__setattr__(self, "edges", edges)
+        object.__setattr__(self, "axes", tuple(self.axes))
+        object.__setattr__(self, "angles_deg", readonly_copy(self.angles_deg))
+        object.__setattr__(self, "view_vectors", readonly_copy(self.view_vectors))
+        object.__setattr__(self, "info", dict(self.info))
+
+    @property
+    def units(self) -> tuple:
+        return tuple(_UNITS[a] for a in self.axes)
+
+    def centers(self, axis) -> np.ndarray:
+        """Bin centres of ``axis`` (a name or an index)."""
+        e = self.edges[self._index(axis)]
+        return 0.5 * (e[1:] + e[:-1])
+
+    def _index(self, axis):
+        if isinstance(axis, str):
+            if axis not in self.axes:
+                raise ParameterError(f"axis must be one of {self.axes}; got {axis!r}")
+            return self.axes.index(axis)
+        return int(axis)
+
+    def total(self) -> np.ndarray:
+        """(n_views,) each view's total return."""
+        return self.values.reshape(self.values.shape[0], -1).sum(axis=1)
+
+    def marginal(self, axis) -> np.ndarray:
+        """(n_views, n) the returns binned by ``axis`` alone (summed over the others)."""
+        k = self._index(axis)
+        others = tuple(1 + j for j in range(len(self.axes)) if j != k)
+        return self.values.sum(axis=others) if others else self.values
+
+    def sinogram(self):
+        """The range marginal as a :class:`~meshladar.sinogram.Sinogram`."""
+        planar = bool(np.all(self.view_vectors[:, 2] == 0.0))
+        return Sinogram(self.marginal("range"), angles_deg=self.angles_deg,
+                        bin_edges=self.edges[self.axes.index("range")], model="mesh",
+                        view_vectors=None if planar else self.view_vectors,
+                        info=dict(self.info))
+
+    def realise(self, noise, n=1, *, seed=None, dwell=0.0):
+        """``n`` noise realisations (n, *values.shape) (:class:`meshladar.receiver.Noise`),
+        each cell integrating background and dark counts over ``dwell`` seconds (its range
+        gate); the returns must count photoelectrons (a sensor that counts them, or
+        :meth:`scaled`)."""
+        if not isinstance(noise, Noise):
+            raise ParameterError(f"noise must be a meshladar.receiver.Noise; got "
+                                 f"{type(noise).__name__}")
+        if self.info.get("units") != "photoelectrons":
+            raise ParameterError(f"noise counts photoelectrons; these returns are in "
+                                 f"{self.info.get('units')!r}: convert with scaled(factor)")
+        dwell = check_real("dwell", dwell, low=0.0)
+        if dwell == 0 and (noise.background_rate > 0 or noise.dark_rate > 0):
+            raise ParameterError("background and dark counts accumulate over each cell's "
+                                 "dwell time: give dwell (s), e.g. its range gate")
+        return draw_noise(noise, self.values, dwell, check_count("n", n), seed)
+
+    def scaled(self, factor, units="photoelectrons") -> "Returns":
+        f = check_real("factor", factor, low=0.0, low_open=True)
+        return Returns(self.values * f, axes=self.axes, edges=self.edges,
+                       angles_deg=self.angles_deg, view_vectors=self.view_vectors,
+                       info=dict(self.info, units=units, scaled_by=f))
+
+    def _summary(self):
+        return (("n_views", self.values.shape[0]),
+                *((a, f"[{e[0]:.4g}, {e[-1]:.4g}] {u} in {e.size - 1}")
+                  for a, e, u in zip(self.axes, self.edges, self.units)),
+                ("units", self.info.get("units")), ("radiometry", self.info.get("radiometry")))
+
+    def __repr__(self) -> str:
+        return text("Returns", *self._summary())
+
+    def _repr_html_(self) -> str:
+        return table("Returns", *self._summary())
+

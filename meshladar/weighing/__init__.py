@@ -1,0 +1,26 @@
+"""The weigh stage (DESIGN.md layer 5): every weight and every binning of first hits.
+
+:mod:`.record` (the :class:`Weighing` record, whose ``check(plan)`` refuses every
+inapplicable combination before the first ray), :mod:`.weigh` (per-hit weights F·δA⊥,
+point/footprint/curved bins, :func:`weigh` of cached :class:`~meshladar.hits.Hits`),
+:mod:`.faces` (per-face weights and footprints of a view, for the compiled loops),
+:mod:`.resolved` (binning by one to three coordinates), :mod:`.sensor_view` (a perspective
+view binned by the compiled loop), :mod:`.fused` (the packet backend's cast-weigh-bin
+loop), :mod:`._kernels` and :mod:`._fused_kernels` (the compiled loops). It imports the :class:`Hits` record and the
+ray-casting stage below it, never the forward models' entry points."""
+
+from __future__ import annotations
+
+from . import weigh as _weigh
+from .record import Weighing
+from .weigh import (GRAZING_RECEIVER_COS, bin_one, material_table, sinogram_of, weigh,
+                    weights)
+
+# the old module's private names, for the importers that still use them (one release)
+_weights, _material_table = weights, material_table
+_bin_one, _sinogram = _weigh._bin_one, _weigh._sinogram
+_box_cdf, _trap_cdf, _curved_spread = _weigh._box_cdf, _weigh._trap_cdf, _weigh._curved_spread
+_warn_grazing_receiver = _weigh._warn_grazing_receiver
+
+__all__ = ["weigh", "Weighing", "weights", "bin_one", "material_table", "sinogram_of",
+           "GRAZING_RECEIVER_COS"]

@@ -1,0 +1,339 @@
+"""The weigh stage's compiled loops (numba): binning of first hits per ray, flat and smooth
+normals, bistatic, seen by a sensor, at a point or over a footprint (copied from
+:mod:`meshladar._kernels`, whose originals go at the merge).
+
+numba is imported here; the stages that use these loops import this module, never
+``import meshladar`` itself. Kernels are cached on disk (``cache=True``)."""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+from .._kernels import _sr_monostatic
+from ..precision import BOX_RATIO as _BOX_RATIO
+from ..precision import TINY as _TINY
+
+__all__ = ["bin_flat_hits", "bin_bistatic_hits", "bin_smooth_hits", "bin_sensor_hits",
+           "face_hit"]
+
+
+@njit(cache=True, nogil=True)
+def _hit_distance(p, c, tf, origins, i, plane_d, face_normals):
+    """Ray i's distance to face p, recomputed in float64 against the face's plane from the
+    float32 origin as cast (c = n·w); Embree's float32 ``tf`` where the plane is edge-on
+    (as meshladar.raytrace.views._refine_t)."""
+    if abs(c) <= 1e-6:
+        return tf * 1.0
+    return (plane_d[p] - (face_normals[p, 0] * origins[i, 0] + face_normals[p, 1] * origins[i, 1]
+                          + face_normals[p, 2] * origins[i, 2])) / (-c)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _face_hit(p, tf, origins, i, w, plane_d, face_normals):
+    """Ray i's hit on face p seen along w: (c, t, r) with c = n·w the flat normal's cosine
+    (negative on a back face), t the float64 distance (:func:`_hit_distance`) and
+    r = t − o·w its range relative to the shifted centre's plane."""
+    c = face_normals[p, 0] * w[0] + face_normals[p, 1] * w[1] + face_normals[p, 2] * w[2]
+    t = _hit_distance(p, c, tf, origins, i, plane_d, face_normals)
+    return c, t, t - (origins[i, 0] * w[0] + origins[i, 1] * w[1] + origins[i, 2] * w[2])
+
+
+@njit(cache=True, nogil=True)
+def _bin_of(r, edges, e0, inv):
+    """The bin k with edges[k] <= r < edges[k + 1] (r inside the edges): guessed in O(1)
+    from uniform edges (``inv`` bins per unit range from ``e0``), checked against the
+    edges, by bisection when the guess is off (non-uniform edges)."""
+    nb = edges.size - 1
+    k = min(max(int((r - e0) * inv), 0), nb - 1)
+    if edges[k] <= r and r < edges[k + 1]:
+        return k
+    lo = 0
+    hi = nb
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if edges[mid] <= r:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _smooth_cos(corner, p, a, b, wx, wy, wz):
+    """cos θ of face p's shading normal, interpolated from its ``corner`` normals with
+    Embree's barycentrics (a, b) and normalised, against the direction (wx, wy, wz)."""
+    nx = (1 - a - b) * corner[p, 0, 0] + a * corner[p, 1, 0] + b * corner[p, 2, 0]
+    ny = (1 - a - b) * corner[p, 0, 1] + a * corner[p, 1, 1] + b * corner[p, 2, 1]
+    nz = (1 - a - b) * corner[p, 0, 2] + a * corner[p, 1, 2] + b * corner[p, 2, 2]
+    norm = math.sqrt(nx * nx + ny * ny + nz * nz)
+    return (nx / norm) * wx + (ny / norm) * wy + (nz / norm) * wz
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _fp_cdf(x, a, b, box):
+    """CDF at x of the footprint's range offset A + B, A ~ U(−a, a), B ~ U(−b, b) (a box
+    when ``box``): meshladar.weighing._box_cdf and _trap_cdf, one value at a time."""
+    if box:
+        return min(max((x + a) / (2 * a if a > 0 else 1.0), 0.0), 1.0)
+    num = _half_sq(x + a + b) - _half_sq(x + a - b) - _half_sq(x - a + b) + _half_sq(x - a - b)
+    return min(max(num / (4 * a * b if a * b > 0 else 1.0), 0.0), 1.0)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _half_sq(y):
+    return 0.5 * max(y, 0.0) ** 2
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _clipped_bin(x, edges, e0, inv):
+    """searchsorted(edges, x, "right") − 1 clipped to the bins (as weighing._bin_one)."""
+    nb = edges.size - 1
+    if x < edges[0]:
+        return 0
+    if x >= edges[nb]:
+        return nb - 1
+    return _bin_of(x, edges, e0, inv)
+
+
+@njit(cache=True, nogil=True)
+def _spread_hit(out, r, r_rel, wt, fp, p, edges, e0, inv):
+    """Add one hit's weight over the bins its footprint's ranges cover, as
+    meshladar.weighing._bin_one with ``footprint``: ``fp[p]`` holds face p's half-widths
+    along u and v and its own range interval (min, max) for the view; the offsets are
+    clipped to the facet's interval, and a box or trapezoid CDF splits the weight."""
+    s0, s1 = fp[p, 0], fp[p, 1]
+    a = max(s0, s1)
+    b = min(s0, s1)
+    lo_c = max(-(a + b), min(fp[p, 2] - r_rel, 0.0))
+    hi_c = min(a + b, max(fp[p, 3] - r_rel, 0.0))
+    nb = edges.size - 1
+    if a <= 0 or hi_c <= lo_c:                      # a point: its own bin
+        if edges[0] <= r and r < edges[nb]:
+            out[_bin_of(r, edges, e0, inv)] += wt
+        return
+    if not (r + hi_c >= edges[0] and r + lo_c < edges[nb]) or wt == 0:
+        return
+    k0 = _clipped_bin(r + lo_c, edges, e0, inv)
+    k1 = _clipped_bin(r + hi_c, edges, e0, inv)
+    box = b <= _BOX_RATIO * max(a, _TINY)
+    mass = _fp_cdf(hi_c, a, b, box) - _fp_cdf(lo_c, a, b, box)
+    if mass <= 0:
+        mass = 1.0
+    for k in range(k0, k1 + 1):
+        lo = max(edges[k] - r, lo_c)
+        hi = min(edges[k + 1] - r, hi_c)
+        frac = (_fp_cdf(hi, a, b, box) - _fp_cdf(lo, a, b, box)) if hi > lo else 0.0
+        out[k] += wt * (frac / mass)
+
+
+@njit(cache=True, nogil=True)
+def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, params,
+                  w, start, edges, area, power, ignore_back, out, stamp, weight, tag,
+                  footprint):
+    """Monostatic, flat-normal weighing and binning of one view's Embree hits, fused:
+    out[k] += F(θ)·area (``power``: F(θ)·cos θ·area, received power) for each hit with range start + t − o·w in bin k (o the float32 origin
+    as cast), t the hit distance recomputed in float64 against the face's plane (as
+    meshladar.raytrace.views._refine_t).
+    ``params`` rows are (rho_d, epsilon, b, e, G, has_diffuse, has_specular) per material.
+    With flat normals F·area is one number per face and view: it is evaluated at a face's
+    first hit and kept in ``weight`` (n_faces,), valid where ``stamp`` equals ``tag`` (a
+    number unique to the view), so the BRDF costs O(faces hit), not O(rays). The bin is
+    found in O(1) on uniform edges (a guess from the first and last edge, checked against
+    the edges exactly as a binary search would place the range), by bisection otherwise.
+    ``footprint`` (n_faces, 4), when not empty, spreads each hit over its footprint's
+    ranges (:func:`_spread_hit`) instead of binning it at a point.
+    Returns the number of back-face hits."""
+    nb = edges.size - 1
+    e0 = edges[0]
+    inv = nb / (edges[nb] - edges[0])
+    spread = footprint.shape[0] > 0
+    back = 0
+    for i in range(prim.size):
+        p = prim[i]
+        if p < 0:
+            continue
+        c, t, r_rel = _face_hit(p, tfar[i], origins, i, w, plane_d, face_normals)
+        if c < 0.0:
+            back += 1
+            if ignore_back:
+                continue
+            c = -c
+        r = start + r_rel
+        if not spread and (r < edges[0] or r >= edges[nb]):
+            continue
+        if stamp[p] != tag:
+            s = math.sqrt(max(1.0 - c * c, 0.0))
+            m = face_material[p]
+            weight[p] = _sr_monostatic(c, s, params[m, 0], params[m, 1], params[m, 2],
+                                       params[m, 3], params[m, 4], params[m, 5] > 0.5,
+                                       params[m, 6] > 0.5) * (area * c if power else area)
+            stamp[p] = tag
+        if spread:
+            _spread_hit(out, r, r_rel, weight[p], footprint, p, edges, e0, inv)
+        else:
+            out[_bin_of(r, edges, e0, inv)] += weight[p]
+    return back
+
+
+@njit(cache=True, nogil=True)
+def bin_bistatic_hits(prim, tfar, origins, blocked, plane_d, face_normals, w, wr, start,
+                      edges, ignore_back, out, weight):
+    """Bistatic (receiver direction ``wr``), flat-normal binning of one view's hits, fused:
+    ``weight`` holds each face's F·area for the pair (w, wr) (0 where either direction is
+    below the face's horizon), ``blocked`` whether the ray from the hit toward the receiver
+    meets the scene. A hit at p = o − t w has range start + ((t − o·w) − p·wr)/2, the
+    two-way path, as meshladar.raytrace.views._trace_view. Returns the back-face hits."""
+    nb = edges.size - 1
+    e0 = edges[0]
+    inv = nb / (edges[nb] - edges[0])
+    back = 0
+    for i in range(prim.size):
+        p = prim[i]
+        if p < 0:
+            continue
+        c, t, r_rel = _face_hit(p, tfar[i], origins, i, w, plane_d, face_normals)
+        if c < 0.0:
+            back += 1
+            if ignore_back:
+                continue
+        if blocked[i]:
+            continue
+        px = origins[i, 0] * 1.0 - t * w[0]
+        py = origins[i, 1] * 1.0 - t * w[1]
+        pz = origins[i, 2] * 1.0 - t * w[2]
+        r = start + 0.5 * (r_rel + -(px * wr[0] + py * wr[1] + pz * wr[2]))
+        if r < edges[0] or r >= edges[nb]:
+            continue
+        out[_bin_of(r, edges, e0, inv)] += weight[p]
+    return back
+
+
+@njit(cache=True, nogil=True)
+def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, face_material,
+                    params, w, start, edges, area, power, ignore_back, min_cos_facet, out,
+                    footprint):
+    """Monostatic weighing and binning with smooth normals, as :func:`bin_flat_hits` with
+    flat ones: the shading normal interpolated from the face's ``corner`` normals (m, 3, 3)
+    with Embree's barycentrics (bu, bv), F of the SR coating at its angle, and the area
+    factor cos θs / max(|cos θg|, ``min_cos_facet``) of meshladar.raytrace.views.
+    _shading_factor, so each ray weighs F(θs)·area·factor (``power``: times cos θs; 0 where
+    the shading normal faces away); ``footprint`` as in :func:`bin_flat_hits` (the flat
+    facet's extent). Returns the number of back-face hits."""
+    nb = edges.size - 1
+    e0 = edges[0]
+    inv = nb / (edges[nb] - edges[0])
+    spread = footprint.shape[0] > 0
+    back = 0
+    for i in range(prim.size):
+        p = prim[i]
+        if p < 0:
+            continue
+        cg, t, r_rel = _face_hit(p, tfar[i], origins, i, w, plane_d, face_normals)
+        c = _smooth_cos(corner, p, bu[i] * 1.0, bv[i] * 1.0, w[0], w[1], w[2])
+        if cg < 0.0:
+            back += 1
+            if ignore_back:
+                continue
+            c = -c
+        if c <= 0.0:
+            continue                                   # the shading normal faces away
+        r = start + r_rel
+        if not spread and (r < edges[0] or r >= edges[nb]):
+            continue
+        s = math.sqrt(max(1.0 - c * c, 0.0))
+        m = face_material[p]
+        f = _sr_monostatic(c, s, params[m, 0], params[m, 1], params[m, 2], params[m, 3],
+                           params[m, 4], params[m, 5] > 0.5, params[m, 6] > 0.5)
+        f = f * c if power else f
+        wt = f * area * (c / max(abs(cg), min_cos_facet))
+        if spread:
+            _spread_hit(out, r, r_rel, wt, footprint, p, edges, e0, inv)
+        else:
+            out[_bin_of(r, edges, e0, inv)] += wt
+    return back
+
+
+@njit(cache=True, nogil=True)
+def bin_sensor_hits(prim, t_cast, S, T, bu, bv, u, v, w, D, sensor_pos, range_offset,
+                    plane_d, face_normals, corner, smooth, face_material, params, beam,
+                    extinction, edges, area, power, ignore_back, min_cos_facet, refine_min_cos,
+                    out):
+    """Monostatic weighing and binning of one view seen by a sensor at standoff D, fused
+    (the numbers of meshladar.raytrace.perspective._trace_sensor_view then
+    meshladar.weighing._bin_one, without per-hit arrays): ray i leaves ``sensor_pos``
+    along q/|q|, q = S[i] u + T[i] v − D w; its hit distance R is recomputed in float64
+    against the hit face's plane (``t_cast`` where the plane is edge-on); its weight is
+    F·area × cos³α (R/D)² × the beam's relative irradiance (× the smooth normal's area
+    factor), and under ``power`` × cos θ (D/R)² exp(−2σR); its range R − ``range_offset``.
+    ``beam`` = (kind, radius or −1, waist, divergence, ax, ay, az): kind 0 a flood (a
+    top-hat of ``radius`` at distance D when ≥ 0), 1 a Gaussian of 1/e² radius
+    sqrt(waist² + (divergence z)²) about the axis (ax, ay, az) from the sensor. Returns
+    the number of back-face hits."""
+    nb = edges.size - 1
+    e0 = edges[0]
+    inv = nb / (edges[nb] - edges[0])
+    back = 0
+    kind = beam[0]
+    ax, ay, az = beam[4], beam[5], beam[6]
+    w_ref = math.sqrt(beam[2] * beam[2] + (beam[3] * D) ** 2)
+    for i in range(prim.size):
+        p = prim[i]
+        if p < 0:
+            continue
+        qx = S[i] * u[0] + T[i] * v[0] - D * w[0]
+        qy = S[i] * u[1] + T[i] * v[1] - D * w[1]
+        qz = S[i] * u[2] + T[i] * v[2] - D * w[2]
+        length = math.sqrt(S[i] * S[i] + T[i] * T[i] + D * D)
+        dx, dy, dz = qx / length, qy / length, qz / length
+        nx, ny, nz = face_normals[p, 0], face_normals[p, 1], face_normals[p, 2]
+        denom = nx * dx + ny * dy + nz * dz
+        if abs(denom) > refine_min_cos:
+            R = (plane_d[p] - (nx * sensor_pos[0] + ny * sensor_pos[1]
+                               + nz * sensor_pos[2])) / denom
+        else:
+            R = t_cast[i]
+        cg = -denom
+        if smooth:
+            c = _smooth_cos(corner, p, bu[i] * 1.0, bv[i] * 1.0, -dx, -dy, -dz)
+        else:
+            c = cg
+        if cg < 0.0:
+            back += 1
+            if ignore_back:
+                continue
+            c = -c
+        if c <= 0.0:
+            continue
+        r = R - range_offset
+        if r < edges[0] or r >= edges[nb]:
+            continue
+        k = _bin_of(r, edges, e0, inv)
+        px, py, pz = R * dx, R * dy, R * dz          # the hit relative to the sensor
+        z = px * ax + py * ay + pz * az
+        rx, ry, rz = px - z * ax, py - z * ay, pz - z * az
+        rho2 = rx * rx + ry * ry + rz * rz
+        if kind == 0:
+            rel = D * D / (rho2 + z * z)
+            if beam[1] >= 0.0 and math.sqrt(rho2) * D > beam[1] * z:
+                rel = 0.0
+        else:
+            wz2 = beam[2] * beam[2] + (beam[3] * z) ** 2
+            rel = w_ref * w_ref / wz2 * math.exp(-2.0 * rho2 / wz2)
+        factor = (D / length) ** 3 * (R / D) ** 2 * rel
+        if smooth:
+            factor *= c / max(abs(cg), min_cos_facet)
+        s = math.sqrt(max(1.0 - c * c, 0.0))
+        m = face_material[p]
+        f = _sr_monostatic(c, s, params[m, 0], params[m, 1], params[m, 2], params[m, 3],
+                           params[m, 4], params[m, 5] > 0.5, params[m, 6] > 0.5)
+        wt = f * area * factor
+        if power:
+            wt *= c * (D / R) ** 2 * math.exp(-2.0 * extinction * R)
+        out[k] += wt
+    return back
+
+
+#: The hit of ray i on face p, public for the packet loops (:mod:`.fused`).
+face_hit = _face_hit

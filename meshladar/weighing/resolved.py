@@ -1,0 +1,59 @@
+"""Resolved returns' binning: one view's hits weighed (:func:`.weigh._weights`) and binned
+by one to three coordinates (range, cross-range, elevation, Doppler; module docstring of
+:mod:`meshladar.forward.resolve`), on a flat index over the cells."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..raytrace.grid import frame as _frame
+from .weigh import _weights
+
+__all__ = ["bin_resolved"]
+
+
+def bin_resolved(h, w, offset, plan, weighing, out):
+    """Add view ``w``'s hits ``h`` (with ``transverse``) into ``out`` (n_0[, n_1[, n_2]]),
+    the axes and edges of ``weighing`` (:class:`.record.Weighing`); ``offset`` places the
+    ranges; ``plan`` (:class:`~meshladar.raytrace.plan.TracePlan`) the geometry, the ray
+    area and the sensor the view was traced with."""
+    geo, sensor = plan.geo, plan.traced_with
+    wt = _weights(h.cos_theta, h.sin_theta, h.material, weighing.materials, plan.area,
+                  power=weighing.power)
+    if h.weight_factor is not None:
+        wt = wt * h.weight_factor
+    if weighing.power and h.receive_factor is not None:
+        wt = wt * h.receive_factor
+    u, v = _frame(w)
+    s, t = h.transverse[:, 0], h.transverse[:, 1]
+    coords = {"range": h.range + offset,
+              "cross_range": s + float(geo.center @ u),
+              "elevation": t + float(geo.center @ v)}
+    if "doppler" in weighing.axes:
+        if sensor is None or sensor.standoff is None:
+            points = geo.center + s[:, None] * u + t[:, None] * v - h.range[:, None] * w
+        else:
+            # the hit point from its transverse coordinates and its true distance
+            points = _sensor_points(geo, w, u, v, s, t, h.range, sensor)
+        coords["doppler"] = weighing.motion.doppler(points, w)
+    shape = out.shape
+    flat = np.zeros(wt.size, np.int64)
+    ok = wt != 0
+    for name, e in zip(weighing.axes, weighing.edges):
+        k = np.searchsorted(e, coords[name], side="right") - 1
+        ok &= (k >= 0) & (k < e.size - 1)
+        flat = flat * (e.size - 1) + k
+    out += np.bincount(flat[ok], weights=wt[ok], minlength=int(np.prod(shape))).reshape(shape)
+
+
+def _sensor_points(geo, w, u, v, s, t, r, sensor):
+    """World hit points of a sensor view from their (u, v) coordinates s, t (shifted) and
+    ranges r = R − D − aim·w: p − c = s u + t v + a w with a fixed by |p − S| = R."""
+    aim = np.asarray(sensor.aim, np.float64)
+    S = aim - geo.center + sensor.standoff * w                    # the sensor, shifted
+    R = r + sensor.standoff + float(aim @ w)
+    q0 = s[:, None] * u + t[:, None] * v - S                       # p − S without its w part
+    b = q0 @ w
+    c = np.einsum("ij,ij->i", q0, q0) - R * R
+    a = -b - np.sqrt(np.maximum(b * b - c, 0.0))                   # the root toward the sensor
+    return geo.center + s[:, None] * u + t[:, None] * v + a[:, None] * w
