@@ -1,36 +1,62 @@
 """meshladar: mesh-based 3D ladar simulation and reflection tomography.
 
-Importing meshladar loads numpy and scipy only; trimesh, embreex, matplotlib and pyvista
-are imported lazily by the features that use them.
+Importing meshladar loads numpy and scipy only. Every public name and submodule is reached
+as ``meshladar.<name>`` from one table below and imported on first use (the habit of
+scikit-image's lazy package faces), so trimesh, embreex, numba, matplotlib and pyvista load
+only with the features that use them. Old module names that moved are deprecated aliases
+for one release: they warn with the new name.
 """
 
 from __future__ import annotations
 
-from . import brdf, errors, materials
-from .brdf import SandfordRobertson
-from .forward import simulate
-from .ladar import Ladar
-from .reconstruct import Image, clip_radiance, fbp, log_radiance
-from .scene import Scene
-from .shapes import Disk, Ellipse
-from .sinogram import Sinogram
-from .raytrace import Hits, trace
-from .weighing import weigh
+import importlib
 
-__version__ = "0.1.0"
+from ._version import __version__
 
-_LAZY_SUBPACKAGES = ("phantoms", "viz", "mesh", "studies", "results", "siddon", "stream",
-                     "runs", "refine", "bench", "paper")
+#: public name -> the module that defines it
+_NAMES = {
+    "SandfordRobertson": "brdf", "Disk": "shapes", "Ellipse": "shapes", "Scene": "scene",
+    "Ladar": "ladar", "Sinogram": "sinogram", "simulate": "forward", "fbp": "reconstruct",
+    "Image": "images", "log_radiance": "reconstruct", "clip_radiance": "reconstruct",
+    "trace": "forward", "weigh": "weighing", "Hits": "hits",
+}
+
+#: the public submodules, in layer order (DESIGN.md), each ``meshladar.<name>``
+_SUBMODULES = (
+    "errors", "precision", "plotting",
+    "brdf", "materials", "shapes", "meshes", "scene", "ladar", "sensor", "motion", "noise",
+    "hits", "sinogram", "returns", "waveforms", "images",
+    "raytrace", "weighing", "stream", "runs", "io",
+    "forward", "reconstruct", "fit", "studies", "cli",
+    "phantoms", "viz",
+)
+
+#: moved modules: old name -> new home (each old module warns on import, naming it)
+_DEPRECATED = {
+    "mesh": "meshes", "results": "io", "receiver": "waveforms",
+    "volume": "reconstruct.volumes", "iterative": "reconstruct.iterative",
+    "compensation": "reconstruct.compensation", "fitting": "fit", "shapefit": "fit.shapes",
+    "resolved": "forward.resolved", "analytic": "forward.analytic", "pixel": "forward.pixel",
+    "siddon": "forward.siddon", "refine": "forward.refine", "paper": "studies.paper",
+    "peer": "studies.peer", "bench": "studies.bench",
+    "study_reconstruction": "studies.reconstruction",
+}
 
 
 def __getattr__(name):
-    # The phantom library, the viewer and the heavier engine modules are reached as
-    # meshladar.<name> but imported only on first use, so `import meshladar` stays light.
-    if name in _LAZY_SUBPACKAGES:
-        import importlib
+    if name in _NAMES:
+        value = getattr(importlib.import_module(f"{__name__}.{_NAMES[name]}"), name)
+    elif name in _SUBMODULES or name in _DEPRECATED:
+        value = importlib.import_module(f"{__name__}.{name}")
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    globals()[name] = value        # looked up once
+    return value
 
-        return importlib.import_module(f"{__name__}.{name}")
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+def __dir__():
+    return sorted(set(globals()) | set(_NAMES) | set(_SUBMODULES))
+
 
 __all__ = ["SandfordRobertson", "Disk", "Ellipse", "Scene", "Ladar", "Sinogram", "simulate",
            "fbp", "Image", "log_radiance", "clip_radiance", "trace", "weigh", "Hits",

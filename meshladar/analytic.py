@@ -3,8 +3,11 @@
 The old module name is the new module itself (sys.modules), so every name it held,
 private ones included, stays reachable at the old path."""
 
+from ._deprecated import warn_moved
 import sys
 
 from .forward import analytic as _module
+
+warn_moved("analytic", "forward.analytic")
 
 sys.modules[__name__] = _module

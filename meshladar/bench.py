@@ -4,8 +4,11 @@ The alias is the module itself (its entry in sys.modules), so that meshladar.ben
 and meshladar.studies.bench.x are one name, also when a test patches one of them.
 """
 
+from ._deprecated import warn_moved
 import sys
 
 from .studies import bench as _module
+
+warn_moved("bench", "studies.bench")
 
 sys.modules[__name__] = _module

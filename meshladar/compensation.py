@@ -7,8 +7,11 @@ Surface estimation lives in :mod:`meshladar.reconstruct.surface`, the surface pr
 
 from __future__ import annotations
 
+from ._deprecated import warn_moved
 from .reconstruct.compensation import (SOLVERS, Surface, SurfaceProjector, compensate,
                                        estimate_surface, first_image, surface_weights)
+
+warn_moved("compensation", "reconstruct.compensation")
 
 __all__ = ["Surface", "estimate_surface", "surface_weights", "SurfaceProjector", "compensate",
            "first_image", "SOLVERS"]

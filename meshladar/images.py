@@ -19,7 +19,7 @@ from . import plotting
 from ._summary import table, text
 from ._validate import finite_array, readonly_copy
 from .errors import ParameterError
-from .mesh import fibonacci_sphere
+from .meshes import fibonacci_sphere
 
 __all__ = ["Image", "Volume", "pixel_centres"]
 

@@ -1,4 +1,4 @@
-"""Result files (formerly ``meshladar.results``): saving and loading results: atomic writes, no pickle.
+"""Result files (formerly ``meshladar.io``): saving and loading results: atomic writes, no pickle.
 
 Results are ``.npz`` archives of plain arrays plus a JSON document (parameters, metrics,
 version) stored as a string array under the key ``"__meta__"``. Files are written to a

@@ -45,7 +45,7 @@ class Ladar:
         Strictly increasing, finite range bin edges in scene units; at least one bin.
     view_vectors : (n_views, 3) array_like, keyword-only, optional
         Arbitrary view directions (from the scene toward the ladar), normalised here; for
-        3-D meshes seen from anywhere (see ``meshladar.mesh.fibonacci_sphere``). Only the mesh
+        3-D meshes seen from anywhere (see ``meshladar.meshes.fibonacci_sphere``). Only the mesh
         model accepts views off the x-y plane.
 
     Examples

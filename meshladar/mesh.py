@@ -9,11 +9,14 @@ warning will be raised.
 
 from __future__ import annotations
 
+from ._deprecated import warn_moved
 import importlib
 
 from . import meshes
 from .meshes import (MeshPart, convex_hull, ellipsoid, fibonacci_sphere, icosphere,
                      inspect_parts, load_parts, part_from_trimesh, prism, sphere)
+
+warn_moved("mesh", "meshes")
 
 __all__ = ["MeshPart", "load_parts", "part_from_trimesh", "prism", "sphere", "ellipsoid",
            "fibonacci_sphere", "icosphere", "corner_normals", "CREASE_DEG", "inspect_parts",

@@ -1,5 +1,5 @@
 """A rigid target's motion (:class:`Motion`), the value that Doppler returns are binned by
-(:mod:`meshladar.forward.resolve`)."""
+(:mod:`meshladar.forward.resolved`)."""
 
 from __future__ import annotations
 

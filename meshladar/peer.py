@@ -4,8 +4,11 @@ The alias is the module itself (its entry in sys.modules), so that meshladar.pee
 and meshladar.studies.peer.x are one name, also when a test patches one of them.
 """
 
+from ._deprecated import warn_moved
 import sys
 
 from .studies import peer as _module
+
+warn_moved("peer", "studies.peer")
 
 sys.modules[__name__] = _module

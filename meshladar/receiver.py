@@ -6,9 +6,12 @@ receiver's :class:`Noise` and :func:`draw_noise` in :mod:`meshladar.noise`.
 
 from __future__ import annotations
 
+from ._deprecated import warn_moved
 from .noise import *  # noqa: F401,F403
 from .noise import Noise, draw_noise
 from .waveforms import *  # noqa: F401,F403
 from .waveforms import GaussianPulse, SampledPulse, Waveforms, receive
+
+warn_moved("receiver", "waveforms (and meshladar.noise for Noise)")
 
 __all__ = ["GaussianPulse", "SampledPulse", "Noise", "Waveforms", "receive", "draw_noise"]

@@ -1,10 +1,13 @@
-"""Deprecated alias of meshladar.forward.resolve (one release).
+"""Deprecated alias of meshladar.forward.resolved (one release).
 
 The old module name is the new module itself (sys.modules), so every name it held,
 private ones included, stays reachable at the old path."""
 
+from ._deprecated import warn_moved
 import sys
 
-from .forward import resolve as _module
+from .forward import resolved as _module
+
+warn_moved("resolved", "forward.resolved")
 
 sys.modules[__name__] = _module

@@ -1,5 +1,5 @@
 """Returns binned by one to three coordinates of each hit (:class:`Returns`), the record
-that :func:`meshladar.forward.resolve.resolve` makes: range (the sinogram's), cross-range,
+that :func:`meshladar.forward.resolved.resolve` makes: range (the sinogram's), cross-range,
 elevation and Doppler."""
 
 from __future__ import annotations
@@ -11,12 +11,12 @@ import numpy as np
 from ._summary import table, text
 from ._validate import check_count, check_real, finite_array, readonly_copy
 from .errors import ParameterError
-from .receiver import Noise, draw_noise
+from .noise import draw_noise, Noise
 from .sinogram import Sinogram
 
 __all__ = ["COORDINATES", "Returns"]
 
-#: The coordinates a view's returns can be binned by (:mod:`meshladar.forward.resolve`).
+#: The coordinates a view's returns can be binned by (:mod:`meshladar.forward.resolved`).
 COORDINATES = ("range", "cross_range", "elevation", "doppler")
 
 _UNITS = {"range": "m", "cross_range": "m", "elevation": "m", "doppler": "Hz"}
@@ -89,12 +89,12 @@ class Returns:
                         info=dict(self.info))
 
     def realise(self, noise, n=1, *, seed=None, dwell=0.0):
-        """``n`` noise realisations (n, *values.shape) (:class:`meshladar.receiver.Noise`),
+        """``n`` noise realisations (n, *values.shape) (:class:`meshladar.noise.Noise`),
         each cell integrating background and dark counts over ``dwell`` seconds (its range
         gate); the returns must count photoelectrons (a sensor that counts them, or
         :meth:`scaled`)."""
         if not isinstance(noise, Noise):
-            raise ParameterError(f"noise must be a meshladar.receiver.Noise; got "
+            raise ParameterError(f"noise must be a meshladar.noise.Noise; got "
                                  f"{type(noise).__name__}")
         if self.info.get("units") != "photoelectrons":
             raise ParameterError(f"noise counts photoelectrons; these returns are in "

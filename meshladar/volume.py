@@ -11,9 +11,12 @@ the warning aliases of :mod:`meshladar.reconstruct.volumes`.
 
 from __future__ import annotations
 
+from ._deprecated import warn_moved
 from .images import Volume
 from .reconstruct.volumes import (MAX_GAP_DEG, coverage_gap_deg, fbp3d, fbp_slices,
                                   sphere_weights)
+
+warn_moved("volume", "reconstruct.volumes (fbp3d, fbp_slices; Volume in meshladar.images)")
 
 #: Old name of :func:`meshladar.reconstruct.volumes.fbp3d`.
 radon3d = fbp3d

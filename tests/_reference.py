@@ -1,6 +1,6 @@
 """Independent references for the analytic model: adaptive quadrature and ray sampling.
 
-Neither uses meshladar.analytic. Geometry comes from the shapes' implicit functions (normals
+Neither uses meshladar.forward.analytic. Geometry comes from the shapes' implicit functions (normals
 are their gradients), breakpoints are found numerically (sampling + brentq / bisection), and
 visibility by casting a ray from each boundary point toward the ladar against every shape.
 """

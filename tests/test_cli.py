@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import meshladar as ml
-from meshladar import results
+from meshladar import io as results
 
 SUBCOMMANDS = ["demo", "materials", "paper", "simulate", "reconstruct", "view", "study",
                "bench"]

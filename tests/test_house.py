@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import ast
 import pathlib
+import subprocess
 import sys
 
 import pytest
@@ -176,3 +177,32 @@ if __name__ == "__main__":
     found = breaches(sys.argv[1:] or None)
     print("\n".join(found))
     print(f"{len(found)} breaches")
+
+
+def test_the_layers_contract_holds():
+    # import-linter checks the layers stated in pyproject.toml (DESIGN.md's order) on the
+    # import graph of the installed code: no upward import, no circle through layers
+    lint = pathlib.Path(sys.executable).with_name("lint-imports")
+    res = subprocess.run([str(lint), "--config", str(ROOT / "pyproject.toml")],
+                         capture_output=True, text=True, cwd=ROOT)
+    assert res.returncode == 0, res.stdout[-4000:] + res.stderr[-2000:]
+    assert "1 kept, 0 broken" in res.stdout
+
+
+def test_only_the_door_imports_viz():
+    # one door from the engine to viz/ (meshladar/plotting.py), which imports it lazily
+    found = []
+    for path in sorted((ROOT / "meshladar").rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom):
+                target = _resolve(path, node.module, node.level)
+                names = [f"{target}.{a.name}" for a in node.names]
+            elif isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            else:
+                continue
+            if any(n == "meshladar.viz" or n.startswith("meshladar.viz.") for n in names):
+                found.append(f"{path.relative_to(ROOT)}:{node.lineno}")
+    assert not found, found
+    door = (ROOT / "meshladar" / "plotting.py").read_text()
+    assert 'import_module(f"meshladar.viz.{module}")' in door

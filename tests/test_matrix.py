@@ -129,7 +129,7 @@ def _al():
 @cache
 def _sphere():
     """A 320-face sphere of radius 0.5 at the origin."""
-    return ml.Scene.from_parts([ml.mesh.sphere((0, 0, 0), 0.5, 0, subdivisions=2)], [_dg()])
+    return ml.Scene.from_parts([ml.meshes.sphere((0, 0, 0), 0.5, 0, subdivisions=2)], [_dg()])
 
 
 @cache
@@ -202,19 +202,19 @@ def _truncated_stl(path):
 
 
 def _result(path):
-    ml.results.save_sinogram(path, _sino())
+    ml.io.save_sinogram(path, _sino())
 
 
 def _truncated_result(path):
     buf = path.with_suffix(".full")
-    ml.results.save_sinogram(buf, _sino())
+    ml.io.save_sinogram(buf, _sino())
     data = buf.read_bytes()
     path.write_bytes(data[: len(data) // 2])
     buf.unlink()
 
 
 def _image_result(path):
-    ml.results.save_result(path, {"image": np.ones((4, 4))}, {"kind": "image"})
+    ml.io.save_result(path, {"image": np.ones((4, 4))}, {"kind": "image"})
 
 
 def _deep_meta_result(path):
@@ -414,7 +414,7 @@ api("Tabulated.projected_values=yes", lambda: _brdf("Tabulated", [0, 90], [1, 1]
                                                     projected_values="yes"),
     "error", "projected_values")
 api("Tabulated.bistatic", lambda: ml.simulate(ml.Scene.from_parts(
-    [ml.mesh.sphere((0, 0, 0), 0.5, 0, subdivisions=2)], [_brdf("Tabulated", [0, 90], [1, 1])]),
+    [ml.meshes.sphere((0, 0, 0), 0.5, 0, subdivisions=2)], [_brdf("Tabulated", [0, 90], [1, 1])]),
     _lad(), model="mesh", receiver=(0, 1, 1)), "error", ("bistatic", "receiver"))
 for _model, _args in (("Lambertian", (0.5,)), ("Phong", (0.3, 0.3, 10.0)), ("GGX", (0.3,)),
                       ("Tabulated", ([0, 90], [1, 1]))):
@@ -455,7 +455,7 @@ for _key, _name in (("nan", "NaNModel"), ("negative", "NegativeModel"),
     api(f"user-BRDF.{_key}.analytic", lambda k=_key: ml.simulate(
         ml.Scene([ml.Disk((0, 0), 0.5, _user_brdfs()[k])]), _lad()), "error", _name)
     api(f"user-BRDF.{_key}.mesh", lambda k=_key: ml.simulate(ml.Scene.from_parts(
-        [ml.mesh.sphere((0, 0, 0), 0.5, 0, subdivisions=2)], [_user_brdfs()[k]]), _lad(),
+        [ml.meshes.sphere((0, 0, 0), 0.5, 0, subdivisions=2)], [_user_brdfs()[k]]), _lad(),
         model="mesh"), "error", _name)
 
 # ------------------------------------------------------------------ shapes and scenes
@@ -499,7 +499,7 @@ api("Scene.generator", lambda: ml.Scene(ml.Disk((x, 0), 0.1, _dg()) for x in (0,
 
 
 def _part(vertices=((0, 0, 0), (1, 0, 0), (0, 1, 0)), faces=((0, 1, 2),), material=0):
-    return ml.mesh.MeshPart(np.array(vertices, dtype=float), np.array(faces), material)
+    return ml.meshes.MeshPart(np.array(vertices, dtype=float), np.array(faces), material)
 
 
 api("Scene.from_parts.materials=[]", lambda: ml.Scene.from_parts([_part()], []), "error",
@@ -524,7 +524,7 @@ api("MeshPart.faces=negative", lambda: _part(faces=((0, 1, -1),)), "error", "fac
 api("Scene.from_parts.degenerate-only", lambda: ml.Scene.from_parts(
     [_part(vertices=((0, 0, 0), (1, 0, 0), (2, 0, 0)))], [_dg()]), "error", "faces")
 api("Scene.from_parts.inverted-warns", lambda: ml.Scene.from_parts(
-    [ml.mesh.MeshPart(_sphere().parts[0].vertices, _sphere().parts[0].faces[:, ::-1], 0)],
+    [ml.meshes.MeshPart(_sphere().parts[0].vertices, _sphere().parts[0].faces[:, ::-1], 0)],
     [_dg()]), "warn")
 
 # mesh files and trimesh objects
@@ -669,7 +669,7 @@ api("Ladar.covering.view_vectors=zero", lambda: ml.Ladar.covering(
 api("Ladar.covering.one-bin-mesh", lambda: ml.Ladar.covering(_sphere(), n_bins=1), "ok",
     check=lambda lad: lad.n_bins == 1)
 api("Ladar.covering.off-axis-warns", lambda: ml.Ladar.covering(ml.Scene.from_parts(
-    [ml.mesh.sphere((100, 0, 0), 0.5, 0, subdivisions=1)], [_dg()]), n_bins=8), "warn")
+    [ml.meshes.sphere((100, 0, 0), 0.5, 0, subdivisions=1)], [_dg()]), n_bins=8), "warn")
 
 # ------------------------------------------------------------------ simulate
 
@@ -723,7 +723,7 @@ api("simulate.analytic.huge-disk-covered", lambda: ml.simulate(
 
 
 def _sized_sphere(radius):
-    scene = ml.Scene.from_parts([ml.mesh.sphere((0, 0, 0), radius, 0, subdivisions=1)],
+    scene = ml.Scene.from_parts([ml.meshes.sphere((0, 0, 0), radius, 0, subdivisions=1)],
                                 [_dg()])
     return ml.simulate(scene, ml.Ladar.covering(scene, n_bins=8, angles_deg=[0.0, 90.0]),
                        model="mesh")
@@ -1003,7 +1003,7 @@ api("resample_uniform.sino=str", lambda: _resample("x"), "error", "sino")
 
 
 def _load(path):
-    return ml.results.load_result(path)
+    return ml.io.load_result(path)
 
 
 _file_cases("io.load_result", "api", _load, ".npz",
@@ -1012,32 +1012,32 @@ _file_cases("io.load_result", "api", _load, ".npz",
              "no-meta": _no_meta_result, "pickled": _pickled_result,
              "deep-meta": _deep_meta_result}, ("bad.npz",))
 _file_cases("io.load_result", "api", _load, ".dat", {"result": _result}, (), expect="ok")
-api("io.load_result.None", lambda: ml.results.load_result(None), "error", ("path", "None"))
-api("io.load_result.int", lambda: ml.results.load_result(3), "error", ("path", "3"))
-_file_cases("io.load_sinogram", "api", lambda p: ml.results.load_sinogram(p), ".npz", {"image": _image_result, "no-meta": _no_meta_result}, ("bad.npz",))
-api("io.save_result.path=empty", lambda: ml.results.save_result("", {"a": np.ones(2)}, {}), "error",
+api("io.load_result.None", lambda: ml.io.load_result(None), "error", ("path", "None"))
+api("io.load_result.int", lambda: ml.io.load_result(3), "error", ("path", "3"))
+_file_cases("io.load_sinogram", "api", lambda p: ml.io.load_sinogram(p), ".npz", {"image": _image_result, "no-meta": _no_meta_result}, ("bad.npz",))
+api("io.save_result.path=empty", lambda: ml.io.save_result("", {"a": np.ones(2)}, {}), "error",
     "path")
-api("io.save_result.path=dir", lambda tmp: ml.results.save_result(tmp, {"a": np.ones(2)}, {}),
+api("io.save_result.path=dir", lambda tmp: ml.io.save_result(tmp, {"a": np.ones(2)}, {}),
     "error", ("path", "folder", "directory"))
-api("io.save_result.path=None", lambda: ml.results.save_result(None, {"a": np.ones(2)}, {}),
+api("io.save_result.path=None", lambda: ml.io.save_result(None, {"a": np.ones(2)}, {}),
     "error", "path")
-api("io.save_result.missing-folder", lambda tmp: ml.results.save_result(tmp / "a" / "r.npz",
+api("io.save_result.missing-folder", lambda tmp: ml.io.save_result(tmp / "a" / "r.npz",
                                                                    {"a": np.ones(2)}, {}),
     "ok")
-api("io.save_result.object-array", lambda tmp: ml.results.save_result(
+api("io.save_result.object-array", lambda tmp: ml.io.save_result(
     tmp / "r.npz", {"a": np.array([{}], dtype=object)}, {}), "error", ("a", "array"))
-api("io.save_result.meta-not-json", lambda tmp: ml.results.save_result(
+api("io.save_result.meta-not-json", lambda tmp: ml.io.save_result(
     tmp / "r.npz", {"a": np.ones(2)}, {"x": object()}), "error", "meta")
-api("io.save_result.reserved-key", lambda tmp: ml.results.save_result(
+api("io.save_result.reserved-key", lambda tmp: ml.io.save_result(
     tmp / "r.npz", {"__meta__": np.ones(2)}, {}), "error", "__meta__")
-api("io.save_result.arrays=str", lambda tmp: ml.results.save_result(tmp / "r.npz", "x", {}),
+api("io.save_result.arrays=str", lambda tmp: ml.io.save_result(tmp / "r.npz", "x", {}),
     "error", "arrays")
-api("io.save_result.meta=str", lambda tmp: ml.results.save_result(tmp / "r.npz", {}, "x"),
+api("io.save_result.meta=str", lambda tmp: ml.io.save_result(tmp / "r.npz", {}, "x"),
     "error", "meta")
-api("io.save_result.read-only", lambda tmp: ml.results.save_result(tmp / "ro" / "r.npz",
+api("io.save_result.read-only", lambda tmp: ml.io.save_result(tmp / "ro" / "r.npz",
                                                               {"a": np.ones(2)}, {}),
     "error", "/ro", setup=files({"ro": _read_only}), skip_root=True)
-api("io.save_sinogram.sino=str", lambda tmp: ml.results.save_sinogram(tmp / "r.npz", "x"), "error",
+api("io.save_sinogram.sino=str", lambda tmp: ml.io.save_sinogram(tmp / "r.npz", "x"), "error",
     "sino")
 
 # ------------------------------------------------------------------ coating tables
@@ -1176,8 +1176,8 @@ api("viewer.show_scene.scene=str", lambda: _viewer().show_scene("disk", off_scre
 # ================================================================== the command line
 
 #: What the long commands run: a bad argument must never reach it.
-_WORK = ("meshladar.paper:simulate", "meshladar.forward:simulate",
-         "meshladar.bench:bench_analytic")
+_WORK = ("meshladar.studies.paper:simulate", "meshladar.forward:simulate",
+         "meshladar.cli.simulate:simulate", "meshladar.studies.bench:bench_analytic")
 
 _SIM = ["simulate", "disk", "-o", "{tmp}/r.npz", "--quiet", "--views", "4"]
 _MESH = ["simulate", "{tmp}/sphere.stl", "-o", "{tmp}/r.npz", "--quiet", "--views", "2",
@@ -1228,8 +1228,8 @@ cli("materials.two-tables", ["materials", "a.toml", "b.toml"], "error", "b.toml"
 
 # ------------------------------------------------------------------ paper, study, bench:
 # only bad arguments, which must be refused before any work (the work raises if reached)
-_PAPER = ("meshladar.paper:simulate",)
-_STUDY = ("meshladar.forward:simulate",)
+_PAPER = ("meshladar.studies.paper:simulate",)
+_STUDY = ("meshladar.studies.faceting:simulate", "meshladar.forward:simulate")
 for _key, _v in {"zero": "0", "neg": "-1", "str": "x", "float": "1.5", "nan": "nan",
                  "empty": ""}.items():
     cli(f"paper.--size={_key}", ["paper", "{tmp}/out", "--size", _v], "error", "--size",
@@ -1716,8 +1716,10 @@ def forbidding(targets):
             try:
                 module = importlib.import_module(module_name)
                 saved.append((module, name, getattr(module, name)))
-            except (ImportError, AttributeError):      # an older meshladar: nothing to guard
-                continue
+            except (ImportError, AttributeError):
+                if _BEFORE:                             # an older meshladar: nothing to guard
+                    continue
+                raise                                   # a guard that guards nothing is a defect
 
             def reached(*args, _target=target, **kwargs):
                 raise WorkStarted(f"{_target} was called: the work started before the bad "

@@ -84,24 +84,60 @@ def test_cli_bad_arguments_exit_nonzero_without_traceback(args):
 
 
 def test_no_public_name_shadows_a_submodule():
-    # `import meshladar.trace as t` once returned the function: the engine module is
-    # meshladar.raytrace, and meshladar.trace is only the function
+    # `import meshladar.trace as t` once returned the function: the mesh model's module is
+    # meshladar.forward.mesh, and meshladar.trace is only the function
     import importlib
+    import pkgutil
+    import sys
 
     import meshladar as ml
 
     assert callable(ml.trace) and not isinstance(ml.trace, type(ml))
-    engine = importlib.import_module("meshladar.raytrace")
-    assert engine.trace is ml.trace
+    assert importlib.import_module("meshladar.forward").trace is ml.trace
     with pytest.raises(ModuleNotFoundError):
         importlib.import_module("meshladar.trace")
-    # no submodule is shadowed by a public name, and none is named like the standard library
-    import pkgutil
-    import sys
-
-    for pkg in (ml, importlib.import_module("meshladar.raytrace")):
-        for mod in [m for m in pkgutil.iter_modules(pkg.__path__) if m.name != "__main__"]:
+    # no submodule is shadowed by a public name, and none is named like the standard
+    # library (io excepted: meshladar.io is the result files, as scipy.io is scipy's)
+    packages = [ml] + [importlib.import_module(f"meshladar.{p}") for p in
+                       ("raytrace", "weighing", "forward", "reconstruct", "fit", "studies",
+                        "brdf", "meshes", "cli")]
+    for pkg in packages:
+        for mod in pkgutil.iter_modules(pkg.__path__):
+            if mod.name == "__main__" or mod.name in ml._DEPRECATED or (
+                    pkg is not ml and f"{pkg.__name__}.{mod.name}".endswith(
+                        ("raytrace.model", "raytrace.hits"))):
+                continue
             module = importlib.import_module(f"{pkg.__name__}.{mod.name}")
             public = getattr(pkg, mod.name, module)
             assert public is module, f"{pkg.__name__}.{mod.name} is not the module"
-            assert mod.name not in sys.stdlib_module_names, f"{mod.name} shadows the stdlib"
+            assert mod.name not in sys.stdlib_module_names or mod.name == "io", \
+                f"{mod.name} shadows the stdlib"
+
+
+def test_every_public_submodule_is_an_attribute_and_old_names_warn():
+    # one lazy table: ml.<name> for every public submodule, imported on first use; the
+    # modules that moved are deprecated aliases that name their new home
+    code = ("import sys, warnings, meshladar as ml\n"
+            "warnings.simplefilter('error')\n"
+            "for name in ml._SUBMODULES:\n"
+            "    assert getattr(ml, name).__name__ == 'meshladar.' + name, name\n"
+            "for old, new in ml._DEPRECATED.items():\n"
+            "    try:\n"
+            "        getattr(ml, old)\n"
+            "    except DeprecationWarning as w:\n"
+            "        assert 'meshladar.' + new in str(w), (old, str(w))\n"
+            "    else:\n"
+            "        raise AssertionError(old + ' did not warn')\n"
+            "print(len(ml._SUBMODULES), len(ml._DEPRECATED))")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.split() == ["29", "17"]
+
+
+def test_a_deprecated_module_warns_at_the_users_import_line():
+    # the warning points at the line that imported the old name, not at the import
+    # machinery, so the default filters show it to the user
+    sys.modules.pop("meshladar.results", None)
+    with pytest.warns(DeprecationWarning, match="meshladar.io") as record:
+        importlib.import_module("meshladar.results")
+    assert record[0].filename == __file__

@@ -13,7 +13,8 @@ from meshladar.materials import ALUMINUM, DARK_GRAY
 
 # -- the receiver: pulses, responses, digitiser, noise -------------------------------------
 
-from meshladar.receiver import GaussianPulse, Noise, SampledPulse, Waveforms, receive  # noqa: E402
+from meshladar.waveforms import GaussianPulse, receive, SampledPulse, Waveforms
+from meshladar.noise import Noise
 
 #: energy through the bin spreading, convolutions and digitiser: rounding only
 ENERGY_RTOL = 1e-12
@@ -152,8 +153,8 @@ def test_waveforms_save_and_load_without_pickle(tmp_path):
     noise = Noise(speckle_cells=2.0, gain=4.0)
     draws = waves.realise(noise, 4, seed=1)
     path = tmp_path / "w.npz"
-    ml.results.save_waveforms(path, waves, realisations=draws, noise=noise)
-    back, got, meta = ml.results.load_waveforms(path)
+    ml.io.save_waveforms(path, waves, realisations=draws, noise=noise)
+    back, got, meta = ml.io.load_waveforms(path)
     np.testing.assert_array_equal(back.values, waves.values)
     np.testing.assert_array_equal(back.time_edges, waves.time_edges)
     np.testing.assert_array_equal(got, draws)
@@ -178,13 +179,13 @@ def test_cli_simulate_with_a_sensor_then_receive_with_noise(tmp_path):
         "aluminum", "--radiometry", "power", "--views", "3", "--standoff", "500",
         "--beam-waist", "0.02", "--beam-divergence", "1e-3", "--pulse-energy", "1e-5",
         "--aperture", "0.1", "--quiet"]) == 0
-    sino, meta = ml.results.load_sinogram(sino_path)
+    sino, meta = ml.io.load_sinogram(sino_path)
     assert sino.info["units"] == "photoelectrons"
     assert meta["params"]["options"]["sensor"]["beam"]["divergence_rad"] == 1e-3
     assert main(["receive", str(sino_path), "-o", str(wave_path), "--sample-rate", "5e9",
                  "--pulse-fwhm", "1e-9", "--realisations", "20", "--speckle-cells", "1",
                  "--seed", "3", "--plot", str(png), "--quiet"]) == 0
-    waves, draws, meta = ml.results.load_waveforms(wave_path)
+    waves, draws, meta = ml.io.load_waveforms(wave_path)
     np.testing.assert_allclose(waves.total(), sino.total(), rtol=ENERGY_RTOL)
     assert draws.shape == (20,) + waves.values.shape and png.stat().st_size > 10_000
     assert waves.standoff == 500.0 and meta["params"]["seed"] == 3
@@ -193,7 +194,7 @@ def test_cli_simulate_with_a_sensor_then_receive_with_noise(tmp_path):
     assert main(["receive", str(sino_path), "-o", str(again), "--sample-rate", "5e9",
                  "--pulse-fwhm", "1e-9", "--realisations", "20", "--speckle-cells", "1",
                  "--seed", "3", "--quiet"]) == 0
-    assert ml.results.load_waveforms(again)[1].tobytes() == draws.tobytes()
+    assert ml.io.load_waveforms(again)[1].tobytes() == draws.tobytes()
     # noise options without realisations, and noise on relative units, are clear errors
     assert main(["receive", str(sino_path), "-o", str(tmp_path / "x.npz"), "--sample-rate",
                  "5e9", "--gain", "3"]) == 2
@@ -222,14 +223,14 @@ def test_cli_receive_with_the_users_pulse_samples(tmp_path):
     from meshladar.cli import main
 
     sino_path = tmp_path / "s.npz"
-    ml.results.save_sinogram(sino_path, _power_sinogram())
+    ml.io.save_sinogram(sino_path, _power_sinogram())
     pulse = tmp_path / "pulse.txt"
     pulse.write_text("# measured pulse\n0, 1, 3\n2 0.5\n")
     out = tmp_path / "w.npz"
     assert main(["receive", str(sino_path), "-o", str(out), "--sample-rate", "2e9",
                  "--pulse-samples", str(pulse), "--pulse-interval", "2.5e-10",
                  "--quiet"]) == 0
-    waves, _, _ = ml.results.load_waveforms(out)
+    waves, _, _ = ml.io.load_waveforms(out)
     np.testing.assert_allclose(waves.total(), _power_sinogram().total(), rtol=ENERGY_RTOL)
     assert waves.info["pulse"]["kind"] == "samples"
     junk = tmp_path / "junk.txt"

@@ -1,11 +1,11 @@
-"""Figures of coating fits: the view design of :func:`meshladar.fitting.design_views`."""
+"""Figures of coating fits: the view design of :func:`meshladar.fit.design_views`."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from meshladar.errors import ParameterError
-from meshladar.fitting import ViewDesign
+from meshladar.fit import ViewDesign
 
 from . import style
 
@@ -20,12 +20,12 @@ def draw_design(design, path, *, dpi=None):
 
 @style.styled
 def design_figure(design):
-    """A :class:`~meshladar.fitting.ViewDesign` as a matplotlib Figure (no pyplot state):
+    """A :class:`~meshladar.fit.ViewDesign` as a matplotlib Figure (no pyplot state):
     each candidate view's own information against its angle with the chosen views numbered
     in the order they were added, and each parameter's σ from the chosen views against as
     many evenly spaced ones (log scale)."""
     if not isinstance(design, ViewDesign):
-        raise ParameterError(f"design must be a meshladar.fitting.ViewDesign; got "
+        raise ParameterError(f"design must be a meshladar.fit.ViewDesign; got "
                              f"{type(design).__name__}")
     plt = style.use()
     fig, (a, b) = plt.subplots(1, 2, figsize=(11.0, 3.8))

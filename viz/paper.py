@@ -1,4 +1,4 @@
-"""Figures 5-11 of Jin & Levine (2009), drawn from a saved result of ``meshladar.paper.run``.
+"""Figures 5-11 of Jin & Levine (2009), drawn from a saved result of ``meshladar.studies.paper.run``.
 
 Figures only load results, so restyling never means simulating again::
 
@@ -22,7 +22,7 @@ import os
 import numpy as np
 
 from meshladar import io as mlio
-from meshladar import paper
+from meshladar.studies import paper
 
 from . import style
 

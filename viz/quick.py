@@ -107,7 +107,7 @@ def image(img, *, y=None, title=None):
 
 @style.styled
 def volume(vol, *, title=None):
-    """Three central slices of a :class:`meshladar.volume.Volume` (z = 0, y = 0, x = 0) on one
+    """Three central slices of a :class:`meshladar.images.Volume` (z = 0, y = 0, x = 0) on one
     colour scale, symmetric about zero as the images' (:func:`meshladar.viz.paper.norm`);
     log input is labelled as such."""
     plt = style.use()

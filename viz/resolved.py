@@ -1,4 +1,4 @@
-"""Figures of resolved returns (:class:`meshladar.resolved.Returns`): a few views' profiles
+"""Figures of resolved returns (:class:`meshladar.returns.Returns`): a few views' profiles
 (one coordinate) or images (two: angle–angle, range–Doppler), with labelled axes and units."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from meshladar.errors import ParameterError
-from meshladar.resolved import Returns
+from meshladar.returns import Returns
 
 from . import style
 
@@ -21,7 +21,7 @@ def draw(returns, path, *, views=None, log=False, dpi=None):
     """Write a PNG of up to four views of ``returns`` to ``path``; ``log`` shows
     log10 of the returns (glints next to diffuse parts). Returns the path."""
     if not isinstance(returns, Returns):
-        raise ParameterError(f"returns must be a meshladar.resolved.Returns; got "
+        raise ParameterError(f"returns must be a meshladar.returns.Returns; got "
                              f"{type(returns).__name__}")
     if len(returns.axes) > 2:
         raise ParameterError(f"draw shows one or two coordinates; these returns have "

@@ -1,6 +1,6 @@
 """Figures of the studies: the faceting study, drawn from its saved files
 (``meshladar.studies``), and the reconstruction and 3-D tomography studies, drawn from
-their images (``meshladar.study_reconstruction``, ``meshladar.paper.run_3d``).
+their images (``meshladar.studies.reconstruction``, ``meshladar.studies.paper.run_3d``).
 
 ``draw(outdir)`` reads ``faceting.json`` and ``faceting_examples.npz`` from ``outdir`` and
 writes:
@@ -21,7 +21,7 @@ import os
 import numpy as np
 
 from meshladar import io as mlio
-from meshladar import study_reconstruction as study
+from meshladar.studies import reconstruction as study
 
 from . import style
 from .paper import norm
@@ -182,7 +182,7 @@ def reconstruction_figures(images, methods=None, spacings=(1.0, 10.0)):
 
 def tomography3d_figures(volumes, views, size):
     """Yield ("tomography3d.png", Figure): the z = 0 slice of every volume of the 3-D
-    study (``meshladar.paper.run_3d``), on the paper figures' symmetric scale."""
+    study (``meshladar.studies.paper.run_3d``), on the paper figures' symmetric scale."""
     plt = style.use()
     keys = list(volumes)
     cols = (len(keys) + 1) // 2

@@ -28,8 +28,8 @@ import numpy as np
 from meshladar import Scene
 from meshladar._validate import check_count, check_real, unit_vectors
 from meshladar.errors import ParameterError
-from meshladar.raytrace import first_hits, occluded
-from meshladar.volume import Volume
+from meshladar.forward.mesh import first_hits, occluded
+from meshladar.images import Volume
 
 from ._frame import Legend, ScalarBar, Shown, _bar, _finish, _headless_window, _legend, _pyvista
 
@@ -292,7 +292,7 @@ def volume_iso(volume):
 
 
 def volume_surface(volume, iso=None):
-    """The iso-surface of a :class:`meshladar.volume.Volume` at ``iso`` (default
+    """The iso-surface of a :class:`meshladar.images.Volume` at ``iso`` (default
     :func:`volume_iso`) as a pyvista mesh in scene coordinates."""
     pv = _pyvista()
     dx, dy, dz = volume.spacing
@@ -307,7 +307,7 @@ def volume_surface(volume, iso=None):
 def show_volume(images, zs=None, *, iso=None, render="iso", off_screen=False,
                 screenshot=None, window_size=(800, 700), camera=None):
     """A stack of reconstructed slices at heights ``zs`` (increasing, evenly spaced), or a
-    :class:`meshladar.volume.Volume` (then ``zs`` is not given), as the iso-surface at value
+    :class:`meshladar.images.Volume` (then ``zs`` is not given), as the iso-surface at value
     ``iso`` (default: for a Volume :func:`volume_iso`, for a stack half its 99.5th
     percentile, where the bright surfaces are), or with ``render="volume"`` (stacks) as a
     volume rendering with a robust window and a sigmoid opacity."""

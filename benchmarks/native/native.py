@@ -54,8 +54,8 @@ def main(argv=None):
     args = ap.parse_args(argv)
 
     from meshladar import materials
-    from meshladar.bench import _icosphere_scene
-    from meshladar.mesh import fibonacci_sphere
+    from meshladar.studies.bench import _icosphere_scene
+    from meshladar.meshes import fibonacci_sphere
     from meshladar.raytrace import embree4
     from meshladar.raytrace.embree import _Geometry
     from meshladar.raytrace.grid import _ray_grid

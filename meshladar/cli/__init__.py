@@ -2,7 +2,7 @@
 
 Errors from bad input print one line (``meshladar: error: ...``) and exit with status 2;
 they never show a traceback. Layout: :mod:`.parser` (generated from
-:mod:`meshladar.options` for ``simulate``), :mod:`.types` (the flags' value checkers),
+:mod:`meshladar.forward.options` for ``simulate``), :mod:`.argtypes` (the flags' value checkers),
 :mod:`.checks` (output paths), and the command bodies in :mod:`.simulate`,
 :mod:`.reconstruct` (``reconstruct``, ``receive``) and :mod:`.commands` (the rest); each
 body only calls the API.

@@ -10,10 +10,12 @@ import os
 
 import numpy as np
 
-from .. import bench, materials, paper, phantoms, plotting, results, studies
-from .. import study_reconstruction as study
+from .. import materials, phantoms, plotting, studies
+from ..studies import bench, paper
+from ..studies import reconstruction as study
 from .._validate import check_size
 from ..errors import ParameterError
+from ..io import write_text_atomic
 from .checks import check_outdir, check_output
 from .simulate import load_scene
 
@@ -113,7 +115,7 @@ _STUDY_3D = {"quick": (600, 64, 1.0, 1.0), "full": (2000, 128, 1.0, 2.0)}
 
 
 def _study_3d(args) -> int:
-    """The paper's findings in 3-D (meshladar.paper.run_3d): metrics as JSON, central slices
+    """The paper's findings in 3-D (meshladar.studies.paper.run_3d): metrics as JSON, central slices
     of every volume as a PNG."""
     views, size, smooth, rpb = _STUDY_3D[args.setting]
     metrics, volumes = paper.run_3d(views=views, size=size, smooth=smooth,
@@ -122,7 +124,7 @@ def _study_3d(args) -> int:
     doc = {"setting": args.setting, "views": views, "size": size, "smooth_bins": smooth,
            "rays_per_bin": rpb, "metrics": metrics}
     path = os.path.join(args.outdir, "tomography3d.json")
-    results.write_text_atomic(path, json.dumps(doc, indent=2, sort_keys=True))
+    write_text_atomic(path, json.dumps(doc, indent=2, sort_keys=True))
     (png,) = plotting.viz("studies").draw_tomography3d(volumes, args.outdir, views, size)
     print(f"3-D tomography study ({args.setting}: {views} views, {size}^3 voxels)")
     for key, value in metrics.items():
@@ -137,13 +139,13 @@ _STUDY_COLUMNS = ["phantom", "spacing_deg", "method", "photons", "speckle_cells"
 
 
 def _study_reconstruction(args) -> int:
-    """The reconstruction study (meshladar.study_reconstruction): its table as CSV and JSON,
+    """The reconstruction study (meshladar.studies.reconstruction): its table as CSV and JSON,
     the 1° and 10° images of every method as a figure."""
     rows, images = study.run(args.setting, photons=args.photons, speckle_cells=args.speckle,
                              background=args.background or 0.0)
     os.makedirs(args.outdir, exist_ok=True)
     path = os.path.join(args.outdir, "reconstruction.json")
-    results.write_text_atomic(path, json.dumps({"setting": args.setting, "rows": rows},
+    write_text_atomic(path, json.dumps({"setting": args.setting, "rows": rows},
                                                indent=2))
     buf = io.StringIO()
     writer = csv.DictWriter(buf, fieldnames=_STUDY_COLUMNS)
@@ -151,7 +153,7 @@ def _study_reconstruction(args) -> int:
     for r in rows:
         writer.writerow({k: r.get(k, "") for k in _STUDY_COLUMNS})
     table = os.path.join(args.outdir, "reconstruction.csv")
-    results.write_text_atomic(table, buf.getvalue())
+    write_text_atomic(table, buf.getvalue())
     (png,) = plotting.viz("studies").draw_reconstruction(images, args.outdir)
     print(f"reconstruction study ({args.setting})")
     print("\n".join(study.report(rows)))

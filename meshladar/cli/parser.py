@@ -1,5 +1,5 @@
 """The command line's parser. ``simulate``'s model, sensor and stream flags are generated
-from :mod:`meshladar.options` (the table :func:`meshladar.simulate` reads); the other
+from :mod:`meshladar.forward.options` (the table :func:`meshladar.simulate` reads); the other
 commands' few flags are written here."""
 
 from __future__ import annotations
@@ -7,9 +7,9 @@ from __future__ import annotations
 import argparse
 
 from .. import __version__
-from ..options import MODELS, OPTIONS, SENSOR_OPTIONS
+from ..forward.options import MODELS, OPTIONS, SENSOR_OPTIONS
 from ..reconstruct import FILTERS
-from .types import (KIND_TYPES, angle_list, coatings, nonnegative_float, nonnegative_int,
+from .argtypes import (KIND_TYPES, angle_list, coatings, nonnegative_float, nonnegative_int,
                     positive_float, positive_int, unit_fraction, window_size)
 
 __all__ = ["build_parser"]
@@ -40,7 +40,7 @@ _RECEIVE_EPILOG = (
 
 
 def _add_option(group, o):
-    """One :class:`meshladar.options.Option` as a flag of ``group``."""
+    """One :class:`meshladar.forward.options.Option` as a flag of ``group``."""
     if o.kind == "flag":
         group.add_argument(o.cli_flag, dest=o.name, action="store_true", help=o.help_text)
     elif o.kind == "choice":

@@ -6,11 +6,12 @@ from __future__ import annotations
 import os
 import warnings
 
-from .. import plotting, results
+from .. import io, plotting
 from ..errors import MeshladarWarning, ParameterError
-from ..receiver import GaussianPulse, Noise, SampledPulse, receive
+from ..noise import Noise
+from ..waveforms import GaussianPulse, SampledPulse, receive
 from ..reconstruct import clip_radiance, fbp, log_radiance
-from ..volume import radon3d
+from ..reconstruct.volumes import fbp3d
 from .checks import check_not_input, check_output
 
 __all__ = ["cmd_reconstruct", "cmd_receive", "IMAGE_SUFFIXES"]
@@ -22,7 +23,7 @@ IMAGE_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg", ".tif", ".tiff")
 
 def _save_figure(fig, output):
     fmt = os.path.splitext(output)[1].lower().lstrip(".")
-    results.write_atomic(output, lambda fh: fig.savefig(fh, format=fmt, dpi=150))
+    io.write_atomic(output, lambda fh: fig.savefig(fh, format=fmt, dpi=150))
 
 
 def cmd_reconstruct(args) -> int:
@@ -31,7 +32,7 @@ def cmd_reconstruct(args) -> int:
     check_output(args.output, IMAGE_SUFFIXES, [args.result])
     data = os.path.splitext(args.output)[0] + ".image.npz"
     check_not_input(args.output, data, args.result, "image data")
-    sino, meta = results.load_sinogram(args.result)
+    sino, meta = io.load_sinogram(args.result)
     if args.log:
         sino = log_radiance(sino)
     if args.clip is not None:
@@ -41,7 +42,7 @@ def cmd_reconstruct(args) -> int:
         # a margin, so that a target filling the bins does not sit on the cube's faces
         return _reconstruct_3d(args, sino, args.extent or 1.15 * extent)
     if args.smooth is not None:
-        raise ParameterError("--smooth applies to 3-D views (radon3d); this sinogram's views "
+        raise ParameterError("--smooth applies to 3-D views (fbp3d); this sinogram's views "
                              "are about the z axis (use --filter)")
     image = fbp(sino, size=args.size or 512, extent=extent, filter=args.filter or "ramp")
     # the quick look's symmetric scale, log input labelled as such, and a centre slice
@@ -50,7 +51,7 @@ def cmd_reconstruct(args) -> int:
                                          + (f", {prep}" if prep else "")
                                          + f" ({args.filter or 'ramp'} filter)")
     _save_figure(fig, args.output)
-    results.save_result(data, {"image": image.values},
+    io.save_result(data, {"image": image.values},
                         {"kind": "image", "extent": extent, "info": image.info,
                          "source": os.path.basename(args.result)})
     if not args.quiet:
@@ -60,13 +61,13 @@ def cmd_reconstruct(args) -> int:
 
 
 def _reconstruct_3d(args, sino, extent) -> int:
-    """reconstruct for views over the sphere: the 3-D Radon inversion (meshladar.volume),
+    """reconstruct for views over the sphere: the 3-D Radon inversion (meshladar.reconstruct.fbp3d),
     three central slices as the figure, the volume in OUTPUT.volume.npz."""
     if args.filter is not None:
         raise ParameterError("--filter applies to FBP of views about the z axis; 3-D views "
                              "are inverted with a second difference (use --smooth BINS)")
     size = args.size or 128
-    vol = radon3d(sino, size=size, extent=extent, smooth=args.smooth or 0.0)
+    vol = fbp3d(sino, size=size, extent=extent, smooth=args.smooth or 0.0)
     data = os.path.splitext(args.output)[0] + ".volume.npz"
     if os.path.abspath(data) == os.path.abspath(args.result):
         raise ParameterError(f"-o {args.output!r} would write the volume to the input "
@@ -75,7 +76,7 @@ def _reconstruct_3d(args, sino, extent) -> int:
         vol, title=f"3-D Radon inversion of {os.path.basename(args.result)} "
                    f"({sino.n_views} views, {size}^3)")
     _save_figure(fig, args.output)
-    results.save_result(data, {"values": vol.values, "x": vol.x, "y": vol.y, "z": vol.z},
+    io.save_result(data, {"values": vol.values, "x": vol.x, "y": vol.y, "z": vol.z},
                         {"kind": "volume", "info": vol.info,
                          "source": os.path.basename(args.result)})
     if not args.quiet:
@@ -136,7 +137,7 @@ def cmd_receive(args) -> int:
     check_output(args.output, (".npz",), [args.result])
     if args.plot is not None:
         check_output(args.plot, (".png",), [args.result, args.output], "--plot")
-    sino, _ = results.load_sinogram(args.result)
+    sino, _ = io.load_sinogram(args.result)
     if sino.info.get("radiometry") != "power" and not args.quiet:
         warnings.warn(f"{args.result} holds {sino.info.get('radiometry', 'paper')!r} "
                       "radiometry (Eq. 8), not the power a receiver collects: simulate with "
@@ -151,7 +152,7 @@ def cmd_receive(args) -> int:
     noise, draws = _noise(args, waves)
     params = {"source": os.path.basename(args.result), "seed": args.seed,
               "realisations": args.realisations}
-    results.save_waveforms(args.output, waves, realisations=draws, noise=noise,
+    io.save_waveforms(args.output, waves, realisations=draws, noise=noise,
                            params=params)
     if args.plot is not None:
         plotting.viz("waveforms").draw(waves, args.plot, realisations=draws, noise=noise)

@@ -1,18 +1,18 @@
 """``meshladar simulate``: a scene's range profiles, saved with the scene and parameters.
 
 The model options' flags, checks and "does not apply" errors come from
-:mod:`meshladar.options`, the table :func:`meshladar.simulate` reads too."""
+:mod:`meshladar.forward.options`, the table :func:`meshladar.simulate` reads too."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from .. import results
+from .. import io
 from ..errors import ParameterError
 from ..forward import simulate
 from ..ladar import MAX_VIEWS, Ladar
-from ..mesh import fibonacci_sphere
-from ..options import OPTIONS, SENSOR_OPTIONS
+from ..meshes import fibonacci_sphere
+from ..forward.options import OPTIONS, SENSOR_OPTIONS
 from ..sensor import FloodBeam, GaussianBeam, Sensor
 from ..stream import dask_executor
 from .checks import check_output
@@ -158,7 +158,7 @@ def cmd_simulate(args) -> int:
               "options": {k: (v.describe() if k == "sensor" else v) for k, v in opts.items()
                           if k != "progress"},
               "n_views": ladar.n_views, "n_bins": ladar.n_bins}
-    results.save_sinogram(args.output, sino, scene=scene, params=params)
+    io.save_sinogram(args.output, sino, scene=scene, params=params)
     if not args.quiet:
         print(_summary(args, sino, ladar, model))
     return 0

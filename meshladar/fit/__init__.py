@@ -1,7 +1,7 @@
 """Coatings and shapes from ladar data, the geometry traced once.
 
 * :mod:`.kernels`: :class:`CoatingKernel` and :func:`coating_kernel` (analytic shapes or
-  mesh :class:`~meshladar.raytrace.hits.Hits`).
+  mesh :class:`~meshladar.hits.Hits`).
 * :mod:`.coatings`: :func:`fit_coatings` (least squares, Poisson or speckle likelihood by
   IRLS; covariance and identifiability).
 * :mod:`.design`: :class:`ViewDesign`, :func:`design_views`.

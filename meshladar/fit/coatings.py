@@ -28,7 +28,7 @@ from .._summary import text as _text
 from .._validate import check_choice, check_count, check_real, check_sinogram
 from ..errors import MeshladarWarning, ParameterError
 from ..ladar import Ladar
-from ..receiver import Waveforms
+from ..waveforms import Waveforms
 from ..scene import Scene
 from . import _irls
 from ._identify import _correlation, _misfit, _uncertainty

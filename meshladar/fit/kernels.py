@@ -12,7 +12,7 @@ table.
   boundary sampled densely at arc-length weights, front-facing and unshadowed points
   binned by range (exact ray-ellipse occlusion); the weight is F cos θ dl (``"paper"``) or
   F cos² θ dl (``"power"``). Agrees with the analytic model's exact profiles to 0.5 %.
-* From mesh hits (:func:`coating_kernel` on :class:`~meshladar.raytrace.hits.Hits`): each
+* From mesh hits (:func:`coating_kernel` on :class:`~meshladar.hits.Hits`): each
   hit binned at its range with the weights :func:`~meshladar.weigh` gives it, per material
   index; equal to ``weigh`` to the table's interpolation.
 """
@@ -31,8 +31,8 @@ from .._validate import check_count
 from ..brdf import projected_weight
 from ..errors import ParameterError
 from ..precision import TINY
-from ..raytrace.hits import Hits
-from ..receiver import receive
+from ..hits import Hits
+from ..waveforms import receive
 from ..scene import Scene
 from ..sensor import check_radiometry
 from ..shapes import from_frame, to_frame
@@ -120,7 +120,7 @@ class CoatingKernel:
         these arguments, which is linear in the bins): each part's matrix composed with the
         per-view map from bins to samples. ``bin_edges`` become the samples' time edges
         (s) and :meth:`predict` gives waveform values; fit them with
-        :func:`fit_coatings` and the measured :class:`~meshladar.receiver.Waveforms`."""
+        :func:`fit_coatings` and the measured :class:`~meshladar.waveforms.Waveforms`."""
         if self.source.endswith("waveforms"):
             raise ParameterError("this kernel already gives waveforms")
         n_views, n_bins = self.shape
@@ -241,7 +241,7 @@ def _mesh_kernel(hits, radiometry):
 def coating_kernel(geometry, ladar=None, *, radiometry="paper", samples=8192):
     """The :class:`CoatingKernel` of analytic shapes (``geometry`` a Scene of disks and
     ellipses, with ``ladar``) or of traced mesh hits (``geometry`` the
-    :class:`~meshladar.raytrace.hits.Hits` of :func:`meshladar.trace`; monostatic, point
+    :class:`~meshladar.hits.Hits` of :func:`meshladar.trace`; monostatic, point
     binning). ``samples`` per analytic boundary."""
     radiometry = "power" if check_radiometry(radiometry) else "paper"
     if isinstance(geometry, Hits):

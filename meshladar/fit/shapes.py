@@ -2,7 +2,7 @@
 then the coatings, and say how the geometry's errors carry into the coatings.
 
 :func:`find_shapes` takes the surface points of a first reconstruction
-(:func:`meshladar.compensation.estimate_surface`: sub-pixel ridge points of the log-radiance
+(:func:`meshladar.reconstruct.compensation.estimate_surface`: sub-pixel ridge points of the log-radiance
 FBP) and finds circles among them by RANSAC (three points define a circle; the circle with
 the most points within ``tol`` wins, its points are removed, repeat), each refined by
 geometric least squares; with ``kind="ellipse"`` each connected group of points is fitted
@@ -31,7 +31,7 @@ from scipy.spatial import cKDTree
 
 from .._validate import check_choice, check_count, check_real
 from ..brdf import SandfordRobertson
-from ..compensation import estimate_surface, first_image
+from ..reconstruct.compensation import estimate_surface, first_image
 from ..errors import ParameterError
 from ..ladar import Ladar
 from ..scene import Scene

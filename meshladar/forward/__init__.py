@@ -12,22 +12,13 @@ from ..ladar import Ladar
 from ..scene import Scene
 from ..sinogram import Sinogram
 from .analytic import simulate_analytic
-from .mesh import simulate_mesh
+from .mesh import simulate_mesh, trace
+from .options import MODELS, OPTIONS, options_of
 from .pixel import simulate_pixel
 from .refine import simulate_tol
+from .resolved import resolve
 
-__all__ = ["simulate", "MODELS"]
-
-#: The forward models available in this version.
-MODELS = ("analytic", "mesh", "pixel")
-
-#: Streaming options every model takes (:mod:`meshladar.stream`).
-_STREAM = ("jobs", "executor", "progress", "run_dir")
-_OPTIONS = {"analytic": ("radiometry",) + _STREAM,
-            "pixel": ("pixel_size", "ray_spacing", "radiometry") + _STREAM,
-            "mesh": ("radiometry", "sensor", "mode", "normals", "back_faces", "z0",
-                     "ray_spacing", "rays_per_bin", "footprint", "sampling", "seed",
-                     "receiver", "tol", "max_rays", "backend") + _STREAM}
+__all__ = ["simulate", "MODELS", "OPTIONS", "trace", "simulate_mesh", "resolve"]
 
 
 def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
@@ -104,10 +95,10 @@ def _check_call(scene, ladar, model, options):
     if not isinstance(ladar, Ladar):
         raise ParameterError(f"ladar must be a meshladar.Ladar; got {type(ladar).__name__}")
     check_choice("model", model, MODELS)
-    unknown = sorted(set(options) - set(_OPTIONS[model]))
+    takes = options_of(model)              # the options table: meshladar.forward.options
+    unknown = sorted(set(options) - set(takes))
     if unknown:
-        raise ParameterError(f"model {model!r} takes options {_OPTIONS[model]}; got "
-                             f"{unknown[0]!r}")
+        raise ParameterError(f"model {model!r} takes options {takes}; got {unknown[0]!r}")
 
 
 def _run_mesh(scene, ladar, options):

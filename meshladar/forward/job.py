@@ -39,7 +39,9 @@ from ..weighing import material_table as _material_table
 from ..weighing.faces import face_bistatic_weights, face_footprints, face_weights
 from ..weighing.fused import cast_bin_grid
 from ..weighing.record import Weighing
+from ..weighing._kernels import bin_flat_hits, bin_smooth_hits
 from ..weighing.resolved import bin_resolved
+from ..weighing.sensor_view import bin_sensor_view
 
 __all__ = ["MeshJob", "plan_job", "mesh_job", "sensor_offset"]
 
@@ -153,9 +155,6 @@ def _resolved_stage(job, scene, view, chunk):
 
 
 def _sensor_stage(job, scene, view, chunk):
-    # numba compiles on first use (meshladar/__init__ imports the mesh model eagerly)
-    from ..weighing.sensor_view import bin_sensor_view
-
     n, back = bin_sensor_view(job.plan, job.weighing, scene, view.w, view.rng,
                               chunk.values[view.slot])
     return n, back
@@ -178,8 +177,6 @@ def _cast(job, scene, view):
 
 
 def _smooth_stage(job, scene, view, chunk):
-    from ..weighing._kernels import bin_smooth_hits   # numba: compiled on first use
-
     p, wg = job.plan, job.weighing
     start = _range_offset(p.geo.center, view.w, None)
     if wg.footprint:
@@ -196,8 +193,6 @@ def _smooth_stage(job, scene, view, chunk):
 def _flat_stage(job, scene, view, chunk):
     """Flat normals, monostatic or (fused backends) bistatic: each face's weight for the
     view before the cast where the compiled kernel cannot evaluate it at a hit."""
-    from ..weighing._kernels import bin_flat_hits     # numba: compiled on first use
-
     p, wg = job.plan, job.weighing
     start = _range_offset(p.geo.center, view.w, view.w_r)
     if wg.footprint:

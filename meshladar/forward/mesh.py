@@ -28,7 +28,7 @@ from ..raytrace.plan import plan_trace
 from ..weighing import sinogram_of as _sinogram
 from ..runs import array_digest as digest
 from ..sensor import check_radiometry
-from ..stream import _MAX_JOBS_PER_CORE, _THREADS_FROM, joined, run_chunks
+from ..stream import MAX_JOBS_PER_CORE, THREADS_FROM, joined, run_chunks
 from ..weighing.record import Weighing
 from .job import mesh_job, plan_job, sensor_offset
 from ..raytrace.grid import ray_grid as _ray_grid
@@ -155,9 +155,9 @@ def _row_jobs(n_views, jobs, executor, work):
     if n_views != 1 or executor is not None:
         return 1
     if jobs is None:
-        return (os.cpu_count() or 1) if work >= _THREADS_FROM else 1
+        return (os.cpu_count() or 1) if work >= THREADS_FROM else 1
     ok = isinstance(jobs, (int, np.integer)) and not isinstance(jobs, bool) and 1 <= jobs
-    return min(int(jobs), _MAX_JOBS_PER_CORE * (os.cpu_count() or 1)) if ok else 1
+    return min(int(jobs), MAX_JOBS_PER_CORE * (os.cpu_count() or 1)) if ok else 1
 
 
 def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0=None,

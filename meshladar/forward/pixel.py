@@ -6,7 +6,7 @@ of the implicit function's gradient at the pixel centre (the normal of the level
 through it; radial, hence exact in direction, for disks).
 
 For each view, parallel rays spaced ``ray_spacing`` apart across the scene travel from the
-ladar along −w and are traced through the grid with Siddon's algorithm (``meshladar.siddon``)
+ladar along −w and are traced through the grid with Siddon's algorithm (``meshladar.forward.siddon``)
 to the first filled pixel they cross: the rasterised surface. The hit's range is that of the middle of the ray's
 path through the pixel. A ray of cross-section δs covers the arc length δs / cos θ of the
 surface, cos θ = n·w, and deposits F(θ) cos θ times that arc (Σ F δs → ∫ F cos θ dl,
@@ -34,6 +34,7 @@ from ..errors import ParameterError
 from ..ladar import Ladar
 from ..scene import Scene
 from ..shapes import ellipse_normal
+from . import _siddon_kernels as _kernels
 from .siddon import PixelGrid
 from ..runs import array_digest
 from ..sensor import check_radiometry
@@ -150,8 +151,6 @@ def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=N
 
 def _views(payload, views):
     """The stream's per-chunk job: the profiles of views ``views``."""
-    from . import _siddon_kernels as _kernels  # numba: loaded when a ray is traced
-
     (mask, grid, flat_owner, flat_normal, materials, arc_max, s_rel, (cx, cy), distance, ds,
      phi, edges, power) = payload
     n_rays, n_bins = s_rel.size, edges.size - 1

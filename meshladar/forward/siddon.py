@@ -21,6 +21,7 @@ import numpy as np
 
 from .._validate import check_count, check_real, finite_array
 from ..errors import ParameterError
+from . import _siddon_kernels as _kernels
 
 __all__ = ["PixelGrid", "Rays", "parallel_rays", "project", "backproject", "ParallelProjector"]
 
@@ -114,8 +115,6 @@ def parallel_rays(angles_deg, positions, *, distance):
 
 def project(image, grid: PixelGrid, rays: Rays) -> np.ndarray:
     """Line integrals Σ length · image of each ray through the grid: (n_rays,)."""
-    from . import _siddon_kernels as _kernels  # numba: loaded when a ray is traced
-
     img = np.ascontiguousarray(finite_array("image", image))
     if img.shape != grid.shape:
         raise ParameterError(f"image must have the grid's shape {grid.shape}; got {img.shape}")
@@ -131,8 +130,6 @@ _BACKPROJECT_PARTS = 8
 
 def backproject(values, grid: PixelGrid, rays: Rays) -> np.ndarray:
     """The exact adjoint of :func:`project`: Σ_rays length · value into each pixel."""
-    from . import _siddon_kernels as _kernels  # numba: loaded when a ray is traced
-
     v = np.ascontiguousarray(finite_array("values", values).ravel())
     if v.size != rays.size:
         raise ParameterError(f"values must have one entry per ray ({rays.size}); got {v.size}")
@@ -152,7 +149,7 @@ class ParallelProjector:
     Examples
     --------
     >>> import numpy as np
-    >>> from meshladar.siddon import PixelGrid, ParallelProjector
+    >>> from meshladar.forward.siddon import PixelGrid, ParallelProjector
     >>> grid = PixelGrid.square(64, 1.0)
     >>> A = ParallelProjector(grid, np.arange(0.0, 360.0, 2.0), np.linspace(-1, 1, 96))
     >>> sino = A @ np.ones(grid.shape)           # chord lengths through the square

@@ -51,6 +51,8 @@ from __future__ import annotations
 
 import importlib
 
+from .._deprecated import warn_moved
+
 from .embree import BACKENDS
 from .grid import MODES, SAMPLINGS
 from ..hits import Hits
@@ -66,5 +68,6 @@ _ENTRY_POINTS = ("trace", "simulate_mesh", "first_hits", "occluded")
 
 def __getattr__(name):
     if name in _ENTRY_POINTS:
+        warn_moved(f"raytrace.{name}", f"forward.{name}")
         return getattr(importlib.import_module("meshladar.forward.mesh"), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

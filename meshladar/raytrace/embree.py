@@ -13,7 +13,7 @@ import numpy as np
 from ..errors import MeshladarWarning, ParameterError
 from ..precision import FAR_RATIO as _FAR_RATIO
 from ..precision import SCENE_RADIUS_RANGE
-from ..mesh import corner_normals
+from ..meshes import corner_normals
 from ..scene import Scene
 from .backends import BACKENDS, resolve_backend
 from .backends import backend as get_backend

@@ -26,7 +26,7 @@ import numpy as np
 from .._validate import check_choice, check_count, check_real, check_sinogram, finite_array
 from ..errors import ParameterError
 from ..images import Image
-from ..siddon import PixelGrid
+from ..forward.siddon import PixelGrid
 from ..stream import Progress
 from .fbp2d import PAPER_CLIP, noise_floor, quiet_fbp
 from .operators import PROJECTORS, LinearProjector, RangeProjector

@@ -1,7 +1,7 @@
 """The projectors of reconstruction as one operator protocol.
 
 Every projector is a :class:`Projector`, a :class:`scipy.sparse.linalg.LinearOperator` from
-an image on a :class:`~meshladar.siddon.PixelGrid` to a sinogram's (n_views, n_bins) bin
+an image on a :class:`~meshladar.forward.siddon.PixelGrid` to a sinogram's (n_views, n_bins) bin
 integrals, with its exact adjoint as ``A.T`` (ODL's habit: FBP is ``ray_trafo.adjoint *
 filter_op``; the solvers of :mod:`meshladar.reconstruct.iterative` only use ``@`` and
 ``.T``). ``A @ image`` takes and gives arrays in their own shapes (image (ny, nx) →
@@ -29,9 +29,9 @@ from scipy.spatial import cKDTree
 
 from .._validate import check_count, check_real, finite_array
 from ..errors import ParameterError
-from ..siddon import backproject as siddon_backproject
-from ..siddon import parallel_rays
-from ..siddon import project as siddon_project
+from ..forward.siddon import backproject as siddon_backproject
+from ..forward.siddon import parallel_rays
+from ..forward.siddon import project as siddon_project
 from ._kernels import backproject, splat_project, surface_backproject, surface_project
 from .surface import _segments, _uniform
 
@@ -125,7 +125,7 @@ class RangeProjector(Projector):
 
     Parameters
     ----------
-    grid : meshladar.siddon.PixelGrid
+    grid : meshladar.forward.siddon.PixelGrid
     angles_deg : (n_views,) array
         View angles about z (w = (cos φ, sin φ)).
     bin_edges : (n_bins + 1,) array

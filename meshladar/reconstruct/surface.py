@@ -20,7 +20,7 @@ from ..brdf import BRDF, check_brdf
 from ..errors import ParameterError
 from ..images import Image
 from ..sensor import check_radiometry
-from ..siddon import PixelGrid
+from ..forward.siddon import PixelGrid
 from ._kernels import surface_backproject, surface_shadows
 from .fbp2d import log_radiance
 

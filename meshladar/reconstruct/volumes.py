@@ -11,11 +11,11 @@ The 3-D inversion formula is local:
 so :func:`fbp3d` takes each profile's second difference (the three-point stencil, exact on
 quadratics: a uniform ball's g = π(a² − s²) gives −g'' = 2π inside, and the ball back),
 and backprojects over the views with quadrature weights (4π/n each for the Fibonacci
-directions of ``meshladar.mesh.fibonacci_sphere``; a solid-angle Voronoi weight otherwise).
+directions of ``meshladar.meshes.fibonacci_sphere``; a solid-angle Voronoi weight otherwise).
 A uniform ball of value 1 reconstructs to 1 inside (tests/reconstruct/test_volumes.py).
 
 :func:`fbp_slices` reconstructs from returns resolved in elevation and range for views about
-the z axis (:func:`meshladar.resolved.resolve`): each elevation row, per unit height, is a
+the z axis (:func:`meshladar.forward.resolved.resolve`): each elevation row, per unit height, is a
 2-D sinogram of that slice, reconstructed by :func:`meshladar.fbp`.
 
 ``radon3d`` and ``fbp_stack`` are the old names of :func:`fbp3d` and :func:`fbp_slices`
@@ -35,8 +35,8 @@ from scipy.spatial import cKDTree
 from .._validate import check_count, check_real, check_sinogram, check_size, finite_array
 from ..errors import ParameterError
 from ..images import Volume
-from ..mesh import fibonacci_sphere
-from ..resolved import Returns
+from ..meshes import fibonacci_sphere
+from ..returns import Returns
 from ..sinogram import Sinogram
 from ._kernels import backproject3d
 from .fbp2d import fbp
@@ -124,7 +124,7 @@ def fbp3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None,
         raise ParameterError(
             f"fbp3d needs views over the whole sphere of directions; these leave a "
             f"direction {gap:.0f} deg from every view (at most {MAX_GAP_DEG:g}): use views "
-            "such as meshladar.mesh.fibonacci_sphere(n) (views about the z axis: fbp, or "
+            "such as meshladar.meshes.fibonacci_sphere(n) (views about the z axis: fbp, or "
             "fbp_slices of elevation-resolved returns)")
     if extent is None:
         extent = float(max(abs(sino.bin_edges[0]), abs(sino.bin_edges[-1])))
@@ -164,7 +164,7 @@ def fbp_slices(returns, *, size=256, extent=None, filter="ramp") -> Volume:
 
     Parameters
     ----------
-    returns : meshladar.resolved.Returns
+    returns : meshladar.returns.Returns
         With axes ("elevation", "range") (either order) and views about the z axis.
     size, extent, filter
         As :func:`meshladar.fbp`, per slice.

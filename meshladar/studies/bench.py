@@ -20,16 +20,16 @@ from .. import phantoms as _phantoms
 from ..brdf import SandfordRobertson
 from ..fit import coating_kernel, fit_coatings
 from ..forward import simulate
-from ..iterative import sart, sirt
+from ..reconstruct.iterative import sart, sirt
 from ..ladar import Ladar
-from ..mesh import fibonacci_sphere, sphere
-from ..raytrace import trace
-from ..receiver import GaussianPulse, receive
+from ..meshes import fibonacci_sphere, sphere
+from ..forward.mesh import trace
+from ..waveforms import GaussianPulse, receive
 from ..reconstruct import fbp
 from ..scene import Scene
 from ..sensor import Sensor
 from ..sinogram import Sinogram
-from ..volume import radon3d
+from ..reconstruct.volumes import fbp3d as radon3d
 from ..weighing import weigh
 from . import peer
 from .bench_mesh import (bench_dask, bench_fused,  # noqa: F401

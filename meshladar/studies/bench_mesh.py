@@ -16,10 +16,11 @@ import numpy as np
 
 from .. import materials
 from ..ladar import Ladar
-from ..mesh import fibonacci_sphere
-from ..raytrace import embree4, simulate_mesh, trace
-from ..raytrace.embree import _embree_scene, _Geometry
-from ..raytrace.grid import _ray_grid
+from ..meshes import fibonacci_sphere
+from ..forward.mesh import simulate_mesh, trace
+from ..raytrace import embree4
+from ..raytrace.embree import Geometry, embree_scene
+from ..raytrace.grid import ray_grid
 from ..stream import dask_executor
 from ..weighing import weigh
 from .timing import icosphere_scene as _icosphere_scene
@@ -45,10 +46,10 @@ def bench_mesh(*, repeats=3, subdivisions=6, rays_per_view=1_000_000, views=16, 
     spacing = 1.0 / math.sqrt(rays_per_view)          # the sphere's 1 × 1 projected square
     vecs = fibonacci_sphere(views)
     ladar = Ladar(None, np.linspace(-0.6, 0.6, 513), view_vectors=vecs)
-    geo = _Geometry(scene, "flat")
-    emb = _embree_scene(geo, "embreex")
-    pk = _embree_scene(geo, "packets")
-    grids = [_ray_grid(geo, w, "3d", spacing, 0.0, None)[0] for w in vecs]
+    geo = Geometry(scene, "flat")
+    emb = embree_scene(geo, "embreex")
+    pk = embree_scene(geo, "packets")
+    grids = [ray_grid(geo, w, "3d", spacing, 0.0, None)[0] for w in vecs]
     dirs = [np.ascontiguousarray((-w)[None, :], dtype=np.float32) for w in vecs]
     n_rays = sum(len(o) for o in grids)
 
@@ -163,8 +164,8 @@ import numpy as np
 from meshladar import materials
 from meshladar.studies.timing import icosphere_scene as _icosphere_scene
 from meshladar.ladar import Ladar
-from meshladar.mesh import fibonacci_sphere
-from meshladar.raytrace import simulate_mesh
+from meshladar.meshes import fibonacci_sphere
+from meshladar.forward.mesh import simulate_mesh
 scene = _icosphere_scene({subdivisions}, materials.DARK_GRAY)
 ladar = Ladar(None, np.linspace(-0.6, 0.6, 1025), view_vectors=fibonacci_sphere({views}))
 t = time.perf_counter()

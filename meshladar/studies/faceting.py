@@ -46,7 +46,7 @@ from ..forward import simulate
 from ..ladar import Ladar
 from ..precision import TINY
 from ..reconstruct import fbp
-from ..results import save_result, write_text_atomic
+from ..io import save_result, write_text_atomic
 from ..runs import RunFolder
 from ..sinogram import Sinogram
 from ..stream import Progress

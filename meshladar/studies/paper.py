@@ -54,11 +54,11 @@ from ..brdf import SandfordRobertson
 from ..errors import EnergyConservationWarning
 from ..forward import simulate
 from ..ladar import Ladar
-from ..mesh import fibonacci_sphere
+from ..meshes import fibonacci_sphere
 from ..reconstruct import clip_radiance, fbp, log_radiance
 from ..scene import Scene
 from ..shapes import from_frame
-from ..volume import radon3d
+from ..reconstruct.volumes import fbp3d as radon3d
 
 __all__ = ["FIGURES", "run", "disk_darkening", "ellipse_darkening", "ring_visibility",
            "IMAGE_SIZE", "IMAGE_EXTENT"]
@@ -279,7 +279,7 @@ def run_3d(*, views=2000, size=128, smooth=1.0, extent=0.8, rays_per_bin=2.0):
     """The paper's findings measured in 3-D (``meshladar study tomography3d``): spheres
     seen from ``views`` Fibonacci directions (Eq. 8, as the paper; the mesh model with
     smooth normals and ``rays_per_bin`` rays per range bin across), reconstructed by
-    :func:`meshladar.volume.radon3d` on ``size``³ voxels with ``smooth``.
+    :func:`meshladar.reconstruct.volumes.fbp3d` on ``size``³ voxels with ``smooth``.
 
     Metrics (``3d.*``): ``sphere_<coating>.darkening`` (:func:`shell_darkening`) for the
     Lambertian (b = 0), diffuse b = 0.99 and glint e = 0.007 coatings;

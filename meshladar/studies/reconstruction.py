@@ -31,12 +31,12 @@ from .. import materials
 from .. import phantoms as _specs
 from .._validate import check_real
 from ..brdf import Lambertian, SandfordRobertson
-from ..compensation import compensate
+from ..reconstruct.compensation import compensate
 from ..errors import MeshladarWarning, ParameterError
 from ..forward import simulate
-from ..iterative import cgls, glint_weights, sart, sirt, tv_fista
+from ..reconstruct.iterative import cgls, glint_weights, sart, sirt, tv_fista
 from ..ladar import Ladar
-from ..receiver import Noise, draw_noise
+from ..noise import draw_noise, Noise
 from ..reconstruct import Image, clip_radiance, fbp, log_radiance
 from ..scene import Scene
 from . import paper
@@ -164,7 +164,7 @@ def _clutter(img, band, inside):
 def _noisy(sino, photons, seed, speckle_cells=None, background=0.0):
     """The sinogram as a photon-counting receiver sees it: scaled so that its brightest
     bin holds ``photons`` photoelectrons, with speckle of ``speckle_cells`` cells per bin
-    and ``background`` photoelectrons per bin (:func:`meshladar.receiver.draw_noise`, one
+    and ``background`` photoelectrons per bin (:func:`meshladar.noise.draw_noise`, one
     seeded draw), the mean background subtracted (as a receiver that measured it would),
     scaled back."""
     k = photons / float(sino.values.max())

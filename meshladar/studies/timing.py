@@ -6,7 +6,7 @@ from __future__ import annotations
 import statistics
 import time
 
-from ..mesh import sphere
+from ..meshes import sphere
 from ..scene import Scene
 
 __all__ = ["time_call", "interleaved", "icosphere_scene"]

@@ -1,7 +1,7 @@
 """The weigh stage (DESIGN.md layer 5): every weight and every binning of first hits.
 
 :mod:`.record` (the :class:`Weighing` record, whose ``check(plan)`` refuses every
-inapplicable combination before the first ray), :mod:`.weigh` (per-hit weights F·δA⊥,
+inapplicable combination before the first ray), :mod:`.per_hit` (per-hit weights F·δA⊥,
 point/footprint/curved bins, :func:`weigh` of cached :class:`~meshladar.hits.Hits`),
 :mod:`.faces` (per-face weights and footprints of a view, for the compiled loops),
 :mod:`.resolved` (binning by one to three coordinates), :mod:`.sensor_view` (a perspective
@@ -11,9 +11,9 @@ ray-casting stage below it, never the forward models' entry points."""
 
 from __future__ import annotations
 
-from . import weigh as _weigh
+from . import per_hit as _weigh
 from .record import Weighing
-from .weigh import (GRAZING_RECEIVER_COS, bin_one, material_table, sinogram_of, weigh,
+from .per_hit import (GRAZING_RECEIVER_COS, bin_one, material_table, sinogram_of, weigh,
                     weights)
 
 # the old module's private names, for the importers that still use them (one release)

@@ -11,7 +11,7 @@ import math
 
 from numba import njit
 
-from .._kernels import _sr_monostatic
+from ..brdf._sandford_robertson_kernel import sr_monostatic as _sr_monostatic
 from ..precision import BOX_RATIO as _BOX_RATIO
 from ..precision import TINY as _TINY
 

@@ -11,7 +11,7 @@ from ..precision import TINY
 from ..raytrace.grid import dot as _dot
 from ..raytrace.grid import frame as _frame
 from ..raytrace.views import bistatic_angles as _bistatic_angles
-from .weigh import _weights
+from .per_hit import _weights
 
 __all__ = ["face_footprints", "face_weights", "face_bistatic_weights"]
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..raytrace.embree4_ctypes import RTC_RAY_QUERY_FLAG_COHERENT
+from ._fused_kernels import cast_bin_grid as kernel
 
 __all__ = ["cast_bin_grid"]
 
@@ -17,9 +18,6 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None):
     :func:`meshladar.raytrace.grid._grid_plan`'s (s, t, du, dv, u, v, L), ``bins`` the
     weigh-and-bin arguments from ``plane_d`` to ``footprint``; ``receiver`` (direction,
     lift) makes the view bistatic. Returns (back-face hits, rays cast)."""
-    # numba compiles on first use; meshladar/__init__ imports the mesh model eagerly
-    from ._fused_kernels import cast_bin_grid as kernel
-
     s, t, du, dv, u, v, L = plan
     sc = emb.scene.scene
     lib = sc.lib

@@ -1,13 +1,13 @@
 """Resolved returns' binning: one view's hits weighed (:func:`.weigh._weights`) and binned
 by one to three coordinates (range, cross-range, elevation, Doppler; module docstring of
-:mod:`meshladar.forward.resolve`), on a flat index over the cells."""
+:mod:`meshladar.forward.resolved`), on a flat index over the cells."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from ..raytrace.grid import frame as _frame
-from .weigh import _weights
+from .per_hit import _weights
 
 __all__ = ["bin_resolved"]
 

@@ -11,7 +11,7 @@ from ..precision import MIN_COS_FACET, REFINE_MIN_COS
 from ..raytrace.perspective import sensor_cast as _sensor_cast
 from ..sensor import FloodBeam
 from ._kernels import bin_sensor_hits
-from .weigh import _material_table
+from .per_hit import _material_table
 
 __all__ = ["bin_sensor_view"]
 

@@ -31,20 +31,6 @@ def test_the_compiled_sr_kernel_equals_the_model_on_a_grid_through_90_degrees(na
     np.testing.assert_allclose(got, m.value(c, s), rtol=1e-13, atol=0)
 
 
-@pytest.mark.parametrize("name", ["dark_gray", "aluminum", "glint e=1e-4"])
-def test_the_twin_is_the_engine_kernel_bit_for_bit(name):
-    # while the engine's loops still call meshladar._kernels._sr_monostatic (until the
-    # merge moves them onto the twin), the two must give the same bits
-    kernels = pytest.importorskip("meshladar._kernels")
-    if not hasattr(kernels, "_sr_monostatic"):
-        pytest.skip("the engine's copy is gone: the twin is the only kernel")
-    m = COATINGS[name]
-    c, s = np.cos(THETA), np.abs(np.sin(THETA))
-    ours = np.array([sr_monostatic(ci, si, *m.kernel_params) for ci, si in zip(c, s)])
-    theirs = np.array([kernels._sr_monostatic(ci, si, *m.kernel_params) for ci, si in zip(c, s)])
-    np.testing.assert_array_equal(ours, theirs)
-
-
 def test_the_material_table_stacks_each_coatings_kernel_row():
     mats = [DARK_GRAY, ALUMINUM, ml.brdf.Lambertian(0.25)]
     table = material_table(mats)

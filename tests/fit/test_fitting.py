@@ -1,4 +1,4 @@
-"""Coatings from ladar data (meshladar.fitting): the coating kernel against the analytic
+"""Coatings from ladar data (meshladar.fit): the coating kernel against the analytic
 model and against weigh on mesh hits, the coverage of the fitted intervals over seeded
 Poisson trials, identifiability failures, a user's own BRDF, and bad input."""
 
@@ -199,7 +199,7 @@ def test_coatings_from_waveforms():
     """Waveforms of 2 ns pulses at 10 GHz: the received kernel equals receive() of the
     kernel's sinogram, and the aluminium disk's coating is recovered from Poisson-counted
     waveform samples."""
-    from meshladar.receiver import GaussianPulse, receive
+    from meshladar.waveforms import GaussianPulse, receive
 
     lad = Ladar(np.arange(0.0, 360.0, 3.0), Ladar.centered(64, 1.6 / 64).bin_edges)
     K = coating_kernel(PAIR, lad, samples=2048, radiometry="power")
@@ -226,7 +226,7 @@ def test_a_glint_never_seen_leaves_its_parameters_undetermined():
     which shape the diffuse return, are fitted."""
     import trimesh
 
-    from meshladar.mesh import part_from_trimesh
+    from meshladar.meshes import part_from_trimesh
 
     plate = part_from_trimesh(trimesh.creation.box((1.0, 1.0, 0.02)), 0, name="plate")
     scene = Scene.from_parts([plate], [materials.ALUMINUM])

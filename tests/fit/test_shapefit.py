@@ -1,4 +1,4 @@
-"""Unknown geometry (meshladar.shapefit): shapes found in a sinogram's first reconstruction
+"""Unknown geometry (meshladar.fit.shapes): shapes found in a sinogram's first reconstruction
 against the true ones, and the coatings fitted on them with the geometry's share of their
 uncertainty."""
 

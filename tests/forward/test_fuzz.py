@@ -67,7 +67,7 @@ def test_random_small_meshes(vertices, faces, flip, angle):
     v = np.array(vertices, dtype=np.float64)
     f = np.array(faces)[:, ::-1] if flip else np.array(faces)
     try:
-        part = ml.mesh.MeshPart(v, f, 0)
+        part = ml.meshes.MeshPart(v, f, 0)
         scene = ml.Scene.from_parts([part], [ml.materials.DARK_GRAY])
     except GeometryError as exc:
         assert any(w in str(exc) for w in ("vertices must be finite", "faces index vertices",

@@ -1,4 +1,4 @@
-"""Returns resolved in cross-range, elevation and Doppler (meshladar.resolved): closed forms
+"""Returns resolved in cross-range, elevation and Doppler (meshladar.forward.resolved): closed forms
 and conservation."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import pytest
 
 import meshladar as ml
 from meshladar.materials import ALUMINUM, lambertian
-from meshladar.forward.resolve import resolve
+from meshladar.forward.resolved import resolve
 from meshladar.motion import Motion
 
 trimesh = pytest.importorskip("trimesh")
@@ -162,7 +162,7 @@ def test_rotating_cylinder_range_doppler():
 def test_each_view_total_is_the_same_whatever_it_is_binned_by():
     scene = ml.Scene.from_mesh(trimesh.creation.icosphere(subdivisions=4),
                                material=ALUMINUM)
-    ladar = ml.Ladar.covering(scene, n_bins=32, view_vectors=ml.mesh.fibonacci_sphere(5))
+    ladar = ml.Ladar.covering(scene, n_bins=32, view_vectors=ml.meshes.fibonacci_sphere(5))
     wide = np.linspace(-1.2, 1.2, 17)
     by = [resolve(scene, ladar, [("range", ladar.bin_edges)]),
           resolve(scene, ladar, [("cross_range", wide)]),
@@ -198,7 +198,7 @@ def test_resolved_noise_realisations():
                                material=lambertian(0.5))
     ladar = ml.Ladar.covering(scene, n_bins=16, angles_deg=[0.0])
     ret = resolve(scene, ladar, [("cross_range", np.linspace(-1, 1, 9))]).scaled(1e3)
-    from meshladar.receiver import Noise
+    from meshladar.noise import Noise
 
     with pytest.raises(ml.errors.ParameterError, match="dwell"):
         ret.realise(Noise(background_rate=1e6), 2, seed=1)

@@ -11,7 +11,7 @@ import trimesh
 from scipy import integrate
 
 import meshladar as ml
-from meshladar import mesh as mlmesh
+from meshladar import meshes as mlmesh
 from meshladar.errors import GeometryError, MeshladarWarning, ParameterError
 from meshladar.materials import ALUMINUM, DARK_GRAY, lambertian
 
@@ -34,7 +34,7 @@ def test_sphere_3d_range_profile(material):
     R = 0.5
     scene = _sphere_scene(material, R)
     edges = np.linspace(-R, R, 33)
-    views = ml.mesh.fibonacci_sphere(3)
+    views = ml.meshes.fibonacci_sphere(3)
     ladar = ml.Ladar(None, edges, view_vectors=views)
     sino = ml.simulate(scene, ladar, model="mesh", normals="exact", rays_per_bin=12,
                        footprint=True)
@@ -62,7 +62,7 @@ def test_sphere_3d_range_profile(material):
 def test_first_return_range_of_an_offset_sphere():
     c = np.array([0.3, -0.2, 0.1])
     scene = _sphere_scene(lambertian(), 0.25, 4, center=c)
-    views = ml.mesh.fibonacci_sphere(5)
+    views = ml.meshes.fibonacci_sphere(5)
     hits = ml.trace(scene, ml.Ladar(None, np.linspace(-2, 2, 401), view_vectors=views),
                     ray_spacing=0.005)
     for i, w in enumerate(views):
@@ -287,10 +287,10 @@ def test_analytic_scene_is_tessellated_for_the_mesh_model():
 
 
 def test_fibonacci_sphere():
-    v = ml.mesh.fibonacci_sphere(500)
+    v = ml.meshes.fibonacci_sphere(500)
     np.testing.assert_allclose(np.linalg.norm(v, axis=1), 1.0, rtol=1e-12)
     assert np.all(np.abs(v.mean(axis=0)) < 0.01)
-    assert np.all(ml.mesh.fibonacci_sphere(50, hemisphere=True)[:, 2] >= 0)
+    assert np.all(ml.meshes.fibonacci_sphere(50, hemisphere=True)[:, 2] >= 0)
 
 
 def test_bistatic_receiver():
@@ -383,7 +383,7 @@ def test_file_formats_and_per_face_materials(tmp_path):
 
 
 def test_sphere_part_via_public_api_and_progress_is_quiet_off_a_terminal(capsys):
-    scene = ml.Scene.from_parts([ml.mesh.sphere((0, 0, 0), 0.5, 0, subdivisions=3)],
+    scene = ml.Scene.from_parts([ml.meshes.sphere((0, 0, 0), 0.5, 0, subdivisions=3)],
                                 [lambertian(1.0)])
     sino = ml.simulate(scene, ml.Ladar.paper(angles_deg=[0.0, 90.0]), model="mesh",
                        progress=True)
@@ -397,7 +397,7 @@ def test_sphere_part_via_public_api_and_progress_is_quiet_off_a_terminal(capsys)
 def test_alternating_meshes_reuse_their_embree_scenes():
     from meshladar.raytrace.embree import _EMBREE_CACHE_SIZE, _embree_scene, _Geometry
 
-    scenes = [ml.Scene.from_parts([ml.mesh.sphere((0, 0, 0), 0.5 + 0.1 * k, 0, subdivisions=1)],
+    scenes = [ml.Scene.from_parts([ml.meshes.sphere((0, 0, 0), 0.5 + 0.1 * k, 0, subdivisions=1)],
                                   [DARK_GRAY]) for k in range(_EMBREE_CACHE_SIZE + 1)]
     geos = [_Geometry(s, "flat") for s in scenes]
     first = [_embree_scene(g) for g in geos[:2]]
@@ -408,7 +408,7 @@ def test_alternating_meshes_reuse_their_embree_scenes():
 
 
 def test_hits_are_a_frozen_record_of_named_arrays():
-    sphere = ml.Scene.from_parts([ml.mesh.sphere((0, 0, 0), 0.5, 0, subdivisions=2)],
+    sphere = ml.Scene.from_parts([ml.meshes.sphere((0, 0, 0), 0.5, 0, subdivisions=2)],
                                  [DARK_GRAY])
     lad = ml.Ladar(np.array([0.0, 90.0]), np.linspace(-0.6, 0.6, 9))
     hits = ml.trace(sphere, lad)

@@ -319,7 +319,7 @@ def test_an_internal_bug_is_one_line_with_the_traceback_in_a_file(capsys, monkey
 
 # ------------------------------------------------------------------ the API's boundary
 
-_SPHERE = ml.Scene.from_parts([ml.mesh.sphere((0, 0, 0), 0.5, 0, subdivisions=2)], [DARK_GRAY])
+_SPHERE = ml.Scene.from_parts([ml.meshes.sphere((0, 0, 0), 0.5, 0, subdivisions=2)], [DARK_GRAY])
 _LAD = ml.Ladar(np.array([0.0]), np.linspace(-0.6, 0.6, 9))
 _SINO = ml.Sinogram(np.ones((2, 4)), angles_deg=[0.0, 90.0], bin_edges=np.linspace(-1, 1, 5))
 

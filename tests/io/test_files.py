@@ -31,7 +31,7 @@ from meshladar import cli
 from meshladar import io as mlio
 from meshladar.errors import GeometryError
 from meshladar.materials import DARK_GRAY
-from meshladar.mesh import MeshPart, corner_normals
+from meshladar.meshes import corner_normals, MeshPart
 
 BOX = 0.5                    # edge of the test box: 12 faces, area 6·0.5² = 1.5
 BOX_AREA = 6 * BOX * BOX
@@ -540,7 +540,7 @@ def test_recomputed_positions_weld_into_one_point():
     ulps = np.random.default_rng(3).integers(-4, 5, size=tri.shape)
     noisy = tri + ulps * np.spacing(np.abs(tri) + BOX)
     assert len(np.unique(noisy, axis=0)) > 8
-    loaded = ml.mesh.load_parts(trimesh.Trimesh(noisy, np.arange(len(tri)).reshape(-1, 3),
+    loaded = ml.meshes.load_parts(trimesh.Trimesh(noisy, np.arange(len(tri)).reshape(-1, 3),
                                                 process=False))
     (_, mesh), = loaded
     assert len(mesh.vertices) == 8 and mesh.is_watertight
@@ -583,7 +583,7 @@ def test_part_names_are_the_same_on_every_load(tmp_path):
     names = [[p.name for p in ml.Scene.from_mesh(path, DARK_GRAY).parts] for _ in range(3)]
     assert names[0] == names[1] == names[2] and len(names[0]) == 2
     assert len(set(names[0])) == 2
-    from meshladar.mesh import _part_name
+    from meshladar.meshes import _part_name
 
     assert _part_name("0_33d0cd", "Truck_1", set()) == "Truck_1"
     assert _part_name("geometry_06ec728accc3a", "geometry_1", set()) == "geometry_1"

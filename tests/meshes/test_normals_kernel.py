@@ -48,27 +48,10 @@ def test_the_compiled_loop_equals_numpy_sums_on_a_prism_with_creases(crease_deg)
     assert sharp == (crease_deg < 90.0)
 
 
-def test_the_twin_is_the_engine_kernel_bit_for_bit():
-    kernels = pytest.importorskip("meshladar._kernels")
-    if not hasattr(kernels, "corner_normals"):
-        pytest.skip("the engine's copy is gone: the twin is the only kernel")
-    part = ml.meshes.sphere((0.0, 0.0, 0.0), 0.5, 0, subdivisions=2)
-    fn, area = part.face_normals_areas()
-    point, n = _point_index(part.vertices)
-    f = np.ascontiguousarray(point[part.faces], dtype=np.int64)
-    order = np.argsort(f.ravel(), kind="stable")
-    ptr = np.searchsorted(f.ravel()[order], np.arange(n + 1))
-    ours, theirs = np.zeros((len(f), 3, 3)), np.zeros((len(f), 3, 3))
-    args = (f, fn, area, ptr, order // 3, math.cos(math.radians(30.0)))
-    accumulate_corner_normals(*args, ours)
-    kernels.corner_normals(*args, theirs)
-    np.testing.assert_array_equal(ours, theirs)
-
-
 def test_import_meshladar_meshes_stays_light_until_normals_are_asked_for():
-    code = ("import sys, meshladar.meshes as m, meshladar.mesh; "
+    code = ("import sys, meshladar.meshes as m; "
             "assert 'numba' not in sys.modules; "
             "m.corner_normals; assert 'numba' in sys.modules; "
-            "from meshladar.mesh import _icosphere, _part_name, CREASE_DEG; "
+            "from meshladar.meshes import CREASE_DEG; "
             "assert CREASE_DEG == 30.0")
     subprocess.run([sys.executable, "-c", code], check=True)

@@ -14,7 +14,7 @@ import pytest
 import trimesh
 
 import meshladar as ml
-from meshladar import results
+from meshladar import io as results
 from meshladar.cli import main
 from meshladar.errors import MeshladarWarning, ParameterError
 from meshladar.materials import DARK_GRAY, lambertian
@@ -216,7 +216,7 @@ def test_stratified_sampling_is_reproducible_and_seeded():
 def _fake_runs(monkeypatch, sequence):
     """simulate_mesh replaced by runs whose values follow ``sequence`` (one float per run):
     the knob's stopping logic without tracing."""
-    from meshladar import refine                     # the knob calls the model through it
+    from meshladar.forward import refine
 
     calls = []
 
@@ -240,7 +240,7 @@ def test_tol_stops_when_estimates_stop_falling_and_keeps_the_best(monkeypatch):
     with pytest.warns(MeshladarWarning, match=r"tol=1e-06 not reached: refinement stopped "
                                               r"converging.*try footprint=True, smooth or "
                                               r"exact normals, a looser tol"):
-        sino = ml.refine.simulate_tol(
+        sino = ml.forward.refine.simulate_tol(
             scene, ladar, 1e-6, "flat", False, None,
             dict(mode=None, ray_spacing=None, rays_per_bin=None))
     assert calls == [1.0, 2.0, 4.0, 8.0]                      # stopped after the 4th run
@@ -259,7 +259,7 @@ def test_tol_respects_its_ray_budget(monkeypatch):
     # runs cast 1000, 4000, 16000 rays: a budget of 25000 stops before the 4th (64000)
     with pytest.warns(MeshladarWarning, match=r"past the budget max_rays=2.5e\+04.*raise "
                                               r"max_rays or loosen tol"):
-        sino = ml.refine.simulate_tol(
+        sino = ml.forward.refine.simulate_tol(
             scene, ladar, 1e-6, None, None, 25000,
             dict(mode=None, ray_spacing=None, rays_per_bin=None))
     assert len(calls) == 3 and sino.info["rays_total"] == 21000

@@ -25,7 +25,7 @@ SAME_HITS_RTOL = 1e-12
 
 
 def _sphere(subdivisions=4):
-    return ml.Scene.from_parts([ml.mesh.sphere((0.1, -0.2, 0.3), 0.5, 0,
+    return ml.Scene.from_parts([ml.meshes.sphere((0.1, -0.2, 0.3), 0.5, 0,
                                                subdivisions=subdivisions)], [DARK_GRAY])
 
 
@@ -74,9 +74,9 @@ def test_the_streaming_paths_agree_too():
         assert b.info["backend"] == "packets"
         np.testing.assert_allclose(b.values, a.values, rtol=SAME_HITS_RTOL,
                                    atol=SAME_HITS_RTOL * np.abs(a.values).max())
-    scene = ml.Scene.from_parts([ml.mesh.sphere((0, 0, 0), 0.5, 0, subdivisions=3)],
+    scene = ml.Scene.from_parts([ml.meshes.sphere((0, 0, 0), 0.5, 0, subdivisions=3)],
                                 [ALUMINUM])
-    ladar = ml.Ladar.covering(scene, n_bins=16, view_vectors=ml.mesh.fibonacci_sphere(6))
+    ladar = ml.Ladar.covering(scene, n_bins=16, view_vectors=ml.meshes.fibonacci_sphere(6))
     a = ml.simulate(scene, ladar, model="mesh", backend="embreex")
     b = ml.simulate(scene, ladar, model="mesh", backend="packets")
     np.testing.assert_allclose(b.values, a.values, rtol=SAME_HITS_RTOL,
@@ -144,12 +144,12 @@ def test_the_fused_loop_gives_the_unfused_numbers_bit_for_bit(sampling, monkeypa
     backend("packets")                                       # registered on first use
 
     for centre, radius in (((0.0, 0.0, 0.0), 0.5), ((1e3, -2e3, 5e2), 37.0)):
-        scene = ml.Scene.from_parts([ml.mesh.sphere(centre, radius, 0, subdivisions=4)],
+        scene = ml.Scene.from_parts([ml.meshes.sphere(centre, radius, 0, subdivisions=4)],
                                     [ALUMINUM])
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", MeshladarWarning)    # the far sphere's bins
             ladar = ml.Ladar.covering(scene, n_bins=48,
-                                      view_vectors=ml.mesh.fibonacci_sphere(5))
+                                      view_vectors=ml.meshes.fibonacci_sphere(5))
             fused = ml.simulate(scene, ladar, model="mesh", sampling=sampling,
                                 backend="packets")
             with monkeypatch.context() as m:
@@ -191,9 +191,9 @@ def test_any_coating_takes_the_fused_path_with_the_general_paths_numbers(backend
 
     coatings = [ml.brdf.Phong(0.2, 0.7, 50), ml.brdf.GGX(alpha=0.3),
                 ml.brdf.Tabulated([0.0, 30.0, 60.0, 90.0], [0.3, 0.2, 0.1, 0.05]), Halfway()]
-    parts = [ml.mesh.sphere((0.6 * k, 0.0, 0.0), 0.25, k, subdivisions=3) for k in range(4)]
+    parts = [ml.meshes.sphere((0.6 * k, 0.0, 0.0), 0.25, k, subdivisions=3) for k in range(4)]
     scene = ml.Scene.from_parts(parts, coatings)
-    ladar = ml.Ladar.covering(scene, n_bins=40, view_vectors=ml.mesh.fibonacci_sphere(3))
+    ladar = ml.Ladar.covering(scene, n_bins=40, view_vectors=ml.meshes.fibonacci_sphere(3))
     one_view = ml.Ladar.covering(scene, n_bins=40, view_vectors=[[0.2, 0.9, 0.3]])
     for lad, jobs in ((ladar, 1), (ladar, 2), (one_view, 2)):   # 2 jobs on one view: rows
         fused = ml.simulate(scene, lad, model="mesh", backend=backend, jobs=jobs)
@@ -207,10 +207,10 @@ def test_any_coating_takes_the_fused_path_with_the_general_paths_numbers(backend
 def test_smooth_normals_take_a_compiled_loop_with_the_general_paths_numbers(back_faces):
     # smooth normals with SR coatings are weighed and binned in one compiled loop from the
     # cast's barycentrics: the numbers of trace + weigh (per-hit arrays in numpy)
-    parts = [ml.mesh.sphere((0.0, 0.0, 0.0), 0.4, 0, subdivisions=3),
-             ml.mesh.sphere((0.9, 0.1, 0.0), 0.3, 1, subdivisions=2)]
+    parts = [ml.meshes.sphere((0.0, 0.0, 0.0), 0.4, 0, subdivisions=3),
+             ml.meshes.sphere((0.9, 0.1, 0.0), 0.3, 1, subdivisions=2)]
     scene = ml.Scene.from_parts(parts, [ALUMINUM, DARK_GRAY])
-    ladar = ml.Ladar.covering(scene, n_bins=48, view_vectors=ml.mesh.fibonacci_sphere(9))
+    ladar = ml.Ladar.covering(scene, n_bins=48, view_vectors=ml.meshes.fibonacci_sphere(9))
     for backend in ("packets", "embreex"):
         fast = ml.simulate(scene, ladar, model="mesh", normals="smooth", backend=backend,
                            back_faces=back_faces)
@@ -233,14 +233,14 @@ def test_footprints_take_the_fused_loop_with_the_general_paths_numbers(mode, nor
     # the per-hit path is not taken
     from meshladar.forward import job as model
 
-    plate = ml.mesh.MeshPart(np.array([[-0.5, -0.4, -0.3], [0.5, -0.4, 0.2], [0.5, 0.4, 0.3],
+    plate = ml.meshes.MeshPart(np.array([[-0.5, -0.4, -0.3], [0.5, -0.4, 0.2], [0.5, 0.4, 0.3],
                                        [-0.5, 0.4, -0.2]]), np.array([[0, 1, 2], [0, 2, 3]]),
                              1, name="plate")                 # open: seen from both sides
-    parts = [ml.mesh.sphere((0.0, 0.0, 0.0), 0.3, 0, subdivisions=3), plate]
+    parts = [ml.meshes.sphere((0.0, 0.0, 0.0), 0.3, 0, subdivisions=3), plate]
     for coatings in ([ALUMINUM, DARK_GRAY], [ml.brdf.GGX(alpha=0.3), DARK_GRAY])[
             :1 if normals == "smooth" else 2]:
         scene = ml.Scene.from_parts(parts, coatings)
-        vectors = ml.mesh.fibonacci_sphere(5) if mode == "3d" else None
+        vectors = ml.meshes.fibonacci_sphere(5) if mode == "3d" else None
         ladar = ml.Ladar.covering(scene, n_bins=40, view_vectors=vectors,
                                   angles_deg=None if vectors is not None else [0, 70, 200])
         for backend in ("packets", "embreex"):
@@ -283,15 +283,15 @@ def test_bistatic_views_take_the_fused_loop_with_the_references_numbers(mode, mo
     from meshladar.weighing import faces
 
     monkeypatch.setattr(faces, "_FACE_BLOCK", 1000)        # the face weights in blocks
-    plate = ml.mesh.MeshPart(np.array([[-0.5, -0.4, -0.3], [0.5, -0.4, 0.2], [0.5, 0.4, 0.3],
+    plate = ml.meshes.MeshPart(np.array([[-0.5, -0.4, -0.3], [0.5, -0.4, 0.2], [0.5, 0.4, 0.3],
                                        [-0.5, 0.4, -0.2]]), np.array([[0, 1, 2], [0, 2, 3]]),
                              1, name="plate")
-    parts = [ml.mesh.sphere((0.0, 0.0, 0.0), 0.3, 0, subdivisions=3),
-             ml.mesh.sphere((0.5, 0.3, 0.1), 0.2, 0, subdivisions=3), plate]
+    parts = [ml.meshes.sphere((0.0, 0.0, 0.0), 0.3, 0, subdivisions=3),
+             ml.meshes.sphere((0.5, 0.3, 0.1), 0.2, 0, subdivisions=3), plate]
     receiver = (0.6, 0.8, 0.0) if mode == "slice" else (0.3, 0.5, 0.81)
     for coatings in ([ALUMINUM, DARK_GRAY], [ml.brdf.GGX(alpha=0.3), DARK_GRAY]):
         scene = ml.Scene.from_parts(parts, coatings)
-        vectors = ml.mesh.fibonacci_sphere(5) if mode == "3d" else None
+        vectors = ml.meshes.fibonacci_sphere(5) if mode == "3d" else None
         ladar = ml.Ladar.covering(scene, n_bins=64, view_vectors=vectors,
                                   angles_deg=None if vectors is not None else [0, 70, 200])
         hits = ml.trace(scene, ladar, mode=mode, receiver=receiver, backend="embreex",

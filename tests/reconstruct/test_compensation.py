@@ -12,7 +12,8 @@ import pytest
 from scipy.integrate import quad
 
 import meshladar as ml
-from meshladar import materials, paper
+from meshladar import materials
+from meshladar.studies import paper
 from meshladar.brdf import Lambertian
 from meshladar.errors import ParameterError
 from meshladar.ladar import Ladar
@@ -148,7 +149,7 @@ def test_shadow_awareness_drops_hidden_points_on_the_gray_pair():
     """Fig. 9's gray pair: the shadow map drops ridge artefacts inside the disks (no view
     sees them), so nothing is left off the surfaces (clutter 0.018 → 0 measured), and
     the surfaces come out more even (surface error 0.63 → 0.58 measured)."""
-    from meshladar import study_reconstruction as study
+    from meshladar.studies import reconstruction as study
 
     lad = Ladar(np.arange(0.0, 360.0, 1.0), Ladar.centered(128, 1.6 / 128).bin_edges)
     scene = paper._pair(materials.DARK_GRAY, materials.DARK_GRAY)
@@ -229,7 +230,7 @@ def test_compensation_with_photon_noise():
     """1000 photoelectrons in the brightest bin, Poisson: the noise floor is read off the
     counts' quantum, noise ridges are dropped because the data does not back them, and the
     b = 0.99 disk still comes out without darkening at its level."""
-    from meshladar import study_reconstruction as study
+    from meshladar.studies import reconstruction as study
     from meshladar.reconstruct import noise_floor
 
     m = paper._diffuse(0.99)

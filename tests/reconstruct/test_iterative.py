@@ -9,7 +9,7 @@ from test_fbp import disk_radon_sinogram
 
 import meshladar as ml
 from meshladar.reconstruct.iterative import RangeProjector, cgls, sirt
-from meshladar.siddon import PixelGrid
+from meshladar.forward.siddon import PixelGrid
 
 SIZE = 96
 CENTER, RADIUS = (0.1, 0.0), 0.4
@@ -143,7 +143,7 @@ def test_glint_weights_reveal_the_gray_disk():
     dropped by their weights — not clipped — SIRT shows the gray disk (visibility ≥ 0.9,
     the issue's goal; measured 5.7 at 128², the aluminium ring being left only its faint
     diffuse return), where plain SIRT hides it as FBP does (measured 0.006)."""
-    from meshladar import paper
+    from meshladar.studies import paper
     from meshladar.reconstruct.iterative import glint_weights
     from meshladar.materials import ALUMINUM, DARK_GRAY
 
@@ -164,7 +164,7 @@ def test_reconstruction_study_rows():
     """The study's rows for one spacing and three methods: every row has its error, its
     phantom's metric and a time; FBP of the pair hides the gray disk, glint weights show
     it, as in the README's table."""
-    from meshladar import study_reconstruction as study
+    from meshladar.studies import reconstruction as study
 
     rows, images = study.run("quick", methods=("fbp", "sirt_glint", "tv"), spacings=(10.0,))
     assert len(rows) == 2 * 3 and len(images) == 6
@@ -182,7 +182,7 @@ def test_reconstruction_study_rows():
 def test_reconstruction_study_with_photon_noise():
     """Photon-counting noise in the study: seeded (the same rows twice), and it moves FBP's
     image away from the noiseless one."""
-    from meshladar import study_reconstruction as study
+    from meshladar.studies import reconstruction as study
 
     kw = dict(methods=("fbp",), spacings=(10.0,))
     clean, _ = study.run("quick", **kw)
@@ -223,7 +223,7 @@ def test_reconstruction_study_with_speckle_and_background():
     """Speckle and background in the study: seeded, recorded in every row, the background's
     mean subtracted (the noisy sinogram's total stays within a few per cent of the clean
     one), and they need photons."""
-    from meshladar import study_reconstruction as study
+    from meshladar.studies import reconstruction as study
     from meshladar.errors import ParameterError
     from meshladar.ladar import Ladar
 
@@ -249,7 +249,7 @@ def test_glint_weights_leave_a_scene_without_glints_alone():
     """'No worse elsewhere': on the diffuse b = 0.99 disk (45 % of its returning bins are
     above the clip level) glint weights are all 1, so weighted SIRT is plain SIRT; on the
     glinting pair (2 %) they drop exactly the bright bins."""
-    from meshladar import study_reconstruction as study
+    from meshladar.studies import reconstruction as study
     from meshladar.reconstruct.iterative import glint_weights
     from meshladar.ladar import Ladar
 

@@ -16,7 +16,7 @@ from meshladar.brdf import Lambertian
 from meshladar.reconstruct.operators import (LinearProjector, Projector, RangeProjector,
                                              SurfaceProjector)
 from meshladar.reconstruct.surface import Surface, surface_weights
-from meshladar.siddon import PixelGrid
+from meshladar.forward.siddon import PixelGrid
 
 SIZE = 48
 ANGLES = np.arange(0.0, 360.0, 12.0)                 # 30 views, opposite pairs included

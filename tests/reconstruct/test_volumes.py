@@ -10,8 +10,8 @@ import pytest
 
 import meshladar as ml
 from meshladar.materials import lambertian
-from meshladar.mesh import fibonacci_sphere
-from meshladar.resolved import resolve
+from meshladar.meshes import fibonacci_sphere
+from meshladar.forward.resolved import resolve
 from meshladar.images import Volume
 from meshladar.reconstruct.volumes import fbp3d, fbp_slices, sphere_weights
 
@@ -182,11 +182,11 @@ def test_reconstruct_command_inverts_3d_views(tmp_path):
     from meshladar.cli import main
 
     path = tmp_path / "ball.npz"
-    ml.results.save_sinogram(path, _ball_sinogram(0.6, n_views=200, n_bins=64))
+    ml.io.save_sinogram(path, _ball_sinogram(0.6, n_views=200, n_bins=64))
     out = tmp_path / "ball.png"
     assert main(["reconstruct", str(path), "-o", str(out), "--size", "48", "--extent", "1.0",
                  "--quiet"]) == 0
-    arrays, meta = ml.results.load_result(tmp_path / "ball.volume.npz")
+    arrays, meta = ml.io.load_result(tmp_path / "ball.volume.npz")
     assert meta["kind"] == "volume" and arrays["values"].shape == (48, 48, 48)
     vol = Volume(arrays["values"], x=arrays["x"], y=arrays["y"], z=arrays["z"])
     np.testing.assert_allclose(vol.radial_profile([0.0, 0.2, 0.4]), 1.0, rtol=BALL_RTOL)

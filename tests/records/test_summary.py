@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 import meshladar as ml
-from meshladar import materials, paper
+from meshladar import materials
+from meshladar.studies import paper
 from meshladar._summary import MAX_REPR
 from meshladar.ladar import Ladar
 
@@ -20,7 +21,7 @@ def results():
     image = ml.Image(np.random.default_rng(0).random((1024, 1024)), 1.0,
                      info={"method": "sirt", "iterations": 50, "radiometry": "power"})
     hits = ml.trace(pair.tessellate(64), ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 30.0)))
-    from meshladar.fitting import coating_kernel, fit_coatings
+    from meshladar.fit import coating_kernel, fit_coatings
     from meshladar.waveforms import GaussianPulse, receive
 
     kernel = coating_kernel(pair, Ladar(lad.angles_deg[::10], lad.bin_edges), samples=512)
@@ -145,7 +146,7 @@ def test_inputs_summarise_too():
     """Scene, Ladar and MeshPart summarise (kind, parts, faces, coatings, bounds; views and
     bins) instead of dumping vertex arrays: a 1.3M-face mesh's repr is as short as a disk's,
     and a scene of 40 shapes lists a few and counts the rest."""
-    big = ml.Scene.from_parts([ml.mesh.sphere((0, 0, 0), 0.5, 0, subdivisions=6)],
+    big = ml.Scene.from_parts([ml.meshes.sphere((0, 0, 0), 0.5, 0, subdivisions=6)],
                               materials=[materials.ALUMINUM])
     text = repr(big)
     assert len(text) <= MAX_REPR and "array(" not in text
@@ -162,7 +163,7 @@ def test_inputs_summarise_too():
     lad = repr(Ladar.paper())
     assert lad == ("Ladar(n_views=360, n_bins=512, range=(-0.8, 0.8), bin_width=0.003125, "
                    "views='about z, 0 to 359 deg every 1')")
-    sphere = Ladar(None, np.linspace(-1, 1, 5), view_vectors=ml.mesh.fibonacci_sphere(10))
+    sphere = Ladar(None, np.linspace(-1, 1, 5), view_vectors=ml.meshes.fibonacci_sphere(10))
     assert "views='3-D directions'" in repr(sphere) and "<table>" in sphere._repr_html_()
     uneven = Ladar([0.0, 10.0, 30.0], [0.0, 1.0, 3.0])
     assert "bin_width='uneven'" in repr(uneven) and "every" not in repr(uneven)

@@ -7,7 +7,7 @@ import os
 import numpy as np
 import pytest
 
-from meshladar import results
+from meshladar import io as results
 from meshladar.studies import paper
 
 

@@ -155,7 +155,7 @@ def test_tol_that_cannot_be_met_warns_and_reports(monkeypatch):
     # dark gray alone stalls near silhouettes (see the study): within two refinements its
     # estimate rises again (measured 0.0065 then 0.0095), so the knob stops there, warns,
     # and reports the best run it made, not the last
-    from meshladar import refine
+    from meshladar.forward import refine
 
     monkeypatch.setattr(refine, "_TOL_STEPS", 2)
     scene = ml.Scene([ml.Disk((0.0, 0.0), 0.5, DARK_GRAY)])
@@ -190,7 +190,7 @@ def test_reconstruction_and_3d_study_figures(tmp_path):
 
     from meshladar.studies import reconstruction as study
     from meshladar.viz import studies as vstudies, style
-    from meshladar.volume import Volume
+    from meshladar.images import Volume
 
     rng = np.random.default_rng(1)
     x = np.linspace(-1, 1, 48)

@@ -55,7 +55,7 @@ def test_shadowed_part_of_the_disk_pair_is_drawn_in_the_shadow_colour():
 def test_lit_lambertian_sphere_is_brightest_at_its_centre(tmp_path):
     from meshladar.viz import viewer
 
-    sphere = ml.Scene.from_parts([ml.mesh.sphere((0, 0, 0), 0.5, 0, subdivisions=4)],
+    sphere = ml.Scene.from_parts([ml.meshes.sphere((0, 0, 0), 0.5, 0, subdivisions=4)],
                                  [lambertian(1.0)])
     shot = tmp_path / "sphere.png"
     img = viewer.show_scene(sphere, view_vector=[0, 0, 1], show_rays=False, off_screen=True,
@@ -99,9 +99,9 @@ def test_volume_iso_surface_of_a_stack():
 @pytest.mark.slow
 def test_show_volume_of_a_reconstructed_ball():
     """A Volume (3-D Radon inversion of a uniform ball) draws as its default iso-surface."""
-    from meshladar.mesh import fibonacci_sphere
+    from meshladar.meshes import fibonacci_sphere
     from meshladar.viz import viewer
-    from meshladar.volume import radon3d
+    from meshladar.reconstruct.volumes import fbp3d as radon3d
 
     a, W = 0.5, fibonacci_sphere(200)
     edges = np.linspace(-1.0, 1.0, 49)

@@ -11,7 +11,7 @@ import pytest
 import meshladar as ml
 from meshladar.errors import ModelError, ParameterError
 from meshladar.forward import job as mesh_job
-from meshladar.forward.resolve import resolve
+from meshladar.forward.resolved import resolve
 from meshladar.materials import DARK_GRAY
 from meshladar.raytrace import embree
 from meshladar.raytrace.plan import plan_trace

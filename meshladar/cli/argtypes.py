@@ -97,7 +97,7 @@ def coatings(text):
     return out
 
 
-#: :class:`meshladar.options.Option` kinds → the checker that parses them.
+#: :class:`meshladar.forward.options.Option` kinds → the checker that parses them.
 KIND_TYPES = {"positive_float": positive_float, "nonnegative_float": nonnegative_float,
               "finite_float": finite_float, "unit_fraction": unit_fraction,
               "positive_int": positive_int, "nonnegative_int": nonnegative_int,

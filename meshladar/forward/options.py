@@ -8,7 +8,7 @@ errors); the documentation lists it. A number or a rule written here is written 
 else (the habit of scikit-learn's and Mitsuba's parameter tables: a thread threshold once
 read 5e4, 2e5 and 4e6 in three places of this project).
 
->>> from meshladar.options import option, options_of
+>>> from meshladar.forward.options import option, options_of
 >>> option("footprint").models
 ('mesh',)
 >>> "pixel_size" in options_of("pixel")
@@ -19,11 +19,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .raytrace.embree import BACKENDS
-from .raytrace.grid import MODES, SAMPLINGS
-from .raytrace.views import BACK_FACES, NORMALS
-from .sensor import RADIOMETRIES
-from .stream import _THREADS_FROM as THREADS_FROM
+from ..raytrace.backends import BACKENDS
+from ..raytrace.grid import MODES, SAMPLINGS
+from ..raytrace.views import BACK_FACES, NORMALS
+from ..sensor import RADIOMETRIES
+from ..stream import THREADS_FROM
 
 __all__ = ["Option", "MODELS", "OPTIONS", "SENSOR_OPTIONS", "option", "options_of"]
 
@@ -127,7 +127,7 @@ OPTIONS: tuple[Option, ...] = (
     Option("footprint", "flag", "spread each ray over the range its footprint covers on "
            "the facet", "point binning", _MESH),
     Option("tol", "positive_float", "relative sinogram accuracy: meshladar picks rays and "
-           "segments (meshladar.refine)", "off", _MESH),
+           "segments (meshladar.forward.refine)", "off", _MESH),
     Option("max_rays", "positive_float", "budget of rays for --tol over all its refinement "
            "runs", "2e9", _MESH),
     Option("pixel_size", "positive_float", "pixel size for --model pixel", "a quarter bin",
