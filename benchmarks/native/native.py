@@ -69,7 +69,7 @@ def main(argv=None):
                                   dtype=np.float32) for w in vecs]
     dirs = [np.ascontiguousarray(-w, dtype=np.float32) for w in vecs]
     n_rays = sum(len(g) for g in grids)
-    pk = embree4.Scene(unit, geo.faces32)
+    pk = embree4.PacketGeometry(unit, geo.faces32)
     width = pk.lib.width
 
     with tempfile.TemporaryDirectory() as tmp:

@@ -27,7 +27,7 @@ from .embree4_ctypes import (_ALIGN, _ARGS_OFF, _CTX_OFF, _DIR_X, _DIR_Y, _DIR_Z
                              RTC_RAY_QUERY_FLAG_COHERENT, RTC_RAY_QUERY_FLAG_INCOHERENT,
                              RTC_SCENE_FLAG_ROBUST, library_candidates)
 
-__all__ = ["library", "available", "Scene", "cast_grid", "occluded_grid", "EmbreeLib",
+__all__ = ["library", "available", "PacketGeometry", "cast_grid", "occluded_grid", "EmbreeLib",
            "library_candidates", "RTC_RAY_QUERY_FLAG_COHERENT", "RTC_RAY_QUERY_FLAG_INCOHERENT"]
 
 
@@ -38,7 +38,7 @@ def _self_test(lib):
     the occlusion query. A library built with other layouts fails here, not later."""
     v = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], np.float32)
     f = np.array([[0, 1, 2]], np.uint32)
-    scene = Scene(v, f, lib=lib)
+    scene = PacketGeometry(v, f, lib=lib)
     try:
         for w in (4, 8, 16):
             n = w + 3                                   # a full packet and a masked tail
@@ -99,7 +99,7 @@ def available():
 # ------------------------------------------------------------------------------- the scene
 
 
-class Scene:
+class PacketGeometry:
     """A committed Embree scene of one triangle mesh whose buffers are shared (zero-copy)
     numpy arrays: the arrays are kept alive here as long as the scene is."""
 

@@ -33,7 +33,7 @@ class PacketScene:
 
 def build(vertices, faces):
     """A packet scene of float32 vertices (n, 3) and int32 faces (m, 3), robust mode."""
-    return PacketScene(embree4.Scene(vertices, faces, robust=True))
+    return PacketScene(embree4.PacketGeometry(vertices, faces, robust=True))
 
 
 register(Backend("packets", build, embree4.available, fused=True))

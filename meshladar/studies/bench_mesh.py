@@ -147,7 +147,7 @@ def _build_split(subdivisions):
     t1 = _time.perf_counter()
     sc.run(np.array([[0, 0, 5]], np.float32), np.array([[0, 0, -1]], np.float32))
     t2 = _time.perf_counter()
-    embree4.Scene(v32, f32, robust=True).release()
+    embree4.PacketGeometry(v32, f32, robust=True).release()
     t3 = _time.perf_counter()
     return {"build_faces": len(f), "upload_s": t1 - t0, "bvh_s": t2 - t1,
             "build_over_bvh": (t2 - t0) / (t2 - t1), "packet_build_s": t3 - t2,
