@@ -182,9 +182,12 @@ if __name__ == "__main__":
 def test_the_layers_contract_holds():
     # import-linter checks the layers stated in pyproject.toml (DESIGN.md's order) on the
     # import graph of the installed code: no upward import, no circle through layers
-    lint = pathlib.Path(sys.executable).with_name("lint-imports")
-    res = subprocess.run([str(lint), "--config", str(ROOT / "pyproject.toml")],
-                         capture_output=True, text=True, cwd=ROOT)
+    # (this interpreter, not the lint-imports script, whose #! may name another venv)
+    code = ("import sys; from importlinter.cli import lint_imports_command; "
+            "sys.argv = ['lint-imports', '--config', 'pyproject.toml']; "
+            "sys.exit(lint_imports_command())")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         cwd=ROOT)
     assert res.returncode == 0, res.stdout[-4000:] + res.stderr[-2000:]
     assert "1 kept, 0 broken" in res.stdout
 
