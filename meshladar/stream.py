@@ -54,7 +54,8 @@ PARALLEL_FROM = 4e6
 #: The same for threads, which cost next to nothing to start: from 5e4 rays a view's rows
 #: on two threads pay (a 1e5-ray view of an 82k-face sphere: 15-18 ms against 24-30 ms).
 THREADS_FROM = 5e4
-#: The old private names (raytrace/model imported them).
+#: The old private names (the old raytrace/model, now
+#: :mod:`meshladar.forward.mesh`, imported them).
 _MAX_JOBS_PER_CORE, _THREADS_FROM = MAX_JOBS_PER_CORE, THREADS_FROM
 
 

@@ -1,8 +1,9 @@
 """The pyvista 3-D viewer: scenes coloured by their return, hits, slices and volumes.
 
-Every entry point takes ``off_screen`` and ``screenshot``: on a desktop it opens a window and
-returns the plotter; off screen (a headless machine, a test) it renders and returns the
-image array (height, width, 3), writing ``screenshot`` if given. With no display, VTK is
+Every entry point takes ``off_screen`` and ``screenshot``: on a desktop it opens a window
+(the plotter is the returned record's ``plotter``); off screen (a headless machine, a test)
+it renders the image array (height, width, 3), the record's ``image``, writing
+``screenshot`` if given. With no display, VTK is
 pointed at its EGL window (Mesa's software renderer: Debian packages libegl1 and
 libgl1-mesa-dri), so nothing needs Xvfb.
 

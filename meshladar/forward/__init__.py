@@ -56,7 +56,8 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
         (:mod:`meshladar.forward.refine`).
     jobs : int, optional
         Workers for chunks of views (every model; default 1). The mesh model's are threads
-        sharing one Embree scene (default one per core from 2e5 rays); the analytic and
+        sharing one Embree scene (default one per core from
+        :data:`meshladar.stream.THREADS_FROM`, 5e4 rays); the analytic and
         pixel models' are processes.
     executor : concurrent.futures.Executor, optional
         Any executor to run the chunks on (threads, processes, a Dask cluster's from

@@ -1,6 +1,6 @@
 """The Siddon projector's compiled loops (numba): exact traversal of a pixel grid, forward
-projection, backprojection and first hits (copied from :mod:`meshladar._kernels`, whose
-originals go at the merge). Cached on disk (``cache=True``)."""
+projection, backprojection and first hits (moved here from the dissolved ``_kernels.py``:
+each compiled loop lives beside its stage). Cached on disk (``cache=True``)."""
 
 from __future__ import annotations
 

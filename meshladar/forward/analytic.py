@@ -27,7 +27,7 @@ Each half arc is cut at all its breakpoints (bin edges, shadow boundaries, silho
 a mesh graded geometrically toward the glint lobe's centre (scale e in θ) and toward the
 silhouette (scale b of the diffuse lobe, 2e of H's branch point), and every piece is
 integrated by Gauss-Legendre. Bins agree with independent adaptive quadrature to 1e-9
-relative (tests/test_analytic.py).
+relative (tests/forward/test_analytic.py).
 """
 
 from __future__ import annotations

@@ -197,7 +197,8 @@ def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0
     jobs : int, optional
         Worker threads. Both backends release the GIL while they cast, so the threads of a
         run share one Embree scene (nothing pickled, nothing rebuilt). Default: 1 below
-        2e5 rays in all, else one per core (at most one per chunk of 8 views).
+        :data:`meshladar.stream.THREADS_FROM` (5e4) rays in all, else one per core (at
+        most one per chunk of views; a single view splits its rows over them).
     executor : concurrent.futures.Executor, optional
         Any executor (e.g. a Dask client's, whose workers are processes on other machines)
         to run chunks of views on; overrides ``jobs``.

@@ -6,7 +6,8 @@ option its model does not take from this table; the command line's ``simulate`` 
 generated from it (flags, types, choices, help, and the "does not apply to this model"
 errors); the documentation lists it. A number or a rule written here is written nowhere
 else (the habit of scikit-learn's and Mitsuba's parameter tables: a thread threshold once
-read 5e4, 2e5 and 4e6 in three places of this project).
+read three different numbers in three places of this project; it is now
+:data:`meshladar.stream.THREADS_FROM` alone).
 
 >>> from meshladar.forward.options import option, options_of
 >>> option("footprint").models

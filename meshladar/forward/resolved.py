@@ -16,7 +16,7 @@ axes u = z × w / |z × w| (x when w is along ±z) and v = w × u:
 
 Each ray's weight is the forward model's (F·δA⊥ under Eq. 8, × cos θ under received
 power): whatever coordinates a view is binned by, its total is the same when the bins
-cover its hits (tests/test_resolved.py).
+cover its hits (tests/forward/test_resolved.py).
 """
 
 from __future__ import annotations

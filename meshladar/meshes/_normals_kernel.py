@@ -1,5 +1,6 @@
 """The compiled twin of :mod:`meshladar.meshes.normals` (numba): the corner-normal
-accumulation loop, copied from ``meshladar._kernels.corner_normals``. Tested against a numpy
+accumulation loop, moved here from the dissolved ``_kernels.py`` (its
+``corner_normals``). Tested against a numpy
 evaluation of the same sums in tests/meshes/test_normals_kernel.py.
 """
 

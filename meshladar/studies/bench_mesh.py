@@ -113,7 +113,8 @@ def bench_fused(*, repeats=2, subdivisions=6, rays_per_view=1_000_000, views=4):
 
 def bench_single_view(*, subdivisions=6, rays=100_000, calls=30):
     """End-to-end time of one view of ``rays`` rays on a cached mesh (82k faces), default
-    options (rows on threads from 5e4 rays) and one thread: medians of ``calls`` calls."""
+    options (rows on threads from :data:`meshladar.stream.THREADS_FROM`, 5e4 rays) and one
+    thread: medians of ``calls`` calls."""
     scene = _icosphere_scene(subdivisions, materials.DARK_GRAY)
     ladar = Ladar(None, np.linspace(-0.6, 0.6, 513), view_vectors=[[0.3, -0.4, 0.866]])
     spacing = 1.0 / math.sqrt(rays)

@@ -4,7 +4,7 @@
 (A/256 range bins with A = 0.8, 360 views at 1°, the analytic forward model) and measures
 each finding as a number; ``meshladar.viz.paper`` draws the figures from the saved result.
 
-Metrics (dimensionless, defined here and asserted in tests/test_paper.py):
+Metrics (dimensionless, defined here and asserted in tests/studies/test_paper.py):
 
 ``darkening``
     Edge darkening of a disk of radius R: (mean of the image's radial profile over the band

@@ -1,6 +1,6 @@
 """The weigh stage's compiled loops (numba): binning of first hits per ray, flat and smooth
-normals, bistatic, seen by a sensor, at a point or over a footprint (copied from
-:mod:`meshladar._kernels`, whose originals go at the merge).
+normals, bistatic, seen by a sensor, at a point or over a footprint (moved here from the
+dissolved ``meshladar/_kernels.py``: each compiled loop lives beside its stage).
 
 numba is imported here; the stages that use these loops import this module, never
 ``import meshladar`` itself. Kernels are cached on disk (``cache=True``)."""
