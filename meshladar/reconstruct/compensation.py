@@ -186,7 +186,7 @@ def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first
     check_sinogram("sino", sino)
     method = check_choice("method", method, SOLVERS)
     size = check_count("size", size)
-    radiometry = sino.info.get("radiometry", "paper")
+    radiometry = sino.radiometry or "paper"
     if surface is None:
         if first is None:
             first = first_image(sino, size, extent, center)

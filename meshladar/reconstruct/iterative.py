@@ -223,7 +223,7 @@ def sirt(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=50, x0=None, w
     info = {"method": "sirt", "iterations": len(run.values), "residuals": run.values,
             "stopped": run.stopped, "nonneg": bool(nonneg), "projector": _projector_name(projector),
             "rays_per_bin": rays_per_bin,
-            "radiometry": sino.info.get("radiometry")}
+            "radiometry": sino.radiometry}
     return _image(x, extent, center, info)
 
 
@@ -283,7 +283,7 @@ def sart(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=10, subsets=No
     info = {"method": "sart", "subsets": n_sub, "relax": relax,
             "iterations": len(run.values), "residuals": run.values, "stopped": run.stopped,
             "nonneg": bool(nonneg), "projector": projector, "rays_per_bin": rays_per_bin,
-            "radiometry": sino.info.get("radiometry")}
+            "radiometry": sino.radiometry}
     return _image(x, extent, center, info)
 
 
@@ -320,7 +320,7 @@ def cgls(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=30, x0=None, w
     run.close()
     info = {"method": "cgls", "iterations": len(run.values), "residuals": run.values,
             "stopped": run.stopped, "projector": _projector_name(projector), "rays_per_bin": rays_per_bin,
-            "radiometry": sino.info.get("radiometry")}
+            "radiometry": sino.radiometry}
     return _image(x, extent, center, info)
 
 
@@ -442,5 +442,5 @@ def tv_fista(sino, size=256, extent=1.0, *, center=(0.0, 0.0), tv=0.005, n_iter=
     info = {"method": "tv_fista", "tv": tv, "lambda": lam, "lipschitz": L,
             "iterations": len(run.values), "residuals": run.values, "objective": objective,
             "stopped": run.stopped, "nonneg": bool(nonneg), "projector": _projector_name(projector),
-            "radiometry": sino.info.get("radiometry")}
+            "radiometry": sino.radiometry}
     return _image(x, extent, center, info)

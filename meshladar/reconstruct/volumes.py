@@ -162,7 +162,7 @@ def fbp3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None,
                   x, y, z, out)
     info = {"method": "radon3d", "filter": "second difference", "smooth_bins": smooth,
             "views": sino.n_views,
-            "radiometry": sino.info.get("radiometry"), "size": n, "extent": e,
+            "radiometry": sino.radiometry, "size": n, "extent": e,
             "center": c.tolist()}
     if sino.info.get("preprocess"):
         info["preprocess"] = sino.info["preprocess"]
