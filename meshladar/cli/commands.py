@@ -7,6 +7,7 @@ import csv
 import io
 import json
 import os
+from typing import NamedTuple
 
 import numpy as np
 
@@ -111,13 +112,25 @@ def cmd_study(args) -> int:
 
 
 #: The 3-D study's settings: (views, voxels per side, smoothing in bins, rays per bin).
-_STUDY_3D = {"quick": (600, 64, 1.0, 1.0), "full": (2000, 128, 1.0, 2.0)}
+class _Study3D(NamedTuple):
+    """One setting of ``meshladar study-3d``: :func:`meshladar.studies.paper.run_3d`'s
+    arguments."""
+
+    views: int
+    size: int
+    smooth: float
+    rays_per_bin: float
+
+
+_STUDY_3D = {"quick": _Study3D(600, 64, 1.0, 1.0), "full": _Study3D(2000, 128, 1.0, 2.0)}
 
 
 def _study_3d(args) -> int:
     """The paper's findings in 3-D (meshladar.studies.paper.run_3d): metrics as JSON, central slices
     of every volume as a PNG."""
-    views, size, smooth, rpb = _STUDY_3D[args.setting]
+    setting = _STUDY_3D[args.setting]
+    views, size, smooth, rpb = setting.views, setting.size, setting.smooth, \
+        setting.rays_per_bin
     metrics, volumes = paper.run_3d(views=views, size=size, smooth=smooth,
                                     rays_per_bin=rpb)
     os.makedirs(args.outdir, exist_ok=True)

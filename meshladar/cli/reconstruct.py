@@ -138,8 +138,8 @@ def cmd_receive(args) -> int:
     if args.plot is not None:
         check_output(args.plot, (".png",), [args.result, args.output], "--plot")
     sino, _ = io.load_sinogram(args.result)
-    if sino.info.get("radiometry") != "power" and not args.quiet:
-        warnings.warn(f"{args.result} holds {sino.info.get('radiometry', 'paper')!r} "
+    if sino.radiometry != "power" and not args.quiet:
+        warnings.warn(f"{args.result} holds {sino.radiometry or 'paper'!r} "
                       "radiometry (Eq. 8), not the power a receiver collects: simulate with "
                       "--radiometry power for a receiver's waveform", MeshladarWarning)
     pulse = _pulse(args)
@@ -161,6 +161,6 @@ def cmd_receive(args) -> int:
         print(f"{args.result}: {waves.values.shape[0]} views x {waves.values.shape[1]} "
               f"samples at {args.sample_rate:g} Hz over two-way time "
               f"[{waves.time_edges[0]:.6g}, {waves.time_edges[-1]:.6g}] s, units "
-              f"{waves.info.get('units')}{extra}; wrote {args.output}"
+              f"{waves.units}{extra}; wrote {args.output}"
               + ("" if args.plot is None else f" and {args.plot}"))
     return 0

@@ -118,7 +118,7 @@ def _summary(args, sino, ladar, model):
             how += f", estimated error {info['error_estimate']:.2g}"
     return (f"{args.scene}: {how}; {ladar.n_views} views x {ladar.n_bins} bins over range "
             f"[{ladar.bin_edges[0]:.6g}, {ladar.bin_edges[-1]:.6g}] (range 0 on the plane "
-            f"through the origin facing the ladar); {info.get('radiometry', 'paper')} "
+            f"through the origin facing the ladar); {sino.radiometry or 'paper'} "
             f"radiometry; total return per view {sino.total().mean():.6g}; wrote "
             f"{args.output}")
 

@@ -212,10 +212,10 @@ def _kernel_for(geometry, measured, *, waveforms, samples):
         kernel = geometry
     elif isinstance(geometry, Scene):
         kernel = coating_kernel(geometry, Ladar(measured.angles_deg, measured.bin_edges),
-                                radiometry=measured.info.get("radiometry", "paper"),
+                                radiometry=measured.radiometry or "paper",
                                 samples=samples)
     else:
-        kernel = coating_kernel(geometry, radiometry=measured.info.get("radiometry", "paper"))
+        kernel = coating_kernel(geometry, radiometry=measured.radiometry or "paper")
     if measured.values.shape != kernel.shape:
         raise ParameterError(f"measured has shape {measured.values.shape}; the geometry's "
                              f"views and bins give {kernel.shape}")

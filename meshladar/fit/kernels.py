@@ -30,9 +30,9 @@ from .._summary import text as _text
 from .._validate import check_count
 from ..brdf import projected_weight
 from ..errors import ParameterError
-from ..precision import TINY
 from ..hits import Hits
 from ..waveforms import receive
+from ..weighing import per_table_weight
 from ..scene import Scene
 from ..sensor import check_radiometry
 from ..shapes import from_frame, to_frame
@@ -215,14 +215,7 @@ def _mesh_kernel(hits, radiometry):
     k = np.searchsorted(edges, hits.range, side="right") - 1
     ok = (hits.cos_theta >= 0) & (k >= 0) & (k < n_bins)
     # weigh's F·δA⊥ (paper) or F cos θ·δA⊥ (power) as ω × the table's F cos θ
-    omega = np.full(hits.view.size, float(hits.area))
-    if hits.weight_factor is not None:
-        omega = omega * hits.weight_factor
-    if radiometry == "power":
-        if hits.receive_factor is not None:
-            omega = omega * hits.receive_factor
-    else:
-        omega = omega / np.maximum(hits.cos_theta, TINY)
+    omega = per_table_weight(hits, radiometry == "power")
     theta = np.arctan2(hits.sin_theta, np.maximum(hits.cos_theta, 0.0))
     rows = hits.view.astype(np.int64) * n_bins + k
     mats = []

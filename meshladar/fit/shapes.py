@@ -256,7 +256,7 @@ def fit_scene(sino, *, kind="disk", size=512, extent=1.0, center=(0.0, 0.0), fir
     shapes = find_shapes(sino, kind=kind, size=size, extent=extent, center=center,
                          first=first, **find)
     ladar = Ladar(sino.angles_deg, sino.bin_edges)
-    radiometry = sino.info.get("radiometry", "paper")
+    radiometry = sino.radiometry or "paper"
     kw = dict(noise=noise, photons_per_unit=photons_per_unit, speckle_cells=speckle_cells)
 
     def fit_with(parts):

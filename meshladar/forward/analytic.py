@@ -33,6 +33,7 @@ relative (tests/forward/test_analytic.py).
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -255,7 +256,7 @@ def simulate_analytic(scene: Scene, ladar: Ladar, *, radiometry="paper", jobs=No
     if run_dir is not None:
         job = {"kind": "simulate_analytic", "radiometry": radiometry, "shapes": [repr(s) for s in shapes],
                "phi": array_digest(phi), "bin_edges": array_digest(edges)}
-    results = run_chunks(_profiles, (shapes, phi, edges, power), phi.size,
+    results = run_chunks(_profiles, _Profiles(shapes, phi, edges, power), phi.size,
                          chunk_size=_VIEWS_PER_CHUNK, jobs=jobs, executor=executor,
                          progress=progress, unit=unit, run_dir=run_dir, job=job,
                          arrays={"values": (ladar.n_bins,)})
@@ -266,9 +267,19 @@ def simulate_analytic(scene: Scene, ladar: Ladar, *, radiometry="paper", jobs=No
                     info={"radiometry": radiometry, "units": "length/sr (per unit height)"})
 
 
+class _Profiles(NamedTuple):
+    """What every chunk of views shares: the shapes, every view's angle (rad), the range
+    bin edges and whether the radiometry is "power"."""
+
+    shapes: tuple
+    phi: np.ndarray
+    edges: np.ndarray
+    power: bool
+
+
 def _profiles(payload, items):
-    """The stream's per-chunk job: the profiles of views ``phi[items]``."""
-    shapes, phi, edges, power = payload
+    """The stream's per-chunk job: the profiles of views ``payload.phi[items]``."""
+    shapes, phi, edges, power = payload.shapes, payload.phi, payload.edges, payload.power
     geoms = [_ShapeViews(s, phi[items]) for s in shapes]
     lo, hi = _occluders(geoms)
     out = np.zeros((items.size, edges.size - 1))

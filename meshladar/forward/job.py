@@ -171,7 +171,7 @@ def _bins(job, view, chunk, start):
 def _cast(job, scene, view):
     """One view's parallel rays cast one at a time: (origins, Embree's results)."""
     p = job.plan
-    o, _, _, _ = _ray_grid(p.geo, view.w, p.mode, p.spacing, p.z0_shifted, view.rng)
+    o = _ray_grid(p.geo, view.w, p.mode, p.spacing, p.z0_shifted, view.rng).origins
     return o, scene.run(o, np.ascontiguousarray((-view.w)[None, :], dtype=np.float32),
                         output=1)
 

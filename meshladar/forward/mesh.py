@@ -62,7 +62,7 @@ def first_hits(scene, view_vector, *, ray_spacing):
     spacing = check_real("ray_spacing", ray_spacing, low=0.0, low_open=True)
     geo = geometry(scene, "flat")
     emb = _embree_scene(geo, resolve_backend("auto"))
-    o, L, _, _ = _ray_grid(geo, w, "3d", spacing, 0.0, None)
+    o = _ray_grid(geo, w, "3d", spacing, 0.0, None).origins
     res = emb.run(o, np.ascontiguousarray((-w)[None, :], dtype=np.float32), output=1)
     hit = res["primID"] >= 0
     t = res["tfar"][hit].astype(np.float64)

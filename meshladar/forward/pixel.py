@@ -25,6 +25,7 @@ narrow glint lobe carry O(pixel) errors that the analytic model does not have.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -129,9 +130,9 @@ def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=N
     s_rel = (np.arange(n_rays) - (n_rays - 1) / 2) * ds          # about the scene centre
     # the most arc one ray covers: sqrt(2 ρ δs) at a silhouette of curvature radius ρ
     arc_max = [math.sqrt(2.0 * max(sh.axes) ** 2 / min(sh.axes) * ds) for sh in scene.shapes]
-    payload = (mask, grid, owner.ravel(), normal.reshape(-1, 2),
-               tuple(s.material for s in scene.shapes), arc_max, s_rel, (cx, cy), 2 * half,
-               ds, np.deg2rad(ladar.angles_deg), ladar.bin_edges, power)
+    payload = _PixelJob(mask, grid, owner.ravel(), normal.reshape(-1, 2),
+                        tuple(s.material for s in scene.shapes), arc_max, s_rel, (cx, cy),
+                        2 * half, ds, np.deg2rad(ladar.angles_deg), ladar.bin_edges, power)
     job = None
     if run_dir is not None:
         job = {"kind": "simulate_pixel", "radiometry": radiometry, "shapes": [repr(s) for s in scene.shapes],
@@ -149,10 +150,31 @@ def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=N
                           "n_rays": n_rays})
 
 
+@dataclass(frozen=True)
+class _PixelJob:
+    """What every chunk of views shares: the rasterised scene and the rays' layout."""
+
+    mask: np.ndarray            # (H, W) 1 where a shape covers the pixel
+    grid: PixelGrid
+    flat_owner: np.ndarray      # (H·W,) the shape index of each pixel, −1 outside
+    flat_normal: np.ndarray     # (H·W, 2) the outward normal of each pixel
+    materials: tuple            # one per shape
+    arc_max: list               # the most arc one ray covers, per shape
+    s_rel: np.ndarray           # the rays' transverse offsets about the scene centre
+    center: tuple               # (cx, cy), the scene centre
+    distance: float             # how far toward the ladar the rays start
+    ds: float                   # the ray spacing
+    phi: np.ndarray             # every view's angle (rad)
+    edges: np.ndarray           # the range bin edges
+    power: bool                 # radiometry "power" (else "paper")
+
+
 def _views(payload, views):
     """The stream's per-chunk job: the profiles of views ``views``."""
-    (mask, grid, flat_owner, flat_normal, materials, arc_max, s_rel, (cx, cy), distance, ds,
-     phi, edges, power) = payload
+    p = payload
+    mask, grid, flat_owner, flat_normal = p.mask, p.grid, p.flat_owner, p.flat_normal
+    materials, arc_max, s_rel, (cx, cy) = p.materials, p.arc_max, p.s_rel, p.center
+    distance, ds, phi, edges, power = p.distance, p.ds, p.phi, p.edges, p.power
     n_rays, n_bins = s_rel.size, edges.size - 1
     w = np.stack([np.cos(phi[views]), np.sin(phi[views])], -1)
     u = np.stack([-np.sin(phi[views]), np.cos(phi[views])], -1)

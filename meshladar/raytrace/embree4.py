@@ -15,6 +15,7 @@ stage's (:mod:`meshladar.weighing.fused`).
 from __future__ import annotations
 
 import threading
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -45,8 +46,9 @@ def _self_test(lib):
             k = np.arange(n)
             x = np.where(k % 2 == 0, 0.25, 2.0).astype(np.float32)     # odd lanes miss
             o = np.stack([x, np.full(n, 0.125, np.float32), np.full(n, 2.0 + k, np.float32)], 1)
-            prim, tfar, u, vv = scene.cast_grid(o, np.array([0, 0, -1], np.float32), width=w,
-                                                barycentrics=True)
+            got = scene.cast_grid(o, np.array([0, 0, -1], np.float32), width=w,
+                                  barycentrics=True)
+            prim, tfar, u, vv = got.prim, got.tfar, got.u, got.v
             hit = k % 2 == 0
             blocked = scene.occluded_grid(o, np.array([0, 0, -1], np.float32), width=w)
             if not (np.array_equal(prim, np.where(hit, 0, -1))
@@ -97,6 +99,16 @@ def available():
 
 
 # ------------------------------------------------------------------------------- the scene
+
+
+class GridHits(NamedTuple):
+    """:meth:`PacketGeometry.cast_grid`'s first hits with barycentrics: primitive (int32,
+    -1 on a miss), distance (float32, inf on a miss) and the barycentrics u, v."""
+
+    prim: np.ndarray
+    tfar: np.ndarray
+    u: np.ndarray
+    v: np.ndarray
 
 
 class PacketGeometry:
@@ -162,7 +174,8 @@ class PacketGeometry:
         along its own, (n, 3): coherent when neighbours are nearly parallel):
         ``prim`` (int32, -1 on a miss), ``tfar`` (float32, inf on a miss; distances in
         units of |direction|) and, with ``barycentrics``, the hits' ``u`` and ``v``
-        (float32). Releases the GIL: callable from several threads."""
+        (float32; then a :class:`GridHits`). Releases the GIL: callable from several
+        threads."""
         w = width or self.lib.width
         o = np.ascontiguousarray(origins, dtype=np.float32)
         d = _directions(direction, len(o))
@@ -174,7 +187,7 @@ class PacketGeometry:
         flags = RTC_RAY_QUERY_FLAG_COHERENT if coherent else RTC_RAY_QUERY_FLAG_INCOHERENT
         cast_grid(self.lib.intersect[w], self._live(), o, d, np.float32(tmax), w, flags,
                   prim, tfar, u, v)
-        return (prim, tfar, u, v) if barycentrics else (prim, tfar)
+        return GridHits(prim, tfar, u, v) if barycentrics else (prim, tfar)
 
     def occluded_grid(self, origins, direction, *, tmax=np.inf, width=None, coherent=True):
         """Whether each ray hits anything within ``tmax``: bool (n,)."""

@@ -111,7 +111,8 @@ def _ray_grid(geo, w, mode, spacing, z0_shifted, rng):
 
     Built component by component in float32 (Embree's precision): o = s u + t v + L w.
     """
-    s, t, du, dv, u, v, L = _grid_plan(geo, w, mode, spacing, z0_shifted, rng)
+    plan = _grid_plan(geo, w, mode, spacing, z0_shifted, rng)
+    s, t, du, dv, u, v, L = plan.s, plan.t, plan.du, plan.dv, plan.u, plan.v, plan.L
     o = np.empty((s.size, t.size, 3), dtype=np.float32)
     if rng is None:
         s32, t32 = s.astype(np.float32), t.astype(np.float32)

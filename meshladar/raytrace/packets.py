@@ -27,8 +27,8 @@ class PacketScene:
         d = np.asarray(directions, dtype=np.float32).reshape(-1, 3)
         if query == "OCCLUDED":
             return np.where(self.scene.occluded_grid(origins, d), 0, -1)
-        prim, tfar, u, v = self.scene.cast_grid(origins, d, barycentrics=True)
-        return {"primID": prim, "tfar": tfar, "u": u, "v": v}
+        got = self.scene.cast_grid(origins, d, barycentrics=True)
+        return {"primID": got.prim, "tfar": got.tfar, "u": got.u, "v": got.v}
 
 
 def build(vertices, faces):

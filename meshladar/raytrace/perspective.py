@@ -35,6 +35,16 @@ from ..hits import ViewHits
 from .views import _hit_normals, _shading_factor
 
 
+class PlaneGrid(NamedTuple):
+    """A sensor view's rays on the reference plane: each ray's grid coordinates S, T (n,)
+    along the view's transverse axes u, v."""
+
+    S: np.ndarray
+    T: np.ndarray
+    u: np.ndarray
+    v: np.ndarray
+
+
 def _plane_grid(geo, w, spacing, rng, sensor_pos, standoff, aim):
     """Cell centres (S, T) (n,) float64 on the reference plane (aim + S u + T v) covering
     the hull as projected from the sensor, and (u, v)."""
@@ -60,7 +70,7 @@ def _plane_grid(geo, w, spacing, rng, sensor_pos, standoff, aim):
         du, dv = _stratified_offsets(s.size, t.size, rng)
         S = S + du.astype(np.float64) * spacing
         T = T + dv.astype(np.float64) * spacing
-    return S.ravel(), T.ravel(), u, v
+    return PlaneGrid(S.ravel(), T.ravel(), u, v)
 
 
 class SensorCast(NamedTuple):
@@ -85,7 +95,8 @@ def _sensor_cast(geo, scene, w, spacing, rng, sensor, aim):
     """Cast one view's rays from a sensor at a finite standoff: a :class:`SensorCast`."""
     D = sensor.standoff
     sensor_pos = aim + D * w
-    S, T, u, v = _plane_grid(geo, w, spacing, rng, sensor_pos, D, aim)
+    plane = _plane_grid(geo, w, spacing, rng, sensor_pos, D, aim)
+    S, T, u, v = plane.S, plane.T, plane.u, plane.v
     q = S[:, None] * u + T[:, None] * v - D * w
     length = np.sqrt(S * S + T * T + D * D)
     dirs = q / length[:, None]
@@ -108,7 +119,8 @@ def _trace_sensor_view(plan, scene, view):
     D = sensor.standoff
     aim = np.asarray(sensor.aim, np.float64) - geo.center
     if D is None:
-        o, L, u, v = _ray_grid(geo, w, mode, spacing, z0_shifted, rng)
+        grid = _ray_grid(geo, w, mode, spacing, z0_shifted, rng)
+        o, u, v = grid.origins, grid.u, grid.v
         d = np.ascontiguousarray((-w)[None, :], dtype=np.float32)
         res = scene.run(o, d, output=1)
         prim = res["primID"]

@@ -28,7 +28,8 @@ def _trace_view(plan, scene, view, footprint=True, transverse=False):
     ``transverse``, each hit's coordinates along the view's (u, v) (its ray's, shifted)."""
     geo, mode, spacing, z0_shifted = plan.geo, plan.mode, plan.spacing, plan.z0_shifted
     back_faces, w, w_r, rng = plan.back_faces, view.w, view.w_r, view.rng
-    o, L, u, v = _ray_grid(geo, w, mode, spacing, z0_shifted, rng)
+    grid = _ray_grid(geo, w, mode, spacing, z0_shifted, rng)
+    o, u, v = grid.origins, grid.u, grid.v
     d = np.ascontiguousarray((-w)[None, :], dtype=np.float32)
     res = scene.run(o, d, output=1)
     prim = res["primID"]

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import dataclasses
 import warnings
+from typing import NamedTuple
 
 import numpy as np
 
@@ -107,12 +108,22 @@ def _uniform_fit(A, m, b, W):
     return c * m, float(np.sum(W * (b - c * Am) ** 2))
 
 
+class _Settled(NamedTuple):
+    """:func:`_settle`'s answer: the shifted surface, its shift, its projector and the
+    uniform start."""
+
+    surface: Surface
+    shift: float
+    projector: SurfaceProjector
+    x0: np.ndarray
+
+
 def _settle(surface, sino, H, W, m, smooth):
     """Shift every surface point along its normal by the one offset in ±1 bin that lets a
     uniform surface fit the data best. A first reconstruction puts a thin surface at the
     centre of the bin its returns pile into, up to half a bin off (inward on a convex
-    surface); the projector is exact, so that offset shows as a residual. Returns
-    (surface, shift, projector, uniform start): the uniform start keeps the solvers from
+    surface); the projector is exact, so that offset shows as a residual. Returns a
+    :class:`_Settled` (surface, shift, projector, uniform start): the uniform start keeps the solvers from
     speckling along the surface, where neighbouring points share their ranges."""
     dr = float(np.mean(np.diff(sino.bin_edges)))
     best = None
@@ -121,8 +132,8 @@ def _settle(surface, sino, H, W, m, smooth):
         A = SurfaceProjector(s, sino.angles_deg, sino.bin_edges, H, smooth)
         x0, res = _uniform_fit(A, m, sino.values, W)
         if best is None or res < best[0]:
-            best = (res, s, float(shift), A, x0)
-    return best[1:]
+            best = (res, _Settled(s, float(shift), A, x0))
+    return best[1]
 
 
 #: Solvers for :func:`compensate`.
@@ -175,7 +186,7 @@ def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first
     check_sinogram("sino", sino)
     method = check_choice("method", method, SOLVERS)
     size = check_count("size", size)
-    radiometry = sino.info.get("radiometry", "paper")
+    radiometry = sino.radiometry or "paper"
     if surface is None:
         if first is None:
             first = first_image(sino, size, extent, center)
@@ -192,7 +203,8 @@ def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first
     surface, H = _seen(surface, H, sino)
     W = np.ones(sino.shape) if weights is None else finite_array("weights", weights)
     m = surface.mask.astype(float)
-    surface, shift, A, x0 = _settle(surface, sino, H, W, m, smooth)
+    settled = _settle(surface, sino, H, W, m, smooth)
+    surface, shift, A, x0 = settled.surface, settled.shift, settled.projector, settled.x0
     solve = cgls if method == "cgls" else sirt
     img = solve(sino, size=size, extent=extent, center=center, n_iter=n_iter, x0=x0,
                 weights=weights, mask=surface.mask, projector=A, tol=tol, progress=progress)

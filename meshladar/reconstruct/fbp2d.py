@@ -219,8 +219,8 @@ def fbp(sinogram, size=512, extent=1.0, *, filter="ramp", interpolation="linear"
     info = {"filter": filter, "interpolation": interpolation, "n_views": sinogram.n_views,
             "n_bins": sinogram.n_bins, "resampled": resampled}
     info.update({k: v for k, v in sinogram.info.items() if k in ("preprocess", "radiometry")})
-    if sinogram.info.get("units"):
-        info["input_units"] = sinogram.info["units"]
+    if sinogram.units:
+        info["input_units"] = sinogram.units
     return Image(out, extent, (float(c[0]), float(c[1])), info)
 
 

@@ -57,8 +57,20 @@ class _Start(NamedTuple):
     nonneg: bool
 
 
+class _Problem(NamedTuple):
+    """The solvers' problem: the image grid, the projector A (None when not built), the
+    data b, the weights W, the mask M and the start x."""
+
+    grid: PixelGrid
+    A: object
+    b: np.ndarray
+    W: np.ndarray
+    M: np.ndarray
+    x: np.ndarray
+
+
 def _setup(sino, image, start, rays_per_bin, projector="siddon"):
-    """(grid, A, b, W, M, x): the solvers' problem. ``image`` an :class:`ImageGrid`,
+    """The solvers' :class:`_Problem`. ``image`` an :class:`ImageGrid`,
     ``start`` a :class:`_Start`; ``projector`` None builds no operator."""
     size, extent, center = image
     weights, mask, x0, nonneg = start.weights, start.mask, start.x0, start.nonneg
@@ -91,7 +103,7 @@ def _setup(sino, image, start, rays_per_bin, projector="siddon"):
     x *= M
     if nonneg:
         x = np.maximum(x, 0.0)
-    return grid, A, b, W, M, x
+    return _Problem(grid, A, b, W, M, x)
 
 
 def _projector(projector, grid, sino, rays_per_bin):
@@ -189,8 +201,9 @@ def sirt(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=50, x0=None, w
     """
     n_iter = check_count("n_iter", n_iter)
     tol = None if tol is None else check_real("tol", tol, low=0.0, low_open=True)
-    grid, A, b, W, M, x = _setup(sino, ImageGrid(size, extent, center),
-                                 _Start(x0, weights, mask, nonneg), rays_per_bin, projector)
+    pr = _setup(sino, ImageGrid(size, extent, center),
+                _Start(x0, weights, mask, nonneg), rays_per_bin, projector)
+    grid, A, b, W, M, x = pr.grid, pr.A, pr.b, pr.W, pr.M, pr.x
     rows = A @ (M * 1.0)                                   # row sums over allowed pixels
     R = np.where(rows > 0, 1.0 / np.where(rows > 0, rows, 1.0), 0.0) * W
     cols = (A.T @ W) * M                                   # column sums, weighted
@@ -210,7 +223,7 @@ def sirt(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=50, x0=None, w
     info = {"method": "sirt", "iterations": len(run.values), "residuals": run.values,
             "stopped": run.stopped, "nonneg": bool(nonneg), "projector": _projector_name(projector),
             "rays_per_bin": rays_per_bin,
-            "radiometry": sino.info.get("radiometry")}
+            "radiometry": sino.radiometry}
     return _image(x, extent, center, info)
 
 
@@ -234,8 +247,9 @@ def sart(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=10, subsets=No
                              f"as one of {PROJECTORS}")
     check_choice("projector", projector, PROJECTORS)
     # one projector per group below, none for the whole set
-    grid, _, b, W, M, x = _setup(sino, ImageGrid(size, extent, center),
-                                 _Start(x0, weights, mask, nonneg), rays_per_bin, None)
+    pr = _setup(sino, ImageGrid(size, extent, center),
+                _Start(x0, weights, mask, nonneg), rays_per_bin, None)
+    grid, b, W, M, x = pr.grid, pr.b, pr.W, pr.M, pr.x
     n_views = b.shape[0]
     n_sub = max(1, n_views // 36) if subsets is None else check_count("subsets", subsets)
     if n_sub > n_views:
@@ -269,7 +283,7 @@ def sart(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=10, subsets=No
     info = {"method": "sart", "subsets": n_sub, "relax": relax,
             "iterations": len(run.values), "residuals": run.values, "stopped": run.stopped,
             "nonneg": bool(nonneg), "projector": projector, "rays_per_bin": rays_per_bin,
-            "radiometry": sino.info.get("radiometry")}
+            "radiometry": sino.radiometry}
     return _image(x, extent, center, info)
 
 
@@ -280,8 +294,9 @@ def cgls(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=30, x0=None, w
     :func:`sirt`; ``info["residuals"]`` is non-increasing."""
     n_iter = check_count("n_iter", n_iter)
     tol = None if tol is None else check_real("tol", tol, low=0.0, low_open=True)
-    grid, A, b, W, M, x = _setup(sino, ImageGrid(size, extent, center),
-                                 _Start(x0, weights, mask, False), rays_per_bin, projector)
+    pr = _setup(sino, ImageGrid(size, extent, center),
+                _Start(x0, weights, mask, False), rays_per_bin, projector)
+    grid, A, b, W, M, x = pr.grid, pr.A, pr.b, pr.W, pr.M, pr.x
     r = b - A @ x
     s = M * (A.T @ (W * r))
     p = s.copy()
@@ -305,7 +320,7 @@ def cgls(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=30, x0=None, w
     run.close()
     info = {"method": "cgls", "iterations": len(run.values), "residuals": run.values,
             "stopped": run.stopped, "projector": _projector_name(projector), "rays_per_bin": rays_per_bin,
-            "radiometry": sino.info.get("radiometry")}
+            "radiometry": sino.radiometry}
     return _image(x, extent, center, info)
 
 
@@ -395,8 +410,9 @@ def tv_fista(sino, size=256, extent=1.0, *, center=(0.0, 0.0), tv=0.005, n_iter=
     n_iter = check_count("n_iter", n_iter)
     tv = check_real("tv", tv, low=0.0)
     tol = None if tol is None else check_real("tol", tol, low=0.0, low_open=True)
-    grid, A, b, W, M, x = _setup(sino, ImageGrid(size, extent, center),
-                                 _Start(x0, weights, mask, nonneg), rays_per_bin, projector)
+    pr = _setup(sino, ImageGrid(size, extent, center),
+                _Start(x0, weights, mask, nonneg), rays_per_bin, projector)
+    grid, A, b, W, M, x = pr.grid, pr.A, pr.b, pr.W, pr.M, pr.x
     rng = np.random.default_rng(0)
     v = rng.random(grid.shape) * M
     for _ in range(15):                                    # power iteration: ‖W^½ A‖²
@@ -426,5 +442,5 @@ def tv_fista(sino, size=256, extent=1.0, *, center=(0.0, 0.0), tv=0.005, n_iter=
     info = {"method": "tv_fista", "tv": tv, "lambda": lam, "lipschitz": L,
             "iterations": len(run.values), "residuals": run.values, "objective": objective,
             "stopped": run.stopped, "nonneg": bool(nonneg), "projector": _projector_name(projector),
-            "radiometry": sino.info.get("radiometry")}
+            "radiometry": sino.radiometry}
     return _image(x, extent, center, info)

@@ -21,6 +21,7 @@ with ``sino.values``.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from scipy.sparse import csr_matrix
@@ -233,6 +234,23 @@ def _opposite_views(angles_deg, edges):
     return base, mirror, index[partner_of[mirror]]
 
 
+class _SurfaceArgs(NamedTuple):
+    """:func:`surface_project`'s and :func:`surface_backproject`'s arguments between the
+    values and the output: the segments (centres, tangents, half-lengths, per-view
+    weights), every view's cos φ and sin φ, the first bin edge and 1 / bin width."""
+
+    x: np.ndarray
+    y: np.ndarray
+    tx: np.ndarray
+    ty: np.ndarray
+    half: np.ndarray
+    H: np.ndarray
+    cos: np.ndarray
+    sin: np.ndarray
+    e0: float
+    inv_dr: float
+
+
 class SurfaceProjector(Projector):
     """A: image → (n_views, n_bins), the exact projector of a
     :class:`~meshladar.reconstruct.surface.Surface` as straight segments (one per surface
@@ -261,8 +279,9 @@ class SurfaceProjector(Projector):
         self.cos, self.sin = np.cos(phi), np.sin(phi)
 
     def _args(self):
-        return (*_segments(self.surface, self.view_weights), self.cos, self.sin, self.e0,
-                self.inv_dr)
+        """The compiled loops' arguments after the values (flat, in their order)."""
+        return _SurfaceArgs(*_segments(self.surface, self.view_weights), self.cos,
+                            self.sin, self.e0, self.inv_dr)
 
     def _forward(self, image):
         v = np.asarray(image, float)[self.surface.rows, self.surface.cols]

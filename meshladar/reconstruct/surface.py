@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import NamedTuple
 from dataclasses import dataclass
 
 import numpy as np
@@ -79,13 +80,36 @@ class Surface:
         return 2.0 * self.extent / self.size
 
 
+class _Ridges(NamedTuple):
+    """Ridge points of an image: pixel rows and columns, sub-pixel offsets (n, 2) in pixels
+    (x, y), and normals (n, 2)."""
+
+    rows: np.ndarray
+    cols: np.ndarray
+    offsets: np.ndarray
+    normals: np.ndarray
+
+
+class _Segments(NamedTuple):
+    """The surface kernels' segment arguments (flat, for the compiled loops): centres x, y,
+    tangents tx, ty, half-lengths and the per-view weights H."""
+
+    x: np.ndarray
+    y: np.ndarray
+    tx: np.ndarray
+    ty: np.ndarray
+    half: np.ndarray
+    H: np.ndarray
+
+
 def _ridges(values, sigma, threshold):
     """Steger's sub-pixel ridge points (IEEE PAMI 20, 1998) of a bright thin structure:
     across a ridge the Gaussian Hessian has a strongly negative eigenvalue, whose
     eigenvector n is the normal; the intensity's maximum along n lies at t = −(∇I·n) /
     (nᵀ H n) from the pixel centre, and the pixel holds a ridge point when that maximum is
     inside it. Keeps points whose strength (−eigenvalue) reaches ``threshold`` × the
-    largest. Returns (rows, cols, offsets (n, 2) in pixels (x, y), normals (n, 2))."""
+    largest. Returns :class:`_Ridges` (rows, cols, offsets (n, 2) in pixels (x, y),
+    normals (n, 2))."""
     d = {o: gaussian_filter(values, sigma, order=o) for o in
          ((0, 1), (1, 0), (0, 2), (2, 0), (1, 1))}
     gx, gy, hxx, hyy, hxy = d[0, 1], d[1, 0], d[0, 2], d[2, 0], d[1, 1]
@@ -107,7 +131,7 @@ def _ridges(values, sigma, threshold):
     rows, cols = np.nonzero(ok)
     tt = t[rows, cols]
     n = np.stack([nx[rows, cols], ny[rows, cols]], axis=1)
-    return rows, cols, tt[:, None] * n, n
+    return _Ridges(rows, cols, tt[:, None] * n, n)
 
 
 def estimate_surface(first, sino, *, threshold=0.2, sigma=1.5, shadows=True):
@@ -136,7 +160,8 @@ def estimate_surface(first, sino, *, threshold=0.2, sigma=1.5, shadows=True):
     threshold = check_real("threshold", threshold, low=0.0, high=1.0, low_open=True,
                            high_open=True)
     sigma = check_real("sigma", sigma, low=0.0, low_open=True)
-    rows, cols, offset, normals = _ridges(first.values, sigma, threshold)
+    ridges = _ridges(first.values, sigma, threshold)
+    rows, cols, offset, normals = ridges.rows, ridges.cols, ridges.offsets, ridges.normals
     if rows.size == 0:
         raise ParameterError("no surface points found in first")
     pix = 2.0 * first.extent / first.size
@@ -173,7 +198,7 @@ def _uniform(edges):
 
 
 def _segments(surface, H):
-    """The kernels' segment arguments: centres, tangents, half-lengths, weights."""
+    """The kernels' :class:`_Segments`: centres, tangents, half-lengths, weights."""
     p, n = surface.points, surface.normals
     # each segment reaches halfway to its two nearest neighbours along the surface
     if p.shape[0] > 2:
@@ -182,7 +207,7 @@ def _segments(surface, H):
     else:
         half = np.full(p.shape[0], 0.5 * surface.pixel_size)
     c = np.ascontiguousarray
-    return (c(p[:, 0]), c(p[:, 1]), c(-n[:, 1]), c(n[:, 0]), half, c(H))
+    return _Segments(c(p[:, 0]), c(p[:, 1]), c(-n[:, 1]), c(n[:, 0]), half, c(H))
 
 
 def _weight_table(material, radiometry, blur_deg):

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import functools
 import math
+from typing import NamedTuple
 import warnings
 
 import numpy as np
@@ -70,6 +71,16 @@ def sphere_weights(view_vectors) -> np.ndarray:
     return np.bincount(owner, minlength=len(w)) * (4 * math.pi / probe.shape[0])
 
 
+class _VolumeGrid(NamedTuple):
+    """A cubic voxel grid: n voxels a side, half-width e, centre c (3,) and the voxel
+    centres along x, y and z."""
+
+    n: int
+    e: float
+    c: np.ndarray
+    centers: tuple
+
+
 def _grid(size, extent, center):
     n = check_count("size", size)
     e = check_real("extent", extent, low=0.0, low_open=True)
@@ -77,7 +88,7 @@ def _grid(size, extent, center):
     if c.shape != (3,):
         raise ParameterError(f"center must be a point (x, y, z); got shape {c.shape}")
     base = -e + (np.arange(n) + 0.5) * (2 * e / n)
-    return n, e, c, (base + c[0], base + c[1], base + c[2])
+    return _VolumeGrid(n, e, c, (base + c[0], base + c[1], base + c[2]))
 
 
 def fbp3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None,
@@ -128,7 +139,8 @@ def fbp3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None,
             "fbp_slices of elevation-resolved returns)")
     if extent is None:
         extent = float(max(abs(sino.bin_edges[0]), abs(sino.bin_edges[-1])))
-    n, e, c, (x, y, z) = _grid(size, extent, center)
+    grid = _grid(size, extent, center)
+    n, e, c, (x, y, z) = grid.n, grid.e, grid.c, grid.centers
     check_size("size", float(n) ** 3, 8 * 2, f"a {n}^3 volume", "give a smaller size")
     if weights is None:
         wts = np.full(sino.n_views, 4 * math.pi / sino.n_views)
@@ -150,7 +162,7 @@ def fbp3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None,
                   x, y, z, out)
     info = {"method": "radon3d", "filter": "second difference", "smooth_bins": smooth,
             "views": sino.n_views,
-            "radiometry": sino.info.get("radiometry"), "size": n, "extent": e,
+            "radiometry": sino.radiometry, "size": n, "extent": e,
             "center": c.tolist()}
     if sino.info.get("preprocess"):
         info["preprocess"] = sino.info["preprocess"]

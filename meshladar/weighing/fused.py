@@ -15,10 +15,11 @@ __all__ = ["cast_bin_grid"]
 def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None):
     """Cast, weigh and bin one view of the packet scene ``emb``
     (:class:`meshladar.raytrace.embree.EmbreeScene` whose backend is fused): ``plan`` is
-    :func:`meshladar.raytrace.grid._grid_plan`'s (s, t, du, dv, u, v, L), ``bins`` the
-    weigh-and-bin arguments from ``plane_d`` to ``footprint``; ``receiver`` (direction,
-    lift) makes the view bistatic. Returns (back-face hits, rays cast)."""
-    s, t, du, dv, u, v, L = plan
+    :func:`meshladar.raytrace.grid._grid_plan`'s :class:`~meshladar.raytrace.grid.GridPlan`,
+    ``bins`` the weigh-and-bin arguments (:class:`~meshladar.forward.job.FlatBins`,
+    flat for the compiled loop); ``receiver`` (direction, lift) makes the view bistatic.
+    Returns (back-face hits, rays cast)."""
+    s, t, du, dv, u, v, L = plan.s, plan.t, plan.du, plan.dv, plan.u, plan.v, plan.L
     sc = emb.scene.scene
     lib = sc.lib
     empty = np.empty((0, 0), np.float32)

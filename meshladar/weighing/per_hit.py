@@ -17,7 +17,7 @@ from ..precision import BOX_RATIO, TINY
 from ..sensor import check_radiometry
 from ..brdf import BRDF, check_brdf, projected_weight
 
-__all__ = ["weigh"]
+__all__ = ["weigh", "scaled", "per_table_weight"]
 
 
 def _weights(cos_t, sin_t, mat, materials, area, bi=None, power=False):
@@ -47,6 +47,27 @@ def _weights(cos_t, sin_t, mat, materials, area, bi=None, power=False):
 #: Below this cos θr a lit surface is edge-on to the receiver: under Eq. 8 a bistatic
 #: weight is F, whose specular term grows as 1/cos θr (1e6 times its value at 60° here).
 GRAZING_RECEIVER_COS = 1e-6
+
+
+def scaled(wt, factor=None, receive=None, *, power=False):
+    """Per-hit weights ``wt`` times the hits' own factors, as every weighing applies them:
+    the sensor's ``factor`` (beam irradiance, spreading, atmosphere; None: 1) and, under
+    received power only, the receiver's ``receive`` factor (None: 1)."""
+    if factor is not None:
+        wt = wt * factor
+    if power and receive is not None:
+        wt = wt * receive
+    return wt
+
+
+def per_table_weight(hits, power):
+    """Each hit's weight per unit of its coating's projected weight F(θ; −θ) cos θ (the
+    table a coating kernel interpolates), such that the product is :func:`weigh`'s weight:
+    δA⊥ × the hit's factors (:func:`scaled`), over cos θ under "paper" (whose weight is F,
+    not F cos θ). Monostatic hits."""
+    omega = scaled(np.full(hits.view.size, float(hits.area)), hits.weight_factor,
+                   hits.receive_factor, power=power)
+    return omega if power else omega / np.maximum(hits.cos_theta, TINY)
 
 
 def _warn_grazing_receiver(cos_t, cos_r):
@@ -131,11 +152,8 @@ def bin_one(r, cos_t, sin_t, mat, spread, materials, edges, area, *, footprint=F
     ``power`` received power, ``receive`` the sensor's receiver factors (applied under
     received power only)."""
     nb = len(edges) - 1
-    wt = _weights(cos_t, sin_t, mat, materials, area, bi, power)
-    if factor is not None:
-        wt = wt * factor
-    if power and receive is not None:
-        wt = wt * receive
+    wt = scaled(_weights(cos_t, sin_t, mat, materials, area, bi, power), factor, receive,
+                power=power)
     if footprint and curve is not None:
         curved = curve[:, 3] > 0
         out = _curved_spread(r[curved], wt[curved], curve[curved], edges)

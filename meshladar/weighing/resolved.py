@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..raytrace.grid import frame as _frame
-from .per_hit import _weights
+from .per_hit import _weights, scaled
 
 __all__ = ["bin_resolved"]
 
@@ -18,12 +18,9 @@ def bin_resolved(h, w, offset, plan, weighing, out):
     ranges; ``plan`` (:class:`~meshladar.raytrace.plan.TracePlan`) the geometry, the ray
     area and the sensor the view was traced with."""
     geo, sensor = plan.geo, plan.traced_with
-    wt = _weights(h.cos_theta, h.sin_theta, h.material, weighing.materials, plan.area,
-                  power=weighing.power)
-    if h.weight_factor is not None:
-        wt = wt * h.weight_factor
-    if weighing.power and h.receive_factor is not None:
-        wt = wt * h.receive_factor
+    wt = scaled(_weights(h.cos_theta, h.sin_theta, h.material, weighing.materials,
+                         plan.area, power=weighing.power),
+                h.weight_factor, h.receive_factor, power=weighing.power)
     u, v = _frame(w)
     s, t = h.transverse[:, 0], h.transverse[:, 1]
     coords = {"range": h.range + offset,
