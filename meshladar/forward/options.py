@@ -98,8 +98,12 @@ class Option:
 
 _MESH = ("mesh",)
 
-#: simulate's options, in the order the command line lists them.
+#: simulate's options, in the order the command line and the errors list them.
 OPTIONS: tuple[Option, ...] = (
+    Option("pixel_size", "positive_float", "pixel size for --model pixel", "a quarter bin",
+           ("pixel",)),
+    Option("ray_spacing", "positive_float", "distance between rays in scene units",
+           "from --rays-per-bin (mesh), a quarter bin (pixel)", ("mesh", "pixel")),
     Option("radiometry", "choice", "paper: the paper's Eq. 8, ∫ F cos θ dA per bin; power: "
            "the power a receiver collects, ∫ F cos θi cos θr dA (every model)", "paper",
            choices=RADIOMETRIES),
@@ -112,8 +116,6 @@ OPTIONS: tuple[Option, ...] = (
     Option("back_faces", "choice", "faces seen from behind: two-sided (they return as if "
            "seen from the front) or ignore (rays pass through them)", "two-sided", _MESH,
            choices=BACK_FACES),
-    Option("ray_spacing", "positive_float", "distance between rays in scene units",
-           "from --rays-per-bin (mesh), a quarter bin (pixel)", ("mesh", "pixel")),
     Option("rays_per_bin", "positive_float", "rays per range-bin width",
            "1 in 3d, at least 128 across the target; 8 in slice", _MESH),
     Option("backend", "choice", "mesh model ray casting: packets (coherent packets, Embree 4 "
@@ -131,8 +133,6 @@ OPTIONS: tuple[Option, ...] = (
            "segments (meshladar.forward.refine)", "off", _MESH),
     Option("max_rays", "positive_float", "budget of rays for --tol over all its refinement "
            "runs", "2e9", _MESH),
-    Option("pixel_size", "positive_float", "pixel size for --model pixel", "a quarter bin",
-           ("pixel",)),
     Option("sensor", "object", "a meshladar.sensor.Sensor: a ladar at a finite standoff, its "
            "beam, the atmosphere and the link budget (the sensor flags build one)",
            "at infinity, a flood, relative units", _MESH, cli=False),
