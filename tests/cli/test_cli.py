@@ -59,10 +59,10 @@ def test_simulate_a_mesh_file_with_two_coatings(tmp_path):
 
 
 def test_view_writes_a_screenshot(tmp_path):
-    from test_viewer import _SMOKE
+    from _rendering import _SMOKE
 
     if subprocess.run([sys.executable, "-c", _SMOKE], capture_output=True).returncode:
-        pytest.skip("off-screen rendering unavailable (see test_viewer)")
+        pytest.skip("off-screen rendering unavailable (see _rendering)")
     _cli("view", "disk_pair", "--view-angle", "0", "--screenshot", tmp_path / "v.png",
          check=True)
     import matplotlib.image as mpimg
