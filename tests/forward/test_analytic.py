@@ -13,7 +13,7 @@ from _reference import quad_profile, ray_sample  # noqa: E402
 from scipy import integrate
 
 import meshladar as ml
-import meshladar.brdf
+import meshladar.brdf.sandford_robertson
 from meshladar.materials import ALUMINUM, DARK_GRAY, glint, lambertian
 
 #: the issue's accuracy target against adaptive quadrature: 1e-9 relative per bin, or 1e-12
@@ -229,7 +229,7 @@ def test_lambertian_takes_no_specular_evaluation(monkeypatch):
     def forbidden(*args, **kwargs):
         raise AssertionError("specular lobe evaluated for a Lambertian coating")
 
-    monkeypatch.setattr(meshladar.brdf, "_glint_over_H", forbidden)
+    monkeypatch.setattr(meshladar.brdf.sandford_robertson, "_glint_over_H", forbidden)
     sino = ml.simulate(_pair(lambertian(0.5), lambertian(0.2)), PAPER)
     assert np.all(np.isfinite(sino.values)) and sino.values.max() > 0
 

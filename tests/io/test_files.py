@@ -583,7 +583,7 @@ def test_part_names_are_the_same_on_every_load(tmp_path):
     names = [[p.name for p in ml.Scene.from_mesh(path, DARK_GRAY).parts] for _ in range(3)]
     assert names[0] == names[1] == names[2] and len(names[0]) == 2
     assert len(set(names[0])) == 2
-    from meshladar.meshes import _part_name
+    from meshladar.meshes.formats import _part_name
 
     assert _part_name("0_33d0cd", "Truck_1", set()) == "Truck_1"
     assert _part_name("geometry_06ec728accc3a", "geometry_1", set()) == "geometry_1"
