@@ -13,7 +13,7 @@ from _reference import quad_profile, ray_sample  # noqa: E402
 from scipy import integrate
 
 import meshladar as ml
-import meshladar.brdf
+import meshladar.brdf.sandford_robertson
 from meshladar.materials import ALUMINUM, DARK_GRAY, glint, lambertian
 
 #: the issue's accuracy target against adaptive quadrature: 1e-9 relative per bin, or 1e-12

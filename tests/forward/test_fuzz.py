@@ -45,6 +45,7 @@ def test_valid_coatings_give_finite_nonnegative_brdf(rho_d, epsilon, b, e, lobes
         assert np.all(m.specular_reflectance(t) >= 0)
 
 
+@pytest.mark.slow
 @FAST
 @given(name=st.sampled_from(["rho_d", "epsilon", "b", "e", "lobes"]), value=anything)
 def test_invalid_coatings_name_the_argument(name, value):

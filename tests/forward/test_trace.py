@@ -92,6 +92,7 @@ def test_tilted_plate_cos_theta_everywhere():
     assert ign.total()[0] == 0.0
 
 
+@pytest.mark.slow
 def test_slice_mode_converges_to_the_analytic_profiles():
     ladar = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 20.0))
     exact = ml.simulate(PAIR, ladar)
@@ -115,6 +116,7 @@ def test_exact_and_smooth_normals_beat_flat_for_a_glossy_coating():
     assert err["smooth"] < 0.1 * err["flat"] and err["exact"] < 0.1 * err["flat"]
 
 
+@pytest.mark.slow
 def test_footprint_beats_point_sampling_at_equal_rays():
     scene = ml.Scene([ml.Disk((0.0, 0.0), 0.8, lambertian(1.0))])
     ladar = ml.Ladar.paper(angles_deg=[0.0, 33.0])
@@ -293,6 +295,7 @@ def test_fibonacci_sphere():
     assert np.all(ml.meshes.fibonacci_sphere(50, hemisphere=True)[:, 2] >= 0)
 
 
+@pytest.mark.slow
 def test_bistatic_receiver():
     mesh = PAIR.tessellate(512)
     ladar = ml.Ladar.paper(angles_deg=[20.0, 140.0])

@@ -351,6 +351,7 @@ def _centred(path, material):
     return ml.Scene.from_mesh(path, material, transform=move)
 
 
+@pytest.mark.slow
 def test_real_meshes_flat_against_smooth():
     meshes = _pyvista_meshes()
     views = ml.meshes.fibonacci_sphere(6)

@@ -1,5 +1,6 @@
 """The sensor stage: radiometry conventions (Eq. 8 and received power) in every forward model,
-finite standoff and beams (the receiver, pulses and noise are in test_sensor.py)."""
+finite standoff and beams (the receiver, pulses and noise are in
+tests/records/test_waveforms.py)."""
 
 from __future__ import annotations
 

@@ -13,7 +13,7 @@ import sys
 import numpy as np
 import pytest
 
-EXAMPLES = pathlib.Path(__file__).resolve().parent.parent / "examples"
+EXAMPLES = pathlib.Path(__file__).resolve().parents[2] / "examples"
 NOTEBOOKS = sorted(p.name for p in EXAMPLES.glob("*.ipynb"))
 
 
@@ -45,13 +45,13 @@ def _close_figures():
 
 @pytest.fixture(scope="module")
 def rendering():
-    from test_viewer import _SMOKE
+    from _rendering import _SMOKE
 
     res = subprocess.run([sys.executable, "-c", _SMOKE], capture_output=True, timeout=300)
     if res.returncode:
         if os.environ.get("CI"):
-            pytest.fail("off-screen rendering unavailable (see test_viewer)")
-        pytest.skip("off-screen rendering unavailable (see test_viewer)")
+            pytest.fail("off-screen rendering unavailable (see _rendering)")
+        pytest.skip("off-screen rendering unavailable (see _rendering)")
 
 
 def _run(name, tmp_path, monkeypatch):

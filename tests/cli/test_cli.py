@@ -20,6 +20,7 @@ def _cli(*args, cwd=None, check=False):
                           capture_output=True, text=True, cwd=cwd, check=check, timeout=600)
 
 
+@pytest.mark.slow
 @pytest.mark.filterwarnings("ignore:.* views are too few")   # 36 views: a quick round trip
 def test_simulate_then_reconstruct_round_trip(tmp_path):
     res = _cli("simulate", "disk_pair", "-o", tmp_path / "pair.npz", "--coating",
@@ -39,6 +40,7 @@ def test_simulate_then_reconstruct_round_trip(tmp_path):
     assert (tmp_path / "pair.png").stat().st_size > 1000
 
 
+@pytest.mark.slow
 def test_simulate_a_mesh_file_with_two_coatings(tmp_path):
     import trimesh
 
@@ -58,11 +60,12 @@ def test_simulate_a_mesh_file_with_two_coatings(tmp_path):
     assert names == {"dark_gray", "aluminum"}
 
 
+@pytest.mark.slow
 def test_view_writes_a_screenshot(tmp_path):
-    from test_viewer import _SMOKE
+    from _rendering import _SMOKE
 
     if subprocess.run([sys.executable, "-c", _SMOKE], capture_output=True).returncode:
-        pytest.skip("off-screen rendering unavailable (see test_viewer)")
+        pytest.skip("off-screen rendering unavailable (see _rendering)")
     _cli("view", "disk_pair", "--view-angle", "0", "--screenshot", tmp_path / "v.png",
          check=True)
     import matplotlib.image as mpimg
@@ -78,13 +81,16 @@ def test_view_writes_a_screenshot(tmp_path):
     assert not (tmp_path / "t.png").exists()
 
 
-@pytest.mark.parametrize("sub", SUBCOMMANDS)
+# one subprocess each (seconds of imports): the fast subset asks one command for its help
+@pytest.mark.parametrize("sub", [s if s == "simulate" else pytest.param(s, marks=pytest.mark.slow)
+                                 for s in SUBCOMMANDS])
 def test_help_everywhere_with_examples(sub):
     res = _cli(sub, "--help", check=True)
     assert "usage: meshladar" in res.stdout and "example" in res.stdout
 
 
-@pytest.mark.parametrize("args, message", [
+#: A bad command line and what its one error line says.
+BAD_INPUT = [
     (["simulate", "nope", "-o", "x.npz"], "not a known phantom"),
     (["simulate", "missing.stl", "-o", "x.npz"], "no such mesh file"),
     (["simulate", "disk_pair", "--coating", "small=gold", "-o", "x.npz"],
@@ -112,7 +118,15 @@ def test_help_everywhere_with_examples(sub):
     (["reconstruct", "junk.npz", "-o", "x.png", "--filter", "rampp"], "invalid choice"),
     (["simulate", "disk_pair", "-o", "x.npz", "--model", "mesh", "--tol", "2"],
      "tol must be in (0, 1)"),
-])
+]
+#: The ones the fast subset runs (a subprocess each; the matrix's cli cases run every
+#: command's bad input in this process): a scene source, a result file, argparse's own.
+FAST_BAD_INPUT = (0, 9, 14)
+
+
+@pytest.mark.parametrize("args, message", [
+    case if i in FAST_BAD_INPUT else pytest.param(*case, marks=pytest.mark.slow)
+    for i, case in enumerate(BAD_INPUT)])
 def test_bad_input_is_one_clear_line(tmp_path, args, message):
     (tmp_path / "bad.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n")
     (tmp_path / "junk.npz").write_bytes(b"\x00" * 64)

@@ -1,5 +1,5 @@
 """The receiver stage: pulses, responses, digitiser and noise (the sensor and its radiometry
-are tested in tests/values/test_sensor.py)."""
+are tested in tests/values/test_sensor_beams.py)."""
 
 from __future__ import annotations
 
