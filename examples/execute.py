@@ -1,5 +1,5 @@
 """Re-execute the example notebooks in place, so their stored outputs are today's (what
-tests/test_notebooks.py checks), with PNG outputs quantised to 256 colours (a third of the
+tests/examples/test_notebooks.py checks), with PNG outputs quantised to 256 colours (a third of the
 bytes; the figures look the same).
 
     pip install nbclient ipykernel    # authoring only: not a dependency of meshladar

@@ -3,10 +3,8 @@
 3-D reflective tomography now lives in :mod:`meshladar.reconstruct.volumes` (``radon3d`` is
 :func:`~meshladar.reconstruct.volumes.fbp3d`, ``fbp_stack`` is
 :func:`~meshladar.reconstruct.volumes.fbp_slices`) and the :class:`Volume` record in
-:mod:`meshladar.images`. The old names here do not warn yet: ``radon3d`` and ``fbp_stack``
-of this module are the new functions themselves until their importers (``cli.py``,
-``paper.py``, ``bench.py``, ``tests/test_viewer.py``) call the new names; then they become
-the warning aliases of :mod:`meshladar.reconstruct.volumes`.
+:mod:`meshladar.images`. Importing this module warns (DeprecationWarning) with the new
+home; its ``radon3d`` and ``fbp_stack`` are the new functions.
 """
 
 from __future__ import annotations

@@ -282,6 +282,13 @@ def run_case(case, tmp):
     return outcome, message
 
 
+def test_the_readme_states_the_number_of_cases():
+    # the README says how many cases the matrix has: the number it states is this one
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
+    stated = re.search(r"\(`tests/matrix/`, (\d+) cases", readme)
+    assert stated and int(stated.group(1)) == len(CASES) == 1162
+
+
 # ================================================================== the test
 
 @pytest.mark.parametrize("case", CASES, ids=[c.id for c in CASES])
