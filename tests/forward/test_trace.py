@@ -118,7 +118,7 @@ def test_exact_and_smooth_normals_beat_flat_for_a_glossy_coating():
 
 @pytest.mark.slow
 def test_footprint_beats_point_sampling_at_equal_rays():
-    scene = ml.Scene([ml.Disk((0.0, 0.0), 0.8, lambertian(1.0))])
+    scene = ml.phantoms.scene("disk", lambertian(1.0))
     ladar = ml.Ladar.paper(angles_deg=[0.0, 33.0])
     exact = ml.simulate(scene, ladar)
     mesh = scene.tessellate(4096)

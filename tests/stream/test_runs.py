@@ -156,7 +156,7 @@ def test_every_model_resumes_from_its_run_folder(model, options, tmp_path):
 
 def test_a_lone_disk_resumes_its_distinct_profiles(tmp_path):
     # a centred disk is one profile whatever the views: the run folder holds that one
-    disk = ml.Scene([ml.Disk((0.0, 0.0), 0.8, ALUMINUM)])
+    disk = ml.phantoms.scene("disk", ALUMINUM)
     ladar = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 1.0))
     sino = ml.simulate(disk, ladar, run_dir=tmp_path)
     assert len(list(tmp_path.glob("chunk_*.npz"))) == 1

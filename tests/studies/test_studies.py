@@ -22,7 +22,7 @@ def test_flat_facets_on_a_lambertian_disk_converge_at_second_order():
     # in position: the inscribed N-gon's ranges are off by at most R(1 − cos(π/N)) ≈
     # Rπ²/(2N²), and footprints return each flat facet's range interval exactly, so the
     # binned error falls as N⁻² (until the 8-rays-per-bin sampling floor, ~4e-3).
-    scene = ml.Scene([ml.Disk((0.0, 0.0), 0.8, lambertian(1.0))])
+    scene = ml.phantoms.scene("disk", lambertian(1.0))
     ladar = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 10.0))
     exact = ml.simulate(scene, ladar)
     ns = [64, 128, 256]

@@ -56,8 +56,8 @@ def test_lambertian_disk_closed_form(radiometry):
 
 
 @pytest.mark.parametrize("name, scene", [
-    ("disk_aluminum", lambda: ml.Scene([ml.Disk((0.0, 0.0), 0.8, ALUMINUM)])),
-    ("disk_glint_e0.007", lambda: ml.Scene([ml.Disk((0.0, 0.0), 0.8, glint(0.007))])),
+    ("disk_aluminum", lambda: ml.phantoms.scene("disk", ALUMINUM)),
+    ("disk_glint_e0.007", lambda: ml.phantoms.scene("disk", glint(0.007))),
     ("ellipse_rotated", lambda: ml.Scene([ml.Ellipse((0.05, -0.1), (0.6, 0.3), 20.0,
                                                      ALUMINUM)])),
     ("pair_gray_al", lambda: ml.phantoms.scene("disk_pair", large=DARK_GRAY,
