@@ -141,3 +141,14 @@ def test_a_deprecated_module_warns_at_the_users_import_line():
     with pytest.warns(DeprecationWarning, match="meshladar.io") as record:
         importlib.import_module("meshladar.results")
     assert record[0].filename == __file__
+
+
+def test_every_engine_package_is_installed():
+    # a non-editable install ships only the packages pyproject.toml lists: every folder of
+    # the engine with an __init__.py must be among them, or `pip install meshladar` lacks it
+    listed = set(tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+                 ["packages"])
+    found = {".".join(p.parent.relative_to(ROOT).parts)
+             for p in (ROOT / "meshladar").rglob("__init__.py")}
+    assert found <= listed, sorted(found - listed)
+    assert {"meshladar.phantoms", "meshladar.viz"} <= listed
