@@ -9,8 +9,10 @@ The habit is pyvista's: its core reaches plotting through one small module only.
 from __future__ import annotations
 
 import importlib
+import importlib.util
+import sys
 
-__all__ = ["plot", "viz"]
+__all__ = ["plot", "viz", "require"]
 
 #: record class name -> (module of meshladar.viz, function drawing it)
 _DRAWERS = {
@@ -50,3 +52,22 @@ def viz(module: str):
     except ImportError as exc:  # matplotlib or pyvista absent
         raise ImportError("plotting needs the viz extra: pip install 'meshladar[viz]'"
                           ) from exc
+
+
+#: What each drawing package is needed for, in the message that names the extra.
+_NEEDS = {"matplotlib": "figures need matplotlib", "pyvista": "the viewer needs pyvista"}
+
+
+def require(package: str) -> None:
+    """Raise the one-line ImportError naming the ``viz`` extra when ``package``
+    (matplotlib or pyvista) cannot be imported: the command line calls it before any work,
+    so a plain install does not compute for minutes and then fail on the figure."""
+    if package not in _NEEDS:
+        raise ValueError(f"package must be one of {tuple(_NEEDS)}; got {package!r}")
+    try:
+        found = sys.modules[package] is not None if package in sys.modules \
+            else importlib.util.find_spec(package) is not None
+    except (ImportError, ValueError):
+        found = False
+    if not found:
+        raise ImportError(f"{_NEEDS[package]}: pip install 'meshladar[viz]'")

@@ -60,6 +60,7 @@ def cmd_paper(args) -> int:
     check_outdir(args.outdir)
     check_size("--size", float(args.size) ** 2, 8 * 3, f"a {args.size} x {args.size} image",
                "use a smaller --size")
+    plotting.require("matplotlib")              # before the work, not after it
     paths, metrics = plotting.viz("paper").reproduce(args.outdir, size=args.size)
     print(f"Jin & Levine (2009) Figs 5-11 reproduced in {args.outdir}/ "
           "(analytic model, 360 views, A/256 bins)")
@@ -76,6 +77,7 @@ def cmd_view(args) -> int:
     if args.screenshot is not None:
         check_output(args.screenshot, (".png",), [args.scene, args.materials],
                      "--screenshot")
+    plotting.require("pyvista")                 # before loading the scene
     scene, default_ladar, _ = load_scene(args)
     if args.screenshot is None and not (os.environ.get("DISPLAY")
                                         or os.environ.get("WAYLAND_DISPLAY")):
@@ -92,6 +94,7 @@ def cmd_view(args) -> int:
 def cmd_study(args) -> int:
     """Run a study and write its table (CSV/JSON), results and figures into a folder."""
     check_outdir(args.outdir)
+    plotting.require("matplotlib")              # before the work, not after it
     if args.kind == "tomography3d":
         return _study_3d(args)
     if args.kind == "reconstruction":

@@ -32,6 +32,7 @@ def cmd_reconstruct(args) -> int:
     check_output(args.output, IMAGE_SUFFIXES, [args.result])
     data = os.path.splitext(args.output)[0] + ".image.npz"
     check_not_input(args.output, data, args.result, "image data")
+    plotting.require("matplotlib")              # before the work, not after it
     sino, meta = io.load_sinogram(args.result)
     if args.log:
         sino = log_radiance(sino)
@@ -137,6 +138,7 @@ def cmd_receive(args) -> int:
     check_output(args.output, (".npz",), [args.result])
     if args.plot is not None:
         check_output(args.plot, (".png",), [args.result, args.output], "--plot")
+        plotting.require("matplotlib")          # before the work, not after it
     sino, _ = io.load_sinogram(args.result)
     if sino.radiometry != "power" and not args.quiet:
         warnings.warn(f"{args.result} holds {sino.radiometry or 'paper'!r} "

@@ -101,6 +101,20 @@ def check_applicable(args, model, is_phantom):
                              "Dask runs the work: give one")
 
 
+def _check_model_fits(args, model, scene):
+    """What the API refuses in its own words (``model='mesh'``), said in flags: a 2-D model
+    needs a phantom's analytic shapes and views about z."""
+    if model == "mesh":
+        return
+    if not scene.shapes:
+        raise ParameterError(f"--model {model} needs a phantom (analytic disks and "
+                             f"ellipses); {args.scene!r} is a mesh: use --model mesh")
+    if args.view_vectors is not None:
+        raise ParameterError(f"--view-vectors places views over the sphere, which only "
+                             f"--model mesh traces; the {model} model takes views about z "
+                             "(--views or --angles-deg)")
+
+
 def _summary(args, sino, ladar, model):
     """One line: what was simulated, how (mode, normals, sampling, rays, bins) and where."""
     info = sino.info
@@ -144,6 +158,7 @@ def cmd_simulate(args) -> int:
     scene, default_ladar, default_model = load_scene(args)
     model = args.model or default_model
     check_applicable(args, model, default_ladar is not None)
+    _check_model_fits(args, model, scene)
     ladar = _ladar(args, scene, default_ladar)
     if model == "mesh" and not scene.is_mesh and args.tol is None:  # --tol tessellates
         scene = scene.tessellate(args.segments or 1024)

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import meshladar as ml
+from meshladar.cli import main
 from meshladar import io as results
 
 SUBCOMMANDS = ["demo", "materials", "paper", "simulate", "reconstruct", "view", "study",
@@ -157,3 +158,45 @@ def test_the_command_line_and_figures_leave_a_sessions_state_as_it_was(tmp_path)
     assert matplotlib.rcParams["font.size"] == 13.0
     assert warnings.formatwarning is fmt
     matplotlib.rcdefaults()
+
+
+@pytest.mark.parametrize("argv, work", [
+    (["paper", "{tmp}/out"], "meshladar.studies.paper:simulate"),
+    (["study", "faceting", "{tmp}/s", "--quiet"], "meshladar.studies.faceting:simulate"),
+    (["study", "reconstruction", "{tmp}/r"], "meshladar.studies.reconstruction:run"),
+    (["study", "tomography3d", "{tmp}/t"], "meshladar.studies.paper:run_3d"),
+])
+def test_a_plain_install_is_told_before_the_work(argv, work, tmp_path, capsys, monkeypatch):
+    # without matplotlib, a command that draws says so at once (it used to compute for
+    # 18-93 s first, then fail on the figure, leaving its folder empty)
+    import importlib
+
+    module, name = work.split(":")
+
+    def reached(*args, **kwargs):
+        raise AssertionError(f"{work} ran before the missing extra was named")
+
+    monkeypatch.setattr(importlib.import_module(module), name, reached)
+    monkeypatch.setitem(sys.modules, "matplotlib", None)          # import fails
+    code = main([a.replace("{tmp}", str(tmp_path)) for a in argv])
+    err = capsys.readouterr().err
+    assert code == 2 and err.strip() == ("meshladar: error: figures need matplotlib: pip "
+                                         "install 'meshladar[viz]'")
+    assert not any(tmp_path.iterdir())                            # nothing half-written
+
+
+def test_model_errors_name_the_flags(tmp_path, capsys):
+    # the API's own words (model='mesh') are Python; the command line names its flags
+    box = tmp_path / "box.stl"
+    import trimesh
+
+    trimesh.creation.box(extents=(0.2, 0.2, 0.2)).export(box)
+    for argv, expected in (
+            (["simulate", str(box), "--model", "analytic", "-o", str(tmp_path / "a.npz")],
+             "--model analytic needs a phantom"),
+            (["simulate", "disk", "--model", "pixel", "--view-vectors", "10", "-o",
+              str(tmp_path / "b.npz")], "--view-vectors places views over the sphere")):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("meshladar: error: ") and expected in err, err
+        assert "model='" not in err and err.count("\n") == 1

@@ -357,7 +357,7 @@ def test_cli_uses_a_users_own_coating_table(tmp_path, capsys):
     (["--max-rays", "1e6"], "--max-rays bounds the work of --tol"),
     (["--sampling", "regular", "--seed", "2"], "--seed jitters the rays"),
     (["--segments", "64"], "--segments tessellates an analytic phantom"),
-    (["--model", "analytic"], "model 'analytic' needs analytic shapes"),
+    (["--model", "analytic"], "--model analytic needs a phantom"),
     (["--jobs", "2", "--workers", "2"], "--jobs runs local processes"),
     (["-o", "out.txt"], "the extension decides the format: one of .npz; got 'out.txt'"),
     (["-o", ""], "-o: must name a file"),
