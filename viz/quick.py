@@ -98,8 +98,8 @@ def image(img, *, y=None, title=None):
     b.plot(img.x, v[row], color="k", lw=0.8)
     if hasattr(n, "linthresh"):
         b.set_yscale("symlog", linthresh=n.linthresh, linscale=2.0)
-    b.set_xlabel(f"x (y = {img.y[row]:.3g})")
-    b.set_ylabel("value")
+    b.set_xlabel(f"x [scene units] (y = {img.y[row]:.3g})")
+    b.set_ylabel(label.replace("reconstruction", "value"))     # the colour bar's units
     b.set_title("slice", fontsize=9)
     fig.tight_layout()
     return fig

@@ -87,6 +87,10 @@ def test_quick_looks(results, tmp_path):
     assert im.norm.vmin == -im.norm.vmax
     labels = " ".join(t.get_text() for t in fig.findobj(lambda a: hasattr(a, "get_text")))
     assert "log input" in labels and "of log(floor=1e-06)" in labels
+    slice_axes = fig.axes[1]                      # the image, then the slice (then the bar)
+    assert slice_axes.get_title() == "slice"
+    assert "[scene units]" in slice_axes.get_xlabel()
+    assert slice_axes.get_ylabel() == "value of log input"        # units on both axes
     fig.savefig(tmp_path / "quick.png")
     assert (tmp_path / "quick.png").stat().st_size > 5000
 
