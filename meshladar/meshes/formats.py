@@ -33,7 +33,8 @@ def load_parts(mesh_or_path):
     ----------
     mesh_or_path : str, os.PathLike, trimesh.Trimesh or trimesh.Scene
         A file of any format trimesh reads: STL (ASCII or binary), OBJ, PLY, OFF, GLB/glTF
-        (several parts, each placed by its node's transform), ZIP and tar archives; 3MF,
+        (several parts, each placed by its node's transform), OBJ with named objects (one
+        part per ``o NAME``, in file order), ZIP and tar archives; 3MF,
         COLLADA and others when their optional readers are installed. ``.gz``, ``.bz2`` and
         ``.xz`` files are decompressed and their inner file read. The format comes from the
         suffix, or from the content when the suffix is unknown or its reader fails (a binary
@@ -126,8 +127,10 @@ def _read(where, source, suffix, head, size, *, resolver, default_name):
         reached_geometry = False
         try:
             with _quiet_reader():
+                # an OBJ's named objects ('o NAME') are parts, as a glTF's nodes are
                 loaded = trimesh.load(source(), file_type=ftype, resolver=resolver,
-                                      process=False, skip_materials=True)
+                                      process=False, skip_materials=True,
+                                      **({"split_objects": True} if ftype == "obj" else {}))
         except ImportError as exc:
             err = GeometryError(_needs(where, ftype, exc))
             err.__cause__ = exc
@@ -147,12 +150,34 @@ def _read(where, source, suffix, head, size, *, resolver, default_name):
             else:
                 reached_geometry = True
                 try:
-                    return _parts_of(loaded, where, default_name)
+                    parts = _parts_of(loaded, where, default_name)
+                    return _in_file_order(parts, source) if ftype == "obj" else parts
                 except GeometryError as exc:
                     err = exc
         if first is None or (reached_geometry and not first[1]):
             first = (err, reached_geometry)
     raise first[0]
+
+def _in_file_order(parts, source):
+    """An OBJ's parts in the order its objects come in the file (trimesh builds them last
+    first); a part trimesh split off an object by material ('NAME_1') follows its object."""
+    if len(parts) < 2:
+        return parts
+    try:
+        src = source()
+        with (open(src, "rb") if isinstance(src, str) else src) as fh:
+            text = fh.read()
+    except OSError:                            # only the order: keep trimesh's
+        return parts
+    names = re.findall(rb"^o[ \t]+(.*?)[ \t\r]*$", text, re.M)
+    order = {n.decode("utf-8", "replace"): i for i, n in reversed(list(enumerate(names)))}
+
+    def rank(item):
+        name = item[0]
+        return order.get(name, order.get(name.rsplit("_", 1)[0], len(order)))
+
+    return sorted(parts, key=rank)
+
 
 #: trimesh makes node names unique with a random hexadecimal suffix (a glTF node with
 #: several primitives, unnamed nodes): such names change on every load.

@@ -324,6 +324,54 @@ def test_multi_part_glb_keeps_each_part_where_it_was_placed(tmp_path):
                                atol=place)
 
 
+def _tetrahedron_lines(first, x0):
+    """An OBJ's lines for a closed tetrahedron at x = x0 whose vertices start at ``first``."""
+    a, b, c, d = range(first, first + 4)
+    return [f"v {x0} 0 0", f"v {x0 + 1} 0 0", f"v {x0} 1 0", f"v {x0} 0 1",
+            f"f {a} {c} {b}", f"f {a} {b} {d}", f"f {a} {d} {c}", f"f {b} {c} {d}"]
+
+
+def _two_object_obj(path):
+    """An OBJ of two named objects ('o left', 'o right'), a tetrahedron each, 3 apart."""
+    path.write_text("\n".join(["# two objects", "o left", *_tetrahedron_lines(1, 0.0),
+                               "o right", *_tetrahedron_lines(5, 3.0)]) + "\n")
+    return path
+
+
+def test_named_objects_of_an_obj_are_parts_coated_separately(tmp_path, capsys):
+    path = _two_object_obj(tmp_path / "pair.obj")
+    scene = ml.Scene.from_mesh(path, material=DARK_GRAY,
+                               materials={"left": ml.materials.ALUMINUM, "right": DARK_GRAY})
+    assert [p.name for p in scene.parts] == ["left", "right"]       # in file order
+    left, right = scene.parts
+    assert len(left.faces) == len(right.faces) == 4
+    assert scene.materials[left.material[0]] is ml.materials.ALUMINUM
+    assert scene.materials[right.material[0]] is DARK_GRAY
+    np.testing.assert_array_equal(left.vertices.min(axis=0), [0, 0, 0])
+    np.testing.assert_array_equal(right.vertices.min(axis=0), [3, 0, 0])
+    # the command line coats one object by its name: coating both by name is coating all
+    def simulate(name, *flags):
+        out = tmp_path / f"{name}.npz"
+        code = cli.main(["simulate", str(path), "-o", str(out), "--views", "4", "--bins",
+                         "16", "--bin-width", "0.5", "--quiet", *flags])
+        assert code == 0 and capsys.readouterr().err == ""
+        return mlio.load_sinogram(out)
+
+    left_al, meta = simulate("left", "--coating", "left=aluminum")
+    assert [p["name"] for p in meta["scene"]["parts"]] == ["left", "right"]
+    assert {m["name"] for m in meta["scene"]["materials"]} == {"aluminum", "dark_gray"}
+    plain, _ = simulate("plain")
+    both, _ = simulate("both", "--coating", "left=aluminum,right=aluminum")
+    all_al, _ = simulate("all", "--material", "aluminum")
+    np.testing.assert_array_equal(both.values, all_al.values)
+    assert not np.array_equal(left_al.values, plain.values)
+    assert not np.array_equal(left_al.values, all_al.values)
+    # a part trimesh splits off an object by material follows its object
+    (tmp_path / "mtl.obj").write_text(path.read_text().replace("f 1 4 3", "usemtl b\nf 1 4 3"))
+    names = [p.name for p in ml.Scene.from_mesh(tmp_path / "mtl.obj", DARK_GRAY).parts]
+    assert names[0] == "left" and names[-1] == "right" and len(names) == 3
+
+
 def test_not_a_mesh_in_memory_says_what_it_is():
     wire = trimesh.load_path(np.array([[0, 0, 0], [1, 0, 1], [1, 1, 2]], dtype=float))
     with pytest.raises(GeometryError, match=r"^mesh: holds a 3-D path \(1 line or curve, "
