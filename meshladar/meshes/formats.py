@@ -1,10 +1,11 @@
 """Reading mesh files (and trimesh objects) as the parts of a scene.
 
-Any format trimesh reads: STL, OBJ, PLY, OFF, GLB/glTF with parts, ZIP and tar archives,
-.gz/.bz2/.xz files, 3MF and COLLADA with their optional readers. Only vertices, faces and
-part names are read; vertices at the same position are merged. trimesh is imported lazily,
-when a file is read. Every way a file can fail is one
-:class:`~meshladar.errors.GeometryError` naming the file.
+Any format trimesh reads: STL, OBJ (its named objects as parts), PLY, OFF, GLB/glTF with
+parts, ZIP and tar archives, .gz/.bz2/.xz files, 3MF and COLLADA with their optional
+readers. Only vertices, faces and part names are read; vertices at the same position are
+merged. trimesh is imported lazily, when a file is read. Every way a file can fail is one
+:class:`~meshladar.errors.GeometryError` naming the file; what a reader prints while it reads
+is kept off the terminal (and quoted in that error).
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from ..precision import WELD_REL as _WELD_REL
 from .archives import (_COMPRESSED, _DRAWINGS, _HEAD_BYTES, _NAMES, _OPTIONAL_READERS, _TAR,
                        _count, _decompress, _is_binary, _label, _members, _name, _needs,
                        _one_line, _printable, _quiet_reader, _readable_formats, _sniff,
-                       _suffix)
+                       _suffix, _with_output)
 from .part import _point_index
 
 __all__ = ["load_parts"]
@@ -126,7 +127,7 @@ def _read(where, source, suffix, head, size, *, resolver, default_name):
     for ftype in tries:
         reached_geometry = False
         try:
-            with _quiet_reader():
+            with _quiet_reader() as said:
                 # an OBJ's named objects ('o NAME') are parts, as a glTF's nodes are
                 loaded = trimesh.load(source(), file_type=ftype, resolver=resolver,
                                       process=False, skip_materials=True,
@@ -154,6 +155,7 @@ def _read(where, source, suffix, head, size, *, resolver, default_name):
                     return _in_file_order(parts, source) if ftype == "obj" else parts
                 except GeometryError as exc:
                     err = exc
+        err = _with_output(err, said)
         if first is None or (reached_geometry and not first[1]):
             first = (err, reached_geometry)
     raise first[0]

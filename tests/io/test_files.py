@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import bz2
 import gzip
+import importlib.machinery
 import importlib.util
 import json
 import lzma
@@ -404,6 +405,69 @@ def test_reader_errors_become_one_chained_line(tmp_path, monkeypatch):
                           "line with tabs xxx")
     assert "\n" not in msg and len(msg) < len(str(path)) + 250 and msg.endswith("...)")
     assert info.value.__cause__ is boom
+
+
+def test_a_missing_reader_package_is_named_by_the_readers_import_error(tmp_path, monkeypatch):
+    # cube1.3dxml: lxml and networkx installed (trimesh registers the reader), Pillow not;
+    # the reader's ImportError names PIL, whose pip package is Pillow
+    from meshladar.meshes import formats
+
+    path = tmp_path / "cube1.3dxml"
+    path.write_bytes(b"PK\x03\x04" + b"\x00" * 200)
+    real_find_spec = importlib.util.find_spec
+
+    def find_spec(name, *args):
+        if name in ("lxml", "networkx"):
+            return importlib.machinery.ModuleSpec(name, None)
+        return None if name.split(".")[0] == "PIL" else real_find_spec(name, *args)
+
+    monkeypatch.setattr(importlib.util, "find_spec", find_spec)
+    monkeypatch.setattr(formats, "_readable_formats",
+                        lambda: set(trimesh.available_formats()) | {"3dxml"})
+    error = ModuleNotFoundError("No module named 'PIL'", name="PIL")
+
+    def load(*args, **kwargs):
+        raise error
+
+    monkeypatch.setattr(trimesh, "load", load)
+    with pytest.raises(GeometryError) as info:
+        ml.Scene.from_mesh(path, DARK_GRAY)
+    assert str(info.value) == (f"{path}: reading '.3dxml' files needs the optional package "
+                               "Pillow: pip install Pillow")
+    assert info.value.__cause__ is error
+    # an ImportError from a package that is there is not a missing package: quote it
+    error = ImportError("cannot import name 'tree' from 'networkx'", name="networkx")
+    with pytest.raises(GeometryError, match=r"needs a package that is not installed "
+                                            r"\(cannot import name 'tree' from 'networkx'\)$"):
+        ml.Scene.from_mesh(path, DARK_GRAY)
+
+
+def test_what_a_reader_prints_stays_off_the_terminal_unless_the_file_fails(
+        tmp_path, monkeypatch, capfd):
+    # meshio prints "Error: Couldn't read file ... as ansys" while it tries formats
+    path = tmp_path / "box.stl"
+    path.write_bytes(_stl_bytes())
+    real_load = trimesh.load
+    outcome = {"fail": False}
+
+    def chatty(*args, **kwargs):
+        print("Error: Couldn't read file box.stl as ansys", file=sys.stderr)
+        print("Error: Couldn't read file box.stl as avsucd")
+        if outcome["fail"]:
+            raise ValueError("not a mesh")
+        return real_load(*args, **kwargs)
+
+    monkeypatch.setattr(trimesh, "load", chatty)
+    scene = ml.Scene.from_mesh(path, DARK_GRAY)
+    assert scene.report["faces"] == 12
+    assert capfd.readouterr() == ("", "")
+    outcome["fail"] = True
+    with pytest.raises(GeometryError) as info:
+        ml.Scene.from_mesh(path, DARK_GRAY)
+    assert capfd.readouterr() == ("", "")
+    assert str(info.value) == (f"{path}: not a readable STL file (ValueError: not a mesh) "
+                               "(the reader printed: Error: Couldn't read file box.stl as "
+                               "ansys Error: Couldn't read file box.stl as avsucd)")
 
 
 def test_in_memory_meshes_are_not_changed_by_loading():
