@@ -161,18 +161,20 @@ def _read(where, source, suffix, head, size, *, resolver, default_name):
     raise first[0]
 
 def _in_file_order(parts, source):
-    """An OBJ's parts in the order its objects come in the file (trimesh builds them last
-    first); a part trimesh split off an object by material ('NAME_1') follows its object."""
-    if len(parts) < 2:
-        return parts
+    """An OBJ's parts named and ordered by its objects ('o NAME'): in the order they come in
+    the file (trimesh builds them last first), a part trimesh split off an object by material
+    ('NAME_1') after its object, and a file of one object named by it (trimesh's one mesh
+    has lost the name), as a glTF's single node is."""
     try:
         src = source()
         with (open(src, "rb") if isinstance(src, str) else src) as fh:
             text = fh.read()
-    except OSError:                            # only the order: keep trimesh's
+    except OSError:                            # only names and order: keep trimesh's
         return parts
-    names = re.findall(rb"^o[ \t]+(.*?)[ \t\r]*$", text, re.M)
+    names = re.findall(rb"^o[ \t]+(\S.*?)[ \t\r]*$", text, re.M)
     order = {n.decode("utf-8", "replace"): i for i, n in reversed(list(enumerate(names)))}
+    if len(parts) == 1:
+        return [(next(iter(order)), parts[0][1])] if len(order) == 1 else parts
 
     def rank(item):
         name = item[0]

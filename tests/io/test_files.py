@@ -371,6 +371,10 @@ def test_named_objects_of_an_obj_are_parts_coated_separately(tmp_path, capsys):
     (tmp_path / "mtl.obj").write_text(path.read_text().replace("f 1 4 3", "usemtl b\nf 1 4 3"))
     names = [p.name for p in ml.Scene.from_mesh(tmp_path / "mtl.obj", DARK_GRAY).parts]
     assert names[0] == "left" and names[-1] == "right" and len(names) == 3
+    # one named object is a part of that name (a glTF's single node is too)
+    (tmp_path / "one.obj").write_text("o left\n" + "\n".join(_tetrahedron_lines(1, 0.0)))
+    assert [p.name for p in ml.Scene.from_mesh(tmp_path / "one.obj", DARK_GRAY).parts] == [
+        "left"]
 
 
 def test_not_a_mesh_in_memory_says_what_it_is():
