@@ -148,7 +148,8 @@ class Scene:
         material : BRDF, optional
             The coating of every part (unless ``materials`` names a part's own).
         materials : dict, optional
-            Coating per part name (GLB/GLTF node names); parts not named take ``material``.
+            Coating per part name (GLB/GLTF node names, OBJ object names); parts not named
+            take ``material``.
         face_materials : (n_faces,) int, optional
             Per-face index into ``materials`` given as a list (single-mesh input only).
         transform : (4, 4) array, optional

@@ -9,6 +9,7 @@ import bz2
 import contextlib
 import gzip
 import importlib.util
+import io
 import logging
 import lzma
 import os
@@ -58,7 +59,10 @@ _NAMES = {"stl": "STL file", "obj": "OBJ file", "ply": "PLY file", "off": "OFF f
           "dae": "COLLADA file", "3mf": "3MF file"}
 
 #: The module a pip package is imported as, where the two differ.
-_IMPORT_NAMES = {"pycollada": "collada"}
+_IMPORT_NAMES = {"pycollada": "collada", "Pillow": "PIL"}
+#: The pip package of a top-level module, where the two differ (a reader's ImportError names
+#: the module).
+_PIP_NAMES = {**{module: pip for pip, module in _IMPORT_NAMES.items()}, "svg": "svg.path"}
 
 
 def _count(n, one, many=None):
@@ -73,21 +77,37 @@ def _readable_formats():
     return set(trimesh.available_formats()) - {"stl_ascii"}
 
 
-def _needs(where, ftype, exc=None):
-    """The message for a format whose optional reader is not installed."""
-    pkgs = _OPTIONAL_READERS.get(ftype) or _DRAWINGS.get(ftype)
-    if pkgs:                       # name only what is missing (networkx may be there)
-        def installed(name):
-            try:
-                return importlib.util.find_spec(_IMPORT_NAMES.get(name, name)) is not None
-            except ImportError:                    # a dotted name whose parent is missing
-                return False
+def _installed(module):
+    """Whether a module can be found (without importing it)."""
+    try:
+        return importlib.util.find_spec(module) is not None
+    except (ImportError, ValueError):              # a dotted name whose parent is missing
+        return False
 
-        missing = [p for p in pkgs.split() if not installed(p)]
-        pkgs = " ".join(missing) or pkgs
-        names = " and ".join(pkgs.split())
+
+def _missing(ftype, exc=None):
+    """The pip packages a format's reader needs that are not installed: those of the table
+    that cannot be found, and the module the reader's ImportError names (trimesh's 3DXML
+    reader needs Pillow for a textured file, which no table entry says), if it is missing."""
+    pkgs = (_OPTIONAL_READERS.get(ftype) or _DRAWINGS.get(ftype) or "").split()
+    missing = [p for p in pkgs if not _installed(_IMPORT_NAMES.get(p, p))]
+    module = (getattr(exc, "name", None) or "").split(".")[0]
+    if module and not _installed(module):
+        pip = _PIP_NAMES.get(module, module)
+        missing += [] if pip in missing else [pip]
+    return missing
+
+
+def _needs(where, ftype, exc=None):
+    """The message for a format whose optional reader is not installed (``exc``: the
+    ImportError its reader raised), naming only the packages that are missing."""
+    missing = _missing(ftype, exc)
+    if not missing and exc is None:                # the format is not registered: its table
+        missing = (_OPTIONAL_READERS.get(ftype) or _DRAWINGS.get(ftype) or "").split()
+    if missing:
         return (f"{where}: reading {_label(ftype)} files needs the optional package"
-                f"{'s' if ' ' in pkgs else ''} {names}: pip install {pkgs}")
+                f"{'s' if len(missing) > 1 else ''} {' and '.join(missing)}: "
+                f"pip install {' '.join(missing)}")
     return (f"{where}: reading {_label(ftype)} files needs a package that is not installed "
             f"({_one_line(exc)})")
 
@@ -188,19 +208,32 @@ def _members(source, ftype):
 
 @contextlib.contextmanager
 def _quiet_reader():
-    """Keep trimesh's own diagnostics off stderr while it reads a file: meshladar accepts
-    the file or rejects it with its own one-line message. trimesh logs without a handler, so
-    Python's last-resort handler would print its warnings (some with tracebacks); its
-    ``warnings.warn`` calls (deprecations) are silenced in this scope only."""
+    """Keep a reader's own diagnostics off the terminal while trimesh reads a file:
+    meshladar accepts the file or rejects it with its own one-line message. trimesh logs
+    without a handler, so Python's last-resort handler would print its warnings (some with
+    tracebacks); its ``warnings.warn`` calls (deprecations) are silenced in this scope only;
+    what a reader prints (meshio's "Error: Couldn't read file ... as ansys" while it tries
+    formats) goes to the StringIO this yields, for the message if the file then fails.
+    Output written by compiled code straight to the file descriptors is not caught."""
     logger = logging.getLogger("trimesh")
     handler = logging.NullHandler()
     logger.addHandler(handler)
+    said = io.StringIO()
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), contextlib.redirect_stdout(said), \
+                contextlib.redirect_stderr(said):
             warnings.simplefilter("ignore")
-            yield
+            yield said
     finally:
         logger.removeHandler(handler)
+
+
+def _with_output(err, said):
+    """``err`` (a GeometryError) with what the reader printed, on one line, appended."""
+    printed = said.getvalue().strip()
+    if printed:
+        err.args = (f"{err.args[0]} (the reader printed: {_one_line(printed)})",)
+    return err
 
 
 def _one_line(text):

@@ -1,10 +1,11 @@
 """Reading mesh files (and trimesh objects) as the parts of a scene.
 
-Any format trimesh reads: STL, OBJ, PLY, OFF, GLB/glTF with parts, ZIP and tar archives,
-.gz/.bz2/.xz files, 3MF and COLLADA with their optional readers. Only vertices, faces and
-part names are read; vertices at the same position are merged. trimesh is imported lazily,
-when a file is read. Every way a file can fail is one
-:class:`~meshladar.errors.GeometryError` naming the file.
+Any format trimesh reads: STL, OBJ (its named objects as parts), PLY, OFF, GLB/glTF with
+parts, ZIP and tar archives, .gz/.bz2/.xz files, 3MF and COLLADA with their optional
+readers. Only vertices, faces and part names are read; vertices at the same position are
+merged. trimesh is imported lazily, when a file is read. Every way a file can fail is one
+:class:`~meshladar.errors.GeometryError` naming the file; what a reader prints while it reads
+is kept off the terminal (and quoted in that error).
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from ..precision import WELD_REL as _WELD_REL
 from .archives import (_COMPRESSED, _DRAWINGS, _HEAD_BYTES, _NAMES, _OPTIONAL_READERS, _TAR,
                        _count, _decompress, _is_binary, _label, _members, _name, _needs,
                        _one_line, _printable, _quiet_reader, _readable_formats, _sniff,
-                       _suffix)
+                       _suffix, _with_output)
 from .part import _point_index
 
 __all__ = ["load_parts"]
@@ -33,7 +34,8 @@ def load_parts(mesh_or_path):
     ----------
     mesh_or_path : str, os.PathLike, trimesh.Trimesh or trimesh.Scene
         A file of any format trimesh reads: STL (ASCII or binary), OBJ, PLY, OFF, GLB/glTF
-        (several parts, each placed by its node's transform), ZIP and tar archives; 3MF,
+        (several parts, each placed by its node's transform), OBJ with named objects (one
+        part per ``o NAME``, in file order), ZIP and tar archives; 3MF,
         COLLADA and others when their optional readers are installed. ``.gz``, ``.bz2`` and
         ``.xz`` files are decompressed and their inner file read. The format comes from the
         suffix, or from the content when the suffix is unknown or its reader fails (a binary
@@ -125,9 +127,11 @@ def _read(where, source, suffix, head, size, *, resolver, default_name):
     for ftype in tries:
         reached_geometry = False
         try:
-            with _quiet_reader():
+            with _quiet_reader() as said:
+                # an OBJ's named objects ('o NAME') are parts, as a glTF's nodes are
                 loaded = trimesh.load(source(), file_type=ftype, resolver=resolver,
-                                      process=False, skip_materials=True)
+                                      process=False, skip_materials=True,
+                                      **({"split_objects": True} if ftype == "obj" else {}))
         except ImportError as exc:
             err = GeometryError(_needs(where, ftype, exc))
             err.__cause__ = exc
@@ -147,12 +151,37 @@ def _read(where, source, suffix, head, size, *, resolver, default_name):
             else:
                 reached_geometry = True
                 try:
-                    return _parts_of(loaded, where, default_name)
+                    parts = _parts_of(loaded, where, default_name)
+                    return _in_file_order(parts, source) if ftype == "obj" else parts
                 except GeometryError as exc:
                     err = exc
+        err = _with_output(err, said)
         if first is None or (reached_geometry and not first[1]):
             first = (err, reached_geometry)
     raise first[0]
+
+def _in_file_order(parts, source):
+    """An OBJ's parts named and ordered by its objects ('o NAME'): in the order they come in
+    the file (trimesh builds them last first), a part trimesh split off an object by material
+    ('NAME_1') after its object, and a file of one object named by it (trimesh's one mesh
+    has lost the name), as a glTF's single node is."""
+    try:
+        src = source()
+        with (open(src, "rb") if isinstance(src, str) else src) as fh:
+            text = fh.read()
+    except OSError:                            # only names and order: keep trimesh's
+        return parts
+    names = re.findall(rb"^o[ \t]+(\S.*?)[ \t\r]*$", text, re.M)
+    order = {n.decode("utf-8", "replace"): i for i, n in reversed(list(enumerate(names)))}
+    if len(parts) == 1:
+        return [(next(iter(order)), parts[0][1])] if len(order) == 1 else parts
+
+    def rank(item):
+        name = item[0]
+        return order.get(name, order.get(name.rsplit("_", 1)[0], len(order)))
+
+    return sorted(parts, key=rank)
+
 
 #: trimesh makes node names unique with a random hexadecimal suffix (a glTF node with
 #: several primitives, unnamed nodes): such names change on every load.

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import bz2
 import gzip
+import importlib.machinery
 import importlib.util
 import json
 import lzma
@@ -324,6 +325,58 @@ def test_multi_part_glb_keeps_each_part_where_it_was_placed(tmp_path):
                                atol=place)
 
 
+def _tetrahedron_lines(first, x0):
+    """An OBJ's lines for a closed tetrahedron at x = x0 whose vertices start at ``first``."""
+    a, b, c, d = range(first, first + 4)
+    return [f"v {x0} 0 0", f"v {x0 + 1} 0 0", f"v {x0} 1 0", f"v {x0} 0 1",
+            f"f {a} {c} {b}", f"f {a} {b} {d}", f"f {a} {d} {c}", f"f {b} {c} {d}"]
+
+
+def _two_object_obj(path):
+    """An OBJ of two named objects ('o left', 'o right'), a tetrahedron each, 3 apart."""
+    path.write_text("\n".join(["# two objects", "o left", *_tetrahedron_lines(1, 0.0),
+                               "o right", *_tetrahedron_lines(5, 3.0)]) + "\n")
+    return path
+
+
+def test_named_objects_of_an_obj_are_parts_coated_separately(tmp_path, capsys):
+    path = _two_object_obj(tmp_path / "pair.obj")
+    scene = ml.Scene.from_mesh(path, material=DARK_GRAY,
+                               materials={"left": ml.materials.ALUMINUM, "right": DARK_GRAY})
+    assert [p.name for p in scene.parts] == ["left", "right"]       # in file order
+    left, right = scene.parts
+    assert len(left.faces) == len(right.faces) == 4
+    assert scene.materials[left.material[0]] is ml.materials.ALUMINUM
+    assert scene.materials[right.material[0]] is DARK_GRAY
+    np.testing.assert_array_equal(left.vertices.min(axis=0), [0, 0, 0])
+    np.testing.assert_array_equal(right.vertices.min(axis=0), [3, 0, 0])
+    # the command line coats one object by its name: coating both by name is coating all
+    def simulate(name, *flags):
+        out = tmp_path / f"{name}.npz"
+        code = cli.main(["simulate", str(path), "-o", str(out), "--views", "4", "--bins",
+                         "16", "--bin-width", "0.5", "--quiet", *flags])
+        assert code == 0 and capsys.readouterr().err == ""
+        return mlio.load_sinogram(out)
+
+    left_al, meta = simulate("left", "--coating", "left=aluminum")
+    assert [p["name"] for p in meta["scene"]["parts"]] == ["left", "right"]
+    assert {m["name"] for m in meta["scene"]["materials"]} == {"aluminum", "dark_gray"}
+    plain, _ = simulate("plain")
+    both, _ = simulate("both", "--coating", "left=aluminum,right=aluminum")
+    all_al, _ = simulate("all", "--material", "aluminum")
+    np.testing.assert_array_equal(both.values, all_al.values)
+    assert not np.array_equal(left_al.values, plain.values)
+    assert not np.array_equal(left_al.values, all_al.values)
+    # a part trimesh splits off an object by material follows its object
+    (tmp_path / "mtl.obj").write_text(path.read_text().replace("f 1 4 3", "usemtl b\nf 1 4 3"))
+    names = [p.name for p in ml.Scene.from_mesh(tmp_path / "mtl.obj", DARK_GRAY).parts]
+    assert names[0] == "left" and names[-1] == "right" and len(names) == 3
+    # one named object is a part of that name (a glTF's single node is too)
+    (tmp_path / "one.obj").write_text("o left\n" + "\n".join(_tetrahedron_lines(1, 0.0)))
+    assert [p.name for p in ml.Scene.from_mesh(tmp_path / "one.obj", DARK_GRAY).parts] == [
+        "left"]
+
+
 def test_not_a_mesh_in_memory_says_what_it_is():
     wire = trimesh.load_path(np.array([[0, 0, 0], [1, 0, 1], [1, 1, 2]], dtype=float))
     with pytest.raises(GeometryError, match=r"^mesh: holds a 3-D path \(1 line or curve, "
@@ -356,6 +409,69 @@ def test_reader_errors_become_one_chained_line(tmp_path, monkeypatch):
                           "line with tabs xxx")
     assert "\n" not in msg and len(msg) < len(str(path)) + 250 and msg.endswith("...)")
     assert info.value.__cause__ is boom
+
+
+def test_a_missing_reader_package_is_named_by_the_readers_import_error(tmp_path, monkeypatch):
+    # cube1.3dxml: lxml and networkx installed (trimesh registers the reader), Pillow not;
+    # the reader's ImportError names PIL, whose pip package is Pillow
+    from meshladar.meshes import formats
+
+    path = tmp_path / "cube1.3dxml"
+    path.write_bytes(b"PK\x03\x04" + b"\x00" * 200)
+    real_find_spec = importlib.util.find_spec
+
+    def find_spec(name, *args):
+        if name in ("lxml", "networkx"):
+            return importlib.machinery.ModuleSpec(name, None)
+        return None if name.split(".")[0] == "PIL" else real_find_spec(name, *args)
+
+    monkeypatch.setattr(importlib.util, "find_spec", find_spec)
+    monkeypatch.setattr(formats, "_readable_formats",
+                        lambda: set(trimesh.available_formats()) | {"3dxml"})
+    error = ModuleNotFoundError("No module named 'PIL'", name="PIL")
+
+    def load(*args, **kwargs):
+        raise error
+
+    monkeypatch.setattr(trimesh, "load", load)
+    with pytest.raises(GeometryError) as info:
+        ml.Scene.from_mesh(path, DARK_GRAY)
+    assert str(info.value) == (f"{path}: reading '.3dxml' files needs the optional package "
+                               "Pillow: pip install Pillow")
+    assert info.value.__cause__ is error
+    # an ImportError from a package that is there is not a missing package: quote it
+    error = ImportError("cannot import name 'tree' from 'networkx'", name="networkx")
+    with pytest.raises(GeometryError, match=r"needs a package that is not installed "
+                                            r"\(cannot import name 'tree' from 'networkx'\)$"):
+        ml.Scene.from_mesh(path, DARK_GRAY)
+
+
+def test_what_a_reader_prints_stays_off_the_terminal_unless_the_file_fails(
+        tmp_path, monkeypatch, capfd):
+    # meshio prints "Error: Couldn't read file ... as ansys" while it tries formats
+    path = tmp_path / "box.stl"
+    path.write_bytes(_stl_bytes())
+    real_load = trimesh.load
+    outcome = {"fail": False}
+
+    def chatty(*args, **kwargs):
+        print("Error: Couldn't read file box.stl as ansys", file=sys.stderr)
+        print("Error: Couldn't read file box.stl as avsucd")
+        if outcome["fail"]:
+            raise ValueError("not a mesh")
+        return real_load(*args, **kwargs)
+
+    monkeypatch.setattr(trimesh, "load", chatty)
+    scene = ml.Scene.from_mesh(path, DARK_GRAY)
+    assert scene.report["faces"] == 12
+    assert capfd.readouterr() == ("", "")
+    outcome["fail"] = True
+    with pytest.raises(GeometryError) as info:
+        ml.Scene.from_mesh(path, DARK_GRAY)
+    assert capfd.readouterr() == ("", "")
+    assert str(info.value) == (f"{path}: not a readable STL file (ValueError: not a mesh) "
+                               "(the reader printed: Error: Couldn't read file box.stl as "
+                               "ansys Error: Couldn't read file box.stl as avsucd)")
 
 
 def test_in_memory_meshes_are_not_changed_by_loading():
