@@ -190,9 +190,7 @@ def _shape_profile(g: _ShapeViews, views: np.ndarray, edges: np.ndarray, shadow_
     n_t = np.hypot(a * np.sin(t), b * np.cos(t))
     cos_t = K[r][:, None] * np.cos(sg * tau - delta[r][:, None]) / n_t
     sin_t = M[r][:, None] * np.abs(np.sin(tau)) / n_t
-    # a cos θ rounded below 0 next to the silhouette is weighed at grazing, (0, 1): the
-    # protocol's unit pair (projected_weight)
-    w = projected_weight(m, cos_t, sin_t)
+    w = projected_weight(m, cos_t, sin_t)      # cos θ rounded below 0: as (0, 1), grazing
     if power:
         w = w * np.maximum(cos_t, 0.0)
     piece = (w * n_t) @ _GL_W * half
