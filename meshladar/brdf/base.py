@@ -105,7 +105,9 @@ class BRDF:
             _REGISTRY[cls.__name__] = cls
 
     def projected(self, cos_theta, sin_theta):
-        """F(θ; −θ)·cos θ in 1/sr for arrays cos θ ≥ 0 and sin θ = sqrt(1 − cos²θ) ≥ 0."""
+        """F(θ; −θ)·cos θ in 1/sr for arrays cos θ ≥ 0 and sin θ = sqrt(1 − cos²θ) ≥ 0:
+        every forward model passes unit pairs, (0, 1) where a direction is below the
+        horizon, so a model may read the cosine, the sine or the angle."""
         raise ModelError(f"{type(self).__name__} must define projected(cos_theta, "
                          "sin_theta), the monostatic F·cos θ (meshladar.brdf.BRDF)")
 
@@ -113,7 +115,7 @@ class BRDF:
         """F(θ; −θ) in 1/sr: the projected weight over cos θ (cos(fl(π/2)) at the horizon),
         0 below it."""
         c = np.asarray(cos_theta, np.float64)
-        p = projected_weight(self, np.maximum(c, 0.0), sin_theta)
+        p = projected_weight(self, c, sin_theta)          # (0, 1) below the horizon
         return np.where(c >= 0, p / np.maximum(c, _COS_HORIZON), 0.0)
 
     def bistatic(self, cos_i, sin_i, cos_r, sin_r, cos_h, sin_h):
@@ -132,7 +134,7 @@ class BRDF:
         0 below the horizon; a float for a scalar θ."""
         c, s = _cos_sin(theta, "theta")
         check_flag("projected", projected)
-        out = projected_weight(self, np.maximum(c, 0.0), s) if projected else self.value(c, s)
+        out = projected_weight(self, c, s) if projected else self.value(c, s)
         return _out(np.where(c >= 0, out, 0.0), theta)
 
     def evaluate(self, incident, reflected, normal=(0.0, 0.0, 1.0), *, projected=False):
@@ -205,8 +207,14 @@ class BRDF:
 
 def projected_weight(m, cos_theta, sin_theta):
     """``m.projected(cos θ, sin θ)`` as a float64 array of the inputs' shape, checked for a
-    user's model: finite and non-negative, else a ParameterError naming the class."""
-    cos_theta = np.maximum(cos_theta, 0.0)             # the protocol's domain: cos θ >= 0
+    user's model: finite and non-negative, else a ParameterError naming the class.
+
+    The protocol's domain is cos θ ≥ 0 with (cos θ, sin θ) a unit pair: a cos θ below 0
+    (a direction below the horizon, where a forward model weighs the surface as at grazing
+    or discards the weight) is clamped to 0 and its sin θ set to 1, so that a model sees
+    θ = π/2 whether it reads the cosine, the sine or the angle atan2(sin θ, cos θ). Pairs
+    with cos θ ≥ 0 pass unchanged."""
+    cos_theta, sin_theta = _grazing_below_horizon(cos_theta, sin_theta)
     out = m.projected(cos_theta, sin_theta)
     if is_builtin(m):
         return out
@@ -224,6 +232,15 @@ def projected_weight(m, cos_theta, sin_theta):
                              f"got {float(out.ravel()[k]):.6g} at cos theta = "
                              f"{float(np.broadcast_to(cos_theta, shape).ravel()[k]):.6g}")
     return out
+
+
+def _grazing_below_horizon(cos_theta, sin_theta):
+    """(max(cos θ, 0), sin θ) with sin θ = 1 where cos θ < 0: the clamped pair stays a unit
+    pair (θ = π/2). Inputs with no cos θ < 0 pass through as they are."""
+    below = np.asarray(cos_theta) < 0
+    if below.any():
+        sin_theta = np.where(below, 1.0, sin_theta)
+    return np.maximum(cos_theta, 0.0), sin_theta
 
 
 def check_brdf(name, value):

@@ -188,11 +188,11 @@ def _shape_profile(g: _ShapeViews, views: np.ndarray, edges: np.ndarray, shadow_
     sg = sigma[r][:, None]
     t = t0[r][:, None] + sg * tau
     n_t = np.hypot(a * np.sin(t), b * np.cos(t))
-    cos_t = np.maximum(K[r][:, None] * np.cos(sg * tau - delta[r][:, None]) / n_t, 0.0)
+    cos_t = K[r][:, None] * np.cos(sg * tau - delta[r][:, None]) / n_t
     sin_t = M[r][:, None] * np.abs(np.sin(tau)) / n_t
-    w = projected_weight(m, cos_t, sin_t)
+    w = projected_weight(m, cos_t, sin_t)      # cos θ rounded below 0: as (0, 1), grazing
     if power:
-        w = w * cos_t
+        w = w * np.maximum(cos_t, 0.0)
     piece = (w * n_t) @ _GL_W * half
 
     # 5. bin and visibility of each piece from its midpoint

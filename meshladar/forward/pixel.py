@@ -15,8 +15,11 @@ at a silhouette covers at most sqrt(2 ρ δs) of a boundary with radius of curva
 the weight is F(θ) cos θ · min(δs / cos θ, sqrt(2 ρ_max δs)). Without that cap, surface
 pixels whose centre normal is near grazing (cos θ → 0 on the staircase near a silhouette,
 where the true surface is not) would deposit the divergent 1/cos θ of the specular lobe
-(A5) and dominate the view. A pixel facing away
-(cos θ ≤ 0) deposits nothing and still stops the ray. Hits are binned by range.
+(A5) and dominate the view. A pixel whose centre normal faces away (cos θ < 0, on the
+staircase next to a silhouette) still stops the ray and is weighed as at grazing incidence,
+the unit pair (cos θ, sin θ) = (0, 1) (:func:`meshladar.brdf.projected_weight`): its
+coating's F·cos θ at θ = π/2 times that largest arc, which is 0 for a diffuse lobe and
+ρs(π/2) e/(2π) for the SR glint, and 0 under received power. Hits are binned by range.
 
 This is the pixelation baseline: positions are known to a pixel, so bins near edges and the
 narrow glint lobe carry O(pixel) errors that the analytic model does not have.
@@ -201,7 +204,7 @@ def _views(payload, views):
     own = flat_owner[pixel_idx]
     for k, m in enumerate(materials):
         sel = own == k
-        c, s = cos_t[sel], sin_t[sel]
+        c, s = cos_t[sel], sin_t[sel]     # c < 0 (facing away) is weighed as (0, 1)
         arc = np.minimum(ds / np.maximum(c, TINY), arc_max[k])
         weight[sel] = projected_weight(m, c, s) * arc * (np.maximum(c, 0.0) if power else 1.0)
     b = np.searchsorted(edges, rng, side="right") - 1
