@@ -252,8 +252,10 @@ def load_sinogram(path):
 def save_waveforms(path, waves, *, realisations=None, noise=None, params=None):
     """Save waveforms (and, optionally, noise realisations (n, n_views, n_samples) and the
     :class:`~meshladar.noise.Noise` that drew them): values, time edges in s, range
-    edges in m, views, every parameter with its unit in ``meta["info"]``. Atomic, no
-    pickle."""
+    edges in m, views, every parameter with its unit in ``meta["info"]``; with both
+    realisations and noise, ``meta["noise"]["clipped_fraction"]`` is the realisations'
+    fraction at the digitiser's top code (:meth:`~meshladar.noise.Noise.clipped_fraction`).
+    Atomic, no pickle."""
     if not isinstance(waves, Waveforms):
         raise ParameterError(f"waves must be a meshladar.waveforms.Waveforms; got "
                              f"{type(waves).__name__}")
@@ -262,9 +264,11 @@ def save_waveforms(path, waves, *, realisations=None, noise=None, params=None):
               "view_vectors": waves.view_vectors}
     if realisations is not None:
         arrays["realisations"] = np.asarray(realisations, dtype=np.float64)
+    described = None if not isinstance(noise, Noise) else noise.describe()
+    if described is not None and realisations is not None:
+        described["clipped_fraction"] = noise.clipped_fraction(arrays["realisations"])
     meta = {"kind": "waveforms", "standoff_m": waves.standoff, "info": _jsonable(waves.info),
-            "noise": None if not isinstance(noise, Noise) else noise.describe(),
-            "params": _jsonable(params or {})}
+            "noise": described, "params": _jsonable(params or {})}
     save_result(path, arrays, meta)
 
 

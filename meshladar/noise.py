@@ -5,19 +5,25 @@ dark_rate)·Δt: the speckled intensity I ~ Gamma(M, s/M) for M speckle cells pe
 cell (variance s²/M); the photoelectron count N ~ Poisson(I + b); an APD of mean gain G and
 excess noise factor F multiplies N by a gamma-distributed gain (mean GN, variance
 G²N(F − 1)); the digitiser rounds to ``bits`` over ``full_scale``. So the mean is G(s + b)
-and the variance G²(F(s + b) + s²/M) (before quantisation). Samples are independent: one
+and the variance G²(F(s + b) + s²/M) (before quantisation). A sample the digitiser cannot
+hold reads its top code, (2**bits − 1)·full_scale/2**bits: the draws' clipped fraction
+(:meth:`Noise.clipped_fraction`, the fraction at the top code) is warned about with a
+:class:`~meshladar.errors.MeshladarWarning` that names the full scale that would hold them,
+and :func:`meshladar.io.save_waveforms` records it in the saved noise. Samples are independent: one
 speckle cell per sample. :meth:`meshladar.waveforms.Waveforms.realise` draws them on a
 noiseless waveform.
 """
 
 from __future__ import annotations
 
+import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
 from ._validate import check_count, check_real
-from .errors import ParameterError
+from .errors import MeshladarWarning, ParameterError
 
 __all__ = ["Noise", "draw_noise"]
 
@@ -39,7 +45,9 @@ class Noise:
         Mean gain G (output units per photoelectron).
     bits : int, optional
         Digitiser resolution; with ``full_scale`` (output units), samples are rounded to
-        full_scale / 2**bits and clipped to [0, full_scale).
+        full_scale / 2**bits and clipped to [0, full_scale): a draw that clips warns
+        (:class:`~meshladar.errors.MeshladarWarning`, with the clipped fraction and the
+        full scale that would avoid it).
     full_scale : float, optional
     """
 
@@ -89,6 +97,16 @@ class Noise:
                 "excess_noise_factor": self.excess_noise_factor, "gain": self.gain,
                 "bits": self.bits, "full_scale": self.full_scale}
 
+    def clipped_fraction(self, draws) -> float:
+        """The fraction of ``draws`` (output units) at the digitiser's top code,
+        (2**bits − 1)·full_scale/2**bits, where every sample beyond full scale lands;
+        0 without quantisation."""
+        draws = np.asarray(draws, dtype=np.float64)
+        if self.bits is None or draws.size == 0:
+            return 0.0
+        top = (2 ** self.bits - 1) * (self.full_scale / 2.0 ** self.bits)
+        return float(np.mean(draws >= top))
+
 
 def draw_noise(noise, signal, dwell, n, seed):
     """``n`` realisations (n, *signal.shape) of ``noise`` on mean ``signal``
@@ -112,5 +130,21 @@ def draw_noise(noise, signal, dwell, n, seed):
         out = noise.gain * counts
     if noise.bits is not None:
         lsb = noise.full_scale / 2.0 ** noise.bits
+        peak = float(out.max()) if out.size else 0.0
         out = np.clip(np.floor(out / lsb + 0.5), 0, 2 ** noise.bits - 1) * lsb
+        _warn_clipped(noise, noise.clipped_fraction(out), peak)
     return out
+
+
+def _warn_clipped(noise, fraction, peak):
+    """Warn when a fraction of the draws sits at the top code; the full scale that would
+    hold ``peak`` (the largest unquantised draw) below it, rounded up to 2 digits."""
+    if fraction <= 0.0:
+        return
+    need = peak * 2.0 ** noise.bits / (2.0 ** noise.bits - 1.5)
+    step = 10.0 ** (math.floor(math.log10(need)) - 1)
+    need = math.ceil(need / step) * step
+    warnings.warn(f"{100 * fraction:.3g} % of the noisy samples clip at the digitiser's "
+                  f"full scale ({noise.full_scale:g}; they read its top code): give "
+                  f"full_scale >= {need:.3g} (the largest draw is {peak:.4g}), or a lower "
+                  "gain", MeshladarWarning, stacklevel=3)

@@ -37,7 +37,8 @@ def figure(waves, *, realisations=None, noise=None, views=None, band=(5.0, 95.0)
         shaded around the expected waveform, and the first is drawn.
     noise : meshladar.noise.Noise, optional
         The noise that drew them: the expected waveform is then its mean, gain × (signal +
-        background), in its output units.
+        background), in its output units; a view whose draws clip at the digitiser's full
+        scale shows it as a dotted line labelled with the view's clipped fraction.
     views : sequence of int, optional
         Which views (default up to four, spread over all).
     band : (low, high) percentiles
@@ -71,6 +72,11 @@ def figure(waves, *, realisations=None, noise=None, views=None, band=(5.0, 95.0)
             ax.step(t_ns, realisations[0, v], where="mid", color="C0", lw=0.6,
                     label="one realisation")
         ax.step(t_ns, expected[v], where="mid", color="k", lw=1.0, label=what)
+        if realisations is not None and noise is not None and noise.bits is not None:
+            clipped = noise.clipped_fraction(realisations[:, v, :])
+            if clipped > 0:                  # draws flat at the top code: say why
+                ax.axhline(noise.full_scale, color="C3", ls=":", lw=0.8,
+                           label=f"full scale: {100 * clipped:.3g} % clipped")
         ax.set_ylabel(f"per sample\n({units})")
         if np.abs(ax.get_ylim()).max() >= 1e4:   # "20 M", not a "1e7" offset under the top axis
             from matplotlib.ticker import EngFormatter

@@ -33,6 +33,7 @@ from ..weighing.record import Weighing
 from .job import mesh_job, plan_job, sensor_offset
 from ..raytrace.grid import ray_grid as _ray_grid
 from ..raytrace.views import range_offset as _range_offset
+from ..raytrace.views import refine_t as _refine_t
 
 __all__ = ["trace", "simulate_mesh", "first_hits", "occluded"]
 
@@ -52,8 +53,10 @@ def _views_per_task(n_views):
 
 def first_hits(scene, view_vector, *, ray_spacing):
     """First hits of one view's 3-D ray grid: (points (k, 3) float64 in scene coordinates,
-    global face index (k,), range (k,)). Faces are numbered part by part in scene order;
-    for the viewer (which faces are lit, where hits land)."""
+    global face index (k,), range (k,) float64). Faces are numbered part by part in scene
+    order; for the viewer (which faces are lit, where hits land). Distances are float64
+    (recomputed against the hit face's plane, as the binning paths): points lie on their
+    faces and ranges are exact to ~1e-14 of the scene's size, not Embree's float32 ~1e-7."""
     if not isinstance(scene, Scene) or not scene.is_mesh:
         raise ParameterError("first_hits needs a mesh scene")
     w = unit_vectors("view_vector", view_vector)
@@ -65,9 +68,13 @@ def first_hits(scene, view_vector, *, ray_spacing):
     o = _ray_grid(geo, w, "3d", spacing, 0.0, None).origins
     res = emb.run(o, np.ascontiguousarray((-w)[None, :], dtype=np.float32), output=1)
     hit = res["primID"] >= 0
-    t = res["tfar"][hit].astype(np.float64)
-    p = o[hit].astype(np.float64) - t[:, None] * w + geo.center
-    return p, res["primID"][hit].astype(np.int64), -(p @ w)
+    prim = res["primID"][hit].astype(np.int64)
+    # Embree's float32 t recomputed in float64 against the hit face's plane, as the binning
+    # paths do (meshladar.raytrace.views): r = −(c + o − t w)·w with o the float32 origin
+    t = _refine_t(geo, prim, o[hit], w, res["tfar"][hit])
+    oh = o[hit].astype(np.float64)
+    p = oh - t[:, None] * w + geo.center
+    return p, prim, t - oh @ w + _range_offset(geo.center, w, None)
 
 
 

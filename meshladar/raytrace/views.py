@@ -203,4 +203,5 @@ def _range_offset(center, w, w_r):
 # public names for the stages above (weighing, forward)
 trace_view = _trace_view
 range_offset = _range_offset
+refine_t = _refine_t
 bistatic_angles = _bistatic_angles

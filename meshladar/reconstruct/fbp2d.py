@@ -131,15 +131,22 @@ def _view_weights(angles_deg):
     return w
 
 
-def _check_view_sampling(sinogram):
-    """Warn when the views are too few for the bins across the target (streaks)."""
+def bins_across(sinogram) -> int:
+    """The most bins any view's returns span, first to last non-zero bin (0: no returns)."""
     v = np.abs(sinogram.values) > 0
-    if sinogram.n_views < 2 or not v.any():
-        return
+    if not v.any():
+        return 0
     rows = v.any(axis=1)
     first = np.argmax(v[rows], axis=1)
     last = v.shape[1] - 1 - np.argmax(v[rows][:, ::-1], axis=1)
-    across = int(np.max(last - first + 1))
+    return int(np.max(last - first + 1))
+
+
+def _check_view_sampling(sinogram):
+    """Warn when the views are too few for the bins across the target (streaks)."""
+    across = bins_across(sinogram)
+    if sinogram.n_views < 2 or across == 0:
+        return
     ratio = math.pi * across / sinogram.n_views
     if ratio > _UNDERSAMPLED_RATIO:
         need = int(math.ceil(math.pi * across / 2.0))

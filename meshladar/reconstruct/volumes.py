@@ -34,21 +34,38 @@ from scipy.ndimage import gaussian_filter1d
 from scipy.spatial import cKDTree
 
 from .._validate import check_count, check_real, check_sinogram, check_size, finite_array
-from ..errors import ParameterError
+from ..errors import MeshladarWarning, ParameterError
 from ..images import Volume
 from ..meshes import fibonacci_sphere
 from ..returns import Returns
 from ..sinogram import Sinogram
 from ._kernels import backproject3d
-from .fbp2d import fbp
+from .fbp2d import bins_across, fbp
 
 __all__ = ["Volume", "fbp3d", "fbp_slices", "sphere_weights", "coverage_gap_deg",
-           "MAX_GAP_DEG", "radon3d", "fbp_stack"]
+           "views_needed", "MAX_GAP_DEG", "UNDERSAMPLED_FACTOR", "radon3d", "fbp_stack"]
 
 
 #: fbp3d refuses view sets that leave a direction farther than this from every view (a
 #: cap unseen: the inversion formula needs the whole sphere of directions).
 MAX_GAP_DEG = 30.0
+#: fbp3d warns when its views are more than this many times fewer than the fully sampled
+#: count π N²/4 (:func:`views_needed`): their spacing is then over 4 times the full
+#: sampling's, where 2-D fbp warns too (below a quarter of its π/2 views per bin across;
+#: streaks of a quarter of the peak and more).
+UNDERSAMPLED_FACTOR = 16.0
+
+
+def views_needed(n_across, smooth=0.0) -> int:
+    """Views over the sphere that sample the angles at the bins' resolution: π N²/4 for a
+    target whose returns span N bins (N / max(1, σ) for a smoothing of σ bins).
+
+    As 2-D FBP's π/2 views per bin across, a spacing Δθ between neighbouring directions
+    with R Δθ = 2 Δr at the target's radius R = N Δr/2 (a plane at R moves two bins between
+    neighbouring views), so Δθ = 4/N; views with that spacing cover the sphere's 4π in
+    4π/Δθ² = π N²/4 (about 1,800 for 48 bins across, 12,900 for 128)."""
+    n = float(n_across) / max(1.0, float(smooth))
+    return int(math.ceil(math.pi * n * n / 4.0))
 
 
 def coverage_gap_deg(view_vectors) -> float:
@@ -58,6 +75,29 @@ def coverage_gap_deg(view_vectors) -> float:
     w = np.asarray(view_vectors, np.float64)
     chord, _ = cKDTree(w).query(fibonacci_sphere(20_000))
     return float(np.degrees(2 * np.arcsin(min(1.0, chord.max() / 2))))
+
+
+def _view_weights(weights, n):
+    """The views' solid angles: ``weights`` checked, or 4π/n each."""
+    if weights is None:
+        return np.full(n, 4 * math.pi / n)
+    wts = finite_array("weights", weights)
+    if wts.shape != (n,) or np.any(wts < 0):
+        raise ParameterError(f"weights must be {n} non-negative solid angles")
+    return wts
+
+
+def _check_view_sampling(sino, smooth):
+    """Warn when the views are too few over the sphere for the bins across the target."""
+    across = bins_across(sino)
+    need = views_needed(across, smooth)
+    if across and sino.n_views * UNDERSAMPLED_FACTOR < need:
+        warnings.warn(
+            f"{sino.n_views} views are too few over the sphere for the {across} bins across "
+            f"the target's returns (smooth={smooth:g}): fbp3d samples the directions fully "
+            f"with about {need} (pi N^2/4, N bins across / max(1, smooth)); expect the "
+            "planes of sharp returns to streak the volume: use more views, a larger smooth "
+            "or wider bins", MeshladarWarning, stacklevel=3)
 
 
 def sphere_weights(view_vectors) -> np.ndarray:
@@ -117,6 +157,13 @@ def fbp3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None,
         and few views leave the planes of sharp returns uncancelled: 1-2 bins trade
         resolution for a cleaner volume.
 
+    Warns
+    -----
+    MeshladarWarning
+        When the views are more than ``UNDERSAMPLED_FACTOR`` (16) times fewer than
+        :func:`views_needed`, π N²/4 for returns N bins across (N / max(1, ``smooth``)):
+        neighbouring directions over 4 times farther apart than the bins resolve, 4/N.
+
     Returns
     -------
     Volume
@@ -142,13 +189,9 @@ def fbp3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None,
     grid = _grid(size, extent, center)
     n, e, c, (x, y, z) = grid.n, grid.e, grid.c, grid.centers
     check_size("size", float(n) ** 3, 8 * 2, f"a {n}^3 volume", "give a smaller size")
-    if weights is None:
-        wts = np.full(sino.n_views, 4 * math.pi / sino.n_views)
-    else:
-        wts = finite_array("weights", weights)
-        if wts.shape != (sino.n_views,) or np.any(wts < 0):
-            raise ParameterError(f"weights must be {sino.n_views} non-negative solid angles")
+    wts = _view_weights(weights, sino.n_views)
     smooth = check_real("smooth", smooth, low=0.0)
+    _check_view_sampling(sino, smooth)
     g = sino.values / dr
     if smooth > 0:
         g = gaussian_filter1d(g, smooth, axis=1, mode="constant", truncate=4.0)

@@ -13,7 +13,8 @@ from meshladar.materials import lambertian
 from meshladar.meshes import fibonacci_sphere
 from meshladar.forward.resolved import resolve
 from meshladar.images import Volume
-from meshladar.reconstruct.volumes import fbp3d, fbp_slices, sphere_weights
+from meshladar.reconstruct.volumes import (fbp3d, fbp_slices, sphere_weights,
+                                           UNDERSAMPLED_FACTOR, views_needed)
 
 #: the ball's interior: −g'' is exactly 2π on every bin inside, so the reconstruction is 1
 #: to rounding (measured 1.0000); the quadrature over 400 Fibonacci directions decides the
@@ -108,6 +109,25 @@ def test_sphere_weights_share_the_sphere():
     # two views: a hemisphere each
     np.testing.assert_allclose(sphere_weights([[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]]),
                                2 * math.pi, rtol=1e-2)
+
+
+def test_too_few_views_over_the_sphere_warn():
+    """A ball of radius 0.6 in 1/64 bins spans N = 78 bins: fully sampled by π N²/4 = 4779
+    views (128 bins across: 12,868; a smoothing of 2 bins halves N); fbp3d warns below
+    1/16 of them (299: the spacing 4 times the full sampling's, as 2-D fbp) and not
+    above."""
+    assert views_needed(78) == math.ceil(math.pi * 78 ** 2 / 4) == 4779
+    assert views_needed(128) == 12868 and views_needed(128, smooth=2.0) == views_needed(64)
+    assert views_needed(78, smooth=0.5) == views_needed(78)
+    assert views_needed(78) / UNDERSAMPLED_FACTOR == pytest.approx(298.7, abs=0.1)
+    with pytest.warns(ml.errors.MeshladarWarning,
+                      match="250 views are too few over the sphere for the 78 bins.*4779"):
+        fbp3d(_ball_sinogram(0.6, n_views=250), size=8, extent=1.0)
+    fbp3d(_ball_sinogram(0.6, n_views=350), size=8, extent=1.0)     # no warning (errors)
+    # smoothing by 1.5 bins: N = 52 effective, 2124 needed, warned below 133
+    fbp3d(_ball_sinogram(0.6, n_views=250), size=8, extent=1.0, smooth=1.5)
+    with pytest.warns(ml.errors.MeshladarWarning, match="120 views are too few"):
+        fbp3d(_ball_sinogram(0.6, n_views=120), size=8, extent=1.0, smooth=1.5)
 
 
 def test_volume_checks():

@@ -134,6 +134,14 @@ def test_profile_against_a_closed_form_and_waveform_quick_look():
         if ax.get_ylabel():
             assert ax.yaxis.get_offset_text().get_text() == ""
             assert any(t.get_text().endswith(" M") for t in ax.get_yticklabels())
+    # a digitiser that clips every sample with signal: the band sits on its full scale,
+    # drawn and labelled with the view's clipped fraction
+    clip = Noise(bits=8, full_scale=1e3)
+    with pytest.warns(ml.errors.MeshladarWarning, match=r"[\d.]+ % of the noisy samples clip"):
+        fig = big.plot(noise=clip, realisations=4)
+    labels = [t for t in fig.axes[0].get_legend_handles_labels()[1] if "full scale" in t]
+    assert len(labels) == 1 and labels[0].endswith("% clipped"), labels
+    assert style.overlapping_texts(fig) == []
 
 
 def results_waves():

@@ -105,13 +105,45 @@ def test_noise_is_seeded_and_quantised():
     waves = _photo_waves()
     noise = Noise(speckle_cells=3.0, background_rate=1e8, excess_noise_factor=2.0, gain=5.0,
                   bits=10, full_scale=4000.0)
-    a = waves.realise(noise, 50, seed=11)
-    b = waves.realise(noise, 50, seed=11)
-    assert a.tobytes() == b.tobytes()
-    assert not np.array_equal(a, waves.realise(noise, 50, seed=12))
+    with pytest.warns(ml.errors.MeshladarWarning, match="clip"):    # the brightest do
+        a = waves.realise(noise, 50, seed=11)
+        b = waves.realise(noise, 50, seed=11)
+        assert a.tobytes() == b.tobytes()
+        assert not np.array_equal(a, waves.realise(noise, 50, seed=12))
     lsb = 4000.0 / 2 ** 10
     np.testing.assert_allclose(a / lsb, np.round(a / lsb), atol=1e-9)
     assert a.max() <= 4000.0 - lsb and a.min() >= 0.0
+
+
+def _constant_waves(photoelectrons):
+    """2 views x 5 samples of a constant number of photoelectrons per sample."""
+    return Waveforms(np.full((2, 5), float(photoelectrons)), time_edges=np.arange(6) * 1e-9,
+                     angles_deg=np.array([0.0, 90.0]), view_vectors=None,
+                     units="photoelectrons")
+
+
+def test_noise_that_clips_warns_with_the_fraction_and_the_full_scale_that_holds_it(
+        tmp_path):
+    """Closed form: Poisson(1e6) photoelectrons x gain 1 on a 1000-unit, 8-bit digitiser
+    clip in every sample (100 %; the 1e6 ± 5σ draws need a full scale of 1.1e6 at 2
+    digits), and Poisson(10) on a 1e6-unit one never does (0 %, no warning); the saved
+    realisations record the fraction."""
+    noise = Noise(bits=8, full_scale=1000.0)
+    top = 1000.0 * 255 / 256
+    with pytest.warns(ml.errors.MeshladarWarning, match=r"100 % of the noisy samples clip"
+                      r".*full scale \(1000;.*full_scale >= 1\.1e\+06") as rec:
+        draws = _constant_waves(1e6).realise(noise, 4, seed=0)
+    assert len(rec) == 1
+    np.testing.assert_array_equal(draws, top)
+    assert noise.clipped_fraction(draws) == 1.0
+    path = tmp_path / "clip.npz"
+    ml.io.save_waveforms(path, _constant_waves(1e6), realisations=draws, noise=noise)
+    assert ml.io.load_waveforms(path)[2]["noise"]["clipped_fraction"] == 1.0
+    quiet = Noise(bits=8, full_scale=1e6)
+    draws = _constant_waves(10.0).realise(quiet, 4, seed=0)       # no warning (errors)
+    assert quiet.clipped_fraction(draws) == 0.0 and Noise().clipped_fraction(draws) == 0.0
+    ml.io.save_waveforms(path, _constant_waves(10.0), realisations=draws, noise=quiet)
+    assert ml.io.load_waveforms(path)[2]["noise"]["clipped_fraction"] == 0.0
 
 
 def test_noise_needs_photoelectrons():
