@@ -197,7 +197,3 @@ def _lock(path):
 
 def _jsonable(x):
     return json.loads(json.dumps(x, sort_keys=True, default=str))
-
-
-#: The old private name (tests imported it); use :func:`chunk_digest`.
-_array_digest = chunk_digest

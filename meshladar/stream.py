@@ -54,9 +54,7 @@ PARALLEL_FROM = 4e6
 #: The same for threads, which cost next to nothing to start: from 5e4 rays a view's rows
 #: on two threads pay (a 1e5-ray view of an 82k-face sphere: 15-18 ms against 24-30 ms).
 THREADS_FROM = 5e4
-#: The old private names (the old raytrace/model, now
-#: :mod:`meshladar.forward.mesh`, imported them).
-_MAX_JOBS_PER_CORE, _THREADS_FROM = MAX_JOBS_PER_CORE, THREADS_FROM
+
 
 
 class Progress:
@@ -367,7 +365,3 @@ def dask_executor(address=None, *, workers=2, threads_per_worker=1, timeout=10.0
         client.close()
         if cluster is not None:
             cluster.close()
-
-
-#: The old private name (a test imported it); use :func:`choose_executor`.
-_executor = choose_executor

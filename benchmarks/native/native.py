@@ -57,15 +57,15 @@ def main(argv=None):
     from meshladar.studies.bench import _icosphere_scene
     from meshladar.meshes import fibonacci_sphere
     from meshladar.raytrace import embree4
-    from meshladar.raytrace.embree import _Geometry
-    from meshladar.raytrace.grid import _ray_grid
+    from meshladar.raytrace.embree import Geometry
+    from meshladar.raytrace.grid import ray_grid
 
     scene = _icosphere_scene(args.subdivisions, materials.DARK_GRAY)
-    geo = _Geometry(scene, "flat")
+    geo = Geometry(scene, "flat")
     unit = np.ascontiguousarray(geo.shifted / geo.scale, dtype=np.float32)
     spacing = 1.0 / math.sqrt(args.rays_per_view)
     vecs = fibonacci_sphere(args.views)
-    grids = [np.ascontiguousarray(_ray_grid(geo, w, "3d", spacing, 0.0, None)[0] / geo.scale,
+    grids = [np.ascontiguousarray(ray_grid(geo, w, "3d", spacing, 0.0, None)[0] / geo.scale,
                                   dtype=np.float32) for w in vecs]
     dirs = [np.ascontiguousarray(-w, dtype=np.float32) for w in vecs]
     n_rays = sum(len(g) for g in grids)

@@ -13,7 +13,7 @@ are stated in :mod:`meshladar.brdf.base`.
 from __future__ import annotations
 
 # in this order, which is the order the models register in (MODELS, messages)
-from .base import MODELS, BRDF, check_brdf, is_builtin, projected_weight  # isort: skip
+from .base import MODELS, BRDF, check_brdf, is_builtin, material_table, projected_weight  # isort: skip
 from .sandford_robertson import (E_MIN, LOBES, KernelRow, SandfordRobertson,  # isort: skip
                                  diffuse_normalization, diffuse_shape, glint_lobe,
                                  specular_normalization)
@@ -39,5 +39,6 @@ __all__ = [
     "KernelRow",
     "is_builtin",
     "projected_weight",
+    "material_table",
     "check_brdf",
 ]

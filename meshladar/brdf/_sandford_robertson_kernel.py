@@ -16,6 +16,7 @@ import numpy as np
 from numba import njit
 
 from ..precision import COS_HORIZON as _COS_HORIZON
+from .base import material_table
 from .sandford_robertson import KernelRow
 
 __all__ = ["sr_monostatic", "material_table", "KernelRow"]
@@ -38,9 +39,3 @@ def sr_monostatic(c, s, rho_d, eps, b, e, G, diffuse, specular):
         h_scaled = kc + (2.0 * e * e + kc * kc) / math.hypot(2.0 * e, kc)   # 2e²H, A9
         out += rho_s * (2.0 * e * e / (d * d * h_scaled)) / (4.0 * math.pi) / max(c, _COS_HORIZON)
     return out
-
-
-def material_table(materials):
-    """(n, 7) float64 rows of (rho_d, epsilon, b, e, G, has_diffuse, has_specular): each
-    material's ``kernel_params`` (every material must have them for the compiled path)."""
-    return np.array([m.kernel_params for m in materials], dtype=np.float64)

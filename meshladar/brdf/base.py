@@ -30,7 +30,7 @@ from .._validate import check_flag, check_real, finite_array, unit_vectors
 from ..errors import ModelError, ParameterError
 from ..precision import COS_HORIZON as _COS_HORIZON
 
-__all__ = ["BRDF", "MODELS", "is_builtin", "projected_weight", "check_brdf"]
+__all__ = ["BRDF", "MODELS", "is_builtin", "projected_weight", "check_brdf", "material_table"]
 
 #: The built-in models by class name, filled by each model's file as it is defined
 #: (``class Name(BRDF, builtin=True)``); read-only.
@@ -263,3 +263,9 @@ def _cos_sin_vec(w, n):
 def _unit_interval(name, value):
     return check_real(name, value, low=0.0, high=1.0)
 
+
+def material_table(materials):
+    """(n, 7) float64 rows of (rho_d, epsilon, b, e, G, has_diffuse, has_specular): each
+    material's ``kernel_params``, the table the engine's compiled loops read (every material
+    must have them for the compiled path)."""
+    return np.array([m.kernel_params for m in materials], dtype=np.float64)

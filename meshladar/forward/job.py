@@ -28,14 +28,14 @@ import numpy as np
 from ..precision import MIN_COS_FACET, RECEIVER_LIFT
 from ..raytrace.backends import backend as get_backend
 from ..raytrace.embree import embree_scene
-from ..raytrace.grid import grid_plan as _grid_plan
-from ..raytrace.grid import ray_grid as _ray_grid
-from ..raytrace.perspective import trace_sensor_view as _trace_sensor_view
+from ..raytrace.grid import grid_plan
+from ..raytrace.grid import ray_grid
+from ..raytrace.perspective import trace_sensor_view
 from ..raytrace.plan import TracePlan, View
-from ..raytrace.views import range_offset as _range_offset
-from ..raytrace.views import trace_view as _trace_view
+from ..raytrace.views import range_offset
+from ..raytrace.views import trace_view
 from ..weighing import bin_one as _bin_one
-from ..weighing import material_table as _material_table
+from ..brdf import material_table
 from ..weighing.faces import face_bistatic_weights, face_footprints, face_weights
 from ..weighing.fused import cast_bin_grid
 from ..weighing.record import Weighing
@@ -106,21 +106,21 @@ class FlatBins(NamedTuple):
 def sensor_offset(geo, w, sensor):
     """What the range of a sensor's hit is relative to: absolute (R − D − aim·w) at a finite
     standoff, the shifted centre's plane at infinity."""
-    return 0.0 if sensor.standoff is not None else _range_offset(geo.center, w, None)
+    return 0.0 if sensor.standoff is not None else range_offset(geo.center, w, None)
 
 
 def _trace(job, scene, view, footprint=True, transverse=False):
     """One view's hits, through parallel rays or the plan's sensor."""
     if job.plan.traced_with is not None:
-        return _trace_sensor_view(job.plan, scene, view)
-    return _trace_view(job.plan, scene, view, footprint=footprint, transverse=transverse)
+        return trace_sensor_view(job.plan, scene, view)
+    return trace_view(job.plan, scene, view, footprint=footprint, transverse=transverse)
 
 
 def _offset(job, view):
     p = job.plan
     if p.traced_with is not None:
         return sensor_offset(p.geo, view.w, p.traced_with)
-    return _range_offset(p.geo.center, view.w, view.w_r)
+    return range_offset(p.geo.center, view.w, view.w_r)
 
 
 def _hits_stage(job, scene, view, chunk):
@@ -171,14 +171,14 @@ def _bins(job, view, chunk, start):
 def _cast(job, scene, view):
     """One view's parallel rays cast one at a time: (origins, Embree's results)."""
     p = job.plan
-    o = _ray_grid(p.geo, view.w, p.mode, p.spacing, p.z0_shifted, view.rng).origins
+    o = ray_grid(p.geo, view.w, p.mode, p.spacing, p.z0_shifted, view.rng).origins
     return o, scene.run(o, np.ascontiguousarray((-view.w)[None, :], dtype=np.float32),
                         output=1)
 
 
 def _smooth_stage(job, scene, view, chunk):
     p, wg = job.plan, job.weighing
-    start = _range_offset(p.geo.center, view.w, None)
+    start = range_offset(p.geo.center, view.w, None)
     if wg.footprint:
         face_footprints(p.geo, view.w, p.mode, p.spacing, chunk.footprints)
     o, res = _cast(job, scene, view)
@@ -194,7 +194,7 @@ def _flat_stage(job, scene, view, chunk):
     """Flat normals, monostatic or (fused backends) bistatic: each face's weight for the
     view before the cast where the compiled kernel cannot evaluate it at a hit."""
     p, wg = job.plan, job.weighing
-    start = _range_offset(p.geo.center, view.w, view.w_r)
+    start = range_offset(p.geo.center, view.w, view.w_r)
     if wg.footprint:
         face_footprints(p.geo, view.w, p.mode, p.spacing, chunk.footprints)
     receiver = None
@@ -209,7 +209,7 @@ def _flat_stage(job, scene, view, chunk):
     bins = _bins(job, view, chunk, start)
     if job.fused:
         # packets: grid, cast, weigh and bin in one loop, no per-ray arrays
-        grid = _grid_plan(p.geo, view.w, p.mode, p.spacing, p.z0_shifted, view.rng)
+        grid = grid_plan(p.geo, view.w, p.mode, p.spacing, p.z0_shifted, view.rng)
         if job.row_jobs > 1:
             return _rows_on_threads(scene, grid, view.w, p.spacing, bins, job.row_jobs,
                                     receiver)[::-1]
@@ -290,7 +290,7 @@ def _chunk(job, n_views):
     shape = tuple(e.size - 1 for e in wg.edges)
     chunk = Chunk(values=np.zeros((n_views,) + shape), hits=[])
     if job.stage.faces:
-        chunk.params = _material_table(wg.materials) if wg.compiled else \
+        chunk.params = material_table(wg.materials) if wg.compiled else \
             np.zeros((len(wg.materials), 7))
         chunk.stamp = np.zeros(len(geo.faces), np.int64)
         chunk.weight = np.empty(len(geo.faces))

@@ -21,7 +21,7 @@ from ..precision import MIN_COS_FACET as _MIN_COS_FACET
 from ..precision import RECEIVER_LIFT as _RECEIVER_LIFT
 from ..scene import Scene
 from ..sinogram import Sinogram
-from ..raytrace.embree import embree_scene as _embree_scene
+from ..raytrace.embree import embree_scene
 from ..raytrace.embree import geometry, resolve_backend
 from ..hits import Hits
 from ..raytrace.plan import plan_trace
@@ -31,9 +31,9 @@ from ..sensor import check_radiometry
 from ..stream import MAX_JOBS_PER_CORE, THREADS_FROM, joined, run_chunks
 from ..weighing.record import Weighing
 from .job import mesh_job, plan_job, sensor_offset
-from ..raytrace.grid import ray_grid as _ray_grid
-from ..raytrace.views import range_offset as _range_offset
-from ..raytrace.views import refine_t as _refine_t
+from ..raytrace.grid import ray_grid
+from ..raytrace.views import range_offset
+from ..raytrace.views import refine_t
 
 __all__ = ["trace", "simulate_mesh", "first_hits", "occluded"]
 
@@ -64,17 +64,17 @@ def first_hits(scene, view_vector, *, ray_spacing):
         raise ParameterError(f"view_vector must be one (3,) direction; got shape {w.shape}")
     spacing = check_real("ray_spacing", ray_spacing, low=0.0, low_open=True)
     geo = geometry(scene, "flat")
-    emb = _embree_scene(geo, resolve_backend("auto"))
-    o = _ray_grid(geo, w, "3d", spacing, 0.0, None).origins
+    emb = embree_scene(geo, resolve_backend("auto"))
+    o = ray_grid(geo, w, "3d", spacing, 0.0, None).origins
     res = emb.run(o, np.ascontiguousarray((-w)[None, :], dtype=np.float32), output=1)
     hit = res["primID"] >= 0
     prim = res["primID"][hit].astype(np.int64)
     # Embree's float32 t recomputed in float64 against the hit face's plane, as the binning
     # paths do (meshladar.raytrace.views): r = −(c + o − t w)·w with o the float32 origin
-    t = _refine_t(geo, prim, o[hit], w, res["tfar"][hit])
+    t = refine_t(geo, prim, o[hit], w, res["tfar"][hit])
     oh = o[hit].astype(np.float64)
     p = oh - t[:, None] * w + geo.center
-    return p, prim, t - oh @ w + _range_offset(geo.center, w, None)
+    return p, prim, t - oh @ w + range_offset(geo.center, w, None)
 
 
 
@@ -86,7 +86,7 @@ def occluded(scene, points, direction, *, lift=_RECEIVER_LIFT):
         raise ParameterError("occluded needs a mesh scene")
     d = unit_vectors("direction", direction)
     geo = geometry(scene, "flat")
-    emb = _embree_scene(geo, resolve_backend("auto"))
+    emb = embree_scene(geo, resolve_backend("auto"))
     p = np.asarray(points, dtype=np.float64) - geo.center + lift * geo.radius * d
     return emb.run(np.ascontiguousarray(p, dtype=np.float32),
                    np.ascontiguousarray(d[None, :], dtype=np.float32), query="OCCLUDED") != -1
@@ -249,7 +249,7 @@ def _hits(plan, scene, ladar, per_view):
     """The :class:`Hits` record of every view's hits, ranges placed per view."""
     geo, receivers, sensed = plan.geo, plan.receivers, plan.traced_with
     vectors = ladar.view_vectors
-    offsets = [_range_offset(geo.center, vectors[i],
+    offsets = [range_offset(geo.center, vectors[i],
                              None if receivers is None else receivers[i]) if sensed is None
                else sensor_offset(geo, vectors[i], sensed) for i in range(ladar.n_views)]
     view = np.concatenate([np.full(h.range.size, i, np.int32) for i, h in enumerate(per_view)])

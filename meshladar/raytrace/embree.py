@@ -19,7 +19,7 @@ from .backends import BACKENDS, resolve_backend
 from .backends import backend as get_backend
 
 
-class _Geometry:
+class Geometry:
     """Everything a worker needs to trace: float64 originals and float32 shifted copies."""
 
     def __init__(self, scene: Scene, normals: str):
@@ -57,14 +57,14 @@ class _Geometry:
 
 
 
-def geometry(scene: Scene, normals: str) -> _Geometry:
+def geometry(scene: Scene, normals: str) -> Geometry:
     """The scene's traced geometry for a normal mode, built once per scene and mode: a
     Scene's parts are immutable, so a second call (another view, another coating, the
     viewer) reuses the concatenated arrays, face planes, hull and content digest."""
     cache = scene.__dict__.setdefault("_geometries", {})
     geo = cache.get(normals)
     if geo is None:
-        geo = cache[normals] = _Geometry(scene, normals)
+        geo = cache[normals] = Geometry(scene, normals)
     return geo
 
 
@@ -99,7 +99,7 @@ _EMBREE_CACHE_SIZE = 4
 _CACHE_LOCK = threading.Lock()
 
 
-def _embree_scene(geo: _Geometry, backend: str = "embreex"):
+def embree_scene(geo: Geometry, backend: str = "embreex"):
     """The Embree scene of the geometry for a resolved backend, built once per process."""
     with _CACHE_LOCK:
         key = (geo.key, backend)
@@ -107,14 +107,14 @@ def _embree_scene(geo: _Geometry, backend: str = "embreex"):
         if scene is None:
             unit = np.ascontiguousarray(geo.shifted / geo.scale, dtype=np.float32)
             raw = get_backend(backend).build(unit, geo.faces32)
-            scene = _Embree(raw, geo.scale)
+            scene = EmbreeScene(raw, geo.scale)
             while len(_EMBREE_CACHE) >= _EMBREE_CACHE_SIZE:
                 del _EMBREE_CACHE[next(iter(_EMBREE_CACHE))]       # the least recently used
         _EMBREE_CACHE[key] = scene
         return scene
 
 
-class _Embree:
+class EmbreeScene:
     """An Embree scene built at unit size: origins in, distances out, in the scene's own
     shifted units. Embree misses outright below ~1e-14 and above ~1e13 scene units, so the
     geometry is divided by a power of two near its radius; a power of two scales float32
@@ -142,6 +142,3 @@ class _Embree:
 
 
 #: The scene a worker casts with, public for the stages above (forward, weighing).
-EmbreeScene = _Embree
-Geometry = _Geometry
-embree_scene = _embree_scene

@@ -213,7 +213,7 @@ def _directions(direction, n):
 
 # ----------------------------------------------------------------------- jitted kernels
 @njit(cache=True, nogil=True)
-def _workspace():
+def workspace():
     """A zeroed workspace whose first byte is 64-aligned: returns (int32 view, float32 view,
     int64 view, base address).  Over-allocated by 64 bytes and offset."""
     raw = np.zeros((_WS_BYTES + _ALIGN) // 8, np.int64)
@@ -224,7 +224,7 @@ def _workspace():
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _init_args(i32, i64, base, flags):
+def init_args(i32, i64, base, flags):
     """rtcInitRayQueryContext + rtcInitIntersectArguments (inline in the headers), with
     flags and the context pointer set.  Same layout for RTCOccludedArguments."""
     c = _CTX_OFF // 4
@@ -241,7 +241,7 @@ def _init_args(i32, i64, base, flags):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _load_packet(f32, i32, o, d, tmax, start, n, w):
+def load_packet(f32, i32, o, d, tmax, start, n, w):
     """Fill the RTCRayW fields, the valid mask and the hit's invalid ids for rays
     start..start+w (masked past n); ``d`` (1, 3) is every ray's direction, or (n, 3) one
     per ray."""
@@ -276,11 +276,11 @@ def cast_grid(fn, scene, o, d, tmax, w, flags, prim, tfar, u, v):
     """rtcIntersectW over rays o[i] + t d, in packets of w in scan order (tail masked).
     ``fn`` is the ctypes rtcIntersect{w} (an argument, not a global: cacheable). ``u`` and
     ``v`` receive the barycentrics when they have one entry per ray (else they are empty)."""
-    i32, f32, i64, base = _workspace()
-    _init_args(i32, i64, base, flags)
+    i32, f32, i64, base = workspace()
+    init_args(i32, i64, base, flags)
     n = o.shape[0]
     for start in range(0, n, w):
-        _load_packet(f32, i32, o, d, tmax, start, n, w)
+        load_packet(f32, i32, o, d, tmax, start, n, w)
         fn(base + _VALID_OFF, scene, base, base + _ARGS_OFF)
         m = min(w, n - start)
         for j in range(m):
@@ -300,11 +300,11 @@ def cast_grid(fn, scene, o, d, tmax, w, flags, prim, tfar, u, v):
 def occluded_grid(fn, scene, o, d, tmax, w, flags, out):
     """rtcOccludedW over the same packets: out[i] = the ray is blocked within tmax
     (Embree sets tfar = -inf on occluded lanes)."""
-    i32, f32, i64, base = _workspace()
-    _init_args(i32, i64, base, flags)
+    i32, f32, i64, base = workspace()
+    init_args(i32, i64, base, flags)
     n = o.shape[0]
     for start in range(0, n, w):
-        _load_packet(f32, i32, o, d, tmax, start, n, w)
+        load_packet(f32, i32, o, d, tmax, start, n, w)
         fn(base + _VALID_OFF, scene, base, base + _ARGS_OFF)
         m = min(w, n - start)
         for j in range(m):
@@ -312,6 +312,3 @@ def occluded_grid(fn, scene, o, d, tmax, w, flags, out):
 
 
 # public names of the packet loop's helpers, for the compiled loops beside other stages
-workspace = _workspace
-init_args = _init_args
-load_packet = _load_packet

@@ -45,7 +45,7 @@ RTCIntersectArguments / RTCOccludedArguments (include/embree4/rtcore_scene.h:31-
       off 24 intersect / occluded  (function pointer)   NULL
       off 32 minWidthDistanceFactor float               only #if RTC_MIN_WIDTH (0 here)
     => 32 bytes (40 with min-width); we reserve 64, zeroed.  rtcInitIntersectArguments
-    (rtcore_scene.h:44-55) is an inline function: replicated in _init_args.
+    (rtcore_scene.h:44-55) is an inline function: replicated in init_args.
 
 RTCRayQueryContext (include/embree4/rtcore_common.h:335-344):
       [unsigned instStackSize, only #if RTC_MAX_INSTANCE_LEVEL_COUNT > 1]

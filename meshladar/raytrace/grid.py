@@ -38,14 +38,14 @@ _MIN_RAYS_ACROSS = 128
 
 
 
-def _dot(a, w):
+def dot(a, w):
     """Row-wise a·w for (k, 3) a, without BLAS (whose threads would oversubscribe the cores
     that worker processes already share)."""
     return a[:, 0] * w[0] + a[:, 1] * w[1] + a[:, 2] * w[2]
 
 
 
-def _frame(w):
+def frame(w):
     """(u, v) completing w to a right-handed orthonormal frame; v = z for horizontal w."""
     z = np.array([0.0, 0.0, 1.0])
     u = np.cross(z, w)
@@ -59,7 +59,7 @@ def _frame(w):
 
 
 class GridPlan(NamedTuple):
-    """A view's ray grid as :func:`_grid_plan` describes it (flat, for the compiled loop)."""
+    """A view's ray grid as :func:`grid_plan` describes it (flat, for the compiled loop)."""
 
     s: np.ndarray
     t: np.ndarray
@@ -71,7 +71,7 @@ class GridPlan(NamedTuple):
 
 
 class RayGrid(NamedTuple):
-    """A view's rays as :func:`_ray_grid` builds them: float32 origins (n, 3) in shifted
+    """A view's rays as :func:`ray_grid` builds them: float32 origins (n, 3) in shifted
     coordinates, the start distance L and the view's transverse axes u, v."""
 
     origins: np.ndarray
@@ -80,14 +80,14 @@ class RayGrid(NamedTuple):
     v: np.ndarray
 
 
-def _grid_plan(geo, w, mode, spacing, z0_shifted, rng):
-    """The grid's recipe, for :func:`_ray_grid` and the packet backend's fused loop (which
+def grid_plan(geo, w, mode, spacing, z0_shifted, rng):
+    """The grid's recipe, for :func:`ray_grid` and the packet backend's fused loop (which
     builds the same float32 origins ray by ray): (s, t, du, dv, u, v, L) with s (ns,) and
     t (nt,) the cell centres along u and v, and du, dv (ns, nt) float32 the stratified
     offsets in 3-D (None on a regular grid, and in slice mode, whose offsets are drawn by
-    :func:`_ray_grid` itself). Ray (i, j) is o = S u + T v + L w, S = s_i (+ δ du_ij),
+    :func:`ray_grid` itself). Ray (i, j) is o = S u + T v + L w, S = s_i (+ δ du_ij),
     T = t_j (+ δ dv_ij), in that order of float32 operations."""
-    u, v = _frame(w)
+    u, v = frame(w)
     L = (1.0 + _ORIGIN_MARGIN) * geo.radius + spacing
     su = geo.hull @ u
     s_lo, s_hi = su.min() - spacing, su.max() + spacing
@@ -106,12 +106,12 @@ def _grid_plan(geo, w, mode, spacing, z0_shifted, rng):
     return GridPlan(s, t, du, dv, u, v, L)
 
 
-def _ray_grid(geo, w, mode, spacing, z0_shifted, rng):
+def ray_grid(geo, w, mode, spacing, z0_shifted, rng):
     """Origins (n, 3) float32 in shifted coordinates, the start distance L, and (u, v).
 
     Built component by component in float32 (Embree's precision): o = s u + t v + L w.
     """
-    plan = _grid_plan(geo, w, mode, spacing, z0_shifted, rng)
+    plan = grid_plan(geo, w, mode, spacing, z0_shifted, rng)
     s, t, du, dv, u, v, L = plan.s, plan.t, plan.du, plan.dv, plan.u, plan.v, plan.L
     o = np.empty((s.size, t.size, 3), dtype=np.float32)
     if rng is None:
@@ -209,7 +209,7 @@ def _spacing(ladar, mode, ray_spacing, rays_per_bin, radius):
 
 
 def _largest_grid(geo, vectors, mode, spacing, limit=None):
-    """The most rays any one view's grid holds (the grids of _ray_grid: the projected
+    """The most rays any one view's grid holds (the grids of ray_grid: the projected
     hull's extent along u, and along v in 3-D, plus a spacing each side). With ``limit``,
     an upper bound (the bounding sphere's grid) when that is within it: the exact count is
     only needed to refuse a run."""
@@ -220,7 +220,7 @@ def _largest_grid(geo, vectors, mode, spacing, limit=None):
     largest = 0.0
     block = max(1, min(256, int(4e6 // max(len(geo.hull), 1))))   # bounded memory
     for start in range(0, len(vectors), block):
-        frames = [_frame(w) for w in vectors[start:start + block]]
+        frames = [frame(w) for w in vectors[start:start + block]]
         u = np.array([f[0] for f in frames])
         su = geo.hull @ u.T
         n = np.ceil((np.ptp(su, axis=0) + 2 * spacing) / spacing)
@@ -238,7 +238,3 @@ def _estimate_rays(geo, ladar, mode, spacing):
 
 
 # public names for the stages above (weighing, forward): the view's frame and grids
-dot = _dot
-frame = _frame
-grid_plan = _grid_plan
-ray_grid = _ray_grid

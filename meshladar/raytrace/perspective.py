@@ -30,7 +30,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..precision import ORIGIN_MARGIN, REFINE_MIN_COS
-from .grid import _dot, _frame, _ray_grid, _stratified_offsets
+from .grid import dot, frame, ray_grid, _stratified_offsets
 from ..hits import ViewHits
 from .views import _hit_normals, _shading_factor
 
@@ -48,7 +48,7 @@ class PlaneGrid(NamedTuple):
 def _plane_grid(geo, w, spacing, rng, sensor_pos, standoff, aim):
     """Cell centres (S, T) (n,) float64 on the reference plane (aim + S u + T v) covering
     the hull as projected from the sensor, and (u, v)."""
-    u, v = _frame(w)
+    u, v = frame(w)
     q = geo.hull - sensor_pos
     depth = -(q @ w)                               # distance along the boresight
     if np.min(depth) <= ORIGIN_MARGIN * geo.radius:
@@ -91,7 +91,7 @@ class SensorCast(NamedTuple):
     res: dict
 
 
-def _sensor_cast(geo, scene, w, spacing, rng, sensor, aim):
+def sensor_cast(geo, scene, w, spacing, rng, sensor, aim):
     """Cast one view's rays from a sensor at a finite standoff: a :class:`SensorCast`."""
     D = sensor.standoff
     sensor_pos = aim + D * w
@@ -109,17 +109,17 @@ def _sensor_cast(geo, scene, w, spacing, rng, sensor, aim):
     return SensorCast(sensor_pos, S, T, u, v, length, dirs, t0, o, res)
 
 
-def _trace_sensor_view(plan, scene, view):
+def trace_sensor_view(plan, scene, view):
     """Hits of one view of a :class:`~meshladar.raytrace.plan.TracePlan` seen by its
     sensor (``plan.traced_with``); ranges absolute (R − D − aim·w at a finite standoff), or
     relative to the plane through the shifted centre (at infinity), as
-    :func:`meshladar.raytrace.views._trace_view`'s."""
+    :func:`meshladar.raytrace.views.trace_view`'s."""
     geo, mode, spacing, z0_shifted = plan.geo, plan.mode, plan.spacing, plan.z0_shifted
     back_faces, sensor, w, rng = plan.back_faces, plan.traced_with, view.w, view.rng
     D = sensor.standoff
     aim = np.asarray(sensor.aim, np.float64) - geo.center
     if D is None:
-        grid = _ray_grid(geo, w, mode, spacing, z0_shifted, rng)
+        grid = ray_grid(geo, w, mode, spacing, z0_shifted, rng)
         o, u, v = grid.origins, grid.u, grid.v
         d = np.ascontiguousarray((-w)[None, :], dtype=np.float32)
         res = scene.run(o, d, output=1)
@@ -135,7 +135,7 @@ def _trace_sensor_view(plan, scene, view):
         if mode != "3d":
             raise ParameterError("a sensor at a finite standoff needs mode='3d' (its rays "
                                  "fan out in both transverse directions)")
-        cast = _sensor_cast(geo, scene, w, spacing, rng, sensor, aim)
+        cast = sensor_cast(geo, scene, w, spacing, rng, sensor, aim)
         sensor_pos, S, T, u, v = cast.sensor_pos, cast.S, cast.T, cast.u, cast.v
         length, dirs_all, t0_all, o, res = cast.length, cast.dirs, cast.t0, cast.origins, \
             cast.res
@@ -171,22 +171,22 @@ def _trace_sensor_view(plan, scene, view):
     off = aim + beam.offset[0] * u + beam.offset[1] * v if hasattr(beam, "offset") else aim
     if D is None:
         rel = p - off
-        along = _dot(rel, w)
+        along = dot(rel, w)
         rho = np.linalg.norm(rel - along[:, None] * w, axis=1)
         factor = factor * beam.relative(rho, None, None)
         receive = None                              # (a sensor at infinity: no extinction)
-        rng_rel = t - _dot(start, w)                # r = −p·w relative to the shifted centre
+        rng_rel = t - dot(start, w)                # r = −p·w relative to the shifted centre
     else:
         axis = off - sensor_pos
         axis = axis / np.linalg.norm(axis)
         rel = p - sensor_pos
-        z = _dot(rel, axis)
+        z = dot(rel, axis)
         rho = np.linalg.norm(rel - z[:, None] * axis, axis=1)
         R = t
         factor = factor * cos3 * (R / D) ** 2 * beam.relative(rho, z, D)
         receive = (D / R) ** 2 * np.exp(-2.0 * sensor.extinction * R)
         rng_rel = R - D - float((aim + geo.center) @ w)
-    across = np.stack([_dot(p, u), _dot(p, v)], -1)       # shifted, as _trace_view's
+    across = np.stack([dot(p, u), dot(p, v)], -1)       # shifted, as trace_view's
     return ViewHits(rng_rel, cos_t, sin_t, geo.material[prim], np.zeros((prim.size, 4)),
                     n_rays, int(back.sum()), None, factor, None, receive, across)
 
@@ -196,5 +196,3 @@ def _rowdot(a, b):
 
 
 # public names for the stages above (weighing, forward)
-trace_sensor_view = _trace_sensor_view
-sensor_cast = _sensor_cast

@@ -8,7 +8,7 @@ import numpy as np
 from ..precision import MIN_COS_FACET as _MIN_COS_FACET
 from ..precision import RECEIVER_LIFT as _RECEIVER_LIFT
 from ..precision import REFINE_MIN_COS as _REFINE_MIN_COS
-from .grid import _dot, _ray_grid
+from .grid import dot, ray_grid
 from ..hits import ViewHits
 from ..precision import TINY
 
@@ -20,7 +20,7 @@ BACK_FACES = ("two-sided", "ignore")
 
 
 
-def _trace_view(plan, scene, view, footprint=True, transverse=False):
+def trace_view(plan, scene, view, footprint=True, transverse=False):
     """Hits of one view (range relative to the shifted centre's plane) of a
     :class:`~meshladar.raytrace.plan.TracePlan`; ``view`` (a
     :class:`~meshladar.raytrace.plan.View`) gives its direction w, receiver w_r and rng.
@@ -28,7 +28,7 @@ def _trace_view(plan, scene, view, footprint=True, transverse=False):
     ``transverse``, each hit's coordinates along the view's (u, v) (its ray's, shifted)."""
     geo, mode, spacing, z0_shifted = plan.geo, plan.mode, plan.spacing, plan.z0_shifted
     back_faces, w, w_r, rng = plan.back_faces, view.w, view.w_r, view.rng
-    grid = _ray_grid(geo, w, mode, spacing, z0_shifted, rng)
+    grid = ray_grid(geo, w, mode, spacing, z0_shifted, rng)
     o, u, v = grid.origins, grid.u, grid.v
     d = np.ascontiguousarray((-w)[None, :], dtype=np.float32)
     res = scene.run(o, d, output=1)
@@ -36,13 +36,13 @@ def _trace_view(plan, scene, view, footprint=True, transverse=False):
     hit = prim >= 0
     prim = prim[hit]
     n_geo = geo.face_normals[prim]
-    t_hit = _refine_t(geo, prim, o[hit], w, res["tfar"][hit])
-    cos_geo = _dot(n_geo, w)
+    t_hit = refine_t(geo, prim, o[hit], w, res["tfar"][hit])
+    cos_geo = dot(n_geo, w)
     back = cos_geo < 0
     n, rho = _hit_normals(geo, prim, res, hit, n_geo,
                           lambda: (o[hit].astype(np.float64) - t_hit[:, None] * w)
                           + geo.center, mode == "slice")
-    cos_t = _dot(n, w)
+    cos_t = dot(n, w)
     if back_faces == "two-sided" and back.any():
         sign = np.where(back, -1.0, 1.0)
         n = n * sign[:, None]
@@ -58,7 +58,7 @@ def _trace_view(plan, scene, view, footprint=True, transverse=False):
     if geo.normals == "exact" and mode == "slice" and np.any(np.isfinite(rho)):
         factor = _arc_factor(n, u, cos_t, rho, spacing)
         if footprint:
-            sin_signed = _dot(n, u)
+            sin_signed = dot(n, u)
             r_ = np.where(np.isfinite(rho), rho, 0.0)
             half = np.where(r_ > 0, 0.5 * spacing / np.where(r_ > 0, r_, 1.0), 0.0)
             curve = np.stack([np.arcsin(np.clip(sin_signed, -1, 1)),
@@ -75,9 +75,9 @@ def _trace_view(plan, scene, view, footprint=True, transverse=False):
         o2 = np.ascontiguousarray(p + lift * n_geo, dtype=np.float32)
         blocked = scene.run(o2, np.ascontiguousarray(w_r[None, :], dtype=np.float32),
                             query="OCCLUDED") != -1
-        bi = _bistatic_angles(n, w, w_r, blocked | (back_faces == "ignore") & back)
+        bi = bistatic_angles(n, w, w_r, blocked | (back_faces == "ignore") & back)
         # range from the two-way path: r = −p·(w + w_r)/2 (monostatic: −p·w)
-        rng_extra = -_dot(p, w_r)
+        rng_extra = -dot(p, w_r)
     # footprint: range spread along u and v on the flat facet, and the facet's own range
     # interval relative to the hit (a footprint cannot return ranges the facet does not span)
     # r = −(c + o − t w)·w = −c·w + t − o·w, with the float32 origin o exactly as cast
@@ -87,28 +87,28 @@ def _trace_view(plan, scene, view, footprint=True, transverse=False):
         rng_rel = 0.5 * (rng_rel + rng_extra)     # r = −c·(w + w_r)/2 + ...
     spread = np.zeros((prim.size, 4))
     if footprint:
-        cg = np.maximum(np.abs(_dot(n_geo, w)), TINY)
+        cg = np.maximum(np.abs(dot(n_geo, w)), TINY)
         tri = geo.vertices[geo.faces[prim]] - geo.center
         tri_r = -(tri[..., 0] * w[0] + tri[..., 1] * w[1] + tri[..., 2] * w[2])
-        spread[:, 0] = np.abs(_dot(n_geo, u)) / cg * 0.5 * spacing
+        spread[:, 0] = np.abs(dot(n_geo, u)) / cg * 0.5 * spacing
         if mode == "3d":
-            spread[:, 1] = np.abs(_dot(n_geo, v)) / cg * 0.5 * spacing
+            spread[:, 1] = np.abs(dot(n_geo, v)) / cg * 0.5 * spacing
         spread[:, 2] = np.minimum(tri_r.min(axis=1) - rng_rel, 0.0)
         spread[:, 3] = np.maximum(tri_r.max(axis=1) - rng_rel, 0.0)
-    across = np.stack([_dot(oh, u), _dot(oh, v)], -1) if transverse else None
+    across = np.stack([dot(oh, u), dot(oh, v)], -1) if transverse else None
     return ViewHits(rng_rel, cos_t, sin_t, geo.material[prim], spread, len(o),
                     int(back.sum()), bi, factor, curve, None, across)
 
 
 
-def _bistatic_angles(n, w, w_r, hidden):
+def bistatic_angles(n, w, w_r, hidden):
     """(k, 4) rows (cos θr, sin θr, cos α, sin α) of normals n (k, 3) for the ladar along
     w and the receiver along w_r (α to the half vector), cos θr = −1 where ``hidden`` (the
     receiver cannot see the point, or its face is an ignored back face)."""
-    cos_r = _dot(n, w_r)
+    cos_r = dot(n, w_r)
     sin_r = np.linalg.norm(np.cross(n, w_r), axis=1)
     half = (w + w_r) / np.linalg.norm(w + w_r)
-    cos_a = _dot(n, half)
+    cos_a = dot(n, half)
     sin_a = np.linalg.norm(np.cross(n, half), axis=1)
     cos_r = np.where(hidden, -1.0, cos_r)
     return np.stack([cos_r, sin_r, cos_a, sin_a], -1)
@@ -179,7 +179,7 @@ def _arc_factor(n, u, cos_t, rho, spacing):
 
 
 
-def _refine_t(geo, prim, origins32, w, t32):
+def refine_t(geo, prim, origins32, w, t32):
     """Hit distances recomputed in float64 against the hit face's plane.
 
     Embree's t is float32 (~1e-7 of the scene's size): enough for geometry, not for a bin
@@ -195,13 +195,9 @@ def _refine_t(geo, prim, origins32, w, t32):
 
 
 
-def _range_offset(center, w, w_r):
+def range_offset(center, w, w_r):
     """−c·w (monostatic) or −c·(w + w_r)/2 (bistatic): the range of the shifted origin."""
     return -float(center @ w) if w_r is None else -0.5 * float(center @ (w + w_r))
 
 
 # public names for the stages above (weighing, forward)
-trace_view = _trace_view
-range_offset = _range_offset
-refine_t = _refine_t
-bistatic_angles = _bistatic_angles

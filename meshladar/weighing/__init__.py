@@ -11,16 +11,10 @@ ray-casting stage below it, never the forward models' entry points."""
 
 from __future__ import annotations
 
-from . import per_hit as _weigh
 from .record import Weighing
-from .per_hit import (GRAZING_RECEIVER_COS, bin_one, material_table, per_table_weight,
-                      scaled, sinogram_of, weigh, weights)
+from .per_hit import (GRAZING_RECEIVER_COS, bin_one, per_table_weight, scaled, sinogram_of,
+                      weigh, weights)
 
-# the old module's private names, for the importers that still use them (one release)
-_weights, _material_table = weights, material_table
-_bin_one, _sinogram = _weigh._bin_one, _weigh._sinogram
-_box_cdf, _trap_cdf, _curved_spread = _weigh._box_cdf, _weigh._trap_cdf, _weigh._curved_spread
-_warn_grazing_receiver = _weigh._warn_grazing_receiver
 
-__all__ = ["weigh", "Weighing", "weights", "bin_one", "material_table", "sinogram_of",
+__all__ = ["weigh", "Weighing", "weights", "bin_one", "sinogram_of",
            "GRAZING_RECEIVER_COS", "scaled", "per_table_weight"]

@@ -23,7 +23,7 @@ def _occlude_block(occ, scene, w, i32, f32, base, prim, tf, o, n, plane_d, face_
     origin ``o`` as built): from p = o − t w (t in float64 against the face's plane) lifted
     by ``lift`` along the face's normal turned toward the ladar, rounded to float32 (and
     to unit size), cast along ``wr32`` in packets of w by ``occ`` (rtcOccludedW): the rays
-    of meshladar.raytrace.views._trace_view. Fills blocked[:n]."""
+    of meshladar.raytrace.views.trace_view. Fills blocked[:n]."""
     for i in range(n):
         p = prim[i]
         c, t, _ = face_hit(p, tf[i], o, i, wv, plane_d, face_normals)
@@ -49,7 +49,7 @@ def cast_bin_grid(fn, scene, w, flags, s, t, du, dv, sp, u, v, lw, d, inv_scale,
                   power, ignore_back, out, stamp, weight, tag, footprint, occ, wr, lift):
     """One view, grid to bins in one loop (monostatic, flat normals, point or footprint
     bins): each
-    packet's float32 origins are built as :func:`meshladar.raytrace.grid._ray_grid` builds
+    packet's float32 origins are built as :func:`meshladar.raytrace.grid.ray_grid` builds
     them (o = (S u + T v) + L w, S = s (+ δ du), T = t (+ δ dv) when ``du`` is not empty),
     cast at unit size (× ``inv_scale``), and the hits, with Embree's distance scaled back
     (× ``scale``), are weighed and binned a cache-sized block at a time by

@@ -23,7 +23,7 @@ __all__ = ["bin_flat_hits", "bin_bistatic_hits", "bin_smooth_hits", "bin_sensor_
 def _hit_distance(p, c, tf, origins, i, plane_d, face_normals):
     """Ray i's distance to face p, recomputed in float64 against the face's plane from the
     float32 origin as cast (c = n·w); Embree's float32 ``tf`` where the plane is edge-on
-    (as meshladar.raytrace.views._refine_t)."""
+    (as meshladar.raytrace.views.refine_t)."""
     if abs(c) <= 1e-6:
         return tf * 1.0
     return (plane_d[p] - (face_normals[p, 0] * origins[i, 0] + face_normals[p, 1] * origins[i, 1]
@@ -31,7 +31,7 @@ def _hit_distance(p, c, tf, origins, i, plane_d, face_normals):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _face_hit(p, tf, origins, i, w, plane_d, face_normals):
+def face_hit(p, tf, origins, i, w, plane_d, face_normals):
     """Ray i's hit on face p seen along w: (c, t, r) with c = n·w the flat normal's cosine
     (negative on a back face), t the float64 distance (:func:`_hit_distance`) and
     r = t − o·w its range relative to the shifted centre's plane."""
@@ -135,7 +135,7 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
     """Monostatic, flat-normal weighing and binning of one view's Embree hits, fused:
     out[k] += F(θ)·area (``power``: F(θ)·cos θ·area, received power) for each hit with range start + t − o·w in bin k (o the float32 origin
     as cast), t the hit distance recomputed in float64 against the face's plane (as
-    meshladar.raytrace.views._refine_t).
+    meshladar.raytrace.views.refine_t).
     ``params`` rows are (rho_d, epsilon, b, e, G, has_diffuse, has_specular) per material.
     With flat normals F·area is one number per face and view: it is evaluated at a face's
     first hit and kept in ``weight`` (n_faces,), valid where ``stamp`` equals ``tag`` (a
@@ -154,7 +154,7 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
         p = prim[i]
         if p < 0:
             continue
-        c, t, r_rel = _face_hit(p, tfar[i], origins, i, w, plane_d, face_normals)
+        c, t, r_rel = face_hit(p, tfar[i], origins, i, w, plane_d, face_normals)
         if c < 0.0:
             back += 1
             if ignore_back:
@@ -184,7 +184,7 @@ def bin_bistatic_hits(prim, tfar, origins, blocked, plane_d, face_normals, w, wr
     ``weight`` holds each face's F·area for the pair (w, wr) (0 where either direction is
     below the face's horizon), ``blocked`` whether the ray from the hit toward the receiver
     meets the scene. A hit at p = o − t w has range start + ((t − o·w) − p·wr)/2, the
-    two-way path, as meshladar.raytrace.views._trace_view. Returns the back-face hits."""
+    two-way path, as meshladar.raytrace.views.trace_view. Returns the back-face hits."""
     nb = edges.size - 1
     e0 = edges[0]
     inv = nb / (edges[nb] - edges[0])
@@ -193,7 +193,7 @@ def bin_bistatic_hits(prim, tfar, origins, blocked, plane_d, face_normals, w, wr
         p = prim[i]
         if p < 0:
             continue
-        c, t, r_rel = _face_hit(p, tfar[i], origins, i, w, plane_d, face_normals)
+        c, t, r_rel = face_hit(p, tfar[i], origins, i, w, plane_d, face_normals)
         if c < 0.0:
             back += 1
             if ignore_back:
@@ -230,7 +230,7 @@ def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, 
         p = prim[i]
         if p < 0:
             continue
-        cg, t, r_rel = _face_hit(p, tfar[i], origins, i, w, plane_d, face_normals)
+        cg, t, r_rel = face_hit(p, tfar[i], origins, i, w, plane_d, face_normals)
         c = _smooth_cos(corner, p, bu[i] * 1.0, bv[i] * 1.0, w[0], w[1], w[2])
         if cg < 0.0:
             back += 1
@@ -261,7 +261,7 @@ def bin_sensor_hits(prim, t_cast, S, T, bu, bv, u, v, w, D, sensor_pos, range_of
                     extinction, edges, area, power, ignore_back, min_cos_facet, refine_min_cos,
                     out):
     """Monostatic weighing and binning of one view seen by a sensor at standoff D, fused
-    (the numbers of meshladar.raytrace.perspective._trace_sensor_view then
+    (the numbers of meshladar.raytrace.perspective.trace_sensor_view then
     meshladar.weighing._bin_one, without per-hit arrays): ray i leaves ``sensor_pos``
     along q/|q|, q = S[i] u + T[i] v − D w; its hit distance R is recomputed in float64
     against the hit face's plane (``t_cast`` where the plane is edge-on); its weight is
@@ -336,4 +336,3 @@ def bin_sensor_hits(prim, t_cast, S, T, bu, bv, u, v, w, D, sensor_pos, range_of
 
 
 #: The hit of ray i on face p, public for the packet loops (:mod:`.fused`).
-face_hit = _face_hit

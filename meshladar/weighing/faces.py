@@ -1,31 +1,31 @@
 """Per-face weights and footprints of one view, for the fused loops: with flat normals
 F·δA⊥ (and a footprint's range extent) is one number per face and view, evaluated for all
 faces before the view is cast, in the float64 operations the per-hit path applies to each
-hit (:func:`meshladar.raytrace.views._trace_view`, :func:`.weigh._weights`)."""
+hit (:func:`meshladar.raytrace.views.trace_view`, :func:`.weigh.weights`)."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from ..precision import TINY
-from ..raytrace.grid import dot as _dot
-from ..raytrace.grid import frame as _frame
-from ..raytrace.views import bistatic_angles as _bistatic_angles
-from .per_hit import _weights
+from ..raytrace.grid import dot
+from ..raytrace.grid import frame
+from ..raytrace.views import bistatic_angles
+from .per_hit import weights
 
 __all__ = ["face_footprints", "face_weights", "face_bistatic_weights"]
 
 
-def _face_footprints(geo, w, mode, spacing, out):
+def face_footprints(geo, w, mode, spacing, out):
     """Each face's footprint for view w, into out (n_faces, 4): the range half-widths a ray
     cell spreads over along the grid's u and v (v only in 3-D), and the face's own range
     interval (min, max of its corners' −p·w), in the same float64 operations as the
-    per-hit footprint of :func:`meshladar.raytrace.views._trace_view`."""
-    u, v = _frame(w)
+    per-hit footprint of :func:`meshladar.raytrace.views.trace_view`."""
+    u, v = frame(w)
     n = geo.face_normals
-    cg = np.maximum(np.abs(_dot(n, w)), TINY)
-    out[:, 0] = np.abs(_dot(n, u)) / cg * 0.5 * spacing
-    out[:, 1] = np.abs(_dot(n, v)) / cg * 0.5 * spacing if mode == "3d" else 0.0
+    cg = np.maximum(np.abs(dot(n, w)), TINY)
+    out[:, 0] = np.abs(dot(n, u)) / cg * 0.5 * spacing
+    out[:, 1] = np.abs(dot(n, v)) / cg * 0.5 * spacing if mode == "3d" else 0.0
     r = -(geo.shifted[:, 0] * w[0] + geo.shifted[:, 1] * w[1] + geo.shifted[:, 2] * w[2])
     corners = r[geo.faces]
     out[:, 2] = corners.min(axis=1)
@@ -36,10 +36,10 @@ def _face_footprints(geo, w, mode, spacing, out):
 _FACE_BLOCK = 1 << 16
 
 
-def _face_bistatic_weights(geo, materials, w, w_r, area, out, power, ignore_back):
+def face_bistatic_weights(geo, materials, w, w_r, area, out, power, ignore_back):
     """F·area of every face for the ladar along w and the receiver along w_r, into out
-    (n_faces,), in the float64 operations :func:`meshladar.raytrace.views._trace_view` and
-    :func:`meshladar.weighing._weights` apply to each hit of the face (flat normals: the
+    (n_faces,), in the float64 operations :func:`meshladar.raytrace.views.trace_view` and
+    :func:`meshladar.weighing.weights` apply to each hit of the face (flat normals: the
     same for all of them; the normal turned toward the ladar unless back faces are
     ignored, which weigh 0). A hit whose receiver ray is blocked weighs 0, in the loop.
     In blocks of faces: a handful of temporaries per face, not per mesh."""
@@ -51,7 +51,7 @@ def _face_bistatic_weights(geo, materials, w, w_r, area, out, power, ignore_back
 
 
 def _bistatic_weights(n, material, materials, w, w_r, area, power, ignore_back):
-    cos_t = _dot(n, w)
+    cos_t = dot(n, w)
     back = cos_t < 0
     if not ignore_back:
         sign = np.where(back, -1.0, 1.0)
@@ -60,20 +60,17 @@ def _bistatic_weights(n, material, materials, w, w_r, area, power, ignore_back):
     sin_t = np.sqrt(np.maximum(1.0 - cos_t * cos_t, 0.0))
     if ignore_back:
         cos_t = np.where(back, -1.0, cos_t)
-    bi = _bistatic_angles(n, w, w_r, ignore_back & back)
-    return _weights(cos_t, sin_t, material, materials, area, bi, power=power)
+    bi = bistatic_angles(n, w, w_r, ignore_back & back)
+    return weights(cos_t, sin_t, material, materials, area, bi, power=power)
 
 
-def _face_weights(geo, materials, w, area, out, power=False):
+def face_weights(geo, materials, w, area, out, power=False):
     """F(θ)·area of every face for view w, into out (n_faces,): θ between the face's flat
     normal and w (either side: the kernel skips back faces that are ignored), weighed by
-    :func:`meshladar.weighing._weights` exactly as the unfused path weighs a hit."""
+    :func:`meshladar.weighing.weights` exactly as the unfused path weighs a hit."""
     n = geo.face_normals
     c = np.abs(n[:, 0] * w[0] + n[:, 1] * w[1] + n[:, 2] * w[2])
-    out[:] = _weights(c, np.sqrt(np.maximum(1.0 - c * c, 0.0)), geo.material, materials, area,
+    out[:] = weights(c, np.sqrt(np.maximum(1.0 - c * c, 0.0)), geo.material, materials, area,
                       power=power)
 
 
-face_footprints = _face_footprints
-face_weights = _face_weights
-face_bistatic_weights = _face_bistatic_weights

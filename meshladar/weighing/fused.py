@@ -15,7 +15,7 @@ __all__ = ["cast_bin_grid"]
 def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None):
     """Cast, weigh and bin one view of the packet scene ``emb``
     (:class:`meshladar.raytrace.embree.EmbreeScene` whose backend is fused): ``plan`` is
-    :func:`meshladar.raytrace.grid._grid_plan`'s :class:`~meshladar.raytrace.grid.GridPlan`,
+    :func:`meshladar.raytrace.grid.grid_plan`'s :class:`~meshladar.raytrace.grid.GridPlan`,
     ``bins`` the weigh-and-bin arguments (:class:`~meshladar.forward.job.FlatBins`,
     flat for the compiled loop); ``receiver`` (direction, lift) makes the view bistatic.
     Returns (back-face hits, rays cast)."""

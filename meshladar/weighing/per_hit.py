@@ -20,7 +20,7 @@ from ..brdf import BRDF, check_brdf, projected_weight
 __all__ = ["weigh", "scaled", "per_table_weight"]
 
 
-def _weights(cos_t, sin_t, mat, materials, area, bi=None, power=False):
+def weights(cos_t, sin_t, mat, materials, area, bi=None, power=False):
     """F·δA⊥ per hit (``radiometry="paper"``, Eq. 8), or F·cos θr·δA⊥ (``power``: what a
     receiver collects), evaluated per material group (0 where either direction is below the
     horizon): monostatic F(θ; −θ) (under power the coating's finite F·cos θ), or bistatic
@@ -152,7 +152,7 @@ def bin_one(r, cos_t, sin_t, mat, spread, materials, edges, area, *, footprint=F
     ``power`` received power, ``receive`` the sensor's receiver factors (applied under
     received power only)."""
     nb = len(edges) - 1
-    wt = scaled(_weights(cos_t, sin_t, mat, materials, area, bi, power), factor, receive,
+    wt = scaled(weights(cos_t, sin_t, mat, materials, area, bi, power), factor, receive,
                 power=power)
     if footprint and curve is not None:
         curved = curve[:, 3] > 0
@@ -194,11 +194,6 @@ def bin_one(r, cos_t, sin_t, mat, spread, materials, edges, area, *, footprint=F
     return np.bincount(kk, weights=wt[rows] * frac, minlength=nb)
 
 
-
-def _material_table(materials):
-    """(n, 7) rows of (rho_d, epsilon, b, e, G, has_diffuse, has_specular): each
-    material's ``kernel_params`` (every material must have them for the compiled path)."""
-    return np.array([m.kernel_params for m in materials], dtype=np.float64)
 
 
 
@@ -303,11 +298,3 @@ def sinogram_of(vals, ladar, edges, run, *, normals, footprint, rays, back, radi
             info["units"] = "photoelectrons"
     return Sinogram(vals, angles_deg=ladar.angles_deg, bin_edges=edges, model="mesh",
                     view_vectors=None if ladar.planar else ladar.view_vectors, info=info)
-
-
-#: Public names of the stage's helpers for the forward models (the underscored names stay
-#: for one release, for the importers that still use them).
-weights = _weights
-_bin_one = bin_one
-_sinogram = sinogram_of
-material_table = _material_table

@@ -1,4 +1,4 @@
-"""Resolved returns' binning: one view's hits weighed (:func:`.weigh._weights`) and binned
+"""Resolved returns' binning: one view's hits weighed (:func:`.weigh.weights`) and binned
 by one to three coordinates (range, cross-range, elevation, Doppler; module docstring of
 :mod:`meshladar.forward.resolved`), on a flat index over the cells."""
 
@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..raytrace.grid import frame as _frame
-from .per_hit import _weights, scaled
+from ..raytrace.grid import frame
+from .per_hit import weights, scaled
 
 __all__ = ["bin_resolved"]
 
@@ -18,10 +18,10 @@ def bin_resolved(h, w, offset, plan, weighing, out):
     ranges; ``plan`` (:class:`~meshladar.raytrace.plan.TracePlan`) the geometry, the ray
     area and the sensor the view was traced with."""
     geo, sensor = plan.geo, plan.traced_with
-    wt = scaled(_weights(h.cos_theta, h.sin_theta, h.material, weighing.materials,
+    wt = scaled(weights(h.cos_theta, h.sin_theta, h.material, weighing.materials,
                          plan.area, power=weighing.power),
                 h.weight_factor, h.receive_factor, power=weighing.power)
-    u, v = _frame(w)
+    u, v = frame(w)
     s, t = h.transverse[:, 0], h.transverse[:, 1]
     coords = {"range": h.range + offset,
               "cross_range": s + float(geo.center @ u),

@@ -1,5 +1,5 @@
 """A view seen by a sensor at a finite standoff, cast by
-:func:`meshladar.raytrace.perspective._sensor_cast` and weighed and binned by the compiled
+:func:`meshladar.raytrace.perspective.sensor_cast` and weighed and binned by the compiled
 loop :func:`._kernels.bin_sensor_hits` (flat or smooth normals, coatings with
 ``kernel_params``): the numbers of the per-hit path."""
 
@@ -8,10 +8,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..precision import MIN_COS_FACET, REFINE_MIN_COS
-from ..raytrace.perspective import sensor_cast as _sensor_cast
+from ..raytrace.perspective import sensor_cast
 from ..sensor import FloodBeam
 from ._kernels import bin_sensor_hits
-from .per_hit import _material_table
+from ..brdf import material_table
 
 __all__ = ["bin_sensor_view"]
 
@@ -20,13 +20,13 @@ def bin_sensor_view(plan, weighing, scene, w, rng, out):
     """One view seen by the plan's sensor at a finite standoff, weighed and binned into
     ``out`` by the compiled loop (:func:`._kernels.bin_sensor_hits`; flat or smooth
     normals, coatings with ``kernel_params``): the numbers of
-    :func:`meshladar.raytrace.perspective._trace_sensor_view` then weighing. Returns
+    :func:`meshladar.raytrace.perspective.trace_sensor_view` then weighing. Returns
     (rays cast, back-face hits)."""
     geo, sensor, spacing = plan.geo, plan.traced_with, plan.spacing
     back_faces, materials, area = plan.back_faces, weighing.materials, plan.area
     power, edges = weighing.power, weighing.edges[0]
     aim = np.asarray(sensor.aim, np.float64) - geo.center
-    cast = _sensor_cast(geo, scene, w, spacing, rng, sensor, aim)
+    cast = sensor_cast(geo, scene, w, spacing, rng, sensor, aim)
     sensor_pos, S, T, u, v = cast.sensor_pos, cast.S, cast.T, cast.u, cast.v
     t0, o, res = cast.t0, cast.origins, cast.res
     beam = sensor.beam
@@ -45,7 +45,7 @@ def bin_sensor_view(plan, weighing, scene, w, rng, out):
         float(sensor.standoff), sensor_pos,
         float(sensor.standoff) + float((aim + geo.center) @ w), geo.plane_d,
         geo.face_normals, geo.corner if smooth else np.zeros((0, 3, 3)), smooth,
-        geo.material, _material_table(materials), np.array(spec + tuple(axis)),
+        geo.material, material_table(materials), np.array(spec + tuple(axis)),
         float(sensor.extinction), edges, float(area), bool(power), back_faces == "ignore",
         MIN_COS_FACET, REFINE_MIN_COS, out)
     return len(o), back

@@ -423,16 +423,16 @@ def test_sphere_part_via_public_api_and_progress_is_quiet_off_a_terminal(capsys)
 
 
 def test_alternating_meshes_reuse_their_embree_scenes():
-    from meshladar.raytrace.embree import _EMBREE_CACHE_SIZE, _embree_scene, _Geometry
+    from meshladar.raytrace.embree import _EMBREE_CACHE_SIZE, embree_scene, Geometry
 
     scenes = [ml.Scene.from_parts([ml.meshes.sphere((0, 0, 0), 0.5 + 0.1 * k, 0, subdivisions=1)],
                                   [DARK_GRAY]) for k in range(_EMBREE_CACHE_SIZE + 1)]
-    geos = [_Geometry(s, "flat") for s in scenes]
-    first = [_embree_scene(g) for g in geos[:2]]
-    assert [_embree_scene(g) for g in geos[:2] * 2] == first * 2     # built once each
+    geos = [Geometry(s, "flat") for s in scenes]
+    first = [embree_scene(g) for g in geos[:2]]
+    assert [embree_scene(g) for g in geos[:2] * 2] == first * 2     # built once each
     for g in geos[2:]:                                # past the bound: the oldest goes
-        _embree_scene(g)
-    assert _embree_scene(geos[1]) is first[1] and _embree_scene(geos[0]) is not first[0]
+        embree_scene(g)
+    assert embree_scene(geos[1]) is first[1] and embree_scene(geos[0]) is not first[0]
 
 
 def test_hits_are_a_frozen_record_of_named_arrays():

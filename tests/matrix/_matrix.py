@@ -123,7 +123,7 @@ def _box(**kw):
 def _refuses_many_jobs():
     """True when a huge ``jobs`` is refused before any process starts."""
     from meshladar.errors import ParameterError
-    from meshladar.stream import _executor
+    from meshladar.stream import choose_executor as _executor
 
     try:
         ex, own = _executor(10**5, None, 1.0, 1)

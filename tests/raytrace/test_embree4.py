@@ -139,7 +139,7 @@ def test_the_fused_loop_gives_the_unfused_numbers_bit_for_bit(sampling, monkeypa
     # same hits as the path through per-ray arrays: equal, not merely close; the far,
     # large sphere makes Embree's unit-size copy a real rescaling
     from meshladar.raytrace.backends import REGISTRY, backend
-    from meshladar.raytrace.embree import _Embree
+    from meshladar.raytrace.embree import EmbreeScene
 
     backend("packets")                                       # registered on first use
 
@@ -153,7 +153,7 @@ def test_the_fused_loop_gives_the_unfused_numbers_bit_for_bit(sampling, monkeypa
             fused = ml.simulate(scene, ladar, model="mesh", sampling=sampling,
                                 backend="packets")
             with monkeypatch.context() as m:
-                m.setattr(_Embree, "fused", property(lambda self: False))
+                m.setattr(EmbreeScene, "fused", property(lambda self: False))
                 m.setitem(REGISTRY, "packets", replace(REGISTRY["packets"], fused=False))
                 plain = ml.simulate(scene, ladar, model="mesh", sampling=sampling,
                                     backend="packets")

@@ -29,7 +29,7 @@ def no_rays(monkeypatch):
 
     monkeypatch.setattr(mesh_job, "embree_scene", cast)
     monkeypatch.setattr(mesh_job, "cast_bin_grid", cast)
-    monkeypatch.setattr(embree._Embree, "run", cast)
+    monkeypatch.setattr(embree.EmbreeScene, "run", cast)
 
 
 @pytest.fixture(scope="module")
