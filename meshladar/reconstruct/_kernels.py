@@ -1,13 +1,9 @@
 """The compiled loops of reconstruction (numba): 2-D and 3-D backprojection, its exact
 transpose (splat), and the surface-segment projector pair with its shadow map.
 
-numba is imported on the first call of a kernel, not with this module, so that
-``import meshladar`` (which reaches :func:`meshladar.fbp`) stays numpy/scipy only: the
-``njit`` below records each loop and its options, and compiles every loop of the module
-with ``numba.njit`` the first time one of them runs (the helpers ``_segment_bins`` and
-``_overlap`` are then bound as compiled functions, which the loops that call them need).
-Kernels are cached on disk (``cache=True``), so the JIT cost is paid once per
-installation.
+numba is imported here, at the top; ``import meshladar`` stays numpy/scipy only because the
+package reaches this module lazily (its name table). Kernels are cached on disk
+(``cache=True``), so the JIT cost is paid once per installation.
 
 Why numba: filtered backprojection of 360 × 1024 onto 1024² is 3.8e8 interpolations; numpy
 spends ~10 passes over memory on each; a compiled, cache-friendly loop parallel over image
@@ -16,60 +12,12 @@ rows does not.
 
 from __future__ import annotations
 
-import functools
 import math
-import threading
+
+from numba import njit, prange
 
 __all__ = ["backproject", "backproject3d", "splat_project", "surface_project",
-           "surface_backproject", "surface_shadows", "set_threads"]
-
-#: numba's parallel range once compiled (plain ``range`` until then)
-prange = range
-#: one thread binds the compiled loops; the others wait for it
-_BINDING = threading.Lock()
-
-
-class _Deferred:
-    """A loop to compile with ``numba.njit(**options)`` on first use."""
-
-    def __init__(self, func, options):
-        self.py_func = func
-        self.options = options
-        self.compiled = None
-        functools.update_wrapper(self, func)
-
-    def __call__(self, *args):
-        if self.compiled is None:
-            with _BINDING:
-                if self.compiled is None:
-                    _compile_all()
-        return self.compiled(*args)
-
-
-def njit(**options):
-    """``numba.njit(**options)``, applied when a kernel of this module first runs."""
-    return lambda func: _Deferred(func, options)
-
-
-def _compile_all():
-    """Wrap every loop of this module with numba and bind the compiled dispatchers under
-    their names (numba compiles each on its first call with the argument types)."""
-    import numba
-
-    space = globals()
-    space["prange"] = numba.prange
-    loops = {name: v for name, v in space.items() if isinstance(v, _Deferred)}
-    compiled = {name: numba.njit(**loop.options)(loop.py_func) for name, loop in loops.items()}
-    space.update(compiled)              # the loops that call a helper find it compiled
-    for name, loop in loops.items():    # only then may other threads skip the lock
-        loop.compiled = compiled[name]
-
-
-def set_threads(n: int | None):
-    """Limit the compiled kernels to n threads (None: all cores)."""
-    import numba
-
-    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS if n is None else int(n))
+           "surface_backproject", "surface_shadows"]
 
 
 @njit(parallel=True, cache=True, fastmath=False)
