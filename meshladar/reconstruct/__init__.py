@@ -10,7 +10,7 @@
 * :mod:`~meshladar.reconstruct.surface` and :mod:`~meshladar.reconstruct.compensation` —
   surface estimation and BRDF/shadow-compensated reconstruction.
 
-This package face imports only the light 2-D FBP (numba compiles on first use); the other
+This package face imports the 2-D FBP (numba with its compiled loop); the other
 modules load when imported.
 """
 
