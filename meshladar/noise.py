@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validate import check_count, check_real
+from ._validate import check_count, check_real, check_seed, check_size
 from .errors import MeshladarWarning, ParameterError
 
 __all__ = ["Noise", "draw_noise"]
@@ -108,26 +108,43 @@ class Noise:
         return float(np.mean(draws >= top))
 
 
+#: The peak memory of :func:`draw_noise`, in bytes per drawn sample: the output (8), the
+#: integer counts it is made from (8), the gamma draw of the excess noise (8) and a mask (1),
+#: rounded up; measured with tracemalloc in tests/values/test_noise_memory.py.
+DRAW_PEAK_BYTES = 32
+
+
 def draw_noise(noise, signal, dwell, n, seed):
     """``n`` realisations (n, *signal.shape) of ``noise`` on mean ``signal``
     (photoelectrons per cell), each cell integrating background and dark counts over
-    ``dwell`` seconds (module docstring). Seeded through numpy's default generator."""
-    rng = np.random.default_rng(seed)
-    s = np.broadcast_to(np.maximum(signal, 0.0), (n,) + np.shape(signal))
+    ``dwell`` seconds (module docstring). Seeded through numpy's default generator.
+    Refused before drawing when its peak memory (:data:`DRAW_PEAK_BYTES` per sample) would
+    pass meshladar's allocation cap."""
+    rng = np.random.default_rng(check_seed("seed", seed))
+    shape = (n,) + np.shape(signal)
+    check_size("n", float(n) * max(1, int(np.prod(np.shape(signal)))), DRAW_PEAK_BYTES,
+               f"{n} realisations of {np.shape(signal)} samples", "draw fewer at a time")
+    s = np.broadcast_to(np.maximum(signal, 0.0), shape)
+    b = (noise.background_rate + noise.dark_rate) * dwell
     if noise.speckle_cells is not None:
         m = noise.speckle_cells
-        intensity = rng.gamma(m, 1.0, size=s.shape) * (s / m)
+        intensity = rng.gamma(m, 1.0, size=shape)
+        intensity *= s / m                              # in place: one array, not three
+        intensity += b
     else:
-        intensity = s
-    b = (noise.background_rate + noise.dark_rate) * dwell
-    counts = rng.poisson(intensity + b).astype(np.float64)
+        intensity = s + b
+    counts = rng.poisson(intensity)
+    del intensity
+    out = counts.astype(np.float64)
+    del counts
     f = noise.excess_noise_factor
     if f > 1.0:
-        shape = counts / (f - 1.0)
-        out = np.where(counts > 0, rng.gamma(np.where(counts > 0, shape, 1.0),
-                                             noise.gain * (f - 1.0)), 0.0)
+        fired = out > 0
+        out /= f - 1.0                                  # the gamma shapes, in place
+        out[~fired] = 1.0
+        out = np.where(fired, rng.gamma(out, noise.gain * (f - 1.0)), 0.0)
     else:
-        out = noise.gain * counts
+        out *= noise.gain
     if noise.bits is not None:
         lsb = noise.full_scale / 2.0 ** noise.bits
         peak = float(out.max()) if out.size else 0.0

@@ -29,7 +29,8 @@ import numpy as np
 
 from . import plotting
 from ._summary import table, text
-from ._validate import check_count, check_real, check_size, finite_array, readonly_copy
+from ._validate import (check_count, check_real, check_seed, check_size, finite_array,
+                        readonly_copy)
 from .errors import ParameterError
 from .noise import Noise, draw_noise
 from .sensor import SPEED_OF_LIGHT
@@ -197,14 +198,13 @@ class Waveforms:
             raise ParameterError(f"noise must be a meshladar.noise.Noise; got "
                                  f"{type(noise).__name__}")
         n = check_count("n", n)
+        check_seed("seed", seed)
         if self.units != "photoelectrons":
             raise ParameterError(
                 f"noise counts photoelectrons; these waveforms are in "
                 f"{self.units!r}: simulate with a Sensor that has pulse_energy "
                 "and aperture_diameter (the command line's --pulse-energy, --aperture), or "
                 "convert with Waveforms.scaled(factor) (receive's --scale)")
-        check_size("n", float(n) * self.values.size, 8, f"{n} realisations of "
-                   f"{self.values.shape} samples", "draw fewer at a time")
         return draw_noise(noise, self.values, self.sample_interval, n, seed)
 
     def detection_probability(self, noise: Noise, threshold, n=1000, *, seed=None,
@@ -219,7 +219,7 @@ class Waveforms:
         thr = check_real("threshold", threshold, low=0.0, low_open=True)
         n = check_count("n", n)
         chunk = check_count("chunk", chunk)
-        rng = np.random.default_rng(seed)
+        rng = np.random.default_rng(check_seed("seed", seed))
         hits = np.zeros(self.values.shape[0])
         alarms = 0
         quiet = Waveforms(np.zeros_like(self.values), time_edges=self.time_edges,

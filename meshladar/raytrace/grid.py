@@ -8,7 +8,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._validate import check_choice, check_real
+from .._validate import check_choice, check_real, check_seed
 from ..errors import ParameterError
 from ..precision import ORIGIN_MARGIN as _ORIGIN_MARGIN
 from ..precision import PARALLEL_SLACK
@@ -185,9 +185,7 @@ def _sampling(mode, sampling, seed):
         return sampling, None
     if seed is None:
         return sampling, 0
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ParameterError(f"seed must be a non-negative integer; got {seed!r}")
-    return sampling, int(seed)
+    return sampling, check_seed("seed", seed)
 
 
 
