@@ -9,11 +9,15 @@ leaves a half-written result, and loaded with ``allow_pickle=False``.
 from __future__ import annotations
 
 import json
+import math
 import os
+import re
+import stat
 import tempfile
 
 import numpy as np
 
+from . import _validate
 from ._version import __version__
 from ._validate import check_path
 from .errors import MeshladarError, ParameterError
@@ -23,7 +27,28 @@ from .waveforms import Waveforms
 
 __all__ = ["save_result", "load_result", "write_atomic", "write_text_atomic", "save_sinogram",
            "load_sinogram", "save_waveforms", "load_waveforms", "describe_scene",
-           "ResultFileError"]
+           "ResultFileError", "TEMPORARY_PREFIX", "temporary_writer"]
+
+#: The prefix of the temporaries meshladar writes beside a file before renaming it into
+#: place: ``.meshladar-tmp-<pid>-<8 random characters><final name>``. Only names of exactly
+#: that form are ever cleaned up, so a user's own ``.tmp-…`` files are never touched.
+TEMPORARY_PREFIX = ".meshladar-tmp-"
+_TEMPORARY = re.compile(re.escape(TEMPORARY_PREFIX) + r"(\d{1,10})-[a-z0-9_]{8}.")
+
+
+def temporary_writer(name: str):
+    """The pid of the meshladar process that wrote temporary ``name``, or None when ``name``
+    is not one of meshladar's temporaries."""
+    match = _TEMPORARY.match(name)
+    return int(match.group(1)) if match else None
+
+
+def regular_file(path) -> bool:
+    """True when ``path`` itself (not a link's target) is a regular file."""
+    try:
+        return stat.S_ISREG(os.lstat(path).st_mode)
+    except OSError:
+        return False
 
 
 class ResultFileError(MeshladarError, ValueError):
@@ -71,7 +96,8 @@ def _atomic(path, write):
         mode = _new_file_mode(path)
         # the writer's pid in the name: a temporary left by a killed process is recognised
         # (and removed) by the next process writing into the same folder
-        fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".tmp-{os.getpid()}-", suffix=name)
+        fd, tmp = tempfile.mkstemp(dir=folder, prefix=f"{TEMPORARY_PREFIX}{os.getpid()}-",
+                                   suffix=name)
     except OSError as exc:
         raise OSError(exc.errno, exc.strerror, path) from exc
     try:
@@ -112,7 +138,8 @@ _SWEPT: set = set()
 
 
 def _remove_stale_temporaries(folder):
-    """Remove ``.tmp-<pid>-…`` files in ``folder`` whose writer is no longer alive."""
+    """Remove meshladar's temporaries (:data:`TEMPORARY_PREFIX`) in ``folder`` whose writer
+    is no longer alive: regular files of exactly that name form, nothing else."""
     if folder in _SWEPT:
         return
     _SWEPT.add(folder)
@@ -121,8 +148,8 @@ def _remove_stale_temporaries(folder):
     except OSError:
         return
     for entry in entries:
-        pid = entry[len(".tmp-"):].split("-", 1)[0] if entry.startswith(".tmp-") else ""
-        if not pid.isdigit() or _alive(int(pid)):
+        pid = temporary_writer(entry)
+        if pid is None or _alive(pid) or not regular_file(os.path.join(folder, entry)):
             continue
         try:
             os.remove(os.path.join(folder, entry))
@@ -174,8 +201,20 @@ def load_result(path):
     """Load a result saved by :func:`save_result`: (arrays dict, meta dict)."""
     path = check_path("path", path)
     try:
+        kind = os.stat(path).st_mode
+    except FileNotFoundError:
+        raise ResultFileError(f"{path}: no such result file") from None
+    except OSError as exc:
+        raise ResultFileError(f"{path}: cannot be read ({exc.strerror})") from None
+    if not stat.S_ISREG(kind):
+        # a FIFO or a device would block or stream forever: refused before opening
+        raise ResultFileError(f"{path}: not a regular file (a result file is an .npz)")
+    try:
         with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
+            _check_declared_sizes(path, z)
             arrays = {k: z[k] for k in z.files}
+    except ResultFileError:
+        raise
     except FileNotFoundError:
         raise ResultFileError(f"{path}: no such result file") from None
     except Exception as exc:  # noqa: BLE001 - a damaged or crafted file can fail anywhere in
@@ -193,6 +232,30 @@ def load_result(path):
         raise ResultFileError(f"{path}: damaged metadata (a JSON {type(meta).__name__}, not "
                               "an object)")
     return arrays, meta
+
+
+def _check_declared_sizes(path, z):
+    """Refuse, before reading any array, a result file whose members would unpack to more
+    than meshladar's allocation cap, or whose array headers claim more bytes than their
+    members hold (a crafted header would otherwise allocate what it claims)."""
+    if not hasattr(z, "zip"):
+        raise ResultFileError(f"{path}: not a meshladar result (a bare .npy, not an .npz)")
+    total = 0
+    for info in z.zip.infolist():
+        total += info.file_size
+        with z.zip.open(info) as member:
+            version = np.lib.format.read_magic(member)
+            read = (np.lib.format.read_array_header_1_0 if version == (1, 0)
+                    else np.lib.format.read_array_header_2_0)
+            shape, _, dtype = read(member)
+        need = math.prod(shape) * dtype.itemsize
+        if need > info.file_size:
+            raise ResultFileError(f"{path}: damaged ({info.filename} declares {need} bytes "
+                                  f"of data but holds {info.file_size})")
+    if total > _validate.MAX_ARRAY_BYTES:
+        raise ResultFileError(f"{path}: its arrays would unpack to {total / 2**30:.3g} GiB, "
+                              f"more than the {_validate.MAX_ARRAY_BYTES / 2**30:g} GiB "
+                              "meshladar reads at once")
 
 
 def describe_scene(scene) -> dict:

@@ -13,12 +13,15 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import stat
+import warnings
 
 import numpy as np
 
 from ._version import __version__
-from .errors import MeshladarError
-from .io import ResultFileError, load_result, save_result, write_text_atomic
+from .errors import MeshladarError, MeshladarWarning
+from .io import (ResultFileError, load_result, regular_file, save_result, temporary_writer,
+                 write_text_atomic)
 
 __all__ = ["RunFolder", "RunFolderError", "job_digest", "array_digest", "chunk_digest"]
 
@@ -73,18 +76,22 @@ class RunFolder:
     def _start(self):
         """Clean temporaries and check (or write) the manifest, holding the lock."""
         # temporaries of writes cut short by a kill: never under a final name, removed here
-        # (only while holding the lock, so never another run's in-flight files)
+        # (only while holding the lock, so never another run's in-flight files; only
+        # meshladar's own names, regular files, never a user's file or a link)
         for name in os.listdir(self.path):
-            if name.startswith(".tmp-"):
+            full = os.path.join(self.path, name)
+            if _owned(name):
+                _check_regular(full)
+            elif temporary_writer(name) is not None and regular_file(full):
                 try:
-                    os.remove(os.path.join(self.path, name))
+                    os.remove(full)
                 except OSError:
                     pass
         manifest = os.path.join(self.path, "manifest.json")
         old, damage = None, None
-        if os.path.exists(manifest):
+        if os.path.lexists(manifest):
             try:
-                with open(manifest, encoding="utf-8") as fh:
+                with _open_plain(manifest) as fh:
                     old = json.load(fh)
                 if not (isinstance(old, dict) and isinstance(old.get("digest"), str)
                         and isinstance(old.get("job", {}), dict)):
@@ -145,11 +152,13 @@ class RunFolder:
 
     def load(self, i, shapes=None):
         """Chunk i's arrays, or None when it is missing, unreadable, fails its checksum, was
-        written for another chunk or job, or (with ``shapes``, name → expected shape) has
-        arrays of other shapes: such a chunk is recomputed, never used."""
+        written for another chunk or job, holds non-finite numbers, or (with ``shapes``,
+        name → expected shape) has arrays of other shapes: such a chunk is recomputed,
+        never used (a warning names it when it was readable but wrong)."""
         f = self._file(i)
-        if not os.path.exists(f):
+        if not os.path.lexists(f):
             return None
+        _check_regular(f)
         try:
             arrays, meta = load_result(f)
         except ResultFileError:
@@ -160,11 +169,21 @@ class RunFolder:
         if shapes is not None and any(
                 k not in arrays or arrays[k].shape != tuple(v) for k, v in shapes.items()):
             return None
+        bad = _non_finite(arrays)
+        if bad:
+            warnings.warn(f"{f}: chunk {i} holds non-finite values in {bad!r}; recomputing it",
+                          MeshladarWarning, stacklevel=2)
+            return None
         return arrays
 
     def save(self, i, arrays: dict):
-
+        """Write chunk i atomically; a chunk with non-finite numbers is refused (naming the
+        chunk and the array), never kept to poison a resume."""
         arrays = {k: np.asarray(v) for k, v in arrays.items()}
+        bad = _non_finite(arrays)
+        if bad:
+            raise RunFolderError(f"{self._file(i)}: chunk {i} computed non-finite values in "
+                                 f"{bad!r}; not kept (the inputs of that chunk are at fault)")
         save_result(self._file(i), arrays, {"job": self.digest, "chunk": int(i),
                                             "sha256": chunk_digest(arrays)})
 
@@ -179,7 +198,7 @@ def _lock(path):
         import fcntl
     except ImportError:                          # not POSIX: no locking
         return None
-    fh = open(os.path.join(path, ".lock"), "a+")
+    fh = _open_plain(os.path.join(path, ".lock"), create=True)
     try:
         fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
     except OSError:
@@ -193,6 +212,54 @@ def _lock(path):
     fh.write(f"pid {os.getpid()}")
     fh.flush()
     return fh
+
+
+#: The names a run folder's own files have: the lock, the manifest and the chunks.
+def _owned(name):
+    return name in (".lock", "manifest.json") or (name.startswith("chunk_")
+                                                   and name.endswith(".npz"))
+
+
+def _check_regular(path):
+    """Refuse, at once, a run-folder file that is a link, a FIFO, a folder or a device:
+    meshladar's own files are regular files, and anything else would be followed (a link's
+    target overwritten) or block forever (a FIFO)."""
+    try:
+        mode = os.lstat(path).st_mode
+    except FileNotFoundError:
+        return
+    if not stat.S_ISREG(mode):
+        kind = ("a symbolic link" if stat.S_ISLNK(mode) else "a FIFO" if stat.S_ISFIFO(mode)
+                else "a folder" if stat.S_ISDIR(mode) else "not a regular file")
+        raise RunFolderError(f"{path}: {kind} where the run folder keeps its own file; "
+                             "remove it, or use another folder")
+
+
+def _open_plain(path, create=False):
+    """Open a run-folder file for reading (and, with ``create``, writing) without following
+    a link, without blocking on a FIFO, and only if it is a regular file."""
+    _check_regular(path)
+    flags = os.O_NOFOLLOW | os.O_NONBLOCK | (os.O_RDWR | os.O_CREAT if create else os.O_RDONLY)
+    try:
+        fd = os.open(path, flags, 0o666)
+    except OSError as exc:
+        raise RunFolderError(f"{path}: cannot be opened ({exc.strerror}); remove it, or use "
+                             "another folder") from None
+    if not stat.S_ISREG(os.fstat(fd).st_mode):        # swapped in since the check
+        os.close(fd)
+        _check_regular(path)
+        raise RunFolderError(f"{path}: not a regular file; remove it, or use another folder")
+    os.set_blocking(fd, True)
+    return os.fdopen(fd, "r+" if create else "r", encoding="utf-8")
+
+
+def _non_finite(arrays):
+    """The name of the first floating or complex array holding NaN or inf, else None."""
+    for k in sorted(arrays):
+        a = arrays[k]
+        if a.dtype.kind in "fc" and not np.all(np.isfinite(a)):
+            return k
+    return None
 
 
 def _jsonable(x):

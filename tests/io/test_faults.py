@@ -159,13 +159,14 @@ def test_a_run_folder_in_use_is_refused_not_shared(tmp_path):
     from meshladar.runs import RunFolder, RunFolderError
 
     first = RunFolder(tmp_path, {"kind": "x"}, 3)
-    (tmp_path / ".tmp-inflight.npz").write_bytes(b"partial")     # the first run's write
+    inflight = tmp_path / ".meshladar-tmp-1-abcdefghchunk_00000.npz"
+    inflight.write_bytes(b"partial")                             # the first run's write
     with pytest.raises(RunFolderError, match=r"run folder in use by another run \(pid \d+\)"):
         RunFolder(tmp_path, {"kind": "x"}, 3)
-    assert (tmp_path / ".tmp-inflight.npz").exists()            # not deleted by the second
+    assert inflight.exists()                                    # not deleted by the second
     first.close()
     with RunFolder(tmp_path, {"kind": "x"}, 3):                  # free again: temporaries go
-        assert not (tmp_path / ".tmp-inflight.npz").exists()
+        assert not inflight.exists()
 
 
 def test_jobs_are_bounded_by_the_cores():
@@ -355,7 +356,7 @@ BAD_CALLS = {
     "jobs float": (lambda: ml.simulate(_SPHERE, _LAD, model="mesh", jobs=2.5),
                    r"jobs must be an integer >= 1; got 2.5"),
     "seed float": (lambda: ml.simulate(_SPHERE, _LAD, model="mesh", seed=0.5),
-                   r"seed must be a non-negative integer; got 0.5"),
+                   r"seed must be None or an integer in \[0, 2\*\*63\); got 0.5"),
     "fbp size string": (lambda: ml.fbp(_SINO, size="big"),
                         r"size must be an integer >= 1; got 'big'"),
     "ladar string": (lambda: ml.trace(_SPHERE, "ladar"),

@@ -83,14 +83,39 @@ def test_temporaries_of_a_killed_writer_are_removed_by_the_next_write(tmp_path):
     child = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
                            capture_output=True, text=True, check=True)
     dead = int(child.stdout)
-    stale = tmp_path / f".tmp-{dead}-abc123out.npz"
+    stale = tmp_path / f".meshladar-tmp-{dead}-abc12_xyout.npz"
     stale.write_bytes(b"x" * 1000)                        # what a SIGKILL mid-write leaves
-    live = tmp_path / f".tmp-{1}-def456other.npz"         # pid 1 is alive: never removed
+    live = tmp_path / f".meshladar-tmp-{1}-def456ghother.npz"   # pid 1 is alive: kept
     live.write_bytes(b"y")
+    users = _near_miss_names(dead)
+    for name in users:
+        (tmp_path / name).write_text("a user's notes")
     mlio._SWEPT.discard(str(tmp_path))
     save_result(tmp_path / "out.npz", {"a": np.zeros(3)}, {})
     assert not stale.exists() and live.exists()
-    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([live.name, "out.npz"])
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([live.name, "out.npz", *users])
+    assert all((tmp_path / name).read_text() == "a user's notes" for name in users)
+
+
+def _near_miss_names(dead_pid):
+    """Users' own file names that look like temporaries (issue 29: ``.tmp-<pid>-notes.txt``
+    was deleted by the next write in its folder)."""
+    return [f".tmp-{dead_pid}-notes.txt", f".tmp-{dead_pid}-abc123out.npz", ".tmp-notes",
+            f".meshladar-tmp-{dead_pid}-short", f".meshladar-tmp-{dead_pid}-ABCDEFGHx.npz",
+            ".meshladar-tmp-notes.txt", f"meshladar-tmp-{dead_pid}-abcdefghx.npz",
+            f".meshladar-tmp-{dead_pid}-abcdefgh", f"x.meshladar-tmp-{dead_pid}-abcdefghy"]
+
+
+def test_a_link_named_like_a_temporary_is_not_followed_or_removed(tmp_path):
+    from meshladar import io as mlio
+
+    target = tmp_path / "keep.txt"
+    target.write_text("precious")
+    link = tmp_path / ".meshladar-tmp-999999999-abcdefghx.npz"
+    link.symlink_to(target)
+    mlio._SWEPT.discard(str(tmp_path))
+    save_result(tmp_path / "out.npz", {"a": np.zeros(3)}, {})
+    assert link.is_symlink() and target.read_text() == "precious"
 
 
 def test_a_failed_write_names_the_users_file_not_the_temporary(tmp_path):
@@ -141,3 +166,37 @@ def test_an_interrupt_inside_a_writer_stays_an_interrupt(tmp_path):
     with pytest.raises(KeyboardInterrupt):
         write_atomic(target, writer)
     assert not target.exists() and list(tmp_path.iterdir()) == []
+
+
+def test_result_files_are_sized_before_reading(tmp_path, monkeypatch):
+    """A result file is checked for its arrays' declared sizes before any is read: a header
+    claiming more than its member holds, or members unpacking past the cap, are refused
+    (issue 29: a 2 GB file of junk was read whole); a FIFO is refused before opening."""
+    import io as stdio
+    import os
+    import zipfile
+
+    import meshladar._validate as validate
+    from meshladar.io import ResultFileError, load_result
+
+    path = tmp_path / "r.npz"
+    save_result(path, {"a": np.zeros(1000)}, {})
+    assert load_result(path)[0]["a"].shape == (1000,)
+    monkeypatch.setattr(validate, "MAX_ARRAY_BYTES", 4000)       # 8000 bytes of data
+    with pytest.raises(ResultFileError, match=r"would unpack to .* GiB, more than the"):
+        load_result(path)
+    monkeypatch.undo()
+    # a crafted header: shape (2**40,) over 8 bytes of data
+    header = stdio.BytesIO()
+    np.lib.format.write_array_header_1_0(header, {"descr": "<f8", "fortran_order": False,
+                                                  "shape": (2**40,)})
+    crafted = tmp_path / "crafted.npz"
+    with zipfile.ZipFile(crafted, "w") as z:
+        z.writestr("values.npy", b"\x93NUMPY\x01\x00" + header.getvalue()[8:] + b"\0" * 8)
+        z.writestr("__meta__.npy", b"")
+    with pytest.raises(ResultFileError, match=r"values\.npy declares 8796093022208 bytes"):
+        load_result(crafted)
+    fifo = tmp_path / "fifo.npz"
+    os.mkfifo(fifo)
+    with pytest.raises(ResultFileError, match="not a regular file"):
+        load_result(fifo)

@@ -106,7 +106,7 @@ def test_sigkill_mid_run_then_resume_gives_the_uninterrupted_result(tmp_path):
         load_result(f)                                           # every final file reads
     code, err = _finish(_start(run, tmp_path / "b.npy"))
     assert code == 0, err
-    assert not list(run.glob(".tmp-*"))                          # resume cleans temporaries
+    assert not list(run.glob(".meshladar-tmp-*"))                # resume cleans temporaries
     del RunFolder
     code, err = _finish(_start(tmp_path / "fresh", tmp_path / "c.npy"))
     assert code == 0, err
