@@ -18,6 +18,7 @@ import tarfile
 import warnings
 import zipfile
 
+from .. import _validate
 from ..errors import GeometryError
 
 __all__: list[str] = []
@@ -179,14 +180,70 @@ def _is_binary(head):
     return False
 
 
-def _decompress(path, kind, where):
+#: A compressed mesh file may unpack to at most this many times its own size (above the
+#: floor below), and never past meshladar's allocation cap: real meshes compress 3-20:1, a
+#: decompression bomb ~1000:1 (gzip) or far more (bzip2). Measured on the decompressed
+#: bytes as they stream, so a bomb is refused in bounded memory and time.
+EXPANSION_RATIO = 256
+#: Decompressed bytes always allowed, whatever the ratio (64 MiB).
+EXPANSION_FLOOR = 64 << 20
+#: Bytes decompressed per read.
+_BLOCK = 1 << 20
+
+
+def expansion_limit(compressed_bytes):
+    """The most bytes a compressed file of ``compressed_bytes`` may unpack to."""
+    return min(_validate.MAX_ARRAY_BYTES,
+               max(EXPANSION_FLOOR, EXPANSION_RATIO * int(compressed_bytes)))
+
+
+def _too_large(where, limit, compressed):
+    return GeometryError(
+        f"{where}: unpacks to more than {limit / 2**20:.0f} MiB from {compressed} compressed "
+        f"bytes (a decompression bomb, or a mesh beyond {EXPANSION_RATIO}:1 and "
+        f"{_validate.MAX_ARRAY_BYTES / 2**30:g} GiB); decompress it yourself if you trust it")
+
+
+def _decompress(path, kind, where, keep=True):
+    """The decompressed bytes of a .gz/.bz2/.xz file (or, without ``keep``, their count),
+    streamed and refused past :func:`expansion_limit`."""
     opener = {"gz": gzip.open, "bz2": bz2.open, "xz": lzma.open}[kind]
+    size = os.path.getsize(path)
+    limit = expansion_limit(size)
+    blocks, total = [], 0
     try:
         with opener(path, "rb") as fh:
-            return fh.read()
+            while block := fh.read(_BLOCK):
+                total += len(block)
+                if total > limit:
+                    raise _too_large(where, limit, size)
+                if keep:
+                    blocks.append(block)
+    except GeometryError:
+        raise
     except Exception as exc:                  # BadGzipFile, OSError, EOFError, LZMAError
         raise GeometryError(f"{where}: not a valid {_name(kind)} "
                             f"({type(exc).__name__}: {_one_line(exc)})") from exc
+    return b"".join(blocks) if keep else total
+
+
+def check_archive(path, head, where):
+    """Refuse, before trimesh unpacks it, a ZIP whose members declare more than
+    :func:`expansion_limit` of the file's size, or a compressed tar that streams past it."""
+    size = os.path.getsize(path)
+    limit = expansion_limit(size)
+    if head.startswith(b"PK\x03\x04"):
+        try:
+            with zipfile.ZipFile(path) as z:
+                total = sum(info.file_size for info in z.infolist())
+        except Exception:                      # unreadable: trimesh's reader says why
+            return
+        if total > limit:
+            raise _too_large(where, limit, size)
+        return
+    kind = _sniff(head, size)
+    if kind in _COMPRESSED:                    # a compressed tar: stream it, keep nothing
+        _decompress(path, kind, where, keep=False)
 
 
 def _members(source, ftype):

@@ -19,7 +19,7 @@ import numpy as np
 from ..errors import GeometryError
 from ..precision import WELD_REL as _WELD_REL
 from .archives import (_COMPRESSED, _DRAWINGS, _HEAD_BYTES, _NAMES, _OPTIONAL_READERS, _TAR,
-                       _count, _decompress, _is_binary, _label, _members, _name, _needs,
+                       _count, _decompress, check_archive, _is_binary, _label, _members, _name, _needs,
                        _one_line, _printable, _quiet_reader, _readable_formats, _sniff,
                        _suffix, _with_output)
 from .part import _point_index
@@ -80,6 +80,8 @@ def _read_file(path):
                             f"({_one_line(exc.strerror or exc)})") from exc
     suffix = _suffix(path)
     kind = suffix if suffix in _COMPRESSED else _sniff(head, size)
+    if suffix in _TAR or kind == "zip" or suffix in ("zip", "3mf"):
+        check_archive(path, head, where)
     # a compressed file (by suffix, or by content unless a tar reader takes it whole)
     if kind in _COMPRESSED and (suffix == kind or suffix not in _TAR):
         import trimesh
