@@ -150,6 +150,36 @@ def _worker_init():
         except (OSError, AttributeError):
             pass
     signal.signal(signal.SIGINT, signal.SIG_IGN)        # the parent handles Ctrl-C
+    # and SIGTERM: a worker told to stop just ends (the parent's handler, inherited by the
+    # fork, would raise KeyboardInterrupt in the worker and print its traceback)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def _stop_workers(ex):
+    """Shut our own pool down without waiting, and end its worker processes now (SIGTERM,
+    which a worker takes as an order to exit, then wait for them), so an interrupted run
+    stops within moments and leaves no process; a thread pool's running chunks cannot be
+    stopped and finish."""
+    # the pool's internals, read before shutdown() drops its references to them
+    processes = dict(getattr(ex, "_processes", None) or {})
+    queue = getattr(ex, "_call_queue", None)
+    wakeup = getattr(ex, "_executor_manager_thread_wakeup", None)
+    ex.shutdown(wait=False, cancel_futures=True)
+    for p in list(processes.values()):
+        if p.is_alive():
+            p.terminate()
+    for p in list(processes.values()):
+        p.join()
+    # the pool's feeder thread may be blocked writing a task no worker will read, and the
+    # interpreter's exit joins it: close the read end as the pool itself does when broken
+    # (cpython gh-94777), then wake its manager to notice the dead workers
+    if queue is not None:
+        queue._reader.close()
+    if wakeup is not None:
+        try:
+            wakeup.wakeup()
+        except OSError:
+            pass
 
 
 def _scatter(ex, payload):
@@ -245,8 +275,8 @@ def run_chunks(fn, payload, n_items, *, chunk_size, args=(), jobs=None, executor
         else:
             _on_executor(ex, _Tasks(fn, payload, chunks, args), todo, keep)
     except BaseException:
-        if own:                          # interrupted or failed: drop the queued chunks,
-            ex.shutdown(wait=False, cancel_futures=True)     # the workers exit with us
+        if own:                          # interrupted or failed: drop the queued chunks and
+            _stop_workers(ex)            # stop the workers at once, not after their chunks
             own = False
         raise
     finally:
