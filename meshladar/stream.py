@@ -37,7 +37,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ._validate import check_flag
+from ._validate import check_count, check_flag, check_real
 from .errors import ParameterError
 from .runs import RunFolder
 
@@ -327,6 +327,39 @@ def _on_executor(ex, tasks, todo, keep):
             break
 
 
+def _connect(client_class, address, timeout, security):
+    """A Dask client of the scheduler at ``address``, or TimeoutError once ``timeout`` (and
+    a grace of a few seconds) has passed: distributed's own timeout does not cover a server
+    that accepts the connection and never answers its handshake. A client that connects
+    after the deadline is closed."""
+    import threading
+
+    box, done, late = {}, threading.Event(), threading.Event()
+
+    def connect():
+        try:
+            box["client"] = client_class(address, timeout=timeout, security=security)
+        except BaseException as exc:             # noqa: BLE001 - handed to the caller
+            box["error"] = exc
+        done.set()
+        if late.is_set() and "client" in box:
+            box["client"].close()
+
+    threading.Thread(target=connect, daemon=True, name="meshladar-dask-connect").start()
+    if not done.wait(timeout + _CONNECT_GRACE_S):
+        late.set()
+        if done.is_set() and "client" in box:   # it made it just now after all
+            box["client"].close()
+        raise TimeoutError(f"no handshake in {timeout + _CONNECT_GRACE_S:g} s")
+    if "error" in box:
+        raise box["error"]
+    return box["client"]
+
+
+#: Seconds allowed beyond the scheduler timeout for the client's own start-up.
+_CONNECT_GRACE_S = 5.0
+
+
 def joined(results, name):
     """One array of all chunks' ``name`` rows (each chunk's result a dict of arrays)."""
     return np.concatenate([np.asarray(r[name]) for r in results])
@@ -359,6 +392,15 @@ def dask_executor(address=None, *, workers=2, threads_per_worker=1, timeout=10.0
     unsecured one, can run code in this process. Connect only to clusters you control, with
     TLS (``tls://`` and ``security=``) on a shared network.
     """
+    workers = check_count("workers", workers)
+    threads_per_worker = check_count("threads_per_worker", threads_per_worker)
+    timeout = check_real("timeout", timeout, low=0.0, low_open=True, high=3600.0)
+    cores = os.cpu_count() or 1
+    if address is None and workers * threads_per_worker > MAX_JOBS_PER_CORE * cores:
+        raise ParameterError(f"workers: {workers} local workers of {threads_per_worker} "
+                             f"thread(s) is more than {MAX_JOBS_PER_CORE} per core on this "
+                             f"{cores}-core machine (they only compete for the cores); give "
+                             f"at most {MAX_JOBS_PER_CORE * cores // threads_per_worker}")
     try:
         from distributed import Client, LocalCluster
     except ImportError as exc:
@@ -373,9 +415,16 @@ def dask_executor(address=None, *, workers=2, threads_per_worker=1, timeout=10.0
         except ImportError as exc:
             raise ImportError("a local Dask cluster is secured with TLS, which needs "
                               "cryptography: pip install 'meshladar[dask]'") from exc
-        cluster = LocalCluster(n_workers=int(workers), threads_per_worker=int(threads_per_worker),
-                               processes=True, host="127.0.0.1", dashboard_address=None,
-                               security=sec, protocol="tls://")
+        import dask
+
+        # no dashboard: the scheduler and every worker still open an HTTP port, which
+        # serves plain, unauthenticated pages (task info, metrics) to any local user
+        # unless their routes are emptied
+        with dask.config.set({"distributed.scheduler.http.routes": [],
+                              "distributed.worker.http.routes": []}):
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=threads_per_worker,
+                                   processes=True, host="127.0.0.1", dashboard_address=None,
+                                   security=sec, protocol="tls://")
         client = Client(cluster, security=sec)
     else:
         scheme = address.split("://", 1)[0] if isinstance(address, str) else None
@@ -383,8 +432,10 @@ def dask_executor(address=None, *, workers=2, threads_per_worker=1, timeout=10.0
             raise ParameterError(f"scheduler must be an address such as tcp://host:8786 "
                                  f"(schemes {', '.join(_SCHEMES)}); got {address!r}")
         try:
-            client = Client(address, timeout=timeout, security=security)
-        except (OSError, TimeoutError, ValueError, TypeError) as exc:
+            client = _connect(Client, address, timeout, security)
+        except Exception as exc:   # noqa: BLE001 - whatever answers that is not a scheduler
+            # (an HTTP server's reply read as a message length asks for exabytes: MemoryError;
+            # a server that accepts and says nothing: our own deadline's TimeoutError)
             raise ParameterError(f"scheduler: no Dask scheduler answered at {address!r} "
                                  f"within {timeout:g} s ({type(exc).__name__}: "
                                  f"{str(exc).splitlines()[0][:120] if str(exc) else ''})") \

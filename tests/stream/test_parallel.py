@@ -126,6 +126,9 @@ def test_a_worker_lost_while_the_mesh_is_scattered_is_retried(job):
 
 
 def test_the_local_cluster_is_tls_secured_and_refuses_strangers():
+    from urllib.error import HTTPError
+    from urllib.request import urlopen
+
     from distributed import Client
 
     with dask_executor(workers=1) as ex:
@@ -135,6 +138,67 @@ def test_the_local_cluster_is_tls_secured_and_refuses_strangers():
         # another local user without the temporary credentials cannot connect
         with pytest.raises((TypeError, OSError, TimeoutError)):
             Client(address, timeout=5)
+        # nor read the cluster over plain HTTP: no dashboard, no info or metrics pages
+        # (issue 29: the scheduler served them on 127.0.0.1:8787 and each worker on a port)
+        info = ex._client.scheduler_info()
+        ports = [info["services"]["dashboard"]] + [
+            w["services"]["dashboard"] for w in info["workers"].values()
+            if "dashboard" in w.get("services", {})]
+        assert len(ports) == 2
+        for port in ports:
+            for page in ("info/main/workers.html", "metrics", "json/counts.json", "health"):
+                with pytest.raises(HTTPError, match="404"):
+                    urlopen(f"http://127.0.0.1:{port}/{page}", timeout=30)
+
+
+@pytest.mark.parametrize("options, message", [
+    ({"workers": 0}, r"workers must be an integer >= 1; got 0"),
+    ({"workers": 1.5}, r"workers must be an integer >= 1; got 1.5"),
+    ({"workers": 10**6}, r"workers: 1000000 local workers of 1 thread\(s\) is more than"),
+    ({"timeout": 0}, r"timeout must be in \(0, 3600\]; got 0.0"),
+    ({"threads_per_worker": -1}, r"threads_per_worker must be an integer >= 1"),
+])
+def test_cluster_sizes_are_checked_before_starting(options, message):
+    """``workers=0`` hung waiting for a worker; 64 workers started on 2 cores."""
+    with pytest.raises(ml.errors.ParameterError, match=message):
+        with dask_executor(**options):
+            pass
+
+
+def _listener(reply):
+    """A local server that is not a Dask scheduler: it answers like a web server, or
+    accepts connections and never says a word."""
+    import socket
+    import threading
+
+    sock = socket.socket()
+    sock.bind(("127.0.0.1", 0))
+    sock.listen()
+    held = []
+
+    def serve():
+        while True:
+            conn, _ = sock.accept()
+            held.append(conn)
+            if reply:
+                conn.sendall(b"HTTP/1.0 200 OK\r\nContent-Length: 5\r\n\r\nhello")
+
+    threading.Thread(target=serve, daemon=True).start()
+    return sock, f"tcp://127.0.0.1:{sock.getsockname()[1]}"
+
+
+@pytest.mark.parametrize("reply", [True, False], ids=["web-server", "silent"])
+def test_something_that_is_not_a_scheduler_is_refused(reply):
+    """issue 29: a web server's reply was read as a message length (a MemoryError
+    traceback); a silent server hung the client for minutes despite ``timeout``."""
+    sock, address = _listener(reply)
+    try:
+        with pytest.raises(ml.errors.ParameterError,
+                           match=f"^scheduler: no Dask scheduler answered at '{address}'"):
+            with dask_executor(address, timeout=1):
+                pass
+    finally:
+        sock.close()
 
 
 @pytest.mark.parametrize("address, message", [
