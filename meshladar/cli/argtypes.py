@@ -8,7 +8,7 @@ import math
 
 __all__ = ["KIND_TYPES", "positive_int", "nonnegative_int", "positive_float",
            "finite_float", "unit_fraction", "nonnegative_float", "pair", "direction",
-           "angle_list", "window_size", "coatings"]
+           "angle_list", "window_size", "coatings", "MergeCoatings"]
 
 
 def _number(parse, ok, what):
@@ -87,14 +87,32 @@ def window_size(text):
 
 
 def coatings(text):
-    """'part=name,part=name' → dict (names from the coating table)."""
+    """'part=name,part=name' → dict (names from the coating table); a part named twice is
+    refused (which coating was meant cannot be guessed)."""
     out = {}
     for item in filter(None, (x.strip() for x in text.split(","))):
         if "=" not in item:
             raise argparse.ArgumentTypeError(f"must be PART=COATING pairs; got {item!r}")
-        k, v = item.split("=", 1)
-        out[k.strip()] = v.strip()
+        k, v = (x.strip() for x in item.split("=", 1))
+        if k in out and out[k] != v:
+            raise argparse.ArgumentTypeError(f"part {k!r} is given two coatings ({out[k]!r} and "
+                                             f"{v!r}); give each part one")
+        out[k] = v
     return out
+
+
+class MergeCoatings(argparse.Action):
+    """``--coating`` given more than once: the pairs of every use, merged; a part given two
+    different coatings across them is refused, as within one."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        merged = dict(getattr(namespace, self.dest, None) or {})
+        for k, v in values.items():
+            if k in merged and merged[k] != v:
+                parser.error(f"argument {option_string}: part {k!r} is given two coatings "
+                             f"({merged[k]!r} and {v!r}); give each part one")
+            merged[k] = v
+        setattr(namespace, self.dest, merged)
 
 
 #: :class:`meshladar.forward.options.Option` kinds → the checker that parses them.

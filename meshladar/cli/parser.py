@@ -9,7 +9,7 @@ import argparse
 from .. import __version__
 from ..forward.options import MODELS, OPTIONS, SENSOR_OPTIONS
 from ..reconstruct import FILTERS
-from .argtypes import (KIND_TYPES, angle_list, coatings, nonnegative_float, nonnegative_int,
+from .argtypes import (KIND_TYPES, MergeCoatings, angle_list, coatings, nonnegative_float, nonnegative_int,
                     positive_float, positive_int, unit_fraction, window_size)
 
 __all__ = ["build_parser"]
@@ -59,6 +59,7 @@ def _scene_args(q):
                    help="coating of a mesh's parts (default: dark_gray); a phantom's "
                         "shapes take --coating")
     q.add_argument("--coating", type=coatings, default=None, metavar="PART=NAME,...",
+                   action=MergeCoatings,
                    help="coating per phantom shape or mesh part, e.g. small=aluminum "
                         "(default: each shape's own, or --material)")
     q.add_argument("--materials", default=None, metavar="TABLE.toml",

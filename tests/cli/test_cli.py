@@ -98,6 +98,11 @@ BAD_INPUT = [
      "unknown coating 'gold'"),
     (["simulate", "disk_pair", "--coating", "huge=aluminum", "-o", "x.npz"],
      "no shape named 'huge'"),
+    (["simulate", "disk_pair", "--coating", "small=aluminum,small=dark_gray", "-o", "x.npz"],
+     "part 'small' is given two coatings ('aluminum' and 'dark_gray'); give each part one"),
+    (["simulate", "disk_pair", "--coating", "small=aluminum", "--coating", "small=dark_gray",
+      "-o", "x.npz"],
+     "part 'small' is given two coatings ('aluminum' and 'dark_gray'); give each part one"),
     (["simulate", "disk_pair", "--views", "0", "-o", "x.npz"], "must be a positive integer"),
     (["simulate", "disk_pair", "--views", "4", "--angles-deg", "0,1", "-o", "x.npz"],
      "--views and --angles-deg both choose the views"),
@@ -121,8 +126,9 @@ BAD_INPUT = [
      "tol must be in (0, 1)"),
 ]
 #: The ones the fast subset runs (a subprocess each; the matrix's cli cases run every
-#: command's bad input in this process): a scene source, a result file, argparse's own.
-FAST_BAD_INPUT = (0, 9, 14)
+#: command's bad input in this process): a scene source, a coating given twice, a result
+#: file, argparse's own.
+FAST_BAD_INPUT = (0, 5, 11, 16)
 
 
 @pytest.mark.parametrize("args, message", [
