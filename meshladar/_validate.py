@@ -95,19 +95,14 @@ def check_size(name: str, count, bytes_each: int, what: str, reduce: str) -> Non
                              f"{reduce}")
 
 
-#: The largest seed numpy's generators take here: seeds are non-negative integers below 2**63
-#: (what ``numpy.random.default_rng`` accepts without a deep TypeError or ValueError).
-SEED_LIMIT = 2**63
-
-
 def check_seed(name: str, value):
     """Return ``value`` as an int (or None, meaning fresh entropy) after checking that it is a
-    non-negative integer below 2**63: the one validator behind every ``seed=``."""
+    non-negative integer (numpy's generators take any size): the one validator behind every
+    ``seed=``."""
     if value is None:
         return None
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) \
-            or not 0 <= int(value) < SEED_LIMIT:
-        raise ParameterError(f"{name} must be None or an integer in [0, 2**63); got {value!r}")
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
+        raise ParameterError(f"{name} must be None or a non-negative integer; got {value!r}")
     return int(value)
 
 

@@ -144,6 +144,10 @@ class GaussianBeam:
                 "offset_m": list(self.offset)}
 
 
+#: The sensor's options that act only on photoelectron counts, with their defaults.
+PHOTON_ONLY = {"optics_transmission": 1.0, "quantum_efficiency": 1.0, "wavelength": 1.064e-6}
+
+
 @dataclass(frozen=True)
 class Sensor:
     """Where the ladar is and what it sends and collects (mesh model; ``sensor=``).
@@ -214,6 +218,29 @@ class Sensor:
                                                       high=1.0, low_open=True))
         object.__setattr__(self, "wavelength", check_real("wavelength", self.wavelength,
                                                           low=0.0, low_open=True))
+        self._check_photon_options()
+
+    def _check_photon_options(self):
+        """Refuse photon-counting options that the others make meaningless (issue 29: they
+        were accepted and silently ignored): energy and aperture only together, at a
+        finite standoff; the optics, quantum efficiency and wavelength only with them."""
+        given = [n for n in ("pulse_energy", "aperture_diameter") if getattr(self, n) is not None]
+        if len(given) == 1:
+            other = ({"pulse_energy", "aperture_diameter"} - set(given)).pop()
+            raise ParameterError(f"{given[0]} counts photoelectrons only together with {other} "
+                                 f"(and a finite standoff); without it, it would be ignored: "
+                                 f"give {other} too, or neither")
+        if given and self.standoff is None:
+            raise ParameterError("pulse_energy and aperture_diameter count photoelectrons at a "
+                                 "finite standoff; with the sensor at infinity they would be "
+                                 "ignored: give standoff too")
+        if not given:
+            for name, default in PHOTON_ONLY.items():
+                if getattr(self, name) != default:
+                    raise ParameterError(
+                        f"{name} ({getattr(self, name):g}) scales photoelectron counts, which "
+                        "need pulse_energy and aperture_diameter (and a finite standoff); "
+                        "without them it would be ignored: give them, or leave it out")
 
     @property
     def counts_photons(self) -> bool:

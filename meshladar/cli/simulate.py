@@ -5,6 +5,8 @@ The model options' flags, checks and "does not apply" errors come from
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
 from .. import io
@@ -64,7 +66,23 @@ def _sensor(args):
         beam = FloodBeam(args.flood_radius)
     kw = {o.name: getattr(args, o.name) for o in SENSOR_OPTIONS
           if o.name not in _BEAM and getattr(args, o.name) is not None}
-    return Sensor(beam=beam, **kw)
+    try:
+        return Sensor(beam=beam, **kw)
+    except ParameterError as exc:          # the Sensor's rule, in the flags' words
+        raise ParameterError(_in_flags(str(exc))) from None
+
+
+def _in_flags(message):
+    """An API message in the command line's words: ``mode='3d'`` becomes ``--mode 3d`` for
+    every option, and a Sensor field's name (never an English word) its flag."""
+    for o in OPTIONS + SENSOR_OPTIONS:
+        if o.cli:
+            message = re.sub(rf"\b{o.name}=(?:'([^']*)'|([\w.+-]+))",
+                             lambda m, f=o.cli_flag: f"{f} {m.group(1) or m.group(2)}",
+                             message)
+    for o in SENSOR_OPTIONS:
+        message = re.sub(rf"(?<!-)\b{o.name}\b", o.cli_flag, message)
+    return message
 
 
 def _given(args, attr):
@@ -163,12 +181,15 @@ def cmd_simulate(args) -> int:
     if model == "mesh" and not scene.is_mesh and args.tol is None:  # --tol tessellates
         scene = scene.tessellate(args.segments or 1024)
     opts = _model_options(args, model)
-    if args.scheduler or args.workers:
-        with dask_executor(args.scheduler, workers=args.workers or 2) as ex:
-            sino = simulate(scene, ladar, model=model, executor=ex,
-                            **{k: v for k, v in opts.items() if k != "jobs"})
-    else:
-        sino = simulate(scene, ladar, model=model, **opts)
+    try:
+        if args.scheduler or args.workers:
+            with dask_executor(args.scheduler, workers=args.workers or 2) as ex:
+                sino = simulate(scene, ladar, model=model, executor=ex,
+                                **{k: v for k, v in opts.items() if k != "jobs"})
+        else:
+            sino = simulate(scene, ladar, model=model, **opts)
+    except ParameterError as exc:          # the API's rule, in the flags' words
+        raise ParameterError(_in_flags(str(exc))) from None
     params = {"scene": args.scene, "model": model,
               "options": {k: (v.describe() if k == "sensor" else v) for k, v in opts.items()
                           if k != "progress"},

@@ -278,7 +278,7 @@ for _key, _v in {"one": "1", "nan": "nan,0", "str": "x,y"}.items():
         "--beam-offset", setup=_SPHERE_FILE)
 cli("simulate.--standoff+analytic", _SIM + ["--standoff", "10"], "error", "--standoff")
 cli("simulate.--standoff+slice", _MESH + ["--standoff", "10", "--mode", "slice"], "error",
-    "mode='3d'", setup=_SPHERE_FILE)
+    "--mode 3d", setup=_SPHERE_FILE)
 cli("simulate.--standoff=inside", _MESH + ["--standoff", "0.1"], "error", "inside the target",
     setup=_SPHERE_FILE)
 cli("simulate.--beam-divergence-alone", _MESH + ["--beam-divergence", "0.1"], "error",
