@@ -63,8 +63,8 @@ def cmd_reconstruct(args) -> int:
 
 
 def _reconstruct_3d(args, sino, extent) -> int:
-    """reconstruct for views over the sphere: the 3-D Radon inversion (meshladar.reconstruct.fbp3d),
-    three slices through the target as the figure, the volume in OUTPUT.volume.npz."""
+    """reconstruct for views over the sphere: the 3-D Radon inversion
+    (meshladar.reconstruct.fbp3d), three slices through the target as the figure, the volume in OUTPUT.volume.npz."""
     if args.filter is not None:
         raise ParameterError("--filter applies to FBP of views about the z axis; 3-D views "
                              "are inverted with a second difference (use --smooth BINS)")

@@ -42,7 +42,8 @@ from ..sinogram import Sinogram
 from ._kernels import backproject
 
 __all__ = ["Image", "fbp", "bins_reach", "fourier_filter", "log_radiance", "clip_radiance",
-           "resample_uniform", "noise_floor", "quiet_fbp", "FILTERS", "INTERPOLATIONS", "LOG_FLOOR", "PAPER_CLIP"]
+           "resample_uniform", "noise_floor", "quiet_fbp", "FILTERS", "INTERPOLATIONS",
+           "LOG_FLOOR", "PAPER_CLIP"]
 
 #: Filter windows, scikit-image's names.
 FILTERS = ("ramp", "shepp-logan", "cosine", "hamming", "hann")

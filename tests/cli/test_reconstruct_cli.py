@@ -57,4 +57,5 @@ def test_the_command_lines_volume_is_the_apis_default_volume(tmp_path):
     for axis in "xyz":
         np.testing.assert_array_equal(getattr(cli, axis), getattr(api, axis))
     # the same sums, in an order the saved copy's memory layout may change: rounding apart
-    np.testing.assert_allclose(cli.values, api.values, rtol=0, atol=1e-12 * np.abs(api.values).max())
+    np.testing.assert_allclose(cli.values, api.values, rtol=0,
+                               atol=1e-12 * np.abs(api.values).max())

@@ -124,6 +124,9 @@ def test_the_notebooks_nut_is_told_its_translation():
     assert f"at most {depth:.3g} of the {span:.3g} range units" in str(w.message)
     assert f"({100 * depth / span:.0f}% of the bins" in str(w.message)
     centre = nut.bounds.mean(axis=0)
+    np.testing.assert_allclose(centre, [81.36, -81.91, -81.36], atol=0.01)
+    assert "(19% of the bins" in str(w.message)                 # the README's numbers
+    assert "apply_translation((-81.3611, 81.9074, 0))" in str(w.message)
     np.testing.assert_allclose(_translation(str(w.message)), [-centre[0], -centre[1], 0.0],
                                atol=1e-4)
     nut.apply_translation(_translation(str(w.message)))
