@@ -179,10 +179,10 @@ class Ladar:
                         np.array([0.0, 1.0]))
         if n is not None:
             check_size("n_bins", n, 8 * views.n_views, f"{n} bins", "use fewer bins")
-        _warn_off_centre(scene, views)
+        near, far = scene.view_ranges(views.view_vectors)
+        _warn_off_centre(scene, views, near, far)
         if scene.is_mesh:
-            lo, hi = scene.range_span(views.view_vectors)
-            lo, hi = lo - m, hi + m
+            lo, hi = float(near.min()) - m, float(far.max()) + m
             center = 0.5 * (lo + hi)
             span = max(hi - lo, 0.0)
             if n is None:
@@ -262,16 +262,16 @@ def target_centre(scene, planar):
     return c
 
 
-def _warn_off_centre(scene, views):
+def _warn_off_centre(scene, views, near, far):
     """Warn, with the translation that fixes it, when the target's centre is so far from
     the origin (the point the views turn about) that the views' shared bins span more than
-    ``OFF_CENTRE_FACTOR`` times the ranges it would span centred there."""
-    near, far = scene.view_ranges(views.view_vectors)
+    ``OFF_CENTRE_FACTOR`` times the ranges it would span centred there (``near``, ``far``:
+    the scene's range interval in each view)."""
     span = float(far.max() - near.min())
     c = target_centre(scene, views.planar)
     shift = views.view_vectors @ c                        # r about c = r + c·w
     centred = float((far + shift).max() - (near + shift).min())
-    if not span > OFF_CENTRE_FACTOR * centred:
+    if not (centred > 0 and span > OFF_CENTRE_FACTOR * centred):
         return
     depth = float(np.max(far - near))
     move = ", ".join(f"{-x:.6g}" if x else "0" for x in c)
