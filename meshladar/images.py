@@ -179,7 +179,7 @@ class Volume:
 
     def plot(self, **options):
         """A quick look (:func:`meshladar.viz.quick.volume`, ``options`` such as ``title`` go
-        to it): three central slices, a matplotlib Figure."""
+        to it): three slices through the target, a matplotlib Figure."""
         return plotting.plot(self, **options)
 
     def __repr__(self) -> str:

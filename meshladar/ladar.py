@@ -22,7 +22,7 @@ from .precision import ANGLE_TOL_DEG as _ANGLE_TOL_DEG
 from .precision import COUNT_SLACK, SPAN_FLOOR
 from .scene import Scene
 
-__all__ = ["Ladar", "PAPER_BIN_DIVISOR"]
+__all__ = ["Ladar", "PAPER_BIN_DIVISOR", "OFF_CENTRE_FACTOR", "target_centre"]
 
 #: The paper's range resolution is A/256 for a disk of radius A (Sec. 4.A).
 PAPER_BIN_DIVISOR = 256
@@ -146,11 +146,19 @@ class Ladar:
         """Bins covering the ranges the scene spans over the requested views.
 
         Range r = −p·w is zero on the plane through the world origin perpendicular to the
-        view and grows away from the ladar. For a mesh scene the bins span exactly the
-        nearest to the farthest range of any vertex over the views (half a bin beyond each
-        end), so a target far from the origin fills its bins; for analytic shapes (the
-        paper's phantoms, centred on the rotation axis) they are centred on range 0 and
-        reach |C| + R, the scene's bounding circle, in every view about z.
+        view and grows away from the ladar: the views turn about the origin. For a mesh
+        scene the bins span exactly the nearest to the farthest range of any vertex over
+        the views (half a bin beyond each end); for analytic shapes (the paper's phantoms,
+        centred on the rotation axis) they are centred on range 0 and reach |C| + R, the
+        scene's bounding circle, in every view about z.
+
+        The bins are shared by all the views, so a target whose centre c is off the origin
+        spreads its ranges −c·w ± R over the views: each view's returns fill only about
+        R / (|c| + R) of the bins, and a reconstruction's default square or cube (the bins'
+        reach about the origin) holds the target small and off-centre. When centring the
+        target on the origin would at least halve the bins' span (``OFF_CENTRE_FACTOR``),
+        ``covering`` warns with the fill and the translation that centres it (views about
+        z: its x and y; over the sphere: all three).
 
         Give ``bin_width`` or ``n_bins`` (or both: ``n_bins`` bins of that width centred on
         the span). Views: ``angles_deg`` about z (default 0, 1, ..., 359) or
@@ -171,11 +179,10 @@ class Ladar:
                         np.array([0.0, 1.0]))
         if n is not None:
             check_size("n_bins", n, 8 * views.n_views, f"{n} bins", "use fewer bins")
+        near, far = scene.view_ranges(views.view_vectors)
+        _warn_off_centre(scene, views, near, far)
         if scene.is_mesh:
-            near, far = scene.view_ranges(views.view_vectors)
-            lo, hi = float(near.min()), float(far.max())
-            _warn_off_axis(float(np.max(far - near)), hi - lo)
-            lo, hi = lo - m, hi + m
+            lo, hi = float(near.min()) - m, float(far.max()) + m
             center = 0.5 * (lo + hi)
             span = max(hi - lo, 0.0)
             if n is None:
@@ -234,18 +241,47 @@ class Ladar:
         return table("Ladar", *self._summary())
 
 
-#: A target whose every view sees it over less than this fraction of the shared range span
-#: is reported: its profiles would use few of the bins.
-_OFF_AXIS_FRACTION = 0.1
+#: ``Ladar.covering`` warns when the views' shared range span is more than this many times
+#: the span the target would need centred on the origin (the point the views turn about):
+#: centring it would give each view's returns at least this many times more bins.
+OFF_CENTRE_FACTOR = 2.0
 
 
-def _warn_off_axis(depth, span):
-    """Warn when the target lies so far off the rotation axis that each view sees it over a
-    small part (``depth``, the deepest view's) of the ranges all the views span together
-    (bins are shared by every view)."""
-    if span > 0 and depth < _OFF_AXIS_FRACTION * span:
-        warnings.warn(f"the target is far from the origin, the axis the views turn about: each "
-                      f"view sees it over at most {depth:.3g} of the {span:.3g} range units "
-                      f"the views span together ({100 * depth / span:.0f}% of the bins); "
-                      "centre it (a transform) or use fewer views", MeshladarWarning,
-                      stacklevel=3)
+def target_centre(scene, planar):
+    """The point a scene's views should turn about: a mesh's bounding-box centre, the
+    shapes' bounding circle's centre for analytic scenes; z = 0 for views about z (z does
+    not change their ranges)."""
+    if scene.is_mesh:
+        b = scene.bounds()
+        c = 0.5 * (b[0] + b[1])
+    else:
+        (cx, cy), _ = scene.bounding_circle()
+        c = np.array([cx, cy, 0.0])
+    if planar:
+        c[2] = 0.0
+    return c
+
+
+def _warn_off_centre(scene, views, near, far):
+    """Warn, with the translation that fixes it, when the target's centre is so far from
+    the origin (the point the views turn about) that the views' shared bins span more than
+    ``OFF_CENTRE_FACTOR`` times the ranges it would span centred there (``near``, ``far``:
+    the scene's range interval in each view)."""
+    span = float(far.max() - near.min())
+    c = target_centre(scene, views.planar)
+    shift = views.view_vectors @ c                        # r about c = r + c·w
+    centred = float((far + shift).max() - (near + shift).min())
+    if not (centred > 0 and span > OFF_CENTRE_FACTOR * centred):
+        return
+    depth = float(np.max(far - near))
+    move = ", ".join(f"{-x:.6g}" if x else "0" for x in c)
+    warnings.warn(
+        f"the target is far from the origin, the {'axis' if views.planar else 'point'} the "
+        f"views turn about: each view sees it over at most {depth:.3g} of the {span:.3g} "
+        f"range units the views span together ({100 * depth / span:.0f}% of the bins; "
+        f"{100 * depth / centred:.0f}% centred on the origin), and a reconstruction's "
+        f"default frame (the bins' reach about the origin) holds it small and off-centre: "
+        f"move its centre ({', '.join(f'{x:.6g}' for x in c)}) to the origin before "
+        f"simulating (trimesh: mesh.apply_translation(({move})), or Scene.from_mesh(mesh, "
+        f"..., transform=trimesh.transformations.translation_matrix(({move}))))",
+        MeshladarWarning, stacklevel=3)

@@ -11,7 +11,7 @@ from meshladar.errors import ParameterError
 from . import style
 from .paper import norm
 
-__all__ = ["sinogram", "image", "volume", "profile"]
+__all__ = ["sinogram", "image", "volume", "profile", "target_voxel", "TARGET_LEVEL"]
 
 
 @style.styled
@@ -105,16 +105,39 @@ def image(img, *, y=None, title=None):
     return fig
 
 
+#: The volume's slices pass through the centroid of the voxels brighter (in magnitude) than
+#: this fraction of the peak: the target, not the streaks and noise spread over the cube.
+TARGET_LEVEL = 0.1
+
+
+def target_voxel(values):
+    """(k, i, j): the voxel nearest the centroid of |values| above ``TARGET_LEVEL`` of their
+    peak (the cube's centre for an all-zero volume): where a slice cuts the target, wherever
+    in the cube it lies."""
+    a = np.abs(np.asarray(values, dtype=np.float64))
+    w = np.maximum(a - TARGET_LEVEL * a.max(initial=0.0), 0.0)
+    total = w.sum()
+    if not total > 0:
+        return tuple(n // 2 for n in a.shape)
+    index = []
+    for axis, n in enumerate(a.shape):
+        marginal = w.sum(axis=tuple(d for d in range(3) if d != axis))
+        index.append(int(np.clip(np.rint(marginal @ np.arange(n) / total), 0, n - 1)))
+    return tuple(index)
+
+
 @style.styled
 def volume(vol, *, title=None):
-    """Three central slices of a :class:`meshladar.images.Volume` (z = 0, y = 0, x = 0) on one
-    colour scale, symmetric about zero as the images' (:func:`meshladar.viz.paper.norm`);
-    log input is labelled as such."""
+    """Three slices of a :class:`meshladar.images.Volume` through the target (planes z, y
+    and x through the centroid of its bright voxels, :func:`target_voxel`: the cube's centre
+    for a target there, and an off-centre target is cut too) on one colour scale, symmetric
+    about zero as the images' (:func:`meshladar.viz.paper.norm`); log input is labelled as
+    such."""
     plt = style.use()
     fig, axes = plt.subplots(1, 3, figsize=(12.5, 4.0))
     fig.subplots_adjust(wspace=0.4, left=0.06, right=0.88, top=0.85, bottom=0.14)
     v = np.asarray(vol.values)
-    kz, ky, kx = (n // 2 for n in v.shape)
+    kz, ky, kx = target_voxel(v)
     cuts = ((v[kz], vol.x, vol.y, f"z = {vol.z[kz]:.3g}", "x", "y"),
             (v[:, ky, :], vol.x, vol.z, f"y = {vol.y[ky]:.3g}", "x", "z"),
             (v[:, :, kx], vol.y, vol.z, f"x = {vol.x[kx]:.3g}", "y", "z"))

@@ -38,14 +38,15 @@ def cmd_reconstruct(args) -> int:
         sino = log_radiance(sino)
     if args.clip is not None:
         sino = clip_radiance(sino, threshold=args.clip)
-    extent = args.extent or float(max(abs(sino.bin_edges[0]), abs(sino.bin_edges[-1])))
+    # no --extent: the API's default (the bins' reach about the origin), the same grid as
+    # meshladar.fbp(sino) and meshladar.reconstruct.fbp3d(sino)
     if not sino.planar:
-        # a margin, so that a target filling the bins does not sit on the cube's faces
-        return _reconstruct_3d(args, sino, args.extent or 1.15 * extent)
+        return _reconstruct_3d(args, sino, args.extent)
     if args.smooth is not None:
         raise ParameterError("--smooth applies to 3-D views (fbp3d); this sinogram's views "
                              "are about the z axis (use --filter)")
-    image = fbp(sino, size=args.size or 512, extent=extent, filter=args.filter or "ramp")
+    image = fbp(sino, size=args.size or 512, extent=args.extent, filter=args.filter or "ramp")
+    extent = image.extent
     # the quick look's symmetric scale, log input labelled as such, and a centre slice
     prep = sino.info.get("preprocess")
     fig = plotting.viz("quick").image(image, title=f"FBP of {os.path.basename(args.result)}"
@@ -62,13 +63,14 @@ def cmd_reconstruct(args) -> int:
 
 
 def _reconstruct_3d(args, sino, extent) -> int:
-    """reconstruct for views over the sphere: the 3-D Radon inversion (meshladar.reconstruct.fbp3d),
-    three central slices as the figure, the volume in OUTPUT.volume.npz."""
+    """reconstruct for views over the sphere: the 3-D Radon inversion
+    (meshladar.reconstruct.fbp3d), three slices through the target as the figure, the volume in OUTPUT.volume.npz."""
     if args.filter is not None:
         raise ParameterError("--filter applies to FBP of views about the z axis; 3-D views "
                              "are inverted with a second difference (use --smooth BINS)")
     size = args.size or 128
     vol = fbp3d(sino, size=size, extent=extent, smooth=args.smooth or 0.0)
+    extent = vol.info["extent"]
     data = os.path.splitext(args.output)[0] + ".volume.npz"
     if os.path.abspath(data) == os.path.abspath(args.result):
         raise ParameterError(f"-o {args.output!r} would write the volume to the input "

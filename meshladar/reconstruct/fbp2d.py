@@ -17,7 +17,10 @@ power of two ≥ 2 n_bins (no wrap-around). With bins of unit width, views 180°
 pixel centres on skimage's grid, ``fbp`` equals iradon's output for 360° data.
 
 Images (:class:`meshladar.images.Image`): ``image[i, j]`` is the value at (x_j, y_i), pixel
-centres c + (−extent + (k + ½) 2 extent/size) increasing along both axes.
+centres c + (−extent + (k + ½) 2 extent/size) increasing along both axes. By default the
+square is centred on the origin (the axis the views turn about) with half-width the bins'
+reach max(|r_0|, |r_n|) (:func:`bins_reach`): every point whose range falls in the bins in
+some view lies in it, so nothing the data holds is cropped, whatever the scene's units.
 """
 
 from __future__ import annotations
@@ -38,8 +41,9 @@ from ..precision import UNIFORM_RTOL as _UNIFORM_RTOL
 from ..sinogram import Sinogram
 from ._kernels import backproject
 
-__all__ = ["Image", "fbp", "fourier_filter", "log_radiance", "clip_radiance", "resample_uniform",
-           "noise_floor", "quiet_fbp", "FILTERS", "INTERPOLATIONS", "LOG_FLOOR", "PAPER_CLIP"]
+__all__ = ["Image", "fbp", "bins_reach", "fourier_filter", "log_radiance", "clip_radiance",
+           "resample_uniform", "noise_floor", "quiet_fbp", "FILTERS", "INTERPOLATIONS",
+           "LOG_FLOOR", "PAPER_CLIP"]
 
 #: Filter windows, scikit-image's names.
 FILTERS = ("ramp", "shepp-logan", "cosine", "hamming", "hann")
@@ -142,6 +146,23 @@ def bins_across(sinogram) -> int:
     return int(np.max(last - first + 1))
 
 
+def bins_reach(sinogram) -> float:
+    """The default half-width of a reconstruction's square (cube) about the origin: the
+    bins' reach max(|r_0|, |r_n|), r_0 and r_n the first and last bin edges.
+
+    Range r = −p·w, so a point at distance d from the origin has ranges ±d in views along
+    its direction: every point whose range falls in the bins in some view is within the
+    reach of the origin, and every point within it stays in the bins in every view when the
+    bins straddle 0 symmetrically (the default bins of ``Ladar.covering`` and
+    ``Ladar.centered``). :func:`fbp`, :func:`~meshladar.reconstruct.fbp3d`,
+    :func:`~meshladar.reconstruct.fbp_slices` and the command line's ``reconstruct`` use it
+    when no extent is given.
+    """
+    edges = sinogram.bin_edges if hasattr(sinogram, "bin_edges") else sinogram
+    edges = np.asarray(edges, dtype=np.float64)
+    return float(max(abs(edges[0]), abs(edges[-1])))
+
+
 def _check_view_sampling(sinogram):
     """Warn when the views are too few for the bins across the target (streaks)."""
     across = bins_across(sinogram)
@@ -156,7 +177,7 @@ def _check_view_sampling(sinogram):
                       "(meshladar.reconstruct.resample_uniform) or more views", MeshladarWarning, stacklevel=3)
 
 
-def fbp(sinogram, size=512, extent=1.0, *, filter="ramp", interpolation="linear",
+def fbp(sinogram, size=512, extent=None, *, filter="ramp", interpolation="linear",
         center=(0.0, 0.0)):
     """Filtered backprojection of a reflective sinogram over the full circle of views.
 
@@ -167,9 +188,11 @@ def fbp(sinogram, size=512, extent=1.0, *, filter="ramp", interpolation="linear"
         lines). Non-uniform bins are resampled onto uniform ones (integrals conserved).
     size : int >= 1
         Pixels along each side of the square image.
-    extent : float > 0
+    extent : float > 0, optional
         Half-width of the image square in scene units: it spans [−extent, extent]² about
-        ``center``.
+        ``center``. Default: the bins' reach max(|r_0|, |r_n|) (:func:`bins_reach`), the
+        square about the origin that holds everything the bins see, in any units (a part
+        in millimetres is not cropped); the command line's ``reconstruct`` uses the same.
     filter : {"ramp", "shepp-logan", "cosine", "hamming", "hann"}, keyword-only
         scikit-image's filters and scaling.
     interpolation : {"linear", "nearest"}, keyword-only
@@ -195,7 +218,9 @@ def fbp(sinogram, size=512, extent=1.0, *, filter="ramp", interpolation="linear"
     >>> import meshladar as ml
     >>> from meshladar import phantoms
     >>> disk = phantoms.load("disk")
-    >>> image = ml.fbp(ml.simulate(disk.scene, disk.ladar), size=256, extent=1.0)
+    >>> image = ml.fbp(ml.simulate(disk.scene, disk.ladar), size=256)
+    >>> image.extent        # the bins' reach: the paper's 512 bins of A/256 about 0, A = 0.8
+    0.8
     """
     size, extent, c = _check_fbp(sinogram, size, extent, filter, interpolation, center)
     widths = sinogram.bin_widths
@@ -243,6 +268,7 @@ def _check_fbp(sinogram, size, extent, filter, interpolation, center):
                              "would silently misplace")
     size = check_count("size", size)
     check_size("size", size * size, 8 * 3, f"a {size} x {size} image", "use a smaller size")
+    extent = bins_reach(sinogram) if extent is None else extent
     extent = check_real("extent", extent, low=0.0, low_open=True)
     check_choice("filter", filter, FILTERS)
     check_choice("interpolation", interpolation, INTERPOLATIONS)

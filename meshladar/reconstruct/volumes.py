@@ -40,7 +40,7 @@ from ..meshes import fibonacci_sphere
 from ..returns import Returns
 from ..sinogram import Sinogram
 from ._kernels import backproject3d
-from .fbp2d import bins_across, fbp
+from .fbp2d import bins_across, bins_reach, fbp
 
 __all__ = ["Volume", "fbp3d", "fbp_slices", "sphere_weights", "coverage_gap_deg",
            "views_needed", "MAX_GAP_DEG", "UNDERSAMPLED_FACTOR", "radon3d", "fbp_stack"]
@@ -145,7 +145,10 @@ def fbp3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None,
     size : int
         Voxels per side (default 128).
     extent : float, optional
-        Half-width of the cube (default the bins' reach).
+        Half-width of the cube. Default: the bins' reach max(|r_0|, |r_n|)
+        (:func:`~meshladar.reconstruct.fbp2d.bins_reach`), the cube about the origin that
+        holds everything the bins see, as :func:`meshladar.fbp`'s square; the command
+        line's ``reconstruct`` uses the same.
     center : (3,) float
         The cube's centre.
     weights : (n_views,) array, optional
@@ -184,9 +187,7 @@ def fbp3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None,
             f"direction {gap:.0f} deg from every view (at most {MAX_GAP_DEG:g}): use views "
             "such as meshladar.meshes.fibonacci_sphere(n) (views about the z axis: fbp, or "
             "fbp_slices of elevation-resolved returns)")
-    if extent is None:
-        extent = float(max(abs(sino.bin_edges[0]), abs(sino.bin_edges[-1])))
-    grid = _grid(size, extent, center)
+    grid = _grid(size, bins_reach(sino) if extent is None else extent, center)
     n, e, c, (x, y, z) = grid.n, grid.e, grid.c, grid.centers
     check_size("size", float(n) ** 3, 8 * 2, f"a {n}^3 volume", "give a smaller size")
     wts = _view_weights(weights, sino.n_views)
@@ -222,7 +223,7 @@ def fbp_slices(returns, *, size=256, extent=None, filter="ramp") -> Volume:
     returns : meshladar.returns.Returns
         With axes ("elevation", "range") (either order) and views about the z axis.
     size, extent, filter
-        As :func:`meshladar.fbp`, per slice.
+        As :func:`meshladar.fbp`, per slice (extent by default the range bins' reach).
     """
     if not isinstance(returns, Returns) or set(returns.axes) != {"elevation", "range"}:
         raise ParameterError("fbp_slices needs Returns resolved in ('elevation', 'range')")
@@ -236,8 +237,7 @@ def fbp_slices(returns, *, size=256, extent=None, filter="ramp") -> Volume:
     if np.ptp(np.diff(el)) > 1e-9 * np.diff(el).mean():
         raise ParameterError("fbp_slices needs evenly spaced elevation bins (the volume's z "
                              "axis)")
-    if extent is None:
-        extent = float(max(abs(rng[0]), abs(rng[-1])))
+    extent = bins_reach(rng) if extent is None else extent
     slices = []
     for k in range(el.size - 1):
         s = Sinogram(vals[:, k, :] / (el[k + 1] - el[k]), angles_deg=returns.angles_deg,

@@ -220,3 +220,43 @@ def test_image_grid_contract():
         np.testing.assert_allclose(img.y, -1.0 - 2.0 + (np.arange(size) + 0.5) * h)
         assert img[0, 0] == img.values[0, 0] and np.asarray(img).shape == (size, size)
         assert not img.values.flags.writeable
+
+
+# ------------------------------------------------------------------ the default frame
+
+#: the ring of a Lambertian disk reconstructed from its exact profiles peaks at its radius
+#: within a bin and a pixel (measured within 0.6 bins at 256²)
+RING_PEAK_TOL_BINS = 1.0
+#: the ring's integral across ±5 bins, on every ray from the centre, against its mean over
+#: the rays: measured 0.86 at the least (a cropped ring gives 0 where it is cut)
+RING_PRESENT = 0.5
+
+
+def test_a_part_in_millimetres_reconstructs_uncropped_by_default():
+    """A disk of radius 50 mm at (30, −20) mm: ``fbp``'s default square is the bins' reach
+    about the origin, |C| + R (the analytic bins' closed form), so the whole ring is in the
+    image, peaking at R all round (the old default, [−1, 1]², held none of it)."""
+    R, C = 50.0, np.array([30.0, -20.0])
+    scene = ml.Scene([ml.Disk(tuple(C), R, ml.materials.lambertian(0.5))])
+    ladar = ml.Ladar.covering(scene, n_bins=256)
+    sino = ml.simulate(scene, ladar)
+    image = ml.fbp(sino, size=256)
+    reach = math.hypot(*C) + R
+    assert image.extent == pytest.approx(reach, rel=1e-12)
+    assert round(image.extent, 2) == 86.06 and image.center == (0.0, 0.0)   # the README's
+    # the ring is in the image all round: on each of 36 rays from C, its brightest radius
+    # is R and its integral across ±5 bins is there
+    dr = ladar.bin_edges[1] - ladar.bin_edges[0]
+    radii = np.linspace(R - 5 * dr, R + 5 * dr, 201)
+    angles = np.deg2rad(np.arange(0.0, 360.0, 10.0))
+    rays = C + radii[:, None, None] * np.stack([np.cos(angles), np.sin(angles)], -1)[None]
+    profile = image.sample(rays)                              # (radii, angles)
+    peaks = radii[np.argmax(profile, axis=0)]
+    assert np.all(np.abs(peaks - R) <= RING_PEAK_TOL_BINS * dr + image.pixel_size), peaks
+    band = np.trapezoid(profile, radii, axis=0)
+    assert band.min() > RING_PRESENT * band.mean(), band / band.mean()
+    # the default is the bins' reach, the command line's default too
+    # (tests/cli/test_reconstruct_cli.py)
+    from meshladar.reconstruct.fbp2d import bins_reach
+    assert bins_reach(sino) == image.extent
+    np.testing.assert_array_equal(image.values, ml.fbp(sino, size=256, extent=reach).values)

@@ -4,6 +4,7 @@ normalisation on a uniform ball, a Lambertian sphere's shell, and stacked 2-D sl
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -12,6 +13,7 @@ import meshladar as ml
 from meshladar.materials import lambertian
 from meshladar.meshes import fibonacci_sphere
 from meshladar.forward.resolved import resolve
+from meshladar.errors import MeshladarWarning
 from meshladar.images import Volume
 from meshladar.reconstruct.volumes import (fbp3d, fbp_slices, sphere_weights,
                                            UNDERSAMPLED_FACTOR, views_needed)
@@ -241,3 +243,59 @@ def test_old_names_warn_and_name_the_new_ones():
     with pytest.warns(DeprecationWarning, match="fbp_slices"):
         with pytest.raises(ml.errors.ParameterError, match="fbp_slices needs Returns"):
             volumes.fbp_stack(sino)
+
+
+# ------------------------------------------------------------------ the default frame
+
+def _shifted_ball_sinogram(a, centre, n_views, n_bins):
+    """Exact bin integrals of a uniform ball of radius a at ``centre``: plane integrals
+    π (a² − u²), u = r + c·w the range about the centre, on the bins ``Ladar.covering``
+    gives it (the views' ranges ±(|c| + a), half a bin beyond each end)."""
+    W = fibonacci_sphere(n_views)
+    c = np.asarray(centre, np.float64)
+    lo, hi = (W @ -c).min() - a, (W @ -c).max() + a
+    dr = (hi - lo) / (n_bins - 1)
+    edges = lo - dr / 2 + dr * np.arange(n_bins + 1)
+    shift = (W @ c)[:, None]
+    u0, u1 = np.clip(edges[:-1] + shift, -a, a), np.clip(edges[1:] + shift, -a, a)
+
+    def prim(u):
+        return math.pi * (a * a * u - u ** 3 / 3)
+
+    return ml.Sinogram(prim(u1) - prim(u0), angles_deg=np.degrees(np.arctan2(W[:, 1], W[:, 0])),
+                       bin_edges=edges, view_vectors=W)
+
+
+#: voxels across the ball at half its value, against the closed form 2a / voxel: the edge
+#: blurs over a bin and a voxel (measured within 0.5 voxels)
+ACROSS_TOL_VOXELS = 2.0
+
+
+@pytest.mark.parametrize("centre", [(0.0, 0.0, 0.0), (300.0, -200.0, 100.0)])
+def test_the_default_cube_holds_a_ball_off_the_origin_at_the_size_its_bins_allow(centre):
+    """A ball of radius 50 (mm) from 400 views over the sphere: the default cube is the
+    bins' reach about the origin, |c| + a + half a bin, so it holds the ball wherever it is,
+    a·size/reach voxels across (closed form, at 64 voxels: 63.3 centred, 7.5 at |c| = 374:
+    centre a part before simulating, as ``Ladar.covering`` warns); and the figure's three
+    slices cut through the ball's centre, not the cube's."""
+    a, c, size = 50.0, np.array(centre), 64
+    sino = _shifted_ball_sinogram(a, c, n_views=400, n_bins=96)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MeshladarWarning)   # 400 views: under-sampled far out
+        vol = fbp3d(sino, size=size)
+    reach = float(np.max(np.abs(sino.bin_edges)))
+    assert vol.info["extent"] == reach
+    lo, hi = vol.x[0] - vol.spacing[0] / 2, vol.x[-1] + vol.spacing[0] / 2
+    assert lo == pytest.approx(-reach) and hi == pytest.approx(reach)
+    assert np.all(c - a >= lo) and np.all(c + a <= hi)                   # contains the ball
+    # its size in voxels along the line through its centre
+    line = vol.sample(np.stack([vol.x, np.full(size, c[1]), np.full(size, c[2])], -1))
+    across = np.count_nonzero(line > 0.5)
+    expected = 2 * a / vol.spacing[0]
+    assert expected == pytest.approx(63.3 if not c.any() else 7.5, abs=0.05)
+    assert abs(across - expected) <= ACROSS_TOL_VOXELS, (across, expected)
+    # the figure's slices: through the ball's centre, within a voxel
+    from meshladar.viz.quick import target_voxel
+    k = target_voxel(vol.values)
+    np.testing.assert_allclose([vol.z[k[0]], vol.y[k[1]], vol.x[k[2]]], c[::-1],
+                               atol=vol.spacing[0])
