@@ -8,7 +8,7 @@ of the image along the iso-range lines −p·w = r. A projector
 :class:`~meshladar.reconstruct.operators.LinearProjector`, the pixel-driven pair) is that
 operator A on a pixel grid with its exact adjoint Aᵀ, so ``A @ image`` is directly
 comparable with ``sino.values``. By default (``projector="auto"``) the solvers use the
-linear pair where the bins are uniform (16× faster at 256²) and Siddon's where they are not.
+linear pair where the bins are uniform (about 20× faster at 256²) and Siddon's where they are not.
 
 ``sirt`` solves min ‖W^½ (A x − b)‖ (Landweber with SIRT's row and column scaling, so each
 step is a weighted average that needs no step size), ``cgls`` the same least-squares
@@ -178,7 +178,7 @@ def sirt(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=50, x0=None, w
     projector : {"auto", "siddon", "linear"} or operator
         Siddon lines with exact pixel lengths (:class:`RangeProjector`, any bins), the
         pixel-driven linear-interpolation pair (:class:`LinearProjector`, uniform bins;
-        16× faster at 256², the same image error), or any operator with ``@``, ``.T`` and a
+        about 20× faster at 256², the same image error), or any operator with ``@``, ``.T`` and a
         ``grid`` equal to the image's (e.g.
         :class:`meshladar.reconstruct.operators.SurfaceProjector`). "auto" (default):
         "linear" where the bins are uniform, "siddon" where not
@@ -237,7 +237,7 @@ def sart(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=10, subsets=No
     relax = check_real("relax", relax, low=0.0, high=2.0, low_open=True, high_open=True)
     if not isinstance(projector, str):
         raise ParameterError("sart builds one projector per group of views: give projector "
-                             f"as one of {PROJECTORS}")
+                             f"as one of {('auto',) + PROJECTORS}")
     check_choice("projector", projector, ("auto",) + PROJECTORS)
     pr = _setup(sino, ImageGrid(size, extent, center),     # one projector per group below
                 _Start(x0, weights, mask, nonneg), rays_per_bin, None)
@@ -396,8 +396,10 @@ def tv_fista(sino, size=256, extent=1.0, *, center=(0.0, 0.0), tv=0.005, n_iter=
     ``tv`` sets λ relative to the image's scale: λ = tv · L · s with s the 99th percentile
     of |FBP image|, so each step smooths away jumps below about tv × s (the default 0.005:
     half a per cent of the image's level; on an exact disk sinogram at 10° view spacing
-    the error is then 0.092, below FBP's 0.104 at 1°). Other parameters as :func:`sirt` (default warm start from FBP). ``info["residuals"]`` holds the data term, ``info["objective"]`` the whole
-    objective per iteration (monotone only on average: FISTA is not a descent method).
+    the error is then 0.092, below FBP's 0.104 at 1°). Other parameters as :func:`sirt`
+    (default warm start from FBP). ``info["residuals"]`` holds the data term,
+    ``info["objective"]`` the whole objective per iteration (monotone only on average:
+    FISTA is not a descent method).
     """
     n_iter = check_count("n_iter", n_iter)
     tv = check_real("tv", tv, low=0.0)
