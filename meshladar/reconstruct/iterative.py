@@ -321,7 +321,8 @@ def glint_weights(sino, *, threshold=None, floor=0.0, max_share=0.1):
     """Per-bin weights that drop (or down-weight to ``floor``) the bins brighter than
     ``threshold`` × the sinogram's maximum (default the paper's clip level, 0.008): a
     glint's few bright bins then stop hiding the diffuse parts, without clipping the data
-    the other bins fit. For :func:`sirt`, :func:`cgls` and :func:`tv_fista`.
+    the other bins fit. For :func:`sirt`, :func:`cgls` and :func:`tv_fista` (their warm
+    start ``x0="fbp"`` leaves the dropped bins out too).
 
     A glint is a few bins: only when the bright bins are at most ``max_share`` of the bins
     that hold returns (above the noise floor) are they dropped; otherwise the scene does
