@@ -29,6 +29,7 @@ coatings must be known (``material``: one BRDF, or several with a label image).
 from __future__ import annotations
 
 import dataclasses
+import math
 import warnings
 from typing import NamedTuple
 
@@ -43,7 +44,33 @@ from .operators import SurfaceProjector
 from .surface import Surface, _segments, _subset, _uniform, estimate_surface, surface_weights
 
 __all__ = ["Surface", "estimate_surface", "surface_weights", "SurfaceProjector", "compensate",
-           "first_image", "SOLVERS"]
+           "first_image", "SOLVERS", "MAX_PIXEL_BINS", "needed_size"]
+
+#: The widest pixel, in range-bin widths, at which the compensated surface keeps its level
+#: and evenness. The surface is one pixel thick: around the b = 0.99 disk with the paper's
+#: 512 bins, at 256² (2.5 bins a pixel) it sits half a bin outside the true circle and its
+#: line density over ±2 bins is 12 % below ⟨h⟩ · 2πR and 8 % uneven (12° arcs); at 427²
+#: (1.5 bins) 2 % and 1.4 %, at 512² 0.2 % and 4.5 % (the same at 256 bins and 1024).
+MAX_PIXEL_BINS = 1.5
+
+
+def needed_size(sino, extent=1.0):
+    """The smallest image size whose pixels (2 ``extent`` / size) are at most
+    :data:`MAX_PIXEL_BINS` of the sinogram's bin width wide."""
+    width = float(np.mean(np.diff(sino.bin_edges)))
+    return math.ceil(2.0 * float(extent) / (MAX_PIXEL_BINS * width) - 1e-9)
+
+
+def _check_resolution(sino, size, extent):
+    """Warn when the pixels are wider than :data:`MAX_PIXEL_BINS` bins."""
+    need = needed_size(sino, extent)
+    if size < need:
+        width = float(np.mean(np.diff(sino.bin_edges)))
+        warnings.warn(f"compensate at size={size} (extent={float(extent):g}) makes pixels "
+                      f"{2.0 * float(extent) / size / width:.2f} range bins wide; the "
+                      f"compensated surface needs at most {MAX_PIXEL_BINS:g} "
+                      f"(below it comes out low and uneven): use size={need} or more",
+                      MeshladarWarning, stacklevel=3)
 
 
 def _backed(surface, H, sino, keep, share=0.5):
@@ -153,7 +180,9 @@ def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first
     material : BRDF or sequence of BRDFs
         The coatings (with ``labels`` when several).
     size, extent, center
-        The image grid.
+        The image grid; pixels at most :data:`MAX_PIXEL_BINS` (1.5) bins wide, or the
+        one-pixel-thick surface comes out low and uneven (warned; :func:`needed_size`:
+        427 for the paper's 512 bins at extent 1).
     first : Image, optional
         The first reconstruction on that grid (default FBP of the log radiance).
     labels : (size, size) int array, optional
@@ -201,6 +230,7 @@ def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first
     H = surface_weights(surface, sino.angles_deg, material, labels=labels,
                       radiometry=radiometry, blur_deg=blur_deg)
     surface, H = _seen(surface, H, sino)
+    _check_resolution(sino, size, extent)
     W = np.ones(sino.shape) if weights is None else finite_array("weights", weights)
     m = surface.mask.astype(float)
     settled = _settle(surface, sino, H, W, m, smooth)

@@ -244,3 +244,57 @@ def test_compensation_with_photon_noise():
     level, spread = _ring_stats(img)
     assert abs(level / (_mean_weight(m) * 2 * np.pi * R) - 1) < 2 * LEVEL_TOL
     assert spread < 2 * UNIFORMITY_TOL
+
+
+#: The compensated b = 0.99 disk with the paper's 512 bins, as the README states it: per
+#: image size, the line density over ±2 bins of the circle over ⟨h⟩ · 2πR, its spread
+#: (std / mean) over 12° arcs and the surface's mean radius less R in bins (measured at
+#: 256²: 0.880, 0.079, +0.48; 427²: 0.980, 0.014, 0.00; 512²: 1.002, 0.045, −0.13).
+STATED_BAND = {256: (0.88, 0.08, 0.5), 427: (0.98, 0.014, 0.0), 512: (1.0, 0.045, -0.13)}
+#: Tolerances on those: level and spread to the digits stated, the offset to a tenth of
+#: a bin.
+BAND_LEVEL_TOL, BAND_SPREAD_TOL, OFFSET_TOL = 0.006, 0.006, 0.1
+
+
+def _band_stats(image, bin_width):
+    """(the line density over ±2 bins of the circle, its mean × 2πR; its std / mean over
+    12° arcs), by bilinear samples: 720 around, 17 across; and the mean radius of the
+    ring band (|r − R| < 0.05) weighted by the image, less R, in bins."""
+    t = np.linspace(0.0, 2 * np.pi, 720, endpoint=False)
+    across = R + np.linspace(-2.0, 2.0, 17) * bin_width
+    pts = across[None, :, None] * np.stack([np.cos(t), np.sin(t)], 1)[:, None, :]
+    dens = image.sample(pts.reshape(-1, 2)).reshape(720, 17).mean(axis=1) * 4 * bin_width
+    arcs = dens.reshape(-1, 24).mean(axis=1)
+    X, Y = _grid_xy(image.size)
+    r = np.hypot(X, Y)
+    band = np.abs(r - R) < 0.05
+    v = image.values[band]
+    offset = (float(np.sum(v * r[band]) / np.sum(v)) - R) / bin_width
+    return float(dens.mean() * 2 * np.pi * R), float(arcs.std() / arcs.mean()), offset
+
+
+@pytest.mark.slow
+def test_compensation_warns_below_the_resolution_it_needs():
+    """With the paper's 512 bins, 256² makes pixels 2.5 bins wide: compensate warns, naming
+    the size given and the size needed (427: MAX_PIXEL_BINS = 1.5), and the surface is
+    indeed off there (half a bin out, low and uneven). At 427² and 512² it does not warn,
+    and the line density over ±2 bins holds ⟨h⟩ · 2πR and is even around the circle."""
+    from meshladar.errors import MeshladarWarning
+    from meshladar.reconstruct.compensation import MAX_PIXEL_BINS, needed_size
+
+    m = paper._diffuse(0.99)
+    sino = ml.simulate(Scene([Disk((0.0, 0.0), R, m)]), Ladar.paper())
+    bw = float(np.diff(sino.bin_edges)[0])
+    need = needed_size(sino)
+    assert need == math.ceil(2.0 / (MAX_PIXEL_BINS * bw)) == 427
+    expected = _mean_weight(m) * 2 * np.pi * R
+    for size, (level, spread, offset) in STATED_BAND.items():
+        if size < need:
+            with pytest.warns(MeshladarWarning, match=r"size=256 .*2\.50 range bins.*size=427"):
+                img = compensate(sino, m, size=size)
+        else:
+            img = compensate(sino, m, size=size)            # warnings are errors here
+        got = _band_stats(img, bw)
+        assert abs(got[0] / expected - level) < BAND_LEVEL_TOL, (size, got)
+        assert abs(got[1] - spread) < BAND_SPREAD_TOL, (size, got)
+        assert abs(got[2] - offset) < OFFSET_TOL, (size, got)
