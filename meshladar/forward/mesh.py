@@ -31,6 +31,7 @@ from ..sensor import check_radiometry
 from ..stream import MAX_JOBS_PER_CORE, THREADS_FROM, joined, run_chunks
 from ..weighing.record import Weighing
 from .job import mesh_job, plan_job, sensor_offset
+from .sampling import warn_unresolved_lobes
 from ..raytrace.grid import ray_grid
 from ..raytrace.views import range_offset
 from ..raytrace.views import refine_t
@@ -142,6 +143,8 @@ def _run(scene, ladar, options, streaming, weighing=None):
     plan = plan_trace(scene, ladar, **options)
     if weighing is not None:
         weighing.check(plan)                        # every rule, before the first ray
+        # a glint narrower than the rays resolve is missed without a word otherwise
+        warn_unresolved_lobes(scene, weighing.materials, plan, stacklevel=3)
     description = None
     if streaming.run_dir is not None:
         description = _job_description(plan, scene, ladar, weighing)
