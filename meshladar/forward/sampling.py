@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+import math
 import warnings
 from types import MappingProxyType
 from typing import NamedTuple
@@ -151,14 +152,20 @@ def unresolved_lobes(scene, materials, *, spacing, normals="smooth", mode="3d",
     out = []
     for (k, m), kappa in _turns(scene, normals, mode).items():
         w = widths[m] if m < len(widths) else None
-        if w is None or kappa <= 0 or 2.0 * w / (kappa * spacing) >= need:
+        if w is None or kappa <= 0 or 2.0 * w / (kappa * spacing) >= need * (1 - 1e-9):
             continue
-        good = 2.0 * w / (need * kappa)
+        good = _floor3(2.0 * w / (need * kappa))     # as printed, and at most δ*
         across = _diameter(scene) / good
         out.append(Unresolved(scene.parts[k].name, _label(materials[m]), float(w),
                               float(kappa * spacing), float(good), need,
                               float(across if mode == "slice" else across * across)))
     return out
+
+
+def _floor3(x):
+    """x rounded down to three significant digits (so the spacing printed meets δ*)."""
+    p = 10.0 ** (math.floor(math.log10(x)) - 2)
+    return math.floor(x / p * (1 + 1e-12)) * p
 
 
 def _diameter(scene):
