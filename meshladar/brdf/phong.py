@@ -81,7 +81,7 @@ class Phong(BRDF, builtin=True):
 
     def lobe_width(self):
         """θ where the monostatic lobe cos^n(2θ) falls to a quarter: arccos(4^(−1/n))/2
-        (≈ 0.83 sqrt(2/n) for large n); None without a lobe (ks = 0 or n = 0)."""
+        (≈ sqrt(ln 4 / 2n) = 0.83/√n for large n); None without a lobe (ks = 0 or n = 0)."""
         if self.ks == 0 or self.exponent == 0:
             return None
         return 0.5 * math.acos(4.0 ** (-1.0 / self.exponent))
