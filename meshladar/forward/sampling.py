@@ -48,7 +48,7 @@ _CURVED_SHARE = 0.05
 
 
 class Unresolved(NamedTuple):
-    """One part and coating whose lobe the run's rays (or flat facets) do not resolve."""
+    """One part and coating whose specular lobe the run's rays do not resolve."""
 
     part: str
     coating: str
