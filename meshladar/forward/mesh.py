@@ -285,7 +285,10 @@ def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-side
     the number of views and rays. An analytic scene is tessellated first (1024 segments
     per shape, see :meth:`Scene.tessellate`). The accuracy knob (``tol``, ``max_rays``) is
     :func:`meshladar.simulate`'s, which refines runs of this function
-    (:mod:`meshladar.forward.refine`).
+    (:mod:`meshladar.forward.refine`). Before the first ray, with smooth or exact normals,
+    it warns for each part whose coating's specular lobe the ray spacing cannot resolve
+    (fewer than 2 regular or 4 stratified rays across it), with the spacing that would
+    (:mod:`meshladar.forward.sampling`).
 
     Parameters
     ----------
