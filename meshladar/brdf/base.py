@@ -104,6 +104,17 @@ class BRDF:
         if builtin:
             _REGISTRY[cls.__name__] = cls
 
+    def lobe_width(self):
+        """The angular half-width, in radians of the monostatic incidence angle θ, of the
+        coating's specular (glint) lobe: about where the lobe falls to a quarter of its
+        peak at normal incidence (GGX's α, Sandford-Robertson's e, Phong's
+        arccos(4^(−1/n))/2). None for a coating without a specular lobe (Lambertian, a
+        diffuse-only Sandford-Robertson) and, by default, for a user's model, which may
+        define it. The mesh model compares it with the normal change between neighbouring
+        rays and warns when the rays cannot resolve the lobe
+        (:mod:`meshladar.forward.sampling`)."""
+        return None
+
     def projected(self, cos_theta, sin_theta):
         """F(θ; −θ)·cos θ in 1/sr for arrays cos θ ≥ 0 and sin θ = sqrt(1 − cos²θ) ≥ 0:
         every forward model passes unit pairs, (0, 1) where a direction is below the

@@ -74,3 +74,7 @@ class GGX(BRDF, builtin=True):
     @property
     def angular_scales(self):
         return (self.alpha, None)
+
+    def lobe_width(self):
+        """α: D falls to a quarter of its peak at sin θ = α/sqrt(1 − α²) ≈ α."""
+        return self.alpha

@@ -79,6 +79,13 @@ class Phong(BRDF, builtin=True):
         return np.where(visible, (self.kd / math.pi + self._lobe(cos_psi)) * np.maximum(cr, 0),
                         0.0)
 
+    def lobe_width(self):
+        """θ where the monostatic lobe cos^n(2θ) falls to a quarter: arccos(4^(−1/n))/2
+        (≈ sqrt(ln 4 / 2n) = 0.83/√n for large n); None without a lobe (ks = 0 or n = 0)."""
+        if self.ks == 0 or self.exponent == 0:
+            return None
+        return 0.5 * math.acos(4.0 ** (-1.0 / self.exponent))
+
     @property
     def angular_scales(self):
         # the monostatic lobe cos^n(2θ) falls to 1/e at 2θ ≈ sqrt(2/n)

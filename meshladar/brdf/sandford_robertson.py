@@ -373,6 +373,11 @@ class SandfordRobertson(BRDF, builtin=True):
                                  (2.0 * self.e if self.has_specular else None))
                      if x is not None], default=None))
 
+    def lobe_width(self):
+        """e, the glint lobe's roughness (a GGX lobe: a quarter of its peak at θ ≈ e); None
+        without the specular lobe."""
+        return self.e if self.has_specular else None
+
     def monostatic(self, theta, *, projected=False):
         """F(θ; −θ): the BRDF for a collocated transmitter and receiver, in 1/sr.
 

@@ -80,6 +80,18 @@ class Tabulated(BRDF, builtin=True):
         step = float(np.min(np.diff(np.deg2rad(self.theta_deg))))
         return (step, step)
 
+    def lobe_width(self):
+        """The angle where F, interpolated, first falls to a quarter of F(0) (a glint
+        measured at normal incidence); None where F(0) = 0 or F never falls that far
+        before 90° (a diffuse or grazing-bright table)."""
+        t = np.deg2rad(self.theta_deg)
+        f = self._weight / np.maximum(np.cos(t), 1e-300)            # F at each sample
+        below = np.flatnonzero(f[:-1] <= 0.25 * f[0])
+        if f[0] <= 0 or below.size == 0:
+            return None
+        k = int(below[0])                       # f[k - 1] > f[0]/4 >= f[k]
+        return float(np.interp(0.25 * f[0], [f[k], f[k - 1]], [t[k], t[k - 1]]))
+
     def describe(self) -> dict:
         return {"model": "Tabulated", "name": self.name, "theta_deg": self.theta_deg.tolist(),
                 "values": self.values.tolist(), "projected_values": self.projected_values}

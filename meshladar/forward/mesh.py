@@ -31,6 +31,7 @@ from ..sensor import check_radiometry
 from ..stream import MAX_JOBS_PER_CORE, THREADS_FROM, joined, run_chunks
 from ..weighing.record import Weighing
 from .job import mesh_job, plan_job, sensor_offset
+from .sampling import warn_unresolved_lobes
 from ..raytrace.grid import ray_grid
 from ..raytrace.views import range_offset
 from ..raytrace.views import refine_t
@@ -142,6 +143,10 @@ def _run(scene, ladar, options, streaming, weighing=None):
     plan = plan_trace(scene, ladar, **options)
     if weighing is not None:
         weighing.check(plan)                        # every rule, before the first ray
+        # a glint narrower than the rays resolve is missed without a word otherwise
+        warn_unresolved_lobes(scene, weighing.materials, spacing=plan.spacing,
+                              normals=plan.normals, mode=plan.mode, sampling=plan.sampling,
+                              stacklevel=3)
     description = None
     if streaming.run_dir is not None:
         description = _job_description(plan, scene, ladar, weighing)
@@ -280,7 +285,10 @@ def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-side
     the number of views and rays. An analytic scene is tessellated first (1024 segments
     per shape, see :meth:`Scene.tessellate`). The accuracy knob (``tol``, ``max_rays``) is
     :func:`meshladar.simulate`'s, which refines runs of this function
-    (:mod:`meshladar.forward.refine`).
+    (:mod:`meshladar.forward.refine`). Before the first ray, with smooth or exact normals,
+    it warns for each part whose coating's specular lobe the ray spacing cannot resolve
+    (fewer than 2 regular or 4 stratified rays across it), with the spacing that would
+    (:mod:`meshladar.forward.sampling`).
 
     Parameters
     ----------
