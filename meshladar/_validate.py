@@ -96,14 +96,22 @@ def check_size(name: str, count, bytes_each: int, what: str, reduce: str) -> Non
 
 
 def check_seed(name: str, value):
-    """Return ``value`` as an int (or None, meaning fresh entropy) after checking that it is a
-    non-negative integer (numpy's generators take any size): the one validator behind every
-    ``seed=``."""
+    """Return ``value`` as an int, a list of ints (numpy's entropy sequences, as
+    ``default_rng([seed, chunk])``) or None (fresh entropy), after checking that it is a
+    non-negative integer or a non-empty sequence of them (numpy takes any size): the one
+    validator behind every ``seed=``."""
     if value is None:
         return None
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
+    if isinstance(value, (list, tuple, np.ndarray)) and len(value) and all(
+            _seed_int(v) for v in np.asarray(value, dtype=object).ravel()):
+        return [int(v) for v in np.asarray(value, dtype=object).ravel()]
+    if not _seed_int(value):
         raise ParameterError(f"{name} must be None or a non-negative integer; got {value!r}")
     return int(value)
+
+
+def _seed_int(v):
+    return not isinstance(v, (bool, np.bool_)) and isinstance(v, (int, np.integer)) and v >= 0
 
 
 def check_name(value) -> None:

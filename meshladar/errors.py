@@ -14,6 +14,7 @@ __all__ = [
     "PhantomSpecError",
     "ModelError",
     "MeshladarWarning",
+    "LobeSamplingWarning",
     "EnergyConservationWarning",
 ]
 
@@ -45,6 +46,11 @@ class ModelError(MeshladarError, NotImplementedError):
 
 class MeshladarWarning(UserWarning):
     """Base class of meshladar's warnings: a soft precondition is not met."""
+
+
+class LobeSamplingWarning(MeshladarWarning):
+    """The rays are too sparse for a coating's specular lobe on a curved part: its glint is
+    undersampled (the warning names the ray spacing that resolves it)."""
 
 
 class EnergyConservationWarning(MeshladarWarning):

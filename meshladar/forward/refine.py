@@ -17,6 +17,7 @@ import numpy as np
 from .._validate import check_real
 from ..errors import MeshladarWarning, ParameterError
 from .mesh import simulate_mesh
+from .sampling import checked_by_caller, warn_unresolved_lobes
 from ..sinogram import Sinogram
 from ..precision import TINY
 
@@ -75,8 +76,9 @@ def simulate_tol(scene, ladar, tol, normals, footprint, max_rays, kwargs):
                 break
         mesh = scene.tessellate(n) if tessellate else scene
         t0 = time.perf_counter()
-        sino = simulate_mesh(mesh, ladar, normals=normals, rays_per_bin=r,
-                             footprint=footprint, **kwargs)
+        with checked_by_caller():          # coarse runs undersample glints on purpose
+            sino = simulate_mesh(mesh, ladar, normals=normals, rays_per_bin=r,
+                                 footprint=footprint, **kwargs)
         spent += sino.info["rays"]
         runs.append({"segments": n if tessellate else None, "rays_per_bin": r,
                      "rays": sino.info["rays"], "seconds": time.perf_counter() - t0})
@@ -87,7 +89,7 @@ def simulate_tol(scene, ladar, tol, normals, footprint, max_rays, kwargs):
             if best is not None and est >= best[0]:
                 why = _stalled(est, best[0], footprint, normals)
                 break
-            best = (est, sino, len(runs) - 1)
+            best = (est, sino, len(runs) - 1, mesh)
             if est <= tol:
                 break
         if tessellate:
@@ -96,13 +98,9 @@ def simulate_tol(scene, ladar, tol, normals, footprint, max_rays, kwargs):
     else:
         why = f"{_TOL_STEPS} refinements were not enough; loosen tol"
     if best is None:                       # a single run: nothing to estimate from
-        best = (float("inf"), sino, len(runs) - 1)
-    est, sino, k = best
-    if why is not None:
-        warnings.warn(f"tol={tol:g} not reached: {why}; returning the run with estimated "
-                      f"error {est:.2g} ({runs[k]['rays_per_bin']:g} rays per bin"
-                      + (f", {runs[k]['segments']} segments" if tessellate else "") + ")",
-                      MeshladarWarning, stacklevel=4)
+        best = (float("inf"), sino, len(runs) - 1, mesh)
+    est, sino, k, _ = best
+    _warn_kept(best, runs, why, tol, normals)
     info = dict(sino.info, tol=tol, error_estimate=est, convergence_order=order,
                 max_rays=max_rays, rays_total=spent, stopped=why or "tol reached",
                 chosen={"segments": runs[k]["segments"],
@@ -112,6 +110,21 @@ def simulate_tol(scene, ladar, tol, normals, footprint, max_rays, kwargs):
     return Sinogram(sino.values, angles_deg=sino.angles_deg, bin_edges=sino.bin_edges,
                     model="mesh", info=info,
                     view_vectors=None if ladar.planar else ladar.view_vectors)
+
+
+def _warn_kept(best, runs, why, tol, normals):
+    """The warnings about the run kept: tol not reached (why), and a glint its rays leave
+    undersampled (the coarse runs before it are not checked)."""
+    est, sino, k, mesh = best
+    warn_unresolved_lobes(mesh, mesh.materials, spacing=sino.info["ray_spacing"],
+                          normals=normals, mode=sino.info["mode"],
+                          sampling=sino.info.get("sampling") or "stratified", stacklevel=4)
+    if why is not None:
+        segments = runs[k]["segments"]
+        warnings.warn(f"tol={tol:g} not reached: {why}; returning the run with estimated "
+                      f"error {est:.2g} ({runs[k]['rays_per_bin']:g} rays per bin"
+                      + (f", {segments} segments" if segments is not None else "") + ")",
+                      MeshladarWarning, stacklevel=5)
 
 
 def _estimate(last, order):

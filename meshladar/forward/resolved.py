@@ -34,6 +34,7 @@ from ..sensor import check_radiometry
 from ..stream import joined
 from ..weighing.record import Weighing
 from .mesh import Streaming, run_plan
+from .sampling import warn_unresolved_lobes
 
 __all__ = ["COORDINATES", "Motion", "Returns", "resolve"]
 
@@ -114,6 +115,9 @@ def resolve(scene, ladar, axes, *, motion=None, radiometry="paper", sensor=None,
                    seed=seed, backend=backend, sensor=sensor)
     plan = plan_trace(scene, ladar, **options)
     weighing.check(plan)                            # every rule, before the first ray
+    warn_unresolved_lobes(scene, weighing.materials, spacing=plan.spacing,
+                          normals=plan.normals, mode=plan.mode, sampling=plan.sampling,
+                          stacklevel=2)
     description = None
     if run_dir is not None:
         description = _description(plan, scene, ladar, weighing)

@@ -27,7 +27,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..errors import MeshladarWarning
+from ..errors import LobeSamplingWarning
 from ..raytrace.embree import geometry
 from ..raytrace.grid import MAX_RAYS_PER_VIEW
 
@@ -188,14 +188,14 @@ def _label(m):
 
 def warn_unresolved_lobes(scene, materials, *, spacing, normals, mode, sampling,
                           stacklevel=2):
-    """One :class:`~meshladar.errors.MeshladarWarning` per part and coating that
+    """One :class:`~meshladar.errors.LobeSamplingWarning` per part and coating that
     :func:`unresolved_lobes` finds, naming the lobe width, the normal change per ray and
     the spacing that resolves it; nothing inside :func:`checked_by_caller`."""
     if _CALLER_CHECKS.get():
         return
     for u in unresolved_lobes(scene, materials, spacing=spacing, normals=normals, mode=mode,
                               sampling=sampling):
-        warnings.warn(_message(u, spacing), MeshladarWarning, stacklevel=stacklevel + 1)
+        warnings.warn(_message(u, spacing), LobeSamplingWarning, stacklevel=stacklevel + 1)
 
 
 @contextlib.contextmanager

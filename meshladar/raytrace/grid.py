@@ -185,6 +185,8 @@ def _sampling(mode, sampling, seed):
         return sampling, None
     if seed is None:
         return sampling, 0
+    if isinstance(seed, (list, tuple, np.ndarray)):     # the rays' seed is one integer
+        raise ParameterError(f"seed must be None or a non-negative integer; got {seed!r}")
     return sampling, check_seed("seed", seed)
 
 

@@ -29,7 +29,7 @@ from ..errors import ParameterError
 from ..images import Image
 from ..forward.siddon import PixelGrid
 from ..stream import Progress
-from .fbp2d import PAPER_CLIP, noise_floor, quiet_fbp
+from .fbp2d import PAPER_CLIP, bins_reach, noise_floor, quiet_fbp
 from .operators import PROJECTORS, LinearProjector, RangeProjector, build, projector_name
 
 __all__ = ["RangeProjector", "LinearProjector", "sirt", "sart", "cgls", "tv_fista",
@@ -139,6 +139,13 @@ class _Progress:
             self.bar.close()
 
 
+def default_extent(sino, extent):
+    """``extent``, or when None the bins' reach (:func:`~meshladar.reconstruct.fbp2d.
+    bins_reach`), the default every reconstruction shares."""
+    check_sinogram("sino", sino)
+    return bins_reach(sino) if extent is None else extent
+
+
 def _image(x, extent, center, info):
     return Image(x, extent, tuple(float(c) for c in center), info=info)
 
@@ -147,7 +154,7 @@ def _norm(r, W):
     return float(np.sqrt(np.sum(W * r * r)))
 
 
-def sirt(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=50, x0=None, weights=None,
+def sirt(sino, size=256, extent=None, *, center=(0.0, 0.0), n_iter=50, x0=None, weights=None,
          mask=None, nonneg=True, tol=None, rays_per_bin=2, projector="auto",
          progress=False):
     """SIRT: x ← x + C Aᵀ W R (b − A x), R and C the inverse row and column sums of A
@@ -192,6 +199,7 @@ def sirt(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=50, x0=None, w
         ``info``: method, iterations, ``residuals`` (weighted ‖A x − b‖ per iteration,
         relative to ‖b‖), stopped ("n_iter" or "tol"), projector (the pair used).
     """
+    extent = default_extent(sino, extent)
     n_iter = check_count("n_iter", n_iter)
     tol = None if tol is None else check_real("tol", tol, low=0.0, low_open=True)
     pr = _setup(sino, ImageGrid(size, extent, center),
@@ -220,7 +228,7 @@ def sirt(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=50, x0=None, w
     return _image(x, extent, center, info)
 
 
-def sart(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=10, subsets=None,
+def sart(sino, size=256, extent=None, *, center=(0.0, 0.0), n_iter=10, subsets=None,
          relax=1.0, x0=None, weights=None, mask=None, nonneg=True, tol=None, rays_per_bin=2,
          projector="auto", progress=False):
     """SART in ordered subsets (OS-SART, as ASTRA's and TIGRE's): each iteration sweeps the
@@ -232,6 +240,7 @@ def sart(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=10, subsets=No
     parameters and ``info`` as :func:`sirt`; ``residuals`` are gathered over each sweep
     (each group's residual just before its step, as ordered-subset methods report it, at
     no extra projection)."""
+    extent = default_extent(sino, extent)
     n_iter = check_count("n_iter", n_iter)
     tol = None if tol is None else check_real("tol", tol, low=0.0, low_open=True)
     relax = check_real("relax", relax, low=0.0, high=2.0, low_open=True, high_open=True)
@@ -280,11 +289,12 @@ def sart(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=10, subsets=No
     return _image(x, extent, center, info)
 
 
-def cgls(sino, size=256, extent=1.0, *, center=(0.0, 0.0), n_iter=30, x0=None, weights=None,
+def cgls(sino, size=256, extent=None, *, center=(0.0, 0.0), n_iter=30, x0=None, weights=None,
          mask=None, tol=None, rays_per_bin=2, projector="auto", progress=False):
     """CGLS: conjugate gradients on the normal equations of min ‖W^½ (A x − b)‖ over the
     masked pixels (no non-negativity: CG's residual then never grows). Parameters as
     :func:`sirt`; ``info["residuals"]`` is non-increasing."""
+    extent = default_extent(sino, extent)
     n_iter = check_count("n_iter", n_iter)
     tol = None if tol is None else check_real("tol", tol, low=0.0, low_open=True)
     pr = _setup(sino, ImageGrid(size, extent, center),
@@ -386,7 +396,7 @@ def _tv_prox(z, mu, nonneg, mask, n_inner=20, dual=None):
     return project(z + mu * _div(px, py)), (px, py)
 
 
-def tv_fista(sino, size=256, extent=1.0, *, center=(0.0, 0.0), tv=0.005, n_iter=100,
+def tv_fista(sino, size=256, extent=None, *, center=(0.0, 0.0), tv=0.005, n_iter=100,
              x0="fbp", weights=None, mask=None, nonneg=True, tol=None, rays_per_bin=2,
              projector="auto", progress=False):
     """Total-variation regularised reconstruction by FISTA:
@@ -402,6 +412,7 @@ def tv_fista(sino, size=256, extent=1.0, *, center=(0.0, 0.0), tv=0.005, n_iter=
     ``info["objective"]`` the whole objective per iteration (monotone only on average:
     FISTA is not a descent method).
     """
+    extent = default_extent(sino, extent)
     n_iter = check_count("n_iter", n_iter)
     tv = check_real("tv", tv, low=0.0)
     tol = None if tol is None else check_real("tol", tol, low=0.0, low_open=True)

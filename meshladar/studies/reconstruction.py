@@ -63,11 +63,11 @@ def _reconstruct(method, sino, size, n_iter, scene=None):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MeshladarWarning)        # FBP's few-views warning
         if method == "fbp":
-            return fbp(sino, size=size)
+            return fbp(sino, size=size, extent=1.0)
         if method == "fbp_log":
-            return fbp(log_radiance(sino), size=size)
+            return fbp(log_radiance(sino), size=size, extent=1.0)
         if method == "fbp_clip":
-            return fbp(clip_radiance(sino), size=size)
+            return fbp(clip_radiance(sino), size=size, extent=1.0)
     if method == "compensated":
         return _compensated(sino, size, n_iter, scene)
     return _iterate(method, sino, size, n_iter)
@@ -112,7 +112,7 @@ def _ideal(scene, ladar, size):
     total = None
     for shape in scene.shapes:
         lone = Scene([type(shape)(**{**_fields(shape), "material": Lambertian(albedo=1.0)})])
-        img = fbp(simulate(lone, ladar), size=size).values
+        img = fbp(simulate(lone, ladar), size=size, extent=1.0).values
         total = img if total is None else total + img
     return total
 

@@ -26,6 +26,7 @@ def _pair(m):
     return ml.phantoms.scene("disk_pair", large=m, small=ALUMINUM)
 
 
+@pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # coarse on purpose
 @pytest.mark.filterwarnings("ignore:.* views are too few")   # few views on purpose: speed
 @pytest.mark.parametrize("name", list(EXTREME_COATINGS))
 def test_extreme_coatings_in_every_model(name):
@@ -144,6 +145,7 @@ def test_extreme_bin_counts(n_bins):
     assert np.all(np.isfinite(image.values))
 
 
+@pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # coarse on purpose
 @pytest.mark.parametrize("n_views", [1, pytest.param(3600, marks=pytest.mark.slow)])
 def test_extreme_view_counts(n_views):
     scene = _pair(ALUMINUM)

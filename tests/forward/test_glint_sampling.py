@@ -16,7 +16,7 @@ import trimesh
 from scipy.integrate import quad
 
 import meshladar as ml
-from meshladar.errors import MeshladarWarning
+from meshladar.errors import LobeSamplingWarning
 from meshladar.forward.sampling import RAYS_ACROSS_LOBE, checked_by_caller, unresolved_lobes
 from meshladar.materials import ALUMINUM, DARK_GRAY
 
@@ -40,7 +40,7 @@ def closed_form(m, theta_max=math.pi / 2):
 
 def recommended(record):
     """The spacing the (one) lobe warning recommends, and its message."""
-    msgs = [str(r.message) for r in record if issubclass(r.category, MeshladarWarning)]
+    msgs = [str(r.message) for r in record if issubclass(r.category, LobeSamplingWarning)]
     assert len(msgs) == 1, msgs
     return float(re.search(r"ray_spacing=([0-9.e+-]+) puts", msgs[0]).group(1)), msgs[0]
 
@@ -112,7 +112,7 @@ def sphere_ggx():
 
 def test_a_narrow_glint_at_the_default_spacing_warns_and_is_missed(sphere_ggx):
     ladar = ml.Ladar.covering(sphere_ggx, n_bins=16, angles_deg=[0.0])
-    with pytest.warns(MeshladarWarning) as record:
+    with pytest.warns(LobeSamplingWarning) as record:
         sino = ml.simulate(sphere_ggx, ladar, model="mesh", normals="smooth")
     spacing, msg = recommended(record)
     s = sino.info["ray_spacing"]
@@ -141,7 +141,7 @@ def test_the_recommended_spacing_resolves_a_narrow_ggx_glint():
     ladar = ml.Ladar(None, np.linspace(-1.01, -0.99, 9), view_vectors=[[0.0, 0.0, 1.0]])
     exact = closed_form(m, 40e-4)
     coarse = 4 * scene.parts[0].vertices[:, 0].max() / 40           # 20 rays across the cap
-    with pytest.warns(MeshladarWarning) as record:
+    with pytest.warns(LobeSamplingWarning) as record:
         ml.simulate(scene, ladar, model="mesh", normals="exact", ray_spacing=coarse)
     spacing, msg = recommended(record)
     assert "part 'cap'" in msg and spacing == pytest.approx(5e-5, rel=3e-3)
@@ -158,7 +158,7 @@ def test_the_recommended_spacing_resolves_aluminium_on_a_sphere():
                                 [ALUMINUM])
     views = np.array([[1.0, 0.0, 0.0], [0.3, -0.5, 0.8]])
     ladar = ml.Ladar.covering(scene, n_bins=8, view_vectors=views)
-    with pytest.warns(MeshladarWarning) as record:
+    with pytest.warns(LobeSamplingWarning) as record:
         default = ml.simulate(scene, ladar, model="mesh", normals="exact")
     spacing, msg = recommended(record)
     assert "aluminum is 0.007 rad wide" in msg
@@ -204,7 +204,7 @@ def test_a_caller_that_checks_its_own_run_silences_the_coarse_ones(sphere_ggx):
         warnings.simplefilter("error")
         with checked_by_caller():
             ml.simulate(sphere_ggx, ladar, model="mesh", normals="smooth")
-    with pytest.warns(MeshladarWarning, match="specular lobe"):      # and only inside it
+    with pytest.warns(LobeSamplingWarning, match="specular lobe"):      # and only inside it
         ml.simulate(sphere_ggx, ladar, model="mesh", normals="smooth")
 
 
@@ -232,7 +232,7 @@ def test_the_criterion_against_the_analytic_model_on_a_regular_row():
     def rms(rays_across):
         spacing = 2 * 0.007 * 0.4 / rays_across
         with warnings.catch_warnings():
-            warnings.simplefilter("ignore", MeshladarWarning)
+            warnings.simplefilter("ignore", LobeSamplingWarning)
             got = ml.simulate(mesh, ladar, model="mesh", normals="exact", ray_spacing=spacing,
                               sampling="regular").total()
         return float(np.sqrt(np.mean((got / exact - 1) ** 2)))

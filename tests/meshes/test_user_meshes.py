@@ -127,7 +127,8 @@ def test_default_bins_cover_the_ranges_the_target_spans():
     shift = trimesh.transformations.translation_matrix([1000.0, 0.0, 0.0])
     scene = ml.Scene.from_mesh(box, LAMBERT, transform=shift)
     angles = [10.0, 20.0, 40.0]
-    ladar = ml.Ladar.covering(scene, n_bins=512, angles_deg=angles)
+    with pytest.warns(ml.errors.MeshladarWarning, match="far from the origin"):
+        ladar = ml.Ladar.covering(scene, n_bins=512, angles_deg=angles)
     # the box's corners' ranges −p·w over the three views: the bins reach them plus half a
     # bin at each end, and no further
     corners = np.array(trimesh.bounds.corners(scene.bounds()))
@@ -226,7 +227,8 @@ def _fake_runs(monkeypatch, sequence):
         calls.append(kwargs["rays_per_bin"])
         vals = np.full((ladar.n_views, ladar.n_bins), sequence[k])
         return ml.Sinogram(vals, angles_deg=ladar.angles_deg, bin_edges=ladar.bin_edges,
-                           model="mesh", info={"mode": "3d", "rays": 1000 * 4**k})
+                           model="mesh", info={"mode": "3d", "rays": 1000 * 4**k,
+                                               "ray_spacing": 0.1 / 2**k})
 
     monkeypatch.setattr(refine, "simulate_mesh", fake)
     return calls

@@ -203,6 +203,7 @@ def test_any_coating_takes_the_fused_path_with_the_general_paths_numbers(backend
                                    atol=SAME_HITS_RTOL * general.values.max())
 
 
+@pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # coarse on purpose
 @pytest.mark.parametrize("back_faces", ["two-sided", "ignore"])
 def test_smooth_normals_take_a_compiled_loop_with_the_general_paths_numbers(back_faces):
     # smooth normals with SR coatings are weighed and binned in one compiled loop from the
@@ -222,6 +223,7 @@ def test_smooth_normals_take_a_compiled_loop_with_the_general_paths_numbers(back
                                    atol=SAME_HITS_RTOL * general.values.max())
 
 
+@pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # coarse on purpose
 @pytest.mark.parametrize("mode, normals", [("3d", "flat"), ("slice", "flat"),
                                            ("3d", "smooth")])
 def test_footprints_take_the_fused_loop_with_the_general_paths_numbers(mode, normals,

@@ -102,6 +102,7 @@ def test_lambertian_sphere_power_is_the_textbook_square_law():
         assert err < SPHERE_TOL, (radiometry, err)
 
 
+@pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # coarse on purpose
 @pytest.mark.parametrize("normals", ["flat", "smooth"])
 @pytest.mark.parametrize("backend", ["packets", "embreex"])
 @pytest.mark.parametrize("coating", [ALUMINUM, ml.brdf.GGX(alpha=0.3)],
@@ -342,6 +343,7 @@ def test_photoelectrons_of_a_small_spot_on_a_lambertian_plate():
         ml.simulate(scene, ladar, model="mesh", sensor=hazy, ray_spacing=0.001)
 
 
+@pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # coarse on purpose
 @pytest.mark.parametrize("sensor", [
     ml.sensor.Sensor(standoff=5.0),
     ml.sensor.Sensor(standoff=8.0, aim=(0.1, 0.2, 0.0), extinction=0.01,
