@@ -17,8 +17,9 @@ modules load when imported.
 from __future__ import annotations
 
 from ..images import Image
-from .fbp2d import (FILTERS, INTERPOLATIONS, LOG_FLOOR, PAPER_CLIP, clip_radiance, fbp,
-                    fourier_filter, log_radiance, noise_floor, quiet_fbp, resample_uniform)
+from .fbp2d import (FILTERS, INTERPOLATIONS, LOG_FLOOR, PAPER_CLIP, bins_reach, clip_radiance,
+                    default_extent, fbp, fourier_filter, log_radiance, noise_floor, quiet_fbp,
+                    resample_uniform)
 
-__all__ = ["Image", "fbp", "fourier_filter", "log_radiance", "clip_radiance", "resample_uniform",
+__all__ = ["Image", "fbp", "bins_reach", "default_extent", "fourier_filter", "log_radiance", "clip_radiance", "resample_uniform",
            "noise_floor", "quiet_fbp", "FILTERS", "INTERPOLATIONS", "LOG_FLOOR", "PAPER_CLIP"]

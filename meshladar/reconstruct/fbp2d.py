@@ -41,7 +41,7 @@ from ..precision import UNIFORM_RTOL as _UNIFORM_RTOL
 from ..sinogram import Sinogram
 from ._kernels import backproject
 
-__all__ = ["Image", "fbp", "bins_reach", "fourier_filter", "log_radiance", "clip_radiance",
+__all__ = ["Image", "fbp", "bins_reach", "default_extent", "fourier_filter", "log_radiance", "clip_radiance",
            "resample_uniform", "noise_floor", "quiet_fbp", "FILTERS", "INTERPOLATIONS",
            "LOG_FLOOR", "PAPER_CLIP"]
 
@@ -144,6 +144,13 @@ def bins_across(sinogram) -> int:
     first = np.argmax(v[rows], axis=1)
     last = v.shape[1] - 1 - np.argmax(v[rows][:, ::-1], axis=1)
     return int(np.max(last - first + 1))
+
+
+def default_extent(sino, extent):
+    """``extent``, or when None the bins' reach (:func:`bins_reach`): the one default of
+    every reconstruction (FBP, the iterative solvers, the command line)."""
+    check_sinogram("sino", sino)
+    return bins_reach(sino) if extent is None else extent
 
 
 def bins_reach(sinogram) -> float:

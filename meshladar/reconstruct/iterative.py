@@ -29,7 +29,7 @@ from ..errors import ParameterError
 from ..images import Image
 from ..forward.siddon import PixelGrid
 from ..stream import Progress
-from .fbp2d import PAPER_CLIP, bins_reach, noise_floor, quiet_fbp
+from .fbp2d import PAPER_CLIP, default_extent, noise_floor, quiet_fbp
 from .operators import PROJECTORS, LinearProjector, RangeProjector, build, projector_name
 
 __all__ = ["RangeProjector", "LinearProjector", "sirt", "sart", "cgls", "tv_fista",
@@ -137,13 +137,6 @@ class _Progress:
     def close(self):
         if self.bar is not None:
             self.bar.close()
-
-
-def default_extent(sino, extent):
-    """``extent``, or when None the bins' reach (:func:`~meshladar.reconstruct.fbp2d.
-    bins_reach`), the default every reconstruction shares."""
-    check_sinogram("sino", sino)
-    return bins_reach(sino) if extent is None else extent
 
 
 def _image(x, extent, center, info):
