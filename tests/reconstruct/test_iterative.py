@@ -370,3 +370,18 @@ def test_sart_is_sirt_in_one_group_and_faster_in_many():
         sart(full, size=SIZE, subsets=361)
     with pytest.raises(ParameterError, match="relax"):
         sart(full, size=SIZE, relax=2.0)
+
+
+@pytest.mark.filterwarnings("ignore:.* views are too few")      # few views on purpose: speed
+def test_every_reconstruction_shares_the_default_frame():
+    """One default (issue 28): FBP, the iterative solvers and the command line all frame the
+    bins' reach about the origin (0.8 for the paper's bins)."""
+    from meshladar.reconstruct.iterative import cgls, sart, sirt, tv_fista
+
+    scene = ml.Scene([ml.Disk((0.0, 0.0), 0.6, ml.materials.DARK_GRAY)])
+    sino = ml.simulate(scene, ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 30.0)))
+    reach = max(abs(sino.bin_edges[0]), abs(sino.bin_edges[-1]))
+    assert reach == pytest.approx(0.8, rel=1e-12)
+    extents = [ml.fbp(sino, 16).extent] + [f(sino, 16, n_iter=1).extent
+                                            for f in (sirt, sart, cgls, tv_fista)]
+    assert extents == [pytest.approx(reach, rel=1e-15)] * 5
