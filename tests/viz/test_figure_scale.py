@@ -8,11 +8,12 @@ AxesImage's data and norm. The ring is computed here from the phantoms' TOML spe
 a ring pixel is one whose centre lies within one range bin of a true boundary.
 
 Measured (512², ``python tests/viz/test_figure_scale.py OUTDIR/paper_result.npz`` prints
-the table): at most 0.13 % of any panel's ring pixels (0.32 % of its boundary points,
-by each one's brightest pixel) sit at the scale's top (with the former top, the image's
-99.9th percentile of |value|: up to 32 % of a shape's ring pixels and 61 % of its points); the median ring pixel of every shape is 0.13-0.64 of
-the top (drawn at 0.86-0.98 of the norm's 0-1 range, 0.5 being zero), except the gray disk
-beside aluminium in Fig. 10, whose ring median is within 0.01 of zero: the figure's point.
+the table): at most 0.13 % of any shape's ring pixels (0.32 % of its boundary points, by
+each one's brightest pixel) sit at the scale's top (with the former top, the image's 99.9th
+percentile of |value|: up to 32 % of the pixels and 61 % of the points); the median ring
+pixel of every shape is 0.13-0.64 of the top (drawn at 0.86-0.98 of the norm's 0-1 range,
+0.5 being zero), except the gray disk beside aluminium in Fig. 10, whose ring median is
+within 0.01 of zero: the figure's point.
 """
 
 from __future__ import annotations
@@ -188,6 +189,47 @@ def test_every_ring_still_reads(drawn):
         else:
             assert median >= LEAST_MEDIAN, (number, key, name, median)
             assert colour >= LEAST_COLOUR, (number, key, name, colour)
+
+
+def _former_top(values):
+    """The former scale's top: the image's 99.9th percentile of |value|."""
+    return float(np.percentile(np.abs(values), 99.9))
+
+
+@pytest.mark.slow
+def test_the_measured_numbers_the_texts_state(drawn):
+    """The numbers this module's docstring and the README state, to their rounding."""
+    rows = drawn[3]
+    shown = [r for r in rows if not (r[0] == 10 and r[5] < LEAST_MEDIAN)]
+    assert len(shown) == len(rows) - 2                   # only Fig. 10's two gray disks
+    assert max(r[3] for r in rows) < 0.0014                          # 0.13 % of pixels
+    assert max(r[4] for r in rows) < 0.0033                          # 0.32 % of points
+    medians = [r[5] for r in shown]
+    assert 0.125 <= min(medians) < 0.135 and 0.625 <= max(medians) < 0.645    # 0.13-0.64
+    colours = [r[6] for r in shown]
+    assert 0.855 <= min(colours) < 0.865 and 0.975 <= max(colours) < 0.985   # 0.86-0.98
+    assert all(abs(r[5]) < 0.01 for r in rows if r not in shown)     # within 0.01 of 0
+
+
+@pytest.mark.slow
+def test_a_percentile_top_clips_the_rings(drawn):
+    """The check can fail: on the former scale (top at the 99.9th percentile of |value|),
+    up to 32 % of a shape's ring pixels and 61 % of its boundary points saturate, and each
+    ring is under 1 % of the image, which is why a percentile top clips it."""
+    arrays, meta, shown, _ = drawn
+    specs = _specs()
+    pixels, points = [], []
+    for _, key, im in shown:
+        values = np.asarray(im.get_array(), dtype=float)
+        top = _former_top(values)
+        shapes, width = rings(specs[_phantom(key)], values.shape[0], meta["extent"])
+        for mask, pts in shapes.values():
+            assert mask.mean() < 0.01
+            pixels.append(float(np.mean(np.abs(values[mask]) >= top)))
+            points.append(_brightest_saturated(values, mask, pts, width, meta["extent"],
+                                               top))
+    assert max(pixels) > MOST_SATURATED and max(points) > MOST_SATURATED
+    assert 0.31 <= max(pixels) < 0.325 and 0.60 <= max(points) < 0.615
 
 
 if __name__ == "__main__":          # the measured table, from a saved paper result
