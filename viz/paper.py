@@ -7,13 +7,13 @@ Figures only load results, so restyling never means simulating again::
     paths = paper.draw("figures/paper_result.npz", "figures/")   # redraw only
 
 Reconstructions are signed, so images use a diverging map symmetric about zero up to
-±(largest |value| in the image): no pixel is saturated, so the bright surface ring keeps its
-shape (a percentile top, however high, clips the ring: at 512² the 99.9th percentile left
-13-22 % of the pixels within one range bin of the boundary at the top colour, since the ring
-is under 1 % of the image). The ring's best-centred pixels reach the top; the rest of it
-(pixels the boundary crosses off-centre) read on a symmetric-log scale that stays linear
-within the 99th percentile of |value| inside the shapes (the interior and background
-artifacts each figure is about) and is logarithmic beyond.
+±(largest |value| in the image): no pixel is saturated, so the bright surface ring keeps
+its shape (a percentile top clips the ring, which is under 1 % of the image: at 512² the
+99.9th percentile left up to 32 % of a shape's pixels within one range bin of its boundary
+at the top colour; tests/viz/test_figure_scale.py). The ring's best-centred pixels reach
+the top; the rest of it (pixels the boundary crosses off-centre) read on a symmetric-log
+scale that stays linear within the 99th percentile of |value| inside the shapes (the
+interior and background artifacts each figure is about) and is logarithmic beyond.
 Outside the shapes (beyond 8 % of their size) a white veil fades FBP's streaks, which
 are real but are not what the figures are about. Centre slices sit beside every
 reconstruction, as in the paper's Fig. 6(c).
@@ -52,7 +52,8 @@ def save_run(outdir, *, size=None):
     return path, res["metrics"]
 
 
-#: The colour scale: ±(largest |value| in the image), linear within ±(this percentile of |value| inside the shapes), logarithmic beyond.
+#: The colour scale: ±(largest |value| in the image), linear within ±(this percentile of
+#: |value| inside the shapes), logarithmic beyond.
 LINEAR_PERCENTILE = 99.0
 #: Opacity of the white veil over the image outside the shapes.
 FADE = 0.7
@@ -74,8 +75,8 @@ def _inside(shape, outlines, extent, shrink=0.97):
 
 def norm(img, inside=None):
     """The colour normalisation of a signed reconstruction: symmetric about 0 up to the
-    image's largest |value| (no pixel saturates, the surface ring least of all: it is the
-    brightest thing in a reconstruction and under 1 % of its pixels), linear within the
+    image's largest |value| (no pixel saturates, so the surface ring, under 1 % of the
+    pixels and the brightest of them, keeps its shape), linear within the
     interior's robust scale (``inside``: the shapes' interiors, where the darkening and
     streaks are) and logarithmic beyond it."""
     from matplotlib.colors import Normalize, SymLogNorm
