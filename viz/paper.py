@@ -6,10 +6,14 @@ Figures only load results, so restyling never means simulating again::
     paths = paper.reproduce("figures/")          # run, save figures/paper_result.npz, draw
     paths = paper.draw("figures/paper_result.npz", "figures/")   # redraw only
 
-Reconstructions are signed, so images use a diverging map symmetric about zero, with
-limits from robust percentiles of the whole image: ±(99.9th percentile of |value|), so the
-bright surface ring is not saturated, on a symmetric-log scale that stays linear within the
-95th percentile of |value| (the interior and background artifacts each figure is about).
+Reconstructions are signed, so images use a diverging map symmetric about zero up to
+±(largest |value| in the image): no pixel is saturated, so the bright surface ring keeps
+its shape (a percentile top clips the ring, which is under 1 % of the image: at 512² the
+99.9th percentile left up to 32 % of a shape's pixels within one range bin of its boundary
+at the top colour; tests/viz/test_figure_scale.py). The ring's best-centred pixels reach
+the top; the rest of it (pixels the boundary crosses off-centre) read on a symmetric-log
+scale that stays linear within the 99th percentile of |value| inside the shapes (the
+interior and background artifacts each figure is about) and is logarithmic beyond.
 Outside the shapes (beyond 8 % of their size) a white veil fades FBP's streaks, which
 are real but are not what the figures are about. Centre slices sit beside every
 reconstruction, as in the paper's Fig. 6(c).
@@ -48,9 +52,8 @@ def save_run(outdir, *, size=None):
     return path, res["metrics"]
 
 
-#: The colour scale: ±(this percentile of |value|) over the whole image ...
-TOP_PERCENTILE = 99.9
-#: ... linear within ±(this percentile of |value| inside the shapes), logarithmic beyond.
+#: The colour scale: ±(largest |value| in the image), linear within ±(this percentile of
+#: |value| inside the shapes), logarithmic beyond.
 LINEAR_PERCENTILE = 99.0
 #: Opacity of the white veil over the image outside the shapes.
 FADE = 0.7
@@ -72,13 +75,15 @@ def _inside(shape, outlines, extent, shrink=0.97):
 
 def norm(img, inside=None):
     """The colour normalisation of a signed reconstruction: symmetric about 0 up to the
-    whole image's robust top (the surface ring is not saturated), linear within the
+    image's largest |value| (no pixel saturates, so the surface ring, under 1 % of the
+    pixels and the brightest of them, keeps its shape), linear within the
     interior's robust scale (``inside``: the shapes' interiors, where the darkening and
     streaks are) and logarithmic beyond it."""
     from matplotlib.colors import Normalize, SymLogNorm
 
     a = np.abs(np.asarray(img, dtype=float))
-    top = float(np.percentile(a, TOP_PERCENTILE)) or float(a.max()) or 1.0
+    top = float(a.max()) if a.size else 0.0
+    top = top or 1.0
     core = a[inside] if inside is not None and inside.any() else a
     lin = float(np.percentile(core, LINEAR_PERCENTILE))
     if lin <= 0 or lin >= 0.3 * top:

@@ -78,21 +78,19 @@ def test_figures_are_drawn_from_the_saved_result(tmp_path):
         assert img.shape[0] > 100 and img.shape[1] > 200
         assert img[..., :3].std() > 0.05                       # not a blank canvas
     assert not list((tmp_path / "figs").glob("*.tmp*"))
-    # picture content: no text overlaps another or leaves the figure; the reconstructed
-    # rings are not saturated (≥ 90 % of ring pixels inside the colour scale)
+    # picture content: no text overlaps another or leaves the figure; every image panel's
+    # scale is symmetric (the rings' saturation is checked at the drawn size, 512², in
+    # tests/viz/test_figure_scale.py)
     from meshladar.viz import style
 
     @style.styled
     def check():
         for n, fig in vpaper.figures(arrays, meta):
             assert style.overlapping_texts(fig) == [], n
-            for im in fig.axes[0].images[:1] + fig.axes[2].images[:1] if n > 5 else []:
-                vals = im.get_array()
-                c = -1 + (np.arange(64) + 0.5) * 2 / 64
-                X, Y = np.meshgrid(c, c)
-                if n == 6:
-                    ring = np.abs(np.hypot(X, Y) - 0.8) < 2 * 2 / 64
-                    assert np.mean(np.abs(vals[ring]) < im.norm.vmax) >= 0.9
+            shown = [ax for ax in fig.axes if ax.images]
+            assert len(shown) == (0 if n == 5 else 2), n
+            for ax in shown:
+                im = ax.images[0]
                 assert im.norm.vmin == -im.norm.vmax              # symmetric about 0
     check()
 
