@@ -50,8 +50,14 @@ def check_choice(name: str, value, choices: tuple[str, ...]) -> str:
 def finite_array(name: str, value) -> np.ndarray:
     """Return ``value`` as a float64 array, raising if any element is NaN or infinite."""
     try:
+        if np.iscomplexobj(value):
+            raise ParameterError(f"{name} must be real numbers; got a complex array (take "
+                                 "its real part, magnitude or power yourself: which is meant "
+                                 "is not for meshladar to guess)")
         a = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError) as exc:
+        if isinstance(exc, ParameterError):
+            raise
         raise ParameterError(f"{name} must be an array of real numbers; got {value!r}") from exc
     if not np.all(np.isfinite(a)):
         bad = float(a[~np.isfinite(a)].ravel()[0])

@@ -19,7 +19,7 @@ from ._validate import (check_count, check_real, check_size, finite_array, reado
                         unit_vectors)
 from .errors import MeshladarWarning, ParameterError
 from .precision import ANGLE_TOL_DEG as _ANGLE_TOL_DEG
-from .precision import COUNT_SLACK, SPAN_FLOOR
+from .precision import COUNT_SLACK, SCENE_RADIUS_RANGE, SPAN_FLOOR
 from .scene import Scene
 
 __all__ = ["Ladar", "PAPER_BIN_DIVISOR", "OFF_CENTRE_FACTOR", "target_centre"]
@@ -126,8 +126,9 @@ class Ladar:
         """
         n = check_count("n_bins", n_bins)
         check_size("n_bins", n, 8 * 360, f"{n} bins (a sinogram of 360 views)", "use fewer bins")
-        w = check_real("bin_width", bin_width, low=0.0, low_open=True)
-        c = check_real("center", center)
+        top = SCENE_RADIUS_RANGE[1]          # ranges of scenes meshladar takes, in units
+        w = check_real("bin_width", bin_width, low=0.0, low_open=True, high=2 * top / n)
+        c = check_real("center", center, low=-top, high=top)
         edges = c + (np.arange(n + 1) - n / 2.0) * w
         return cls(np.arange(360.0) if angles_deg is None else angles_deg, edges)
 
@@ -137,7 +138,7 @@ class Ladar:
 
         With the default A = 0.8 and 512 bins, the bins cover [−A, A]: the paper's disk.
         """
-        a = check_real("radius", radius, low=0.0, low_open=True)
+        a = check_real("radius", radius, low=0.0, low_open=True, high=SCENE_RADIUS_RANGE[1])
         return cls.centered(n_bins, a / PAPER_BIN_DIVISOR, angles_deg=angles_deg)
 
     @classmethod

@@ -40,8 +40,19 @@ def check_radiometry(radiometry) -> bool:
     return check_choice("radiometry", radiometry, RADIOMETRIES) == "power"
 
 
+#: The largest magnitudes the sensor's computation stays finite and accurate with (its
+#: ranges, link budget and Poisson draws): a standoff to 1e9 m (ranges then resolved to
+#: 1e9 · 2⁻⁵² ≈ 0.2 µm), pulse energies to 1e9 J, apertures to 1e3 m, wavelengths from
+#: 1e-9 m to 1 m. Beyond them a parameter is refused at construction, naming its range.
+LIMITS = {"standoff": 1e9, "pulse_energy": 1e9, "aperture_diameter": 1e3, "wavelength": 1.0,
+          "radius": 1e9, "waist": 1e9}
+#: The shortest wavelength taken (m).
+MIN_WAVELENGTH = 1e-9
+
+
 def _optional_positive(name, value):
-    return None if value is None else check_real(name, value, low=0.0, low_open=True)
+    return None if value is None else check_real(name, value, low=0.0, low_open=True,
+                                                 high=LIMITS.get(name))
 
 
 @dataclass(frozen=True)
@@ -113,7 +124,7 @@ class GaussianBeam:
 
     def __post_init__(self):
         object.__setattr__(self, "waist", check_real("waist", self.waist, low=0.0,
-                                                     low_open=True))
+                                                     low_open=True, high=LIMITS["waist"]))
         object.__setattr__(self, "divergence", check_real("divergence", self.divergence,
                                                           low=0.0, high=1.0))
         off = finite_array("offset", self.offset)
@@ -155,9 +166,11 @@ class Sensor:
     Parameters
     ----------
     standoff : float, optional
-        Distance D (m, scene units) from the sensor to the aim point. None (default): at
-        infinity, parallel rays (today's orthographic ladar). Finite: rays fan out from the
-        sensor at ``aim + D w``; ranges are true distances R from it, reported as
+        Distance D (m, scene units, at most 1e9: :data:`LIMITS`, as for ``pulse_energy``
+        ≤ 1e9 J, ``aperture_diameter`` ≤ 1e3 m and ``wavelength`` in [1e-9, 1] m, the
+        ranges in which the computation stays finite) from the sensor to the aim point.
+        None (default): at infinity, parallel rays (today's orthographic ladar). Finite:
+        rays fan out from the sensor at ``aim + D w``; ranges are true distances R from it, reported as
         r = R − D − aim·w (R − D when aiming at the origin): the sensor's distance from the
         plane through the origin is D + aim·w, so r tends to the ladar at infinity's −p·w
         and its bins still fit; the two-way time is 2R/c = 2(r + D + aim·w)/c. Each ray
@@ -217,7 +230,8 @@ class Sensor:
             object.__setattr__(self, name, check_real(name, getattr(self, name), low=0.0,
                                                       high=1.0, low_open=True))
         object.__setattr__(self, "wavelength", check_real("wavelength", self.wavelength,
-                                                          low=0.0, low_open=True))
+                                                          low=MIN_WAVELENGTH,
+                                                          high=LIMITS["wavelength"]))
         self._check_photon_options()
 
     def _check_photon_options(self):

@@ -33,11 +33,14 @@ from ._validate import (check_count, check_real, check_seed, check_size, finite_
                         readonly_copy)
 from .errors import ParameterError
 from .noise import Noise, draw_noise
+from .sensor import LIMITS as SENSOR_LIMITS
 from .sensor import SPEED_OF_LIGHT
 from .sinogram import TYPED_INFO_KEYS, Sinogram, check_sinogram, split_info
 
 __all__ = ["GaussianPulse", "SampledPulse", "Waveforms", "receive"]
 
+#: The longest pulse, response or sample interval taken (s): a second is 3e8 m of range.
+MAX_PULSE_S = 1.0
 #: A Gaussian pulse or response is cut where it falls below exp(−CUT²/2) of its peak.
 _GAUSS_CUT = 8.0
 #: FWHM = 2 sqrt(2 ln 2) σ
@@ -53,7 +56,7 @@ class GaussianPulse:
 
     def __post_init__(self):
         object.__setattr__(self, "fwhm", check_real("fwhm", self.fwhm, low=0.0,
-                                                    low_open=True))
+                                                    low_open=True, high=MAX_PULSE_S))
 
     @property
     def support(self):
@@ -87,7 +90,7 @@ class SampledPulse:
                                  "numbers, not all zero")
         object.__setattr__(self, "samples", readonly_copy(x / x.sum()))
         object.__setattr__(self, "interval", check_real("interval", self.interval, low=0.0,
-                                                        low_open=True))
+                                                        low_open=True, high=MAX_PULSE_S))
         object.__setattr__(self, "start", check_real("start", self.start))
 
     @property
@@ -285,9 +288,14 @@ def receive(sino: Sinogram, *, sample_rate, pulse=None, response=None, standoff=
     m = check_count("oversample", oversample)
     if standoff is None:
         standoff = (sino.info.get("sensor") or {}).get("standoff_m") or 0.0
-    D = check_real("standoff", standoff, low=0.0)
+    D = check_real("standoff", standoff, low=0.0, high=SENSOR_LIMITS["standoff"])
     t_edges = 2.0 * (sino.bin_edges + D) / SPEED_OF_LIGHT
     dt = 1.0 / (fs * m)
+    for name, shape in (("pulse", pulse), ("response", response)):
+        if shape is not None:        # its kernel's cells, counted before any is made
+            check_size("sample_rate", (shape.support[1] - shape.support[0]) / dt + 2, 8 * 3,
+                       f"a {name} {shape.support[1] - shape.support[0]:.3g} s long on "
+                       f"{dt:.3g} s cells", f"give a lower sample_rate or a shorter {name}")
     kp, p0 = _kernel(pulse, dt)
     kr, r0 = _kernel(response, dt)
     # the digitiser's window: whole samples from the first bin's start (less the kernels'

@@ -13,6 +13,11 @@ from .base import BRDF
 __all__ = ["Tabulated"]
 
 
+#: The largest BRDF value a table may hold (sr⁻¹): far above any real glint's peak, and
+#: small enough that the weights, sums and squares computed from it stay finite.
+MAX_BRDF = 1e12
+
+
 @dataclass(frozen=True, eq=False)
 class Tabulated(BRDF, builtin=True):
     """A measured monostatic BRDF: F(θ) sampled at angles ``theta_deg``.
@@ -52,10 +57,10 @@ class Tabulated(BRDF, builtin=True):
             raise ParameterError(f"theta_deg must increase strictly from 0 to 90 degrees; got "
                                  f"{t[0]:g} ... {t[-1]:g}" + (" (not increasing)" if
                                                              np.any(np.diff(t) <= 0) else ""))
-        if np.any(v < 0):
-            k = int(np.argmax(v < 0))
-            raise ParameterError(f"values must be non-negative; got {v[k]:g} at "
-                                 f"{t[k]:g} degrees")
+        if np.any(v < 0) or np.any(v > MAX_BRDF):
+            k = int(np.argmax((v < 0) | (v > MAX_BRDF)))
+            raise ParameterError(f"values must be in [0, {MAX_BRDF:g}] (per sr: a mirror-like "
+                                 f"glint peaks near 1e6); got {v[k]:g} at {t[k]:g} degrees")
         weight = v.copy() if self.projected_values else v * np.cos(np.deg2rad(t))
         if not self.projected_values:
             weight[-1] = 0.0                                    # F cos θ at exactly 90°

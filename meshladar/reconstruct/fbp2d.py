@@ -273,6 +273,7 @@ def _check_fbp(sinogram, size, extent, filter, interpolation, center):
                              f"{int(np.count_nonzero(sinogram.view_vectors[:, 2]))} view "
                              "vectors off the x-y plane (3-D views), which a planar FBP "
                              "would silently misplace")
+    _warn_degenerate(sinogram)
     size = check_count("size", size)
     check_size("size", size * size, 8 * 3, f"a {size} x {size} image", "use a smaller size")
     extent = bins_reach(sinogram) if extent is None else extent
@@ -283,6 +284,21 @@ def _check_fbp(sinogram, size, extent, filter, interpolation, center):
     if c.shape != (2,):
         raise ParameterError(f"center must be a point (x, y); got shape {c.shape}")
     return size, extent, c
+
+
+def _warn_degenerate(sinogram):
+    """Warn (issue 29: silently a streak or zeros) when the data cannot make an image: all
+    views at one angle, or a single range bin."""
+    distinct = np.unique(np.round(np.mod(sinogram.angles_deg, 360.0), 9)).size
+    if distinct < 2 and sinogram.n_views > 1:
+        warnings.warn(f"all {sinogram.n_views} views are at "
+                      f"{float(np.mod(sinogram.angles_deg[0], 360.0)):g} degrees: FBP smears "
+                      "one profile into a streak; it needs views all around the scene",
+                      MeshladarWarning, stacklevel=4)
+    if sinogram.n_bins < 2:
+        warnings.warn("one range bin: the image has no range resolution (a uniform disk at "
+                      "best); FBP needs the bins across the target", MeshladarWarning,
+                      stacklevel=4)
 
 
 def _filtered(values, filter):

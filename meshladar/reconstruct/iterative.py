@@ -24,12 +24,14 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._validate import check_choice, check_count, check_real, check_sinogram, finite_array
+from .._validate import (check_choice, check_count, check_real, check_sinogram, check_size,
+                         finite_array)
 from ..errors import ParameterError
 from ..images import Image
 from ..forward.siddon import PixelGrid
 from ..stream import Progress
 from .fbp2d import PAPER_CLIP, default_extent, noise_floor, quiet_fbp
+from ._tv import MAX_TV, gradient, tv_prox
 from .operators import PROJECTORS, LinearProjector, RangeProjector, build, projector_name
 
 __all__ = ["RangeProjector", "LinearProjector", "sirt", "sart", "cgls", "tv_fista",
@@ -80,17 +82,25 @@ def _setup(sino, image, start, rays_per_bin, projector="auto"):
         raise ParameterError("iterative reconstruction needs views about the z axis; this "
                              "sinogram has 3-D view vectors (meshladar.reconstruct.fbp3d)")
     size = check_count("size", size)
+    # the solvers hold a few images and the projector's per-view tables: ~8 arrays a pixel
+    check_size("size", float(size) ** 2, 8 * 8, f"a {size}² image", "give a smaller size")
     extent = check_real("extent", extent, low=0.0, low_open=True)
     grid = PixelGrid.square(size, extent, center)
-    A = None if projector is None else build(projector, grid, sino, rays_per_bin)
     b = sino.values
     W = np.ones_like(b) if weights is None else finite_array("weights", weights)
     if W.shape != b.shape or np.any(W < 0):
         raise ParameterError(f"weights must be non-negative, one per bin {b.shape}; got "
                              f"shape {W.shape}")
+    if not np.any(W > 0):
+        raise ParameterError("weights are all zero: every bin is dropped, so there is no "
+                             "data to reconstruct from (keep some bins, weight > 0)")
     M = np.ones((size, size)) if mask is None else np.asarray(mask, dtype=bool).astype(float)
     if M.shape != (size, size):
         raise ParameterError(f"mask must be a ({size}, {size}) array; got {M.shape}")
+    if not np.any(M):
+        raise ParameterError("mask is empty (no pixel is True): there is nothing to "
+                             "reconstruct (mark the pixels the target may occupy)")
+    A = None if projector is None else build(projector, grid, sino, rays_per_bin)
     if x0 is None:
         x = np.zeros((size, size))
     elif isinstance(x0, str) and x0 == "fbp":      # the data the weights keep (dropped: 0)
@@ -345,57 +355,13 @@ def glint_weights(sino, *, threshold=None, floor=0.0, max_share=0.1):
     return np.where(bright, floor, 1.0)
 
 
-def _grad(x):
-    """Forward differences (zero at the far edges)."""
-    gx = np.zeros_like(x)
-    gy = np.zeros_like(x)
-    gx[:, :-1] = x[:, 1:] - x[:, :-1]
-    gy[:-1, :] = x[1:, :] - x[:-1, :]
-    return gx, gy
-
-
-def _div(px, py):
-    """The negative adjoint of _grad."""
-    d = np.zeros_like(px)
-    d[:, 0] += px[:, 0]
-    d[:, 1:] += px[:, 1:] - px[:, :-1]
-    d[:, -1] -= px[:, -1]
-    d[0, :] += py[0, :]
-    d[1:, :] += py[1:, :] - py[:-1, :]
-    d[-1, :] -= py[-1, :]
-    return d
-
-
-def _tv_prox(z, mu, nonneg, mask, n_inner=20, dual=None):
-    """argmin_x ½‖x − z‖² + μ TV(x) over x ≥ 0 (``nonneg``) and the mask: Beck and
-    Teboulle's fast gradient projection on the dual (isotropic TV). Returns (x, dual)."""
-    def project(v):
-        v = v * mask
-        return np.maximum(v, 0.0) if nonneg else v
-
-    px, py = (np.zeros_like(z), np.zeros_like(z)) if dual is None else dual
-    rx, ry = px, py
-    t = 1.0
-    for _ in range(n_inner):
-        x = project(z + mu * _div(rx, ry))
-        gx, gy = _grad(x)
-        qx, qy = rx + gx / (8.0 * mu), ry + gy / (8.0 * mu)
-        norm = np.maximum(1.0, np.hypot(qx, qy))
-        qx, qy = qx / norm, qy / norm
-        t_new = 0.5 * (1.0 + math.sqrt(1.0 + 4.0 * t * t))
-        rx = qx + (t - 1.0) / t_new * (qx - px)
-        ry = qy + (t - 1.0) / t_new * (qy - py)
-        px, py, t = qx, qy, t_new
-    return project(z + mu * _div(px, py)), (px, py)
-
-
 def tv_fista(sino, size=256, extent=None, *, center=(0.0, 0.0), tv=0.005, n_iter=100,
              x0="fbp", weights=None, mask=None, nonneg=True, tol=None, rays_per_bin=2,
              projector="auto", progress=False):
     """Total-variation regularised reconstruction by FISTA:
     min ½‖W^½ (A x − b)‖² + λ TV(x) over x ≥ 0 and the mask, each step a gradient step on
     the data term (step 1/L, L = ‖W^½ A‖² by power iteration) and the TV proximal map
-    (:func:`_tv_prox`, dual fast gradient projection).
+    (:func:`~meshladar.reconstruct._tv.tv_prox`, dual fast gradient projection).
 
     ``tv`` sets λ relative to the image's scale: λ = tv · L · s with s the 99th percentile
     of |FBP image|, so each step smooths away jumps below about tv × s (the default 0.005:
@@ -407,7 +373,7 @@ def tv_fista(sino, size=256, extent=None, *, center=(0.0, 0.0), tv=0.005, n_iter
     """
     extent = default_extent(sino, extent)
     n_iter = check_count("n_iter", n_iter)
-    tv = check_real("tv", tv, low=0.0)
+    tv = check_real("tv", tv, low=0.0, high=MAX_TV)
     tol = None if tol is None else check_real("tol", tol, low=0.0, low_open=True)
     pr = _setup(sino, ImageGrid(size, extent, center),
                 _Start(x0, weights, mask, nonneg), rays_per_bin, projector)
@@ -428,12 +394,12 @@ def tv_fista(sino, size=256, extent=None, *, center=(0.0, 0.0), tv=0.005, n_iter
     run = _Progress(n_iter, tol, progress)
     for _ in range(n_iter):
         g = M * (A.T @ (W * (A @ y - b)))
-        x_new, dual = _tv_prox(y - g / L, lam / L, nonneg, M, dual=dual)
+        x_new, dual = tv_prox(y - g / L, lam / L, nonneg, M, dual=dual)
         t_new = 0.5 * (1.0 + math.sqrt(1.0 + 4.0 * t * t))
         y = x_new + (t - 1.0) / t_new * (x_new - x)
         x, t = x_new, t_new
         r = A @ x - b
-        gx, gy = _grad(x)
+        gx, gy = gradient(x)
         objective.append(0.5 * float(np.sum(W * r * r)) + lam * float(np.sum(np.hypot(gx, gy))))
         if run.step(_norm(r, W) / bnorm, objective):
             break

@@ -262,8 +262,10 @@ for _key, _v in dict(COUNTS, huge=10**5).items():
     api(f"fbp.size={_key}", lambda v=_v: ml.fbp(_sino(), size=v), "error", "size")
 api("fbp.size=1", lambda: ml.fbp(_sino(), size=1), "ok", check=lambda im: im.values.shape
     == (1, 1))
-scalar_cases("fbp", lambda v: ml.fbp(_sino(), size=8, extent=v), "extent", ok=("huge",),
-             checks={"huge": _finite})
+scalar_cases("fbp", lambda v: ml.fbp(_sino(), size=8, extent=v), "extent",
+             ok=("huge", "none"), checks={"huge": _finite,             # none: the bins' reach
+                                         "none": lambda im: im.extent == max(
+                                             abs(_sino().bin_edges[[0, -1]]))})
 for _key, _v in {"x": "x", "none": None, "upper": "RAMP"}.items():
     api(f"fbp.filter={_key}", lambda v=_v: ml.fbp(_sino(), size=8, filter=v), "error", "filter")
 api("fbp.interpolation=cubic", lambda: ml.fbp(_sino(), size=8, interpolation="cubic"), "error",

@@ -343,14 +343,15 @@ for _key, _v in COUNTS.items():
         "n_bins")
 api("Ladar.centered.n_bins=1", lambda: ml.Ladar.centered(1, 0.1), "ok",
     check=lambda lad: lad.n_bins == 1)
-scalar_cases("Ladar.centered", lambda v: ml.Ladar.centered(8, v), "bin_width", ok=("huge",))
+# bins wider than scenes meshladar takes (1e30 across) are refused (issue 29: overflowed)
+scalar_cases("Ladar.centered", lambda v: ml.Ladar.centered(8, v), "bin_width")
 scalar_cases("Ladar.centered", lambda v: ml.Ladar.centered(8, 0.1, center=v), "center",
              ok=("neg", "zero"), names=("center", "bin_edges"))
 api("Ladar.centered.angles_deg=[]", lambda: ml.Ladar.centered(8, 0.1, angles_deg=[]), "error",
     "angles_deg")
 api("Ladar.centered.angles_deg=nan", lambda: ml.Ladar.centered(8, 0.1, angles_deg=[nan]),
     "error", "angles_deg")
-scalar_cases("Ladar.paper", lambda v: ml.Ladar.paper(v), "radius", ok=("huge",))
+scalar_cases("Ladar.paper", lambda v: ml.Ladar.paper(v), "radius")
 api("Ladar.paper.n_bins=0", lambda: ml.Ladar.paper(n_bins=0), "error", "n_bins")
 
 api("Ladar.covering.neither", lambda: ml.Ladar.covering(_disk()), "error",
