@@ -196,6 +196,8 @@ def fbp(sinogram, size=512, extent=1.0, *, filter="ramp", interpolation="linear"
     >>> from meshladar import phantoms
     >>> disk = phantoms.load("disk")
     >>> image = ml.fbp(ml.simulate(disk.scene, disk.ladar), size=256, extent=1.0)
+    >>> image.values.shape, float(image.x[0]), float(image.x[-1])   # pixel centres in ±1
+    ((256, 256), -0.99609375, 0.99609375)
     """
     size, extent, c = _check_fbp(sinogram, size, extent, filter, interpolation, center)
     widths = sinogram.bin_widths
