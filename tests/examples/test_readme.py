@@ -152,9 +152,9 @@ def commands(block):
     comments left out."""
     joined, cur = [], ""
     for line in block.code.splitlines():
-        cur += line.rstrip()
+        cur += line.strip() if cur else line.rstrip()
         if cur.endswith("\\"):
-            cur = cur[:-1] + " "
+            cur = cur[:-1].rstrip() + " "
             continue
         joined.append(cur.strip())
         cur = ""
@@ -213,7 +213,7 @@ def test_synopsis_is_not_run():
             "meshladar simulate a \\\n    --views 3 -o a.npz\n```\n")
     found = blocks(text)
     assert [b.lang for b in found] == ["", "bash"]
-    assert commands(found[1]) == ["meshladar simulate a     --views 3 -o a.npz"]
+    assert commands(found[1]) == ["meshladar simulate a --views 3 -o a.npz"]
 
 
 # ---- python blocks --------------------------------------------------------------------
