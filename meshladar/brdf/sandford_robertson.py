@@ -233,8 +233,8 @@ class SandfordRobertson(BRDF, builtin=True):
     --------
     >>> import numpy as np, meshladar as ml
     >>> m = ml.SandfordRobertson(rho_d=0.047, epsilon=0.53, b=0.1, e=0.007)
-    >>> round(m.monostatic(0.0), 1)             # the aluminium glint at normal incidence
-    651.0
+    >>> round(float(m.monostatic(0.0)), 1)      # the aluminium glint at normal incidence
+    651.1
     >>> float(m.monostatic(np.pi / 2, projected=True)) > 0   # F·cos θ finite at grazing
     True
 

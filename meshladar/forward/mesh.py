@@ -239,9 +239,13 @@ def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0
 
     Examples
     --------
-    >>> hits = ml.trace(scene, ladar)                        # geometry only, traced once
-    >>> for m in (ml.materials.DARK_GRAY, ml.materials.ALUMINUM):
-    ...     sino = ml.weigh(hits, [m])                        # any coating, no new trace
+    >>> import numpy as np, meshladar as ml
+    >>> scene = ml.phantoms.scene("disk").tessellate(256, height=1.0)   # a one-part mesh
+    >>> ladar = ml.Ladar.covering(scene, n_bins=64, angles_deg=np.arange(0.0, 360.0, 30.0))
+    >>> hits = ml.trace(scene, ladar)      # geometry only, traced once; then any coatings:
+    >>> for m in (ml.materials.DARK_GRAY, ml.materials.ALUMINUM): alu = ml.weigh(hits, [m])
+    >>> alu.values.shape
+    (12, 64)
     """
     options = dict(mode=mode, normals=normals, back_faces=back_faces, z0=z0,
                    ray_spacing=ray_spacing, rays_per_bin=rays_per_bin, sampling=sampling,

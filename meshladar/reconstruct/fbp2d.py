@@ -228,6 +228,8 @@ def fbp(sinogram, size=512, extent=None, *, filter="ramp", interpolation="linear
     >>> image = ml.fbp(ml.simulate(disk.scene, disk.ladar), size=256)
     >>> image.extent        # the bins' reach: the paper's 512 bins of A/256 about 0, A = 0.8
     0.8
+    >>> image.values.shape, float(image.x[0]), float(image.x[-1])   # pixel centres in ±0.8
+    ((256, 256), -0.796875, 0.796875)
     """
     size, extent, c = _check_fbp(sinogram, size, extent, filter, interpolation, center)
     widths = sinogram.bin_widths
