@@ -21,10 +21,12 @@ cover its hits (tests/forward/test_resolved.py).
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from .._validate import finite_array
-from ..errors import ParameterError
+from ..errors import MeshladarWarning, ParameterError
 from ..motion import Motion
 from ..raytrace.plan import plan_trace
 from ..returns import COORDINATES, Returns
@@ -143,6 +145,18 @@ def _description(plan, scene, ladar, weighing):
             "seed": plan.seed}
 
 
+def _warn_empty(weighing, rays):
+    """All cells zero (issue 29: said by simulate, silent here): name each axis's bins."""
+    if rays == 0:
+        why = "no ray hit the target (check the views and the ray spacing)"
+    else:
+        why = (f"{rays} rays hit the target but every return fell outside the cells: " +
+               ", ".join(f"{a} bins [{e[0]:.6g}, {e[-1]:.6g}]"
+                         for a, e in zip(weighing.axes, weighing.edges)) +
+               " (widen them to the target's ranges, cross-ranges or Doppler shifts)")
+    warnings.warn(f"the returns are all zeros: {why}", MeshladarWarning, stacklevel=4)
+
+
 def _returns(plan, weighing, ladar, results):
     """The :class:`Returns` record of a resolved run, photoelectrons where counted."""
     sensor, motion = plan.sensor, weighing.motion
@@ -153,6 +167,8 @@ def _returns(plan, weighing, ladar, results):
             "motion": None if motion is None else motion.describe(),
             "frame": "u = z x w / |z x w| (x for w along z), v = w x u"}
     values = joined(results, "values")
+    if not np.any(values):
+        _warn_empty(weighing, info["rays"])
     if sensor is not None:
         info["sensor"] = sensor.describe()
         if sensor.counts_photons:

@@ -273,3 +273,19 @@ def test_resolved_returns_with_a_sensor():
                       sensor=ml.sensor.Sensor(standoff=D)).values
         errors.append(np.linalg.norm(far - ref) / np.linalg.norm(ref))
     assert errors[1] < 0.5 * errors[0] and errors[1] < 0.02, errors
+
+
+def test_doppler_bins_that_miss_every_return_say_so():
+    """issue 29: Doppler or range bins missing every return gave an empty Returns without a
+    word (simulate warns in the same case): the warning names each axis's bins."""
+    scene = ml.Scene.from_mesh(trimesh.creation.icosphere(subdivisions=3),
+                               material=lambertian(0.5))
+    ladar = ml.Ladar(angles_deg=[30.0], bin_edges=np.linspace(-1.0, 0.0, 33))
+    V, lam = np.array([3.0, -1.0, 2.0]), 1.55e-6
+    f0 = 2 * float(V @ ladar.view_vectors[0]) / lam
+    far = f0 + np.array([1e6, 2e6])                  # 1 MHz and more from every return
+    with pytest.warns(ml.errors.MeshladarWarning,
+                      match=r"^the returns are all zeros: \d+ rays hit the target but every "
+                            r"return fell outside the cells: doppler bins \["):
+        ret = resolve(scene, ladar, {"doppler": far}, motion=Motion(velocity=V, wavelength=lam))
+    assert not np.any(ret.values)
