@@ -90,17 +90,17 @@ def test_sinogram_values_are_bin_integrals_not_densities():
 
 
 def test_the_tours_image_summary():
-    """The tour's example line 'Image(size=256, extent=1, center=(0, 0), values=(-1.05e+04,
-    2.492e+04), method='fbp', filter='ramp', input='log(floor=1e-06)', radiometry='paper',
-    ...)': the first example's log-input FBP of the paper's pair (over [−1, 1]²)."""
+    """The tour's example line 'Image(size=256, extent=0.8, center=(0, 0), values=(-9710,
+    2.876e+04), method='fbp', filter='ramp', input='log(floor=1e-06)', radiometry='paper',
+    ...)': the first example's log-input FBP of the paper's pair (over the bins' reach,
+    [−0.8, 0.8]², fbp's default frame)."""
     from meshladar.materials import ALUMINUM, DARK_GRAY
 
     scene = ml.phantoms.scene("disk_pair", large=DARK_GRAY, small=ALUMINUM)
-    image = ml.fbp(ml.log_radiance(ml.simulate(scene, ml.Ladar.paper())), size=256,
-                   extent=1.0)
+    image = ml.fbp(ml.log_radiance(ml.simulate(scene, ml.Ladar.paper())), size=256)
     text = repr(image)
     assert len(text) <= 400
-    for part in ("Image(size=256, extent=1, center=(0, 0), values=(-1.05e+04, 2.492e+04), "
+    for part in ("Image(size=256, extent=0.8, center=(0, 0), values=(-9710, 2.876e+04), "
                  "method='fbp', filter='ramp', input='log(floor=1e-06)', radiometry='paper'",):
         assert part in text, (part, text)
 
