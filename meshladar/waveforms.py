@@ -182,6 +182,10 @@ class Waveforms:
         """The same waveforms times ``factor`` (e.g. photoelectrons per unit of a relative
         power sinogram), in ``units``."""
         f = check_real("factor", factor, low=0.0, low_open=True)
+        if self.units == "photoelectrons":
+            raise ParameterError("these waveforms already count photoelectrons (their sensor "
+                                 "counted them): scaling them again would count twice; "
+                                 "scale waveforms of relative power only")
         return Waveforms(self.values * f, time_edges=self.time_edges,
                          angles_deg=self.angles_deg, view_vectors=self.view_vectors,
                          standoff=self.standoff, info=dict(self.provenance, scaled_by=f),
@@ -282,6 +286,10 @@ def receive(sino: Sinogram, *, sample_rate, pulse=None, response=None, standoff=
         Each view's samples; they sum to its bins (module docstring).
     """
     check_sinogram("sino", sino)
+    if np.any(sino.values < 0):
+        raise ParameterError(f"sino must hold received power or counts (>= 0); its smallest "
+                             f"value is {float(sino.values.min()):.4g} (log or clipped "
+                             "input, or a difference, is not a power)")
     fs = check_real("sample_rate", sample_rate, low=0.0, low_open=True)
     pulse = _check_shape("pulse", pulse)
     response = _check_shape("response", response)

@@ -95,8 +95,6 @@ def cmd_study(args) -> int:
     """Run a study and write its table (CSV/JSON), results and figures into a folder."""
     check_outdir(args.outdir)
     plotting.require("matplotlib")              # before the work, not after it
-    if args.kind == "tomography3d":
-        return _study_3d(args)
     if args.kind == "reconstruction":
         return _study_reconstruction(args)
     for flag, value in (("--photons", args.photons), ("--speckle", args.speckle),
@@ -104,6 +102,8 @@ def cmd_study(args) -> int:
         if value is not None:
             raise ParameterError(f"{flag} is an option of the reconstruction study; the "
                                  f"{args.kind} study does not use it")
+    if args.kind == "tomography3d":
+        return _study_3d(args)
     result = studies.faceting_study(args.setting, progress=not args.quiet,
                                     run_dir=os.path.join(args.outdir, "run"))
     files = studies.save_study(result, args.outdir)

@@ -142,6 +142,10 @@ def cmd_receive(args) -> int:
         check_output(args.plot, (".png",), [args.result, args.output], "--plot")
         plotting.require("matplotlib")          # before the work, not after it
     sino, _ = io.load_sinogram(args.result)
+    if args.scale is not None and sino.units == "photoelectrons":
+        raise ParameterError(f"--scale converts relative power to photoelectrons; "
+                             f"{args.result} already counts photoelectrons (simulated with "
+                             "--pulse-energy and --aperture): drop --scale")
     if sino.radiometry != "power" and not args.quiet:
         warnings.warn(f"{args.result} holds {sino.radiometry or 'paper'!r} "
                       "radiometry (Eq. 8), not the power a receiver collects: simulate with "

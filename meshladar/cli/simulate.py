@@ -82,7 +82,14 @@ def _in_flags(message):
                              message)
     for o in SENSOR_OPTIONS:
         message = re.sub(rf"(?<!-)\b{o.name}\b", o.cli_flag, message)
+    for api, flag in _BEAM_WORDS:
+        message = message.replace(api, flag)
     return message
+
+
+#: The beam classes' words and the flags that make them.
+_BEAM_WORDS = (("FloodBeam(radius=...)", "--flood-radius"), ("a GaussianBeam", "--beam-waist"),
+               ("sensor.beam=FloodBeam(radius=None)", "no --flood-radius"))
 
 
 def _given(args, attr):

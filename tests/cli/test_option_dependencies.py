@@ -49,6 +49,10 @@ CLI = [
     (["--wavelength", "1.5e-6", "--standoff", "10"], r"--wavelength \(1.5e-06\) scales"),
     (["--standoff", "10", "--mode", "slice"],
      r"a sensor at a finite --standoff needs --mode 3d"),
+    (["--standoff", "100", "--mode", "3d", "--pulse-energy", "1e-3", "--aperture", "0.1",
+      "--radiometry", "power"],
+     r"photoelectrons need the flood's extent: give --flood-radius \(m at the aim point\), "
+     r"or --beam-waist; got no --flood-radius"),
 ]
 
 
@@ -63,3 +67,54 @@ def test_the_command_line_says_it_in_flags(flags, message, tmp_path, capsys):
     assert not re.search(r"pulse_energy|aperture_diameter|quantum_efficiency|"
                          r"optics_transmission|mode=", err), err     # Python's words
     assert not out.exists()
+
+
+def _photon_sinogram(tmp_path):
+    """A sinogram that counts photoelectrons, saved as the command line would."""
+    out = tmp_path / "pe.npz"
+    assert main(["simulate", "disk", "--model", "mesh", "--views", "2", "--mode", "3d",
+                 "--standoff", "100", "--pulse-energy", "1e-3", "--aperture", "0.1",
+                 "--flood-radius", "1", "--radiometry", "power", "--quiet", "-o",
+                 str(out)]) == 0
+    return out
+
+
+def test_receive_scale_on_photoelectrons_is_refused(tmp_path, capsys):
+    """--scale on a photoelectron sinogram multiplied the counts again and kept calling
+    them photoelectrons."""
+    src = _photon_sinogram(tmp_path)
+    capsys.readouterr()
+    out = tmp_path / "w.npz"
+    code = main(["receive", str(src), "-o", str(out), "--sample-rate", "1e9", "--scale", "3"])
+    err = capsys.readouterr().err
+    assert code == 2 and "--scale converts relative power to photoelectrons" in err, err
+    assert "already counts photoelectrons" in err and not out.exists()
+    from meshladar.io import load_sinogram
+    from meshladar.waveforms import receive
+
+    waves = receive(load_sinogram(src)[0], sample_rate=1e9)
+    with pytest.raises(ParameterError, match="^these waveforms already count photoelectrons"):
+        waves.scaled(3.0)
+
+
+def test_receive_refuses_a_negative_sinogram():
+    """A log-input or differenced sinogram was clipped to zero waveforms without a word."""
+    import numpy as np
+
+    import meshladar as ml
+    from meshladar.waveforms import receive
+
+    sino = ml.Sinogram(np.array([[1.0, -2.0, 3.0]]), angles_deg=[0.0],
+                       bin_edges=[0.0, 1.0, 2.0, 3.0])
+    with pytest.raises(ParameterError, match=r"^sino must hold received power or counts "
+                                             r"\(>= 0\); its smallest value is -2"):
+        receive(sino, sample_rate=1e9)
+
+
+@pytest.mark.parametrize("flag", ["--photons", "--speckle", "--background"])
+def test_noise_options_on_the_3d_study_are_refused(flag, tmp_path, capsys):
+    """--photons on study tomography3d was accepted and ignored."""
+    code = main(["study", "tomography3d", str(tmp_path / "out"), flag, "5"])
+    err = capsys.readouterr().err
+    assert code == 2 and f"{flag} is an option of the reconstruction study; the " \
+                         "tomography3d study does not use it" in err, err
