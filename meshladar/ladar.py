@@ -31,6 +31,10 @@ PAPER_BIN_DIVISOR = 256
 MAX_VIEWS = 10**6
 
 
+#: The narrowest bins taken: 1/width and its square stay finite (subnormal widths did not).
+MIN_BIN_WIDTH = 1e-200
+
+
 @dataclass(frozen=True, eq=False)
 class Ladar:
     """A monostatic, range-resolved ladar: where it looks from and how it bins range.
@@ -127,7 +131,8 @@ class Ladar:
         n = check_count("n_bins", n_bins)
         check_size("n_bins", n, 8 * 360, f"{n} bins (a sinogram of 360 views)", "use fewer bins")
         top = SCENE_RADIUS_RANGE[1]          # ranges of scenes meshladar takes, in units
-        w = check_real("bin_width", bin_width, low=0.0, low_open=True, high=2 * top / n)
+        # from 1e-200 (1/width and its square stay finite) to the scenes' range
+        w = check_real("bin_width", bin_width, low=MIN_BIN_WIDTH, high=2 * top / n)
         c = check_real("center", center, low=-top, high=top)
         edges = c + (np.arange(n + 1) - n / 2.0) * w
         return cls(np.arange(360.0) if angles_deg is None else angles_deg, edges)

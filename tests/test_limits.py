@@ -54,8 +54,37 @@ CASES = {
                                                bin_edges=s.bin_edges),
                          r"^values must be real numbers; got a complex array"),
     "bins 1e308 wide": (lambda s: ml.Ladar.centered(10, 1e308),
-                        r"^bin_width must be in \(0, 2e\+29\]; got 1e\+308"),
+                        r"^bin_width must be in \[1e-200, 2e\+29\]; got 1e\+308"),
+    "bins 1e-320 wide": (lambda s: ml.Ladar.centered(8, 1e-320),
+                         r"^bin_width must be in \[1e-200, 2.5e\+29\]; got 1e-320"),
+    "segments 1e7": (lambda s: ml.phantoms.scene("disk").tessellate(10**7),
+                     r"^segments: a prism of 10000000 segments would need"),
+    "fbp3d smooth 1e6": (lambda s: _fbp3d_smooth(1e6),
+                         r"^smooth must be in \[0, 16\]; got 1000000.0"),
+    "resolve 1000^3 cells": (lambda s: _resolve_cube(1000),
+                             r"^axes: 1 views of 1000 x 1000 x 1000 cells would need"),
 }
+
+
+def _fbp3d_smooth(smooth):
+    from meshladar.reconstruct.volumes import fbp3d
+
+    ladar = ml.Ladar(None, np.linspace(-1.0, 1.0, 17), view_vectors=fibonacci_sphere(64))
+    sino = ml.Sinogram(np.ones((64, 16)), angles_deg=ladar.angles_deg, bin_edges=ladar.bin_edges,
+                       view_vectors=ladar.view_vectors)
+    return fbp3d(sino, size=8, smooth=smooth)
+
+
+def _resolve_cube(n):
+    import trimesh
+
+    from meshladar.forward.resolved import resolve
+
+    scene = ml.Scene.from_mesh(trimesh.creation.icosphere(subdivisions=1),
+                               material=ml.materials.DARK_GRAY)
+    e = np.linspace(-1.0, 1.0, n + 1)
+    return resolve(scene, ml.Ladar(angles_deg=[0.0], bin_edges=e),
+                   [("range", e), ("cross_range", e), ("elevation", e)])
 
 
 @pytest.mark.parametrize("case", list(CASES))

@@ -25,7 +25,7 @@ import warnings
 
 import numpy as np
 
-from .._validate import finite_array
+from .._validate import check_size, finite_array
 from ..errors import MeshladarWarning, ParameterError
 from ..motion import Motion
 from ..raytrace.plan import plan_trace
@@ -116,6 +116,11 @@ def resolve(scene, ladar, axes, *, motion=None, radiometry="paper", sensor=None,
                    ray_spacing=ray_spacing, rays_per_bin=rays_per_bin, sampling=sampling,
                    seed=seed, backend=backend, sensor=sensor)
     plan = plan_trace(scene, ladar, **options)
+    cells = float(np.prod([e.size - 1 for e in edges]))
+    # the result and the chunks' copies of it before they are joined
+    check_size("axes", cells * ladar.n_views, 8 * 2,
+               f"{ladar.n_views} views of {' x '.join(str(e.size - 1) for e in edges)} cells",
+               "give fewer or wider bins, or fewer views")
     weighing.check(plan)                            # every rule, before the first ray
     warn_unresolved_lobes(scene, weighing.materials, spacing=plan.spacing,
                           normals=plan.normals, mode=plan.mode, sampling=plan.sampling,

@@ -70,7 +70,8 @@ def prism(shape, segments, height, material_index, *, z0=0.0):
     and ±z on the caps.
     """
     n = check_count("segments", segments, 3)
-    check_size("segments", n, 400, f"a prism of {n} segments", "use fewer segments")
+    # the prism's arrays and trimesh's processing of them, about 1 kB a segment at peak
+    check_size("segments", n, 1024, f"a prism of {n} segments", "use fewer segments")
     t = 2 * math.pi * np.arange(n) / n
     ring = shape.boundary(t)                                 # (n, 2)
     lo, hi = z0 - height / 2, z0 + height / 2

@@ -191,7 +191,9 @@ def fbp3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None,
     n, e, c, (x, y, z) = grid.n, grid.e, grid.c, grid.centers
     check_size("size", float(n) ** 3, 8 * 2, f"a {n}^3 volume", "give a smaller size")
     wts = _view_weights(weights, sino.n_views)
-    smooth = check_real("smooth", smooth, low=0.0)
+    # a Gaussian wider than the profile only flattens it (and 1e6 bins of kernel ran for
+    # minutes): at most the profile's length
+    smooth = check_real("smooth", smooth, low=0.0, high=float(sino.n_bins))
     _check_view_sampling(sino, smooth)
     g = sino.values / dr
     if smooth > 0:

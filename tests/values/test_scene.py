@@ -110,7 +110,7 @@ def test_bad_ladar(args, match):
 def test_bad_ladar_helpers():
     with pytest.raises(ParameterError, match=r"n_bins must be an integer >= 1; got 0"):
         ml.Ladar.centered(0, 0.1)
-    with pytest.raises(ParameterError, match=r"bin_width must be in \(0, 5e\+29\]; got -0.1"):
+    with pytest.raises(ParameterError, match=r"bin_width must be in \[1e-200, 5e\+29\]; got -0.1"):
         ml.Ladar.centered(4, -0.1)
 
 
