@@ -88,7 +88,10 @@ def _view_weights(weights, n):
 
 
 def _check_view_sampling(sino, smooth):
-    """Warn when the views are too few over the sphere for the bins across the target."""
+    """``smooth`` checked (at most the profile's length: 1e6 bins of kernel ran for
+    minutes), and a warning when the views are too few over the sphere for the bins across
+    the target; returns ``smooth``."""
+    smooth = check_real("smooth", smooth, low=0.0, high=float(sino.n_bins))
     across = bins_across(sino)
     need = views_needed(across, smooth)
     if across and sino.n_views * UNDERSAMPLED_FACTOR < need:
@@ -98,6 +101,7 @@ def _check_view_sampling(sino, smooth):
             f"with about {need} (pi N^2/4, N bins across / max(1, smooth)); expect the "
             "planes of sharp returns to streak the volume: use more views, a larger smooth "
             "or wider bins", MeshladarWarning, stacklevel=3)
+    return smooth
 
 
 def sphere_weights(view_vectors) -> np.ndarray:
@@ -191,10 +195,7 @@ def fbp3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None,
     n, e, c, (x, y, z) = grid.n, grid.e, grid.c, grid.centers
     check_size("size", float(n) ** 3, 8 * 2, f"a {n}^3 volume", "give a smaller size")
     wts = _view_weights(weights, sino.n_views)
-    # a Gaussian wider than the profile only flattens it (and 1e6 bins of kernel ran for
-    # minutes): at most the profile's length
-    smooth = check_real("smooth", smooth, low=0.0, high=float(sino.n_bins))
-    _check_view_sampling(sino, smooth)
+    smooth = _check_view_sampling(sino, smooth)
     g = sino.values / dr
     if smooth > 0:
         g = gaussian_filter1d(g, smooth, axis=1, mode="constant", truncate=4.0)
