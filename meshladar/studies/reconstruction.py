@@ -97,15 +97,17 @@ def _compensated(sino, size, n_iter, scene):
 
 def _iterate(method, sino, size, n_iter):
     if method == "sart":             # ten groups: a sweep moves about as far as ten SIRT steps
-        return sart(sino, size=size, n_iter=max(2, n_iter // 4), subsets=min(10, sino.n_views))
+        return sart(sino, size=size, extent=1.0, n_iter=max(2, n_iter // 4),
+                    subsets=min(10, sino.n_views))
     if method == "sirt":
-        return sirt(sino, size=size, n_iter=n_iter, projector="linear")
+        return sirt(sino, size=size, extent=1.0, n_iter=n_iter, projector="linear")
     if method == "sirt_glint":
-        return sirt(sino, size=size, n_iter=n_iter, projector="linear",
+        return sirt(sino, size=size, extent=1.0, n_iter=n_iter, projector="linear",
                     weights=glint_weights(sino))
     if method == "cgls":
-        return cgls(sino, size=size, n_iter=max(5, n_iter // 2), projector="linear")
-    return tv_fista(sino, size=size, n_iter=n_iter)
+        return cgls(sino, size=size, extent=1.0, n_iter=max(5, n_iter // 2),
+                    projector="linear")
+    return tv_fista(sino, size=size, extent=1.0, n_iter=n_iter)
 
 
 def _ideal(scene, ladar, size):
