@@ -504,7 +504,9 @@ def test_tabulated_interpolates_a_measured_table_and_checks_it():
     assert user.flags.writeable and user.tolist() == [0.0, 90.0]        # not taken over
     for args, message in [(([0, 45], [1, 1]), r"increase strictly from 0 to 90"),
                           (([0, 90, 45], [1, 1, 1]), r"from 0 to 90 .*not increasing"),
-                          (([0, 90], [1, -1]), r"values must be non-negative; got -1 at 90"),
+                          (([0, 90], [1, -1]),
+                           r"values must be in \[0, 1e\+12\] \(per sr: a mirror-like glint "
+                           r"peaks near 1e6\); got -1 at 90"),
                           (([0, 90], [1, np.nan]), r"values must be finite"),
                           (([0, 90], [1, 1, 1]), r"values must have theta_deg's shape")]:
         with pytest.raises(ParameterError, match=message):
