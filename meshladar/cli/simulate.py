@@ -84,7 +84,7 @@ def _in_flags(message):
         message = re.sub(rf"(?<!-)\b{o.name}\b", o.cli_flag, message)
     for api, flag in _BEAM_WORDS:
         message = message.replace(api, flag)
-    return message
+    return re.sub(r"^(workers|scheduler):", r"--\1:", message)
 
 
 #: The beam classes' words and the flags that make them.
@@ -188,7 +188,7 @@ def cmd_simulate(args) -> int:
     if model == "mesh" and not scene.is_mesh and args.tol is None:  # --tol tessellates
         scene = scene.tessellate(args.segments or 1024)
     opts = _model_options(args, model)
-    try:
+    try:                                   # (the Dask cluster's own checks too)
         if args.scheduler or args.workers:
             with dask_executor(args.scheduler, workers=args.workers or 2) as ex:
                 sino = simulate(scene, ladar, model=model, executor=ex,

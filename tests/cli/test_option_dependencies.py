@@ -118,3 +118,15 @@ def test_noise_options_on_the_3d_study_are_refused(flag, tmp_path, capsys):
     err = capsys.readouterr().err
     assert code == 2 and f"{flag} is an option of the reconstruction study; the " \
                          "tomography3d study does not use it" in err, err
+
+
+def test_too_many_local_workers_are_refused_in_flags(tmp_path, capsys):
+    """--workers 64 started 64 local Dask workers on a 2-core machine."""
+    import os
+
+    pytest.importorskip("distributed")
+    many = 4 * (os.cpu_count() or 1) + 1
+    code = main(["simulate", "disk", "--views", "4", "--workers", str(many), "-o",
+                 str(tmp_path / "x.npz")])
+    err = capsys.readouterr().err
+    assert code == 2 and err.startswith(f"meshladar: error: --workers: {many} local workers"), err
