@@ -180,12 +180,14 @@ class Waveforms:
 
     def scaled(self, factor, units="photoelectrons") -> "Waveforms":
         """The same waveforms times ``factor`` (e.g. photoelectrons per unit of a relative
-        power sinogram), in ``units``."""
+        power sinogram), in ``units``; photoelectrons are not scaled to photoelectrons
+        again (a double count)."""
         f = check_real("factor", factor, low=0.0, low_open=True)
-        if self.units == "photoelectrons":
+        if self.units == "photoelectrons" and units == "photoelectrons":
             raise ParameterError("these waveforms already count photoelectrons (their sensor "
-                                 "counted them): scaling them again would count twice; "
-                                 "scale waveforms of relative power only")
+                                 "counted them): scaling them to photoelectrons again would "
+                                 "count twice; scale waveforms of relative power, or give "
+                                 "the units the factor converts to")
         return Waveforms(self.values * f, time_edges=self.time_edges,
                          angles_deg=self.angles_deg, view_vectors=self.view_vectors,
                          standoff=self.standoff, info=dict(self.provenance, scaled_by=f),

@@ -53,6 +53,7 @@ from .. import phantoms as _phantoms
 from ..brdf import SandfordRobertson
 from ..errors import EnergyConservationWarning
 from ..forward import simulate
+from ..forward.sampling import checked_by_caller
 from ..ladar import Ladar
 from ..meshes import fibonacci_sphere
 from ..reconstruct import clip_radiance, fbp, log_radiance
@@ -271,7 +272,9 @@ def _shell_peak(volume, center, radius):
 
 def _volume_of(ladar, rays_per_bin, grid, scene):
     """A scene's mesh profiles (smooth normals) and their 3-D inversion on ``grid``."""
-    sino = simulate(scene, ladar, model="mesh", normals="smooth", rays_per_bin=rays_per_bin)
+    with checked_by_caller():                  # the glint sphere is undersampled on purpose
+        sino = simulate(scene, ladar, model="mesh", normals="smooth",
+                        rays_per_bin=rays_per_bin)
     return sino, radon3d(sino, **grid)
 
 
@@ -286,7 +289,11 @@ def run_3d(*, views=2000, size=128, smooth=1.0, extent=0.8, rays_per_bin=2.0):
     ``pair_gray_al.visibility`` (the gray sphere's shell peak over the aluminium one's, and
     with log and clip input); ``pair.shadow_streaks`` (RMS, outside both spheres, of the
     pair's volume minus the two spheres reconstructed alone, over the gray shell's peak:
-    what mutual shadowing adds). Returns (metrics, volumes)."""
+    what mutual shadowing adds). Returns (metrics, volumes).
+
+    The glint sphere's lobe (e = 0.007) gets fewer rays across it than the mesh model's
+    lobe check asks (0.27 at 2 rays per bin in the quick setting): its shell darkening is
+    that of undersampled data, at every setting alike, and the check is silenced here."""
     ladar = Ladar(None, np.linspace(-extent, extent, size + 1),
                   view_vectors=fibonacci_sphere(views))
 
@@ -303,7 +310,9 @@ def run_3d(*, views=2000, size=128, smooth=1.0, extent=0.8, rays_per_bin=2.0):
     (cg, rg), (ca, ra) = PAIR_3D
     gray, al = materials.DARK_GRAY, materials.ALUMINUM
     pair = _sphere_scene([(PAIR_3D[0], gray), (PAIR_3D[1], al)])
-    sino = simulate(pair, ladar, model="mesh", normals="smooth", rays_per_bin=rays_per_bin)
+    with checked_by_caller():                  # aluminium's glint: undersampled on purpose
+        sino = simulate(pair, ladar, model="mesh", normals="smooth",
+                        rays_per_bin=rays_per_bin)
     for prep in (None, "log", "clip"):
         vol = radon3d(_prepared(sino, prep), size=size, extent=extent, smooth=smooth)
         key = "pair_gray_al" + ("" if prep is None else f"_{prep}")

@@ -127,7 +127,7 @@ def test_profile_against_a_closed_form_and_waveform_quick_look():
                c.__class__.__name__ == "PolyCollection" for c in fig.axes[0].collections)
     # 1e8 photoelectrons: engineering labels ("50 M"), no "1e8" offset text for the top
     # axis's labels to cover
-    big = waves.scaled(1e4)
+    big = results_waves(peak=1e8)
     fig = big.plot(noise=Noise(), realisations=4)
     assert style.overlapping_texts(fig) == []
     for ax in fig.axes:
@@ -144,14 +144,14 @@ def test_profile_against_a_closed_form_and_waveform_quick_look():
     assert style.overlapping_texts(fig) == []
 
 
-def results_waves():
+def results_waves(peak=1e4):
     from meshladar.waveforms import GaussianPulse, receive
 
     pair = paper._pair(materials.DARK_GRAY, materials.ALUMINUM)
     lad = Ladar(np.arange(0.0, 360.0, 30.0), Ladar.centered(128, 1.6 / 128).bin_edges)
     sino = ml.simulate(pair, lad, radiometry="power")
     w = receive(sino, sample_rate=20e9, pulse=GaussianPulse(1e-10))
-    return w.scaled(1e4 / w.values.max(), units="photoelectrons")
+    return w.scaled(peak / w.values.max(), units="photoelectrons")
 
 
 def test_inputs_summarise_too():
