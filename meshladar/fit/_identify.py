@@ -35,8 +35,10 @@ _DEAD = 1e-14
 
 
 class Identified(NamedTuple):
-    """Covariance (inf on undetermined diagonals, NaN beside them), per-parameter True or
-    the reason, and the determined combinations as (coefficients, σ) pairs."""
+    """Covariance (inf on the diagonal of a parameter the data do not act on or that takes
+    part in a null direction, NaN beside it; weakly determined ones keep their finite σ),
+    per-parameter True or the reason, and the determined combinations as (coefficients, σ)
+    pairs."""
 
     covariance: np.ndarray
     reasons: list
@@ -63,6 +65,7 @@ def _uncertainty(fisher, x, params, label):
     live = [i for i in range(n) if reasons[i] is True]
     cov = np.full((n, n), np.nan)
     combinations = []
+    involved = np.zeros(len(live), bool)
     if live:
         d = 1.0 / np.sqrt(np.diag(fisher)[live])
         lam, vec = np.linalg.eigh(fisher[np.ix_(live, live)] * np.outer(d, d))
@@ -70,7 +73,6 @@ def _uncertainty(fisher, x, params, label):
         inv = (vec[:, ~null] / lam[~null]) @ vec[:, ~null].T
         sub = inv * np.outer(d, d)                         # D S⁺ D, user units
         cov[np.ix_(live, live)] = sub
-        involved = np.zeros(len(live), bool)
         if null.any():
             involved = np.any(np.abs(vec[:, null]) > _SHARE, axis=1)
             combinations = _combinations(vec[:, null] * d[:, None], involved, sub)
@@ -78,10 +80,11 @@ def _uncertainty(fisher, x, params, label):
             for a in np.flatnonzero(involved):
                 reasons[live[a]] = f"the data determine only a combination of {names}"
         _loose_ones(reasons, live, involved, (sub, width, x), (params, label))
-    for i in range(n):
-        if reasons[i] is not True:
-            cov[i, :] = cov[:, i] = np.nan
-            cov[i, i] = math.inf
+    unknown = [i for i in range(n) if i not in live]
+    unknown += [i for a, i in enumerate(live) if involved[a]]
+    for i in unknown:
+        cov[i, :] = cov[:, i] = np.nan
+        cov[i, i] = math.inf
     return Identified(cov, reasons, combinations)
 
 

@@ -163,6 +163,12 @@ def interp_matrix(rows, theta, omega, n_rows, grid, *, cubic=False):
                 np.where(last, 1.0 - f, 0.5 * (3.0 * f3 - 5.0 * f2 + 2.0)),
                 np.where(last, f, 0.5 * (-3.0 * f3 + 4.0 * f2 + f)),
                 np.where(last, 0.0, 0.5 * (f3 - f2)))
-    return csr_matrix((np.concatenate([omega * v for v in vals]),
-                       (np.concatenate([rows] * len(cols)), np.concatenate(cols))),
-                      shape=(n_rows, grid))
+    # CSR straight from the rows' order (column indices unsorted, repeats summed by the
+    # products): no COO conversion, no sort within rows
+    order = np.argsort(rows, kind="stable")
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=n_rows))])
+    indptr = indptr * len(cols)
+    data = np.stack([omega[order] * v[order] for v in vals], axis=1).ravel()
+    indices = np.stack([c[order] for c in cols], axis=1).ravel()
+    return csr_matrix((data, indices.astype(np.int32 if grid < 2 ** 31 else np.int64),
+                       indptr), shape=(n_rows, grid))

@@ -57,7 +57,8 @@ class CoatingFit:
     names : tuple of str
         "part.parameter" of each free parameter.
     estimate, stderr : (n,) arrays
-        σ is inf for a parameter the data cannot determine.
+        σ is inf for a parameter the data do not act on or that only a combination
+        determines (a weakly determined one, named in ``identifiable``, keeps its σ).
     covariance, correlation : (n, n) arrays
         From the Fisher information of the user's parameters at the estimate (inf on an
         undetermined parameter's diagonal, NaN beside it).
@@ -75,6 +76,8 @@ class CoatingFit:
         An analytic kernel's error: the largest change of the model at the estimate over
         the bins from N to 2N pieces per boundary, in units of each bin's noise σ (the fit
         used 2N; None: not estimated, see ``info["kernel_error_note"]``).
+        ``info["kernel_shift"]``: the largest shift of a parameter, in its σ, that this
+        change would cause.
     samples : int or None
         Pieces per boundary of the kernel used.
     noise, deviance, dof, iterations, predicted
@@ -157,7 +160,7 @@ class CoatingFit:
 
 def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, initial=None,
                  noise="gaussian", photons_per_unit=None, speckle_cells=None, background=0.0,
-                 bootstrap=0, seed=0, samples=8192, kernel_tol=KERNEL_TOL,
+                 bootstrap=0, seed=0, samples=2048, kernel_tol=KERNEL_TOL,
                  max_samples=MAX_SAMPLES, max_iter=50):
     """Fit coating parameters of chosen parts to a measured sinogram, the geometry known.
 
@@ -241,7 +244,8 @@ def _result(model, solved, ladder, boot):
     problem, (x, m, iterations) = model.problem, solved
     kernel, params = ladder.used, problem.params
     J = model.jacobian(x)
-    fit = _misfit(problem, m, _irls.variance(m, problem.noise, problem.M), J)
+    V = _irls.variance(m, problem.noise, problem.M)
+    fit = _misfit(problem, m, V, J)
     full = problem.fixed_all.copy()
     full[problem.rows] = m
     names = tuple(f"{kernel.parts[p.part]}.{p.name}" for p in params)
@@ -253,6 +257,9 @@ def _result(model, solved, ladder, boot):
              if boot[0] else None)
     _warn_undetermined(ident, combos)
     res = ladder.info()
+    if res["kernel_error"] is not None:
+        res["kernel_shift"] = _kernel_shift(ladder, problem, (x, J, V, fit.sigma2),
+                                           found.covariance)
     scale = problem.scale
     return CoatingFit(names, x, stderr, found.covariance, corr,
                       tuple(_materials(problem.mats, params, x)), ident,
@@ -266,6 +273,20 @@ def _result(model, solved, ladder, boot):
                                      "largest of the unit-diagonal Fisher matrix)", **res},
                       combinations=combos, kernel_error=res["kernel_error"],
                       samples=res["samples"])
+
+
+def _kernel_shift(ladder, problem, at, cov):
+    """The largest shift of a determined parameter, in its σ, that the model's change from
+    N to 2N pieces would cause (the Gauss-Newton step F⁻¹ Jᵀ V⁻¹ Δm)."""
+    x, J, V, sigma2 = at
+    mats = _materials(problem.mats, problem.params, x)
+    dm = (ladder.used.predict(mats) - ladder.coarse.predict(mats)).ravel()[problem.rows]
+    g = J.T @ (dm * problem.scale / (sigma2 if problem.noise == "gaussian" else V))
+    ok = np.isfinite(np.diag(cov))
+    if not ok.any():
+        return None
+    sub = cov[np.ix_(ok, ok)]
+    return float(np.max(np.abs(sub @ g[ok]) / np.sqrt(np.diag(sub))))
 
 
 def _warn_undetermined(ident, combos):
