@@ -3,9 +3,11 @@
 An analytic scene's kernel with N pieces per boundary errs by O(1/N²) (second order: the
 change from N to 2N is ~3/4 of the N kernel's error and ~3× the 2N kernel's). A fit uses
 the 2N kernel and reports, as its kernel error, the largest change |m_2N − m_N| of the
-model at the estimate over the bins, in units of each bin's noise σ: an upper estimate of
-the error of the kernel it used. The sample count doubles until that is at most
-``kernel_tol`` (default :data:`KERNEL_TOL` = 0.1 σ in every bin), up to ``max_samples``.
+model at the estimate over the bins, in units of each bin's noise σ (an upper estimate of
+the error of the kernel it used), and the largest shift of a parameter that change causes,
+in its σ (many bins each under 0.1 σ may shift a parameter by more). The sample count
+doubles until both are at most ``kernel_tol`` (default :data:`KERNEL_TOL` = 0.1), up to
+``max_samples``.
 """
 
 from __future__ import annotations
@@ -41,34 +43,39 @@ class Ladder:
         self.active = (tol is not None and kernel.samples is not None
                        and kernel._traced is not None)
         self.coarse = kernel
-        self.error = None
+        self.error = self.shift = None
 
     @property
     def used(self):
         """The kernel the fit uses."""
         return self.coarse.resampled(2 * self.coarse.samples) if self.active else self.coarse
 
-    def settle(self, mats, sigma_of):
+    def settle(self, mats, sigma_of, shift_of=None):
         """Double N until the kernel error with coatings ``mats`` is at most the tolerance
-        (``sigma_of(kernel, mats)`` gives each bin's σ with that kernel) or the cap is reached;
-        True when the kernel used did not change."""
+        (``sigma_of(kernel, mats)`` gives each bin's σ with that kernel), and so is the
+        parameters' shift ``shift_of(coarse, fine)`` (in their σ) where given, or the cap
+        is reached; True when the kernel used did not change."""
         if not self.active:
             return True
         before = self.used
         while True:
             fine = self.used
             self.error = kernel_error(self.coarse, fine, mats, sigma_of(fine, mats))
-            if self.error <= self.tol or 2 * fine.samples > self.cap:
+            self.shift = None if shift_of is None else shift_of(self.coarse, fine)
+            worst = max(self.error, self.shift or 0.0)
+            if worst <= self.tol or 2 * fine.samples > self.cap:
                 break
             self.coarse = fine
         return self.used is before
 
     def warn_if_coarse(self):
         """Warn with the numbers when the cap stopped the refinement above tolerance."""
-        if self.active and self.error > self.tol:
+        if self.active and max(self.error, self.shift or 0.0) > self.tol:
             n = self.used.samples
-            need = n * 2 ** math.ceil(0.5 * math.log2(self.error / self.tol))
+            worst = max(self.error, self.shift or 0.0)
+            need = n * 2 ** math.ceil(0.5 * math.log2(worst / self.tol))
             warnings.warn(f"the coating kernel's error is {self.error:.3g} σ in its worst bin "
+                          f"(a shift of {self.shift or 0.0:.3g} σ in the parameters) "
                           f"with {n} samples per boundary (kernel_tol={self.tol:g}, capped "
                           f"by max_samples={self.cap}); pass max_samples={need} (the error "
                           "falls ~4× per doubling) or accept it", KernelErrorWarning,
@@ -82,8 +89,10 @@ class Ladder:
                         "kernel_tol=None" if self.tol is None and self.coarse.samples
                         else f"a {self.coarse.source} kernel cannot be resampled (check it "
                              "against one traced at a finer spacing)")}
-        return {"kernel_error": self.error, "samples": self.used.samples,
+        return {"kernel_error": self.error, "kernel_shift": self.shift,
+                "samples": self.used.samples,
                 "kernel_error_note": f"largest |model({self.used.samples}) − "
                                      f"model({self.coarse.samples})| over the bins, in "
                                      "units of each bin's noise σ (an upper estimate of "
-                                     "the error of the kernel used)"}
+                                     "the error of the kernel used); kernel_shift: the largest shift of a "
+                                     "parameter, in its σ, that change causes"}

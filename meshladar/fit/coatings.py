@@ -17,6 +17,7 @@ identifiability in :mod:`._identify`.
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from dataclasses import dataclass, field
@@ -77,7 +78,7 @@ class CoatingFit:
         the bins from N to 2N pieces per boundary, in units of each bin's noise σ (the fit
         used 2N; None: not estimated, see ``info["kernel_error_note"]``).
         ``info["kernel_shift"]``: the largest shift of a parameter, in its σ, that this
-        change would cause.
+        change causes; N doubles until both are at most ``kernel_tol``.
     samples : int or None
         Pieces per boundary of the kernel used.
     noise, deviance, dof, iterations, predicted
@@ -232,8 +233,8 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
         problem = _problem(ladder.used, measured, mats, params, opts)
         model = _irls.Model(problem)
         x, m, iterations = _irls.solve(model, problem.data, x)
-        if ladder.settle(_materials(mats, params, x),
-                         _noise_sigma(measured, opts, len(params))):
+        if ladder.settle(_materials(mats, params, x), _noise_sigma(measured, opts, len(params)),
+                         functools.partial(_kernel_shift, model, (x, m))):
             break
     ladder.warn_if_coarse()
     return _result(model, (x, m, iterations), ladder, (bootstrap, seed))
@@ -257,9 +258,6 @@ def _result(model, solved, ladder, boot):
              if boot[0] else None)
     _warn_undetermined(ident, combos)
     res = ladder.info()
-    if res["kernel_error"] is not None:
-        res["kernel_shift"] = _kernel_shift(ladder, problem, (x, J, V, fit.sigma2),
-                                           found.covariance)
     scale = problem.scale
     return CoatingFit(names, x, stderr, found.covariance, corr,
                       tuple(_materials(problem.mats, params, x)), ident,
@@ -275,18 +273,25 @@ def _result(model, solved, ladder, boot):
                       samples=res["samples"])
 
 
-def _kernel_shift(ladder, problem, at, cov):
-    """The largest shift of a determined parameter, in its σ, that the model's change from
-    N to 2N pieces would cause (the Gauss-Newton step F⁻¹ Jᵀ V⁻¹ Δm)."""
-    x, J, V, sigma2 = at
+def _kernel_shift(model, at, coarse, fine):
+    """The largest shift of a parameter, in its σ, that the model's change from the
+    ``coarse`` to the ``fine`` kernel causes at ``at`` = (x, model values): the weighted
+    least-squares step (Jᵀ W J)⁺ Jᵀ W Δm, W the inverse noise variance."""
+    problem = model.problem
+    x, m = at
     mats = _materials(problem.mats, problem.params, x)
-    dm = (ladder.used.predict(mats) - ladder.coarse.predict(mats)).ravel()[problem.rows]
-    g = J.T @ (dm * problem.scale / (sigma2 if problem.noise == "gaussian" else V))
-    ok = np.isfinite(np.diag(cov))
-    if not ok.any():
-        return None
-    sub = cov[np.ix_(ok, ok)]
-    return float(np.max(np.abs(sub @ g[ok]) / np.sqrt(np.diag(sub))))
+    dm = (fine.predict(mats) - coarse.predict(mats)).ravel()[problem.rows] * problem.scale
+    if problem.noise == "gaussian":
+        rss = float(np.sum((problem.data - m) ** 2)) / max(1, m.size - len(x))
+        w = np.full(m.size, 1.0 / math.sqrt(max(rss, 1e-300)))
+    else:
+        w = 1.0 / np.sqrt(_irls.variance(m, problem.noise, problem.M))
+    Jw = model.jacobian(x) * w[:, None]
+    cov = np.linalg.pinv(Jw.T @ Jw)
+    step = cov @ (Jw.T @ (dm * w))
+    sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    ok = sd > 0
+    return float(np.max(np.abs(step[ok]) / sd[ok], initial=0.0))
 
 
 def _warn_undetermined(ident, combos):
