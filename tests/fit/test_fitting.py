@@ -24,8 +24,8 @@ from meshladar.shapes import Disk
 
 PAIR = paper._pair(materials.DARK_GRAY, materials.ALUMINUM)
 LADAR = Ladar(np.arange(0.0, 360.0, 1.0), Ladar.centered(128, 1.6 / 128).bin_edges)
-#: The kernel against the analytic model's exact profiles (relative L2; measured 2.3e-5 at
-#: 8192 samples).
+#: The kernel against the analytic model's exact profiles (relative L2; measured 2.4e-5 at
+#: 8192 samples; the point-sampled kernel it replaced: 3e-4).
 KERNEL_TOL = 1e-4
 
 
@@ -46,14 +46,15 @@ def _measured(values, ladar=LADAR, radiometry="paper"):
 def test_kernel_matches_the_analytic_model(radiometry):
     """Sampled boundaries, exact occlusion and the tabulated F cos θ reproduce the analytic
     model's exact sinogram of the shadowed, glinting pair."""
-    exact = ml.simulate(PAIR, LADAR, radiometry=radiometry)
-    K = coating_kernel(PAIR, LADAR, radiometry=radiometry)
+    lad = Ladar(np.arange(0.0, 360.0, 3.0), LADAR.bin_edges)
+    exact = ml.simulate(PAIR, lad, radiometry=radiometry)
+    K = coating_kernel(PAIR, lad, radiometry=radiometry)
     got = K.predict()
     assert np.linalg.norm(got - exact.values) / np.linalg.norm(exact.values) < KERNEL_TOL
     assert K.parts == ("large", "small") and K.source == "analytic"
     # re-weighing for other coatings is linear in each part's table
     swapped = K.predict([materials.ALUMINUM, materials.DARK_GRAY])
-    other = ml.simulate(paper._pair(materials.ALUMINUM, materials.DARK_GRAY), LADAR,
+    other = ml.simulate(paper._pair(materials.ALUMINUM, materials.DARK_GRAY), lad,
                         radiometry=radiometry)
     assert np.linalg.norm(swapped - other.values) / np.linalg.norm(other.values) < KERNEL_TOL
 
