@@ -21,8 +21,9 @@ from ..errors import MeshladarWarning
 
 #: Largest kernel error allowed in any bin, in units of that bin's noise σ.
 KERNEL_TOL = 0.1
-#: Most pieces per boundary the refinement goes to (a 360-view kernel at 2^17 takes ~30 s).
-MAX_SAMPLES = 2 ** 17
+#: Most pieces per boundary the refinement goes to (a 360-view kernel at 2^16 takes ~15 s
+#: and ~1 GB).
+MAX_SAMPLES = 2 ** 16
 
 
 class KernelErrorWarning(MeshladarWarning):

@@ -202,7 +202,7 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
         (default 0.1): N doubles until the model's change from N to 2N pieces per boundary
         at the estimate is at most this; the fit uses 2N. None: no check.
     max_samples : int
-        The most pieces per boundary (default 2^17); above it a :class:`KernelErrorWarning`
+        The most pieces per boundary (default 2^16); above it a :class:`KernelErrorWarning`
         gives the error and the count that would do.
     max_iter : int
         Most outer (reweighting) iterations.

@@ -76,12 +76,14 @@ def test_gaussian_fit_bootstrap_and_report():
     """Least squares with σ from the residuals, the aluminium disk's coating from a wrong
     start (the gray disk's known), on the analytic model's exact profiles plus Gaussian
     noise; the parametric bootstrap's spread agrees with the Fisher σ."""
-    K = coating_kernel(PAIR, LADAR, samples=2048)
-    truth = ml.simulate(PAIR, LADAR, model="analytic").values
+    lad = Ladar(np.arange(0.0, 360.0, 2.0), LADAR.bin_edges)
+    K = coating_kernel(PAIR, lad, samples=2048)
+    truth = ml.simulate(PAIR, lad, model="analytic").values
     sigma = 1e-4 * truth.max()
     y = truth + np.random.default_rng(5).normal(0.0, sigma, truth.shape)
     start = {"small": SandfordRobertson(0.06, 0.5, 0.15, 0.01)}
-    fit = fit_coatings(K, _measured(y), parts=["small"], initial=start, bootstrap=20, seed=2)
+    fit = fit_coatings(K, _measured(y, lad), parts=["small"], initial=start, bootstrap=20,
+                       seed=2)
     assert fit.names == ("small.rho_d", "small.epsilon", "small.b", "small.e")
     true = np.array([0.047, 0.53, 0.1, 0.007])
     assert np.all(np.abs(fit.estimate - true) < 4 * fit.stderr)
