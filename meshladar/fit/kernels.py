@@ -3,15 +3,18 @@ any coatings.
 
 :class:`CoatingKernel` keeps it as, per part, a sparse matrix from the part's monostatic
 BRDF F(θ; −θ) tabulated on a fine grid of incidence angles (the projected weight F cos θ,
-finite to the horizon; linear interpolation, 8193 points on [0, π/2]: 1.9e-4 rad, fine for
-a 0.007 rad glint) to the sinogram's bins; any coating is then a matrix-vector product
-(milliseconds), and a parameter's derivative is the product with the derivative of its
-table.
+finite to the horizon; 8193 points on [0, π/2]: 1.9e-4 rad, 36 across a 0.007 rad glint)
+to the sinogram's bins; any coating is then a matrix-vector product (milliseconds), and a
+parameter's derivative is the product with the derivative of its table.
 
 * From analytic shapes (:func:`coating_kernel` on a :class:`~meshladar.Scene`): each
-  boundary sampled densely at arc-length weights, front-facing and unshadowed points
-  binned by range (exact ray-ellipse occlusion); the weight is F cos θ dl (``"paper"``) or
-  F cos² θ dl (``"power"``). Agrees with the analytic model's exact profiles to 0.5 %.
+  boundary cut per view into ``samples`` pieces from the point nearest the ladar, every
+  piece's visible part split between bins exactly (:mod:`._sampling`), the table
+  interpolated cubically; the weight is F cos θ dl (``"paper"``) or F cos² θ dl
+  (``"power"``). The error is second order in the piece length (~4× less per doubling);
+  at 8192 pieces the paper's pair is within 1e-4 (relative L2) of the analytic model's
+  exact profiles. :meth:`CoatingKernel.resampled` gives the same scene at another count
+  (a fit uses it to control the error, :mod:`._resolution`).
 * From mesh hits (:func:`coating_kernel` on :class:`~meshladar.hits.Hits`): each
   hit binned at its range with the weights :func:`~meshladar.weigh` gives it, per material
   index; equal to ``weigh`` to the table's interpolation.
