@@ -99,6 +99,7 @@ def test_intervals_cover_the_truth_on_exact_data(name):
     assert max(out[lv][2].max() for lv in levels) <= 0.1
 
 
+@pytest.mark.slow
 def test_the_pair_at_1e3_names_what_it_cannot_determine():
     """At 10³ photoelectrons in the aluminium glint's bin, the pair's fit names the
     aluminium's ε as not determined (in each of three seeded trials) rather than claim an
