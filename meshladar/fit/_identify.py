@@ -1,6 +1,16 @@
-"""Identifiability of a coating fit: the covariance from the Fisher information, and which
-parameters the data cannot determine (no effect on the data, an uncertainty beyond their
-range, or a near-perfect correlation with another)."""
+"""Identifiability of a coating fit: the covariance from the Fisher information in the
+user's own parameters, its near-null directions (the combinations the data cannot
+separate), and which parameters the data cannot determine.
+
+The Fisher matrix F (of the user's parameters, whatever their bounds) is scaled to unit
+diagonal, S = D F D with D = diag(F)^(-1/2), and eigen-decomposed. An eigenvalue below
+:data:`NULL_REL` times the largest marks a near-null direction: along it the parameters move
+together without changing the data (for a unit-diagonal S, the direction's σ is more than
+1/sqrt(NULL_REL) ≈ 30,000 times the σ each parameter would have alone). The parameters with
+a share of such a direction are undetermined (σ = inf); the combinations orthogonal to the
+null directions are determined, and are named with their σ from the generalised inverse
+D S⁺ D restricted to the other directions.
+"""
 
 from __future__ import annotations
 
@@ -9,58 +19,125 @@ from typing import NamedTuple
 
 import numpy as np
 
-#: A parameter is called undetermined when its standard error exceeds this share of its
-#: bounds' width (or of its value where unbounded), or when it is correlated beyond
-#: _CORR_LIMIT with another and its standard error exceeds _LOOSE of its value.
+#: Relative eigenvalue threshold of the unit-diagonal Fisher matrix below which a direction
+#: counts as null (finite-difference Jacobians leave ~1e-14 on exact degeneracies).
+NULL_REL = 1e-9
+#: A parameter takes part in a null direction when its (scaled) component exceeds this.
+_SHARE = 0.05
+#: Also undetermined: a σ beyond half the bounds' width (or the value, unbounded), or a
+#: correlation beyond _CORR_LIMIT with another while σ exceeds _LOOSE of the value.
 _REL_LIMIT = 0.5
 _CORR_LIMIT = 0.995
 _LOOSE = 0.25
+#: A parameter whose effect on the data over its range is below this share of the largest
+#: one's does not act on the data.
+_DEAD = 1e-14
 
 
-def _uncertainty(fisher, x, params, kernel):
-    """(covariance, per-parameter True or the reason it is undetermined)."""
+class Identified(NamedTuple):
+    """Covariance (inf on the diagonal of a parameter the data do not act on or that takes
+    part in a null direction, NaN beside it; weakly determined ones keep their finite σ),
+    per-parameter True or the reason, and the determined combinations as (coefficients, σ)
+    pairs."""
+
+    covariance: np.ndarray
+    reasons: list
+    combinations: list
+
+
+def _scales(params, x):
+    return np.array([p.high - p.low if math.isfinite(p.high - p.low) else
+                     max(abs(v), 1e-12) for p, v in zip(params, x)])
+
+
+def _uncertainty(fisher, x, params, label):
+    """Identified from the Fisher matrix ``fisher`` (user parameters) at ``x``; ``label(i)``
+    names parameter i."""
     n = len(params)
-    width = np.array([p.high - p.low if math.isfinite(p.high - p.low) else
-                      max(abs(v), 1e-12) for p, v in zip(params, x)])
-    scaled = fisher * np.outer(width, width)
+    fisher = 0.5 * (fisher + fisher.T)
+    width = _scales(params, x)
+    effect = np.diag(fisher) * width ** 2
     reasons = [True] * n
-    diag = np.diag(scaled)
-    top = float(diag.max(initial=0.0))
+    top = float(effect.max(initial=0.0))
     for i in range(n):
-        if diag[i] <= 1e-14 * max(top, 1e-300):
+        if not effect[i] > _DEAD * max(top, 1e-300):
             reasons[i] = "the data do not depend on it"
     live = [i for i in range(n) if reasons[i] is True]
-    cov = np.full((n, n), 0.0)
-    for i in range(n):
-        if reasons[i] is not True:
-            cov[i, i] = math.inf
+    cov = np.full((n, n), np.nan)
+    combinations = []
+    involved = np.zeros(len(live), bool)
     if live:
-        sub = scaled[np.ix_(live, live)]
-        try:
-            inv = np.linalg.inv(sub)
-            if not np.all(np.isfinite(inv)):
-                raise np.linalg.LinAlgError
-        except np.linalg.LinAlgError:
-            inv = np.linalg.pinv(sub)
-        cov[np.ix_(live, live)] = inv / np.outer(width[live], width[live])
-        sd = np.sqrt(np.maximum(np.diag(inv), 0.0))
-        for a, i in enumerate(live):
-            if sd[a] > _REL_LIMIT:
-                reasons[i] = (f"its uncertainty ({sd[a] * width[i]:.3g}) exceeds half its "
-                              f"range")
-        corr = inv / np.outer(np.where(sd > 0, sd, 1), np.where(sd > 0, sd, 1))
-        loose = {i: sd[a] * width[i] > _LOOSE * max(abs(x[i]), 1e-12)
-                 for a, i in enumerate(live)}
-        for a, i in enumerate(live):
-            for b_, j in enumerate(live):
-                if i < j and abs(corr[a, b_]) > _CORR_LIMIT:
-                    for k, other in ((i, j), (j, i)):
-                        if reasons[k] is True and loose[k]:
-                            reasons[k] = (f"it trades off with "
-                                          f"{kernel.parts[params[other].part]}."
-                                          f"{params[other].name} (correlation "
-                                          f"{corr[a, b_]:+.4f})")
-    return cov, reasons
+        d = 1.0 / np.sqrt(np.diag(fisher)[live])
+        lam, vec = np.linalg.eigh(fisher[np.ix_(live, live)] * np.outer(d, d))
+        null = lam <= NULL_REL * lam[-1]
+        inv = (vec[:, ~null] / lam[~null]) @ vec[:, ~null].T
+        sub = inv * np.outer(d, d)                         # D S⁺ D, user units
+        cov[np.ix_(live, live)] = sub
+        if null.any():
+            involved = np.any(np.abs(vec[:, null]) > _SHARE, axis=1)
+            combinations = _combinations(vec[:, null] * d[:, None], involved, sub)
+            names = " and ".join(label(live[a]) for a in np.flatnonzero(involved))
+            for a in np.flatnonzero(involved):
+                reasons[live[a]] = f"the data determine only a combination of {names}"
+        _loose_ones(reasons, live, involved, (sub, width, x), (params, label))
+    unknown = [i for i in range(n) if i not in live]
+    unknown += [i for a, i in enumerate(live) if involved[a]]
+    for i in unknown:
+        cov[i, :] = cov[:, i] = np.nan
+        cov[i, i] = math.inf
+    return Identified(cov, reasons, combinations)
+
+
+def _combinations(null_user, involved, sub):
+    """Determined combinations: an orthonormal basis of the involved parameters' space
+    less the null directions (in user units), each scaled to a largest coefficient of 1,
+    with its σ from the generalised inverse ``sub``."""
+    idx = np.flatnonzero(involved)
+    N = null_user[idx]                                     # (p, m)
+    q, _ = np.linalg.qr(N, mode="complete")
+    basis = q[:, np.linalg.matrix_rank(N):]
+    out = []
+    for c in basis.T:
+        c = c / c[np.argmax(np.abs(c))]
+        full = np.zeros(len(involved))
+        full[idx] = c
+        out.append((full, math.sqrt(max(float(full @ sub @ full), 0.0))))
+    return out
+
+
+def _loose_ones(reasons, live, involved, at, named):
+    """Mark, among the determined live parameters, those whose σ exceeds half their range
+    or which trade off with another beyond _CORR_LIMIT while loose."""
+    sub, width, x = at
+    params, label = named
+    sd = np.sqrt(np.maximum(np.diag(sub), 0.0))
+    for a, i in enumerate(live):
+        if not involved[a] and sd[a] > _REL_LIMIT * width[i]:
+            reasons[i] = f"its uncertainty ({sd[a]:.3g}) exceeds half its range"
+    safe = np.where(sd > 0, sd, 1.0)
+    corr = sub / np.outer(safe, safe)
+    for a, i in enumerate(live):
+        for b, j in enumerate(live):
+            if i < j and not (involved[a] or involved[b]) and abs(corr[a, b]) > _CORR_LIMIT:
+                for k, other, s in ((i, j, sd[a]), (j, i, sd[b])):
+                    if reasons[k] is True and s > _LOOSE * max(abs(x[k]), 1e-12):
+                        reasons[k] = (f"it trades off with {label(other)} (correlation "
+                                      f"{corr[a, b]:+.4f})")
+
+
+def describe(coefficients, labels):
+    """'a + 0.5·b − c' from coefficients and labels (zeros left out)."""
+    terms = []
+    for c, name in zip(coefficients, labels):
+        if c == 0:
+            continue
+        mag = abs(c)
+        body = name if abs(mag - 1.0) < 1e-9 else f"{mag:.4g}·{name}"
+        terms.append(("−" if c < 0 else "+", body))
+    if not terms:
+        return "0"
+    text = ("−" if terms[0][0] == "−" else "") + terms[0][1]
+    return text + "".join(f" {s} {b}" for s, b in terms[1:])
 
 
 class Misfit(NamedTuple):
@@ -99,6 +176,8 @@ def _misfit(problem, m, V, J):
 
 def _correlation(cov):
     """(standard errors, correlation matrix) of a covariance (NaN where undetermined)."""
-    stderr = np.sqrt(np.maximum(np.diag(cov), 0.0))
-    d = np.where((stderr > 0) & np.isfinite(stderr), stderr, 1.0)
-    return stderr, np.where(np.isfinite(cov), cov, np.nan) / np.outer(d, d)
+    diag = np.diag(cov)
+    stderr = np.sqrt(np.where(np.isfinite(diag), np.maximum(diag, 0.0), np.inf))
+    d = np.where((stderr > 0) & np.isfinite(stderr), stderr, np.nan)
+    with np.errstate(invalid="ignore"):
+        return stderr, cov / np.outer(d, d)

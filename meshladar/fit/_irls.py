@@ -7,12 +7,13 @@ from __future__ import annotations
 
 import functools
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..errors import ParameterError
+from ..errors import EnergyConservationWarning, ParameterError
 from ._params import _jacobian, _materials
 from .kernels import _table
 
@@ -57,8 +58,12 @@ class Model:
         key = tuple(np.asarray(x, float))
         if key not in self._cache:
             try:
-                ms = _materials(pr.mats, pr.params, x)
-                self._cache[key] = {p: _table(ms[p]) for p in pr.fitted_parts}
+                with warnings.catch_warnings():
+                    # the solver's trial points may leave energy conservation (allowed,
+                    # as the paper's Sec. 4.A); the user hears of the estimate only
+                    warnings.simplefilter("ignore", EnergyConservationWarning)
+                    ms = _materials(pr.mats, pr.params, x)
+                    self._cache[key] = {p: _table(ms[p]) for p in pr.fitted_parts}
             except ParameterError:
                 self._cache[key] = None
             if len(self._cache) > 8:

@@ -17,6 +17,8 @@ identifiability in :mod:`._identify`.
 
 from __future__ import annotations
 
+import functools
+import math
 import warnings
 from dataclasses import dataclass, field
 
@@ -31,11 +33,13 @@ from ..ladar import Ladar
 from ..waveforms import Waveforms
 from ..scene import Scene
 from . import _irls
-from ._identify import _correlation, _misfit, _uncertainty
+from ._identify import NULL_REL, _correlation, _misfit, _uncertainty, describe
 from ._params import _materials, _resolve_params
+from ._resolution import KERNEL_TOL, MAX_SAMPLES, KernelErrorWarning, Ladder
 from .kernels import CoatingKernel, _table, coating_kernel
 
-__all__ = ["fit_coatings", "CoatingFit", "IdentifiabilityWarning", "NOISE_MODELS"]
+__all__ = ["fit_coatings", "CoatingFit", "IdentifiabilityWarning", "KernelErrorWarning",
+           "NOISE_MODELS", "KERNEL_TOL"]
 
 #: Noise models of :func:`fit_coatings`.
 NOISE_MODELS = ("gaussian", "poisson")
@@ -54,12 +58,29 @@ class CoatingFit:
     names : tuple of str
         "part.parameter" of each free parameter.
     estimate, stderr : (n,) arrays
+        σ is inf for a parameter the data do not act on or that only a combination
+        determines (a weakly determined one, named in ``identifiable``, keeps its σ).
     covariance, correlation : (n, n) arrays
-        From the Fisher information at the estimate.
+        From the Fisher information of the user's parameters at the estimate (inf on an
+        undetermined parameter's diagonal, NaN beside it).
     materials : tuple of BRDF
         Every part's coating with the estimates in.
     identifiable : dict
         name → True, or the reason the data cannot determine it.
+    undetermined : tuple of str
+        The names the data cannot determine.
+    combinations : tuple of (str, float, float)
+        The combinations of undetermined parameters that the data do determine (the
+        directions of the Fisher matrix orthogonal to its near-null ones), as (text,
+        value, σ): e.g. ("disk.rho_d + disk.epsilon", 0.5, 0.0027).
+    kernel_error : float or None
+        An analytic kernel's error: the largest change of the model at the estimate over
+        the bins from N to 2N pieces per boundary, in units of each bin's noise σ (the fit
+        used 2N; None: not estimated, see ``info["kernel_error_note"]``).
+        ``info["kernel_shift"]``: the largest shift of a parameter, in its σ, that this
+        change causes; N doubles until both are at most ``kernel_tol``.
+    samples : int or None
+        Pieces per boundary of the kernel used.
     noise, deviance, dof, iterations, predicted
         The noise model, the misfit (χ² for Gaussian, deviance for counts), degrees of
         freedom, solver iterations, the fitted sinogram values.
@@ -81,13 +102,28 @@ class CoatingFit:
     predicted: np.ndarray
     bootstrap: np.ndarray | None = None
     info: dict = field(default_factory=dict)
+    combinations: tuple = ()
+    kernel_error: float | None = None
+    samples: int | None = None
+
+    @property
+    def undetermined(self):
+        """The names the data cannot determine."""
+        return tuple(n for n in self.names if self.identifiable[n] is not True)
+
+    def _kernel_line(self):
+        if self.kernel_error is None:
+            return "not estimated"
+        return f"{self.kernel_error:.2g} σ ({self.samples} samples per boundary)"
 
     def _summary(self):
         return (("noise", self.noise),
                 *((n, f"{v:.5g} ± {e:.3g}" + ("" if self.identifiable[n] is True
                                                else " (undetermined)"))
                   for n, v, e in zip(self.names, self.estimate, self.stderr)),
-                ("misfit", f"{self.deviance:.4g} on {self.dof} dof"))
+                *((c, f"{v:.5g} ± {e:.3g} (determined)") for c, v, e in self.combinations),
+                ("misfit", f"{self.deviance:.4g} on {self.dof} dof"),
+                ("kernel error", self._kernel_line()))
 
     def __repr__(self) -> str:
         return _text("CoatingFit", *self._summary())
@@ -115,14 +151,18 @@ class CoatingFit:
                        f"[{lo[i]:10.5g}, {hi[i]:10.5g}]{note}")
         strong = [(self.names[i], self.names[j], self.correlation[i, j])
                   for i in range(len(self.names)) for j in range(i + 1, len(self.names))
-                  if abs(self.correlation[i, j]) > 0.9]
+                  if np.isfinite(self.correlation[i, j]) and abs(self.correlation[i, j]) > 0.9]
         for a, b, r in strong:
             out.append(f"  correlation {a} ~ {b}: {r:+.3f}")
+        for c, v, e in self.combinations:
+            out.append(f"  determined: {c} = {v:.5g} ± {e:.3g}")
+        out.append(f"  kernel error: {self._kernel_line()}")
         return out
 
 def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, initial=None,
                  noise="gaussian", photons_per_unit=None, speckle_cells=None, background=0.0,
-                 bootstrap=0, seed=0, samples=8192, max_iter=50):
+                 bootstrap=0, seed=0, samples=2048, kernel_tol=KERNEL_TOL,
+                 max_samples=MAX_SAMPLES, max_iter=50):
     """Fit coating parameters of chosen parts to a measured sinogram, the geometry known.
 
     Parameters
@@ -142,7 +182,8 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
         another BRDF); a dict gives them per part.
     bounds : dict, optional
         "part.param", "index.param" or "param" → (low, high) (default SR's valid ranges;
-        unbounded for other models).
+        unbounded for other models). They limit the search only: σ is the user
+        parameters' own, whatever the bounds.
     initial : dict, optional
         part → BRDF to start from (default the geometry's own coatings).
     noise : {"gaussian", "poisson"}
@@ -152,10 +193,17 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
         Counts per unit of ``measured.values`` (required for ``"poisson"``).
     background : float
         Known mean background counts per bin (``"poisson"``), not subtracted from the data.
-    bootstrap : int
-        Parametric-bootstrap refits (0: none): noise drawn from the fitted model.
-    seed : int
-        The bootstrap's seed.
+    bootstrap, seed : int
+        Parametric-bootstrap refits (0: none) from the fitted model, and their seed.
+    samples : int
+        Pieces per boundary an analytic scene's kernel starts from.
+    kernel_tol : float or None
+        An analytic kernel's error allowed in any bin, in units of that bin's noise σ
+        (default 0.1): N doubles until the model's change from N to 2N pieces per boundary
+        at the estimate is at most this; the fit uses 2N. None: no check.
+    max_samples : int
+        The most pieces per boundary (default 2^16); above it a :class:`KernelErrorWarning`
+        gives the error and the count that would do.
     max_iter : int
         Most outer (reweighting) iterations.
 
@@ -163,7 +211,7 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
     -------
     CoatingFit
         Warns :class:`IdentifiabilityWarning` naming any parameter the data cannot
-        determine.
+        determine and the combinations they do.
     """
     waveforms = isinstance(measured, Waveforms)
     if not waveforms:
@@ -173,33 +221,105 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
     scale, M, background = _noise_options(noise, photons_per_unit, speckle_cells, background)
     bootstrap = check_count("bootstrap", bootstrap, low=0)
     max_iter = check_count("max_iter", max_iter)
+    if kernel_tol is not None:
+        kernel_tol = check_real("kernel_tol", kernel_tol, low=0.0, low_open=True)
+    ladder = Ladder(kernel, kernel_tol, check_count("max_samples", max_samples))
     mats, params = _resolve_params(kernel, parts, free, bounds, initial)
-    problem = _problem(kernel, measured, mats, params,
-                       _Options(noise, scale, M, background, max_iter))
-    x0 = np.clip([float(getattr(mats[p.part], p.name)) for p in params], problem.low,
-                 problem.high)
-    model = _irls.Model(problem)
-    x, m, iterations = _irls.solve(model, problem.data, x0)
-    V = _irls.variance(m, noise, M)
+    opts = _Options(noise, scale, M, background, max_iter)
+    x = np.clip([float(getattr(mats[p.part], p.name)) for p in params],
+                [p.low for p in params], [p.high for p in params])
+    ladder.settle(_materials(mats, params, x), _noise_sigma(measured, opts, len(params)))
+    while True:
+        problem = _problem(ladder.used, measured, mats, params, opts)
+        model = _irls.Model(problem)
+        x, m, iterations = _irls.solve(model, problem.data, x)
+        if ladder.settle(_materials(mats, params, x), _noise_sigma(measured, opts, len(params)),
+                         functools.partial(_kernel_shift, model, (x, m))):
+            break
+    ladder.warn_if_coarse()
+    return _result(model, (x, m, iterations), ladder, (bootstrap, seed))
+
+
+def _result(model, solved, ladder, boot):
+    """The CoatingFit of a solved problem, with its covariance and identifiability."""
+    problem, (x, m, iterations) = model.problem, solved
+    kernel, params = ladder.used, problem.params
     J = model.jacobian(x)
+    V = _irls.variance(m, problem.noise, problem.M)
     fit = _misfit(problem, m, V, J)
     full = problem.fixed_all.copy()
     full[problem.rows] = m
-    cov, ident = _uncertainty(fit.fisher, x, params, kernel)
-    stderr, corr = _correlation(cov)
     names = tuple(f"{kernel.parts[p.part]}.{p.name}" for p in params)
-    ident = {names[i]: v for i, v in enumerate(ident)}
-    boots = (_irls.bootstrap(model, m, x, count=bootstrap, seed=seed, sigma2=fit.sigma2)
-             if bootstrap else None)
+    found = _uncertainty(fit.fisher, x, params, lambda i: names[i])
+    stderr, corr = _correlation(found.covariance)
+    ident = {names[i]: v for i, v in enumerate(found.reasons)}
+    combos = tuple((describe(c, names), float(c @ x), s) for c, s in found.combinations)
+    boots = (_irls.bootstrap(model, m, x, count=boot[0], seed=boot[1], sigma2=fit.sigma2)
+             if boot[0] else None)
+    _warn_undetermined(ident, combos)
+    res = ladder.info()
+    scale = problem.scale
+    return CoatingFit(names, x, stderr, found.covariance, corr,
+                      tuple(_materials(problem.mats, params, x)), ident,
+                      problem.noise if problem.M is None else
+                      f"negative binomial (M = {problem.M:g})", fit.misfit, fit.dof,
+                      iterations, (full / scale).reshape(kernel.shape), boots,
+                      {"photons_per_unit": scale if problem.noise == "poisson" else None,
+                       "radiometry": kernel.radiometry, "source": kernel.source,
+                       "covariance": "inverse Fisher information of the user's parameters "
+                                     f"(null directions: eigenvalue ≤ {NULL_REL:g} of the "
+                                     "largest of the unit-diagonal Fisher matrix)", **res},
+                      combinations=combos, kernel_error=res["kernel_error"],
+                      samples=res["samples"])
+
+
+def _kernel_shift(model, at, coarse, fine):
+    """The largest shift of a parameter, in its σ, that the model's change from the
+    ``coarse`` to the ``fine`` kernel causes at ``at`` = (x, model values): the weighted
+    least-squares step (Jᵀ W J)⁺ Jᵀ W Δm, W the inverse noise variance."""
+    problem = model.problem
+    x, m = at
+    mats = _materials(problem.mats, problem.params, x)
+    dm = (fine.predict(mats) - coarse.predict(mats)).ravel()[problem.rows] * problem.scale
+    if problem.noise == "gaussian":
+        rss = float(np.sum((problem.data - m) ** 2)) / max(1, m.size - len(x))
+        w = np.full(m.size, 1.0 / math.sqrt(max(rss, 1e-300)))
+    else:
+        w = 1.0 / np.sqrt(_irls.variance(m, problem.noise, problem.M))
+    Jw = model.jacobian(x) * w[:, None]
+    cov = np.linalg.pinv(Jw.T @ Jw)
+    step = cov @ (Jw.T @ (dm * w))
+    sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    ok = sd > 0
+    return float(np.max(np.abs(step[ok]) / sd[ok], initial=0.0))
+
+
+def _warn_undetermined(ident, combos):
     bad = {n: why for n, why in ident.items() if why is not True}
-    if bad:
-        warnings.warn("the data cannot determine " + "; ".join(
-            f"{n} ({why})" for n, why in bad.items()), IdentifiabilityWarning, stacklevel=2)
-    return CoatingFit(names, x, stderr, cov, corr, tuple(_materials(mats, params, x)), ident,
-                      noise if M is None else f"negative binomial (M = {M:g})", fit.misfit,
-                      fit.dof, iterations, (full / scale).reshape(kernel.shape), boots,
-                      {"photons_per_unit": scale if noise == "poisson" else None,
-                       "radiometry": kernel.radiometry, "source": kernel.source})
+    if not bad:
+        return
+    text = "the data cannot determine " + "; ".join(f"{n} ({why})" for n, why in bad.items())
+    if combos:
+        text += ("; they determine " + ", ".join(f"{c} = {v:.5g} ± {s:.3g}"
+                                                 for c, v, s in combos)
+                 + ": fix all but one of each combination's parameters (free=) or add views "
+                   "that separate them")
+    warnings.warn(text, IdentifiabilityWarning, stacklevel=3)
+
+
+def _noise_sigma(measured, opts, n):
+    """The function kernel → each bin's noise σ (data units) at given coatings' model."""
+    y = np.asarray(measured.values, float).ravel()
+
+    def sigma_of(kernel, mats):
+        model = kernel.predict(mats).ravel()
+        if opts.noise == "poisson":
+            counts = model * opts.scale + opts.background
+            return np.sqrt(_irls.variance(counts, opts.noise, opts.M)) / opts.scale
+        rss = float(np.sum((y - model) ** 2))
+        return max(math.sqrt(rss / max(1, y.size - n)), 1e-12 * float(np.abs(y).max(
+            initial=1.0)))
+    return sigma_of
 
 
 def _kernel_for(geometry, measured, *, waveforms, samples):

@@ -3,15 +3,18 @@ any coatings.
 
 :class:`CoatingKernel` keeps it as, per part, a sparse matrix from the part's monostatic
 BRDF F(θ; −θ) tabulated on a fine grid of incidence angles (the projected weight F cos θ,
-finite to the horizon; linear interpolation, 8193 points on [0, π/2]: 1.9e-4 rad, fine for
-a 0.007 rad glint) to the sinogram's bins; any coating is then a matrix-vector product
-(milliseconds), and a parameter's derivative is the product with the derivative of its
-table.
+finite to the horizon; 8193 points on [0, π/2]: 1.9e-4 rad, 36 across a 0.007 rad glint)
+to the sinogram's bins; any coating is then a matrix-vector product (milliseconds), and a
+parameter's derivative is the product with the derivative of its table.
 
 * From analytic shapes (:func:`coating_kernel` on a :class:`~meshladar.Scene`): each
-  boundary sampled densely at arc-length weights, front-facing and unshadowed points
-  binned by range (exact ray-ellipse occlusion); the weight is F cos θ dl (``"paper"``) or
-  F cos² θ dl (``"power"``). Agrees with the analytic model's exact profiles to 0.5 %.
+  boundary cut per view into ``samples`` pieces from the point nearest the ladar, every
+  piece's visible part split between bins exactly (:mod:`._sampling`), the table
+  interpolated cubically; the weight is F cos θ dl (``"paper"``) or F cos² θ dl
+  (``"power"``). The error is second order in the piece length (~4× less per doubling);
+  at 8192 pieces the paper's pair is within 1e-4 (relative L2) of the analytic model's
+  exact profiles. :meth:`CoatingKernel.resampled` gives the same scene at another count
+  (a fit uses it to control the error, :mod:`._resolution`).
 * From mesh hits (:func:`coating_kernel` on :class:`~meshladar.hits.Hits`): each
   hit binned at its range with the weights :func:`~meshladar.weigh` gives it, per material
   index; equal to ``weigh`` to the table's interpolation.
@@ -35,8 +38,8 @@ from ..waveforms import receive
 from ..weighing import per_table_weight
 from ..scene import Scene
 from ..sensor import check_radiometry
-from ..shapes import from_frame, to_frame
 from ..sinogram import Sinogram
+from ._sampling import analytic_triplets, interp_matrix
 
 __all__ = ["CoatingKernel", "coating_kernel", "GRID"]
 
@@ -80,6 +83,8 @@ class CoatingKernel:
     radiometry: str
     source: str
     info: dict = field(default_factory=dict)
+    _traced: tuple | None = field(default=None, repr=False)
+    _finer: dict = field(default_factory=dict, repr=False)
 
     def _summary(self):
         return (("parts", self.parts), ("shape", self.shape), ("source", self.source),
@@ -91,6 +96,25 @@ class CoatingKernel:
 
     def _repr_html_(self) -> str:
         return _html_table("CoatingKernel", *self._summary())
+
+    @property
+    def samples(self):
+        """Pieces per analytic boundary (None for mesh hits)."""
+        return self.info.get("samples_per_shape")
+
+    def resampled(self, samples):
+        """This analytic kernel with ``samples`` pieces per boundary (kept, so a second
+        call is free); a mesh kernel cannot be resampled (ParameterError)."""
+        samples = check_count("samples", samples)
+        if self._traced is None:
+            raise ParameterError("only an analytic scene's kernel can be resampled; this "
+                                 f"one is from {self.source}")
+        if samples == self.samples:
+            return self
+        if samples not in self._finer:
+            scene, ladar = self._traced
+            self._finer[samples] = _analytic_kernel(scene, ladar, self.radiometry, samples)
+        return self._finer[samples]
 
     def part_index(self, part) -> int:
         """A part's index from its name or index."""
@@ -148,63 +172,21 @@ class CoatingKernel:
 def _interp_matrix(rows, theta, omega, n_rows):
     """The sparse (n_rows, GRID) matrix putting weight ω at angle θ into row ``rows`` by
     linear interpolation on the θ grid."""
-    u = np.clip(theta, 0.0, 0.5 * math.pi) / (_THETA[1] - _THETA[0])
-    j = np.minimum(np.floor(u).astype(np.int64), GRID - 2)
-    f = u - j
-    r = np.concatenate([rows, rows])
-    c = np.concatenate([j, j + 1])
-    v = np.concatenate([omega * (1.0 - f), omega * f])
-    return csr_matrix((v, (r, c)), shape=(n_rows, GRID))
-
-
-def _ray_blocked(p, w, shape):
-    """(N, V) bool: does the ray p + s w, s > 0, cross the ellipse ``shape``?"""
-    a, b = shape.axes
-    d = p - np.asarray(shape.center)
-    qx, qy = to_frame(shape.angle, d[:, 0], d[:, 1])
-    dx, dy = to_frame(shape.angle, w[:, 0], w[:, 1])
-    qx, qy, dx, dy = qx[:, None] / a, qy[:, None] / b, dx[None, :] / a, dy[None, :] / b
-    A = dx * dx + dy * dy
-    B = qx * dx + qy * dy
-    C = qx * qx + qy * qy - 1.0
-    disc = B * B - A * C
-    far = (-B + np.sqrt(np.maximum(disc, 0.0))) / A
-    return (disc > 0) & (far > 0) & (C > 0)
+    return interp_matrix(rows, theta, omega, n_rows, GRID)
 
 
 def _analytic_kernel(scene, ladar, radiometry, samples):
-    edges = ladar.bin_edges
-    n_views, n_bins = ladar.n_views, edges.size - 1
-    phi = np.deg2rad(ladar.angles_deg)
-    w = np.stack([np.cos(phi), np.sin(phi)], axis=1)
-    mats, names = [], []
-    for i, shape in enumerate(scene.shapes):
-        a, b = shape.axes
-        t = (np.arange(samples) + 0.5) * (2.0 * math.pi / samples)
-        p = shape.boundary(t)
-        speed = np.hypot(a * np.sin(t), b * np.cos(t))
-        dl = speed * (2.0 * math.pi / samples)
-        nx, ny = from_frame(shape.angle, b * np.cos(t), a * np.sin(t))
-        n = np.stack([nx, ny], axis=1) / np.hypot(nx, ny)[:, None]
-        c = n @ w.T                                               # (N, V)
-        ok = c > 0
-        for j, other in enumerate(scene.shapes):
-            if j != i:
-                ok &= ~_ray_blocked(p, w, other)
-        r = -(p @ w.T)
-        k = np.searchsorted(edges, r, side="right") - 1
-        ok &= (k >= 0) & (k < n_bins)
-        si, vi = np.nonzero(ok)
-        cos_t = c[si, vi]
-        omega = dl[si] * (1.0 if radiometry == "paper" else cos_t)          # × F cos θ
-        mats.append(_interp_matrix(vi * n_bins + k[si, vi], np.arccos(np.minimum(cos_t, 1.0)),
-                                   omega, n_views * n_bins))
-        names.append(shape.name if shape.name is not None else f"shape {i}")
+    n_views, n_bins = ladar.n_views, ladar.bin_edges.size - 1
+    mats = [interp_matrix(r, t, w, n_views * n_bins, GRID, cubic=True) for r, t, w in
+            analytic_triplets(scene, ladar, radiometry == "power", samples)]
+    names = [s.name if s.name is not None else f"shape {i}"
+             for i, s in enumerate(scene.shapes)]
     if len(set(names)) != len(names):
         names = [f"{nm} ({i})" for i, nm in enumerate(names)]
     return CoatingKernel(tuple(mats), tuple(names), tuple(s.material for s in scene.shapes),
-                         (n_views, n_bins), ladar.angles_deg, edges, radiometry, "analytic",
-                         {"samples_per_shape": samples, "units": "length/sr"})
+                         (n_views, n_bins), ladar.angles_deg, ladar.bin_edges, radiometry,
+                         "analytic", {"samples_per_shape": samples, "units": "length/sr"},
+                         _traced=(scene, ladar))
 
 
 def _mesh_kernel(hits, radiometry):

@@ -1,6 +1,8 @@
 """Coatings from ladar data (meshladar.fit): the coating kernel against the analytic
-model and against weigh on mesh hits, the coverage of the fitted intervals over seeded
-Poisson trials, identifiability failures, a user's own BRDF, and bad input."""
+model and against weigh on mesh hits, least squares with a bootstrap, identifiability
+failures, a user's own BRDF, waveforms, view design and bad input. The coverage of the
+intervals is tests/fit/test_coverage.py's, the kernel's error test_kernel_error.py's, the
+degenerate coatings and σ's independence of bounds test_identify.py's."""
 
 from __future__ import annotations
 
@@ -22,10 +24,17 @@ from meshladar.shapes import Disk
 
 PAIR = paper._pair(materials.DARK_GRAY, materials.ALUMINUM)
 LADAR = Ladar(np.arange(0.0, 360.0, 1.0), Ladar.centered(128, 1.6 / 128).bin_edges)
-#: Photoelectrons in the brightest bin (the aluminium glint) of the coverage trials.
-PEAK_PHOTONS = 1e5
-#: The kernel against the analytic model's exact profiles (measured 3e-4 at 8192 samples).
-KERNEL_TOL = 2e-3
+#: The kernel against the analytic model's exact profiles (relative L2; measured 2.4e-5 at
+#: 8192 samples; the point-sampled kernel it replaced: 3e-4).
+KERNEL_TOL = 1e-4
+
+
+def _counts(scene, ladar, peak, seed=0):
+    """Seeded Poisson counts of the analytic model's exact profiles with ``peak``
+    photoelectrons in the brightest bin: (values, counts per unit)."""
+    exact = ml.simulate(scene, ladar, model="analytic").values
+    k = peak / exact.max()
+    return np.random.default_rng(seed).poisson(exact * k) / k, k
 
 
 def _measured(values, ladar=LADAR, radiometry="paper"):
@@ -37,14 +46,15 @@ def _measured(values, ladar=LADAR, radiometry="paper"):
 def test_kernel_matches_the_analytic_model(radiometry):
     """Sampled boundaries, exact occlusion and the tabulated F cos θ reproduce the analytic
     model's exact sinogram of the shadowed, glinting pair."""
-    exact = ml.simulate(PAIR, LADAR, radiometry=radiometry)
-    K = coating_kernel(PAIR, LADAR, radiometry=radiometry)
+    lad = Ladar(np.arange(0.0, 360.0, 3.0), LADAR.bin_edges)
+    exact = ml.simulate(PAIR, lad, radiometry=radiometry)
+    K = coating_kernel(PAIR, lad, radiometry=radiometry)
     got = K.predict()
     assert np.linalg.norm(got - exact.values) / np.linalg.norm(exact.values) < KERNEL_TOL
     assert K.parts == ("large", "small") and K.source == "analytic"
     # re-weighing for other coatings is linear in each part's table
     swapped = K.predict([materials.ALUMINUM, materials.DARK_GRAY])
-    other = ml.simulate(paper._pair(materials.ALUMINUM, materials.DARK_GRAY), LADAR,
+    other = ml.simulate(paper._pair(materials.ALUMINUM, materials.DARK_GRAY), lad,
                         radiometry=radiometry)
     assert np.linalg.norm(swapped - other.values) / np.linalg.norm(other.values) < KERNEL_TOL
 
@@ -62,45 +72,18 @@ def test_kernel_equals_weigh_on_mesh_hits():
 
 
 @pytest.mark.slow
-def test_intervals_cover_the_truth_over_seeded_poisson_trials():
-    """The issue's goal: the gray/aluminium pair, 360 views of 64 bins, Poisson counts with
-    1e5 photoelectrons in the brightest bin; over 200 seeded trials every parameter's 95 %
-    interval holds the truth in ≥ 90 % of them, and the bias is below 0.25 σ (0.07 is the
-    sampling error of a 200-trial mean)."""
-    lad = Ladar(np.arange(0.0, 360.0, 1.0), Ladar.centered(64, 1.6 / 64).bin_edges)
-    K = coating_kernel(PAIR, lad, samples=1024)
-    truth = K.predict()
-    k = PEAK_PHOTONS / truth.max()
-    true = np.array([getattr(m, n) for m in (materials.DARK_GRAY, materials.ALUMINUM)
-                     for n in ("rho_d", "epsilon", "b", "e")])
-    inside, z = [], []
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")                         # no warning in any trial
-        for seed in range(200):
-            counts = np.random.default_rng(seed).poisson(truth * k)
-            fit = fit_coatings(K, _measured(counts / k, lad), noise="poisson",
-                               photons_per_unit=k)
-            lo, hi = fit.interval(0.95)
-            inside.append((lo <= true) & (true <= hi))
-            z.append((fit.estimate - true) / fit.stderr)
-    coverage = np.mean(inside, axis=0)
-    assert np.all(coverage >= 0.90), dict(zip(fit.names, coverage))
-    assert np.all(np.abs(np.mean(z, axis=0)) < 0.25), dict(zip(fit.names, np.mean(z, axis=0)))
-    assert all(v is True for v in fit.identifiable.values())
-    assert fit.names[0] == "large.rho_d" and fit.noise == "poisson"
-
-
-@pytest.mark.slow
 def test_gaussian_fit_bootstrap_and_report():
     """Least squares with σ from the residuals, the aluminium disk's coating from a wrong
-    start (the gray disk's known); the parametric bootstrap's spread agrees with the
-    Fisher σ."""
-    K = coating_kernel(PAIR, LADAR, samples=2048)
-    truth = K.predict()
+    start (the gray disk's known), on the analytic model's exact profiles plus Gaussian
+    noise; the parametric bootstrap's spread agrees with the Fisher σ."""
+    lad = Ladar(np.arange(0.0, 360.0, 2.0), LADAR.bin_edges)
+    K = coating_kernel(PAIR, lad, samples=2048)
+    truth = ml.simulate(PAIR, lad, model="analytic").values
     sigma = 1e-4 * truth.max()
     y = truth + np.random.default_rng(5).normal(0.0, sigma, truth.shape)
     start = {"small": SandfordRobertson(0.06, 0.5, 0.15, 0.01)}
-    fit = fit_coatings(K, _measured(y), parts=["small"], initial=start, bootstrap=20, seed=2)
+    fit = fit_coatings(K, _measured(y, lad), parts=["small"], initial=start, bootstrap=20,
+                       seed=2)
     assert fit.names == ("small.rho_d", "small.epsilon", "small.b", "small.e")
     true = np.array([0.047, 0.53, 0.1, 0.007])
     assert np.all(np.abs(fit.estimate - true) < 4 * fit.stderr)
@@ -109,6 +92,7 @@ def test_gaussian_fit_bootstrap_and_report():
     text = "\n".join(fit.report())
     assert "small.e" in text and "95 % interval" in text
     assert fit.predicted.shape == truth.shape
+    assert fit.kernel_error <= 0.1 and "kernel error" in text
 
 
 def test_an_undetermined_parameter_is_named():
@@ -117,14 +101,15 @@ def test_an_undetermined_parameter_is_named():
     m = SandfordRobertson(0.4, 0.3, 0.5, 0.2, lobes="diffuse")
     scene = Scene([Disk((0.0, 0.0), 0.5, m, name="disk")])
     lad = Ladar(np.arange(0.0, 360.0, 5.0), Ladar.centered(64, 1.2 / 64).bin_edges)
-    y = coating_kernel(scene, lad).predict()
+    y, k = _counts(scene, lad, 1e5)
     with pytest.warns(IdentifiabilityWarning, match=r"disk\.epsilon \(the data do not "
                                                     r"depend on it\)"):
-        fit = fit_coatings(scene, _measured(y, lad), free=("rho_d", "epsilon", "b"))
+        fit = fit_coatings(scene, _measured(y, lad), free=("rho_d", "epsilon", "b"),
+                           noise="poisson", photons_per_unit=k)
     assert fit.identifiable["disk.epsilon"] == "the data do not depend on it"
     assert fit.identifiable["disk.rho_d"] is True
     assert np.isinf(fit.stderr[1])
-    assert abs(fit.estimate[0] - 0.4) < 1e-6 and abs(fit.estimate[2] - 0.5) < 1e-6
+    assert np.all(np.abs(fit.estimate[[0, 2]] - [0.4, 0.5]) < 4 * fit.stderr[[0, 2]])
 
 
 def test_a_users_own_brdf_is_fitted():
@@ -140,11 +125,13 @@ def test_a_users_own_brdf_is_fitted():
 
     scene = Scene([Disk((0.0, 0.0), 0.5, Sheen(0.6, 3.0), name="disk")])
     lad = Ladar(np.arange(0.0, 360.0, 5.0), Ladar.centered(64, 1.2 / 64).bin_edges)
-    y = coating_kernel(scene, lad).predict()
+    y, k = _counts(scene, lad, 1e6)
     fit = fit_coatings(scene, _measured(y, lad), initial={"disk": Sheen(0.3, 1.5)},
-                       bounds={"albedo": (0.0, 1.0), "n": (0.0, 50.0)})
+                       bounds={"albedo": (0.0, 1.0), "n": (0.0, 50.0)}, noise="poisson",
+                       photons_per_unit=k)
     assert fit.names == ("disk.albedo", "disk.n")
-    np.testing.assert_allclose(fit.estimate, [0.6, 3.0], rtol=1e-5)
+    assert np.all(np.abs(fit.estimate - [0.6, 3.0]) < 4 * fit.stderr)
+    assert np.all(fit.stderr < [3e-3, 0.03])
     assert isinstance(fit.materials[0], Sheen)
 
 
@@ -164,6 +151,10 @@ def test_bad_input_is_named():
                                                                  LADAR.bin_edges[:65])))
     with pytest.raises(ParameterError, match="noise"):
         fit_coatings(K, y, noise="laplace")
+    with pytest.raises(ParameterError, match="kernel_tol"):
+        fit_coatings(K, y, kernel_tol=0.0)
+    with pytest.raises(ParameterError, match="max_samples"):
+        fit_coatings(K, y, max_samples=0)
     with pytest.raises(ParameterError, match="geometry"):
         coating_kernel("pair.stl", LADAR)
 
@@ -244,6 +235,8 @@ def test_a_glint_never_seen_leaves_its_parameters_undetermined():
     with pytest.warns(IdentifiabilityWarning) as caught:
         fit = fit_coatings(K, measured, noise="poisson", photons_per_unit=k)
     named = str(caught[0].message)
+    assert fit.kernel_error is None and "mesh kernel cannot be resampled" in \
+        fit.info["kernel_error_note"]
     assert "epsilon" in named and ".e (" in named
     assert fit.identifiable[f"{K.parts[0]}.rho_d"] is True
     assert fit.identifiable[f"{K.parts[0]}.b"] is True
