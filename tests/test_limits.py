@@ -115,3 +115,16 @@ def test_tv_zero_is_fista_without_regularisation(sino):
     assert np.all(np.isfinite(img.values))
     ref = cgls(sino, 32, n_iter=30, extent=1.0)
     assert img.info["residuals"][-1] <= 1.5 * ref.info["residuals"][-1]
+
+
+@pytest.mark.parametrize("seed", [-1, 1.5, "a", object()], ids=repr)
+def test_the_fits_check_their_seed_first(sino, seed):
+    """fit_coatings and find_shapes passed a bad seed to numpy deep inside (TypeError)."""
+    from meshladar.fit import fit_coatings
+    from meshladar.fit.shapes import find_shapes
+
+    with pytest.raises(ParameterError, match="^seed must be None or a non-negative integer"):
+        find_shapes(sino, size=16, seed=seed)
+    scene = ml.Scene([ml.Disk((0.0, 0.0), 0.6, ml.materials.DARK_GRAY, name="disk")])
+    with pytest.raises(ParameterError, match="^seed must be None or a non-negative integer"):
+        fit_coatings(scene, sino, seed=seed)

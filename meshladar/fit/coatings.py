@@ -27,7 +27,7 @@ from scipy.stats import norm
 
 from .._summary import table as _html_table
 from .._summary import text as _text
-from .._validate import check_choice, check_count, check_real, check_sinogram
+from .._validate import check_choice, check_count, check_real, check_seed, check_sinogram
 from ..errors import MeshladarWarning, ParameterError
 from ..ladar import Ladar
 from ..waveforms import Waveforms
@@ -217,13 +217,14 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
     if not waveforms:
         check_sinogram("measured", measured)
     noise = check_choice("noise", noise, NOISE_MODELS)
-    kernel = _kernel_for(geometry, measured, waveforms=waveforms, samples=samples)
-    scale, M, background = _noise_options(noise, photons_per_unit, speckle_cells, background)
-    bootstrap = check_count("bootstrap", bootstrap, low=0)
-    max_iter = check_count("max_iter", max_iter)
+    bootstrap, seed = check_count("bootstrap", bootstrap, low=0), check_seed("seed", seed)
+    max_iter = check_count("max_iter", max_iter)                    # all before the kernel
     if kernel_tol is not None:
         kernel_tol = check_real("kernel_tol", kernel_tol, low=0.0, low_open=True)
-    ladder = Ladder(kernel, kernel_tol, check_count("max_samples", max_samples))
+    max_samples = check_count("max_samples", max_samples)
+    kernel = _kernel_for(geometry, measured, waveforms=waveforms, samples=samples)
+    scale, M, background = _noise_options(noise, photons_per_unit, speckle_cells, background)
+    ladder = Ladder(kernel, kernel_tol, max_samples)
     mats, params = _resolve_params(kernel, parts, free, bounds, initial)
     opts = _Options(noise, scale, M, background, max_iter)
     x = np.clip([float(getattr(mats[p.part], p.name)) for p in params],

@@ -29,7 +29,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from .._validate import check_choice, check_count, check_real
+from .._validate import check_choice, check_count, check_real, check_seed
 from ..brdf import SandfordRobertson
 from ..reconstruct.compensation import estimate_surface, first_image
 from ..errors import ParameterError
@@ -171,6 +171,7 @@ def find_shapes(sino, *, size=512, extent=1.0, center=(0.0, 0.0), kind="disk", f
     """
 
     kind = check_choice("kind", kind, SHAPE_KINDS)
+    seed = check_seed("seed", seed)                    # before the first reconstruction
     if first is None:
         first = first_image(sino, size, extent, center)
     surface = estimate_surface(first, sino, shadows=False)
