@@ -11,6 +11,8 @@ import pytest
 import meshladar as ml
 from meshladar.brdf import Tabulated
 from meshladar.errors import ParameterError
+from meshladar.fit import coating_kernel, fit_coatings
+from meshladar.reconstruct.compensation import compensate
 from meshladar.meshes import fibonacci_sphere
 from meshladar.reconstruct.iterative import cgls, sirt, tv_fista
 from meshladar.sensor import GaussianBeam, Sensor
@@ -31,7 +33,8 @@ CASES = {
                            r"^pulse_energy must be in \(0, 1e\+09\]"),
     "aperture 1e9": (lambda s: Sensor(standoff=10.0, pulse_energy=1.0, aperture_diameter=1e9),
                      r"^aperture_diameter must be in \(0, 1000\]"),
-    "wavelength 1e-20": (lambda s: Sensor(wavelength=1e-20), r"^wavelength must be in \[1e-09, 1\]"),
+    "wavelength 1e-20": (lambda s: Sensor(wavelength=1e-20),
+                         r"^wavelength must be in \[1e-09, 1\]"),
     "waist 1e300": (lambda s: GaussianBeam(1e300), r"^waist must be in \(0, 1e\+09\]"),
     "pulse 1e300 s": (lambda s: GaussianPulse(1e300), r"^fwhm must be in \(0, 1\]"),
     "sampled pulse interval": (lambda s: SampledPulse([1.0], 1e300), r"^interval must be in"),
@@ -128,3 +131,49 @@ def test_the_fits_check_their_seed_first(sino, seed):
     scene = ml.Scene([ml.Disk((0.0, 0.0), 0.6, ml.materials.DARK_GRAY, name="disk")])
     with pytest.raises(ParameterError, match="^seed must be None or a non-negative integer"):
         fit_coatings(scene, sino, seed=seed)
+
+
+def _scaled(sino, factor, shift=0.0):
+    """The sinogram times ``factor``, plus ``shift`` times its peak."""
+    values = factor * sino.values + shift * sino.values.max()
+    return ml.Sinogram(values, angles_deg=sino.angles_deg, bin_edges=sino.bin_edges)
+
+
+def _disk_scene():
+    return ml.Scene([ml.Disk((0.0, 0.0), 0.6, ml.materials.DARK_GRAY, name="disk")])
+
+
+FIT_CASES = {
+    "fit zero data": (lambda s: fit_coatings(_disk_scene(), _scaled(s, 0.0)),
+                      r"^measured has no positive value: nothing returned"),
+    "fit negative data": (lambda s: fit_coatings(_disk_scene(), _scaled(s, -1.0)),
+                          r"^measured has no positive value"),
+    "fit bounds outside": (lambda s: fit_coatings(_disk_scene(), s,
+                                                  bounds={"rho_d": (-1.0, 5.0)}),
+                           r"^bounds of disk.rho_d must lie in its valid range \[0, 1\]; "
+                           r"got \(-1, 5\)"),
+    "poisson negative counts": (lambda s: fit_coatings(_disk_scene(), _scaled(s, 1.0, -0.5),
+                                                       noise="poisson", photons_per_unit=1e3),
+                                r"^noise='poisson' counts events, which are >= 0"),
+    "kernel of a mesh scene": (lambda s: coating_kernel(ml.phantoms.scene("disk").tessellate(64),
+                                                        ml.Ladar.paper(angles_deg=[0.0])),
+                               r"^coating_kernel takes analytic shapes"),
+    "kernel samples 1e9": (lambda s: coating_kernel(_disk_scene(),
+                                                    ml.Ladar.paper(angles_deg=[0.0]),
+                                                    samples=10**9),
+                           r"^samples must be at most 1048576 per boundary"),
+    "compensate negated": (lambda s: compensate(_scaled(s, -1.0), ml.materials.DARK_GRAY,
+                                                size=64),
+                           r"^sino has no positive return to compensate; its largest value "
+                           r"is 0 "),
+}
+
+
+@pytest.mark.parametrize("case", list(FIT_CASES))
+def test_fits_and_compensation_refuse_data_they_cannot_use(case, sino):
+    """Each was silent (an all-'undetermined' fit of zeros, σ shrunk by bounds outside the
+    valid range, an empty kernel), a minutes-long hang, or a message naming an internal
+    quantity ("first has no bright ridge")."""
+    call, message = FIT_CASES[case]
+    with pytest.raises(ParameterError, match=message):
+        call(sino)

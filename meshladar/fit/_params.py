@@ -70,11 +70,15 @@ def _resolve_params(kernel, parts, free, bounds, initial):
         for n in names:
             lo, hi = SR_BOUNDS.get(n, (-math.inf, math.inf)) if isinstance(
                 m, SandfordRobertson) else (-math.inf, math.inf)
+            valid = (lo, hi)
             if bounds is not None:
                 for key in (f"{kernel.parts[p]}.{n}", f"{p}.{n}", n):
                     if key in bounds:
                         lo, hi = (float(v) for v in bounds[key])
                         break
+            if lo < valid[0] or hi > valid[1]:
+                raise ParameterError(f"bounds of {kernel.parts[p]}.{n} must lie in its valid "
+                                     f"range [{valid[0]:g}, {valid[1]:g}]; got ({lo:g}, {hi:g})")
             if not lo < hi:
                 raise ParameterError(f"bounds of {kernel.parts[p]}.{n} must be (low, high) "
                                      f"with low < high; got ({lo}, {hi})")

@@ -216,7 +216,7 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
     waveforms = isinstance(measured, Waveforms)
     if not waveforms:
         check_sinogram("measured", measured)
-    noise = check_choice("noise", noise, NOISE_MODELS)
+    noise = _check_measured(measured.values, noise)
     bootstrap, seed = check_count("bootstrap", bootstrap, low=0), check_seed("seed", seed)
     max_iter = check_count("max_iter", max_iter)                    # all before the kernel
     if kernel_tol is not None:
@@ -321,6 +321,21 @@ def _noise_sigma(measured, opts, n):
         return max(math.sqrt(rss / max(1, y.size - n)), 1e-12 * float(np.abs(y).max(
             initial=1.0)))
     return sigma_of
+
+
+def _check_measured(values, noise):
+    """``noise`` checked, and data a fit cannot use refused: nothing returned, or negative
+    counts."""
+    noise = check_choice("noise", noise, NOISE_MODELS)
+    if not np.any(values > 0):
+        raise ParameterError("measured has no positive value: nothing returned, so there is "
+                             "nothing to fit (check the data's sign and units)")
+    if noise == "poisson" and np.any(values < 0):
+        raise ParameterError(f"noise='poisson' counts events, which are >= 0; measured has "
+                             f"{int(np.count_nonzero(values < 0))} negative values (smallest "
+                             f"{float(values.min()):.4g}): subtract no background, or use "
+                             "noise='gaussian'")
+    return noise
 
 
 def _kernel_for(geometry, measured, *, waveforms, samples):

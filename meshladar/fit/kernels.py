@@ -213,6 +213,11 @@ def _mesh_kernel(hits, radiometry):
                          {"mode": hits.mode, "normals": hits.normals})
 
 
+#: The most samples per analytic boundary a kernel takes (16 times the fit's refinement cap;
+#: 1e9 ran for minutes before running out of memory).
+MAX_KERNEL_SAMPLES = 2 ** 20
+
+
 def coating_kernel(geometry, ladar=None, *, radiometry="paper", samples=8192):
     """The :class:`CoatingKernel` of analytic shapes (``geometry`` a Scene of disks and
     ellipses, with ``ladar``) or of traced mesh hits (``geometry`` the
@@ -224,9 +229,18 @@ def coating_kernel(geometry, ladar=None, *, radiometry="paper", samples=8192):
     if isinstance(geometry, Scene):
         if ladar is None:
             raise ParameterError("an analytic scene's kernel needs the ladar (views, bins)")
-        if not all(hasattr(s, "axes") for s in geometry.shapes):
+        if geometry.is_mesh or not all(hasattr(s, "axes") for s in geometry.shapes):
             raise ParameterError("coating_kernel takes analytic shapes (Disk, Ellipse) or "
-                                 "mesh Hits; trace a mesh scene with meshladar.trace first")
-        return _analytic_kernel(geometry, ladar, radiometry, check_count("samples", samples))
+                                 "mesh Hits; trace a mesh scene with meshladar.trace first "
+                                 "(a mesh Scene gave an empty kernel)")
+        if not ladar.planar:
+            raise ParameterError("an analytic scene's kernel needs views about the z axis; "
+                                 "this ladar has 3-D view vectors (trace a mesh instead)")
+        samples = check_count("samples", samples)
+        if samples > MAX_KERNEL_SAMPLES:
+            raise ParameterError(f"samples must be at most {MAX_KERNEL_SAMPLES} per boundary "
+                                 f"(the kernel converges at second order well before); got "
+                                 f"{samples}")
+        return _analytic_kernel(geometry, ladar, radiometry, samples)
     raise ParameterError(f"geometry must be a Scene of analytic shapes or Hits; got "
                          f"{type(geometry).__name__}")

@@ -167,6 +167,16 @@ def _settle(surface, sino, H, W, m, smooth):
 SOLVERS = ("cgls", "sirt")
 
 
+def _check_returns(sino):
+    """A sinogram with returns to compensate: some value > 0 (a negated or log sinogram
+    said only "first has no bright ridge")."""
+    check_sinogram("sino", sino)
+    if not np.any(sino.values > 0):
+        raise ParameterError(f"sino has no positive return to compensate; its largest value "
+                             f"is {float(sino.values.max()) + 0.0:.4g} (pass the returns themselves: "
+                             "the log input of the first reconstruction is made inside)")
+
+
 def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first=None,
                labels=None, method="cgls", n_iter=30, weights=None, threshold=0.2,
                sigma=1.5, shadows=True, blur_deg=1.0, smooth=2.0, surface=None, tol=None,
@@ -212,7 +222,7 @@ def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first
         surface_pixels, shadowed_fraction (of front-facing point-views), blur_deg,
         surface_shift (the offset along the normals, scene units).
     """
-    check_sinogram("sino", sino)
+    _check_returns(sino)
     method = check_choice("method", method, SOLVERS)
     size = check_count("size", size)
     radiometry = sino.radiometry or "paper"
