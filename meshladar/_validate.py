@@ -19,6 +19,17 @@ __all__: list[str] = []
 MAX_ARRAY_BYTES = 4 * 2**30
 
 
+#: The longest quotation of a user's value in a message (characters): an array or a
+#: 400-digit number is cut, so the message stays one readable line.
+MAX_QUOTE = 80
+
+
+def short(value) -> str:
+    """``repr(value)``, cut to :data:`MAX_QUOTE` characters."""
+    text = repr(value)
+    return text if len(text) <= MAX_QUOTE else text[: MAX_QUOTE - 3] + "..."
+
+
 def check_real(name: str, value, *, low: float | None = None, high: float | None = None,
                low_open: bool = False, high_open: bool = False) -> float:
     """Return ``value`` as a float after checking that it is a finite real in the range.
@@ -26,8 +37,11 @@ def check_real(name: str, value, *, low: float | None = None, high: float | None
     ``low``/``high`` bound the range, closed unless ``low_open``/``high_open``.
     """
     if isinstance(value, bool) or not isinstance(value, (Real, np.floating, np.integer)):
-        raise ParameterError(f"{name} must be a real number; got {value!r}")
-    x = float(value)
+        raise ParameterError(f"{name} must be a real number; got {short(value)}")
+    try:
+        x = float(value)
+    except OverflowError:          # an integer beyond float64 (a 400-digit table entry)
+        x = math.inf if value > 0 else -math.inf
     lo = "(" if low_open else "["
     hi = ")" if high_open else "]"
     valid = f"{lo}{'-inf' if low is None else f'{low:g}'}, {'inf' if high is None else f'{high:g}'}{hi}"
@@ -43,7 +57,7 @@ def check_real(name: str, value, *, low: float | None = None, high: float | None
 def check_choice(name: str, value, choices: tuple[str, ...]) -> str:
     """Return ``value`` if it is one of ``choices``, else raise naming them."""
     if not isinstance(value, str) or value not in choices:
-        raise ParameterError(f"{name} must be one of {choices}; got {value!r}")
+        raise ParameterError(f"{name} must be one of {choices}; got {short(value)}")
     return value
 
 
@@ -55,10 +69,10 @@ def finite_array(name: str, value) -> np.ndarray:
                                  "its real part, magnitude or power yourself: which is meant "
                                  "is not for meshladar to guess)")
         a = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, OverflowError) as exc:
         if isinstance(exc, ParameterError):
             raise
-        raise ParameterError(f"{name} must be an array of real numbers; got {value!r}") from exc
+        raise ParameterError(f"{name} must be an array of real numbers; got {short(value)}") from exc
     if not np.all(np.isfinite(a)):
         bad = float(a[~np.isfinite(a)].ravel()[0])
         idx = np.argwhere(~np.isfinite(a))[0]
@@ -77,7 +91,7 @@ def readonly_copy(a) -> np.ndarray:
 def check_count(name: str, value, low: int = 1) -> int:
     """Return ``value`` as an int after checking it is an integer >= low (bools refused)."""
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
-        raise ParameterError(f"{name} must be an integer >= {low}; got {value!r}")
+        raise ParameterError(f"{name} must be an integer >= {low}; got {short(value)}")
     return int(value)
 
 
@@ -112,7 +126,7 @@ def check_seed(name: str, value):
             _seed_int(v) for v in np.asarray(value, dtype=object).ravel()):
         return [int(v) for v in np.asarray(value, dtype=object).ravel()]
     if not _seed_int(value):
-        raise ParameterError(f"{name} must be None or a non-negative integer; got {value!r}")
+        raise ParameterError(f"{name} must be None or a non-negative integer; got {short(value)}")
     return int(value)
 
 
@@ -123,13 +137,13 @@ def _seed_int(v):
 def check_name(value) -> None:
     """A label (``name=``) must be a string or None."""
     if value is not None and not isinstance(value, str):
-        raise ParameterError(f"name must be a string or None; got {value!r}")
+        raise ParameterError(f"name must be a string or None; got {short(value)}")
 
 
 def check_flag(name: str, value) -> bool:
     """Return ``value`` if it is a bool (numpy's included), else raise."""
     if not isinstance(value, (bool, np.bool_)):
-        raise ParameterError(f"{name} must be True or False; got {value!r}")
+        raise ParameterError(f"{name} must be True or False; got {short(value)}")
     return bool(value)
 
 
@@ -139,7 +153,7 @@ def check_path(name: str, value):
         path = os.fspath(value)
         if isinstance(path, str) and path:
             return path
-    raise ParameterError(f"{name} must be a file path; got {value!r}")
+    raise ParameterError(f"{name} must be a file path; got {short(value)}")
 
 
 def check_sinogram(name: str, value):

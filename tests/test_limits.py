@@ -177,3 +177,24 @@ def test_fits_and_compensation_refuse_data_they_cannot_use(case, sino):
     call, message = FIT_CASES[case]
     with pytest.raises(ParameterError, match=message):
         call(sino)
+
+
+def test_an_integer_beyond_float64_is_a_clear_error(tmp_path):
+    """A 400-digit integer in a material table was an internal error (OverflowError)."""
+    from meshladar.cli import main
+
+    table = tmp_path / "big.toml"
+    table.write_text(f"[huge]\nrho_d = {'9' * 400}\nepsilon = 0.1\nb = 0.5\ne = 0.1\n")
+    with pytest.raises(ParameterError, match=r"^rho_d must be finite and in \[0, 1\]; got inf"):
+        ml.brdf.SandfordRobertson(rho_d=10 ** 400, epsilon=0.1, b=0.5, e=0.1)
+    assert main(["materials", str(table)]) == 2
+
+
+def test_a_users_value_is_quoted_short():
+    """Messages printed whole arrays (issue 29, class 7): a quotation is cut to one line."""
+    from meshladar._validate import MAX_QUOTE, finite_array
+
+    with pytest.raises(ParameterError) as exc:
+        finite_array("values", [10 ** 400] + [1] * 10000)
+    quoted = str(exc.value).split("; got ", 1)[1]
+    assert len(quoted) == MAX_QUOTE and quoted.endswith("...")
