@@ -41,6 +41,8 @@ __all__ = ["GaussianPulse", "SampledPulse", "Waveforms", "receive"]
 
 #: The longest pulse, response or sample interval taken (s): a second is 3e8 m of range.
 MAX_PULSE_S = 1.0
+#: The shortest (s): an attosecond, far below any laser's; subnormal widths overflowed.
+MIN_PULSE_S = 1e-18
 #: A Gaussian pulse or response is cut where it falls below exp(−CUT²/2) of its peak.
 _GAUSS_CUT = 8.0
 #: FWHM = 2 sqrt(2 ln 2) σ
@@ -55,8 +57,8 @@ class GaussianPulse:
     fwhm: float
 
     def __post_init__(self):
-        object.__setattr__(self, "fwhm", check_real("fwhm", self.fwhm, low=0.0,
-                                                    low_open=True, high=MAX_PULSE_S))
+        object.__setattr__(self, "fwhm", check_real("fwhm", self.fwhm, low=MIN_PULSE_S,
+                                                    high=MAX_PULSE_S))
 
     @property
     def support(self):
@@ -89,8 +91,8 @@ class SampledPulse:
             raise ParameterError("samples must be a non-empty 1-D array of non-negative "
                                  "numbers, not all zero")
         object.__setattr__(self, "samples", readonly_copy(x / x.sum()))
-        object.__setattr__(self, "interval", check_real("interval", self.interval, low=0.0,
-                                                        low_open=True, high=MAX_PULSE_S))
+        object.__setattr__(self, "interval", check_real("interval", self.interval,
+                                                        low=MIN_PULSE_S, high=MAX_PULSE_S))
         object.__setattr__(self, "start", check_real("start", self.start))
 
     @property
