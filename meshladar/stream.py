@@ -39,6 +39,7 @@ import numpy as np
 
 from ._validate import check_count, check_flag, check_real
 from .errors import ParameterError
+from ._dask import connect
 from .runs import RunFolder
 
 __all__ = ["run_chunks", "joined", "dask_executor", "Progress", "choose_executor",
@@ -155,6 +156,10 @@ def _worker_init():
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
+#: Seconds a terminated worker has to exit before it is killed.
+_STOP_GRACE_S = 5.0
+
+
 def _stop_workers(ex):
     """Shut our own pool down without waiting, and end its worker processes now (SIGTERM,
     which a worker takes as an order to exit, then wait for them), so an interrupted run
@@ -169,11 +174,16 @@ def _stop_workers(ex):
         if p.is_alive():
             p.terminate()
     for p in list(processes.values()):
-        p.join()
+        p.join(_STOP_GRACE_S)              # one caught mid-start may not take SIGTERM yet:
+        if p.is_alive():                   # then SIGKILL, so the stop always completes
+            p.kill()
+            p.join()
     # the pool's feeder thread may be blocked writing a task no worker will read, and the
-    # interpreter's exit joins it: close the read end as the pool itself does when broken
-    # (cpython gh-94777), then wake its manager to notice the dead workers
+    # interpreter's exit joins it: nobody joins it (the queue is abandoned), its read end is
+    # closed as the pool itself does when broken (cpython gh-94777), and its manager woken
+    # to notice the dead workers
     if queue is not None:
+        queue.cancel_join_thread()
         queue._reader.close()
     if wakeup is not None:
         try:
@@ -327,39 +337,6 @@ def _on_executor(ex, tasks, todo, keep):
             break
 
 
-def _connect(client_class, address, timeout, security):
-    """A Dask client of the scheduler at ``address``, or TimeoutError once ``timeout`` (and
-    a grace of a few seconds) has passed: distributed's own timeout does not cover a server
-    that accepts the connection and never answers its handshake. A client that connects
-    after the deadline is closed."""
-    import threading
-
-    box, done, late = {}, threading.Event(), threading.Event()
-
-    def connect():
-        try:
-            box["client"] = client_class(address, timeout=timeout, security=security)
-        except BaseException as exc:             # noqa: BLE001 - handed to the caller
-            box["error"] = exc
-        done.set()
-        if late.is_set() and "client" in box:
-            box["client"].close()
-
-    threading.Thread(target=connect, daemon=True, name="meshladar-dask-connect").start()
-    if not done.wait(timeout + _CONNECT_GRACE_S):
-        late.set()
-        if done.is_set() and "client" in box:   # it made it just now after all
-            box["client"].close()
-        raise TimeoutError(f"no handshake in {timeout + _CONNECT_GRACE_S:g} s")
-    if "error" in box:
-        raise box["error"]
-    return box["client"]
-
-
-#: Seconds allowed beyond the scheduler timeout for the client's own start-up.
-_CONNECT_GRACE_S = 5.0
-
-
 def joined(results, name):
     """One array of all chunks' ``name`` rows (each chunk's result a dict of arrays)."""
     return np.concatenate([np.asarray(r[name]) for r in results])
@@ -432,7 +409,7 @@ def dask_executor(address=None, *, workers=2, threads_per_worker=1, timeout=10.0
             raise ParameterError(f"scheduler must be an address such as tcp://host:8786 "
                                  f"(schemes {', '.join(_SCHEMES)}); got {address!r}")
         try:
-            client = _connect(Client, address, timeout, security)
+            client = connect(Client, address, timeout, security)
         except Exception as exc:   # noqa: BLE001 - whatever answers that is not a scheduler
             # (an HTTP server's reply read as a message length asks for exabytes: MemoryError;
             # a server that accepts and says nothing: our own deadline's TimeoutError)
