@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import os
 import signal
-import time
 
 import numpy as np
 import pytest
@@ -18,13 +17,16 @@ def _chunk(folder, items):
     """Chunk 0 interrupts the run (SIGTERM to the parent) once chunk 1 is running; chunk 1
     never finishes by itself: only being stopped ends it."""
     k = int(items[0])
-    with open(os.path.join(folder, f"pid{k}"), "w") as fh:
-        fh.write(str(os.getpid()))
+    ready = os.path.join(folder, "ready")          # a FIFO: opening it blocks until both ends
     if k == 0:
-        while not os.path.exists(os.path.join(folder, "pid1")):   # the event: chunk 1 runs
-            time.sleep(0.01)
+        with open(ready, "rb") as fh:              # the event: chunk 1 has written its pid
+            fh.read(1)
         os.kill(os.getppid(), signal.SIGTERM)
         return {"values": np.zeros((1, 1))}
+    with open(os.path.join(folder, "pid1"), "w") as fh:
+        fh.write(str(os.getpid()))
+    with open(ready, "wb") as fh:
+        fh.write(b"1")
     while True:
         signal.pause()
 
@@ -35,6 +37,7 @@ def _interrupt(signum, frame):
 
 @pytest.mark.skipif(not hasattr(signal, "pause"), reason="POSIX signals")
 def test_an_interrupt_ends_the_workers_computing_chunks(tmp_path):
+    os.mkfifo(tmp_path / "ready")
     previous = signal.signal(signal.SIGTERM, _interrupt)     # as the command line does
     try:
         with pytest.raises(KeyboardInterrupt):
