@@ -2,7 +2,7 @@
 
 The command line imports the whole engine (about a second); a Ctrl-C or SIGTERM during that
 import is one line and status 130, like one during a run, not a traceback from inside
-whichever module was loading.
+whichever module was loading. The import stands at the top of this module, under the guard.
 """
 
 import signal
@@ -13,16 +13,20 @@ def _interrupt(signum, frame):
     raise KeyboardInterrupt
 
 
+_previous = signal.signal(signal.SIGTERM, _interrupt)
+try:
+    from .cli import main
+except KeyboardInterrupt:
+    main = None                      # interrupted while loading: run() says so
+finally:
+    signal.signal(signal.SIGTERM, _previous)
+
+
 def run(argv=None) -> int:
-    """Import the command line, then run it with ``argv`` (default the process's)."""
-    previous = signal.signal(signal.SIGTERM, _interrupt)
-    try:
-        from .cli import main        # heavy: under the guard below (a lazy door)
-    except KeyboardInterrupt:
+    """Run the command line with ``argv`` (default the process's)."""
+    if main is None:
         print("meshladar: interrupted", file=sys.stderr)
         return 130
-    finally:
-        signal.signal(signal.SIGTERM, previous)
     return main(argv)
 
 

@@ -34,9 +34,7 @@ MAX_FUNCTION_LINES = 80
 MAX_PRIVATE_PARAMS = 8
 #: the engine's modules allowed to import meshladar modules lazily, and why
 LAZY_DOORS = {"meshladar/plotting.py": "the one door to viz/",
-              "meshladar/__init__.py": "the lazy name table",
-              "meshladar/__main__.py": "the entry point: the command line imported under a "
-                                       "Ctrl-C guard"}
+              "meshladar/__init__.py": "the lazy name table"}
 SHARED_PRIVATE_MODULES = {"_validate", "_summary"}
 SOURCES = ("meshladar", "phantoms", "viz")
 
