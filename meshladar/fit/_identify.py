@@ -149,6 +149,21 @@ class Misfit(NamedTuple):
     sigma2: float
 
 
+def deviance(y, m, M=None):
+    """The count deviance of counts ``y`` against means ``m``: twice the log-likelihood
+    ratio of the saturated model, 2 Σ [y ln(y/m) − (y − m)] for Poisson and
+    2 Σ [y ln(y/m) − (y + M) ln((y + M)/(m + M))] for the negative binomial of M cells
+    (y ln y = 0 at y = 0; means floored at 1e-300)."""
+    y = np.asarray(y, float)
+    m = np.maximum(np.asarray(m, float), 1e-300)
+    pos = y > 0
+    ylog = np.zeros_like(y)
+    ylog[pos] = y[pos] * np.log(y[pos] / m[pos])
+    if M is None:
+        return float(2.0 * np.sum(ylog - (y - m)))
+    return float(2.0 * np.sum(ylog - (y + M) * np.log((y + M) / (m + M))))
+
+
 def _misfit(problem, m, V, J):
     """χ² (Gaussian, σ² from the residuals) or the count deviance, its degrees of freedom
     and the Fisher information at the estimate (model values ``m``, variances ``V``,
@@ -169,7 +184,7 @@ def _misfit(problem, m, V, J):
     else:
         sigma2 = None
         dof = max(1, data.size - n)
-        misfit = float(np.sum((data - m) ** 2 / V))
+        misfit = deviance(data, m, problem.M)
         fisher = J.T @ (J / V[:, None])
     return Misfit(misfit, dof, fisher, sigma2)
 

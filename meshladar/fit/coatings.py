@@ -82,8 +82,9 @@ class CoatingFit:
     samples : int or None
         Pieces per boundary of the kernel used.
     noise, deviance, dof, iterations, predicted
-        The noise model, the misfit (χ² for Gaussian, deviance for counts), degrees of
-        freedom, solver iterations, the fitted sinogram values.
+        The noise model, the misfit (χ² for Gaussian; for counts the deviance, twice the
+        log-likelihood ratio against the saturated model), degrees of freedom, solver
+        iterations, the fitted sinogram values.
     bootstrap : (n_boot, n) array or None
         Parametric-bootstrap estimates.
     """
