@@ -25,8 +25,8 @@ MAX_QUOTE = 80
 
 
 def short(value) -> str:
-    """``repr(value)``, cut to :data:`MAX_QUOTE` characters."""
-    text = repr(value)
+    """``repr(value)`` on one line, cut to :data:`MAX_QUOTE` characters."""
+    text = " ".join(repr(value).split())
     return text if len(text) <= MAX_QUOTE else text[: MAX_QUOTE - 3] + "..."
 
 
@@ -88,10 +88,20 @@ def readonly_copy(a) -> np.ndarray:
     return a
 
 
-def check_count(name: str, value, low: int = 1) -> int:
-    """Return ``value`` as an int after checking it is an integer >= low (bools refused)."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
+#: The largest count any option takes (2^53, the last integer float64 holds exactly): a
+#: larger one cannot be a size, an iteration count or a number of draws.
+MAX_COUNT = 2 ** 53
+
+
+def check_count(name: str, value, low: int = 1, high: int = MAX_COUNT) -> int:
+    """Return ``value`` as an int after checking it is an integer in [low, high] (bools
+    refused)."""
+    if (isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer))
+            or value < low):
         raise ParameterError(f"{name} must be an integer >= {low}; got {short(value)}")
+    if value > high:
+        raise ParameterError(f"{name} must be an integer in [{low}, {high}]; got "
+                             f"{short(value)}")
     return int(value)
 
 

@@ -43,6 +43,14 @@ __all__ = ["GaussianPulse", "SampledPulse", "Waveforms", "receive"]
 MAX_PULSE_S = 1.0
 #: The shortest (s): an attosecond, far below any laser's; subnormal widths overflowed.
 MIN_PULSE_S = 1e-18
+#: Digitiser rates receive accepts, Hz: one sample per second to one per attosecond (the
+#: pulses' shortest), so its time grid stays finite.
+SAMPLE_RATE_RANGE = (1.0, 1e18)
+#: The most fine cells per digitiser sample receive's convolutions take (its default is 8).
+MAX_OVERSAMPLE = 1024
+#: The most samples Waveforms.detection_probability draws in all (n pulses × the
+#: waveforms' samples, signal and noise alone): about a minute's draws.
+MAX_DETECTION_DRAWS = 10 ** 10
 #: A Gaussian pulse or response is cut where it falls below exp(−CUT²/2) of its peak.
 _GAUSS_CUT = 8.0
 #: FWHM = 2 sqrt(2 ln 2) σ
@@ -226,9 +234,15 @@ class Waveforms:
         which any sample of the view reaches ``threshold`` (output units); ``false_alarm``,
         the fraction of samples that reach it in noise alone (background and dark counts,
         the same gain and quantisation) over as many samples; ``threshold`` and ``n``.
-        Seeded; drawn ``chunk`` pulses at a time (bounded memory)."""
+        Seeded; drawn ``chunk`` pulses at a time (bounded memory), at most
+        :data:`MAX_DETECTION_DRAWS` samples in all (bounded time)."""
         thr = check_real("threshold", threshold, low=0.0, low_open=True)
         n = check_count("n", n)
+        draws = 2.0 * n * self.values.size
+        if draws > MAX_DETECTION_DRAWS:
+            raise ParameterError(f"n: {n} pulses of {self.values.size} samples would draw "
+                                 f"{draws:.3g} samples, more than the {MAX_DETECTION_DRAWS:.0e} "
+                                 "detection_probability draws; give a smaller n")
         chunk = check_count("chunk", chunk)
         rng = np.random.default_rng(check_seed("seed", seed))
         hits = np.zeros(self.values.shape[0])
@@ -274,7 +288,8 @@ def receive(sino: Sinogram, *, sample_rate, pulse=None, response=None, standoff=
         Range profiles, best of received power (``radiometry="power"``); in photoelectrons
         when simulated with a :class:`~meshladar.sensor.Sensor` that counts them.
     sample_rate : float
-        Digitiser rate, Hz (samples per second).
+        Digitiser rate, Hz (samples per second), in :data:`SAMPLE_RATE_RANGE` (1 Hz to
+        10¹⁸ Hz).
     pulse : GaussianPulse or SampledPulse, optional
         The transmitted pulse's power against time (default: none, a Dirac pulse).
     response : GaussianPulse or SampledPulse, optional
@@ -282,7 +297,8 @@ def receive(sino: Sinogram, *, sample_rate, pulse=None, response=None, standoff=
     standoff : float, optional
         D (m) for the time origin t = 2(r + D)/c; default the sinogram's sensor's, else 0.
     oversample : int
-        Fine cells per digitiser sample for the convolutions (default 8).
+        Fine cells per digitiser sample for the convolutions (default 8, at most
+        :data:`MAX_OVERSAMPLE`).
 
     Returns
     -------
@@ -294,10 +310,11 @@ def receive(sino: Sinogram, *, sample_rate, pulse=None, response=None, standoff=
         raise ParameterError(f"sino must hold received power or counts (>= 0); its smallest "
                              f"value is {float(sino.values.min()):.4g} (log or clipped "
                              "input, or a difference, is not a power)")
-    fs = check_real("sample_rate", sample_rate, low=0.0, low_open=True)
+    fs = check_real("sample_rate", sample_rate, low=SAMPLE_RATE_RANGE[0],
+                    high=SAMPLE_RATE_RANGE[1])
     pulse = _check_shape("pulse", pulse)
     response = _check_shape("response", response)
-    m = check_count("oversample", oversample)
+    m = check_count("oversample", oversample, high=MAX_OVERSAMPLE)
     if standoff is None:
         standoff = (sino.info.get("sensor") or {}).get("standoff_m") or 0.0
     D = check_real("standoff", standoff, low=0.0, high=SENSOR_LIMITS["standoff"])

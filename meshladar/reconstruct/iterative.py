@@ -94,6 +94,7 @@ def _setup(sino, image, start, rays_per_bin, projector="auto"):
     if not np.any(W > 0):
         raise ParameterError("weights are all zero: every bin is dropped, so there is no "
                              "data to reconstruct from (keep some bins, weight > 0)")
+    W = W / W.max()          # relative: every solver is invariant to their scale
     M = np.ones((size, size)) if mask is None else np.asarray(mask, dtype=bool).astype(float)
     if M.shape != (size, size):
         raise ParameterError(f"mask must be a ({size}, {size}) array; got {M.shape}")
@@ -176,7 +177,8 @@ def sirt(sino, size=256, extent=None, *, center=(0.0, 0.0), n_iter=50, x0=None, 
         bins (weight 0) set to 0: a dropped glint is then not in the start either (from
         all the data its bright ring stays, as only the dropped bins could lower it).
     weights : (n_views, n_bins) array, optional
-        Per-bin weights ≥ 0 (glint bins down-weighted, 0 drops a bin).
+        Per-bin weights ≥ 0 (glint bins down-weighted, 0 drops a bin); relative: only their
+        ratios matter (they are scaled so that the largest is 1).
     mask : (size, size) bool array, optional
         Pixels allowed to be non-zero.
     nonneg : bool
