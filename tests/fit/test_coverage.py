@@ -1,7 +1,7 @@
 """Coverage of coating fits on INDEPENDENT data (meshladar.fit): the analytic model's exact
 profiles (not the fit's kernel) with seeded Poisson noise at 10³, 10⁴, 10⁵ and 10⁶
 photoelectrons in the brightest bin, on a diffuse coating and a glinting one (e = 0.02):
-200 seeded trials in all. The paper's gray/aluminium pair (e = 0.007) is set up too, but
+400 seeded trials per scene. The paper's gray/aluminium pair (e = 0.007) is set up too, but
 its run is too slow to assert here (see ASSERTED)."""
 
 from __future__ import annotations
@@ -33,12 +33,21 @@ LEVELS = (1e3, 1e4, 1e5, 1e6)
 #: calls the aluminium's ε undetermined (σ beyond half its range;
 #: test_the_pair_at_1e3_names_what_it_cannot_determine), so no interval is claimed.
 LEVELS_OF = {"diffuse": LEVELS, "glint": LEVELS, "pair": LEVELS[1:]}
-#: Seeded trials per scene and photon level (25 × (4 + 4) = 200 asserted).
-TRIALS = 25
-#: The goals: coverage on the 75 trials per parameter at 10⁴-10⁶ (sampling error of a
-#: coverage of 0.95: 0.025) and bias on all of a scene's trials (0.1-0.12 σ).
+#: Seeded trials per scene and photon level (100 × 4 levels × 2 scenes = 800 asserted).
+TRIALS = 100
+#: The goals: coverage ≥ 0.90 and |mean bias| < 0.25 σ. A coverage measured on N trials
+#: has a binomial sampling error of sqrt(0.9 × 0.1 / N) at 0.90 (0.03 on 100 trials): it is
+#: asserted to be no more than SAMPLING_SIGMAS of them below the goal, per level and pooled
+#: over the four levels (0.84 and 0.87), so a true coverage of 0.90 passes and one of 0.80
+#: fails at any level.
 MIN_COVERAGE = 0.90
+SAMPLING_SIGMAS = 2.0
 MAX_BIAS = 0.25
+
+
+def _floor(n):
+    """The lowest measured coverage on ``n`` trials consistent with MIN_COVERAGE."""
+    return MIN_COVERAGE - SAMPLING_SIGMAS * np.sqrt(MIN_COVERAGE * (1 - MIN_COVERAGE) / n)
 
 
 def _trials(scene, levels=LEVELS):
@@ -70,39 +79,35 @@ def _trials(scene, levels=LEVELS):
     return fit.names, out
 
 
-#: Measured shortfalls at 10³ photoelectrons, asserted as measured rather than hidden:
-#: (scene, parameter) → the coverage floor there. At 10³ in the glint's bin the rest of the
-#: glinting disk returns a few counts per bin, and the Fisher (Wald) interval of the
-#: diffuse width b is too narrow (measured 0.76 over 25 trials).
-SHORTFALL_1E3 = {("glint", "disk.b"): 0.7}
-
-
-#: The scenes whose coverage is asserted. The pair's run (75 fits at 10⁴-10⁶) did not finish
-#: within 30 minutes on the shared test machine, so its coverage is not claimed here;
-#: _trials(SCENES["pair"], LEVELS_OF["pair"]) measures it.
+#: The scenes whose coverage is asserted. The pair's run (25 trials at each of 10⁴-10⁶)
+#: took 21 minutes on the shared 2-core machine (17 s a fit: the aluminium glint, e = 0.007,
+#: refines the kernel to 4096-8192 pieces per boundary), so it is measured, not asserted:
+#: _trials(SCENES["pair"], LEVELS_OF["pair"]). Measured (2026-12-03, 75 trials): coverage
+#: 0.87-0.97 per parameter pooled (gray ε and b 0.87), |bias| ≤ 0.08 σ but for the
+#: aluminium's ε and e at 10⁴ (+1.6 σ, −1.7 σ; there the fit calls them undetermined in
+#: 32 % and 56 % of the trials).
 ASSERTED = ("diffuse", "glint")
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ASSERTED)
 def test_intervals_cover_the_truth_on_exact_data(name):
-    """Every parameter's mean bias over the scene's trials is below 0.25 σ; its 95 %
-    interval holds the truth in ≥ 90 % of the 75 trials at 10⁴-10⁶ photoelectrons, and of
-    the 25 at 10³ (but for SHORTFALL_1E3); the kernel error and the shift it causes stay
+    """Every parameter's mean bias over the scene's 400 trials is below 0.25 σ; its 95 %
+    interval holds the truth in ≥ 90 % of the trials at each photon level and pooled
+    (within the sampling error, _floor); the kernel error and the shift it causes stay
     ≤ 0.1 σ in every trial (the fit refines the kernel)."""
     levels = LEVELS_OF[name]
     names, out = _trials(SCENES[name], levels)
     z = np.concatenate([out[lv][1] for lv in levels])
-    high = np.concatenate([out[lv][0] for lv in levels if lv > 1e3]).mean(axis=0)
+    inside = np.concatenate([out[lv][0] for lv in levels])
     report = {lv: (np.round(out[lv][0].mean(0), 2), np.round(out[lv][1].mean(0), 2))
               for lv in levels}
     bias = z.mean(axis=0)
     assert np.all(np.abs(bias) < MAX_BIAS), (dict(zip(names, bias)), report)
-    assert np.all(high >= MIN_COVERAGE), (dict(zip(names, high)), report)
-    if 1e3 in out:
-        low = out[1e3][0].mean(axis=0)
-        floor = np.array([SHORTFALL_1E3.get((name, n), MIN_COVERAGE) for n in names])
-        assert np.all(low >= floor), (dict(zip(names, low)), report)
+    for lv in levels:
+        cover = out[lv][0].mean(axis=0)
+        assert np.all(cover >= _floor(TRIALS)), (lv, dict(zip(names, cover)), report)
+    assert np.all(inside.mean(axis=0) >= _floor(len(inside))), report
     assert max(out[lv][2].max() for lv in levels) <= 0.1
 
 
