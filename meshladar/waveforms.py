@@ -46,6 +46,9 @@ MIN_PULSE_S = 1e-18
 #: Digitiser rates receive accepts, Hz: one sample per second to one per attosecond (the
 #: pulses' shortest), so its time grid stays finite.
 SAMPLE_RATE_RANGE = (1.0, 1e18)
+#: receive's peak memory per fine cell of (views + 1) rows of (window + kernels): the FFT
+#: convolution's padded copies and spectra (measured ≤ 140 B; a margin above).
+RECEIVE_PEAK_BYTES = 192
 #: The most fine cells per digitiser sample receive's convolutions take (its default is 8).
 MAX_OVERSAMPLE = 1024
 #: The most samples Waveforms.detection_probability draws in all (n pulses × the
@@ -332,9 +335,11 @@ def receive(sino: Sinogram, *, sample_rate, pulse=None, response=None, standoff=
     first = math.floor((t_edges[0] / dt + p0 + r0) / m)
     last = math.ceil((t_edges[-1] / dt + p0 + r0 + kp.size + kr.size) / m)
     n_fine = (last - first) * m
-    check_size("sample_rate", float(n_fine) * sino.n_views, 8 * 3,
-               f"{n_fine} fine cells per view ({last - first} samples)",
-               "give a lower sample_rate or fewer bins")
+    # the FFT convolution's peak (measured: tests/values/test_receive_memory.py)
+    check_size("sample_rate", float(n_fine + kp.size + kr.size) * (sino.n_views + 1),
+               RECEIVE_PEAK_BYTES, f"{n_fine} fine cells per view ({last - first} samples) "
+               f"convolved with a {kp.size + kr.size}-cell kernel",
+               "give a lower sample_rate, a shorter pulse or fewer bins")
     fine_edges = (first * m + np.arange(n_fine + 1)) * dt
     # each bin spread uniformly over its time interval: a piecewise-linear CDF per view
     cum = np.concatenate([np.zeros((sino.n_views, 1)), np.cumsum(sino.values, axis=1)], 1)

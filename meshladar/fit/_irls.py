@@ -13,9 +13,28 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
+from .._validate import check_real, short
 from ..errors import EnergyConservationWarning, ParameterError
 from ._params import _jacobian, _materials
 from .kernels import _table
+
+
+#: The most counts in the brightest bin a count fit takes: 10¹⁵ photoelectrons (a relative
+#: Poisson σ of 3e-8) is beyond any detector; far beyond, the likelihood's products
+#: overflow. (The least is one count: below it there is no signal to fit.)
+MAX_COUNTS = 1e15
+
+
+def check_scale(photons_per_unit, peak):
+    """``photons_per_unit`` checked: positive, and the brightest bin (``peak`` in data units)
+    between 1 and MAX_COUNTS counts."""
+    scale = check_real("photons_per_unit", photons_per_unit, low=0.0, low_open=True)
+    if not 1.0 <= scale * peak <= MAX_COUNTS:
+        raise ParameterError(f"photons_per_unit: {short(photons_per_unit)} per unit makes the "
+                             f"brightest bin {scale * peak:.3g} counts; a count fit takes 1 to "
+                             f"{MAX_COUNTS:.0e} there (fewer is no signal, more overflows its "
+                             "arithmetic): give the counts per unit of the values")
+    return scale
 
 
 @dataclass(frozen=True, eq=False)

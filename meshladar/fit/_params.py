@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..brdf import SandfordRobertson
+from .._validate import check_real, short
 from ..errors import ParameterError
 from .kernels import GRID, _table
 
@@ -74,7 +75,7 @@ def _resolve_params(kernel, parts, free, bounds, initial):
             if bounds is not None:
                 for key in (f"{kernel.parts[p]}.{n}", f"{p}.{n}", n):
                     if key in bounds:
-                        lo, hi = (float(v) for v in bounds[key])
+                        lo, hi = _bound_pair(key, bounds[key])
                         break
             if lo < valid[0] or hi > valid[1]:
                 raise ParameterError(f"bounds of {kernel.parts[p]}.{n} must lie in its valid "
@@ -86,6 +87,14 @@ def _resolve_params(kernel, parts, free, bounds, initial):
     if not params:
         raise ParameterError("nothing to fit: no free parameters in the chosen parts")
     return mats, params
+
+
+def _bound_pair(key, pair):
+    """``bounds[key]`` as two floats (checked: a pair of real numbers, ±inf allowed)."""
+    if not isinstance(pair, (tuple, list, np.ndarray)) or len(pair) != 2:
+        raise ParameterError(f"bounds[{key!r}] must be a (low, high) pair; got {short(pair)}")
+    return tuple(v if isinstance(v, float) and math.isinf(v)
+                 else check_real(f"bounds[{key!r}]", v) for v in pair)
 
 
 def _materials(mats, params, x):

@@ -21,6 +21,9 @@ from ..errors import MeshladarWarning
 
 #: Largest kernel error allowed in any bin, in units of that bin's noise σ.
 KERNEL_TOL = 0.1
+#: The smallest kernel_tol taken (an error of a millionth of σ needs ~2^10 times the
+#: pieces that 0.1 σ needs: beyond any cap).
+MIN_KERNEL_TOL = 1e-6
 #: Most pieces per boundary the refinement goes to (a 360-view kernel at 2^16 takes ~15 s
 #: and ~1 GB).
 MAX_SAMPLES = 2 ** 16
@@ -74,7 +77,7 @@ class Ladder:
         if self.active and max(self.error, self.shift or 0.0) > self.tol:
             n = self.used.samples
             worst = max(self.error, self.shift or 0.0)
-            need = n * 2 ** math.ceil(0.5 * math.log2(worst / self.tol))
+            need = n * 2 ** min(64, math.ceil(0.5 * math.log2(worst / self.tol)))
             warnings.warn(f"the coating kernel's error is {self.error:.3g} σ in its worst bin "
                           f"(a shift of {self.shift or 0.0:.3g} σ in the parameters) "
                           f"with {n} samples per boundary (kernel_tol={self.tol:g}, capped "

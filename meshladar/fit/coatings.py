@@ -35,8 +35,8 @@ from ..scene import Scene
 from . import _irls
 from ._identify import NULL_REL, _correlation, _misfit, _uncertainty, describe
 from ._params import _materials, _resolve_params
-from ._resolution import KERNEL_TOL, MAX_SAMPLES, KernelErrorWarning, Ladder
-from .kernels import CoatingKernel, _table, coating_kernel
+from ._resolution import KERNEL_TOL, MAX_SAMPLES, MIN_KERNEL_TOL, KernelErrorWarning, Ladder
+from .kernels import MAX_KERNEL_SAMPLES, CoatingKernel, _table, coating_kernel
 
 __all__ = ["fit_coatings", "CoatingFit", "IdentifiabilityWarning", "KernelErrorWarning",
            "NOISE_MODELS", "KERNEL_TOL"]
@@ -200,8 +200,8 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
         Pieces per boundary an analytic scene's kernel starts from.
     kernel_tol : float or None
         An analytic kernel's error allowed in any bin, in units of that bin's noise σ
-        (default 0.1): N doubles until the model's change from N to 2N pieces per boundary
-        at the estimate is at most this; the fit uses 2N. None: no check.
+        (default 0.1, at least 1e-6): N doubles until the model's change from N to 2N pieces
+        per boundary at the estimate is at most this; the fit uses 2N. None: no check.
     max_samples : int
         The most pieces per boundary (default 2^16); above it a :class:`KernelErrorWarning`
         gives the error and the count that would do.
@@ -221,10 +221,11 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
     bootstrap, seed = check_count("bootstrap", bootstrap, low=0), check_seed("seed", seed)
     max_iter = check_count("max_iter", max_iter)                    # all before the kernel
     if kernel_tol is not None:
-        kernel_tol = check_real("kernel_tol", kernel_tol, low=0.0, low_open=True)
-    max_samples = check_count("max_samples", max_samples)
+        kernel_tol = check_real("kernel_tol", kernel_tol, low=MIN_KERNEL_TOL)
+    max_samples = check_count("max_samples", max_samples, high=MAX_KERNEL_SAMPLES)
+    scale, M, background = _noise_options(noise, photons_per_unit, speckle_cells, background,
+                                          float(np.max(measured.values)))
     kernel = _kernel_for(geometry, measured, waveforms=waveforms, samples=samples)
-    scale, M, background = _noise_options(noise, photons_per_unit, speckle_cells, background)
     ladder = Ladder(kernel, kernel_tol, max_samples)
     mats, params = _resolve_params(kernel, parts, free, bounds, initial)
     opts = _Options(noise, scale, M, background, max_iter)
@@ -359,16 +360,16 @@ def _kernel_for(geometry, measured, *, waveforms, samples):
     return kernel
 
 
-def _noise_options(noise, photons_per_unit, speckle_cells, background):
+def _noise_options(noise, photons_per_unit, speckle_cells, background, peak):
     """(counts per unit, speckle cells or None, background), checked for ``noise``."""
     if noise == "poisson":
         if photons_per_unit is None:
             raise ParameterError("noise='poisson' needs photons_per_unit (counts per unit "
                                  "of the measured values)")
-        scale = check_real("photons_per_unit", photons_per_unit, low=0.0, low_open=True)
+        scale = _irls.check_scale(photons_per_unit, peak)
         M = None if speckle_cells is None else check_real("speckle_cells", speckle_cells,
                                                           low=1.0)
-        background = check_real("background", background, low=0.0)
+        background = check_real("background", background, low=0.0, high=_irls.MAX_COUNTS)
         return scale, M, background
     if speckle_cells is not None or background:
         raise ParameterError("speckle_cells and background belong to noise='poisson'")

@@ -11,6 +11,7 @@ import numpy as np
 from .. import plotting
 from .._validate import check_count, check_real
 from ..errors import ParameterError
+from ._irls import check_scale
 from ._params import _jacobian, _resolve_params
 from .kernels import CoatingKernel, _table, coating_kernel
 
@@ -81,7 +82,7 @@ def design_views(geometry, budget, *, ladar=None, parts=None, free=None, materia
     x = np.array([float(getattr(mats[p.part], p.name)) for p in params])
     m = kernel.predict(mats).ravel()
     scale = (1e5 / float(m.max()) if photons_per_unit is None else
-             check_real("photons_per_unit", photons_per_unit, low=0.0, low_open=True))
+             check_scale(photons_per_unit, float(m.max())))
     width = np.array([prm.high - prm.low if math.isfinite(prm.high - prm.low)
                       else max(abs(v), 1e-12) for prm, v in zip(params, x)])
     per_view = _per_view_fisher(kernel, (mats, params, x), m, scale, width)

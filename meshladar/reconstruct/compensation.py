@@ -204,7 +204,7 @@ def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first
     threshold, sigma, shadows
         :func:`estimate_surface`.
     blur_deg : float
-        Angular blur of h(θ), degrees, for the normals' uncertainty.
+        Angular blur of h(θ), degrees, for the normals' uncertainty (at most 90).
     smooth : float
         Width, pixels, of the Gaussian along the surface that the solution is built from
         (x = S z, :class:`SurfaceProjector`): neighbouring surface points share their

@@ -300,7 +300,8 @@ class SurfaceProjector(Projector):
 
     def __init__(self, surface, angles_deg, bin_edges, H, smooth=0.0):
         self.surface = surface
-        self.smooth = _smoother(surface, check_real("smooth", smooth, low=0.0))
+        self.smooth = _smoother(surface, check_real("smooth", smooth, low=0.0,
+                                                    high=float(surface.size)))
         super().__init__(surface.grid, angles_deg, bin_edges)
         self.e0, self.inv_dr = _uniform(self.bin_edges)
         H = np.asarray(H, dtype=float)
@@ -342,7 +343,7 @@ def _smoother(surface, width):
     """The sparse operator that averages each surface point's value with its neighbours
     within 2 ``width`` (pixels) under a Gaussian of that width, or None for 0: the solution
     is then smooth along the surface by construction (x = S z)."""
-    if width == 0:
+    if width < 1e-3:            # no two points that close: the identity (and w² underflows)
         return None
     p = surface.points / surface.pixel_size
     pairs = cKDTree(p).query_pairs(2.0 * width, output_type="ndarray")

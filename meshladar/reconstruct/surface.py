@@ -149,7 +149,7 @@ def estimate_surface(first, sino, *, threshold=0.2, sigma=1.5, shadows=True):
     threshold : float in (0, 1)
         Keep ridge points at least this fraction of the strongest ridge's strength.
     sigma : float
-        Gaussian scale, pixels, of the ridge detector.
+        Gaussian scale, pixels, of the ridge detector (at most the image's size).
     shadows : bool
         Also find, per point and view, whether another surface hides it from the ladar
         (:attr:`Surface.shadowed`).
@@ -159,7 +159,8 @@ def estimate_surface(first, sino, *, threshold=0.2, sigma=1.5, shadows=True):
     check_sinogram("sino", sino)
     threshold = check_real("threshold", threshold, low=0.0, high=1.0, low_open=True,
                            high_open=True)
-    sigma = check_real("sigma", sigma, low=0.0, low_open=True)
+    sigma = check_real("sigma", sigma, low=0.0, low_open=True,
+                       high=float(max(first.values.shape)))
     ridges = _ridges(first.values, sigma, threshold)
     rows, cols, offset, normals = ridges.rows, ridges.cols, ridges.offsets, ridges.normals
     if rows.size == 0:
@@ -210,6 +211,12 @@ def _segments(surface, H):
     return _Segments(c(p[:, 0]), c(p[:, 1]), c(-n[:, 1]), c(n[:, 0]), half, c(H))
 
 
+#: A blur narrower than this share of the table's step changes nothing (and underflows).
+_LEAST_BLUR = 1e-3
+#: The widest angular blur of h(θ) taken, degrees (wider spreads it past the hemisphere).
+MAX_BLUR_DEG = 90.0
+
+
 def _weight_table(material, radiometry, blur_deg):
     """(θ grid on [0, π/2], h(θ)/⟨h⟩): the monostatic weight blurred by a Gaussian of
     ``blur_deg`` in θ (the normals' uncertainty) and divided by its mean over the plane's
@@ -219,8 +226,8 @@ def _weight_table(material, radiometry, blur_deg):
     h = np.asarray(material.projected(c, s), dtype=float)
     if radiometry == "power":
         h = h * c
-    if blur_deg > 0:
-        step = theta[1] - theta[0]
+    step = theta[1] - theta[0]
+    if math.radians(blur_deg) / step > _LEAST_BLUR:
         # mirror at normal incidence (h is even in θ), zero beyond the horizon
         full = np.concatenate([h[:0:-1], h, np.zeros(_TABLE - 1)])
         full = gaussian_filter1d(full, math.radians(blur_deg) / step, mode="constant")
@@ -239,7 +246,7 @@ def surface_weights(surface, angles_deg, material, *, labels=None, radiometry="p
     ``material`` is one BRDF, or a sequence of them with ``labels`` a (size, size) int image
     giving each pixel's index into it."""
     radiometry = "power" if check_radiometry(radiometry) else "paper"
-    blur_deg = check_real("blur_deg", blur_deg, low=0.0)
+    blur_deg = check_real("blur_deg", blur_deg, low=0.0, high=MAX_BLUR_DEG)
     mats = [material] if isinstance(material, BRDF) else list(material)
     for i, m in enumerate(mats):
         check_brdf(f"material[{i}]", m)
