@@ -281,6 +281,28 @@ class Waveforms:
         return table("Waveforms", *self._summary())
 
 
+def _window(sino, t_edges, dt, m, shapes):
+    """The pulse's and response's kernels on ``dt`` cells, their lead in cells, and the
+    digitiser's window (first, last sample), each size checked before it is made."""
+    for name, shape in zip(("pulse", "response"), shapes):
+        if shape is not None:        # its kernel's cells, counted before any is made
+            check_size("sample_rate", (shape.support[1] - shape.support[0]) / dt + 2, 8 * 3,
+                       f"a {name} {shape.support[1] - shape.support[0]:.3g} s long on "
+                       f"{dt:.3g} s cells", f"give a lower sample_rate or a shorter {name}")
+    (kp, p0), (kr, r0) = (_kernel(shape, dt) for shape in shapes)
+    # whole samples from the first bin's start (less the kernels' lead) to the last bin's
+    # end (plus their tails)
+    first = math.floor((t_edges[0] / dt + p0 + r0) / m)
+    last = math.ceil((t_edges[-1] / dt + p0 + r0 + kp.size + kr.size) / m)
+    # the FFT convolution's peak (measured: tests/values/test_receive_memory.py)
+    check_size("sample_rate", float((last - first) * m + kp.size + kr.size)
+               * (sino.n_views + 1), RECEIVE_PEAK_BYTES,
+               f"{(last - first) * m} fine cells per view ({last - first} samples) "
+               f"convolved with a {kp.size + kr.size}-cell kernel",
+               "give a lower sample_rate, a shorter pulse or fewer bins")
+    return kp, kr, p0 + r0, (first, last)
+
+
 def receive(sino: Sinogram, *, sample_rate, pulse=None, response=None, standoff=None,
             oversample=8) -> Waveforms:
     """The waveforms a digitiser records from a sinogram's range bins.
@@ -323,28 +345,13 @@ def receive(sino: Sinogram, *, sample_rate, pulse=None, response=None, standoff=
     D = check_real("standoff", standoff, low=0.0, high=SENSOR_LIMITS["standoff"])
     t_edges = 2.0 * (sino.bin_edges + D) / SPEED_OF_LIGHT
     dt = 1.0 / (fs * m)
-    for name, shape in (("pulse", pulse), ("response", response)):
-        if shape is not None:        # its kernel's cells, counted before any is made
-            check_size("sample_rate", (shape.support[1] - shape.support[0]) / dt + 2, 8 * 3,
-                       f"a {name} {shape.support[1] - shape.support[0]:.3g} s long on "
-                       f"{dt:.3g} s cells", f"give a lower sample_rate or a shorter {name}")
-    kp, p0 = _kernel(pulse, dt)
-    kr, r0 = _kernel(response, dt)
-    # the digitiser's window: whole samples from the first bin's start (less the kernels'
-    # lead) to the last bin's end (plus their tails)
-    first = math.floor((t_edges[0] / dt + p0 + r0) / m)
-    last = math.ceil((t_edges[-1] / dt + p0 + r0 + kp.size + kr.size) / m)
+    kp, kr, shift, (first, last) = _window(sino, t_edges, dt, m, (pulse, response))
     n_fine = (last - first) * m
-    # the FFT convolution's peak (measured: tests/values/test_receive_memory.py)
-    check_size("sample_rate", float(n_fine + kp.size + kr.size) * (sino.n_views + 1),
-               RECEIVE_PEAK_BYTES, f"{n_fine} fine cells per view ({last - first} samples) "
-               f"convolved with a {kp.size + kr.size}-cell kernel",
-               "give a lower sample_rate, a shorter pulse or fewer bins")
     fine_edges = (first * m + np.arange(n_fine + 1)) * dt
     # each bin spread uniformly over its time interval: a piecewise-linear CDF per view
     cum = np.concatenate([np.zeros((sino.n_views, 1)), np.cumsum(sino.values, axis=1)], 1)
     # the kernels shift the signal by (p0 + r0) cells: deposit at the shifted edges
-    shifted = fine_edges - (p0 + r0) * dt
+    shifted = fine_edges - shift * dt
     fine = np.empty((sino.n_views, n_fine))
     for i in range(sino.n_views):
         fine[i] = np.diff(np.interp(shifted, t_edges, cum[i]))

@@ -219,10 +219,7 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
         check_sinogram("measured", measured)
     noise = _check_measured(measured.values, noise)
     bootstrap, seed = check_count("bootstrap", bootstrap, low=0), check_seed("seed", seed)
-    max_iter = check_count("max_iter", max_iter)                    # all before the kernel
-    if kernel_tol is not None:
-        kernel_tol = check_real("kernel_tol", kernel_tol, low=MIN_KERNEL_TOL)
-    max_samples = check_count("max_samples", max_samples, high=MAX_KERNEL_SAMPLES)
+    kernel_tol, max_samples, max_iter = _check_solver(kernel_tol, max_samples, max_iter)
     scale, M, background = _noise_options(noise, photons_per_unit, speckle_cells, background,
                                           float(np.max(measured.values)))
     kernel = _kernel_for(geometry, measured, waveforms=waveforms, samples=samples)
@@ -241,6 +238,14 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
             break
     ladder.warn_if_coarse()
     return _result(model, (x, m, iterations), ladder, (bootstrap, seed))
+
+
+def _check_solver(kernel_tol, max_samples, max_iter):
+    """The solver's options checked, before the kernel is traced."""
+    return ((None if kernel_tol is None
+             else check_real("kernel_tol", kernel_tol, low=MIN_KERNEL_TOL)),
+            check_count("max_samples", max_samples, high=MAX_KERNEL_SAMPLES),
+            check_count("max_iter", max_iter))
 
 
 def _result(model, solved, ladder, boot):
