@@ -28,6 +28,14 @@ from .errors import MeshladarWarning, ParameterError
 __all__ = ["Noise", "draw_noise"]
 
 
+#: The highest background or dark rate taken, photoelectrons per second: 1e15 (a
+#: second's dwell still draws within numpy's Poisson range, ~9e18).
+MAX_RATE = 1e15
+#: The highest gain (and excess noise factor) taken: 1e9, beyond any APD or PMT, so that
+#: gain × counts stays finite.
+MAX_GAIN = 1e9
+
+
 @dataclass(frozen=True)
 class Noise:
     """The receiver's noise (module docstring).
@@ -38,11 +46,12 @@ class Noise:
         M, speckle cells per resolution cell (≥ 1; 1 is fully developed speckle); None: no
         speckle.
     background_rate, dark_rate : float
-        Background (sky, scattered light) and dark counts, photoelectrons per second.
+        Background (sky, scattered light) and dark counts, photoelectrons per second
+        (at most :data:`MAX_RATE`, 1e15).
     excess_noise_factor : float
-        APD excess noise factor F ≥ 1 (1: a noiseless gain).
+        APD excess noise factor F ≥ 1 (1: a noiseless gain; at most :data:`MAX_GAIN`).
     gain : float
-        Mean gain G (output units per photoelectron).
+        Mean gain G (output units per photoelectron; at most :data:`MAX_GAIN`, 1e9).
     bits : int, optional
         Digitiser resolution; with ``full_scale`` (output units), samples are rounded to
         full_scale / 2**bits and clipped to [0, full_scale): a draw that clips warns
@@ -64,11 +73,12 @@ class Noise:
             object.__setattr__(self, "speckle_cells", check_real(
                 "speckle_cells", self.speckle_cells, low=1.0))
         for name in ("background_rate", "dark_rate"):
-            object.__setattr__(self, name, check_real(name, getattr(self, name), low=0.0))
+            object.__setattr__(self, name, check_real(name, getattr(self, name), low=0.0,
+                                                      high=MAX_RATE))
         object.__setattr__(self, "excess_noise_factor", check_real(
-            "excess_noise_factor", self.excess_noise_factor, low=1.0))
+            "excess_noise_factor", self.excess_noise_factor, low=1.0, high=MAX_GAIN))
         object.__setattr__(self, "gain", check_real("gain", self.gain, low=0.0,
-                                                    low_open=True))
+                                                    low_open=True, high=MAX_GAIN))
         if (self.bits is None) != (self.full_scale is None):
             raise ParameterError("quantisation needs both bits and full_scale; got "
                                  f"bits={self.bits!r}, full_scale={self.full_scale!r}")

@@ -191,13 +191,21 @@ def _sampling(mode, sampling, seed):
 
 
 
+#: The finest and coarsest ray spacing taken (scene units): its inverse square, a ray count,
+#: stays finite.
+MIN_SPACING = 1e-150
+#: rays_per_bin taken: a millionth of a ray to a million rays per bin width.
+RAYS_PER_BIN_RANGE = (1e-6, 1e6)
+
+
 def _spacing(ladar, mode, ray_spacing, rays_per_bin, radius):
     if ray_spacing is not None and rays_per_bin is not None:
         raise ParameterError("give ray_spacing or rays_per_bin, not both")
     if ray_spacing is not None:
-        return check_real("ray_spacing", ray_spacing, low=0.0, low_open=True)
+        return check_real("ray_spacing", ray_spacing, low=MIN_SPACING, high=1.0 / MIN_SPACING)
     if rays_per_bin is not None:
-        rpb = check_real("rays_per_bin", rays_per_bin, low=0.0, low_open=True)
+        rpb = check_real("rays_per_bin", rays_per_bin, low=RAYS_PER_BIN_RANGE[0],
+                         high=RAYS_PER_BIN_RANGE[1])
         return float(np.min(np.diff(ladar.bin_edges))) / rpb
     spacing = float(np.min(np.diff(ladar.bin_edges))) / _DEFAULT_RAYS_PER_BIN[mode]
     if mode == "3d":

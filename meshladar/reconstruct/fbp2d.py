@@ -146,6 +146,11 @@ def bins_across(sinogram) -> int:
     return int(np.max(last - first + 1))
 
 
+#: Half-widths of a reconstruction's square (cube) taken, scene units: its pixels' size
+#: and their inverse stay finite at any size meshladar allocates.
+EXTENT_RANGE = (1e-150, 1e150)
+
+
 def default_extent(sino, extent):
     """``extent``, or when None the bins' reach (:func:`bins_reach`): the one default of
     every reconstruction (FBP, the iterative solvers, the command line)."""
@@ -195,7 +200,7 @@ def fbp(sinogram, size=512, extent=None, *, filter="ramp", interpolation="linear
         lines). Non-uniform bins are resampled onto uniform ones (integrals conserved).
     size : int >= 1
         Pixels along each side of the square image.
-    extent : float > 0, optional
+    extent : float in [1e-150, 1e150], optional
         Half-width of the image square in scene units: it spans [−extent, extent]² about
         ``center``. Default: the bins' reach max(|r_0|, |r_n|) (:func:`bins_reach`), the
         square about the origin that holds everything the bins see, in any units (a part
@@ -279,7 +284,7 @@ def _check_fbp(sinogram, size, extent, filter, interpolation, center):
     size = check_count("size", size)
     check_size("size", size * size, 8 * 3, f"a {size} x {size} image", "use a smaller size")
     extent = bins_reach(sinogram) if extent is None else extent
-    extent = check_real("extent", extent, low=0.0, low_open=True)
+    extent = check_real("extent", extent, low=EXTENT_RANGE[0], high=EXTENT_RANGE[1])
     check_choice("filter", filter, FILTERS)
     check_choice("interpolation", interpolation, INTERPOLATIONS)
     c = finite_array("center", center)

@@ -30,7 +30,7 @@ from ..errors import ParameterError
 from ..images import Image
 from ..forward.siddon import PixelGrid
 from ..stream import Progress
-from .fbp2d import PAPER_CLIP, default_extent, noise_floor, quiet_fbp
+from .fbp2d import EXTENT_RANGE, PAPER_CLIP, default_extent, noise_floor, quiet_fbp
 from ._tv import MAX_TV, gradient, tv_prox
 from .operators import PROJECTORS, LinearProjector, RangeProjector, build, projector_name
 
@@ -84,7 +84,7 @@ def _setup(sino, image, start, rays_per_bin, projector="auto"):
     size = check_count("size", size)
     # the solvers hold a few images and the projector's per-view tables: ~8 arrays a pixel
     check_size("size", float(size) ** 2, 8 * 8, f"a {size}² image", "give a smaller size")
-    extent = check_real("extent", extent, low=0.0, low_open=True)
+    extent = check_real("extent", extent, low=EXTENT_RANGE[0], high=EXTENT_RANGE[1])
     grid = PixelGrid.square(size, extent, center)
     b = sino.values
     W = np.ones_like(b) if weights is None else finite_array("weights", weights)

@@ -40,7 +40,7 @@ from ..meshes import fibonacci_sphere
 from ..returns import Returns
 from ..sinogram import Sinogram
 from ._kernels import backproject3d
-from .fbp2d import bins_across, bins_reach, fbp
+from .fbp2d import EXTENT_RANGE, bins_across, bins_reach, fbp
 
 __all__ = ["Volume", "fbp3d", "fbp_slices", "sphere_weights", "coverage_gap_deg",
            "views_needed", "MAX_GAP_DEG", "UNDERSAMPLED_FACTOR", "radon3d", "fbp_stack"]
@@ -127,7 +127,7 @@ class _VolumeGrid(NamedTuple):
 
 def _grid(size, extent, center):
     n = check_count("size", size)
-    e = check_real("extent", extent, low=0.0, low_open=True)
+    e = check_real("extent", extent, low=EXTENT_RANGE[0], high=EXTENT_RANGE[1])
     c = finite_array("center", center)
     if c.shape != (3,):
         raise ParameterError(f"center must be a point (x, y, z); got shape {c.shape}")
