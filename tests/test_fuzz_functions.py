@@ -17,6 +17,7 @@ from hypothesis import strategies as st
 import meshladar as ml
 from meshladar.errors import MeshladarError
 from meshladar.fit import design_views, find_shapes, fit_coatings
+from meshladar.forward.resolved import resolve
 from meshladar.noise import Noise
 from meshladar.reconstruct.compensation import compensate
 from meshladar.reconstruct.iterative import cgls, sart, sirt, tv_fista
@@ -47,7 +48,13 @@ def data():
     ladar = ml.Ladar(np.arange(0.0, 360.0, 20.0), ml.Ladar.centered(24, 1.6 / 24).bin_edges)
     sino = ml.simulate(scene, ladar, model="analytic")
     waves = receive(sino, sample_rate=2e9, pulse=GaussianPulse(2e-9)).scaled(1e4)
-    return dict(scene=scene, ladar=ladar, sino=sino, waves=waves)
+    returns = resolve(scene, ladar, _axes(0.5)).scaled(1e3)
+    return dict(scene=scene, ladar=ladar, sino=sino, waves=waves, returns=returns)
+
+
+def _axes(top):
+    """Range bins and two elevation bins up to ``top`` (a resolved image per view)."""
+    return [("range", np.linspace(-0.8, 0.8, 25)), ("elevation", [-0.5, 0.0, top])]
 
 
 def _outcome(call):
@@ -102,6 +109,12 @@ CALLS = {
     "receive.oversample": lambda d, v: receive(d["sino"], sample_rate=1e9, oversample=v),
     "receive.response": lambda d, v: receive(d["sino"], sample_rate=1e9, response=v),
     "Waveforms.scaled": lambda d, v: d["waves"].scaled(v),
+    "resolve.edges": lambda d, v: resolve(d["scene"], d["ladar"], _axes(v)),
+    "resolve.ray_spacing": lambda d, v: resolve(d["scene"], d["ladar"], _axes(0.5),
+                                                ray_spacing=v),
+    "Returns.realise.dwell": lambda d, v: d["returns"].realise(
+        Noise(background_rate=1e6), 1, seed=0, dwell=v),
+    "Returns.realise.noise": lambda d, v: d["returns"].realise(Noise(gain=v), 1, seed=0),
     "Waveforms.realise.n": lambda d, v: d["waves"].realise(Noise(), v),
     "Waveforms.realise.seed": lambda d, v: d["waves"].realise(Noise(), 1, seed=v),
     "Waveforms.detection.threshold": lambda d, v: d["waves"].detection_probability(
