@@ -97,6 +97,10 @@ SCENE_RADIUS_RANGE = (1e-30, 1e30)
 #: target to worse than ~1e-7 of its size (|c|·2⁻⁵³ against its radius): a warning.
 FAR_RATIO = 1e9
 
+#: The share of the narrowest range bin that a standoff's rounding may reach before the
+#: mesh model warns: ranges R − D carry ~(D + |aim|)·2⁻⁵³ of float64 rounding.
+STANDOFF_ROUNDING_SHARE = 1e-3
+
 # -- reconstruction -------------------------------------------------------------------------
 
 #: Relative non-uniformity of bin widths accepted as uniform (rounding of edges).

@@ -5,6 +5,9 @@ warning, or a silent zero or NaN image before."""
 
 from __future__ import annotations
 
+import re
+import warnings
+
 import numpy as np
 import pytest
 
@@ -198,3 +201,28 @@ def test_a_users_value_is_quoted_short():
         finite_array("values", [10 ** 400] + [1] * 10000)
     quoted = str(exc.value).split("; got ", 1)[1]
     assert len(quoted) == MAX_QUOTE and quoted.endswith("...")
+
+
+def _far_sphere_warnings(standoff):
+    import trimesh
+
+    scene = ml.Scene.from_mesh(trimesh.creation.icosphere(subdivisions=2, radius=0.5),
+                               material=ml.materials.lambertian(0.5))
+    ladar = ml.Ladar([0.0], np.linspace(-0.5, 0.5, 100_001))           # 1e-5-wide bins
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        ml.simulate(scene, ladar, model="mesh", mode="3d", ray_spacing=0.05,
+                    sensor=Sensor(standoff=standoff))
+    return [str(w.message) for w in caught if "float64 rounding" in str(w.message)]
+
+
+def test_a_standoff_whose_rounding_reaches_the_bins_warns():
+    """Ranges R − D round to ~D·2⁻⁵³: at D = 1e9 m that is 1.1e-7 m, 0.011 of 1e-5-wide
+    bins (over STANDOFF_ROUNDING_SHARE = 1e-3: a warning naming it); at 1e3 m, 1e-8 of a
+    bin (none). A standoff of 1e15 (issue 29: a 119 % error without a word) is refused."""
+    (message,) = _far_sphere_warnings(1e9)
+    assert re.search(r"standoff 1e\+09 leaves the ranges a float64 rounding of ~1\.1e-07, "
+                     r"0\.011 of the narrowest bin", message), message
+    assert _far_sphere_warnings(1e3) == []
+    with pytest.raises(ParameterError, match=r"^standoff must be in \(0, 1e\+09\]"):
+        Sensor(standoff=1e15)

@@ -17,7 +17,7 @@ import numpy as np
 from .._validate import check_choice, check_real, unit_vectors
 from ..errors import MeshladarWarning, ParameterError
 from ..ladar import Ladar
-from ..precision import ORIGIN_MARGIN, PARALLEL_SLACK
+from ..precision import ORIGIN_MARGIN, PARALLEL_SLACK, STANDOFF_ROUNDING_SHARE
 from ..scene import Scene
 from ..sensor import FloodBeam, Sensor
 from .backends import resolve_backend
@@ -187,6 +187,14 @@ def _check_standoff(geo, ladar, sensor):
                 f"standoff {sensor.standoff:g} puts the sensor inside the target's extent "
                 f"(the target reaches {sensor.standoff - float(np.min(depth)):.6g} toward "
                 "it from the aim point): give a larger standoff")
+    # ranges R − D: differences of numbers ~D, each rounded to D·2⁻⁵³
+    rounding = (sensor.standoff + float(np.linalg.norm(aim))) * 2.0 ** -53
+    width = float(np.min(np.diff(ladar.bin_edges)))
+    if rounding > STANDOFF_ROUNDING_SHARE * width:
+        warnings.warn(f"standoff {sensor.standoff:g} leaves the ranges a float64 rounding of "
+                      f"~{rounding:.2g}, {rounding / width:.2g} of the narrowest bin "
+                      f"({width:.3g}): give a smaller standoff or wider bins",
+                      MeshladarWarning, stacklevel=4)
 
 
 def plan_trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0=None,
