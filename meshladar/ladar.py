@@ -175,8 +175,8 @@ class Ladar:
         if bin_width is None and n_bins is None:
             raise ParameterError("give bin_width or n_bins (or both); got neither")
         m = check_real("margin", margin, low=0.0)
-        w = check_real("bin_width", bin_width, low=MIN_BIN_WIDTH,
-                       high=SCENE_RADIUS_RANGE[1]) if bin_width is not None else None
+        w = check_real("bin_width", bin_width, low=MIN_BIN_WIDTH) \
+            if bin_width is not None else None
         n = check_count("n_bins", n_bins) if n_bins is not None else None
         if view_vectors is not None:
             views = cls(angles_deg, np.array([0.0, 1.0]), view_vectors=view_vectors)

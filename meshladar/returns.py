@@ -18,6 +18,9 @@ __all__ = ["COORDINATES", "Returns"]
 
 #: The coordinates a view's returns can be binned by (:mod:`meshladar.forward.resolved`).
 COORDINATES = ("range", "cross_range", "elevation", "doppler")
+#: The longest dwell (s) a realisation integrates background over: at the noise's highest
+#: rates (1e15 s⁻¹) its mean count stays within numpy's Poisson range.
+MAX_DWELL_S = 1e3
 
 _UNITS = {"range": "m", "cross_range": "m", "elevation": "m", "doppler": "Hz"}
 
@@ -91,7 +94,7 @@ class Returns:
     def realise(self, noise, n=1, *, seed=None, dwell=0.0):
         """``n`` noise realisations (n, *values.shape) (:class:`meshladar.noise.Noise`),
         each cell integrating background and dark counts over ``dwell`` seconds (its range
-        gate); the returns must count photoelectrons (a sensor that counts them, or
+        gate, at most :data:`MAX_DWELL_S`); the returns must count photoelectrons (a sensor that counts them, or
         :meth:`scaled`)."""
         if not isinstance(noise, Noise):
             raise ParameterError(f"noise must be a meshladar.noise.Noise; got "
@@ -99,7 +102,7 @@ class Returns:
         if self.info.get("units") != "photoelectrons":
             raise ParameterError(f"noise counts photoelectrons; these returns are in "
                                  f"{self.info.get('units')!r}: convert with scaled(factor)")
-        dwell = check_real("dwell", dwell, low=0.0)
+        dwell = check_real("dwell", dwell, low=0.0, high=MAX_DWELL_S)
         if dwell == 0 and (noise.background_rate > 0 or noise.dark_rate > 0):
             raise ParameterError("background and dark counts accumulate over each cell's "
                                  "dwell time: give dwell (s), e.g. its range gate")

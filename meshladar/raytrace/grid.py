@@ -191,22 +191,27 @@ def _sampling(mode, sampling, seed):
 
 
 
-#: The finest and coarsest ray spacing taken (scene units): its inverse square, a ray count,
-#: stays finite.
+#: The finest ray spacing taken (scene units): its inverse square, a ray count, stays finite.
 MIN_SPACING = 1e-150
-#: rays_per_bin taken: a millionth of a ray to a million rays per bin width.
-RAYS_PER_BIN_RANGE = (1e-6, 1e6)
+#: rays_per_bin taken (subnormal ones made the spacing infinite); the ray budget refuses
+#: what the top allows and the scene cannot hold.
+RAYS_PER_BIN_RANGE = (1e-300, 1e6)
 
 
 def _spacing(ladar, mode, ray_spacing, rays_per_bin, radius):
     if ray_spacing is not None and rays_per_bin is not None:
         raise ParameterError("give ray_spacing or rays_per_bin, not both")
     if ray_spacing is not None:
-        return check_real("ray_spacing", ray_spacing, low=MIN_SPACING, high=1.0 / MIN_SPACING)
+        return check_real("ray_spacing", ray_spacing, low=MIN_SPACING)
     if rays_per_bin is not None:
         rpb = check_real("rays_per_bin", rays_per_bin, low=RAYS_PER_BIN_RANGE[0],
                          high=RAYS_PER_BIN_RANGE[1])
-        return float(np.min(np.diff(ladar.bin_edges))) / rpb
+        spacing = float(np.min(np.diff(ladar.bin_edges))) / rpb
+        if not math.isfinite(spacing):
+            raise ParameterError(f"rays_per_bin={rpb:g} makes the ray spacing overflow (bins "
+                                 f"{float(np.min(np.diff(ladar.bin_edges))):.3g} wide): give "
+                                 "more rays_per_bin or a ray_spacing")
+        return spacing
     spacing = float(np.min(np.diff(ladar.bin_edges))) / _DEFAULT_RAYS_PER_BIN[mode]
     if mode == "3d":
         # bins much wider than the target (a target far off the rotation axis, seen from

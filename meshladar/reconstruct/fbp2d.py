@@ -148,7 +148,7 @@ def bins_across(sinogram) -> int:
 
 #: Half-widths of a reconstruction's square (cube) taken, scene units: its pixels' size
 #: and their inverse stay finite at any size meshladar allocates.
-EXTENT_RANGE = (1e-150, 1e150)
+EXTENT_RANGE = (1e-150, 1e300)
 
 
 def default_extent(sino, extent):
@@ -200,7 +200,7 @@ def fbp(sinogram, size=512, extent=None, *, filter="ramp", interpolation="linear
         lines). Non-uniform bins are resampled onto uniform ones (integrals conserved).
     size : int >= 1
         Pixels along each side of the square image.
-    extent : float in [1e-150, 1e150], optional
+    extent : float in [1e-150, 1e300], optional
         Half-width of the image square in scene units: it spans [−extent, extent]² about
         ``center``. Default: the bins' reach max(|r_0|, |r_n|) (:func:`bins_reach`), the
         square about the origin that holds everything the bins see, in any units (a part

@@ -316,7 +316,11 @@ def cgls(sino, size=256, extent=None, *, center=(0.0, 0.0), n_iter=30, x0=None, 
             run.stopped = "converged"
             break
         q = A @ p
-        alpha = gamma / float(np.sum(W * q * q))
+        qq = float(np.sum(W * q * q))
+        if not qq > 0:               # the rays carry nothing back (pixels far below the bins)
+            run.stopped = "converged"
+            break
+        alpha = gamma / qq
         x = x + alpha * p
         r = r - alpha * q
         s = M * (A.T @ (W * r))

@@ -179,7 +179,7 @@ def test_view_weights_follow_uneven_spacing():
 @pytest.mark.parametrize("kwargs, match", [
     (dict(size=0), r"size must be an integer >= 1; got 0"),
     (dict(size=2.5), r"size must be an integer >= 1; got 2.5"),
-    (dict(extent=-1.0), r"extent must be in \(0, inf\]; got -1.0"),
+    (dict(extent=-1.0), r"extent must be in \[1e-150, 1e\+300\]; got -1.0"),
     (dict(filter="rampp"), r"filter must be one of \('ramp', 'shepp-logan', 'cosine', "
                            r"'hamming', 'hann'\); got 'rampp'"),
     (dict(interpolation="cubic"), r"interpolation must be one of \('linear', 'nearest'\)"),
