@@ -31,6 +31,9 @@ __all__ = ["Noise", "draw_noise"]
 #: The highest background or dark rate taken, photoelectrons per second: 1e15 (a
 #: second's dwell still draws within numpy's Poisson range, ~9e18).
 MAX_RATE = 1e15
+#: The largest mean count per cell a draw takes: numpy's Poisson stops near 9e18, and a
+#: speckle draw can reach hundreds of times its mean.
+MAX_MEAN_COUNT = 1e16
 #: The highest gain (and excess noise factor) taken: 1e9, beyond any APD or PMT, so that
 #: gain × counts stays finite.
 MAX_GAIN = 1e9
@@ -129,13 +132,19 @@ def draw_noise(noise, signal, dwell, n, seed):
     (photoelectrons per cell), each cell integrating background and dark counts over
     ``dwell`` seconds (module docstring). Seeded through numpy's default generator.
     Refused before drawing when its peak memory (:data:`DRAW_PEAK_BYTES` per sample) would
-    pass meshladar's allocation cap."""
+    pass meshladar's allocation cap, or a cell's mean count :data:`MAX_MEAN_COUNT`."""
     rng = np.random.default_rng(check_seed("seed", seed))
     shape = (n,) + np.shape(signal)
     check_size("n", float(n) * max(1, int(np.prod(np.shape(signal)))), DRAW_PEAK_BYTES,
                f"{n} realisations of {np.shape(signal)} samples", "draw fewer at a time")
-    s = np.broadcast_to(np.maximum(signal, 0.0), shape)
     b = (noise.background_rate + noise.dark_rate) * dwell
+    top = (float(np.max(signal)) if np.size(signal) else 0.0) + b
+    if not top <= MAX_MEAN_COUNT:
+        raise ParameterError(f"the largest mean count per cell would be {top:.3g} "
+                             f"photoelectrons (signal plus background and dark counts over the "
+                             f"dwell), beyond the {MAX_MEAN_COUNT:.0e} the draws take: check "
+                             "the signal's scale, the rates and the dwell")
+    s = np.broadcast_to(np.maximum(signal, 0.0), shape)
     if noise.speckle_cells is not None:
         m = noise.speckle_cells
         intensity = rng.gamma(m, 1.0, size=shape)

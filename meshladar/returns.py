@@ -94,8 +94,8 @@ class Returns:
     def realise(self, noise, n=1, *, seed=None, dwell=0.0):
         """``n`` noise realisations (n, *values.shape) (:class:`meshladar.noise.Noise`),
         each cell integrating background and dark counts over ``dwell`` seconds (its range
-        gate, at most :data:`MAX_DWELL_S`); the returns must count photoelectrons (a sensor that counts them, or
-        :meth:`scaled`)."""
+        gate, at most :data:`MAX_DWELL_S`); the returns must count photoelectrons (a sensor
+        that counts them, or :meth:`scaled`)."""
         if not isinstance(noise, Noise):
             raise ParameterError(f"noise must be a meshladar.noise.Noise; got "
                                  f"{type(noise).__name__}")

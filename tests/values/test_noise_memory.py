@@ -73,3 +73,14 @@ def test_seeds_checked_with_one_message(seed):
         with pytest.raises(ParameterError,
                            match=r"^seed must be None or a non-negative integer; got"):
             call()
+
+
+def test_a_mean_count_beyond_the_draws_range_is_refused():
+    """Scaled returns of 1e300 photoelectrons reached numpy's Poisson as "lam value too
+    large"; the draw refuses them first, naming the mean count. 1e15 still draws (with
+    fully developed speckle), finite."""
+    with pytest.raises(ParameterError, match=r"^the largest mean count per cell would be "
+                                             r"1e\+300 photoelectrons"):
+        draw_noise(Noise(), np.full((2, 3), 1e300), 1e-6, 1, 0)
+    out = draw_noise(Noise(speckle_cells=1.0), np.full((2, 3), 1e15), 1e-6, 2, 0)
+    assert np.all(np.isfinite(out)) and out.max() > 1e14
