@@ -8,6 +8,16 @@ the error of the kernel it used), and the largest shift of a parameter that chan
 in its σ (many bins each under 0.1 σ may shift a parameter by more). The sample count
 doubles until both are at most ``kernel_tol`` (default :data:`KERNEL_TOL` = 0.1), up to
 ``max_samples``.
+
+A mesh kernel traced from its Scene climbs the same ladder in rays per range-bin width
+(the scene traced again at half the ray spacing), up to :data:`MAX_KERNEL_RAYS` rays over
+all views. Point binning converges slowly: near a silhouette or a range extremum the range
+is quadratic in the ray's position, so a bin's share of rays errs at order 1/2 in the
+spacing (measured on a glinting prism: a noiseless fit's offset falls ~N^-0.6, and the
+change from N to 2N is a third to a quarter of the 2N kernel's own offset). Its change is
+therefore scaled by :data:`MESH_ERROR_FACTOR` = 1/(√2 − 1), the error of the 2N kernel if
+it converges at order 1/2 (Richardson), before it is compared or reported. A kernel
+of the user's own Hits is not checked (its ``kernel_error`` is None and the note says so).
 """
 
 from __future__ import annotations
@@ -18,6 +28,8 @@ import warnings
 import numpy as np
 
 from ..errors import MeshladarWarning
+from . import _irls
+from ._params import _materials
 
 #: Largest kernel error allowed in any bin, in units of that bin's noise σ.
 KERNEL_TOL = 0.1
@@ -27,6 +39,12 @@ MIN_KERNEL_TOL = 1e-6
 #: Most pieces per boundary the refinement goes to (a 360-view kernel at 2^16 takes ~15 s
 #: and ~1 GB).
 MAX_SAMPLES = 2 ** 16
+#: Most rays a mesh kernel's refinement traces over all views (the hits take ~60 bytes a
+#: ray while the kernel is built: about 0.5 GB).
+MAX_KERNEL_RAYS = 2 ** 23
+#: A mesh kernel's error per unit of its change from N to 2N rays per bin width: the
+#: Richardson factor 1/(2^p − 1) of convergence at order p = 1/2.
+MESH_ERROR_FACTOR = 1.0 / (math.sqrt(2.0) - 1.0)
 
 
 class KernelErrorWarning(MeshladarWarning):
@@ -48,6 +66,8 @@ class Ladder:
                        and kernel._traced is not None)
         self.coarse = kernel
         self.error = self.shift = None
+        #: the kernel's error per unit of its change from N to 2N
+        self.factor = MESH_ERROR_FACTOR if kernel.source == "mesh" else 1.0
 
     @property
     def used(self):
@@ -64,26 +84,52 @@ class Ladder:
         before = self.used
         while True:
             fine = self.used
-            self.error = kernel_error(self.coarse, fine, mats, sigma_of(fine, mats))
-            self.shift = None if shift_of is None else shift_of(self.coarse, fine)
-            worst = max(self.error, self.shift or 0.0)
-            if worst <= self.tol or 2 * fine.samples > self.cap:
+            self.error = self.factor * kernel_error(self.coarse, fine, mats,
+                                                    sigma_of(fine, mats))
+            self.shift = None if shift_of is None else self.factor * shift_of(self.coarse,
+                                                                              fine)
+            if self.worst <= self.tol or not self._refinable(fine):
                 break
             self.coarse = fine
         return self.used is before
 
+    @property
+    def worst(self):
+        """What must be within the tolerance: the per-bin error and the parameters' shift
+        of an analytic kernel; a mesh kernel's shift alone (its per-bin error near a
+        silhouette falls only ~N^-0.4, out of reach at 10⁵ photons in a bin, and a bin's
+        error the parameters do not feel costs nothing; it is still reported)."""
+        if self.coarse.source == "mesh":
+            return self.shift or 0.0
+        return max(self.error, self.shift or 0.0)
+
+    def _refinable(self, kernel):
+        """Whether the kernel at twice ``kernel``'s resolution is within the caps."""
+        if 2 * kernel.samples > self.cap:
+            return False
+        return (kernel.source != "mesh"
+                or kernel.rays * (2 if kernel.info["mode"] == "slice" else 4)
+                <= MAX_KERNEL_RAYS)
+
     def warn_if_coarse(self):
         """Warn with the numbers when the cap stopped the refinement above tolerance."""
-        if self.active and max(self.error, self.shift or 0.0) > self.tol:
-            n = self.used.samples
-            worst = max(self.error, self.shift or 0.0)
-            need = n * 2 ** min(64, math.ceil(0.5 * math.log2(worst / self.tol)))
-            warnings.warn(f"the coating kernel's error is {self.error:.3g} σ in its worst bin "
-                          f"(a shift of {self.shift or 0.0:.3g} σ in the parameters) "
-                          f"with {n} samples per boundary (kernel_tol={self.tol:g}, capped "
-                          f"by max_samples={self.cap}); pass max_samples={need} (the error "
-                          "falls ~4× per doubling) or accept it", KernelErrorWarning,
-                          stacklevel=3)
+        if self.active and self.worst > self.tol:
+            n, worst = self.used.samples, self.worst
+            head = (f"the coating kernel's error is {self.error:.3g} σ in its worst bin "
+                    f"(a shift of {self.shift or 0.0:.3g} σ in the parameters) ")
+            if self.used.source == "mesh":
+                need = n * 2 ** min(64, math.ceil(math.log2(worst / self.tol)))
+                text = (f"with {n:.4g} rays per bin width ({self.used.rays} rays; "
+                        f"kernel_tol={self.tol:g}, capped at {MAX_KERNEL_RAYS} rays or "
+                        f"max_samples={self.cap}); about {need:.4g} rays per bin width would "
+                        "do (the error falls ~2× per doubling): trace fewer views at a time, "
+                        "or accept it")
+            else:
+                need = n * 2 ** min(64, math.ceil(0.5 * math.log2(worst / self.tol)))
+                text = (f"with {n} samples per boundary (kernel_tol={self.tol:g}, capped by "
+                        f"max_samples={self.cap}); pass max_samples={need} (the error falls "
+                        "~4× per doubling) or accept it")
+            warnings.warn(head + text, KernelErrorWarning, stacklevel=3)
 
     def info(self):
         """The kernel's resolution for the fit's ``info``."""
@@ -91,12 +137,58 @@ class Ladder:
             return {"kernel_error": None, "samples": self.coarse.samples,
                     "kernel_error_note": "not estimated: " + (
                         "kernel_tol=None" if self.tol is None and self.coarse.samples
-                        else f"a {self.coarse.source} kernel cannot be resampled (check it "
-                             "against one traced at a finer spacing)")}
+                        else f"a kernel of {self.coarse.source} hits cannot be resampled "
+                             "(give fit_coatings the mesh Scene, or coating_kernel(scene, "
+                             "ladar), to have it traced and checked at finer spacings)")}
         return {"kernel_error": self.error, "kernel_shift": self.shift,
                 "samples": self.used.samples,
-                "kernel_error_note": f"largest |model({self.used.samples}) − "
-                                     f"model({self.coarse.samples})| over the bins, in "
-                                     "units of each bin's noise σ (an upper estimate of "
-                                     "the error of the kernel used); kernel_shift: the largest shift of a "
-                                     "parameter, in its σ, that change causes"}
+                "kernel_error_note": (f"largest |model({self.used.samples:g}) − "
+                                      f"model({self.coarse.samples:g})| "
+                                      f"({_unit(self.used)}) over the bins, in units of "
+                                      "each bin's noise σ" + (
+                                          f", times {self.factor:.3g} (convergence at "
+                                          "order 1/2)" if self.factor != 1.0 else
+                                          " (an upper estimate of the error of the kernel "
+                                          "used)") + "; kernel_shift: the largest shift of "
+                                      "a parameter, in its σ, that change causes (scaled "
+                                      "alike)")}
+
+
+def _unit(kernel):
+    """What a kernel's ``samples`` counts."""
+    return "rays per bin width" if kernel.source == "mesh" else "pieces per boundary"
+
+
+def kernel_shift(model, at, coarse, fine):
+    """The largest shift of a parameter, in its σ, that the model's change from the
+    ``coarse`` to the ``fine`` kernel causes at ``at`` = (x, model values)."""
+    step, sd = kernel_step(model, at, coarse, fine)
+    ok = sd > 0
+    return float(np.max(np.abs(step[ok]) / sd[ok], initial=0.0))
+
+
+def kernel_step(model, at, coarse, fine):
+    """(the parameters' shift, their σ) that the model's change Δm from the ``coarse`` to
+    the ``fine`` kernel causes at ``at`` = (x, model values): the weighted least-squares
+    step (Jᵀ W J)⁺ Jᵀ W Δm, W the inverse noise variance."""
+    problem = model.problem
+    x, m = at
+    mats = _materials(problem.mats, problem.params, x)
+    dm = (fine.predict(mats) - coarse.predict(mats)).ravel()[problem.rows] * problem.scale
+    if problem.noise == "gaussian":
+        rss = float(np.sum((problem.data - m) ** 2)) / max(1, m.size - len(x))
+        w = np.full(m.size, 1.0 / math.sqrt(max(rss, 1e-300)))
+    else:
+        w = 1.0 / np.sqrt(_irls.variance(m, problem.noise, problem.M))
+    Jw = model.jacobian(x) * w[:, None]
+    cov = np.linalg.pinv(Jw.T @ Jw)
+    return cov @ (Jw.T @ (dm * w)), np.sqrt(np.maximum(np.diag(cov), 0.0))
+
+
+def with_kernel_error(covariance, step):
+    """The covariance with the kernel's estimated error added as a systematic term
+    s sᵀ (s the parameters' shift from N to 2N), on the determined parameters."""
+    ok = np.isfinite(np.diag(covariance)) & np.isfinite(step)
+    out = covariance.copy()
+    out[np.ix_(ok, ok)] += np.outer(step[ok], step[ok])
+    return out

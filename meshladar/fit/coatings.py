@@ -35,7 +35,8 @@ from ..scene import Scene
 from . import _irls
 from ._identify import NULL_REL, _correlation, _misfit, _uncertainty, describe
 from ._params import _materials, _resolve_params
-from ._resolution import KERNEL_TOL, MAX_SAMPLES, MIN_KERNEL_TOL, KernelErrorWarning, Ladder
+from ._resolution import (KERNEL_TOL, MAX_SAMPLES, MIN_KERNEL_TOL, KernelErrorWarning, Ladder,
+                          kernel_shift, kernel_step, with_kernel_error)
 from .kernels import MAX_KERNEL_SAMPLES, CoatingKernel, _table, coating_kernel
 
 __all__ = ["fit_coatings", "CoatingFit", "IdentifiabilityWarning", "KernelErrorWarning",
@@ -62,7 +63,9 @@ class CoatingFit:
         determines (a weakly determined one, named in ``identifiable``, keeps its σ).
     covariance, correlation : (n, n) arrays
         From the Fisher information of the user's parameters at the estimate (inf on an
-        undetermined parameter's diagonal, NaN beside it).
+        undetermined parameter's diagonal, NaN beside it), plus the kernel's estimated
+        error as a systematic term s sᵀ, s the parameters' shift from the kernel's N to 2N
+        (where it was estimated; ≤ 0.5 % of σ when the shift is within ``kernel_tol``).
     materials : tuple of BRDF
         Every part's coating with the estimates in.
     identifiable : dict
@@ -74,13 +77,15 @@ class CoatingFit:
         directions of the Fisher matrix orthogonal to its near-null ones), as (text,
         value, σ): e.g. ("disk.rho_d + disk.epsilon", 0.5, 0.0027).
     kernel_error : float or None
-        An analytic kernel's error: the largest change of the model at the estimate over
-        the bins from N to 2N pieces per boundary, in units of each bin's noise σ (the fit
-        used 2N; None: not estimated, see ``info["kernel_error_note"]``).
+        The kernel's error: the largest change of the model at the estimate over the bins
+        from N to 2N pieces per boundary (or rays per bin width of a mesh traced from its
+        Scene), in units of each bin's noise σ (the fit used 2N; None: not estimated, see
+        ``info["kernel_error_note"]``).
         ``info["kernel_shift"]``: the largest shift of a parameter, in its σ, that this
         change causes; N doubles until both are at most ``kernel_tol``.
-    samples : int or None
-        Pieces per boundary of the kernel used.
+    samples : float or None
+        Pieces per boundary (analytic) or rays per bin width (a mesh traced from its
+        Scene) of the kernel used.
     noise, deviance, dof, iterations, predicted
         The noise model, the misfit (χ² for Gaussian; for counts the deviance, twice the
         log-likelihood ratio against the saturated model), degrees of freedom, solver
@@ -115,7 +120,9 @@ class CoatingFit:
     def _kernel_line(self):
         if self.kernel_error is None:
             return "not estimated"
-        return f"{self.kernel_error:.2g} σ ({self.samples} samples per boundary)"
+        unit = ("rays per bin width" if self.info.get("source") == "mesh"
+                else "samples per boundary")
+        return f"{self.kernel_error:.2g} σ ({self.samples:g} {unit})"
 
     def _summary(self):
         return (("noise", self.noise),
@@ -173,15 +180,16 @@ class CoatingFit:
 
 def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, initial=None,
                  noise="gaussian", photons_per_unit=None, speckle_cells=None, background=0.0,
-                 bootstrap=0, seed=0, samples=2048, kernel_tol=KERNEL_TOL,
+                 bootstrap=0, seed=0, samples=None, kernel_tol=KERNEL_TOL,
                  max_samples=MAX_SAMPLES, max_iter=50):
     """Fit coating parameters of chosen parts to a measured sinogram, the geometry known.
 
     Parameters
     ----------
     geometry : CoatingKernel, Scene or Hits
-        The traced geometry (:func:`coating_kernel`); a Scene of analytic shapes is traced
-        on the measured sinogram's views and bins.
+        The traced geometry (:func:`coating_kernel`); a Scene (analytic or mesh, with
+        trace's defaults) is traced on the measured views and bins. The kernel of the
+        user's own Hits is used as it is, its error not estimated.
     measured : Sinogram or Waveforms
         The data (its ``info["radiometry"]`` picks the radiometry for a Scene); waveforms
         need a waveform kernel (:meth:`CoatingKernel.received`).
@@ -193,9 +201,8 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
         parameters, or ρd and b of a diffuse-only SR coating, or every float field of
         another BRDF); a dict gives them per part.
     bounds : dict, optional
-        "part.param", "index.param" or "param" → (low, high) (default SR's valid ranges;
-        unbounded for other models). They limit the search only: σ is the user
-        parameters' own, whatever the bounds.
+        "part.param", "index.param" or "param" → (low, high) (default SR's valid ranges,
+        others unbounded): they limit the search only, not σ.
     initial : dict, optional
         part → BRDF to start from (default the geometry's own coatings).
     noise : {"gaussian", "poisson"}
@@ -207,15 +214,17 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
         Known mean background counts per bin (``"poisson"``), not subtracted from the data.
     bootstrap, seed : int
         Parametric-bootstrap refits (0: none) from the fitted model, and their seed.
-    samples : int
-        Pieces per boundary an analytic scene's kernel starts from.
+    samples : float
+        Pieces per boundary an analytic Scene's kernel starts from (default 2048); rays per
+        bin width a mesh Scene's starts from (default trace's).
     kernel_tol : float or None
-        An analytic kernel's error allowed in any bin, in units of that bin's noise σ
-        (default 0.1, at least 1e-6): N doubles until the model's change from N to 2N pieces
-        per boundary at the estimate is at most this; the fit uses 2N. None: no check.
+        The kernel's error allowed, in σ (default 0.1, at least 1e-6): N doubles until the
+        model's change from N to 2N (a mesh traced again at half the spacing) is at most
+        this in each bin and in each parameter's shift (a mesh: the shift alone,
+        :mod:`._resolution`); the fit uses 2N. None: no check.
     max_samples : int
-        The most pieces per boundary (default 2^16); above it a :class:`KernelErrorWarning`
-        gives the error and the count that would do.
+        The most N (default 2^16; a mesh stops at 2^23 rays too); above it a
+        :class:`KernelErrorWarning` gives the error and the N that would do.
     max_iter : int
         Most outer (reweighting) iterations.
 
@@ -239,13 +248,13 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
     opts = _Options(noise, scale, M, background, max_iter)
     x = np.clip([float(getattr(mats[p.part], p.name)) for p in params],
                 [p.low for p in params], [p.high for p in params])
-    ladder.settle(_materials(mats, params, x), _noise_sigma(measured, opts, len(params)))
+    sigma_of = _noise_sigma(measured, opts, len(params))
+    ladder.settle(_materials(mats, params, x), sigma_of)
     while True:
-        problem = _problem(ladder.used, measured, mats, params, opts)
-        model = _irls.Model(problem)
-        x, m, iterations = _irls.solve(model, problem.data, x)
-        if ladder.settle(_materials(mats, params, x), _noise_sigma(measured, opts, len(params)),
-                         functools.partial(_kernel_shift, model, (x, m))):
+        model = _irls.Model(_problem(ladder.used, measured, mats, params, opts))
+        x, m, iterations = _irls.solve(model, model.problem.data, x)
+        if ladder.settle(_materials(mats, params, x), sigma_of,
+                         functools.partial(kernel_shift, model, (x, m))):
             break
     ladder.warn_if_coarse()
     return _result(model, (x, m, iterations), ladder, (bootstrap, seed))
@@ -270,7 +279,11 @@ def _result(model, solved, ladder, boot):
     full[problem.rows] = m
     names = tuple(f"{kernel.parts[p.part]}.{p.name}" for p in params)
     found = _uncertainty(fit.fisher, x, params, lambda i: names[i])
-    stderr, corr = _correlation(found.covariance)
+    covariance = found.covariance
+    if ladder.active:
+        covariance = with_kernel_error(covariance, ladder.factor * kernel_step(
+            model, (x, m), ladder.coarse, kernel)[0])
+    stderr, corr = _correlation(covariance)
     ident = {names[i]: v for i, v in enumerate(found.reasons)}
     combos = tuple((describe(c, names), float(c @ x), s) for c, s in found.combinations)
     boots = (_irls.bootstrap(model, m, x, count=boot[0], seed=boot[1], sigma2=fit.sigma2)
@@ -278,7 +291,7 @@ def _result(model, solved, ladder, boot):
     _warn_undetermined(ident, combos)
     res = ladder.info()
     scale = problem.scale
-    return CoatingFit(names, x, stderr, found.covariance, corr,
+    return CoatingFit(names, x, stderr, covariance, corr,
                       tuple(_materials(problem.mats, params, x)), ident,
                       problem.noise if problem.M is None else
                       f"negative binomial (M = {problem.M:g})", fit.misfit, fit.dof,
@@ -288,30 +301,12 @@ def _result(model, solved, ladder, boot):
                        "radiometry": kernel.radiometry, "source": kernel.source,
                        "covariance": "inverse Fisher information of the user's parameters "
                                      f"(null directions: eigenvalue ≤ {NULL_REL:g} of the "
-                                     "largest of the unit-diagonal Fisher matrix)", **res},
+                                     "largest of the unit-diagonal Fisher matrix)"
+                                     + (", plus s sᵀ, s the parameters' shift from the "
+                                        "kernel's N to 2N (its estimated error)"
+                                        if ladder.active else ""), **res},
                       combinations=combos, kernel_error=res["kernel_error"],
                       samples=res["samples"])
-
-
-def _kernel_shift(model, at, coarse, fine):
-    """The largest shift of a parameter, in its σ, that the model's change from the
-    ``coarse`` to the ``fine`` kernel causes at ``at`` = (x, model values): the weighted
-    least-squares step (Jᵀ W J)⁺ Jᵀ W Δm, W the inverse noise variance."""
-    problem = model.problem
-    x, m = at
-    mats = _materials(problem.mats, problem.params, x)
-    dm = (fine.predict(mats) - coarse.predict(mats)).ravel()[problem.rows] * problem.scale
-    if problem.noise == "gaussian":
-        rss = float(np.sum((problem.data - m) ** 2)) / max(1, m.size - len(x))
-        w = np.full(m.size, 1.0 / math.sqrt(max(rss, 1e-300)))
-    else:
-        w = 1.0 / np.sqrt(_irls.variance(m, problem.noise, problem.M))
-    Jw = model.jacobian(x) * w[:, None]
-    cov = np.linalg.pinv(Jw.T @ Jw)
-    step = cov @ (Jw.T @ (dm * w))
-    sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
-    ok = sd > 0
-    return float(np.max(np.abs(step[ok]) / sd[ok], initial=0.0))
 
 
 def _warn_undetermined(ident, combos):
@@ -366,7 +361,11 @@ def _kernel_for(geometry, measured, *, waveforms, samples):
     if isinstance(geometry, CoatingKernel):
         kernel = geometry
     elif isinstance(geometry, Scene):
-        kernel = coating_kernel(geometry, Ladar(measured.angles_deg, measured.bin_edges),
+        if samples is None and not geometry.is_mesh:
+            samples = 2048
+        views = (dict(angles_deg=measured.angles_deg) if measured.planar
+                 else dict(angles_deg=None, view_vectors=measured.view_vectors))
+        kernel = coating_kernel(geometry, Ladar(bin_edges=measured.bin_edges, **views),
                                 radiometry=measured.radiometry or "paper",
                                 samples=samples)
     else:

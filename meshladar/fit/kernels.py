@@ -15,9 +15,13 @@ parameter's derivative is the product with the derivative of its table.
   at 8192 pieces the paper's pair is within 1e-4 (relative L2) of the analytic model's
   exact profiles. :meth:`CoatingKernel.resampled` gives the same scene at another count
   (a fit uses it to control the error, :mod:`._resolution`).
-* From mesh hits (:func:`coating_kernel` on :class:`~meshladar.hits.Hits`): each
-  hit binned at its range with the weights :func:`~meshladar.weigh` gives it, per material
-  index; equal to ``weigh`` to the table's interpolation.
+* From mesh hits (:func:`coating_kernel` on :class:`~meshladar.hits.Hits`, or on a mesh
+  :class:`~meshladar.Scene` with the ladar, which it traces): each hit binned at its range
+  with the weights :func:`~meshladar.weigh` gives it, per material index; equal to
+  ``weigh`` to the table's interpolation. A kernel traced here from a Scene keeps the
+  scene, so :meth:`CoatingKernel.resampled` traces it again at another count of rays per
+  bin width (its error falls ~2× per doubling: point binning at the bins' edges is first
+  order); a kernel of the user's own Hits cannot be resampled.
 """
 
 from __future__ import annotations
@@ -30,9 +34,11 @@ from scipy.sparse import csr_matrix, identity, kron
 
 from .._summary import table as _html_table
 from .._summary import text as _text
-from .._validate import check_count
+from .._validate import check_count, check_real
 from ..brdf import projected_weight
 from ..errors import ParameterError
+from ..forward.mesh import trace
+from ..raytrace.grid import RAYS_PER_BIN_RANGE
 from ..hits import Hits
 from ..waveforms import receive
 from ..weighing import per_table_weight
@@ -99,22 +105,35 @@ class CoatingKernel:
 
     @property
     def samples(self):
-        """Pieces per analytic boundary (None for mesh hits)."""
-        return self.info.get("samples_per_shape")
+        """Pieces per analytic boundary, or rays per range-bin width of a mesh kernel traced
+        from its Scene (None for a kernel of the user's own Hits)."""
+        return self.info.get("samples_per_shape", self.info.get("rays_per_bin"))
 
     def resampled(self, samples):
-        """This analytic kernel with ``samples`` pieces per boundary (kept, so a second
-        call is free); a mesh kernel cannot be resampled (ParameterError)."""
-        samples = check_count("samples", samples)
+        """This kernel with ``samples`` pieces per analytic boundary, or traced again with
+        ``samples`` rays per bin width (a mesh kernel traced from its Scene); kept, so a
+        second call is free. A kernel of the user's own Hits cannot be resampled
+        (ParameterError)."""
         if self._traced is None:
-            raise ParameterError("only an analytic scene's kernel can be resampled; this "
-                                 f"one is from {self.source}")
+            raise ParameterError("only a kernel traced from its Scene (coating_kernel(scene, "
+                                 f"ladar)) can be resampled; this one is from {self.source}"
+                                 + (" hits" if self.source == "mesh" else ""))
+        samples = (check_count("samples", samples) if self.source == "analytic"
+                   else check_real("samples", samples, low=0.0, low_open=True))
         if samples == self.samples:
             return self
         if samples not in self._finer:
-            scene, ladar = self._traced
-            self._finer[samples] = _analytic_kernel(scene, ladar, self.radiometry, samples)
+            scene, ladar, *options = self._traced
+            self._finer[samples] = (
+                _analytic_kernel(scene, ladar, self.radiometry, samples)
+                if self.source == "analytic"
+                else _traced_mesh_kernel(scene, ladar, self.radiometry, samples, *options))
         return self._finer[samples]
+
+    @property
+    def rays(self):
+        """Rays a mesh kernel traced, over all views (None for an analytic kernel)."""
+        return self.info.get("rays")
 
     def part_index(self, part) -> int:
         """A part's index from its name or index."""
@@ -210,7 +229,26 @@ def _mesh_kernel(hits, radiometry):
         names = tuple(f"material {i}" for i in range(len(names)))
     return CoatingKernel(tuple(mats), names, tuple(hits.materials), (n_views, n_bins),
                          hits.ladar.angles_deg, edges, radiometry, "mesh",
-                         {"mode": hits.mode, "normals": hits.normals})
+                         {"mode": hits.mode, "normals": hits.normals,
+                          "rays": int(np.sum(hits.rays))})
+
+
+#: Options of :func:`meshladar.trace` a mesh scene's kernel takes (the ray spacing is the
+#: kernel's own ``samples``, rays per bin width; a bistatic receiver has no kernel).
+TRACE_OPTIONS = ("mode", "normals", "back_faces", "z0", "sampling", "seed", "backend",
+                 "sensor")
+
+
+def _traced_mesh_kernel(scene, ladar, radiometry, rays_per_bin, options):
+    """The kernel of a mesh scene traced with ``rays_per_bin`` (None: trace's default)."""
+    hits = trace(scene, ladar, rays_per_bin=rays_per_bin, **options)
+    kernel = _mesh_kernel(hits, radiometry)
+    spacing = float(hits.info["ray_spacing"])
+    kernel.info["rays_per_bin"] = float(np.min(np.diff(ladar.bin_edges))) / spacing
+    kernel.info["ray_spacing"] = spacing
+    return CoatingKernel(kernel.matrices, kernel.parts, kernel.materials, kernel.shape,
+                         kernel.angles_deg, kernel.bin_edges, radiometry, "mesh",
+                         kernel.info, _traced=(scene, ladar, options))
 
 
 #: The most samples per analytic boundary a kernel takes (16 times the fit's refinement cap;
@@ -218,29 +256,66 @@ def _mesh_kernel(hits, radiometry):
 MAX_KERNEL_SAMPLES = 2 ** 20
 
 
-def coating_kernel(geometry, ladar=None, *, radiometry="paper", samples=8192):
-    """The :class:`CoatingKernel` of analytic shapes (``geometry`` a Scene of disks and
-    ellipses, with ``ladar``) or of traced mesh hits (``geometry`` the
-    :class:`~meshladar.hits.Hits` of :func:`meshladar.trace`; monostatic, point
-    binning). ``samples`` per analytic boundary."""
+def coating_kernel(geometry, ladar=None, *, radiometry="paper", samples=None, **trace):
+    """The :class:`CoatingKernel` of a scene under a ladar, for re-weighing with any
+    coatings.
+
+    Parameters
+    ----------
+    geometry : Scene or Hits
+        A Scene of analytic shapes (Disk, Ellipse; views about the z axis), a mesh Scene
+        (traced here with :func:`meshladar.trace`), or the :class:`~meshladar.hits.Hits`
+        of a trace (monostatic, point binning).
+    ladar : Ladar
+        Views and bins; required with a Scene (Hits carry their own).
+    radiometry : {"paper", "power"}
+    samples : float, optional
+        Pieces per analytic boundary (default 8192, at most :data:`MAX_KERNEL_SAMPLES`),
+        or rays per range-bin width of a mesh scene (default :func:`~meshladar.trace`'s).
+    **trace
+        Options of :func:`~meshladar.trace` for a mesh scene (:data:`TRACE_OPTIONS`:
+        mode, normals, back_faces, z0, sampling, seed, backend, sensor).
+
+    Returns
+    -------
+    CoatingKernel
+        Traced from a Scene, it can be :meth:`~CoatingKernel.resampled`, which is how
+        :func:`fit_coatings` controls its error.
+    """
     radiometry = "power" if check_radiometry(radiometry) else "paper"
+    unknown = sorted(set(trace) - set(TRACE_OPTIONS))
+    if unknown:
+        raise ParameterError(f"coating_kernel takes the trace options {list(TRACE_OPTIONS)}; "
+                             f"got {unknown}" + (" (the ray spacing is samples=, rays per "
+                                                 "bin width)" if {"ray_spacing",
+                                                 "rays_per_bin"} & set(unknown) else ""))
     if isinstance(geometry, Hits):
+        if ladar is not None or samples is not None or trace:
+            raise ParameterError("Hits carry their ladar and rays: give coating_kernel(hits) "
+                                 "alone, or the mesh Scene with the ladar and samples")
         return _mesh_kernel(geometry, radiometry)
-    if isinstance(geometry, Scene):
-        if ladar is None:
-            raise ParameterError("an analytic scene's kernel needs the ladar (views, bins)")
-        if geometry.is_mesh or not all(hasattr(s, "axes") for s in geometry.shapes):
-            raise ParameterError("coating_kernel takes analytic shapes (Disk, Ellipse) or "
-                                 "mesh Hits; trace a mesh scene with meshladar.trace first "
-                                 "(a mesh Scene gave an empty kernel)")
-        if not ladar.planar:
-            raise ParameterError("an analytic scene's kernel needs views about the z axis; "
-                                 "this ladar has 3-D view vectors (trace a mesh instead)")
-        samples = check_count("samples", samples)
-        if samples > MAX_KERNEL_SAMPLES:
-            raise ParameterError(f"samples must be at most {MAX_KERNEL_SAMPLES} per boundary "
-                                 f"(the kernel converges at second order well before); got "
-                                 f"{samples}")
-        return _analytic_kernel(geometry, ladar, radiometry, samples)
-    raise ParameterError(f"geometry must be a Scene of analytic shapes or Hits; got "
-                         f"{type(geometry).__name__}")
+    if not isinstance(geometry, Scene):
+        raise ParameterError(f"geometry must be a Scene of analytic shapes or Hits; got "
+                             f"{type(geometry).__name__}")
+    if ladar is None:
+        raise ParameterError("a scene's kernel needs the ladar (views, bins)")
+    if geometry.is_mesh:
+        if samples is not None:
+            samples = check_real("samples", samples, low=RAYS_PER_BIN_RANGE[0],
+                                 high=RAYS_PER_BIN_RANGE[1])
+        return _traced_mesh_kernel(geometry, ladar, radiometry, samples, trace)
+    if trace:
+        raise ParameterError(f"trace options {sorted(trace)} apply to a mesh scene; this one "
+                             "is analytic")
+    if not all(hasattr(s, "axes") for s in geometry.shapes):
+        raise ParameterError("coating_kernel takes analytic shapes (Disk, Ellipse), a mesh "
+                             "Scene or mesh Hits")
+    if not ladar.planar:
+        raise ParameterError("an analytic scene's kernel needs views about the z axis; "
+                             "this ladar has 3-D view vectors (trace a mesh instead)")
+    samples = check_count("samples", 8192 if samples is None else samples)
+    if samples > MAX_KERNEL_SAMPLES:
+        raise ParameterError(f"samples must be at most {MAX_KERNEL_SAMPLES} per boundary "
+                             f"(the kernel converges at second order well before); got "
+                             f"{samples}")
+    return _analytic_kernel(geometry, ladar, radiometry, samples)

@@ -50,30 +50,39 @@ def _floor(n):
     return MIN_COVERAGE - SAMPLING_SIGMAS * np.sqrt(MIN_COVERAGE * (1 - MIN_COVERAGE) / n)
 
 
-def _trials(scene, levels=LEVELS):
-    """Per level, (inside (TRIALS, n) bool, z (TRIALS, n), kernel errors, determined
-    (TRIALS, n) bool) of the 95 % intervals against the truth; the exact profiles computed once, the kernel traced once
-    (its refinements kept), every fit started from the truth."""
-    exact = ml.simulate(scene, LAD, model="analytic").values
-    kernel = coating_kernel(scene, LAD, samples=2048)
+def _trials(scene, levels=LEVELS, trials=TRIALS, mesh=False):
+    """Per level, (inside (trials, n) bool, z (trials, n), kernel errors, determined
+    (trials, n) bool) of the 95 % intervals against the truth; the exact profiles computed
+    once (``mesh``: the mesh model at MESH_DATA_RAYS rays per bin width), the kernel traced
+    once (its refinements kept), every fit started from the truth."""
+    if mesh:
+        exact = ml.simulate(scene, LAD, model="mesh", rays_per_bin=MESH_DATA_RAYS,
+                            normals="exact").values
+        kernel = coating_kernel(scene, LAD, normals="exact")
+    else:
+        exact = ml.simulate(scene, LAD, model="analytic").values
+        kernel = coating_kernel(scene, LAD, samples=2048)
     out = {}
     for level in levels:
         k = level / exact.max()
         inside, z, kerr, known = [], [], [], []
-        for seed in range(TRIALS):
+        for seed in range(trials):
             y = np.random.default_rng(seed).poisson(exact * k) / k
             measured = ml.Sinogram(y, angles_deg=LAD.angles_deg, bin_edges=LAD.bin_edges,
                                    info={"radiometry": "paper"})
             with warnings.catch_warnings():
                 # a weakly determined parameter at 10³ photons is named; it keeps its σ
                 warnings.simplefilter("ignore", ml.fit.IdentifiabilityWarning)
+                # a mesh kernel capped above kernel_tol says so; its error is in σ
+                warnings.simplefilter("ignore", ml.fit.KernelErrorWarning)
                 fit = fit_coatings(kernel, measured, noise="poisson", photons_per_unit=k)
             true = np.array([getattr(scene.shapes[kernel.part_index(n.split(".")[0])]
                                      .material, n.split(".")[1]) for n in fit.names])
             lo, hi = fit.interval(0.95)
             inside.append((lo <= true) & (true <= hi))
             z.append((fit.estimate - true) / fit.stderr)
-            kerr.append(max(fit.kernel_error, fit.info["kernel_shift"]))
+            kerr.append(fit.info["kernel_shift"] if mesh
+                        else max(fit.kernel_error, fit.info["kernel_shift"]))
             known.append([fit.identifiable[n] is True for n in fit.names])
         out[level] = (np.array(inside), np.array(z), np.array(kerr), np.array(known))
     return fit.names, out
@@ -126,3 +135,31 @@ def test_the_pair_at_1e3_names_what_it_cannot_determine():
         with pytest.warns(ml.fit.IdentifiabilityWarning, match=r"small\.epsilon"):
             fit = fit_coatings(scene, measured, noise="poisson", photons_per_unit=k)
         assert fit.identifiable["small.epsilon"] is not True
+
+
+#: The mesh model's data: 4096 rays per bin width, twice the most the kernel's refinement
+#: reaches on this scene (2048, capped by MAX_KERNEL_RAYS), through simulate's own loop.
+MESH_DATA_RAYS = 4096
+#: Seeded trials per level on the mesh (50 × 4 levels = 200; ~1 s a fit).
+MESH_TRIALS = 50
+
+
+@pytest.mark.slow
+def test_mesh_intervals_cover_the_truth_on_finer_mesh_data():
+    """The glinting disk as a 256-sided prism (exact normals), fitted through its Scene (the
+    kernel traced at 16 rays per bin width and refined): on the mesh model's profiles at
+    a finer spacing plus Poisson noise, each parameter's interval covers the truth at each
+    level and pooled (within the sampling error of 50 and 200 trials), with |bias| <
+    0.25 σ pooled. At 10⁵-10⁶ photons the refinement stops at its ray cap with the shift
+    above kernel_tol; the shift is then in σ (measured 2026-12-03, 40 trials a level:
+    coverage 0.875-1.0, the shift 0.26 σ and 0.81 σ)."""
+    scene = SCENES["glint"].tessellate(256)
+    names, out = _trials(scene, LEVELS, MESH_TRIALS, mesh=True)
+    z = np.concatenate([out[lv][1] for lv in LEVELS])
+    inside = np.concatenate([out[lv][0] for lv in LEVELS])
+    report = {lv: (np.round(out[lv][0].mean(0), 2), np.round(out[lv][1].mean(0), 2),
+                   round(float(out[lv][2].max()), 2)) for lv in LEVELS}
+    assert np.all(np.abs(z.mean(axis=0)) < MAX_BIAS), report
+    for lv in LEVELS:
+        assert np.all(out[lv][0].mean(axis=0) >= _floor(MESH_TRIALS)), (lv, report)
+    assert np.all(inside.mean(axis=0) >= _floor(len(inside))), report

@@ -235,7 +235,7 @@ def test_a_glint_never_seen_leaves_its_parameters_undetermined():
     with pytest.warns(IdentifiabilityWarning) as caught:
         fit = fit_coatings(K, measured, noise="poisson", photons_per_unit=k)
     named = str(caught[0].message)
-    assert fit.kernel_error is None and "mesh kernel cannot be resampled" in \
+    assert fit.kernel_error is None and "hits cannot be resampled" in \
         fit.info["kernel_error_note"]
     assert "epsilon" in named and ".e (" in named
     assert fit.identifiable[f"{K.parts[0]}.rho_d"] is True
