@@ -145,8 +145,7 @@ def _run(scene, ladar, options, streaming, weighing=None):
         weighing.check(plan)                        # every rule, before the first ray
         # a glint narrower than the rays resolve is missed without a word otherwise
         warn_unresolved_lobes(scene, weighing.materials, spacing=plan.spacing,
-                              normals=plan.normals, mode=plan.mode, sampling=plan.sampling,
-                              stacklevel=3)
+                              normals=plan.normals, mode=plan.mode, sampling=plan.sampling)
     description = None
     if streaming.run_dir is not None:
         description = _job_description(plan, scene, ladar, weighing)

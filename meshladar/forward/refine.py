@@ -118,7 +118,7 @@ def _warn_kept(best, runs, why, tol, normals):
     est, sino, k, mesh = best
     warn_unresolved_lobes(mesh, mesh.materials, spacing=sino.info["ray_spacing"],
                           normals=normals, mode=sino.info["mode"],
-                          sampling=sino.info.get("sampling") or "stratified", stacklevel=4)
+                          sampling=sino.info.get("sampling") or "stratified")
     if why is not None:
         segments = runs[k]["segments"]
         warnings.warn(f"tol={tol:g} not reached: {why}; returning the run with estimated "

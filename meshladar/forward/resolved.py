@@ -123,8 +123,7 @@ def resolve(scene, ladar, axes, *, motion=None, radiometry="paper", sensor=None,
                "give fewer or wider bins, or fewer views")
     weighing.check(plan)                            # every rule, before the first ray
     warn_unresolved_lobes(scene, weighing.materials, spacing=plan.spacing,
-                          normals=plan.normals, mode=plan.mode, sampling=plan.sampling,
-                          stacklevel=2)
+                          normals=plan.normals, mode=plan.mode, sampling=plan.sampling)
     description = None
     if run_dir is not None:
         description = _description(plan, scene, ladar, weighing)

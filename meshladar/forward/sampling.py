@@ -11,9 +11,17 @@ spacing δ* = 2w / (rays · κ) meets.
 κ is the rate at which the normal the engine shades with turns (smooth: the interpolated
 corner normals; exact: the part's own): per face, the largest rate in any direction (in a
 slice, along the row of rays); a part's κ is what its most-curved 5 % of curved area
-reaches (an area-weighted quantile, so a sliver does not decide). Flat normals are not
-checked: each face's normal is constant, so the rays sample its glint exactly (a curved
-part's faceting is the faceting study's subject, see the README).
+reaches (an area-weighted quantile, so a sliver does not decide).
+
+Flat normals (:func:`faceted_lobes`): each face's normal is constant, so the rays sample the
+faceted mesh's glint exactly, whatever the spacing; but where a part is curved (its faces
+meet at less than the crease angle :data:`~meshladar.meshes.CREASE_DEG`) and its faces'
+normals step by more than the lobe's full width 2w from face to face, some views find no
+face inside the lobe: the glints come from single facets, not from the curved surface the
+mesh may approximate (a GGX α = 1e-4 on an icosphere of 2,562 points returns ~1e-5 of the
+sphere's closed form at any spacing). The step is the median angle over a part's curved
+edges; the fix is ``normals="smooth"`` (or "exact" for tessellated shapes), or a mesh
+whose faces step by less than 2w.
 """
 
 from __future__ import annotations
@@ -21,6 +29,8 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import math
+import os
+import sys
 import warnings
 from types import MappingProxyType
 from typing import NamedTuple
@@ -28,17 +38,20 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import LobeSamplingWarning
+from ..meshes.normals import curved_edge_angles
 from ..raytrace.embree import geometry
 from ..raytrace.grid import MAX_RAYS_PER_VIEW
 
-__all__ = ["RAYS_ACROSS_LOBE", "Unresolved", "normal_turn", "unresolved_lobes",
-           "warn_unresolved_lobes", "checked_by_caller"]
+__all__ = ["RAYS_ACROSS_LOBE", "Unresolved", "Faceted", "normal_turn", "unresolved_lobes",
+           "faceted_lobes", "warn_unresolved_lobes", "checked_by_caller"]
 
 #: Rays the criterion asks across a lobe's full width 2w, per sampling: cell centres are
 #: a midpoint rule (measured 1.7 % at 2 rays, 4 % at 1.8, 34 % at 1); stratified offsets
 #: are unbiased but noisy (3-D: 2–3 % rms at 4 rays, 6–8 % at 2).
 RAYS_ACROSS_LOBE = MappingProxyType({"regular": 2.0, "stratified": 4.0})
 _TINY = 1e-300
+#: The package's folder, with a separator: frames under it are meshladar's own.
+_PACKAGE = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + os.sep
 #: Faces per part and coating the curvature is estimated from (evenly strided beyond).
 _MAX_FACES = 1 << 17
 #: True inside :func:`checked_by_caller`.
@@ -57,6 +70,15 @@ class Unresolved(NamedTuple):
     spacing: float        # the spacing δ* that resolves it (RAYS_ACROSS_LOBE rays)
     needed: float         # rays the criterion asks across the lobe (per sampling)
     rays_per_view: float  # rays one view needs at δ* over the whole target
+
+
+class Faceted(NamedTuple):
+    """One curved part and coating whose faces' normals step wider than the lobe."""
+
+    part: str
+    coating: str
+    width: float          # the lobe's half-width w, radians
+    step: float           # the median angle between neighbouring faces' normals, radians
 
 
 def normal_turn(v, n, face_normals, mode):
@@ -162,6 +184,38 @@ def unresolved_lobes(scene, materials, *, spacing, normals="smooth", mode="3d",
     return out
 
 
+def faceted_lobes(scene, materials):
+    """The curved parts and coatings whose faces' normals step from face to face by more
+    than the lobe's full width 2w (:class:`Faceted` records; empty for flat-faced
+    polyhedra, diffuse coatings and fine meshes). With flat normals their glints come from
+    single facets. Nothing is traced; the steps are computed once per scene."""
+    widths = [_lobe_width(m) for m in materials]
+    if all(w is None for w in widths):
+        return []
+    out = []
+    for (k, m), step in _face_steps(scene).items():
+        w = widths[m] if m < len(widths) else None
+        if w is not None and step > 2.0 * w:
+            out.append(Faceted(scene.parts[k].name, _label(materials[m]), float(w),
+                               float(step)))
+    return out
+
+
+def _face_steps(scene):
+    """{(part, material index): median angle between the normals of neighbouring faces over
+    the part's curved edges (:func:`~meshladar.meshes.curved_edge_angles`)}, for parts that
+    have any; computed once per scene."""
+    cache = scene.__dict__.get("_face_steps")
+    if cache is None:
+        cache = {}
+        for k, part in enumerate(scene.parts):
+            angle, mats = curved_edge_angles(part)
+            for m in np.unique(mats):
+                cache[k, int(m)] = float(np.median(angle[mats == m]))
+        scene.__dict__["_face_steps"] = cache
+    return cache
+
+
 def _floor3(x):
     """x rounded down to three significant digits (so the spacing printed meets δ*)."""
     p = 10.0 ** (math.floor(math.log10(x)) - 2)
@@ -186,16 +240,29 @@ def _label(m):
     return m.name or type(m).__name__
 
 
-def warn_unresolved_lobes(scene, materials, *, spacing, normals, mode, sampling,
-                          stacklevel=2):
+def warn_unresolved_lobes(scene, materials, *, spacing, normals, mode, sampling):
     """One :class:`~meshladar.errors.LobeSamplingWarning` per part and coating that
     :func:`unresolved_lobes` finds, naming the lobe width, the normal change per ray and
     the spacing that resolves it; nothing inside :func:`checked_by_caller`."""
     if _CALLER_CHECKS.get():
         return
+    if normals == "flat":
+        for f in faceted_lobes(scene, materials):
+            warnings.warn(_faceted_message(f), LobeSamplingWarning, stacklevel=_user_level())
+        return
     for u in unresolved_lobes(scene, materials, spacing=spacing, normals=normals, mode=mode,
                               sampling=sampling):
-        warnings.warn(_message(u, spacing), LobeSamplingWarning, stacklevel=stacklevel + 1)
+        warnings.warn(_message(u, spacing), LobeSamplingWarning, stacklevel=_user_level())
+
+
+def _user_level():
+    """The ``stacklevel``, for a warning raised by this function's caller, of the first frame
+    outside the meshladar package: the user's call, however many of meshladar's layers
+    (simulate, trace, resolve, the tol knob) lie between."""
+    frame, level = sys._getframe(2), 2
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(_PACKAGE):
+        frame, level = frame.f_back, level + 1
+    return level if frame is not None else 2
 
 
 @contextlib.contextmanager
@@ -221,3 +288,12 @@ def _message(u, spacing):
             f"rays (ray_spacing {spacing:.3g}): {2 * u.width / u.turn:.2g} rays across the "
             f"lobe, fewer than {u.needed:g}, so the glint is undersampled (its return comes "
             f"out low or noisy); {fix}")
+
+
+def _faceted_message(f):
+    return (f"part {f.part!r}: with flat normals its faces' normals step by {f.step:.3g} rad "
+            f"from face to face where it is curved (median), wider than the specular lobe of "
+            f"{f.coating} ({2 * f.width:.3g} rad across): its glints come from single "
+            "facets, not from the curved surface the mesh approximates; use "
+            "normals='smooth' (or 'exact' for tessellated shapes), a mesh whose faces step "
+            f"by less than {2 * f.width:.3g} rad, or keep the facets if they are the object")

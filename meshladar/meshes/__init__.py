@@ -36,11 +36,13 @@ from .part import MeshPart, part_from_trimesh
 from .primitives import ellipsoid, fibonacci_sphere, icosphere, prism, sphere
 
 __all__ = ["MeshPart", "load_parts", "part_from_trimesh", "prism", "sphere", "ellipsoid",
-           "fibonacci_sphere", "icosphere", "corner_normals", "CREASE_DEG", "inspect_parts",
+           "fibonacci_sphere", "icosphere", "corner_normals", "curved_edge_angles", "CREASE_DEG",
+           "inspect_parts",
            "convex_hull"]
 
 #: Names reached lazily (their module imports numba): name -> submodule.
-_LAZY = {"corner_normals": "normals", "CREASE_DEG": "normals", "normals": None,
+_LAZY = {"corner_normals": "normals", "curved_edge_angles": "normals", "CREASE_DEG": "normals",
+         "normals": None,
          "_normals_kernel": None}
 
 

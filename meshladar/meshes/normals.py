@@ -14,7 +14,7 @@ import numpy as np
 from ._normals_kernel import accumulate_corner_normals
 from .part import MeshPart, _point_index
 
-__all__ = ["corner_normals", "CREASE_DEG"]
+__all__ = ["corner_normals", "curved_edge_angles", "CREASE_DEG"]
 
 #: Vertex normals are averaged only over faces within this angle of each other, so the
 #: edges of a prism or a box stay sharp ("smooth" normals that respect creases).
@@ -40,3 +40,24 @@ def corner_normals(part: MeshPart, *, crease_deg=CREASE_DEG):
     out = np.zeros((len(f), 3, 3))
     accumulate_corner_normals(f, fn, area, ptr, face_of, math.cos(math.radians(crease_deg)), out)
     return out
+
+
+def curved_edge_angles(part: MeshPart, *, crease_deg=CREASE_DEG):
+    """((k,) angles in radians, (k,) material indices) between the normals of the two faces
+    at each of the part's curved edges: edges shared by two faces of one material (by
+    position, as :func:`corner_normals` joins them) that meet at more than 0 and less than
+    ``crease_deg`` (an edge inside a flat face's triangulation is not curved, a crease is
+    not either)."""
+    fn, _ = part.face_normals_areas()
+    point, _ = _point_index(part.vertices)
+    f = point[part.faces]
+    edges = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
+    face = np.tile(np.arange(len(f)), 3)
+    order = np.lexsort(edges.T[::-1])
+    edges, face = edges[order], face[order]
+    pair = np.flatnonzero(np.all(edges[1:] == edges[:-1], axis=1))   # an edge's two faces
+    a, b = face[pair], face[pair + 1]
+    mats = np.broadcast_to(np.asarray(part.material), (len(f),))
+    angle = np.arccos(np.clip(np.einsum("ij,ij->i", fn[a], fn[b]), -1.0, 1.0))
+    curved = (angle > 1e-9) & (angle < math.radians(crease_deg)) & (mats[a] == mats[b])
+    return angle[curved], mats[a][curved]

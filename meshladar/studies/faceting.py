@@ -43,6 +43,7 @@ from .._validate import check_path
 from ..brdf import SandfordRobertson
 from ..errors import EnergyConservationWarning, MeshladarWarning, ParameterError
 from ..forward import simulate
+from ..forward.sampling import checked_by_caller
 from ..ladar import Ladar
 from ..precision import TINY
 from ..reconstruct import fbp
@@ -241,8 +242,10 @@ def _simulate_point(run, pt):
     if pt.segments not in run.meshes:
         run.meshes[pt.segments] = run.scene.tessellate(pt.segments)
     par = {"executor": run.executor} if run.executor is not None else {"jobs": 1}
-    return simulate(run.meshes[pt.segments], run.ladar, model="mesh", normals=pt.normals,
-                    rays_per_bin=pt.rays_per_bin, footprint=pt.footprint, **par)
+    with checked_by_caller():       # the faceting and sampling errors are what it measures
+        return simulate(run.meshes[pt.segments], run.ladar, model="mesh",
+                        normals=pt.normals, rays_per_bin=pt.rays_per_bin,
+                        footprint=pt.footprint, **par)
 
 
 def _measure(run, pt, example):

@@ -117,6 +117,7 @@ def test_mesh_sizes_beyond_the_engine_are_refused(radius):
         ml.simulate(scene, lad, model="mesh")
 
 
+@pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # faceted on purpose
 def test_a_mesh_far_from_the_origin_for_its_size_warns():
     sphere = trimesh.creation.icosphere(subdivisions=1, radius=1e-3)
     sphere.apply_translation([1e7, 0.0, 0.0])

@@ -183,19 +183,43 @@ def test_diffuse_or_wide_lobes_do_not_warn(sphere_ggx, coating):
     assert unresolved_lobes(scene, [coating], spacing=2 * R / 128) == []
 
 
-def test_flat_normals_and_a_users_model_are_not_checked(sphere_ggx):
+def test_flat_normals_on_a_curved_part_coarser_than_the_lobe_warn_and_miss_it(sphere_ggx):
+    """Flat normals on an icosphere (faces 0.048 rad apart) under GGX α = 1e-4: the warning
+    names the part, the faces' step and the lobe; its return is a small share of the
+    sphere's closed form at any spacing (the facets, not the rays, decide; smooth normals
+    at the spacing their own warning gives meet it: test_the_recommended_spacing_resolves_a_narrow_ggx_glint)."""
+    m = ml.brdf.GGX(1e-4)
     ladar = ml.Ladar.covering(sphere_ggx, n_bins=16, angles_deg=[0.0])
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        # flat faces: each face's normal is constant, its glint sampled exactly
-        ml.simulate(sphere_ggx, ladar, model="mesh", normals="flat")
+    want = closed_form(m)
+    for spacing in (0.02, 0.005):
+        with pytest.warns(LobeSamplingWarning) as record:
+            sino = ml.simulate(sphere_ggx, ladar, model="mesh", normals="flat",
+                               ray_spacing=spacing)
+        (msg,) = [str(r.message) for r in record]
+        step = float(re.search(r"step by ([0-9.e+-]+) rad", msg).group(1))
+        assert msg.startswith("part 'mesh': with flat normals") and "normals='smooth'" in msg
+        assert step == pytest.approx(0.0476, rel=0.01) and "(0.0002 rad across)" in msg
+        assert sino.values.sum() < 1e-3 * want
+
+
+def test_flat_faces_fine_meshes_and_users_models_are_not_warned():
+    """A box (no curved edge), an icosphere whose faces step less than the lobe's width
+    (dark gray, 2e = 0.34 rad, on faces 0.048 rad apart), and a user's model without
+    lobe_width: nothing to say."""
+    box = ml.Scene.from_mesh(trimesh.creation.box((1.0, 1.0, 1.0)), material=ALUMINUM)
+    ball = ml.Scene.from_mesh(trimesh.creation.icosphere(subdivisions=4), material=DARK_GRAY)
 
     class Mine(ml.brdf.BRDF):                 # the same glint, but no lobe_width
         def projected(self, cos_theta, sin_theta):
             return ml.brdf.GGX(1e-4).projected(cos_theta, sin_theta)
 
-    scene = ml.Scene.from_mesh(trimesh.creation.icosphere(subdivisions=4), material=Mine())
-    assert unresolved_lobes(scene, [Mine()], spacing=0.1) == []
+    mine = ml.Scene.from_mesh(trimesh.creation.icosphere(subdivisions=4), material=Mine())
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for scene in (box, ball, mine):
+            ladar = ml.Ladar.covering(scene, n_bins=16, angles_deg=[0.0, 45.0])
+            ml.simulate(scene, ladar, model="mesh", normals="flat")
+    assert unresolved_lobes(mine, [Mine()], spacing=0.1) == []
 
 
 def test_a_caller_that_checks_its_own_run_silences_the_coarse_ones(sphere_ggx):

@@ -87,6 +87,7 @@ def test_turntable_doppler_sign():
     assert prof[ret.centers("doppler") > 0].sum() == 0
 
 
+@pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # faceted on purpose
 def test_range_gated_image_stack():
     """Three coordinates at once: cross-range × elevation × range; its marginals are the
     two-coordinate images and the range profile."""
@@ -159,6 +160,7 @@ def test_rotating_cylinder_range_doppler():
     np.testing.assert_allclose(ret.marginal("doppler")[0], rho / math.pi * H * dy, rtol=0.02)
 
 
+@pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # faceted on purpose
 def test_each_view_total_is_the_same_whatever_it_is_binned_by():
     scene = ml.Scene.from_mesh(trimesh.creation.icosphere(subdivisions=4),
                                material=ALUMINUM)
@@ -178,6 +180,7 @@ def test_each_view_total_is_the_same_whatever_it_is_binned_by():
     assert by[0].sinogram().shape == sino.shape
 
 
+@pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # faceted on purpose
 def test_resolved_runs_stream_on_threads_and_resume(tmp_path):
     scene = ml.Scene.from_mesh(trimesh.creation.icosphere(subdivisions=3),
                                material=ALUMINUM)
@@ -228,6 +231,7 @@ def test_resolve_checks_its_axes(axes, motion, match):
         resolve(scene, ladar, axes, motion=motion)
 
 
+@pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # faceted on purpose
 def test_returns_figures(tmp_path):
     pytest.importorskip("matplotlib")
     from meshladar.viz import resolved as figures

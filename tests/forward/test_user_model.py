@@ -82,6 +82,7 @@ def test_pixel_back_facing_pixels_weigh_as_grazing():
     _same(user, ml.simulate(scene, lad, model="pixel"))
 
 
+@pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # faceted on purpose
 @pytest.mark.parametrize("normals", ["flat", "smooth", "exact"])
 @pytest.mark.parametrize("back_faces", ["two-sided", "ignore"])
 def test_mesh_model(normals, back_faces):

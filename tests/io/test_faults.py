@@ -18,6 +18,10 @@ from meshladar.materials import ALUMINUM, DARK_GRAY, load_table
 
 from conftest import PAIR  # noqa: E402  (the shared disk pair)
 
+#: These tests are about files and runs: the shared pair's aluminium disk, tessellated and
+#: traced with flat normals, is faceted more coarsely than its glint on purpose.
+pytestmark = pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")
+
 
 @pytest.fixture(scope="module")
 def finished_run(tmp_path_factory):

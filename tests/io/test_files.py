@@ -291,6 +291,7 @@ def test_api_loads_or_says_what_is_wrong(tmp_path, case):
     assert info.match(expected.what)
 
 
+@pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # faceted on purpose
 @pytest.mark.parametrize("case", list(CORPUS))
 def test_cli_simulates_or_prints_one_error_line(tmp_path, case, capsys):
     write, expected = CORPUS[case]

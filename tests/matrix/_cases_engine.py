@@ -63,7 +63,7 @@ api("simulate.analytic.huge-disk-covered", lambda: ml.simulate(
 
 
 def _sized_sphere(radius):
-    scene = ml.Scene.from_parts([ml.meshes.sphere((0, 0, 0), radius, 0, subdivisions=1)],
+    scene = ml.Scene.from_parts([ml.meshes.sphere((0, 0, 0), radius, 0, subdivisions=2)],
                                 [_dg()])
     return ml.simulate(scene, ml.Ladar.covering(scene, n_bins=8, angles_deg=[0.0, 90.0]),
                        model="mesh")

@@ -64,6 +64,7 @@ def test_packets_give_embreexs_hits_and_sinograms(options):
                                atol=SAME_HITS_RTOL * np.abs(sa.values).max())
 
 
+@pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # faceted on purpose
 def test_the_streaming_paths_agree_too():
     # the fused monostatic path (flat normals, point bins) and the slice mode of a phantom
     mesh = PAIR.tessellate(256)
@@ -274,6 +275,7 @@ def test_footprints_take_the_fused_loop_with_the_general_paths_numbers(mode, nor
                                    atol=SAME_HITS_RTOL * one.values.max())
 
 
+@pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # faceted on purpose
 @pytest.mark.slow
 @pytest.mark.parametrize("mode", ["3d", "slice"])
 def test_bistatic_views_take_the_fused_loop_with_the_references_numbers(mode, monkeypatch):

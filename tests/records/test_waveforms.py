@@ -196,6 +196,7 @@ def test_waveforms_save_and_load_without_pickle(tmp_path):
         np.testing.assert_allclose(z["range_edges_m"], waves.range_edges)
 
 
+@pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # faceted on purpose
 def test_cli_simulate_with_a_sensor_then_receive_with_noise(tmp_path):
     """The command line end to end: a sphere at 500 m counted in photoelectrons, then its
     waveforms with noise and a figure; the waveforms hold the sinogram's photoelectrons."""

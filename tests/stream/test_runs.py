@@ -17,6 +17,7 @@ from meshladar.runs import RunFolderError
 from conftest import PAIR  # noqa: E402  (the shared disk pair)
 
 
+@pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # faceted on purpose
 def test_resume_reuses_verified_chunks_and_recomputes_corrupt_ones(tmp_path):
     mesh = PAIR.tessellate(256)
     ladar = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 10.0))     # 36 views: 5 chunks
@@ -44,6 +45,7 @@ def test_resume_reuses_verified_chunks_and_recomputes_corrupt_ones(tmp_path):
                                   ref.values)
 
 
+@pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # faceted on purpose
 def test_a_different_job_is_refused(tmp_path):
     mesh = PAIR.tessellate(128)
     ladar = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 30.0))
