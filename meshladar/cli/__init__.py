@@ -10,6 +10,7 @@ body only calls the API.
 
 from __future__ import annotations
 
+import functools
 import signal
 import sys
 import tempfile
@@ -21,7 +22,7 @@ from ..errors import MeshladarError
 from .commands import cmd_bench, cmd_demo, cmd_materials, cmd_paper, cmd_study, cmd_view
 from .parser import build_parser
 from .reconstruct import cmd_receive, cmd_reconstruct
-from .simulate import cmd_simulate
+from .simulate import cmd_simulate, in_flags
 
 __all__ = ["main", "COMMANDS"]
 
@@ -32,15 +33,22 @@ COMMANDS = {"demo": cmd_demo, "materials": cmd_materials, "paper": cmd_paper,
             "bench": cmd_bench}
 
 
-def _one_line_warning(message, category, filename, lineno, line=None):
-    return f"meshladar: warning: {message}\n"
+def _one_line_warning(message, category, filename, lineno, line=None, *, words=str):
+    return f"meshladar: warning: {words(str(message))}\n"
+
+
+#: Per command, how an API message is put in its flags' words (simulate's: ``normals=
+#: 'smooth'`` becomes ``--normals smooth``).
+_WORDS = {"simulate": in_flags}
 
 
 def main(argv=None) -> int:
     """Run the command line; returns the exit status."""
     args = build_parser(COMMANDS).parse_args(argv)
     previous = _terminate_as_interrupt()
-    format_before, warnings.formatwarning = warnings.formatwarning, _one_line_warning
+    format_before = warnings.formatwarning
+    warnings.formatwarning = functools.partial(_one_line_warning,
+                                               words=_WORDS.get(args.command, str))
     try:
         return COMMANDS[args.command](args)
     except (MeshladarError, ImportError) as exc:  # ImportError: a missing extra, named there

@@ -69,10 +69,10 @@ def _sensor(args):
     try:
         return Sensor(beam=beam, **kw)
     except ParameterError as exc:          # the Sensor's rule, in the flags' words
-        raise ParameterError(_in_flags(str(exc))) from None
+        raise ParameterError(in_flags(str(exc))) from None
 
 
-def _in_flags(message):
+def in_flags(message):
     """An API message in the command line's words: ``mode='3d'`` becomes ``--mode 3d`` for
     every option, and a Sensor field's name (never an English word) its flag."""
     for o in OPTIONS + SENSOR_OPTIONS:
@@ -196,7 +196,7 @@ def cmd_simulate(args) -> int:
         else:
             sino = simulate(scene, ladar, model=model, **opts)
     except ParameterError as exc:          # the API's rule, in the flags' words
-        raise ParameterError(_in_flags(str(exc))) from None
+        raise ParameterError(in_flags(str(exc))) from None
     params = {"scene": args.scene, "model": model,
               "options": {k: (v.describe() if k == "sensor" else v) for k, v in opts.items()
                           if k != "progress"},

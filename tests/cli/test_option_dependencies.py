@@ -5,9 +5,12 @@ quantum efficiency and wavelength without photon counting, were accepted and ign
 from __future__ import annotations
 
 import re
+import sys
+import warnings
 
 import pytest
 
+import meshladar as ml
 from meshladar.cli import main
 from meshladar.errors import ParameterError
 from meshladar.sensor import Sensor
@@ -130,3 +133,24 @@ def test_too_many_local_workers_are_refused_in_flags(tmp_path, capsys):
                  str(tmp_path / "x.npz")])
     err = capsys.readouterr().err
     assert code == 2 and err.startswith(f"meshladar: error: --workers: {many} local workers"), err
+
+
+def test_a_warning_is_in_flags_too(tmp_path, capsys):
+    """The faceting check's advice reaches the command line as --normals, not normals=."""
+    import trimesh
+
+    stl = tmp_path / "ball.stl"
+    trimesh.creation.icosphere(subdivisions=3).export(stl)
+    out = tmp_path / "x.npz"
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", ml.errors.LobeSamplingWarning)
+        # shown as a plain Python shows it (pytest records warnings instead)
+        warnings.showwarning = lambda m, c, f, n, file=None, line=None: sys.stderr.write(
+            warnings.formatwarning(m, c, f, n, line))
+        code = main(["simulate", str(stl), "--coating", "mesh=aluminum", "--views", "2",
+                     "-o", str(out), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 0 and out.exists()
+    (line,) = [ln for ln in err.splitlines() if ln.startswith("meshladar: warning:")]
+    assert "with flat normals" in line and "use --normals smooth" in line, line
+    assert "normals=" not in line, line
