@@ -153,8 +153,11 @@ class CoatingFit:
         log = (np.asarray(self.info.get("positive", np.zeros(est.size, bool)), bool)
                & (est > 0) & np.isfinite(sd))
         r = np.where(log, sd, 0.0) / np.where(log, est, 1.0)
-        return (np.where(log, est * np.exp(-z * r), est - z * sd),
-                np.where(log, est * np.exp(z * r), est + z * sd))
+        # a σ hundreds of times its estimate (a weakly determined glint width) takes the
+        # top to inf and the bottom to 0: the interval is unbounded above, not a warning
+        with np.errstate(over="ignore", under="ignore"):
+            return (np.where(log, est * np.exp(-z * r), est - z * sd),
+                    np.where(log, est * np.exp(z * r), est + z * sd))
 
     def report(self):
         """The fit as text lines: each parameter ± σ, its 95 % interval, and whether the

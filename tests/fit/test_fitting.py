@@ -240,3 +240,19 @@ def test_a_glint_never_seen_leaves_its_parameters_undetermined():
     assert "epsilon" in named and ".e (" in named
     assert fit.identifiable[f"{K.parts[0]}.rho_d"] is True
     assert fit.identifiable[f"{K.parts[0]}.b"] is True
+
+
+def test_an_interval_with_a_sigma_far_beyond_its_estimate_is_unbounded_without_a_warning():
+    """On the log scale a σ 10⁴ times its estimate takes the top past float64: the interval
+    is (0, inf), not an overflow warning (warnings are errors here)."""
+    import dataclasses
+
+    scene = Scene([Disk((0.0, 0.0), 0.5, materials.DARK_GRAY, name="disk")])
+    lad = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 30.0))
+    measured = ml.simulate(scene, lad)
+    fit = fit_coatings(scene, measured, free=["rho_d", "b"], kernel_tol=None)   # noiseless
+    wide = dataclasses.replace(fit, estimate=np.array([1e-3, 0.5]),
+                               stderr=np.array([10.0, 0.01]))
+    lo, hi = wide.interval(0.95)
+    assert hi[0] == np.inf and 0.0 <= lo[0] < 1e-300
+    assert np.isfinite(hi[1]) and 0.48 < lo[1] < 0.5 < hi[1] < 0.52
