@@ -26,6 +26,7 @@ parameter's derivative is the product with the derivative of its table.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -244,11 +245,10 @@ def _traced_mesh_kernel(scene, ladar, radiometry, rays_per_bin, options):
     hits = trace(scene, ladar, rays_per_bin=rays_per_bin, **options)
     kernel = _mesh_kernel(hits, radiometry)
     spacing = float(hits.info["ray_spacing"])
-    kernel.info["rays_per_bin"] = float(np.min(np.diff(ladar.bin_edges))) / spacing
-    kernel.info["ray_spacing"] = spacing
-    return CoatingKernel(kernel.matrices, kernel.parts, kernel.materials, kernel.shape,
-                         kernel.angles_deg, kernel.bin_edges, radiometry, "mesh",
-                         kernel.info, _traced=(scene, ladar, options))
+    return dataclasses.replace(
+        kernel, _traced=(scene, ladar, options),
+        info={**kernel.info, "ray_spacing": spacing,
+              "rays_per_bin": float(np.min(np.diff(ladar.bin_edges))) / spacing})
 
 
 #: The most samples per analytic boundary a kernel takes (16 times the fit's refinement cap;
