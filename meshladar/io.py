@@ -11,9 +11,12 @@ from __future__ import annotations
 import json
 import math
 import os
+import contextlib
 import re
+import signal
 import stat
 import tempfile
+import threading
 
 import numpy as np
 
@@ -101,12 +104,13 @@ def _atomic(path, write):
     except OSError as exc:
         raise OSError(exc.errno, exc.strerror, path) from exc
     try:
-        os.fchmod(fd, mode)
-        with os.fdopen(fd, "wb") as fh:
-            write(fh)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
+        with _interrupts_held():
+            os.fchmod(fd, mode)
+            with os.fdopen(fd, "wb") as fh:
+                write(fh)
+                fh.flush()
+                os.fsync(fh.fileno())
+            os.replace(tmp, path)
     except BaseException as exc:
         if os.path.exists(tmp):
             os.unlink(tmp)
@@ -119,6 +123,43 @@ def _atomic(path, write):
             # a full disk or a lost permission: name the user's file, not the temporary
             raise OSError(exc.errno, exc.strerror or str(exc), path) from exc
         raise
+
+
+#: The signals a file's write holds until the file is whole: Ctrl-C, and SIGTERM (which the
+#: command line turns into an interrupt).
+_HELD_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+@contextlib.contextmanager
+def _interrupts_held():
+    """Hold Ctrl-C and SIGTERM while a file is written, then deliver them: an interrupt
+    that lands inside numpy's zip writer would leave a ZipFile that complains when it is
+    collected, long after the clean stop. A second signal of a kind delivers it at once
+    (a write that hangs can still be stopped). Off the main thread, and for handlers set
+    outside Python, nothing is held."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {s: signal.getsignal(s) for s in _HELD_SIGNALS}
+    held = [s for s, handler in previous.items() if handler not in (None, signal.SIG_IGN)]
+    pending = []
+
+    def hold(signum, frame):
+        if signum in pending:                            # pressed again: now
+            pending.remove(signum)
+            signal.signal(signum, previous[signum])
+            signal.raise_signal(signum)
+        pending.append(signum)
+
+    for signum in held:
+        signal.signal(signum, hold)
+    try:
+        yield
+    finally:
+        for signum in held:
+            signal.signal(signum, previous[signum])
+        for signum in dict.fromkeys(pending):
+            signal.raise_signal(signum)
 
 
 def _interrupt_behind(exc):
