@@ -1,0 +1,145 @@
+"""Profile-likelihood intervals of a coating fit (``CoatingFit.interval(method="profile")``).
+
+A parameter's interval at level L is the set of its values v whose profile misfit, the
+misfit with the parameter held at v and every other free parameter refitted, exceeds the
+fit's own by at most z², z the normal quantile of L (Wilks' theorem: the likelihood-ratio
+interval; Pawitan, *In All Likelihood*, 2001, Sec. 3.4 and 9.7). For counts the misfit is
+the deviance, for least squares RSS / σ², σ² the fit's own. Where the likelihood is
+quadratic it equals the normal interval estimate ∓ z σ; where it is not (a narrow glint at
+a few thousand photoelectrons, its ε and e on a curved ridge) it follows the likelihood,
+as the normal interval cannot. The kernel is the fit's own (its estimated error, ≤ 0.1 σ,
+is not added).
+
+Each end is found on the signed root r(v) = ±√Δ(v), nearly linear in v (in ln v for a
+parameter ≥ 0): a secant from the normal interval's end, bracketed and bisected where the
+root is not linear, each refit warm-started from the last; an end that does not reach z²
+before the parameter's bound (or the coatings' valid set) is the bound.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import warnings
+
+import numpy as np
+
+from ..errors import EnergyConservationWarning, ParameterError
+from . import _irls
+from ._identify import deviance
+from ._params import _materials
+
+#: An end is accepted when its signed root is within this fraction of z.
+ROOT_TOL = 0.01
+#: The most profile refits per end.
+MAX_REFITS = 12
+
+
+def misfit(problem, m, sigma2):
+    """The fit's misfit at model values ``m``: the count deviance, or RSS / σ²."""
+    if problem.noise == "gaussian":
+        return float(np.sum((problem.data - m) ** 2)) / sigma2
+    return deviance(problem.data, m, problem.M)
+
+
+class Profile:
+    """The profile misfit of one parameter of a solved fit (``model`` at ``x``)."""
+
+    def __init__(self, model, x, base, sigma2, i):
+        self.model, self.i, self.sigma2, self.base = model, i, sigma2, base
+        self.rest = np.delete(np.asarray(x, float), i)
+        self.x = np.asarray(x, float)
+
+    def delta(self, v):
+        """The misfit's rise with parameter i held at v (inf outside the valid set)."""
+        pr = self.model.problem
+        x = self.x.copy()
+        x[self.i] = v
+        x[np.arange(x.size) != self.i] = self.rest
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", EnergyConservationWarning)
+                mats = _materials(pr.mats, pr.params, x)
+        except ParameterError:
+            return math.inf
+        held = dataclasses.replace(
+            pr, mats=tuple(mats), params=pr.params[:self.i] + pr.params[self.i + 1:],
+            low=np.delete(pr.low, self.i), high=np.delete(pr.high, self.i))
+        if not held.params:                       # one free parameter: nothing to refit
+            m = _irls.Model(held).values(np.zeros(0))
+        else:
+            start = np.clip(self.rest, held.low, held.high)
+            rest, m, _ = _irls.solve(_irls.Model(held), held.data, start)
+            self.rest = rest                      # the next refit starts here
+        if m is None:
+            return math.inf
+        return max(misfit(held, m, self.sigma2) - self.base, 0.0)
+
+
+def _coordinates(low, value):
+    """(to, back): the coordinate the end is sought in, ln v for a parameter ≥ 0."""
+    if low >= 0.0 and value > 0.0:
+        return math.log, math.exp
+    return float, float
+
+
+#: A parameter ≥ 0 whose low end is not reached above e^-LOG_DEPTH times its estimate has
+#: the bound 0 as its low end.
+LOG_DEPTH = 50.0
+#: The most a step from the estimate grows, per refit, while no end is bracketed.
+MAX_GROWTH = 8.0
+
+
+def end(profile, value, sd, z, side, limit):
+    """One end (side −1: low, +1: high) of the interval of parameter ``profile.i``, from
+    its estimate ``value`` and normal σ ``sd``; ``limit`` is its bound on that side."""
+    to, back = _coordinates(profile.model.problem.low[profile.i], value)
+    u0 = to(value)
+    if to is math.log and limit <= 0.0:
+        ulim = u0 - LOG_DEPTH
+    else:
+        ulim = to(limit) if np.isfinite(limit) else side * math.inf
+    inside, outside = (u0, 0.0), None                 # (u, signed root) either side of z
+    u = u0 + side * z * (sd / value if to is math.log else sd)
+    for _ in range(MAX_REFITS):
+        if side * (u - ulim) >= 0:
+            u = ulim
+        r = math.sqrt(profile.delta(back(u)))
+        if abs(r - z) <= ROOT_TOL * z:
+            return back(u)
+        if r < z:
+            if u == ulim:
+                return limit                          # the bound comes first
+            inside = (u, r)
+        else:
+            outside = (u, r)
+        u = _next(u0, inside, outside, z)
+    return limit if outside is None else back(outside[0])
+
+
+def _next(u0, inside, outside, z):
+    """The next trial: regula falsi in the bracket (bisection where it stalls), or, with no
+    bracket yet, a secant from the estimate through the last point inside (the signed root
+    is linear there for a quadratic likelihood), grown at most MAX_GROWTH times."""
+    ui, ri = inside
+    if outside is None:
+        reach = z / ri if ri > 0 else MAX_GROWTH
+        return u0 + (ui - u0) * min(max(reach, 1.5), MAX_GROWTH)
+    uo, ro = outside
+    u = ui + (z - ri) * (uo - ui) / (ro - ri) if math.isfinite(ro) else 0.5 * (ui + uo)
+    lo, hi = sorted((ui, uo))
+    return u if lo + 0.02 * (hi - lo) < u < hi - 0.02 * (hi - lo) else 0.5 * (ui + uo)
+
+
+def intervals(model, x, m, sigma2, stderr, z, which):
+    """(low, high): the profile-likelihood ends of the parameters ``which`` (indices) of
+    the fit ``model`` solved at ``x`` (model values ``m``, least squares' σ² or None),
+    from their normal σ ``stderr`` at the quantile ``z``; NaN for the others."""
+    pr = model.problem
+    base = misfit(pr, m, sigma2)
+    low, high = np.full(len(x), np.nan), np.full(len(x), np.nan)
+    for i in which:
+        low[i], high[i] = (end(Profile(model, x, base, sigma2, i), float(x[i]),
+                               float(stderr[i]), z, side, float(limit))
+                           for side, limit in ((-1, pr.low[i]), (1, pr.high[i])))
+    return low, high
