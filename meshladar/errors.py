@@ -6,6 +6,10 @@ user can catch either ``ValueError`` or ``meshladar.errors.MeshladarError``.
 
 from __future__ import annotations
 
+import importlib
+import os
+import sys
+
 __all__ = [
     "MeshladarError",
     "ParameterError",
@@ -16,7 +20,27 @@ __all__ = [
     "MeshladarWarning",
     "LobeSamplingWarning",
     "EnergyConservationWarning",
+    "user_stacklevel",
 ]
+
+_PACKAGE = os.path.dirname(os.path.abspath(__file__)) + os.sep
+_IMPORTLIB = os.path.dirname(os.path.abspath(importlib.__file__)) + os.sep
+
+
+def user_stacklevel() -> int:
+    """The ``stacklevel``, for a warning raised by this function's caller, of the first
+    frame outside meshladar and the import machinery: the user's own call (or import line),
+    however many of meshladar's layers lie between. ``warnings`` itself skips the frozen
+    importlib frames when it counts, so they are not counted here either."""
+    frame, level = sys._getframe(2), 2
+    while frame is not None:
+        name = frame.f_code.co_filename
+        internal = "importlib" in name and "_bootstrap" in name     # as warnings judges it
+        if not internal and not os.path.abspath(name).startswith((_PACKAGE, _IMPORTLIB)):
+            return level
+        frame = frame.f_back
+        level += 0 if internal else 1
+    return 2
 
 
 class MeshladarError(Exception):

@@ -29,15 +29,13 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import math
-import os
-import sys
 import warnings
 from types import MappingProxyType
 from typing import NamedTuple
 
 import numpy as np
 
-from ..errors import LobeSamplingWarning
+from ..errors import LobeSamplingWarning, user_stacklevel
 from ..meshes.normals import curved_edge_angles
 from ..raytrace.embree import geometry
 from ..raytrace.grid import MAX_RAYS_PER_VIEW
@@ -50,8 +48,6 @@ __all__ = ["RAYS_ACROSS_LOBE", "Unresolved", "Faceted", "normal_turn", "unresolv
 #: are unbiased but noisy (3-D: 2–3 % rms at 4 rays, 6–8 % at 2).
 RAYS_ACROSS_LOBE = MappingProxyType({"regular": 2.0, "stratified": 4.0})
 _TINY = 1e-300
-#: The package's folder, with a separator: frames under it are meshladar's own.
-_PACKAGE = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + os.sep
 #: Faces per part and coating the curvature is estimated from (evenly strided beyond).
 _MAX_FACES = 1 << 17
 #: True inside :func:`checked_by_caller`.
@@ -248,21 +244,11 @@ def warn_unresolved_lobes(scene, materials, *, spacing, normals, mode, sampling)
         return
     if normals == "flat":
         for f in faceted_lobes(scene, materials):
-            warnings.warn(_faceted_message(f), LobeSamplingWarning, stacklevel=_user_level())
+            warnings.warn(_faceted_message(f), LobeSamplingWarning, stacklevel=user_stacklevel())
         return
     for u in unresolved_lobes(scene, materials, spacing=spacing, normals=normals, mode=mode,
                               sampling=sampling):
-        warnings.warn(_message(u, spacing), LobeSamplingWarning, stacklevel=_user_level())
-
-
-def _user_level():
-    """The ``stacklevel``, for a warning raised by this function's caller, of the first frame
-    outside the meshladar package: the user's call, however many of meshladar's layers
-    (simulate, trace, resolve, the tol knob) lie between."""
-    frame, level = sys._getframe(2), 2
-    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(_PACKAGE):
-        frame, level = frame.f_back, level + 1
-    return level if frame is not None else 2
+        warnings.warn(_message(u, spacing), LobeSamplingWarning, stacklevel=user_stacklevel())
 
 
 @contextlib.contextmanager
