@@ -43,7 +43,7 @@ from ._dask import connect
 from .runs import RunFolder
 
 __all__ = ["run_chunks", "joined", "dask_executor", "Progress", "choose_executor",
-           "check_run_dir", "in_worker", "MAX_JOBS_PER_CORE", "THREADS_FROM", "PARALLEL_FROM"]
+           "check_jobs", "check_run_dir", "in_worker", "MAX_JOBS_PER_CORE", "THREADS_FROM", "PARALLEL_FROM"]
 
 #: Worker processes allowed per core (``jobs``): more only compete for the cores.
 MAX_JOBS_PER_CORE = 4
@@ -97,6 +97,21 @@ def _chunks(n, size):
     return [np.arange(i, min(i + size, n)) for i in range(0, n, size)]
 
 
+def check_jobs(jobs):
+    """``jobs`` checked (None, or 1 to MAX_JOBS_PER_CORE per core): a caller checks it with
+    its other options, before any work or warning."""
+    if jobs is None:
+        return None
+    cores = os.cpu_count() or 1
+    if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)) or jobs < 1:
+        raise ParameterError(f"jobs must be an integer >= 1; got {jobs!r}")
+    if jobs > MAX_JOBS_PER_CORE * cores:
+        raise ParameterError(f"jobs must be at most {MAX_JOBS_PER_CORE * cores} "
+                             f"({MAX_JOBS_PER_CORE} per core on this {cores}-core machine: "
+                             f"more workers only compete for the cores); got {jobs}")
+    return jobs
+
+
 def choose_executor(jobs, executor, work, n_chunks, *, threads=False):
     """The executor to use, and whether it is this call's own (to shut down): the user's;
     else a pool of ``jobs`` threads (a job whose compiled loop releases the GIL, as the mesh
@@ -112,12 +127,7 @@ def choose_executor(jobs, executor, work, n_chunks, *, threads=False):
     if jobs is None:
         start = THREADS_FROM if threads else PARALLEL_FROM
         jobs = 1 if work < start else max(1, min(cores, n_chunks))
-    if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)) or jobs < 1:
-        raise ParameterError(f"jobs must be an integer >= 1; got {jobs!r}")
-    if jobs > MAX_JOBS_PER_CORE * cores:
-        raise ParameterError(f"jobs must be at most {MAX_JOBS_PER_CORE * cores} "
-                             f"({MAX_JOBS_PER_CORE} per core on this {cores}-core machine: "
-                             f"more workers only compete for the cores); got {jobs}")
+    check_jobs(jobs)
     if jobs == 1:
         return None, False
     if threads:

@@ -11,6 +11,7 @@ from ..errors import MeshladarWarning, ParameterError
 from ..ladar import Ladar
 from ..scene import Scene
 from ..sinogram import Sinogram
+from ..stream import check_jobs
 from .analytic import simulate_analytic
 from .mesh import simulate_mesh, trace
 from .options import MODELS, OPTIONS, options_of
@@ -100,6 +101,7 @@ def _check_call(scene, ladar, model, options):
     unknown = sorted(set(options) - set(takes))
     if unknown:
         raise ParameterError(f"model {model!r} takes options {takes}; got {unknown[0]!r}")
+    check_jobs(options.get("jobs"))          # the stream's, checked before any plan's warning
 
 
 def _run_mesh(scene, ladar, options):

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import re
 import shutil
+import warnings
 
 import numpy as np
 import pytest
@@ -182,6 +183,23 @@ def test_jobs_are_bounded_by_the_cores():
     with pytest.raises(ml.errors.ParameterError,
                        match=rf"jobs must be at most {4 * cores} .*; got 100000"):
         ml.simulate(mesh, ladar, model="mesh", jobs=100000)
+
+
+def test_jobs_are_refused_before_the_plans_warnings():
+    """A faceted aluminium sphere warns of its flat normals when it runs; with a ``jobs``
+    it cannot take, the refusal comes first and alone (the check is one of simulate's
+    own, not the stream's after planning)."""
+    import trimesh
+
+    scene = ml.Scene.from_mesh(trimesh.creation.icosphere(1), ml.materials.ALUMINUM)
+    ladar = ml.Ladar.paper(angles_deg=[0.0])
+    with warnings.catch_warnings(record=True) as heard:
+        warnings.simplefilter("always")
+        with pytest.raises(ml.errors.ParameterError, match="jobs must be at most"):
+            ml.simulate(scene, ladar, model="mesh", jobs=100000)
+    assert heard == []
+    with pytest.warns(ml.errors.LobeSamplingWarning, match="flat normals"):
+        ml.simulate(scene, ladar, model="mesh", jobs=1)       # the warning the check precedes
 
 
 #: The command line, held after its first saved chunk until a signal arrives: the stop
