@@ -35,6 +35,38 @@ ROOT_TOL = 0.01
 MAX_REFITS = 12
 
 
+def normal(estimate, stderr, positive, z):
+    """(low, high) of the normal intervals: on the log scale for a positive estimate of a
+    parameter ≥ 0 (``positive``) with a finite σ, estimate ∓ z σ otherwise."""
+    est, sd = np.asarray(estimate, float), np.asarray(stderr, float)
+    log = (np.asarray(np.zeros(est.size, bool) if positive is None else positive, bool)
+           & (est > 0) & np.isfinite(sd))
+    r = np.where(log, sd, 0.0) / np.where(log, est, 1.0)
+    # a σ hundreds of times its estimate (a weakly determined glint width) takes the top
+    # to inf and the bottom to 0: the interval is unbounded above, not a warning
+    with np.errstate(over="ignore", under="ignore"):
+        return (np.where(log, est * np.exp(-z * r), est - z * sd),
+                np.where(log, est * np.exp(z * r), est + z * sd))
+
+
+def chosen(names, parameters):
+    """The indices of ``parameters`` (names of ``names``; None: all), checked."""
+    if parameters is None:
+        return list(range(len(names)))
+    if isinstance(parameters, str):
+        parameters = [parameters]
+    if not isinstance(parameters, (list, tuple)):
+        raise ParameterError(f"parameters must be a list of the fit's names; got "
+                             f"{type(parameters).__name__}")
+    out = []
+    for p in parameters:
+        if p not in names:
+            raise ParameterError(f"parameters: {p!r} is not a fitted parameter; the fit has "
+                                 f"{', '.join(names)}")
+        out.append(names.index(p))
+    return out
+
+
 def misfit(problem, m, sigma2):
     """The fit's misfit at model values ``m``: the count deviance, or RSS / σ²."""
     if problem.noise == "gaussian":

@@ -141,7 +141,7 @@ class CoatingFit:
     def _repr_html_(self) -> str:
         return _html_table("CoatingFit", *self._summary())
 
-    def interval(self, level=0.95, method="normal"):
+    def interval(self, level=0.95, method="normal", parameters=None):
         """(low, high) arrays of the ``level`` intervals.
 
         ``method="normal"`` (z the normal quantile): a parameter whose valid range starts
@@ -154,32 +154,29 @@ class CoatingFit:
 
         ``method="profile"``: the likelihood-ratio interval, the values whose profile
         misfit (the others refitted) rises at most z² (:mod:`._profile`): right where the
-        likelihood is far from quadratic (a narrow glint's ε and e at a few thousand
-        photoelectrons), at the cost of a few refits per end (seconds to a minute for a
-        pair of coatings); an end stops at the parameter's bound. An undetermined
-        parameter keeps its normal interval. Computed once per level."""
+        likelihood is far from quadratic (a narrow glint's ε and e at 10⁴ photoelectrons),
+        at the cost of a few refits per end (seconds each for a pair of coatings); an end
+        stops at the parameter's bound. ``parameters`` (names; default all) limits the
+        profiling to those, the others keep their normal interval, as does an
+        undetermined parameter. Each end is computed once."""
         level = check_real("level", level, low=0.0, high=1.0, low_open=True, high_open=True)
         method = check_choice("method", method, ("normal", "profile"))
         z = float(norm.ppf(0.5 + 0.5 * level))
-        est, sd = self.estimate, self.stderr
-        log = (np.asarray(self.info.get("positive", np.zeros(est.size, bool)), bool)
-               & (est > 0) & np.isfinite(sd))
-        r = np.where(log, sd, 0.0) / np.where(log, est, 1.0)
-        # a σ hundreds of times its estimate (a weakly determined glint width) takes the
-        # top to inf and the bottom to 0: the interval is unbounded above, not a warning
-        with np.errstate(over="ignore", under="ignore"):
-            low = np.where(log, est * np.exp(-z * r), est - z * sd)
-            high = np.where(log, est * np.exp(z * r), est + z * sd)
+        low, high = _profile.normal(self.estimate, self.stderr, self.info.get("positive"), z)
         if method == "normal":
             return low, high
         if self._likelihood is None:
             raise ParameterError("method='profile' needs the fit's likelihood, which this "
                                  "CoatingFit does not carry (it was not made by fit_coatings)")
-        if level not in self._profiled:
-            self._profiled[level] = self._likelihood(
-                sd, z, [i for i in range(est.size) if np.isfinite(sd[i])])
-        plow, phigh = self._profiled[level]
-        return np.where(np.isnan(plow), low, plow), np.where(np.isnan(phigh), high, phigh)
+        chosen = [i for i in _profile.chosen(self.names, parameters)
+                  if np.isfinite(self.stderr[i])]
+        todo = [i for i in chosen if (level, i) not in self._profiled]
+        if todo:
+            plow, phigh = self._likelihood(self.stderr, z, todo)
+            self._profiled.update({(level, i): (plow[i], phigh[i]) for i in todo})
+        for i in chosen:
+            low[i], high[i] = self._profiled[(level, i)]
+        return low, high
 
     def report(self):
         """The fit as text lines: each parameter ± σ, its 95 % interval, and whether the

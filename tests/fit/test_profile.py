@@ -85,6 +85,8 @@ def test_two_parameter_gaussian_profile_is_estimate_plus_minus_z_sigma():
     fit = fit_coatings(coating_kernel(scene, lad, samples=1024), measured, free=["rho_d"],
                        kernel_tol=None)
     assert fit.correlation[0, 1] < -0.5                  # the nuisance matters
+    only = fit.interval(0.95, method="profile", parameters=["b.rho_d"])
+    assert np.array_equal(only[0][0], fit.interval(0.95)[0][0])         # a's stays normal
     lo, hi = fit.interval(0.95, method="profile")
     z_sigma = Z95 * fit.stderr
     np.testing.assert_allclose(lo, fit.estimate - z_sigma, atol=END_TOL * z_sigma.min())
@@ -103,13 +105,18 @@ def test_an_end_stops_at_the_parameters_bound_and_each_level_is_computed_once():
                                                    rel=1e-3)
     again = fit.interval(0.95, method="profile")
     assert again[0] is not lo and np.array_equal(again[0], lo)
-    assert list(fit._profiled) == [0.95]
+    assert list(fit._profiled) == [(0.95, 0)]
 
 
 def test_profile_needs_the_fits_likelihood_and_a_known_method():
     fit, *_ = _poisson_fit(1000.0)
     with pytest.raises(ParameterError, match="method.*'normal', 'profile'"):
         fit.interval(method="wald")
+    with pytest.raises(ParameterError, match="'disk.e' is not a fitted parameter; the fit "
+                                             "has disk.rho_d"):
+        fit.interval(method="profile", parameters=["disk.e"])
+    with pytest.raises(ParameterError, match="parameters must be a list"):
+        fit.interval(method="profile", parameters=3)
     bare = dataclasses.replace(fit, _likelihood=None)
     with pytest.raises(ParameterError, match="needs the fit's likelihood"):
         bare.interval(method="profile")
