@@ -10,10 +10,11 @@ a few thousand photoelectrons, its ε and e on a curved ridge) it follows the li
 as the normal interval cannot. The kernel is the fit's own (its estimated error, ≤ 0.1 σ,
 is not added).
 
-Each end is found on the signed root r(v) = ±√Δ(v), nearly linear in v (in ln v for a
-parameter ≥ 0): a secant from the normal interval's end, bracketed and bisected where the
-root is not linear, each refit warm-started from the last; an end that does not reach z²
-before the parameter's bound (or the coatings' valid set) is the bound.
+Each end is found on the signed root r(v) = √Δ(v), nearly linear in v (in ln v for a
+parameter ≥ 0): from the normal interval's end, a secant from the estimate brackets it,
+and Brent's method closes in until r is within ROOT_TOL of z; each refit starts from the
+last. An end that does not reach z² before the parameter's bound is the bound; values
+outside the coatings' valid set count as far outside the interval.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ import math
 import warnings
 
 import numpy as np
+from scipy.optimize import brentq
 
 from ..errors import EnergyConservationWarning, ParameterError
 from . import _irls
@@ -79,15 +81,16 @@ class Profile:
 
     def __init__(self, model, x, base, sigma2, i):
         self.model, self.i, self.sigma2, self.base = model, i, sigma2, base
-        self.rest = np.delete(np.asarray(x, float), i)
         self.x = np.asarray(x, float)
+        self.starts = {self.x[i]: np.delete(self.x, i)}   # v → the others refitted there
 
     def delta(self, v):
         """The misfit's rise with parameter i held at v (inf outside the valid set)."""
         pr = self.model.problem
+        near = min(self.starts, key=lambda w: abs(w - v))   # the nearest refit starts it
         x = self.x.copy()
         x[self.i] = v
-        x[np.arange(x.size) != self.i] = self.rest
+        x[np.arange(x.size) != self.i] = self.starts[near]
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", EnergyConservationWarning)
@@ -100,9 +103,8 @@ class Profile:
         if not held.params:                       # one free parameter: nothing to refit
             m = _irls.Model(held).values(np.zeros(0))
         else:
-            start = np.clip(self.rest, held.low, held.high)
-            rest, m, _ = _irls.solve(_irls.Model(held), held.data, start)
-            self.rest = rest                      # the next refit starts here
+            start = np.clip(self.starts[near], held.low, held.high)
+            self.starts[v], m, _ = _irls.solve(_irls.Model(held), held.data, start)
         if m is None:
             return math.inf
         return max(misfit(held, m, self.sigma2) - self.base, 0.0)
@@ -122,6 +124,15 @@ LOG_DEPTH = 50.0
 MAX_GROWTH = 8.0
 
 
+class _Found(Exception):
+    """An end within ROOT_TOL: stops Brent's search early."""
+
+
+#: The first step from the estimate, on the log scale, is at most this (a normal σ many
+#: times its estimate would put it decades away, where each refit is slow).
+MAX_FIRST_LOG_STEP = math.log(4.0)
+
+
 def end(profile, value, sd, z, side, limit):
     """One end (side −1: low, +1: high) of the interval of parameter ``profile.i``, from
     its estimate ``value`` and normal σ ``sd``; ``limit`` is its bound on that side."""
@@ -131,36 +142,49 @@ def end(profile, value, sd, z, side, limit):
         ulim = u0 - LOG_DEPTH
     else:
         ulim = to(limit) if np.isfinite(limit) else side * math.inf
-    inside, outside = (u0, 0.0), None                 # (u, signed root) either side of z
-    u = u0 + side * z * (sd / value if to is math.log else sd)
+    seen = {u0: -z}                                   # the estimate: no rise
+
+    def excess(u):                     # the signed root less z (inf: invalid), each u once
+        if u not in seen:
+            seen[u] = math.sqrt(profile.delta(back(u))) - z
+            if abs(seen[u]) <= ROOT_TOL * z:
+                raise _Found(u)
+        return seen[u]
+
+    step = min(z * sd / value, MAX_FIRST_LOG_STEP) if to is math.log else z * sd
+    try:
+        inside, outside = _bracket(excess, u0, u0 + side * step, ulim, z)
+        if outside is None:
+            return limit if inside == ulim else back(inside)
+        brentq(excess, *sorted((inside, outside)), xtol=1e-12, maxiter=MAX_REFITS)
+    except _Found as found:
+        return back(found.args[0])
+    except RuntimeError:                             # not settled: the outer point
+        pass
+    return back(outside)
+
+
+def _bracket(excess, u0, u, ulim, z):
+    """(last u inside, first u outside): from the first trial ``u``, a secant from the
+    estimate ``u0`` through the last point inside (the signed root is linear there for a
+    quadratic likelihood), grown 1.5 to MAX_GROWTH times; a trial outside the coatings'
+    valid set halves the step back. No u outside (None): the bound ``ulim`` is inside, or
+    the valid set ends first (the last u inside is then the end)."""
+    side, inside, edge = math.copysign(1.0, u - u0), u0, ulim
     for _ in range(MAX_REFITS):
-        if side * (u - ulim) >= 0:
-            u = ulim
-        r = math.sqrt(profile.delta(back(u)))
-        if abs(r - z) <= ROOT_TOL * z:
-            return back(u)
-        if r < z:
-            if u == ulim:
-                return limit                          # the bound comes first
-            inside = (u, r)
-        else:
-            outside = (u, r)
-        u = _next(u0, inside, outside, z)
-    return limit if outside is None else back(outside[0])
-
-
-def _next(u0, inside, outside, z):
-    """The next trial: regula falsi in the bracket (bisection where it stalls), or, with no
-    bracket yet, a secant from the estimate through the last point inside (the signed root
-    is linear there for a quadratic likelihood), grown at most MAX_GROWTH times."""
-    ui, ri = inside
-    if outside is None:
-        reach = z / ri if ri > 0 else MAX_GROWTH
-        return u0 + (ui - u0) * min(max(reach, 1.5), MAX_GROWTH)
-    uo, ro = outside
-    u = ui + (z - ri) * (uo - ui) / (ro - ri) if math.isfinite(ro) else 0.5 * (ui + uo)
-    lo, hi = sorted((ui, uo))
-    return u if lo + 0.02 * (hi - lo) < u < hi - 0.02 * (hi - lo) else 0.5 * (ui + uo)
+        if side * (u - edge) >= 0:
+            u = edge
+        f = excess(u)
+        if math.isinf(f):                             # the valid set ends nearer
+            edge, u = u, 0.5 * (inside + u)
+            continue
+        if f > 0:
+            return inside, u
+        inside, r = u, f + z
+        if u == ulim:
+            break
+        u = u0 + (u - u0) * min(max(z / r if r > 0 else MAX_GROWTH, 1.5), MAX_GROWTH)
+    return inside, None
 
 
 def intervals(model, x, m, sigma2, stderr, z, which):
