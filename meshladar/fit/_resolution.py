@@ -65,7 +65,7 @@ class Ladder:
         self.active = (tol is not None and kernel.samples is not None
                        and kernel._traced is not None)
         self.coarse = kernel
-        self.error = self.shift = None
+        self.error = self.shift = self.step = None
         #: the kernel's error per unit of its change from N to 2N
         self.factor = MESH_ERROR_FACTOR if kernel.source == "mesh" else 1.0
 
@@ -77,8 +77,9 @@ class Ladder:
     def settle(self, mats, sigma_of, shift_of=None):
         """Double N until the kernel error with coatings ``mats`` is at most the tolerance
         (``sigma_of(kernel, mats)`` gives each bin's σ with that kernel), and so is the
-        parameters' shift ``shift_of(coarse, fine)`` (in their σ) where given, or the cap
-        is reached; True when the kernel used did not change."""
+        parameters' largest shift ``shift_of(coarse, fine)`` (in their σ; with the shifts,
+        kept scaled as ``step``) where given, or the cap is reached; True when the kernel
+        used did not change."""
         if not self.active:
             return True
         before = self.used
@@ -86,8 +87,9 @@ class Ladder:
             fine = self.used
             self.error = self.factor * kernel_error(self.coarse, fine, mats,
                                                     sigma_of(fine, mats))
-            self.shift = None if shift_of is None else self.factor * shift_of(self.coarse,
-                                                                              fine)
+            if shift_of is not None:
+                shift, step = shift_of(self.coarse, fine)
+                self.shift, self.step = self.factor * shift, self.factor * step
             if self.worst <= self.tol or not self._refinable(fine):
                 break
             self.coarse = fine
@@ -160,11 +162,11 @@ def _unit(kernel):
 
 
 def kernel_shift(model, at, coarse, fine):
-    """The largest shift of a parameter, in its σ, that the model's change from the
-    ``coarse`` to the ``fine`` kernel causes at ``at`` = (x, model values)."""
+    """(the largest shift of a parameter in its σ, the shifts) that the model's change
+    from the ``coarse`` to the ``fine`` kernel causes at ``at`` = (x, model values)."""
     step, sd = kernel_step(model, at, coarse, fine)
     ok = sd > 0
-    return float(np.max(np.abs(step[ok]) / sd[ok], initial=0.0))
+    return float(np.max(np.abs(step[ok]) / sd[ok], initial=0.0)), step
 
 
 def kernel_step(model, at, coarse, fine):

@@ -36,7 +36,7 @@ from . import _irls, _profile
 from ._identify import NULL_REL, _correlation, _misfit, _uncertainty, describe
 from ._params import _materials, _resolve_params
 from ._resolution import (KERNEL_TOL, MAX_SAMPLES, MIN_KERNEL_TOL, KernelErrorWarning, Ladder,
-                          kernel_shift, kernel_step, with_kernel_error)
+                          kernel_shift, with_kernel_error)
 from .kernels import MAX_KERNEL_SAMPLES, CoatingKernel, _table, coating_kernel
 
 __all__ = ["fit_coatings", "CoatingFit", "IdentifiabilityWarning", "KernelErrorWarning",
@@ -302,9 +302,8 @@ def _result(model, solved, ladder, boot):
     names = tuple(f"{kernel.parts[p.part]}.{p.name}" for p in params)
     found = _uncertainty(fit.fisher, x, params, lambda i: names[i])
     covariance = found.covariance
-    if ladder.active:
-        covariance = with_kernel_error(covariance, ladder.factor * kernel_step(
-            model, (x, m), ladder.coarse, kernel)[0])
+    if ladder.step is not None:              # the last shift, at this x and kernel
+        covariance = with_kernel_error(covariance, ladder.step)
     stderr, corr = _correlation(covariance)
     ident = {names[i]: v for i, v in enumerate(found.reasons)}
     combos = tuple((describe(c, names), float(c @ x), s) for c, s in found.combinations)
