@@ -241,6 +241,15 @@ class Scene:
             raise ParameterError("hull_points() is for mesh scenes")
         return self._hull
 
+    def cached(self, key, make):
+        """``make()``, computed once per scene and ``key``: what the engine derives from a
+        scene's parts (traced geometry, curvature estimates) stays true, as a Scene is
+        immutable."""
+        derived = self.__dict__.setdefault("_derived", {})
+        if key not in derived:
+            derived[key] = make()
+        return derived[key]
+
     @cached_property
     def _hull(self) -> np.ndarray:
         # one part: the part's own hull, shared by every scene of it (a coating sweep)

@@ -128,17 +128,20 @@ def _turns(scene, normals, mode):
     """{(part, material index): κ} of a scene, computed once per scene, normals and mode
     (smooth: the traced geometry's own corner normals, which the run has built), from at
     most :data:`_MAX_FACES` evenly strided faces of each part and material."""
-    cache = scene.__dict__.setdefault("_lobe_turns", {})
-    if (normals, mode) not in cache:
-        geo = geometry(scene, normals)
-        key = geo.part_of.astype(np.int64) * (int(geo.material.max()) + 1) + geo.material
-        out = cache[normals, mode] = {}
-        for first in np.unique(key, return_index=True)[1]:
-            faces = np.flatnonzero(key == key[first])
-            faces = faces[::-(-faces.size // _MAX_FACES)]
-            out[int(geo.part_of[first]), int(geo.material[first])] = _curved_quantile(
-                *_face_rates(scene, geo, faces, normals, mode))
-    return cache[normals, mode]
+    return scene.cached(("lobe turns", normals, mode),
+                        lambda: _part_turns(scene, normals, mode))
+
+
+def _part_turns(scene, normals, mode):
+    geo = geometry(scene, normals)
+    key = geo.part_of.astype(np.int64) * (int(geo.material.max()) + 1) + geo.material
+    out = {}
+    for first in np.unique(key, return_index=True)[1]:
+        faces = np.flatnonzero(key == key[first])
+        faces = faces[::-(-faces.size // _MAX_FACES)]
+        out[int(geo.part_of[first]), int(geo.material[first])] = _curved_quantile(
+            *_face_rates(scene, geo, faces, normals, mode))
+    return out
 
 
 def _face_rates(scene, geo, faces, normals, mode):
@@ -201,15 +204,16 @@ def _face_steps(scene):
     """{(part, material index): median angle between the normals of neighbouring faces over
     the part's curved edges (:func:`~meshladar.meshes.curved_edge_angles`)}, for parts that
     have any; computed once per scene."""
-    cache = scene.__dict__.get("_face_steps")
-    if cache is None:
-        cache = {}
-        for k, part in enumerate(scene.parts):
-            angle, mats = curved_edge_angles(part)
-            for m in np.unique(mats):
-                cache[k, int(m)] = float(np.median(angle[mats == m]))
-        scene.__dict__["_face_steps"] = cache
-    return cache
+    return scene.cached("face steps", lambda: _part_face_steps(scene))
+
+
+def _part_face_steps(scene):
+    out = {}
+    for k, part in enumerate(scene.parts):
+        angle, mats = curved_edge_angles(part)
+        for m in np.unique(mats):
+            out[k, int(m)] = float(np.median(angle[mats == m]))
+    return out
 
 
 def _floor3(x):

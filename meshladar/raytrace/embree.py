@@ -61,11 +61,7 @@ def geometry(scene: Scene, normals: str) -> Geometry:
     """The scene's traced geometry for a normal mode, built once per scene and mode: a
     Scene's parts are immutable, so a second call (another view, another coating, the
     viewer) reuses the concatenated arrays, face planes, hull and content digest."""
-    cache = scene.__dict__.setdefault("_geometries", {})
-    geo = cache.get(normals)
-    if geo is None:
-        geo = cache[normals] = Geometry(scene, normals)
-    return geo
+    return scene.cached(("geometry", normals), lambda: Geometry(scene, normals))
 
 
 def _check_scale(radius, offset):

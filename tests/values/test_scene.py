@@ -192,3 +192,23 @@ def test_a_large_meshs_hull_points_keep_every_extreme(monkeypatch):
         assert len(got) < len(sphere.vertices) + 100                # the interior is dropped
         kept = {tuple(p) for p in got}
         assert all(tuple(p) in kept for p in truth)                  # every hull vertex
+
+
+def test_what_the_engine_derives_from_a_scene_is_computed_once_per_key():
+    """Scene.cached: one call of ``make`` per scene and key (the traced geometry of a
+    normal mode, the curvature estimates); another scene of the same parts has its own."""
+    sphere = ml.meshes.sphere((0.0, 0.0, 0.0), 0.5, 0, subdivisions=1)
+    scene = ml.Scene.from_parts([sphere], [DARK_GRAY])
+    calls = []
+
+    def make():
+        calls.append(1)
+        return len(calls)
+
+    assert scene.cached("k", make) == 1 and scene.cached("k", make) == 1
+    assert scene.cached(("k", 2), make) == 2
+    other = ml.Scene.from_parts([sphere], [ALUMINUM])
+    assert other.cached("k", make) == 3 and len(calls) == 3
+    from meshladar.raytrace.embree import geometry
+    assert geometry(scene, "flat") is geometry(scene, "flat")
+    assert geometry(scene, "flat") is not geometry(other, "flat")
