@@ -53,11 +53,12 @@ def _floor(n):
     return MIN_COVERAGE - SAMPLING_SIGMAS * np.sqrt(MIN_COVERAGE * (1 - MIN_COVERAGE) / n)
 
 
-def _trials(scene, levels=LEVELS, trials=TRIALS, mesh=False):
+def _trials(scene, levels=LEVELS, trials=TRIALS, mesh=False, profile=()):
     """Per level, (inside (trials, n) bool, z (trials, n), kernel errors, determined
     (trials, n) bool) of the 95 % intervals against the truth; the exact profiles computed
     once (``mesh``: the mesh model at MESH_DATA_RAYS rays per bin width), the kernel traced
-    once (its refinements kept), every fit started from the truth."""
+    once (its refinements kept), every fit started from the truth; the parameters named
+    in ``profile`` get profile-likelihood intervals, the others normal ones."""
     if mesh:
         exact = ml.simulate(scene, LAD, model="mesh", rays_per_bin=MESH_DATA_RAYS,
                             normals="exact").values
@@ -81,7 +82,7 @@ def _trials(scene, levels=LEVELS, trials=TRIALS, mesh=False):
                 fit = fit_coatings(kernel, measured, noise="poisson", photons_per_unit=k)
             true = np.array([getattr(scene.shapes[kernel.part_index(n.split(".")[0])]
                                      .material, n.split(".")[1]) for n in fit.names])
-            lo, hi = fit.interval(0.95)
+            lo, hi = fit.interval(0.95, method="profile", parameters=list(profile))
             inside.append((lo <= true) & (true <= hi))
             z.append((fit.estimate - true) / fit.stderr)
             kerr.append(fit.info["kernel_shift"] if mesh
@@ -164,3 +165,22 @@ def test_mesh_intervals_cover_the_truth_on_finer_mesh_data():
     for lv in LEVELS:
         assert np.all(out[lv][0].mean(axis=0) >= _floor(MESH_TRIALS)), (lv, report)
     assert np.all(inside.mean(axis=0) >= _floor(len(inside))), report
+
+
+if __name__ == "__main__":
+    # python tests/fit/test_coverage.py SCENE LEVEL TRIALS [PROFILED,...]: the coverage and
+    # bias of each parameter's 95 % interval at one photon level (e.g. the pair at 10⁴ with
+    # the aluminium's ε and e profiled: pair 1e4 100 small.epsilon,small.e)
+    import sys
+    import time
+
+    scene_name, level, count = sys.argv[1], float(sys.argv[2]), int(sys.argv[3])
+    profiled = sys.argv[4].split(",") if len(sys.argv) > 4 else ()
+    start = time.perf_counter()
+    names, out = _trials(SCENES[scene_name], [level], count, profile=profiled)
+    inside, z, _, known = out[level]
+    print(f"{scene_name} at {level:g} photoelectrons, {count} trials, "
+          f"{time.perf_counter() - start:.0f} s; profiled: {', '.join(profiled) or 'none'}")
+    for i, name in enumerate(names):
+        print(f"  {name:16s} coverage {inside[:, i].mean():.2f}  bias {z[:, i].mean():+.2f} σ"
+              f"  spread {z[:, i].std():.2f} σ  determined {known[:, i].mean():.2f}")
