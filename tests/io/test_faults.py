@@ -223,17 +223,18 @@ sys.exit(main(sys.argv[1:]))
 """
 
 
-def _long_cli_run(tmp_path):
+def _long_cli_run(tmp_path, model="pixel"):
     import subprocess
     import sys
 
     run = tmp_path / "run"
-    # the pixel model: its --jobs are worker processes (the mesh model's are threads)
-    cmd = [sys.executable, "-c", _HELD_CLI, "simulate", "disk_pair", "--model", "pixel",
+    # the pixel and analytic models: their --jobs are worker processes (the mesh model's
+    # are threads); a session of its own, as a terminal's foreground job has its own group
+    cmd = [sys.executable, "-c", _HELD_CLI, "simulate", "disk_pair", "--model", model,
            "--views", "720", "--jobs", "2", "--run-dir", str(run), "-o",
            str(tmp_path / "r.npz"), "--quiet"]
     return run, subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                                 text=True)
+                                 text=True, start_new_session=True)
 
 
 def _workers_once_a_chunk_is_saved(run, proc):
@@ -251,16 +252,23 @@ def _workers_once_a_chunk_is_saved(run, proc):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("sig", ["SIGTERM", "SIGKILL"])
-def test_a_stopped_run_takes_its_workers_with_it(tmp_path, sig):
+@pytest.mark.parametrize("sig, model", [("SIGTERM", "pixel"), ("SIGKILL", "pixel"),
+                                        ("Ctrl-C", "analytic")])
+def test_a_stopped_run_takes_its_workers_with_it(tmp_path, sig, model):
+    """SIGTERM, SIGKILL, and Ctrl-C as a terminal sends it (SIGINT to the whole foreground
+    group: the run and its worker processes; issue 29 saw the analytic model ignore it)."""
+    import os
     import signal
 
     psutil = pytest.importorskip("psutil")
-    run, proc = _long_cli_run(tmp_path)
+    run, proc = _long_cli_run(tmp_path, model)
     try:
         workers = _workers_once_a_chunk_is_saved(run, proc)
         assert len(workers) >= 2
-        proc.send_signal(getattr(signal, sig))
+        if sig == "Ctrl-C":
+            os.killpg(proc.pid, signal.SIGINT)
+        else:
+            proc.send_signal(getattr(signal, sig))
         _, err = proc.communicate(timeout=120)
     finally:                                   # a failed assertion must not leave the held
         if proc.poll() is None:                # run (and its workers) behind for good
@@ -268,7 +276,7 @@ def test_a_stopped_run_takes_its_workers_with_it(tmp_path, sig):
                 p.kill()
             proc.kill()
             proc.wait()
-    if sig == "SIGTERM":                       # like Ctrl-C: one line and a resume hint
+    if sig != "SIGKILL":                       # one line and a resume hint
         assert proc.returncode == 130 and "Traceback" not in err
         assert "interrupted; finished chunks are kept" in err
     # the workers end with the run (SIGKILL: through the parent-death signal); the wait is
