@@ -31,7 +31,16 @@ def user_stacklevel() -> int:
     """The ``stacklevel``, for a warning raised by this function's caller, of the first
     frame outside meshladar and the import machinery: the user's own call (or import line),
     however many of meshladar's layers lie between. ``warnings`` itself skips the frozen
-    importlib frames when it counts, so they are not counted here either."""
+    importlib frames when it counts, so they are not counted here either.
+
+    Returns
+    -------
+    int
+        The ``stacklevel`` (2 or more) for :func:`warnings.warn` called by this function's
+        caller: that of the first frame, walking outwards from the caller's caller, whose
+        file lies outside the meshladar package folder and the ``importlib`` folder (frozen
+        importlib bootstrap frames are skipped and not counted); 2 if no such frame exists.
+    """
     frame, level = sys._getframe(2), 2
     while frame is not None:
         name = frame.f_code.co_filename
@@ -44,38 +53,92 @@ def user_stacklevel() -> int:
 
 
 class MeshladarError(Exception):
-    """Base class of every error meshladar raises on purpose."""
+    """Base class of every error meshladar raises on purpose.
+
+    Parameters
+    ----------
+    *args : object
+        The message (a ``str``), passed on to the builtin exception unchanged.
+    """
 
 
 class ParameterError(MeshladarError, ValueError):
-    """A parameter is out of its valid range, non-finite or of the wrong kind."""
+    """A parameter is out of its valid range, non-finite or of the wrong kind.
+
+    Parameters
+    ----------
+    *args : object
+        The message (a ``str``), passed on to the builtin exception unchanged.
+    """
 
 
 class MaterialFileError(MeshladarError, ValueError):
-    """A material table (TOML) is unreadable or one of its entries is invalid."""
+    """A material table (TOML) is unreadable or one of its entries is invalid.
+
+    Parameters
+    ----------
+    *args : object
+        The message (a ``str``), passed on to the builtin exception unchanged.
+    """
 
 
 class GeometryError(MeshladarError, ValueError):
-    """A scene's geometry is invalid: overlapping shapes, a mesh that fails its checks."""
+    """A scene's geometry is invalid: overlapping shapes, a mesh that fails its checks.
+
+    Parameters
+    ----------
+    *args : object
+        The message (a ``str``), passed on to the builtin exception unchanged.
+    """
 
 
 class PhantomSpecError(MeshladarError, ValueError):
-    """A phantom spec (TOML) is unreadable or one of its fields is invalid."""
+    """A phantom spec (TOML) is unreadable or one of its fields is invalid.
+
+    Parameters
+    ----------
+    *args : object
+        The message (a ``str``), passed on to the builtin exception unchanged.
+    """
 
 
 class ModelError(MeshladarError, NotImplementedError):
     """A BRDF lacks a method the run needs (``projected``; ``bistatic`` for a bistatic
-    receiver)."""
+    receiver).
+
+    Parameters
+    ----------
+    *args : object
+        The message (a ``str``), passed on to the builtin exception unchanged.
+    """
 
 
 class MeshladarWarning(UserWarning):
-    """Base class of meshladar's warnings: a soft precondition is not met."""
+    """Base class of meshladar's warnings: a soft precondition is not met.
+
+    Parameters
+    ----------
+    *args : object
+        The message (a ``str``), passed on to :class:`UserWarning` unchanged.
+    """
 
 
 class LobeSamplingWarning(MeshladarWarning):
     """The rays are too sparse for a coating's specular lobe on a curved part: its glint is
-    undersampled (the warning names the ray spacing that resolves it)."""
+    undersampled (the warning names the ray spacing that resolves it).
+
+    Parameters
+    ----------
+    *args : object
+        The message (a ``str``), passed on to :class:`UserWarning` unchanged.
+    """
 
 
 class EnergyConservationWarning(MeshladarWarning):
-    """A coating reflects more light than it receives at some incidence angle."""
+    """A coating reflects more light than it receives at some incidence angle.
+
+    Parameters
+    ----------
+    *args : object
+        The message (a ``str``), passed on to :class:`UserWarning` unchanged.
+    """

@@ -20,7 +20,41 @@ class ViewHits:
     through the scene's (shifted) centre. The per-hit fields are :class:`Hits`' for that
     view, with the same shapes ((k,), or (k, 4) for ``spread``, ``bistatic`` and ``curve``;
     the last three may be None), frozen read-only; ``rays`` cast and ``back_face_hits`` are
-    the view's counts."""
+    the view's counts.
+
+    Parameters
+    ----------
+    range : (k,) numpy.ndarray
+        Range of each hit relative to the plane through the scene's (shifted) centre,
+        scene units.
+    cos_theta, sin_theta : (k,) numpy.ndarray
+        cos θ and sin θ of each hit's normal against the view direction, as in
+        :class:`Hits`.
+    material : (k,) numpy.ndarray
+        Index of each hit's material in the scene's materials.
+    spread : (k, 4) numpy.ndarray
+        Footprint of each hit, as in :class:`Hits`.
+    rays : int
+        Rays cast in the view.
+    back_face_hits : int
+        Back-face hits in the view.
+    bistatic : (k, 4) numpy.ndarray, optional
+        Bistatic receiver angles, as in :class:`Hits` (default None).
+    weight_factor : (k,) numpy.ndarray, optional
+        Per-ray factor on F·area, as in :class:`Hits` (default None).
+    curve : (k, 4) numpy.ndarray, optional
+        Exact-normal slice footprints, as in :class:`Hits` (default None).
+    receive_factor : (k,) numpy.ndarray, optional
+        Received-power factor with a sensor, as in :class:`Hits` (default None).
+    transverse : (k, 2) numpy.ndarray, optional
+        Each hit's coordinates along the view's transverse axes (u, v) (default None).
+
+    Raises
+    ------
+    ParameterError
+        When ``range`` is not 1-D, or a per-hit field (an optional one unless None) does
+        not have the shape above for k = ``len(range)``.
+    """
 
     range: np.ndarray
     cos_theta: np.ndarray
@@ -100,6 +134,38 @@ class Hits:
     Per view (n_views,): ``rays`` cast and ``back_face_hits``. Scalars: ``area`` (δA⊥ per
     ray), ``mode``, ``normals``; ``ladar`` and ``materials`` as traced; ``info`` the run's
     parameters.
+
+    Attributes
+    ----------
+    view, range, cos_theta, sin_theta, material : (k,) numpy.ndarray
+        Per-hit fields, as in the table above.
+    spread : (k, 4) numpy.ndarray
+        Per-hit footprint, as in the table above.
+    rays, back_face_hits : (n_views,) numpy.ndarray
+        Rays cast and back-face hits, per view; made read-only.
+    area : float
+        δA⊥, the area each ray stands for: the ray spacing δ in slice mode (per unit
+        height), δ² in 3-D.
+    mode : str
+        The tracing mode, "slice" or "3d".
+    normals : str
+        The normals used, "flat", "smooth" or "exact".
+    ladar : Ladar
+        The views and range bins traced.
+    materials : tuple
+        The scene's materials, as traced; ``material`` indexes into it.
+    bistatic, curve : (k, 4) numpy.ndarray or None
+        Optional per-hit fields, as in the table above (default None).
+    weight_factor, receive_factor : (k,) numpy.ndarray or None
+        Optional per-hit fields, as in the table above (default None).
+    info : dict
+        The run's parameters (default empty).
+
+    Raises
+    ------
+    ParameterError
+        When ``view`` is not 1-D, or a per-hit field (an optional one unless None) does
+        not have the shape above for k = ``len(view)``.
     """
 
     view: np.ndarray

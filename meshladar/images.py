@@ -56,7 +56,23 @@ class Image:
 
     def plot(self, **options):
         """A quick look (:func:`meshladar.viz.quick.image`, ``options`` such as ``y`` and
-        ``title`` go to it): a matplotlib Figure."""
+        ``title`` go to it): a matplotlib Figure.
+
+        Parameters
+        ----------
+        **options
+            Keyword arguments passed unchanged to :func:`meshladar.viz.quick.image`.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The image and its slice along x.
+
+        Raises
+        ------
+        ImportError
+            When the ``viz`` extra is not installed.
+        """
         return plotting.plot(self, **options)
 
     def _summary(self):
@@ -101,7 +117,19 @@ class Image:
         return self.values if dtype is None else self.values.astype(dtype)
 
     def sample(self, points):
-        """Bilinear interpolation at points (..., 2) (x, y); 0 outside the grid."""
+        """Bilinear interpolation at points (..., 2) (x, y); 0 outside the grid.
+
+        Parameters
+        ----------
+        points : (..., 2) array_like
+            Points (x, y), scene units.
+
+        Returns
+        -------
+        (...) numpy.ndarray
+            The image bilinearly interpolated between pixel centres at each point (scipy's
+            ``map_coordinates``, order 1, constant 0 beyond the grid).
+        """
         p = np.asarray(points, dtype=np.float64)
         col = (p[..., 0] - self.x[0]) / self.pixel_size
         row = (p[..., 1] - self.y[0]) / self.pixel_size
@@ -109,7 +137,22 @@ class Image:
                                mode="constant", cval=0.0).reshape(p.shape[:-1])
 
     def radial_profile(self, radii, *, center=None, n_angles=720):
-        """Mean over angle of the image on circles of the given radii about ``center``."""
+        """Mean over angle of the image on circles of the given radii about ``center``.
+
+        Parameters
+        ----------
+        radii : (m,) array_like
+            Radii of the circles, scene units.
+        center : (2,) array_like, optional
+            Centre (x, y) of the circles, scene units (default the image's ``center``).
+        n_angles : int
+            Points per circle, evenly spaced in angle from 0 (on the +x axis); default 720.
+
+        Returns
+        -------
+        (m,) numpy.ndarray
+            The mean of :meth:`sample` over each circle's points.
+        """
         c = np.asarray(self.center if center is None else center, dtype=np.float64)
         a = np.linspace(0.0, 2 * math.pi, n_angles, endpoint=False)
         r = np.asarray(radii, dtype=np.float64)
@@ -118,7 +161,20 @@ class Image:
 
 
 def pixel_centres(size, extent):
-    """(size,) pixel-centre offsets from the grid's centre: −extent + (k + ½) 2 extent/size."""
+    """(size,) pixel-centre offsets from the grid's centre: −extent + (k + ½) 2 extent/size.
+
+    Parameters
+    ----------
+    size : int
+        Number of pixels along the axis.
+    extent : float
+        Half-width of the grid, scene units.
+
+    Returns
+    -------
+    (size,) numpy.ndarray
+        Offsets of the pixel centres from the grid's centre, increasing, scene units.
+    """
     return -extent + (np.arange(size) + 0.5) * (2.0 * extent / size)
 
 
@@ -126,7 +182,25 @@ def pixel_centres(size, extent):
 @dataclass(frozen=True, eq=False)
 class Volume:
     """A reconstructed volume: ``values[k, i, j]`` at (x[j], y[i], z[k]) (voxel centres,
-    increasing, evenly spaced), and ``info`` (method, views, filter, units)."""
+    increasing, evenly spaced), and ``info`` (method, views, filter, units).
+
+    Parameters
+    ----------
+    values : (nz, ny, nx) array_like
+        ``values[k, i, j]`` at (x[j], y[i], z[k]); finite, stored as a read-only float64
+        copy.
+    x, y, z : (nx,), (ny,), (nz,) array_like
+        Voxel-centre coordinates along each axis, scene units; finite and strictly
+        increasing, stored as read-only float64 copies. Keyword-only.
+    info : dict, optional
+        How it was made (default empty; copied). Keyword-only.
+
+    Raises
+    ------
+    ParameterError
+        When an array is not finite real numbers, ``values`` is not 3-D of shape
+        (len(z), len(y), len(x)), or an axis is not strictly increasing.
+    """
 
     values: np.ndarray
     x: np.ndarray = field(kw_only=True)
@@ -157,14 +231,41 @@ class Volume:
         return tuple(float(a[1] - a[0]) if a.size > 1 else 1.0 for a in (self.x, self.y, self.z))
 
     def sample(self, points) -> np.ndarray:
-        """Trilinear values at ``points`` (k, 3) (0 outside the grid)."""
+        """Trilinear values at ``points`` (k, 3) (0 outside the grid).
+
+        Parameters
+        ----------
+        points : (k, 3) or (3,) array_like
+            Points (x, y, z), scene units; a single point is taken as (1, 3).
+
+        Returns
+        -------
+        (k,) numpy.ndarray
+            The volume trilinearly interpolated between voxel centres at each point
+            (scipy's ``map_coordinates``, order 1, constant 0 beyond the grid).
+        """
         p = np.atleast_2d(np.asarray(points, np.float64))
         idx = [(p[:, 2 - a] - ax[0]) / sp for a, (ax, sp) in
                enumerate(zip((self.z, self.y, self.x), self.spacing[::-1]))]
         return map_coordinates(self.values, idx, order=1, mode="constant", cval=0.0)
 
     def radial_profile(self, radii, center=(0.0, 0.0, 0.0), n_directions=2000):
-        """The mean over spheres of ``radii`` about ``center`` (Fibonacci directions)."""
+        """The mean over spheres of ``radii`` about ``center`` (Fibonacci directions).
+
+        Parameters
+        ----------
+        radii : (m,) array_like
+            Radii of the spheres, scene units.
+        center : (3,) array_like
+            Centre (x, y, z) of the spheres, scene units (default the origin).
+        n_directions : int
+            Points per sphere, on a Fibonacci sphere (default 2000).
+
+        Returns
+        -------
+        (m,) numpy.ndarray
+            The mean of :meth:`sample` over each sphere's points.
+        """
         d = fibonacci_sphere(n_directions)
         r = np.asarray(radii, np.float64)
         pts = np.asarray(center, np.float64) + r[:, None, None] * d[None]
@@ -179,7 +280,23 @@ class Volume:
 
     def plot(self, **options):
         """A quick look (:func:`meshladar.viz.quick.volume`, ``options`` such as ``title`` go
-        to it): three slices through the target, a matplotlib Figure."""
+        to it): three slices through the target, a matplotlib Figure.
+
+        Parameters
+        ----------
+        **options
+            Keyword arguments passed unchanged to :func:`meshladar.viz.quick.volume`.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            Three slices through the target on one colour scale.
+
+        Raises
+        ------
+        ImportError
+            When the ``viz`` extra is not installed.
+        """
         return plotting.plot(self, **options)
 
     def __repr__(self) -> str:

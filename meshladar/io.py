@@ -1,4 +1,5 @@
-"""Result files (formerly ``meshladar.io``): saving and loading results: atomic writes, no pickle.
+"""Result files (formerly ``meshladar.results``): saving and loading results: atomic writes,
+no pickle.
 
 Results are ``.npz`` archives of plain arrays plus a JSON document (parameters, metrics,
 version) stored as a string array under the key ``"__meta__"``. Files are written to a
@@ -41,7 +42,19 @@ _TEMPORARY = re.compile(re.escape(TEMPORARY_PREFIX) + r"(\d{1,10})-[a-z0-9_]{8}.
 
 def temporary_writer(name: str):
     """The pid of the meshladar process that wrote temporary ``name``, or None when ``name``
-    is not one of meshladar's temporaries."""
+    is not one of meshladar's temporaries.
+
+    Parameters
+    ----------
+    name : str
+        A file name (no folder): ``.meshladar-tmp-<pid>-<8 characters><final name>`` for
+        one of meshladar's temporaries.
+
+    Returns
+    -------
+    int or None
+        The writer's process id, or None when ``name`` does not have that form.
+    """
     match = _TEMPORARY.match(name)
     return int(match.group(1)) if match else None
 
@@ -55,7 +68,13 @@ def regular_file(path) -> bool:
 
 
 class ResultFileError(MeshladarError, ValueError):
-    """A result file is missing, unreadable, or not a meshladar result."""
+    """A result file is missing, unreadable, or not a meshladar result.
+
+    Parameters
+    ----------
+    *args : object
+        The message (a ``str``), passed on to the builtin exception unchanged.
+    """
 
 
 def _new_file_mode(path):
@@ -85,7 +104,29 @@ def _umask():
 def write_atomic(path, write):
     """Write a file atomically: ``write(fh)`` fills a temporary beside ``path`` (binary
     mode), which is renamed over ``path`` once complete, with the user's normal
-    permissions."""
+    permissions.
+
+    The folder is created if missing; stale temporaries of dead meshladar processes in it
+    are removed (once per folder and process). On the main thread, Ctrl-C and SIGTERM
+    are held while the file is written and renamed, and delivered after (a second signal
+    of a kind is delivered at once). The data is flushed and fsynced before the rename.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to write; replaced if it exists (keeping its permissions; a new file gets
+        0o666 less the umask).
+    write : callable
+        Called once with the temporary's binary file object; it writes the content.
+
+    Raises
+    ------
+    OSError
+        When the folder or temporary cannot be made or written (a full disk, a lost
+        permission), naming ``path`` rather than the temporary. On any failure the
+        temporary is removed and ``path`` is left as it was; an exception raised by
+        ``write`` propagates.
+    """
     _atomic(path, write)
 
 
@@ -211,12 +252,49 @@ def _alive(pid):
 
 
 def write_text_atomic(path, text: str):
-    """Write a text file atomically (UTF-8)."""
+    """Write a text file atomically (UTF-8).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to write (as :func:`write_atomic`).
+    text : str
+        The content, encoded as UTF-8.
+
+    Raises
+    ------
+    OSError
+        As :func:`write_atomic`.
+    """
     _atomic(path, lambda fh: fh.write(text.encode("utf-8")))
 
 
 def save_result(path, arrays: dict, meta: dict):
-    """Save named float/int arrays and a JSON-serialisable ``meta`` dict atomically."""
+    """Save named float/int arrays and a JSON-serialisable ``meta`` dict atomically.
+
+    The file is a compressed ``.npz`` (``numpy.savez_compressed``) written through
+    :func:`write_atomic`; ``meta``, with ``meshladar_version`` added, is stored as JSON
+    text (sorted keys) under the key ``"__meta__"``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to write; not a folder.
+    arrays : dict
+        Names (str, not ``"__meta__"``) to array_like values of a numeric dtype (no object
+        arrays: files are loaded without pickle).
+    meta : dict
+        JSON-serialisable metadata.
+
+    Raises
+    ------
+    ParameterError
+        When ``path`` is not a non-empty path or names a folder, ``arrays`` or ``meta`` is
+        not a dict, a name is not a str or is ``"__meta__"``, an array is of object dtype,
+        or ``meta`` is not JSON-serialisable.
+    OSError
+        As :func:`write_atomic`.
+    """
     path = check_path("path", path)
     if os.path.isdir(path):
         raise ParameterError(f"path must name a file, not a folder; got {path!r}")
@@ -239,7 +317,32 @@ def save_result(path, arrays: dict, meta: dict):
 
 
 def load_result(path):
-    """Load a result saved by :func:`save_result`: (arrays dict, meta dict)."""
+    """Load a result saved by :func:`save_result`: (arrays dict, meta dict).
+
+    Loaded with ``allow_pickle=False``; before any array is read, the members' declared
+    sizes are checked against their stored sizes and meshladar's allocation cap (4 GiB).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.npz`` file.
+
+    Returns
+    -------
+    arrays : dict
+        Name to numpy.ndarray, every member but ``"__meta__"``.
+    meta : dict
+        The parsed JSON metadata (with ``meshladar_version``).
+
+    Raises
+    ------
+    ParameterError
+        When ``path`` is not a non-empty str or os.PathLike.
+    ResultFileError
+        When the file is missing, unreadable, not a regular file, not an ``.npz``, damaged
+        (a member declaring more bytes than it holds, or failing to read), too large to
+        unpack, without metadata, or with metadata that is not a JSON object.
+    """
     path = check_path("path", path)
     try:
         kind = os.stat(path).st_mode
@@ -300,7 +403,22 @@ def _check_declared_sizes(path, z):
 
 
 def describe_scene(scene) -> dict:
-    """A JSON-serialisable description of a scene: shapes or mesh parts, and coatings."""
+    """A JSON-serialisable description of a scene: shapes or mesh parts, and coatings.
+
+    Parameters
+    ----------
+    scene : Scene
+        A mesh or analytic scene.
+
+    Returns
+    -------
+    dict
+        For a mesh scene: ``kind`` ``"mesh"``, ``materials`` (each coating's
+        ``describe()``), ``parts`` (per part its ``name``, ``faces`` and ``vertices``
+        counts and ``digest``) and ``report`` (the mesh checks). For an analytic scene:
+        ``kind`` ``"analytic"`` and ``shapes`` (per shape its ``type``, ``name``,
+        ``center``, ``semi_axes``, ``angle_deg`` (0 for a disk) and ``material``).
+    """
     def mat(m):
         return m.describe()
 
@@ -325,7 +443,29 @@ def save_sinogram(path, sino, *, scene=None, params=None):
     coatings, the run's parameters, and meshladar's version. Atomic, no pickle.
 
     The typed fields ``radiometry`` and ``units`` are written inside ``meta["info"]``, as
-    before they were fields: files read both ways."""
+    before they were fields: files read both ways.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to write (an ``.npz``, :func:`save_result`).
+    sino : Sinogram
+        The sinogram: ``values``, ``angles_deg``, ``bin_edges`` and ``view_vectors`` are
+        stored as arrays, ``model`` and ``info`` in the metadata.
+    scene : Scene, optional
+        Described in ``meta["scene"]`` (:func:`describe_scene`; default None).
+        Keyword-only.
+    params : dict, optional
+        The run's parameters, stored in ``meta["params"]`` (numpy values as numbers and
+        lists, anything else not JSON as its repr). Keyword-only.
+
+    Raises
+    ------
+    ParameterError
+        When ``sino`` is not a Sinogram, or :func:`save_result` refuses the path.
+    OSError
+        As :func:`write_atomic`.
+    """
     check_sinogram("sino", sino)
     meta = {"kind": "sinogram", "model": sino.model, "info": _jsonable(sino.info),
             "scene": None if scene is None else describe_scene(scene),
@@ -336,7 +476,30 @@ def save_sinogram(path, sino, *, scene=None, params=None):
 
 def load_sinogram(path):
     """Load a sinogram saved by :func:`save_sinogram`: (Sinogram, meta). ``radiometry``
-    and ``units`` in the stored info fill the record's typed fields."""
+    and ``units`` in the stored info fill the record's typed fields.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.npz`` file.
+
+    Returns
+    -------
+    sino : Sinogram
+        The sinogram (``model`` default ``"measured"`` when the file has none).
+    meta : dict
+        The file's metadata (``kind``, ``model``, ``info``, ``scene``, ``params``,
+        ``meshladar_version``).
+
+    Raises
+    ------
+    ParameterError
+        When ``path`` is not a non-empty str or os.PathLike.
+    ResultFileError
+        When :func:`load_result` fails, the file is not a sinogram result, lacks
+        ``values``, ``angles_deg`` or ``bin_edges``, or its arrays do not make a valid
+        Sinogram.
+    """
     arrays, meta = load_result(path)
     if meta.get("kind") != "sinogram":
         raise ResultFileError(f"{os.fspath(path)}: not a sinogram result (kind "
@@ -359,7 +522,31 @@ def save_waveforms(path, waves, *, realisations=None, noise=None, params=None):
     edges in m, views, every parameter with its unit in ``meta["info"]``; with both
     realisations and noise, ``meta["noise"]["clipped_fraction"]`` is the realisations'
     fraction at the digitiser's top code (:meth:`~meshladar.noise.Noise.clipped_fraction`).
-    Atomic, no pickle."""
+    Atomic, no pickle.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to write (an ``.npz``, :func:`save_result`).
+    waves : Waveforms
+        Stored as arrays ``values``, ``time_edges_s``, ``range_edges_m``, ``angles_deg``
+        and ``view_vectors``; its standoff as ``meta["standoff_m"]``.
+    realisations : (n, n_views, n_samples) array_like, optional
+        Noise realisations, stored as float64 ``realisations`` (shape not checked).
+        Keyword-only.
+    noise : Noise, optional
+        Described in ``meta["noise"]`` (anything else is stored as None). Keyword-only.
+    params : dict, optional
+        The run's parameters, stored in ``meta["params"]``. Keyword-only.
+
+    Raises
+    ------
+    ParameterError
+        When ``waves`` is not a Waveforms, or :func:`save_result` refuses the path or
+        arrays.
+    OSError
+        As :func:`write_atomic`.
+    """
     if not isinstance(waves, Waveforms):
         raise ParameterError(f"waves must be a meshladar.waveforms.Waveforms; got "
                              f"{type(waves).__name__}")
@@ -378,7 +565,31 @@ def save_waveforms(path, waves, *, realisations=None, noise=None, params=None):
 
 def load_waveforms(path):
     """Load waveforms saved by :func:`save_waveforms`: (Waveforms, realisations or None,
-    meta)."""
+    meta).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.npz`` file.
+
+    Returns
+    -------
+    waves : Waveforms
+        The waveforms (standoff from ``meta["standoff_m"]``, default 0.0).
+    realisations : numpy.ndarray or None
+        The stored noise realisations, or None when the file has none.
+    meta : dict
+        The file's metadata (``kind``, ``standoff_m``, ``info``, ``noise``, ``params``,
+        ``meshladar_version``).
+
+    Raises
+    ------
+    ParameterError
+        When ``path`` is not a non-empty str or os.PathLike.
+    ResultFileError
+        When :func:`load_result` fails, the file is not a waveforms result, or it lacks an
+        array or its arrays do not make valid Waveforms.
+    """
     arrays, meta = load_result(path)
     if meta.get("kind") != "waveforms":
         raise ResultFileError(f"{os.fspath(path)}: not a waveforms result (kind "

@@ -52,6 +52,17 @@ class Ladar:
         3-D meshes seen from anywhere (see ``meshladar.meshes.fibonacci_sphere``). Only the mesh
         model accepts views off the x-y plane.
 
+    Raises
+    ------
+    ParameterError
+        When neither ``angles_deg`` nor ``view_vectors`` is given; an array is not finite;
+        ``view_vectors`` is not (n_views, 3) non-zero vectors; both are given and an
+        angle differs from its vector's azimuth by more than
+        :data:`meshladar.precision.ANGLE_TOL_DEG` (vectors along ±z excepted) or their
+        lengths differ; ``angles_deg`` is not a non-empty 1-D array; ``bin_edges`` is not
+        1-D with at least 2 strictly increasing edges; or the sinogram (n_views × n_bins
+        float64) would pass meshladar's allocation cap.
+
     Examples
     --------
     >>> import numpy as np, meshladar as ml
@@ -127,6 +138,30 @@ class Ladar:
         """n_bins bins of width ``bin_width`` centred on range ``center``.
 
         ``angles_deg`` defaults to the paper's 360 views at 1° (0, 1, ..., 359).
+
+        Parameters
+        ----------
+        n_bins : int
+            Number of range bins, ≥ 1.
+        bin_width : float
+            Width of each bin, scene units, in [1e-200, 2 × 1e30 / n_bins].
+        center : float
+            Range of the middle of the bins, scene units, in [−1e30, 1e30] (default 0.0).
+            Keyword-only.
+        angles_deg : (n_views,) array_like, optional
+            View angles, degrees (default 0, 1, ..., 359). Keyword-only.
+
+        Returns
+        -------
+        Ladar
+            Edges ``center + (k − n_bins/2) bin_width`` for k = 0, ..., n_bins.
+
+        Raises
+        ------
+        ParameterError
+            When ``n_bins``, ``bin_width`` or ``center`` is out of range, 360 views of
+            ``n_bins`` bins would pass meshladar's allocation cap, or the angles are
+            invalid (see :class:`Ladar`).
         """
         n = check_count("n_bins", n_bins)
         check_size("n_bins", n, 8 * 360, f"{n} bins (a sinogram of 360 views)", "use fewer bins")
@@ -142,6 +177,33 @@ class Ladar:
         """The paper's set-up: bins of width A/256 for A = ``radius``, 360 views at 1°.
 
         With the default A = 0.8 and 512 bins, the bins cover [−A, A]: the paper's disk.
+
+        Parameters
+        ----------
+        radius : float
+            The disk's radius A, scene units, in (0, 1e30] (default 0.8).
+        n_bins : int
+            Number of range bins, ≥ 1 (default 2 × :data:`PAPER_BIN_DIVISOR` = 512).
+            Keyword-only.
+        angles_deg : (n_views,) array_like, optional
+            View angles, degrees (default 0, 1, ..., 359). Keyword-only.
+
+        Returns
+        -------
+        Ladar
+            ``n_bins`` bins of width A / :data:`PAPER_BIN_DIVISOR` centred on range 0
+            (:meth:`centered`).
+
+        Raises
+        ------
+        ParameterError
+            When ``radius`` is out of range, or :meth:`centered` refuses the bins or
+            angles.
+
+        References
+        ----------
+        Jin & Levine (2009), Sec. 4.A and Fig. 6 (range bins of width A/256 for a disk of
+        radius A; 360 views at 1°).
         """
         a = check_real("radius", radius, low=0.0, low_open=True, high=SCENE_RADIUS_RANGE[1])
         return cls.centered(n_bins, a / PAPER_BIN_DIVISOR, angles_deg=angles_deg)
@@ -169,6 +231,46 @@ class Ladar:
         Give ``bin_width`` or ``n_bins`` (or both: ``n_bins`` bins of that width centred on
         the span). Views: ``angles_deg`` about z (default 0, 1, ..., 359) or
         ``view_vectors``.
+
+        Parameters
+        ----------
+        scene : Scene
+            The target: a mesh or an analytic scene.
+        bin_width : float, optional
+            Width of each bin, scene units, ≥ 1e-200. Keyword-only.
+        n_bins : int, optional
+            Number of bins, ≥ 1. Keyword-only.
+        margin : float
+            Extra range, scene units, ≥ 0, added beyond the nearest and the farthest range
+            (default 0.0). Keyword-only.
+        angles_deg : (n_views,) array_like, optional
+            View angles about z, degrees (default 0, 1, ..., 359). Keyword-only.
+        view_vectors : (n_views, 3) array_like, optional
+            View directions instead (``angles_deg`` then None or their azimuths).
+            Keyword-only.
+
+        Returns
+        -------
+        Ladar
+            The views given and uniform bins centred on the span's middle (a mesh) or on
+            range 0 (analytic shapes). For a mesh of span s (nearest to farthest range,
+            margins included): with only ``bin_width``, ceil(s / bin_width) + 1 bins (to a
+            slack of 1e-9 bin); with only ``n_bins``, width s / (n_bins − 1) (for one bin
+            or s = 0: max(s, 1e-12 (1 + |middle|))). For analytic shapes of half-span
+            h = |C| + R + margin: ceil(2h / bin_width) bins, or width 2h / n_bins.
+
+        Raises
+        ------
+        ParameterError
+            When ``scene`` is not a Scene, neither ``bin_width`` nor ``n_bins`` is given,
+            ``margin``, ``bin_width`` or ``n_bins`` is out of range, the views are invalid
+            (see :class:`Ladar`), or the bins would pass meshladar's allocation cap.
+
+        Warns
+        -----
+        MeshladarWarning
+            When the target's centre is so far from the origin that centring it would at
+            least halve the bins' span (:data:`OFF_CENTRE_FACTOR`).
         """
         if not isinstance(scene, Scene):
             raise ParameterError(f"scene must be a meshladar.Scene; got {type(scene).__name__}")
@@ -256,7 +358,21 @@ OFF_CENTRE_FACTOR = 2.0
 def target_centre(scene, planar):
     """The point a scene's views should turn about: a mesh's bounding-box centre, the
     shapes' bounding circle's centre for analytic scenes; z = 0 for views about z (z does
-    not change their ranges)."""
+    not change their ranges).
+
+    Parameters
+    ----------
+    scene : Scene
+        The target.
+    planar : bool
+        True for views about z: the centre's z is then 0.
+
+    Returns
+    -------
+    (3,) numpy.ndarray
+        The centre (x, y, z), scene units: the middle of a mesh scene's bounding box, or
+        the centre of an analytic scene's :meth:`Scene.bounding_circle` with z = 0.
+    """
     if scene.is_mesh:
         b = scene.bounds()
         c = 0.5 * (b[0] + b[1])

@@ -38,7 +38,30 @@ _REQUIRED = ("rho_d", "epsilon", "b", "e")
 
 
 def lambertian(rho_d=1.0, *, name=None):
-    """A Lambertian coating: F = ρd/π at every angle (SR with b = 0, diffuse lobe only)."""
+    """A Lambertian coating: F = ρd/π at every angle (SR with b = 0, diffuse lobe only).
+
+    Parameters
+    ----------
+    rho_d : float
+        Diffuse reflectivity ρd, in [0, 1] (default 1.0).
+    name : str, optional
+        A label for tables and reprs. Keyword-only.
+
+    Returns
+    -------
+    SandfordRobertson
+        ``SandfordRobertson(rho_d=rho_d, epsilon=0, b=0, e=1, lobes="diffuse")``.
+
+    Raises
+    ------
+    ParameterError
+        When ``rho_d`` is not a finite real in [0, 1], or ``name`` is neither a str nor
+        None.
+
+    References
+    ----------
+    Jin & Levine (2009), Eqs. A1-A3 with b = 0 (g ≡ 1, G = 1).
+    """
     return SandfordRobertson(rho_d=rho_d, epsilon=0.0, b=0.0, e=1.0, lobes="diffuse", name=name)
 
 
@@ -47,6 +70,30 @@ def glint(e, rho_s=1.0, *, name=None):
 
     With b = 0 the SR reflectivity A8 is ρs = 1 − ε, so ε = 1 − ρs; ``glint(e)`` is the
     paper's Fig. 8 surface (ρs = 1, ε = ρd = 0).
+
+    Parameters
+    ----------
+    e : float
+        Glint eccentricity, in [1e-12, 1] (A6): small values are mirror-like.
+    rho_s : float
+        Specular reflectivity ρs, in [0, 1] (default 1.0).
+    name : str, optional
+        A label for tables and reprs. Keyword-only.
+
+    Returns
+    -------
+    SandfordRobertson
+        ``SandfordRobertson(rho_d=0, epsilon=1 − rho_s, b=0, e=e, lobes="specular")``.
+
+    Raises
+    ------
+    ParameterError
+        When ``rho_s`` or ``e`` is not a finite real in its range, or ``name`` is neither
+        a str nor None.
+
+    References
+    ----------
+    Jin & Levine (2009), Eqs. A5-A8 and Fig. 8.
     """
     epsilon = 1.0 - check_real("rho_s", rho_s, low=0.0, high=1.0)
     return SandfordRobertson(rho_d=0.0, epsilon=epsilon, b=0.0, e=e, lobes="specular", name=name)
@@ -57,6 +104,29 @@ def parse_table(data, *, source="<table>"):
 
     Returns a read-only mapping of name to :class:`SandfordRobertson`. Errors are
     :class:`~meshladar.errors.MaterialFileError` naming ``source``, the entry and the field.
+
+    Parameters
+    ----------
+    data : dict
+        ``{name: {field: value}}``: per material the numbers ``rho_d``, ``epsilon``, ``b``
+        and ``e`` (required) and the strings ``lobes`` (default ``"both"``) and
+        ``description`` (optional, not stored); at least one material.
+    source : str
+        What the table came from, for the messages (default ``"<table>"``).
+        Keyword-only.
+
+    Returns
+    -------
+    types.MappingProxyType
+        Read-only mapping of each entry's name to its :class:`SandfordRobertson` (named
+        after the entry).
+
+    Raises
+    ------
+    MaterialFileError
+        When ``data`` is not a non-empty dict, an entry is not a table, has an unknown or
+        missing field or a field of the wrong type (a bool is not a number), or its values
+        are refused by :class:`SandfordRobertson`.
     """
     if not isinstance(data, dict) or not data:
         raise MaterialFileError(f"{source}: expected at least one [material] table; got none")
@@ -97,10 +167,20 @@ def load_table(path):
     Parameters
     ----------
     path : str or os.PathLike
+        The TOML file.
 
     Returns
     -------
     Mapping[str, SandfordRobertson]
+        Read-only mapping of each material's name to its coating (:func:`parse_table`).
+
+    Raises
+    ------
+    ParameterError
+        When ``path`` is not a non-empty str or os.PathLike.
+    MaterialFileError
+        When the file cannot be read or parsed, or an entry is invalid (naming the file,
+        the entry and the field).
     """
     path = check_path("path", path)
     return parse_table(read_toml(path, "material table", MaterialFileError), source=path)
@@ -108,7 +188,30 @@ def load_table(path):
 
 def read_toml(path, what, error):
     """Parse a TOML file, turning every way it can fail into one ``error`` naming the file:
-    unreadable, not UTF-8, not TOML, nested too deeply, numbers too long to parse."""
+    unreadable, not UTF-8, not TOML, nested too deeply, numbers too long to parse.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The TOML file.
+    what : str
+        What the file should be (e.g. ``"material table"``), for the messages.
+    error : type
+        The exception class to raise, called with the message (e.g.
+        :class:`~meshladar.errors.MaterialFileError`).
+
+    Returns
+    -------
+    dict
+        The parsed TOML document.
+
+    Raises
+    ------
+    error
+        When the file cannot be opened or read (OSError), is not UTF-8, is not valid TOML,
+        is nested too deeply, or holds a value Python cannot parse (e.g. an integer of more
+        than 4300 digits); chained to the original exception.
+    """
     try:
         with open(path, "rb") as fh:
             return tomllib.load(fh)

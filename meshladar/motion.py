@@ -35,7 +35,13 @@ class Motion:
     velocity : (3,) float
         Translation V (m/s).
     wavelength : float
-        λ (m; default 1.064e-6).
+        λ (m; default 1.064e-6), > 0.
+
+    Raises
+    ------
+    ParameterError
+        When ``omega``, ``center`` or ``velocity`` is not three finite numbers, or
+        ``wavelength`` is not a finite number > 0.
     """
 
     omega: tuple = (0.0, 0.0, 0.0)
@@ -50,12 +56,34 @@ class Motion:
                                                           low=0.0, low_open=True))
 
     def doppler(self, points, w):
-        """f_D (Hz) of ``points`` (k, 3) seen from view ``w``: 2 (V + Ω × (p − c))·w / λ."""
+        """f_D (Hz) of ``points`` (k, 3) seen from view ``w``: 2 (V + Ω × (p − c))·w / λ.
+
+        Parameters
+        ----------
+        points : (k, 3) array_like
+            Points p on the target, m.
+        w : (3,) array_like
+            The view vector (from the scene toward the ladar; a unit vector, not
+            normalised here).
+
+        Returns
+        -------
+        (k,) numpy.ndarray
+            Doppler shift of each point, Hz: positive for a point moving toward the ladar.
+        """
         rel = np.asarray(points, np.float64) - np.asarray(self.center)
         vel = np.cross(np.asarray(self.omega), rel) + np.asarray(self.velocity)
         return 2.0 * (vel @ np.asarray(w, np.float64)) / self.wavelength
 
     def describe(self):
+        """Every parameter, with its unit in its name (for result files).
+
+        Returns
+        -------
+        dict
+            ``omega_rad_per_s``, ``center_m``, ``velocity_m_per_s`` (lists of three
+            floats) and ``wavelength_m``.
+        """
         return {"omega_rad_per_s": list(self.omega), "center_m": list(self.center),
                 "velocity_m_per_s": list(self.velocity), "wavelength_m": self.wavelength}
 

@@ -61,6 +61,13 @@ class Noise:
         (:class:`~meshladar.errors.MeshladarWarning`, with the clipped fraction and the
         full scale that would avoid it).
     full_scale : float, optional
+        The digitiser's full scale, output units (> 0); given together with ``bits``.
+
+    Raises
+    ------
+    ParameterError
+        When a parameter is outside the ranges above (``gain`` must be > 0, ``bits`` an
+        integer in [1, 32]), or only one of ``bits`` and ``full_scale`` is given.
     """
 
     speckle_cells: float | None = None
@@ -94,16 +101,52 @@ class Noise:
 
     def mean(self, signal, dt):
         """Expected output per sample for mean signal (photoelectrons), before
-        quantisation."""
+        quantisation.
+
+        Parameters
+        ----------
+        signal : float or array_like
+            Mean signal s per sample, photoelectrons.
+        dt : float
+            Sample interval Δt, s: the background b = (background_rate + dark_rate)·Δt.
+
+        Returns
+        -------
+        float or numpy.ndarray
+            G (s + b), output units, the shape of ``signal``.
+        """
         return self.gain * (signal + (self.background_rate + self.dark_rate) * dt)
 
     def variance(self, signal, dt):
-        """Variance per sample, before quantisation: G² (F (s + b) + s²/M)."""
+        """Variance per sample, before quantisation: G² (F (s + b) + s²/M).
+
+        Parameters
+        ----------
+        signal : float or array_like
+            Mean signal s per sample, photoelectrons.
+        dt : float
+            Sample interval Δt, s: the background b = (background_rate + dark_rate)·Δt.
+
+        Returns
+        -------
+        float or numpy.ndarray
+            The variance, output units squared, the shape of ``signal``; the s²/M term is
+            0 without speckle (``speckle_cells`` None).
+        """
         b = (self.background_rate + self.dark_rate) * dt
         speckle = 0.0 if self.speckle_cells is None else signal ** 2 / self.speckle_cells
         return self.gain ** 2 * (self.excess_noise_factor * (signal + b) + speckle)
 
     def describe(self):
+        """The parameters as a JSON-serialisable dict (as :func:`meshladar.io.save_waveforms`
+        stores them).
+
+        Returns
+        -------
+        dict
+            ``speckle_cells``, ``background_rate_per_s``, ``dark_rate_per_s``,
+            ``excess_noise_factor``, ``gain``, ``bits`` and ``full_scale``.
+        """
         return {"speckle_cells": self.speckle_cells,
                 "background_rate_per_s": self.background_rate,
                 "dark_rate_per_s": self.dark_rate,
@@ -113,7 +156,20 @@ class Noise:
     def clipped_fraction(self, draws) -> float:
         """The fraction of ``draws`` (output units) at the digitiser's top code,
         (2**bits − 1)·full_scale/2**bits, where every sample beyond full scale lands;
-        0 without quantisation."""
+        0 without quantisation.
+
+        Parameters
+        ----------
+        draws : array_like
+            Noise realisations, output units (e.g. from
+            :meth:`meshladar.waveforms.Waveforms.realise`).
+
+        Returns
+        -------
+        float
+            The fraction of ``draws`` at or above the top code, in [0, 1]; 0.0 without
+            quantisation (``bits`` None) or for empty ``draws``.
+        """
         draws = np.asarray(draws, dtype=np.float64)
         if self.bits is None or draws.size == 0:
             return 0.0
@@ -128,11 +184,51 @@ DRAW_PEAK_BYTES = 32
 
 
 def draw_noise(noise, signal, dwell, n, seed):
-    """``n`` realisations (n, *signal.shape) of ``noise`` on mean ``signal``
+    """``n`` realisations, shape ``(n, *signal.shape)``, of ``noise`` on mean ``signal``
     (photoelectrons per cell), each cell integrating background and dark counts over
     ``dwell`` seconds (module docstring). Seeded through numpy's default generator.
     Refused before drawing when its peak memory (:data:`DRAW_PEAK_BYTES` per sample) would
-    pass meshladar's allocation cap, or a cell's mean count :data:`MAX_MEAN_COUNT`."""
+    pass meshladar's allocation cap, or a cell's mean count :data:`MAX_MEAN_COUNT`.
+
+    Parameters
+    ----------
+    noise : Noise
+        The receiver's noise.
+    signal : array_like
+        Mean signal per cell, photoelectrons; negative values are drawn as 0.
+    dwell : float
+        Integration time of each cell, s (the sample interval Δt).
+    n : int
+        Number of realisations (not checked here: :meth:`Waveforms.realise
+        <meshladar.waveforms.Waveforms.realise>` checks it).
+    seed : int, sequence of int or None
+        Seed of :func:`numpy.random.default_rng` (None: fresh entropy).
+
+    Returns
+    -------
+    (n, ...) numpy.ndarray
+        float64 draws (``...`` the shape of ``signal``) in output units, gain ×
+        photoelectrons; when ``noise`` quantises, rounded to multiples of full_scale /
+        2**bits and clipped to [0, top code].
+
+    Raises
+    ------
+    ParameterError
+        When ``seed`` is not None, a non-negative integer or a non-empty sequence of them;
+        when the draws would need more than meshladar's allocation cap; or when the largest
+        mean count per cell (signal plus background and dark counts over ``dwell``) is over
+        :data:`MAX_MEAN_COUNT` or not a number.
+
+    Warns
+    -----
+    MeshladarWarning
+        When some quantised draws clip at the digitiser's top code.
+
+    References
+    ----------
+    J. W. Goodman, *Statistical Optics*, Wiley (1985) (integrated speckle intensity
+    Gamma(M, s/M) for M speckle cells; photocounts Poisson given the intensity).
+    """
     rng = np.random.default_rng(check_seed("seed", seed))
     shape = (n,) + np.shape(signal)
     check_size("n", float(n) * max(1, int(np.prod(np.shape(signal)))), DRAW_PEAK_BYTES,

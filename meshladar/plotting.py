@@ -29,6 +29,22 @@ def plot(record, **options):
     matplotlib Figure (no pyplot state is touched). ``options`` go to the drawing
     function unchanged.
 
+    Parameters
+    ----------
+    record : Sinogram, Image, Volume, Waveforms or ViewDesign
+        The record to draw, chosen by its class's name: a Sinogram by
+        :func:`meshladar.viz.quick.sinogram`, an Image by :func:`meshladar.viz.quick.image`,
+        a Volume by :func:`meshladar.viz.quick.volume`, Waveforms by
+        :func:`meshladar.viz.waveforms.figure` and a ViewDesign by
+        :func:`meshladar.viz.fitting.design_figure`.
+    **options
+        Keyword arguments of that function.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The drawing function's figure.
+
     Raises
     ------
     TypeError
@@ -46,7 +62,26 @@ def plot(record, **options):
 
 def viz(module: str):
     """The drawing module ``meshladar.viz.<module>`` (the command line's figures: the
-    paper's, the studies', the viewer), imported on first use; a missing extra is named."""
+    paper's, the studies', the viewer), imported on first use; a missing extra is named.
+
+    Parameters
+    ----------
+    module : str
+        The module's name under ``meshladar.viz``: ``"quick"``, ``"paper"``,
+        ``"studies"``, ``"viewer"``, ``"waveforms"``, ``"fitting"``, ``"resolved"`` or
+        ``"style"``.
+
+    Returns
+    -------
+    module
+        ``meshladar.viz.<module>``.
+
+    Raises
+    ------
+    ImportError
+        When it cannot be imported (matplotlib or pyvista absent, or no such module),
+        naming the ``viz`` extra.
+    """
     try:
         return importlib.import_module(f"meshladar.viz.{module}")
     except ImportError as exc:  # matplotlib or pyvista absent
@@ -61,7 +96,22 @@ _NEEDS = {"matplotlib": "figures need matplotlib", "pyvista": "the viewer needs 
 def require(package: str) -> None:
     """Raise the one-line ImportError naming the ``viz`` extra when ``package``
     (matplotlib or pyvista) cannot be imported: the command line calls it before any work,
-    so a plain install does not compute for minutes and then fail on the figure."""
+    so a plain install does not compute for minutes and then fail on the figure.
+
+    Parameters
+    ----------
+    package : {"matplotlib", "pyvista"}
+        The drawing package needed. It is looked up (already imported, or found by
+        ``importlib.util.find_spec``), not imported.
+
+    Raises
+    ------
+    ValueError
+        When ``package`` is neither.
+    ImportError
+        When ``package`` cannot be found: "figures need matplotlib" or "the viewer needs
+        pyvista", with ``pip install 'meshladar[viz]'``.
+    """
     if package not in _NEEDS:
         raise ValueError(f"package must be one of {tuple(_NEEDS)}; got {package!r}")
     try:

@@ -33,6 +33,33 @@ class Returns:
     first hit lies in it (bin integrals, as a sinogram's); ``axes`` the coordinates' names
     (:data:`COORDINATES`), ``edges`` their bin edges (in ``units``); ``angles_deg`` and
     ``view_vectors`` the views; ``info`` the run's parameters (radiometry, units, motion).
+
+    Parameters
+    ----------
+    values : (n_views, n_0[, n_1[, n_2]]) array_like
+        Bin integrals per view and cell; finite, stored as a read-only float64 copy.
+    axes : tuple of str
+        The coordinates' names, one per axis of ``values`` after the first, from
+        :data:`COORDINATES` (``units`` reads m for the lengths, Hz for ``"doppler"``).
+        Keyword-only.
+    edges : tuple of array_like
+        Per axis, its (n_k + 1,) bin edges in that axis' unit; finite, stored as read-only
+        float64 copies. Keyword-only.
+    angles_deg : (n_views,) array_like
+        View angles, degrees; stored as a read-only float64 copy, not checked.
+        Keyword-only.
+    view_vectors : (n_views, 3) array_like
+        View directions; stored as a read-only float64 copy, not checked. Keyword-only.
+    info : dict
+        The run's parameters (default empty; copied). ``info["units"]`` is
+        ``"photoelectrons"`` for returns that :meth:`realise` takes. Keyword-only.
+
+    Raises
+    ------
+    ParameterError
+        When ``values`` or an edge array is not finite, or the shapes disagree: ``values``
+        not 1 + len(axes) dimensional, not one edge array per axis, or an edge array not
+        one longer than its axis.
     """
 
     values: np.ndarray
@@ -62,7 +89,23 @@ class Returns:
         return tuple(_UNITS[a] for a in self.axes)
 
     def centers(self, axis) -> np.ndarray:
-        """Bin centres of ``axis`` (a name or an index)."""
+        """Bin centres of ``axis`` (a name or an index).
+
+        Parameters
+        ----------
+        axis : str or int
+            A name in :attr:`axes`, or its index among them (0 for the first binned axis).
+
+        Returns
+        -------
+        (n_k,) numpy.ndarray
+            Mid-points of the axis' bin edges, in its unit.
+
+        Raises
+        ------
+        ParameterError
+            When ``axis`` is a name not in :attr:`axes`.
+        """
         e = self.edges[self._index(axis)]
         return 0.5 * (e[1:] + e[:-1])
 
@@ -74,17 +117,53 @@ class Returns:
         return int(axis)
 
     def total(self) -> np.ndarray:
-        """(n_views,) each view's total return."""
+        """(n_views,) each view's total return.
+
+        Returns
+        -------
+        (n_views,) numpy.ndarray
+            The sum of each view's cells.
+        """
         return self.values.reshape(self.values.shape[0], -1).sum(axis=1)
 
     def marginal(self, axis) -> np.ndarray:
-        """(n_views, n) the returns binned by ``axis`` alone (summed over the others)."""
+        """(n_views, n) the returns binned by ``axis`` alone (summed over the others).
+
+        Parameters
+        ----------
+        axis : str or int
+            A name in :attr:`axes`, or its index among them.
+
+        Returns
+        -------
+        (n_views, n) numpy.ndarray
+            ``values`` summed over every other binned axis (``values`` itself when there is
+            one axis); n the axis' number of bins.
+
+        Raises
+        ------
+        ParameterError
+            When ``axis`` is a name not in :attr:`axes`.
+        """
         k = self._index(axis)
         others = tuple(1 + j for j in range(len(self.axes)) if j != k)
         return self.values.sum(axis=others) if others else self.values
 
     def sinogram(self):
-        """The range marginal as a :class:`~meshladar.sinogram.Sinogram`."""
+        """The range marginal as a :class:`~meshladar.sinogram.Sinogram`.
+
+        Returns
+        -------
+        Sinogram
+            ``model="mesh"``, values :meth:`marginal` ``("range")``, the range axis' edges as
+            ``bin_edges``, the views' angles, their vectors unless all lie in the x-y plane,
+            and a copy of ``info``.
+
+        Raises
+        ------
+        ParameterError
+            When ``"range"`` is not one of the axes.
+        """
         planar = bool(np.all(self.view_vectors[:, 2] == 0.0))
         return Sinogram(self.marginal("range"), angles_deg=self.angles_deg,
                         bin_edges=self.edges[self.axes.index("range")], model="mesh",
@@ -92,10 +171,42 @@ class Returns:
                         info=dict(self.info))
 
     def realise(self, noise, n=1, *, seed=None, dwell=0.0):
-        """``n`` noise realisations (n, *values.shape) (:class:`meshladar.noise.Noise`),
-        each cell integrating background and dark counts over ``dwell`` seconds (its range
-        gate, at most :data:`MAX_DWELL_S`); the returns must count photoelectrons (a sensor
-        that counts them, or :meth:`scaled`)."""
+        """``n`` noise realisations, shape ``(n, *values.shape)``
+        (:class:`meshladar.noise.Noise`), each cell integrating background and dark counts
+        over ``dwell`` seconds (its range gate, at most :data:`MAX_DWELL_S`); the returns
+        must count photoelectrons (a sensor that counts them, or :meth:`scaled`).
+
+        Parameters
+        ----------
+        noise : meshladar.noise.Noise
+            The receiver's noise.
+        n : int
+            Number of realisations, ≥ 1 (default 1).
+        seed : int, sequence of int or None
+            Seed of numpy's default generator (default None: fresh entropy). Keyword-only.
+        dwell : float
+            Each cell's integration time, s, in [0, :data:`MAX_DWELL_S`] (default 0.0);
+            must be > 0 when the noise has background or dark counts. Keyword-only.
+
+        Returns
+        -------
+        (n, n_views, n_0, ...) numpy.ndarray
+            float64 draws in the noise's output units
+            (:func:`meshladar.noise.draw_noise`).
+
+        Raises
+        ------
+        ParameterError
+            When ``noise`` is not a Noise, ``info["units"]`` is not ``"photoelectrons"``,
+            ``dwell`` is out of range or 0 with background or dark counts, ``n`` is not an
+            integer ≥ 1, ``seed`` is invalid, or the draws would pass meshladar's
+            allocation cap or mean-count limit.
+
+        Warns
+        -----
+        MeshladarWarning
+            When quantised draws clip at the digitiser's top code.
+        """
         if not isinstance(noise, Noise):
             raise ParameterError(f"noise must be a meshladar.noise.Noise; got "
                                  f"{type(noise).__name__}")
@@ -109,6 +220,27 @@ class Returns:
         return draw_noise(noise, self.values, dwell, check_count("n", n), seed)
 
     def scaled(self, factor, units="photoelectrons") -> "Returns":
+        """The same returns times ``factor``, in ``units``.
+
+        Parameters
+        ----------
+        factor : float
+            Multiplier, finite and > 0 (e.g. photoelectrons per unit of relative power).
+        units : str
+            The scaled values' units, stored as ``info["units"]`` (default
+            ``"photoelectrons"``; not checked).
+
+        Returns
+        -------
+        Returns
+            A new record: values × ``factor``, the same axes, edges and views, and ``info``
+            with ``units`` and ``scaled_by`` (the factor) set.
+
+        Raises
+        ------
+        ParameterError
+            When ``factor`` is not a finite number > 0.
+        """
         f = check_real("factor", factor, low=0.0, low_open=True)
         return Returns(self.values * f, axes=self.axes, edges=self.edges,
                        angles_deg=self.angles_deg, view_vectors=self.view_vectors,

@@ -27,22 +27,62 @@ __all__ = ["RunFolder", "RunFolderError", "job_digest", "array_digest", "chunk_d
 
 
 class RunFolderError(MeshladarError, ValueError):
-    """A run folder holds another job, or cannot be used."""
+    """A run folder holds another job, or cannot be used.
+
+    Parameters
+    ----------
+    *args : object
+        The message (a ``str``), passed on to the builtin exception unchanged.
+    """
 
 
 def job_digest(job: dict) -> str:
-    """A stable hash of a job description (JSON with sorted keys)."""
+    """A stable hash of a job description (JSON with sorted keys).
+
+    Parameters
+    ----------
+    job : dict
+        The job description; values JSON cannot encode are encoded as their ``str``.
+
+    Returns
+    -------
+    str
+        The SHA-256 of the job's JSON text (sorted keys, UTF-8), 64 hexadecimal digits.
+    """
     return hashlib.sha256(json.dumps(job, sort_keys=True, default=str).encode()).hexdigest()
 
 
 def array_digest(a) -> str:
-    """The SHA-256 of one array's bytes (a job description's record of its large inputs)."""
+    """The SHA-256 of one array's bytes (a job description's record of its large inputs).
+
+    Parameters
+    ----------
+    a : array_like
+        The array; hashed in C order. Its dtype and shape are not hashed (see
+        :func:`chunk_digest`).
+
+    Returns
+    -------
+    str
+        64 hexadecimal digits.
+    """
     return hashlib.sha256(np.ascontiguousarray(a).tobytes()).hexdigest()
 
 
 def chunk_digest(arrays: dict) -> str:
     """The SHA-256 of a chunk's named arrays (names, dtypes, shapes and bytes, in name
-    order): the checksum a chunk file records and is verified against."""
+    order): the checksum a chunk file records and is verified against.
+
+    Parameters
+    ----------
+    arrays : dict
+        Names (str) to array_like values; each array is hashed in C order.
+
+    Returns
+    -------
+    str
+        64 hexadecimal digits.
+    """
     h = hashlib.sha256()
     for k in sorted(arrays):
         a = np.ascontiguousarray(arrays[k])
@@ -58,6 +98,39 @@ class RunFolder:
 
     ``load(i)`` returns chunk i's arrays if its file exists and verifies, else None;
     ``save(i, arrays)`` writes it atomically.
+
+    Opening one takes an exclusive lock on the folder (``.lock``, on POSIX systems; released
+    by :meth:`close`, on leaving a ``with`` block, or when the process ends), removes
+    temporaries left by killed writes, and checks the manifest, writing it when there is
+    none (or a damaged one) and no chunk of another job.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The run folder; created if missing.
+    job : dict
+        The job's full parameters (JSON-serialisable, anything else by its ``str``).
+    n_chunks : int
+        How many chunks the job has; added to ``job`` as ``n_chunks``.
+
+    Attributes
+    ----------
+    path : str
+        The run folder.
+    n_chunks : int
+        How many chunks the job has.
+    job : dict
+        ``job`` with ``n_chunks``.
+    digest : str
+        :func:`job_digest` of ``job``: what the manifest and every chunk file record.
+
+    Raises
+    ------
+    RunFolderError
+        When another run holds the folder's lock; the manifest names a different job; the
+        manifest is missing or damaged and some readable chunk files belong to another
+        job; or one of the folder's own files (``.lock``, ``manifest.json``, a chunk) is
+        a link, a FIFO, a folder or a device, or cannot be opened.
     """
 
     def __init__(self, path, job: dict, n_chunks: int):
@@ -154,7 +227,31 @@ class RunFolder:
         """Chunk i's arrays, or None when it is missing, unreadable, fails its checksum, was
         written for another chunk or job, holds non-finite numbers, or (with ``shapes``,
         name → expected shape) has arrays of other shapes: such a chunk is recomputed,
-        never used (a warning names it when it was readable but wrong)."""
+        never used (a warning names it when it was readable but wrong).
+
+        Parameters
+        ----------
+        i : int
+            The chunk's index.
+        shapes : dict, optional
+            Name → expected shape of the chunk's arrays (default None: not checked).
+
+        Returns
+        -------
+        dict or None
+            The chunk's arrays by name, or None when the chunk must be computed.
+
+        Raises
+        ------
+        RunFolderError
+            When the chunk's file is not a regular file (a link, a FIFO, a folder, a
+            device).
+
+        Warns
+        -----
+        MeshladarWarning
+            When a chunk that verified holds NaN or inf in a floating or complex array.
+        """
         f = self._file(i)
         if not os.path.lexists(f):
             return None
@@ -178,7 +275,23 @@ class RunFolder:
 
     def save(self, i, arrays: dict):
         """Write chunk i atomically; a chunk with non-finite numbers is refused (naming the
-        chunk and the array), never kept to poison a resume."""
+        chunk and the array), never kept to poison a resume.
+
+        Parameters
+        ----------
+        i : int
+            The chunk's index (file ``chunk_<i, 5 digits>.npz``).
+        arrays : dict
+            Names (str, not ``"__meta__"``) to numeric arrays; the file's metadata records
+            the job's digest, ``i`` and :func:`chunk_digest` of them.
+
+        Raises
+        ------
+        RunFolderError
+            When a floating or complex array holds NaN or inf.
+        ParameterError
+            When a name is not a str or is ``"__meta__"``, or an array is of object dtype.
+        """
         arrays = {k: np.asarray(v) for k, v in arrays.items()}
         bad = _non_finite(arrays)
         if bad:
@@ -188,6 +301,14 @@ class RunFolder:
                                             "sha256": chunk_digest(arrays)})
 
     def done(self):
+        """The chunks that have a file.
+
+        Returns
+        -------
+        list of int
+            The indices in [0, n_chunks) whose chunk file exists; the files are not
+            verified here (:meth:`load` does that).
+        """
         return [i for i in range(self.n_chunks) if os.path.exists(self._file(i))]
 
 

@@ -27,13 +27,21 @@ __all__ = ["Shape", "Disk", "Ellipse", "Scene", "OVERLAP_RTOL"]
 class Scene:
     """A set of non-overlapping analytic shapes, or of triangle meshes, each with a coating.
 
+    Mesh scenes come from :meth:`from_mesh`, :meth:`from_meshes` or :meth:`tessellate`;
+    they hold ``parts`` (MeshPart), ``materials`` and a ``report`` of the mesh checks.
+
     Parameters
     ----------
     shapes : sequence of Disk or Ellipse
         At least one. Shapes may touch but not overlap (GeometryError).
 
-    Mesh scenes come from :meth:`from_mesh`, :meth:`from_meshes` or :meth:`tessellate`;
-    they hold ``parts`` (MeshPart), ``materials`` and a ``report`` of the mesh checks.
+    Raises
+    ------
+    ParameterError
+        When ``shapes`` is not a sequence, is empty, or holds something other than a Disk
+        or an Ellipse.
+    GeometryError
+        When two shapes overlap.
 
     Examples
     --------
@@ -127,7 +135,36 @@ class Scene:
     @classmethod
     def from_parts(cls, parts, materials):
         """A mesh scene from :class:`meshladar.meshes.MeshPart` objects (e.g.
-        ``meshladar.meshes.sphere(center, radius, 0, subdivisions=5)``) and their materials."""
+        ``meshladar.meshes.sphere(center, radius, 0, subdivisions=5)``) and their materials.
+
+        Parameters
+        ----------
+        parts : iterable of meshladar.meshes.MeshPart
+            The mesh parts; each face's material index points into ``materials``.
+            Degenerate faces are dropped (counted in ``report``).
+        materials : list or tuple of BRDF
+            The coatings, indexed by the parts' face material indices.
+
+        Returns
+        -------
+        Scene
+            A mesh scene of the cleaned parts.
+
+        Raises
+        ------
+        ParameterError
+            When ``materials`` is not a list or tuple, a material is not a BRDF, a part is
+            not a MeshPart, or a face material index is outside [0, len(materials) − 1].
+        ModelError
+            When a material lacks a method the BRDF protocol needs.
+        GeometryError
+            When no part has a face left (all degenerate or none given).
+
+        Warns
+        -----
+        MeshladarWarning
+            When some closed body has inverted normals (faces wound inward).
+        """
         return cls._from_parts(list(parts), materials)
 
     @classmethod
@@ -154,6 +191,30 @@ class Scene:
             Per-face index into ``materials`` given as a list (single-mesh input only).
         transform : (4, 4) array, optional
             Applied to every part.
+
+        Returns
+        -------
+        Scene
+            A mesh scene: one part per mesh the file holds, the coatings in ``materials``
+            (each distinct coating once, in the parts' order; with ``face_materials`` the
+            list given).
+
+        Raises
+        ------
+        GeometryError
+            For a file or object that is not a triangle mesh (see
+            :func:`meshladar.meshes.load_parts`), or when no face is left.
+        ParameterError
+            When ``face_materials`` is given for several parts, without ``materials`` as a
+            list, or not as (n_faces,) integers; when ``materials`` is neither a dict nor
+            None without ``face_materials``, or names a part the file lacks; when a part
+            has no coating; when ``transform`` is not a finite 4 × 4 matrix; or when a
+            coating is not a BRDF.
+
+        Warns
+        -----
+        MeshladarWarning
+            When some closed body has inverted normals.
         """
         loaded = load_parts(mesh_or_path)
         if face_materials is not None:
@@ -192,7 +253,35 @@ class Scene:
     @classmethod
     def from_meshes(cls, items):
         """A scene of several meshes: items of (mesh_or_path, material) or
-        (mesh_or_path, material, transform)."""
+        (mesh_or_path, material, transform).
+
+        Parameters
+        ----------
+        items : iterable of tuple
+            ``(mesh_or_path, material)`` or ``(mesh_or_path, material, transform)``:
+            anything :func:`meshladar.meshes.load_parts` takes, its coating (a BRDF) and an
+            optional (4, 4) transform applied to its parts. Parts are named
+            ``"<k>:<part name>"``, k the item's index.
+
+        Returns
+        -------
+        Scene
+            A mesh scene of every item's parts, each distinct coating once in
+            ``materials``.
+
+        Raises
+        ------
+        ParameterError
+            When an item is not a 2- or 3-tuple (or list), a transform is not a finite
+            4 × 4 matrix, or a coating is not a BRDF.
+        GeometryError
+            For an item that is not a triangle mesh, or when no face is left.
+
+        Warns
+        -----
+        MeshladarWarning
+            When some closed body has inverted normals.
+        """
         mats, parts = [], []
         for k, item in enumerate(items):
             if not isinstance(item, (tuple, list)) or len(item) not in (2, 3):
@@ -210,7 +299,31 @@ class Scene:
     def tessellate(self, segments=256, *, height=1.0, z0=0.0):
         """This analytic scene as a mesh scene: each disk/ellipse extruded to a prism of
         ``height`` centred on z = z0 with ``segments`` boundary vertices. The parts keep the
-        shapes' exact normals (``normals="exact"`` when tracing)."""
+        shapes' exact normals (``normals="exact"`` when tracing).
+
+        Parameters
+        ----------
+        segments : int
+            Boundary vertices per shape, ≥ 3 (default 256), spaced uniformly in the
+            eccentric angle.
+        height : float
+            Height of each prism, scene units, > 0 (default 1.0). Keyword-only.
+        z0 : float
+            z of the prisms' mid-plane, scene units (default 0.0). Keyword-only.
+
+        Returns
+        -------
+        Scene
+            A mesh scene (one part per shape, the same materials) that keeps the analytic
+            shapes.
+
+        Raises
+        ------
+        ParameterError
+            When this scene is already a mesh, ``height`` or ``z0`` is out of range or not
+            finite, ``segments`` is not an integer ≥ 3, or the prisms would pass
+            meshladar's allocation cap.
+        """
         if self.is_mesh:
             raise ParameterError("tessellate needs an analytic scene; this one is a mesh")
         height = check_real("height", height, low=0.0, low_open=True)
@@ -226,7 +339,18 @@ class Scene:
         return iter(self._parts if self._parts else self._shapes)
 
     def bounds(self) -> np.ndarray:
-        """(2, 3) axis-aligned bounds of a mesh scene (min, max)."""
+        """(2, 3) axis-aligned bounds of a mesh scene (min, max).
+
+        Returns
+        -------
+        (2, 3) numpy.ndarray
+            Row 0 the smallest x, y, z of any vertex, row 1 the largest; scene units.
+
+        Raises
+        ------
+        ParameterError
+            For an analytic scene (use :meth:`bounding_circle`).
+        """
         if not self._parts:
             raise ParameterError("bounds() is for mesh scenes; use bounding_circle()")
         v = np.concatenate([p.vertices for p in self._parts])
@@ -236,7 +360,18 @@ class Scene:
         """(k, 3) vertices of the convex hull of a mesh scene (all vertices when the hull is
         degenerate: a flat sheet; for meshes of more than 200,000 points on their hull, a
         superset of them), computed once per mesh. Every extreme of a linear function of
-        position (a range, a ray grid's extent) is attained at one of them."""
+        position (a range, a ray grid's extent) is attained at one of them.
+
+        Returns
+        -------
+        (k, 3) numpy.ndarray
+            The hull's vertices, scene units.
+
+        Raises
+        ------
+        ParameterError
+            For an analytic scene.
+        """
         if not self._parts:
             raise ParameterError("hull_points() is for mesh scenes")
         return self._hull
@@ -244,7 +379,20 @@ class Scene:
     def cached(self, key, make):
         """``make()``, computed once per scene and ``key``: what the engine derives from a
         scene's parts (traced geometry, curvature estimates) stays true, as a Scene is
-        immutable."""
+        immutable.
+
+        Parameters
+        ----------
+        key : hashable
+            What is derived (the cache's key).
+        make : callable
+            Called with no arguments, the first time ``key`` is asked for only.
+
+        Returns
+        -------
+        object
+            What ``make()`` returned the first time for this ``key``.
+        """
         derived = self.__dict__.setdefault("_derived", {})
         if key not in derived:
             derived[key] = make()
@@ -260,7 +408,21 @@ class Scene:
     def view_ranges(self, view_vectors) -> tuple[np.ndarray, np.ndarray]:
         """(nearest, farthest) range r = −p·w of the scene in each view, two (n_views,)
         arrays (DESIGN.md: range zero is the plane through the world origin perpendicular
-        to w, growing away from the ladar)."""
+        to w, growing away from the ladar).
+
+        Parameters
+        ----------
+        view_vectors : (n_views, 3) array_like
+            Unit view vectors w (from the scene toward the ladar; not normalised here). An
+            analytic scene uses their x and y components only.
+
+        Returns
+        -------
+        nearest, farthest : (n_views,) numpy.ndarray
+            The smallest and largest range of the scene in each view, scene units: over
+            the hull's vertices for a mesh scene, over the shapes' exact boundaries for an
+            analytic one.
+        """
         w = np.asarray(view_vectors, dtype=np.float64).reshape(-1, 3)
         if self._parts:
             pts = self.hull_points()
@@ -282,12 +444,33 @@ class Scene:
         return lo, hi
 
     def range_span(self, view_vectors) -> tuple[float, float]:
-        """(nearest, farthest) range any point of the scene takes over all the views."""
+        """(nearest, farthest) range any point of the scene takes over all the views.
+
+        Parameters
+        ----------
+        view_vectors : (n_views, 3) array_like
+            Unit view vectors w, as for :meth:`view_ranges`.
+
+        Returns
+        -------
+        nearest, farthest : float
+            The smallest and largest range over every view, scene units.
+        """
         lo, hi = self.view_ranges(view_vectors)
         return float(lo.min()), float(hi.max())
 
     def bounding_circle(self) -> tuple[tuple[float, float], float]:
-        """A circle (centre, radius) in x-y containing every shape (about their box centre)."""
+        """A circle (centre, radius) in x-y containing every shape (about their box centre).
+
+        Returns
+        -------
+        centre : tuple of float
+            (x, y) of the centre of the shapes' bounding box (for a mesh scene without
+            analytic shapes, of the vertices' x-y bounds), scene units.
+        radius : float
+            The smallest radius about that centre that holds every shape's bounding circle
+            (every vertex, for a mesh scene), scene units.
+        """
         if self._parts and not self._shapes:
             b = self.bounds()
             c = 0.5 * (b[0, :2] + b[1, :2])

@@ -68,6 +68,11 @@ class FloodBeam:
         the view: a top-hat of that radius (a cone of half-angle atan(radius/D) at standoff
         D). None (default): unbounded. Needed for photoelectrons: the pulse's energy is
         spread over π radius².
+
+    Raises
+    ------
+    ParameterError
+        When ``radius`` is given and not in (0, 1e9] m.
     """
 
     radius: float | None = None
@@ -76,7 +81,26 @@ class FloodBeam:
         object.__setattr__(self, "radius", _optional_positive("radius", self.radius))
 
     def reference_fluence(self, energy, standoff):
-        """J/m² at the aim point for a pulse of ``energy`` J."""
+        """J/m² at the aim point for a pulse of ``energy`` J.
+
+        Parameters
+        ----------
+        energy : float
+            Pulse energy E, J.
+        standoff : float or None
+            The sensor's standoff D, m; not used (the lit disk's radius is given at the aim
+            point).
+
+        Returns
+        -------
+        float
+            E / (π radius²), J/m².
+
+        Raises
+        ------
+        ParameterError
+            When the flood is unbounded (``radius`` None).
+        """
         if self.radius is None:
             raise ParameterError("photoelectrons need the flood's extent: give "
                                  "FloodBeam(radius=...) (m at the aim point), or a "
@@ -85,7 +109,25 @@ class FloodBeam:
 
     def relative(self, rho, z, standoff):
         """Irradiance on a surface facing the sensor, relative to the aim point's, at
-        distance ``rho`` from the beam's axis and ``z`` along it (arrays)."""
+        distance ``rho`` from the beam's axis and ``z`` along it (arrays).
+
+        Parameters
+        ----------
+        rho : numpy.ndarray
+            Distance from the beam's axis, m.
+        z : numpy.ndarray or None
+            Distance along the axis from the sensor, m (broadcast with ``rho``); not used
+            (None from the tracer) with the sensor at infinity.
+        standoff : float or None
+            The sensor's standoff D, m; None for a sensor at infinity.
+
+        Returns
+        -------
+        numpy.ndarray
+            float64, the shape of ``rho`` (and ``z``). At infinity: 1 where
+            ``rho`` ≤ ``radius`` (everywhere when unbounded), else 0. At standoff D:
+            D² / (ρ² + z²), 0 outside the cone ρ/z > radius/D when bounded.
+        """
         if standoff is None:
             inside = np.ones_like(rho, dtype=bool) if self.radius is None else \
                 rho <= self.radius
@@ -97,6 +139,13 @@ class FloodBeam:
         return out
 
     def describe(self):
+        """The parameters, with units in their names (for result files).
+
+        Returns
+        -------
+        dict
+            ``{"kind": "flood", "radius_m": radius}``.
+        """
         return {"kind": "flood", "radius_m": self.radius}
 
 
@@ -116,6 +165,12 @@ class GaussianBeam:
     offset : (2,) float
         Pointing offset of the beam's axis at the aim point, along the view's transverse
         axes (u, v) (m): u = z × w normalised (w the view vector), v = w × u.
+
+    Raises
+    ------
+    ParameterError
+        When ``waist`` is not in (0, 1e9] m, ``divergence`` not in [0, 1] rad, or
+        ``offset`` not two finite numbers.
     """
 
     waist: float
@@ -134,16 +189,57 @@ class GaussianBeam:
         object.__setattr__(self, "offset", (float(off[0]), float(off[1])))
 
     def radius(self, z):
-        """1/e² radius at distance z from the sensor (m)."""
+        """1/e² radius at distance z from the sensor (m).
+
+        Parameters
+        ----------
+        z : float or array_like
+            Distance from the sensor, m.
+
+        Returns
+        -------
+        numpy.ndarray
+            w(z) = sqrt(waist² + (divergence·z)²), m, the shape of ``z``.
+        """
         return np.sqrt(self.waist ** 2 + (self.divergence * np.asarray(z, np.float64)) ** 2)
 
     def reference_fluence(self, energy, standoff):
-        """Peak J/m² on the axis at the aim point's distance: 2E/(π w²)."""
+        """Peak J/m² on the axis at the aim point's distance: 2E/(π w²).
+
+        Parameters
+        ----------
+        energy : float
+            Pulse energy E, J.
+        standoff : float or None
+            The sensor's standoff D, m: w = w(D); None (at infinity): w = ``waist``.
+
+        Returns
+        -------
+        float
+            2E / (π w²), J/m².
+        """
         w = self.waist if standoff is None else float(self.radius(standoff))
         return 2.0 * energy / (math.pi * w * w)
 
     def relative(self, rho, z, standoff):
-        """Irradiance relative to the axis at the aim point's distance."""
+        """Irradiance relative to the axis at the aim point's distance.
+
+        Parameters
+        ----------
+        rho : numpy.ndarray
+            Distance from the beam's axis, m.
+        z : numpy.ndarray or None
+            Distance along the axis from the sensor, m (broadcast with ``rho``); not used
+            (None from the tracer) with the sensor at infinity.
+        standoff : float or None
+            The sensor's standoff D, m; None for a sensor at infinity.
+
+        Returns
+        -------
+        numpy.ndarray
+            At infinity exp(−2ρ²/waist²); at standoff D (w(D)/w(z))² exp(−2ρ²/w(z)²).
+            ``offset`` is not applied here: ``rho`` is measured from the offset axis.
+        """
         if standoff is None:
             return np.exp(-2.0 * rho * rho / self.waist ** 2)
         wz = self.radius(z)
@@ -151,6 +247,14 @@ class GaussianBeam:
         return (w0 / wz) ** 2 * np.exp(-2.0 * rho * rho / (wz * wz))
 
     def describe(self):
+        """The parameters, with units in their names (for result files).
+
+        Returns
+        -------
+        dict
+            ``kind`` ("gaussian"), ``waist_m``, ``divergence_rad`` and ``offset_m`` (a
+            list of two floats).
+        """
         return {"kind": "gaussian", "waist_m": self.waist, "divergence_rad": self.divergence,
                 "offset_m": list(self.offset)}
 
@@ -193,6 +297,17 @@ class Sensor:
         Receive optics' transmission and the detector's quantum efficiency (default 1).
     wavelength : float
         m (default 1.064e-6, Nd:YAG): the photon energy hc/λ.
+
+    Raises
+    ------
+    ParameterError
+        When a parameter is outside its range above (``standoff``, ``pulse_energy`` and
+        ``aperture_diameter`` must be > 0), ``aim`` is not three finite numbers, ``beam``
+        is not a FloodBeam or GaussianBeam, a beam's divergence or a non-zero extinction
+        is given without a standoff, only one of ``pulse_energy`` and
+        ``aperture_diameter`` is given, they are given without a standoff, or
+        ``optics_transmission``, ``quantum_efficiency`` or ``wavelength`` differs from its
+        default without them.
     """
 
     standoff: float | None = None
@@ -266,7 +381,20 @@ class Sensor:
     def photoelectrons_per_unit(self) -> float:
         """Photoelectrons per unit of the power sinogram (m²/sr): the aim point's fluence
         E_ref (J/m²) × the aperture's solid angle at D, π a²/4 / D² (sr) × optics ×
-        quantum efficiency ÷ the photon energy hc/λ (J)."""
+        quantum efficiency ÷ the photon energy hc/λ (J).
+
+        Returns
+        -------
+        float
+            Photoelectrons per unit of the power sinogram (per m²/sr).
+
+        Raises
+        ------
+        ParameterError
+            When the sensor does not count photons (``pulse_energy``,
+            ``aperture_diameter`` and ``standoff`` not all given), or its beam is an
+            unbounded flood.
+        """
         if not self.counts_photons:
             raise ParameterError("photoelectrons need pulse_energy (J), aperture_diameter (m) "
                                  "and a finite standoff (m)")
@@ -276,7 +404,15 @@ class Sensor:
         return fluence * solid * self.optics_transmission * self.quantum_efficiency / photon
 
     def describe(self) -> dict:
-        """Every parameter, with its unit in its name (for result files)."""
+        """Every parameter, with its unit in its name (for result files).
+
+        Returns
+        -------
+        dict
+            ``standoff_m``, ``aim_m`` (a list), ``beam`` (the beam's own ``describe()``),
+            ``extinction_per_m``, ``pulse_energy_J``, ``aperture_diameter_m``,
+            ``optics_transmission``, ``quantum_efficiency`` and ``wavelength_m``.
+        """
         return {"standoff_m": self.standoff, "aim_m": list(self.aim),
                 "beam": self.beam.describe(), "extinction_per_m": self.extinction,
                 "pulse_energy_J": self.pulse_energy,

@@ -34,20 +34,65 @@ def _material(value, name=None):
 
 
 def to_frame(angle, dx, dy):
-    """World offsets (dx, dy) from an ellipse's centre in its own axes: rotated by −angle."""
+    """World offsets (dx, dy) from an ellipse's centre in its own axes: rotated by −angle.
+
+    Parameters
+    ----------
+    angle : float
+        The ellipse's rotation from the world x axis, counter-clockwise, radians.
+    dx, dy : float or numpy.ndarray
+        World offsets from the centre (any matching shapes).
+
+    Returns
+    -------
+    x, y : float or numpy.ndarray
+        The offsets along the ellipse's own axes: x = cos(angle) dx + sin(angle) dy,
+        y = −sin(angle) dx + cos(angle) dy.
+    """
     ca, sa = math.cos(angle), math.sin(angle)
     return ca * dx + sa * dy, -sa * dx + ca * dy
 
 
 def from_frame(angle, x, y):
-    """Vectors (x, y) in an ellipse's own axes back in the world: rotated by +angle."""
+    """Vectors (x, y) in an ellipse's own axes back in the world: rotated by +angle.
+
+    Parameters
+    ----------
+    angle : float
+        The ellipse's rotation from the world x axis, counter-clockwise, radians.
+    x, y : float or numpy.ndarray
+        Components along the ellipse's own axes (any matching shapes).
+
+    Returns
+    -------
+    dx, dy : float or numpy.ndarray
+        World components: dx = cos(angle) x − sin(angle) y, dy = sin(angle) x +
+        cos(angle) y (the inverse of :func:`to_frame`).
+    """
     ca, sa = math.cos(angle), math.sin(angle)
     return ca * x - sa * y, sa * x + ca * y
 
 
 def ellipse_normal(center, axes, angle, px, py):
     """Unit outward normals (nx, ny) of the ellipse's level sets through the points (the
-    gradient of (x'/A)² + (y'/B)²); (0, 0) at the centre itself."""
+    gradient of (x'/A)² + (y'/B)²); (0, 0) at the centre itself.
+
+    Parameters
+    ----------
+    center : (2,) sequence of float
+        The ellipse's centre (x, y), scene units.
+    axes : (2,) sequence of float
+        Semi-axes (A, B) along the ellipse's own x and y axes, scene units.
+    angle : float
+        The ellipse's rotation from the world x axis, counter-clockwise, radians.
+    px, py : array_like
+        World coordinates of the points (matching shapes), scene units.
+
+    Returns
+    -------
+    nx, ny : numpy.ndarray
+        The unit normal's world components at each point, the shape of ``px``.
+    """
     a, b = axes
     xl, yl = to_frame(angle, np.asarray(px) - center[0], np.asarray(py) - center[1])
     nx, ny = from_frame(angle, xl / a**2, yl / b**2)
@@ -80,20 +125,49 @@ class Shape:
         return max(self.axes)
 
     def boundary(self, t):
-        """Points (..., 2) at eccentric angle ``t`` (radians): c + R (A cos t, B sin t)."""
+        """Points (..., 2) at eccentric angle ``t`` (radians): c + R (A cos t, B sin t).
+
+        Parameters
+        ----------
+        t : float or array_like
+            Eccentric angle, radians, of shape (...); R rotates by :attr:`angle`.
+
+        Returns
+        -------
+        (..., 2) numpy.ndarray
+            World points (x, y) on the boundary, scene units.
+        """
         a, b = self.axes
         x, y = from_frame(self.angle, a * np.cos(t), b * np.sin(t))
         return np.stack([self.center[0] + x, self.center[1] + y], -1)
 
     def implicit(self, p):
-        """(x'/A)² + (y'/B)² of points p (..., 2) in the shape's frame: < 1 inside."""
+        """(x'/A)² + (y'/B)² of points p (..., 2) in the shape's frame: < 1 inside.
+
+        Parameters
+        ----------
+        p : (..., 2) array_like
+            World points (x, y), scene units.
+
+        Returns
+        -------
+        (...) numpy.ndarray
+            The implicit function: < 1 inside, 1 on the boundary, > 1 outside.
+        """
         a, b = self.axes
         d = np.asarray(p, dtype=np.float64) - np.asarray(self.center)
         x, y = to_frame(self.angle, d[..., 0], d[..., 1])
         return (x / a) ** 2 + (y / b) ** 2
 
     def perimeter(self) -> float:
-        """Exact perimeter (complete elliptic integral of the second kind)."""
+        """Exact perimeter (complete elliptic integral of the second kind).
+
+        Returns
+        -------
+        float
+            4 A E(1 − (B/A)²), scene units, with A ≥ B the larger and smaller semi-axes and
+            E scipy's ``ellipe`` (argument the parameter m = k²); 2πA for a disk.
+        """
         from scipy.special import ellipe
 
         a, b = sorted(self.axes, reverse=True)
@@ -113,8 +187,18 @@ class Ellipse(Shape):
     angle_deg : float
         Rotation of the ellipse's A axis from the scene's x axis, counter-clockwise, degrees.
     material : BRDF
+        The coating.
     name : str, optional
         A label (e.g. which part of a phantom); not part of equality.
+
+    Raises
+    ------
+    ParameterError
+        When ``center`` is not two finite numbers, ``semi_axes`` not two finite positive
+        lengths, ``angle_deg`` not finite, ``name`` not a string or None, or ``material``
+        not a BRDF.
+    ModelError
+        When ``material`` lacks a method the BRDF protocol needs.
     """
 
     center: tuple[float, float]
@@ -151,9 +235,19 @@ class Disk(Shape):
     center : (2,) float
         Centre (x, y) in scene units.
     radius : float > 0
+        Radius, scene units; finite.
     material : BRDF
+        The coating.
     name : str, optional
         A label (e.g. "large" in the disk pair); not part of equality.
+
+    Raises
+    ------
+    ParameterError
+        When ``center`` is not two finite numbers, ``radius`` not a finite number > 0,
+        ``name`` not a string or None, or ``material`` not a BRDF.
+    ModelError
+        When ``material`` lacks a method the BRDF protocol needs.
     """
 
     center: tuple[float, float]

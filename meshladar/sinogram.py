@@ -35,6 +35,19 @@ class RecordInfo(dict):
     __slots__ = ()
 
     def _read_only(self, *args, **kwargs):
+        """Refuse any change: a record's ``info`` is read-only (``update``, ``pop``,
+        ``popitem``, ``clear``, ``setdefault``, item assignment and deletion, ``|=``).
+
+        Parameters
+        ----------
+        *args, **kwargs
+            Whatever the dict method takes; ignored.
+
+        Raises
+        ------
+        TypeError
+            Always; build a new record with ``info=dict(record.info, key=value)``.
+        """
         raise TypeError("a record's info is read-only; build a new record with "
                         "info=dict(record.info, key=value)")
 
@@ -56,7 +69,31 @@ def split_info(record, info, *, keep_none=False) -> dict:
     (a frozen dataclass with ``radiometry`` and ``units``) and set
     ``record.info`` to the merged read-only :class:`RecordInfo`. Returns the provenance (the
     free-form rest) as a new dict. An unset typed field shows in ``info`` as None when the
-    given info held the key, or with ``keep_none`` (the waveforms' info always held both)."""
+    given info held the key, or with ``keep_none`` (the waveforms' info always held both).
+
+    Parameters
+    ----------
+    record : object
+        A frozen dataclass with ``radiometry``, ``units`` and ``info`` fields
+        (:class:`Sinogram`, :class:`~meshladar.waveforms.Waveforms`); changed in place.
+    info : Mapping
+        The info given. When it is a :class:`RecordInfo` (the record's own, passed on by
+        ``dataclasses.replace``) a field set on ``record`` wins over its typed key;
+        otherwise a typed key given in ``info`` wins over the field.
+    keep_none : bool
+        Show both typed keys in ``record.info`` even when None (default False).
+        Keyword-only.
+
+    Returns
+    -------
+    dict
+        The free-form provenance: ``info`` without the keys in :data:`TYPED_INFO_KEYS`.
+
+    Raises
+    ------
+    ParameterError
+        When ``info`` is not a mapping, or a typed value is neither a string nor None.
+    """
     if not isinstance(info, Mapping):
         raise ParameterError(f"info must be a dict; got {type(info).__name__}")
     # dataclasses.replace hands both the old fields and the old info: a record's own
@@ -79,7 +116,25 @@ def split_info(record, info, *, keep_none=False) -> dict:
 
 
 def check_sinogram(name: str, value):
-    """``value`` if it is a meshladar.Sinogram, else a ParameterError."""
+    """``value`` if it is a meshladar.Sinogram, else a ParameterError.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name, for the message.
+    value : object
+        The value to check.
+
+    Returns
+    -------
+    Sinogram
+        ``value``, unchanged.
+
+    Raises
+    ------
+    ParameterError
+        When ``value`` is not a :class:`Sinogram` (or a subclass).
+    """
     if not isinstance(value, Sinogram):
         raise ParameterError(f"{name} must be a meshladar.Sinogram; got {type(value).__name__}")
     return value
@@ -88,6 +143,8 @@ def check_sinogram(name: str, value):
 @dataclass(frozen=True, eq=False)
 class Sinogram:
     """Range-resolved returns of many views.
+
+    All arrays are stored as read-only float64 copies.
 
     Parameters
     ----------
@@ -116,7 +173,14 @@ class Sinogram:
     units : str, keyword-only, optional
         The values' units when not the convention's own (``"photoelectrons"``).
 
-    All arrays are stored as read-only float64 copies.
+    Raises
+    ------
+    ParameterError
+        When an array is not finite real numbers; ``values`` is not 2-D with at least one
+        view and one bin; ``angles_deg`` has not one angle per view; ``bin_edges`` has not
+        n_bins + 1 strictly increasing entries; ``model`` is not a string; ``view_vectors``
+        is not (n_views, 3) non-zero vectors (normalised to unit length); ``info`` is not
+        a mapping; or ``radiometry`` or ``units`` is neither a string nor None.
     """
 
     values: np.ndarray
@@ -189,7 +253,13 @@ class Sinogram:
         return np.diff(self.bin_edges)
 
     def total(self) -> np.ndarray:
-        """(n_views,) total return of each view: the sum of its bins."""
+        """(n_views,) total return of each view: the sum of its bins.
+
+        Returns
+        -------
+        (n_views,) numpy.ndarray
+            ``values.sum(axis=1)``, in the values' units.
+        """
         return self.values.sum(axis=1)
 
     @property
@@ -200,7 +270,24 @@ class Sinogram:
     def plot(self, *, log=None):
         """A quick look (:func:`meshladar.viz.quick.sinogram`, through
         :mod:`meshladar.plotting`): a matplotlib Figure; ``log`` (default: when the values
-        span more than three decades) a log colour scale."""
+        span more than three decades) a log colour scale.
+
+        Parameters
+        ----------
+        log : bool, optional
+            Log colour scale; None (default): when the positive values' largest is more
+            than 1e3 times their smallest. Keyword-only.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            Views against range, and the views' totals.
+
+        Raises
+        ------
+        ImportError
+            When the ``viz`` extra is not installed.
+        """
         return plotting.plot(self, log=log)
 
     def _summary(self):

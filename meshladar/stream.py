@@ -62,6 +62,18 @@ class Progress:
     """``Progress(total, unit, enabled=True)``; ``update(n)``; ``close()``.
 
     Draws to stderr only when enabled and stderr is a TTY (quiet in pipes, logs and CI).
+
+    Parameters
+    ----------
+    total : int
+        How many items the bar counts to.
+    unit : str
+        The items' name in the bar (default ``"items"``).
+    enabled : bool
+        Whether to draw at all (default True); keyword-only. The bar is drawn only when
+        this is true and ``stream`` has ``isatty()`` returning true.
+    stream : file-like, optional
+        Where to draw (default ``sys.stderr``); keyword-only.
     """
 
     def __init__(self, total, unit="items", *, enabled=True, stream=None):
@@ -72,6 +84,15 @@ class Progress:
         self._last = 0.0
 
     def update(self, n=1):
+        """Count ``n`` more items done and redraw the bar (at most every 0.1 s, and once
+        the total is reached): done/total, the rate per second and the estimated time
+        left.
+
+        Parameters
+        ----------
+        n : int
+            Items finished since the last update (default 1).
+        """
         self.done += n
         if not self.enabled:
             return
@@ -99,7 +120,25 @@ def _chunks(n, size):
 
 def check_jobs(jobs):
     """``jobs`` checked (None, or 1 to MAX_JOBS_PER_CORE per core): a caller checks it with
-    its other options, before any work or warning."""
+    its other options, before any work or warning.
+
+    Parameters
+    ----------
+    jobs : int or None
+        Worker count: None (the caller's default), or an integer in
+        [1, :data:`MAX_JOBS_PER_CORE` × the machine's cores].
+
+    Returns
+    -------
+    int or None
+        ``jobs``, unchanged.
+
+    Raises
+    ------
+    ParameterError
+        When ``jobs`` is not None and not an integer ≥ 1 (bools refused), or is more than
+        :data:`MAX_JOBS_PER_CORE` per core.
+    """
     if jobs is None:
         return None
     cores = os.cpu_count() or 1
@@ -117,7 +156,35 @@ def choose_executor(jobs, executor, work, n_chunks, *, threads=False):
     else a pool of ``jobs`` threads (a job whose compiled loop releases the GIL, as the mesh
     engine's casts do) or worker processes (one that holds it: the analytic and pixel
     models' numpy); else none. By default a pool is started only when the work (rays) pays
-    for it, with at most one worker per chunk: a single view never starts one."""
+    for it, with at most one worker per chunk: a single view never starts one.
+
+    Parameters
+    ----------
+    jobs : int or None
+        Workers; None: 1 below the work threshold (:data:`THREADS_FROM` for threads,
+        :data:`PARALLEL_FROM` for processes), else one per core, at most ``n_chunks``.
+    executor : concurrent.futures.Executor or None
+        The user's executor: used as given, ``jobs`` ignored.
+    work : float
+        Estimated work (rays), for the default ``jobs``.
+    n_chunks : int
+        Number of chunks: the most workers the default starts.
+    threads : bool
+        A thread pool rather than worker processes (default False). Keyword-only.
+
+    Returns
+    -------
+    executor : concurrent.futures.Executor or None
+        The executor, or None to run the chunks in this thread (one job).
+    own : bool
+        True when the pool was started here (the caller shuts it down).
+
+    Raises
+    ------
+    ParameterError
+        When ``executor`` has no callable ``submit``, or ``jobs`` is refused by
+        :func:`check_jobs`.
+    """
     if executor is not None:
         if not callable(getattr(executor, "submit", None)):
             raise ParameterError(f"executor must be a concurrent.futures.Executor (with "
@@ -142,7 +209,13 @@ _IN_WORKER = False
 def in_worker() -> bool:
     """Whether this process is a worker forked by :func:`run_chunks`' own pool. A job runs
     its compiled kernels serially there: the workers already share the cores, and a child
-    forked after an OpenMP kernel ran in its parent aborts when it starts one itself."""
+    forked after an OpenMP kernel ran in its parent aborts when it starts one itself.
+
+    Returns
+    -------
+    bool
+        True in a worker process of this module's process pools, else False.
+    """
     return _IN_WORKER
 
 
@@ -218,7 +291,24 @@ def _scatter(ex, payload):
 
 
 def check_run_dir(run_dir):
-    """``run_dir`` as a path, refused early (before any work) if it cannot be a folder."""
+    """``run_dir`` as a path, refused early (before any work) if it cannot be a folder.
+
+    Parameters
+    ----------
+    run_dir : str or os.PathLike
+        The run folder; it need not exist yet.
+
+    Returns
+    -------
+    str or os.PathLike
+        ``run_dir``, unchanged.
+
+    Raises
+    ------
+    ParameterError
+        When ``run_dir`` is not a non-empty str or os.PathLike, or names an existing
+        path that is not a folder.
+    """
     if not isinstance(run_dir, (str, os.PathLike)) or not os.fspath(run_dir):
         raise ParameterError(f"run_dir must be a folder path; got {run_dir!r}")
     if os.path.exists(run_dir) and not os.path.isdir(run_dir):
@@ -268,6 +358,16 @@ def run_chunks(fn, payload, n_items, *, chunk_size, args=(), jobs=None, executor
     -------
     list
         Each chunk's result, in chunk order.
+
+    Raises
+    ------
+    ParameterError
+        When ``progress`` is not a bool, ``run_dir``, ``jobs`` or ``executor`` is refused
+        (:func:`check_run_dir`, :func:`choose_executor`), or a chunk's arrays cannot be
+        saved.
+    RunFolderError
+        When the run folder is in use, holds another job, or a chunk computes non-finite
+        values (:class:`~meshladar.runs.RunFolder`).
     """
     check_flag("progress", progress)
     if run_dir is not None:
@@ -348,7 +448,21 @@ def _on_executor(ex, tasks, todo, keep):
 
 
 def joined(results, name):
-    """One array of all chunks' ``name`` rows (each chunk's result a dict of arrays)."""
+    """One array of all chunks' ``name`` rows (each chunk's result a dict of arrays).
+
+    Parameters
+    ----------
+    results : sequence of dict
+        Each chunk's result (:func:`run_chunks`), in chunk order.
+    name : str
+        The array to join.
+
+    Returns
+    -------
+    numpy.ndarray
+        The chunks' ``name`` arrays concatenated along their first axis (one row per
+        item).
+    """
     return np.concatenate([np.asarray(r[name]) for r in results])
 
 
@@ -358,6 +472,10 @@ _SCHEMES = ("tcp", "tls", "ucx", "ws", "wss")
 def dask_executor(address=None, *, workers=2, threads_per_worker=1, timeout=10.0,
                   security=None):
     """A ``concurrent.futures`` executor on a Dask cluster, closed on exit.
+
+    An existing scheduler is trusted completely: whoever controls it, or can connect to an
+    unsecured one, can run code in this process. Connect only to clusters you control, with
+    TLS (``tls://`` and ``security=``) on a shared network.
 
     Parameters
     ----------
@@ -375,9 +493,21 @@ def dask_executor(address=None, *, workers=2, threads_per_worker=1, timeout=10.0
     security : distributed.security.Security, optional
         Credentials for an existing TLS cluster.
 
-    An existing scheduler is trusted completely: whoever controls it, or can connect to an
-    unsecured one, can run code in this process. Connect only to clusters you control, with
-    TLS (``tls://`` and ``security=``) on a shared network.
+    Yields
+    ------
+    concurrent.futures.Executor
+        The Dask client's executor (``Client.get_executor(pure=False)``); the client, and
+        the local cluster if one was started, are closed on exit.
+
+    Raises
+    ------
+    ParameterError
+        When ``workers`` or ``threads_per_worker`` is not an integer ≥ 1, ``timeout`` is
+        not in (0, 3600], a local cluster would have more than :data:`MAX_JOBS_PER_CORE`
+        threads per core, ``address`` is not a ``scheme://host`` address with a scheme of
+        tcp, tls, ucx, ws or wss, or no scheduler answers there within ``timeout``.
+    ImportError
+        When ``distributed`` (or, for a local cluster, ``cryptography``) is not installed.
     """
     workers = check_count("workers", workers)
     threads_per_worker = check_count("threads_per_worker", threads_per_worker)

@@ -63,7 +63,19 @@ _FWHM_PER_SIGMA = 2.0 * math.sqrt(2.0 * math.log(2.0))
 @dataclass(frozen=True)
 class GaussianPulse:
     """A Gaussian pulse (or impulse response) of full width at half maximum ``fwhm`` (s),
-    centred on t = 0, unit area."""
+    centred on t = 0, unit area.
+
+    Parameters
+    ----------
+    fwhm : float
+        Full width at half maximum, s, in [:data:`MIN_PULSE_S`, :data:`MAX_PULSE_S`]
+        (1e-18 s to 1 s).
+
+    Raises
+    ------
+    ParameterError
+        When ``fwhm`` is not a finite real number in that range.
+    """
 
     fwhm: float
 
@@ -78,11 +90,31 @@ class GaussianPulse:
         return -h, h
 
     def cdf(self, t):
+        """The fraction of the pulse's area before time ``t``.
+
+        Parameters
+        ----------
+        t : float or array_like
+            Time, s, from the pulse's centre.
+
+        Returns
+        -------
+        numpy.ndarray
+            Φ(t / σ), σ = fwhm / (2 sqrt(2 ln 2)), Φ the standard normal CDF (not cut at
+            :attr:`support`), the shape of ``t``.
+        """
         from scipy.special import ndtr
 
         return ndtr(np.asarray(t, np.float64) * _FWHM_PER_SIGMA / self.fwhm)
 
     def describe(self):
+        """The parameters, with units in their names (for result files).
+
+        Returns
+        -------
+        dict
+            ``{"kind": "gaussian", "fwhm_s": fwhm}``.
+        """
         return {"kind": "gaussian", "fwhm_s": self.fwhm}
 
 
@@ -90,7 +122,24 @@ class GaussianPulse:
 class SampledPulse:
     """A user's pulse shape (or impulse response): ``samples`` ≥ 0 of its power at
     ``interval`` (s) spacing from ``start`` (s), held constant over each interval;
-    normalised to unit area here."""
+    normalised to unit area here.
+
+    Parameters
+    ----------
+    samples : (n,) array_like
+        The pulse's power in each interval: finite, ≥ 0, not all zero. Stored as a
+        read-only float64 copy divided by its sum (each interval's fraction of the area).
+    interval : float
+        Sample spacing, s, in [:data:`MIN_PULSE_S`, :data:`MAX_PULSE_S`].
+    start : float
+        Time of the first sample's leading edge, s (default 0.0); any finite real.
+
+    Raises
+    ------
+    ParameterError
+        When ``samples`` is not a non-empty 1-D array of finite non-negative numbers with
+        one above zero, or ``interval`` or ``start`` is out of range or not finite.
+    """
 
     samples: np.ndarray
     interval: float
@@ -111,10 +160,32 @@ class SampledPulse:
         return self.start, self.start + self.interval * self.samples.size
 
     def cdf(self, t):
+        """The fraction of the pulse's area before time ``t``.
+
+        Parameters
+        ----------
+        t : float or array_like
+            Time, s (the same origin as ``start``).
+
+        Returns
+        -------
+        float or numpy.ndarray
+            The cumulative sum of ``samples`` interpolated linearly between the sample
+            edges ``start + k·interval``: 0 before ``start``, 1 after the last edge; the
+            shape of ``t``.
+        """
         edges = self.start + self.interval * np.arange(self.samples.size + 1)
         return np.interp(t, edges, np.concatenate([[0.0], np.cumsum(self.samples)]))
 
     def describe(self):
+        """The parameters, with units in their names (for result files).
+
+        Returns
+        -------
+        dict
+            ``kind`` ("samples"), ``interval_s``, ``start_s`` and ``samples`` (the
+            normalised samples, as a list).
+        """
         return {"kind": "samples", "interval_s": self.interval, "start_s": self.start,
                 "samples": self.samples.tolist()}
 
@@ -149,6 +220,36 @@ class Waveforms:
     ``radiometry``, ``units``: typed fields (as :class:`~meshladar.sinogram.Sinogram`'s);
     ``info``: free-form provenance (standoff, pulse, response, sample rate), read-only, that
     also shows the typed fields (``info["units"]`` reads for one release).
+
+    Parameters
+    ----------
+    values : (n_views, n_samples) array_like
+        Signal per sample; finite, stored as a read-only float64 copy.
+    time_edges : (n_samples + 1,) array_like
+        Sample edges, two-way time, s; finite and strictly increasing. Keyword-only.
+    angles_deg : (n_views,) array_like
+        View angles, degrees (as :class:`~meshladar.sinogram.Sinogram`'s); stored as a
+        read-only float64 copy, not checked. Keyword-only.
+    view_vectors : (n_views, 3) array_like
+        View directions; stored as a read-only float64 copy, not checked. Keyword-only.
+    standoff : float
+        D, m, for :attr:`range_edges` (default 0.0, a ladar at infinity); not checked.
+        Keyword-only.
+    info : dict
+        Free-form provenance (default empty); a ``"radiometry"`` or ``"units"`` key fills
+        the field of that name. Keyword-only.
+    radiometry : str, optional
+        ``"paper"`` or ``"power"``, as the sinogram's; None when unknown. Keyword-only.
+    units : str, optional
+        The values' units when not the convention's own (``"photoelectrons"``).
+        Keyword-only.
+
+    Raises
+    ------
+    ParameterError
+        When ``values`` or ``time_edges`` is not finite, ``values`` is not 2-D,
+        ``time_edges`` has not n_samples + 1 strictly increasing entries, ``info`` is not a
+        mapping, or ``radiometry`` or ``units`` is neither a string nor None.
     """
 
     values: np.ndarray
@@ -189,12 +290,40 @@ class Waveforms:
         return SPEED_OF_LIGHT * self.time_edges / 2.0 - self.standoff
 
     def total(self) -> np.ndarray:
+        """(n_views,) total signal of each view: the sum of its samples.
+
+        Returns
+        -------
+        (n_views,) numpy.ndarray
+            ``values.sum(axis=1)``, in the waveforms' units.
+        """
         return self.values.sum(axis=1)
 
     def scaled(self, factor, units="photoelectrons") -> "Waveforms":
         """The same waveforms times ``factor`` (e.g. photoelectrons per unit of a relative
         power sinogram), in ``units``; photoelectrons are not scaled to photoelectrons
-        again (a double count)."""
+        again (a double count).
+
+        Parameters
+        ----------
+        factor : float
+            Multiplier, finite and > 0 (units per unit of the current values).
+        units : str or None
+            Units of the scaled values (default ``"photoelectrons"``).
+
+        Returns
+        -------
+        Waveforms
+            A new record: values × ``factor``, the same times and views, ``units`` as
+            given, and ``info`` the provenance plus ``scaled_by`` (the factor).
+
+        Raises
+        ------
+        ParameterError
+            When ``factor`` is not a finite number > 0, when the waveforms already count
+            photoelectrons and ``units`` is ``"photoelectrons"``, or when ``units`` is
+            neither a string nor None.
+        """
         f = check_real("factor", factor, low=0.0, low_open=True)
         if self.units == "photoelectrons" and units == "photoelectrons":
             raise ParameterError("these waveforms already count photoelectrons (their sensor "
@@ -215,7 +344,34 @@ class Waveforms:
         """``n`` noise realisations, (n, n_views, n_samples), in the noise's output units
         (gain × photoelectrons, quantised if asked). Seeded: the same seed gives the same
         bits. The waveforms must count photoelectrons (a sensor with ``pulse_energy`` and
-        ``aperture_diameter``, or :meth:`scaled`)."""
+        ``aperture_diameter``, or :meth:`scaled`).
+
+        Parameters
+        ----------
+        noise : meshladar.noise.Noise
+            The receiver's noise.
+        n : int
+            Number of realisations, ≥ 1 (default 1).
+        seed : int, sequence of int or None
+            Seed of numpy's default generator (default None: fresh entropy). Keyword-only.
+
+        Returns
+        -------
+        (n, n_views, n_samples) numpy.ndarray
+            float64 draws (:func:`meshladar.noise.draw_noise`, dwell the sample interval).
+
+        Raises
+        ------
+        ParameterError
+            When ``noise`` is not a Noise, ``n`` is not an integer ≥ 1, ``seed`` is
+            invalid, the waveforms' ``units`` are not ``"photoelectrons"``, or the draws
+            would pass meshladar's allocation cap or mean-count limit.
+
+        Warns
+        -----
+        MeshladarWarning
+            When quantised draws clip at the digitiser's top code.
+        """
         if not isinstance(noise, Noise):
             raise ParameterError(f"noise must be a meshladar.noise.Noise; got "
                                  f"{type(noise).__name__}")
@@ -238,7 +394,36 @@ class Waveforms:
         the fraction of samples that reach it in noise alone (background and dark counts,
         the same gain and quantisation) over as many samples; ``threshold`` and ``n``.
         Seeded; drawn ``chunk`` pulses at a time (bounded memory), at most
-        :data:`MAX_DETECTION_DRAWS` samples in all (bounded time)."""
+        :data:`MAX_DETECTION_DRAWS` samples in all (bounded time).
+
+        Parameters
+        ----------
+        noise : meshladar.noise.Noise
+            The receiver's noise.
+        threshold : float
+            Detection threshold, output units; finite and > 0.
+        n : int
+            Number of noisy pulses, ≥ 1 (default 1000); 2 n × ``values.size`` must not pass
+            :data:`MAX_DETECTION_DRAWS`.
+        seed : int, sequence of int or None
+            Seed of numpy's default generator, from which each chunk's seeds are drawn
+            (default None: fresh entropy). Keyword-only.
+        chunk : int
+            Pulses drawn at a time, ≥ 1 (default 100).
+
+        Returns
+        -------
+        dict
+            ``detection`` ((n_views,) numpy.ndarray, in [0, 1]), ``false_alarm`` (float,
+            in [0, 1]), ``threshold`` (float) and ``n`` (int).
+
+        Raises
+        ------
+        ParameterError
+            When ``threshold``, ``n``, ``chunk`` or ``seed`` is invalid, the draws would
+            pass :data:`MAX_DETECTION_DRAWS`, or :meth:`realise` refuses (``noise`` not a
+            Noise, waveforms not in photoelectrons).
+        """
         thr = check_real("threshold", threshold, low=0.0, low_open=True)
         n = check_count("n", n)
         draws = 2.0 * n * self.values.size
@@ -264,7 +449,32 @@ class Waveforms:
     def plot(self, *, noise=None, realisations=8, seed=0, views=None):
         """A quick look (:func:`meshladar.viz.waveforms.figure`, through :mod:`meshladar.plotting`): a few views' waveforms,
         with ``noise`` the band of ``realisations`` draws around the expected waveform;
-        a matplotlib Figure."""
+        a matplotlib Figure.
+
+        Parameters
+        ----------
+        noise : meshladar.noise.Noise, optional
+            Draws this noise's realisations (:meth:`realise`) for the band (default None:
+            the noiseless waveforms only). Keyword-only.
+        realisations : int
+            Number of realisations drawn with ``noise`` (default 8). Keyword-only.
+        seed : int, sequence of int or None
+            Seed of the realisations (default 0). Keyword-only.
+        views : sequence of int, optional
+            Which views (default up to four, spread over all). Keyword-only.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The views' waveforms.
+
+        Raises
+        ------
+        ParameterError
+            When :meth:`realise` refuses the noise, ``realisations`` or ``seed``.
+        ImportError
+            When the ``viz`` extra is not installed.
+        """
         draws = None if noise is None else self.realise(noise, realisations, seed=seed)
         return plotting.plot(self, realisations=draws, noise=noise, views=views)
 
@@ -329,6 +539,14 @@ def receive(sino: Sinogram, *, sample_rate, pulse=None, response=None, standoff=
     -------
     Waveforms
         Each view's samples; they sum to its bins (module docstring).
+
+    Raises
+    ------
+    ParameterError
+        When ``sino`` is not a Sinogram or holds a negative value, ``sample_rate``,
+        ``oversample`` or ``standoff`` (at most 1e9 m) is out of range, ``pulse`` or
+        ``response`` is of the wrong type, or the convolution would need more than
+        meshladar's allocation cap.
     """
     check_sinogram("sino", sino)
     if np.any(sino.values < 0):

@@ -59,19 +59,45 @@ _MAX_VIEWS = MAX_VIEWS
 
 def materials():
     """The packaged coating table as a read-only mapping of name to SandfordRobertson
-    (:data:`meshladar.materials.PAPER`)."""
+    (:data:`meshladar.materials.PAPER`).
+
+    Returns
+    -------
+    Mapping of str to SandfordRobertson
+        The table read from :data:`MATERIALS_TOML` (the same object on every call).
+    """
     return _materials.PAPER
 
 
 def names() -> list[str]:
-    """Names of the packaged phantoms."""
+    """Names of the packaged phantoms.
+
+    Returns
+    -------
+    list of str
+        The ``.toml`` specs packaged in this folder, without the suffix, sorted
+        (``["disk", "disk_pair", "ellipse"]`` as shipped).
+    """
     return sorted(p.name[:-5] for p in resources.files(__name__).iterdir()
                   if p.name.endswith(".toml"))
 
 
 @dataclass(frozen=True)
 class Phantom:
-    """A built phantom: its scene and the paper's ladar set-up for it."""
+    """A built phantom: its scene and the paper's ladar set-up for it.
+
+    Attributes
+    ----------
+    name : str
+        The spec's ``name`` (default "phantom").
+    description : str
+        The spec's ``description`` (default empty).
+    scene : Scene
+        Its shapes, each with its coating.
+    ladar : Ladar
+        The spec's ``[ladar]``: its views (default 0°, 1°, ..., 359°) and bins (default 512
+        of width 0.003125 centred on range 0, or its ``bin_edges``).
+    """
 
     name: str
     description: str
@@ -222,7 +248,31 @@ def load(name_or_path, *, materials=None):
 def scene(name_or_path, coating=None, **coatings):
     """The phantom's scene with ``coating`` on every shape, or coatings by shape name
     (``scene("disk_pair", large=DARK_GRAY, small=ALUMINUM)``); the spec's own where neither
-    is given. The one source of the paper's phantoms for the engine, studies and tests."""
+    is given. The one source of the paper's phantoms for the engine, studies and tests.
+
+    Parameters
+    ----------
+    name_or_path : str or os.PathLike
+        A packaged phantom's name (:func:`names`) or a spec's path.
+    coating : str, dict or BRDF, optional
+        The coating of every shape not named in ``coatings``: a name from the packaged
+        table, an inline dict of SR parameters, or a BRDF (default None: the spec's own).
+    **coatings
+        Coatings by shape name, as ``coating``.
+
+    Returns
+    -------
+    Scene
+        The phantom's scene.
+
+    Raises
+    ------
+    ParameterError
+        When a keyword names no shape of the phantom.
+    PhantomSpecError
+        When the phantom is unknown, its spec is not valid, or a coating is unknown (as
+        :func:`load`).
+    """
     base = load(name_or_path)
     shape_names = [s.name for s in base.scene.shapes]
     unknown = sorted(set(coatings) - set(shape_names))
@@ -238,7 +288,19 @@ def scene(name_or_path, coating=None, **coatings):
 
 def is_phantom(source) -> bool:
     """Whether ``source`` names a phantom (a packaged phantom's name or a ``.toml`` spec)
-    rather than a mesh file."""
+    rather than a mesh file.
+
+    Parameters
+    ----------
+    source : object
+        What a user named: only a ``str`` can name a phantom.
+
+    Returns
+    -------
+    bool
+        True for a packaged phantom's name (:func:`names`) or a string ending in
+        ``.toml`` (any case); the file is not opened.
+    """
     return isinstance(source, str) and (source in names() or source.lower().endswith(".toml"))
 
 

@@ -14,7 +14,27 @@ __all__ = ["design_figure", "draw_design"]
 
 @style.styled
 def draw_design(design, path, *, dpi=None):
-    """Write :func:`design_figure` as a PNG to ``path`` atomically; returns the path."""
+    """Write :func:`design_figure` as a PNG to ``path`` atomically; returns the path.
+
+    Parameters
+    ----------
+    design : ViewDesign
+        What :func:`meshladar.fit.design_views` returns.
+    path : str or os.PathLike
+        The PNG to write (replaced if it exists).
+    dpi : float, optional, keyword-only
+        Resolution (default None: the style's, 150).
+
+    Returns
+    -------
+    str
+        ``path``, as a string.
+
+    Raises
+    ------
+    ParameterError
+        When ``design`` is not a ViewDesign.
+    """
     return style.save_png(design_figure(design), path, dpi)
 
 
@@ -23,7 +43,26 @@ def design_figure(design):
     """A :class:`~meshladar.fit.ViewDesign` as a matplotlib Figure (no pyplot state):
     each candidate view's own information against its angle with the chosen views numbered
     in the order they were added, and each parameter's σ from the chosen views against as
-    many evenly spaced ones (log scale)."""
+    many evenly spaced ones (log scale).
+
+    Parameters
+    ----------
+    design : ViewDesign
+        What :func:`meshladar.fit.design_views` returns.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Two panels: left, each candidate's log det of its own Fisher information against
+        its angle in degrees, the evenly spaced views circled and the chosen ones filled
+        and numbered; right, each parameter's σ from the chosen and from the evenly
+        spaced views, as bars on a log scale.
+
+    Raises
+    ------
+    ParameterError
+        When ``design`` is not a :class:`~meshladar.fit.ViewDesign`.
+    """
     if not isinstance(design, ViewDesign):
         raise ParameterError(f"design must be a meshladar.fit.ViewDesign; got "
                              f"{type(design).__name__}")

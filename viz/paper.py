@@ -36,7 +36,28 @@ RESULT_NAME = "paper_result.npz"
 
 
 def save_run(outdir, *, size=None):
-    """Run the paper's experiments and save them to ``outdir/paper_result.npz``."""
+    """Run the paper's experiments and save them to ``outdir/paper_result.npz``.
+
+    The arrays saved: every panel's sinogram (``sino/<key>``) and image
+    (``image/<key>``), ``bin_edges`` and ``angles_deg``; the metadata: captions, metrics,
+    extent, outlines, size, :data:`meshladar.studies.paper.FIGURES` and the model
+    (``"analytic"``) (:func:`meshladar.io.save_result`).
+
+    Parameters
+    ----------
+    outdir : str or os.PathLike
+        The folder (created if missing).
+    size : int, optional, keyword-only
+        Pixels per side of the reconstructions (default None:
+        :func:`meshladar.studies.paper.run`'s, 512).
+
+    Returns
+    -------
+    path : str
+        The result file's path.
+    metrics : dict of str to float
+        The findings' numbers (:func:`meshladar.studies.paper.run`'s ``metrics``).
+    """
     kwargs = {} if size is None else {"size": size}
     res = paper.run(**kwargs)
     arrays = {f"sino/{k}": v for k, v in res["sinograms"].items()}
@@ -244,6 +265,20 @@ def draw(result_path, outdir, *, dpi=None):
     """Draw Figs 5-11 as PNGs in ``outdir`` from a saved result; returns their paths.
 
     ``dpi`` overrides the style's resolution (150, as the README's copies).
+
+    Parameters
+    ----------
+    result_path : str or os.PathLike
+        A result written by :func:`save_run`.
+    outdir : str or os.PathLike
+        The folder (created if missing); ``fig05.png`` to ``fig11.png`` are replaced.
+    dpi : float, optional, keyword-only
+        Resolution (default None: 150).
+
+    Returns
+    -------
+    list of str
+        The paths of ``fig05.png`` to ``fig11.png``, in order.
     """
     arrays, meta = mlio.load_result(result_path)
     os.makedirs(outdir, exist_ok=True)
@@ -252,6 +287,21 @@ def draw(result_path, outdir, *, dpi=None):
 
 
 def reproduce(outdir, *, size=None):
-    """Run, save and draw: returns (figure paths, metrics)."""
+    """Run, save and draw: returns (figure paths, metrics).
+
+    Parameters
+    ----------
+    outdir : str or os.PathLike
+        The folder for ``paper_result.npz`` and the figures (created if missing).
+    size : int, optional, keyword-only
+        Pixels per side of the reconstructions (default None: 512).
+
+    Returns
+    -------
+    paths : list of str
+        The figures' paths (:func:`draw`).
+    metrics : dict of str to float
+        The findings' numbers (:func:`save_run`).
+    """
     path, metrics = save_run(outdir, size=size)
     return draw(path, outdir), metrics

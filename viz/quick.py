@@ -20,7 +20,23 @@ def sinogram(sino, *, log=None):
     ``log`` shows the values on a log scale (glints next to diffuse parts); by default
     when the positive values span more than three decades. Views about z are placed at
     their angles in degrees (when evenly spaced), other view sets by index; empty bins
-    take the scale's lowest colour."""
+    take the scale's lowest colour.
+
+    Parameters
+    ----------
+    sino : Sinogram
+        The sinogram (its values, bins, views, model, units and radiometry label it).
+    log : bool, optional, keyword-only
+        A log colour scale from max(smallest positive value, 10⁻⁸ × the largest) to the
+        largest. Default None: log when the largest positive value is more than 10³
+        times the smallest.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Left, the values as an image: range r = −p·w across, views up, a colour bar in
+        the sinogram's units; right, each view's total return.
+    """
     import matplotlib
     from matplotlib.colors import LogNorm
 
@@ -68,7 +84,24 @@ def sinogram(sino, *, log=None):
 def image(img, *, y=None, title=None):
     """The image on a diverging map symmetric about zero (the paper figures' scale:
     :func:`meshladar.viz.paper.norm`) and its slice along x at ``y`` (default the centre)
-    beside it; ``title`` replaces the image panel's (method, input, size)."""
+    beside it; ``title`` replaces the image panel's (method, input, size).
+
+    Parameters
+    ----------
+    img : Image
+        The reconstruction.
+    y : float, optional, keyword-only
+        The slice's height in scene units: the pixel row containing it (clamped to the
+        grid). Default None: the image's centre.
+    title : str, optional, keyword-only
+        The image panel's title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Left, the image (x across, y up, scene units) with its colour bar; right, the
+        row's values against x, on a symmetric-log scale when the colour scale is one.
+    """
     plt = style.use()
     fig, (a, b) = plt.subplots(1, 2, figsize=(10.0, 4.2),
                                gridspec_kw={"width_ratios": [1.25, 1]})
@@ -113,7 +146,20 @@ TARGET_LEVEL = 0.1
 def target_voxel(values):
     """(k, i, j): the voxel nearest the centroid of |values| above ``TARGET_LEVEL`` of their
     peak (the cube's centre for an all-zero volume): where a slice cuts the target, wherever
-    in the cube it lies."""
+    in the cube it lies.
+
+    Parameters
+    ----------
+    values : (nz, ny, nx) array_like
+        A volume's values, ``values[k, i, j]``.
+
+    Returns
+    -------
+    tuple of int
+        (k, i, j): the rounded centroid of the weights max(|values| − ``TARGET_LEVEL`` ×
+        peak, 0) along each axis, clipped to the grid; (nz // 2, ny // 2, nx // 2) when
+        every weight is 0.
+    """
     a = np.abs(np.asarray(values, dtype=np.float64))
     w = np.maximum(a - TARGET_LEVEL * a.max(initial=0.0), 0.0)
     total = w.sum()
@@ -132,7 +178,22 @@ def volume(vol, *, title=None):
     and x through the centroid of its bright voxels, :func:`target_voxel`: the cube's centre
     for a target there, and an off-centre target is cut too) on one colour scale, symmetric
     about zero as the images' (:func:`meshladar.viz.paper.norm`); log input is labelled as
-    such."""
+    such.
+
+    Parameters
+    ----------
+    vol : Volume
+        The reconstruction, ``values[k, i, j]`` at (x[j], y[i], z[k]).
+    title : str, optional, keyword-only
+        The figure's title. Default None: the volume's method (``info["method"]``, else
+        "volume") and its size in voxels (nx × ny × nz).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Three panels, the slices at z, y and x through :func:`target_voxel`, axes in
+        scene units, with one colour bar.
+    """
     plt = style.use()
     fig, axes = plt.subplots(1, 3, figsize=(12.5, 4.0))
     fig.subplots_adjust(wspace=0.4, left=0.06, right=0.88, top=0.85, bottom=0.14)
@@ -162,7 +223,31 @@ def volume(vol, *, title=None):
 def profile(sino, reference, *, view=0, label="closed form"):
     """One view's range profile against a reference (an array of the view's bin values,
     or a callable of the bin edges giving them, e.g. a closed form), with their difference
-    relative to the reference's peak below: the picture of an analytic check."""
+    relative to the reference's peak below: the picture of an analytic check.
+
+    Parameters
+    ----------
+    sino : Sinogram
+        The simulated profiles.
+    reference : (n_bins,) array_like or callable
+        The view's reference bin values, or a function of the bin edges (n_bins + 1,)
+        that returns them.
+    view : int, keyword-only
+        The view's index (default 0).
+    label : str, keyword-only
+        The reference's name in the legend and title (default "closed form").
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Above, both profiles as steps; below, (profile − reference) / max|reference|
+        (the axis at least ±10⁻³), titled with the relative L2 difference.
+
+    Raises
+    ------
+    ParameterError
+        When the reference does not have the view's n_bins values.
+    """
     plt = style.use()
     got = np.asarray(sino.values[view], dtype=float)
     e = sino.bin_edges

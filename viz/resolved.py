@@ -19,7 +19,38 @@ _LABELS = {"range": "range r = -p.w", "cross_range": "cross-range p.u",
 @style.styled
 def draw(returns, path, *, views=None, log=False, dpi=None):
     """Write a PNG of up to four views of ``returns`` to ``path``; ``log`` shows
-    log10 of the returns (glints next to diffuse parts). Returns the path."""
+    log10 of the returns (glints next to diffuse parts). Returns the path.
+
+    One panel per view, titled with its direction w: a profile (one coordinate) as steps
+    against the coordinate's bin edges, or an image (two) as a ``magma`` colour mesh with
+    the second coordinate across and a colour bar. Axes are labelled with the
+    coordinates and their units, the values with ``returns.info["units"]``.
+
+    Parameters
+    ----------
+    returns : Returns
+        One or two coordinates (:class:`meshladar.returns.Returns`).
+    path : str or os.PathLike
+        The PNG to write (replaced if it exists).
+    views : sequence of int, optional, keyword-only
+        View indices (default None: up to four spread over all views).
+    log : bool, keyword-only
+        Show log10 of the values, each view's values floored at its smallest positive
+        one (1 when it has none) (default False).
+    dpi : float, optional, keyword-only
+        Resolution (default None: the style's, 150).
+
+    Returns
+    -------
+    str
+        ``path``, as a string.
+
+    Raises
+    ------
+    ParameterError
+        When ``returns`` is not a Returns, has more than two coordinates, or ``views``
+        does not index its views.
+    """
     if not isinstance(returns, Returns):
         raise ParameterError(f"returns must be a meshladar.returns.Returns; got "
                              f"{type(returns).__name__}")

@@ -58,7 +58,21 @@ def _log_ticks(ax):
 
 def figures(outdir):
     """Yield (file name, matplotlib Figure) for the study saved in ``outdir`` (inside
-    :func:`meshladar.viz.style.styled`); :func:`draw` saves them."""
+    :func:`meshladar.viz.style.styled`); :func:`draw` saves them.
+
+    Parameters
+    ----------
+    outdir : str or os.PathLike
+        A folder holding ``faceting.json`` and ``faceting_examples.npz``
+        (:func:`meshladar.studies.save_study`).
+
+    Yields
+    ------
+    (str, matplotlib.figure.Figure)
+        ``pareto.png``, ``error_vs_segments.png``, then one
+        ``difference_<phantom>_<coating>.png`` per example (module docstring); each grid
+        has one panel per phantom (rows) and coating (columns).
+    """
     plt = style.use()
     with open(os.path.join(outdir, "faceting.json"), encoding="utf-8") as fh:
         doc = json.load(fh)
@@ -140,7 +154,19 @@ def figures(outdir):
 @style.styled
 def draw(outdir):
     """Write the faceting study's figures into ``outdir`` atomically; returns their
-    paths."""
+    paths.
+
+    Parameters
+    ----------
+    outdir : str or os.PathLike
+        The study's folder: its files are read from it and the PNGs written into it
+        (:func:`figures`).
+
+    Returns
+    -------
+    list of str
+        The paths written.
+    """
     return style.save_all(figures(outdir), outdir)
 
 
@@ -156,7 +182,25 @@ def _signed_panel(ax, img, extent):
 def reconstruction_figures(images, methods=None, spacings=(1.0, 10.0)):
     """Yield ("reconstruction.png", Figure): every method's image (columns) of every
     phantom at each view spacing (rows), from the reconstruction study's
-    ``images[(phantom, spacing_deg, method)]``; each panel on its own symmetric scale."""
+    ``images[(phantom, spacing_deg, method)]``; each panel on its own symmetric scale.
+
+    Parameters
+    ----------
+    images : dict
+        (phantom, spacing_deg, method) → (size, size) image over [−1, 1]²
+        (:func:`meshladar.studies.reconstruction.run`'s second value).
+    methods : sequence of str, optional
+        The columns (default None: :data:`meshladar.studies.reconstruction.METHODS`); a
+        missing image leaves its panel blank.
+    spacings : sequence of float
+        The view spacings in degrees shown for each phantom (default (1.0, 10.0)).
+
+    Yields
+    ------
+    (str, matplotlib.figure.Figure)
+        One pair: ``"reconstruction.png"`` and the figure, one row per phantom and
+        spacing.
+    """
     plt = style.use()
     methods = list(study.METHODS if methods is None else methods)
     panels = [(ph, sp) for ph in sorted({k[0] for k in images}) for sp in spacings]
@@ -181,8 +225,27 @@ def reconstruction_figures(images, methods=None, spacings=(1.0, 10.0)):
 
 
 def tomography3d_figures(volumes, views, size):
-    """Yield ("tomography3d.png", Figure): the z = 0 slice of every volume of the 3-D
-    study (``meshladar.studies.paper.run_3d``), on the paper figures' symmetric scale."""
+    """Yield ("tomography3d.png", Figure): the middle z slice (z ≈ 0) of every volume of
+    the 3-D study (``meshladar.studies.paper.run_3d``), on the paper figures' symmetric
+    scale.
+
+    The slice is ``values[nz // 2]``: at z = 0 for an odd nz on a grid centred on the
+    origin, half a voxel above it for an even one (the study's 64³ and 128³).
+
+    Parameters
+    ----------
+    volumes : dict of str to Volume
+        The study's volumes by name (each a panel, in two rows).
+    views : int
+        The number of views, for the title.
+    size : int
+        Voxels per side, for the title.
+
+    Yields
+    ------
+    (str, matplotlib.figure.Figure)
+        One pair: ``"tomography3d.png"`` and the figure.
+    """
     plt = style.use()
     keys = list(volumes)
     cols = (len(keys) + 1) // 2
@@ -202,11 +265,41 @@ def tomography3d_figures(volumes, views, size):
 
 @style.styled
 def draw_reconstruction(images, outdir, **kwargs):
-    """Write :func:`reconstruction_figures` into ``outdir`` atomically; returns the paths."""
+    """Write :func:`reconstruction_figures` into ``outdir`` atomically; returns the paths.
+
+    Parameters
+    ----------
+    images : dict
+        As :func:`reconstruction_figures`.
+    outdir : str or os.PathLike
+        The folder (created if missing).
+    **kwargs
+        ``methods`` and ``spacings`` of :func:`reconstruction_figures`.
+
+    Returns
+    -------
+    list of str
+        The path of ``reconstruction.png``.
+    """
     return style.save_all(reconstruction_figures(images, **kwargs), outdir)
 
 
 @style.styled
 def draw_tomography3d(volumes, outdir, views, size):
-    """Write :func:`tomography3d_figures` into ``outdir`` atomically; returns the paths."""
+    """Write :func:`tomography3d_figures` into ``outdir`` atomically; returns the paths.
+
+    Parameters
+    ----------
+    volumes : dict of str to Volume
+        As :func:`tomography3d_figures`.
+    outdir : str or os.PathLike
+        The folder (created if missing).
+    views, size : int
+        The number of views and voxels per side, for the title.
+
+    Returns
+    -------
+    list of str
+        The path of ``tomography3d.png``.
+    """
     return style.save_all(tomography3d_figures(volumes, views, size), outdir)

@@ -28,7 +28,21 @@ STYLE = {
 def use():
     """Figures without pyplot: an object with pyplot's ``subplots`` and ``close`` that makes
     plain ``matplotlib.figure.Figure`` objects, so drawing never switches the session's
-    backend (a notebook's inline backend stays). Style them inside :func:`styled`."""
+    backend (a notebook's inline backend stays). Style them inside :func:`styled`.
+
+    Returns
+    -------
+    object
+        Its ``subplots(nrows=1, ncols=1, *, figsize=None, squeeze=True, **kwargs)`` makes
+        a ``Figure`` (dpi: :data:`STYLE`'s ``savefig.dpi``, 150) and returns (figure,
+        axes) as pyplot's does; its ``close(fig)`` does nothing (the figure belongs to no
+        pyplot state).
+
+    Raises
+    ------
+    ImportError
+        When matplotlib is not installed, naming the ``viz`` extra.
+    """
     _matplotlib()
     return _Figures()
 
@@ -56,7 +70,21 @@ class _Figures:
 
 def styled(func):
     """Run ``func`` with meshladar's style in a ``matplotlib.rc_context``: the user's
-    rcParams are as they were afterwards."""
+    rcParams are as they were afterwards.
+
+    Parameters
+    ----------
+    func : callable
+        The drawing function. A generator function's body would run when it is
+        iterated, outside the style: generators of figures are left undecorated and
+        iterated inside a styled function (as :func:`meshladar.viz.studies.draw` does).
+
+    Returns
+    -------
+    callable
+        ``func`` wrapped (``functools.wraps``): the same arguments and return value, run
+        inside ``matplotlib.rc_context(STYLE)``.
+    """
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
         with _matplotlib().rc_context(STYLE):
@@ -67,7 +95,29 @@ def styled(func):
 
 def pick_views(n_views, views=None, most=4):
     """The views a figure shows: ``views`` checked against ``n_views``, or up to ``most``
-    spread over all of them."""
+    spread over all of them.
+
+    Parameters
+    ----------
+    n_views : int
+        The record's number of views.
+    views : sequence of int, optional
+        The views to show, as indices in [0, ``n_views``) (negative indices are
+        refused). Default None: ``min(most, n_views)`` views evenly spread from the first
+        to the last (rounded, duplicates dropped).
+    most : int
+        How many views the default spreads (default 4).
+
+    Returns
+    -------
+    list of int
+        The view indices.
+
+    Raises
+    ------
+    ParameterError
+        When the views are empty or an index is outside [0, ``n_views``).
+    """
     if views is None:
         views = np.unique(np.linspace(0, n_views - 1, min(most, n_views)).round().astype(int))
     views = [int(v) for v in views]
@@ -78,13 +128,44 @@ def pick_views(n_views, views=None, most=4):
 
 def save_all(named_figures, outdir, dpi=None):
     """Write each (file name, Figure) of ``named_figures`` into ``outdir`` with
-    :func:`save_png`; returns the paths."""
+    :func:`save_png`; returns the paths.
+
+    Parameters
+    ----------
+    named_figures : iterable of (str, matplotlib.figure.Figure)
+        File names (relative to ``outdir``) and figures; a generator is drawn one
+        figure at a time.
+    outdir : str or os.PathLike
+        The folder (created if missing).
+    dpi : float, optional
+        Resolution (default None: :data:`STYLE`'s ``savefig.dpi``, 150).
+
+    Returns
+    -------
+    list of str
+        The paths written, in order.
+    """
     return [save_png(fig, os.path.join(outdir, name), dpi) for name, fig in named_figures]
 
 
 def save_png(fig, path, dpi=None):
     """Write ``fig`` as a PNG at ``path`` atomically (:func:`meshladar.io.write_atomic`:
-    a crash never leaves half a file or a stray temporary); returns the path."""
+    a crash never leaves half a file or a stray temporary); returns the path.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    path : str or os.PathLike
+        The file to write (replaced if it exists); its folder is created if missing.
+    dpi : float, optional
+        Resolution (default None: :data:`STYLE`'s ``savefig.dpi``, 150).
+
+    Returns
+    -------
+    str
+        ``path``, as a string.
+    """
     path = os.fspath(path)
     dpi = STYLE["savefig.dpi"] if dpi is None else dpi
     write_atomic(path, lambda fh: fig.savefig(fh, format="png", dpi=dpi))

@@ -85,7 +85,31 @@ def face_returns(scene, w, *, segments=256):
     """Per face of the (tessellated) scene: the monostatic return F(θ)·cos θ for view ``w``
     and a state: 0 lit, 1 shadowed (facing the ladar, but the ray from its centroid toward
     the ladar meets another face), 2 turned away. Returns (mesh scene, returns (m,),
-    state (m,))."""
+    state (m,)).
+
+    Parameters
+    ----------
+    scene : Scene
+        A mesh scene, or an analytic one, tessellated here into prisms of ``segments``
+        sides as tall as its bounding-circle radius.
+    w : (3,) numpy.ndarray
+        The view direction, from the scene toward the ladar, of unit length (neither
+        checked nor normalised here: :func:`show_scene` passes a checked one).
+    segments : int, keyword-only
+        Sides of an analytic scene's prisms (default 256).
+
+    Returns
+    -------
+    mesh : Scene
+        The mesh scene the faces belong to (``scene`` itself when it is a mesh); faces are
+        numbered part by part in its order.
+    returns : (m,) numpy.ndarray of float64
+        Each lit face's F(θ)·cos θ in 1/sr, θ the angle between its normal and ``w``
+        (its coating's ``monostatic(θ, projected=True)``);
+        0 for shadowed and turned-away faces.
+    state : (m,) numpy.ndarray of int
+        0 lit, 1 shadowed, 2 turned away (cos θ ≤ 0).
+    """
     mesh = _mesh_scene(scene, segments)
     v, f = _joined(mesh)
     mat = np.concatenate([p.material for p in mesh.parts])
@@ -111,29 +135,54 @@ def show_scene(scene, *, view_angle_deg=None, view_vector=None, ladar=None, segm
                screenshot=None, window_size=(900, 700), camera=None):
     """Show a scene coloured by its return for one view.
 
+    A legend in the top-left corner names the flat colours drawn (shadowed, turned away,
+    beam and ray grid, iso-range planes); colour bars sit at the right edge.
+
     Parameters
     ----------
     scene : Scene
         A mesh scene, or an analytic one (drawn as prisms of ``segments`` sides).
     view_angle_deg, view_vector :
         The view: an angle about z (default 90°, the paper's Fig. 1) or any vector.
+        ``view_vector`` (3,), normalised here, wins when both are given.
     ladar : Ladar, optional
         For hits coloured by range bin and iso-range planes at its bin edges.
+    segments : int
+        Sides of an analytic scene's prisms, ≥ 3 (default 256); their height is the
+        scene's bounding-circle radius.
     show_rays, show_hits : bool
         Draw the ray grid's footprint and the view direction; draw first hits coloured by
-        range bin.
+        range bin (with ``ladar`` only). Default True.
     iso_ranges : int
-        Number of iso-range planes drawn (0: none).
+        Number of iso-range planes drawn, ≥ 0 (0: none; default 6).
     log_scale : bool
         Colour lit faces by log10 of their return (glints next to diffuse coatings).
+    shadow_color, back_color : (3,) float
+        RGB in [0, 1] of shadowed faces and of faces turned away (default
+        :data:`SHADOW_COLOR`, :data:`BACK_COLOR`).
     off_screen, screenshot, window_size :
-        See the module docstring.
+        See the module docstring. ``window_size`` is (width, height) in pixels, each
+        integer in [1, 16384] (default (900, 700)).
     camera : "oblique", "view" or a pyvista camera position
         "view" looks along the beam from the ladar; "oblique" (default, also None) from
         beside and above the ladar, so the lit side and the shadows both show.
 
-    A legend in the top-left corner names the flat colours drawn (shadowed, turned away,
-    beam and ray grid, iso-range planes); colour bars sit at the right edge.
+    Returns
+    -------
+    Shown
+        Off screen, its ``image`` (height, width, 3) (also written to ``screenshot`` when
+        given); on a desktop, its ``plotter`` (shown with ``plotter.show``). With the
+        ``legend`` and the ``scalar_bars`` drawn.
+
+    Raises
+    ------
+    ParameterError
+        When ``scene`` is not a Scene, ``iso_ranges`` < 0, ``segments`` < 3,
+        ``window_size`` is not two integers in [1, 16384], ``camera`` is a string other
+        than "oblique" or "view", ``view_vector`` is not one finite non-zero (3,)
+        direction, or ``view_angle_deg`` is not a finite number.
+    ImportError
+        When pyvista is not installed.
     """
     _check_view_options(scene, iso_ranges, window_size, segments, camera)
     w = _view_vector(view_angle_deg, view_vector)
@@ -262,7 +311,35 @@ def _image_data(pv, image, z):
 def show_slice(image, *, z=0.0, scene=None, clim=None, off_screen=False, screenshot=None,
                window_size=(800, 700), camera=None):
     """A reconstructed slice (an ``Image``) placed in 3-D at height ``z``, optionally with
-    the scene's mesh as a wireframe. Cell (i, j) of the slice sits at (x_j, y_i, z)."""
+    the scene's mesh as a wireframe. Cell (i, j) of the slice sits at (x_j, y_i, z).
+
+    Parameters
+    ----------
+    image : Image
+        The slice; each pixel is drawn as a cell of its size, grey-scale, with a colour
+        bar.
+    z : float, keyword-only
+        The slice's height, scene units (default 0.0).
+    scene : Scene, optional, keyword-only
+        Drawn as an orange wireframe (an analytic scene as prisms of 128 sides).
+    clim : (low, high), optional, keyword-only
+        The colour scale's limits (default None: pyvista's, the values' range).
+    off_screen, screenshot, window_size : keyword-only
+        See the module docstring; ``window_size`` (width, height) in pixels, default
+        (800, 700).
+    camera : pyvista camera position, optional, keyword-only
+        Default None: above the slice's centre at 4 × its half-width, looking down, y up.
+
+    Returns
+    -------
+    Shown
+        The image off screen, or the plotter on a desktop (module docstring).
+
+    Raises
+    ------
+    ImportError
+        When pyvista is not installed.
+    """
     pv = _pyvista()
     plotter = pv.Plotter(off_screen=off_screen, window_size=window_size)
     plotter.set_background("black")
@@ -287,14 +364,44 @@ def show_slice(image, *, z=0.0, scene=None, clim=None, off_screen=False, screens
 
 def volume_iso(volume):
     """A default iso-value for a reconstructed volume: half its 99.9th percentile (the
-    bright surface shell, not the FBP side-lobes and noise around it)."""
+    bright surface shell, not the FBP side-lobes and noise around it).
+
+    Parameters
+    ----------
+    volume : Volume
+        The reconstruction.
+
+    Returns
+    -------
+    float
+        0.5 × the 99.9th percentile of all its (signed) values.
+    """
     v = np.asarray(volume.values)
     return 0.5 * float(np.percentile(v, 99.9))
 
 
 def volume_surface(volume, iso=None):
     """The iso-surface of a :class:`meshladar.images.Volume` at ``iso`` (default
-    :func:`volume_iso`) as a pyvista mesh in scene coordinates."""
+    :func:`volume_iso`) as a pyvista mesh in scene coordinates.
+
+    Parameters
+    ----------
+    volume : Volume
+        The reconstruction; its values sit on the points of a grid through the voxel
+        centres.
+    iso : float, optional
+        The iso-value (default None: :func:`volume_iso`).
+
+    Returns
+    -------
+    pyvista.PolyData
+        The surface (empty when no value crosses ``iso``).
+
+    Raises
+    ------
+    ImportError
+        When pyvista is not installed.
+    """
     pv = _pyvista()
     dx, dy, dz = volume.spacing
     grid = pv.ImageData(dimensions=(volume.x.size, volume.y.size, volume.z.size),
@@ -311,7 +418,43 @@ def show_volume(images, zs=None, *, iso=None, render="iso", off_screen=False,
     :class:`meshladar.images.Volume` (then ``zs`` is not given), as the iso-surface at value
     ``iso`` (default: for a Volume :func:`volume_iso`, for a stack half its 99.5th
     percentile, where the bright surfaces are), or with ``render="volume"`` (stacks) as a
-    volume rendering with a robust window and a sigmoid opacity."""
+    volume rendering with a robust window and a sigmoid opacity.
+
+    Parameters
+    ----------
+    images : Volume or sequence of Image
+        A Volume (always drawn as its iso-surface: ``render`` is checked but not used),
+        or at least two images, one per height in ``zs``, all placed on the first one's
+        grid (not checked); the stack's values sit on the points of a grid through the
+        pixel centres.
+    zs : (n,) array_like, optional
+        The images' heights, scene units; not given with a Volume.
+    iso : float, optional, keyword-only
+        The iso-value. Default None: for a Volume :func:`volume_iso`; for a stack half the
+        99.5th percentile of its positive values (0 when it has none).
+    render : {"iso", "volume"}, keyword-only
+        For a stack: the iso-surface (default), or a volume rendering (``magma``, colour
+        limits 0 to the 99.5th percentile of the positive values, a colour bar).
+    off_screen, screenshot, window_size : keyword-only
+        See the module docstring; ``window_size`` (width, height) in pixels, default
+        (800, 700).
+    camera : pyvista camera position, optional, keyword-only
+        Default None: pyvista's isometric view.
+
+    Returns
+    -------
+    Shown
+        The image off screen, or the plotter on a desktop (module docstring).
+
+    Raises
+    ------
+    ValueError
+        When ``render`` is neither choice, ``zs`` is given with a Volume, ``images`` and
+        ``zs`` differ in length or have fewer than two, or ``zs`` is not increasing and
+        evenly spaced.
+    ImportError
+        When pyvista is not installed.
+    """
     pv = _pyvista()
     if render not in ("iso", "volume"):
         raise ValueError(f"render must be 'iso' or 'volume'; got {render!r}")

@@ -17,7 +17,29 @@ __all__ = ["draw", "figure"]
 @style.styled
 def draw(waves, path, *, realisations=None, noise=None, views=None, band=(5.0, 95.0),
          dpi=None):
-    """Write a PNG of :func:`figure` to ``path``; returns the path."""
+    """Write a PNG of :func:`figure` to ``path``; returns the path.
+
+    Parameters
+    ----------
+    waves : Waveforms
+        The waveforms (:class:`meshladar.waveforms.Waveforms`).
+    path : str or os.PathLike
+        The PNG to write, atomically (replaced if it exists).
+    realisations, noise, views, band :
+        As :func:`figure`.
+    dpi : float, optional
+        Resolution (default None: the style's, 150).
+
+    Returns
+    -------
+    str
+        ``path``, as a string.
+
+    Raises
+    ------
+    ParameterError
+        As :func:`figure`.
+    """
     plt = style.use()
     fig = figure(waves, realisations=realisations, noise=noise, views=views, band=band)
     path = style.save_png(fig, path, dpi)
@@ -32,6 +54,9 @@ def figure(waves, *, realisations=None, noise=None, views=None, band=(5.0, 95.0)
 
     Parameters
     ----------
+    waves : Waveforms
+        The noiseless waveforms: each view's samples against two-way time in ns (a range
+        axis r = ct/2 − standoff in metres on top).
     realisations : (n, n_views, n_samples) array, optional
         Noise realisations (:meth:`Waveforms.realise`): their ``band`` percentiles are
         shaded around the expected waveform, and the first is drawn.
@@ -42,6 +67,18 @@ def figure(waves, *, realisations=None, noise=None, views=None, band=(5.0, 95.0)
     views : sequence of int, optional
         Which views (default up to four, spread over all).
     band : (low, high) percentiles
+        The shaded band's percentiles of the realisations, in [0, 100] (default (5, 95)).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One panel per view, stacked, sharing the time axis.
+
+    Raises
+    ------
+    ParameterError
+        When ``waves`` is not a Waveforms, ``realisations`` is not (n, n_views,
+        n_samples), or ``views`` does not index the views.
     """
     if not isinstance(waves, Waveforms):
         raise ParameterError(f"waves must be a meshladar.waveforms.Waveforms; got "

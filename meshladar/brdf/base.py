@@ -40,7 +40,20 @@ MODELS = MappingProxyType(_REGISTRY)
 
 def is_builtin(model) -> bool:
     """True when ``model`` is an instance of a registered built-in model (not a subclass
-    of one): its outputs are trusted and not checked."""
+    of one): its outputs are trusted and not checked.
+
+    Parameters
+    ----------
+    model : object
+        Any object; only its exact type is looked at.
+
+    Returns
+    -------
+    bool
+        True when ``type(model)`` is the class registered in :data:`MODELS` under its
+        class name; False for a user's model, a subclass of a built-in model, or a
+        non-BRDF.
+    """
     return MODELS.get(type(model).__name__) is type(model)
 
 
@@ -112,37 +125,158 @@ class BRDF:
         diffuse-only Sandford-Robertson) and, by default, for a user's model, which may
         define it. The mesh model compares it with the normal change between neighbouring
         rays and warns when the rays cannot resolve the lobe
-        (:mod:`meshladar.forward.sampling`)."""
+        (:mod:`meshladar.forward.sampling`).
+
+        Returns
+        -------
+        float or None
+            The half-width in radians; the base class returns None.
+        """
         return None
 
     def projected(self, cos_theta, sin_theta):
         """F(θ; −θ)·cos θ in 1/sr for arrays cos θ ≥ 0 and sin θ = sqrt(1 − cos²θ) ≥ 0:
         every forward model passes unit pairs, (0, 1) where a direction is below the
-        horizon, so a model may read the cosine, the sine or the angle."""
+        horizon, so a model may read the cosine, the sine or the angle.
+
+        The one method a subclass must define; the base class only raises.
+
+        Parameters
+        ----------
+        cos_theta : array_like
+            cos θ of the monostatic incidence angle θ (from the outward normal), ≥ 0.
+        sin_theta : array_like
+            sin θ ≥ 0, broadcasting with ``cos_theta``.
+
+        Returns
+        -------
+        ndarray
+            F(θ; −θ)·cos θ in 1/sr, finite and ≥ 0, of the inputs' broadcast shape (a
+            subclass's return; :func:`projected_weight` checks a user's model's).
+
+        Raises
+        ------
+        ModelError
+            Always, from the base class: a subclass that does not define it cannot be
+            evaluated.
+
+        References
+        ----------
+        Jin & Levine (2009), Eq. 8.
+        """
         raise ModelError(f"{type(self).__name__} must define projected(cos_theta, "
                          "sin_theta), the monostatic F·cos θ (meshladar.brdf.BRDF)")
 
     def value(self, cos_theta, sin_theta):
         """F(θ; −θ) in 1/sr: the projected weight over cos θ (cos(fl(π/2)) at the horizon),
-        0 below it."""
+        0 below it.
+
+        Parameters
+        ----------
+        cos_theta : array_like
+            cos θ of the monostatic incidence angle θ. Where it is < 0 (below the horizon)
+            the result is 0.
+        sin_theta : array_like
+            sin θ ≥ 0, broadcasting with ``cos_theta``.
+
+        Returns
+        -------
+        ndarray
+            F(θ; −θ) in 1/sr: :func:`projected_weight` divided by max(cos θ, cos(fl(π/2))),
+            of the inputs' broadcast shape (float64).
+
+        Raises
+        ------
+        ParameterError
+            When a user's model's :meth:`projected` returns values of the wrong shape,
+            non-finite or negative values (from :func:`projected_weight`).
+        ModelError
+            When the class does not define :meth:`projected`.
+        """
         c = np.asarray(cos_theta, np.float64)
         p = projected_weight(self, c, sin_theta)          # (0, 1) below the horizon
         return np.where(c >= 0, p / np.maximum(c, _COS_HORIZON), 0.0)
 
     def bistatic(self, cos_i, sin_i, cos_r, sin_r, cos_h, sin_h):
         """F(w_i, w_r)·cos θr in 1/sr from the cosines and sines of θi, θr and the half
-        vector's polar angle; 0 below either horizon. Optional."""
+        vector's polar angle; 0 below either horizon. Optional.
+
+        Parameters
+        ----------
+        cos_i, sin_i : array_like
+            Cosine and sine (≥ 0) of θi, the polar angle of the direction to the source.
+        cos_r, sin_r : array_like
+            Cosine and sine (≥ 0) of θr, the polar angle of the direction to the receiver.
+        cos_h, sin_h : array_like
+            Cosine and sine (≥ 0) of the polar angle of the half vector that bisects the
+            two directions (the glint angle α). All six broadcast together.
+
+        Returns
+        -------
+        ndarray
+            F(w_i, w_r)·cos θr in 1/sr (a subclass's return; the base class has none).
+
+        Raises
+        ------
+        ModelError
+            Always, from the base class: a model without a bistatic evaluation cannot be
+            used with a bistatic receiver.
+        """
         raise ModelError(f"{type(self).__name__} has no bistatic evaluation: define "
                          "bistatic() to use it with a bistatic receiver")
 
     def bistatic_value(self, cos_i, sin_i, cos_r, sin_r, cos_h, sin_h):
-        """F(w_i, w_r) in 1/sr (the bistatic weight over cos θr)."""
+        """F(w_i, w_r) in 1/sr (the bistatic weight over cos θr).
+
+        Parameters
+        ----------
+        cos_i, sin_i : array_like
+            Cosine and sine (≥ 0) of θi, the polar angle of the direction to the source.
+        cos_r, sin_r : array_like
+            Cosine and sine (≥ 0) of θr, the polar angle of the direction to the receiver.
+        cos_h, sin_h : array_like
+            Cosine and sine (≥ 0) of the half vector's polar angle. All six broadcast
+            together.
+
+        Returns
+        -------
+        ndarray
+            :meth:`bistatic` divided by max(cos θr, cos(fl(π/2))); 0 where cos θi < 0 or
+            cos θr < 0.
+
+        Raises
+        ------
+        ModelError
+            When the class does not define :meth:`bistatic`.
+        """
         p = self.bistatic(cos_i, sin_i, cos_r, sin_r, cos_h, sin_h)
         return np.where((cos_i >= 0) & (cos_r >= 0), p / np.maximum(cos_r, _COS_HORIZON), 0.0)
 
     def monostatic(self, theta, *, projected=False):
         """F(θ; −θ) (or F·cos θ with ``projected=True``) for incidence angles θ in radians,
-        0 below the horizon; a float for a scalar θ."""
+        0 below the horizon; a float for a scalar θ.
+
+        Parameters
+        ----------
+        theta : array_like, radians
+            Incidence angle from the outward normal; must be finite. Only cos θ and |sin θ|
+            enter; the result is 0 where cos θ < 0.
+        projected : bool, keyword-only, default False
+            Return F(θ)·cos θ (:meth:`projected`) instead of F (:meth:`value`).
+
+        Returns
+        -------
+        ndarray or float
+            In 1/sr, the shape of ``theta``; a Python float for a scalar ``theta``.
+
+        Raises
+        ------
+        ParameterError
+            When ``theta`` is not finite real numbers, ``projected`` is not a bool, or a
+            user's model returns values of the wrong shape, non-finite or negative.
+        ModelError
+            When the class does not define :meth:`projected`.
+        """
         c, s = _cos_sin(theta, "theta")
         check_flag("projected", projected)
         out = projected_weight(self, c, s) if projected else self.value(c, s)
@@ -166,6 +300,14 @@ class BRDF:
         -------
         (...) ndarray
             0 where either direction is below the horizon.
+
+        Raises
+        ------
+        ParameterError
+            When a direction is not finite, not of shape (..., 3) or zero, the three do not
+            broadcast together, or ``projected`` is not a bool.
+        ModelError
+            When the class does not define :meth:`bistatic`.
         """
         check_flag("projected", projected)
         w_i = unit_vectors("incident", incident)
@@ -197,6 +339,35 @@ class BRDF:
 
         Δφ = 0 with θr = θi is the monostatic geometry; Δφ = π with θr = θi is the mirror
         (Snell) direction. Angles in radians, broadcast together.
+
+        The directions are built about the normal +z: w_i = (sin θi, 0, cos θi) and
+        w_r = (sin θr cos Δφ, sin θr sin Δφ, cos θr), then passed to :meth:`evaluate`.
+
+        Parameters
+        ----------
+        theta_i : array_like, radians
+            Polar angle of the direction to the source; must be finite.
+        theta_r : array_like, radians
+            Polar angle of the direction to the receiver; must be finite.
+        delta_phi : array_like, radians, default 0.0
+            Relative azimuth φr − φi; must be finite.
+        projected : bool, keyword-only, default False
+            Return F·cos θr instead of F.
+
+        Returns
+        -------
+        ndarray or float
+            In 1/sr, of the angles' broadcast shape; 0 where either direction is below the
+            horizon; a Python float when all three angles are scalars.
+
+        Raises
+        ------
+        ParameterError
+            When an angle is not finite real numbers or ``projected`` is not a bool.
+        ValueError
+            When the angles do not broadcast together.
+        ModelError
+            When the class does not define :meth:`bistatic`.
         """
         ti = finite_array("theta_i", theta_i)
         tr = finite_array("theta_r", theta_r)
@@ -208,7 +379,15 @@ class BRDF:
         return _out(self.evaluate(w_i, w_r, projected=projected), theta_i, theta_r, delta_phi)
 
     def describe(self) -> dict:
-        """A JSON-serialisable description: the model's name and its parameters."""
+        """A JSON-serialisable description: the model's name and its parameters.
+
+        Returns
+        -------
+        dict
+            ``"model"`` (the class name), ``"name"`` (the label, or None) and, for a
+            dataclass, every other field by name, arrays as lists. A user's model that is
+            not a dataclass gives only ``"model"`` and ``"name"``.
+        """
         params = ({f.name: getattr(self, f.name) for f in dataclasses.fields(self)
                    if f.name != "name"} if dataclasses.is_dataclass(self) else {})
         return {"model": type(self).__name__, "name": self.name,
@@ -224,7 +403,32 @@ def projected_weight(m, cos_theta, sin_theta):
     (a direction below the horizon, where a forward model weighs the surface as at grazing
     or discards the weight) is clamped to 0 and its sin θ set to 1, so that a model sees
     θ = π/2 whether it reads the cosine, the sine or the angle atan2(sin θ, cos θ). Pairs
-    with cos θ ≥ 0 pass unchanged."""
+    with cos θ ≥ 0 pass unchanged.
+
+    Parameters
+    ----------
+    m : BRDF
+        The model whose :meth:`BRDF.projected` is called.
+    cos_theta : array_like
+        cos θ of the monostatic incidence angle; values < 0 are clamped to 0.
+    sin_theta : array_like
+        sin θ, broadcasting with ``cos_theta``; set to 1 where cos θ < 0.
+
+    Returns
+    -------
+    ndarray
+        F(θ; −θ)·cos θ in 1/sr. For a user's model, a read-only float64 array of the
+        inputs' broadcast shape (``np.broadcast_to`` of the model's output); for a built-in
+        model (:func:`is_builtin`), its output as returned, unchecked.
+
+    Raises
+    ------
+    ParameterError
+        When a user's model returns something that does not convert to real numbers of the
+        inputs' shape, or a value that is not finite or is negative.
+    ModelError
+        When the class does not define :meth:`BRDF.projected`.
+    """
     cos_theta, sin_theta = _grazing_below_horizon(cos_theta, sin_theta)
     out = m.projected(cos_theta, sin_theta)
     if is_builtin(m):
@@ -255,7 +459,27 @@ def _grazing_below_horizon(cos_theta, sin_theta):
 
 
 def check_brdf(name, value):
-    """``value`` if it follows the BRDF protocol, else a ParameterError naming ``name``."""
+    """``value`` if it follows the BRDF protocol, else a ParameterError naming ``name``.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name, quoted in the error message.
+    value : object
+        The candidate coating.
+
+    Returns
+    -------
+    BRDF
+        ``value`` itself, unchanged.
+
+    Raises
+    ------
+    ParameterError
+        When ``value`` is not an instance of :class:`BRDF`.
+    ModelError
+        When its class does not define :meth:`BRDF.projected`.
+    """
     if not isinstance(value, BRDF):
         raise ParameterError(f"{name} must be a meshladar.brdf.BRDF ({', '.join(MODELS)} "
                              f"or a subclass); got {type(value).__name__}")
@@ -278,5 +502,19 @@ def _unit_interval(name, value):
 def material_table(materials):
     """(n, 7) float64 rows of (rho_d, epsilon, b, e, G, has_diffuse, has_specular): each
     material's ``kernel_params``, the table the engine's compiled loops read (every material
-    must have them for the compiled path)."""
+    must have them for the compiled path).
+
+    Parameters
+    ----------
+    materials : sequence of BRDF
+        The n coatings, in material-index order. Each must have ``kernel_params`` that are
+        not None (of the built-in models, :class:`meshladar.brdf.SandfordRobertson` and
+        :class:`meshladar.brdf.Lambertian`); this is not checked here.
+
+    Returns
+    -------
+    (n, 7) ndarray of float64
+        Row i is ``materials[i].kernel_params`` (a
+        :class:`meshladar.brdf.KernelRow`).
+    """
     return np.array([m.kernel_params for m in materials], dtype=np.float64)

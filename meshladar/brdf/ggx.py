@@ -35,6 +35,26 @@ class GGX(BRDF, builtin=True):
     [0, 1] the Fresnel factor, taken constant (Mitsuba's ``specular_reflectance`` with a
     perfect conductor; 1 by default). Monostatic, θh = θ and
     F cos θ = R D(θ) cos θ / (cos θ + sqrt(cos²θ + α² sin²θ))², finite up to θ = π/2.
+
+    Parameters
+    ----------
+    alpha : float
+        Roughness α of the distribution D, in [1e-4, 1].
+    reflectance : float, default 1.0
+        Constant Fresnel factor R, in [0, 1].
+    name : str or None, keyword-only, default None
+        A label for tables and reprs; not part of equality.
+
+    Raises
+    ------
+    ParameterError
+        When ``alpha`` or ``reflectance`` is not a finite real in its range, or ``name`` is
+        neither a str nor None.
+
+    References
+    ----------
+    Walter et al. (2007): the GGX distribution D, its Smith shadowing G1 and the microfacet
+    BRDF F above.
     """
 
     alpha: float
@@ -57,11 +77,53 @@ class GGX(BRDF, builtin=True):
         return 1.0 / (c + np.hypot(c, self.alpha * s))
 
     def projected(self, cos_theta, sin_theta):
+        """F(θ; −θ)·cos θ = R D(θ) cos θ / (cos θ + sqrt(cos²θ + α² sin²θ))² in 1/sr.
+
+        Monostatic: θi = θr = θh = θ. Finite up to θ = π/2, where it is 0.
+
+        Parameters
+        ----------
+        cos_theta : array_like
+            cos θ of the monostatic incidence angle θ; values < 0 are clamped to 0.
+        sin_theta : array_like
+            sin θ ≥ 0, broadcasting with ``cos_theta``.
+
+        Returns
+        -------
+        ndarray
+            F·cos θ in 1/sr, float64, of the inputs' broadcast shape.
+
+        References
+        ----------
+        Walter et al. (2007).
+        """
         c = np.maximum(np.asarray(cos_theta, np.float64), 0.0)
         s = np.asarray(sin_theta, np.float64)
         return self.reflectance * self._D(c, s) * c * self._g1_over_2c(c, s) ** 2
 
     def bistatic(self, cos_i, sin_i, cos_r, sin_r, cos_h, sin_h):
+        """F(w_i, w_r)·cos θr = R D(θh) cos θr · G1(w_i)/(2 cos θi) · G1(w_r)/(2 cos θr) in
+        1/sr; 0 where cos θi < 0 or cos θr < 0. cos θh is clamped at 0.
+
+        Parameters
+        ----------
+        cos_i, sin_i : array_like
+            Cosine and sine (≥ 0) of θi, the polar angle of the direction to the source.
+        cos_r, sin_r : array_like
+            Cosine and sine (≥ 0) of θr, the polar angle of the direction to the receiver.
+        cos_h, sin_h : array_like
+            Cosine and sine (≥ 0) of θh, the polar angle of the half vector. All six
+            broadcast together.
+
+        Returns
+        -------
+        ndarray
+            F·cos θr in 1/sr, float64, of the inputs' broadcast shape.
+
+        References
+        ----------
+        Walter et al. (2007).
+        """
         ci = np.maximum(np.asarray(cos_i, np.float64), 0.0)
         cr = np.maximum(np.asarray(cos_r, np.float64), 0.0)
         ch = np.maximum(np.asarray(cos_h, np.float64), 0.0)
@@ -76,5 +138,11 @@ class GGX(BRDF, builtin=True):
         return (self.alpha, None)
 
     def lobe_width(self):
-        """α: D falls to a quarter of its peak at sin θ = α/sqrt(1 − α²) ≈ α."""
+        """α: D falls to a quarter of its peak at sin θ = α/sqrt(1 − α²) ≈ α.
+
+        Returns
+        -------
+        float
+            ``alpha``, read as radians of the monostatic incidence angle θ.
+        """
         return self.alpha

@@ -17,7 +17,7 @@ SR splits reflection into a diffuse lobe (Eqs. A1-A4) and a specular glint lobe
 the source and to the receiver. For the collocated (monostatic) ladar, θr = θi = θ and
 α = θ. Conventions (angles, horizon, units) are :mod:`meshladar.brdf.base`'s.
 
-Its compiled twin, :func:`meshladar.brdf._sandford_robertson_kernel.sr_monostatic`, takes
+Its compiled twin, ``meshladar.brdf._sandford_robertson_kernel.sr_monostatic``, takes
 the coating's :attr:`SandfordRobertson.kernel_params` (a :class:`KernelRow`) and evaluates
 the same expressions in the same order.
 """
@@ -55,7 +55,25 @@ _G_SERIES_TERMS = 64
 
 class KernelRow(NamedTuple):
     """One coating's row of the compiled SR kernel's material table (the flat arguments of
-    :func:`~meshladar.brdf._sandford_robertson_kernel.sr_monostatic` after cos θ, sin θ)."""
+    the compiled ``sr_monostatic`` after cos θ, sin θ).
+
+    Attributes
+    ----------
+    rho_d : float
+        Diffuse spectral reflectivity ρd (A1).
+    epsilon : float
+        Spectral emissivity ε (A7).
+    b : float
+        Grazing-angle reflectivity (A2).
+    e : float
+        Glint eccentricity (A6).
+    G : float
+        Diffuse normalisation G(b) (A3).
+    has_diffuse : float
+        1.0 when the diffuse lobe is summed, else 0.0.
+    has_specular : float
+        1.0 when the specular (glint) lobe is summed, else 0.0.
+    """
 
     rho_d: float
     epsilon: float
@@ -128,6 +146,17 @@ def diffuse_shape(theta, b):
     Returns
     -------
     g : ndarray or float, in [0, 1]
+        The shape of ``theta``; a Python float for a scalar ``theta``.
+
+    Raises
+    ------
+    ParameterError
+        When ``b`` is not a real number in [0, 1] or ``theta`` is not finite.
+
+    References
+    ----------
+    Jin & Levine (2009), Eq. A2.
+    Sandford & Robertson (1985).
     """
     b = check_real("b", b, low=0.0, high=1.0)
     c, s = _cos_sin(theta, "theta")
@@ -148,6 +177,17 @@ def diffuse_normalization(b):
     Returns
     -------
     G : ndarray or float, in [1/2, 1]
+        The shape of ``b``; a Python float for a scalar ``b``.
+
+    Raises
+    ------
+    ParameterError
+        When ``b`` is not finite real numbers, or any element is outside [0, 1].
+
+    References
+    ----------
+    Jin & Levine (2009), Eq. A3.
+    Sandford & Robertson (1985).
     """
     arr = finite_array("b", b)
     if np.any((arr < 0) | (arr > 1)):
@@ -166,8 +206,25 @@ def glint_lobe(alpha, e):
     Parameters
     ----------
     alpha : array_like, radians
-        Glint angle: polar angle of the half vector.
+        Glint angle: polar angle of the half vector. Must be finite; only cos α and |sin α|
+        enter.
     e : float in [E_MIN, 1]
+        Glint eccentricity (specularity parameter), a scalar; E_MIN = 1e-12.
+
+    Returns
+    -------
+    h : ndarray or float, in [1, 1/e⁴]
+        The shape of ``alpha``; a Python float for a scalar ``alpha``.
+
+    Raises
+    ------
+    ParameterError
+        When ``e`` is not a real number in [E_MIN, 1] or ``alpha`` is not finite.
+
+    References
+    ----------
+    Jin & Levine (2009), Eq. A6.
+    Sandford & Robertson (1985).
     """
     e = check_real("e", e, low=E_MIN, high=1.0)
     c, s = _cos_sin(alpha, "alpha")
@@ -194,8 +251,26 @@ def specular_normalization(theta, e):
     Parameters
     ----------
     theta : array_like, radians
-        Incidence angle θi; only cos θ enters, clipped at 0 below the horizon.
+        Incidence angle θi; only cos θ enters, clipped at 0 below the horizon. Must be
+        finite.
     e : float in [E_MIN, 1]
+        Glint eccentricity (specularity parameter), a scalar; E_MIN = 1e-12.
+
+    Returns
+    -------
+    H : ndarray or float
+        The closed form above, from 1/(e²(1 + e²)) at θ = 0 to 1/(2e) at θ = π/2 (and
+        below the horizon); the shape of ``theta``, a Python float for a scalar ``theta``.
+
+    Raises
+    ------
+    ParameterError
+        When ``e`` is not a real number in [E_MIN, 1] or ``theta`` is not finite.
+
+    References
+    ----------
+    Jin & Levine (2009), Eqs. A9 and A10.
+    Sandford & Robertson (1985).
     """
     e = check_real("e", e, low=E_MIN, high=1.0)
     c, _ = _cos_sin(theta, "theta")
@@ -229,6 +304,41 @@ class SandfordRobertson(BRDF, builtin=True):
 
     The glint lobe h(α) is the Trowbridge-Reitz (GGX) distribution with roughness e.
 
+    Parameters
+    ----------
+    rho_d : float
+        Diffuse spectral reflectivity ρd, in [0, 1] (A1).
+    epsilon : float
+        Spectral emissivity ε, in [0, 1] (A7).
+    b : float
+        Grazing-angle reflectivity, in [0, 1] (A2): 0 is a Lambertian diffuse lobe, larger
+        values a narrower one.
+    e : float
+        Glint eccentricity, in [E_MIN, 1] = [1e-12, 1] (A6): small values are mirror-like,
+        1 a flat lobe (h ≡ 1).
+    lobes : {"both", "diffuse", "specular"}, keyword-only, default "both"
+        Which lobes F sums (Eq. 4). With "specular" the diffuse term is left out but ρd
+        still enters ρs (A8).
+    name : str or None, keyword-only, default None
+        A label for tables and reprs; not part of equality.
+
+    Raises
+    ------
+    ParameterError
+        When ``rho_d``, ``epsilon``, ``b`` or ``e`` is not a finite real in its range,
+        ``lobes`` is not one of :data:`LOBES`, ``name`` is neither a str nor None, or the
+        specular lobe is included and rho_d + epsilon > G(b)·(1 + 1e-12).
+
+    Warns
+    -----
+    EnergyConservationWarning
+        When ``lobes="diffuse"`` and rho_d / G(b) > 1 + 1e-12.
+
+    References
+    ----------
+    Jin & Levine (2009), Eqs. 1-4, 8 and A1-A10.
+    Sandford & Robertson (1985), the original BRDF.
+
     Examples
     --------
     >>> import numpy as np, meshladar as ml
@@ -237,10 +347,6 @@ class SandfordRobertson(BRDF, builtin=True):
     651.1
     >>> float(m.monostatic(np.pi / 2, projected=True)) > 0   # F·cos θ finite at grazing
     True
-
-    References
-    ----------
-    Jin & Levine, Appl. Opt. 48 (2009), Eqs. (1)-(4), (8), (A1)-(A10).
     """
 
     rho_d: float
@@ -297,13 +403,57 @@ class SandfordRobertson(BRDF, builtin=True):
 
     # -- directional quantities (A4, A7, A8) --------------------------------------------
     def diffuse_reflectance(self, theta):
-        """Directional diffuse reflectance ρd g(θ)/G(b) (A4), 0 for lobes='specular'."""
+        """Directional diffuse reflectance ρd g(θ)/G(b) (A4), 0 for lobes='specular'.
+
+        Parameters
+        ----------
+        theta : array_like, radians
+            Incidence angle from the outward normal; must be finite. Only cos θ and |sin θ|
+            enter; the result is 0 where cos θ < 0 (below the horizon).
+
+        Returns
+        -------
+        ndarray or float
+            Dimensionless, the shape of ``theta``; a Python float for a scalar ``theta``.
+
+        Raises
+        ------
+        ParameterError
+            When ``theta`` is not finite real numbers.
+
+        References
+        ----------
+        Jin & Levine (2009), Eq. A4.
+        """
         c, s = _cos_sin(theta, "theta")
         scale = self.rho_d / self.G if self.lobes != "specular" else 0.0
         return _out(np.where(c >= 0, scale * _g(np.abs(c), s, self.b), 0.0), theta)
 
     def emissivity(self, theta):
-        """Directional emissivity ε g(θ)/G(b) (A7)."""
+        """Directional emissivity ε g(θ)/G(b) (A7).
+
+        It does not depend on ``lobes``.
+
+        Parameters
+        ----------
+        theta : array_like, radians
+            Incidence angle from the outward normal; must be finite. Only cos θ and |sin θ|
+            enter; the result is 0 where cos θ < 0 (below the horizon).
+
+        Returns
+        -------
+        ndarray or float
+            Dimensionless, the shape of ``theta``; a Python float for a scalar ``theta``.
+
+        Raises
+        ------
+        ParameterError
+            When ``theta`` is not finite real numbers.
+
+        References
+        ----------
+        Jin & Levine (2009), Eq. A7.
+        """
         c, s = _cos_sin(theta, "theta")
         return _out(np.where(c >= 0, self.epsilon / self.G * _g(np.abs(c), s, self.b), 0.0),
                     theta)
@@ -313,6 +463,27 @@ class SandfordRobertson(BRDF, builtin=True):
 
         Clipped at 0 (it is ≥ 0 for every coating that includes the specular lobe);
         0 for lobes='diffuse'.
+
+        Parameters
+        ----------
+        theta : array_like, radians
+            Incidence angle from the outward normal; must be finite. Only cos θ and |sin θ|
+            enter; the result is 0 where cos θ < 0 (below the horizon).
+
+        Returns
+        -------
+        ndarray or float
+            Dimensionless, in [0, 1], the shape of ``theta``; a Python float for a scalar
+            ``theta``.
+
+        Raises
+        ------
+        ParameterError
+            When ``theta`` is not finite real numbers.
+
+        References
+        ----------
+        Jin & Levine (2009), Eq. A8.
         """
         c, s = _cos_sin(theta, "theta")
         rs = self._rho_s(np.abs(c), s) if self.has_specular else np.zeros_like(c)
@@ -342,18 +513,102 @@ class SandfordRobertson(BRDF, builtin=True):
     def projected(self, cos_theta, sin_theta):
         """F(θ; −θ)·cos θ, the weight of the paper's Eq. 8: the specular term's 1/cos θ (A5)
         cancels exactly, so this is finite up to and including θ = π/2, where it equals
-        ρs(π/2) e/(2π) for the glint lobe."""
+        ρs(π/2) e/(2π) for the glint lobe.
+
+        Monostatic: θr = θi = θ and the glint angle α = θ.
+
+        Parameters
+        ----------
+        cos_theta : array_like
+            cos θ of the monostatic incidence angle θ; the result is 0 where it is < 0.
+        sin_theta : array_like
+            sin θ ≥ 0, broadcasting with ``cos_theta``.
+
+        Returns
+        -------
+        ndarray
+            F(θ; −θ)·cos θ in 1/sr, float64, of the inputs' broadcast shape.
+
+        References
+        ----------
+        Jin & Levine (2009), Eqs. 8, A1, A5 and A8.
+        """
         return self._core(cos_theta, sin_theta, cos_theta, sin_theta, cos_theta, sin_theta,
                           True)
 
     def value(self, cos_theta, sin_theta):
+        """F(θ; −θ) in 1/sr, evaluated directly (not as :meth:`projected` over cos θ): the
+        specular term's 1/cos θr (A5) is taken as 1/max(cos θ, cos(fl(π/2))).
+
+        Monostatic: θr = θi = θ and the glint angle α = θ.
+
+        Parameters
+        ----------
+        cos_theta : array_like
+            cos θ of the monostatic incidence angle θ; the result is 0 where it is < 0.
+        sin_theta : array_like
+            sin θ ≥ 0, broadcasting with ``cos_theta``.
+
+        Returns
+        -------
+        ndarray
+            F(θ; −θ) in 1/sr, float64, of the inputs' broadcast shape.
+
+        References
+        ----------
+        Jin & Levine (2009), Eqs. 4, A1, A5 and A8.
+        """
         return self._core(cos_theta, sin_theta, cos_theta, sin_theta, cos_theta, sin_theta,
                           False)
 
     def bistatic(self, cos_i, sin_i, cos_r, sin_r, cos_h, sin_h):
+        """F(w_i, w_r)·cos θr in 1/sr; 0 where cos θi < 0 or cos θr < 0. The specular
+        term's 1/cos θr (A5) cancels, so it is finite at θr = π/2.
+
+        Parameters
+        ----------
+        cos_i, sin_i : array_like
+            Cosine and sine (≥ 0) of θi, the polar angle of the direction to the source.
+        cos_r, sin_r : array_like
+            Cosine and sine (≥ 0) of θr, the polar angle of the direction to the receiver.
+        cos_h, sin_h : array_like
+            Cosine and sine of the glint angle α, the half vector's polar angle. All six
+            broadcast together.
+
+        Returns
+        -------
+        ndarray
+            F·cos θr in 1/sr, float64, of the inputs' broadcast shape.
+
+        References
+        ----------
+        Jin & Levine (2009), Eqs. A1, A5 and A8.
+        """
         return self._core(cos_i, sin_i, cos_r, sin_r, cos_h, sin_h, True)
 
     def bistatic_value(self, cos_i, sin_i, cos_r, sin_r, cos_h, sin_h):
+        """F(w_i, w_r) in 1/sr; 0 where cos θi < 0 or cos θr < 0. The specular term's
+        1/cos θr (A5) is taken as 1/max(cos θr, cos(fl(π/2))).
+
+        Parameters
+        ----------
+        cos_i, sin_i : array_like
+            Cosine and sine (≥ 0) of θi, the polar angle of the direction to the source.
+        cos_r, sin_r : array_like
+            Cosine and sine (≥ 0) of θr, the polar angle of the direction to the receiver.
+        cos_h, sin_h : array_like
+            Cosine and sine of the glint angle α, the half vector's polar angle. All six
+            broadcast together.
+
+        Returns
+        -------
+        ndarray
+            F in 1/sr, float64, of the inputs' broadcast shape.
+
+        References
+        ----------
+        Jin & Levine (2009), Eqs. 4, A1, A5 and A8.
+        """
         return self._core(cos_i, sin_i, cos_r, sin_r, cos_h, sin_h, False)
 
     def _evaluate_cs(self, cos_i, sin_i, cos_r, sin_r, cos_a, sin_a, projected):
@@ -375,7 +630,13 @@ class SandfordRobertson(BRDF, builtin=True):
 
     def lobe_width(self):
         """e, the glint lobe's roughness (a GGX lobe: a quarter of its peak at θ ≈ e); None
-        without the specular lobe."""
+        without the specular lobe.
+
+        Returns
+        -------
+        float or None
+            ``e`` (read as radians of θ) when ``lobes`` is "both" or "specular", else None.
+        """
         return self.e if self.has_specular else None
 
     def monostatic(self, theta, *, projected=False):
@@ -398,6 +659,15 @@ class SandfordRobertson(BRDF, builtin=True):
         -------
         ndarray or float
             Same shape as ``theta``; a float for scalar input.
+
+        Raises
+        ------
+        ParameterError
+            When ``theta`` is not finite real numbers or ``projected`` is not a bool.
+
+        References
+        ----------
+        Jin & Levine (2009), Eqs. 4, 8, A1, A5 and A8.
         """
         c, s = _cos_sin(theta, "theta")
         return _out(self._core(c, s, c, s, c, s, check_flag("projected", projected)), theta)

@@ -33,9 +33,32 @@ class Tabulated(BRDF, builtin=True):
     ================  =====  ==================  ========================================
 
     ``theta_deg`` must increase strictly from 0 to 90 (degrees); ``values`` are F in 1/sr
-    (or, with ``projected=True``, F·cos θ: give that form when F grows toward grazing
-    incidence, as glossy coatings' does). Between samples F·cos θ is interpolated linearly
-    in θ. Monostatic only.
+    (or, with ``projected_values=True``, F·cos θ: give that form when F grows toward
+    grazing incidence, as glossy coatings' does). Between samples F·cos θ is interpolated
+    linearly in θ. Monostatic only.
+
+    Parameters
+    ----------
+    theta_deg : (k,) array_like, degrees
+        Sample angles from the normal, k ≥ 2, finite, strictly increasing, the first
+        exactly 0 and the last exactly 90. Stored as a read-only float64 copy.
+    values : (k,) array_like, 1/sr
+        F (or F·cos θ) at each angle, finite, in [0, 1e12]. Stored as a read-only float64
+        copy, as given.
+    projected_values : bool, keyword-only, default False
+        ``values`` are F·cos θ, not F. With False, F·cos θ at 90° is taken as exactly 0
+        whatever the last value.
+    name : str or None, keyword-only, default None
+        A label; not part of equality.
+
+    Raises
+    ------
+    ParameterError
+        When ``name`` is neither a str nor None, ``projected_values`` is not a bool,
+        ``theta_deg`` or ``values`` holds non-finite or non-real numbers, ``theta_deg`` is
+        not 1-D with at least 2 angles, ``values`` does not have its shape, ``theta_deg``
+        does not increase strictly from exactly 0 to exactly 90, or a value is outside
+        [0, 1e12].
     """
 
     theta_deg: np.ndarray
@@ -76,6 +99,21 @@ class Tabulated(BRDF, builtin=True):
     __hash__ = None
 
     def projected(self, cos_theta, sin_theta):
+        """F(θ; −θ)·cos θ in 1/sr, interpolated linearly in θ between the samples.
+
+        Parameters
+        ----------
+        cos_theta : array_like
+            cos θ of the monostatic incidence angle θ; values < 0 are clamped to 0.
+        sin_theta : array_like
+            sin θ ≥ 0, broadcasting with ``cos_theta``. θ is read as
+            atan2(sin θ, max(cos θ, 0)), in degrees, and looked up in ``theta_deg``.
+
+        Returns
+        -------
+        ndarray
+            F·cos θ in 1/sr, float64, of the inputs' broadcast shape.
+        """
         c = np.maximum(np.asarray(cos_theta, np.float64), 0.0)
         theta = np.degrees(np.arctan2(np.asarray(sin_theta, np.float64), c))
         return np.interp(theta, self.theta_deg, self._weight)
@@ -88,7 +126,17 @@ class Tabulated(BRDF, builtin=True):
     def lobe_width(self):
         """The angle where F, interpolated, first falls to a quarter of F(0) (a glint
         measured at normal incidence); None where F(0) = 0 or F never falls that far
-        before 90° (a diffuse or grazing-bright table)."""
+        before 90° (a diffuse or grazing-bright table).
+
+        F at each sample is the table's F·cos θ over cos θ; the sample at 90° is not
+        searched, and between the two samples that bracket F(0)/4, F is interpolated
+        linearly in θ.
+
+        Returns
+        -------
+        float or None
+            The angle in radians, or None.
+        """
         t = np.deg2rad(self.theta_deg)
         f = self._weight / np.maximum(np.cos(t), 1e-300)            # F at each sample
         below = np.flatnonzero(f[:-1] <= 0.25 * f[0])
@@ -98,5 +146,13 @@ class Tabulated(BRDF, builtin=True):
         return float(np.interp(0.25 * f[0], [f[k], f[k - 1]], [t[k], t[k - 1]]))
 
     def describe(self) -> dict:
+        """A JSON-serialisable description: the model's name and its parameters.
+
+        Returns
+        -------
+        dict
+            ``"model"`` ("Tabulated"), ``"name"``, ``"theta_deg"`` and ``"values"`` (as
+            stored, as lists) and ``"projected_values"``.
+        """
         return {"model": "Tabulated", "name": self.name, "theta_deg": self.theta_deg.tolist(),
                 "values": self.values.tolist(), "projected_values": self.projected_values}

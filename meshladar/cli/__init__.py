@@ -43,7 +43,37 @@ _WORDS = {"simulate": in_flags}
 
 
 def main(argv=None) -> int:
-    """Run the command line; returns the exit status."""
+    """Run the command line; returns the exit status.
+
+    Errors never show a traceback: an input error prints one ``meshladar: error: ...``
+    line, and a bug of meshladar's own prints one line naming a file that holds the
+    traceback. Warnings print as one ``meshladar: warning: ...`` line each (simulate's in
+    its flags' words) while the command runs; the caller's ``warnings.formatwarning`` is
+    restored afterwards. On the main thread SIGTERM stops a run as Ctrl-C does, and the
+    previous SIGTERM handler is restored afterwards.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments after the program's name, e.g. ``["simulate", "disk", "-o",
+        "disk.npz"]``. Default None: ``sys.argv[1:]`` (argparse's default).
+
+    Returns
+    -------
+    int
+        The exit status: the command's own (0 on success); 2 for a
+        :class:`~meshladar.errors.MeshladarError`, an ``ImportError`` (a missing extra) or
+        an ``OSError``; 130 when interrupted (Ctrl-C, or SIGTERM on the main thread), with
+        a hint to resume when ``--run-dir`` was given; 1 for any other
+        exception (a bug), its traceback written to a new temporary file
+        ``meshladar-traceback-*.txt``.
+
+    Raises
+    ------
+    SystemExit
+        From argparse, before any command runs: status 2 for a command line it cannot
+        parse (a flag's value checker's message), 0 after ``--help`` or ``--version``.
+    """
     args = build_parser(COMMANDS).parse_args(argv)
     previous = _terminate_as_interrupt()
     format_before = warnings.formatwarning

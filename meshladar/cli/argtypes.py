@@ -15,6 +15,29 @@ def _number(parse, ok, what):
     """An argparse type: ``parse(text)`` accepted when ``ok(value)``, else one message
     naming what is valid."""
     def convert(text: str):
+        """One flag's value: a number of the kind this checker names (its ``__name__``, e.g.
+        "positive integer").
+
+        Parameters
+        ----------
+        text : str
+            The value as typed on the command line.
+
+        Returns
+        -------
+        int or float
+            The parsed value: an ``int`` for ``positive_int`` and ``nonnegative_int``, a
+            ``float`` for the others (``positive_float``: > 0 and finite;
+            ``nonnegative_float``: >= 0 and finite; ``finite_float``: finite;
+            ``unit_fraction``: in (0, 1]; ``positive_int``: >= 1; ``nonnegative_int``:
+            >= 0).
+
+        Raises
+        ------
+        argparse.ArgumentTypeError
+            When ``text`` does not parse or its value is out of range: ``must be a
+            <kind>; got '<text>'``.
+        """
         try:
             value = parse(text)
         except ValueError:
@@ -38,7 +61,23 @@ nonnegative_float = _number(float, lambda v: v >= 0 and math.isfinite(v),
 
 
 def pair(text: str):
-    """Two finite numbers ``U,V``."""
+    """Two finite numbers ``U,V``.
+
+    Parameters
+    ----------
+    text : str
+        Two numbers separated by one comma, e.g. ``"0.1,-0.2"``.
+
+    Returns
+    -------
+    tuple of float
+        ``(u, v)``.
+
+    Raises
+    ------
+    argparse.ArgumentTypeError
+        When ``text`` is not exactly two numbers, or either is not finite.
+    """
     try:
         values = tuple(float(v) for v in text.split(","))
     except ValueError:
@@ -49,7 +88,24 @@ def pair(text: str):
 
 
 def direction(text: str):
-    """A direction ``X,Y,Z``: three finite numbers, not all zero."""
+    """A direction ``X,Y,Z``: three finite numbers, not all zero.
+
+    Parameters
+    ----------
+    text : str
+        Three numbers separated by commas, e.g. ``"0,0,1"``.
+
+    Returns
+    -------
+    list of float
+        ``[x, y, z]`` as given (not normalised here).
+
+    Raises
+    ------
+    argparse.ArgumentTypeError
+        When ``text`` is not exactly three numbers, one is not finite, or all three are
+        zero.
+    """
     try:
         values = [float(v) for v in text.split(",")]
     except ValueError:
@@ -62,7 +118,24 @@ def direction(text: str):
 
 
 def angle_list(text: str):
-    """Comma-separated finite angles in degrees."""
+    """Comma-separated finite angles in degrees.
+
+    Parameters
+    ----------
+    text : str
+        Numbers separated by commas, e.g. ``"0,1,5,45,90"``; empty items (``"0,,1"``, a
+        trailing comma) are skipped. Any finite value is accepted (no range is imposed).
+
+    Returns
+    -------
+    list of float
+        The angles in degrees, in the order given (at least one).
+
+    Raises
+    ------
+    argparse.ArgumentTypeError
+        When an item is not a number, none is given, or one is not finite.
+    """
     try:
         values = [float(v) for v in text.split(",") if v.strip()]
     except ValueError:
@@ -74,7 +147,24 @@ def angle_list(text: str):
 
 
 def window_size(text):
-    """WxH in pixels."""
+    """WxH in pixels.
+
+    Parameters
+    ----------
+    text : str
+        ``WIDTHxHEIGHT``, e.g. ``"1200x900"`` (the ``x`` in either case).
+
+    Returns
+    -------
+    tuple of int
+        ``(width, height)`` in pixels.
+
+    Raises
+    ------
+    argparse.ArgumentTypeError
+        When ``text`` is not two integers separated by ``x``, or either is outside
+        [1, 16384].
+    """
     parts = text.lower().split("x")
     try:
         size = tuple(int(p) for p in parts)
@@ -88,7 +178,27 @@ def window_size(text):
 
 def coatings(text):
     """'part=name,part=name' → dict (names from the coating table); a part named twice is
-    refused (which coating was meant cannot be guessed)."""
+    refused (which coating was meant cannot be guessed).
+
+    Parameters
+    ----------
+    text : str
+        ``PART=COATING`` pairs separated by commas, e.g. ``"small=aluminum"``; spaces
+        around names and empty items are ignored. A part given the same coating twice is
+        accepted.
+
+    Returns
+    -------
+    dict of str to str
+        Part (or shape) name → coating name. The names are not checked here: the scene
+        loader (:func:`meshladar.cli.sources.load_source`) checks them against the coating
+        table and the scene's parts.
+
+    Raises
+    ------
+    argparse.ArgumentTypeError
+        When an item has no ``=``, or a part is given two different coatings.
+    """
     out = {}
     for item in filter(None, (x.strip() for x in text.split(","))):
         if "=" not in item:

@@ -10,14 +10,49 @@ __all__ = ["check_output", "check_outdir", "check_not_input"]
 
 
 def check_outdir(outdir):
-    """An output folder: a folder (existing or not), not a file, not empty."""
+    """An output folder: a folder (existing or not), not a file, not empty.
+
+    Parameters
+    ----------
+    outdir : str or None
+        The folder's path. It need not exist (the command creates it); nothing is created
+        here.
+
+    Raises
+    ------
+    ParameterError
+        When ``outdir`` is empty or None, or names an existing path that is not a folder
+        (a file).
+    """
     if not outdir or (os.path.exists(outdir) and not os.path.isdir(outdir)):
         raise ParameterError(f"outdir must name a folder; got {outdir!r}"
                              + (" (a file)" if outdir and os.path.exists(outdir) else ""))
 
 
 def check_output(output, suffixes, inputs, flag="-o"):
-    """An output path must never name an input, and must name a file of a known format."""
+    """An output path must never name an input, and must name a file of a known format.
+
+    Parameters
+    ----------
+    output : str or None
+        The output file's path.
+    suffixes : sequence of str
+        The extensions accepted, lower case with their dot (e.g. ``(".npz",)``); the
+        output's extension is compared in lower case.
+    inputs : iterable of str or None
+        The command's input paths; None entries (inputs not given) are skipped. The
+        output may not be any of them: neither the same absolute path nor, when both
+        exist, the same file (a link to it).
+    flag : str
+        The output's flag, named in the messages (default ``"-o"``).
+
+    Raises
+    ------
+    ParameterError
+        When ``output`` is empty or None, names a folder (an existing one, or a path
+        whose last component is empty, ``.`` or ``..``), is one of ``inputs``, or has an
+        extension not in ``suffixes``.
+    """
     if not output or os.path.basename(output) in ("", ".", "..") or os.path.isdir(output):
         raise ParameterError(f"{flag}: must name a file, not a folder; got {output!r}")
     for src in filter(None, inputs):
@@ -33,7 +68,25 @@ def check_output(output, suffixes, inputs, flag="-o"):
 
 
 def check_not_input(output, data, source, what):
-    """``data``, a file written beside ``output``, must not be the input ``source``."""
+    """``data``, a file written beside ``output``, must not be the input ``source``.
+
+    Parameters
+    ----------
+    output : str
+        The output path the user gave (named in the message only).
+    data : str
+        The path of the file written beside ``output`` (e.g. ``OUTPUT.image.npz``).
+    source : str
+        The input's path.
+    what : str
+        What ``data`` holds, for the message (e.g. ``"image data"``).
+
+    Raises
+    ------
+    ParameterError
+        When ``data`` and ``source`` are the same absolute path or, ``data`` existing,
+        the same file.
+    """
     if os.path.abspath(data) == os.path.abspath(source) or (
             os.path.exists(data) and os.path.samefile(data, source)):
         raise ParameterError(f"-o {output!r} would write the {what} to {data!r}, the "

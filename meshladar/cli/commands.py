@@ -27,7 +27,20 @@ DEMO_ANGLES_DEG = (0.0, 1.0, 5.0, 10.0, 30.0, 60.0, 85.0, 90.0)
 
 
 def cmd_demo(args) -> int:
-    """Print the paper's two coatings' monostatic BRDF at a few incidence angles."""
+    """Print the paper's two coatings' monostatic BRDF at a few incidence angles.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``angles_deg``: the incidence angles θ in degrees (list of float). For dark gray
+        and aluminium, each angle's row holds F [1/sr], F cos θ [1/sr] and the specular
+        reflectance ρ_s(θ).
+
+    Returns
+    -------
+    int
+        0, the exit status.
+    """
     angles = np.array(args.angles_deg, dtype=np.float64)
     theta = np.deg2rad(angles)
     print("Sandford-Robertson BRDF, monostatic (collocated ladar), paper coatings at 1 um")
@@ -45,7 +58,26 @@ def cmd_demo(args) -> int:
 
 
 def cmd_materials(args) -> int:
-    """List a coating table (the packaged one by default)."""
+    """List a coating table (the packaged one by default).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``table``: the path of a TOML material table, or None for the packaged one
+        (:func:`meshladar.phantoms.materials`). Each coating's row holds its lobes, ρ_d, ε,
+        b, e, G(b) and its monostatic F(0) [1/sr].
+
+    Returns
+    -------
+    int
+        0, the exit status.
+
+    Raises
+    ------
+    MeshladarError
+        When the table cannot be read or is not a valid material table
+        (:func:`meshladar.materials.load_table`).
+    """
     table = phantoms.materials() if args.table is None else materials.load_table(args.table)
     print(f"{'name':<14} {'lobes':<9} {'rho_d':>7} {'epsilon':>8} {'b':>6} {'e':>7}"
           f" {'G(b)':>8} {'F(0) [1/sr]':>12}")
@@ -56,7 +88,30 @@ def cmd_materials(args) -> int:
 
 
 def cmd_paper(args) -> int:
-    """Reproduce the paper's Figs 5-11: PNGs, a saved result and the findings' numbers."""
+    """Reproduce the paper's Figs 5-11: PNGs, a saved result and the findings' numbers.
+
+    Runs :func:`meshladar.viz.paper.reproduce`: ``paper_result.npz`` and ``fig05.png`` to
+    ``fig11.png`` in the folder; prints each finding's value and the paths written.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``outdir``: the folder (created if missing); ``size``: the reconstructions' side in
+        pixels (int).
+
+    Returns
+    -------
+    int
+        0, the exit status.
+
+    Raises
+    ------
+    ParameterError
+        When ``outdir`` is not a folder name, or a ``size`` × ``size`` image (24 bytes a
+        pixel) would exceed the 4 GiB meshladar allocates at once; both before any work.
+    ImportError
+        When matplotlib is not installed (checked before the work).
+    """
     check_outdir(args.outdir)
     check_size("--size", float(args.size) ** 2, 8 * 3, f"a {args.size} x {args.size} image",
                "use a smaller --size")
@@ -73,7 +128,35 @@ def cmd_paper(args) -> int:
 
 
 def cmd_view(args) -> int:
-    """Show a scene in 3-D coloured by its return for one view (or save a screenshot)."""
+    """Show a scene in 3-D coloured by its return for one view (or save a screenshot).
+
+    Draws :func:`meshladar.viz.viewer.show_scene` with the scene's default ladar (a
+    phantom's; none for a mesh).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The scene's options (``scene``, ``material``, ``coating``, ``materials``: see
+        :func:`meshladar.cli.simulate.load_scene`); ``view_angle``: the view's angle about z
+        in degrees; ``screenshot``: a ``.png`` path to render off screen into, or None to
+        open a window; ``log``: colour by log10 of the return; ``size``: the window's
+        (width, height) in pixels; ``camera``: ``"oblique"`` or ``"view"``; ``quiet``:
+        no "wrote" line.
+
+    Returns
+    -------
+    int
+        0, the exit status.
+
+    Raises
+    ------
+    ParameterError
+        When ``screenshot`` is not a ``.png`` path or names an input, when the scene
+        cannot be loaded, or when there is no display (neither ``DISPLAY`` nor
+        ``WAYLAND_DISPLAY`` set) and no ``screenshot``.
+    ImportError
+        When pyvista is not installed (checked before the scene is loaded).
+    """
     if args.screenshot is not None:
         check_output(args.screenshot, (".png",), [args.scene, args.materials],
                      "--screenshot")
@@ -92,7 +175,42 @@ def cmd_view(args) -> int:
 
 
 def cmd_study(args) -> int:
-    """Run a study and write its table (CSV/JSON), results and figures into a folder."""
+    """Run a study and write its table (CSV/JSON), results and figures into a folder.
+
+    The faceting study (:func:`meshladar.studies.faceting_study`) writes ``faceting.csv``,
+    ``faceting.json``, ``faceting_examples.npz`` and its figures (``pareto.png``,
+    ``error_vs_segments.png``, ``difference_<phantom>_<coating>.png``), keeps finished
+    points in ``outdir/run`` (a rerun resumes) and prints its report. The tomography3d
+    study (:func:`meshladar.studies.paper.run_3d`; quick: 600 views, 64³ voxels; full:
+    2000 views, 128³) writes ``tomography3d.json`` and ``tomography3d.png``. The
+    reconstruction study (:func:`meshladar.studies.reconstruction.run`) writes
+    ``reconstruction.json``, ``reconstruction.csv`` and ``reconstruction.png``, and prints
+    its table.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``kind``: ``"faceting"``, ``"tomography3d"`` or ``"reconstruction"``; ``outdir``:
+        the folder (created if missing); ``setting``: ``"quick"`` or ``"full"``;
+        ``photons``, ``speckle``, ``background``: the reconstruction study's noise
+        (photoelectrons in each sinogram's brightest bin, speckle cells per bin,
+        background photoelectrons per bin), None when not given; ``quiet``: no progress
+        bar (faceting study).
+
+    Returns
+    -------
+    int
+        0, the exit status.
+
+    Raises
+    ------
+    ParameterError
+        When ``outdir`` is not a folder name; when ``photons``, ``speckle`` or
+        ``background`` is given to a study other than reconstruction; when ``speckle`` or
+        ``background`` is given without ``photons``.
+    ImportError
+        When matplotlib is not installed (checked before the work).
+    """
     check_outdir(args.outdir)
     plotting.require("matplotlib")              # before the work, not after it
     if args.kind == "reconstruction":
@@ -116,8 +234,8 @@ def cmd_study(args) -> int:
 
 #: The 3-D study's settings: (views, voxels per side, smoothing in bins, rays per bin).
 class _Study3D(NamedTuple):
-    """One setting of ``meshladar study-3d``: :func:`meshladar.studies.paper.run_3d`'s
-    arguments."""
+    """One setting of ``meshladar study tomography3d``:
+    :func:`meshladar.studies.paper.run_3d`'s arguments."""
 
     views: int
     size: int
@@ -178,7 +296,21 @@ def _study_reconstruction(args) -> int:
 
 
 def cmd_bench(args) -> int:
-    """Time the forward models and FBP against their peers (median of several runs)."""
+    """Time the forward models and FBP against their peers (median of several runs).
+
+    Prints :func:`meshladar.studies.bench.report` line by line, as each is measured.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``repeats``: timed runs per case after one warm-up (int); ``full``: add the
+        Mitsuba 3 + mitransient comparison, the streaming run and the Dask run (bool).
+
+    Returns
+    -------
+    int
+        0, the exit status.
+    """
     for line in bench.report(repeats=args.repeats, full=args.full):
         print(line, flush=True)
     return 0

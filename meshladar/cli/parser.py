@@ -5,6 +5,8 @@ commands' few flags are written here."""
 from __future__ import annotations
 
 import argparse
+import inspect
+import re
 
 from .. import __version__
 from ..forward.options import MODELS, OPTIONS, SENSOR_OPTIONS
@@ -70,8 +72,20 @@ def _scene_args(q):
 
 
 def _sub(sub, name, commands, help, epilog):
-    return sub.add_parser(name, help=help, description=commands[name].__doc__,
+    return sub.add_parser(name, help=help, description=_description(commands[name]),
                           epilog=epilog, formatter_class=_RAW)
+
+
+def _description(command):
+    """A command's ``--help`` description: its docstring's prose, before the numpydoc
+    sections (which document the function for the API reference, not the user)."""
+    text = inspect.cleandoc(command.__doc__ or "")
+    cut = _SECTION.search(text)
+    return text[:cut.start()].rstrip() if cut else text
+
+
+#: A numpydoc section heading: a line of words under a line of dashes.
+_SECTION = re.compile(r"^\w[\w ]*\n-{3,}$", re.MULTILINE)
 
 
 def _simple(sub, commands):
@@ -260,7 +274,28 @@ def _study(sub, commands):
 
 def build_parser(commands) -> argparse.ArgumentParser:
     """The parser of every command; ``commands`` maps each command's name to its function
-    (its docstring is the command's description)."""
+    (its docstring is the command's description).
+
+    Parameters
+    ----------
+    commands : dict of str to callable
+        Every command's function by name: ``demo``, ``materials``, ``paper``,
+        ``simulate``, ``reconstruct``, ``receive``, ``view``, ``study`` and ``bench``
+        (:data:`meshladar.cli.COMMANDS`). Only their docstrings are read here; the
+        functions are not called.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The ``meshladar`` parser: ``--version`` and one required subcommand, stored as
+        ``command``, each with its flags (``simulate``'s model and sensor flags from
+        :mod:`meshladar.forward.options`) and examples in its epilog.
+
+    Raises
+    ------
+    KeyError
+        When ``commands`` lacks one of the command names.
+    """
     p = argparse.ArgumentParser(
         prog="meshladar", description="Mesh-based ladar simulation and reflection tomography.",
         epilog=_EPILOG, formatter_class=_RAW)

@@ -28,7 +28,40 @@ def _save_figure(fig, output):
 
 def cmd_reconstruct(args) -> int:
     """Reconstruct a saved sinogram by FBP: a figure (PNG, PDF, SVG, JPEG or TIFF, chosen by
-    the extension of -o) and the image's values in OUTPUT.image.npz."""
+    the extension of -o) and the image's values in OUTPUT.image.npz.
+
+    A sinogram whose views are not all about z (``--view-vectors``) is inverted in 3-D
+    instead (:func:`meshladar.reconstruct.volumes.fbp3d`): the figure shows three slices
+    through the target and the volume goes to OUTPUT.volume.npz. ``--log`` and then
+    ``--clip`` preprocess the sinogram first.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``result``: the ``.npz`` written by ``meshladar simulate``; ``output``: the figure's
+        path (its extension one of :data:`IMAGE_SUFFIXES`); ``size``: pixels per side
+        (default 512), or voxels per side in 3-D (default 128); ``extent``: the half-width
+        of the image or cube in scene units (default None: the bins' reach);
+        ``filter``: the FBP filter (default ``"ramp"``; 2-D only); ``smooth``: Gaussian
+        smoothing of each profile in bins (3-D only; default 0); ``log``: reconstruct the
+        log of the radiance; ``clip``: clip at this fraction of the maximum, in (0, 1];
+        ``quiet``: no summary line.
+
+    Returns
+    -------
+    int
+        0, the exit status.
+
+    Raises
+    ------
+    ParameterError
+        When ``output`` has an extension not in :data:`IMAGE_SUFFIXES`, or it or the data
+        file beside it would overwrite ``result``; when ``smooth`` is given for views about
+        z, or ``filter`` for 3-D views; and the API's own refusals (an unreadable result,
+        an image too large).
+    ImportError
+        When matplotlib is not installed (checked before the work).
+    """
     check_output(args.output, IMAGE_SUFFIXES, [args.result])
     data = os.path.splitext(args.output)[0] + ".image.npz"
     check_not_input(args.output, data, args.result, "image data")
@@ -136,7 +169,48 @@ def cmd_receive(args) -> int:
     """Turn a saved sinogram's range bins into digitised waveforms (two-way time, the
     transmitted pulse, the receiver's impulse response, the digitiser's rate), optionally
     with noise realisations (photon counting, speckle, background and dark counts, APD
-    gain and excess noise, quantisation); save them, and a figure with --plot."""
+    gain and excess noise, quantisation); save them, and a figure with --plot.
+
+    The waveforms (:func:`meshladar.waveforms.receive`) and any noise realisations are
+    saved with :func:`meshladar.io.save_waveforms`; the figure is
+    :func:`meshladar.viz.waveforms.draw`. A sinogram not simulated with
+    ``--radiometry power`` warns (a :class:`~meshladar.errors.MeshladarWarning`) unless
+    ``quiet``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``result``: the ``.npz`` written by ``meshladar simulate``; ``output``: the
+        waveforms' ``.npz`` path; ``sample_rate``: the digitiser's rate in samples per
+        second; ``oversample``: fine cells per sample for the convolutions (int);
+        ``pulse_fwhm`` (s, a Gaussian pulse) or ``pulse_samples`` (a text file of power
+        samples) with ``pulse_interval`` (s between them), None for a Dirac pulse;
+        ``response_fwhm``: the receiver's Gaussian impulse response in s (None: ideal);
+        ``standoff``: D in metres, the time origin t = 2(r + D)/c (None: the
+        simulation's sensor's, else 0); ``scale``: photoelectrons per unit of the
+        sinogram; ``realisations``: the number of noise draws (None: no noise) and their
+        ``seed``; the noise options ``speckle_cells``, ``background_rate`` and
+        ``dark_rate`` (per s), ``excess_noise``, ``gain``, ``bits`` and ``full_scale``
+        (:class:`meshladar.noise.Noise`'s fields); ``plot``: a ``.png`` path for the
+        figure, or None; ``quiet``: no warning or summary line.
+
+    Returns
+    -------
+    int
+        0, the exit status.
+
+    Raises
+    ------
+    ParameterError
+        When ``output`` is not a ``.npz`` path or is ``result``; when ``plot`` is not a
+        ``.png`` path or names ``result`` or ``output``; when ``scale`` is given for a
+        sinogram that already counts photoelectrons; when both ``pulse_fwhm`` and
+        ``pulse_samples`` are given, or one of ``pulse_samples`` and ``pulse_interval``
+        without the other, or the samples file is not text of numbers; when a noise
+        option or ``seed`` is given without ``realisations``; and the API's own refusals.
+    ImportError
+        With ``plot``, when matplotlib is not installed (checked before the work).
+    """
     check_output(args.output, (".npz",), [args.result])
     if args.plot is not None:
         check_output(args.plot, (".png",), [args.result, args.output], "--plot")

@@ -29,7 +29,34 @@ _BEAM = ("flood_radius", "beam_waist", "beam_divergence", "beam_offset")
 
 def load_scene(args):
     """(scene, default ladar or None, default model) from SCENE: phantom, spec or mesh
-    (:func:`meshladar.cli.sources.load_source`)."""
+    (:func:`meshladar.cli.sources.load_source`).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``scene``: a packaged phantom's name, a phantom spec (``.toml``) or a mesh file;
+        ``material``: a mesh's coating name, or None; ``coating``: ``{part or shape name:
+        coating name}``, or None; ``materials``: the path of a TOML coating table whose
+        names join the packaged ones, or None.
+
+    Returns
+    -------
+    tuple
+        ``(Scene, Ladar or None, str)``: the scene, a phantom's own ladar set-up (None for
+        a mesh), and its default model (``"analytic"`` for a phantom, ``"mesh"`` for a
+        mesh).
+
+    Raises
+    ------
+    ParameterError
+        As :func:`meshladar.cli.sources.load_source`, its messages naming the flags
+        (``SCENE``, ``--material``, ``--coating``): an unknown coating, no such mesh file
+        or phantom, ``--material`` given for a phantom.
+    PhantomSpecError
+        For a phantom spec that is not valid.
+    GeometryError
+        For a mesh file that is not a triangle mesh.
+    """
     return load_source(args.scene, material=args.material, coatings=args.coating,
                             materials_file=args.materials, labels=SCENE_LABELS)
 
@@ -178,7 +205,47 @@ def _model_options(args, model):
 
 
 def cmd_simulate(args) -> int:
-    """Simulate a scene's range profiles and save them (sinogram, scene, parameters)."""
+    """Simulate a scene's range profiles and save them (sinogram, scene, parameters).
+
+    The model is ``--model``, else the scene's default (analytic for a phantom, mesh for a
+    mesh); an analytic phantom run with the mesh model and no ``--tol`` is tessellated into
+    ``--segments`` (default 1024) segments first. The views and bins: ``--bins`` or
+    ``--bin-width`` give bins covering the scene (:meth:`meshladar.ladar.Ladar.covering`);
+    otherwise a phantom keeps its own bins (and views, unless ``--views`` or
+    ``--angles-deg`` replace them), and any other run gets 512 bins covering the scene.
+    ``--views N`` spreads N views evenly over 360° about z. The sinogram, the scene and the
+    run's parameters are saved with :func:`meshladar.io.save_sinogram`.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``output``: the ``.npz`` path; the scene's options (see :func:`load_scene`);
+        ``model``; ``views``, ``angles_deg``, ``view_vectors`` (at most one of them),
+        ``bins``, ``bin_width``, ``segments``; every model, sensor and stream option of
+        :mod:`meshladar.forward.options` that has a flag (None or False when not given);
+        ``scheduler`` (a Dask scheduler address) or ``workers`` (a local Dask cluster of
+        that many processes) to run on Dask; ``quiet``: no progress bar or summary line.
+
+    Returns
+    -------
+    int
+        0, the exit status.
+
+    Raises
+    ------
+    ParameterError
+        Before the work: when ``output`` is not a ``.npz`` path or names an input (the
+        scene, the coating table or the run folder); when the scene cannot be loaded
+        (:func:`load_scene`); when two of ``views``, ``angles_deg`` and ``view_vectors`` are
+        given, or ``views`` or ``view_vectors`` is above 10⁶
+        (``meshladar.ladar.MAX_VIEWS``); when an option does not apply to the model or the
+        rest of the command (e.g. ``--z0`` without ``--mode slice``, ``--seed`` with regular
+        sampling, ``--max-rays`` without ``--tol``, ``--jobs`` with Dask); when a 2-D model
+        is given a mesh or ``--view-vectors``; when the sensor flags contradict one another.
+        During the run: the API's own refusals, put in the flags' words.
+    PhantomSpecError, GeometryError
+        For a phantom spec or a mesh file that cannot be loaded (:func:`load_scene`).
+    """
     check_output(args.output, (".npz",), [args.scene, args.materials, args.run_dir])
     scene, default_ladar, default_model = load_scene(args)
     model = args.model or default_model

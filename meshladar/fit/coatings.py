@@ -158,7 +158,33 @@ class CoatingFit:
         at the cost of a few refits per end (seconds each for a pair of coatings); an end
         stops at the parameter's bound. ``parameters`` (names; default all) limits the
         profiling to those, the others keep their normal interval, as does an
-        undetermined parameter. Each end is computed once."""
+        undetermined parameter. Each end is computed once.
+
+        Parameters
+        ----------
+        level : float
+            The intervals' coverage, in (0, 1) (default 0.95).
+        method : {"normal", "profile"}
+            The normal approximation (default) or the profile likelihood.
+        parameters : list of str, optional
+            ``method="profile"``: the names (of ``names``) to profile (default all).
+
+        Returns
+        -------
+        low, high : (n,) arrays
+            The ends, in the parameters' own units, in the order of ``names``.
+
+        Raises
+        ------
+        ParameterError
+            On a level outside (0, 1), an unknown method or parameter name, or
+            ``method="profile"`` on a CoatingFit not made by :func:`fit_coatings`.
+
+        References
+        ----------
+        Y. Pawitan, *In All Likelihood*, Oxford University Press (2001), Sec. 3.4 and 9.7
+        (likelihood-ratio and profile-likelihood intervals).
+        """
         level = check_real("level", level, low=0.0, high=1.0, low_open=True, high_open=True)
         method = check_choice("method", method, ("normal", "profile"))
         z = float(norm.ppf(0.5 + 0.5 * level))
@@ -180,7 +206,15 @@ class CoatingFit:
 
     def report(self):
         """The fit as text lines: each parameter ± σ, its 95 % interval, and whether the
-        data determine it."""
+        data determine it.
+
+        Returns
+        -------
+        list of str
+            The lines: a header (noise model, misfit, iterations), one line per parameter
+            (estimate, σ, normal 95 % interval, NOT DETERMINED and why), correlations
+            beyond 0.9, the determined combinations, and the kernel's error.
+        """
         lo, hi = self.interval()
         out = [f"  coating fit ({self.noise}; misfit {self.deviance:.4g} on {self.dof} "
                f"degrees of freedom, {self.iterations} iterations)",

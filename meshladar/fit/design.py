@@ -32,8 +32,13 @@ class ViewDesign:
         Each candidate alone: log det of its scaled Fisher information (with a small
         ridge), the view's own worth.
     names : tuple of str
+        "part.parameter" of each of the n free parameters.
     stderr_designed, stderr_uniform : (n,) arrays
-        Parameter σ from the chosen views and from ``budget`` evenly spaced views.
+        Parameter σ from the chosen views and from ``budget`` evenly spaced views, in
+        each parameter's own units (the inverse of the summed Fisher information plus the
+        ridge).
+    uniform : (budget,) int array
+        The evenly spaced views: indices round(k · n_views / budget), k = 0 … budget − 1.
     """
 
     chosen: np.ndarray
@@ -46,7 +51,25 @@ class ViewDesign:
 
     def plot(self, **options):
         """A quick look (:func:`meshladar.viz.fitting.design_figure`, through
-        :mod:`meshladar.plotting`): a matplotlib Figure."""
+        :mod:`meshladar.plotting`): a matplotlib Figure.
+
+        Parameters
+        ----------
+        **options
+            Passed to the drawing function unchanged (``design_figure`` takes none at
+            present, so any option raises TypeError).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            Each view's own information against its angle, the chosen and evenly spaced
+            views marked, and each parameter's σ from both (no pyplot state touched).
+
+        Raises
+        ------
+        ImportError
+            When the ``viz`` extra (matplotlib) is not installed.
+        """
         return plotting.plot(self, **options)
 
 
@@ -56,18 +79,51 @@ def design_views(geometry, budget, *, ladar=None, parts=None, free=None, materia
     D-optimal design on the Fisher information of Poisson counts (each step adds the view
     that most raises log det F of the chosen set), compared with evenly spaced views.
 
+    The Fisher information of view v is Σ over its bins of J_b J_bᵀ / m_b, J the model's
+    derivatives in counts with each parameter measured in units of its range (the width
+    of its bounds: SR's valid ranges, or |value| for an unbounded one), m_b the bin's
+    expected counts (at least 1e-9 of the brightest). A ridge of 1e-9 times the mean
+    diagonal of the total information keeps log det finite.
+
     Parameters
     ----------
     geometry : CoatingKernel, Scene or Hits
-        The candidates are its views (a Scene needs ``ladar``).
+        The candidates are its views (a Scene needs ``ladar``). A Scene or Hits goes
+        through :func:`coating_kernel` with ``samples``; Hits need ``samples=None``
+        (``coating_kernel`` refuses any other value with Hits, the default included).
     budget : int
-        Views to choose.
+        Views to choose, in [1, n_views].
+    ladar : Ladar, optional
+        The candidate views and bins of a Scene (unused with a CoatingKernel).
     parts, free
         As :func:`fit_coatings`.
     materials : dict, optional
         part → BRDF, the coatings the design is for (default the geometry's).
     photons_per_unit : float, optional
-        Counts per unit of the sinogram (default: 1e5 counts in the brightest bin).
+        Counts per unit of the sinogram (default: 1e5 counts in the brightest bin), > 0;
+        the brightest bin must then hold 1 to 1e15 counts.
+    samples : int, float or None, optional
+        ``samples`` of :func:`coating_kernel` (default 4096: pieces per analytic boundary,
+        or rays per range-bin width of a mesh Scene; None: its own default); unused with a
+        CoatingKernel.
+
+    Returns
+    -------
+    ViewDesign
+        The chosen views in the order added, each candidate's own information, and the
+        parameters' σ from the chosen and from evenly spaced views.
+
+    Raises
+    ------
+    ParameterError
+        If ``budget`` is not an integer in [1, n_views], ``parts``, ``free`` or
+        ``materials`` name no part or parameter of the kernel, ``photons_per_unit`` is
+        invalid, or :func:`coating_kernel` refuses the geometry.
+
+    References
+    ----------
+    A. C. Atkinson, A. N. Donev and R. D. Tobias, *Optimum Experimental Designs, with SAS*,
+    Oxford University Press (2007) (D-optimum designs).
     """
     if isinstance(geometry, CoatingKernel):
         kernel = geometry

@@ -9,12 +9,12 @@ parameter's derivative is the product with the derivative of its table.
 
 * From analytic shapes (:func:`coating_kernel` on a :class:`~meshladar.Scene`): each
   boundary cut per view into ``samples`` pieces from the point nearest the ladar, every
-  piece's visible part split between bins exactly (:mod:`._sampling`), the table
+  piece's visible part split between bins exactly (``meshladar.fit._sampling``), the table
   interpolated cubically; the weight is F cos θ dl (``"paper"``) or F cos² θ dl
   (``"power"``). The error is second order in the piece length (~4× less per doubling);
   at 8192 pieces the paper's pair is within 1e-4 (relative L2) of the analytic model's
   exact profiles. :meth:`CoatingKernel.resampled` gives the same scene at another count
-  (a fit uses it to control the error, :mod:`._resolution`).
+  (a fit uses it to control the error, ``meshladar.fit._resolution``).
 * From mesh hits (:func:`coating_kernel` on :class:`~meshladar.hits.Hits`, or on a mesh
   :class:`~meshladar.Scene` with the ladar, which it traces): each hit binned at its range
   with the weights :func:`~meshladar.weigh` gives it, per material index; equal to
@@ -75,10 +75,20 @@ class CoatingKernel:
     materials : tuple of BRDF
         Each part's coating as traced (the default starting point of a fit).
     shape : (n_views, n_bins)
+        The shape of the sinogram it predicts ((n_views, n_samples) for a waveform
+        kernel).
     angles_deg, bin_edges : arrays
+        The views (degrees) and the range bin edges (a waveform kernel: the samples' time
+        edges, s).
     radiometry : str
+        ``"paper"`` or ``"power"``.
     source : str
-        "analytic" or "mesh".
+        "analytic" or "mesh"; "analytic waveforms" or "mesh waveforms" for the kernel of
+        :meth:`received`.
+    info : dict
+        Provenance: ``samples_per_shape`` and ``units`` (analytic); ``mode``, ``normals``,
+        ``rays``, and ``ray_spacing`` and ``rays_per_bin`` when traced from a Scene
+        (mesh); ``sample_rate``, ``pulse``, ``response`` added by :meth:`received`.
     """
 
     matrices: tuple
@@ -114,7 +124,27 @@ class CoatingKernel:
         """This kernel with ``samples`` pieces per analytic boundary, or traced again with
         ``samples`` rays per bin width (a mesh kernel traced from its Scene); kept, so a
         second call is free. A kernel of the user's own Hits cannot be resampled
-        (ParameterError)."""
+        (ParameterError).
+
+        Parameters
+        ----------
+        samples : int or float
+            Analytic kernel: pieces per boundary, an integer ≥ 1 (not capped here at
+            :data:`MAX_KERNEL_SAMPLES`, unlike :func:`coating_kernel`). Mesh kernel: rays
+            per range-bin width, a real > 0 (:func:`meshladar.trace` bounds it).
+
+        Returns
+        -------
+        CoatingKernel
+            This kernel when ``samples`` equals its own :attr:`samples`; else the kernel at
+            ``samples``, built once and kept on this one.
+
+        Raises
+        ------
+        ParameterError
+            If the kernel was not traced from a Scene here (the user's own Hits, or a
+            waveform kernel), or ``samples`` is invalid.
+        """
         if self._traced is None:
             raise ParameterError("only a kernel traced from its Scene (coating_kernel(scene, "
                                  f"ladar)) can be resampled; this one is from {self.source}"
@@ -137,7 +167,23 @@ class CoatingKernel:
         return self.info.get("rays")
 
     def part_index(self, part) -> int:
-        """A part's index from its name or index."""
+        """A part's index from its name or index.
+
+        Parameters
+        ----------
+        part : str or int
+            A name in :attr:`parts`, or an index in [0, n_parts) (bools are refused).
+
+        Returns
+        -------
+        int
+            The part's index into :attr:`parts` and :attr:`matrices`.
+
+        Raises
+        ------
+        ParameterError
+            If ``part`` is neither.
+        """
         if isinstance(part, (int, np.integer)) and not isinstance(part, bool):
             if 0 <= part < len(self.parts):
                 return int(part)
@@ -147,11 +193,47 @@ class CoatingKernel:
                              f"{len(self.parts)}; got {part!r}")
 
     def contribution(self, part, material) -> np.ndarray:
-        """One part's sinogram values (n_views, n_bins) with ``material``."""
+        """One part's sinogram values (n_views, n_bins) with ``material``.
+
+        Parameters
+        ----------
+        part : str or int
+            The part's name or index (:meth:`part_index`).
+        material : BRDF
+            The coating, evaluated through its projected monostatic weight on the
+            :data:`GRID` angles.
+
+        Returns
+        -------
+        (n_views, n_bins) float64
+            The part's share of the sinogram (:attr:`shape`).
+
+        Raises
+        ------
+        ParameterError
+            If ``part`` names no part.
+        """
         return (self.matrices[self.part_index(part)] @ _table(material)).reshape(self.shape)
 
     def predict(self, materials=None) -> np.ndarray:
-        """The sinogram values with ``materials`` (one per part; default as traced)."""
+        """The sinogram values with ``materials`` (one per part; default as traced).
+
+        Parameters
+        ----------
+        materials : sequence of BRDF, optional
+            One coating per part, in the order of :attr:`parts` (default
+            :attr:`materials`).
+
+        Returns
+        -------
+        (n_views, n_bins) float64
+            The sum of every part's :meth:`contribution` (:attr:`shape`).
+
+        Raises
+        ------
+        ParameterError
+            If ``materials`` does not give one coating per part.
+        """
         mats = self.materials if materials is None else tuple(materials)
         if len(mats) != len(self.parts):
             raise ParameterError(f"materials must give {len(self.parts)} coatings, one per "
@@ -160,11 +242,40 @@ class CoatingKernel:
 
     def received(self, sample_rate, *, pulse=None, response=None, standoff=0.0,
                  oversample=8):
-        """The kernel of the waveforms a digitiser records (:func:`meshladar.receive` with
-        these arguments, which is linear in the bins): each part's matrix composed with the
-        per-view map from bins to samples. ``bin_edges`` become the samples' time edges
-        (s) and :meth:`predict` gives waveform values; fit them with
-        :func:`fit_coatings` and the measured :class:`~meshladar.waveforms.Waveforms`."""
+        """The kernel of the waveforms a digitiser records
+        (:func:`meshladar.waveforms.receive` with these arguments, which is linear in the
+        bins): each part's matrix composed with the per-view map from bins to samples.
+        ``bin_edges`` become the samples' time edges (s) and :meth:`predict` gives
+        waveform values; fit them with :func:`fit_coatings` and the measured
+        :class:`~meshladar.waveforms.Waveforms`.
+
+        The map's entries below 1e-12 of its largest are set to 0 (kept sparse).
+
+        Parameters
+        ----------
+        sample_rate : float
+            Digitiser rate, Hz, as :func:`meshladar.waveforms.receive` checks it.
+        pulse : GaussianPulse or SampledPulse, optional
+            The transmitted pulse (default none, a Dirac pulse).
+        response : GaussianPulse or SampledPulse, optional
+            The receiver's impulse response (default none, ideal).
+        standoff : float, optional
+            D (m) for the time origin t = 2(r + D)/c (default 0.0).
+        oversample : int, optional
+            Fine cells per digitiser sample for the convolutions (default 8).
+
+        Returns
+        -------
+        CoatingKernel
+            Of shape (n_views, n_samples), ``bin_edges`` the samples' time edges (s),
+            source ``"<source> waveforms"``; it cannot be resampled.
+
+        Raises
+        ------
+        ParameterError
+            If this kernel already gives waveforms, or
+            :func:`meshladar.waveforms.receive` refuses an argument.
+        """
         if self.source.endswith("waveforms"):
             raise ParameterError("this kernel already gives waveforms")
         n_views, n_bins = self.shape
@@ -183,7 +294,25 @@ class CoatingKernel:
                               "pulse": repr(pulse), "response": repr(response)})
 
     def sinogram(self, materials=None):
-        """:meth:`predict` as a :class:`~meshladar.Sinogram`."""
+        """:meth:`predict` as a :class:`~meshladar.Sinogram`.
+
+        Parameters
+        ----------
+        materials : sequence of BRDF, optional
+            One coating per part (default as traced).
+
+        Returns
+        -------
+        Sinogram
+            ``values`` (n_views, n_bins), the kernel's ``angles_deg`` and ``bin_edges``,
+            model ``"kernel (<source>)"``, ``info`` the radiometry and the kernel's
+            :attr:`info`.
+
+        Raises
+        ------
+        ParameterError
+            If ``materials`` does not give one coating per part.
+        """
         return Sinogram(self.predict(materials), angles_deg=self.angles_deg,
                         bin_edges=self.bin_edges, model=f"kernel ({self.source})",
                         info={"radiometry": self.radiometry, **self.info})
@@ -281,6 +410,17 @@ def coating_kernel(geometry, ladar=None, *, radiometry="paper", samples=None, **
     CoatingKernel
         Traced from a Scene, it can be :meth:`~CoatingKernel.resampled`, which is how
         :func:`fit_coatings` controls its error.
+
+    Raises
+    ------
+    ParameterError
+        If ``radiometry`` is invalid; a keyword is not among :data:`TRACE_OPTIONS`; Hits
+        come with a ``ladar``, ``samples`` or trace options; ``geometry`` is neither a
+        Scene nor Hits, or its Hits are bistatic; a Scene comes without a ``ladar``; an
+        analytic Scene gets trace options, holds shapes other than disks and ellipses, or
+        meets views off the x-y plane; or ``samples`` is not an integer in
+        [1, :data:`MAX_KERNEL_SAMPLES`] (analytic) or a real in the range
+        ``RAYS_PER_BIN_RANGE`` of :mod:`meshladar.raytrace.grid` (mesh).
     """
     radiometry = "power" if check_radiometry(radiometry) else "paper"
     unknown = sorted(set(trace) - set(TRACE_OPTIONS))

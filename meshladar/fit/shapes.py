@@ -2,8 +2,8 @@
 then the coatings, and say how the geometry's errors carry into the coatings.
 
 :func:`find_shapes` takes the surface points of a first reconstruction
-(:func:`meshladar.reconstruct.compensation.estimate_surface`: sub-pixel ridge points of the log-radiance
-FBP) and finds circles among them by RANSAC (three points define a circle; the circle with
+(:func:`meshladar.reconstruct.compensation.estimate_surface`: sub-pixel ridge points of the
+log-radiance FBP) and finds circles among them by RANSAC (three points define a circle; the circle with
 the most points within ``tol`` wins, its points are removed, repeat), each refined by
 geometric least squares; with ``kind="ellipse"`` each connected group of points is fitted
 as an ellipse (Fitzgibbon's direct least-squares fit, then geometric refinement), so
@@ -150,14 +150,24 @@ def find_shapes(sino, *, size=512, extent=1.0, center=(0.0, 0.0), kind="disk", f
     sino : Sinogram
         Views about z, uniform bins.
     size, extent, center
-        The first reconstruction's grid (default FBP of the log radiance).
+        The first reconstruction's grid (default FBP of the log radiance): ``size`` pixels
+        across [−extent, extent]² about ``center`` (defaults 512, 1.0, (0, 0)); unused
+        when ``first`` is given.
     kind : {"disk", "ellipse"}
+        ``"disk"`` (default): circles found by RANSAC; ``"ellipse"``: each connected group
+        of surface points (neighbours within 2.5 pixels) fitted as an ellipse.
     first : Image, optional
         The first reconstruction.
     tol_bins : float
-        A surface point belongs to a shape within this many range bins of it.
+        A surface point belongs to a shape within this many range bins (the mean bin
+        width) of it (default 1.5, > 0); used by ``"disk"`` only, checked for both.
     min_share : float
-        A shape needs at least this share of the surface points.
+        A shape needs at least this share of the surface points, in [0, 1] (default
+        0.05), and at least 10 points.
+    max_shapes : int
+        The most shapes found (default 8, ≥ 1).
+    seed : int
+        Seed of the RANSAC draws (``"disk"``; default 0).
     material : BRDF, optional
         The coating the shapes carry (default a neutral SR start for fitting).
 
@@ -168,6 +178,21 @@ def find_shapes(sino, *, size=512, extent=1.0, center=(0.0, 0.0), kind="disk", f
         "shape 1", ... by decreasing size), the standard errors of their parameters
         ((cx, cy, r) or (cx, cy, A, B, angle in radians)), and the rms distance of their
         points.
+
+    Raises
+    ------
+    ParameterError
+        If ``kind``, ``seed``, ``tol_bins``, ``min_share`` or ``max_shapes`` is invalid,
+        no shape is found among the surface points, the points of a group do not
+        determine an ellipse, or the first reconstruction yields no surface point.
+
+    References
+    ----------
+    M. A. Fischler and R. C. Bolles, "Random sample consensus", Commun. ACM 24, 381-395
+    (1981) (RANSAC); I. Kåsa, "A circle fitting procedure and its error analysis", IEEE
+    Trans. Instrum. Meas. 25, 8-14 (1976) (the algebraic circle start); A. Fitzgibbon,
+    M. Pilu and R. B. Fisher, "Direct least square fitting of ellipses", IEEE Trans.
+    Pattern Anal. Mach. Intell. 21, 476-480 (1999).
     """
 
     kind = check_choice("kind", kind, SHAPE_KINDS)
@@ -218,11 +243,16 @@ class SceneFit:
         :func:`find_shapes`'s (shape, standard errors, rms).
     fit : CoatingFit
         The coatings, the geometry taken as found.
+    geometry_names : tuple of str
+        "shape.parameter" of each geometry parameter moved (``cx``, ``cy``, ``r`` per
+        disk; ``cx``, ``cy``, ``A``, ``B``, ``angle`` per ellipse).
     geometry_shift : (n_geometry, n_coating) array
         Change of each coating estimate when one geometry parameter moves by its standard
         error (rows named in ``geometry_names``).
     geometry_stderr : (n_coating,) array
         Their root sum of squares: the geometry's share of each coating's uncertainty.
+    info : dict
+        ``"kind"``: the shapes fitted.
     """
 
     scene: object
@@ -234,6 +264,15 @@ class SceneFit:
     info: dict = field(default_factory=dict)
 
     def report(self):
+        """The fit as text lines.
+
+        Returns
+        -------
+        list of str
+            One line per shape found (centre, semi-axes, standard errors, rms), the
+            coating fit's :meth:`~meshladar.fit.CoatingFit.report`, then each coating
+            parameter's σ from the noise and from the geometry.
+        """
         out = ["  shapes found:"]
         for s, se, rms in self.shapes:
             axes = s.axes
@@ -252,7 +291,51 @@ def fit_scene(sino, *, kind="disk", size=512, extent=1.0, center=(0.0, 0.0), fir
               **find):
     """Shapes, then coatings, from a sinogram alone; see the module docstring.
     ``noise``, ``photons_per_unit``, ``speckle_cells`` as
-    :func:`~meshladar.fit.coatings.fit_coatings`; other keywords go to :func:`find_shapes`."""
+    :func:`~meshladar.fit.coatings.fit_coatings`; other keywords go to :func:`find_shapes`.
+
+    Each disk's radius is first moved by the best of nine offsets in [−1, 1] range bins
+    (the scene that fits the data best with the best starting coatings of a grid of SR
+    e and b); ellipses are kept as found. Disks that then overlap are shrunk to
+    touching. The coatings are fitted from those starting coatings, then refitted once
+    per geometry parameter moved by its standard error (the refits' warnings silenced).
+
+    Parameters
+    ----------
+    sino : Sinogram
+        Views about z (``angles_deg``), uniform bins; its ``radiometry`` (default
+        ``"paper"``) is the kernels'.
+    kind : {"disk", "ellipse"}
+        The shapes to find (default ``"disk"``).
+    size, extent, center, first
+        The first reconstruction, as :func:`find_shapes`.
+    noise, photons_per_unit, speckle_cells
+        The noise model, as :func:`~meshladar.fit.coatings.fit_coatings` (default
+        ``"gaussian"``).
+    samples : int
+        Pieces per boundary of the coating kernels (default 4096; the radius search
+        uses at most 2048).
+    **find
+        Other options of :func:`find_shapes` (``tol_bins``, ``min_share``,
+        ``max_shapes``, ``seed``, ``material``).
+
+    Returns
+    -------
+    SceneFit
+        The found scene with the fitted coatings, the shapes, the coating fit, and the
+        geometry's share of each coating parameter's uncertainty.
+
+    Raises
+    ------
+    ParameterError
+        Whatever :func:`find_shapes`, :func:`coating_kernel` or
+        :func:`~meshladar.fit.coatings.fit_coatings` refuses (no shape found, an invalid
+        noise option).
+
+    References
+    ----------
+    Jin & Levine (2009), Section 5 (a geometric reconstruction first, to assign the
+    binned radiance to components, then their BRDF parameters).
+    """
 
     shapes = find_shapes(sino, kind=kind, size=size, extent=extent, center=center,
                          first=first, **find)

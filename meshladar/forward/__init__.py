@@ -40,7 +40,8 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
         and ``tol``. ``sensor`` (:class:`meshladar.sensor.Sensor`): a ladar at a finite
         standoff, a beam, the atmosphere and the link budget (photoelectrons).
         ``"pixel"``: the paper's method, a rasterised surface traced with Siddon rays
-        (options ``pixel_size``, ``ray_spacing``; :func:`meshladar.forward.pixel.simulate_pixel`).
+        (options ``pixel_size``, ``ray_spacing``;
+        :func:`meshladar.forward.pixel.simulate_pixel`).
     radiometry : {"paper", "power"}, every model
         "paper" (default): the paper's Eq. 8, bins of ∫ F(θ) cos θ dA; "power": the power a
         receiver collects, ∫ F cos θ_i cos θ_r dA (monostatic ∫ F cos²θ dA), exact in the
@@ -50,9 +51,10 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
         analytic scenes) double from 1 ray per bin and 256 segments until a refinement
         check (successive runs' difference, extrapolated with the measured convergence
         order) estimates the error at most ``tol``; defaults then become exact (analytic)
-        or smooth (mesh) normals and footprint binning. It stops early, keeping its best
-        run and warning why, when an estimate fails to fall or the next run would pass
-        ``max_rays`` (default ``refine.TOL_MAX_RAYS`` = 2e9). ``info`` holds ``chosen``,
+        or smooth (mesh) normals and footprint binning (point binning with a ``receiver``).
+        It stops early, keeping its best run and warning why, when an estimate fails to
+        fall or the next run would pass ``max_rays`` (default ``refine.TOL_MAX_RAYS`` =
+        2e9). ``info`` holds ``chosen``,
         ``error_estimate``, ``stopped`` and every ``refinement`` run
         (:mod:`meshladar.forward.refine`).
     jobs : int, optional
@@ -78,6 +80,25 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
         or of received power,
         ``angles_deg`` (or ``view_vectors``), ``bin_edges``, ``model``, and ``info`` (the
         convention and options the run used).
+
+    Raises
+    ------
+    ParameterError
+        If ``scene`` is not a Scene or ``ladar`` not a Ladar, ``model`` is not one of
+        :data:`MODELS`, an option is one the model does not take, ``jobs`` is invalid,
+        ``run_dir`` is combined with ``tol`` or ``max_rays`` given without it, or the
+        analytic or pixel model gets a mesh scene or views off the x-y plane; and
+        whatever the chosen model refuses.
+
+    Warns
+    -----
+    MeshladarWarning
+        When the analytic or pixel model's sinogram is all zeros (the bins miss the
+        scene), naming the scene's range span and the bins'.
+
+    References
+    ----------
+    Jin & Levine (2009), Eq. 8 (the ``"paper"`` radiometry).
 
     Examples
     --------

@@ -94,7 +94,22 @@ def _traverse(ox, oy, dx, dy, xmin, ymin, pix, nx, ny, idx, length):
 
 @njit(parallel=True, cache=True)
 def siddon_project(image, ox, oy, dx, dy, xmin, ymin, pix, out):
-    """out[m] = Σ_pixels length(ray m ∩ pixel) · image[pixel] (line integrals)."""
+    """out[m] = Σ_pixels length(ray m ∩ pixel) · image[pixel] (line integrals).
+
+    Parameters
+    ----------
+    image : (ny, nx) float64, C-contiguous
+        Pixel values; row i along y.
+    ox, oy, dx, dy : (n,) float64
+        The rays' origins and unit directions; each ray's whole line through the grid is
+        walked (α < 0 too).
+    xmin, ymin : float
+        The grid's lower-left corner.
+    pix : float
+        The pixels' side, > 0.
+    out : (n,) float64
+        Filled with the line integrals (rays in parallel).
+    """
     ny, nx = image.shape
     flat = image.ravel()
     for m in prange(ox.size):
@@ -111,7 +126,22 @@ def siddon_project(image, ox, oy, dx, dy, xmin, ymin, pix, out):
 def siddon_backproject_parallel(values, ox, oy, dx, dy, xmin, ymin, pix, parts):
     """siddon_backproject over ``parts.shape[0]`` contiguous blocks of rays in parallel,
     each into its own image parts[k] (sum them for the backprojection; the order of the
-    sum, hence the rounding, is fixed by the number of parts)."""
+    sum, hence the rounding, is fixed by the number of parts).
+
+    Parameters
+    ----------
+    values : (n,) float64
+        One value per ray.
+    ox, oy, dx, dy : (n,) float64
+        The rays' origins and unit directions; each ray's whole line through the grid is
+        walked (α < 0 too).
+    xmin, ymin : float
+        The grid's lower-left corner.
+    pix : float
+        The pixels' side, > 0.
+    parts : (n_parts, ny, nx) float64, C-contiguous
+        Added to (zero it first): block k of the rays goes into ``parts[k]``.
+    """
     n_parts, ny, nx = parts.shape
     n = ox.size
     for k in prange(n_parts):
@@ -127,7 +157,22 @@ def siddon_backproject_parallel(values, ox, oy, dx, dy, xmin, ymin, pix, parts):
 @njit(cache=True)
 def siddon_backproject(values, ox, oy, dx, dy, xmin, ymin, pix, out):
     """out[pixel] += Σ_m length(ray m ∩ pixel) · values[m]: the exact adjoint of
-    siddon_project (serial: rays scatter into shared pixels)."""
+    siddon_project (serial: rays scatter into shared pixels).
+
+    Parameters
+    ----------
+    values : (n,) float64
+        One value per ray.
+    ox, oy, dx, dy : (n,) float64
+        The rays' origins and unit directions; each ray's whole line through the grid is
+        walked (α < 0 too).
+    xmin, ymin : float
+        The grid's lower-left corner.
+    pix : float
+        The pixels' side, > 0.
+    out : (ny, nx) float64, C-contiguous
+        Added to.
+    """
     ny, nx = out.shape
     flat = out.ravel()
     idx = np.empty(nx + ny + 2, np.int64)
@@ -158,7 +203,24 @@ def _first_hit(m, flat, ox, oy, dx, dy, xmin, ymin, pix, nx, ny, hit_pixel, hit_
 @njit(parallel=True, cache=True)
 def siddon_first_hits(mask, ox, oy, dx, dy, xmin, ymin, pix, hit_pixel, hit_alpha):
     """For each ray, the first pixel along it with mask > 0 and the α of the middle of its
-    traversal (−1 and nan where the ray meets none); rays in parallel."""
+    traversal (−1 and nan where the ray meets none); rays in parallel.
+
+    Parameters
+    ----------
+    mask : (ny, nx) float64, C-contiguous
+        > 0 on the filled pixels.
+    ox, oy, dx, dy : (n,) float64
+        The rays' origins and unit directions; each ray's whole line through the grid is
+        walked (α < 0 too).
+    xmin, ymin : float
+        The grid's lower-left corner.
+    pix : float
+        The pixels' side, > 0.
+    hit_pixel : (n,) int64
+        Filled with the flat (row-major) index of each ray's first filled pixel, or −1.
+    hit_alpha : (n,) float64
+        Filled with α at the middle of the ray's path through that pixel, or NaN.
+    """
     ny, nx = mask.shape
     flat = mask.ravel()
     for m in prange(ox.size):
@@ -167,8 +229,14 @@ def siddon_first_hits(mask, ox, oy, dx, dy, xmin, ymin, pix, hit_pixel, hit_alph
 
 @njit(cache=True)
 def siddon_first_hits_serial(mask, ox, oy, dx, dy, xmin, ymin, pix, hit_pixel, hit_alpha):
-    """:func:`siddon_first_hits` on one thread (in a worker process, see
-    :func:`meshladar.stream.in_worker`)."""
+    """``siddon_first_hits`` on one thread (in a worker process, see
+    :func:`meshladar.stream.in_worker`).
+
+    Parameters
+    ----------
+    mask, ox, oy, dx, dy, xmin, ymin, pix, hit_pixel, hit_alpha
+        As ``siddon_first_hits``.
+    """
     ny, nx = mask.shape
     flat = mask.ravel()
     for m in range(ox.size):

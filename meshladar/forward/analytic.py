@@ -241,6 +241,11 @@ def simulate_analytic(scene: Scene, ladar: Ladar, *, radiometry="paper", jobs=No
     is computed once per distinct centre range (once for a centred disk; the progress bar
     then counts profiles). A material's lobes are evaluated only where present: a
     Lambertian coating costs no specular evaluation.
+
+    References
+    ----------
+    Jin & Levine (2009), Eq. 8 (each bin's integral), evaluated exactly on the disks and
+    ellipses of their Section 4.
     """
     power = check_radiometry(radiometry)
     phi = np.deg2rad(ladar.angles_deg)

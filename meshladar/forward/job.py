@@ -60,7 +60,30 @@ class Stage(NamedTuple):
 class MeshJob:
     """Everything a chunk needs, decided once: the plan, the weighing (None: keep hits),
     the views, the stage, threads for one view's rows, and whether the backend's fused
-    loop casts the grids."""
+    loop casts the grids.
+
+    Built by :func:`plan_job`; frozen.
+
+    Attributes
+    ----------
+    plan : meshladar.raytrace.plan.TracePlan
+        The run's geometry, validated once (rays, normals, back faces, receivers, sensor,
+        backend).
+    weighing : meshladar.weighing.Weighing or None
+        How hits become bins; None keeps the hits (:func:`meshladar.trace`).
+    vectors : (n_views, 3) float64
+        Every view's unit vector w, from the scene toward the ladar; a chunk's views index
+        its rows.
+    stage : Stage
+        The view stage every view of the run goes through: ``"hits"``, ``"per_hit"``,
+        ``"flat"``, ``"smooth"``, ``"bistatic"``, ``"sensor"`` or ``"resolved"`` (module
+        docstring).
+    row_jobs : int
+        Threads one view's rows are split over, in the fused loop of the ``"flat"`` and
+        ``"bistatic"`` stages only (default 1).
+    fused : bool
+        Whether the backend's fused cast-weigh-bin loop casts the grids (default False).
+    """
 
     plan: TracePlan
     weighing: Weighing | None
@@ -105,7 +128,25 @@ class FlatBins(NamedTuple):
 
 def sensor_offset(geo, w, sensor):
     """What the range of a sensor's hit is relative to: absolute (R − D − aim·w) at a finite
-    standoff, the shifted centre's plane at infinity."""
+    standoff, the shifted centre's plane at infinity.
+
+    Parameters
+    ----------
+    geo : meshladar.raytrace.embree.Geometry
+        The traced geometry; its ``center`` (3,) is the origin of the shifted coordinates
+        the rays are cast in.
+    w : (3,) float64
+        The view's unit vector, from the scene toward the ladar.
+    sensor : meshladar.sensor.Sensor
+        The sensor the run traces with.
+
+    Returns
+    -------
+    float
+        The offset added to the hits' ranges (scene units): 0.0 when ``sensor.standoff``
+        is set (the ranges are already absolute), else −c·w, the range of the geometry's
+        centre c.
+    """
     return 0.0 if sensor.standoff is not None else range_offset(geo.center, w, None)
 
 
@@ -276,7 +317,31 @@ def _stage_name(plan, weighing):
 
 
 def plan_job(plan, weighing, vectors, row_jobs=1) -> MeshJob:
-    """The chunk job of a plan and a weighing (None: keep hits), its stage chosen once."""
+    """The chunk job of a plan and a weighing (None: keep hits), its stage chosen once.
+
+    The stage: ``"hits"`` without a weighing; ``"resolved"`` for resolved returns; with a
+    sensor traced, ``"sensor"`` at a finite standoff with flat or smooth normals and
+    compiled coatings, else ``"per_hit"``; monostatic, ``"flat"`` for flat normals and
+    ``"smooth"`` for smooth normals with compiled coatings; ``"bistatic"`` for flat normals
+    and receivers on a fused backend; ``"per_hit"`` otherwise. Nothing is checked here: the
+    plan and the weighing were checked against each other before.
+
+    Parameters
+    ----------
+    plan : meshladar.raytrace.plan.TracePlan
+        The run's validated geometry.
+    weighing : meshladar.weighing.Weighing or None
+        How hits become bins; None keeps each view's hits.
+    vectors : (n_views, 3) array_like
+        The views' unit vectors w (the ladar's ``view_vectors``); stored as float64.
+    row_jobs : int, optional
+        Threads for one view's rows in the fused loop (default 1).
+
+    Returns
+    -------
+    MeshJob
+        The job :func:`mesh_job` runs on every chunk of views.
+    """
     return MeshJob(plan=plan, weighing=weighing,
                    vectors=np.asarray(vectors, dtype=np.float64),
                    stage=STAGES[_stage_name(plan, weighing)], row_jobs=row_jobs,
@@ -301,7 +366,28 @@ def _chunk(job, n_views):
 def mesh_job(geo, views, job):
     """The stream's per-chunk job (``run_chunks(mesh_job, geo, ..., args=(job,))``): the
     views' hits (a list of :class:`~meshladar.hits.ViewHits`) when ``job.weighing`` is
-    None, else ``{"values", "rays", "backs"}`` arrays."""
+    None, else ``{"values", "rays", "backs"}`` arrays.
+
+    Parameters
+    ----------
+    geo : meshladar.raytrace.embree.Geometry
+        The plan's traced geometry (``job.plan.geo``); its Embree scene is built for the
+        plan's backend.
+    views : (n,) array_like of int
+        The chunk's view indices into ``job.vectors``. With a seeded plan, view i draws
+        from ``np.random.default_rng([seed, i])``, whichever chunk holds it.
+    job : MeshJob
+        From :func:`plan_job`.
+
+    Returns
+    -------
+    list of meshladar.hits.ViewHits or dict
+        Without a weighing, each view's hits in the order of ``views``. Otherwise
+        ``"values"``: (n, n_0[, n_1, ...]) float64, the view's bins over the weighing's
+        axes (``(n, n_bins)`` for a sinogram); ``"rays"``: (n,) int64, rays cast per view;
+        ``"backs"``: (n,) int64, hits on the back of a face per view (0 in the
+        ``"resolved"`` stage).
+    """
     scene = embree_scene(geo, job.plan.backend)
     chunk = _chunk(job, len(views))
     seed, receivers = job.plan.seed, job.plan.receivers

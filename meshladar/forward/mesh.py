@@ -4,7 +4,7 @@
 :class:`~meshladar.raytrace.plan.TracePlan`, and a :class:`~meshladar.weighing.Weighing`
 checked against it before the first ray), then hands :mod:`meshladar.stream` the one
 per-chunk job (:mod:`.job`); :func:`run_plan` is shared with resolved returns
-(:mod:`.resolve`)."""
+(:mod:`meshladar.forward.resolved`)."""
 
 from __future__ import annotations
 
@@ -57,7 +57,37 @@ def first_hits(scene, view_vector, *, ray_spacing):
     global face index (k,), range (k,) float64). Faces are numbered part by part in scene
     order; for the viewer (which faces are lit, where hits land). Distances are float64
     (recomputed against the hit face's plane, as the binning paths): points lie on their
-    faces and ranges are exact to ~1e-14 of the scene's size, not Embree's float32 ~1e-7."""
+    faces and ranges are exact to ~1e-14 of the scene's size, not Embree's float32 ~1e-7.
+
+    The rays sit at the centres of a regular square grid (no stratified offsets) covering
+    the scene's hull seen from the view plus one spacing on each side; they are cast on
+    the flat-normal geometry with the ``"auto"`` backend.
+
+    Parameters
+    ----------
+    scene : Scene
+        A mesh scene (``Scene.from_mesh``, ``Scene.tessellate``).
+    view_vector : (3,) array_like
+        The view w, from the scene toward the ladar (normalised here); rays travel along
+        −w.
+    ray_spacing : float
+        Distance between neighbouring rays (scene units), > 0.
+
+    Returns
+    -------
+    points : (k, 3) float64
+        The first hit of each ray that meets the scene, in scene coordinates.
+    faces : (k,) int64
+        Global index of the face hit (faces numbered part by part in scene order).
+    range : (k,) float64
+        Each hit's range r = −p·w (scene units, growing away from the ladar).
+
+    Raises
+    ------
+    ParameterError
+        If ``scene`` is not a mesh scene, ``view_vector`` is not one finite non-zero (3,)
+        direction, or ``ray_spacing`` is not a finite real > 0.
+    """
     if not isinstance(scene, Scene) or not scene.is_mesh:
         raise ParameterError("first_hits needs a mesh scene")
     w = unit_vectors("view_vector", view_vector)
@@ -82,7 +112,32 @@ def first_hits(scene, view_vector, *, ray_spacing):
 def occluded(scene, points, direction, *, lift=_RECEIVER_LIFT):
     """Whether the ray from each point (k, 3) toward ``direction`` meets the scene; points
     are lifted by ``lift`` × the scene's radius along the direction first (so a point on a
-    face does not hit that face)."""
+    face does not hit that face).
+
+    Parameters
+    ----------
+    scene : Scene
+        A mesh scene; cast on its flat-normal geometry with the ``"auto"`` backend.
+    points : (k, 3) array_like
+        Start points in scene coordinates (not checked).
+    direction : (3,) array_like
+        The direction of every ray (normalised here), e.g. toward a receiver.
+    lift : float, optional
+        The lift off each point along ``direction``, as a fraction of the scene's radius
+        (the largest distance of a vertex from its bounding box's centre); default
+        :data:`meshladar.precision.RECEIVER_LIFT` (1e-5). Not checked.
+
+    Returns
+    -------
+    (k,) bool ndarray
+        True where the ray meets a face of the scene.
+
+    Raises
+    ------
+    ParameterError
+        If ``scene`` is not a mesh scene or ``direction`` is not a finite non-zero
+        direction.
+    """
     if not isinstance(scene, Scene) or not scene.is_mesh:
         raise ParameterError("occluded needs a mesh scene")
     d = unit_vectors("direction", direction)
@@ -316,8 +371,13 @@ def simulate_mesh(scene, ladar, *, mode=None, normals=None, back_faces="two-side
     -------
     Sinogram
         ``values`` (n_views, n_bins) bin integrals of F(θ) cos θ dA (paper Eq. 8) or of
-        F cos θ_i cos θ_r dA (power), model "mesh"; ``info`` records radiometry, mode, normals, footprint, ray_spacing,
-        sampling, seed, rays cast and back-face hits per view.
+        F cos θ_i cos θ_r dA (power), model "mesh"; ``info`` records radiometry, mode,
+        normals, footprint, ray_spacing, sampling, seed, rays cast and back-face hits per
+        view.
+
+    References
+    ----------
+    Jin & Levine (2009), Eq. 8 (the ``"paper"`` radiometry's bin integral).
     """
     normals = "flat" if normals is None else normals
     footprint = False if footprint is None else footprint

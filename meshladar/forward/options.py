@@ -62,6 +62,15 @@ class Option:
         (fields of :class:`meshladar.sensor.Sensor` and its beam, in SI units).
     cli : bool
         Whether the command line offers it (an executor object or a Sensor is API only).
+    flag : str or None
+        The command line's flag where it is not ``--name-with-dashes`` (``cli_flag``).
+
+    Raises
+    ------
+    ValueError
+        If ``kind`` is not one of :data:`KINDS`, ``choices`` are given without kind
+        ``"choice"`` (or that kind without them), or ``models`` names a model outside
+        :data:`MODELS`.
     """
 
     name: str
@@ -180,14 +189,48 @@ _BY_NAME = {o.name: o for o in OPTIONS}
 
 
 def option(name: str) -> Option:
-    """The :class:`Option` called ``name``."""
+    """The :class:`Option` called ``name``.
+
+    Parameters
+    ----------
+    name : str
+        An option of :data:`OPTIONS` (the sensor flags of :data:`SENSOR_OPTIONS` are not
+        looked up here).
+
+    Returns
+    -------
+    Option
+        Its record.
+
+    Raises
+    ------
+    KeyError
+        If no option of :data:`OPTIONS` has that name; the message lists them.
+    """
     if name not in _BY_NAME:
         raise KeyError(f"no option {name!r}; options: {tuple(_BY_NAME)}")
     return _BY_NAME[name]
 
 
 def options_of(model: str) -> tuple[str, ...]:
-    """The names of the options ``model`` takes, in table order."""
+    """The names of the options ``model`` takes, in table order.
+
+    Parameters
+    ----------
+    model : str
+        One of :data:`MODELS` (``"analytic"``, ``"mesh"``, ``"pixel"``).
+
+    Returns
+    -------
+    tuple of str
+        The names of the :data:`OPTIONS` whose ``models`` include ``model``, in the
+        table's order (the stream's options included; the sensor flags are not).
+
+    Raises
+    ------
+    KeyError
+        If ``model`` is not one of :data:`MODELS`.
+    """
     if model not in MODELS:
         raise KeyError(f"model must be one of {MODELS}; got {model!r}")
     return tuple(o.name for o in OPTIONS if model in o.models)

@@ -6,9 +6,10 @@ of the implicit function's gradient at the pixel centre (the normal of the level
 through it; radial, hence exact in direction, for disks).
 
 For each view, parallel rays spaced ``ray_spacing`` apart across the scene travel from the
-ladar along −w and are traced through the grid with Siddon's algorithm (``meshladar.forward.siddon``)
-to the first filled pixel they cross: the rasterised surface. The hit's range is that of the middle of the ray's
-path through the pixel. A ray of cross-section δs covers the arc length δs / cos θ of the
+ladar along −w and are traced through the grid with Siddon's algorithm
+(``meshladar.forward.siddon``) to the first filled pixel they cross: the rasterised surface.
+The hit's range is that of the middle of the ray's path through the pixel. A ray of
+cross-section δs covers the arc length δs / cos θ of the
 surface, cos θ = n·w, and deposits F(θ) cos θ times that arc (Σ F δs → ∫ F cos θ dl,
 DESIGN.md), but never more arc than one ray can cover on the true shape: the outermost ray
 at a silhouette covers at most sqrt(2 ρ δs) of a boundary with radius of curvature ρ, so
@@ -56,6 +57,14 @@ def rasterize(scene: Scene, grid: PixelGrid):
     region from outside stops at its first filled pixel, which is always on the region's
     border: the rasterised surface. (Marking only pixels the boundary crosses would leave
     diagonal gaps through which rays slip to the far side.)
+
+    Parameters
+    ----------
+    scene : Scene
+        A scene of analytic shapes (disks and ellipses, ``scene.shapes``); where shapes
+        overlap, the later one owns the pixel.
+    grid : PixelGrid
+        The pixels; pixel ``[i, j]`` is centred at ``(grid.x[j], grid.y[i])``.
 
     Returns
     -------
@@ -105,6 +114,19 @@ def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=N
     Sinogram
         ``values`` (n_views, n_bins) bin integrals (paper Eq. 8); ``info`` holds
         ``radiometry``, ``pixel_size``, ``ray_spacing`` and ``n_rays`` per view.
+
+    Raises
+    ------
+    ParameterError
+        If ``radiometry`` is not a valid choice, ``pixel_size`` or ``ray_spacing`` is not a
+        finite real > 0, ``pixel_size`` exceeds half the smallest semi-axis of any shape,
+        or the pixel grid or the rays would need more memory than meshladar allocates at
+        once.
+
+    References
+    ----------
+    Jin & Levine (2009), Eq. 8 (each hit's weight), and Section 4 (the pixel method with
+    Siddon ray tracing, their ref. 29).
     """
     power = check_radiometry(radiometry)
     width = float(np.min(np.diff(ladar.bin_edges)))

@@ -47,6 +47,57 @@ def simulate_tol(scene, ladar, tol, normals, footprint, max_rays, kwargs):
     fall below the best so far (refinement no longer converges: noise or a singular
     feature dominates) or when the next run would take the rays cast past ``max_rays``;
     both warn with the estimate reached and what to change.
+
+    The first run has 1 ray per bin width (and 256 segments per shape); there are at most
+    6 refinements (7 runs), each doubling both. The order p is clipped to [0.3, 2]. The
+    next run's rays are predicted as 2× the last run's in slice mode, 4× in 3-D. Only the
+    run kept is checked for undersampled glints (:func:`warn_unresolved_lobes`); the
+    coarser runs are not.
+
+    Parameters
+    ----------
+    scene : Scene
+        A mesh scene, or a scene of analytic shapes, which is tessellated afresh for each
+        run.
+    ladar : Ladar
+        Views and range bins.
+    tol : float
+        The relative L2 error wanted, in (0, 1).
+    normals : {"flat", "smooth", "exact"} or None
+        Shading normals; None: ``"exact"`` for a scene tessellated here, ``"smooth"`` for a
+        mesh.
+    footprint : bool or None
+        Footprint binning; None: True unless ``kwargs`` gives a ``receiver``.
+    max_rays : float or None
+        Budget of rays over all runs, ≥ 1; None: :data:`TOL_MAX_RAYS` (2e9).
+    kwargs : dict
+        The other options of :func:`meshladar.forward.mesh.simulate_mesh`; it must hold
+        ``"ray_spacing"`` and ``"rays_per_bin"`` (both None: the knob picks the density),
+        which are popped from it (the dict is changed).
+
+    Returns
+    -------
+    Sinogram
+        The kept run's values (model ``"mesh"``) with ``info`` extended by ``tol``,
+        ``error_estimate`` (inf when only one run was made), ``convergence_order``,
+        ``max_rays``, ``rays_total`` (over all runs), ``stopped`` (``"tol reached"`` or
+        why not), ``chosen`` (the kept run's ``segments``, ``rays_per_bin``, ``normals``,
+        ``footprint``) and ``refinement`` (one record per run: segments, rays_per_bin,
+        rays, seconds, and error_estimate from the second run on).
+
+    Raises
+    ------
+    ParameterError
+        If ``tol`` is not in (0, 1), ``max_rays`` is not a finite real ≥ 1, or
+        ``ray_spacing`` or ``rays_per_bin`` is given; and whatever ``simulate_mesh``
+        refuses.
+
+    Warns
+    -----
+    MeshladarWarning
+        When ``tol`` is not reached: the reason, and the estimate of the run returned.
+    LobeSamplingWarning
+        When the kept run's rays undersample a coating's glint.
     """
     tol = check_real("tol", tol, low=0.0, high=1.0, low_open=True, high_open=True)
     max_rays = check_real("max_rays", TOL_MAX_RAYS if max_rays is None else max_rays,

@@ -105,6 +105,15 @@ def resolve(scene, ladar, axes, *, motion=None, radiometry="paper", sensor=None,
     Returns
         ``values`` (n_views, n_0[, n_1[, n_2]]) with ``axes``, ``edges``, the views and
         ``info``.
+
+    Raises
+    ------
+    ParameterError
+        If ``axes`` does not give one to three distinct coordinates of
+        :data:`COORDINATES`, each with strictly increasing 1-D finite edges (at least 2),
+        a ``"doppler"`` axis comes without a :class:`Motion`, ``motion`` is not one,
+        ``radiometry`` is invalid, or the result would need more memory than meshladar
+        allocates at once; and whatever the mesh model's plan refuses.
     """
     names, edges = _check_axes(axes, motion)
     check_radiometry(radiometry)

@@ -57,7 +57,28 @@ _CURVED_SHARE = 0.05
 
 
 class Unresolved(NamedTuple):
-    """One part and coating whose specular lobe the run's rays do not resolve."""
+    """One part and coating whose specular lobe the run's rays do not resolve.
+
+    Attributes
+    ----------
+    part : str
+        The part's name.
+    coating : str
+        The coating's name (its class name when it has none).
+    width : float
+        The lobe's half-width w (radians).
+    turn : float
+        κδ, the shading normal's change between neighbouring rays (radians).
+    spacing : float
+        The spacing δ* = 2w / (``needed`` · κ) that resolves it, rounded down to three
+        significant digits (scene units).
+    needed : float
+        Rays the criterion asks across the lobe's full width (:data:`RAYS_ACROSS_LOBE`
+        for the sampling).
+    rays_per_view : float
+        Rays one view needs at that spacing over the whole target: the bounding box's
+        diagonal over the spacing, squared in 3-D.
+    """
 
     part: str
     coating: str
@@ -69,7 +90,20 @@ class Unresolved(NamedTuple):
 
 
 class Faceted(NamedTuple):
-    """One curved part and coating whose faces' normals step wider than the lobe."""
+    """One curved part and coating whose faces' normals step wider than the lobe.
+
+    Attributes
+    ----------
+    part : str
+        The part's name.
+    coating : str
+        The coating's name (its class name when it has none).
+    width : float
+        The lobe's half-width w (radians).
+    step : float
+        The median angle between neighbouring faces' normals over the part's curved
+        edges (radians); it exceeds 2w.
+    """
 
     part: str
     coating: str
@@ -83,7 +117,26 @@ def normal_turn(v, n, face_normals, mode):
     linearly between them. In 3-D the largest rate in any direction of the face's plane;
     in a slice the rate along the face's horizontal direction (the one the row of rays
     moves in; 0 on a horizontal face). 0 on degenerate faces. Dot products only, so a
-    million faces take a fraction of a second."""
+    million faces take a fraction of a second.
+
+    Parameters
+    ----------
+    v : (m, 3, 3) float64
+        Three points of each face (its corners, or points inside it), scene coordinates.
+    n : (m, 3, 3) float64
+        The shading normal at each of those points.
+    face_normals : (m, 3) float64
+        Each face's unit normal; read in slice mode only.
+    mode : {"3d", "slice"}
+        ``"slice"``: the rate along the face's horizontal direction; any other value: the
+        largest rate over the face's plane (3-D).
+
+    Returns
+    -------
+    (m,) float64
+        κ per face, radians per unit length (0 where the face is degenerate: its edges'
+        Gram determinant at most 1e-24 of the product of their squared lengths).
+    """
     d1, d2 = v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]
     g1, g2 = n[:, 1] - n[:, 0], n[:, 2] - n[:, 0]
 
@@ -165,7 +218,39 @@ def unresolved_lobes(scene, materials, *, spacing, normals="smooth", mode="3d",
     ("regular" or "stratified"): :class:`Unresolved` records, empty when every lobe is
     resolved, the normals are flat, or no coating states a lobe width (diffuse coatings,
     a user's model without ``lobe_width``). Nothing is traced; the per-face rates are
-    computed once per scene, normals and mode."""
+    computed once per scene, normals and mode.
+
+    A lobe of half-width w on a part whose normal turns at κ (module docstring) is
+    resolved when 2w / (κ · spacing) is at least ``RAYS_ACROSS_LOBE[sampling]``.
+
+    Parameters
+    ----------
+    scene : Scene
+        A mesh scene (its parts, and the traced geometry for ``normals``).
+    materials : sequence of BRDF
+        One coating per material index of the scene; a coating without a finite, positive
+        ``lobe_width()`` is not checked.
+    spacing : float
+        The run's ray spacing δ (scene units), > 0 (not checked).
+    normals : {"smooth", "exact", "flat"}, optional
+        The shading normals (default ``"smooth"``); ``"flat"`` returns no records.
+    mode : {"3d", "slice"}, optional
+        Default ``"3d"``.
+    sampling : {"stratified", "regular"}, optional
+        Default ``"stratified"``; picks the rays asked across a lobe.
+
+    Returns
+    -------
+    list of Unresolved
+        One per part and material index whose lobe is not resolved, by part, then
+        material index.
+
+    Raises
+    ------
+    KeyError
+        If ``sampling`` is not a key of :data:`RAYS_ACROSS_LOBE` (only when the normals are
+        not flat and some coating states a lobe width).
+    """
     widths = [_lobe_width(m) for m in materials]
     if normals == "flat" or all(w is None for w in widths):
         return []                   # flat faces are sampled exactly; no lobe: nothing to do
@@ -187,7 +272,22 @@ def faceted_lobes(scene, materials):
     """The curved parts and coatings whose faces' normals step from face to face by more
     than the lobe's full width 2w (:class:`Faceted` records; empty for flat-faced
     polyhedra, diffuse coatings and fine meshes). With flat normals their glints come from
-    single facets. Nothing is traced; the steps are computed once per scene."""
+    single facets. Nothing is traced; the steps are computed once per scene.
+
+    Parameters
+    ----------
+    scene : Scene
+        A mesh scene.
+    materials : sequence of BRDF
+        One coating per material index of the scene; a coating without a finite, positive
+        ``lobe_width()`` is not checked.
+
+    Returns
+    -------
+    list of Faceted
+        One per curved part and material index whose median normal step exceeds 2w, by
+        part, then material index.
+    """
     widths = [_lobe_width(m) for m in materials]
     if all(w is None for w in widths):
         return []
@@ -243,7 +343,31 @@ def _label(m):
 def warn_unresolved_lobes(scene, materials, *, spacing, normals, mode, sampling):
     """One :class:`~meshladar.errors.LobeSamplingWarning` per part and coating that
     :func:`unresolved_lobes` finds, naming the lobe width, the normal change per ray and
-    the spacing that resolves it; nothing inside :func:`checked_by_caller`."""
+    the spacing that resolves it; nothing inside :func:`checked_by_caller`.
+
+    With flat normals it warns instead once per record of :func:`faceted_lobes` (faces
+    that step wider than the lobe), naming the fix.
+
+    Parameters
+    ----------
+    scene : Scene
+        A mesh scene.
+    materials : sequence of BRDF
+        One coating per material index of the scene.
+    spacing : float
+        The run's ray spacing (scene units).
+    normals : {"flat", "smooth", "exact"}
+        The run's shading normals.
+    mode : {"3d", "slice"}
+        The run's mode.
+    sampling : {"regular", "stratified"}
+        The run's sampling.
+
+    Warns
+    -----
+    LobeSamplingWarning
+        One per part and coating found, at the user's call site.
+    """
     if _CALLER_CHECKS.get():
         return
     if normals == "flat":
@@ -259,7 +383,13 @@ def warn_unresolved_lobes(scene, materials, *, spacing, normals, mode, sampling)
 def checked_by_caller():
     """Within it, :func:`warn_unresolved_lobes` says nothing: for a caller that runs the
     mesh model several times and checks only the run it keeps (the ``tol`` knob's coarse
-    runs are undersampled on purpose). Per thread and task (a context variable)."""
+    runs are undersampled on purpose). Per thread and task (a context variable).
+
+    Yields
+    ------
+    None
+        The previous setting is restored on exit, also when the block raises.
+    """
     token = _CALLER_CHECKS.set(True)
     try:
         yield

@@ -29,7 +29,26 @@ __all__ = ["PixelGrid", "Rays", "parallel_rays", "project", "backproject", "Para
 @dataclass(frozen=True)
 class PixelGrid:
     """A grid of ny × nx square pixels of side ``pixel_size`` whose lower-left corner is
-    ``origin`` = (x_min, y_min)."""
+    ``origin`` = (x_min, y_min).
+
+    Pixel ``[i, j]`` (row i along y, column j along x) is centred at
+    (x_j, y_i) = (x_min + (j + 0.5)·pixel_size, y_min + (i + 0.5)·pixel_size).
+
+    Parameters
+    ----------
+    nx, ny : int
+        Pixels along x and along y, ≥ 1.
+    pixel_size : float
+        The pixels' side (scene units), > 0.
+    origin : (2,) array_like
+        (x_min, y_min), the grid's lower-left corner; stored as a tuple of floats.
+
+    Raises
+    ------
+    ParameterError
+        If ``nx`` or ``ny`` is not an integer ≥ 1, ``pixel_size`` is not a finite real
+        > 0, or ``origin`` is not one finite point (x, y).
+    """
 
     nx: int
     ny: int
@@ -48,7 +67,30 @@ class PixelGrid:
 
     @classmethod
     def square(cls, size, extent, center=(0.0, 0.0)):
-        """size × size pixels spanning [−extent, extent]² about ``center`` (an Image's grid)."""
+        """size × size pixels spanning [−extent, extent]² about ``center`` (an Image's
+        grid).
+
+        Parameters
+        ----------
+        size : int
+            Pixels along each axis, ≥ 1.
+        extent : float
+            Half the grid's side (scene units), > 0.
+        center : (2,) array_like, optional
+            The grid's centre (default (0, 0)).
+
+        Returns
+        -------
+        PixelGrid
+            Pixels of side 2·extent/size with lower-left corner center − (extent, extent):
+            pixel centres center + (−extent + (k + 0.5)·2·extent/size) along both axes.
+
+        Raises
+        ------
+        ParameterError
+            If ``extent`` is not a finite real > 0, ``size`` is not an integer ≥ 1, or
+            ``center`` is not finite.
+        """
         extent = check_real("extent", extent, low=0.0, low_open=True)
         size = check_count("size", size)
         c = finite_array("center", center)
@@ -57,14 +99,17 @@ class PixelGrid:
 
     @property
     def shape(self) -> tuple[int, int]:
+        """(ny, nx): the shape of an image on the grid."""
         return (self.ny, self.nx)
 
     @cached_property
     def x(self) -> np.ndarray:
+        """(nx,) float64: the pixel centres' x, increasing."""
         return self.origin[0] + (np.arange(self.nx) + 0.5) * self.pixel_size
 
     @cached_property
     def y(self) -> np.ndarray:
+        """(ny,) float64: the pixel centres' y, increasing."""
         return self.origin[1] + (np.arange(self.ny) + 0.5) * self.pixel_size
 
     def _args(self):
@@ -73,7 +118,30 @@ class PixelGrid:
 
 @dataclass(frozen=True, eq=False)
 class Rays:
-    """Straight rays o + α d with unit d, α ≥ 0 increasing along the ray: arrays (n,)."""
+    """Straight rays o + α d with unit d, α ≥ 0 increasing along the ray: arrays (n,).
+
+    The projector's traversal walks each ray's whole line through the grid, α < 0 too:
+    start rays outside the grid (as :func:`parallel_rays` with a large enough
+    ``distance`` and :class:`ParallelProjector` do) for α ≥ 0 to hold.
+
+    Parameters
+    ----------
+    ox, oy : array_like
+        The rays' origins (scene units), any shape, flattened.
+    dx, dy : array_like
+        Their directions, normalised here to unit length; as many elements as ``ox``.
+
+    Attributes
+    ----------
+    ox, oy, dx, dy : (n,) float64
+        Contiguous, finite; (dx, dy) of unit length.
+
+    Raises
+    ------
+    ParameterError
+        If any value is not finite, the four do not have the same number of elements, or
+        a direction is zero.
+    """
 
     ox: np.ndarray
     oy: np.ndarray
@@ -95,6 +163,7 @@ class Rays:
 
     @property
     def size(self) -> int:
+        """n, the number of rays."""
         return self.ox.size
 
 
@@ -103,6 +172,27 @@ def parallel_rays(angles_deg, positions, *, distance):
     the origin on the ladar's side and travelling along −w.
 
     Returns Rays ordered view-major: ray (v, k) is index v·len(positions) + k.
+
+    Parameters
+    ----------
+    angles_deg : (n_views,) array_like
+        View angles φ in degrees (flattened); w = (cos φ, sin φ) points toward the ladar.
+    positions : (n_positions,) array_like
+        Transverse positions s along u = (−sin φ, cos φ), scene units (flattened).
+    distance : float
+        How far from the origin along w the rays start (scene units), ≥ 0.
+
+    Returns
+    -------
+    Rays
+        n_views · n_positions rays: ray (v, k) starts at s_k u_v + distance · w_v and
+        travels along −w_v.
+
+    Raises
+    ------
+    ParameterError
+        If ``angles_deg`` or ``positions`` is not finite, or ``distance`` is not a finite
+        real ≥ 0.
     """
     phi = np.deg2rad(finite_array("angles_deg", angles_deg)).ravel()
     s = finite_array("positions", positions).ravel()
@@ -114,7 +204,35 @@ def parallel_rays(angles_deg, positions, *, distance):
 
 
 def project(image, grid: PixelGrid, rays: Rays) -> np.ndarray:
-    """Line integrals Σ length · image of each ray through the grid: (n_rays,)."""
+    """Line integrals Σ length · image of each ray through the grid: (n_rays,).
+
+    Parameters
+    ----------
+    image : (ny, nx) array_like
+        Pixel values, ``grid.shape``, finite.
+    grid : PixelGrid
+        The pixels.
+    rays : Rays
+        The rays (their whole lines through the grid are integrated, see :class:`Rays`).
+
+    Returns
+    -------
+    (n_rays,) float64
+        Σ over the pixels each ray crosses of its exact length inside the pixel (scene
+        units) times the pixel's value; 0 for a ray that misses the grid.
+
+    Raises
+    ------
+    ParameterError
+        If ``image`` is not finite or its shape is not ``grid.shape``.
+
+    References
+    ----------
+    R. L. Siddon, "Fast calculation of the exact radiological path for a three-dimensional
+    CT array", Med. Phys. 12, 252-255 (1985) (Jin & Levine (2009), ref. 29); F. Jacobs
+    et al., "A fast algorithm to calculate the exact radiological path through a pixel or
+    voxel space", J. Comput. Inf. Technol. 6, 89-94 (1998) (the incremental form).
+    """
     img = np.ascontiguousarray(finite_array("image", image))
     if img.shape != grid.shape:
         raise ParameterError(f"image must have the grid's shape {grid.shape}; got {img.shape}")
@@ -129,7 +247,39 @@ _BACKPROJECT_PARTS = 8
 
 
 def backproject(values, grid: PixelGrid, rays: Rays) -> np.ndarray:
-    """The exact adjoint of :func:`project`: Σ_rays length · value into each pixel."""
+    """The exact adjoint of :func:`project`: Σ_rays length · value into each pixel.
+
+    The rays are split into at most 8 contiguous blocks (one per 4096 rays), each
+    backprojected into its own image and the images summed in order, so the result does
+    not depend on the number of cores.
+
+    Parameters
+    ----------
+    values : array_like
+        One finite value per ray (flattened: (n_views, n_positions) from
+        :func:`parallel_rays` is accepted as it is).
+    grid : PixelGrid
+        The pixels.
+    rays : Rays
+        The rays.
+
+    Returns
+    -------
+    (ny, nx) float64
+        Σ over the rays crossing each pixel of the ray's length inside it times its value.
+
+    Raises
+    ------
+    ParameterError
+        If ``values`` is not finite or does not have one entry per ray.
+
+    References
+    ----------
+    R. L. Siddon, "Fast calculation of the exact radiological path for a three-dimensional
+    CT array", Med. Phys. 12, 252-255 (1985) (Jin & Levine (2009), ref. 29); F. Jacobs
+    et al., "A fast algorithm to calculate the exact radiological path through a pixel or
+    voxel space", J. Comput. Inf. Technol. 6, 89-94 (1998) (the incremental form).
+    """
     v = np.ascontiguousarray(finite_array("values", values).ravel())
     if v.size != rays.size:
         raise ParameterError(f"values must have one entry per ray ({rays.size}); got {v.size}")
@@ -145,6 +295,36 @@ class ParallelProjector:
 
     ``A @ image`` gives the (n_views, n_positions) line integrals of ``image`` along the rays
     of each view φ at transverse positions s; ``A.T @ sino`` backprojects exactly.
+
+    Parameters
+    ----------
+    grid : PixelGrid
+        The image's pixels.
+    angles_deg : (n_views,) array_like
+        View angles φ in degrees (flattened, finite).
+    positions : (n_positions,) array_like
+        Transverse positions s of each view's rays (flattened, finite; scene units).
+
+    Attributes
+    ----------
+    grid : PixelGrid
+    angles_deg : (n_views,) float64
+    positions : (n_positions,) float64
+    rays : Rays
+        The rays of :func:`parallel_rays`, starting outside the grid at distance
+        hypot(nx, ny)·pixel_size + |origin| + 1 from the origin.
+
+    Raises
+    ------
+    ParameterError
+        If ``angles_deg`` or ``positions`` is not finite.
+
+    References
+    ----------
+    R. L. Siddon, "Fast calculation of the exact radiological path for a three-dimensional
+    CT array", Med. Phys. 12, 252-255 (1985) (Jin & Levine (2009), ref. 29); F. Jacobs
+    et al., "A fast algorithm to calculate the exact radiological path through a pixel or
+    voxel space", J. Comput. Inf. Technol. 6, 89-94 (1998) (the incremental form).
 
     Examples
     --------
@@ -167,6 +347,7 @@ class ParallelProjector:
 
     @property
     def shape(self):
+        """(n_views · n_positions, nx · ny): the shape of A as a matrix."""
         return (self.angles_deg.size * self.positions.size, self.grid.nx * self.grid.ny)
 
     def __matmul__(self, image):
@@ -175,6 +356,7 @@ class ParallelProjector:
 
     @property
     def T(self):
+        """Aᵀ: ``A.T @ sino`` backprojects n_views · n_positions values into (ny, nx)."""
         return _Adjoint(self)
 
 

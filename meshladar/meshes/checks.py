@@ -75,7 +75,36 @@ def _bodies(part: MeshPart):
 def inspect_parts(parts):
     """Clean parts and build the scene's mesh report: ``watertight`` and ``inverted`` per
     part (inverted: some closed body of it has negative volume, its faces wound inward),
-    ``inverted_bodies`` in all."""
+    ``inverted_bodies`` in all.
+
+    A face is degenerate, and dropped, when two of its vertex indices are equal or its area
+    is at most 1e-14 times the square of the diagonal of the part's vertex bounding box. A
+    body is a set of faces joined through shared vertex indices; it is closed when each of
+    its undirected edges is met exactly twice, once in each direction, and its signed
+    volume is the sum over its faces of (p0·n) area / 3.
+
+    Parameters
+    ----------
+    parts : iterable of MeshPart
+        The scene's parts; iterated once.
+
+    Returns
+    -------
+    cleaned : list of MeshPart
+        One per part, in order: the part itself when no face was dropped, else a new part
+        with the same vertices, name and ``exact_normal`` and the remaining faces.
+    report : dict
+        ``"degenerate_faces"`` (int): faces dropped in all parts. ``"watertight"`` (list of
+        bool, one per part): every body of the part is closed (False for a part left
+        without faces). ``"inverted"`` (list of bool, one per part): some closed body has
+        negative signed volume. ``"inverted_bodies"`` (int): such bodies in all parts.
+        ``"faces"`` (int): the faces left in all parts.
+
+    Raises
+    ------
+    GeometryError
+        When no part has any face left (all degenerate, or none given).
+    """
     cleaned, dropped, watertight, inverted, n_inverted = [], 0, [], [], 0
     for p in parts:
         q, k = _clean(p)

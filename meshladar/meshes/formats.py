@@ -45,7 +45,9 @@ def load_parts(mesh_or_path):
     -------
     list of (str, trimesh.Trimesh)
         Part names and meshes in world coordinates, each a fresh mesh of vertices and faces
-        only, with vertices at the same position merged (see :func:`_welded`).
+        only, with vertices at the same position merged (positions rounded to a grid of
+        2⁻⁴⁰ times the mesh's largest extent, from its lowest corner) and unreferenced
+        vertices dropped.
 
     Raises
     ------

@@ -1,9 +1,9 @@
 """Convex hulls of mesh vertices: the points every extreme of a linear (or perspective)
 function of position is attained at, found once per part or scene.
 
-Above :data:`_HULL_FILTER_ABOVE` points the hull is found in two steps: the points strictly
-inside the polytope of their extremes along :data:`_FILTER_DIRECTIONS` directions are
-dropped first (Akl–Toussaint); Qhull then runs on at most :data:`_QHULL_MAX` points.
+Above 100 000 points the hull is found in two steps: the points strictly inside the
+polytope of their extremes along 64 directions are dropped first (Akl–Toussaint); Qhull
+then runs on at most 200 000 points.
 """
 
 from __future__ import annotations
@@ -28,8 +28,29 @@ _FILTER_DIRECTIONS = 64
 
 def convex_hull(v):
     """Points (n, 3) that include every vertex of their convex hull (exactly the hull's
-    vertices unless they are very many, see :data:`_QHULL_MAX`), read-only; all the points
-    when the hull is degenerate (a flat sheet) or they are few."""
+    vertices unless they are very many, over 200 000 after filtering), read-only; all the
+    points when the hull is degenerate (a flat sheet) or they are few (64 or fewer).
+
+    Above 100 000 points, the points strictly inside the polytope of their extremes along
+    64 Fibonacci-lattice directions are dropped first (Akl–Toussaint; a point within
+    1e-9 × (largest coordinate extent + largest |coordinate|) of that polytope's boundary
+    is kept). Qhull then runs when between 65 and 200 000 points are
+    left; beyond 200 000 the filtered points are returned, a superset of the hull's
+    vertices, so every extreme of a linear or perspective function of position is the
+    same.
+
+    Parameters
+    ----------
+    v : (n, 3) ndarray
+        Points, in scene units; not validated.
+
+    Returns
+    -------
+    (k, 3) ndarray
+        Read-only and C-contiguous, of ``v``'s dtype. Where no point was dropped (64 or
+        fewer points, or Qhull failed on a degenerate set) and ``v`` is already
+        C-contiguous, this is ``v`` itself, made read-only in place.
+    """
     hull = v
     if len(v) > _HULL_FILTER_ABOVE:
         hull = _outside_extremes(v)

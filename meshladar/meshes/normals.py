@@ -1,7 +1,7 @@
 """Normals of a mesh: the unit normal at each face corner, averaged over the faces around
 the corner's point within a crease angle (smooth where the surface is, sharp at creases).
 
-Its compiled loop is :mod:`meshladar.meshes._normals_kernel` (numba), imported here: this
+Its compiled loop is ``meshladar.meshes._normals_kernel`` (numba), imported here: this
 module is reached lazily through :mod:`meshladar.meshes`, so ``import meshladar`` stays light.
 """
 
@@ -29,6 +29,21 @@ def corner_normals(part: MeshPart, *, crease_deg=CREASE_DEG):
     Faces meet at a point when their corners have the same position (exact float equality),
     whatever the vertex indices: a file's UV seams and split normals store one point as
     several vertices, and they are not creases.
+
+    Parameters
+    ----------
+    part : MeshPart
+        The mesh, of m faces.
+    crease_deg : float, keyword-only, degrees, default CREASE_DEG (30.0)
+        A neighbouring face g joins the mean at a corner of face f when n_g·n_f ≥
+        cos(crease_deg); f itself always does. Not validated.
+
+    Returns
+    -------
+    (m, 3, 3) ndarray of float64
+        ``out[f, c]`` is the normal at corner c of face f (the corner at vertex
+        ``part.faces[f, c]``). Where the weighted sum vanishes, the face's own normal is
+        used (a zero vector for a zero-area face).
     """
     fn, area = part.face_normals_areas()
     point_of, n_points = _point_index(part.vertices)
@@ -47,7 +62,27 @@ def curved_edge_angles(part: MeshPart, *, crease_deg=CREASE_DEG):
     at each of the part's curved edges: edges shared by two faces of one material (by
     position, as :func:`corner_normals` joins them) that meet at more than 0 and less than
     ``crease_deg`` (an edge inside a flat face's triangulation is not curved, a crease is
-    not either)."""
+    not either).
+
+    An edge is two positions (exact float equality, as in :func:`corner_normals`); an edge
+    met by more than two faces gives one entry per consecutive pair of them in sorted
+    order. "More than 0" is an angle above 1e-9 rad.
+
+    Parameters
+    ----------
+    part : MeshPart
+        The mesh.
+    crease_deg : float, keyword-only, degrees, default CREASE_DEG (30.0)
+        Edges whose faces' normals are this far apart or more are creases, not curved. Not
+        validated.
+
+    Returns
+    -------
+    angles : (k,) ndarray of float64
+        The angle between the two faces' unit normals at each curved edge, in radians.
+    materials : (k,) ndarray of int64
+        The material index of the two faces at each curved edge.
+    """
     fn, _ = part.face_normals_areas()
     point, _ = _point_index(part.vertices)
     f = point[part.faces]

@@ -26,13 +26,25 @@ class MeshPart:
     Parameters
     ----------
     vertices : (n, 3) float64
+        Positions in scene units, finite. Stored as a read-only C-contiguous float64 array.
     faces : (m, 3) int64, counter-clockwise seen from outside (outward normals)
+        Indices into ``vertices``, each in [0, n). Stored as a read-only int64 array.
     material : int or (m,) int
-        Index into the scene's material list, for all faces or per face.
-    name : str
+        Index into the scene's material list, for all faces or per face. Stored as a
+        read-only (m,) int64 array; not range-checked here.
+    name : str, default "mesh"
+        A label, quoted in error messages and the repr.
     exact_normal : callable, optional
         Maps points (k, 3) to the unit outward normals (k, 3) of the smooth surface the mesh
         approximates (set by the tessellation of analytic shapes: ``normals="exact"``).
+        Default None.
+
+    Raises
+    ------
+    GeometryError
+        When ``vertices`` is not of shape (n, 3) or not finite, ``faces`` is not an (m, 3)
+        integer array (an empty one may be of any dtype), or a face index is outside
+        [0, n).
     """
 
     vertices: np.ndarray
@@ -79,7 +91,16 @@ class MeshPart:
 
     def face_normals_areas(self):
         """Unit face normals (m, 3) and areas (m,), in float64: computed once per part (the
-        part is immutable) and returned read-only."""
+        part is immutable) and returned read-only.
+
+        Returns
+        -------
+        normals : (m, 3) ndarray of float64
+            (v1 − v0) × (v2 − v0) normalised: outward for faces wound counter-clockwise seen
+            from outside; a zero vector for a zero-area face.
+        areas : (m,) ndarray of float64
+            Face areas, in squared scene units.
+        """
         cached = self.__dict__.get("_normals_areas")
         if cached is None:
             tri = self.triangles
@@ -99,7 +120,15 @@ class MeshPart:
         return convex_hull(self.vertices)
 
     def digest(self) -> str:
-        """Content hash of the geometry (vertices and faces)."""
+        """Content hash of the geometry (vertices and faces).
+
+        Returns
+        -------
+        str
+            The 40-character hexadecimal SHA-1 of the bytes of ``vertices`` (float64)
+            followed by those of ``faces`` (int64); ``material``, ``name`` and
+            ``exact_normal`` do not enter.
+        """
         h = hashlib.sha1()
         h.update(self.vertices.tobytes())
         h.update(self.faces.tobytes())
@@ -107,7 +136,32 @@ class MeshPart:
 
 
 def part_from_trimesh(mesh, material_index, *, name="mesh", transform=None):
-    """A MeshPart from a trimesh.Trimesh (optionally transformed by a 4×4 matrix)."""
+    """A MeshPart from a trimesh.Trimesh (optionally transformed by a 4×4 matrix).
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh
+        Read through its ``vertices`` and ``faces`` only.
+    material_index : int or (m,) int
+        Index into the scene's material list, for all faces or per face.
+    name : str, keyword-only, default "mesh"
+        The part's label.
+    transform : (4, 4) array_like, keyword-only, optional
+        Finite affine transform applied to the vertices as ``v @ T[:3, :3].T + T[:3, 3]``
+        (the bottom row is not used). Default None: the vertices as they are.
+
+    Returns
+    -------
+    MeshPart
+        Without ``exact_normal``.
+
+    Raises
+    ------
+    ParameterError
+        When ``transform`` is not a finite 4×4 matrix.
+    GeometryError
+        When the vertices or faces are invalid (from :class:`MeshPart`).
+    """
     v = np.asarray(mesh.vertices, dtype=np.float64)
     if transform is not None:
         t = np.asarray(transform, dtype=np.float64)

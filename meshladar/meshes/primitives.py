@@ -68,6 +68,35 @@ def prism(shape, segments, height, material_index, *, z0=0.0):
 
     The part's ``exact_normal`` is the shape's own outward normal (in x-y) for side points
     and ±z on the caps.
+
+    Ring vertex k (k = 0 … segments − 1) is ``shape.boundary(2πk / segments)``, at
+    z0 − height/2 and z0 + height/2; each cap is a fan about the shape's centre.
+
+    Parameters
+    ----------
+    shape : meshladar.Disk or meshladar.Ellipse
+        The cross-section, in the x-y plane, in scene units.
+    segments : int
+        Vertices per ring, ≥ 3.
+    height : float
+        Length of the prism along z, in scene units; not validated.
+    material_index : int or (4·segments,) int
+        Index into the scene's material list, for all faces or per face.
+    z0 : float, keyword-only, default 0.0
+        z of the prism's middle, in scene units.
+
+    Returns
+    -------
+    MeshPart
+        2·segments + 2 vertices and 4·segments faces (two per side quad, one per cap fan
+        slice), named ``shape.name`` or, when that is empty, the shape's class name in
+        lower case.
+
+    Raises
+    ------
+    ParameterError
+        When ``segments`` is not an integer ≥ 3, or the prism (about 1 kB a segment) would
+        need more than 4 GiB.
     """
     n = check_count("segments", segments, 3)
     # the prism's arrays and trimesh's processing of them, about 1 kB a segment at peak
@@ -91,7 +120,26 @@ def prism(shape, segments, height, material_index, *, z0=0.0):
 
 def icosphere(subdivisions):
     """Vertices (n, 3) float64 and faces (m, 3) of the unit icosphere (radius 1 about the
-    origin, 20·4^subdivisions faces), as trimesh builds it."""
+    origin, 20·4^subdivisions faces), as trimesh builds it.
+
+    Parameters
+    ----------
+    subdivisions : int
+        Number of subdivisions of the icosahedron, ≥ 0. The size is not checked against a
+        memory limit.
+
+    Returns
+    -------
+    vertices : (n, 3) ndarray of float64
+        Unit vectors.
+    faces : (m, 3) ndarray of int
+        Vertex indices, m = 20·4^subdivisions, as trimesh returns them.
+
+    Raises
+    ------
+    ParameterError
+        When ``subdivisions`` is not an integer ≥ 0.
+    """
     import trimesh
 
     subdivisions = check_count("subdivisions", subdivisions, 0)
@@ -101,7 +149,37 @@ def icosphere(subdivisions):
 
 def ellipsoid(center, semi_axes, material_index, *, subdivisions=4, name="ellipsoid"):
     """A tessellated ellipsoid (a scaled icosphere: 20·4^subdivisions faces) whose
-    ``exact_normal`` is the ellipsoid's own (the gradient of Σ (x_i/a_i)²)."""
+    ``exact_normal`` is the ellipsoid's own (the gradient of Σ (x_i/a_i)²).
+
+    Vertex i is ``center + u_i * semi_axes`` for the unit icosphere's vertex u_i
+    (:func:`icosphere`), so every vertex lies on the ellipsoid.
+
+    Parameters
+    ----------
+    center : (3,) array_like
+        Centre, in scene units.
+    semi_axes : (3,) array_like
+        Semi-axes along x, y and z, in scene units, finite and > 0.
+    material_index : int or (m,) int
+        Index into the scene's material list, for all faces or per face.
+    subdivisions : int, keyword-only, default 4
+        Icosphere subdivisions, ≥ 0.
+    name : str, keyword-only, default "ellipsoid"
+        The part's label.
+
+    Returns
+    -------
+    MeshPart
+        With its ``exact_normal`` set.
+
+    Raises
+    ------
+    ParameterError
+        When ``center`` or ``semi_axes`` is not of shape (3,), a semi-axis is not finite
+        and positive, or ``subdivisions`` is not an integer ≥ 0.
+    GeometryError
+        When ``center`` is not finite (from :class:`MeshPart`).
+    """
     c = np.asarray(center, dtype=np.float64)
     ax = np.asarray(semi_axes, dtype=np.float64)
     if c.shape != (3,) or ax.shape != (3,) or np.any(ax <= 0) or not np.all(np.isfinite(ax)):
@@ -112,6 +190,35 @@ def ellipsoid(center, semi_axes, material_index, *, subdivisions=4, name="ellips
 
 
 def sphere(center, radius, material_index, *, subdivisions=4, name="sphere"):
-    """A tessellated sphere (icosphere: 20·4^subdivisions faces) with its exact normals."""
+    """A tessellated sphere (icosphere: 20·4^subdivisions faces) with its exact normals.
+
+    :func:`ellipsoid` with three equal semi-axes.
+
+    Parameters
+    ----------
+    center : (3,) array_like
+        Centre, in scene units.
+    radius : float
+        Radius, in scene units, finite and > 0.
+    material_index : int or (m,) int
+        Index into the scene's material list, for all faces or per face.
+    subdivisions : int, keyword-only, default 4
+        Icosphere subdivisions, ≥ 0.
+    name : str, keyword-only, default "sphere"
+        The part's label.
+
+    Returns
+    -------
+    MeshPart
+        With its ``exact_normal`` set.
+
+    Raises
+    ------
+    ParameterError
+        When ``center`` is not of shape (3,), ``radius`` is not finite and positive (the
+        message names ``semi_axes``), or ``subdivisions`` is not an integer ≥ 0.
+    GeometryError
+        When ``center`` is not finite (from :class:`MeshPart`).
+    """
     return ellipsoid(center, (radius, radius, radius), material_index,
                      subdivisions=subdivisions, name=name)

@@ -36,9 +36,9 @@ interval, not a point: along the transverse axis u the range changes at dr/du = 
 The ray's weight is spread over that interval (a box in slice mode; in 3-D the sum of the u
 and v boxes, a trapezoid), exactly as the flat facet would return it.
 
-Layout (this stage only casts; DESIGN.md layer 4): :mod:`.plan` (the :class:`TracePlan`
-record, built and validated once by :func:`plan_trace`), :mod:`.grid` (ray grids and their
-defaults), :mod:`.views` (one view's parallel rays → :class:`~meshladar.hits.ViewHits`),
+Layout (this stage only casts; DESIGN.md layer 4): :mod:`.plan` (the
+:class:`~meshladar.raytrace.plan.TracePlan` record, built and validated once by
+:func:`~meshladar.raytrace.plan.plan_trace`), :mod:`.grid` (ray grids and their defaults), :mod:`.views` (one view's parallel rays → :class:`~meshladar.hits.ViewHits`),
 :mod:`.perspective` (a sensor's rays), :mod:`.embree` (the geometry a worker traces and
 the per-process cache of Embree scenes), :mod:`.backends` (the backend registry), with
 :mod:`.packets` (+ :mod:`.embree4`, :mod:`.embree4_ctypes`: the packet library through

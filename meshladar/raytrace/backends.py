@@ -35,7 +35,22 @@ class Backend:
     ``build(vertices, faces)`` makes a raw scene of float32 (n, 3) vertices at unit size and
     int32 (m, 3) faces, with embreex's ``run(origins, directions, output=, query=)``
     interface; ``available()`` says (True, where) or (False, why); ``fused`` whether the
-    weigh stage's fused loop (:mod:`meshladar.weighing.fused`) can cast with its scenes."""
+    weigh stage's fused loop (:mod:`meshladar.weighing.fused`) can cast with its scenes.
+
+    Attributes
+    ----------
+    name : str
+        The backend's name, its key in :data:`REGISTRY` and its ``backend=`` choice.
+    build : callable
+        ``build(vertices, faces)``: the raw scene of float32 (n, 3) vertices (at unit size)
+        and int32 (m, 3) faces, an object with embreex's ``run(origins, directions,
+        output=, query=)``.
+    available : callable
+        ``available()``: ``(True, where)`` when the backend loads here, else
+        ``(False, why)``.
+    fused : bool
+        Whether the fused cast-weigh-bin loop can cast with its scenes (default False).
+    """
 
     name: str
     build: Callable
@@ -48,13 +63,44 @@ REGISTRY: dict = {}
 
 
 def register(entry: Backend) -> Backend:
-    """Add (or replace) a backend in :data:`REGISTRY`; returns it."""
+    """Add (or replace) a backend in :data:`REGISTRY`; returns it.
+
+    Parameters
+    ----------
+    entry : Backend
+        The backend, registered under ``entry.name`` (an existing entry of that name is
+        replaced; nothing is checked).
+
+    Returns
+    -------
+    Backend
+        ``entry`` itself.
+    """
     REGISTRY[entry.name] = entry
     return entry
 
 
 def backend(name: str) -> Backend:
-    """The registered backend ``name``, its module imported on first use."""
+    """The registered backend ``name``, its module imported on first use.
+
+    Parameters
+    ----------
+    name : str
+        A registered backend's name, or a built-in one (``"packets"``, ``"embreex"``:
+        :data:`BUILTIN`), whose module is imported (and registers itself) here. ``"auto"``
+        is not a backend: :func:`resolve_backend` chooses one for it.
+
+    Returns
+    -------
+    Backend
+        The entry of :data:`REGISTRY`. Whether it can load here is not checked (its
+        ``available()`` says).
+
+    Raises
+    ------
+    ParameterError
+        When ``name`` is neither registered nor built in.
+    """
     if name not in REGISTRY and name in BUILTIN:
         importlib.import_module(BUILTIN[name])
     if name not in REGISTRY:
@@ -64,7 +110,14 @@ def backend(name: str) -> Backend:
 
 
 def choices() -> tuple:
-    """The ``backend=`` names: "auto", the built-in backends and any registered one."""
+    """The ``backend=`` names: "auto", the built-in backends and any registered one.
+
+    Returns
+    -------
+    tuple of str
+        ``"auto"``, then the built-in names (:data:`BUILTIN`, in order), then any other
+        registered name, each once.
+    """
     return ("auto",) + tuple(dict.fromkeys((*BUILTIN, *REGISTRY)))
 
 
@@ -73,7 +126,33 @@ _FALLBACK_SAID = False
 
 def resolve_backend(name):
     """The backend a run uses, by name: ``name`` itself when it loads, "auto" the first of
-    :data:`PREFERENCE` that loads (warning once per process when it falls back)."""
+    :data:`PREFERENCE` that loads (warning once per process when it falls back).
+
+    Parameters
+    ----------
+    name : str
+        One of :func:`choices`: ``"auto"``, ``"packets"``, ``"embreex"`` or a registered
+        backend's name.
+
+    Returns
+    -------
+    str
+        The name of a backend whose ``available()`` is true here: ``name`` itself, or for
+        ``"auto"`` the first of :data:`PREFERENCE` (``"packets"``, then ``"embreex"``).
+
+    Raises
+    ------
+    ParameterError
+        When ``name`` is not one of :func:`choices`; when a backend named explicitly cannot
+        load here (the message gives its reason); when, under ``"auto"``, none of
+        :data:`PREFERENCE` loads.
+
+    Warns
+    -----
+    MeshladarWarning
+        Under ``"auto"``, when a preferred backend cannot load and a later one is used
+        (once per process).
+    """
     global _FALLBACK_SAID
     check_choice("backend", name, choices())
     why = None

@@ -70,7 +70,25 @@ _LIB_LOCK = threading.Lock()
 def library():
     """The process-wide EmbreeLib (loaded and its device created on first use); raises
     OSError, with the reason, when it cannot be loaded (once per process: the reason is
-    kept)."""
+    kept).
+
+    The first call loads the library (:class:`EmbreeLib`: ``MESHLADAR_EMBREE4``, else the
+    copy embreex ships) and checks it against the packet layouts this module uses, with one
+    triangle and packets of width 4, 8 and 16 (hits, barycentrics, misses, occlusion).
+    Thread-safe.
+
+    Returns
+    -------
+    EmbreeLib
+        The same object for every call in the process.
+
+    Raises
+    ------
+    OSError
+        When no library is found, it is not Embree 4, a symbol or its device is missing,
+        or it does not answer packets as the layouts expect; every later call raises
+        again with the first reason, without retrying.
+    """
     with _LIB_LOCK:
         return _load()
 
@@ -91,7 +109,14 @@ def _load():
 
 
 def available():
-    """(True, library path) when the packet backend loads; else (False, the reason)."""
+    """(True, library path) when the packet backend loads; else (False, the reason).
+
+    Returns
+    -------
+    tuple of (bool, str)
+        ``(True, path)`` of the library :func:`library` loaded, or ``(False, reason)``
+        with the OSError's message; never raises for a library that cannot load.
+    """
     try:
         return True, library().path
     except OSError as exc:
@@ -113,7 +138,50 @@ class GridHits(NamedTuple):
 
 class PacketGeometry:
     """A committed Embree scene of one triangle mesh whose buffers are shared (zero-copy)
-    numpy arrays: the arrays are kept alive here as long as the scene is."""
+    numpy arrays: the arrays are kept alive here as long as the scene is.
+
+    The vertices are copied once into a float32 buffer with one padding row (Embree may
+    read the last vertex with a 16-byte load) and the faces are kept as a contiguous uint32
+    array; Embree reads both in place. The scene is built (its BVH) at construction; as a
+    context manager it is released on exit.
+
+    Parameters
+    ----------
+    vertices : (n, 3) array_like
+        The triangles' corners, stored as float32.
+    faces : (m, 3) array_like of int
+        Each triangle's three vertex indices, each in [0, n).
+    robust : bool
+        Embree's robust mode (``RTC_SCENE_FLAG_ROBUST``: watertight ray-triangle tests),
+        default True.
+    quality : int, optional
+        Embree's BVH build quality (``RTC_BUILD_QUALITY_LOW``, ``_MEDIUM``, ``_HIGH`` =
+        0, 1, 2 in :mod:`meshladar.raytrace.embree4_ctypes`); None (default) leaves
+        Embree's default.
+    lib : EmbreeLib, optional
+        The library to build with (default :func:`library`'s).
+
+    Attributes
+    ----------
+    lib : EmbreeLib
+        The library the scene was built with.
+    handle : int
+        The RTCScene handle; 0 once released.
+    geom_id : int
+        The triangle geometry's id in the scene.
+    n_faces : int
+        m, the number of triangles.
+
+    Raises
+    ------
+    ValueError
+        When ``vertices`` or ``faces`` is not (k, 3), or a face index lies outside
+        [0, n).
+    OSError
+        When ``lib`` is None and the library cannot be loaded (:func:`library`).
+    RuntimeError
+        When Embree reports an error building the scene.
+    """
 
     def __init__(self, vertices, faces, *, robust=True, quality=None, lib=None):
         self.lib = lib = lib or library()
@@ -146,6 +214,8 @@ class PacketGeometry:
         lib.check("scene build")
 
     def release(self):
+        """Release the Embree scene and drop the shared buffers; a released scene's casts
+        raise RuntimeError. Safe to call twice; also called on garbage collection."""
         if getattr(self, "handle", 0):
             self.lib.rtcReleaseScene(self.handle)
             self.handle = 0
@@ -165,7 +235,18 @@ class PacketGeometry:
         return self.handle
 
     def live(self):
-        """The scene's handle for a compiled loop; RuntimeError once released."""
+        """The scene's handle for a compiled loop; RuntimeError once released.
+
+        Returns
+        -------
+        int
+            The RTCScene handle (a pointer as an integer).
+
+        Raises
+        ------
+        RuntimeError
+            When the scene has been released.
+        """
         return self._live()
 
     def cast_grid(self, origins, direction, *, width=None, coherent=True, tmax=np.inf,
@@ -175,7 +256,42 @@ class PacketGeometry:
         ``prim`` (int32, -1 on a miss), ``tfar`` (float32, inf on a miss; distances in
         units of |direction|) and, with ``barycentrics``, the hits' ``u`` and ``v``
         (float32; then a :class:`GridHits`). Releases the GIL: callable from several
-        threads."""
+        threads.
+
+        Parameters
+        ----------
+        origins : (n, 3) array_like
+            Ray origins, cast as float32.
+        direction : (3,) or (n, 3) array_like
+            One direction for every ray, or one per ray, cast as float32; need not be unit
+            length (distances are in units of its length).
+        width : int, optional
+            Packet width, 4, 8 or 16 (the library's ``rtcIntersect4/8/16``); default (None
+            or 0) the CPU's native width, ``lib.width``. Another value raises KeyError.
+        coherent : bool
+            Embree's coherent query flag (neighbouring rays nearly parallel, the grids'
+            case), default True; False asks for incoherent rays.
+        tmax : float
+            Each ray's far limit (cast as float32), in units of |direction|; hits beyond it
+            are not reported. Default inf. Rays start at t = 0.
+        barycentrics : bool
+            Also return the hits' barycentrics (default False).
+
+        Returns
+        -------
+        tuple of (prim, tfar) or GridHits
+            ``prim`` (n,) int32: the hit face's index, -1 on a miss; ``tfar`` (n,)
+            float32: the hit distance, inf on a miss. With ``barycentrics``, a
+            :class:`GridHits` that adds ``u`` and ``v`` (n,) float32 (meaningful on hits
+            only).
+
+        Raises
+        ------
+        ValueError
+            When ``direction`` is neither (3,) nor (n, 3).
+        RuntimeError
+            When the scene has been released.
+        """
         w = width or self.lib.width
         o = np.ascontiguousarray(origins, dtype=np.float32)
         d = _directions(direction, len(o))
@@ -190,7 +306,33 @@ class PacketGeometry:
         return GridHits(prim, tfar, u, v) if barycentrics else (prim, tfar)
 
     def occluded_grid(self, origins, direction, *, tmax=np.inf, width=None, coherent=True):
-        """Whether each ray hits anything within ``tmax``: bool (n,)."""
+        """Whether each ray hits anything within ``tmax``: bool (n,).
+
+        Parameters
+        ----------
+        origins : (n, 3) array_like
+            Ray origins, cast as float32.
+        direction : (3,) or (n, 3) array_like
+            One direction for every ray, or one per ray, cast as float32.
+        tmax : float
+            Each ray's far limit (cast as float32), in units of |direction|; default inf.
+        width : int, optional
+            Packet width, 4, 8 or 16; default (None or 0) the native ``lib.width``.
+        coherent : bool
+            Embree's coherent query flag, default True.
+
+        Returns
+        -------
+        (n,) bool numpy.ndarray
+            True where the ray meets a triangle between t = 0 and ``tmax``.
+
+        Raises
+        ------
+        ValueError
+            When ``direction`` is neither (3,) nor (n, 3).
+        RuntimeError
+            When the scene has been released.
+        """
         w = width or self.lib.width
         o = np.ascontiguousarray(origins, dtype=np.float32)
         d = _directions(direction, len(o))
@@ -275,7 +417,31 @@ def load_packet(f32, i32, o, d, tmax, start, n, w):
 def cast_grid(fn, scene, o, d, tmax, w, flags, prim, tfar, u, v):
     """rtcIntersectW over rays o[i] + t d, in packets of w in scan order (tail masked).
     ``fn`` is the ctypes rtcIntersect{w} (an argument, not a global: cacheable). ``u`` and
-    ``v`` receive the barycentrics when they have one entry per ray (else they are empty)."""
+    ``v`` receive the barycentrics when they have one entry per ray (else they are empty).
+
+    Parameters
+    ----------
+    fn : ctypes function
+        ``EmbreeLib.intersect[w]``, the library's rtcIntersect4, 8 or 16 matching ``w``.
+    scene : int
+        The committed scene's handle (:meth:`PacketGeometry.live`).
+    o : (n, 3) float32 numpy.ndarray
+        Ray origins, C-contiguous.
+    d : (1, 3) or (n, 3) float32 numpy.ndarray
+        One direction for every ray, or one per ray.
+    tmax : numpy.float32
+        Each ray's far limit, in units of |d|.
+    w : int
+        Packet width, 4, 8 or 16, as ``fn``.
+    flags : int
+        Ray query flags (``RTC_RAY_QUERY_FLAG_COHERENT`` or ``_INCOHERENT``).
+    prim : (n,) int32 numpy.ndarray
+        Output: the hit face's index, -1 on a miss.
+    tfar : (n,) float32 numpy.ndarray
+        Output: the hit distance, inf on a miss.
+    u, v : (n,) or (0,) float32 numpy.ndarray
+        Output: the barycentrics, written only when they have n entries.
+    """
     i32, f32, i64, base = workspace()
     init_args(i32, i64, base, flags)
     n = o.shape[0]
@@ -299,7 +465,27 @@ def cast_grid(fn, scene, o, d, tmax, w, flags, prim, tfar, u, v):
 @njit(cache=True, nogil=True)
 def occluded_grid(fn, scene, o, d, tmax, w, flags, out):
     """rtcOccludedW over the same packets: out[i] = the ray is blocked within tmax
-    (Embree sets tfar = -inf on occluded lanes)."""
+    (Embree sets tfar = -inf on occluded lanes).
+
+    Parameters
+    ----------
+    fn : ctypes function
+        ``EmbreeLib.occluded[w]``, the library's rtcOccluded4, 8 or 16 matching ``w``.
+    scene : int
+        The committed scene's handle (:meth:`PacketGeometry.live`).
+    o : (n, 3) float32 numpy.ndarray
+        Ray origins, C-contiguous.
+    d : (1, 3) or (n, 3) float32 numpy.ndarray
+        One direction for every ray, or one per ray.
+    tmax : numpy.float32
+        Each ray's far limit, in units of |d|.
+    w : int
+        Packet width, 4, 8 or 16, as ``fn``.
+    flags : int
+        Ray query flags (``RTC_RAY_QUERY_FLAG_COHERENT`` or ``_INCOHERENT``).
+    out : (n,) bool numpy.ndarray
+        Output: True where the ray is blocked.
+    """
     i32, f32, i64, base = workspace()
     init_args(i32, i64, base, flags)
     n = o.shape[0]

@@ -1,8 +1,9 @@
-"""The packet backend's ctypes bindings: the layouts, enums and entry points of the Embree 4 library that the embreex
-wheel ships, called through ctypes (the loops that cast are :mod:`.embree4`'s).
+"""The packet backend's ctypes bindings: the layouts, enums and entry points of the Embree 4
+library that the embreex wheel ships, called through ctypes (the loops that cast are
+:mod:`.embree4`'s).
 
 No compiler is needed: ``pip install meshladar`` brings embreex, whose wheel carries the
-library. :func:`library` finds it (``MESHLADAR_EMBREE4`` overrides the path), checks that it
+library. ``library()`` finds it (``MESHLADAR_EMBREE4`` overrides the path), checks that it
 is Embree 4, and reads the packet width the CPU runs natively (16 with AVX-512, 8 with AVX2:
 a non-native width loops over single rays inside Embree). Scenes share their buffers with
 numpy (no per-element copy). Hits equal embreex's (the same library, the same robust
@@ -22,44 +23,46 @@ Every field this module *reads* (primID, geomID, tfar) sits before the config-de
 ones, and every struct is over-allocated and zeroed at its tail, so another instance
 level count would change nothing but the (reserved) sizes.
 
-RTCRayHitW, W = 4/8/16 (include/embree4/rtcore_ray.h:53-184), structure of arrays, every
-field an array of W 4-byte lanes; field k starts at byte k*4*W (W=16: k*64):
+The structures, as laid out in memory::
 
-    RTCRayW  (RTC_ALIGN(4W), rtcore_ray.h:143-159 for W=16)
-      k  0 org_x    float      k  4 dir_x  float      k  8 tfar   float
-      k  1 org_y    float      k  5 dir_y  float      k  9 mask   unsigned int
-      k  2 org_z    float      k  6 dir_z  float      k 10 id     unsigned int
-      k  3 tnear    float      k  7 time   float      k 11 flags  unsigned int
-    RTCHitW  (RTC_ALIGN(4W), rtcore_ray.h:161-177), follows at k = 12:
-      k 12 Ng_x  k 13 Ng_y  k 14 Ng_z  k 15 u  k 16 v   (float)
-      k 17 primID  k 18 geomID            (unsigned int)
-      k 19 instID[RTC_MAX_INSTANCE_LEVEL_COUNT][W]
-      k 20 instPrimID[RTC_MAX_INSTANCE_LEVEL_COUNT][W]   (#if RTC_GEOMETRY_INSTANCE_ARRAY)
-    => RTCRay16 = 768 bytes, RTCRayHit16 = 21*64 = 1344 bytes (we reserve 2048, zeroed).
+    RTCRayHitW, W = 4/8/16 (include/embree4/rtcore_ray.h:53-184), structure of arrays, every
+    field an array of W 4-byte lanes; field k starts at byte k*4*W (W=16: k*64):
 
-RTCIntersectArguments / RTCOccludedArguments (include/embree4/rtcore_scene.h:31-41, 58-69):
-      off  0 flags         enum RTCRayQueryFlags (int)  COHERENT = 1<<16 (rtcore_common.h:309)
-      off  4 feature_mask  enum RTCFeatureFlags (int)   ALL = 0xffffffff (rtcore_common.h:297)
-      off  8 context       RTCRayQueryContext*
-      off 16 filter        RTCFilterFunctionN           NULL
-      off 24 intersect / occluded  (function pointer)   NULL
-      off 32 minWidthDistanceFactor float               only #if RTC_MIN_WIDTH (0 here)
-    => 32 bytes (40 with min-width); we reserve 64, zeroed.  rtcInitIntersectArguments
-    (rtcore_scene.h:44-55) is an inline function: replicated in init_args.
+        RTCRayW  (RTC_ALIGN(4W), rtcore_ray.h:143-159 for W=16)
+          k  0 org_x    float      k  4 dir_x  float      k  8 tfar   float
+          k  1 org_y    float      k  5 dir_y  float      k  9 mask   unsigned int
+          k  2 org_z    float      k  6 dir_z  float      k 10 id     unsigned int
+          k  3 tnear    float      k  7 time   float      k 11 flags  unsigned int
+        RTCHitW  (RTC_ALIGN(4W), rtcore_ray.h:161-177), follows at k = 12:
+          k 12 Ng_x  k 13 Ng_y  k 14 Ng_z  k 15 u  k 16 v   (float)
+          k 17 primID  k 18 geomID            (unsigned int)
+          k 19 instID[RTC_MAX_INSTANCE_LEVEL_COUNT][W]
+          k 20 instPrimID[RTC_MAX_INSTANCE_LEVEL_COUNT][W]   (#if RTC_GEOMETRY_INSTANCE_ARRAY)
+        => RTCRay16 = 768 bytes, RTCRayHit16 = 21*64 = 1344 bytes (we reserve 2048, zeroed).
 
-RTCRayQueryContext (include/embree4/rtcore_common.h:335-344):
-      [unsigned instStackSize, only #if RTC_MAX_INSTANCE_LEVEL_COUNT > 1]
-      off 0 instID[1]      = RTC_INVALID_GEOMETRY_ID (0xffffffff)
-      off 4 instPrimID[1]  = RTC_INVALID_GEOMETRY_ID
-    => 8 bytes; reserve 64.  rtcInitRayQueryContext (rtcore_common.h:347-361) replicated.
+    RTCIntersectArguments / RTCOccludedArguments (include/embree4/rtcore_scene.h:31-41, 58-69):
+          off  0 flags         enum RTCRayQueryFlags (int)  COHERENT = 1<<16 (rtcore_common.h:309)
+          off  4 feature_mask  enum RTCFeatureFlags (int)   ALL = 0xffffffff (rtcore_common.h:297)
+          off  8 context       RTCRayQueryContext*
+          off 16 filter        RTCFilterFunctionN           NULL
+          off 24 intersect / occluded  (function pointer)   NULL
+          off 32 minWidthDistanceFactor float               only #if RTC_MIN_WIDTH (0 here)
+        => 32 bytes (40 with min-width); we reserve 64, zeroed.  rtcInitIntersectArguments
+        (rtcore_scene.h:44-55) is an inline function: replicated in init_args.
 
-Entry points (rtcore_scene.h:176, 214; rtcore_device.h:15, 84; rtcore_geometry.h:130-172):
-    void rtcIntersect16(const int* valid, RTCScene, RTCRayHit16*, RTCIntersectArguments*)
-    void rtcOccluded16 (const int* valid, RTCScene, RTCRay16*,    RTCOccludedArguments*)
-    ssize_t rtcGetDeviceProperty(RTCDevice, enum RTCDeviceProperty)
-  valid: W int32, -1 = active lane, 0 = inactive.  valid and ray structs must be aligned to
-  4*W bytes (release builds do not check: a misaligned packet segfaults), we align to 64.
-  rtcOccluded sets tfar = -inf on occluded lanes.
+    RTCRayQueryContext (include/embree4/rtcore_common.h:335-344):
+          [unsigned instStackSize, only #if RTC_MAX_INSTANCE_LEVEL_COUNT > 1]
+          off 0 instID[1]      = RTC_INVALID_GEOMETRY_ID (0xffffffff)
+          off 4 instPrimID[1]  = RTC_INVALID_GEOMETRY_ID
+        => 8 bytes; reserve 64.  rtcInitRayQueryContext (rtcore_common.h:347-361) replicated.
+
+    Entry points (rtcore_scene.h:176, 214; rtcore_device.h:15, 84; rtcore_geometry.h:130-172):
+        void rtcIntersect16(const int* valid, RTCScene, RTCRayHit16*, RTCIntersectArguments*)
+        void rtcOccluded16 (const int* valid, RTCScene, RTCRay16*,    RTCOccludedArguments*)
+        ssize_t rtcGetDeviceProperty(RTCDevice, enum RTCDeviceProperty)
+      valid: W int32, -1 = active lane, 0 = inactive.  valid and ray structs must be aligned to
+      4*W bytes (release builds do not check: a misaligned packet segfaults), we align to 64.
+      rtcOccluded sets tfar = -inf on occluded lanes.
 
 Enums: RTC_DEVICE_PROPERTY_VERSION_MAJOR/MINOR/PATCH = 1/2/3, NATIVE_RAY4/8/16_SUPPORTED
 = 32/33/34 (rtcore_device.h:49-81); RTC_GEOMETRY_TYPE_TRIANGLE = 0 (rtcore_geometry.h:20);
@@ -128,6 +131,16 @@ def library_candidates():
     macOS (delocate):   site-packages/embreex/.dylibs/libembree4*.dylib     (untested)
     Windows (delvewheel): site-packages/embreex.libs/embree4*.dll            (untested)
     ``MESHLADAR_EMBREE4`` (a path) overrides the search.
+
+    embreex is located without being imported.
+
+    Returns
+    -------
+    list of str
+        ``[MESHLADAR_EMBREE4]`` when that environment variable is set and non-empty (not
+        checked for existence); else the files matching the patterns above, in that
+        order, each pattern's matches sorted; empty when embreex is not installed or holds
+        no such file.
     """
     env = os.environ.get("MESHLADAR_EMBREE4")
     if env:
@@ -151,7 +164,40 @@ def library_candidates():
 
 
 class EmbreeLib:
-    """The ctypes-loaded library: function prototypes, one shared device, its properties."""
+    """The ctypes-loaded library: function prototypes, one shared device, its properties.
+
+    Parameters
+    ----------
+    path : str, optional
+        The shared library to load; default the first of :func:`library_candidates`.
+
+    Attributes
+    ----------
+    path : str
+        The library loaded.
+    dll : ctypes.CDLL
+        The loaded library; the ``rtc*`` attributes are its entry points with their
+        prototypes (every handle and pointer passed as an integer, ``c_size_t``).
+    device : int
+        The one RTCDevice handle, created with no configuration string
+        (``rtcNewDevice(NULL)``).
+    version : tuple of int
+        (major, minor, patch) of Embree, as the device reports it; the major is 4.
+    native : dict
+        {4, 8, 16: the device's ``NATIVE_RAY4/8/16_SUPPORTED`` property}.
+    width : int
+        The widest natively supported packet width, 16, 8 or else 4.
+    intersect, occluded : dict
+        {4, 8, 16: ``rtcIntersect{w}`` / ``rtcOccluded{w}``}, the packet queries.
+
+    Raises
+    ------
+    OSError
+        When no library is found, it cannot be loaded, its device cannot be created, or
+        it is not Embree 4.
+    AttributeError
+        When the library lacks one of the entry points.
+    """
 
     def __init__(self, path=None):
         paths = [path] if path else library_candidates()
@@ -207,6 +253,19 @@ class EmbreeLib:
         self.width = next((w for w in (16, 8, 4) if self.native[w]), 4)
 
     def check(self, what):
+        """Raise the device's pending error, if any (``rtcGetDeviceError``).
+
+        Parameters
+        ----------
+        what : str
+            The operation just done, named in the error message (``"scene build"``).
+
+        Raises
+        ------
+        RuntimeError
+            When ``rtcGetDeviceError`` reports an error: its code, ``what`` and Embree's
+            last error message.
+        """
         err = self.rtcGetDeviceError(self.device)
         if err:
             msg = self.rtcGetDeviceLastErrorMessage(self.device) or b""

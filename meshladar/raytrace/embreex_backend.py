@@ -9,7 +9,28 @@ __all__ = ["build"]
 
 
 def build(vertices, faces):
-    """An embreex scene of float32 vertices (n, 3) and int32 faces (m, 3), robust mode."""
+    """An embreex scene of float32 vertices (n, 3) and int32 faces (m, 3), robust mode.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float32 numpy.ndarray
+        The triangles' corners, as a :class:`~meshladar.raytrace.backends.Backend`'s
+        ``build`` receives them (the engine passes the scene shifted to its centre, at unit
+        size).
+    faces : (m, 3) int32 numpy.ndarray
+        Each triangle's three vertex indices into ``vertices``.
+
+    Returns
+    -------
+    embreex.rtcore_scene.EmbreeScene
+        The scene in robust mode (watertight ray-triangle tests), with one triangle mesh;
+        it casts through its ``run(origins, directions, output=, query=)``.
+
+    Raises
+    ------
+    ImportError
+        When embreex is not installed (naming it).
+    """
     try:
         from embreex import rtcore_scene
         from embreex.mesh_construction import TriangleMesh
@@ -25,7 +46,13 @@ def build(vertices, faces):
 
 def available():
     """embreex is a core dependency: always (True, "embreex"); a missing install raises
-    ImportError naming it when a scene is built."""
+    ImportError naming it when a scene is built.
+
+    Returns
+    -------
+    tuple of (bool, str)
+        ``(True, "embreex")``.
+    """
     return True, "embreex"
 
 

@@ -15,7 +15,21 @@ __all__ = ["PacketScene", "build"]
 
 class PacketScene:
     """A packet scene behind embreex's ``run`` interface (one direction for all rays, or one
-    per ray), so every path of the engine casts through either backend unchanged."""
+    per ray), so every path of the engine casts through either backend unchanged.
+
+    Parameters
+    ----------
+    scene : PacketGeometry
+        The committed packet scene (:class:`meshladar.raytrace.embree4.PacketGeometry`)
+        that :meth:`run` casts with.
+
+    Attributes
+    ----------
+    scene : PacketGeometry
+        As given.
+    fused : bool
+        True (a class attribute): the weigh stage's fused loop can cast with this scene.
+    """
 
     #: the weigh stage's fused loop casts with this scene (:mod:`meshladar.weighing.fused`)
     fused = True
@@ -24,6 +38,38 @@ class PacketScene:
         self.scene = scene
 
     def run(self, origins, directions, output=None, query="INTERSECT"):
+        """Cast rays as embreex's ``run`` does: first hits, or occlusion.
+
+        Parameters
+        ----------
+        origins : (n, 3) array_like
+            Ray origins, cast as float32.
+        directions : (3,), (1, 3) or (n, 3) array_like
+            One direction for every ray, or one per ray, cast as float32; distances come
+            back in units of its length.
+        output : object, optional
+            Ignored: accepted for embreex's signature (the result is always the dict
+            below).
+        query : str
+            ``"OCCLUDED"`` for the occlusion query; any other value (default
+            ``"INTERSECT"``) casts for first hits.
+
+        Returns
+        -------
+        dict or numpy.ndarray
+            First hits: a dict of (n,) arrays ``"primID"`` (int32, the hit face's index,
+            -1 on a miss), ``"tfar"`` (float32, the hit distance, inf on a miss), ``"u"``
+            and ``"v"`` (float32, the hit's barycentrics). ``"OCCLUDED"``: (n,) integers,
+            0 where the ray meets anything and -1 where it does not (embreex's
+            convention).
+
+        Raises
+        ------
+        ValueError
+            When ``directions`` is neither one direction nor one per ray.
+        RuntimeError
+            When the scene has been released.
+        """
         d = np.asarray(directions, dtype=np.float32).reshape(-1, 3)
         if query == "OCCLUDED":
             return np.where(self.scene.occluded_grid(origins, d), 0, -1)
@@ -32,7 +78,31 @@ class PacketScene:
 
 
 def build(vertices, faces):
-    """A packet scene of float32 vertices (n, 3) and int32 faces (m, 3), robust mode."""
+    """A packet scene of float32 vertices (n, 3) and int32 faces (m, 3), robust mode.
+
+    Parameters
+    ----------
+    vertices : (n, 3) numpy.ndarray
+        The triangles' corners (float32, as a backend's ``build`` receives them; copied
+        as float32 into the scene's shared buffer).
+    faces : (m, 3) numpy.ndarray
+        Each triangle's three vertex indices into ``vertices`` (int32; converted to uint32).
+
+    Returns
+    -------
+    PacketScene
+        A :class:`meshladar.raytrace.embree4.PacketGeometry` built with ``robust=True``,
+        behind embreex's ``run`` interface.
+
+    Raises
+    ------
+    OSError
+        When the Embree 4 library cannot be loaded (:func:`meshladar.raytrace.embree4.library`).
+    ValueError
+        When ``vertices`` or ``faces`` is not (k, 3), or a face index is out of range.
+    RuntimeError
+        When Embree reports an error building the scene.
+    """
     return PacketScene(embree4.PacketGeometry(vertices, faces, robust=True))
 
 

@@ -84,12 +84,28 @@ class TracePlan:
 
     @property
     def ignore_back(self) -> bool:
+        """Whether back-face hits are blocked (``back_faces == "ignore"``)."""
         return self.back_faces == "ignore"
 
 
 class View(NamedTuple):
     """One view of a chunk: its slot in the chunk, its index, its direction w (3,), its
-    bistatic receiver w_r (3,) or None, and its seeded rng (None: a regular grid)."""
+    bistatic receiver w_r (3,) or None, and its seeded rng (None: a regular grid).
+
+    Attributes
+    ----------
+    slot : int
+        The view's position within its chunk.
+    index : int
+        The view's index into the ladar's views.
+    w : (3,) numpy.ndarray
+        The view direction, a unit vector from the scene toward the ladar (rays travel
+        along −w).
+    w_r : (3,) numpy.ndarray or None
+        The bistatic receiver's direction; None for a monostatic view.
+    rng : numpy.random.Generator or None
+        The view's seeded generator for stratified rays; None for a regular grid.
+    """
 
     slot: int
     index: int
@@ -100,7 +116,54 @@ class View(NamedTuple):
 
 def check_scene(scene, ladar, mode, normals, back_faces, z0):
     """(mode, geometry, z0) of a mesh run, after the scene, ladar, normals, back faces,
-    mode and slice plane are checked (a slice plane off the target warns)."""
+    mode and slice plane are checked (a slice plane off the target warns).
+
+    Parameters
+    ----------
+    scene : meshladar.Scene
+        A mesh scene (``Scene.from_mesh`` or ``scene.tessellate``).
+    ladar : meshladar.Ladar
+        The views and range bins.
+    mode : {"slice", "3d"} or None
+        None: ``"slice"`` when the scene was tessellated from analytic shapes and every
+        view lies in the x-y plane, else ``"3d"``. ``"slice"`` needs views in the x-y
+        plane.
+    normals : {"flat", "smooth", "exact"}
+        The normal each hit is weighed with; ``"exact"`` needs parts tessellated from
+        analytic shapes.
+    back_faces : {"two-sided", "ignore"}
+        Whether back-face hits count (with the normal turned toward the ladar) or are
+        blocked.
+    z0 : float or None
+        The slice plane's height (scene coordinates, scene units), slice mode only; None:
+        the middle of the scene's bounding box in z.
+
+    Returns
+    -------
+    mode : str
+        ``"slice"`` or ``"3d"``, as given or chosen.
+    geo : Geometry
+        The scene's traced geometry for ``normals``
+        (:func:`meshladar.raytrace.embree.geometry`, cached on the scene).
+    z0 : float
+        The slice plane's height (in 3-D too: the middle of the bounding box in z).
+
+    Raises
+    ------
+    ParameterError
+        When ``scene`` is not a Scene or not a mesh scene; ``ladar`` is not a Ladar;
+        ``normals``, ``back_faces`` or ``mode`` is not one of its choices; ``mode="slice"``
+        has views off the x-y plane; ``z0`` is given in 3-D or is not a finite real;
+        ``normals="exact"`` meets a part without an exact normal; the mesh's bounding
+        radius lies outside ``meshladar.precision.SCENE_RADIUS_RANGE``.
+
+    Warns
+    -----
+    MeshladarWarning
+        In slice mode, when ``z0`` lies outside the target's heights (the slice returns
+        nothing); when the mesh lies far from the origin for its size
+        (``meshladar.precision.FAR_RATIO``).
+    """
     if not isinstance(scene, Scene):
         raise ParameterError(f"scene must be a meshladar.Scene; got {type(scene).__name__}")
     if not isinstance(ladar, Ladar):
@@ -137,7 +200,29 @@ def check_scene(scene, ladar, mode, normals, back_faces, z0):
 def check_sensor(sensor, receiver, mode):
     """The sensor a job traces with (None for none, or for one that changes nothing: at
     infinity, an unbounded flood), after its type, its monostatic receiver and its mode
-    are checked."""
+    are checked.
+
+    Parameters
+    ----------
+    sensor : meshladar.sensor.Sensor or None
+        The run's sensor.
+    receiver : array_like or None
+        The run's bistatic receiver; must be None with a sensor.
+    mode : {"slice", "3d"}
+        The run's (checked) mode; a sensor at a finite standoff needs ``"3d"``.
+
+    Returns
+    -------
+    meshladar.sensor.Sensor or None
+        ``sensor``, or None when it is None or is at infinity (``standoff=None``) with an
+        unbounded ``FloodBeam`` (``radius=None``): parallel rays then trace it.
+
+    Raises
+    ------
+    ParameterError
+        When ``sensor`` is not a Sensor, is given with a ``receiver``, or has a finite
+        standoff with ``mode`` other than ``"3d"``.
+    """
     if sensor is None:
         return None
     if not isinstance(sensor, Sensor):
@@ -156,7 +241,34 @@ def check_sensor(sensor, receiver, mode):
 
 
 def check_receivers(receiver, ladar, mode):
-    """Bistatic receivers (n_views, 3), or None for a collocated (monostatic) ladar."""
+    """Bistatic receivers (n_views, 3), or None for a collocated (monostatic) ladar.
+
+    Parameters
+    ----------
+    receiver : (3,) or (n_views, 3) array_like, or None
+        The receiver's direction (from the scene toward the receiver, at infinity), one
+        for every view or one per view; any non-zero length (normalised here). None:
+        monostatic.
+    ladar : meshladar.Ladar
+        The views the receivers pair with.
+    mode : {"slice", "3d"}
+        The run's mode; in slice mode every receiver must lie in the x-y plane (z exactly
+        0).
+
+    Returns
+    -------
+    (n_views, 3) float64 numpy.ndarray or None
+        Unit receiver directions, one row per view (C-contiguous); None when ``receiver``
+        is None.
+
+    Raises
+    ------
+    ParameterError
+        When ``receiver`` has another shape, is not finite or is a zero vector; when a
+        receiver points opposite its view (w_r·w ≤ −1 +
+        ``meshladar.precision.PARALLEL_SLACK``: no light returns); when in slice mode a
+        receiver has a z component.
+    """
     if receiver is None:
         return None
     if np.shape(receiver) not in ((3,), (ladar.n_views, 3)):
@@ -201,7 +313,73 @@ def plan_trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided
                ray_spacing=None, rays_per_bin=None, sampling=None, seed=None,
                receiver=None, backend="auto", sensor=None) -> TracePlan:
     """The :class:`TracePlan` of a mesh run, every geometric option checked (the messages
-    name the argument, the value and what is valid); nothing is cast."""
+    name the argument, the value and what is valid); nothing is cast.
+
+    Parameters
+    ----------
+    scene : meshladar.Scene
+        A mesh scene.
+    ladar : meshladar.Ladar
+        The views and range bins (the bins set the default ray spacing).
+    mode : {"slice", "3d"}, optional
+        As :func:`check_scene` (default None: ``"slice"`` for a scene tessellated from
+        analytic shapes seen about the z axis, else ``"3d"``).
+    normals : {"flat", "smooth", "exact"}
+        The hits' normals (default ``"flat"``).
+    back_faces : {"two-sided", "ignore"}
+        Back-face hits count, the normal turned toward the ladar (default
+        ``"two-sided"``), or are blocked (``"ignore"``).
+    z0 : float, optional
+        The slice plane's height (scene coordinates), slice mode only; default the middle
+        of the scene's bounding box in z.
+    ray_spacing : float, optional
+        The ray spacing δ (scene units, finite, at least 1e-150); not with
+        ``rays_per_bin``.
+    rays_per_bin : float, optional
+        Rays per width of the narrowest range bin, in [1e-300, 1e6]: δ = narrowest bin
+        width / ``rays_per_bin``. Default (neither given): 8 in slice mode, 1 in 3-D, where
+        δ is also at most the scene's bounding diameter / 128 (the bounding radius is
+        about the bounding box's centre).
+    sampling : {"regular", "stratified"}, optional
+        Rays at cell centres, or one ray per cell at a seeded random offset. Default:
+        ``"stratified"`` in 3-D or whenever ``seed`` is given, else ``"regular"``.
+    seed : int, optional
+        The stratified offsets' seed, a non-negative integer (default 0 when stratified);
+        refused with ``sampling="regular"``.
+    receiver : (3,) or (n_views, 3) array_like, optional
+        A bistatic receiver's direction(s) (:func:`check_receivers`); default None,
+        monostatic.
+    backend : str
+        The ray caster, one of ``"auto"`` (default), ``"packets"``, ``"embreex"`` or a
+        registered backend (:func:`meshladar.raytrace.backends.resolve_backend`).
+    sensor : meshladar.sensor.Sensor, optional
+        The sensor (:func:`check_sensor`); default None, parallel rays.
+
+    Returns
+    -------
+    TracePlan
+        The validated plan: ``backend`` resolved, ``spacing`` chosen, ``traced_with`` the
+        sensor the rays follow (or None), and ``rays`` the estimated total,
+        n_views × (2 radius / δ + 2) in slice mode or n_views × (2 radius / δ + 2)² in
+        3-D.
+
+    Raises
+    ------
+    ParameterError
+        Any refusal of :func:`check_scene`, :func:`check_sensor`,
+        :func:`check_receivers` or ``resolve_backend``; ``sampling`` not one of its
+        choices, or ``seed`` not a non-negative integer or given with regular sampling;
+        both ``ray_spacing`` and ``rays_per_bin``, either out of its range, or a spacing
+        that overflows; a view that would cast more than ``MAX_RAYS_PER_VIEW`` (5e7)
+        rays; a sensor whose standoff puts it inside the target's extent from some view.
+
+    Warns
+    -----
+    MeshladarWarning
+        As :func:`check_scene` and ``resolve_backend``; when a finite standoff leaves the
+        ranges a float64 rounding above ``STANDOFF_ROUNDING_SHARE`` (1e-3) of the
+        narrowest bin.
+    """
     mode, geo, z0 = check_scene(scene, ladar, mode, normals, back_faces, z0)
     traced_with = check_sensor(sensor, receiver, mode)
     backend = resolve_backend(backend)

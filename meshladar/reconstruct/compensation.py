@@ -5,7 +5,7 @@ h(θ) = F(θ; −θ) cos θ (``radiometry="paper"``, Eq. 8; times another cos θ
 power) falls to 0 at glancing incidence, is 0 from behind, and is 0 where another surface
 shadows it. FBP assumes every view sees every pixel equally, and the missing glancing and
 hidden views are what darkens the inside of a reconstructed boundary (the paper's Sec. 4.A)
-and draws the crossed shadow streaks (Sec. 4.C).
+and draws the crossed shadow streaks (Sec. 4.B).
 
 Compensation puts that view dependence into the projector instead:
 
@@ -56,7 +56,23 @@ MAX_PIXEL_BINS = 1.5
 
 def needed_size(sino, extent=1.0):
     """The smallest image size whose pixels (2 ``extent`` / size) are at most
-    :data:`MAX_PIXEL_BINS` of the sinogram's bin width wide."""
+    :data:`MAX_PIXEL_BINS` of the sinogram's bin width wide.
+
+    Parameters
+    ----------
+    sino : Sinogram
+        The data; its bin width is the mean of ``bin_edges``' differences (scene units).
+        Not checked.
+    extent : float, default 1.0
+        Half-width of the image square, scene units.
+
+    Returns
+    -------
+    int
+        The size ceil(2 ``extent`` / (:data:`MAX_PIXEL_BINS` × bin width) − 1e-9): 1e-9 keeps
+        a quotient a rounding error above an integer at that integer (427 for the paper's
+        512 bins of 0.8/256 at extent 1).
+    """
     width = float(np.mean(np.diff(sino.bin_edges)))
     return math.ceil(2.0 * float(extent) / (MAX_PIXEL_BINS * width) - 1e-9)
 
@@ -95,7 +111,36 @@ def _backed(surface, H, sino, keep, share=0.5):
 def first_image(sino, size, extent=1.0, center=(0.0, 0.0)):
     """The default first reconstruction: FBP of the log radiance, its floor at half a
     count (or above the noise) so weak surfaces next to glints show and noise does not
-    (FBP's few-views warning is for FBP's own output, not for this intermediate)."""
+    (FBP's warnings are for FBP's own output, not for this intermediate: every
+    :class:`~meshladar.errors.MeshladarWarning` it raises, not only the few-views one, is
+    silenced).
+
+    Parameters
+    ----------
+    sino : Sinogram
+        The returns (not their log: it is taken here).
+    size : int >= 1
+        Pixels along each side of the square image.
+    extent : float in [1e-150, 1e300], default 1.0
+        Half-width of the image square, scene units.
+    center : (2,) float, default (0, 0)
+        Centre of the image square.
+
+    Returns
+    -------
+    Image
+        :func:`~meshladar.reconstruct.fbp2d.fbp` of
+        :func:`~meshladar.reconstruct.fbp2d.log_radiance` with the floor
+        ``noise_floor(sino, quanta=0.5)``
+        (:func:`~meshladar.reconstruct.fbp2d.noise_floor`) on the (size, size) grid.
+
+    Raises
+    ------
+    ParameterError
+        As :func:`~meshladar.reconstruct.fbp2d.log_radiance` and
+        :func:`~meshladar.reconstruct.fbp2d.fbp` (``sino`` not a
+        :class:`~meshladar.Sinogram`, a bad grid).
+    """
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MeshladarWarning)
         return fbp(log_radiance(sino, floor=noise_floor(sino, quanta=0.5)), size=size,
@@ -189,38 +234,70 @@ def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first
         Views about z, uniform bins; its ``info["radiometry"]`` picks h(θ).
     material : BRDF or sequence of BRDFs
         The coatings (with ``labels`` when several).
-    size, extent, center
-        The image grid; pixels at most :data:`MAX_PIXEL_BINS` (1.5) bins wide, or the
+    size, extent, center : int >= 1, float, (2,) float
+        The image grid (defaults 256, 1.0 and (0, 0): the extent is not the bins' reach
+        here); pixels at most :data:`MAX_PIXEL_BINS` (1.5) bins wide, or the
         one-pixel-thick surface comes out low and uneven (warned; :func:`needed_size`:
         427 for the paper's 512 bins at extent 1).
     first : Image, optional
         The first reconstruction on that grid (default FBP of the log radiance).
     labels : (size, size) int array, optional
         Each pixel's index into ``material``.
-    method : {"cgls", "sirt"}
-        The solver (:mod:`meshladar.reconstruct.iterative`), ``n_iter`` iterations, warm start zero.
+    method : {"cgls", "sirt"}, default "cgls"
+        The solver (:mod:`meshladar.reconstruct.iterative`), ``n_iter`` iterations,
+        warm-started from the uniform surface that fits the data best (the multiple of
+        the surface mask with the least weighted residual), masked to the surface pixels.
+    n_iter : int >= 1, default 30
+        Most iterations of the solver.
     weights : (n_views, n_bins) array, optional
         Per-bin data weights (e.g. :func:`~meshladar.reconstruct.iterative.glint_weights`).
-    threshold, sigma, shadows
-        :func:`estimate_surface`.
-    blur_deg : float
+    threshold, sigma, shadows : float, float, bool
+        :func:`estimate_surface`'s (defaults 0.2, 1.5 pixels and True); unused when
+        ``surface`` is given.
+    blur_deg : float in [0, 90], default 1.0
         Angular blur of h(θ), degrees, for the normals' uncertainty (at most 90).
-    smooth : float
+    smooth : float in [0, size], default 2.0
         Width, pixels, of the Gaussian along the surface that the solution is built from
         (x = S z, :class:`SurfaceProjector`): neighbouring surface points share their
         ranges in most views, and without it the solution speckles along the surface.
         0 solves for every point independently.
     surface : Surface, optional
         Use these surface pixels and normals instead of estimating them.
-    tol, progress
-        As :func:`~meshladar.reconstruct.iterative.sirt`.
+    tol, progress : float or None, bool
+        As :func:`~meshladar.reconstruct.iterative.sirt` (defaults None and False).
 
     Returns
     -------
     Image
-        ``info``: method "compensated", solver, iterations, residuals, radiometry,
-        surface_pixels, shadowed_fraction (of front-facing point-views), blur_deg,
-        surface_shift (the offset along the normals, scene units).
+        (size, size) values, zero off the surface pixels. ``info``: the solver's
+        (iterations, residuals, stopped, ...) with method "compensated", solver,
+        radiometry, surface_pixels, shadowed_fraction (of front-facing point-views),
+        blur_deg, shadows (whether a shadow map was used), surface_shift (the offset along
+        the normals, scene units) and smooth.
+
+    Raises
+    ------
+    ParameterError
+        When ``sino`` is not a :class:`~meshladar.Sinogram`, holds no value > 0 or has
+        non-uniform bins; when ``method`` is not one of :data:`SOLVERS` or ``size`` is not
+        an integer >= 1; when ``surface`` is not a
+        :class:`~meshladar.reconstruct.surface.Surface` or not on the grid (size, extent,
+        center); when no surface point is seen and backed by the data; and as
+        :func:`estimate_surface`, :func:`surface_weights`, :class:`SurfaceProjector` and
+        the solver for their arguments.
+
+    Warns
+    -----
+    MeshladarWarning
+        When ``size`` is below :func:`needed_size` (pixels wider than
+        :data:`MAX_PIXEL_BINS` bins).
+
+    References
+    ----------
+    Jin & Levine (2009), Eq. 8 (the view weight h(θ) = F(θ; −θ) cos θ), Sec. 4.A-4.B (the
+    artefacts compensated). C. Steger, "An unbiased detector of curvilinear structures",
+    IEEE Trans. Pattern Anal. Mach. Intell. 20 (1998) (the ridge detector of
+    :func:`estimate_surface`).
     """
     _check_returns(sino)
     method = check_choice("method", method, SOLVERS)

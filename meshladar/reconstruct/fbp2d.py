@@ -70,6 +70,37 @@ def fourier_filter(n_padded, filter="ramp"):
     The ramp is the FFT of the band-limited Ram-Lak kernel h[0] = ¼, h[odd n] = −1/(πn)²,
     which is |ν| (cycles per sample) up to its truncation; windows multiply it. Returned
     without scikit-image's extra factor 2 (it pairs with a 180° scan).
+
+    Parameters
+    ----------
+    n_padded : int
+        Length of the zero-padded projection the response multiplies. Not checked: an odd
+        length makes numpy raise ValueError. :func:`fbp` passes a power of two, at least 64
+        and at least 2 n_bins.
+    filter : {"ramp", "shepp-logan", "cosine", "hamming", "hann"}, default "ramp"
+        The window (:data:`FILTERS`) applied to the ramp: "shepp-logan" multiplies by
+        sin(ω)/ω with ω = π ν (ν from ``scipy.fft.fftfreq``; the zero frequency is left
+        as is), "cosine" by a half sine period, "hamming" and "hann" by numpy's windows,
+        each shifted into FFT order.
+
+    Returns
+    -------
+    (n_padded,) ndarray of float64
+        The real part of the kernel's FFT times the window, in FFT order (index 0 is
+        the zero frequency, as ``scipy.fft.fftfreq``): the factor by which a padded
+        profile's spectrum is multiplied, ≈ |ν| with ν in cycles per sample for the
+        ramp (0.497 at the Nyquist frequency ½ for n_padded = 64).
+
+    Raises
+    ------
+    ParameterError
+        When ``filter`` is not one of :data:`FILTERS`.
+
+    References
+    ----------
+    A. C. Kak and M. Slaney, *Principles of Computerized Tomographic Imaging*, IEEE Press
+    (1988), Ch. 3, Eq. (61) (the band-limited Ram-Lak kernel); scikit-image's
+    ``skimage.transform.iradon`` (its filters and discretisation).
     """
     check_choice("filter", filter, FILTERS)
     n = np.concatenate((np.arange(1, n_padded / 2 + 1, 2, dtype=int),
@@ -95,6 +126,29 @@ def resample_uniform(sino: Sinogram, n_bins=None) -> Sinogram:
     integral over each new bin (linear interpolation of the cumulative integral).
 
     ``n_bins`` defaults to the span divided by the narrowest bin.
+
+    Parameters
+    ----------
+    sino : Sinogram
+        The data, any strictly increasing bins.
+    n_bins : int >= 1, optional
+        Number of uniform bins over the same span [r_0, r_n]. Default: the span over the
+        narrowest bin's width, rounded up (so no new bin is wider than the narrowest old
+        one).
+
+    Returns
+    -------
+    Sinogram
+        Same views, fields and ``info`` (plus ``info["resampled_from"]``, the old number of
+        bins), with ``n_bins + 1`` evenly spaced edges from r_0 to r_n and values
+        (n_views, n_bins) the bin integrals of each view over the new bins.
+
+    Raises
+    ------
+    ParameterError
+        When ``sino`` is not a :class:`~meshladar.Sinogram`, ``n_bins`` is not an integer
+        >= 1, or the resampling's arrays (24 bytes per view and bin) would pass meshladar's
+        4 GiB allocation limit.
     """
     check_sinogram("sino", sino)
     edges = sino.bin_edges
@@ -153,7 +207,27 @@ EXTENT_RANGE = (1e-150, 1e300)
 
 def default_extent(sino, extent):
     """``extent``, or when None the bins' reach (:func:`bins_reach`): the one default of
-    every reconstruction (FBP, the iterative solvers, the command line)."""
+    every reconstruction (FBP, the iterative solvers, the command line).
+
+    Parameters
+    ----------
+    sino : Sinogram
+        The data whose bin edges give the default.
+    extent : float or None
+        The half-width asked for, scene units; None for the default.
+
+    Returns
+    -------
+    float or object
+        ``extent`` itself (returned as given, not checked: the reconstructions check it)
+        when not None, else ``bins_reach(sino)``, the half-width max(|r_0|, |r_n|) in
+        scene units.
+
+    Raises
+    ------
+    ParameterError
+        When ``sino`` is not a :class:`~meshladar.Sinogram`.
+    """
     check_sinogram("sino", sino)
     return bins_reach(sino) if extent is None else extent
 
@@ -166,9 +240,20 @@ def bins_reach(sinogram) -> float:
     its direction: every point whose range falls in the bins in some view is within the
     reach of the origin, and every point within it stays in the bins in every view when the
     bins straddle 0 symmetrically (the default bins of ``Ladar.covering`` and
-    ``Ladar.centered``). :func:`fbp`, :func:`~meshladar.reconstruct.fbp3d`,
-    :func:`~meshladar.reconstruct.fbp_slices` and the command line's ``reconstruct`` use it
-    when no extent is given.
+    ``Ladar.centered``). :func:`fbp`, :func:`~meshladar.reconstruct.volumes.fbp3d`,
+    :func:`~meshladar.reconstruct.volumes.fbp_slices` and the command line's
+    ``reconstruct`` use it when no extent is given.
+
+    Parameters
+    ----------
+    sinogram : Sinogram or (n_bins + 1,) array_like
+        A record with ``bin_edges`` (a :class:`~meshladar.Sinogram`), or the bin edges
+        themselves (scene units). Not checked.
+
+    Returns
+    -------
+    float
+        The reach max(|r_0|, |r_n|) of the first and last edge, scene units (>= 0).
     """
     edges = sinogram.bin_edges if hasattr(sinogram, "bin_edges") else sinogram
     edges = np.asarray(edges, dtype=np.float64)
@@ -218,12 +303,34 @@ def fbp(sinogram, size=512, extent=None, *, filter="ramp", interpolation="linear
         ``image[i, j]`` is the reconstruction at (image.x[j], image.y[i]). An off-centre
         disk appears at its true (x, y).
 
+    Raises
+    ------
+    ParameterError
+        When ``sinogram`` is not a :class:`~meshladar.Sinogram` or has view vectors off the
+        x-y plane; when ``size`` is not an integer >= 1 or a ``size`` × ``size`` image (24
+        bytes a pixel) would pass meshladar's 4 GiB allocation limit; when ``extent`` is
+        not a finite real in [1e-150, 1e300]; when ``filter`` or ``interpolation`` is not
+        one of :data:`FILTERS` or :data:`INTERPOLATIONS`; when ``center`` is not a finite
+        (2,) point; or when the image would overflow float64.
+
+    Warns
+    -----
+    MeshladarWarning
+        When all views are at one angle, there is one range bin, there is one view, the
+        views leave a gap wider than 3× their median spacing, or the views are too few for
+        the bins across the target (π · bins across / n_views above 8: streaks).
+
     Notes
     -----
     Normalised so that the FBP of the exact Radon transform of f over 360° returns f:
     image = Σ_v w_v q_v(r), w_v half of view v's share of 2π, q_v the ramp-filtered
     projection values_v / bin_width². Views that leave a gap of more than 3× the median
     spacing warn (missing views streak the image).
+
+    References
+    ----------
+    A. C. Kak and M. Slaney, *Principles of Computerized Tomographic Imaging*, IEEE Press
+    (1988), Ch. 3 (filtered backprojection; the band-limited ramp of Eq. (61)).
 
     Examples
     --------
@@ -330,7 +437,26 @@ def noise_floor(sino, *, quanta=3.0):
     :data:`~meshladar.reconstruct.LOG_FLOOR`: ``quanta`` quanta when the bins are whole
     multiples of a quantum (counted photoelectrons, however scaled), else five robust
     standard deviations of the bins (most bins hold no surface, so their median absolute
-    deviation is the noise)."""
+    deviation is the noise).
+
+    The bins count as quantised when the smallest non-zero |value| (the quantum) is below
+    the peak and more than 99 % of the non-zero bins lie within 1e-6 of a whole multiple
+    of it; the robust standard deviation is 1.4826 × the median absolute deviation of all
+    the bins, empty ones included.
+
+    Parameters
+    ----------
+    sino : Sinogram
+        The data (anything with a ``values`` array; not checked).
+    quanta : float, keyword-only, default 3.0
+        The floor in quanta, for quantised data. Not checked.
+
+    Returns
+    -------
+    float
+        The floor as a fraction of the largest |value|, in [:data:`LOG_FLOOR`, 0.5] (it is
+        capped at 0.5); :data:`LOG_FLOOR` when every bin is 0.
+    """
     v = sino.values
     peak = float(np.abs(v).max(initial=0.0))
     if peak == 0:
@@ -346,9 +472,36 @@ def noise_floor(sino, *, quanta=3.0):
 
 
 def quiet_fbp(sino, size, extent, *, center=(0.0, 0.0)):
-    """FBP's image values, its warning about too few views silenced: for a starting point
-    or a scale of another method (iterative, compensation), where the warning about FBP's
-    own output does not apply."""
+    """FBP's image values, its warnings silenced: for a starting point or a scale of another
+    method (iterative, compensation), where the warnings about FBP's own output (too few
+    views, gaps, one view or one bin) do not apply.
+
+    Every :class:`~meshladar.errors.MeshladarWarning` that :func:`fbp` raises is ignored;
+    its errors are not.
+
+    Parameters
+    ----------
+    sino : Sinogram
+        The data, as :func:`fbp`'s ``sinogram``.
+    size : int >= 1
+        Pixels along each side of the square image.
+    extent : float in [1e-150, 1e300] or None
+        Half-width of the image square, scene units; None: the bins' reach
+        (:func:`bins_reach`).
+    center : (2,) float, keyword-only, default (0, 0)
+        Centre of the image square.
+
+    Returns
+    -------
+    (size, size) ndarray of float64
+        :func:`fbp`'s image values (read-only, as an :class:`~meshladar.Image`'s):
+        ``[i, j]`` at (x_j, y_i).
+
+    Raises
+    ------
+    ParameterError
+        As :func:`fbp`.
+    """
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MeshladarWarning)
         return fbp(sino, size=size, extent=extent, center=center).values
@@ -360,6 +513,32 @@ def log_radiance(sinogram: Sinogram, *, floor=LOG_FLOOR) -> Sinogram:
     ``values → log(max(values, m) / m)`` with m = floor × max(values): bins at or below the
     floor (empty bins included) map to 0, everything else to its log-ratio to the floor, so
     the result is ≥ 0 and finite. A floor of 1e-6 keeps six decades of dynamic range.
+    A sinogram whose maximum is ≤ 0 maps to all zeros.
+
+    Parameters
+    ----------
+    sinogram : Sinogram
+        The binned radiance (any radiometry or units).
+    floor : float in (0, 1], keyword-only, default :data:`LOG_FLOOR` (1e-6)
+        The floor m as a fraction of the sinogram's maximum.
+
+    Returns
+    -------
+    Sinogram
+        Same views and bins, values (n_views, n_bins) ≥ 0 the natural log of the ratio to
+        the floor; ``units`` "dimensionless (natural log of the ratio to the floor)" and
+        ``info["preprocess"]`` extended with ``"log(floor=...)"``.
+
+    Raises
+    ------
+    ParameterError
+        When ``sinogram`` is not a :class:`~meshladar.Sinogram`, or ``floor`` is not a
+        finite real in (0, 1].
+
+    References
+    ----------
+    Jin & Levine (2009), Sec. 4.B, Fig. 11(a) (the logarithm of the binned radiance as
+    the reconstruction's input).
     """
     check_sinogram("sinogram", sinogram)
     floor = check_real("floor", floor, low=0.0, high=1.0, low_open=True)
@@ -375,7 +554,32 @@ def log_radiance(sinogram: Sinogram, *, floor=LOG_FLOOR) -> Sinogram:
 
 
 def clip_radiance(sinogram: Sinogram, *, threshold=PAPER_CLIP) -> Sinogram:
-    """The paper's Fig. 11(b) input: radiance clipped at ``threshold`` × its maximum."""
+    """The paper's Fig. 11(b) input: radiance clipped at ``threshold`` × its maximum.
+
+    Parameters
+    ----------
+    sinogram : Sinogram
+        The binned radiance.
+    threshold : float in (0, 1], keyword-only, default :data:`PAPER_CLIP` (0.008)
+        The cap as a fraction of the sinogram's maximum value.
+
+    Returns
+    -------
+    Sinogram
+        Same views, bins and units, each value replaced by min(value, threshold ×
+        maximum); ``info["preprocess"]`` extended with ``"clip(threshold=...)"``.
+
+    Raises
+    ------
+    ParameterError
+        When ``sinogram`` is not a :class:`~meshladar.Sinogram`, or ``threshold`` is not a
+        finite real in (0, 1].
+
+    References
+    ----------
+    Jin & Levine (2009), Sec. 4.B, Fig. 11(b) (radiance clipped at 0.008 times the
+    maximum to remove glints).
+    """
     check_sinogram("sinogram", sinogram)
     threshold = check_real("threshold", threshold, low=0.0, high=1.0, low_open=True)
     cap = threshold * float(sinogram.values.max(initial=0.0))

@@ -43,7 +43,17 @@ METHODS = ("sirt", "sart", "cgls", "tv_fista")
 
 class ImageGrid(NamedTuple):
     """The square image grid of a reconstruction: ``size`` pixels a side, half-width
-    ``extent``, centred on ``center`` (as :func:`meshladar.fbp`)."""
+    ``extent``, centred on ``center`` (as :func:`meshladar.fbp`).
+
+    Attributes
+    ----------
+    size : int
+        Pixels along each side.
+    extent : float
+        Half-width of the square, scene units.
+    center : tuple
+        Centre (x, y) of the square.
+    """
 
     size: int
     extent: float
@@ -168,41 +178,65 @@ def sirt(sino, size=256, extent=None, *, center=(0.0, 0.0), n_iter=50, x0=None, 
     ----------
     sino : Sinogram
         Views about z; ``values`` bin integrals (any radiometry, log or clipped input).
-    size, extent, center
-        The image grid, as :func:`meshladar.fbp`.
-    n_iter : int
+    size, extent, center : int >= 1, float or None, (2,) float
+        The image grid, as :func:`meshladar.fbp` (defaults 256; None: the bins' reach,
+        :func:`~meshladar.reconstruct.fbp2d.bins_reach`; (0, 0)). ``extent`` in
+        [1e-150, 1e300]; ``center`` keyword-only.
+    n_iter : int >= 1, default 50
         Most iterations.
-    x0 : None, "fbp", Image or array
-        Warm start (default zeros). "fbp": FBP of the data the weights keep, the dropped
+    x0 : None, "fbp", Image or (size, size) array
+        Warm start (default zeros); an Image's values are taken as they are (its grid is
+        not compared). "fbp": FBP of the data the weights keep, the dropped
         bins (weight 0) set to 0: a dropped glint is then not in the start either (from
         all the data its bright ring stays, as only the dropped bins could lower it).
     weights : (n_views, n_bins) array, optional
         Per-bin weights ≥ 0 (glint bins down-weighted, 0 drops a bin); relative: only their
         ratios matter (they are scaled so that the largest is 1).
     mask : (size, size) bool array, optional
-        Pixels allowed to be non-zero.
-    nonneg : bool
+        Pixels allowed to be non-zero (the start is masked too).
+    nonneg : bool, default True
         Project onto x ≥ 0 after each step.
-    tol : float, optional
+    tol : float > 0, optional
         Stop when the weighted residual falls by less than ``tol`` (relative) in a step.
-    rays_per_bin : int
+    rays_per_bin : int >= 1, default 2
         Iso-range lines per bin in the Siddon projector.
-    projector : {"auto", "siddon", "linear"} or operator
+    projector : {"auto", "siddon", "linear"} or operator, default "auto"
         Siddon lines with exact pixel lengths (:class:`RangeProjector`, any bins), the
         pixel-driven linear-interpolation pair (:class:`LinearProjector`, uniform bins;
-        about 20× faster at 256², the same image error), or any operator with ``@``, ``.T`` and a
-        ``grid`` equal to the image's (e.g.
+        about 20× faster at 256², the same image error), or any operator with ``@``,
+        ``.T`` and a ``grid`` equal to the image's (e.g.
         :class:`meshladar.reconstruct.operators.SurfaceProjector`). "auto" (default):
         "linear" where the bins are uniform, "siddon" where not
         (:func:`~meshladar.reconstruct.operators.projector_name`).
-    progress : bool
+    progress : bool, default False
         A progress bar over the iterations (on a terminal).
 
     Returns
     -------
     Image
         ``info``: method, iterations, ``residuals`` (weighted ‖A x − b‖ per iteration,
-        relative to ‖b‖), stopped ("n_iter" or "tol"), projector (the pair used).
+        relative to the weighted ‖b‖), stopped ("n_iter" or "tol"), projector (the pair
+        used, or the operator's class name), nonneg, rays_per_bin, radiometry.
+
+    Raises
+    ------
+    ParameterError
+        When ``sino`` is not a :class:`~meshladar.Sinogram` or has views off the x-y
+        plane; ``size`` is not an integer >= 1 or its images (about 64 bytes a pixel)
+        would pass meshladar's 4 GiB allocation limit; ``extent`` is outside [1e-150,
+        1e300]; ``n_iter`` is not an integer >= 1, or ``rays_per_bin`` where the Siddon
+        projector is built; ``tol`` is not > 0; ``weights`` are not finite, one per bin
+        and ≥ 0, or are all 0; ``mask`` is not (size, size) or is empty; ``x0`` is not
+        None, "fbp", an Image or a finite (size, size) array; or ``projector`` is neither
+        a name above nor an operator with ``@``, ``.T`` and a matching ``grid`` (the
+        linear pair also refuses non-uniform bins).
+
+    References
+    ----------
+    A. C. Kak and M. Slaney, *Principles of Computerized Tomographic Imaging*, IEEE Press
+    (1988), Ch. 7 (algebraic reconstruction); J. Gregor and T. Benson, "Computational
+    analysis and improvement of SIRT", IEEE Trans. Med. Imaging 27 (2008) (SIRT with the
+    inverse row and column sums).
     """
     extent = default_extent(sino, extent)
     n_iter = check_count("n_iter", n_iter)
@@ -244,7 +278,58 @@ def sart(sino, size=256, extent=None, *, center=(0.0, 0.0), n_iter=10, subsets=N
     ``subsets=n_views`` is classic one-view SART); ``relax`` is λ in (0, 2). Other
     parameters and ``info`` as :func:`sirt`; ``residuals`` are gathered over each sweep
     (each group's residual just before its step, as ordered-subset methods report it, at
-    no extra projection)."""
+    no extra projection).
+
+    Group k holds views k, k + s, k + 2s, ... in the sinogram's order, and the groups are
+    swept in the order k = 0, 1, ..., s − 1 every iteration.
+
+    Parameters
+    ----------
+    sino : Sinogram
+        Views about z; ``values`` bin integrals (any radiometry, log or clipped input).
+    size, extent, center : int >= 1, float or None, (2,) float
+        The image grid, as :func:`sirt` (defaults 256, the bins' reach, (0, 0)).
+    n_iter : int >= 1, default 10
+        Most sweeps over all the groups.
+    subsets : int in [1, n_views], optional
+        Number of groups s; default max(1, n_views // 36).
+    relax : float in (0, 2), default 1.0
+        Relaxation λ multiplying each group's step.
+    x0 : None, "fbp", Image or (size, size) array, default None
+        Warm start, as :func:`sirt` (default zeros).
+    weights : (n_views, n_bins) array, optional
+        Per-bin weights ≥ 0, relative, as :func:`sirt`.
+    mask : (size, size) bool array, optional
+        Pixels allowed to be non-zero, as :func:`sirt`.
+    nonneg : bool, default True
+        Project onto x ≥ 0 after each step.
+    tol : float > 0, optional
+        Relative stopping tolerance, as :func:`sirt`.
+    rays_per_bin : int >= 1, default 2
+        Iso-range lines per bin in the Siddon projector.
+    projector : {"auto", "siddon", "linear"}, default "auto"
+        The projector pair, built once per group; unlike :func:`sirt`, an operator is
+        refused.
+    progress : bool, default False
+        A progress bar over the sweeps (on a terminal).
+
+    Returns
+    -------
+    Image
+        ``info`` as :func:`sirt`'s, with method "sart", subsets and relax; ``residuals``
+        per sweep, relative to the weighted ‖b‖.
+
+    Raises
+    ------
+    ParameterError
+        As :func:`sirt`; also when ``relax`` is outside (0, 2), ``subsets`` is not an
+        integer in [1, n_views], or ``projector`` is not one of the names above.
+
+    References
+    ----------
+    A. H. Andersen and A. C. Kak, "Simultaneous algebraic reconstruction technique
+    (SART): a superior implementation of the ART algorithm", Ultrasonic Imaging 6 (1984).
+    """
     extent = default_extent(sino, extent)
     n_iter = check_count("n_iter", n_iter)
     tol = None if tol is None else check_real("tol", tol, low=0.0, low_open=True)
@@ -298,7 +383,50 @@ def cgls(sino, size=256, extent=None, *, center=(0.0, 0.0), n_iter=30, x0=None, 
          mask=None, tol=None, rays_per_bin=2, projector="auto", progress=False):
     """CGLS: conjugate gradients on the normal equations of min ‖W^½ (A x − b)‖ over the
     masked pixels (no non-negativity: CG's residual then never grows). Parameters as
-    :func:`sirt`; ``info["residuals"]`` is non-increasing."""
+    :func:`sirt`; ``info["residuals"]`` is non-increasing.
+
+    Parameters
+    ----------
+    sino : Sinogram
+        Views about z; ``values`` bin integrals (any radiometry, log or clipped input).
+    size, extent, center : int >= 1, float or None, (2,) float
+        The image grid, as :func:`sirt` (defaults 256, the bins' reach, (0, 0)).
+    n_iter : int >= 1, default 30
+        Most iterations.
+    x0 : None, "fbp", Image or (size, size) array
+        Warm start, as :func:`sirt` (default zeros); masked, and not clipped to x ≥ 0.
+    weights : (n_views, n_bins) array, optional
+        Per-bin weights ≥ 0, relative, as :func:`sirt`.
+    mask : (size, size) bool array, optional
+        Pixels allowed to be non-zero, as :func:`sirt`.
+    tol : float > 0, optional
+        Relative stopping tolerance, as :func:`sirt`.
+    rays_per_bin : int >= 1, default 2
+        Iso-range lines per bin in the Siddon projector.
+    projector : {"auto", "siddon", "linear"} or operator, default "auto"
+        The projector, as :func:`sirt`.
+    progress : bool, default False
+        A progress bar over the iterations (on a terminal).
+
+    Returns
+    -------
+    Image
+        ``info``: method "cgls", iterations, residuals (weighted ‖A x − b‖ per iteration,
+        relative to the weighted ‖b‖), stopped ("n_iter", "tol", or "converged" when the
+        masked gradient is 0 or the search direction projects to 0), projector,
+        rays_per_bin, radiometry.
+
+    Raises
+    ------
+    ParameterError
+        As :func:`sirt`.
+
+    References
+    ----------
+    M. R. Hestenes and E. Stiefel, "Methods of conjugate gradients for solving linear
+    systems", J. Res. Natl. Bur. Stand. 49 (1952); Å. Björck, *Numerical Methods for
+    Least Squares Problems*, SIAM (1996) (CGLS).
+    """
     extent = default_extent(sino, extent)
     n_iter = check_count("n_iter", n_iter)
     tol = None if tol is None else check_real("tol", tol, low=0.0, low_open=True)
@@ -346,7 +474,41 @@ def glint_weights(sino, *, threshold=None, floor=0.0, max_share=0.1):
     A glint is a few bins: only when the bright bins are at most ``max_share`` of the bins
     that hold returns (above the noise floor) are they dropped; otherwise the scene does
     not glint and every weight is 1 (measured at 1° views: 2-4 % on the paper's glinting
-    pairs, 42-45 % on the diffuse disk and the gray pair)."""
+    pairs, 42-45 % on the diffuse disk and the gray pair).
+
+    The bins that hold returns are those above min(``threshold``, the noise floor) × the
+    maximum (:func:`~meshladar.reconstruct.fbp2d.noise_floor`).
+
+    Parameters
+    ----------
+    sino : Sinogram
+        The data.
+    threshold : float in (0, 1], keyword-only, optional
+        Bins above ``threshold`` × the maximum value are bright; default
+        :data:`~meshladar.reconstruct.fbp2d.PAPER_CLIP` (0.008).
+    floor : float in [0, 1], keyword-only, default 0.0
+        The weight of a bright bin (0 drops it).
+    max_share : float in [0, 1], keyword-only, default 0.1
+        The largest share of the returning bins that may be bright for them to be
+        down-weighted.
+
+    Returns
+    -------
+    (n_views, n_bins) ndarray of float64
+        ``floor`` at the bright bins and 1 elsewhere, or 1 everywhere when the bright bins
+        are more than ``max_share`` of the returning ones.
+
+    Raises
+    ------
+    ParameterError
+        When ``sino`` is not a :class:`~meshladar.Sinogram`, or ``threshold``, ``floor``
+        or ``max_share`` is outside its range.
+
+    References
+    ----------
+    Jin & Levine (2009), Sec. 4.B, Fig. 11(b) (the default threshold, 0.008 of the
+    maximum).
+    """
     check_sinogram("sino", sino)
     thr = check_real("threshold", PAPER_CLIP if threshold is None else threshold, low=0.0,
                      high=1.0, low_open=True)
@@ -367,7 +529,8 @@ def tv_fista(sino, size=256, extent=None, *, center=(0.0, 0.0), tv=0.005, n_iter
     """Total-variation regularised reconstruction by FISTA:
     min ½‖W^½ (A x − b)‖² + λ TV(x) over x ≥ 0 and the mask, each step a gradient step on
     the data term (step 1/L, L = ‖W^½ A‖² by power iteration) and the TV proximal map
-    (:func:`~meshladar.reconstruct._tv.tv_prox`, dual fast gradient projection).
+    (isotropic TV, Beck and Teboulle's fast gradient projection on the dual, 20 inner
+    steps, warm-started from the previous step's dual).
 
     ``tv`` sets λ relative to the image's scale: λ = tv · L · s with s the 99th percentile
     of |FBP image|, so each step smooths away jumps below about tv × s (the default 0.005:
@@ -376,6 +539,59 @@ def tv_fista(sino, size=256, extent=None, *, center=(0.0, 0.0), tv=0.005, n_iter
     (default warm start from FBP). ``info["residuals"]`` holds the data term,
     ``info["objective"]`` the whole objective per iteration (monotone only on average:
     FISTA is not a descent method).
+
+    L is estimated by 15 power iterations on M Aᵀ W A M from a seeded random start
+    (``numpy.random.default_rng(0)``), so runs repeat exactly. TV is the sum over pixels
+    of the length of the forward-difference gradient (differences zero at the last row
+    and column). With ``tol``, the run stops when the objective, not the residual,
+    changes by less than ``tol`` (relative) in a step.
+
+    Parameters
+    ----------
+    sino : Sinogram
+        Views about z; ``values`` bin integrals (any radiometry, log or clipped input).
+    size, extent, center : int >= 1, float or None, (2,) float
+        The image grid, as :func:`sirt` (defaults 256, the bins' reach, (0, 0)).
+    tv : float in [0, 100], keyword-only, default 0.005
+        The regularisation relative to the image's scale (above); 0: FISTA on the data
+        term alone, with the constraints.
+    n_iter : int >= 1, default 100
+        Most iterations.
+    x0 : None, "fbp", Image or (size, size) array, default "fbp"
+        Warm start, as :func:`sirt`.
+    weights : (n_views, n_bins) array, optional
+        Per-bin weights ≥ 0, relative, as :func:`sirt`.
+    mask : (size, size) bool array, optional
+        Pixels allowed to be non-zero, as :func:`sirt`.
+    nonneg : bool, default True
+        Keep x ≥ 0 (a constraint of the TV proximal map, and of the start).
+    tol : float > 0, optional
+        Stop when the objective changes by less than ``tol`` (relative) in a step.
+    rays_per_bin : int >= 1, default 2
+        Iso-range lines per bin in the Siddon projector.
+    projector : {"auto", "siddon", "linear"} or operator, default "auto"
+        The projector, as :func:`sirt`.
+    progress : bool, default False
+        A progress bar over the iterations (on a terminal).
+
+    Returns
+    -------
+    Image
+        ``info``: method "tv_fista", tv, lambda (λ), lipschitz (L), iterations, residuals
+        (weighted ‖A x − b‖ relative to the weighted ‖b‖, per iteration), objective,
+        stopped ("n_iter" or "tol"), nonneg, projector, radiometry.
+
+    Raises
+    ------
+    ParameterError
+        As :func:`sirt`; also when ``tv`` is outside [0, 100].
+
+    References
+    ----------
+    A. Beck and M. Teboulle, "A fast iterative shrinkage-thresholding algorithm for linear
+    inverse problems", SIAM J. Imaging Sci. 2 (2009) (FISTA); A. Beck and M. Teboulle,
+    "Fast gradient-based algorithms for constrained total variation image denoising and
+    deblurring problems", IEEE Trans. Image Process. 18 (2009) (the TV proximal map).
     """
     extent = default_extent(sino, extent)
     n_iter = check_count("n_iter", n_iter)

@@ -47,8 +47,20 @@ UNIFORM_RTOL = 1e-9
 
 
 def uniform_bins(bin_edges):
-    """Whether the range bins are uniform (widths equal to :data:`UNIFORM_RTOL`): where
-    :class:`LinearProjector` applies."""
+    """Whether the range bins are uniform (widths equal to within :data:`UNIFORM_RTOL` of
+    their mean): where :class:`LinearProjector` applies.
+
+    Parameters
+    ----------
+    bin_edges : (n_bins + 1,) array_like
+        Range bin edges, scene units. Not checked for finiteness or order.
+
+    Returns
+    -------
+    bool
+        True when there is at least one bin and the spread (max − min) of the widths is at
+        most :data:`UNIFORM_RTOL` (1e-9) times their mean.
+    """
     w = np.diff(np.asarray(bin_edges, dtype=float))
     return bool(w.size) and float(np.ptp(w)) <= UNIFORM_RTOL * float(np.mean(w))
 
@@ -57,7 +69,21 @@ def projector_name(projector, bin_edges):
     """The projector pair ``projector="auto"`` means: ``"linear"`` (the pixel-driven pair,
     about 20× faster than Siddon lines at 256², the same image error) where the bins are
     uniform, ``"siddon"`` (which takes any bins) where they are not; any other name is
-    itself."""
+    itself.
+
+    Parameters
+    ----------
+    projector : str or object
+        ``"auto"``, a name of :data:`PROJECTORS`, or an operator. Not checked
+        (:func:`build` checks).
+    bin_edges : (n_bins + 1,) array_like
+        Range bin edges (:func:`uniform_bins`), read only for ``"auto"``.
+
+    Returns
+    -------
+    str or object
+        ``"linear"`` or ``"siddon"`` for ``"auto"``; ``projector`` unchanged otherwise.
+    """
     if projector == "auto":
         return "linear" if uniform_bins(bin_edges) else "siddon"
     return projector
@@ -66,7 +92,33 @@ def projector_name(projector, bin_edges):
 def build(projector, grid, sino, rays_per_bin=2):
     """The solvers' operator for a sinogram's views and bins on ``grid``: a projector name
     (``"auto"``, :data:`PROJECTORS`), or a user's operator: anything with ``@``, ``.T`` and
-    a ``grid`` equal to the image's (an ODL-like composition), returned as it is."""
+    a ``grid`` equal to the image's (an ODL-like composition), returned as it is.
+
+    Parameters
+    ----------
+    projector : {"auto", "siddon", "linear"} or operator
+        The pair by name (``"auto"``: :func:`projector_name`), or an operator with
+        ``__matmul__``, ``T`` and ``grid == grid``.
+    grid : meshladar.forward.siddon.PixelGrid
+        The image's pixel grid.
+    sino : Sinogram
+        The data whose ``angles_deg`` and ``bin_edges`` the projector maps to.
+    rays_per_bin : int >= 1, default 2
+        Iso-range lines per bin, for the Siddon projector only.
+
+    Returns
+    -------
+    Projector or object
+        A :class:`LinearProjector` or :class:`RangeProjector` for a name, or ``projector``
+        itself.
+
+    Raises
+    ------
+    ParameterError
+        When ``projector`` is neither one of ``("auto",) +`` :data:`PROJECTORS` nor an
+        operator as above; when ``"linear"`` is asked for with non-uniform bins; when
+        ``rays_per_bin`` is not an integer >= 1 (Siddon projector).
+    """
     if not isinstance(projector, str):
         if not (hasattr(projector, "__matmul__") and hasattr(projector, "T")
                 and getattr(projector, "grid", None) == grid):
@@ -86,6 +138,33 @@ class Projector(LinearOperator):
     Subclasses implement ``_forward(image) -> (n_views, n_bins)`` and ``_backward(values)
     -> image``; this class makes them a scipy ``LinearOperator`` (flat vectors) that also
     maps arrays in their own shapes.
+
+    The operator's ``shape`` is (n_views · n_bins, ny · nx), its dtype float64; flat
+    vectors are images raveled in row-major (ny, nx) order and data raveled in
+    (n_views, n_bins) order.
+
+    Parameters
+    ----------
+    grid : meshladar.forward.siddon.PixelGrid
+        The image's pixel grid (ny × nx pixels).
+    angles_deg : (n_views,) array_like
+        View angles about z, degrees (w = (cos φ, sin φ)); flattened.
+    bin_edges : (n_bins + 1,) array_like
+        Range bin edges, scene units (range r = −p·w); flattened.
+
+    Attributes
+    ----------
+    grid : meshladar.forward.siddon.PixelGrid
+        As given.
+    angles_deg, bin_edges : ndarray of float64
+        As given, checked finite and flattened.
+    n_views, n_bins : int
+        The data's shape, :attr:`data_shape`.
+
+    Raises
+    ------
+    ParameterError
+        When ``angles_deg`` or ``bin_edges`` holds a value that is not finite.
     """
 
     def __init__(self, grid, angles_deg, bin_edges):
@@ -118,6 +197,27 @@ class Projector(LinearOperator):
     _transpose = _adjoint
 
     def dot(self, x):
+        """A x: an image in its own shape to (n_views, n_bins), anything else as scipy.
+
+        Parameters
+        ----------
+        x : array_like, LinearOperator or scalar
+            A (ny, nx) image on ``grid``; or what ``scipy.sparse.linalg.LinearOperator.dot``
+            takes: a flat (ny · nx,) image, a (ny · nx, k) matrix of k flat images, an
+            operator to compose with or a scalar to scale by.
+
+        Returns
+        -------
+        ndarray or LinearOperator
+            (n_views, n_bins) bin integrals for an image in its own shape; otherwise
+            scipy's answer: a (n_views · n_bins,) vector, a (n_views · n_bins, k) array, or
+            the composed or scaled operator.
+
+        Raises
+        ------
+        ValueError
+            From scipy, when ``x`` is an array of neither shape.
+        """
         if not isinstance(x, LinearOperator) and np.shape(x) == self.grid.shape:
             return self._forward(x)
         return super().dot(x)
@@ -205,7 +305,28 @@ class LinearProjector(Projector):
 
     Opposite views see the same iso-range lines in reverse order: with bins symmetric
     about range 0, view φ + 180° projects to view φ's bins reversed. The pair then computes
-    only one view of each opposite pair (half the work on a full circle of views)."""
+    only one view of each opposite pair (half the work on a full circle of views).
+
+    Views count as opposite when their angles modulo 360°, rounded to 1e-6 degree, differ
+    by 180°; bins count as symmetric when every edge matches the negated mirrored edge to
+    within 1e-12 of the largest |edge|.
+
+    Parameters
+    ----------
+    grid : meshladar.forward.siddon.PixelGrid
+        The image's pixel grid; samples at the pixel centres.
+    angles_deg : (n_views,) array_like
+        View angles about z, degrees (w = (cos φ, sin φ)).
+    bin_edges : (n_bins + 1,) array_like
+        Uniform range bin edges, scene units (range r = −p·w); the profile is sampled at
+        the bin centres.
+
+    Raises
+    ------
+    ParameterError
+        When the bins are not uniform (:func:`uniform_bins`), or ``angles_deg`` or
+        ``bin_edges`` is not finite.
+    """
 
     def __init__(self, grid, angles_deg, bin_edges):
         super().__init__(grid, angles_deg, bin_edges)
@@ -296,7 +417,44 @@ class SurfaceProjector(Projector):
     by a Gaussian of that width (A S, adjoint Sᵀ Aᵀ). Image values are areal densities (a
     segment carries value × pixel area), as FBP's. Composes with
     :func:`~meshladar.reconstruct.iterative.sirt` and
-    :func:`~meshladar.reconstruct.iterative.cgls` through ``projector=``."""
+    :func:`~meshladar.reconstruct.iterative.cgls` through ``projector=``.
+
+    Each segment's half-length is half the mean distance to its two nearest neighbouring
+    points, at most one pixel (half a pixel when the surface has two points or fewer); its
+    tangent is the normal turned by +90°.
+
+    Parameters
+    ----------
+    surface : meshladar.reconstruct.surface.Surface
+        The n surface points, their pixels, normals and grid (the operator's ``grid``).
+    angles_deg : (n_views,) array_like
+        View angles about z, degrees (w = (cos φ, sin φ)).
+    bin_edges : (n_bins + 1,) array_like
+        Uniform range bin edges, scene units (range r = −p·w).
+    H : (n, n_views) array_like
+        Per point and view weights, e.g.
+        :func:`~meshladar.reconstruct.surface.surface_weights`; 0 drops a point-view.
+    smooth : float in [0, surface.size], default 0.0
+        Standard deviation, pixels, of the Gaussian along the surface: each point's value
+        is averaged over the points within 2 ``smooth`` pixels of it with weights
+        exp(−d² / (2 s²)), s = ``smooth``, normalised to sum 1. Below 1e-3: no smoothing.
+
+    Attributes
+    ----------
+    surface : meshladar.reconstruct.surface.Surface
+        As given.
+    smooth : scipy.sparse.csr_matrix or None
+        The (n, n) smoothing operator S, or None without smoothing (not the width given).
+    view_weights : (n, n_views) ndarray
+        ``H`` times the pixel area: the weights the segments carry.
+
+    Raises
+    ------
+    ParameterError
+        When ``smooth`` is outside [0, surface.size], the bins are not uniform (to 1e-9
+        of their mean width), ``H`` is not (n, n_views), or ``angles_deg`` or
+        ``bin_edges`` is not finite.
+    """
 
     def __init__(self, surface, angles_deg, bin_edges, H, smooth=0.0):
         self.surface = surface

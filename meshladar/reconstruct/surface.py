@@ -146,13 +146,37 @@ def estimate_surface(first, sino, *, threshold=0.2, sigma=1.5, shadows=True):
         The data, which decides each normal's sign: a surface faces the views that see it,
         so the sign whose front half of the views holds more returns (summed as
         :func:`~meshladar.log_radiance`, so weak surfaces next to glints count) wins.
-    threshold : float in (0, 1)
+    threshold : float in (0, 1), keyword-only, default 0.2
         Keep ridge points at least this fraction of the strongest ridge's strength.
-    sigma : float
+    sigma : float in (0, size], keyword-only, default 1.5
         Gaussian scale, pixels, of the ridge detector (at most the image's size).
-    shadows : bool
+    shadows : bool, keyword-only, default True
         Also find, per point and view, whether another surface hides it from the ladar
         (:attr:`Surface.shadowed`).
+
+    Returns
+    -------
+    Surface
+        One point per pixel whose ridge maximum lies inside it: ``points`` (n, 2) on
+        ``first``'s grid (scene units), outward unit ``normals`` (n, 2), and with
+        ``shadows`` the (n, n_views) shadow map, else None. A point is shadowed in a view
+        when the ray from its pixel toward the ladar, in half-pixel steps, leaves the
+        (one-pixel dilated) surface pixels, stays out for two pixels and meets them
+        again.
+
+    Raises
+    ------
+    ParameterError
+        When ``first`` is not a :class:`~meshladar.Image` or ``sino`` not a
+        :class:`~meshladar.Sinogram`; ``threshold`` or ``sigma`` is outside its range;
+        ``first`` has no bright ridge or no ridge point passes ``threshold``; or the bins
+        are not uniform (to 1e-9 of their mean width).
+
+    References
+    ----------
+    C. Steger, "An unbiased detector of curvilinear structures", IEEE Trans. Pattern
+    Anal. Mach. Intell. 20 (1998) (sub-pixel ridge points and their normals from the
+    Gaussian Hessian).
     """
     if not isinstance(first, Image):
         raise ParameterError(f"first must be a meshladar.Image; got {type(first).__name__}")
@@ -244,7 +268,53 @@ def surface_weights(surface, angles_deg, material, *, labels=None, radiometry="p
     pixel's normal and the view, 0 from behind or where shadowed.
 
     ``material`` is one BRDF, or a sequence of them with ``labels`` a (size, size) int image
-    giving each pixel's index into it."""
+    giving each pixel's index into it.
+
+    h(θ) is the monostatic weight F(θ; −θ) cos θ (``radiometry="paper"``; times another
+    cos θ for ``"power"``), tabulated on 8193 angles in [0, π/2], blurred in θ by a
+    Gaussian of ``blur_deg`` (mirrored at normal incidence, zero beyond the horizon) and
+    divided by its mean over the directions of the plane, ⟨h⟩ = (1/π) ∫₀^{π/2} h dθ; each
+    pixel's θ is interpolated linearly in the table.
+
+    Parameters
+    ----------
+    surface : Surface
+        The points and outward normals (and, when not None, the shadow map).
+    angles_deg : (n_views,) array_like
+        View angles φ about z, degrees: the ladar looks from w = (cos φ, sin φ); θ is
+        the angle between a normal and w.
+    material : BRDF or sequence of BRDF
+        The coatings.
+    labels : (size, size) int array_like, keyword-only, optional
+        Each pixel's index into ``material``; needed when it holds more than one BRDF,
+        ignored otherwise.
+    radiometry : {"paper", "power"}, keyword-only, default "paper"
+        h = F cos θ (the paper's Eq. 8) or the received power F cos² θ.
+    blur_deg : float in [0, 90], keyword-only, default 1.0
+        Standard deviation, degrees, of the Gaussian blur of h(θ) (the normals'
+        uncertainty); a blur below 1e-3 of the table's step is skipped.
+
+    Returns
+    -------
+    (n, n_views) ndarray of float64
+        The weight h(θ)/⟨h⟩ of each surface point and view: ≥ 0, 0 where the normal
+        faces away from the view (n·w ≤ 0) and where ``surface.shadowed`` is True.
+
+    Raises
+    ------
+    ParameterError
+        When ``radiometry`` or ``blur_deg`` is invalid; a material is not a
+        :class:`~meshladar.brdf.BRDF` or returns no light to a monostatic ladar; several
+        materials come without ``labels``, or ``labels`` is not (size, size) or holds an
+        index outside [0, len(material)) on the surface; ``angles_deg`` is not finite; or
+        the shadow map's views do not match ``angles_deg``.
+    ModelError
+        When a material's class does not define ``projected``.
+
+    References
+    ----------
+    Jin & Levine (2009), Eq. 8 (the binned radiance weight F(θ; −θ) cos θ).
+    """
     radiometry = "power" if check_radiometry(radiometry) else "paper"
     blur_deg = check_real("blur_deg", blur_deg, low=0.0, high=MAX_BLUR_DEG)
     mats = [material] if isinstance(material, BRDF) else list(material)

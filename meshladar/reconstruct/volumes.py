@@ -63,7 +63,22 @@ def views_needed(n_across, smooth=0.0) -> int:
     As 2-D FBP's π/2 views per bin across, a spacing Δθ between neighbouring directions
     with R Δθ = 2 Δr at the target's radius R = N Δr/2 (a plane at R moves two bins between
     neighbouring views), so Δθ = 4/N; views with that spacing cover the sphere's 4π in
-    4π/Δθ² = π N²/4 (about 1,800 for 48 bins across, 12,900 for 128)."""
+    4π/Δθ² = π N²/4 (about 1,800 for 48 bins across, 12,900 for 128).
+
+    Parameters
+    ----------
+    n_across : float
+        N, the most bins any view's returns span (first to last non-zero bin). Not
+        checked.
+    smooth : float, default 0.0
+        σ, the Gaussian smoothing of the profiles in bins (as :func:`fbp3d`'s); below 1 it
+        changes nothing. Not checked.
+
+    Returns
+    -------
+    int
+        The view count ceil(π n² / 4), with n = N / max(1, σ).
+    """
     n = float(n_across) / max(1.0, float(smooth))
     return int(math.ceil(math.pi * n * n / 4.0))
 
@@ -71,7 +86,20 @@ def views_needed(n_across, smooth=0.0) -> int:
 def coverage_gap_deg(view_vectors) -> float:
     """The largest angle (degrees) from any direction of the sphere to the nearest view
     (estimated on 2e4 Fibonacci directions): small for views spread over the sphere, 90 for
-    a hemisphere or a plane of views."""
+    a hemisphere or a plane of views.
+
+    Parameters
+    ----------
+    view_vectors : (n_views, 3) array_like
+        Unit view directions (not normalised here: the chord-to-angle conversion assumes
+        unit length).
+
+    Returns
+    -------
+    float
+        The angle in degrees, in [0, 180], from the probe direction farthest from every
+        view to its nearest view.
+    """
     w = np.asarray(view_vectors, np.float64)
     chord, _ = cKDTree(w).query(fibonacci_sphere(20_000))
     return float(np.degrees(2 * np.arcsin(min(1.0, chord.max() / 2))))
@@ -108,7 +136,19 @@ def sphere_weights(view_vectors) -> np.ndarray:
     """Quadrature weights over the sphere for view directions covering it: each view's
     share of 4π by nearest direction (a spherical Voronoi cell estimated on 2e5 Fibonacci
     points). Views that leave part of the sphere unseen get its area too: right only for
-    sets that cover the sphere (:func:`coverage_gap_deg`)."""
+    sets that cover the sphere (:func:`coverage_gap_deg`).
+
+    Parameters
+    ----------
+    view_vectors : (n_views, 3) array_like
+        Unit view directions (not normalised here).
+
+    Returns
+    -------
+    (n_views,) ndarray of float64
+        Each view's solid angle, steradians: 4π / 2e5 times the number of probe points
+        nearest to it (they sum to 4π).
+    """
     w = np.asarray(view_vectors, np.float64)
     probe = fibonacci_sphere(200_000)
     _, owner = cKDTree(w).query(probe)
@@ -158,11 +198,29 @@ def fbp3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None,
     weights : (n_views,) array, optional
         Quadrature weight (solid angle) of each view; default 4π/n for n views, right for
         Fibonacci directions (:func:`sphere_weights` for other sets covering the sphere).
-    smooth : float
+    smooth : float in [0, n_bins]
         Standard deviation (in bins) of a Gaussian applied to each profile before its
         second difference (default 0: none). The second difference amplifies sampling noise
         and few views leave the planes of sharp returns uncancelled: 1-2 bins trade
         resolution for a cleaner volume.
+
+    Returns
+    -------
+    Volume
+        The surface's return density (per unit volume): values integrate, over a thin shell
+        around the surface, to its return per unit area. ``values[k, i, j]`` (size, size,
+        size) at (x[j], y[i], z[k]), the voxel centres.
+
+    Raises
+    ------
+    ParameterError
+        When ``sino`` is not a :class:`~meshladar.Sinogram`; its bins are not uniform (to
+        1e-6 of their mean width) or fewer than 3; its views leave a direction more than
+        ``MAX_GAP_DEG`` (30°) from every view; ``size`` is not an integer >= 1 or a
+        ``size``³ volume (16 bytes a voxel) would pass meshladar's 4 GiB allocation limit;
+        ``extent`` is outside [1e-150, 1e300]; ``center`` is not a finite (3,) point;
+        ``weights`` are not n_views finite values ≥ 0; or ``smooth`` is outside [0,
+        n_bins].
 
     Warns
     -----
@@ -171,11 +229,10 @@ def fbp3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None,
         :func:`views_needed`, π N²/4 for returns N bins across (N / max(1, ``smooth``)):
         neighbouring directions over 4 times farther apart than the bins resolve, 4/N.
 
-    Returns
-    -------
-    Volume
-        The surface's return density (per unit volume): values integrate, over a thin shell
-        around the surface, to its return per unit area.
+    References
+    ----------
+    F. Natterer, *The Mathematics of Computerized Tomography*, Wiley (1986), Ch. II (the
+    inversion formula of the Radon transform; its local form in three dimensions).
     """
     check_sinogram("sino", sino)
     widths = np.diff(sino.bin_edges)
@@ -225,8 +282,31 @@ def fbp_slices(returns, *, size=256, extent=None, filter="ramp") -> Volume:
     ----------
     returns : meshladar.returns.Returns
         With axes ("elevation", "range") (either order) and views about the z axis.
-    size, extent, filter
-        As :func:`meshladar.fbp`, per slice (extent by default the range bins' reach).
+    size, extent, filter : int >= 1, float or None, str
+        As :func:`meshladar.fbp`, per slice (extent by default the range bins' reach);
+        keyword-only, defaults 256, None and "ramp". The slices are centred on the z
+        axis.
+
+    Returns
+    -------
+    Volume
+        ``values[k, i, j]`` (n_elevation, size, size) the FBP of elevation row k at
+        (x[j], y[i], z[k]), z the elevation bins' centres; each row's values are divided
+        by its elevation bin height before FBP, so the volume is a density per unit
+        volume. ``info``: method "fbp_stack", filter, views, radiometry, slices and, when
+        the returns record one, preprocess.
+
+    Raises
+    ------
+    ParameterError
+        When ``returns`` is not a :class:`~meshladar.returns.Returns` resolved in
+        ("elevation", "range"), has a view off the x-y plane or unevenly spaced elevation
+        bins; and as :func:`meshladar.fbp` for each slice.
+
+    Warns
+    -----
+    MeshladarWarning
+        As :func:`meshladar.fbp`, for each slice.
     """
     if not isinstance(returns, Returns) or set(returns.axes) != {"elevation", "range"}:
         raise ParameterError("fbp_slices needs Returns resolved in ('elevation', 'range')")
@@ -264,7 +344,12 @@ def _renamed(new, old):
         return new(*args, **kwargs)
 
     alias.__name__ = alias.__qualname__ = old
-    alias.__doc__ = f"Deprecated alias of :func:`{new.__name__}` (one release)."
+    alias.__doc__ = (f"Deprecated alias of :func:`{new.__name__}` (one release).\n\n"
+                     "Parameters\n----------\n*args, **kwargs\n"
+                     f"    Passed to :func:`{new.__name__}` unchanged.\n\n"
+                     "Returns\n-------\nVolume\n"
+                     f"    What :func:`{new.__name__}` returns.\n\n"
+                     "Warns\n-----\nDeprecationWarning\n    On every call.\n")
     return alias
 
 

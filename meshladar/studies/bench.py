@@ -47,6 +47,23 @@ def bench_analytic(*, repeats=5):
     """The paper's analytic sinograms (360 views × 512 bins of A/256): one row per case.
 
     Returns a list of dicts with ``case``, ``median_s``, ``min_s``, ``max_s``.
+
+    The six cases: the disk pair with each of the four combinations of dark gray and
+    aluminium, the ellipse of semi-axes 0.6 and 0.3 in aluminium and the disk of radius
+    A = 0.8 in aluminium, each
+    simulated with the analytic model on :meth:`meshladar.ladar.Ladar.paper`'s ladar.
+
+    Parameters
+    ----------
+    repeats : int, keyword-only
+        Timed runs per case after one warm-up run (default 5); at least 1, as
+        ``statistics.median`` of no times fails.
+
+    Returns
+    -------
+    list of dict
+        One per case: ``case`` (str), and the ``median_s``, ``min_s`` and ``max_s`` of its
+        wall times, in seconds.
     """
     gray, al = materials.DARK_GRAY, materials.ALUMINUM
     ladar = Ladar.paper()
@@ -75,6 +92,33 @@ def bench_fbp(*, n_bins=1024, size=1024, repeats=3, filter="ramp"):
     the same filter and linear interpolation, on the same grid (unit bins centred on
     k − n/2, pixel centres on scikit-image's grid, views 180° − φ). Returns a dict with both
     medians, their ratio and the largest difference relative to the image maximum.
+
+    Parameters
+    ----------
+    n_bins : int, keyword-only
+        Range bins of width 2 / ``n_bins`` (default 1024), bin k centred on
+        (k − ``n_bins``/2) × 2 / ``n_bins``.
+    size : int, keyword-only
+        Pixels per side of both images (default 1024); ours has half-width 1 about
+        (−w/2, −w/2), w the bin width, to match scikit-image's pixel grid.
+    repeats : int, keyword-only
+        Timed runs of each after one warm-up run (default 3).
+    filter : str, keyword-only
+        The filter both use (default ``"ramp"``): a name both :func:`meshladar.fbp` and
+        scikit-image's ``iradon`` accept.
+
+    Returns
+    -------
+    dict
+        ``ours_s`` and ``skimage_s``: median wall times in seconds; ``speedup``:
+        ``skimage_s / ours_s``; ``max_diff_rel``: the largest absolute difference of the
+        two images over scikit-image's largest absolute value; ``shape``: the sinogram's
+        (360, ``n_bins``); ``size``.
+
+    Raises
+    ------
+    ImportError
+        When scikit-image is not installed (the ``bench`` extra).
     """
     try:
         from skimage.transform import iradon
@@ -102,8 +146,35 @@ def bench_fbp(*, n_bins=1024, size=1024, repeats=3, filter="ramp"):
 
 def bench_sensor(*, subdivisions=6, rays_per_view=1_000_000, views=4, repeats=2):
     """Received power of an aluminium icosphere: the ladar at infinity (the compiled loop)
-    against a sensor at a standoff of 100 radii (50 scene units) (perspective rays, weighed per hit in
-    numpy), interleaved; and the waveforms of 360 views (receive)."""
+    against a sensor at a standoff of 100 radii (50 scene units) (perspective rays, weighed
+    and binned by the compiled loop of the ``sensor`` stage: flat normals, a compiled SR
+    coating), interleaved; and the waveforms of 360 views (receive).
+
+    Both received-power runs use the mesh model on one thread, 512 bins covering the
+    sphere (radius 0.5) and ``views`` views at 0°, 1°, ...; the waveforms are those of a
+    360-view, 512-bin received-power sinogram (``rays_per_bin=1``) sampled at 20 GHz with
+    a Gaussian pulse of 0.1 ns FWHM.
+
+    Parameters
+    ----------
+    subdivisions : int, keyword-only
+        Icosphere subdivisions (default 6: 81,920 faces).
+    rays_per_view : int, keyword-only
+        Rays per view: the ray spacing is 1 / sqrt(``rays_per_view``) across the sphere's
+        1 × 1 projected square (default 10⁶).
+    views : int, keyword-only
+        Views of the two received-power runs (default 4).
+    repeats : int, keyword-only
+        Timed rounds after one warm-up round (default 2).
+
+    Returns
+    -------
+    dict
+        ``faces``; ``rays``: rays cast by the run at infinity, over all its views;
+        ``far_mrays`` and ``near_mrays``: millions of rays per second of the two runs
+        (median times); ``receive_s``: the median wall time of ``receive`` in seconds;
+        ``receive_shape``: the sinogram's (n_views, n_bins) it sampled.
+    """
     scene = _icosphere_scene(subdivisions, materials.ALUMINUM)
     ladar = Ladar.covering(scene, n_bins=512, angles_deg=np.arange(float(views)))
     spacing = 1.0 / math.sqrt(rays_per_view)           # the sphere is 1 across
@@ -130,7 +201,30 @@ def bench_sensor(*, subdivisions=6, rays_per_view=1_000_000, views=4, repeats=2)
 def bench_tomography3d(*, views=200, size=128, subdivisions=6, jobs=2):
     """3-D reflective tomography of an 82k-face sphere part: the range profiles of ``views``
     Fibonacci directions (mesh model, received power, ``jobs`` threads), then their 3-D
-    Radon inversion onto ``size``³ voxels; wall times of each (after a warm-up)."""
+    Radon inversion onto size³ voxels (``size`` a side); wall times of each (after a warm-up).
+
+    The bins: ``size`` of them over ranges [−0.55, 0.55]; the cube: half-width 0.55. Each
+    stage is timed once, after one run of each (the inversion at 8³, to compile it);
+    meshladar's warnings are silenced while timing (the volume is not looked at, so the
+    inversion's warning that the views are too few does not apply).
+
+    Parameters
+    ----------
+    views : int, keyword-only
+        Fibonacci view directions over the sphere (default 200).
+    size : int, keyword-only
+        Voxels per side, and range bins (default 128).
+    subdivisions : int, keyword-only
+        Icosphere subdivisions (default 6: 81,920 faces).
+    jobs : int, keyword-only
+        Threads of the mesh model (default 2).
+
+    Returns
+    -------
+    dict
+        ``faces``, ``views``, ``size``, ``rays`` (rays cast, all views), and the wall
+        times in seconds ``simulate_s`` and ``reconstruct_s``.
+    """
     scene = _icosphere_scene(subdivisions, materials.DARK_GRAY)
     ladar = Ladar(None, np.linspace(-0.55, 0.55, size + 1),
                   view_vectors=fibonacci_sphere(views))
@@ -153,7 +247,32 @@ def bench_sirt(*, size=512, n_views=360, iterations=50, skimage_iterations=2):
     """SIRT and SART (ordered subsets, 10 groups) of a 360 × 512 disk sinogram onto 512²
     (``iterations`` sweeps each, the linear projector pair) against scikit-image's
     ``iradon_sart`` on the same data (its time per sweep, from ``skimage_iterations``
-    calls, times ``iterations``)."""
+    calls, times ``iterations``).
+
+    The data: the exact bin integrals of a uniform disk of radius 0.4 centred at
+    (0.1, 0), ``size`` bins over [−1, 1]. SIRT uses the linear projector, SART its
+    default (``"auto"``: linear, as the bins are uniform) and its default groups, one per
+    36 views (10 for 360). Each of ours is timed once after a compiling run at 16².
+
+    Parameters
+    ----------
+    size : int, keyword-only
+        Range bins, and pixels per side of the image over [−1, 1]² (default 512).
+    n_views : int, keyword-only
+        Views evenly spaced over 360° (default 360).
+    iterations : int, keyword-only
+        Sweeps of each method (default 50).
+    skimage_iterations : int, keyword-only
+        ``iradon_sart`` calls timed to estimate its time per sweep (default 2).
+
+    Returns
+    -------
+    dict
+        ``ours_s`` (SIRT) and ``sart_s``: wall times in seconds of ``iterations`` sweeps;
+        ``skimage_s``: scikit-image's estimated time for as many sweeps, or None when
+        scikit-image is not installed (the dict then holds only ``ours_s``, ``sart_s``,
+        ``skimage_s`` and ``iterations``); ``iterations``, ``size``, ``views``.
+    """
     edges = np.linspace(-1.0, 1.0, size + 1)
     phi = np.deg2rad(np.arange(n_views) * 360.0 / n_views)
     a, c = 0.4, np.array([0.1, 0.0])
@@ -229,7 +348,30 @@ def bench_fit(*, subdivisions=6, views=36, n_bins=256, photons=1e5, repeats=3):
 
 def report(*, repeats=5, full=False):
     """The benchmark report, line by line (what ``meshladar bench`` prints): each model and
-    FBP timed against its peer in the same process; ``full`` adds streaming and Dask."""
+    FBP timed against its peer in the same process; ``full`` adds streaming and Dask.
+
+    The lines, in order: the analytic model (:func:`bench_analytic`), FBP against
+    scikit-image (:func:`bench_fbp`; skipped with a line when it is not installed), the
+    mesh engine (:mod:`meshladar.studies.bench_mesh`), received power and waveforms
+    (:func:`bench_sensor`), SIRT and SART (:func:`bench_sirt`), a two-coating fit, and 3-D
+    tomography (:func:`bench_tomography3d`); with ``full`` also Mitsuba 3 + mitransient
+    (:func:`meshladar.studies.peer.bench_time_to_accuracy`), streaming
+    (:func:`bench_streaming`) and Dask (:func:`bench_dask`; skipped with a line when Dask
+    is not installed).
+
+    Parameters
+    ----------
+    repeats : int, keyword-only
+        Timed runs per case after one warm-up (default 5), for the analytic model, FBP
+        and the mesh engine's main case; the other cases use their own defaults.
+    full : bool, keyword-only
+        Add the peer renderer, the streaming run and the Dask run (default False).
+
+    Yields
+    ------
+    str
+        One line of the report, each as soon as its case is measured.
+    """
     yield (f"analytic model, 360 views x 512 bins (A/256), median of {repeats} runs after "
            "one warm-up")
     yield f"  {'case':<40} {'median [s]':>10} {'min [s]':>9} {'max [s]':>9}"

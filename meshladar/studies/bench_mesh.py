@@ -41,6 +41,37 @@ def bench_mesh(*, repeats=3, subdivisions=6, rays_per_view=1_000_000, views=16, 
     ``packet_width``, and the build of a 1.3M-triangle mesh: embreex's upload and BVH
     (``upload_s``, ``bvh_s``) against the packet backend's shared-buffer scene
     (``packet_build_s``), unless ``build`` is False.
+
+    The target: a dark gray icosphere of radius 0.5
+    (:func:`meshladar.studies.timing.icosphere_scene`), seen from ``views`` Fibonacci
+    directions with 512 range bins over [−0.6, 0.6]; the pipeline runs are the mesh model
+    in ``mode="3d"``.
+
+    Parameters
+    ----------
+    repeats : int, keyword-only
+        Timed rounds after one warm-up round (default 3).
+    subdivisions : int, keyword-only
+        Icosphere subdivisions (default 6: 81,920 faces).
+    rays_per_view : int, keyword-only
+        Rays per view: the ray spacing is 1 / sqrt(``rays_per_view``) across the sphere's
+        1 × 1 projected square (default 10⁶).
+    views : int, keyword-only
+        Fibonacci view directions (default 16).
+    build : bool, keyword-only
+        Also time the scene builds of an 8-subdivision icosphere (default True).
+
+    Returns
+    -------
+    dict
+        ``faces``, ``rays`` (all views), ``views``, ``packet_width`` (the packet backend's
+        width), the throughputs in millions of rays per second (``*_mrays``, from median
+        times) and their ratios ``packet_over_raw``, ``pipeline_over_raw``,
+        ``stratified_over_regular``, ``two_over_one`` and ``two_over_raw`` (each a ratio
+        of times: > 1 when the first named is faster); with ``build``, ``build_faces`` and
+        the build times in seconds ``upload_s``, ``bvh_s`` and ``packet_build_s``, and the
+        ratios ``build_over_bvh`` (embreex's upload and BVH over its BVH) and
+        ``packet_build_over_bvh``.
     """
     scene = _icosphere_scene(subdivisions, materials.DARK_GRAY)
     spacing = 1.0 / math.sqrt(rays_per_view)          # the sphere's 1 × 1 projected square
@@ -85,7 +116,32 @@ def bench_fused(*, repeats=2, subdivisions=6, rays_per_view=1_000_000, views=4):
     """The cases the compiled loop took over from per-hit arrays, against the per-hit path
     (``trace`` + ``weigh``, the same packets cast), on the same rays in interleaved rounds,
     one thread: footprint binning, and a bistatic receiver 60° off the ladar (aluminium
-    82k-face sphere; flat normals). Returns Mrays/s and the ratios."""
+    82k-face sphere; flat normals). Returns Mrays/s and the ratios.
+
+    Each view's receiver direction is 0.5 w + (√3/2) u, u the unit horizontal vector
+    w × z; the views are ``views`` Fibonacci directions with 512 range bins over
+    [−0.6, 0.6], traced in ``mode="3d"`` with the packet backend.
+
+    Parameters
+    ----------
+    repeats : int, keyword-only
+        Timed rounds after one warm-up round (default 2).
+    subdivisions : int, keyword-only
+        Icosphere subdivisions (default 6: 81,920 faces).
+    rays_per_view : int, keyword-only
+        Rays per view: the ray spacing is 1 / sqrt(``rays_per_view``) (default 10⁶).
+    views : int, keyword-only
+        Fibonacci view directions (default 4).
+
+    Returns
+    -------
+    dict
+        ``faces`` (20 × 4^``subdivisions``), ``rays`` (all views), the throughputs in
+        millions of rays per second ``footprint_mrays``, ``footprint_hits_mrays``,
+        ``bistatic_mrays``, ``bistatic_hits_mrays`` and ``point_mrays`` (median times),
+        and ``footprint_speedup`` and ``bistatic_speedup``: the per-hit path's time over
+        the compiled loop's.
+    """
     scene = _icosphere_scene(subdivisions, materials.ALUMINUM)
     spacing = 1.0 / math.sqrt(rays_per_view)
     ladar = Ladar(None, np.linspace(-0.6, 0.6, 513), view_vectors=fibonacci_sphere(views))
@@ -114,7 +170,26 @@ def bench_fused(*, repeats=2, subdivisions=6, rays_per_view=1_000_000, views=4):
 def bench_single_view(*, subdivisions=6, rays=100_000, calls=30):
     """End-to-end time of one view of ``rays`` rays on a cached mesh (82k faces), default
     options (rows on threads from :data:`meshladar.stream.THREADS_FROM`, 5e4 rays) and one
-    thread: medians of ``calls`` calls."""
+    thread: medians of ``calls`` calls.
+
+    The view: direction (0.3, −0.4, 0.866) of a dark gray icosphere of radius 0.5, 512
+    range bins over [−0.6, 0.6]; each setting runs once untimed first.
+
+    Parameters
+    ----------
+    subdivisions : int, keyword-only
+        Icosphere subdivisions (default 6: 81,920 faces).
+    rays : int, keyword-only
+        Rays of the view: the ray spacing is 1 / sqrt(``rays``) (default 10⁵).
+    calls : int, keyword-only
+        Timed calls of each setting (default 30).
+
+    Returns
+    -------
+    dict
+        ``rays``: the rays cast per call; ``default_ms`` and ``one_thread_ms``: the median
+        wall times in milliseconds.
+    """
     scene = _icosphere_scene(subdivisions, materials.DARK_GRAY)
     ladar = Ladar(None, np.linspace(-0.6, 0.6, 513), view_vectors=[[0.3, -0.4, 0.866]])
     spacing = 1.0 / math.sqrt(rays)
@@ -158,7 +233,34 @@ def _build_split(subdivisions):
 def bench_streaming(*, views=360, rays_per_view=1_000_000, subdivisions=6, jobs=2):
     """The streaming run of the issue: ``views`` views × ~1e6 rays of an 82k-triangle
     sphere, binned per chunk. Runs in a fresh subprocess and reports its wall time and the
-    peak RSS of it and its workers (ru_maxrss of the largest process)."""
+    peak RSS of it and its workers (ru_maxrss of the largest process).
+
+    The run: the mesh model in ``mode="3d"`` on a dark gray icosphere of radius 0.5 from
+    ``views`` Fibonacci directions, 1024 range bins over [−0.6, 0.6].
+
+    Parameters
+    ----------
+    views : int, keyword-only
+        Fibonacci view directions (default 360).
+    rays_per_view : int, keyword-only
+        Rays per view: the ray spacing is 1 / sqrt(``rays_per_view``) (default 10⁶).
+    subdivisions : int, keyword-only
+        Icosphere subdivisions (default 6: 81,920 faces).
+    jobs : int, keyword-only
+        Threads of the run (default 2).
+
+    Returns
+    -------
+    dict
+        ``seconds``: the run's wall time; ``rays``: rays cast; ``peak_rss_mb``: the peak
+        resident memory in MiB (ru_maxrss / 1024, as Linux reports it in KiB);
+        ``mrays``: millions of rays per second.
+
+    Raises
+    ------
+    subprocess.CalledProcessError
+        When the subprocess fails.
+    """
     code = f"""
 import json, math, resource, time
 import numpy as np
@@ -187,7 +289,40 @@ print(json.dumps({{"seconds": dt, "rays": sino.info["rays"], "peak_rss_mb": rss}
 def bench_dask(*, views=360, rays_per_view=1_000_000, subdivisions=6, workers=2):
     """The streaming mesh run on a local Dask cluster of ``workers`` processes against the
     same run serially, in this process; and the per-task overhead (mean wall time of a no-op
-    task through the executor). Returns a dict of seconds and the speed-up."""
+    task through the executor). Returns a dict of seconds and the speed-up.
+
+    The run: the mesh model in ``mode="3d"`` on a dark gray icosphere of radius 0.5 from
+    ``views`` Fibonacci directions, 1024 range bins over [−0.6, 0.6]; serially with
+    ``jobs=1``, then on the cluster's executor. The overhead is the mean of 200 no-op
+    tasks submitted together, after one that waits for the workers.
+
+    Parameters
+    ----------
+    views : int, keyword-only
+        Fibonacci view directions (default 360).
+    rays_per_view : int, keyword-only
+        Rays per view: the ray spacing is 1 / sqrt(``rays_per_view``) (default 10⁶).
+    subdivisions : int, keyword-only
+        Icosphere subdivisions (default 6: 81,920 faces).
+    workers : int, keyword-only
+        Processes of the local Dask cluster (default 2).
+
+    Returns
+    -------
+    dict
+        ``views``; ``rays`` (the serial run's); ``serial_s`` and ``dask_s``: wall times in
+        seconds; ``speedup``: ``serial_s / dask_s``; ``task_overhead_s``: seconds per
+        no-op task; ``identical``: whether the two sinograms are equal to the bit.
+
+    Raises
+    ------
+    ImportError
+        When Dask's ``distributed`` (or ``cryptography``, for the cluster's TLS) is not
+        installed (:func:`meshladar.stream.dask_executor`).
+    ParameterError
+        When ``workers`` is more processes per core than
+        :func:`meshladar.stream.dask_executor` starts.
+    """
     scene = _icosphere_scene(subdivisions, materials.DARK_GRAY)
     ladar = Ladar(None, np.linspace(-0.6, 0.6, 1025), view_vectors=fibonacci_sphere(views))
     spacing = 1.0 / math.sqrt(rays_per_view)

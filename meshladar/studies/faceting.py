@@ -86,7 +86,27 @@ SETTINGS = {
 
 
 def study_scene(phantom, coating):
-    """The scene of a study point: a packaged phantom with one coating on every shape."""
+    """The scene of a study point: a packaged phantom with one coating on every shape.
+
+    Parameters
+    ----------
+    phantom : str
+        A name of :data:`PHANTOMS`: ``"disk"``, ``"ellipse"`` or ``"disk_pair"``.
+    coating : str
+        A name of :data:`COATINGS`: ``"dark_gray"``, ``"aluminum"``, ``"diffuse_b0.99"``
+        or ``"specular_e0.007"``.
+
+    Returns
+    -------
+    Scene
+        The phantom's analytic scene (:func:`meshladar.phantoms.scene`), every shape in
+        the coating.
+
+    Raises
+    ------
+    ParameterError
+        When ``phantom`` or ``coating`` is not one of those names.
+    """
     if phantom not in PHANTOMS:
         raise ParameterError(f"phantom must be one of {tuple(PHANTOMS)}; got {phantom!r}")
     if coating not in COATINGS:
@@ -139,9 +159,18 @@ def faceting_study(setting="quick", *, phantoms=None, coatings=None, progress=Fa
         ``rows``: one dict per point (phantom, coating, series, segments, normals,
         rays_per_bin, footprint, pixel_size, rel_l2, rel_max, image_rel_l2, seconds,
         analytic_seconds);
-        ``setting``; ``orders`` (:func:`convergence_orders` of the rows); ``examples``: for
-        each phantom and coating, the analytic sinogram, a coarse flat mesh's
-        (``segments[1]``) sinogram and both FBP images, for the difference figures.
+        ``setting``; ``config`` (its :data:`SETTINGS` entry); ``orders``
+        (:func:`convergence_orders` of the rows); ``examples``: for each phantom and
+        coating, the analytic sinogram, a coarse flat mesh's (``segments[1]``) sinogram
+        and both FBP images, for the difference figures; ``bin_edges`` and
+        ``angles_deg`` of the ladar (the paper's A/256 bins, ``views`` views evenly over
+        360°).
+
+    Raises
+    ------
+    ParameterError
+        When ``setting`` is not a key of :data:`SETTINGS`, ``phantoms`` or ``coatings`` is
+        not a list or tuple (or holds an unknown name), or ``run_dir`` is not a path.
     """
     if setting not in SETTINGS:
         raise ParameterError(f"setting must be one of {tuple(SETTINGS)}; got {setting!r}")
@@ -365,7 +394,21 @@ def _fmt(x):
 
 
 def report(result) -> str:
-    """A plain-text summary: the convergence orders and break points of every series."""
+    """A plain-text summary: the convergence orders and break points of every series.
+
+    Parameters
+    ----------
+    result : dict
+        What :func:`faceting_study` returns (its ``setting``, ``rows`` and ``orders`` are
+        read).
+
+    Returns
+    -------
+    str
+        A title line, a header and one line per series (phantom, coating, series, order,
+        break point, coarsest and finest relative L2 error, "yes" when it reached its
+        floor), joined by newlines.
+    """
     lines = [f"faceting study ({result['setting']}): {len(result['rows'])} points",
              f"{'phantom':<10} {'coating':<16} {'series':<15} {'order':>6} {'breaks at':>9} "
              f"{'coarsest':>9} {'finest':>9} floor"]

@@ -116,7 +116,33 @@ FIGURES = {
 
 
 def disk_darkening(image, radius, power, center=(0.0, 0.0)):
-    """(darkening, width) of a reconstructed disk; see the module docstring."""
+    """(darkening, width) of a reconstructed disk; see the module docstring.
+
+    The radial profile is sampled at 4001 radii from 0 to R (``Image.radial_profile``: the
+    mean over each circle).
+
+    Parameters
+    ----------
+    image : Image
+        The reconstruction.
+    radius : float
+        R, the disk's radius, scene units.
+    power : float
+        P̄, the mean returned power per view (the mean over views of each view's sum of
+        bins), in the sinogram's units; not 0.
+    center : (2,) float
+        The disk's centre (x, y), scene units (default the origin).
+
+    Returns
+    -------
+    darkening : float
+        (mean profile over 0.90 R < ρ < 0.97 R − mean over 0.60 R < ρ < 0.80 R) × πR² / P̄:
+        negative when the surface band is darker than the interior.
+    width : float
+        The radial extent, in units of R, of the radii in 0.60 R < ρ < 0.97 R where the
+        profile is below the interior mean by more than half the trough's depth (from
+        the first such radius to the last); 0.0 when there is none.
+    """
     radii = np.linspace(0.0, radius, 4001)
     prof = image.radial_profile(radii, center=center)
     deep = prof[(radii > 0.60 * radius) & (radii < 0.80 * radius)].mean()
@@ -131,7 +157,30 @@ def disk_darkening(image, radius, power, center=(0.0, 0.0)):
 
 
 def ellipse_darkening(image, ellipse, power):
-    """(ends, sides) darkening of a reconstructed ellipse; see the module docstring."""
+    """(ends, sides) darkening of a reconstructed ellipse; see the module docstring.
+
+    The boundary is sampled at 1440 eccentric angles t; the band at 8 depths from 0.03 to
+    0.10 × min(A, B) along the inward normal; the interior level is the mean over points
+    0.3 to 0.6 of the way from the centre to the boundary (7 fractions, every angle).
+
+    Parameters
+    ----------
+    image : Image
+        The reconstruction.
+    ellipse : Ellipse
+        The true shape (its ``axes`` (A, B), ``center``, ``angle`` and ``boundary``).
+    power : float
+        P̄, the mean returned power per view (the mean over views of each view's sum of
+        bins), in the sinogram's units; not 0.
+
+    Returns
+    -------
+    ends : float
+        (band mean over |cos t| > 0.95 − interior level) × πAB / P̄: the ends of the A
+        semi-axis (the tapered ends when A is the major one).
+    sides : float
+        The same over |sin t| > 0.95: the ends of the B semi-axis.
+    """
     a, b = ellipse.axes
     t = np.linspace(0.0, 2 * math.pi, 1440, endpoint=False)
     nl = np.stack([b * np.cos(t), a * np.sin(t)], -1)
@@ -151,7 +200,26 @@ def ellipse_darkening(image, ellipse, power):
 
 def ring_visibility(image, gray_disk, al_disk, bin_width):
     """The gray disk's ring mean over the aluminium disk's (annuli of ±2 bins); NaN when
-    the aluminium ring is exactly 0."""
+    the aluminium ring is exactly 0.
+
+    A disk's ring mean: the mean of the image's radial profile about the disk's centre at
+    17 radii evenly spaced over radius ± 2 ``bin_width``.
+
+    Parameters
+    ----------
+    image : Image
+        The reconstruction of the disk pair.
+    gray_disk, al_disk : Disk
+        The dark gray and the aluminium disk (their ``center`` and ``radius``).
+    bin_width : float
+        The range bin width, scene units.
+
+    Returns
+    -------
+    float
+        The gray ring's mean over the aluminium ring's (both signed), or NaN when the
+        aluminium ring's mean is exactly 0.
+    """
 
     def ring(d):
         radii = d.radius + np.linspace(-2, 2, 17) * bin_width
@@ -202,13 +270,31 @@ def _measure(key, scene, prep, raw, ladar, size, extent, metrics):
 def run(*, size=IMAGE_SIZE, extent=IMAGE_EXTENT, ladar=None):
     """Compute every panel and metric of Figs 5-11.
 
+    Each panel's analytic sinogram (Eq. 8) is reconstructed by FBP (after the panel's log
+    or clip preprocessing, :func:`meshladar.reconstruct.log_radiance` and
+    :func:`meshladar.reconstruct.clip_radiance` at their defaults) and measured; the
+    panels of :data:`POWER_PANELS` are measured again from received power.
+
+    Parameters
+    ----------
+    size : int, keyword-only
+        Pixels per side of every reconstruction (default :data:`IMAGE_SIZE`, 512).
+    extent : float, keyword-only
+        Half-width of the reconstructions' square about the origin, scene units (default
+        :data:`IMAGE_EXTENT`, 1.0).
+    ladar : Ladar, optional, keyword-only
+        The views and bins (default :meth:`meshladar.ladar.Ladar.paper` with A = 0.8: 360
+        views at 1°, 512 bins of A/256 over [−A, A]). The disk metrics take the paper's
+        radius 0.8 whatever the ladar.
+
     Returns
     -------
     dict
-        ``sinograms``: key → (360, 512) values; ``images``: key → (size, size) values;
-        ``bin_edges``, ``angles_deg``, ``extent``, ``captions``, ``outlines`` (each panel's
-        shapes, for the figures' colour scales), and ``metrics``: a flat dict of the
-        findings' numbers (see the module docstring).
+        ``sinograms``: key → (n_views, n_bins) values ((360, 512) with the default ladar),
+        preprocessed as the panel's image was; ``images``: key → (size, size) values;
+        ``bin_edges``, ``angles_deg``, ``extent``, ``size``, ``captions``, ``outlines``
+        (each panel's shapes, for the figures' colour scales), and ``metrics``: a flat
+        dict of the findings' numbers (see the module docstring).
     """
     ladar = Ladar.paper(_A) if ladar is None else ladar
     panels = _panels()
@@ -256,7 +342,24 @@ def _sphere_scene(parts):
 def shell_darkening(volume, radius, power, center=(0.0, 0.0, 0.0)):
     """3-D edge darkening: (mean over the spherical shell 0.85-0.95 R − mean over the deeper
     interior 0.4-0.6 R) × (4/3)πR³ / P̄, with P̄ the mean returned power per view (the band
-    sits further inside than the 2-D metric's because a volume's resolution is coarser)."""
+    sits further inside than the 2-D metric's because a volume's resolution is coarser).
+
+    Parameters
+    ----------
+    volume : Volume
+        The reconstruction; its radial profile is sampled at 201 radii from 0 to R.
+    radius : float
+        R, the sphere's radius, scene units.
+    power : float
+        P̄, in the sinogram's units; not 0.
+    center : (3,) float
+        The sphere's centre, scene units (default the origin).
+
+    Returns
+    -------
+    float
+        The darkening: negative when the shell is darker than the interior.
+    """
     radii = np.linspace(0.0, radius, 201)
     prof = volume.radial_profile(radii, center=center)
     deep = prof[(radii > 0.4 * radius) & (radii < 0.6 * radius)].mean()
@@ -293,7 +396,31 @@ def run_3d(*, views=2000, size=128, smooth=1.0, extent=0.8, rays_per_bin=2.0):
 
     The glint sphere's lobe (e = 0.007) gets fewer rays across it than the mesh model's
     lobe check asks (0.27 at 2 rays per bin in the quick setting): its shell darkening is
-    that of undersampled data, at every setting alike, and the check is silenced here."""
+    that of undersampled data, at every setting alike, and the check is silenced here.
+
+    Parameters
+    ----------
+    views : int, keyword-only
+        Fibonacci view directions (default 2000).
+    size : int, keyword-only
+        Voxels per side, and range bins over [−``extent``, ``extent``] (default 128).
+    smooth : float, keyword-only
+        Gaussian smoothing of each profile before the inversion, in bins (default 1.0).
+    extent : float, keyword-only
+        Half-width of the cube and of the bins' span, scene units (default 0.8).
+    rays_per_bin : float, keyword-only
+        The mesh model's rays per range bin across (default 2.0).
+
+    Returns
+    -------
+    metrics : dict of str to float
+        ``3d.sphere_b0.darkening``, ``3d.sphere_b0.99.darkening``,
+        ``3d.sphere_e0.007.darkening``, ``3d.pair_gray_al.visibility`` (and ``_log``,
+        ``_clip``) and ``3d.pair.shadow_streaks``.
+    volumes : dict of str to Volume
+        ``sphere_b0``, ``sphere_b0.99``, ``sphere_e0.007``, ``pair_gray_al``,
+        ``pair_gray_al_log`` and ``pair_gray_al_clip``.
+    """
     ladar = Ladar(None, np.linspace(-extent, extent, size + 1),
                   view_vectors=fibonacci_sphere(views))
 

@@ -96,7 +96,23 @@ def available(reason=False):
     """Whether Mitsuba 3 + mitransient import and render in the ``llvm_ad_mono`` variant.
 
     Probed once per process, in a subprocess, so a drjit abort (an unsupported libLLVM)
-    cannot take this interpreter down. With ``reason=True`` returns (bool, message)."""
+    cannot take this interpreter down. With ``reason=True`` returns (bool, message).
+
+    The probe renders a 4 × 4 film of a diffuse rectangle with ``transient_path`` in a
+    child interpreter (at most 300 s); its answer is cached for the process.
+
+    Parameters
+    ----------
+    reason : bool
+        Also return the probe's message (default False).
+
+    Returns
+    -------
+    bool or (bool, str)
+        Whether the renderer runs here; with ``reason``, also ``"ok"``, or why not: what
+        to install (the pinned versions of :data:`PINS`, libllvm19) and the tail of the
+        child's output.
+    """
     ok, msg = _probe()
     return (ok, msg) if reason else ok
 
@@ -210,7 +226,25 @@ def sphere_power_profile(bin_edges, radius, reflectance, top):
     A point at depth d = r − top below the sphere's nearest point has cos θ = 1 − d/R; the
     band [d, d + dd] has area 2πR dd, so the received-power density is
     (ρ/π) cos²θ 2πR = 2ρR (1 − d/R)² for 0 ≤ d ≤ R (total 2ρR²/3), and a bin
-    [d0, d1] holds (2ρR²/3) [(1 − d0/R)³ − (1 − d1/R)³]."""
+    [d0, d1] holds (2ρR²/3) [(1 − d0/R)³ − (1 − d1/R)³].
+
+    Parameters
+    ----------
+    bin_edges : (n_bins + 1,) array_like
+        Range edges, increasing, scene units (r = −p·w, growing away from the sensor).
+    radius : float
+        R, scene units.
+    reflectance : float
+        ρ, the Lambertian reflectance (F = ρ/π).
+    top : float
+        The range of the sphere's nearest point (its centre's range − R).
+
+    Returns
+    -------
+    (n_bins,) numpy.ndarray of float64
+        Received power per bin; 0 for bins wholly before ``top`` or beyond ``top + R``
+        (the far half is not seen).
+    """
     e = np.asarray(bin_edges, dtype=np.float64)
     R = float(radius)
     d0 = np.clip(e[:-1] - top, 0.0, R) / R
@@ -240,7 +274,29 @@ def convex_power_profile(vertices, faces, view, bin_edges, reflectance=0.5):
 
     Each face facing w contributes (ρ/π) cos²θ × area, spread over range as the triangular
     distribution of r = −p·w over the triangle (min, mode, max at its vertices' ranges):
-    no sampling, so the error of either tool on the same mesh is measured exactly."""
+    no sampling, so the error of either tool on the same mesh is measured exactly.
+
+    Parameters
+    ----------
+    vertices : (n, 3) array_like of float
+        The mesh's vertices, scene units.
+    faces : (m, 3) array_like of int
+        Vertex indices; a face faces w when its normal by the right-hand rule (counter-
+        clockwise winding seen from outside) has a positive component along w. Others
+        return nothing.
+    view : (3,) array_like
+        w, from the scene toward the sensor (normalised here).
+    bin_edges : (n_bins + 1,) array_like
+        Range edges r = −p·w, increasing, scene units; a face's power outside them is not
+        counted.
+    reflectance : float
+        ρ, the Lambertian reflectance (default 0.5).
+
+    Returns
+    -------
+    (n_bins,) numpy.ndarray of float64
+        Received power per bin, ``radiometry="power"`` units under unit irradiance.
+    """
     v = np.asarray(vertices, dtype=np.float64)
     f = np.asarray(faces, dtype=np.int64)
     w = np.asarray(view, dtype=np.float64).reshape(3)
@@ -301,7 +357,42 @@ def bench_time_to_accuracy(*, subdivisions=6, view=(0.3, 0.5, 0.8), n_bins=64,
     About 100 s on 2 cores with the defaults (mitransient's 1024 spp runs are 26 s each).
     Measured there (Dec 2026, shared machine): 1e-3 in 0.08 s (meshladar, 1M rays) against
     1.1 s (mitransient, ~20 spp), 1e-4 in 2.7 s (~25M rays) against 14 s (~500 spp); per
-    sample both tools are about equally accurate (16M rays 1.4e-4, 16.8M samples 1.6e-4)."""
+    sample both tools are about equally accurate (16M rays 1.4e-4, 16.8M samples 1.6e-4).
+
+    Parameters
+    ----------
+    subdivisions : int, keyword-only
+        Icosphere subdivisions (default 6); the sphere has radius 1 at the origin.
+    view : (3,) array_like, keyword-only
+        w, toward the sensor (normalised here; default (0.3, 0.5, 0.8)).
+    n_bins : int, keyword-only
+        Range bins over [−1, 0], the sphere's near half (default 64).
+    reflectance : float, keyword-only
+        ρ of the Lambertian coating (default 0.5).
+    ray_spacings : sequence of float, keyword-only
+        meshladar's ray spacings, scene units (default 4e-3 to 3e-4); the first is also
+        the warm-up run's.
+    spps : sequence of int, keyword-only
+        mitransient's samples per pixel (default 4 to 1024).
+    film : (nx, ny), keyword-only
+        mitransient's film in pixels (default (256, 256)).
+    seeds : sequence of int, keyword-only
+        Seeds of each setting's runs (default (0, 1)): times are their mean, errors their
+        RMS.
+    targets : sequence of float, keyword-only
+        Relative L2 errors to find each tool's time for (default (1e-3, 1e-4)).
+
+    Returns
+    -------
+    dict
+        ``meshladar``: one dict per ray spacing (``ray_spacing``, ``rays``, ``seconds``,
+        ``error``); ``mitransient``: one per spp (``spp``, ``samples``, ``seconds``,
+        ``error``), empty when :func:`available` is false; ``time_to``: target → {tool:
+        seconds, or None when no run reached it}, log-log interpolated between the runs
+        that bracket it (tools without runs left out); ``faces``, ``n_bins``, ``view``
+        (normalised), ``film``, ``seeds``; ``closed_form_error``: the mesh's own relative
+        L2 error against :func:`sphere_power_profile`.
+    """
     import trimesh
 
     sphere = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)

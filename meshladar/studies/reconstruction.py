@@ -185,7 +185,54 @@ def run(setting="quick", *, methods=METHODS, spacings=SPACINGS, photons=None, se
     keyed by (phantom, spacing, method). With ``photons``, each sinogram carries
     photon-counting noise with that many photoelectrons in its brightest bin (seeded),
     and optionally speckle (``speckle_cells`` M ≥ 1 per bin) and a ``background`` of
-    photoelectrons per bin (subtracted in the mean, its noise kept)."""
+    photoelectrons per bin (subtracted in the mean, its noise kept).
+
+    The phantoms: ``"disk_b0.99"`` (the paper's disk, diffuse b = 0.99) and
+    ``"pair_gray_al"`` (the disk pair, gray large disk and aluminium small one). Their
+    sinograms are analytic (Eq. 8), views at ``0, sp, 2 sp, ...`` below 360° for each
+    spacing sp, bins of width 1.6 / n_bins centred on range 0; every image is
+    size × size over [−1, 1]². The ideal and the measures are the module docstring's.
+
+    Parameters
+    ----------
+    setting : {"quick", "full"}
+        Image size, range bins and iterations: quick (128, 128, 40), full (256, 256,
+        100). Not checked: another value raises ``KeyError``.
+    methods : sequence of str, keyword-only
+        Names from :data:`METHODS` (default all). Not checked: a name that is none of
+        them is run as ``"tv"``.
+    spacings : sequence of float, keyword-only
+        View spacings in degrees (default :data:`SPACINGS`).
+    photons : float, optional, keyword-only
+        > 0: photoelectrons in each noisy sinogram's brightest bin (default None: no
+        noise).
+    seed : int, keyword-only
+        Seed of the noise; each spacing draws from ``[seed, int(1000 × spacing)]``
+        (default 0).
+    speckle_cells : float, optional, keyword-only
+        M, speckle cells per bin, with ``photons`` (default None: no speckle).
+    background : float, keyword-only
+        >= 0: background photoelectrons per bin, with ``photons`` (default 0.0).
+
+    Returns
+    -------
+    rows : list of dict
+        One per (phantom, spacing, method), in that order: ``phantom``, ``spacing_deg``,
+        ``method``, ``photons``, ``speckle_cells``, ``background``, ``error`` (None when
+        the reconstruction has no surface left), ``clutter``, ``seconds`` (the
+        reconstruction's wall time), and ``darkening``
+        (:func:`meshladar.studies.paper.disk_darkening`, the disk) or ``visibility``
+        (:func:`meshladar.studies.paper.ring_visibility`, the pair; None when the
+        aluminium ring is gone).
+    images : dict
+        (phantom, spacing_deg, method) → the (size, size) image values.
+
+    Raises
+    ------
+    ParameterError
+        When ``speckle_cells`` or a non-zero ``background`` is given without ``photons``,
+        ``photons`` is not > 0, or ``background`` is negative.
+    """
     if photons is None and (speckle_cells is not None or background):
         raise ParameterError("speckle_cells and background need photons (the signal's "
                              "scale in photoelectrons)")
@@ -234,7 +281,19 @@ def run(setting="quick", *, methods=METHODS, spacings=SPACINGS, photons=None, se
 
 
 def report(rows):
-    """The study's table as text lines."""
+    """The study's table as text lines.
+
+    Parameters
+    ----------
+    rows : list of dict
+        The rows :func:`run` returns.
+
+    Returns
+    -------
+    list of str
+        A header, then one line per row: phantom, spacing, method, error, clutter, the
+        metric's kind (``dark`` or ``vis``) and value (``—`` for None) and seconds.
+    """
     out = [f"  {'phantom':<14} {'spacing':>7} {'method':<11} {'error':>7} {'clutter':>7} "
            f"{'metric':>11} {'seconds':>8}"]
     for r in rows:

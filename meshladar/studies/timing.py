@@ -13,7 +13,21 @@ __all__ = ["time_call", "interleaved", "icosphere_scene"]
 
 
 def time_call(fn, *, repeats=5):
-    """Wall times (s) of ``repeats`` calls of ``fn()`` after one warm-up call."""
+    """Wall times (s) of ``repeats`` calls of ``fn()`` after one warm-up call.
+
+    Parameters
+    ----------
+    fn : callable
+        Called with no arguments; what it returns is discarded.
+    repeats : int, keyword-only
+        Timed calls (default 5).
+
+    Returns
+    -------
+    list of float
+        Each timed call's wall time in seconds (``time.perf_counter``), in order; the
+        warm-up call is not included.
+    """
     fn()
     times = []
     for _ in range(repeats):
@@ -26,7 +40,21 @@ def time_call(fn, *, repeats=5):
 def interleaved(fns, *, repeats=3):
     """Median wall time (s) of each of ``fns`` (a dict of name → callable), run in rounds
     (one call of each per round, after one warm-up round) so that a shared machine's load
-    falls on all of them alike."""
+    falls on all of them alike.
+
+    Parameters
+    ----------
+    fns : dict of str to callable
+        The calls to time, by name; each is called with no arguments.
+    repeats : int, keyword-only
+        Timed rounds after the warm-up round (default 3); at least 1 (the median of no
+        times fails).
+
+    Returns
+    -------
+    dict of str to float
+        Each name's median wall time in seconds.
+    """
     for fn in fns.values():
         fn()
     times = {k: [] for k in fns}
@@ -40,6 +68,20 @@ def interleaved(fns, *, repeats=3):
 
 def icosphere_scene(subdivisions, material):
     """A one-part scene: a sphere of radius 0.5 at the origin, ``subdivisions`` times
-    subdivided (6: 81,920 faces), in ``material``."""
+    subdivided (6: 81,920 faces), in ``material``.
+
+    Parameters
+    ----------
+    subdivisions : int
+        Icosphere subdivisions, ≥ 0: 20 × 4^``subdivisions`` faces.
+    material : BRDF
+        The coating of every face (e.g. :data:`meshladar.materials.DARK_GRAY`).
+
+    Returns
+    -------
+    Scene
+        A mesh scene of one part (:func:`meshladar.meshes.sphere`, with its exact
+        normals).
+    """
     return Scene.from_parts([sphere((0.0, 0.0, 0.0), 0.5, 0, subdivisions=subdivisions)],
                              [material])

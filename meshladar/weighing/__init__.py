@@ -6,8 +6,9 @@ point/footprint/curved bins, :func:`weigh` of cached :class:`~meshladar.hits.Hit
 :mod:`.faces` (per-face weights and footprints of a view, for the compiled loops),
 :mod:`.resolved` (binning by one to three coordinates), :mod:`.sensor_view` (a perspective
 view binned by the compiled loop), :mod:`.fused` (the packet backend's cast-weigh-bin
-loop), :mod:`._kernels` and :mod:`._fused_kernels` (the compiled loops). It imports the :class:`Hits` record and the
-ray-casting stage below it, never the forward models' entry points."""
+loop), ``._kernels`` and ``._fused_kernels`` (the compiled loops). It imports the
+:class:`Hits` record and the ray-casting stage below it, never the forward models' entry
+points."""
 
 from __future__ import annotations
 

@@ -1,7 +1,7 @@
 """Per-face weights and footprints of one view, for the fused loops: with flat normals
 F·δA⊥ (and a footprint's range extent) is one number per face and view, evaluated for all
 faces before the view is cast, in the float64 operations the per-hit path applies to each
-hit (:func:`meshladar.raytrace.views.trace_view`, :func:`.weigh.weights`)."""
+hit (:func:`meshladar.raytrace.views.trace_view`, :func:`meshladar.weighing.weights`)."""
 
 from __future__ import annotations
 
@@ -20,7 +20,25 @@ def face_footprints(geo, w, mode, spacing, out):
     """Each face's footprint for view w, into out (n_faces, 4): the range half-widths a ray
     cell spreads over along the grid's u and v (v only in 3-D), and the face's own range
     interval (min, max of its corners' −p·w), in the same float64 operations as the
-    per-hit footprint of :func:`meshladar.raytrace.views.trace_view`."""
+    per-hit footprint of :func:`meshladar.raytrace.views.trace_view`.
+
+    Parameters
+    ----------
+    geo : Geometry
+        The traced geometry (``TracePlan.geo``): its flat face normals, shifted vertices
+        and faces.
+    w : (3,) numpy.ndarray
+        The view direction, a unit vector from the scene toward the ladar.
+    mode : {"slice", "3d"}
+        The run's mode; in slice mode the half-width along v is 0.
+    spacing : float
+        The ray spacing δ (scene units).
+    out : (n_faces, 4) float64 numpy.ndarray
+        Output, overwritten: per face, the range half-widths |n·u| / |n·w| · δ/2 and
+        |n·v| / |n·w| · δ/2 (|n·w| floored at ``meshladar.precision.TINY``), then the
+        minimum and maximum of its corners' ranges −p·w (p in shifted coordinates, scene
+        units).
+    """
     u, v = frame(w)
     n = geo.face_normals
     cg = np.maximum(np.abs(dot(n, w)), TINY)
@@ -42,7 +60,38 @@ def face_bistatic_weights(geo, materials, w, w_r, area, out, power, ignore_back)
     :func:`meshladar.weighing.weights` apply to each hit of the face (flat normals: the
     same for all of them; the normal turned toward the ladar unless back faces are
     ignored, which weigh 0). A hit whose receiver ray is blocked weighs 0, in the loop.
-    In blocks of faces: a handful of temporaries per face, not per mesh."""
+    In blocks of faces: a handful of temporaries per face, not per mesh.
+
+    Parameters
+    ----------
+    geo : Geometry
+        The traced geometry (``TracePlan.geo``): its flat face normals and face materials.
+    materials : sequence of BRDF
+        One coating per material index; each must evaluate ``bistatic``.
+    w : (3,) numpy.ndarray
+        The view direction, a unit vector from the scene toward the ladar.
+    w_r : (3,) numpy.ndarray
+        The receiver's direction, a unit vector from the scene toward it.
+    area : float
+        δA⊥ of one ray (``TracePlan.area``: δ in slice mode, δ² in 3-D).
+    out : (n_faces,) float64 numpy.ndarray
+        Output, overwritten: each face's weight, as
+        :func:`meshladar.weighing.weights` with the bistatic angles of the face's normal.
+    power : bool
+        Received power, F·cos θr·area (True), or the paper's Eq. 8 weight F·area (False).
+    ignore_back : bool
+        Whether back faces are ignored (weight 0) rather than weighed two-sided.
+
+    Warns
+    -----
+    MeshladarWarning
+        Under the paper's convention, when a face toward the ladar lies edge-on to the
+        receiver (:func:`meshladar.weighing.weights`).
+
+    References
+    ----------
+    Jin & Levine (2009), Eq. 8 (the weight under ``power=False``).
+    """
     step = _FACE_BLOCK
     for a in range(0, len(geo.face_normals), step):
         out[a:a + step] = _bistatic_weights(geo.face_normals[a:a + step],
@@ -67,7 +116,28 @@ def _bistatic_weights(n, material, materials, w, w_r, area, power, ignore_back):
 def face_weights(geo, materials, w, area, out, power=False):
     """F(θ)·area of every face for view w, into out (n_faces,): θ between the face's flat
     normal and w (either side: the kernel skips back faces that are ignored), weighed by
-    :func:`meshladar.weighing.weights` exactly as the unfused path weighs a hit."""
+    :func:`meshladar.weighing.weights` exactly as the unfused path weighs a hit.
+
+    Parameters
+    ----------
+    geo : Geometry
+        The traced geometry (``TracePlan.geo``): its flat face normals and face materials.
+    materials : sequence of BRDF
+        One coating per material index.
+    w : (3,) numpy.ndarray
+        The view direction, a unit vector from the scene toward the ladar.
+    area : float
+        δA⊥ of one ray (``TracePlan.area``: δ in slice mode, δ² in 3-D).
+    out : (n_faces,) float64 numpy.ndarray
+        Output, overwritten: each face's weight at cos θ = |n·w|.
+    power : bool
+        Received power, F·cos θ·area (True), or the paper's Eq. 8 weight F·area (default
+        False).
+
+    References
+    ----------
+    Jin & Levine (2009), Eq. 8 (the weight under ``power=False``).
+    """
     n = geo.face_normals
     c = np.abs(n[:, 0] * w[0] + n[:, 1] * w[1] + n[:, 2] * w[2])
     out[:] = weights(c, np.sqrt(np.maximum(1.0 - c * c, 0.0)), geo.material, materials, area,

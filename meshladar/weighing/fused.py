@@ -1,6 +1,6 @@
 """The fused path of the packet backend: one view from ray grid to bins in one compiled
-loop (:func:`._fused_kernels.cast_bin_grid`), with the weights and bins a
-:class:`~meshladar.forward.mesh` job prepared for it."""
+loop (``meshladar.weighing._fused_kernels.cast_bin_grid``), with the weights and bins a
+:mod:`meshladar.forward.mesh` job prepared for it."""
 
 from __future__ import annotations
 
@@ -18,7 +18,46 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None):
     :func:`meshladar.raytrace.grid.grid_plan`'s :class:`~meshladar.raytrace.grid.GridPlan`,
     ``bins`` the weigh-and-bin arguments (:class:`~meshladar.forward.job.FlatBins`,
     flat for the compiled loop); ``receiver`` (direction, lift) makes the view bistatic.
-    Returns (back-face hits, rays cast)."""
+    Returns (back-face hits, rays cast).
+
+    Monostatic or bistatic, flat normals, binned at a point or over each face's footprint
+    (``bins.footprint`` not empty). The packets are cast with the library's native width,
+    coherent; the ray origins are built in float32 as ``ray_grid`` builds them and cast at
+    unit size (× ``emb.inverse``), Embree's distances scaled back (× ``emb.scale``).
+
+    Parameters
+    ----------
+    emb : EmbreeScene
+        The view's scene (``meshladar.raytrace.embree.embree_scene``) on the packet
+        backend: ``emb.scene.scene`` is its
+        :class:`~meshladar.raytrace.embree4.PacketGeometry`.
+    plan : GridPlan
+        The view's ray grid (``s``, ``t``, the stratified offsets ``du``, ``dv`` or None,
+        the axes ``u``, ``v`` and the start distance ``L``, shifted coordinates).
+    direction : (3,) array_like
+        The view direction w, a unit vector from the scene toward the ladar; the rays
+        travel along −w.
+    spacing : float
+        The ray spacing δ (scene units) that scales the stratified offsets.
+    bins : FlatBins
+        The compiled loop's 15 arguments after the hits, in order: ``plane_d``,
+        ``face_normals``, ``face_material``, ``params``, ``w``, ``start``, ``edges``,
+        ``area``, ``power``, ``ignore_back``, ``out``, ``stamp``, ``weight``, ``tag``,
+        ``footprint``. The weights are added into ``out`` (n_bins,).
+    receiver : tuple of ((3,) array_like, float), optional
+        Bistatic: the receiver's direction w_r and the lift (scene units) along the hit
+        face's normal, turned toward the ladar, from which each hit's occlusion ray toward
+        it starts; ``bins.weight`` then holds every face's bistatic weight
+        (:func:`meshladar.weighing.faces.face_bistatic_weights`). None (default):
+        monostatic.
+
+    Returns
+    -------
+    back : int
+        The view's back-face hits.
+    rays : int
+        The rays cast, len(s) × len(t).
+    """
     s, t, du, dv, u, v, L = plan.s, plan.t, plan.du, plan.dv, plan.u, plan.v, plan.L
     sc = emb.scene.scene
     lib = sc.lib

@@ -24,7 +24,44 @@ def weights(cos_t, sin_t, mat, materials, area, bi=None, power=False):
     """F·δA⊥ per hit (``radiometry="paper"``, Eq. 8), or F·cos θr·δA⊥ (``power``: what a
     receiver collects), evaluated per material group (0 where either direction is below the
     horizon): monostatic F(θ; −θ) (under power the coating's finite F·cos θ), or bistatic
-    F(w, w_r) from (cos, sin) of θr and α (under power the coating's F·cos θr)."""
+    F(w, w_r) from (cos, sin) of θr and α (under power the coating's F·cos θr).
+
+    Parameters
+    ----------
+    cos_t, sin_t : (k,) numpy.ndarray
+        cos θ and sin θ of each hit's normal against the view direction w (cos θ < 0
+        below the horizon: weight 0; −1 marks an ignored back face).
+    mat : (k,) numpy.ndarray of int
+        Each hit's material index into ``materials`` (not read when there is one
+        coating).
+    materials : sequence of BRDF
+        One coating per material index.
+    area : float
+        δA⊥ of one ray (scene units: a length in slice mode, an area in 3-D).
+    bi : (k, 4) numpy.ndarray, optional
+        Bistatic rows (cos θr, sin θr, cos α, sin α): the receiver's angle to the normal
+        and the half vector's (cos θr = −1 where the receiver is occluded). Default None:
+        monostatic.
+    power : bool
+        Received power (True) or the paper's Eq. 8 (default False).
+
+    Returns
+    -------
+    (k,) float64 numpy.ndarray
+        Each hit's weight: F·area (paper) or F·cos θ·area, bistatic F·cos θr·area
+        (power), with F in 1/sr.
+
+    Warns
+    -----
+    MeshladarWarning
+        Bistatic under the paper's convention, when a hit facing the ladar lies edge-on
+        to the receiver (0 ≤ cos θr < :data:`GRAZING_RECEIVER_COS`).
+
+    References
+    ----------
+    Jin & Levine (2009), Eq. 8 (the monostatic weight F(θ; −θ) per ray of cross-section
+    δA⊥).
+    """
     def one(m, c, s, b):
         if b is None:
             return projected_weight(m, c, s) * (c >= 0) if power else m.value(c, s)
@@ -52,7 +89,24 @@ GRAZING_RECEIVER_COS = 1e-6
 def scaled(wt, factor=None, receive=None, *, power=False):
     """Per-hit weights ``wt`` times the hits' own factors, as every weighing applies them:
     the sensor's ``factor`` (beam irradiance, spreading, atmosphere; None: 1) and, under
-    received power only, the receiver's ``receive`` factor (None: 1)."""
+    received power only, the receiver's ``receive`` factor (None: 1).
+
+    Parameters
+    ----------
+    wt : (k,) numpy.ndarray
+        Per-hit weights (:func:`weights`).
+    factor : (k,) numpy.ndarray, optional
+        The hits' ``weight_factor`` (default None: 1).
+    receive : (k,) numpy.ndarray, optional
+        The hits' ``receive_factor``, applied under ``power`` only (default None: 1).
+    power : bool
+        Received power (True) or the paper's Eq. 8 (default False).
+
+    Returns
+    -------
+    (k,) numpy.ndarray
+        The scaled weights: a new array, or ``wt`` itself when no factor applies.
+    """
     if factor is not None:
         wt = wt * factor
     if power and receive is not None:
@@ -64,7 +118,22 @@ def per_table_weight(hits, power):
     """Each hit's weight per unit of its coating's projected weight F(θ; −θ) cos θ (the
     table a coating kernel interpolates), such that the product is :func:`weigh`'s weight:
     δA⊥ × the hit's factors (:func:`scaled`), over cos θ under "paper" (whose weight is F,
-    not F cos θ). Monostatic hits."""
+    not F cos θ). Monostatic hits.
+
+    Parameters
+    ----------
+    hits : Hits
+        The traced hits (their ``area``, ``weight_factor``, ``receive_factor`` and
+        ``cos_theta``).
+    power : bool
+        Received power (True) or the paper's Eq. 8 (False).
+
+    Returns
+    -------
+    (k,) float64 numpy.ndarray
+        Per hit, δA⊥ × its factors, divided under "paper" by cos θ floored at
+        ``meshladar.precision.TINY`` (1e-300).
+    """
     omega = scaled(np.full(hits.view.size, float(hits.area)), hits.weight_factor,
                    hits.receive_factor, power=power)
     return omega if power else omega / np.maximum(hits.cos_theta, TINY)
@@ -150,7 +219,65 @@ def bin_one(r, cos_t, sin_t, mat, spread, materials, edges, area, *, footprint=F
     edges and δA⊥; binned at a point or over the footprint; ``bi`` (k, 4) the bistatic
     angles, ``factor`` a per-hit weight factor, ``curve`` (k, 4) curved footprints,
     ``power`` received power, ``receive`` the sensor's receiver factors (applied under
-    received power only)."""
+    received power only).
+
+    Bins are half-open, [edges[j], edges[j + 1]); a hit binned at a point outside the
+    edges is dropped. With ``footprint``, each hit's weight is spread over the range
+    interval r + [−(a + b), a + b] of its footprint's half-widths a and b, clipped to its
+    facet's own interval (``spread[:, 2:]``), by the distribution of the sum of two
+    uniform offsets (a box where b is negligible, a trapezoid otherwise), renormalised
+    over the clipped interval; weight outside the edges is lost. With ``curve`` as well,
+    rows with ρ > 0 are spread uniformly in θ over their cell on the locally circular
+    surface, the rest as flat footprints.
+
+    Parameters
+    ----------
+    r : (k,) numpy.ndarray
+        The hits' ranges (scene units, in the frame of ``edges``).
+    cos_t, sin_t : (k,) numpy.ndarray
+        cos θ and sin θ of the hits' incidence (:func:`weights`).
+    mat : (k,) numpy.ndarray of int
+        The hits' material indices into ``materials``.
+    spread : (k, 4) numpy.ndarray
+        The hits' footprints: range half-widths along the two transverse axes, and the
+        facet's own range interval relative to the hit (≤ 0, ≥ 0); read only with
+        ``footprint``.
+    materials : sequence of BRDF
+        One coating per material index.
+    edges : (n_bins + 1,) numpy.ndarray
+        Increasing range bin edges (scene units).
+    area : float
+        δA⊥ of one ray.
+    footprint : bool
+        Spread each hit over its footprint (default False: bin at its range).
+    bi : (k, 4) numpy.ndarray, optional
+        Bistatic angles (:func:`weights`); default None, monostatic.
+    factor : (k,) numpy.ndarray, optional
+        Per-hit weight factors (:func:`scaled`); default None.
+    curve : (k, 4) numpy.ndarray, optional
+        Rows (θ at the hit, θ at the cell's two ends, ρ): signed incidence angles in
+        radians and the surface's radius of curvature (0 for none); read only with
+        ``footprint``. Default None.
+    power : bool
+        Received power (True) or the paper's Eq. 8 (default False).
+    receive : (k,) numpy.ndarray, optional
+        Receiver factors (:func:`scaled`, under ``power`` only); default None.
+
+    Returns
+    -------
+    (n_bins,) float64 numpy.ndarray
+        The view's profile: per bin, the sum of the weights (F·δA⊥ under Eq. 8) that fall
+        in it.
+
+    Warns
+    -----
+    MeshladarWarning
+        As :func:`weights`, for bistatic hits edge-on to the receiver.
+
+    References
+    ----------
+    Jin & Levine (2009), Eq. 8 (P[k] = Σ F(θ_hit) δA⊥ over the hits in bin k).
+    """
     nb = len(edges) - 1
     wt = scaled(weights(cos_t, sin_t, mat, materials, area, bi, power), factor, receive,
                 power=power)
@@ -204,13 +331,16 @@ def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None,
     Parameters
     ----------
     hits : Hits
-    materials : sequence of BRDF, optional
+        The first hits that ``meshladar.trace`` returns.
+    materials : BRDF or list or tuple of BRDF, optional
         Replacement coatings, one per material index of the traced scene (default: the
-        scene's). A material sweep re-weighs the same hits.
+        scene's; a single BRDF stands for a one-material scene). A material sweep
+        re-weighs the same hits.
     footprint : bool
-        Spread each ray over the range interval its footprint covers on the hit facet.
+        Spread each ray over the range interval its footprint covers on the hit facet
+        (default False). Monostatic hits of parallel rays only.
     bin_edges : array_like, optional
-        Other range bins (default the ladar's), increasing.
+        Other range bins (default the ladar's), increasing, scene units.
     radiometry : {"paper", "power"}
         "paper" (default): Eq. 8, Σ F(θ_hit)·δA⊥; "power": received power, Σ F·cos θr·δA⊥
         (:mod:`meshladar.sensor`). The same hits serve both.
@@ -220,7 +350,24 @@ def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None,
     Sinogram
         ``values`` (n_views, n_bins): per bin, the weights of the rays whose first hit
         lies in it, model "mesh"; ``info`` records the radiometry, mode, normals, footprint,
-        ray spacing, sampling, seed, rays and back-face hits.
+        ray spacing, sampling, seed, rays and back-face hits (and backend, units, and where
+        they apply z0, receiver and sensor: :func:`sinogram_of`).
+
+    Raises
+    ------
+    ParameterError
+        When ``hits`` is not a Hits; ``footprint`` is not a bool; ``radiometry`` is not
+        one of its choices; ``footprint`` meets bistatic hits or hits traced with a
+        sensor; ``materials`` is not a BRDF, list or tuple, holds a non-BRDF, or does not
+        give one coating per material index; ``bin_edges`` are not at least two strictly
+        increasing edges; the hits' sensor needs ``radiometry="power"``
+        (:func:`sinogram_of`).
+    ModelError
+        When a coating does not define ``projected``.
+
+    References
+    ----------
+    Jin & Levine (2009), Eq. 8.
     """
     if not isinstance(hits, Hits):
         raise ParameterError(f"hits must be the Hits that meshladar.trace returns; got "
@@ -269,7 +416,45 @@ def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None,
 def sinogram_of(vals, ladar, edges, run, *, normals, footprint, rays, back, radiometry):
     """The mesh model's sinogram of binned ``vals`` (n_views, n_bins); its info says how it
     was made (``run``: mode, spacing, sampling, seed, receiver, sensor; normals, footprint,
-    rays and back-face hits per view) and under which convention (radiometry)."""
+    rays and back-face hits per view) and under which convention (radiometry).
+
+    Parameters
+    ----------
+    vals : (n_views, n_bins) numpy.ndarray
+        The binned profiles.
+    ladar : meshladar.Ladar
+        The views (their angles, and their view vectors when not all in the x-y plane).
+    edges : (n_bins + 1,) numpy.ndarray
+        The range bin edges.
+    run : dict
+        The run's parameters: ``"mode"``, ``"ray_spacing"``, ``"sampling"``, ``"seed"``,
+        ``"z0"`` (slice mode), and optionally ``"backend"``, ``"receiver"`` and
+        ``"sensor"``.
+    normals : str
+        The hits' normals, recorded.
+    footprint : bool
+        Whether footprint binning was used, recorded.
+    rays : array_like of int
+        Rays cast per view; their sum is recorded.
+    back : array_like of int
+        Back-face hits per view, recorded as a list.
+    radiometry : {"paper", "power"}
+        The convention of ``vals``, recorded.
+
+    Returns
+    -------
+    Sinogram
+        Model ``"mesh"``, with ``info`` holding the above and ``"units"``
+        (``"length/sr (per unit height)"`` in slice mode, ``"area/sr"`` in 3-D, or
+        ``"photoelectrons"``). With a sensor that counts photons, the values are
+        multiplied by ``sensor.photoelectrons_per_unit()``.
+
+    Raises
+    ------
+    ParameterError
+        When the run's sensor has a non-zero extinction or counts photoelectrons and
+        ``radiometry`` is not ``"power"``.
+    """
     info = {"radiometry": radiometry, "mode": run["mode"], "normals": normals,
             "footprint": footprint, "ray_spacing": run["ray_spacing"],
             "sampling": run["sampling"], "seed": run["seed"], "rays": int(np.sum(rays)),

@@ -39,6 +39,12 @@ class Weighing:
         Bin edges per axis.
     motion : meshladar.motion.Motion or None
         The target's motion, for a Doppler axis.
+
+    Raises
+    ------
+    ParameterError
+        When ``radiometry`` is not ``"paper"`` or ``"power"``, or ``footprint`` is not a
+        bool.
     """
 
     materials: tuple
@@ -74,7 +80,24 @@ class Weighing:
 
     def check(self, plan: TracePlan) -> None:
         """Refuse every combination of this weighing and ``plan`` that no ray can honour,
-        before the first ray is cast; returns nothing."""
+        before the first ray is cast; returns nothing.
+
+        Parameters
+        ----------
+        plan : TracePlan
+            The run's validated plan (its ``sensor`` as given and its ``receivers``).
+
+        Raises
+        ------
+        ParameterError
+            When footprint binning meets a sensor or a bistatic receiver; when the
+            plan's sensor has a non-zero extinction, or counts photoelectrons
+            (``counts_photons``), under ``radiometry="paper"``; when it counts
+            photoelectrons with an unbounded flood beam (``FloodBeam(radius=None)``).
+        ModelError
+            When the plan has bistatic receivers and a coating has no ``bistatic``
+            evaluation of its own.
+        """
         if self.footprint and plan.sensor is not None:
             raise ParameterError("footprint binning is for parallel rays without a sensor; "
                                  "use footprint=False with a sensor")

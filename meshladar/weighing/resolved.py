@@ -1,6 +1,6 @@
-"""Resolved returns' binning: one view's hits weighed (:func:`.weigh.weights`) and binned
-by one to three coordinates (range, cross-range, elevation, Doppler; module docstring of
-:mod:`meshladar.forward.resolved`), on a flat index over the cells."""
+"""Resolved returns' binning: one view's hits weighed (:func:`meshladar.weighing.weights`)
+and binned by one to three coordinates (range, cross-range, elevation, Doppler; module
+docstring of :mod:`meshladar.forward.resolved`), on a flat index over the cells."""
 
 from __future__ import annotations
 
@@ -16,7 +16,33 @@ def bin_resolved(h, w, offset, plan, weighing, out):
     """Add view ``w``'s hits ``h`` (with ``transverse``) into ``out`` (n_0[, n_1[, n_2]]),
     the axes and edges of ``weighing`` (:class:`.record.Weighing`); ``offset`` places the
     ranges; ``plan`` (:class:`~meshladar.raytrace.plan.TracePlan`) the geometry, the ray
-    area and the sensor the view was traced with."""
+    area and the sensor the view was traced with.
+
+    Each hit weighs :func:`meshladar.weighing.weights` (monostatic) times its factors
+    (:func:`meshladar.weighing.scaled`) and falls in the cell whose bins hold its
+    coordinates, each bin half-open, [e[k], e[k + 1]); a hit outside any axis' edges, or of
+    weight 0, is dropped. Coordinates (world, scene units; Doppler in Hz): ``"range"``
+    h.range + ``offset``; ``"cross_range"`` and ``"elevation"`` the hit's transverse
+    coordinates along the view's u and v plus the geometry centre's; ``"doppler"``
+    ``weighing.motion.doppler`` of the hit points.
+
+    Parameters
+    ----------
+    h : ViewHits
+        The view's k hits, traced with ``transverse`` (k, 2) coordinates along (u, v).
+    w : (3,) numpy.ndarray
+        The view direction, a unit vector from the scene toward the ladar.
+    offset : float
+        Added to ``h.range`` to give the binned range (scene units).
+    plan : TracePlan
+        The run's plan: ``geo``, ``area`` and ``traced_with``.
+    weighing : Weighing
+        The coatings, radiometry, ``axes`` (one to three names), their ``edges`` and,
+        for ``"doppler"``, the ``motion``.
+    out : (n_0[, n_1[, n_2]]) float64 numpy.ndarray
+        The view's cells, n_i = len(weighing.edges[i]) − 1, in the order of
+        ``weighing.axes``; the weights are added into it.
+    """
     geo, sensor = plan.geo, plan.traced_with
     wt = scaled(weights(h.cos_theta, h.sin_theta, h.material, weighing.materials,
                          plan.area, power=weighing.power),

@@ -1,6 +1,6 @@
 """A view seen by a sensor at a finite standoff, cast by
 :func:`meshladar.raytrace.perspective.sensor_cast` and weighed and binned by the compiled
-loop :func:`._kernels.bin_sensor_hits` (flat or smooth normals, coatings with
+loop ``meshladar.weighing._kernels.bin_sensor_hits`` (flat or smooth normals, coatings with
 ``kernel_params``): the numbers of the per-hit path."""
 
 from __future__ import annotations
@@ -18,10 +18,48 @@ __all__ = ["bin_sensor_view"]
 
 def bin_sensor_view(plan, weighing, scene, w, rng, out):
     """One view seen by the plan's sensor at a finite standoff, weighed and binned into
-    ``out`` by the compiled loop (:func:`._kernels.bin_sensor_hits`; flat or smooth
-    normals, coatings with ``kernel_params``): the numbers of
+    ``out`` by the compiled loop (``meshladar.weighing._kernels.bin_sensor_hits``; flat or
+    smooth normals, coatings with ``kernel_params``): the numbers of
     :func:`meshladar.raytrace.perspective.trace_sensor_view` then weighing. Returns
-    (rays cast, back-face hits)."""
+    (rays cast, back-face hits).
+
+    Monostatic. Each ray's weight is F·area × cos³α (R/D)² × the beam's irradiance at the
+    hit relative to the aim point's (× the smooth normal's area factor), and under
+    received power also × cos θ (D/R)² exp(−2σR); it is binned at its range
+    R − D − aim·w (world coordinates, scene units) by the first range axis' edges.
+    Smooth normals are used when ``plan.geo.normals == "smooth"``, the flat face normals
+    otherwise.
+
+    Parameters
+    ----------
+    plan : TracePlan
+        The run's plan, whose ``traced_with`` sensor has a finite standoff D; its
+        geometry, ray spacing δ, ray area and back faces.
+    weighing : Weighing
+        The coatings (each with ``kernel_params``), the radiometry and the range edges
+        (``weighing.edges[0]``).
+    scene : EmbreeScene
+        The geometry's scene to cast with (``meshladar.raytrace.embree.embree_scene``).
+    w : (3,) numpy.ndarray
+        The view direction, a unit vector from the aim point toward the sensor.
+    rng : numpy.random.Generator or None
+        The view's generator for a stratified grid on the reference plane; None: regular.
+    out : (n_bins,) float64 numpy.ndarray
+        The view's range profile; the weights are added into it.
+
+    Returns
+    -------
+    rays : int
+        The rays cast.
+    back : int
+        The view's back-face hits.
+
+    Raises
+    ------
+    ParameterError
+        When the standoff puts the sensor inside the target's extent seen from this view
+        (``plan_trace`` refuses that for every view first).
+    """
     geo, sensor, spacing = plan.geo, plan.traced_with, plan.spacing
     back_faces, materials, area = plan.back_faces, weighing.materials, plan.area
     power, edges = weighing.power, weighing.edges[0]

@@ -206,3 +206,19 @@ def test_model_errors_name_the_flags(tmp_path, capsys):
         err = capsys.readouterr().err
         assert err.startswith("meshladar: error: ") and expected in err, err
         assert "model='" not in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("command", ["demo", "materials", "paper", "simulate", "reconstruct",
+                                     "receive", "view", "study", "bench"])
+def test_help_describes_a_command_in_prose_without_its_api_sections(command, capsys):
+    """A command's description is its docstring's prose: the numpydoc sections that
+    document the function for the API reference stay out of ``--help``."""
+    from meshladar.cli import COMMANDS, main
+
+    with pytest.raises(SystemExit) as done:
+        main([command, "--help"])
+    assert done.value.code == 0
+    out = capsys.readouterr().out
+    first = COMMANDS[command].__doc__.split("\n")[0].strip()
+    assert first in out
+    assert "----------" not in out and "argparse.Namespace" not in out

@@ -8,10 +8,8 @@ A function or method that takes parameters (``self`` and ``cls`` apart) needs a
 generator). A class needs ``Parameters`` or ``Attributes`` when it is built from
 arguments. Properties and dunder methods are documented by their one line.
 
-What is not yet documented is listed in ``UNDOCUMENTED`` (a ratchet): a definition missing
-from it and missing a section fails, and so does a listed one that has its sections now
-(take it off the list). Run as a script, it prints the missing sections under the paths
-given (``python tests/examples/test_docstring_sections.py meshladar/reconstruct``).
+Run as a script, it prints the missing sections under the paths given
+(``python tests/examples/test_docstring_sections.py meshladar/reconstruct``).
 """
 
 from __future__ import annotations
@@ -28,7 +26,6 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 #: The public packages: the engine, and the phantom library and viewer it installs.
 PACKAGES = {"meshladar": ROOT / "meshladar", "meshladar.phantoms": ROOT / "phantoms",
             "meshladar.viz": ROOT / "viz"}
-UNDOCUMENTED_FILE = pathlib.Path(__file__).with_name("undocumented.txt")
 
 
 def _modules():
@@ -143,21 +140,10 @@ def missing(paths=None):
     return out
 
 
-def _listed():
-    return {line.strip() for line in UNDOCUMENTED_FILE.read_text().splitlines()
-            if line.strip() and not line.startswith("#")}
-
-
 def test_every_public_definition_has_its_sections():
     found = missing()
-    listed = _listed()
-    new = sorted(set(found) - listed)
-    assert not new, ("public definitions without their numpydoc sections (document them; "
-                     "the list is for what predates this test):\n"
-                     + "\n".join(f"  {n}: {', '.join(found[n])}" for n in new))
-    done = sorted(listed - set(found))
-    assert not done, ("documented now: take them off tests/examples/undocumented.txt:\n  "
-                      + "\n  ".join(done))
+    assert not found, ("public definitions without their numpydoc sections:\n"
+                       + "\n".join(f"  {n}: {', '.join(v)}" for n, v in sorted(found.items())))
 
 
 def test_the_check_sees_what_is_missing():

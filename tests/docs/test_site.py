@@ -1,0 +1,63 @@
+"""The documentation site builds offline from the repository, warnings as errors and every
+cross-reference checked (``sphinx-build -W -n``), with its gallery executed; its command-line
+reference holds every option ``--help`` shows and its API reference every public module."""
+
+from __future__ import annotations
+
+import argparse
+import pathlib
+import subprocess
+import sys
+
+import pytest
+
+import meshladar
+from meshladar.cli import COMMANDS
+from meshladar.cli.parser import build_parser
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory):
+    out = tmp_path_factory.mktemp("site")
+    done = subprocess.run([sys.executable, "-m", "sphinx", "-W", "-n", "--keep-going", "-q",
+                           "-b", "html", "-d", str(out / "doctrees"), str(ROOT / "docs"),
+                           str(out / "html")], capture_output=True, text=True, cwd=ROOT)
+    assert done.returncode == 0, done.stderr[-6000:]
+    return out / "html"
+
+
+@pytest.mark.slow
+def test_the_cli_reference_is_the_parsers(site):
+    """Every option of every command, as ``--help`` has it, is on the page."""
+    page = (site / "reference" / "cli.html").read_text(encoding="utf-8")
+    parser = build_parser(COMMANDS)
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    assert list(sub.choices) == list(COMMANDS)
+    for name, command in sub.choices.items():
+        assert f"meshladar {name}" in page
+        for action in command._actions:
+            for flag in action.option_strings:
+                assert flag in page, (name, flag)
+
+
+@pytest.mark.slow
+def test_the_api_reference_has_every_public_module(site):
+    index = (site / "reference" / "api" / "index.html").read_text(encoding="utf-8")
+    for name in meshladar._SUBMODULES:
+        assert (site / "reference" / "api" / f"{name}.html").exists(), name
+        assert f"meshladar.{name}" in index
+    fbp = (site / "reference" / "api" / "reconstruct.html").read_text(encoding="utf-8")
+    assert 'id="meshladar.reconstruct.fbp"' in fbp and "Parameters" in fbp
+
+
+@pytest.mark.slow
+def test_the_gallery_ran_and_drew(site):
+    """Each gallery script ran at build time and its figure is on its page."""
+    scripts = sorted((ROOT / "docs" / "gallery").glob("plot_*.py"))
+    assert len(scripts) >= 2
+    for script in scripts:
+        page = (site / "auto_gallery" / f"{script.stem}.html").read_text(encoding="utf-8")
+        assert f"sphx_glr_{script.stem}_001.png" in page, script.name
+        assert (site / "_images" / f"sphx_glr_{script.stem}_001.png").stat().st_size > 10_000
