@@ -37,6 +37,8 @@ html_title = "meshladar"
 html_theme_options = {"navigation_with_keys": False, "show_toc_level": 2}
 html_static_path: list = []
 exclude_patterns = ["_build", "gallery"]
+# flags stay as typed: "--views", not an en dash
+smartquotes = False
 templates_path: list = []
 
 # cross-references are checked (-n); the types in numpydoc's Parameters are prose (shapes,

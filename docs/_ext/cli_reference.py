@@ -40,7 +40,9 @@ def _arguments(actions, parser):
         if isinstance(action, argparse._HelpAction) or action.help == argparse.SUPPRESS:
             continue
         item = nodes.definition_list_item()
-        item += nodes.term(text=_term(action))
+        term = nodes.term()
+        term += nodes.literal(text=_term(action))       # as typed: no smart dashes
+        item += term
         body = nodes.definition()
         body += nodes.paragraph(text=_help(action, parser))
         item += body
