@@ -72,7 +72,7 @@ def cmd_reconstruct(args) -> int:
     if args.clip is not None:
         sino = clip_radiance(sino, threshold=args.clip)
     # no --extent: the API's default (the bins' reach about the origin), the same grid as
-    # meshladar.fbp(sino) and meshladar.reconstruct.fbp3d(sino)
+    # meshladar.fbp(sino) and meshladar.reconstruct.volumes.fbp3d(sino)
     if not sino.planar:
         return _reconstruct_3d(args, sino, args.extent)
     if args.smooth is not None:
@@ -97,7 +97,8 @@ def cmd_reconstruct(args) -> int:
 
 def _reconstruct_3d(args, sino, extent) -> int:
     """reconstruct for views over the sphere: the 3-D Radon inversion
-    (meshladar.reconstruct.fbp3d), three slices through the target as the figure, the volume in OUTPUT.volume.npz."""
+    (meshladar.reconstruct.volumes.fbp3d), three slices through the target as the figure,
+    the volume in OUTPUT.volume.npz."""
     if args.filter is not None:
         raise ParameterError("--filter applies to FBP of views about the z axis; 3-D views "
                              "are inverted with a second difference (use --smooth BINS)")

@@ -90,7 +90,8 @@ def _setup(sino, image, start, rays_per_bin, projector="auto"):
     check_sinogram("sino", sino)
     if not sino.planar:
         raise ParameterError("iterative reconstruction needs views about the z axis; this "
-                             "sinogram has 3-D view vectors (meshladar.reconstruct.fbp3d)")
+                             "sinogram has 3-D view vectors (reconstruct them with "
+                             "meshladar.reconstruct.volumes.fbp3d)")
     size = check_count("size", size)
     # the solvers hold a few images and the projector's per-view tables: ~8 arrays a pixel
     check_size("size", float(size) ** 2, 8 * 8, f"a {size}² image", "give a smaller size")

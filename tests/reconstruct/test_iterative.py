@@ -3,6 +3,8 @@ on an exact disk sinogram, weights, masks and warm starts."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from test_fbp import disk_radon_sinogram
@@ -385,3 +387,22 @@ def test_every_reconstruction_shares_the_default_frame():
     extents = [ml.fbp(sino, 16).extent] + [f(sino, 16, n_iter=1).extent
                                             for f in (sirt, sart, cgls, tv_fista)]
     assert extents == [pytest.approx(reach, rel=1e-15)] * 5
+
+
+def test_views_over_the_sphere_are_sent_to_the_3d_inversion_by_its_real_name():
+    """An iterative solver refuses 3-D view vectors and names the function that takes them,
+    by a path that exists."""
+    import importlib
+
+    from meshladar.meshes import fibonacci_sphere
+
+    w = fibonacci_sphere(8)
+    sino = ml.Sinogram(np.ones((8, 4)), angles_deg=np.degrees(np.arctan2(w[:, 1], w[:, 0])),
+                       bin_edges=np.linspace(-1, 1, 5),
+                       view_vectors=w)
+    with pytest.raises(ml.errors.ParameterError,
+                       match=r"meshladar\.reconstruct\.volumes\.fbp3d") as refused:
+        sirt(sino, 16)
+    path = re.search(r"meshladar\.[\w.]+fbp3d", str(refused.value)).group(0)
+    module, name = path.rsplit(".", 1)
+    assert callable(getattr(importlib.import_module(module), name))
