@@ -9,8 +9,6 @@
 * no module over :data:`MAX_MODULE_LINES` lines;
 * no function over :data:`MAX_FUNCTION_LINES` lines, except compiled kernels whose body
   says why (a comment containing ``long kernel:``);
-* docstrings do not count towards either size: a module or function is long when its code
-  is (numpydoc's Parameters, Returns and References sections are documentation, not jobs);
 * no private function with more than :data:`MAX_PRIVATE_PARAMS` parameters (state travels
   in records), compiled kernels excepted (numba takes flat arrays or namedtuples).
 
@@ -96,15 +94,14 @@ def _file_breaches(path: pathlib.Path, text: str) -> list[str]:
     """The breaches of one file, ``text`` as if it stood at ``path``."""
     out = []
     rel = str(path.relative_to(ROOT))
-    tree = ast.parse(text)
-    docs = _docstring_lines(tree)
-    lines = text.count("\n") - len(docs)
+    lines = text.count("\n")
     if lines > MAX_MODULE_LINES:
-        out.append(f"{rel}: {lines} lines of code (> {MAX_MODULE_LINES})")
+        out.append(f"{rel}: {lines} lines (> {MAX_MODULE_LINES})")
+    tree = ast.parse(text)
     own = _package_of(path)
     for node in ast.walk(tree):
         if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
-            out += _function_breaches(rel, node, text, docs)
+            out += _function_breaches(rel, node, text)
         if isinstance(node, ast.ImportFrom):
             target = _resolve(path, node.module, node.level)
             if not target.startswith("meshladar"):
@@ -122,23 +119,10 @@ def _file_breaches(path: pathlib.Path, text: str) -> list[str]:
     return out
 
 
-def _docstring_lines(tree) -> set:
-    """The line numbers the module's, classes' and functions' docstrings span."""
-    out = set()
-    for node in ast.walk(tree):
-        if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)) \
-                and node.body and isinstance(node.body[0], ast.Expr) \
-                and isinstance(node.body[0].value, ast.Constant) \
-                and isinstance(node.body[0].value.value, str):
-            out.update(range(node.body[0].lineno, node.body[0].end_lineno + 1))
-    return out
-
-
-def _function_breaches(rel, node, text, docs):
+def _function_breaches(rel, node, text):
     out = []
     kernel = _is_kernel(node)
-    n = node.end_lineno - node.lineno + 1 - len(docs.intersection(
-        range(node.lineno, node.end_lineno + 1)))
+    n = node.end_lineno - node.lineno + 1
     body = ast.get_source_segment(text, node) or ""
     if n > MAX_FUNCTION_LINES and not (kernel and "long kernel:" in body):
         out.append(f"{rel}:{node.lineno}: {node.name} has {n} lines (> {MAX_FUNCTION_LINES})")
@@ -181,25 +165,12 @@ def test_house_rules():
     ("from meshladar.raytrace.grid import _frame\n", "private name _frame"),
     ("def _g(a, b, c, d, e, f, g, h, i):\n    pass\n", "takes 9 parameters"),
     ("def h():\n" + "    x = 1\n" * 81, "has 82 lines"),
-    ('def h():\n    """Doc\n' + "    more\n" * 40 + '    """\n' + "    x = 1\n" * 81,
-     "has 82 lines"),
-    ("x = 1\n" * 451, "451 lines of code"),
-    ('"""Doc\n' + "more\n" * 100 + '"""\n' + "x = 1\n" * 451, "451 lines of code"),
 ])
 def test_house_rules_catch_breaches(snippet, expected):
     # the checker is not blind: each rule fires on a file made to break it (checked as if
     # it were a module of the engine's top level; nothing is written)
     found = _file_breaches(ROOT / "meshladar" / "probe.py", snippet)
     assert any(expected in b for b in found), found
-
-
-def test_docstrings_do_not_count_towards_sizes():
-    # a function of 70 code lines and a 40-line docstring, a module of 440 code lines and
-    # a 100-line docstring: within the limits
-    fn = 'def h():\n    """Doc\n' + "    more\n" * 40 + '    """\n' + "    x = 1\n" * 70
-    module = '"""Doc\n' + "more\n" * 100 + '"""\n' + "x = 1\n" * 440
-    for snippet in (fn, module):
-        assert _file_breaches(ROOT / "meshladar" / "probe.py", snippet) == []
 
 
 if __name__ == "__main__":
