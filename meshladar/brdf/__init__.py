@@ -1,6 +1,8 @@
-"""BRDFs: the protocol every forward model accepts (:class:`BRDF`, in :mod:`.base`) and the
-built-in models, one file each: :class:`SandfordRobertson` (Jin & Levine 2009, Appendix A,
-with its compiled twin beside it), :class:`Lambertian`, :class:`Phong`, :class:`GGX`
+"""BRDFs: the protocol every forward model accepts (:class:`BRDF`, in :mod:`.base`; the
+registry of built-in models in :mod:`.registry`, the compiled kernel's material table in
+:mod:`.kernel_table`) and the built-in models, one file each: :class:`SandfordRobertson`
+(Jin & Levine 2009, Appendix A, with its functions in :mod:`.sandford_robertson_functions`
+and its compiled twin beside it), :class:`Lambertian`, :class:`Phong`, :class:`GGX`
 (Mitsuba's rough conductor) and :class:`Tabulated` (measured).
 
 The protocol: a coating defines ``projected(cos_theta, sin_theta)``, its monostatic weight

@@ -3,7 +3,7 @@ BRDF per hit, for the engine's compiled binning loops, and the material table th
 
 numba is imported here, at the top; the pure-numpy model module stays light, and only the
 compiled stages import this file. Each coating's row is its ``kernel_params``
-(:class:`~meshladar.brdf.sandford_robertson.KernelRow`); :func:`material_table` stacks them.
+(:class:`~meshladar.brdf.kernel_table.KernelRow`); :func:`material_table` stacks them.
 The tests hold :func:`sr_monostatic` to :meth:`SandfordRobertson.value` to 1e-13 on a grid
 through 90° (tests/brdf/test_sandford_robertson_kernel.py).
 """
@@ -16,8 +16,7 @@ import numpy as np
 from numba import njit
 
 from ..precision import COS_HORIZON as _COS_HORIZON
-from .base import material_table
-from .sandford_robertson import KernelRow
+from .kernel_table import KernelRow, material_table
 
 __all__ = ["sr_monostatic", "material_table", "KernelRow"]
 

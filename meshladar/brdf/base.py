@@ -1,11 +1,14 @@
-"""The BRDF protocol every forward model accepts, the registry of built-in models, and the
-helpers the models share.
+"""The BRDF protocol every forward model accepts (:class:`BRDF`) and the check that a value
+follows it (:func:`check_brdf`).
 
 A coating defines ``projected(cos_theta, sin_theta)``, its monostatic weight F(θ; −θ)·cos θ,
 and inherits ``monostatic``; a bistatic receiver needs ``bistatic`` as well. Built-in models
 register themselves by subclassing with ``builtin=True`` (``class GGX(BRDF, builtin=True)``):
 :data:`MODELS` maps their names to their classes, and their outputs are trusted, while a
-user's model is checked (shape, finite, ≥ 0) by :func:`projected_weight`.
+user's model is checked (shape, finite, ≥ 0) by :func:`projected_weight`. The registry and
+that check live in :mod:`meshladar.brdf.registry`, :func:`material_table` (the compiled
+kernel's table) in :mod:`meshladar.brdf.kernel_table`; all four names are importable from
+here as well.
 
 Conventions
 -----------
@@ -22,59 +25,17 @@ Conventions
 from __future__ import annotations
 
 import dataclasses
-from types import MappingProxyType
 
 import numpy as np
 
-from .._validate import check_flag, check_real, finite_array, unit_vectors
+from .._validate import check_flag, finite_array, unit_vectors
 from ..errors import ModelError, ParameterError
 from ..precision import COS_HORIZON as _COS_HORIZON
+from ._shared import _cos_sin, _cos_sin_vec, _out, _safe_divide
+from .kernel_table import material_table
+from .registry import _REGISTRY, MODELS, is_builtin, projected_weight
 
 __all__ = ["BRDF", "MODELS", "is_builtin", "projected_weight", "check_brdf", "material_table"]
-
-#: The built-in models by class name, filled by each model's file as it is defined
-#: (``class Name(BRDF, builtin=True)``); read-only.
-_REGISTRY: dict = {}
-MODELS = MappingProxyType(_REGISTRY)
-
-
-def is_builtin(model) -> bool:
-    """True when ``model`` is an instance of a registered built-in model (not a subclass
-    of one): its outputs are trusted and not checked.
-
-    Parameters
-    ----------
-    model : object
-        Any object; only its exact type is looked at.
-
-    Returns
-    -------
-    bool
-        True when ``type(model)`` is the class registered in :data:`MODELS` under its
-        class name; False for a user's model, a subclass of a built-in model, or a
-        non-BRDF.
-    """
-    return MODELS.get(type(model).__name__) is type(model)
-
-
-def _safe_divide(num, den, fill):
-    """num / den where den > 0, ``fill`` where den == 0, without a numpy warning."""
-    num, den = np.broadcast_arrays(np.asarray(num, np.float64), np.asarray(den, np.float64))
-    out = np.full(num.shape, fill, dtype=np.float64)
-    np.divide(num, den, out=out, where=den > 0)
-    return out
-
-
-def _cos_sin(theta, name):
-    t = finite_array(name, theta)
-    return np.cos(t), np.abs(np.sin(t))
-
-
-def _out(value, *inputs):
-    """Scalar in, scalar out: a Python float when every input was 0-d."""
-    if all(np.ndim(x) == 0 for x in inputs):
-        return float(value)
-    return value
 
 
 class BRDF:
@@ -395,69 +356,6 @@ class BRDF:
                    for k, v in params.items()}}
 
 
-def projected_weight(m, cos_theta, sin_theta):
-    """``m.projected(cos θ, sin θ)`` as a float64 array of the inputs' shape, checked for a
-    user's model: finite and non-negative, else a ParameterError naming the class.
-
-    The protocol's domain is cos θ ≥ 0 with (cos θ, sin θ) a unit pair: a cos θ below 0
-    (a direction below the horizon, where a forward model weighs the surface as at grazing
-    or discards the weight) is clamped to 0 and its sin θ set to 1, so that a model sees
-    θ = π/2 whether it reads the cosine, the sine or the angle atan2(sin θ, cos θ). Pairs
-    with cos θ ≥ 0 pass unchanged.
-
-    Parameters
-    ----------
-    m : BRDF
-        The model whose :meth:`BRDF.projected` is called.
-    cos_theta : array_like
-        cos θ of the monostatic incidence angle; values < 0 are clamped to 0.
-    sin_theta : array_like
-        sin θ, broadcasting with ``cos_theta``; set to 1 where cos θ < 0.
-
-    Returns
-    -------
-    ndarray
-        F(θ; −θ)·cos θ in 1/sr. For a user's model, a read-only float64 array of the
-        inputs' broadcast shape (``np.broadcast_to`` of the model's output); for a built-in
-        model (:func:`is_builtin`), its output as returned, unchecked.
-
-    Raises
-    ------
-    ParameterError
-        When a user's model returns something that does not convert to real numbers of the
-        inputs' shape, or a value that is not finite or is negative.
-    ModelError
-        When the class does not define :meth:`BRDF.projected`.
-    """
-    cos_theta, sin_theta = _grazing_below_horizon(cos_theta, sin_theta)
-    out = m.projected(cos_theta, sin_theta)
-    if is_builtin(m):
-        return out
-    shape = np.broadcast(np.asarray(cos_theta), np.asarray(sin_theta)).shape
-    try:
-        out = np.broadcast_to(np.asarray(out, dtype=np.float64), shape)
-    except (TypeError, ValueError):
-        raise ParameterError(f"{type(m).__name__}.projected must return real numbers of the "
-                             f"inputs' shape {shape}; got {type(out).__name__} of shape "
-                             f"{np.shape(out)}") from None
-    bad = ~np.isfinite(out) | (out < 0)
-    if bad.any():
-        k = np.flatnonzero(bad.ravel())[0]
-        raise ParameterError(f"{type(m).__name__}.projected must be finite and non-negative; "
-                             f"got {float(out.ravel()[k]):.6g} at cos theta = "
-                             f"{float(np.broadcast_to(cos_theta, shape).ravel()[k]):.6g}")
-    return out
-
-
-def _grazing_below_horizon(cos_theta, sin_theta):
-    """(max(cos θ, 0), sin θ) with sin θ = 1 where cos θ < 0: the clamped pair stays a unit
-    pair (θ = π/2). Inputs with no cos θ < 0 pass through as they are."""
-    below = np.asarray(cos_theta) < 0
-    if below.any():
-        sin_theta = np.where(below, 1.0, sin_theta)
-    return np.maximum(cos_theta, 0.0), sin_theta
-
-
 def check_brdf(name, value):
     """``value`` if it follows the BRDF protocol, else a ParameterError naming ``name``.
 
@@ -487,34 +385,3 @@ def check_brdf(name, value):
         raise ModelError(f"{name}: {type(value).__name__} must define projected(cos_theta, "
                          "sin_theta), the monostatic F·cos θ (meshladar.brdf.BRDF)")
     return value
-
-
-def _cos_sin_vec(w, n):
-    """cos and sin of the angle between unit vectors, sin from the cross product (accurate
-    near 0 where sqrt(1 − cos²) is not)."""
-    return (np.einsum("...k,...k->...", w, n), np.linalg.norm(np.cross(w, n), axis=-1))
-
-
-def _unit_interval(name, value):
-    return check_real(name, value, low=0.0, high=1.0)
-
-
-def material_table(materials):
-    """(n, 7) float64 rows of (rho_d, epsilon, b, e, G, has_diffuse, has_specular): each
-    material's ``kernel_params``, the table the engine's compiled loops read (every material
-    must have them for the compiled path).
-
-    Parameters
-    ----------
-    materials : sequence of BRDF
-        The n coatings, in material-index order. Each must have ``kernel_params`` that are
-        not None (of the built-in models, :class:`meshladar.brdf.SandfordRobertson` and
-        :class:`meshladar.brdf.Lambertian`); this is not checked here.
-
-    Returns
-    -------
-    (n, 7) ndarray of float64
-        Row i is ``materials[i].kernel_params`` (a
-        :class:`meshladar.brdf.KernelRow`).
-    """
-    return np.array([m.kernel_params for m in materials], dtype=np.float64)

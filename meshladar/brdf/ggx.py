@@ -9,7 +9,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._validate import check_name, check_real
-from .base import BRDF, _unit_interval
+from ._shared import _unit_interval
+from .base import BRDF
 
 __all__ = ["GGX"]
 

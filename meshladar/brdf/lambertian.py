@@ -8,8 +8,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._validate import check_name
-from .base import BRDF, _unit_interval
-from .sandford_robertson import KernelRow
+from ._shared import _unit_interval
+from .base import BRDF
+from .kernel_table import KernelRow
 
 __all__ = ["Lambertian"]
 

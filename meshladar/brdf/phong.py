@@ -10,7 +10,8 @@ import numpy as np
 from .._validate import check_name, check_real
 from ..errors import ParameterError
 from ..precision import ENERGY_SLACK as _ENERGY_SLACK
-from .base import BRDF, _unit_interval
+from ._shared import _unit_interval
+from .base import BRDF
 
 __all__ = ["Phong"]
 

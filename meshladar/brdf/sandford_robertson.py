@@ -18,263 +18,33 @@ the source and to the receiver. For the collocated (monostatic) ladar, θr = θi
 α = θ. Conventions (angles, horizon, units) are :mod:`meshladar.brdf.base`'s.
 
 Its compiled twin, ``meshladar.brdf._sandford_robertson_kernel.sr_monostatic``, takes
-the coating's :attr:`SandfordRobertson.kernel_params` (a :class:`KernelRow`) and evaluates
-the same expressions in the same order.
+the coating's :attr:`SandfordRobertson.kernel_params` (a :class:`KernelRow`, from
+:mod:`meshladar.brdf.kernel_table`) and evaluates the same expressions in the same order.
+The functions g, G, h and H are in :mod:`meshladar.brdf.sandford_robertson_functions`, the
+rules the parameters follow in ``_sandford_robertson_checks``; the public names of both are
+importable from here as well.
 """
 
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import NamedTuple
 
 import numpy as np
-from scipy.special import xlogy
 
-from .._validate import check_choice, check_flag, check_name, check_real, finite_array
-from ..errors import EnergyConservationWarning, ParameterError
+from .._validate import check_flag
 from ..precision import COS_HORIZON as _COS_HORIZON
 from ..precision import E_MIN
-from ..precision import ENERGY_SLACK as _ENERGY_SLACK
-from .base import BRDF, _cos_sin, _out, _safe_divide
+from ._sandford_robertson_checks import LOBES, _check_energy, _checked_parameters
+from ._shared import _cos_sin, _out
+from .base import BRDF
+from .kernel_table import KernelRow
+from .sandford_robertson_functions import (_G, _g, _glint_over_H, diffuse_normalization,
+                                           diffuse_shape, glint_lobe, specular_normalization)
 
 __all__ = ["SandfordRobertson", "KernelRow", "diffuse_shape", "diffuse_normalization",
            "glint_lobe", "specular_normalization", "LOBES", "E_MIN"]
-
-#: The lobe selections a :class:`SandfordRobertson` accepts.
-LOBES = ("both", "diffuse", "specular")
-
-#: Below this value of c = 1 − b², G(b) is summed as its Taylor series in c (A3 cancels
-#: catastrophically as b → 1); above, the closed form loses at most ~2 bits.
-_G_SERIES_BELOW = 0.5
-#: Terms of that series: the tail after 64 terms is < 0.5**64 / (65·66) ≈ 1e-23 of G ≥ 1/2.
-_G_SERIES_TERMS = 64
-
-
-class KernelRow(NamedTuple):
-    """One coating's row of the compiled SR kernel's material table (the flat arguments of
-    the compiled ``sr_monostatic`` after cos θ, sin θ).
-
-    Attributes
-    ----------
-    rho_d : float
-        Diffuse spectral reflectivity ρd (A1).
-    epsilon : float
-        Spectral emissivity ε (A7).
-    b : float
-        Grazing-angle reflectivity (A2).
-    e : float
-        Glint eccentricity (A6).
-    G : float
-        Diffuse normalisation G(b) (A3).
-    has_diffuse : float
-        1.0 when the diffuse lobe is summed, else 0.0.
-    has_specular : float
-        1.0 when the specular (glint) lobe is summed, else 0.0.
-    """
-
-    rho_d: float
-    epsilon: float
-    b: float
-    e: float
-    G: float
-    has_diffuse: float
-    has_specular: float
-
-
-# --------------------------------------------------------------------------------------
-# The model's functions, vectorised, on (cos, sin) pairs: private kernels first.
-# --------------------------------------------------------------------------------------
-
-def _g(cos_t, sin_t, b):
-    """Diffuse shape g (A2) as cos²θ / (cos²θ + b² sin²θ), scaled by hypot against under-
-    and overflow. g = 1 where both terms vanish (b = 0 at θ = π/2), the b → 0 limit."""
-    den = np.hypot(cos_t, b * sin_t)
-    return _safe_divide(cos_t, den, 1.0) ** 2
-
-
-def _G(b):
-    """Diffuse normalisation G(b) (A3), stable on all of [0, 1].
-
-    With c = 1 − b² (formed as (1 − b)(1 + b), exact near b = 1) and s = b²,
-    G = (c + s ln s) / c² = Σ_k c^k / ((k + 1)(k + 2)). The closed form is used for
-    c ≥ 1/2 (s ln s handled at s = 0 by xlogy), the series for c < 1/2.
-    """
-    b = np.asarray(b, dtype=np.float64)
-    c = (1.0 - b) * (1.0 + b)
-    s = b * b
-    series = np.zeros_like(c)
-    for k in range(_G_SERIES_TERMS - 1, -1, -1):
-        series = series * c + 1.0 / ((k + 1) * (k + 2))
-    c_safe = np.where(c >= _G_SERIES_BELOW, c, 1.0)
-    closed = (c_safe + xlogy(s, s)) / (c_safe * c_safe)
-    return np.where(c >= _G_SERIES_BELOW, closed, series)
-
-
-def _H_scaled(cos_t, e):
-    """2e²·H(θ): the specular normalisation (A9) times 2e², always in [e, 2].
-
-    H(θ) = (1/2e²) [(1 − e²) cos θ + (2e² + (1 − e²)² cos²θ) / sqrt(4e² + (1 − e²)² cos²θ)]
-    """
-    k = (1.0 - e) * (1.0 + e)
-    kc = k * cos_t
-    return kc + (2.0 * e * e + kc * kc) / np.hypot(2.0 * e, kc)
-
-
-def _glint_over_H(cos_a, sin_a, cos_t, e):
-    """h(α) / H(θ) in one scaled expression: 2e² / ((e² cos²α + sin²α)² · 2e²H(θ))."""
-    d = np.hypot(e * cos_a, sin_a) ** 2
-    return 2.0 * e * e / (d * d * _H_scaled(cos_t, e))
-
-
-# --------------------------------------------------------------------------------------
-# Public functions of the model (angles in radians).
-# --------------------------------------------------------------------------------------
-
-def diffuse_shape(theta, b):
-    """Diffuse lobe shape g(θ) = 1 / (1 + b² tan²θ) (paper Eq. A2).
-
-    Parameters
-    ----------
-    theta : array_like, radians
-        Polar angle from the normal. Only cos θ and |sin θ| enter.
-    b : float in [0, 1]
-        Grazing-angle reflectivity. b = 0 gives g ≡ 1 (Lambertian), also at θ = π/2.
-
-    Returns
-    -------
-    g : ndarray or float, in [0, 1]
-        The shape of ``theta``; a Python float for a scalar ``theta``.
-
-    Raises
-    ------
-    ParameterError
-        When ``b`` is not a real number in [0, 1] or ``theta`` is not finite.
-
-    References
-    ----------
-    Jin & Levine (2009), Eq. A2.
-    Sandford & Robertson (1985).
-    """
-    b = check_real("b", b, low=0.0, high=1.0)
-    c, s = _cos_sin(theta, "theta")
-    return _out(_g(np.abs(c), s, b), theta)
-
-
-def diffuse_normalization(b):
-    """G(b) = (1/π) ∫ g(θ) cos θ dω over the hemisphere (paper Eq. A3).
-
-    Evaluated as (c + b² ln b²)/c² with c = 1 − b² for c ≥ 1/2 and as the series
-    Σ c^k/((k+1)(k+2)) for c < 1/2, so that it is accurate to a few ulp on all of [0, 1]:
-    G(0) = 1 and G(1) = 1/2 exactly.
-
-    Parameters
-    ----------
-    b : array_like in [0, 1]
-
-    Returns
-    -------
-    G : ndarray or float, in [1/2, 1]
-        The shape of ``b``; a Python float for a scalar ``b``.
-
-    Raises
-    ------
-    ParameterError
-        When ``b`` is not finite real numbers, or any element is outside [0, 1].
-
-    References
-    ----------
-    Jin & Levine (2009), Eq. A3.
-    Sandford & Robertson (1985).
-    """
-    arr = finite_array("b", b)
-    if np.any((arr < 0) | (arr > 1)):
-        bad = float(arr[(arr < 0) | (arr > 1)].ravel()[0])
-        raise ParameterError(f"b must be in [0, 1]; got {bad!r}")
-    return _out(_G(arr), b)
-
-
-def glint_lobe(alpha, e):
-    """Glint lobe h(α) = 1 / (e² cos²α + sin²α)² (paper Eq. A6).
-
-    This is, up to normalisation, the Trowbridge-Reitz (GGX) microfacet distribution with
-    roughness e: D(α) = e² / (π cos⁴α (e² + tan²α)²) = e² h(α) / π. It peaks at
-    h(0) = 1/e⁴ and equals 1 at α = π/2 for every e.
-
-    Parameters
-    ----------
-    alpha : array_like, radians
-        Glint angle: polar angle of the half vector. Must be finite; only cos α and |sin α|
-        enter.
-    e : float in [E_MIN, 1]
-        Glint eccentricity (specularity parameter), a scalar; E_MIN = 1e-12.
-
-    Returns
-    -------
-    h : ndarray or float, in [1, 1/e⁴]
-        The shape of ``alpha``; a Python float for a scalar ``alpha``.
-
-    Raises
-    ------
-    ParameterError
-        When ``e`` is not a real number in [E_MIN, 1] or ``alpha`` is not finite.
-
-    References
-    ----------
-    Jin & Levine (2009), Eq. A6.
-    Sandford & Robertson (1985).
-    """
-    e = check_real("e", e, low=E_MIN, high=1.0)
-    c, s = _cos_sin(alpha, "alpha")
-    return _out(1.0 / np.hypot(e * c, s) ** 4, alpha)
-
-
-def specular_normalization(theta, e):
-    """H(θi) = (1/4π) ∫ h(α) dω_r over the hemisphere of reflected directions (Eq. A9).
-
-    The paper's Eq. A10 prints the closed form inside a stray integral; H is defined by the
-    consistency condition A9, ρs(θi) = ∫ F_s cos θr dω_r, which with F_s from A5 gives
-    H(θi) = (1/4π) ∫ h(α) dω_r. Its closed form is
-
-        H(θ) = 1/(2e²) [(1 − e²) cos θ + (2e² + (1 − e²)² cos²θ) / sqrt(4e² + (1 − e²)² cos²θ)].
-
-    Derivation: change variables from the reflected direction to the half vector m,
-    dω_r = 4 (w_i·m) dω_m, so H = (1/π) ∫ h(α_m) (w_i·m) dω_m over the half vectors whose
-    reflection stays above the surface. With u = cos²α_m, h depends on α_m alone, the
-    azimuthal integral of w_i·m over the admissible cap reduces to elementary terms, and the
-    remaining integral of the rational function 1/(e² + (1 − e²)(1 − u))² gives the form
-    above. Checks: H(0) = 1/(e²(1 + e²)), H(π/2) = 1/(2e), and H ≡ 1/2 at e = 1 (h ≡ 1,
-    H = 2π/4π). The test suite verifies it against independent quadrature down to e = 1e-4.
-
-    Parameters
-    ----------
-    theta : array_like, radians
-        Incidence angle θi; only cos θ enters, clipped at 0 below the horizon. Must be
-        finite.
-    e : float in [E_MIN, 1]
-        Glint eccentricity (specularity parameter), a scalar; E_MIN = 1e-12.
-
-    Returns
-    -------
-    H : ndarray or float
-        The closed form above, from 1/(e²(1 + e²)) at θ = 0 to 1/(2e) at θ = π/2 (and
-        below the horizon); the shape of ``theta``, a Python float for a scalar ``theta``.
-
-    Raises
-    ------
-    ParameterError
-        When ``e`` is not a real number in [E_MIN, 1] or ``theta`` is not finite.
-
-    References
-    ----------
-    Jin & Levine (2009), Eqs. A9 and A10.
-    Sandford & Robertson (1985).
-    """
-    e = check_real("e", e, low=E_MIN, high=1.0)
-    c, _ = _cos_sin(theta, "theta")
-    return _out(_H_scaled(np.maximum(c, 0.0), e) / (2.0 * e * e), theta)
 
 
 @dataclass(frozen=True)
@@ -357,28 +127,9 @@ class SandfordRobertson(BRDF, builtin=True):
     name: str | None = field(default=None, kw_only=True, compare=False)
 
     def __post_init__(self):
-        for param, low, high in (("rho_d", 0.0, 1.0), ("epsilon", 0.0, 1.0),
-                                 ("b", 0.0, 1.0), ("e", E_MIN, 1.0)):
-            object.__setattr__(self, param, check_real(param, getattr(self, param),
-                                                       low=low, high=high))
-        check_choice("lobes", self.lobes, LOBES)
-        check_name(self.name)
-        G = self.G
-        if self.has_specular:
-            total = self.rho_d + self.epsilon
-            if total > G * (1.0 + _ENERGY_SLACK):
-                raise ParameterError(
-                    f"coating is not energy-conserving: rho_d + epsilon = {total:.6g} exceeds "
-                    f"G(b) = {G:.6g} (b = {self.b:g}) by {total - G:.3g}, so the specular "
-                    f"reflectivity rho_s(0) = 1 - (rho_d + epsilon)/G(b) = {1 - total / G:.3g} "
-                    "< 0; lower rho_d or epsilon, or use lobes='diffuse'")
-        peak = self.rho_d / G
-        if self.lobes == "diffuse" and peak > 1.0 * (1.0 + _ENERGY_SLACK):
-            warnings.warn(
-                f"diffuse-only coating is not energy-conserving: it reflects up to "
-                f"rho_d/G(b) = {peak:.4g} of the incident light at normal incidence "
-                f"(rho_d = {self.rho_d:g}, b = {self.b:g}); allowed, as in the paper's Sec. 4.A",
-                EnergyConservationWarning, stacklevel=3)
+        for param, value in _checked_parameters(self).items():
+            object.__setattr__(self, param, value)
+        _check_energy(self)
 
     # -- derived constants --------------------------------------------------------------
     @cached_property
@@ -671,4 +422,3 @@ class SandfordRobertson(BRDF, builtin=True):
         """
         c, s = _cos_sin(theta, "theta")
         return _out(self._core(c, s, c, s, c, s, check_flag("projected", projected)), theta)
-
