@@ -38,13 +38,15 @@ and v boxes, a trapezoid), exactly as the flat facet would return it.
 
 Layout (this stage only casts; DESIGN.md layer 4): :mod:`.plan` (the
 :class:`~meshladar.raytrace.plan.TracePlan` record, built and validated once by
-:func:`~meshladar.raytrace.plan.plan_trace`), :mod:`.grid` (ray grids and their defaults), :mod:`.views` (one view's parallel rays → :class:`~meshladar.hits.ViewHits`),
-:mod:`.perspective` (a sensor's rays), :mod:`.embree` (the geometry a worker traces and
-the per-process cache of Embree scenes), :mod:`.backends` (the backend registry), with
-:mod:`.packets` (+ :mod:`.embree4`, :mod:`.embree4_ctypes`: the packet library through
-ctypes and numba) and :mod:`.embreex_backend` registering themselves. Weights and bins are
-:mod:`meshladar.weighing`'s; the entry points :func:`trace`, :func:`simulate_mesh`,
-:func:`first_hits`, :func:`occluded` and the per-chunk job :mod:`meshladar.forward`'s.
+:func:`~meshladar.raytrace.plan.plan_trace`), :mod:`.grid` (ray grids and their defaults),
+:mod:`.views` (one view's parallel rays → :class:`~meshladar.hits.ViewHits`),
+:mod:`.perspective` (a sensor's rays), :mod:`.embree` (the geometry a worker traces and the
+per-process cache of Embree scenes), :mod:`.backends` (the backend registry), with
+:mod:`.packets` (+ :mod:`.embree4`, :mod:`.embree4_ctypes`, :mod:`.embree4_kernels`: the
+packet library through ctypes and numba) and :mod:`.embreex_backend` registering themselves.
+Weights and bins are :mod:`meshladar.weighing`'s; the entry points :func:`trace`,
+:func:`simulate_mesh`, :func:`first_hits`, :func:`occluded` and the per-chunk job
+:mod:`meshladar.forward`'s.
 """
 
 from __future__ import annotations

@@ -164,6 +164,23 @@ def check_scene(scene, ladar, mode, normals, back_faces, z0):
         nothing); when the mesh lies far from the origin for its size
         (``meshladar.precision.FAR_RATIO``).
     """
+    mode = _checked_mode(scene, ladar, mode, normals, back_faces, z0)
+    geo = geometry(scene, normals)
+    if z0 is None:
+        z0 = float(geo.center[2])
+    z0 = check_real("z0", z0)
+    if mode == "slice":
+        lo, hi = float(geo.vertices[:, 2].min()), float(geo.vertices[:, 2].max())
+        if not lo <= z0 <= hi:
+            warnings.warn(f"z0={z0:.6g} lies outside the target's heights [{lo:.6g}, "
+                          f"{hi:.6g}]: the slice returns nothing", MeshladarWarning,
+                          stacklevel=7)
+    return mode, geo, z0
+
+
+def _checked_mode(scene, ladar, mode, normals, back_faces, z0):
+    """The run's mode, as given or chosen, after the arguments of :func:`check_scene` are
+    checked on their own (the scene's geometry is not built yet)."""
     if not isinstance(scene, Scene):
         raise ParameterError(f"scene must be a meshladar.Scene; got {type(scene).__name__}")
     if not isinstance(ladar, Ladar):
@@ -184,17 +201,7 @@ def check_scene(scene, ladar, mode, normals, back_faces, z0):
     if z0 is not None and mode == "3d":
         raise ParameterError(f"z0 places the slice plane of mode='slice'; got z0={z0!r} "
                              "with mode='3d'")
-    geo = geometry(scene, normals)
-    if z0 is None:
-        z0 = float(geo.center[2])
-    z0 = check_real("z0", z0)
-    if mode == "slice":
-        lo, hi = float(geo.vertices[:, 2].min()), float(geo.vertices[:, 2].max())
-        if not lo <= z0 <= hi:
-            warnings.warn(f"z0={z0:.6g} lies outside the target's heights [{lo:.6g}, "
-                          f"{hi:.6g}]: the slice returns nothing", MeshladarWarning,
-                          stacklevel=7)
-    return mode, geo, z0
+    return mode
 
 
 def check_sensor(sensor, receiver, mode):
@@ -333,8 +340,7 @@ def plan_trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided
         The slice plane's height (scene coordinates), slice mode only; default the middle
         of the scene's bounding box in z.
     ray_spacing : float, optional
-        The ray spacing δ (scene units, finite, at least 1e-150); not with
-        ``rays_per_bin``.
+        The ray spacing δ (scene units, finite, at least 1e-150); not with ``rays_per_bin``.
     rays_per_bin : float, optional
         Rays per width of the narrowest range bin, in [1e-300, 1e6]: δ = narrowest bin
         width / ``rays_per_bin``. Default (neither given): 8 in slice mode, 1 in 3-D, where
@@ -360,8 +366,7 @@ def plan_trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided
     TracePlan
         The validated plan: ``backend`` resolved, ``spacing`` chosen, ``traced_with`` the
         sensor the rays follow (or None), and ``rays`` the estimated total,
-        n_views × (2 radius / δ + 2) in slice mode or n_views × (2 radius / δ + 2)² in
-        3-D.
+        n_views × (2 radius / δ + 2) in slice mode or n_views × (2 radius / δ + 2)² in 3-D.
 
     Raises
     ------
@@ -385,6 +390,16 @@ def plan_trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided
     backend = resolve_backend(backend)
     sampling, seed = _sampling(mode, sampling, seed)
     receivers = check_receivers(receiver, ladar, mode)
+    spacing, rays = _checked_spacing(geo, ladar, mode, ray_spacing, rays_per_bin)
+    _check_standoff(geo, ladar, traced_with)
+    return TracePlan(geo=geo, mode=mode, normals=normals, back_faces=back_faces, z0=z0,
+                     spacing=spacing, sampling=sampling, seed=seed, receivers=receivers,
+                     sensor=sensor, traced_with=traced_with, backend=backend, rays=rays)
+
+
+def _checked_spacing(geo, ladar, mode, ray_spacing, rays_per_bin):
+    """(δ, estimated rays) of a run: the ray spacing given or chosen, refused when one view
+    would cast more rays than :data:`MAX_RAYS_PER_VIEW`, and the run's estimated total."""
     spacing = _spacing(ladar, mode, ray_spacing, rays_per_bin, geo.radius)
     per_view = _largest_grid(geo, ladar.view_vectors, mode, spacing, MAX_RAYS_PER_VIEW)
     if per_view > MAX_RAYS_PER_VIEW:
@@ -393,8 +408,4 @@ def plan_trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided
             f"a target {2 * geo.radius:.3g} across), more than the {MAX_RAYS_PER_VIEW:.0e} a "
             "view may hold in memory; give a larger ray_spacing (or fewer rays_per_bin, "
             "or wider bins)")
-    _check_standoff(geo, ladar, traced_with)
-    return TracePlan(geo=geo, mode=mode, normals=normals, back_faces=back_faces, z0=z0,
-                     spacing=spacing, sampling=sampling, seed=seed, receivers=receivers,
-                     sensor=sensor, traced_with=traced_with, backend=backend,
-                     rays=_estimate_rays(geo, ladar, mode, spacing))
+    return spacing, _estimate_rays(geo, ladar, mode, spacing)

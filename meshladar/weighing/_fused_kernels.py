@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..raytrace.embree4 import init_args, load_packet, workspace
+from ..raytrace.embree4_kernels import init_args, load_packet, workspace
 from ..raytrace.embree4_ctypes import ARGS_OFF, GEOMID, PRIMID, TFAR, VALID_OFF
 from ._kernels import bin_bistatic_hits, bin_flat_hits, face_hit
 

@@ -1,0 +1,165 @@
+"""The packet backend's compiled loops: numba-jitted, GIL-free loops that fill Embree 4's
+ray packets (:mod:`.embree4_ctypes`' layouts) in an aligned workspace and call the library's
+``rtcIntersect``/``rtcOccluded`` entry points through ctypes.
+
+:func:`cast_grid` and :func:`occluded_grid` cast every ray of a grid in packets of the
+library's width (:meth:`meshladar.raytrace.embree4.PacketGeometry.cast_grid` and
+``occluded_grid`` call them). Their building blocks, :func:`workspace`, :func:`init_args`
+and :func:`load_packet`, are public for the compiled loops beside other stages (the weigh
+stage's cast-weigh-bin loop, :mod:`meshladar.weighing.fused`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .embree4_ctypes import (_ALIGN, _ARGS_OFF, _CTX_OFF, _DIR_X, _DIR_Y, _DIR_Z, _FLAGS,
+                             _GEOMID, _ID, _INSTID, _MASK, _ORG_X, _ORG_Y, _ORG_Z, _PRIMID,
+                             _TFAR, _TIME, _TNEAR, _U, _V, _VALID_OFF, _WS_BYTES)
+
+__all__ = ["cast_grid", "occluded_grid"]
+
+
+@njit(cache=True, nogil=True)
+def workspace():
+    """A zeroed workspace whose first byte is 64-aligned: returns (int32 view, float32 view,
+    int64 view, base address).  Over-allocated by 64 bytes and offset."""
+    raw = np.zeros((_WS_BYTES + _ALIGN) // 8, np.int64)
+    addr = raw.ctypes.data
+    skip = ((_ALIGN - addr % _ALIGN) % _ALIGN) // 8        # int64 storage: addr % 8 == 0
+    ws = raw[skip:skip + _WS_BYTES // 8]
+    return ws.view(np.int32), ws.view(np.float32), ws, addr + skip * 8
+
+
+@njit(cache=True, nogil=True, inline="always")
+def init_args(i32, i64, base, flags):
+    """rtcInitRayQueryContext + rtcInitIntersectArguments (inline in the headers), with
+    flags and the context pointer set.  Same layout for RTCOccludedArguments."""
+    c = _CTX_OFF // 4
+    i32[c + 0] = -1                      # instID[0]     = RTC_INVALID_GEOMETRY_ID
+    i32[c + 1] = -1                      # instPrimID[0] = RTC_INVALID_GEOMETRY_ID
+    a = _ARGS_OFF // 4
+    i32[a + 0] = flags                   # flags
+    i32[a + 1] = -1                      # feature_mask = RTC_FEATURE_FLAG_ALL
+    a8 = _ARGS_OFF // 8
+    i64[a8 + 1] = base + _CTX_OFF        # context
+    i64[a8 + 2] = 0                      # filter
+    i64[a8 + 3] = 0                      # intersect / occluded
+    i64[a8 + 4] = 0                      # [minWidthDistanceFactor] + padding
+
+
+@njit(cache=True, nogil=True, inline="always")
+def load_packet(f32, i32, o, d, tmax, start, n, w):
+    """Fill the RTCRayW fields, the valid mask and the hit's invalid ids for rays
+    start..start+w (masked past n); ``d`` (1, 3) is every ray's direction, or (n, 3) one
+    per ray."""
+    v = _VALID_OFF // 4
+    each = d.shape[0] > 1
+    for j in range(w):
+        r = start + j
+        ok = r < n
+        if not ok:
+            r = start                    # harmless finite data in inactive lanes
+        k = r if each else 0
+        f32[_ORG_X * w + j] = o[r, 0]
+        f32[_ORG_Y * w + j] = o[r, 1]
+        f32[_ORG_Z * w + j] = o[r, 2]
+        f32[_TNEAR * w + j] = 0.0
+        f32[_DIR_X * w + j] = d[k, 0]
+        f32[_DIR_Y * w + j] = d[k, 1]
+        f32[_DIR_Z * w + j] = d[k, 2]
+        f32[_TIME * w + j] = 0.0
+        f32[_TFAR * w + j] = tmax
+        i32[_MASK * w + j] = -1
+        i32[_ID * w + j] = j
+        i32[_FLAGS * w + j] = 0
+        i32[v + j] = -1 if ok else 0
+        i32[_PRIMID * w + j] = -1        # RTCHitW: geomID/primID invalid (the occlusion
+        i32[_GEOMID * w + j] = -1        # query ignores these; they lie inside the
+        i32[_INSTID * w + j] = -1        # workspace's reserve either way)
+
+
+@njit(cache=True, nogil=True)
+def cast_grid(fn, scene, o, d, tmax, w, flags, prim, tfar, u, v):
+    """rtcIntersectW over rays o[i] + t d, in packets of w in scan order (tail masked).
+    ``fn`` is the ctypes rtcIntersect{w} (an argument, not a global: cacheable). ``u`` and
+    ``v`` receive the barycentrics when they have one entry per ray (else they are empty).
+
+    Parameters
+    ----------
+    fn : ctypes function
+        ``EmbreeLib.intersect[w]``, the library's rtcIntersect4, 8 or 16 matching ``w``.
+    scene : int
+        The committed scene's handle (:meth:`meshladar.raytrace.embree4.PacketGeometry.live`).
+    o : (n, 3) float32 numpy.ndarray
+        Ray origins, C-contiguous.
+    d : (1, 3) or (n, 3) float32 numpy.ndarray
+        One direction for every ray, or one per ray.
+    tmax : numpy.float32
+        Each ray's far limit, in units of |d|.
+    w : int
+        Packet width, 4, 8 or 16, as ``fn``.
+    flags : int
+        Ray query flags (``RTC_RAY_QUERY_FLAG_COHERENT`` or ``_INCOHERENT``).
+    prim : (n,) int32 numpy.ndarray
+        Output: the hit face's index, -1 on a miss.
+    tfar : (n,) float32 numpy.ndarray
+        Output: the hit distance, inf on a miss.
+    u, v : (n,) or (0,) float32 numpy.ndarray
+        Output: the barycentrics, written only when they have n entries.
+    """
+    i32, f32, i64, base = workspace()
+    init_args(i32, i64, base, flags)
+    n = o.shape[0]
+    for start in range(0, n, w):
+        load_packet(f32, i32, o, d, tmax, start, n, w)
+        fn(base + _VALID_OFF, scene, base, base + _ARGS_OFF)
+        m = min(w, n - start)
+        for j in range(m):
+            if i32[_GEOMID * w + j] == -1:
+                prim[start + j] = -1
+                tfar[start + j] = np.inf
+            else:
+                prim[start + j] = i32[_PRIMID * w + j]
+                tfar[start + j] = f32[_TFAR * w + j]
+        if u.shape[0] == n:
+            for j in range(m):
+                u[start + j] = f32[_U * w + j]
+                v[start + j] = f32[_V * w + j]
+
+
+@njit(cache=True, nogil=True)
+def occluded_grid(fn, scene, o, d, tmax, w, flags, out):
+    """rtcOccludedW over the same packets: out[i] = the ray is blocked within tmax
+    (Embree sets tfar = -inf on occluded lanes).
+
+    Parameters
+    ----------
+    fn : ctypes function
+        ``EmbreeLib.occluded[w]``, the library's rtcOccluded4, 8 or 16 matching ``w``.
+    scene : int
+        The committed scene's handle (:meth:`meshladar.raytrace.embree4.PacketGeometry.live`).
+    o : (n, 3) float32 numpy.ndarray
+        Ray origins, C-contiguous.
+    d : (1, 3) or (n, 3) float32 numpy.ndarray
+        One direction for every ray, or one per ray.
+    tmax : numpy.float32
+        Each ray's far limit, in units of |d|.
+    w : int
+        Packet width, 4, 8 or 16, as ``fn``.
+    flags : int
+        Ray query flags (``RTC_RAY_QUERY_FLAG_COHERENT`` or ``_INCOHERENT``).
+    out : (n,) bool numpy.ndarray
+        Output: True where the ray is blocked.
+    """
+    i32, f32, i64, base = workspace()
+    init_args(i32, i64, base, flags)
+    n = o.shape[0]
+    for start in range(0, n, w):
+        load_packet(f32, i32, o, d, tmax, start, n, w)
+        fn(base + _VALID_OFF, scene, base, base + _ARGS_OFF)
+        m = min(w, n - start)
+        for j in range(m):
+            out[start + j] = f32[_TFAR * w + j] == -np.inf
+
