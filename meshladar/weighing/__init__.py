@@ -1,8 +1,9 @@
 """The weigh stage (DESIGN.md layer 5): every weight and every binning of first hits.
 
 :mod:`.record` (the :class:`Weighing` record, whose ``check(plan)`` refuses every
-inapplicable combination before the first ray), :mod:`.per_hit` (per-hit weights F·δA⊥,
-point/footprint/curved bins, :func:`weigh` of cached :class:`~meshladar.hits.Hits`),
+inapplicable combination before the first ray), :mod:`.hit_weights` (per-hit weights
+F·δA⊥), :mod:`.binning` (one view's point, footprint and curved bins), :mod:`.per_hit`
+(:func:`weigh` of cached :class:`~meshladar.hits.Hits`, and the mesh model's sinogram),
 :mod:`.faces` (per-face weights and footprints of a view, for the compiled loops),
 :mod:`.resolved` (binning by one to three coordinates), :mod:`.sensor_view` (a perspective
 view binned by the compiled loop), :mod:`.fused` (the packet backend's cast-weigh-bin
@@ -13,8 +14,9 @@ points."""
 from __future__ import annotations
 
 from .record import Weighing
-from .per_hit import (GRAZING_RECEIVER_COS, bin_one, per_table_weight, scaled, sinogram_of,
-                      weigh, weights)
+from .binning import bin_one
+from .hit_weights import GRAZING_RECEIVER_COS, per_table_weight, scaled, weights
+from .per_hit import sinogram_of, weigh
 
 
 __all__ = ["weigh", "Weighing", "weights", "bin_one", "sinogram_of",

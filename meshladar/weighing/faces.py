@@ -11,7 +11,7 @@ from ..precision import TINY
 from ..raytrace.grid import dot
 from ..raytrace.grid import frame
 from ..raytrace.views import bistatic_angles
-from .per_hit import weights
+from .hit_weights import weights
 
 __all__ = ["face_footprints", "face_weights", "face_bistatic_weights"]
 

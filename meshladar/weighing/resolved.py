@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..raytrace.grid import frame
-from .per_hit import weights, scaled
+from .hit_weights import scaled, weights
 
 __all__ = ["bin_resolved"]
 
