@@ -134,6 +134,29 @@ def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=N
                      low_open=True)
     ds = check_real("ray_spacing", pix / 4 if ray_spacing is None else ray_spacing, low=0.0,
                     low_open=True)
+    payload = _pixel_job(scene, ladar, pix, ds, power)
+    n_rays = payload.s_rel.size
+    job = None
+    if run_dir is not None:
+        job = {"kind": "simulate_pixel", "radiometry": radiometry,
+               "shapes": [repr(s) for s in scene.shapes], "pixel_size": pix, "ray_spacing": ds,
+               "angles_deg": array_digest(ladar.angles_deg),
+               "bin_edges": array_digest(ladar.bin_edges)}
+    results = run_chunks(_views, payload, ladar.n_views,
+                         chunk_size=max(1, min(_VIEWS_PER_CHUNK, _RAYS_PER_CHUNK // n_rays)),
+                         jobs=jobs, executor=executor, progress=progress, run_dir=run_dir,
+                         job=job, arrays={"values": (ladar.n_bins,)})
+    return Sinogram(joined(results, "values"), angles_deg=ladar.angles_deg,
+                    bin_edges=ladar.bin_edges, model="pixel",
+                    info={"radiometry": radiometry, "units": "length/sr (per unit height)",
+                          "pixel_size": pix, "ray_spacing": ds,
+                          "n_rays": n_rays})
+
+
+def _pixel_job(scene, ladar, pix, ds, power):
+    """What every chunk of views shares (:class:`_PixelJob`): the scene rasterised with
+    pixels of side ``pix`` and the layout of rays ``ds`` apart, after the pixel size is
+    checked against the shapes and the grid and the rays against memory."""
     smallest = min(min(sh.axes) for sh in scene.shapes)
     if pix > 0.5 * smallest:
         raise ParameterError(f"pixel_size must be at most {0.5 * smallest:g} (half the "
@@ -155,24 +178,9 @@ def simulate_pixel(scene: Scene, ladar: Ladar, *, pixel_size=None, ray_spacing=N
     s_rel = (np.arange(n_rays) - (n_rays - 1) / 2) * ds          # about the scene centre
     # the most arc one ray covers: sqrt(2 ρ δs) at a silhouette of curvature radius ρ
     arc_max = [math.sqrt(2.0 * max(sh.axes) ** 2 / min(sh.axes) * ds) for sh in scene.shapes]
-    payload = _PixelJob(mask, grid, owner.ravel(), normal.reshape(-1, 2),
-                        tuple(s.material for s in scene.shapes), arc_max, s_rel, (cx, cy),
-                        2 * half, ds, np.deg2rad(ladar.angles_deg), ladar.bin_edges, power)
-    job = None
-    if run_dir is not None:
-        job = {"kind": "simulate_pixel", "radiometry": radiometry, "shapes": [repr(s) for s in scene.shapes],
-               "pixel_size": pix, "ray_spacing": ds,
-               "angles_deg": array_digest(ladar.angles_deg),
-               "bin_edges": array_digest(ladar.bin_edges)}
-    results = run_chunks(_views, payload, ladar.n_views,
-                         chunk_size=max(1, min(_VIEWS_PER_CHUNK, _RAYS_PER_CHUNK // n_rays)), jobs=jobs, executor=executor,
-                         progress=progress, run_dir=run_dir, job=job,
-                         arrays={"values": (ladar.n_bins,)})
-    return Sinogram(joined(results, "values"), angles_deg=ladar.angles_deg,
-                    bin_edges=ladar.bin_edges, model="pixel",
-                    info={"radiometry": radiometry, "units": "length/sr (per unit height)",
-                          "pixel_size": pix, "ray_spacing": ds,
-                          "n_rays": n_rays})
+    return _PixelJob(mask, grid, owner.ravel(), normal.reshape(-1, 2),
+                     tuple(s.material for s in scene.shapes), arc_max, s_rel, (cx, cy),
+                     2 * half, ds, np.deg2rad(ladar.angles_deg), ladar.bin_edges, power)
 
 
 @dataclass(frozen=True)

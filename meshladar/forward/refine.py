@@ -99,68 +99,119 @@ def simulate_tol(scene, ladar, tol, normals, footprint, max_rays, kwargs):
     LobeSamplingWarning
         When the kept run's rays undersample a coating's glint.
     """
-    tol = check_real("tol", tol, low=0.0, high=1.0, low_open=True, high_open=True)
-    max_rays = check_real("max_rays", TOL_MAX_RAYS if max_rays is None else max_rays,
-                          low=1.0)
-    if kwargs.pop("ray_spacing") is not None or kwargs.pop("rays_per_bin") is not None:
-        raise ParameterError("tol chooses the ray density itself: drop ray_spacing and "
-                             "rays_per_bin, or drop tol")
-    tessellate = not scene.is_mesh
-    if normals is None:
-        normals = "exact" if tessellate else "smooth"
-    if footprint is None:
-        footprint = kwargs.get("receiver") is None
-    n, r = _TOL_START
-    runs, last = [], []                    # every run's record; the last three values
-    best = None                            # (estimate, sinogram, run index)
-    order = 1.0
-    spent = 0
-    why = None
-    for step in range(_TOL_STEPS + 1):
-        if runs:
-            # rays grow 2x per step in slice mode, 4x in 3-D: predict from the last run
-            growth = 2.0 if sino.info["mode"] == "slice" else 4.0
-            if spent + growth * runs[-1]["rays"] > max_rays:
-                why = (f"the next run would cast about {growth * runs[-1]['rays']:.3g} rays, "
-                       f"past the budget max_rays={max_rays:.3g} ({spent:.3g} cast so far); "
-                       "raise max_rays or loosen tol")
-                break
-        mesh = scene.tessellate(n) if tessellate else scene
+    knob = _Knob.checked(scene, tol, normals, footprint, max_rays, kwargs)
+    while knob.another_run():
+        mesh = scene.tessellate(knob.segments) if knob.tessellate else scene
         t0 = time.perf_counter()
         with checked_by_caller():          # coarse runs undersample glints on purpose
-            sino = simulate_mesh(mesh, ladar, normals=normals, rays_per_bin=r,
-                                 footprint=footprint, **kwargs)
-        spent += sino.info["rays"]
-        runs.append({"segments": n if tessellate else None, "rays_per_bin": r,
-                     "rays": sino.info["rays"], "seconds": time.perf_counter() - t0})
-        last = (last + [sino.values])[-3:]
-        if len(last) >= 2:
-            est, order = _estimate(last, order)
-            runs[-1]["error_estimate"] = est
-            if best is not None and est >= best[0]:
-                why = _stalled(est, best[0], footprint, normals)
-                break
-            best = (est, sino, len(runs) - 1, mesh)
-            if est <= tol:
-                break
-        if tessellate:
-            n *= 2
-        r *= 2
-    else:
-        why = f"{_TOL_STEPS} refinements were not enough; loosen tol"
-    if best is None:                       # a single run: nothing to estimate from
-        best = (float("inf"), sino, len(runs) - 1, mesh)
-    est, sino, k, _ = best
-    _warn_kept(best, runs, why, tol, normals)
-    info = dict(sino.info, tol=tol, error_estimate=est, convergence_order=order,
-                max_rays=max_rays, rays_total=spent, stopped=why or "tol reached",
-                chosen={"segments": runs[k]["segments"],
-                        "rays_per_bin": runs[k]["rays_per_bin"], "normals": normals,
-                        "footprint": footprint},
-                refinement=runs)
-    return Sinogram(sino.values, angles_deg=sino.angles_deg, bin_edges=sino.bin_edges,
-                    model="mesh", info=info,
-                    view_vectors=None if ladar.planar else ladar.view_vectors)
+            sino = simulate_mesh(mesh, ladar, normals=knob.normals, footprint=knob.footprint,
+                                 rays_per_bin=knob.rays_per_bin, **kwargs)
+        knob.record(sino, mesh, time.perf_counter() - t0)
+    _warn_kept(knob.kept(), knob.runs, knob.why, knob.tol, knob.normals)
+    return knob.result(ladar)
+
+
+class _Knob:
+    """The knob's bookkeeping over its runs: the checked settings, the next run's density,
+    every run's record, the best run so far and why refinement stopped (None: tol reached).
+
+    :func:`simulate_tol` asks :meth:`another_run`, makes the run itself (so that the mesh
+    model's warnings keep their stack level) and hands it to :meth:`record`."""
+
+    def __init__(self, tol, max_rays, tessellate, normals, footprint):
+        self.tol, self.max_rays, self.tessellate = tol, max_rays, tessellate
+        self.normals, self.footprint = normals, footprint
+        self.segments, self.rays_per_bin = _TOL_START
+        self.runs, self.last = [], []      # every run's record; the last three values
+        self.best = None                   # (estimate, sinogram, run index, mesh)
+        self.order = 1.0
+        self.spent = 0
+        self.why = None
+        self.done = False
+        self.sino = self.mesh = None       # the latest run
+
+    @classmethod
+    def checked(cls, scene, tol, normals, footprint, max_rays, kwargs):
+        """The knob of a run, its arguments checked and its defaults chosen; pops
+        ``ray_spacing`` and ``rays_per_bin`` from ``kwargs`` (refusing either given)."""
+        tol = check_real("tol", tol, low=0.0, high=1.0, low_open=True, high_open=True)
+        max_rays = check_real("max_rays", TOL_MAX_RAYS if max_rays is None else max_rays,
+                              low=1.0)
+        if kwargs.pop("ray_spacing") is not None or kwargs.pop("rays_per_bin") is not None:
+            raise ParameterError("tol chooses the ray density itself: drop ray_spacing and "
+                                 "rays_per_bin, or drop tol")
+        tessellate = not scene.is_mesh
+        if normals is None:
+            normals = "exact" if tessellate else "smooth"
+        if footprint is None:
+            footprint = kwargs.get("receiver") is None
+        return cls(tol, max_rays, tessellate, normals, footprint)
+
+    def another_run(self):
+        """Whether to make another run: not once tol is met or refinement stalled, nor
+        after the last refinement, nor when the next run would pass the ray budget (the
+        last two say why)."""
+        if self.done:
+            return False
+        if len(self.runs) > _TOL_STEPS:
+            self.why = f"{_TOL_STEPS} refinements were not enough; loosen tol"
+            return False
+        if self.runs:
+            # rays grow 2x per step in slice mode, 4x in 3-D: predict from the last run
+            growth = 2.0 if self.sino.info["mode"] == "slice" else 4.0
+            more = growth * self.runs[-1]["rays"]
+            if self.spent + more > self.max_rays:
+                self.why = (f"the next run would cast about {more:.3g} rays, past the budget "
+                            f"max_rays={self.max_rays:.3g} ({self.spent:.3g} cast so far); "
+                            "raise max_rays or loosen tol")
+                return False
+        return True
+
+    def record(self, sino, mesh, seconds):
+        """Take a run in: its record, its error estimate (from the second run on), the best
+        run so far; stop when tol is met or the estimate stops falling, else refine."""
+        self.sino, self.mesh = sino, mesh
+        self.spent += sino.info["rays"]
+        self.runs.append({"segments": self.segments if self.tessellate else None,
+                          "rays_per_bin": self.rays_per_bin, "rays": sino.info["rays"],
+                          "seconds": seconds})
+        self.last = (self.last + [sino.values])[-3:]
+        if len(self.last) >= 2:
+            est, self.order = _estimate(self.last, self.order)
+            self.runs[-1]["error_estimate"] = est
+            if self.best is not None and est >= self.best[0]:
+                self.why = _stalled(est, self.best[0], self.footprint, self.normals)
+                self.done = True
+                return
+            self.best = (est, sino, len(self.runs) - 1, mesh)
+            if est <= self.tol:
+                self.done = True
+                return
+        if self.tessellate:
+            self.segments *= 2
+        self.rays_per_bin *= 2
+
+    def kept(self):
+        """(estimate, sinogram, run index, mesh) of the run kept: the best estimated, or
+        the only run (estimate inf: nothing to estimate from)."""
+        if self.best is None:
+            self.best = (float("inf"), self.sino, len(self.runs) - 1, self.mesh)
+        return self.best
+
+    def result(self, ladar):
+        """The kept run's sinogram, its ``info`` extended by how the knob got there."""
+        est, sino, k, _ = self.kept()
+        runs = self.runs
+        info = dict(sino.info, tol=self.tol, error_estimate=est, convergence_order=self.order,
+                    max_rays=self.max_rays, rays_total=self.spent,
+                    stopped=self.why or "tol reached",
+                    chosen={"segments": runs[k]["segments"],
+                            "rays_per_bin": runs[k]["rays_per_bin"], "normals": self.normals,
+                            "footprint": self.footprint},
+                    refinement=runs)
+        return Sinogram(sino.values, angles_deg=sino.angles_deg, bin_edges=sino.bin_edges,
+                        model="mesh", info=info,
+                        view_vectors=None if ladar.planar else ladar.view_vectors)
 
 
 def _warn_kept(best, runs, why, tol, normals):
