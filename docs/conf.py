@@ -26,6 +26,7 @@ release = version = meshladar.__version__
 extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.mathjax",
+    "myst_parser",
     "numpydoc",
     "sphinx_gallery.gen_gallery",
     "cli_reference",
@@ -37,6 +38,12 @@ html_title = "meshladar"
 html_theme_options = {"navigation_with_keys": False, "show_toc_level": 2}
 html_static_path: list = []
 exclude_patterns = ["_build", "gallery"]
+# the guide's pages are Markdown (MyST), so that they read on GitHub as well and the test
+# suite runs their examples as it runs the README's; ::: fences hold directives (images,
+# includes) where a ``` fence would read as code
+source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
+myst_enable_extensions = ["colon_fence"]
+myst_heading_anchors = 3
 # flags stay as typed: "--views", not an en dash
 smartquotes = False
 templates_path: list = []

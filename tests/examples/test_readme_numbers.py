@@ -1,4 +1,5 @@
-"""Numbers README.md states about its examples' output that no other test asserted.
+"""Numbers README.md and the guide's pages (``docs/guide/``, once the README's sections)
+state about their examples' output that no other test asserted.
 
 Sections covered: the top, the tour, the BRDF, scenes and the ladar, meshes, the sensor,
 long runs, material tables, the command line and the layout. Where a claim is already

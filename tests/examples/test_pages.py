@@ -1,15 +1,18 @@
-"""Every code example in README.md runs, as written, in the test suite.
+"""Every code example in README.md and in the user guide's pages (``docs/guide/*.md``) runs,
+as written, in the test suite.
 
 Conventions (what runs, and how):
 
-* Fenced blocks are found outside other blocks; a block belongs to the ``##`` section (and
-  ``###`` subsection) above it. Each block is one test case named by its section and the
-  README line of its opening fence (``tour-L47``), so a failure points at the text.
-* ```` ```python ```` blocks run in README order in one namespace per ``##`` section (its
-  subsections share it: the phantoms subsection uses the Scenes section's ``ml``). Running
-  one block alone first runs the blocks above it in its section. The code is compiled as
-  written, never rewritten. What the reader holds at a section's start from earlier
-  sections is that section's :data:`PRELUDES` entry, stated here in the open.
+* Fenced blocks are found outside other blocks. A block belongs to a section: in the
+  README the ``##`` section above it, in a guide page the page itself (its ``#`` title; its
+  ``##`` subsections share it). Each block is one test case named by its page, section and
+  the line of its opening fence (``guide-tour-a-tour-L6``), so a failure points at the text.
+  ``:::`` fences are MyST directives (images, includes), not code.
+* ```` ```python ```` blocks run in page order in one namespace per section (the
+  phantoms subsection uses the Scenes page's ``ml``). Running one block alone first runs
+  the blocks above it in its section. The code is compiled as written, never rewritten.
+  A page starts from its own first block: nothing is carried from another page (the
+  tour's mesh files apart, below).
 * ```` ```bash ```` blocks are commands: each line (with its ``\\`` continuations) that
   starts with ``meshladar``, ``python`` or ``.venv/bin/`` runs through bash and must exit
   0; ``python``, ``meshladar`` and ``.venv/bin/`` mean this interpreter's. Set-up lines (``pip install``,
@@ -17,8 +20,9 @@ Conventions (what runs, and how):
   are skipped.
 * Plain ```` ``` ```` blocks (no language) are synopses and listings, never run.
 * Every block runs in a fresh scratch folder holding the mesh files the tour makes
-  (``part.stl``, ``probe.glb``), made by the tour's own first command.
-* Warnings are errors (as in the whole suite), except a warning the README says the block
+  (``part.stl``, ``probe.glb``), made by the tour's own first command; a page that uses
+  them says so and links the tour.
+* Warnings are errors (as in the whole suite), except a warning the text says the block
   gives: :data:`WARNS` names it, and the block must give it.
 * Blocks over ~5 s are marked slow in :data:`SLOW`.
 """
@@ -39,48 +43,8 @@ import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 README = ROOT / "README.md"
-
-#: Names a section's examples use that an earlier section defined (or that stand for the
-#: reader's own data), as the reader has them at that point. Keyed by the section title's
-#: start; the README's own sections make their own names where they can.
-PRELUDES = {
-    # the Scenes section's sino (the paper's pair), points and radii to sample at, and the
-    # pair's coatings with each pixel's coating (left of x = 0.05: gray; right: aluminium)
-    "Reconstruction": (
-        "import numpy as np, meshladar as ml\n"
-        "from meshladar.materials import DARK_GRAY, ALUMINUM\n"
-        "sino = ml.simulate(ml.phantoms.scene('disk_pair', large=DARK_GRAY, small=ALUMINUM),"
-        " ml.Ladar.paper())\n"
-        "points = np.array([[0.1, 0.0], [0.4, 0.3]]); radii = np.array([0.2, 0.4])\n"
-        "coating, gray, aluminium = DARK_GRAY, DARK_GRAY, ALUMINUM\n"
-        "labels = np.broadcast_to((np.linspace(-1, 1, 512) > 0.05).astype(int), (512, 512))\n"
-    ),
-    # the tour's sphere as `part`, views about z, and cross-range and Doppler bin edges
-    "Beyond range": (
-        "import numpy as np, meshladar as ml\n"
-        "part = ml.Scene.from_mesh('part.stl', material=ml.materials.DARK_GRAY)\n"
-        "ladar = ml.Ladar.covering(part, n_bins=64, angles_deg=np.arange(0, 360, 30.0))\n"
-        "e = np.linspace(-0.6, 0.6, 33); f = np.linspace(-2e5, 2e5, 33)\n"
-    ),
-    # the paper's pair, 72 views of 64 bins, and Poisson counts of 1e5 in the brightest bin
-    "Coatings from ladar data": (
-        "import numpy as np, meshladar as ml\n"
-        "scene = ml.phantoms.scene('disk_pair', large=ml.materials.DARK_GRAY,"
-        " small=ml.materials.ALUMINUM)\n"
-        "ladar = ml.Ladar(angles_deg=np.arange(0, 360, 5.0),"
-        " bin_edges=np.linspace(-0.8, 0.8, 65))\n"
-        "exact = ml.simulate(scene, ladar); k = 1e5 / exact.values.max()\n"
-        "measured = ml.Sinogram(np.random.default_rng(0).poisson(k * exact.values) / k,"
-        " angles_deg=ladar.angles_deg, bin_edges=ladar.bin_edges)\n"
-    ),
-    # the mixed disk pair at 10° views, the set-up the text says tol is tested on
-    "Accuracy": (
-        "import numpy as np, meshladar as ml\n"
-        "scene = ml.phantoms.scene('disk_pair', large=ml.materials.DARK_GRAY,"
-        " small=ml.materials.ALUMINUM)\n"
-        "ladar = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 10.0))\n"
-    ),
-}
+#: the pages whose examples run: the README, then the guide's pages
+PAGES = [README] + sorted((ROOT / "docs" / "guide").glob("*.md"))
 
 #: Blocks the README says warn: (section start, ordinal of the block in its section) ->
 #: the warning class name the block must give (and may give, alone of all warnings).
@@ -90,9 +54,10 @@ WARNS = {
 
 #: Blocks over ~5 s (section start, ordinal): run by the full suite, left out of the fast one.
 SLOW = {
-    ("(top)", 1), ("A tour", 0), ("Reconstruction", 1), ("Reconstruction", 2),
-    ("Meshes", 0), ("The sensor", 0), ("The sensor", 1), ("The sensor", 2), ("The sensor", 3),
-    ("Beyond range", 1), ("Long runs", 0), ("Long runs", 1), ("Accuracy", 0),
+    ("In ten lines", 0), ("A tour", 0), ("Getting started", 1), ("Getting started", 2),
+    ("Reconstruction", 2), ("Reconstruction", 3), ("Meshes", 0), ("The sensor", 0),
+    ("The sensor", 1), ("The sensor", 2), ("The sensor", 3), ("Beyond range", 2),
+    ("Long runs", 0), ("Long runs", 1), ("Accuracy", 1),
 }
 
 SETUP = ("pip install", "python3 -m venv", "git clone")
@@ -103,14 +68,21 @@ COMMAND = re.compile(r"^(meshladar|python|\.venv/bin/)")
 class Block:
     lang: str
     line: int          # 1-based line of the opening fence
-    section: str       # the ## heading ("(top)" before the first)
+    section: str       # the README's ## heading ("(top)" before the first), a page's title
     ordinal: int       # the block's place among its section's blocks (0, 1, ...)
     code: str
+    page: str = "README.md"     # relative to the repository
 
     @property
     def id(self):
         words = re.findall(r"[a-z0-9]+", self.section.lower())
-        return f"{'-'.join(words[:3]) or 'top'}-L{self.line}"
+        where = "" if self.page == "README.md" else \
+            "-".join(pathlib.PurePosixPath(self.page).with_suffix("").parts[1:]) + "-"
+        return f"{where}{'-'.join(words[:3]) or 'top'}-L{self.line}"
+
+    @property
+    def where(self):
+        return f"{self.page}:{self.line}"
 
     def key_in(self, table):
         return next((v for (s, i), v in _items(table) if self.section.startswith(s)
@@ -121,26 +93,29 @@ def _items(table):
     return table.items() if isinstance(table, dict) else ((k, True) for k in table)
 
 
-def blocks(text=None):
-    """Every fenced block of the README, in order."""
-    lines = (README.read_text(encoding="utf-8") if text is None else text).splitlines()
+def blocks(text=None, page="README.md"):
+    """Every fenced block of a page (the README unless ``text`` is given), in order."""
+    if text is None:
+        text = (ROOT / page).read_text(encoding="utf-8")
+    heading = "## " if page == "README.md" else "# "
     out, section, fence, counts = [], "(top)", None, {}
-    for n, line in enumerate(lines, 1):
+    for n, line in enumerate(text.splitlines(), 1):
         if fence is None:
             m = re.match(r"^```(\w*)\s*$", line)
             if m:
                 fence, body = (m.group(1), n), []
-            elif line.startswith("## "):
-                section = line[3:].strip()
+            elif line.startswith(heading):
+                section = line[len(heading):].strip()
             continue
         if line.startswith("```"):
             lang, start = fence
             counts[section] = counts.get(section, -1) + 1
-            out.append(Block(lang, start, section, counts[section], "\n".join(body) + "\n"))
+            out.append(Block(lang, start, section, counts[section], "\n".join(body) + "\n",
+                             page))
             fence = None
         else:
             body.append(line)
-    assert fence is None, f"README.md: the block opened at line {fence[1]} is not closed"
+    assert fence is None, f"{page}: the block opened at line {fence[1]} is not closed"
     return out
 
 
@@ -158,7 +133,7 @@ def commands(block):
     return [c for c in joined if COMMAND.match(c) and not any(s in c for s in SETUP)]
 
 
-BLOCKS = blocks()
+BLOCKS = [b for p in PAGES for b in blocks(page=p.relative_to(ROOT).as_posix())]
 PYTHON = [b for b in BLOCKS if b.lang == "python"]
 BASH = [b for b in BLOCKS if b.lang == "bash"]
 TOUR_MESHES = next(c for b in BASH if b.section == "A tour" for c in commands(b)
@@ -206,10 +181,13 @@ def scratch(tmp_path, tour_files, monkeypatch):
     return tmp_path
 
 
-def test_readme_has_blocks():
-    """The parser sees the README's examples (a parser that saw none would pass all)."""
+def test_pages_have_blocks():
+    """The parser sees the README's and the guide's examples (a parser that saw none would
+    pass all)."""
     assert len(PYTHON) >= 15 and len(BASH) >= 3
-    assert {"(top)", "Reconstruction"} <= {b.section for b in PYTHON}
+    assert {"In ten lines", "Reconstruction", "Getting started"} <= {b.section for b in PYTHON}
+    assert {b.page for b in PYTHON} >= {"README.md", "docs/guide/getting_started.md",
+                                        "docs/guide/scenes.md"}
     assert any("meshladar simulate" in c for b in BASH for c in commands(b))
     for table in (SLOW, WARNS):         # every entry names a block that exists
         for section, ordinal in table:
@@ -225,6 +203,10 @@ def test_synopsis_is_not_run():
             "meshladar simulate a \\\n    --views 3 -o a.npz\n```\n")
     found = blocks(text)
     assert [b.lang for b in found] == ["", "bash"]
+    # a guide page: its title is the section, its ## subsections share it; ::: is no fence
+    page = blocks("# T\n```python\nx = 1\n```\n## Sub\n:::{image} a.png\n:::\n"
+                  "```python\ny = x\n```\n", page="docs/guide/t.md")
+    assert [(b.section, b.ordinal) for b in page] == [("T", 0), ("T", 1)]
     assert commands(found[1]) == ["meshladar simulate a --views 3 -o a.npz"]
 
 
@@ -236,32 +218,29 @@ _NAMESPACES: dict = {}
 def _run_python(block):
     with warnings.catch_warnings(record=True) as seen:
         warnings.simplefilter("always")
-        exec(compile(block.code, f"README.md:{block.line}", "exec"), _namespace_for(block))
+        exec(compile(block.code, block.where, "exec"), _namespace_for(block))
     want = block.key_in(WARNS)
     names = sorted({type(w.message).__name__ for w in seen})
     unexpected = [f"{type(w.message).__name__}: {w.message}" for w in seen
                   if type(w.message).__name__ != want]
-    assert not unexpected, f"README.md:{block.line} warns: {unexpected}"
+    assert not unexpected, f"{block.where} warns: {unexpected}"
     if want:
-        assert want in names, f"README.md:{block.line} should warn {want} (the text says so)"
+        assert want in names, f"{block.where} should warn {want} (the text says so)"
 
 
 def _namespace_for(block):
     """The section's namespace with every earlier block of the section run in it."""
-    key = block.section
+    key = (block.page, block.section)
     if key not in _NAMESPACES:
-        ns = {"__name__": "__readme__"}
-        prelude = next((p for s, p in PRELUDES.items() if key.startswith(s)), "")
-        exec(compile(prelude, f"prelude of {key!r}", "exec"), ns)
-        _NAMESPACES[key] = [ns, 0]
+        _NAMESPACES[key] = [{"__name__": "__readme__"}, 0]
     ns, done = _NAMESPACES[key]
-    earlier = [b for b in PYTHON if b.section == key and b.ordinal < block.ordinal]
+    earlier = [b for b in PYTHON if (b.page, b.section) == key and b.ordinal < block.ordinal]
     for b in earlier[done:]:
         _NAMESPACES[key][1] += 1
         try:
-            exec(compile(b.code, f"README.md:{b.line}", "exec"), ns)
+            exec(compile(b.code, b.where, "exec"), ns)
         except Exception as exc:        # noqa: BLE001 - names the earlier block
-            pytest.fail(f"an earlier block of the section (README.md:{b.line}) failed: {exc!r}")
+            pytest.fail(f"an earlier block of the section ({b.where}) failed: {exc!r}")
     _NAMESPACES[key][1] = max(_NAMESPACES[key][1], block.ordinal + 1)
     return ns
 
@@ -299,5 +278,5 @@ def test_bash_block(block, scratch, bindir, request):
         request.getfixturevalue("rendering")
     for cmd in cmds:
         res = _bash(cmd, scratch, bindir)
-        assert res.returncode == 0, (f"README.md:{block.line}: `{cmd}` exited "
+        assert res.returncode == 0, (f"{block.where}: `{cmd}` exited "
                                      f"{res.returncode}:\n{res.stderr[-3000:]}")
