@@ -77,7 +77,7 @@ def test_temporaries_of_a_killed_writer_are_removed_by_the_next_write(tmp_path):
     import subprocess
     import sys
 
-    from meshladar import io as mlio
+    from meshladar import _atomic_write
 
     # a pid that has ended (a finished child), and this process's own (alive)
     child = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
@@ -90,7 +90,7 @@ def test_temporaries_of_a_killed_writer_are_removed_by_the_next_write(tmp_path):
     users = _near_miss_names(dead)
     for name in users:
         (tmp_path / name).write_text("a user's notes")
-    mlio._SWEPT.discard(str(tmp_path))
+    _atomic_write._SWEPT.discard(str(tmp_path))
     save_result(tmp_path / "out.npz", {"a": np.zeros(3)}, {})
     assert not stale.exists() and live.exists()
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted([live.name, "out.npz", *users])
@@ -107,13 +107,13 @@ def _near_miss_names(dead_pid):
 
 
 def test_a_link_named_like_a_temporary_is_not_followed_or_removed(tmp_path):
-    from meshladar import io as mlio
+    from meshladar import _atomic_write
 
     target = tmp_path / "keep.txt"
     target.write_text("precious")
     link = tmp_path / ".meshladar-tmp-999999999-abcdefghx.npz"
     link.symlink_to(target)
-    mlio._SWEPT.discard(str(tmp_path))
+    _atomic_write._SWEPT.discard(str(tmp_path))
     save_result(tmp_path / "out.npz", {"a": np.zeros(3)}, {})
     assert link.is_symlink() and target.read_text() == "precious"
 
