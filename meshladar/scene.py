@@ -12,16 +12,16 @@ from functools import cached_property
 
 import numpy as np
 
+from ._scene_inputs import (checked_coatings, checked_shapes, parts_by_face, parts_by_name,
+                            parts_of_items)
 from ._summary import listing, material_name, table, text
 from ._validate import check_real
-from .brdf import check_brdf
-from .errors import GeometryError, MeshladarWarning, ParameterError
-from .meshes import MeshPart, convex_hull, inspect_parts, load_parts, part_from_trimesh, prism
+from .errors import MeshladarWarning, ParameterError
+from .meshes import convex_hull, inspect_parts, load_parts, prism
 from .precision import OVERLAP_RTOL
-from .shapes import Disk, Ellipse, Shape, _overlap, to_frame
+from .shapes import Disk, Ellipse, Shape, to_frame
 
 __all__ = ["Shape", "Disk", "Ellipse", "Scene", "OVERLAP_RTOL"]
-
 
 
 class Scene:
@@ -55,24 +55,7 @@ class Scene:
     _report: dict = {}
 
     def __init__(self, shapes):
-        try:
-            shapes = tuple(shapes)
-        except TypeError:
-            raise ParameterError(f"shapes must be a sequence of Disk or Ellipse; got "
-                                 f"{type(shapes).__name__}") from None
-        if not shapes:
-            raise ParameterError("shapes must hold at least one shape; got an empty scene")
-        for i, s in enumerate(shapes):
-            if not isinstance(s, Shape):
-                raise ParameterError(f"shapes[{i}] must be a Disk or an Ellipse; got "
-                                     f"{type(s).__name__}")
-        for i in range(len(shapes)):
-            for j in range(i + 1, len(shapes)):
-                if _overlap(shapes[i], shapes[j]):
-                    raise GeometryError(
-                        f"shapes[{i}] and shapes[{j}] overlap; shapes in a scene may touch "
-                        "but not overlap (the boundary of their union is not theirs)")
-        self._shapes = shapes
+        self._shapes = checked_shapes(shapes)
 
     @property
     def shapes(self) -> tuple[Shape, ...]:
@@ -101,21 +84,7 @@ class Scene:
     # -- mesh scenes ------------------------------------------------------------------------
     @classmethod
     def _from_parts(cls, parts, materials, shapes=()):
-        if not isinstance(materials, (list, tuple)) or not isinstance(parts, (list, tuple)):
-            raise ParameterError(f"parts and materials must be lists; got "
-                                 f"{type(parts).__name__} and {type(materials).__name__}")
-        mats = tuple(materials)
-        for i, m in enumerate(mats):
-            check_brdf(f"materials[{i}]", m)
-        for i, p in enumerate(parts):
-            if not isinstance(p, MeshPart):
-                raise ParameterError(f"parts[{i}] must be a meshladar.meshes.MeshPart; got "
-                                     f"{type(p).__name__}")
-        for p in parts:
-            if len(p.material) and (p.material.min() < 0 or p.material.max() >= len(mats)):
-                raise ParameterError(f"{p.name}: face material indices must be in "
-                                     f"[0, {len(mats) - 1}]; got {int(p.material.min())}.."
-                                     f"{int(p.material.max())}")
+        mats = checked_coatings(parts, materials)
         cleaned, report = inspect_parts(parts)
         inverted = [p.name for p, bad in zip(cleaned, report["inverted"]) if bad]
         if inverted:
@@ -218,36 +187,9 @@ class Scene:
         """
         loaded = load_parts(mesh_or_path)
         if face_materials is not None:
-            if len(loaded) != 1:
-                raise ParameterError("face_materials needs a single mesh; got a scene of "
-                                     f"{len(loaded)} parts (use materials={{part: m}})")
-            if not isinstance(materials, (list, tuple)):
-                raise ParameterError("with face_materials, materials must be a list of "
-                                     "BRDF indexed by face_materials")
-            name, m = loaded[0]
-            fm = np.asarray(face_materials)
-            if fm.shape != (len(m.faces),) or not np.issubdtype(fm.dtype, np.integer):
-                raise ParameterError(f"face_materials must be ({len(m.faces)},) integers; got "
-                                     f"shape {fm.shape}, dtype {fm.dtype}")
-            part = part_from_trimesh(m, fm, name=name, transform=transform)
-            return cls._from_parts([part], materials)
-        if materials is not None and not isinstance(materials, dict):
-            raise ParameterError(f"materials must be a dict of part name -> coating; got "
-                                 f"{type(materials).__name__}")
-        named = dict(materials or {})
-        unknown = sorted(set(named) - {n for n, _ in loaded})
-        if unknown:
-            raise ParameterError(f"materials: no part named {unknown[0]!r}; parts are "
-                                 f"{[n for n, _ in loaded]}")
-        mats, parts = [], []
-        for name, m in loaded:
-            coat = named.get(name, material)
-            if coat is None:
-                raise ParameterError(f"part {name!r} has no material: give material= or "
-                                     f"materials={{{name!r}: ...}}")
-            if coat not in mats:
-                mats.append(coat)
-            parts.append(part_from_trimesh(m, mats.index(coat), name=name, transform=transform))
+            parts, mats = parts_by_face(loaded, materials, face_materials, transform)
+        else:
+            parts, mats = parts_by_name(loaded, material, materials, transform)
         return cls._from_parts(parts, mats)
 
     @classmethod
@@ -282,18 +224,7 @@ class Scene:
         MeshladarWarning
             When some closed body has inverted normals.
         """
-        mats, parts = [], []
-        for k, item in enumerate(items):
-            if not isinstance(item, (tuple, list)) or len(item) not in (2, 3):
-                raise ParameterError(f"items[{k}] must be (mesh, material[, transform]); got "
-                                     f"{item!r}")
-            mesh, coat = item[0], item[1]
-            transform = item[2] if len(item) == 3 else None
-            if coat not in mats:
-                mats.append(coat)
-            for name, m in load_parts(mesh):
-                parts.append(part_from_trimesh(m, mats.index(coat), name=f"{k}:{name}",
-                                                   transform=transform))
+        parts, mats = parts_of_items(items)
         return cls._from_parts(parts, mats)
 
     def tessellate(self, segments=256, *, height=1.0, z0=0.0):
