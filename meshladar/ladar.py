@@ -272,44 +272,13 @@ class Ladar:
             When the target's centre is so far from the origin that centring it would at
             least halve the bins' span (:data:`OFF_CENTRE_FACTOR`).
         """
-        if not isinstance(scene, Scene):
-            raise ParameterError(f"scene must be a meshladar.Scene; got {type(scene).__name__}")
-        if bin_width is None and n_bins is None:
-            raise ParameterError("give bin_width or n_bins (or both); got neither")
-        m = check_real("margin", margin, low=0.0)
-        w = check_real("bin_width", bin_width, low=MIN_BIN_WIDTH) \
-            if bin_width is not None else None
-        n = check_count("n_bins", n_bins) if n_bins is not None else None
-        if view_vectors is not None:
-            views = cls(angles_deg, np.array([0.0, 1.0]), view_vectors=view_vectors)
-        else:
-            views = cls(np.arange(360.0) if angles_deg is None else angles_deg,
-                        np.array([0.0, 1.0]))
+        m, w, n = _covering_options(scene, bin_width, n_bins, margin)
+        views = _requested_views(cls, angles_deg, view_vectors)
         if n is not None:
             check_size("n_bins", n, 8 * views.n_views, f"{n} bins", "use fewer bins")
         near, far = scene.view_ranges(views.view_vectors)
         _warn_off_centre(scene, views, near, far)
-        if scene.is_mesh:
-            lo, hi = float(near.min()) - m, float(far.max()) + m
-            center = 0.5 * (lo + hi)
-            span = max(hi - lo, 0.0)
-            if n is None:
-                n = max(1, int(np.ceil(span / w - COUNT_SLACK)) + 1)
-            elif w is None:
-                # n bins whose centres run from the nearest to the farthest range
-                w = span / (n - 1) if n > 1 and span > 0 else max(span, SPAN_FLOOR * (
-                    1.0 + abs(center)))
-        else:
-            c, radius = scene.bounding_circle()
-            center = 0.0
-            half = float(np.hypot(*c)) + radius + m
-            if n is None:
-                n = max(1, int(np.ceil(2 * half / w - COUNT_SLACK)))
-            elif w is None:
-                w = 2 * half / n
-        check_size("bin_width", n, 8 * views.n_views, f"{n:.4g} bins of width {w:g}",
-                   "give wider bins")
-        edges = center + (np.arange(n + 1) - n / 2.0) * w
+        edges = _covering_edges(scene, (near, far), m, w, n, views.n_views)
         if view_vectors is not None:
             return cls(None, edges, view_vectors=views.view_vectors)
         return cls(views.angles_deg, edges)
@@ -407,3 +376,56 @@ def _warn_off_centre(scene, views, near, far):
         f"simulating (trimesh: mesh.apply_translation(({move})), or Scene.from_mesh(mesh, "
         f"..., transform=trimesh.transformations.translation_matrix(({move}))))",
         MeshladarWarning, stacklevel=3)
+
+
+def _covering_options(scene, bin_width, n_bins, margin):
+    """:meth:`Ladar.covering`'s scene and bin options, checked: (margin, bin width, bin
+    count), the width or the count None when not given."""
+    if not isinstance(scene, Scene):
+        raise ParameterError(f"scene must be a meshladar.Scene; got {type(scene).__name__}")
+    if bin_width is None and n_bins is None:
+        raise ParameterError("give bin_width or n_bins (or both); got neither")
+    m = check_real("margin", margin, low=0.0)
+    w = check_real("bin_width", bin_width, low=MIN_BIN_WIDTH) \
+        if bin_width is not None else None
+    n = check_count("n_bins", n_bins) if n_bins is not None else None
+    return m, w, n
+
+
+def _requested_views(ladar_class, angles_deg, view_vectors):
+    """A ladar (of ``ladar_class``) of :meth:`Ladar.covering`'s views and one placeholder
+    bin, which checks them: ``view_vectors``, else ``angles_deg`` (default 0, 1, ..., 359)."""
+    if view_vectors is not None:
+        return ladar_class(angles_deg, np.array([0.0, 1.0]), view_vectors=view_vectors)
+    return ladar_class(np.arange(360.0) if angles_deg is None else angles_deg,
+                       np.array([0.0, 1.0]))
+
+
+def _covering_edges(scene, ranges, m, w, n, n_views):
+    """The edges of :meth:`Ladar.covering`'s bins: ``n`` bins of width ``w`` (the one not
+    given, None, derived from the other) covering a mesh scene's ``ranges`` (its nearest
+    and farthest range in each view), or an analytic scene's bounding circle, with margin
+    ``m`` beyond each end; refused when ``n_views`` views of them would pass meshladar's
+    allocation cap."""
+    near, far = ranges
+    if scene.is_mesh:
+        lo, hi = float(near.min()) - m, float(far.max()) + m
+        center = 0.5 * (lo + hi)
+        span = max(hi - lo, 0.0)
+        if n is None:
+            n = max(1, int(np.ceil(span / w - COUNT_SLACK)) + 1)
+        elif w is None:
+            # n bins whose centres run from the nearest to the farthest range
+            w = span / (n - 1) if n > 1 and span > 0 else max(span, SPAN_FLOOR * (
+                1.0 + abs(center)))
+    else:
+        c, radius = scene.bounding_circle()
+        center = 0.0
+        half = float(np.hypot(*c)) + radius + m
+        if n is None:
+            n = max(1, int(np.ceil(2 * half / w - COUNT_SLACK)))
+        elif w is None:
+            w = 2 * half / n
+    check_size("bin_width", n, 8 * n_views, f"{n:.4g} bins of width {w:g}",
+               "give wider bins")
+    return center + (np.arange(n + 1) - n / 2.0) * w

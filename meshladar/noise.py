@@ -233,13 +233,7 @@ def draw_noise(noise, signal, dwell, n, seed):
     shape = (n,) + np.shape(signal)
     check_size("n", float(n) * max(1, int(np.prod(np.shape(signal)))), DRAW_PEAK_BYTES,
                f"{n} realisations of {np.shape(signal)} samples", "draw fewer at a time")
-    b = (noise.background_rate + noise.dark_rate) * dwell
-    top = (float(np.max(signal)) if np.size(signal) else 0.0) + b
-    if not top <= MAX_MEAN_COUNT:
-        raise ParameterError(f"the largest mean count per cell would be {top:.3g} "
-                             f"photoelectrons (signal plus background and dark counts over the "
-                             f"dwell), beyond the {MAX_MEAN_COUNT:.0e} the draws take: check "
-                             "the signal's scale, the rates and the dwell")
+    b = _background(noise, signal, dwell)
     s = np.broadcast_to(np.maximum(signal, 0.0), shape)
     if noise.speckle_cells is not None:
         m = noise.speckle_cells
@@ -251,21 +245,41 @@ def draw_noise(noise, signal, dwell, n, seed):
     counts = rng.poisson(intensity)
     del intensity
     out = counts.astype(np.float64)
-    del counts
-    f = noise.excess_noise_factor
-    if f > 1.0:
-        fired = out > 0
-        out /= f - 1.0                                  # the gamma shapes, in place
-        out[~fired] = 1.0
-        out = np.where(fired, rng.gamma(out, noise.gain * (f - 1.0)), 0.0)
-    else:
-        out *= noise.gain
+    del counts                                          # freed before the gain's draws
+    out = _apd_gain(rng, noise, out)
     if noise.bits is not None:
         lsb = noise.full_scale / 2.0 ** noise.bits
         peak = float(out.max()) if out.size else 0.0
         out = np.clip(np.floor(out / lsb + 0.5), 0, 2 ** noise.bits - 1) * lsb
         _warn_clipped(noise, noise.clipped_fraction(out), peak)
     return out
+
+
+def _background(noise, signal, dwell):
+    """The background and dark counts per cell over ``dwell``, b, once the largest mean
+    count per cell (``signal``'s largest plus b) is checked against :data:`MAX_MEAN_COUNT`."""
+    b = (noise.background_rate + noise.dark_rate) * dwell
+    top = (float(np.max(signal)) if np.size(signal) else 0.0) + b
+    if not top <= MAX_MEAN_COUNT:
+        raise ParameterError(f"the largest mean count per cell would be {top:.3g} "
+                             f"photoelectrons (signal plus background and dark counts over the "
+                             f"dwell), beyond the {MAX_MEAN_COUNT:.0e} the draws take: check "
+                             "the signal's scale, the rates and the dwell")
+    return b
+
+
+def _apd_gain(rng, noise, counts):
+    """The APD's output for the photoelectron ``counts`` (float64, reused in place): each
+    count N times a gamma-distributed gain (mean GN, variance G²N(F − 1)), or GN exactly
+    for a noiseless gain (F = 1)."""
+    f = noise.excess_noise_factor
+    if f > 1.0:
+        fired = counts > 0
+        counts /= f - 1.0                               # the gamma shapes, in place
+        counts[~fired] = 1.0
+        return np.where(fired, rng.gamma(counts, noise.gain * (f - 1.0)), 0.0)
+    counts *= noise.gain
+    return counts
 
 
 def _warn_clipped(noise, fraction, peak):
