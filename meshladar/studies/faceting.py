@@ -172,26 +172,12 @@ def faceting_study(setting="quick", *, phantoms=None, coatings=None, progress=Fa
         When ``setting`` is not a key of :data:`SETTINGS`, ``phantoms`` or ``coatings`` is
         not a list or tuple (or holds an unknown name), or ``run_dir`` is not a path.
     """
-    if setting not in SETTINGS:
-        raise ParameterError(f"setting must be one of {tuple(SETTINGS)}; got {setting!r}")
-    cfg = SETTINGS[setting]
-    for arg, value in (("phantoms", phantoms), ("coatings", coatings)):
-        if value is not None and not isinstance(value, (list, tuple)):
-            raise ParameterError(f"{arg} must be a list of names; got {value!r}")
-    if run_dir is not None:
-        check_path("run_dir", run_dir)
-    phantoms = list(PHANTOMS) if phantoms is None else list(phantoms)
-    coatings = list(COATINGS) if coatings is None else list(coatings)
+    cfg, phantoms, coatings = _checked(setting, phantoms, coatings, run_dir)
     ladar = Ladar.paper(angles_deg=np.arange(0.0, 360.0, 360.0 / cfg["views"]))
     plan = _plan(cfg)
     n_points = len(phantoms) * len(coatings) * len(plan)
     bar = Progress(n_points, "study points", enabled=progress)
-    folder = None
-    if run_dir is not None:
-        folder = RunFolder(run_dir, {"kind": "faceting_study", "setting": setting,
-                                     "config": cfg, "phantoms": phantoms,
-                                     "coatings": coatings, "version": __version__},
-                           n_points)
+    folder = _run_folder(run_dir, setting, cfg, phantoms, coatings, n_points)
     rows, examples = [], {}
     index = 0
     for ph in phantoms:
@@ -219,6 +205,32 @@ def faceting_study(setting="quick", *, phantoms=None, coatings=None, progress=Fa
     return {"setting": setting, "config": cfg, "rows": rows,
             "orders": convergence_orders(rows), "examples": examples,
             "bin_edges": ladar.bin_edges, "angles_deg": ladar.angles_deg}
+
+
+def _checked(setting, phantoms, coatings, run_dir):
+    """The study's arguments checked: (its :data:`SETTINGS` entry, phantom names, coating
+    names), the names defaulting to all."""
+    if setting not in SETTINGS:
+        raise ParameterError(f"setting must be one of {tuple(SETTINGS)}; got {setting!r}")
+    for arg, value in (("phantoms", phantoms), ("coatings", coatings)):
+        if value is not None and not isinstance(value, (list, tuple)):
+            raise ParameterError(f"{arg} must be a list of names; got {value!r}")
+    if run_dir is not None:
+        check_path("run_dir", run_dir)
+    phantoms = list(PHANTOMS) if phantoms is None else list(phantoms)
+    coatings = list(COATINGS) if coatings is None else list(coatings)
+    return SETTINGS[setting], phantoms, coatings
+
+
+def _run_folder(run_dir, setting, cfg, phantoms, coatings, n_points):
+    """The resumable study's folder of ``n_points`` finished points (None without
+    ``run_dir``), keyed by everything that decides the points' values."""
+    if run_dir is None:
+        return None
+    return RunFolder(run_dir, {"kind": "faceting_study", "setting": setting,
+                               "config": cfg, "phantoms": phantoms,
+                               "coatings": coatings, "version": __version__},
+                     n_points)
 
 
 class _Point(NamedTuple):

@@ -9,7 +9,8 @@ collocated), in meshladar's units for ``radiometry="power"``: per range bin,
 Two references need no peer at all: :func:`sphere_power_profile`, the closed form for a
 Lambertian sphere, and :func:`convex_power_profile`, the exact bin integrals of a convex
 (or otherwise unoccluded) faceted Lambertian mesh, with which :func:`bench_time_to_accuracy`
-measures how much time each tool needs for a given accuracy.
+measures how much time each tool needs for a given accuracy. Both are defined in the
+private ``_exact_profiles`` beside this module, and importable from here.
 
 Mitsuba, mitransient and drjit are imported inside the functions that need them: importing
 ``meshladar`` (or this module) never loads them. Install (pinned, as measured)::
@@ -28,6 +29,7 @@ import functools
 import subprocess
 import sys
 import time
+from typing import NamedTuple
 
 import numpy as np
 
@@ -35,6 +37,7 @@ from ..forward import simulate
 from ..ladar import Ladar
 from ..materials import lambertian
 from ..scene import Scene
+from ._exact_profiles import convex_power_profile, sphere_power_profile
 from ._mitsuba_scene import (_checked, _frame, _opl_mapping, _samples, _target,
                              _transient_scene)
 
@@ -220,103 +223,6 @@ def mitransient_profile(vertices, faces, view, bin_edges, *, reflectance=0.5, sp
     return profile, info
 
 
-def sphere_power_profile(bin_edges, radius, reflectance, top):
-    """Closed form for a Lambertian sphere under unit irradiance, seen monostatically.
-
-    A point at depth d = r − top below the sphere's nearest point has cos θ = 1 − d/R; the
-    band [d, d + dd] has area 2πR dd, so the received-power density is
-    (ρ/π) cos²θ 2πR = 2ρR (1 − d/R)² for 0 ≤ d ≤ R (total 2ρR²/3), and a bin
-    [d0, d1] holds (2ρR²/3) [(1 − d0/R)³ − (1 − d1/R)³].
-
-    Parameters
-    ----------
-    bin_edges : (n_bins + 1,) array_like
-        Range edges, increasing, scene units (r = −p·w, growing away from the sensor).
-    radius : float
-        R, scene units.
-    reflectance : float
-        ρ, the Lambertian reflectance (F = ρ/π).
-    top : float
-        The range of the sphere's nearest point (its centre's range − R).
-
-    Returns
-    -------
-    (n_bins,) numpy.ndarray of float64
-        Received power per bin; 0 for bins wholly before ``top`` or beyond ``top + R``
-        (the far half is not seen).
-    """
-    e = np.asarray(bin_edges, dtype=np.float64)
-    R = float(radius)
-    d0 = np.clip(e[:-1] - top, 0.0, R) / R
-    d1 = np.clip(e[1:] - top, 0.0, R) / R
-    return 2.0 * reflectance * R * R / 3.0 * ((1.0 - d0) ** 3 - (1.0 - d1) ** 3)
-
-
-def _triangular_cdf(x, a, c, b):
-    """CDF at x (…, k) of the triangular distribution (a ≤ c ≤ b per row): a linear
-    function's values over a uniform triangle."""
-    x = np.asarray(x)
-    a, c, b = a[:, None], c[:, None], b[:, None]
-    span = b - a
-    left = np.where((c - a) > 0, (x - a) ** 2 / np.where(span * (c - a) > 0, span * (c - a), 1.0),
-                    0.0)
-    right = 1.0 - np.where((b - c) > 0,
-                           (b - x) ** 2 / np.where(span * (b - c) > 0, span * (b - c), 1.0),
-                           0.0)
-    out = np.where(x <= c, left, right)
-    out = np.where(x <= a, 0.0, np.where(x >= b, 1.0, out))
-    return out
-
-
-def convex_power_profile(vertices, faces, view, bin_edges, reflectance=0.5):
-    """Exact received-power profile of a convex Lambertian mesh (or any mesh whose front
-    faces neither shadow nor hide one another), flat facets, monostatic, irradiance 1.
-
-    Each face facing w contributes (ρ/π) cos²θ × area, spread over range as the triangular
-    distribution of r = −p·w over the triangle (min, mode, max at its vertices' ranges):
-    no sampling, so the error of either tool on the same mesh is measured exactly.
-
-    Parameters
-    ----------
-    vertices : (n, 3) array_like of float
-        The mesh's vertices, scene units.
-    faces : (m, 3) array_like of int
-        Vertex indices; a face faces w when its normal by the right-hand rule (counter-
-        clockwise winding seen from outside) has a positive component along w. Others
-        return nothing.
-    view : (3,) array_like
-        w, from the scene toward the sensor (normalised here).
-    bin_edges : (n_bins + 1,) array_like
-        Range edges r = −p·w, increasing, scene units; a face's power outside them is not
-        counted.
-    reflectance : float
-        ρ, the Lambertian reflectance (default 0.5).
-
-    Returns
-    -------
-    (n_bins,) numpy.ndarray of float64
-        Received power per bin, ``radiometry="power"`` units under unit irradiance.
-    """
-    v = np.asarray(vertices, dtype=np.float64)
-    f = np.asarray(faces, dtype=np.int64)
-    w = np.asarray(view, dtype=np.float64).reshape(3)
-    w = w / np.linalg.norm(w)
-    e = np.asarray(bin_edges, dtype=np.float64)
-    tri = v[f]
-    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    area2 = np.linalg.norm(n, axis=1)
-    cos = (n @ w) / np.where(area2 > 0, area2, 1.0)
-    front = cos > 0
-    weight = reflectance / np.pi * cos[front] ** 2 * 0.5 * area2[front]
-    r = np.sort(-(tri[front] @ w), axis=1)
-    out = np.zeros(len(e) - 1)
-    for lo in range(0, len(r), 20000):                    # bounded memory
-        rr = r[lo:lo + 20000]
-        cdf = _triangular_cdf(e[None, :], rr[:, 0], rr[:, 1], rr[:, 2])
-        out += weight[lo:lo + 20000] @ np.diff(cdf, axis=1)
-    return out
-
-
 def _rel(a, b):
     return float(np.linalg.norm(a - b) / np.linalg.norm(b))
 
@@ -393,52 +299,89 @@ def bench_time_to_accuracy(*, subdivisions=6, view=(0.3, 0.5, 0.8), n_bins=64,
         (normalised), ``film``, ``seeds``; ``closed_form_error``: the mesh's own relative
         L2 error against :func:`sphere_power_profile`.
     """
+    sphere = _sphere(subdivisions, view, n_bins, reflectance)
+    runs = {"meshladar": _meshladar_runs(sphere, ray_spacings, seeds), "mitransient": []}
+    if available():
+        runs["mitransient"] = _mitransient_runs(sphere, reflectance, spps, film, seeds)
+    time_to = {}
+    for target in targets:
+        time_to[target] = {tool: _time_for([(r["seconds"], r["error"]) for r in rs], target)
+                           for tool, rs in runs.items() if rs}
+    return {**runs, "time_to": time_to, "faces": len(sphere.f), "n_bins": n_bins,
+            "view": sphere.w.tolist(), "film": tuple(film), "seeds": tuple(seeds),
+            "closed_form_error": _rel(sphere.exact, sphere_power_profile(
+                sphere.edges, 1.0, reflectance, sphere.top))}
+
+
+class _Sphere(NamedTuple):
+    """The target of :func:`bench_time_to_accuracy`: the icosphere's vertices ``v`` and faces
+    ``f``, the unit view ``w``, the range ``edges`` from its nearest point ``top``, its
+    ``exact`` profile (:func:`convex_power_profile`), and meshladar's ``scene`` and
+    ``ladar`` of it."""
+
+    v: np.ndarray
+    f: np.ndarray
+    w: np.ndarray
+    top: float
+    edges: np.ndarray
+    exact: np.ndarray
+    scene: Scene
+    ladar: Ladar
+
+
+def _sphere(subdivisions, view, n_bins, reflectance):
+    """The unit Lambertian icosphere at the origin seen from ``view``: a :class:`_Sphere`."""
     import trimesh
 
-    sphere = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)
-    v, f = np.asarray(sphere.vertices), np.asarray(sphere.faces)
+    mesh = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)
+    v, f = np.asarray(mesh.vertices), np.asarray(mesh.faces)
     w = np.asarray(view, dtype=np.float64)
     w = w / np.linalg.norm(w)
     top = -1.0                                        # the sphere's (the mesh's within 1e-3)
     edges = np.linspace(top, 0.0, n_bins + 1)
     exact = convex_power_profile(v, f, w, edges, reflectance)
-    scene = Scene.from_mesh(sphere, lambertian(reflectance))
+    scene = Scene.from_mesh(mesh, lambertian(reflectance))
     ladar = Ladar(None, edges, view_vectors=w[None])
+    return _Sphere(v, f, w, top, edges, exact, scene, ladar)
+
+
+def _meshladar_runs(sphere, ray_spacings, seeds):
+    """meshladar's runs on ``sphere``, after a warm-up run: one dict per ray spacing, its
+    seeds' mean time and RMS error."""
 
     def ml_run(spacing, seed):
         t = time.perf_counter()
-        s = simulate(scene, ladar, model="mesh", radiometry="power", normals="flat",
-                        ray_spacing=spacing, seed=seed)
+        s = simulate(sphere.scene, sphere.ladar, model="mesh", radiometry="power",
+                     normals="flat", ray_spacing=spacing, seed=seed)
         return time.perf_counter() - t, s.values[0], int(np.sum(s.info.get("rays", 0)))
 
     ml_run(ray_spacings[0], 0)                                  # warm: build, compile
-    runs = {"meshladar": [], "mitransient": []}
+    runs = []
     for sp in ray_spacings:
         ts, errs, n = [], [], 0
         for sd in seeds:
             t, p, n = ml_run(sp, sd)
             ts.append(t)
-            errs.append(_rel(p, exact))
-        runs["meshladar"].append({"ray_spacing": sp, "rays": n, "seconds": float(np.mean(ts)),
-                                  "error": float(np.sqrt(np.mean(np.square(errs))))})
-    if available():
-        mitransient_profile(v, f, w, edges, reflectance=reflectance, spp=1, film=(8, 8))
-        for spp in spps:
-            ts, errs, n = [], [], 0
-            for sd in seeds:
-                p, info = mitransient_profile(v, f, w, edges, reflectance=reflectance, spp=spp,
-                                              film=film, seed=sd)
-                ts.append(info["seconds"])
-                errs.append(_rel(p, exact))
-                n = info["samples"]
-            runs["mitransient"].append({"spp": spp, "samples": n,
-                                        "seconds": float(np.mean(ts)),
-                                        "error": float(np.sqrt(np.mean(np.square(errs))))})
-    time_to = {}
-    for target in targets:
-        time_to[target] = {tool: _time_for([(r["seconds"], r["error"]) for r in rs], target)
-                           for tool, rs in runs.items() if rs}
-    return {**runs, "time_to": time_to, "faces": len(f), "n_bins": n_bins,
-            "view": w.tolist(), "film": tuple(film), "seeds": tuple(seeds),
-            "closed_form_error": _rel(exact, sphere_power_profile(edges, 1.0, reflectance,
-                                                                  top))}
+            errs.append(_rel(p, sphere.exact))
+        runs.append({"ray_spacing": sp, "rays": n, "seconds": float(np.mean(ts)),
+                     "error": float(np.sqrt(np.mean(np.square(errs))))})
+    return runs
+
+
+def _mitransient_runs(sphere, reflectance, spps, film, seeds):
+    """mitransient's runs on ``sphere``, after a warm-up render: one dict per spp, its
+    seeds' mean time and RMS error."""
+    v, f, w, edges = sphere.v, sphere.f, sphere.w, sphere.edges
+    mitransient_profile(v, f, w, edges, reflectance=reflectance, spp=1, film=(8, 8))
+    runs = []
+    for spp in spps:
+        ts, errs, n = [], [], 0
+        for sd in seeds:
+            p, info = mitransient_profile(v, f, w, edges, reflectance=reflectance, spp=spp,
+                                          film=film, seed=sd)
+            ts.append(info["seconds"])
+            errs.append(_rel(p, sphere.exact))
+            n = info["samples"]
+        runs.append({"spp": spp, "samples": n, "seconds": float(np.mean(ts)),
+                     "error": float(np.sqrt(np.mean(np.square(errs))))})
+    return runs

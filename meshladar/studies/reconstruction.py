@@ -233,23 +233,12 @@ def run(setting="quick", *, methods=METHODS, spacings=SPACINGS, photons=None, se
         When ``speckle_cells`` or a non-zero ``background`` is given without ``photons``,
         ``photons`` is not > 0, or ``background`` is negative.
     """
-    if photons is None and (speckle_cells is not None or background):
-        raise ParameterError("speckle_cells and background need photons (the signal's "
-                             "scale in photoelectrons)")
-    if photons is not None:
-        photons = check_real("photons", photons, low=0.0, low_open=True)
-    background = check_real("background", background, low=0.0)
-
+    photons, background = _checked_noise(photons, speckle_cells, background)
     size, n_bins, n_iter = _SETTINGS[setting]
     rows, images = [], {}
-    c = -1.0 + (np.arange(size) + 0.5) * (2.0 / size)
-    X, Y = np.meshgrid(c, c)
+    bins = Ladar.centered(n_bins, 1.6 / n_bins).bin_edges
     for name, scene in _phantoms().items():
-        (cx, cy), radius = scene.bounding_circle()
-        inside = np.hypot(X - cx, Y - cy) < radius * 1.05
-        bins = Ladar.centered(n_bins, 1.6 / n_bins).bin_edges
-        points, band = _bands(scene, float(np.diff(bins)[0]), size)
-        ideal = _ideal(scene, Ladar(np.arange(0.0, 360.0, 1.0), bins), size)
+        judge = _judge(scene, bins, size)
         for sp in spacings:
             ladar = Ladar(np.arange(0.0, 360.0, sp), bins)
             sino = simulate(scene, ladar)
@@ -257,27 +246,69 @@ def run(setting="quick", *, methods=METHODS, spacings=SPACINGS, photons=None, se
                 sino = _noisy(sino, photons, [seed, int(sp * 1000)], speckle_cells,
                               background)
             for method in methods:
-                used = {"fbp_log": log_radiance, "fbp_clip": clip_radiance}.get(
-                    method, lambda x: x)(sino)
-                power = float(used.total().mean())      # the input's own level
-                t0 = time.perf_counter()
-                img = _reconstruct(method, sino, size, n_iter, scene)
-                seconds = time.perf_counter() - t0
-                row = {"phantom": name, "spacing_deg": sp, "method": method,
-                       "photons": photons, "speckle_cells": speckle_cells,
-                       "background": background,
-                       "error": _error(img.values, ideal, points),
-                       "clutter": _clutter(img.values, band, inside), "seconds": seconds}
-                if name.startswith("disk"):
-                    row["darkening"] = paper.disk_darkening(img, 0.8, power)[0]
-                else:
-                    gray, al = scene.shapes
-                    vis = paper.ring_visibility(img, gray, al, float(np.diff(bins)[0]))
-                    # None where the aluminium ring is gone (the ratio is undefined)
-                    row["visibility"] = vis if np.isfinite(vis) else None
-                rows.append(row)
+                measured, img = _measure(name, method, sino, judge, size, n_iter)
+                rows.append({"phantom": name, "spacing_deg": sp, "method": method,
+                             "photons": photons, "speckle_cells": speckle_cells,
+                             "background": background, **measured})
                 images[(name, sp, method)] = img.values
     return rows, images
+
+
+def _checked_noise(photons, speckle_cells, background):
+    """``photons`` and ``background`` checked (speckle and background need photons)."""
+    if photons is None and (speckle_cells is not None or background):
+        raise ParameterError("speckle_cells and background need photons (the signal's "
+                             "scale in photoelectrons)")
+    if photons is not None:
+        photons = check_real("photons", photons, low=0.0, low_open=True)
+    return photons, check_real("background", background, low=0.0)
+
+
+@dataclasses.dataclass(frozen=True)
+class _Judge:
+    """What a phantom's reconstructions are judged against: its ``scene``, the ``ideal``
+    image, the sample ``points`` across its boundaries and the mask of their ``band``
+    (:func:`_bands`), the mask ``inside`` its bounding circle and the ``bin_width``."""
+
+    scene: Scene
+    ideal: np.ndarray
+    points: np.ndarray
+    band: np.ndarray
+    inside: np.ndarray
+    bin_width: float
+
+
+def _judge(scene, bins, size):
+    """The :class:`_Judge` of ``scene`` for range bins ``bins`` and size × size images."""
+    c = -1.0 + (np.arange(size) + 0.5) * (2.0 / size)
+    X, Y = np.meshgrid(c, c)
+    (cx, cy), radius = scene.bounding_circle()
+    inside = np.hypot(X - cx, Y - cy) < radius * 1.05
+    bin_width = float(np.diff(bins)[0])
+    points, band = _bands(scene, bin_width, size)
+    ideal = _ideal(scene, Ladar(np.arange(0.0, 360.0, 1.0), bins), size)
+    return _Judge(scene, ideal, points, band, inside, bin_width)
+
+
+def _measure(name, method, sino, judge, size, n_iter):
+    """One method's reconstruction of ``sino`` and its measures: ({``error``, ``clutter``,
+    ``seconds`` and the phantom's ``darkening`` or ``visibility``}, the image)."""
+    used = {"fbp_log": log_radiance, "fbp_clip": clip_radiance}.get(
+        method, lambda x: x)(sino)
+    power = float(used.total().mean())      # the input's own level
+    t0 = time.perf_counter()
+    img = _reconstruct(method, sino, size, n_iter, judge.scene)
+    seconds = time.perf_counter() - t0
+    row = {"error": _error(img.values, judge.ideal, judge.points),
+           "clutter": _clutter(img.values, judge.band, judge.inside), "seconds": seconds}
+    if name.startswith("disk"):
+        row["darkening"] = paper.disk_darkening(img, 0.8, power)[0]
+    else:
+        gray, al = judge.scene.shapes
+        vis = paper.ring_visibility(img, gray, al, judge.bin_width)
+        # None where the aluminium ring is gone (the ratio is undefined)
+        row["visibility"] = vis if np.isfinite(vis) else None
+    return row, img
 
 
 def report(rows):
