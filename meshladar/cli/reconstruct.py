@@ -166,6 +166,21 @@ def _noise(args, waves):
     return noise, waves.realise(noise, args.realisations, seed=args.seed)
 
 
+def _load_for_receiver(args):
+    """The saved sinogram, refused when ``--scale`` is given for one that already counts
+    photoelectrons, with a warning (unless quiet) when it is not a receiver's power."""
+    sino, _ = io.load_sinogram(args.result)
+    if args.scale is not None and sino.units == "photoelectrons":
+        raise ParameterError(f"--scale converts relative power to photoelectrons; "
+                             f"{args.result} already counts photoelectrons (simulated with "
+                             "--pulse-energy and --aperture): drop --scale")
+    if sino.radiometry != "power" and not args.quiet:
+        warnings.warn(f"{args.result} holds {sino.radiometry or 'paper'!r} "
+                      "radiometry (Eq. 8), not the power a receiver collects: simulate with "
+                      "--radiometry power for a receiver's waveform", MeshladarWarning)
+    return sino
+
+
 def cmd_receive(args) -> int:
     """Turn a saved sinogram's range bins into digitised waveforms (two-way time, the
     transmitted pulse, the receiver's impulse response, the digitiser's rate), optionally
@@ -216,15 +231,7 @@ def cmd_receive(args) -> int:
     if args.plot is not None:
         check_output(args.plot, (".png",), [args.result, args.output], "--plot")
         plotting.require("matplotlib")          # before the work, not after it
-    sino, _ = io.load_sinogram(args.result)
-    if args.scale is not None and sino.units == "photoelectrons":
-        raise ParameterError(f"--scale converts relative power to photoelectrons; "
-                             f"{args.result} already counts photoelectrons (simulated with "
-                             "--pulse-energy and --aperture): drop --scale")
-    if sino.radiometry != "power" and not args.quiet:
-        warnings.warn(f"{args.result} holds {sino.radiometry or 'paper'!r} "
-                      "radiometry (Eq. 8), not the power a receiver collects: simulate with "
-                      "--radiometry power for a receiver's waveform", MeshladarWarning)
+    sino = _load_for_receiver(args)
     pulse = _pulse(args)
     waves = receive(sino, sample_rate=args.sample_rate, pulse=pulse,
                     response=None if args.response_fwhm is None
