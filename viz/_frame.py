@@ -1,6 +1,7 @@
 """The frame every viewer figure shares: pyvista on demand, a headless EGL window, titled
-colour bars in fixed slots, the legend of flat colours, and the :class:`Shown` record an
-entry point returns (image or plotter, legend, colour bars) instead of module state."""
+colour bars in fixed slots, the legend of flat colours, the mesh an analytic scene is drawn
+as, and the :class:`Shown` record an entry point returns (image or plotter, legend, colour
+bars) instead of module state."""
 
 from __future__ import annotations
 
@@ -22,6 +23,15 @@ def _pyvista():
     except ImportError as exc:
         raise ImportError("the viewer needs pyvista: pip install 'meshladar[viz]'") from exc
     return pv
+
+
+def _mesh_scene(scene, segments):
+    """The scene as drawn: a mesh scene itself, an analytic one tessellated into prisms of
+    ``segments`` sides as tall as its bounding-circle radius."""
+    if scene.is_mesh:
+        return scene
+    (cx, cy), r = scene.bounding_circle()
+    return scene.tessellate(segments, height=r)
 
 
 def _headless_window(func):

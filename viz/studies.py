@@ -79,7 +79,17 @@ def figures(outdir):
     rows = doc["rows"]
     phantoms = sorted({r["phantom"] for r in rows})
     coatings = sorted({r["coating"] for r in rows})
+    yield "pareto.png", _pareto_figure(plt, rows, phantoms, coatings, doc["setting"])
+    yield "error_vs_segments.png", _segments_figure(plt, rows, phantoms, coatings)
+    arrays, meta = mlio.load_result(os.path.join(outdir, "faceting_examples.npz"))
+    for key, info in meta["examples"].items():
+        yield (f"difference_{key.replace('/', '_')}.png",
+               _difference_figure(plt, arrays, key, info["segments"]))
 
+
+def _pareto_figure(plt, rows, phantoms, coatings, setting):
+    """pareto.png: error against wall time, one panel per phantom (rows) and coating
+    (columns), coloured by series, with the Pareto front drawn through the points."""
     shape = (len(phantoms), len(coatings))
     fig, axes = plt.subplots(*shape, figsize=(3.2 * shape[1], 2.8 * shape[0]), squeeze=False)
     for i, ph in enumerate(phantoms):
@@ -100,10 +110,15 @@ def figures(outdir):
             ax.set_xlabel("wall time [s]")
             ax.set_ylabel("relative L2 error")
     axes[0, 0].legend(fontsize=6, frameon=False)
-    fig.suptitle(f"Faceting study ({doc['setting']}): error against time, Pareto fronts")
+    fig.suptitle(f"Faceting study ({setting}): error against time, Pareto fronts")
     fig.tight_layout()
-    yield "pareto.png", fig
+    return fig
 
+
+def _segments_figure(plt, rows, phantoms, coatings):
+    """error_vs_segments.png: error against segments for flat, smooth and exact normals,
+    one panel per phantom and coating, with an N⁻² guide."""
+    shape = (len(phantoms), len(coatings))
     fig, axes = plt.subplots(*shape, figsize=(3.2 * shape[1], 2.8 * shape[0]), squeeze=False)
     for i, ph in enumerate(phantoms):
         for j, co in enumerate(coatings):
@@ -124,31 +139,33 @@ def figures(outdir):
     axes[0, 0].legend(fontsize=6, frameon=False)
     fig.suptitle("Error against tessellation segments")
     fig.tight_layout()
-    yield "error_vs_segments.png", fig
+    return fig
 
-    arrays, meta = mlio.load_result(os.path.join(outdir, "faceting_examples.npz"))
+
+def _difference_figure(plt, arrays, key, segments):
+    """difference_<phantom>_<coating>.png: the coarse flat mesh's sinogram (of ``segments``
+    segments) minus the analytic one, and the difference of their FBP images."""
     edges = arrays["bin_edges"]
     angles = arrays["angles_deg"]
-    for key, info in meta["examples"].items():
-        diff = arrays[f"{key}/mesh"] - arrays[f"{key}/analytic"]
-        idiff = arrays[f"{key}/mesh_image"] - arrays[f"{key}/analytic_image"]
-        fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.0))
-        lim = np.max(np.abs(diff)) or 1.0
-        h = axes[0].imshow(diff, aspect="auto", cmap="RdBu_r", vmin=-lim, vmax=lim,
-                           extent=(edges[0], edges[-1], angles[0], angles[-1]))
-        axes[0].set_xlabel("range [scene units]")
-        axes[0].set_ylabel("view angle [deg]")
-        axes[0].set_title(f"sinogram: {info['segments']}-segment flat mesh − analytic")
-        fig.colorbar(h, ax=axes[0], label="bin difference")
-        lim = np.max(np.abs(idiff)) or 1.0
-        h = axes[1].imshow(idiff, cmap="RdBu_r", vmin=-lim, vmax=lim, extent=(-1, 1, -1, 1))
-        axes[1].set_xlabel("x [scene units]")
-        axes[1].set_ylabel("y [scene units]")
-        axes[1].set_title("FBP image difference")
-        fig.colorbar(h, ax=axes[1], label="image difference")
-        fig.suptitle(f"{key}: what a coarse flat mesh gets wrong")
-        fig.tight_layout()
-        yield f"difference_{key.replace('/', '_')}.png", fig
+    diff = arrays[f"{key}/mesh"] - arrays[f"{key}/analytic"]
+    idiff = arrays[f"{key}/mesh_image"] - arrays[f"{key}/analytic_image"]
+    fig, axes = plt.subplots(1, 2, figsize=(10.0, 4.0))
+    lim = np.max(np.abs(diff)) or 1.0
+    h = axes[0].imshow(diff, aspect="auto", cmap="RdBu_r", vmin=-lim, vmax=lim,
+                       extent=(edges[0], edges[-1], angles[0], angles[-1]))
+    axes[0].set_xlabel("range [scene units]")
+    axes[0].set_ylabel("view angle [deg]")
+    axes[0].set_title(f"sinogram: {segments}-segment flat mesh − analytic")
+    fig.colorbar(h, ax=axes[0], label="bin difference")
+    lim = np.max(np.abs(idiff)) or 1.0
+    h = axes[1].imshow(idiff, cmap="RdBu_r", vmin=-lim, vmax=lim, extent=(-1, 1, -1, 1))
+    axes[1].set_xlabel("x [scene units]")
+    axes[1].set_ylabel("y [scene units]")
+    axes[1].set_title("FBP image difference")
+    fig.colorbar(h, ax=axes[1], label="image difference")
+    fig.suptitle(f"{key}: what a coarse flat mesh gets wrong")
+    fig.tight_layout()
+    return fig
 
 
 @style.styled

@@ -94,13 +94,7 @@ def figure(waves, *, realisations=None, noise=None, views=None, band=(5.0, 95.0)
     fig, axes = plt.subplots(len(views), 1, figsize=(6.4, 1.9 * len(views) + 0.8),
                              squeeze=False, sharex=True)
     t_ns = waves.times * 1e9
-    units = waves.units or "sinogram units"
-    if noise is not None:
-        expected = noise.mean(waves.values, waves.sample_interval)
-        units = units if noise.gain == 1 else f"{noise.gain:g} x {units}"
-        what = "expected: gain x (signal + background)"
-    else:
-        expected, what = waves.values, "noiseless"
+    expected, units, what = _expected(waves, noise)
     for ax, v in zip(axes[:, 0], views):
         if realisations is not None:
             lo, hi = np.percentile(realisations[:, v, :], band, axis=0)
@@ -124,7 +118,27 @@ def figure(waves, *, realisations=None, noise=None, views=None, band=(5.0, 95.0)
     axes[0, 0].legend(loc="upper right", fontsize=7, frameon=False)
     axes[-1, 0].set_xlabel(f"two-way time (ns); sample interval "
                            f"{waves.sample_interval * 1e9:.3g} ns")
-    top = axes[0, 0].secondary_xaxis(
+    _range_axis(axes[0, 0], waves)
+    fig.tight_layout()
+    return fig
+
+
+def _expected(waves, noise):
+    """What the black line shows: (values, their units, its legend label): the noiseless
+    waveforms, or with ``noise`` its mean, gain × (signal + background)."""
+    units = waves.units or "sinogram units"
+    if noise is not None:
+        expected = noise.mean(waves.values, waves.sample_interval)
+        units = units if noise.gain == 1 else f"{noise.gain:g} x {units}"
+        what = "expected: gain x (signal + background)"
+    else:
+        expected, what = waves.values, "noiseless"
+    return expected, units, what
+
+
+def _range_axis(ax, waves):
+    """The range axis r = ct/2 − standoff in metres on top of the time axis (ns) of ``ax``."""
+    top = ax.secondary_xaxis(
         "top", functions=(lambda t: t * 1e-9 * c / 2 - waves.standoff,
                           lambda r: (r + waves.standoff) * 2 / c * 1e9))
     top.set_xlabel("range r = ct/2 - standoff (m)")
@@ -132,5 +146,3 @@ def figure(waves, *, realisations=None, noise=None, views=None, band=(5.0, 95.0)
 
     # no label in the corners, where the left axis's top label sits
     top.xaxis.set_major_locator(MaxNLocator(5, prune="both"))
-    fig.tight_layout()
-    return fig

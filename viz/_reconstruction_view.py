@@ -1,0 +1,231 @@
+"""The viewer's reconstructions (see :mod:`meshladar.viz.viewer`, which re-exports these
+entry points): a reconstructed slice placed in 3-D (:func:`show_slice`), and a stack of
+slices or a :class:`meshladar.images.Volume` as an iso-surface or a volume rendering
+(:func:`show_volume`, :func:`volume_surface`, :func:`volume_iso`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from meshladar.images import Volume
+
+from ._frame import _bar, _finish, _headless_window, _legend, _mesh_scene, _pyvista
+
+__all__ = ["show_slice", "show_volume", "volume_surface", "volume_iso"]
+
+
+def _image_data(pv, image, z):
+    img = np.asarray(image.values)
+    grid = pv.ImageData(dimensions=(img.shape[1] + 1, img.shape[0] + 1, 1),
+                        spacing=(image.pixel_size, image.pixel_size, 1.0),
+                        origin=(image.x[0] - image.pixel_size / 2,
+                                image.y[0] - image.pixel_size / 2, z))
+    grid.cell_data["reconstruction"] = img.ravel(order="C")
+    return grid
+
+
+@_headless_window
+def show_slice(image, *, z=0.0, scene=None, clim=None, off_screen=False, screenshot=None,
+               window_size=(800, 700), camera=None):
+    """A reconstructed slice (an ``Image``) placed in 3-D at height ``z``, optionally with
+    the scene's mesh as a wireframe. Cell (i, j) of the slice sits at (x_j, y_i, z).
+
+    Parameters
+    ----------
+    image : Image
+        The slice; each pixel is drawn as a cell of its size, grey-scale, with a colour
+        bar.
+    z : float, keyword-only
+        The slice's height, scene units (default 0.0).
+    scene : Scene, optional, keyword-only
+        Drawn as an orange wireframe (an analytic scene as prisms of 128 sides).
+    clim : (low, high), optional, keyword-only
+        The colour scale's limits (default None: pyvista's, the values' range).
+    off_screen, screenshot, window_size : keyword-only
+        See the module docstring; ``window_size`` (width, height) in pixels, default
+        (800, 700).
+    camera : pyvista camera position, optional, keyword-only
+        Default None: above the slice's centre at 4 × its half-width, looking down, y up.
+
+    Returns
+    -------
+    Shown
+        The image off screen, or the plotter on a desktop (module docstring).
+
+    Raises
+    ------
+    ImportError
+        When pyvista is not installed.
+    """
+    pv = _pyvista()
+    plotter = pv.Plotter(off_screen=off_screen, window_size=window_size)
+    plotter.set_background("black")
+    grid = _image_data(pv, image, z)
+    inp = image.info.get("preprocess") or ""
+    plotter.add_mesh(grid, scalars="reconstruction", cmap="gray", lighting=False, clim=clim,
+                     scalar_bar_args=_bar("reconstruction of log input" if
+                                          inp.startswith("log") else
+                                          "reconstruction [radiance / area]", 0))
+    if scene is not None:
+        mesh = _mesh_scene(scene, 128)
+        for p in mesh.parts:
+            cells = np.hstack([np.full((len(p.faces), 1), 3), p.faces]).ravel()
+            plotter.add_mesh(pv.PolyData(p.vertices, cells), style="wireframe",
+                             color="orange", opacity=0.3, lighting=False)
+        _legend(plotter, [("scene (wireframe)", (1.0, 0.65, 0.0))])
+    c = (float(image.center[0]), float(image.center[1]), float(z))
+    plotter.camera_position = camera if camera is not None else [
+        (c[0], c[1], c[2] + 4.0 * image.extent), c, (0.0, 1.0, 0.0)]
+    return _finish(plotter, off_screen, screenshot)
+
+
+def volume_iso(volume):
+    """A default iso-value for a reconstructed volume: half its 99.9th percentile (the
+    bright surface shell, not the FBP side-lobes and noise around it).
+
+    Parameters
+    ----------
+    volume : Volume
+        The reconstruction.
+
+    Returns
+    -------
+    float
+        0.5 × the 99.9th percentile of all its (signed) values.
+    """
+    v = np.asarray(volume.values)
+    return 0.5 * float(np.percentile(v, 99.9))
+
+
+def volume_surface(volume, iso=None):
+    """The iso-surface of a :class:`meshladar.images.Volume` at ``iso`` (default
+    :func:`volume_iso`) as a pyvista mesh in scene coordinates.
+
+    Parameters
+    ----------
+    volume : Volume
+        The reconstruction; its values sit on the points of a grid through the voxel
+        centres.
+    iso : float, optional
+        The iso-value (default None: :func:`volume_iso`).
+
+    Returns
+    -------
+    pyvista.PolyData
+        The surface (empty when no value crosses ``iso``).
+
+    Raises
+    ------
+    ImportError
+        When pyvista is not installed.
+    """
+    pv = _pyvista()
+    dx, dy, dz = volume.spacing
+    grid = pv.ImageData(dimensions=(volume.x.size, volume.y.size, volume.z.size),
+                        spacing=(dx, dy, dz), origin=(volume.x[0], volume.y[0], volume.z[0]))
+    grid.point_data["reconstruction"] = np.asarray(volume.values).ravel(order="C")
+    return grid.contour([volume_iso(volume) if iso is None else iso],
+                        scalars="reconstruction")
+
+
+@_headless_window
+def show_volume(images, zs=None, *, iso=None, render="iso", off_screen=False,
+                screenshot=None, window_size=(800, 700), camera=None):
+    """A stack of reconstructed slices at heights ``zs`` (increasing, evenly spaced), or a
+    :class:`meshladar.images.Volume` (then ``zs`` is not given), as the iso-surface at value
+    ``iso`` (default: for a Volume :func:`volume_iso`, for a stack half its 99.5th
+    percentile, where the bright surfaces are), or with ``render="volume"`` (stacks) as a
+    volume rendering with a robust window and a sigmoid opacity.
+
+    Parameters
+    ----------
+    images : Volume or sequence of Image
+        A Volume (always drawn as its iso-surface: ``render`` is checked but not used),
+        or at least two images, one per height in ``zs``, all placed on the first one's
+        grid (not checked); the stack's values sit on the points of a grid through the
+        pixel centres.
+    zs : (n,) array_like, optional
+        The images' heights, scene units; not given with a Volume.
+    iso : float, optional, keyword-only
+        The iso-value. Default None: for a Volume :func:`volume_iso`; for a stack half the
+        99.5th percentile of its positive values (0 when it has none).
+    render : {"iso", "volume"}, keyword-only
+        For a stack: the iso-surface (default), or a volume rendering (``magma``, colour
+        limits 0 to the 99.5th percentile of the positive values, a colour bar).
+    off_screen, screenshot, window_size : keyword-only
+        See the module docstring; ``window_size`` (width, height) in pixels, default
+        (800, 700).
+    camera : pyvista camera position, optional, keyword-only
+        Default None: pyvista's isometric view.
+
+    Returns
+    -------
+    Shown
+        The image off screen, or the plotter on a desktop (module docstring).
+
+    Raises
+    ------
+    ValueError
+        When ``render`` is neither choice, ``zs`` is given with a Volume, ``images`` and
+        ``zs`` differ in length or have fewer than two, or ``zs`` is not increasing and
+        evenly spaced.
+    ImportError
+        When pyvista is not installed.
+    """
+    pv = _pyvista()
+    if render not in ("iso", "volume"):
+        raise ValueError(f"render must be 'iso' or 'volume'; got {render!r}")
+    if isinstance(images, Volume):
+        if zs is not None:
+            raise ValueError("a Volume carries its own z; do not give zs")
+        plotter = pv.Plotter(off_screen=off_screen, window_size=window_size)
+        plotter.set_background("black")
+        plotter.add_mesh(volume_surface(images, iso), color="white", smooth_shading=True)
+        _aim(plotter, camera)
+        return _finish(plotter, off_screen, screenshot)
+    vol, grid = _stack(pv, images, zs)
+    plotter = pv.Plotter(off_screen=off_screen, window_size=window_size)
+    plotter.set_background("black")
+    if render == "volume":
+        # a robust window and a sigmoid opacity: the surfaces glow, the noise stays clear
+        vals = vol[vol > 0]
+        top = float(np.percentile(vals, 99.5)) if vals.size else 1.0
+        plotter.add_volume(grid, scalars="reconstruction", cmap="magma", opacity="sigmoid",
+                           clim=(0.0, top), scalar_bar_args=_bar("reconstruction", 0))
+    else:
+        if iso is None:                   # half the robust peak: the bright surfaces
+            vals = vol[vol > 0]
+            iso = 0.5 * float(np.percentile(vals, 99.5)) if vals.size else 0.0
+        plotter.add_mesh(grid.contour([iso], scalars="reconstruction"), color="white",
+                         smooth_shading=True)
+    _aim(plotter, camera)
+    return _finish(plotter, off_screen, screenshot)
+
+
+def _stack(pv, images, zs):
+    """A stack of slices at heights ``zs`` (checked: as many as the images, at least two,
+    increasing and evenly spaced): its values (nz, ny, nx) and a pyvista grid of them on
+    the points through the first image's pixel centres."""
+    zs = np.asarray(zs, dtype=np.float64)
+    if len(images) != len(zs) or len(zs) < 2:
+        raise ValueError(f"images and zs must have the same length >= 2; got {len(images)} "
+                         f"and {len(zs)}")
+    dz = np.diff(zs)
+    if np.any(dz <= 0) or np.ptp(dz) > 1e-9 * dz.mean():
+        raise ValueError("zs must be increasing and evenly spaced")
+    first = images[0]
+    vol = np.stack([np.asarray(im.values) for im in images])          # (nz, ny, nx)
+    grid = pv.ImageData(dimensions=(vol.shape[2], vol.shape[1], vol.shape[0]),
+                        spacing=(first.pixel_size, first.pixel_size, float(dz[0])),
+                        origin=(first.x[0], first.y[0], zs[0]))
+    grid.point_data["reconstruction"] = vol.ravel(order="C")
+    return vol, grid
+
+
+def _aim(plotter, camera):
+    """Place the camera at ``camera``, or (None) at pyvista's isometric view."""
+    if camera is not None:
+        plotter.camera_position = camera
+    else:
+        plotter.view_isometric()
