@@ -1,7 +1,9 @@
 """Reconstruction: images and volumes from sinograms.
 
 * :mod:`~meshladar.reconstruct.fbp2d` — filtered backprojection of views about the z axis
-  (:func:`fbp`), its filters and resampling, and the paper's log/clip preprocessing;
+  (:func:`fbp`) and its resampling, with its filters in
+  :mod:`~meshladar.reconstruct.filters` and the paper's log/clip preprocessing in
+  :mod:`~meshladar.reconstruct.radiance`;
 * :mod:`~meshladar.reconstruct.volumes` — 3-D inversion over the sphere of views
   (:func:`~meshladar.reconstruct.volumes.fbp3d`) and stacked slices
   (:func:`~meshladar.reconstruct.volumes.fbp_slices`);

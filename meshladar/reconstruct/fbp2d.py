@@ -1,4 +1,4 @@
-"""Filtered backprojection of reflective sinograms, and glint preprocessing.
+"""Filtered backprojection of reflective sinograms.
 
 ``fbp`` treats ``values / bin_width`` as the Radon transform of an image along iso-range
 lines (DESIGN.md) and inverts it over the full circle of views:
@@ -21,6 +21,11 @@ centres c + (−extent + (k + ½) 2 extent/size) increasing along both axes. By 
 square is centred on the origin (the axis the views turn about) with half-width the bins'
 reach max(|r_0|, |r_n|) (:func:`bins_reach`): every point whose range falls in the bins in
 some view lies in it, so nothing the data holds is cropped, whatever the scene's units.
+
+The paper's glint preprocessing (:func:`log_radiance`, :func:`clip_radiance`,
+:func:`noise_floor`) lives in :mod:`meshladar.reconstruct.radiance`, the filters
+(:func:`fourier_filter`, :data:`FILTERS`) in :mod:`meshladar.reconstruct.filters`; both are
+importable from here too.
 """
 
 from __future__ import annotations
@@ -30,7 +35,6 @@ import math
 import warnings
 
 import numpy as np
-from scipy import fft as sfft
 
 from .._validate import (check_choice, check_count, check_real, check_sinogram, check_size,
                          finite_array)
@@ -40,19 +44,15 @@ from ..precision import COUNT_SLACK
 from ..precision import UNIFORM_RTOL as _UNIFORM_RTOL
 from ..sinogram import Sinogram
 from ._kernels import backproject
+from .filters import FILTERS, _filtered, fourier_filter
+from .radiance import LOG_FLOOR, PAPER_CLIP, clip_radiance, log_radiance, noise_floor
 
 __all__ = ["Image", "fbp", "bins_reach", "default_extent", "fourier_filter", "log_radiance", "clip_radiance",
            "resample_uniform", "noise_floor", "quiet_fbp", "FILTERS", "INTERPOLATIONS",
            "LOG_FLOOR", "PAPER_CLIP"]
 
-#: Filter windows, scikit-image's names.
-FILTERS = ("ramp", "shepp-logan", "cosine", "hamming", "hann")
 #: Interpolation of filtered projections at each pixel's range.
 INTERPOLATIONS = ("linear", "nearest")
-#: Default floor of :func:`log_radiance`, as a fraction of the sinogram's maximum.
-LOG_FLOOR = 1e-6
-#: The paper's clipping threshold, as a fraction of the maximum (Fig. 11b).
-PAPER_CLIP = 0.008
 #: A gap between consecutive views wider than this many times the median spacing warns that
 #: the views do not cover the circle.
 _GAP_FACTOR = 3.0
@@ -62,63 +62,6 @@ _GAP_FACTOR = 3.0
 #: paper's figures: 350 bins across, 360 views), 18 % at 6. Beyond this ratio (streaks of a
 #: quarter of the peak and more) fbp warns.
 _UNDERSAMPLED_RATIO = 8.0
-
-
-def fourier_filter(n_padded, filter="ramp"):
-    """The frequency response (n_padded,) of a filter, as scikit-image builds it.
-
-    The ramp is the FFT of the band-limited Ram-Lak kernel h[0] = ¼, h[odd n] = −1/(πn)²,
-    which is |ν| (cycles per sample) up to its truncation; windows multiply it. Returned
-    without scikit-image's extra factor 2 (it pairs with a 180° scan).
-
-    Parameters
-    ----------
-    n_padded : int
-        Length of the zero-padded projection the response multiplies. Not checked: an odd
-        length makes numpy raise ValueError. :func:`fbp` passes a power of two, at least 64
-        and at least 2 n_bins.
-    filter : {"ramp", "shepp-logan", "cosine", "hamming", "hann"}, default "ramp"
-        The window (:data:`FILTERS`) applied to the ramp: "shepp-logan" multiplies by
-        sin(ω)/ω with ω = π ν (ν from ``scipy.fft.fftfreq``; the zero frequency is left
-        as is), "cosine" by a half sine period, "hamming" and "hann" by numpy's windows,
-        each shifted into FFT order.
-
-    Returns
-    -------
-    (n_padded,) ndarray of float64
-        The real part of the kernel's FFT times the window, in FFT order (index 0 is
-        the zero frequency, as ``scipy.fft.fftfreq``): the factor by which a padded
-        profile's spectrum is multiplied, ≈ |ν| with ν in cycles per sample for the
-        ramp (0.497 at the Nyquist frequency ½ for n_padded = 64).
-
-    Raises
-    ------
-    ParameterError
-        When ``filter`` is not one of :data:`FILTERS`.
-
-    References
-    ----------
-    A. C. Kak and M. Slaney, *Principles of Computerized Tomographic Imaging*, IEEE Press
-    (1988), Ch. 3, Eq. (61) (the band-limited Ram-Lak kernel); scikit-image's
-    ``skimage.transform.iradon`` (its filters and discretisation).
-    """
-    check_choice("filter", filter, FILTERS)
-    n = np.concatenate((np.arange(1, n_padded / 2 + 1, 2, dtype=int),
-                        np.arange(n_padded / 2 - 1, 0, -2, dtype=int)))
-    f = np.zeros(n_padded)
-    f[0] = 0.25
-    f[1::2] = -1.0 / (np.pi * n) ** 2
-    response = np.real(sfft.fft(f))
-    if filter == "shepp-logan":
-        omega = np.pi * sfft.fftfreq(n_padded)[1:]
-        response[1:] *= np.sin(omega) / omega
-    elif filter == "cosine":
-        response *= sfft.fftshift(np.sin(np.linspace(0, np.pi, n_padded, endpoint=False)))
-    elif filter == "hamming":
-        response *= sfft.fftshift(np.hamming(n_padded))
-    elif filter == "hann":
-        response *= sfft.fftshift(np.hanning(n_padded))
-    return response
 
 
 def resample_uniform(sino: Sinogram, n_bins=None) -> Sinogram:
@@ -171,7 +114,7 @@ def _view_weights(angles_deg):
     if a.size == 1:
         warnings.warn("one view does not cover the circle: reflective FBP assumes views all "
                       "around the scene; the image is that view's backprojection, streaks "
-                      "along its iso-range lines", MeshladarWarning, stacklevel=3)
+                      "along its iso-range lines", MeshladarWarning, stacklevel=4)
         return np.array([math.pi])
     order = np.argsort(a, kind="stable")
     s = a[order]
@@ -185,7 +128,7 @@ def _view_weights(angles_deg):
             f"views do not cover the full circle: largest gap {math.degrees(gaps.max()):.3g}° "
             f"vs median spacing {math.degrees(med):.3g}°; reflective FBP assumes views all "
             "around the scene, and the missing ones will streak the image",
-            MeshladarWarning, stacklevel=3)
+            MeshladarWarning, stacklevel=4)
     return w
 
 
@@ -271,7 +214,7 @@ def _check_view_sampling(sinogram):
         warnings.warn(f"{sinogram.n_views} views are too few for the {across} bins across the "
                       f"target's returns: FBP samples the angles fully with about {need} (pi/2 "
                       "per bin across); expect streaks around it, or use wider bins "
-                      "(meshladar.reconstruct.resample_uniform) or more views", MeshladarWarning, stacklevel=3)
+                      "(meshladar.reconstruct.resample_uniform) or more views", MeshladarWarning, stacklevel=4)
 
 
 def fbp(sinogram, size=512, extent=None, *, filter="ramp", interpolation="linear",
@@ -344,10 +287,28 @@ def fbp(sinogram, size=512, extent=None, *, filter="ramp", interpolation="linear
     ((256, 256), -0.796875, 0.796875)
     """
     size, extent, c = _check_fbp(sinogram, size, extent, filter, interpolation, center)
+    sinogram, resampled = _on_uniform_bins(sinogram)
+    out = _backprojected(sinogram, int(size), extent, c, filter, interpolation)
+    return Image(out, extent, (float(c[0]), float(c[1])),
+                 _fbp_info(sinogram, filter, interpolation, resampled))
+
+
+def _on_uniform_bins(sinogram):
+    """(sinogram, resampled): the sinogram as it is when its bins are uniform (their widths
+    within UNIFORM_RTOL of their mean), else resampled onto uniform ones
+    (:func:`resample_uniform`, integrals conserved)."""
     widths = sinogram.bin_widths
     resampled = bool(np.ptp(widths) > _UNIFORM_RTOL * widths.mean())
     if resampled:
         sinogram = resample_uniform(sinogram)
+    return sinogram, resampled
+
+
+def _backprojected(sinogram, size, extent, c, filter, interpolation):
+    """The (size, size) image of :func:`fbp` on the square of half-width ``extent`` about
+    ``c``, from a sinogram on uniform bins: each view weighted by half its share of the
+    circle, filtered, backprojected, and scaled by 1 / bin width². Warns (for fbp's caller)
+    when the views leave a gap or are too few; raises when the image overflows float64."""
     dr = float(np.mean(sinogram.bin_widths))
     weights = _view_weights(sinogram.angles_deg)
     _check_view_sampling(sinogram)
@@ -358,9 +319,9 @@ def fbp(sinogram, size=512, extent=None, *, filter="ramp", interpolation="linear
     q = _filtered(sinogram.values / scale, filter)
 
     phi = np.deg2rad(sinogram.angles_deg)
-    xs = c[0] + pixel_centres(int(size), extent)
-    ys = c[1] + pixel_centres(int(size), extent)
-    out = np.zeros((int(size), int(size)))
+    xs = c[0] + pixel_centres(size, extent)
+    ys = c[1] + pixel_centres(size, extent)
+    out = np.zeros((size, size))
     backproject(q, np.cos(phi), np.sin(phi), weights, float(sinogram.bin_centers[0]),
                 1.0 / dr, xs, ys, interpolation == "nearest", out)
     with np.errstate(over="ignore"):
@@ -369,12 +330,18 @@ def fbp(sinogram, size=512, extent=None, *, filter="ramp", interpolation="linear
     if not np.all(np.isfinite(out)):
         raise ParameterError(f"sinogram: values up to {peak:.3g} in bins {dr:.3g} wide give an "
                              "image beyond float64's range (1.8e308); rescale the values")
+    return out
+
+
+def _fbp_info(sinogram, filter, interpolation, resampled):
+    """The ``info`` of :func:`fbp`'s image: how it was made, and the data's preprocessing,
+    radiometry and units."""
     info = {"filter": filter, "interpolation": interpolation, "n_views": sinogram.n_views,
             "n_bins": sinogram.n_bins, "resampled": resampled}
     info.update({k: v for k, v in sinogram.info.items() if k in ("preprocess", "radiometry")})
     if sinogram.units:
         info["input_units"] = sinogram.units
-    return Image(out, extent, (float(c[0]), float(c[1])), info)
+    return info
 
 
 def _check_fbp(sinogram, size, extent, filter, interpolation, center):
@@ -415,62 +382,6 @@ def _warn_degenerate(sinogram):
                       stacklevel=4)
 
 
-def _filtered(values, filter):
-    """Each view's profile filtered with :func:`fourier_filter`, zero-padded to a power of
-    two >= 2 n_bins (no wrap-around), as scikit-image."""
-    n = values.shape[1]
-    n_pad = max(64, int(2 ** math.ceil(math.log2(2 * n))))
-    response = fourier_filter(n_pad, filter)
-    # full complex FFT: the windows are not exactly symmetric (scikit-image keeps the real part)
-    spectrum = sfft.fft(values, n=n_pad, axis=1)
-    return np.ascontiguousarray(np.real(sfft.ifft(spectrum * response, axis=1))[:, :n])
-
-
-def _preprocessed(sinogram, step):
-    """The sinogram's info with ``step`` added to its record of preprocessing, in order."""
-    before = sinogram.info.get("preprocess")
-    return dict(sinogram.info, preprocess=step if not before else f"{before}, then {step}")
-
-
-def noise_floor(sino, *, quanta=3.0):
-    """The data's noise floor relative to its maximum, and at least
-    :data:`~meshladar.reconstruct.LOG_FLOOR`: ``quanta`` quanta when the bins are whole
-    multiples of a quantum (counted photoelectrons, however scaled), else five robust
-    standard deviations of the bins (most bins hold no surface, so their median absolute
-    deviation is the noise).
-
-    The bins count as quantised when the smallest non-zero |value| (the quantum) is below
-    the peak and more than 99 % of the non-zero bins lie within 1e-6 of a whole multiple
-    of it; the robust standard deviation is 1.4826 × the median absolute deviation of all
-    the bins, empty ones included.
-
-    Parameters
-    ----------
-    sino : Sinogram
-        The data (anything with a ``values`` array; not checked).
-    quanta : float, keyword-only, default 3.0
-        The floor in quanta, for quantised data. Not checked.
-
-    Returns
-    -------
-    float
-        The floor as a fraction of the largest |value|, in [:data:`LOG_FLOOR`, 0.5] (it is
-        capped at 0.5); :data:`LOG_FLOOR` when every bin is 0.
-    """
-    v = sino.values
-    peak = float(np.abs(v).max(initial=0.0))
-    if peak == 0:
-        return LOG_FLOOR
-    nonzero = np.abs(v[v != 0])
-    quantum = float(nonzero.min())
-    steps = nonzero / quantum
-    if quantum < peak and np.mean(np.abs(steps - np.round(steps)) < 1e-6) > 0.99:
-        level = quanta * quantum
-    else:
-        level = 5.0 * 1.4826 * float(np.median(np.abs(v - np.median(v))))
-    return float(min(0.5, max(LOG_FLOOR, level / peak)))
-
-
 def quiet_fbp(sino, size, extent, *, center=(0.0, 0.0)):
     """FBP's image values, its warnings silenced: for a starting point or a scale of another
     method (iterative, compensation), where the warnings about FBP's own output (too few
@@ -506,82 +417,3 @@ def quiet_fbp(sino, size, extent, *, center=(0.0, 0.0)):
         warnings.simplefilter("ignore", MeshladarWarning)
         return fbp(sino, size=size, extent=extent, center=center).values
 
-
-def log_radiance(sinogram: Sinogram, *, floor=LOG_FLOOR) -> Sinogram:
-    """The paper's Fig. 11(a) input: the logarithm of the binned radiance.
-
-    ``values → log(max(values, m) / m)`` with m = floor × max(values): bins at or below the
-    floor (empty bins included) map to 0, everything else to its log-ratio to the floor, so
-    the result is ≥ 0 and finite. A floor of 1e-6 keeps six decades of dynamic range.
-    A sinogram whose maximum is ≤ 0 maps to all zeros.
-
-    Parameters
-    ----------
-    sinogram : Sinogram
-        The binned radiance (any radiometry or units).
-    floor : float in (0, 1], keyword-only, default :data:`LOG_FLOOR` (1e-6)
-        The floor m as a fraction of the sinogram's maximum.
-
-    Returns
-    -------
-    Sinogram
-        Same views and bins, values (n_views, n_bins) ≥ 0 the natural log of the ratio to
-        the floor; ``units`` "dimensionless (natural log of the ratio to the floor)" and
-        ``info["preprocess"]`` extended with ``"log(floor=...)"``.
-
-    Raises
-    ------
-    ParameterError
-        When ``sinogram`` is not a :class:`~meshladar.Sinogram`, or ``floor`` is not a
-        finite real in (0, 1].
-
-    References
-    ----------
-    Jin & Levine (2009), Sec. 4.B, Fig. 11(a) (the logarithm of the binned radiance as
-    the reconstruction's input).
-    """
-    check_sinogram("sinogram", sinogram)
-    floor = check_real("floor", floor, low=0.0, high=1.0, low_open=True)
-    vmax = float(sinogram.values.max(initial=0.0))
-    if vmax <= 0:
-        out = np.zeros_like(sinogram.values)
-    else:
-        m = floor * vmax
-        out = np.log(np.maximum(sinogram.values, m) / m)
-    info = _preprocessed(sinogram, f"log(floor={floor:g})")
-    info["units"] = "dimensionless (natural log of the ratio to the floor)"
-    return dataclasses.replace(sinogram, values=out, info=info)
-
-
-def clip_radiance(sinogram: Sinogram, *, threshold=PAPER_CLIP) -> Sinogram:
-    """The paper's Fig. 11(b) input: radiance clipped at ``threshold`` × its maximum.
-
-    Parameters
-    ----------
-    sinogram : Sinogram
-        The binned radiance.
-    threshold : float in (0, 1], keyword-only, default :data:`PAPER_CLIP` (0.008)
-        The cap as a fraction of the sinogram's maximum value.
-
-    Returns
-    -------
-    Sinogram
-        Same views, bins and units, each value replaced by min(value, threshold ×
-        maximum); ``info["preprocess"]`` extended with ``"clip(threshold=...)"``.
-
-    Raises
-    ------
-    ParameterError
-        When ``sinogram`` is not a :class:`~meshladar.Sinogram`, or ``threshold`` is not a
-        finite real in (0, 1].
-
-    References
-    ----------
-    Jin & Levine (2009), Sec. 4.B, Fig. 11(b) (radiance clipped at 0.008 times the
-    maximum to remove glints).
-    """
-    check_sinogram("sinogram", sinogram)
-    threshold = check_real("threshold", threshold, low=0.0, high=1.0, low_open=True)
-    cap = threshold * float(sinogram.values.max(initial=0.0))
-    return dataclasses.replace(sinogram, values=np.minimum(sinogram.values, cap),
-                               info=_preprocessed(sinogram, f"clip(threshold={threshold:g})"))
