@@ -14,25 +14,26 @@ linear pair where the bins are uniform (about 20× faster at 256²) and Siddon's
 step is a weighted average that needs no step size), ``cgls`` the same least-squares
 problem by conjugate gradients (its residual never grows). Weights W ≥ 0 per bin let a user
 down-weight glint bins or shadow-gapped views instead of clipping them; 0 drops a bin.
+
+Each solver here checks its arguments and sets up its problem (the private ``_problem``:
+the checks the solvers share, the grid, projector, data, weights, mask and start), then
+runs its iterations (the private ``_iterations``: each method's loop and record).
 """
 
 from __future__ import annotations
 
-import dataclasses
-import math
 from typing import NamedTuple
 
 import numpy as np
 
-from .._validate import (check_choice, check_count, check_real, check_sinogram, check_size,
-                         finite_array)
+from .._validate import check_choice, check_count, check_real, check_sinogram
 from ..errors import ParameterError
-from ..images import Image
-from ..forward.siddon import PixelGrid
-from ..stream import Progress
-from .fbp2d import EXTENT_RANGE, PAPER_CLIP, default_extent, noise_floor, quiet_fbp
-from ._tv import MAX_TV, gradient, tv_prox
-from .operators import PROJECTORS, LinearProjector, RangeProjector, build, projector_name
+from ._iterations import _cgls, _fista, _sart, _sirt
+from ._problem import _Run, _run, _setup, _Start
+from ._tv import MAX_TV
+from .fbp2d import default_extent
+from .operators import PROJECTORS, LinearProjector, RangeProjector
+from .radiance import PAPER_CLIP, noise_floor
 
 __all__ = ["RangeProjector", "LinearProjector", "sirt", "sart", "cgls", "tv_fista",
            "glint_weights", "ImageGrid", "METHODS", "PROJECTORS"]
@@ -58,115 +59,6 @@ class ImageGrid(NamedTuple):
     size: int
     extent: float
     center: tuple
-
-
-class _Start(NamedTuple):
-    """Where a solver starts: the warm start ``x0``, the per-bin ``weights``, the ``mask``
-    and whether the image is kept non-negative."""
-
-    x0: object
-    weights: object
-    mask: object
-    nonneg: bool
-
-
-class _Problem(NamedTuple):
-    """The solvers' problem: the image grid, the projector A (None when not built), the
-    data b, the weights W, the mask M and the start x."""
-
-    grid: PixelGrid
-    A: object
-    b: np.ndarray
-    W: np.ndarray
-    M: np.ndarray
-    x: np.ndarray
-
-
-def _setup(sino, image, start, rays_per_bin, projector="auto"):
-    """The solvers' :class:`_Problem`. ``image`` an :class:`ImageGrid`,
-    ``start`` a :class:`_Start`; ``projector`` None builds no operator."""
-    size, extent, center = image
-    weights, mask, x0, nonneg = start.weights, start.mask, start.x0, start.nonneg
-    check_sinogram("sino", sino)
-    if not sino.planar:
-        raise ParameterError("iterative reconstruction needs views about the z axis; this "
-                             "sinogram has 3-D view vectors (reconstruct them with "
-                             "meshladar.reconstruct.volumes.fbp3d)")
-    size = check_count("size", size)
-    # the solvers hold a few images and the projector's per-view tables: ~8 arrays a pixel
-    check_size("size", float(size) ** 2, 8 * 8, f"a {size}² image", "give a smaller size")
-    extent = check_real("extent", extent, low=EXTENT_RANGE[0], high=EXTENT_RANGE[1])
-    grid = PixelGrid.square(size, extent, center)
-    b = sino.values
-    W = np.ones_like(b) if weights is None else finite_array("weights", weights)
-    if W.shape != b.shape or np.any(W < 0):
-        raise ParameterError(f"weights must be non-negative, one per bin {b.shape}; got "
-                             f"shape {W.shape}")
-    if not np.any(W > 0):
-        raise ParameterError("weights are all zero: every bin is dropped, so there is no "
-                             "data to reconstruct from (keep some bins, weight > 0)")
-    W = W / W.max()          # relative: every solver is invariant to their scale
-    M = np.ones((size, size)) if mask is None else np.asarray(mask, dtype=bool).astype(float)
-    if M.shape != (size, size):
-        raise ParameterError(f"mask must be a ({size}, {size}) array; got {M.shape}")
-    if not np.any(M):
-        raise ParameterError("mask is empty (no pixel is True): there is nothing to "
-                             "reconstruct (mark the pixels the target may occupy)")
-    A = None if projector is None else build(projector, grid, sino, rays_per_bin)
-    if x0 is None:
-        x = np.zeros((size, size))
-    elif isinstance(x0, str) and x0 == "fbp":      # the data the weights keep (dropped: 0)
-        kept = sino if np.all(W > 0) else dataclasses.replace(sino, values=np.where(W > 0, b, 0))
-        x = np.array(quiet_fbp(kept, size, extent, center=center))
-    elif isinstance(x0, Image):
-        x = np.array(x0.values)
-    else:
-        x = np.array(finite_array("x0", x0))
-    if x.shape != (size, size):
-        raise ParameterError(f"x0 must be None, 'fbp', an Image or a ({size}, {size}) array")
-    x *= M
-    if nonneg:
-        x = np.maximum(x, 0.0)
-    return _Problem(grid, A, b, W, M, x)
-
-
-def _projector_name(projector, sino):                   # the pair used, or the operator's type
-    return (projector_name(projector, sino.bin_edges) if isinstance(projector, str)
-            else type(projector).__name__)
-
-
-class _Progress:
-    """An iterative run's bookkeeping: the residual history, the progress bar and the
-    stopping rule (stop when a step lowers the tracked value by less than ``tol``
-    relatively)."""
-
-    def __init__(self, n_iter, tol, progress):
-        self.values, self.tol, self.stopped = [], tol, "n_iter"
-        self.bar = Progress(n_iter, "iterations") if progress else None
-
-    def step(self, value, tracked=None):
-        """Record a step; True when the run should stop."""
-        self.values.append(value)
-        tracked = self.values if tracked is None else tracked
-        if self.bar is not None:
-            self.bar.update(1)
-        if (self.tol is not None and len(tracked) > 1
-                and abs(tracked[-2] - tracked[-1]) < self.tol * tracked[-2]):
-            self.stopped = "tol"
-            return True
-        return False
-
-    def close(self):
-        if self.bar is not None:
-            self.bar.close()
-
-
-def _image(x, extent, center, info):
-    return Image(x, extent, tuple(float(c) for c in center), info=info)
-
-
-def _norm(r, W):
-    return float(np.sqrt(np.sum(W * r * r)))
 
 
 def sirt(sino, size=256, extent=None, *, center=(0.0, 0.0), n_iter=50, x0=None, weights=None,
@@ -240,32 +132,9 @@ def sirt(sino, size=256, extent=None, *, center=(0.0, 0.0), n_iter=50, x0=None, 
     inverse row and column sums).
     """
     extent = default_extent(sino, extent)
-    n_iter = check_count("n_iter", n_iter)
-    tol = None if tol is None else check_real("tol", tol, low=0.0, low_open=True)
-    pr = _setup(sino, ImageGrid(size, extent, center),
-                _Start(x0, weights, mask, nonneg), rays_per_bin, projector)
-    grid, A, b, W, M, x = pr.grid, pr.A, pr.b, pr.W, pr.M, pr.x
-    rows = A @ (M * 1.0)                                   # row sums over allowed pixels
-    R = np.where(rows > 0, 1.0 / np.where(rows > 0, rows, 1.0), 0.0) * W
-    cols = (A.T @ W) * M                                   # column sums, weighted
-    C = np.where(cols > 0, 1.0 / np.where(cols > 0, cols, 1.0), 0.0)
-    bnorm = _norm(b, W) or 1.0
-    run = _Progress(n_iter, tol, progress)
-    r = b - A @ x
-    for _ in range(n_iter):
-        x = x + C * (A.T @ (R * r))
-        x *= M
-        if nonneg:
-            np.maximum(x, 0.0, out=x)
-        r = b - A @ x
-        if run.step(_norm(r, W) / bnorm):
-            break
-    run.close()
-    info = {"method": "sirt", "iterations": len(run.values), "residuals": run.values,
-            "stopped": run.stopped, "nonneg": bool(nonneg),
-            "projector": _projector_name(projector, sino), "rays_per_bin": rays_per_bin,
-            "radiometry": sino.radiometry}
-    return _image(x, extent, center, info)
+    run = _run(n_iter, tol, progress, rays_per_bin, projector)
+    pr = _setup(sino, ImageGrid(size, extent, center), _Start(x0, weights, mask, nonneg), run)
+    return _sirt(sino, pr, run, nonneg)
 
 
 def sart(sino, size=256, extent=None, *, center=(0.0, 0.0), n_iter=10, subsets=None,
@@ -332,52 +201,15 @@ def sart(sino, size=256, extent=None, *, center=(0.0, 0.0), n_iter=10, subsets=N
     (SART): a superior implementation of the ART algorithm", Ultrasonic Imaging 6 (1984).
     """
     extent = default_extent(sino, extent)
-    n_iter = check_count("n_iter", n_iter)
-    tol = None if tol is None else check_real("tol", tol, low=0.0, low_open=True)
+    run = _run(n_iter, tol, progress, rays_per_bin, projector)
     relax = check_real("relax", relax, low=0.0, high=2.0, low_open=True, high_open=True)
     if not isinstance(projector, str):
         raise ParameterError("sart builds one projector per group of views: give projector "
                              f"as one of {('auto',) + PROJECTORS}")
     check_choice("projector", projector, ("auto",) + PROJECTORS)
-    pr = _setup(sino, ImageGrid(size, extent, center),     # one projector per group below
-                _Start(x0, weights, mask, nonneg), rays_per_bin, None)
-    projector = projector_name(projector, sino.bin_edges)
-    grid, b, W, M, x = pr.grid, pr.b, pr.W, pr.M, pr.x
-    n_views = b.shape[0]
-    n_sub = max(1, n_views // 36) if subsets is None else check_count("subsets", subsets)
-    if n_sub > n_views:
-        raise ParameterError(f"subsets must be at most the number of views ({n_views}); "
-                             f"got {n_sub}")
-    groups = []
-    for k in range(n_sub):
-        idx = np.arange(k, n_views, n_sub)
-        part = dataclasses.replace(sino, values=b[idx], angles_deg=sino.angles_deg[idx],
-                                   view_vectors=sino.view_vectors[idx])
-        As = build(projector, grid, part, rays_per_bin)
-        rows = As @ (M * 1.0)
-        R = np.where(rows > 0, 1.0 / np.where(rows > 0, rows, 1.0), 0.0) * W[idx]
-        cols = (As.T @ W[idx]) * M
-        C = np.where(cols > 0, relax / np.where(cols > 0, cols, 1.0), 0.0)
-        groups.append((idx, As, R, C))
-    bnorm = _norm(b, W) or 1.0
-    run = _Progress(n_iter, tol, progress)
-    for _ in range(n_iter):
-        gathered = 0.0
-        for idx, As, R, C in groups:
-            r = b[idx] - As @ x
-            gathered += float(np.sum(W[idx] * r * r))
-            x = x + C * (As.T @ (R * r))
-            x *= M
-            if nonneg:
-                np.maximum(x, 0.0, out=x)
-        if run.step(math.sqrt(gathered) / bnorm):
-            break
-    run.close()
-    info = {"method": "sart", "subsets": n_sub, "relax": relax,
-            "iterations": len(run.values), "residuals": run.values, "stopped": run.stopped,
-            "nonneg": bool(nonneg), "projector": projector, "rays_per_bin": rays_per_bin,
-            "radiometry": sino.radiometry}
-    return _image(x, extent, center, info)
+    pr = _setup(sino, ImageGrid(size, extent, center), _Start(x0, weights, mask, nonneg), run,
+                build_projector=False)                    # one projector per group of views
+    return _sart(sino, pr, run, subsets, relax, nonneg)
 
 
 def cgls(sino, size=256, extent=None, *, center=(0.0, 0.0), n_iter=30, x0=None, weights=None,
@@ -429,40 +261,9 @@ def cgls(sino, size=256, extent=None, *, center=(0.0, 0.0), n_iter=30, x0=None, 
     Least Squares Problems*, SIAM (1996) (CGLS).
     """
     extent = default_extent(sino, extent)
-    n_iter = check_count("n_iter", n_iter)
-    tol = None if tol is None else check_real("tol", tol, low=0.0, low_open=True)
-    pr = _setup(sino, ImageGrid(size, extent, center),
-                _Start(x0, weights, mask, False), rays_per_bin, projector)
-    grid, A, b, W, M, x = pr.grid, pr.A, pr.b, pr.W, pr.M, pr.x
-    r = b - A @ x
-    s = M * (A.T @ (W * r))
-    p = s.copy()
-    gamma = float(np.sum(s * s))
-    bnorm = _norm(b, W) or 1.0
-    run = _Progress(n_iter, tol, progress)
-    for _ in range(n_iter):
-        if gamma == 0:
-            run.stopped = "converged"
-            break
-        q = A @ p
-        qq = float(np.sum(W * q * q))
-        if not qq > 0:               # the rays carry nothing back (pixels far below the bins)
-            run.stopped = "converged"
-            break
-        alpha = gamma / qq
-        x = x + alpha * p
-        r = r - alpha * q
-        s = M * (A.T @ (W * r))
-        gamma_new = float(np.sum(s * s))
-        p = s + (gamma_new / gamma) * p
-        gamma = gamma_new
-        if run.step(_norm(r, W) / bnorm):
-            break
-    run.close()
-    info = {"method": "cgls", "iterations": len(run.values), "residuals": run.values,
-            "stopped": run.stopped, "projector": _projector_name(projector, sino),
-            "rays_per_bin": rays_per_bin, "radiometry": sino.radiometry}
-    return _image(x, extent, center, info)
+    run = _run(n_iter, tol, progress, rays_per_bin, projector)
+    pr = _setup(sino, ImageGrid(size, extent, center), _Start(x0, weights, mask, False), run)
+    return _cgls(sino, pr, run)
 
 
 def glint_weights(sino, *, threshold=None, floor=0.0, max_share=0.1):
@@ -598,37 +399,6 @@ def tv_fista(sino, size=256, extent=None, *, center=(0.0, 0.0), tv=0.005, n_iter
     n_iter = check_count("n_iter", n_iter)
     tv = check_real("tv", tv, low=0.0, high=MAX_TV)
     tol = None if tol is None else check_real("tol", tol, low=0.0, low_open=True)
-    pr = _setup(sino, ImageGrid(size, extent, center),
-                _Start(x0, weights, mask, nonneg), rays_per_bin, projector)
-    grid, A, b, W, M, x = pr.grid, pr.A, pr.b, pr.W, pr.M, pr.x
-    rng = np.random.default_rng(0)
-    v = rng.random(grid.shape) * M
-    for _ in range(15):                                    # power iteration: ‖W^½ A‖²
-        v = M * (A.T @ (W * (A @ v)))
-        L = float(np.linalg.norm(v))
-        v /= L if L > 0 else 1.0
-    first = quiet_fbp(sino, size, extent, center=center)
-    scale = float(np.percentile(np.abs(first), 99)) or 1.0
-    lam = tv * L * scale
-    bnorm = _norm(b, W) or 1.0
-    y, t = x.copy(), 1.0
-    dual = None
-    objective = []
-    run = _Progress(n_iter, tol, progress)
-    for _ in range(n_iter):
-        g = M * (A.T @ (W * (A @ y - b)))
-        x_new, dual = tv_prox(y - g / L, lam / L, nonneg, M, dual=dual)
-        t_new = 0.5 * (1.0 + math.sqrt(1.0 + 4.0 * t * t))
-        y = x_new + (t - 1.0) / t_new * (x_new - x)
-        x, t = x_new, t_new
-        r = A @ x - b
-        gx, gy = gradient(x)
-        objective.append(0.5 * float(np.sum(W * r * r)) + lam * float(np.sum(np.hypot(gx, gy))))
-        if run.step(_norm(r, W) / bnorm, objective):
-            break
-    run.close()
-    info = {"method": "tv_fista", "tv": tv, "lambda": lam, "lipschitz": L,
-            "iterations": len(run.values), "residuals": run.values, "objective": objective,
-            "stopped": run.stopped, "nonneg": bool(nonneg),
-            "projector": _projector_name(projector, sino), "radiometry": sino.radiometry}
-    return _image(x, extent, center, info)
+    run = _Run(n_iter, tol, progress, rays_per_bin, projector)
+    pr = _setup(sino, ImageGrid(size, extent, center), _Start(x0, weights, mask, nonneg), run)
+    return _fista(sino, pr, run, tv, nonneg)
