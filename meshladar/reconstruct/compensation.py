@@ -38,9 +38,10 @@ import numpy as np
 from .._validate import check_choice, check_count, check_sinogram, finite_array
 from ..errors import MeshladarWarning, ParameterError
 from ._kernels import surface_backproject
-from .fbp2d import fbp, log_radiance, noise_floor
-from .iterative import cgls, sirt
+from .fbp2d import fbp
+from .iterative import ImageGrid, cgls, sirt
 from .operators import SurfaceProjector
+from .radiance import log_radiance, noise_floor
 from .surface import Surface, _segments, _subset, _uniform, estimate_surface, surface_weights
 
 __all__ = ["Surface", "estimate_surface", "surface_weights", "SurfaceProjector", "compensate",
@@ -86,7 +87,7 @@ def _check_resolution(sino, size, extent):
                       f"{2.0 * float(extent) / size / width:.2f} range bins wide; the "
                       f"compensated surface needs at most {MAX_PIXEL_BINS:g} "
                       f"(below it comes out low and uneven): use size={need} or more",
-                      MeshladarWarning, stacklevel=3)
+                      MeshladarWarning, stacklevel=4)
 
 
 def _backed(surface, H, sino, keep, share=0.5):
@@ -223,9 +224,8 @@ def _check_returns(sino):
 
 
 def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first=None,
-               labels=None, method="cgls", n_iter=30, weights=None, threshold=0.2,
-               sigma=1.5, shadows=True, blur_deg=1.0, smooth=2.0, surface=None, tol=None,
-               progress=False):
+               labels=None, method="cgls", n_iter=30, weights=None, threshold=0.2, sigma=1.5,
+               shadows=True, blur_deg=1.0, smooth=2.0, surface=None, tol=None, progress=False):
     """BRDF- and shadow-compensated reconstruction (see the module docstring).
 
     Parameters
@@ -299,38 +299,89 @@ def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first
     IEEE Trans. Pattern Anal. Mach. Intell. 20 (1998) (the ridge detector of
     :func:`estimate_surface`).
     """
+    return _compensated(sino, material, ImageGrid(size, extent, center),
+                        _Surfacing(first, surface, threshold, sigma, shadows, labels, blur_deg),
+                        _Solving(method, n_iter, weights, smooth, tol, progress))
+
+
+class _Surfacing(NamedTuple):
+    """How :func:`compensate` finds the surface and weighs its views: the ``surface`` given,
+    or one estimated from ``first`` (None: :func:`first_image`) with ``threshold``,
+    ``sigma`` and ``shadows``; the materials' ``labels`` and the blur ``blur_deg`` of
+    h(θ)."""
+
+    first: object
+    surface: object
+    threshold: object
+    sigma: object
+    shadows: bool
+    labels: object
+    blur_deg: object
+
+
+class _Solving(NamedTuple):
+    """How :func:`compensate` solves for the surface's values: the solver ``method``, at
+    most ``n_iter`` iterations, the per-bin ``weights``, the smoothing ``smooth`` along the
+    surface (pixels), ``tol`` and ``progress``."""
+
+    method: object
+    n_iter: object
+    weights: object
+    smooth: object
+    tol: object
+    progress: bool
+
+
+def _compensated(sino, material, image, surfacing, solving):
+    """:func:`compensate` on the image grid ``image`` (an
+    :class:`~meshladar.reconstruct.iterative.ImageGrid`), its other arguments in a
+    :class:`_Surfacing` and a :class:`_Solving`: the checks, the surface seen by the data
+    and its view weights, the settled surface and its uniform start, the solve."""
     _check_returns(sino)
-    method = check_choice("method", method, SOLVERS)
-    size = check_count("size", size)
+    method = check_choice("method", solving.method, SOLVERS)
+    size = check_count("size", image.size)
+    extent, center = image.extent, image.center
     radiometry = sino.radiometry or "paper"
-    if surface is None:
-        if first is None:
-            first = first_image(sino, size, extent, center)
-        surface = estimate_surface(first, sino, threshold=threshold, sigma=sigma,
-                                   shadows=shadows)
-    elif not isinstance(surface, Surface):
-        raise ParameterError(f"surface must be a meshladar.reconstruct.surface.Surface; got "
-                             f"{type(surface).__name__}")
-    if (surface.size, surface.extent, tuple(surface.center)) != (
-            size, float(extent), tuple(float(c) for c in center)):
-        raise ParameterError("surface must be on the image grid (size, extent, center)")
-    H = surface_weights(surface, sino.angles_deg, material, labels=labels,
-                      radiometry=radiometry, blur_deg=blur_deg)
+    surface = _surface_on_grid(sino, image._replace(size=size), surfacing)
+    H = surface_weights(surface, sino.angles_deg, material, labels=surfacing.labels,
+                        radiometry=radiometry, blur_deg=surfacing.blur_deg)
     surface, H = _seen(surface, H, sino)
     _check_resolution(sino, size, extent)
+    weights = solving.weights
     W = np.ones(sino.shape) if weights is None else finite_array("weights", weights)
     m = surface.mask.astype(float)
-    settled = _settle(surface, sino, H, W, m, smooth)
+    settled = _settle(surface, sino, H, W, m, solving.smooth)
     surface, shift, A, x0 = settled.surface, settled.shift, settled.projector, settled.x0
     solve = cgls if method == "cgls" else sirt
-    img = solve(sino, size=size, extent=extent, center=center, n_iter=n_iter, x0=x0,
-                weights=weights, mask=surface.mask, projector=A, tol=tol, progress=progress)
+    img = solve(sino, size=size, extent=extent, center=center, n_iter=solving.n_iter, x0=x0,
+                weights=weights, mask=surface.mask, projector=A, tol=solving.tol,
+                progress=solving.progress)
     values = np.array(img.values)
     if A.smooth is not None:                          # the solution is x = S z
         values[surface.rows, surface.cols] = A.smooth @ values[surface.rows, surface.cols]
     info = dict(img.info, method="compensated", solver=method, radiometry=radiometry,
                 surface_pixels=int(surface.rows.size),
                 shadowed_fraction=_shadowed_fraction(surface, sino),
-                blur_deg=blur_deg, shadows=surface.shadowed is not None,
-                surface_shift=shift, smooth=smooth)
+                blur_deg=surfacing.blur_deg, shadows=surface.shadowed is not None,
+                surface_shift=shift, smooth=solving.smooth)
     return type(img)(values, img.extent, img.center, info=info)
+
+
+def _surface_on_grid(sino, image, surfacing):
+    """The surface given, or estimated from the first reconstruction (by default
+    :func:`first_image` on ``image``); refused unless a
+    :class:`~meshladar.reconstruct.surface.Surface` on that grid."""
+    size, extent, center = image
+    surface, first = surfacing.surface, surfacing.first
+    if surface is None:
+        if first is None:
+            first = first_image(sino, size, extent, center)
+        surface = estimate_surface(first, sino, threshold=surfacing.threshold,
+                                   sigma=surfacing.sigma, shadows=surfacing.shadows)
+    elif not isinstance(surface, Surface):
+        raise ParameterError(f"surface must be a meshladar.reconstruct.surface.Surface; got "
+                             f"{type(surface).__name__}")
+    if (surface.size, surface.extent, tuple(surface.center)) != (
+            size, float(extent), tuple(float(c) for c in center)):
+        raise ParameterError("surface must be on the image grid (size, extent, center)")
+    return surface

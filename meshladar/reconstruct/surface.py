@@ -23,7 +23,7 @@ from ..images import Image
 from ..sensor import check_radiometry
 from ..forward.siddon import PixelGrid
 from ._kernels import surface_backproject, surface_shadows
-from .fbp2d import log_radiance
+from .radiance import log_radiance
 
 __all__ = ["Surface", "estimate_surface", "surface_weights"]
 
@@ -320,20 +320,7 @@ def surface_weights(surface, angles_deg, material, *, labels=None, radiometry="p
     mats = [material] if isinstance(material, BRDF) else list(material)
     for i, m in enumerate(mats):
         check_brdf(f"material[{i}]", m)
-    if len(mats) == 1:
-        which = np.zeros(surface.rows.size, int)
-    else:
-        if labels is None:
-            raise ParameterError("several materials need labels: a (size, size) int image "
-                                 "of indices into material")
-        lab = np.asarray(labels)
-        if lab.shape != (surface.size, surface.size):
-            raise ParameterError(f"labels must be a ({surface.size}, {surface.size}) array; "
-                                 f"got {lab.shape}")
-        which = lab[surface.rows, surface.cols].astype(int)
-        if which.min() < 0 or which.max() >= len(mats):
-            raise ParameterError(f"labels on the surface must be in [0, {len(mats)}); got "
-                                 f"{which.min()}..{which.max()}")
+    which = _material_of(surface, len(mats), labels)
     phi = np.deg2rad(finite_array("angles_deg", angles_deg).ravel())
     cos_t = surface.normals[:, :1] * np.cos(phi) + surface.normals[:, 1:] * np.sin(phi)
     theta = np.arccos(np.clip(np.abs(cos_t), 0.0, 1.0))
@@ -349,6 +336,25 @@ def surface_weights(surface, angles_deg, material, *, labels=None, radiometry="p
                                  f"views; the sinogram has {H.shape[1]}")
         H[surface.shadowed] = 0.0
     return H
+
+
+def _material_of(surface, n_materials, labels):
+    """Each surface point's index into the materials: 0 for one material, else ``labels``
+    (a (size, size) int image) at the point's pixel, checked in [0, n_materials)."""
+    if n_materials == 1:
+        return np.zeros(surface.rows.size, int)
+    if labels is None:
+        raise ParameterError("several materials need labels: a (size, size) int image "
+                             "of indices into material")
+    lab = np.asarray(labels)
+    if lab.shape != (surface.size, surface.size):
+        raise ParameterError(f"labels must be a ({surface.size}, {surface.size}) array; "
+                             f"got {lab.shape}")
+    which = lab[surface.rows, surface.cols].astype(int)
+    if which.min() < 0 or which.max() >= n_materials:
+        raise ParameterError(f"labels on the surface must be in [0, {n_materials}); got "
+                             f"{which.min()}..{which.max()}")
+    return which
 
 
 def _subset(surface, keep):

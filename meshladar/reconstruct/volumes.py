@@ -234,6 +234,25 @@ def fbp3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None,
     F. Natterer, *The Mathematics of Computerized Tomography*, Wiley (1986), Ch. II (the
     inversion formula of the Radon transform; its local form in three dimensions).
     """
+    dr = _check_views_and_bins(sino)
+    grid = _grid(size, bins_reach(sino) if extent is None else extent, center)
+    n, (x, y, z) = grid.n, grid.centers
+    check_size("size", float(n) ** 3, 8 * 2, f"a {n}^3 volume", "give a smaller size")
+    wts = _view_weights(weights, sino.n_views)
+    smooth = _check_view_sampling(sino, smooth)
+    q = _second_differences(sino, dr, smooth)
+    out = np.zeros((n, n, n))
+    w = sino.view_vectors
+    backproject3d(q, np.ascontiguousarray(w[:, 0]), np.ascontiguousarray(w[:, 1]),
+                  np.ascontiguousarray(w[:, 2]), wts, float(sino.bin_centers[0]), 1.0 / dr,
+                  x, y, z, out)
+    return Volume(out, x=x, y=y, z=z, info=_fbp3d_info(sino, smooth, grid))
+
+
+def _check_views_and_bins(sino):
+    """The bin width of a sinogram :func:`fbp3d` can invert: a
+    :class:`~meshladar.Sinogram` with at least 3 uniform bins (to 1e-6 of their mean width)
+    and views leaving no direction more than :data:`MAX_GAP_DEG` from them all."""
     check_sinogram("sino", sino)
     widths = np.diff(sino.bin_edges)
     if np.ptp(widths) > 1e-6 * widths.mean():
@@ -248,29 +267,31 @@ def fbp3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None,
             f"direction {gap:.0f} deg from every view (at most {MAX_GAP_DEG:g}): use views "
             "such as meshladar.meshes.fibonacci_sphere(n) (views about the z axis: fbp, or "
             "fbp_slices of elevation-resolved returns)")
-    grid = _grid(size, bins_reach(sino) if extent is None else extent, center)
-    n, e, c, (x, y, z) = grid.n, grid.e, grid.c, grid.centers
-    check_size("size", float(n) ** 3, 8 * 2, f"a {n}^3 volume", "give a smaller size")
-    wts = _view_weights(weights, sino.n_views)
-    smooth = _check_view_sampling(sino, smooth)
+    return dr
+
+
+def _second_differences(sino, dr, smooth):
+    """The profiles' −∂²g/∂s² / (8π²), g = values / ``dr`` smoothed by a Gaussian of
+    ``smooth`` bins (when > 0), by the three-point stencil with zeros beyond the bins:
+    what :func:`fbp3d` backprojects."""
     g = sino.values / dr
     if smooth > 0:
         g = gaussian_filter1d(g, smooth, axis=1, mode="constant", truncate=4.0)
     g = np.pad(g, ((0, 0), (1, 1)))                             # zero beyond the bins
     minus_g2 = -(g[:, 2:] - 2 * g[:, 1:-1] + g[:, :-2]) / (dr * dr)
-    q = np.ascontiguousarray(minus_g2 / (8 * math.pi ** 2))
-    out = np.zeros((n, n, n))
-    w = sino.view_vectors
-    backproject3d(q, np.ascontiguousarray(w[:, 0]), np.ascontiguousarray(w[:, 1]),
-                  np.ascontiguousarray(w[:, 2]), wts, float(sino.bin_centers[0]), 1.0 / dr,
-                  x, y, z, out)
+    return np.ascontiguousarray(minus_g2 / (8 * math.pi ** 2))
+
+
+def _fbp3d_info(sino, smooth, grid):
+    """The ``info`` of :func:`fbp3d`'s volume: the method, its smoothing, the views, the
+    data's radiometry and preprocessing, and the voxel grid."""
     info = {"method": "radon3d", "filter": "second difference", "smooth_bins": smooth,
             "views": sino.n_views,
-            "radiometry": sino.radiometry, "size": n, "extent": e,
-            "center": c.tolist()}
+            "radiometry": sino.radiometry, "size": grid.n, "extent": grid.e,
+            "center": grid.c.tolist()}
     if sino.info.get("preprocess"):
         info["preprocess"] = sino.info["preprocess"]
-    return Volume(out, x=x, y=y, z=z, info=info)
+    return info
 
 
 def fbp_slices(returns, *, size=256, extent=None, filter="ramp") -> Volume:
