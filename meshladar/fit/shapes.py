@@ -8,7 +8,8 @@ the most points within ``tol`` wins, its points are removed, repeat), each refin
 geometric least squares; with ``kind="ellipse"`` each connected group of points is fitted
 as an ellipse (Fitzgibbon's direct least-squares fit, then geometric refinement), so
 ellipses must not touch. Every shape
-comes with its standard errors from the fit's residuals.
+comes with its standard errors from the fit's residuals (the point fits live in
+:mod:`._conics`).
 
 :func:`fit_scene` builds the scene from those shapes, fits the coatings
 (:func:`meshladar.fit.coatings.fit_coatings`) and refits with each geometry parameter moved by
@@ -24,10 +25,6 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import least_squares
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
-from scipy.spatial import cKDTree
 
 from .._validate import check_choice, check_count, check_real, check_seed
 from ..brdf import SandfordRobertson
@@ -36,6 +33,7 @@ from ..errors import ParameterError
 from ..ladar import Ladar
 from ..scene import Scene
 from ..shapes import Disk, Ellipse
+from ._conics import _circle_lsq, _components, _ellipse_lsq, _ransac_circles
 from .coatings import fit_coatings
 from .kernels import coating_kernel
 
@@ -43,102 +41,6 @@ __all__ = ["find_shapes", "fit_scene", "SceneFit", "SHAPE_KINDS"]
 
 #: Shapes :func:`find_shapes` fits.
 SHAPE_KINDS = ("disk", "ellipse")
-
-
-def _circle_lsq(p):
-    """Geometric least-squares circle (centre, radius, covariance of (cx, cy, r))."""
-    x, y = p[:, 0], p[:, 1]
-    A = np.stack([x, y, np.ones_like(x)], axis=1)            # Kåsa's algebraic start
-    c = np.linalg.lstsq(A, x * x + y * y, rcond=None)[0]
-    cx, cy = 0.5 * c[0], 0.5 * c[1]
-    r = math.sqrt(max(c[2] + cx * cx + cy * cy, 1e-300))
-    sol = least_squares(lambda q: np.hypot(x - q[0], y - q[1]) - q[2], [cx, cy, r])
-    dof = max(1, p.shape[0] - 3)
-    s2 = float(np.sum(sol.fun ** 2)) / dof
-    cov = s2 * np.linalg.pinv(sol.jac.T @ sol.jac)
-    return sol.x, cov, float(math.sqrt(s2))
-
-
-def _ellipse_lsq(p):
-    """(centre, semi-axes, angle_deg, covariance of the five, rms): Fitzgibbon's direct fit
-    refined by geometric least squares on the distance to the ellipse (sampled)."""
-    x, y = p[:, 0] - p[:, 0].mean(), p[:, 1] - p[:, 1].mean()
-    D = np.stack([x * x, x * y, y * y, x, y, np.ones_like(x)], axis=1)
-    S = D.T @ D
-    C = np.zeros((6, 6))
-    C[0, 2] = C[2, 0] = 2.0
-    C[1, 1] = -1.0
-    try:
-        w, v = np.linalg.eig(np.linalg.solve(S, C))
-    except np.linalg.LinAlgError:
-        raise ParameterError("the surface points do not determine an ellipse") from None
-    a = np.real(v[:, np.argmax(np.real(w))])
-    A_, B_, C_, D_, E_, F_ = a
-    den = B_ * B_ - 4 * A_ * C_
-    x0 = (2 * C_ * D_ - B_ * E_) / den
-    y0 = (2 * A_ * E_ - B_ * D_) / den
-    theta = 0.5 * math.atan2(-B_, C_ - A_)
-    num = 2 * (A_ * E_ * E_ + C_ * D_ * D_ - B_ * D_ * E_ + den * F_)
-    root = math.hypot(A_ - C_, B_)
-    ax1 = math.sqrt(abs(num * ((A_ + C_) + root))) / abs(den)
-    ax2 = math.sqrt(abs(num * ((A_ + C_) - root))) / abs(den)
-    start = [x0 + p[:, 0].mean(), y0 + p[:, 1].mean(), ax1, ax2, theta]
-
-    def resid(q):
-        cx, cy, a1, a2, t = q
-        c, s = math.cos(t), math.sin(t)
-        u = (p[:, 0] - cx) * c + (p[:, 1] - cy) * s
-        v_ = -(p[:, 0] - cx) * s + (p[:, 1] - cy) * c
-        ang = np.arctan2(v_ / a2, u / a1)                   # nearest by eccentric angle
-        return np.hypot(u - a1 * np.cos(ang), v_ - a2 * np.sin(ang))
-
-    sol = least_squares(resid, start)
-    dof = max(1, p.shape[0] - 5)
-    s2 = float(np.sum(sol.fun ** 2)) / dof
-    cov = s2 * np.linalg.pinv(sol.jac.T @ sol.jac)
-    return sol.x, cov, float(math.sqrt(s2))
-
-
-def _components(points, reach, min_points):
-    """Index arrays of the connected groups of points (neighbours within ``reach``) with at
-    least ``min_points`` points."""
-
-    pairs = cKDTree(points).query_pairs(reach, output_type="ndarray")
-    n = points.shape[0]
-    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
-    _, label = connected_components(graph, directed=False)
-    return [np.flatnonzero(label == k) for k in np.unique(label)
-            if np.count_nonzero(label == k) >= min_points]
-
-
-def _ransac_circles(points, tol, min_points, max_shapes, seed):
-    rng = np.random.default_rng(seed)
-    left = np.arange(points.shape[0])
-    found = []
-    while left.size >= min_points and len(found) < max_shapes:
-        p = points[left]
-        best = None
-        for _ in range(400):
-            i, j, k = rng.choice(p.shape[0], 3, replace=False)
-            (ax, ay), (bx, by), (cx_, cy_) = p[i], p[j], p[k]
-            d = 2 * (ax * (by - cy_) + bx * (cy_ - ay) + cx_ * (ay - by))
-            if abs(d) < 1e-12:
-                continue
-            ux = ((ax * ax + ay * ay) * (by - cy_) + (bx * bx + by * by) * (cy_ - ay)
-                  + (cx_ * cx_ + cy_ * cy_) * (ay - by)) / d
-            uy = ((ax * ax + ay * ay) * (cx_ - bx) + (bx * bx + by * by) * (ax - cx_)
-                  + (cx_ * cx_ + cy_ * cy_) * (bx - ax)) / d
-            r = math.hypot(ax - ux, ay - uy)
-            inl = np.abs(np.hypot(p[:, 0] - ux, p[:, 1] - uy) - r) < tol
-            if best is None or inl.sum() > best.sum():
-                best = inl
-        if best is None or best.sum() < min_points:
-            break
-        q, _, _ = _circle_lsq(p[best])                       # refine, then re-collect
-        inl = np.abs(np.hypot(p[:, 0] - q[0], p[:, 1] - q[1]) - q[2]) < tol
-        found.append(left[inl])
-        left = left[~inl]
-    return found
 
 
 def find_shapes(sino, *, size=512, extent=1.0, center=(0.0, 0.0), kind="disk", first=None,
@@ -214,16 +116,23 @@ def find_shapes(sino, *, size=512, extent=1.0, center=(0.0, 0.0), kind="disk", f
         raise ParameterError("no shape found among the first reconstruction's surface "
                              "points; give first= or a coarser tol_bins")
     mat = material if material is not None else SandfordRobertson(0.05, 0.7, 0.2, 0.1)
+    return _named_shapes(surface.points, groups, kind, mat)
+
+
+def _named_shapes(points, groups, kind, material):
+    """Each group of ``points`` (index arrays) fitted as a shape of ``kind`` carrying
+    ``material``: (shape, standard errors, rms distance), named "shape 0", "shape 1", ...
+    by decreasing size."""
     out = []
     for g in groups:
-        p = surface.points[g]
+        p = points[g]
         if kind == "disk":
             q, cov, rms = _circle_lsq(p)
-            shape = Disk((q[0], q[1]), q[2], mat)
+            shape = Disk((q[0], q[1]), q[2], material)
             size_ = q[2]
         else:
             q, cov, rms = _ellipse_lsq(p)
-            shape = Ellipse((q[0], q[1]), (q[2], q[3]), math.degrees(q[4]), mat)
+            shape = Ellipse((q[0], q[1]), (q[2], q[3]), math.degrees(q[4]), material)
             size_ = q[2] * q[3]
         out.append((size_, shape, np.sqrt(np.abs(np.diag(cov))), rms))
     out.sort(key=lambda t: -t[0])
@@ -354,9 +263,19 @@ def fit_scene(sino, *, kind="disk", size=512, extent=1.0, center=(0.0, 0.0), fir
     scene = _scene([s for s, _, _ in shapes])
     shapes = [(t, se, rms) for t, (_, se, rms) in zip(scene.shapes, shapes)]
     kernel = coating_kernel(scene, ladar, radiometry=radiometry, samples=samples)
-    start = _start(kernel, sino.values)
-    fit = fit_coatings(kernel, sino, initial=start, **kw)
+    fit = fit_coatings(kernel, sino, initial=_start(kernel, sino.values), **kw)
     kw["initial"] = dict(enumerate(fit.materials))
+    names, shifts = _geometry_shifts(shapes, kind, fit, fit_with)
+    found = Scene([dataclasses.replace(s, material=m)
+                   for (s, _, _), m in zip(shapes, fit.materials)])
+    return SceneFit(found, shapes, fit, tuple(names), shifts,
+                    np.sqrt(np.sum(shifts ** 2, axis=0)), {"kind": kind})
+
+
+def _geometry_shifts(shapes, kind, fit, fit_with):
+    """The names of the geometry parameters and, per parameter, the change of the coating
+    estimates of ``fit`` when it moves by its standard error (the coatings refitted by
+    ``fit_with`` on the moved shapes)."""
     names, shifts = [], []
     fields = ("cx", "cy", "r") if kind == "disk" else ("cx", "cy", "A", "B", "angle")
     for i, (s, se, _) in enumerate(shapes):
@@ -367,11 +286,7 @@ def fit_scene(sino, *, kind="disk", size=512, extent=1.0, center=(0.0, 0.0), fir
             refit = fit_with(parts)
             names.append(f"{s.name}.{f}")
             shifts.append(refit.estimate - fit.estimate)
-    shifts = np.array(shifts)
-    found = Scene([dataclasses.replace(s, material=m)
-                   for (s, _, _), m in zip(shapes, fit.materials)])
-    return SceneFit(found, shapes, fit, tuple(names), shifts,
-                    np.sqrt(np.sum(shifts ** 2, axis=0)), {"kind": kind})
+    return names, np.array(shifts)
 
 
 #: The starting grid of :func:`fit_scene`: glint widths and diffuse narrowness tried per
