@@ -16,7 +16,7 @@ from scipy.optimize import least_squares
 from .._validate import check_real, short
 from ..errors import EnergyConservationWarning, ParameterError
 from ._params import _jacobian, _materials
-from .kernels import _table
+from ._tables import _table
 
 
 #: The most counts in the brightest bin a count fit takes: 10¹⁵ photoelectrons (a relative

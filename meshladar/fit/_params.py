@@ -12,7 +12,7 @@ import numpy as np
 from ..brdf import SandfordRobertson
 from .._validate import check_real, short
 from ..errors import ParameterError
-from .kernels import GRID, _table
+from ._tables import GRID, _table
 
 #: Default bounds of the Sandford-Robertson parameters.
 SR_BOUNDS = {"rho_d": (0.0, 1.0), "epsilon": (0.0, 1.0), "b": (0.0, 1.0), "e": (1e-4, 1.0)}

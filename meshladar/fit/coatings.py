@@ -12,7 +12,8 @@ parameters the data cannot determine (no effect on the data, or an uncertainty b
 their range, or a near-perfect correlation with another) and warns.
 
 The solver lives in :mod:`._irls`, the parameters in :mod:`._params`, the covariance and
-identifiability in :mod:`._identify`.
+identifiability in :mod:`._identify`, the result record :class:`CoatingFit` in
+:mod:`._coating_fit`.
 """
 
 from __future__ import annotations
@@ -20,24 +21,23 @@ from __future__ import annotations
 import functools
 import math
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import norm
 
-from .._summary import table as _html_table
-from .._summary import text as _text
 from .._validate import check_choice, check_count, check_real, check_seed, check_sinogram
 from ..errors import MeshladarWarning, ParameterError
 from ..ladar import Ladar
 from ..waveforms import Waveforms
 from ..scene import Scene
 from . import _irls, _profile
+from ._coating_fit import CoatingFit
 from ._identify import NULL_REL, _correlation, _misfit, _uncertainty, describe
 from ._params import _materials, _resolve_params
 from ._resolution import (KERNEL_TOL, MAX_SAMPLES, MIN_KERNEL_TOL, KernelErrorWarning, Ladder,
                           kernel_shift, with_kernel_error)
-from .kernels import MAX_KERNEL_SAMPLES, CoatingKernel, _table, coating_kernel
+from ._tables import _table
+from .kernels import MAX_KERNEL_SAMPLES, CoatingKernel, coating_kernel
 
 __all__ = ["fit_coatings", "CoatingFit", "IdentifiabilityWarning", "KernelErrorWarning",
            "NOISE_MODELS", "KERNEL_TOL"]
@@ -49,190 +49,6 @@ NOISE_MODELS = ("gaussian", "poisson")
 class IdentifiabilityWarning(MeshladarWarning):
     """A fitted parameter that the data cannot determine."""
 
-
-@dataclass(frozen=True, eq=False)
-class CoatingFit:
-    """The result of :func:`fit_coatings`.
-
-    Attributes
-    ----------
-    names : tuple of str
-        "part.parameter" of each free parameter.
-    estimate, stderr : (n,) arrays
-        σ is inf for a parameter the data do not act on or that only a combination
-        determines (a weakly determined one, named in ``identifiable``, keeps its σ).
-    covariance, correlation : (n, n) arrays
-        From the Fisher information of the user's parameters at the estimate (inf on an
-        undetermined parameter's diagonal, NaN beside it), plus the kernel's estimated
-        error as a systematic term s sᵀ, s the parameters' shift from the kernel's N to 2N
-        (where it was estimated; ≤ 0.5 % of σ when the shift is within ``kernel_tol``).
-    materials : tuple of BRDF
-        Every part's coating with the estimates in.
-    identifiable : dict
-        name → True, or the reason the data cannot determine it.
-    undetermined : tuple of str
-        The names the data cannot determine.
-    combinations : tuple of (str, float, float)
-        The combinations of undetermined parameters that the data do determine (the
-        directions of the Fisher matrix orthogonal to its near-null ones), as (text,
-        value, σ): e.g. ("disk.rho_d + disk.epsilon", 0.5, 0.0027).
-    kernel_error : float or None
-        The kernel's error: the largest change of the model at the estimate over the bins
-        from N to 2N pieces per boundary (or rays per bin width of a mesh traced from its
-        Scene), in units of each bin's noise σ (the fit used 2N; None: not estimated, see
-        ``info["kernel_error_note"]``).
-        ``info["kernel_shift"]``: the largest shift of a parameter, in its σ, that this
-        change causes; N doubles until both are at most ``kernel_tol``.
-    samples : float or None
-        Pieces per boundary (analytic) or rays per bin width (a mesh traced from its
-        Scene) of the kernel used.
-    noise, deviance, dof, iterations, predicted
-        The noise model, the misfit (χ² for Gaussian; for counts the deviance, twice the
-        log-likelihood ratio against the saturated model), degrees of freedom, solver
-        iterations, the fitted sinogram values.
-    bootstrap : (n_boot, n) array or None
-        Parametric-bootstrap estimates.
-    """
-
-    names: tuple
-    estimate: np.ndarray
-    stderr: np.ndarray
-    covariance: np.ndarray
-    correlation: np.ndarray
-    materials: tuple
-    identifiable: dict
-    noise: str
-    deviance: float
-    dof: int
-    iterations: int
-    predicted: np.ndarray
-    bootstrap: np.ndarray | None = None
-    info: dict = field(default_factory=dict)
-    combinations: tuple = ()
-    kernel_error: float | None = None
-    samples: int | None = None
-    _likelihood: object = field(default=None, repr=False, compare=False)
-    _profiled: dict = field(default_factory=dict, init=False, repr=False, compare=False)
-
-    @property
-    def undetermined(self):
-        """The names the data cannot determine."""
-        return tuple(n for n in self.names if self.identifiable[n] is not True)
-
-    def _kernel_line(self):
-        if self.kernel_error is None:
-            return "not estimated"
-        unit = ("rays per bin width" if self.info.get("source") == "mesh"
-                else "samples per boundary")
-        return f"{self.kernel_error:.2g} σ ({self.samples:g} {unit})"
-
-    def _summary(self):
-        return (("noise", self.noise),
-                *((n, f"{v:.5g} ± {e:.3g}" + ("" if self.identifiable[n] is True
-                                               else " (undetermined)"))
-                  for n, v, e in zip(self.names, self.estimate, self.stderr)),
-                *((c, f"{v:.5g} ± {e:.3g} (determined)") for c, v, e in self.combinations),
-                ("misfit", f"{self.deviance:.4g} on {self.dof} dof"),
-                ("kernel error", self._kernel_line()))
-
-    def __repr__(self) -> str:
-        return _text("CoatingFit", *self._summary())
-
-    def _repr_html_(self) -> str:
-        return _html_table("CoatingFit", *self._summary())
-
-    def interval(self, level=0.95, method="normal", parameters=None):
-        """(low, high) arrays of the ``level`` intervals.
-
-        ``method="normal"`` (z the normal quantile): a parameter whose valid range starts
-        at 0 or above (``info["positive"]``: every SR parameter) has a positive estimate,
-        and a finite σ gets its interval on the log scale, estimate · exp(∓ z σ /
-        estimate) (the delta method's σ of the logarithm): it stays positive and follows
-        the right skew of a width's estimates (the glinting disk's b at 10³ photons covers
-        0.93 of the truths, against 0.88 for estimate ∓ z σ; the same at 10⁴, on 100
-        seeded trials each); any other gets estimate ∓ z σ.
-
-        ``method="profile"``: the likelihood-ratio interval, the values whose profile
-        misfit (the others refitted) rises at most z² (:mod:`._profile`): right where the
-        likelihood is far from quadratic (a narrow glint's ε and e at 10⁴ photoelectrons),
-        at the cost of a few refits per end (seconds each for a pair of coatings); an end
-        stops at the parameter's bound. ``parameters`` (names; default all) limits the
-        profiling to those, the others keep their normal interval, as does an
-        undetermined parameter. Each end is computed once.
-
-        Parameters
-        ----------
-        level : float
-            The intervals' coverage, in (0, 1) (default 0.95).
-        method : {"normal", "profile"}
-            The normal approximation (default) or the profile likelihood.
-        parameters : list of str, optional
-            ``method="profile"``: the names (of ``names``) to profile (default all).
-
-        Returns
-        -------
-        low, high : (n,) arrays
-            The ends, in the parameters' own units, in the order of ``names``.
-
-        Raises
-        ------
-        ParameterError
-            On a level outside (0, 1), an unknown method or parameter name, or
-            ``method="profile"`` on a CoatingFit not made by :func:`fit_coatings`.
-
-        References
-        ----------
-        Y. Pawitan, *In All Likelihood*, Oxford University Press (2001), Sec. 3.4 and 9.7
-        (likelihood-ratio and profile-likelihood intervals).
-        """
-        level = check_real("level", level, low=0.0, high=1.0, low_open=True, high_open=True)
-        method = check_choice("method", method, ("normal", "profile"))
-        z = float(norm.ppf(0.5 + 0.5 * level))
-        low, high = _profile.normal(self.estimate, self.stderr, self.info.get("positive"), z)
-        if method == "normal":
-            return low, high
-        if self._likelihood is None:
-            raise ParameterError("method='profile' needs the fit's likelihood, which this "
-                                 "CoatingFit does not carry (it was not made by fit_coatings)")
-        chosen = [i for i in _profile.chosen(self.names, parameters)
-                  if np.isfinite(self.stderr[i])]
-        todo = [i for i in chosen if (level, i) not in self._profiled]
-        if todo:
-            plow, phigh = self._likelihood(self.stderr, z, todo)
-            self._profiled.update({(level, i): (plow[i], phigh[i]) for i in todo})
-        for i in chosen:
-            low[i], high[i] = self._profiled[(level, i)]
-        return low, high
-
-    def report(self):
-        """The fit as text lines: each parameter ± σ, its 95 % interval, and whether the
-        data determine it.
-
-        Returns
-        -------
-        list of str
-            The lines: a header (noise model, misfit, iterations), one line per parameter
-            (estimate, σ, normal 95 % interval, NOT DETERMINED and why), correlations
-            beyond 0.9, the determined combinations, and the kernel's error.
-        """
-        lo, hi = self.interval()
-        out = [f"  coating fit ({self.noise}; misfit {self.deviance:.4g} on {self.dof} "
-               f"degrees of freedom, {self.iterations} iterations)",
-               f"  {'parameter':<26} {'estimate':>11} {'± σ':>10} {'95 % interval':>24}"]
-        for i, n in enumerate(self.names):
-            ok = self.identifiable[n]
-            note = "" if ok is True else f"  NOT DETERMINED: {ok}"
-            out.append(f"  {n:<26} {self.estimate[i]:11.5g} {self.stderr[i]:10.3g} "
-                       f"[{lo[i]:10.5g}, {hi[i]:10.5g}]{note}")
-        strong = [(self.names[i], self.names[j], self.correlation[i, j])
-                  for i in range(len(self.names)) for j in range(i + 1, len(self.names))
-                  if np.isfinite(self.correlation[i, j]) and abs(self.correlation[i, j]) > 0.9]
-        for a, b, r in strong:
-            out.append(f"  correlation {a} ~ {b}: {r:+.3f}")
-        for c, v, e in self.combinations:
-            out.append(f"  determined: {c} = {v:.5g} ± {e:.3g}")
-        out.append(f"  kernel error: {self._kernel_line()}")
-        return out
 
 def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, initial=None,
                  noise="gaussian", photons_per_unit=None, speckle_cells=None, background=0.0,

@@ -13,7 +13,8 @@ from .._validate import check_count, check_real
 from ..errors import ParameterError
 from ._irls import check_scale
 from ._params import _jacobian, _resolve_params
-from .kernels import CoatingKernel, _table, coating_kernel
+from ._tables import _table
+from .kernels import CoatingKernel, coating_kernel
 
 __all__ = ["ViewDesign", "design_views"]
 

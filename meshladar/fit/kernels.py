@@ -22,12 +22,13 @@ parameter's derivative is the product with the derivative of its table.
   scene, so :meth:`CoatingKernel.resampled` traces it again at another count of rays per
   bin width (its error falls ~2× per doubling: point binning at the bins' edges is first
   order); a kernel of the user's own Hits cannot be resampled.
+
+Both are built in ``meshladar.fit._building``; the tables and their θ grid
+(:data:`GRID`) are ``meshladar.fit._tables``.
 """
 
 from __future__ import annotations
 
-import dataclasses
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -36,29 +37,17 @@ from scipy.sparse import csr_matrix, identity, kron
 from .._summary import table as _html_table
 from .._summary import text as _text
 from .._validate import check_count, check_real
-from ..brdf import projected_weight
 from ..errors import ParameterError
-from ..forward.mesh import trace
 from ..raytrace.grid import RAYS_PER_BIN_RANGE
 from ..hits import Hits
 from ..waveforms import receive
-from ..weighing import per_table_weight
 from ..scene import Scene
 from ..sensor import check_radiometry
 from ..sinogram import Sinogram
-from ._sampling import analytic_triplets, interp_matrix
+from ._building import analytic_fields, hits_fields, traced_mesh_fields
+from ._tables import GRID, _table
 
 __all__ = ["CoatingKernel", "coating_kernel", "GRID"]
-
-#: θ samples of the tables on [0, π/2].
-GRID = 8193
-_THETA = np.linspace(0.0, 0.5 * math.pi, GRID)
-
-
-def _table(material):
-    """The projected weight F(θ; −θ) cos θ on the θ grid (1/sr; finite up to the horizon,
-    where F itself is not)."""
-    return np.asarray(projected_weight(material, np.cos(_THETA), np.sin(_THETA)), dtype=float)
 
 
 @dataclass(frozen=True, eq=False)
@@ -155,10 +144,10 @@ class CoatingKernel:
             return self
         if samples not in self._finer:
             scene, ladar, *options = self._traced
-            self._finer[samples] = (
-                _analytic_kernel(scene, ladar, self.radiometry, samples)
+            self._finer[samples] = CoatingKernel(**(
+                analytic_fields(scene, ladar, self.radiometry, samples)
                 if self.source == "analytic"
-                else _traced_mesh_kernel(scene, ladar, self.radiometry, samples, *options))
+                else traced_mesh_fields(scene, ladar, self.radiometry, samples, *options)))
         return self._finer[samples]
 
     @property
@@ -318,66 +307,10 @@ class CoatingKernel:
                         info={"radiometry": self.radiometry, **self.info})
 
 
-def _interp_matrix(rows, theta, omega, n_rows):
-    """The sparse (n_rows, GRID) matrix putting weight ω at angle θ into row ``rows`` by
-    linear interpolation on the θ grid."""
-    return interp_matrix(rows, theta, omega, n_rows, GRID)
-
-
-def _analytic_kernel(scene, ladar, radiometry, samples):
-    n_views, n_bins = ladar.n_views, ladar.bin_edges.size - 1
-    mats = [interp_matrix(r, t, w, n_views * n_bins, GRID, cubic=True) for r, t, w in
-            analytic_triplets(scene, ladar, radiometry == "power", samples)]
-    names = [s.name if s.name is not None else f"shape {i}"
-             for i, s in enumerate(scene.shapes)]
-    if len(set(names)) != len(names):
-        names = [f"{nm} ({i})" for i, nm in enumerate(names)]
-    return CoatingKernel(tuple(mats), tuple(names), tuple(s.material for s in scene.shapes),
-                         (n_views, n_bins), ladar.angles_deg, ladar.bin_edges, radiometry,
-                         "analytic", {"samples_per_shape": samples, "units": "length/sr"},
-                         _traced=(scene, ladar))
-
-
-def _mesh_kernel(hits, radiometry):
-    if hits.bistatic is not None:
-        raise ParameterError("coating kernels are monostatic; these hits are bistatic")
-    edges = hits.ladar.bin_edges
-    n_views, n_bins = hits.ladar.n_views, edges.size - 1
-    k = np.searchsorted(edges, hits.range, side="right") - 1
-    ok = (hits.cos_theta >= 0) & (k >= 0) & (k < n_bins)
-    # weigh's F·δA⊥ (paper) or F cos θ·δA⊥ (power) as ω × the table's F cos θ
-    omega = per_table_weight(hits, radiometry == "power")
-    theta = np.arctan2(hits.sin_theta, np.maximum(hits.cos_theta, 0.0))
-    rows = hits.view.astype(np.int64) * n_bins + k
-    mats = []
-    for m in range(len(hits.materials)):
-        sel = ok & (hits.material == m)
-        mats.append(_interp_matrix(rows[sel], theta[sel], omega[sel], n_views * n_bins))
-    names = tuple(getattr(m, "name", None) or f"material {i}"
-                  for i, m in enumerate(hits.materials))
-    if len(set(names)) != len(names):
-        names = tuple(f"material {i}" for i in range(len(names)))
-    return CoatingKernel(tuple(mats), names, tuple(hits.materials), (n_views, n_bins),
-                         hits.ladar.angles_deg, edges, radiometry, "mesh",
-                         {"mode": hits.mode, "normals": hits.normals,
-                          "rays": int(np.sum(hits.rays))})
-
-
 #: Options of :func:`meshladar.trace` a mesh scene's kernel takes (the ray spacing is the
 #: kernel's own ``samples``, rays per bin width; a bistatic receiver has no kernel).
 TRACE_OPTIONS = ("mode", "normals", "back_faces", "z0", "sampling", "seed", "backend",
                  "sensor")
-
-
-def _traced_mesh_kernel(scene, ladar, radiometry, rays_per_bin, options):
-    """The kernel of a mesh scene traced with ``rays_per_bin`` (None: trace's default)."""
-    hits = trace(scene, ladar, rays_per_bin=rays_per_bin, **options)
-    kernel = _mesh_kernel(hits, radiometry)
-    spacing = float(hits.info["ray_spacing"])
-    return dataclasses.replace(
-        kernel, _traced=(scene, ladar, options),
-        info={**kernel.info, "ray_spacing": spacing,
-              "rays_per_bin": float(np.min(np.diff(ladar.bin_edges))) / spacing})
 
 
 #: The most samples per analytic boundary a kernel takes (16 times the fit's refinement cap;
@@ -433,7 +366,7 @@ def coating_kernel(geometry, ladar=None, *, radiometry="paper", samples=None, **
         if ladar is not None or samples is not None or trace:
             raise ParameterError("Hits carry their ladar and rays: give coating_kernel(hits) "
                                  "alone, or the mesh Scene with the ladar and samples")
-        return _mesh_kernel(geometry, radiometry)
+        return CoatingKernel(**hits_fields(geometry, radiometry))
     if not isinstance(geometry, Scene):
         raise ParameterError(f"geometry must be a Scene of analytic shapes or Hits; got "
                              f"{type(geometry).__name__}")
@@ -443,7 +376,7 @@ def coating_kernel(geometry, ladar=None, *, radiometry="paper", samples=None, **
         if samples is not None:
             samples = check_real("samples", samples, low=RAYS_PER_BIN_RANGE[0],
                                  high=RAYS_PER_BIN_RANGE[1])
-        return _traced_mesh_kernel(geometry, ladar, radiometry, samples, trace)
+        return CoatingKernel(**traced_mesh_fields(geometry, ladar, radiometry, samples, trace))
     if trace:
         raise ParameterError(f"trace options {sorted(trace)} apply to a mesh scene; this one "
                              "is analytic")
@@ -458,4 +391,4 @@ def coating_kernel(geometry, ladar=None, *, radiometry="paper", samples=None, **
         raise ParameterError(f"samples must be at most {MAX_KERNEL_SAMPLES} per boundary "
                              f"(the kernel converges at second order well before); got "
                              f"{samples}")
-    return _analytic_kernel(geometry, ladar, radiometry, samples)
+    return CoatingKernel(**analytic_fields(geometry, ladar, radiometry, samples))
