@@ -16,10 +16,10 @@ import stat
 
 import numpy as np
 
-from . import _validate
+from . import _atomic_write, _validate
 # the atomic writer (its own module), re-exported here, where it always was
-from ._atomic_write import (TEMPORARY_PREFIX, _atomic, regular_file, temporary_writer,
-                            write_atomic, write_text_atomic)
+from ._atomic_write import (_atomic, regular_file, temporary_writer, write_atomic,
+                            write_text_atomic)
 from ._atomic_write import _SWEPT  # noqa: F401  (the deprecated meshladar.results offers it)
 from ._version import __version__
 from ._validate import check_path
@@ -31,6 +31,12 @@ from .waveforms import Waveforms
 __all__ = ["save_result", "load_result", "write_atomic", "write_text_atomic", "save_sinogram",
            "load_sinogram", "save_waveforms", "load_waveforms", "describe_scene",
            "ResultFileError", "TEMPORARY_PREFIX", "temporary_writer"]
+
+# the writer's prefix, documented here, where it is public
+#: The prefix of the temporaries meshladar writes beside a file before renaming it into
+#: place: ``.meshladar-tmp-<pid>-<8 random characters><final name>``. Only names of exactly
+#: that form are ever cleaned up, so a user's own ``.tmp-…`` files are never touched.
+TEMPORARY_PREFIX = _atomic_write.TEMPORARY_PREFIX
 
 
 class ResultFileError(MeshladarError, ValueError):
