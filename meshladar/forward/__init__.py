@@ -22,10 +22,8 @@ from .resolved import resolve
 __all__ = ["simulate", "MODELS", "OPTIONS", "trace", "simulate_mesh", "resolve"]
 
 
-#: The docstring of :func:`simulate`, attached to it below: the one entry point documents
-#: every model's options in some 85 lines, more than the house rules let a function hold,
-#: around a dispatch of two lines.
-_SIMULATE_DOC = """Range-resolved returns of ``scene`` seen by ``ladar``.
+def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
+    """Range-resolved returns of ``scene`` seen by ``ladar``.
 
     Parameters
     ----------
@@ -34,63 +32,48 @@ _SIMULATE_DOC = """Range-resolved returns of ``scene`` seen by ``ladar``.
     ladar : Ladar
         Views (``angles_deg`` about z, or ``view_vectors``) and range ``bin_edges``.
     model : {"analytic", "mesh", "pixel"}
-        ``"analytic"``: exact profiles of disks and ellipses (no faceting, no sampling).
-        ``"mesh"``: triangle meshes ray-cast with Embree; a mesh is a 3-D target
-        (``mode="3d"``) unless it was tessellated from the analytic shapes. Options of
-        :func:`meshladar.forward.mesh.simulate_mesh` (mode, normals, back_faces, z0,
-        ray_spacing, rays_per_bin, footprint, sampling, seed, receiver, backend, sensor)
-        and ``tol``. ``sensor`` (:class:`meshladar.sensor.Sensor`): a ladar at a finite
-        standoff, a beam, the atmosphere and the link budget (photoelectrons).
-        ``"pixel"``: the paper's method, a rasterised surface traced with Siddon rays
-        (options ``pixel_size``, ``ray_spacing``;
-        :func:`meshladar.forward.pixel.simulate_pixel`).
+        ``"analytic"``: exact profiles of disks and ellipses. ``"mesh"``: triangle meshes
+        ray-cast with Embree, a 3-D target unless tessellated from analytic shapes, with
+        the options of :func:`meshladar.forward.mesh.simulate_mesh` (mode, normals, rays,
+        footprint, receiver, backend, ``sensor``: a standoff, beam and link budget) and
+        ``tol``. ``"pixel"``: the paper's method, a rasterised surface traced with Siddon
+        rays (:func:`meshladar.forward.pixel.simulate_pixel`).
     radiometry : {"paper", "power"}, every model
         "paper" (default): the paper's Eq. 8, bins of ∫ F(θ) cos θ dA; "power": the power a
-        receiver collects, ∫ F cos θ_i cos θ_r dA (monostatic ∫ F cos²θ dA), exact in the
-        analytic model (:mod:`meshladar.sensor`). ``info["radiometry"]`` records it.
+        receiver collects, ∫ F cos θ_i cos θ_r dA (:mod:`meshladar.sensor`).
     tol : float in (0, 1), optional, mesh model only
-        A relative L2 accuracy instead of a ray density: rays per bin (and segments, for
-        analytic scenes) double from 1 ray per bin and 256 segments until a refinement
-        check (successive runs' difference, extrapolated with the measured convergence
-        order) estimates the error at most ``tol``; defaults then become exact (analytic)
-        or smooth (mesh) normals and footprint binning (point binning with a ``receiver``).
-        It stops early, keeping its best run and warning why, when an estimate fails to
-        fall or the next run would pass ``max_rays`` (default ``refine.TOL_MAX_RAYS`` =
-        2e9). ``info`` holds ``chosen``,
-        ``error_estimate``, ``stopped`` and every ``refinement`` run
-        (:mod:`meshladar.forward.refine`).
+        A relative L2 accuracy instead of a ray density: rays per bin (and segments) double
+        until a refinement check estimates the error at most ``tol``, within ``max_rays``;
+        ``info`` records the choice and every run (:mod:`meshladar.forward.refine`).
     jobs : int, optional
-        Workers for chunks of views (every model; default 1). The mesh model's are threads
-        sharing one Embree scene (default one per core from
-        :data:`meshladar.stream.THREADS_FROM`, 5e4 rays); the analytic and
-        pixel models' are processes.
+        Workers for chunks of views (default 1): the mesh model's are threads sharing one
+        Embree scene (default one per core from :data:`meshladar.stream.THREADS_FROM`
+        rays), the analytic and pixel models' processes.
     executor : concurrent.futures.Executor, optional
-        Any executor to run the chunks on (threads, processes, a Dask cluster's from
-        :func:`meshladar.stream.dask_executor`); overrides ``jobs``.
+        Any executor to run the chunks on (:func:`meshladar.stream.dask_executor`'s for a
+        Dask cluster); overrides ``jobs``.
     progress : bool
         A progress bar over the views, on a terminal only.
     run_dir : path, optional
-        A run folder: each finished chunk of views is saved there (atomically, checksummed)
-        and the same job run again computes only what is missing (:mod:`meshladar.runs`).
+        A run folder: each finished chunk of views is saved there and the same job run
+        again computes only what is missing (:mod:`meshladar.runs`).
     **options
         The chosen model's own options; an option another model takes is an error.
 
     Returns
     -------
     Sinogram
-        ``values`` (n_views, n_bins), float64: bin integrals of F(θ) cos θ dA (paper Eq. 8)
-        or of received power,
-        ``angles_deg`` (or ``view_vectors``), ``bin_edges``, ``model``, and ``info`` (the
-        convention and options the run used).
+        ``values`` (n_views, n_bins), float64: bin integrals of F(θ) cos θ dA (Eq. 8) or
+        of received power, with ``angles_deg`` (or ``view_vectors``), ``bin_edges``,
+        ``model``, and ``info`` (the convention and options the run used).
 
     Raises
     ------
     ParameterError
-        If ``scene`` is not a Scene or ``ladar`` not a Ladar, ``model`` is not one of
-        :data:`MODELS`, an option is one the model does not take, ``jobs`` is invalid,
-        ``run_dir`` is combined with ``tol`` or ``max_rays`` given without it, or the
-        analytic or pixel model gets a mesh scene or views off the x-y plane; and
-        whatever the chosen model refuses.
+        If ``scene`` or ``ladar`` is of the wrong type, ``model`` not one of
+        :data:`MODELS`, an option one the model does not take, ``jobs`` invalid,
+        ``run_dir`` combined with ``tol``, or a mesh scene or views off the x-y plane given
+        to the analytic or pixel model; and whatever the chosen model refuses.
 
     Warns
     -----
@@ -110,14 +93,8 @@ _SIMULATE_DOC = """Range-resolved returns of ``scene`` seen by ``ladar``.
     >>> ml.simulate(scene, ladar).values.shape
     (360, 256)
     """
-
-
-def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
     _check_call(scene, ladar, model, options)
     return _RUNNERS[model](scene, ladar, options)
-
-
-simulate.__doc__ = _SIMULATE_DOC
 
 
 def _check_call(scene, ladar, model, options):
