@@ -73,7 +73,19 @@ class Legend(NamedTuple):
 class Shown:
     """What a viewer entry point drew: ``image`` (height, width, 3) off screen (else None),
     ``plotter`` on a desktop (else None), its ``legend`` (None without one) and its
-    ``scalar_bars``, for checks that they are titled and do not overlap."""
+    ``scalar_bars``, for checks that they are titled and do not overlap.
+
+    Attributes
+    ----------
+    image : (height, width, 3) uint8 array or None
+        The rendered picture off screen; None when shown on a desktop.
+    plotter : pyvista.Plotter or None
+        The live plotter on a desktop; None off screen.
+    legend : Legend or None
+        The legend's entries and box, None without one.
+    scalar_bars : tuple
+        The scalar bars drawn, with their titles and boxes.
+    """
 
     image: np.ndarray | None
     plotter: object

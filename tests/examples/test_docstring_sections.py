@@ -2,7 +2,8 @@
 from them).
 
 The public definitions: the functions and classes each public module (no ``_`` in its
-dotted name) lists in ``__all__``, and the public methods those classes define themselves.
+dotted name) lists in ``__all__`` and defines, or re-exports from a private module, and
+the public methods those classes define themselves.
 A function or method that takes parameters (``self`` and ``cls`` apart) needs a
 ``Parameters`` section; one whose body returns a value needs ``Returns`` (``Yields`` for a
 generator). A class needs ``Parameters`` or ``Attributes`` when it is built from
@@ -113,6 +114,15 @@ def _current(get):
             return None
 
 
+def _defined_for(obj, dotted):
+    """Whether ``dotted`` is where ``obj`` is public: it defines it, or re-exports it from a
+    private module (``meshladar._pulses.GaussianPulse`` is public as
+    ``meshladar.waveforms.GaussianPulse``)."""
+    home = getattr(obj, "__module__", None) or ""
+    return home == dotted or (home.startswith("meshladar.")
+                              and any(p.startswith("_") for p in home.split(".")[1:]))
+
+
 def missing(paths=None):
     """{"module.name": [sections]} of every public definition under ``paths`` (files or
     folders; default all) that lacks a section."""
@@ -125,7 +135,7 @@ def missing(paths=None):
         for name in getattr(module, "__all__", ()) if module is not None else ():
             obj = _current(lambda: getattr(module, name, None))
             if not (inspect.isfunction(obj) or inspect.isclass(obj)) \
-                    or getattr(obj, "__module__", None) != dotted or id(obj) in seen:
+                    or not _defined_for(obj, dotted) or id(obj) in seen:
                 continue
             seen.add(id(obj))
             label = f"{dotted}.{obj.__qualname__}"
@@ -186,6 +196,11 @@ def test_the_check_sees_what_is_missing():
         a: int
 
     assert _class_missing(Record) == ["Parameters or Attributes"]
+    # a public name re-exported from a private module is checked where it is public
+    from meshladar import _pulses, waveforms
+    assert _defined_for(_pulses.GaussianPulse, "meshladar.waveforms")
+    assert waveforms.GaussianPulse is _pulses.GaussianPulse
+    assert not _defined_for(inspect.signature, "meshladar.io")
 
 
 if __name__ == "__main__":
