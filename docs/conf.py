@@ -31,6 +31,7 @@ extensions = [
     "sphinx_gallery.gen_gallery",
     "cli_reference",
     "resolve_refs",
+    "validation",
 ]
 
 html_theme = "pydata_sphinx_theme"

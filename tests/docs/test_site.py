@@ -56,8 +56,41 @@ def test_the_api_reference_has_every_public_module(site):
 def test_the_gallery_ran_and_drew(site):
     """Each gallery script ran at build time and its figure is on its page."""
     scripts = sorted((ROOT / "docs" / "gallery").glob("plot_*.py"))
-    assert len(scripts) >= 2
+    assert len(scripts) >= 10
     for script in scripts:
         page = (site / "auto_gallery" / f"{script.stem}.html").read_text(encoding="utf-8")
         assert f"sphx_glr_{script.stem}_001.png" in page, script.name
         assert (site / "_images" / f"sphx_glr_{script.stem}_001.png").stat().st_size > 10_000
+
+
+def _validation():
+    sys.path.insert(0, str(ROOT / "docs" / "_ext"))
+    try:
+        import validation
+    finally:
+        sys.path.remove(str(ROOT / "docs" / "_ext"))
+    return validation
+
+
+def test_the_validation_page_is_written_from_the_tests():
+    """The page quotes the paper tests' assertions as written and the command for each; a
+    test's changed tolerance would change the page (no number is typed by hand)."""
+    validation = _validation()
+    text = validation.page()
+    source = (ROOT / "tests" / "studies" / "test_paper.py").read_text(encoding="utf-8")
+    line = next(s.strip() for s in source.splitlines() if "disk_b0.99.darkening\"] < -" in s)
+    assert line in text
+    assert ".venv/bin/python -m pytest tests/studies/test_paper.py::" \
+           "test_glancing_loss_darkens_the_interior_boundary" in text
+    assert "``G_RTOL = 1e-12``" in text            # a named tolerance, with its value
+    for _title, _what, modules in validation.SECTIONS:
+        for module in modules:
+            assert (ROOT / module).exists(), module
+    total = int(text.rsplit(" tests in all", 1)[0].rsplit("\n", 1)[-1])
+    assert total >= 150
+
+
+@pytest.mark.slow
+def test_the_validation_page_is_built(site):
+    page = (site / "reference" / "validation.html").read_text(encoding="utf-8")
+    assert "test_lambertian_disk_is_not_darkened" in page and "Named tolerances" in page
