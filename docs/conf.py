@@ -32,6 +32,7 @@ extensions = [
     "cli_reference",
     "resolve_refs",
     "validation",
+    "notebooks",
 ]
 
 html_theme = "pydata_sphinx_theme"

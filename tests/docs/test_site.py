@@ -94,3 +94,15 @@ def test_the_validation_page_is_written_from_the_tests():
 def test_the_validation_page_is_built(site):
     page = (site / "reference" / "validation.html").read_text(encoding="utf-8")
     assert "test_lambertian_disk_is_not_darkened" in page and "Named tolerances" in page
+
+
+@pytest.mark.slow
+def test_the_notebooks_ran_at_build_time(site):
+    """Each notebook in examples/ is a page, its figures drawn by this build (the stored
+    outputs are not used) and its download offered."""
+    books = sorted((ROOT / "examples").glob("*.ipynb"))
+    assert len(books) >= 3
+    for book in books:
+        page = (site / "notebooks" / f"{book.stem}.html").read_text(encoding="utf-8")
+        assert f"{book.stem}_01.png" in page and book.name in page, book.name
+        assert (site / "_images" / f"{book.stem}_01.png").stat().st_size > 10_000
