@@ -47,9 +47,8 @@ def convex_hull(v):
     Returns
     -------
     (k, 3) ndarray
-        Read-only and C-contiguous, of ``v``'s dtype. Where no point was dropped (64 or
-        fewer points, or Qhull failed on a degenerate set) and ``v`` is already
-        C-contiguous, this is ``v`` itself, made read-only in place.
+        Read-only and C-contiguous, of ``v``'s dtype; always a new array (where no point
+        was dropped, a copy of ``v``), so ``v`` and its flags are left as they were.
     """
     hull = v
     if len(v) > _HULL_FILTER_ABOVE:
@@ -59,7 +58,9 @@ def convex_hull(v):
             hull = hull[ConvexHull(hull).vertices]
         except (QhullError, ValueError):
             pass
-    hull = np.ascontiguousarray(hull)
+    # a copy where nothing was dropped: making the caller's own array read-only would
+    # change their data's flags behind their back
+    hull = np.array(hull, order="C") if hull is v else np.ascontiguousarray(hull)
     hull.flags.writeable = False
     return hull
 
