@@ -14,7 +14,8 @@ import math
 import numpy as np
 from scipy import fft as sfft
 
-from .._validate import check_choice
+from .._validate import check_choice, check_size, short
+from ..errors import ParameterError
 
 __all__ = ["fourier_filter", "FILTERS"]
 
@@ -32,9 +33,10 @@ def fourier_filter(n_padded, filter="ramp"):
     Parameters
     ----------
     n_padded : int
-        Length of the zero-padded projection the response multiplies. Not checked: an odd
-        length makes numpy raise ValueError. :func:`fbp` passes a power of two, at least 64
-        and at least 2 n_bins.
+        Length of the zero-padded projection the response multiplies: a positive multiple
+        of 4 (the kernel's construction is symmetric, hence right, only there; any other
+        length is refused). :func:`fbp` passes a power of two, at least 64 and at least
+        2 n_bins.
     filter : {"ramp", "shepp-logan", "cosine", "hamming", "hann"}, default "ramp"
         The window (:data:`FILTERS`) applied to the ramp: "shepp-logan" multiplies by
         sin(ω)/ω with ω = π ν (ν from ``scipy.fft.fftfreq``; the zero frequency is left
@@ -52,7 +54,8 @@ def fourier_filter(n_padded, filter="ramp"):
     Raises
     ------
     ParameterError
-        When ``filter`` is not one of :data:`FILTERS`.
+        When ``filter`` is not one of :data:`FILTERS`, or ``n_padded`` is not a positive
+        integer multiple of 4 (or its response would exceed the allocation cap).
 
     References
     ----------
@@ -61,6 +64,7 @@ def fourier_filter(n_padded, filter="ramp"):
     ``skimage.transform.iradon`` (its filters and discretisation).
     """
     check_choice("filter", filter, FILTERS)
+    n_padded = _check_length(n_padded)
     n = np.concatenate((np.arange(1, n_padded / 2 + 1, 2, dtype=int),
                         np.arange(n_padded / 2 - 1, 0, -2, dtype=int)))
     f = np.zeros(n_padded)
@@ -77,6 +81,23 @@ def fourier_filter(n_padded, filter="ramp"):
     elif filter == "hann":
         response *= sfft.fftshift(np.hanning(n_padded))
     return response
+
+
+def _check_length(n_padded):
+    """Refuse a padded length other than a positive multiple of 4: scikit-image's kernel
+    puts −1/(πn)² at the odd offsets counted from both ends, which is the symmetric
+    (circular) Ram-Lak kernel only when the length is a multiple of 4; at 2 mod 4 its
+    response is silently wrong (≈ 0.09 at the zero frequency instead of ≈ 0) and at an
+    odd length numpy fails on a shape mismatch. Returns it as an int."""
+    if (isinstance(n_padded, (bool, np.bool_)) or not isinstance(n_padded, (int, np.integer))
+            or n_padded < 4 or n_padded % 4):
+        raise ParameterError(f"n_padded must be a positive integer multiple of 4 (fbp pads to "
+                             f"a power of two >= 64); got {short(n_padded)}")
+    n_padded = int(n_padded)
+    count = n_padded if n_padded < 2 ** 1000 else math.inf     # float() would overflow
+    check_size("n_padded", count, 8 * 4, f"a filter response of {short(n_padded)} samples",
+               "ask for a shorter length")
+    return n_padded
 
 
 def _filtered(values, filter):
