@@ -118,9 +118,11 @@ class CoatingKernel:
         Parameters
         ----------
         samples : int or float
-            Analytic kernel: pieces per boundary, an integer ≥ 1 (not capped here at
-            :data:`MAX_KERNEL_SAMPLES`, unlike :func:`coating_kernel`). Mesh kernel: rays
-            per range-bin width, a real > 0 (:func:`meshladar.trace` bounds it).
+            Analytic kernel: pieces per boundary, an integer in [1, 2 ×
+            :data:`MAX_KERNEL_SAMPLES`] (twice :func:`coating_kernel`'s cap: a fit checks
+            a kernel of N pieces against the one of 2N). Mesh kernel: rays per range-bin
+            width, a real in the range ``RAYS_PER_BIN_RANGE`` of
+            :mod:`meshladar.raytrace.grid` (as :func:`coating_kernel`).
 
         Returns
         -------
@@ -138,8 +140,11 @@ class CoatingKernel:
             raise ParameterError("only a kernel traced from its Scene (coating_kernel(scene, "
                                  f"ladar)) can be resampled; this one is from {self.source}"
                                  + (" hits" if self.source == "mesh" else ""))
-        samples = (check_count("samples", samples) if self.source == "analytic"
-                   else check_real("samples", samples, low=0.0, low_open=True))
+        # checked before anything is built: the pieces' arrays grow linearly with samples
+        samples = (check_count("samples", samples, high=2 * MAX_KERNEL_SAMPLES)
+                   if self.source == "analytic"
+                   else check_real("samples", samples, low=RAYS_PER_BIN_RANGE[0],
+                                   high=RAYS_PER_BIN_RANGE[1]))
         if samples == self.samples:
             return self
         if samples not in self._finer:
