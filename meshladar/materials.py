@@ -61,6 +61,13 @@ def lambertian(rho_d=1.0, *, name=None):
     References
     ----------
     Jin & Levine (2009), Eqs. A1-A3 with b = 0 (g ≡ 1, G = 1).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from meshladar.materials import lambertian
+    >>> bool(np.isclose(lambertian(0.5).monostatic(0.3), 0.5 / np.pi))   # at any angle
+    True
     """
     return SandfordRobertson(rho_d=rho_d, epsilon=0.0, b=0.0, e=1.0, lobes="diffuse", name=name)
 
@@ -94,6 +101,15 @@ def glint(e, rho_s=1.0, *, name=None):
     References
     ----------
     Jin & Levine (2009), Eqs. A5-A8 and Fig. 8.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from meshladar.materials import glint
+    >>> aluminium_like = glint(e=0.007)
+    >>> f = aluminium_like.monostatic(np.array([0.0, 0.01]))   # 0.01 rad off the mirror
+    >>> bool(f[1] < 0.2 * f[0])                      # the lobe is 0.007 wide
+    True
     """
     epsilon = 1.0 - check_real("rho_s", rho_s, low=0.0, high=1.0)
     return SandfordRobertson(rho_d=0.0, epsilon=epsilon, b=0.0, e=e, lobes="specular", name=name)

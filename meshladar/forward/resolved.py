@@ -114,6 +114,17 @@ def resolve(scene, ladar, axes, *, motion=None, radiometry="paper", sensor=None,
         a ``"doppler"`` axis comes without a :class:`Motion`, ``motion`` is not one,
         ``radiometry`` is invalid, or the result would need more memory than meshladar
         allocates at once; and whatever the mesh model's plan refuses.
+
+    Examples
+    --------
+    >>> import numpy as np, trimesh, meshladar as ml
+    >>> ball = ml.Scene.from_mesh(trimesh.creation.icosphere(subdivisions=3, radius=0.5),
+    ...                           material=ml.materials.DARK_GRAY)
+    >>> ladar = ml.Ladar.covering(ball, n_bins=64, angles_deg=[0.0, 90.0])
+    >>> e = np.linspace(-0.6, 0.6, 33)
+    >>> image = resolve(ball, ladar, [("cross_range", e), ("elevation", e)])
+    >>> image.values.shape                           # angle-angle images, one per view
+    (2, 32, 32)
     """
     names, edges = _check_axes(axes, motion)
     check_radiometry(radiometry)

@@ -68,6 +68,17 @@ def weigh(hits: Hits, materials=None, *, footprint=False, bin_edges=None,
     References
     ----------
     Jin & Levine (2009), Eq. 8.
+
+    Examples
+    --------
+    >>> import trimesh, meshladar as ml
+    >>> ball = ml.Scene.from_mesh(trimesh.creation.icosphere(subdivisions=3, radius=0.5),
+    ...                           material=ml.materials.DARK_GRAY)
+    >>> hits = ml.trace(ball, ml.Ladar.covering(ball, n_bins=64, angles_deg=[0.0, 90.0]))
+    >>> gray = weigh(hits)                                    # the coating it was made with
+    >>> glossy = weigh(hits, [ml.brdf.GGX(alpha=0.2)])        # another, on the same rays
+    >>> gray.values.shape, glossy.values.shape
+    ((2, 64), (2, 64))
     """
     mats, edges, power = _checked(hits, materials, footprint, bin_edges, radiometry)
     order = np.argsort(hits.view, kind="stable")
