@@ -29,7 +29,7 @@ import numpy as np
 
 from .. import materials
 from .. import phantoms as _specs
-from .._validate import check_real
+from .._validate import check_choice, check_real, short
 from ..brdf import Lambertian, SandfordRobertson
 from ..reconstruct.compensation import compensate
 from ..errors import MeshladarWarning, ParameterError
@@ -197,12 +197,11 @@ def run(setting="quick", *, methods=METHODS, spacings=SPACINGS, photons=None, se
     ----------
     setting : {"quick", "full"}
         Image size, range bins and iterations: quick (128, 128, 40), full (256, 256,
-        100). Not checked: another value raises ``KeyError``.
+        100).
     methods : sequence of str, keyword-only
-        Names from :data:`METHODS` (default all). Not checked: a name that is none of
-        them is run as ``"tv"``.
+        One or more names from :data:`METHODS` (default all).
     spacings : sequence of float, keyword-only
-        View spacings in degrees (default :data:`SPACINGS`).
+        One or more view spacings in degrees, each > 0 (default :data:`SPACINGS`).
     photons : float, optional, keyword-only
         > 0: photoelectrons in each noisy sinogram's brightest bin (default None: no
         noise).
@@ -230,9 +229,11 @@ def run(setting="quick", *, methods=METHODS, spacings=SPACINGS, photons=None, se
     Raises
     ------
     ParameterError
-        When ``speckle_cells`` or a non-zero ``background`` is given without ``photons``,
-        ``photons`` is not > 0, or ``background`` is negative.
+        When ``setting``, a method or a spacing is none of the above, ``speckle_cells``
+        or a non-zero ``background`` is given without ``photons``, ``photons`` is not
+        > 0, or ``background`` is negative; before any work.
     """
+    methods, spacings = _checked_runs(setting, methods, spacings)
     photons, background = _checked_noise(photons, speckle_cells, background)
     size, n_bins, n_iter = _SETTINGS[setting]
     rows, images = [], {}
@@ -252,6 +253,19 @@ def run(setting="quick", *, methods=METHODS, spacings=SPACINGS, photons=None, se
                              "background": background, **measured})
                 images[(name, sp, method)] = img.values
     return rows, images
+
+
+def _checked_runs(setting, methods, spacings):
+    """``setting``, ``methods`` and ``spacings`` checked (a name outside :data:`METHODS`
+    would otherwise run as "tv" under its own label; a string would run each letter)."""
+    check_choice("setting", setting, tuple(_SETTINGS))
+    for name, value in (("methods", methods), ("spacings", spacings)):
+        if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or not len(value):
+            raise ParameterError(f"{name} must be a non-empty list or tuple; got {short(value)}")
+    methods = tuple(check_choice(f"methods[{i}]", m, METHODS) for i, m in enumerate(methods))
+    spacings = tuple(check_real(f"spacings[{i}]", sp, low=0.0, low_open=True)
+                     for i, sp in enumerate(spacings))
+    return methods, spacings
 
 
 def _checked_noise(photons, speckle_cells, background):
