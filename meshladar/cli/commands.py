@@ -34,7 +34,11 @@ def cmd_demo(args) -> int:
     args : argparse.Namespace
         ``angles_deg``: the incidence angles θ in degrees (list of float). For dark gray
         and aluminium, each angle's row holds F [1/sr], F cos θ [1/sr] and the specular
-        reflectance ρ_s(θ).
+        reflectance ρ_s(θ). At grazing incidence (θ = 90° + k·180°, where the coating
+        still returns light) F grows without bound as 1/cos θ: its column says
+        ``unbounded`` (a float cos 90° of 6e-17 would print ~1e14) and a note follows;
+        F cos θ, the weight the sinogram uses, stays bounded. An angle that 3 decimals
+        would round is printed with up to 10 significant digits.
 
     Returns
     -------
@@ -52,9 +56,21 @@ def cmd_demo(args) -> int:
         f = m.monostatic(theta)
         fc = m.monostatic(theta, projected=True)
         rs = m.specular_reflectance(theta)
-        for row in zip(angles, f, fc, rs):
-            print(f"  {row[0]:11.3f}  {row[1]:12.6g}  {row[2]:20.6g}  {row[3]:12.6f}")
+        grazing = (np.mod(angles, 180.0) == 90.0) & (fc != 0.0)
+        for a, fa, fca, rsa, g in zip(angles, f, fc, rs, grazing):
+            shown = "unbounded" if g else f"{fa:.6g}"
+            print(f"  {_demo_angle(a):>11}  {shown:>12}  {fca:20.6g}  {rsa:12.6f}")
+        if grazing.any():
+            print("  F is unbounded at grazing incidence (it grows as 1/cos(theta)); "
+                  "F cos(theta) stays bounded")
     return 0
+
+
+def _demo_angle(a):
+    """An angle in degrees with 3 decimals, or up to 10 significant digits where 3 would
+    round it (89.9999999 is not 90) or
+    the number is huge."""
+    return f"{a:.3f}" if abs(a) < 1e9 and float(f"{a:.3f}") == a else f"{a:.10g}"
 
 
 def cmd_materials(args) -> int:
