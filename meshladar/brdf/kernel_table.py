@@ -16,6 +16,9 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .._validate import short
+from ..errors import ParameterError
+
 __all__ = ["KernelRow", "material_table"]
 
 
@@ -58,14 +61,45 @@ def material_table(materials):
     Parameters
     ----------
     materials : sequence of BRDF
-        The n coatings, in material-index order. Each must have ``kernel_params`` that are
-        not None (of the built-in models, :class:`meshladar.brdf.SandfordRobertson` and
-        :class:`meshladar.brdf.Lambertian`); this is not checked here.
+        The n coatings, in material-index order (n ≥ 0). Each must have ``kernel_params``
+        that are not None: of the built-in models, :class:`meshladar.brdf.SandfordRobertson`
+        and :class:`meshladar.brdf.Lambertian`; a user's row must be 7 finite numbers.
 
     Returns
     -------
     (n, 7) ndarray of float64
         Row i is ``materials[i].kernel_params`` (a
-        :class:`meshladar.brdf.KernelRow`).
+        :class:`meshladar.brdf.KernelRow`); (0, 7) for no materials.
+
+    Raises
+    ------
+    ParameterError
+        When ``materials`` is not a sequence, or a material has no ``kernel_params`` (the
+        models without a compiled kernel are weighed through ``value`` instead) or a row
+        that is not 7 finite numbers; the message names the material's index and type.
     """
-    return np.array([m.kernel_params for m in materials], dtype=np.float64)
+    if not isinstance(materials, (list, tuple)):
+        raise ParameterError(f"materials must be a list or tuple of BRDFs; got "
+                             f"{short(materials)}")
+    rows = [_row(i, m) for i, m in enumerate(materials)]
+    return np.array(rows, dtype=np.float64).reshape(len(rows), len(KernelRow._fields))
+
+
+def _row(i, material):
+    """``material.kernel_params`` as 7 finite floats, or a ParameterError naming it."""
+    params = getattr(material, "kernel_params", None)
+    kind = type(material).__name__
+    if params is None:
+        raise ParameterError(f"materials[{i}]: {kind} has no kernel_params (a row of the "
+                             f"compiled SR kernel); material_table takes coatings that have "
+                             f"one (SandfordRobertson, Lambertian), others are weighed "
+                             f"through their value()")
+    try:
+        row = np.asarray(params, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ParameterError(f"materials[{i}]: {kind}.kernel_params must be 7 real numbers "
+                             f"{KernelRow._fields}; got {short(params)}") from exc
+    if row.shape != (len(KernelRow._fields),) or not np.all(np.isfinite(row)):
+        raise ParameterError(f"materials[{i}]: {kind}.kernel_params must be 7 finite numbers "
+                             f"{KernelRow._fields}; got {short(params)}")
+    return row

@@ -41,6 +41,32 @@ def test_the_material_table_stacks_each_coatings_kernel_row():
     assert tuple(table[0]) == tuple(row)
 
 
+
+class _BadRow(BRDF):
+    kernel_params = (0.1, 0.0, 0.0, 1.0)                   # 4 numbers, not 7
+
+    def projected(self, cos_theta, sin_theta):
+        return 0.1 * np.maximum(cos_theta, 0.0)
+
+
+@pytest.mark.parametrize("materials, message", [
+    # a model without a compiled row gave array([nan]); mixed with one that has a row,
+    # numpy's "inhomogeneous shape" ValueError
+    ([ml.brdf.GGX(alpha=0.2)], r"^materials\[0\]: GGX has no kernel_params .*"
+     r"\(SandfordRobertson, Lambertian\)"),
+    ([DARK_GRAY, ml.brdf.Phong(0.2, 0.3, 10.0)], r"^materials\[1\]: Phong has no kernel_params"),
+    ([DARK_GRAY, _BadRow()], r"^materials\[1\]: _BadRow.kernel_params must be 7 finite "
+     r"numbers .*got \(0.1, 0.0, 0.0, 1.0\)"),
+    (DARK_GRAY, r"^materials must be a list or tuple of BRDFs; got SandfordRobertson"),
+])
+def test_the_material_table_refuses_coatings_without_a_compiled_row(materials, message):
+    with pytest.raises(ParameterError, match=message):
+        material_table(materials)
+
+
+def test_the_material_table_of_no_coatings_has_seven_columns():
+    assert material_table([]).shape == (0, 7)
+
 def test_built_in_models_register_themselves_and_a_users_do_not():
     assert set(MODELS) == {"SandfordRobertson", "Lambertian", "Phong", "GGX", "Tabulated"}
     assert MODELS["GGX"] is ml.brdf.GGX
