@@ -12,7 +12,7 @@ import numpy as np
 
 from ..brdf import projected_weight
 from ..errors import MeshladarWarning
-from ..precision import TINY
+from ..precision import COS_HORIZON
 
 __all__ = ["weights", "scaled", "per_table_weight", "GRAZING_RECEIVER_COS"]
 
@@ -142,8 +142,10 @@ def per_table_weight(hits, power):
     -------
     (k,) float64 numpy.ndarray
         Per hit, δA⊥ × its factors, divided under "paper" by cos θ floored at
-        ``meshladar.precision.TINY`` (1e-300).
+        ``meshladar.precision.COS_HORIZON`` (cos(fl(π/2)) = 6.1e-17, the floor
+        :meth:`BRDF.value <meshladar.brdf.BRDF.value>` divides by), so the product with the
+        table is :func:`weigh`'s weight up to and including grazing incidence.
     """
     omega = scaled(np.full(hits.view.size, float(hits.area)), hits.weight_factor,
                    hits.receive_factor, power=power)
-    return omega if power else omega / np.maximum(hits.cos_theta, TINY)
+    return omega if power else omega / np.maximum(hits.cos_theta, COS_HORIZON)
