@@ -23,6 +23,13 @@ from .._validate import check_count, check_real, finite_array
 from ..errors import ParameterError
 from . import _siddon_kernels as _kernels
 
+#: The farthest a parallel ray may start, in units of the largest of 1 and the positions'
+#: reach: the traversal walks each ray's whole line, so the start only has to be on it, but
+#: a start's rounding is carried into the projection about in proportion to the distance
+#: (measured for positions of order 1: 1e-9 of the signal at 1e4, 7e-7 at 1e8, 6e-3 at
+#: 1e12, all of it at 1e16); here it stays near 1e-7.
+MAX_START_DISTANCE = 1e6
+
 __all__ = ["PixelGrid", "Rays", "parallel_rays", "project", "backproject", "ParallelProjector"]
 
 
@@ -180,7 +187,9 @@ def parallel_rays(angles_deg, positions, *, distance):
     positions : (n_positions,) array_like
         Transverse positions s along u = (−sin φ, cos φ), scene units (flattened).
     distance : float
-        How far from the origin along w the rays start (scene units), ≥ 0.
+        How far from the origin along w the rays start (scene units), from 0 to
+        :data:`MAX_START_DISTANCE` × max(1, max |s|): the projection does not depend on it
+        (each ray's whole line is walked), but a far start loses its sideways precision.
 
     Returns
     -------
@@ -192,11 +201,12 @@ def parallel_rays(angles_deg, positions, *, distance):
     ------
     ParameterError
         If ``angles_deg`` or ``positions`` is not finite, or ``distance`` is not a finite
-        real ≥ 0.
+        real in its range.
     """
     phi = np.deg2rad(finite_array("angles_deg", angles_deg)).ravel()
     s = finite_array("positions", positions).ravel()
-    distance = check_real("distance", distance, low=0.0)
+    reach = max(1.0, float(np.abs(s).max(initial=0.0)))
+    distance = check_real("distance", distance, low=0.0, high=MAX_START_DISTANCE * reach)
     c, sn = np.cos(phi)[:, None], np.sin(phi)[:, None]
     ox = -sn * s[None, :] + distance * c
     oy = c * s[None, :] + distance * sn
