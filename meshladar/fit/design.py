@@ -5,18 +5,24 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from numbers import Real
 
 import numpy as np
 
 from .. import plotting
-from .._validate import check_count, check_real
+from .._validate import check_count, check_real, short
 from ..errors import ParameterError
+from ..hits import Hits
 from ._irls import check_scale
 from ._params import _jacobian, _resolve_params
 from ._tables import _table
 from .kernels import CoatingKernel, coating_kernel
 
 __all__ = ["ViewDesign", "design_views"]
+
+#: design_views' default ``samples`` for a Scene (pieces per analytic boundary, or rays per
+#: range-bin width of a mesh Scene); Hits carry their own rays and take no samples.
+DESIGN_SAMPLES = 4096
 
 
 @dataclass(frozen=True, eq=False)
@@ -75,7 +81,7 @@ class ViewDesign:
 
 
 def design_views(geometry, budget, *, ladar=None, parts=None, free=None, materials=None,
-                 photons_per_unit=None, samples=4096):
+                 photons_per_unit=None, samples=DESIGN_SAMPLES):
     """Which ``budget`` of the candidate views constrain the coatings best: greedy
     D-optimal design on the Fisher information of Poisson counts (each step adds the view
     that most raises log det F of the chosen set), compared with evenly spaced views.
@@ -89,9 +95,9 @@ def design_views(geometry, budget, *, ladar=None, parts=None, free=None, materia
     Parameters
     ----------
     geometry : CoatingKernel, Scene or Hits
-        The candidates are its views (a Scene needs ``ladar``). A Scene or Hits goes
-        through :func:`coating_kernel` with ``samples``; Hits need ``samples=None``
-        (``coating_kernel`` refuses any other value with Hits, the default included).
+        The candidates are its views (a Scene needs ``ladar``). A Scene goes through
+        :func:`coating_kernel` with ``samples``, Hits through ``coating_kernel(hits)``
+        (they carry their own rays: ``samples`` is not passed).
     budget : int
         Views to choose, in [1, n_views].
     ladar : Ladar, optional
@@ -104,9 +110,11 @@ def design_views(geometry, budget, *, ladar=None, parts=None, free=None, materia
         Counts per unit of the sinogram (default: 1e5 counts in the brightest bin), > 0;
         the brightest bin must then hold 1 to 1e15 counts.
     samples : int, float or None, optional
-        ``samples`` of :func:`coating_kernel` (default 4096: pieces per analytic boundary,
-        or rays per range-bin width of a mesh Scene; None: its own default); unused with a
-        CoatingKernel.
+        ``samples`` of :func:`coating_kernel` for a Scene (default
+        :data:`DESIGN_SAMPLES`, 4096: pieces per analytic boundary, or rays per range-bin
+        width of a mesh Scene; None: its own default); unused with a CoatingKernel. Hits
+        take only the default or None (any other value is refused: their rays are
+        traced).
 
     Returns
     -------
@@ -119,17 +127,15 @@ def design_views(geometry, budget, *, ladar=None, parts=None, free=None, materia
     ParameterError
         If ``budget`` is not an integer in [1, n_views], ``parts``, ``free`` or
         ``materials`` name no part or parameter of the kernel, ``photons_per_unit`` is
-        invalid, or :func:`coating_kernel` refuses the geometry.
+        invalid, Hits come with a ``samples`` other than the default or None, or
+        :func:`coating_kernel` refuses the geometry.
 
     References
     ----------
     A. C. Atkinson, A. N. Donev and R. D. Tobias, *Optimum Experimental Designs, with SAS*,
     Oxford University Press (2007) (D-optimum designs).
     """
-    if isinstance(geometry, CoatingKernel):
-        kernel = geometry
-    else:
-        kernel = coating_kernel(geometry, ladar, samples=samples)
+    kernel = _kernel_of(geometry, ladar, samples)
     n_views = kernel.shape[0]
     budget = check_count("budget", budget)
     if budget > n_views:
@@ -152,6 +158,21 @@ def design_views(geometry, budget, *, ladar=None, parts=None, free=None, materia
     return ViewDesign(np.array(chosen), np.asarray(kernel.angles_deg), information, names,
                       _stderr(per_view, chosen, ridge, width),
                       _stderr(per_view, uniform, ridge, width), uniform)
+
+
+def _kernel_of(geometry, ladar, samples):
+    """The geometry's coating kernel: a CoatingKernel itself, a Scene's at ``samples``,
+    Hits' from their own rays (``samples`` only the default or None)."""
+    if isinstance(geometry, CoatingKernel):
+        return geometry
+    if not isinstance(geometry, Hits):
+        return coating_kernel(geometry, ladar, samples=samples)
+    default = (isinstance(samples, Real) and not isinstance(samples, bool)
+               and samples == DESIGN_SAMPLES)
+    if samples is not None and not default:
+        raise ParameterError(f"samples applies to a Scene; Hits carry their own rays: leave "
+                             f"samples at its default or None; got {short(samples)}")
+    return coating_kernel(geometry, ladar)
 
 
 def _per_view_fisher(kernel, at, m, scale, width):
