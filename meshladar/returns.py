@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._summary import table, text
-from ._validate import check_count, check_real, finite_array, readonly_copy
+from ._validate import check_count, check_real, finite_array, readonly_copy, short
 from .errors import ParameterError
 from .noise import draw_noise, Noise
 from .sinogram import Sinogram
@@ -57,9 +57,10 @@ class Returns:
     Raises
     ------
     ParameterError
-        When ``values`` or an edge array is not finite, or the shapes disagree: ``values``
-        not 1 + len(axes) dimensional, not one edge array per axis, or an edge array not
-        one longer than its axis.
+        When ``axes`` is not a tuple or list of distinct names from :data:`COORDINATES`,
+        ``values`` or an edge array is not finite, or the shapes disagree: ``values`` not
+        1 + len(axes) dimensional, not one edge array per axis, or an edge array not one
+        longer than its axis.
     """
 
     values: np.ndarray
@@ -70,6 +71,7 @@ class Returns:
     info: dict = field(default_factory=dict, kw_only=True)
 
     def __post_init__(self):
+        _check_axes(self.axes)
         v = finite_array("values", self.values)
         edges = tuple(readonly_copy(finite_array(f"edges[{i}]", e))
                       for i, e in enumerate(self.edges))
@@ -226,9 +228,10 @@ class Returns:
         ----------
         factor : float
             Multiplier, finite and > 0 (e.g. photoelectrons per unit of relative power).
-        units : str
+        units : str or None
             The scaled values' units, stored as ``info["units"]`` (default
-            ``"photoelectrons"``; not checked).
+            ``"photoelectrons"``); photoelectrons are not scaled to photoelectrons again
+            (a double count).
 
         Returns
         -------
@@ -239,9 +242,18 @@ class Returns:
         Raises
         ------
         ParameterError
-            When ``factor`` is not a finite number > 0.
+            When ``factor`` is not a finite number > 0, when the returns already count
+            photoelectrons and ``units`` is ``"photoelectrons"``, or when ``units`` is
+            neither a string nor None.
         """
         f = check_real("factor", factor, low=0.0, low_open=True)
+        if units is not None and not isinstance(units, str):
+            raise ParameterError(f"units must be a string or None; got {short(units)}")
+        if self.info.get("units") == "photoelectrons" and units == "photoelectrons":
+            raise ParameterError("these returns already count photoelectrons (their sensor "
+                                 "counted them): scaling them to photoelectrons again would "
+                                 "count twice; scale returns of relative power, or give "
+                                 "the units the factor converts to")
         return Returns(self.values * f, axes=self.axes, edges=self.edges,
                        angles_deg=self.angles_deg, view_vectors=self.view_vectors,
                        info=dict(self.info, units=units, scaled_by=f))
@@ -258,3 +270,12 @@ class Returns:
     def _repr_html_(self) -> str:
         return table("Returns", *self._summary())
 
+
+def _check_axes(axes):
+    """``axes`` must be a tuple or list of distinct names from :data:`COORDINATES`."""
+    if not isinstance(axes, (tuple, list)) or not all(
+            isinstance(a, str) and a in COORDINATES for a in axes):
+        raise ParameterError(f"axes must be a tuple of names from {COORDINATES}; got "
+                             f"{short(axes)}")
+    if len(set(axes)) != len(axes):
+        raise ParameterError(f"axes must be different coordinates; got {short(axes)}")
