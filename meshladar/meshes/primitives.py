@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from .._validate import check_count, check_size
+from .._validate import check_count, check_real, check_size
 from ..errors import ParameterError
 from ..precision import CAP_REL
 from ..shapes import ellipse_normal, to_frame
@@ -16,6 +16,10 @@ from .directions import fibonacci_sphere
 from .part import MeshPart
 
 __all__ = ["prism", "sphere", "ellipsoid", "icosphere", "fibonacci_sphere"]
+
+#: Bytes an icosphere face takes at the peak of building it (trimesh's arrays and ours:
+#: measured about 120 B a face at 3 to 7 subdivisions; twice that for margin).
+ICOSPHERE_FACE_BYTES = 256
 
 
 class _PrismNormal:
@@ -79,11 +83,11 @@ def prism(shape, segments, height, material_index, *, z0=0.0):
     segments : int
         Vertices per ring, ≥ 3.
     height : float
-        Length of the prism along z, in scene units; not validated.
+        Length of the prism along z, in scene units, finite and > 0.
     material_index : int or (4·segments,) int
         Index into the scene's material list, for all faces or per face.
     z0 : float, keyword-only, default 0.0
-        z of the prism's middle, in scene units.
+        z of the prism's middle, in scene units, finite.
 
     Returns
     -------
@@ -95,10 +99,12 @@ def prism(shape, segments, height, material_index, *, z0=0.0):
     Raises
     ------
     ParameterError
-        When ``segments`` is not an integer ≥ 3, or the prism (about 1 kB a segment) would
-        need more than 4 GiB.
+        When ``segments`` is not an integer ≥ 3, ``height`` is not finite and > 0, ``z0``
+        is not finite, or the prism (about 1 kB a segment) would need more than 4 GiB.
     """
     n = check_count("segments", segments, 3)
+    height = check_real("height", height, low=0.0, low_open=True)
+    z0 = check_real("z0", z0)
     # the prism's arrays and trimesh's processing of them, about 1 kB a segment at peak
     check_size("segments", n, 1024, f"a prism of {n} segments", "use fewer segments")
     t = 2 * math.pi * np.arange(n) / n
@@ -125,8 +131,9 @@ def icosphere(subdivisions):
     Parameters
     ----------
     subdivisions : int
-        Number of subdivisions of the icosahedron, ≥ 0. The size is not checked against a
-        memory limit.
+        Number of subdivisions of the icosahedron, ≥ 0; the faces (about
+        :data:`ICOSPHERE_FACE_BYTES` each while building) must fit in meshladar's 4 GiB
+        allocation cap: at most 9 subdivisions.
 
     Returns
     -------
@@ -138,11 +145,17 @@ def icosphere(subdivisions):
     Raises
     ------
     ParameterError
-        When ``subdivisions`` is not an integer ≥ 0.
+        When ``subdivisions`` is not an integer ≥ 0, or the icosphere would need more than
+        the 4 GiB allocation cap (checked before anything is built).
     """
     import trimesh
 
     subdivisions = check_count("subdivisions", subdivisions, 0)
+    # 20·4^n faces (inf where that passes float64, n > 500: any such n is refused)
+    faces = 20.0 * 4.0 ** subdivisions if subdivisions <= 500 else math.inf
+    check_size("subdivisions", faces, ICOSPHERE_FACE_BYTES,
+               f"an icosphere of {subdivisions} subdivisions (20·4^{subdivisions} faces)",
+               "use fewer subdivisions (at most 9)")
     m = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)
     return np.asarray(m.vertices, dtype=np.float64), np.asarray(m.faces)
 
@@ -176,7 +189,8 @@ def ellipsoid(center, semi_axes, material_index, *, subdivisions=4, name="ellips
     ------
     ParameterError
         When ``center`` or ``semi_axes`` is not of shape (3,), a semi-axis is not finite
-        and positive, or ``subdivisions`` is not an integer ≥ 0.
+        and positive, ``subdivisions`` is not an integer ≥ 0, or the icosphere would pass
+        the 4 GiB allocation cap (:func:`icosphere`).
     GeometryError
         When ``center`` is not finite (from :class:`MeshPart`).
     """
@@ -216,7 +230,8 @@ def sphere(center, radius, material_index, *, subdivisions=4, name="sphere"):
     ------
     ParameterError
         When ``center`` is not of shape (3,), ``radius`` is not finite and positive (the
-        message names ``semi_axes``), or ``subdivisions`` is not an integer ≥ 0.
+        message names ``semi_axes``), ``subdivisions`` is not an integer ≥ 0, or the
+        icosphere would pass the 4 GiB allocation cap (:func:`icosphere`).
     GeometryError
         When ``center`` is not finite (from :class:`MeshPart`).
     """
