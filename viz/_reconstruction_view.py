@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from meshladar.images import Volume
+from meshladar._validate import check_choice, check_real, finite_array, short
+from meshladar.errors import ParameterError
+from meshladar.images import Image, Volume
 
 from ._frame import _bar, _finish, _headless_window, _legend, _mesh_scene, _pyvista
 
@@ -166,19 +168,18 @@ def show_volume(images, zs=None, *, iso=None, render="iso", off_screen=False,
 
     Raises
     ------
-    ValueError
-        When ``render`` is neither choice, ``zs`` is given with a Volume, ``images`` and
-        ``zs`` differ in length or have fewer than two, or ``zs`` is not increasing and
-        evenly spaced.
+    ParameterError
+        When ``render`` is neither choice, ``iso`` is not a finite number, ``images`` is
+        neither a Volume nor a list or tuple of Images, ``zs`` is given with a Volume or
+        missing with a stack, ``images`` and ``zs`` differ in length or have fewer than
+        two, or ``zs`` is not finite, increasing and evenly spaced; all checked before
+        pyvista is imported (a ParameterError is a ``ValueError``).
     ImportError
         When pyvista is not installed.
     """
+    zs = _check_volume(images, zs, iso, render)
     pv = _pyvista()
-    if render not in ("iso", "volume"):
-        raise ValueError(f"render must be 'iso' or 'volume'; got {render!r}")
     if isinstance(images, Volume):
-        if zs is not None:
-            raise ValueError("a Volume carries its own z; do not give zs")
         plotter = pv.Plotter(off_screen=off_screen, window_size=window_size)
         plotter.set_background("black")
         plotter.add_mesh(volume_surface(images, iso), color="white", smooth_shading=True)
@@ -203,17 +204,39 @@ def show_volume(images, zs=None, *, iso=None, render="iso", off_screen=False,
     return _finish(plotter, off_screen, screenshot)
 
 
-def _stack(pv, images, zs):
-    """A stack of slices at heights ``zs`` (checked: as many as the images, at least two,
-    increasing and evenly spaced): its values (nz, ny, nx) and a pyvista grid of them on
-    the points through the first image's pixel centres."""
-    zs = np.asarray(zs, dtype=np.float64)
-    if len(images) != len(zs) or len(zs) < 2:
-        raise ValueError(f"images and zs must have the same length >= 2; got {len(images)} "
-                         f"and {len(zs)}")
+def _check_volume(images, zs, iso, render):
+    """show_volume's arguments, checked before any work: ``zs`` as a float64 array (None
+    with a Volume)."""
+    check_choice("render", render, ("iso", "volume"))
+    if iso is not None:
+        check_real("iso", iso)
+    if isinstance(images, Volume):
+        if zs is not None:
+            raise ParameterError(f"a Volume carries its own z; do not give zs; got zs="
+                                 f"{short(zs)}")
+        return None
+    if not isinstance(images, (list, tuple)) or not all(isinstance(im, Image)
+                                                        for im in images):
+        raise ParameterError(f"images must be a Volume or a list or tuple of Images; got "
+                             f"{short(images)}")
+    if zs is None:
+        raise ParameterError("a stack of images needs zs, one height per image; got "
+                             "zs=None")
+    zs = finite_array("zs", zs)
+    if zs.ndim != 1 or len(images) != zs.size or zs.size < 2:
+        raise ParameterError(f"images and zs must have the same length >= 2; got "
+                             f"{len(images)} images and zs of shape {zs.shape}")
     dz = np.diff(zs)
     if np.any(dz <= 0) or np.ptp(dz) > 1e-9 * dz.mean():
-        raise ValueError("zs must be increasing and evenly spaced")
+        raise ParameterError(f"zs must be increasing and evenly spaced; got {short(zs)}")
+    return zs
+
+
+def _stack(pv, images, zs):
+    """A stack of slices at heights ``zs`` (checked by :func:`_check_volume`): its values
+    (nz, ny, nx) and a pyvista grid of them on the points through the first image's pixel
+    centres."""
+    dz = np.diff(zs)
     first = images[0]
     vol = np.stack([np.asarray(im.values) for im in images])          # (nz, ny, nx)
     grid = pv.ImageData(dimensions=(vol.shape[2], vol.shape[1], vol.shape[0]),
