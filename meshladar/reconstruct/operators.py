@@ -68,9 +68,9 @@ def uniform_bins(bin_edges):
 
 def projector_name(projector, bin_edges):
     """The projector pair ``projector="auto"`` means: ``"linear"`` (the pixel-driven pair,
-    about 20× faster than Siddon lines at 256², the same image error) where the bins are
-    uniform, ``"siddon"`` (which takes any bins) where they are not; any other name is
-    itself.
+    about 20× faster than Siddon lines at 256², the same image error: measured on the
+    reconstruction guide's SIRT example, 60 iterations) where the bins are uniform,
+    ``"siddon"`` (which takes any bins) where they are not; any other name is itself.
 
     Parameters
     ----------
@@ -179,9 +179,9 @@ class RangeProjector(Projector):
 class LinearProjector(Projector):
     """The pixel-driven pair: Aᵀ is FBP's linear-interpolation backprojection (pixel area ×
     the profile interpolated at each pixel centre's range), A its exact transpose (each
-    pixel's value times its area split between the two nearest bin centres, a splat). About
-    ten times faster than Siddon lines; needs uniform bins. Same interface as
-    :class:`RangeProjector`.
+    pixel's value times its area split between the two nearest bin centres, a splat).
+    Faster than Siddon lines (the measured speed-up is in :func:`projector_name`); needs
+    uniform bins. Same interface as :class:`RangeProjector`.
 
     Opposite views see the same iso-range lines in reverse order: with bins symmetric
     about range 0, view φ + 180° projects to view φ's bins reversed. The pair then computes
