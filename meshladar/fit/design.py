@@ -135,9 +135,9 @@ def design_views(geometry, budget, *, ladar=None, parts=None, free=None, materia
     A. C. Atkinson, A. N. Donev and R. D. Tobias, *Optimum Experimental Designs, with SAS*,
     Oxford University Press (2007) (D-optimum designs).
     """
+    budget = check_count("budget", budget)          # before a kernel is traced
     kernel = _kernel_of(geometry, ladar, samples)
     n_views = kernel.shape[0]
-    budget = check_count("budget", budget)
     if budget > n_views:
         raise ParameterError(f"budget must be at most the {n_views} candidate views; got "
                              f"{budget}")

@@ -9,7 +9,7 @@ import pytest
 
 import meshladar as ml
 from meshladar.errors import ParameterError
-from meshladar.fit import coating_kernel, design_views
+from meshladar.fit import coating_kernel, design, design_views
 from meshladar.materials import ALUMINUM
 
 SCENE = ml.Scene([ml.Disk((0.1, 0.0), 0.5, ALUMINUM, name="disk")]).tessellate(64)
@@ -38,3 +38,16 @@ def test_samples_other_than_the_default_are_refused_with_hits(hits, samples):
     with pytest.raises(ParameterError, match=r"^samples applies to a Scene; Hits carry their "
                                              r"own rays.*got " + repr(samples)):
         design_views(hits, 3, samples=samples)
+
+
+def test_a_budget_that_is_not_a_count_is_refused_before_any_tracing(monkeypatch):
+    """A budget of 0, 2.5 or "3" is refused before the geometry is traced."""
+    def no_kernel(*args, **kwargs):
+        raise AssertionError("a kernel was built before the budget was checked")
+
+    monkeypatch.setattr(design, "_kernel_of", no_kernel)
+    scene = ml.phantoms.scene("disk_pair", large=ml.materials.DARK_GRAY,
+                              small=ml.materials.ALUMINUM)
+    for budget in (0, 2.5, "3"):
+        with pytest.raises(ParameterError, match="budget"):
+            design.design_views(scene, budget, ladar=ml.Ladar.paper(angles_deg=[0.0, 90.0]))
