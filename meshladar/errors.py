@@ -38,14 +38,20 @@ def user_stacklevel() -> int:
     int
         The ``stacklevel`` (2 or more) for :func:`warnings.warn` called by this function's
         caller: that of the first frame, walking outwards from the caller's caller, whose
-        file lies outside the meshladar package folder and the ``importlib`` folder (frozen
-        importlib bootstrap frames are skipped and not counted); 2 if no such frame exists.
+        file lies outside the meshladar package folder and the ``importlib`` folder and
+        whose code does not run in a meshladar module's namespace (a dataclass's generated
+        ``__init__``); frozen importlib bootstrap frames are skipped and not counted; 2 if
+        no such frame exists.
     """
     frame, level = sys._getframe(2), 2
     while frame is not None:
         name = frame.f_code.co_filename
         internal = "importlib" in name and "_bootstrap" in name     # as warnings judges it
-        if not internal and not os.path.abspath(name).startswith((_PACKAGE, _IMPORTLIB)):
+        # code made at run time in one of meshladar's modules (a dataclass's __init__,
+        # file "<string>") is meshladar's too
+        ours = str(frame.f_globals.get("__name__", "")).partition(".")[0] == "meshladar"
+        if not internal and not ours \
+                and not os.path.abspath(name).startswith((_PACKAGE, _IMPORTLIB)):
             return level
         frame = frame.f_back
         level += 0 if internal else 1

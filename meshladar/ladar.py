@@ -17,7 +17,7 @@ import numpy as np
 from ._summary import table, text
 from ._validate import (check_count, check_real, check_size, finite_array, readonly_copy,
                         unit_vectors)
-from .errors import MeshladarWarning, ParameterError
+from .errors import MeshladarWarning, ParameterError, user_stacklevel
 from .precision import ANGLE_TOL_DEG as _ANGLE_TOL_DEG
 from .precision import COUNT_SLACK, SCENE_RADIUS_RANGE, SPAN_FLOOR
 from .scene import Scene
@@ -375,7 +375,7 @@ def _warn_off_centre(scene, views, near, far):
         f"move its centre ({', '.join(f'{x:.6g}' for x in c)}) to the origin before "
         f"simulating (trimesh: mesh.apply_translation(({move})), or Scene.from_mesh(mesh, "
         f"..., transform=trimesh.transformations.translation_matrix(({move}))))",
-        MeshladarWarning, stacklevel=3)
+        MeshladarWarning, stacklevel=user_stacklevel())
 
 
 def _covering_options(scene, bin_width, n_bins, margin):

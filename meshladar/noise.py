@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._validate import check_count, check_real, check_seed, check_size
-from .errors import MeshladarWarning, ParameterError
+from .errors import MeshladarWarning, ParameterError, user_stacklevel
 
 __all__ = ["Noise", "draw_noise"]
 
@@ -293,4 +293,4 @@ def _warn_clipped(noise, fraction, peak):
     warnings.warn(f"{100 * fraction:.3g} % of the noisy samples clip at the digitiser's "
                   f"full scale ({noise.full_scale:g}; they read its top code): give "
                   f"full_scale >= {need:.3g} (the largest draw is {peak:.4g}), or a lower "
-                  "gain", MeshladarWarning, stacklevel=3)
+                  "gain", MeshladarWarning, stacklevel=user_stacklevel())

@@ -19,7 +19,7 @@ import warnings
 import numpy as np
 
 from ._version import __version__
-from .errors import MeshladarError, MeshladarWarning
+from .errors import MeshladarError, MeshladarWarning, user_stacklevel
 from .io import (ResultFileError, load_result, regular_file, save_result, temporary_writer,
                  write_text_atomic)
 
@@ -269,7 +269,7 @@ class RunFolder:
         bad = _non_finite(arrays)
         if bad:
             warnings.warn(f"{f}: chunk {i} holds non-finite values in {bad!r}; recomputing it",
-                          MeshladarWarning, stacklevel=2)
+                          MeshladarWarning, stacklevel=user_stacklevel())
             return None
         return arrays
 

@@ -16,7 +16,7 @@ from ._scene_inputs import (checked_coatings, checked_shapes, parts_by_face, par
                             parts_of_items)
 from ._summary import listing, material_name, table, text
 from ._validate import check_real
-from .errors import MeshladarWarning, ParameterError
+from .errors import MeshladarWarning, ParameterError, user_stacklevel
 from .meshes import convex_hull, inspect_parts, load_parts, prism
 from .precision import OVERLAP_RTOL
 from .shapes import Disk, Ellipse, Shape, to_frame
@@ -93,7 +93,7 @@ class Scene:
                           f"(faces wound clockwise seen from outside), in part "
                           f"{inverted[0]!r}{' and others' if len(inverted) > 1 else ''}: "
                           "traced two-sided by default, but back_faces='ignore' would blank "
-                          "them (scene.report['inverted'])", MeshladarWarning, stacklevel=3)
+                          "them (scene.report['inverted'])", MeshladarWarning, stacklevel=user_stacklevel())
         self = cls.__new__(cls)
         self._shapes = tuple(shapes)
         self._parts = tuple(cleaned)

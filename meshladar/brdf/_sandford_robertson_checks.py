@@ -10,7 +10,7 @@ from __future__ import annotations
 import warnings
 
 from .._validate import check_choice, check_name, check_real
-from ..errors import EnergyConservationWarning, ParameterError
+from ..errors import EnergyConservationWarning, ParameterError, user_stacklevel
 from ..precision import E_MIN
 from ..precision import ENERGY_SLACK as _ENERGY_SLACK
 
@@ -52,4 +52,4 @@ def _check_energy(coating):
             f"diffuse-only coating is not energy-conserving: it reflects up to "
             f"rho_d/G(b) = {peak:.4g} of the incident light at normal incidence "
             f"(rho_d = {coating.rho_d:g}, b = {coating.b:g}); allowed, as in the paper's "
-            "Sec. 4.A", EnergyConservationWarning, stacklevel=4)
+            "Sec. 4.A", EnergyConservationWarning, stacklevel=user_stacklevel())

@@ -27,7 +27,7 @@ import warnings
 
 import numpy as np
 
-from ..errors import MeshladarWarning
+from ..errors import MeshladarWarning, user_stacklevel
 from . import _irls
 from ._params import _materials
 
@@ -131,7 +131,7 @@ class Ladder:
                 text = (f"with {n} samples per boundary (kernel_tol={self.tol:g}, capped by "
                         f"max_samples={self.cap}); pass max_samples={need} (the error falls "
                         "~4× per doubling) or accept it")
-            warnings.warn(head + text, KernelErrorWarning, stacklevel=3)
+            warnings.warn(head + text, KernelErrorWarning, stacklevel=user_stacklevel())
 
     def info(self):
         """The kernel's resolution for the fit's ``info``."""

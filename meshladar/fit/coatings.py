@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._validate import check_choice, check_count, check_real, check_seed, check_sinogram
-from ..errors import MeshladarWarning, ParameterError
+from ..errors import MeshladarWarning, ParameterError, user_stacklevel
 from ..ladar import Ladar
 from ..waveforms import Waveforms
 from ..scene import Scene
@@ -191,7 +191,7 @@ def _warn_undetermined(ident, combos):
                                                  for c, v, s in combos)
                  + ": fix all but one of each combination's parameters (free=) or add views "
                    "that separate them")
-    warnings.warn(text, IdentifiabilityWarning, stacklevel=3)
+    warnings.warn(text, IdentifiabilityWarning, stacklevel=user_stacklevel())
 
 
 def _noise_sigma(measured, opts, n):

@@ -7,7 +7,7 @@ import warnings
 import numpy as np
 
 from .._validate import check_choice
-from ..errors import MeshladarWarning, ParameterError
+from ..errors import MeshladarWarning, ParameterError, user_stacklevel
 from ..ladar import Ladar
 from ..scene import Scene
 from ..sinogram import Sinogram
@@ -143,7 +143,7 @@ def _planar(simulate_model, model):
             warnings.warn(f"the sinogram is all zeros: the scene spans ranges [{lo:.6g}, "
                           f"{hi:.6g}] over these views (its lit side the nearer half), the "
                           f"bins cover [{ladar.bin_edges[0]:.6g}, "
-                          f"{ladar.bin_edges[-1]:.6g}]", MeshladarWarning, stacklevel=3)
+                          f"{ladar.bin_edges[-1]:.6g}]", MeshladarWarning, stacklevel=user_stacklevel())
         return sino
 
     return run

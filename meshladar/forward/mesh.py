@@ -15,7 +15,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._validate import check_flag, check_real, unit_vectors
-from ..errors import MeshladarWarning, ParameterError
+from ..errors import MeshladarWarning, ParameterError, user_stacklevel
 from ..ladar import Ladar
 from ..precision import MIN_COS_FACET as _MIN_COS_FACET
 from ..precision import RECEIVER_LIFT as _RECEIVER_LIFT
@@ -423,4 +423,4 @@ def _warn_empty(scene, ladar, run, back_faces, back_hits, face_normals):
         reasons.append(f"ray_spacing {run['ray_spacing']:.4g} may be too coarse for the "
                        "target")
     warnings.warn("the sinogram is all zeros: no return reached any bin; " +
-                  "; ".join(reasons), MeshladarWarning, stacklevel=5)
+                  "; ".join(reasons), MeshladarWarning, stacklevel=user_stacklevel())

@@ -15,7 +15,7 @@ import warnings
 import numpy as np
 
 from .._validate import check_real
-from ..errors import MeshladarWarning, ParameterError
+from ..errors import MeshladarWarning, ParameterError, user_stacklevel
 from .mesh import simulate_mesh
 from .sampling import checked_by_caller, warn_unresolved_lobes
 from ..sinogram import Sinogram
@@ -226,7 +226,7 @@ def _warn_kept(best, runs, why, tol, normals):
         warnings.warn(f"tol={tol:g} not reached: {why}; returning the run with estimated "
                       f"error {est:.2g} ({runs[k]['rays_per_bin']:g} rays per bin"
                       + (f", {segments} segments" if segments is not None else "") + ")",
-                      MeshladarWarning, stacklevel=5)
+                      MeshladarWarning, stacklevel=user_stacklevel())
 
 
 def _estimate(last, order):

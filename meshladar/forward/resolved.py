@@ -26,7 +26,7 @@ import warnings
 import numpy as np
 
 from .._validate import check_size, finite_array
-from ..errors import MeshladarWarning, ParameterError
+from ..errors import MeshladarWarning, ParameterError, user_stacklevel
 from ..motion import Motion
 from ..raytrace.plan import plan_trace
 from ..returns import COORDINATES, Returns
@@ -178,7 +178,7 @@ def _warn_empty(weighing, rays):
                ", ".join(f"{a} bins [{e[0]:.6g}, {e[-1]:.6g}]"
                          for a, e in zip(weighing.axes, weighing.edges)) +
                " (widen them to the target's ranges, cross-ranges or Doppler shifts)")
-    warnings.warn(f"the returns are all zeros: {why}", MeshladarWarning, stacklevel=4)
+    warnings.warn(f"the returns are all zeros: {why}", MeshladarWarning, stacklevel=user_stacklevel())
 
 
 def _returns(plan, weighing, ladar, results):

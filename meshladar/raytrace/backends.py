@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 from .._validate import check_choice
-from ..errors import MeshladarWarning, ParameterError
+from ..errors import MeshladarWarning, ParameterError, user_stacklevel
 
 __all__ = ["BACKENDS", "Backend", "REGISTRY", "register", "backend", "choices",
            "resolve_backend"]
@@ -164,7 +164,7 @@ def resolve_backend(name):
                 warnings.warn(f"the packet backend cannot load ({why}): the mesh engine "
                               "casts with embreex, one ray at a time (backend='embreex'); "
                               "the numbers are the same, slower", MeshladarWarning,
-                              stacklevel=7)
+                              stacklevel=user_stacklevel())
             return candidate
         if name != "auto":
             raise ParameterError(f"backend={name!r} cannot load here ({reason}); use "

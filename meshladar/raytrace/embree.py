@@ -10,7 +10,7 @@ import warnings
 
 import numpy as np
 
-from ..errors import MeshladarWarning, ParameterError
+from ..errors import MeshladarWarning, ParameterError, user_stacklevel
 from ..precision import FAR_RATIO as _FAR_RATIO
 from ..precision import SCENE_RADIUS_RANGE
 from ..meshes import corner_normals
@@ -73,7 +73,7 @@ def _check_scale(radius, offset):
     if offset > _FAR_RATIO * radius:
         warnings.warn(f"the mesh (radius {radius:.3g}) lies {offset:.3g} from the origin: ranges "
                       f"carry only ~{offset * 2.0 ** -53 / radius:.1g} of its size in float64; "
-                      "move it near the origin", MeshladarWarning, stacklevel=4)
+                      "move it near the origin", MeshladarWarning, stacklevel=user_stacklevel())
 
 
 

@@ -15,7 +15,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._validate import check_choice, check_real, unit_vectors
-from ..errors import MeshladarWarning, ParameterError
+from ..errors import MeshladarWarning, ParameterError, user_stacklevel
 from ..ladar import Ladar
 from ..precision import ORIGIN_MARGIN, PARALLEL_SLACK, STANDOFF_ROUNDING_SHARE
 from ..scene import Scene
@@ -174,7 +174,7 @@ def check_scene(scene, ladar, mode, normals, back_faces, z0):
         if not lo <= z0 <= hi:
             warnings.warn(f"z0={z0:.6g} lies outside the target's heights [{lo:.6g}, "
                           f"{hi:.6g}]: the slice returns nothing", MeshladarWarning,
-                          stacklevel=7)
+                          stacklevel=user_stacklevel())
     return mode, geo, z0
 
 
@@ -313,7 +313,7 @@ def _check_standoff(geo, ladar, sensor):
         warnings.warn(f"standoff {sensor.standoff:g} leaves the ranges a float64 rounding of "
                       f"~{rounding:.2g}, {rounding / width:.2g} of the narrowest bin "
                       f"({width:.3g}): give a smaller standoff or wider bins",
-                      MeshladarWarning, stacklevel=4)
+                      MeshladarWarning, stacklevel=user_stacklevel())
 
 
 def plan_trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0=None,

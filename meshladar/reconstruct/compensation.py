@@ -36,7 +36,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._validate import check_choice, check_count, check_sinogram, finite_array
-from ..errors import MeshladarWarning, ParameterError
+from ..errors import MeshladarWarning, ParameterError, user_stacklevel
 from ._kernels import surface_backproject
 from .fbp2d import fbp
 from .iterative import ImageGrid, cgls, sirt
@@ -87,7 +87,7 @@ def _check_resolution(sino, size, extent):
                       f"{2.0 * float(extent) / size / width:.2f} range bins wide; the "
                       f"compensated surface needs at most {MAX_PIXEL_BINS:g} "
                       f"(below it comes out low and uneven): use size={need} or more",
-                      MeshladarWarning, stacklevel=4)
+                      MeshladarWarning, stacklevel=user_stacklevel())
 
 
 def _backed(surface, H, sino, keep, share=0.5):

@@ -38,7 +38,7 @@ import numpy as np
 
 from .._validate import (check_choice, check_count, check_real, check_sinogram, check_size,
                          finite_array)
-from ..errors import MeshladarWarning, ParameterError
+from ..errors import MeshladarWarning, ParameterError, user_stacklevel
 from ..images import Image, pixel_centres
 from ..precision import COUNT_SLACK
 from ..precision import UNIFORM_RTOL as _UNIFORM_RTOL
@@ -114,7 +114,7 @@ def _view_weights(angles_deg):
     if a.size == 1:
         warnings.warn("one view does not cover the circle: reflective FBP assumes views all "
                       "around the scene; the image is that view's backprojection, streaks "
-                      "along its iso-range lines", MeshladarWarning, stacklevel=4)
+                      "along its iso-range lines", MeshladarWarning, stacklevel=user_stacklevel())
         return np.array([math.pi])
     order = np.argsort(a, kind="stable")
     s = a[order]
@@ -128,7 +128,7 @@ def _view_weights(angles_deg):
             f"views do not cover the full circle: largest gap {math.degrees(gaps.max()):.3g}° "
             f"vs median spacing {math.degrees(med):.3g}°; reflective FBP assumes views all "
             "around the scene, and the missing ones will streak the image",
-            MeshladarWarning, stacklevel=4)
+            MeshladarWarning, stacklevel=user_stacklevel())
     return w
 
 
@@ -214,7 +214,7 @@ def _check_view_sampling(sinogram):
         warnings.warn(f"{sinogram.n_views} views are too few for the {across} bins across the "
                       f"target's returns: FBP samples the angles fully with about {need} (pi/2 "
                       "per bin across); expect streaks around it, or use wider bins "
-                      "(meshladar.reconstruct.resample_uniform) or more views", MeshladarWarning, stacklevel=4)
+                      "(meshladar.reconstruct.resample_uniform) or more views", MeshladarWarning, stacklevel=user_stacklevel())
 
 
 def fbp(sinogram, size=512, extent=None, *, filter="ramp", interpolation="linear",
@@ -375,11 +375,11 @@ def _warn_degenerate(sinogram):
         warnings.warn(f"all {sinogram.n_views} views are at "
                       f"{float(np.mod(sinogram.angles_deg[0], 360.0)):g} degrees: FBP smears "
                       "one profile into a streak; it needs views all around the scene",
-                      MeshladarWarning, stacklevel=4)
+                      MeshladarWarning, stacklevel=user_stacklevel())
     if sinogram.n_bins < 2:
         warnings.warn("one range bin: the image has no range resolution (a uniform disk at "
                       "best); FBP needs the bins across the target", MeshladarWarning,
-                      stacklevel=4)
+                      stacklevel=user_stacklevel())
 
 
 def quiet_fbp(sino, size, extent, *, center=(0.0, 0.0)):

@@ -34,7 +34,7 @@ from scipy.ndimage import gaussian_filter1d
 from scipy.spatial import cKDTree
 
 from .._validate import check_count, check_real, check_sinogram, check_size, finite_array
-from ..errors import MeshladarWarning, ParameterError
+from ..errors import MeshladarWarning, ParameterError, user_stacklevel
 from ..images import Volume
 from ..meshes import fibonacci_sphere
 from ..returns import Returns
@@ -128,7 +128,7 @@ def _check_view_sampling(sino, smooth):
             f"the target's returns (smooth={smooth:g}): fbp3d samples the directions fully "
             f"with about {need} (pi N^2/4, N bins across / max(1, smooth)); expect the "
             "planes of sharp returns to streak the volume: use more views, a larger smooth "
-            "or wider bins", MeshladarWarning, stacklevel=3)
+            "or wider bins", MeshladarWarning, stacklevel=user_stacklevel())
     return smooth
 
 
@@ -361,7 +361,7 @@ def _renamed(new, old):
     @functools.wraps(new)
     def alias(*args, **kwargs):
         warnings.warn(f"meshladar {old} is deprecated (one release): use "
-                      f"meshladar.reconstruct.{new.__name__}", DeprecationWarning, stacklevel=2)
+                      f"meshladar.reconstruct.{new.__name__}", DeprecationWarning, stacklevel=user_stacklevel())
         return new(*args, **kwargs)
 
     alias.__name__ = alias.__qualname__ = old

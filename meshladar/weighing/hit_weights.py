@@ -11,7 +11,7 @@ import warnings
 import numpy as np
 
 from ..brdf import projected_weight
-from ..errors import MeshladarWarning
+from ..errors import MeshladarWarning, user_stacklevel
 from ..precision import COS_HORIZON
 
 __all__ = ["weights", "scaled", "per_table_weight", "GRAZING_RECEIVER_COS"]
@@ -93,7 +93,7 @@ def _warn_grazing_receiver(cos_t, cos_r):
                       "1e-6): under radiometry='paper' a bistatic return weighs F, which "
                       "grows as 1/cos θr there, so they dominate the profile; "
                       "radiometry='power' (received power, F·cos θr) is finite",
-                      MeshladarWarning, stacklevel=4)
+                      MeshladarWarning, stacklevel=user_stacklevel())
 
 
 def scaled(wt, factor=None, receive=None, *, power=False):
