@@ -29,6 +29,7 @@ Conventions (what runs, and how):
 
 from __future__ import annotations
 
+import gc
 import os
 import pathlib
 import re
@@ -243,6 +244,17 @@ def _namespace_for(block):
             pytest.fail(f"an earlier block of the section ({b.where}) failed: {exc!r}")
     _NAMESPACES[key][1] = max(_NAMESPACES[key][1], block.ordinal + 1)
     return ns
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _release_namespaces():
+    """Drop the pages' namespaces (a viewer's plotter among them) while pyvista and VTK are
+    still loaded: collected at interpreter exit, a plotter prints "Exception ignored"."""
+    yield
+    _NAMESPACES.clear()
+    if "pyvista" in sys.modules:
+        sys.modules["pyvista"].close_all()
+    gc.collect()
 
 
 @pytest.fixture(autouse=True)
