@@ -428,4 +428,6 @@ def _covering_edges(scene, ranges, m, w, n, n_views):
             w = 2 * half / n
     check_size("bin_width", n, 8 * n_views, f"{n:.4g} bins of width {w:g}",
                "give wider bins")
+    # the bins' span within the scenes' range (as Ladar.centered): edges stay finite
+    check_real("bin_width", w, high=2 * SCENE_RADIUS_RANGE[1] / n)
     return center + (np.arange(n + 1) - n / 2.0) * w

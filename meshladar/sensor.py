@@ -23,7 +23,8 @@ import numpy as np
 from ._validate import check_choice, check_real, finite_array
 from .errors import ParameterError
 
-__all__ = ["RADIOMETRIES", "FloodBeam", "GaussianBeam", "Sensor", "SPEED_OF_LIGHT", "PLANCK"]
+__all__ = ["RADIOMETRIES", "FloodBeam", "GaussianBeam", "Sensor", "SPEED_OF_LIGHT", "PLANCK",
+           "MIN_WAIST"]
 
 #: Speed of light in vacuum, m/s (exact, SI).
 SPEED_OF_LIGHT = 299_792_458.0
@@ -48,6 +49,9 @@ LIMITS = {"standoff": 1e9, "pulse_energy": 1e9, "aperture_diameter": 1e3, "wavel
           "radius": 1e9, "waist": 1e9}
 #: The shortest wavelength taken (m).
 MIN_WAVELENGTH = 1e-9
+#: The narrowest Gaussian waist taken (m): a picometre, far below any optics, and its
+#: square (the spot's 1/e² radius squared divides the irradiance's exponent) stays normal.
+MIN_WAIST = 1e-12
 
 
 def _optional_positive(name, value):
@@ -169,7 +173,8 @@ class GaussianBeam:
     Raises
     ------
     ParameterError
-        When ``waist`` is not in (0, 1e9] m, ``divergence`` not in [0, 1] rad, or
+        When ``waist`` is not in [1e-12, 1e9] m (:data:`MIN_WAIST`), ``divergence`` not
+        in [0, 1] rad, or
         ``offset`` not two finite numbers.
     """
 
@@ -178,8 +183,8 @@ class GaussianBeam:
     offset: tuple = (0.0, 0.0)
 
     def __post_init__(self):
-        object.__setattr__(self, "waist", check_real("waist", self.waist, low=0.0,
-                                                     low_open=True, high=LIMITS["waist"]))
+        object.__setattr__(self, "waist", check_real("waist", self.waist, low=MIN_WAIST,
+                                                     high=LIMITS["waist"]))
         object.__setattr__(self, "divergence", check_real("divergence", self.divergence,
                                                           low=0.0, high=1.0))
         off = finite_array("offset", self.offset)

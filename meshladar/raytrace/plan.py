@@ -17,7 +17,8 @@ import numpy as np
 from .._validate import check_choice, check_real, unit_vectors
 from ..errors import MeshladarWarning, ParameterError, user_stacklevel
 from ..ladar import Ladar
-from ..precision import ORIGIN_MARGIN, PARALLEL_SLACK, STANDOFF_ROUNDING_SHARE
+from ..precision import (ORIGIN_MARGIN, PARALLEL_SLACK, SCENE_RADIUS_RANGE,
+                         STANDOFF_ROUNDING_SHARE)
 from ..scene import Scene
 from ..sensor import FloodBeam, Sensor
 from .backends import resolve_backend
@@ -165,10 +166,11 @@ def check_scene(scene, ladar, mode, normals, back_faces, z0):
         (``meshladar.precision.FAR_RATIO``).
     """
     mode = _checked_mode(scene, ladar, mode, normals, back_faces, z0)
+    if z0 is not None:                  # within the scenes' range, before any geometry
+        z0 = check_real("z0", z0, low=-SCENE_RADIUS_RANGE[1], high=SCENE_RADIUS_RANGE[1])
     geo = geometry(scene, normals)
     if z0 is None:
         z0 = float(geo.center[2])
-    z0 = check_real("z0", z0)
     if mode == "slice":
         lo, hi = float(geo.vertices[:, 2].min()), float(geo.vertices[:, 2].max())
         if not lo <= z0 <= hi:
