@@ -33,6 +33,7 @@ MAX_VIEWS = 10**6
 
 #: The narrowest bins taken: 1/width and its square stay finite (subnormal widths did not).
 MIN_BIN_WIDTH = 1e-200
+_FLOAT_MAX = float(np.finfo(np.float64).max)
 
 
 @dataclass(frozen=True, eq=False)
@@ -428,6 +429,6 @@ def _covering_edges(scene, ranges, m, w, n, n_views):
             w = 2 * half / n
     check_size("bin_width", n, 8 * n_views, f"{n:.4g} bins of width {w:g}",
                "give wider bins")
-    # the bins' span within the scenes' range (as Ladar.centered): edges stay finite
-    check_real("bin_width", w, high=2 * SCENE_RADIUS_RANGE[1] / n)
+    # edges center ± (n/2)·w stay finite (16 bins of 1e308 overflowed to inf)
+    check_real("bin_width", w, low=MIN_BIN_WIDTH, high=_FLOAT_MAX / (n + 2))
     return center + (np.arange(n + 1) - n / 2.0) * w

@@ -38,7 +38,7 @@ CASES = {
                      r"^aperture_diameter must be in \(0, 1000\]"),
     "wavelength 1e-20": (lambda s: Sensor(wavelength=1e-20),
                          r"^wavelength must be in \[1e-09, 1\]"),
-    "waist 1e300": (lambda s: GaussianBeam(1e300), r"^waist must be in \(0, 1e\+09\]"),
+    "waist 1e300": (lambda s: GaussianBeam(1e300), r"^waist must be in \[1e-12, 1e\+09\]"),
     "pulse 1e300 s": (lambda s: GaussianPulse(1e300), r"^fwhm must be in \[1e-18, 1\]"),
     "sampled pulse interval": (lambda s: SampledPulse([1.0], 1e300), r"^interval must be in"),
     "receive standoff 1e308": (lambda s: receive(s, sample_rate=1e9, standoff=1e308),

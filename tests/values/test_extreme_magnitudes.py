@@ -21,13 +21,14 @@ def test_a_waist_whose_square_underflows_is_refused(waist):
     assert GaussianBeam(waist=MIN_WAIST).waist == MIN_WAIST
 
 
-def test_covering_bins_beyond_the_scenes_range_are_refused():
-    # 16 bins of 1e308 overflowed to inf edges (the same width Ladar.centered refuses)
+def test_covering_bins_whose_edges_overflow_are_refused():
+    # 16 bins of 1e308 overflowed to inf edges; one bin of 1e300 still fits
     disk = ml.phantoms.scene("disk")
-    with pytest.raises(ParameterError, match="bin_width"):
+    with pytest.raises(ParameterError, match=r"bin_width must be in \[1e-200, 9\.987\d*e\+306\]"):
         ml.Ladar.covering(disk, n_bins=16, bin_width=1e308, angles_deg=[0.0])
-    edges = ml.Ladar.covering(disk, n_bins=16, bin_width=1e20, angles_deg=[0.0]).bin_edges
-    assert np.all(np.isfinite(edges))
+    for n, w in ((16, 1e306), (None, 1e300)):
+        edges = ml.Ladar.covering(disk, n_bins=n, bin_width=w, angles_deg=[0.0]).bin_edges
+        assert np.all(np.isfinite(edges))
 
 
 @pytest.mark.parametrize("z0", [1e308, -1e300, 1e31])
