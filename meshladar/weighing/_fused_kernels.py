@@ -43,46 +43,31 @@ def _occlude_block(occ, scene, w, i32, f32, base, prim, tf, o, n, plane_d, face_
 _BLOCK = 1024
 
 
+@njit(cache=True, nogil=True, inline="always")
+def tile_shape(w):
+    """(rows, columns) of a packet's tile of the ray grid for packet width ``w``: 4 × 4 at
+    16, 2 × 4 at 8, 2 × 2 at 4. Square tiles keep a packet's rays together on the target
+    (one BVH path serves them all), where a 1 × w row spans w ray spacings."""
+    if w == 16:
+        return 4, 4
+    if w == 8:
+        return 2, 4
+    return 2, 2
+
+
 @njit(cache=True, nogil=True)
-def cast_bin_grid(fn, scene, w, flags, s, t, du, dv, sp, u, v, lw, d, inv_scale, scale,
-                  plane_d, face_normals, face_material, params, wv, start, edges, area,
-                  power, ignore_back, out, stamp, weight, tag, footprint, occ, wr, lift):
-    """One view, grid to bins in one loop (monostatic, flat normals, point or footprint
-    bins): each
-    packet's float32 origins are built as :func:`meshladar.raytrace.grid.ray_grid` builds
-    them (o = (S u + T v) + L w, S = s (+ δ du), T = t (+ δ dv) when ``du`` is not empty),
-    cast at unit size (× ``inv_scale``), and the hits, with Embree's distance scaled back
-    (× ``scale``), are weighed and binned a cache-sized block at a time by
-    :func:`._kernels.bin_flat_hits`: the numbers of the unfused path, without
-    per-ray arrays. With a receiver direction ``wr`` (3,) (empty: monostatic) each block's
-    hits first cast their occlusion rays toward it with ``occ`` (rtcOccludedW; see
-    :func:`_occlude_block`), and :func:`._kernels.bin_bistatic_hits` bins them
-    with the per-face bistatic weights in ``weight``. Returns (back-face hits, rays
-    cast)."""
-    i32, f32, i64, base = workspace()
-    init_args(i32, i64, base, flags)
-    ns, nt = s.shape[0], t.shape[0]
-    n = ns * nt
+def _tile_origins(a0, b0, rows, cols, nt, s, t, du, dv, sp, u, v, lw, one, inv_scale,
+                  lanes, cast, slot):
+    """The float32 origins of the grid's tile at (a0, b0), ``rows`` × ``cols`` rays, packed
+    into the first lanes as :func:`meshladar.raytrace.grid.ray_grid` builds them (``lanes``)
+    and at unit size (``cast``); ``slot`` receives each lane's position in the band of rows
+    a0.., in scan order. Returns the lanes filled."""
     jitter = du.shape[0] > 0
-    one = scale == 1.0
-    lanes = np.empty((w, 3), np.float32)          # origins as built (for the ranges)
-    cast = np.empty((w, 3), np.float32)           # and as cast (at unit size)
-    hit_prim = np.empty(_BLOCK + w, np.int32)
-    hit_t = np.empty(_BLOCK + w, np.float32)
-    hit_o = np.empty((_BLOCK + w, 3), np.float32)
-    bistatic = wr.shape[0] == 3
-    blocked = np.zeros(_BLOCK + w if bistatic else 0, np.bool_)
-    lifted = np.empty((_BLOCK + w if bistatic else 0, 3), np.float32)
-    wr32 = np.empty((1, 3), np.float32)
-    if bistatic:
-        for k in range(3):
-            wr32[0, k] = wr[k]
-    held = 0
-    back = 0
-    for first in range(0, n, w):
-        m = min(w, n - first)
-        for j in range(m):
-            a, b = (first + j) // nt, (first + j) % nt
+    m = 0
+    for da in range(rows):
+        a = a0 + da
+        for db in range(cols):
+            b = b0 + db
             if jitter:
                 S = np.float32(du[a, b] * sp) + s[a]
                 T = np.float32(dv[a, b] * sp) + t[b]
@@ -90,33 +75,109 @@ def cast_bin_grid(fn, scene, w, flags, s, t, du, dv, sp, u, v, lw, d, inv_scale,
                 S = s[a]
                 T = t[b]
             for k in range(3):
-                lanes[j, k] = np.float32(np.float32(S * u[k]) + np.float32(T * v[k])) + lw[k]
-                cast[j, k] = lanes[j, k] if one else lanes[j, k] * inv_scale
-        load_packet(f32, i32, cast, d, np.float32(np.inf), 0, m, w)
-        fn(base + VALID_OFF, scene, base, base + ARGS_OFF)
-        for j in range(m):
-            if i32[GEOMID * w + j] == -1:
+                lanes[m, k] = np.float32(np.float32(S * u[k]) + np.float32(T * v[k])) + lw[k]
+                cast[m, k] = lanes[m, k] if one else lanes[m, k] * inv_scale
+            slot[m] = da * nt + b
+            m += 1
+    return m
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _keep_hits(i32, f32, w, m, one, scale, lanes, slot, band_prim, band_t, band_o):
+    """The packet's hits (face, distance scaled back, origin as built) into the band's
+    slots; -1 where a lane missed."""
+    for j in range(m):
+        q = slot[j]
+        if i32[GEOMID * w + j] == -1:
+            band_prim[q] = -1
+            continue
+        tf = f32[TFAR * w + j]
+        band_prim[q] = i32[PRIMID * w + j]
+        band_t[q] = tf if one else np.float32(tf * scale)
+        for k in range(3):
+            band_o[q, k] = lanes[j, k]
+
+
+@njit(cache=True, nogil=True)
+def cast_bin_grid(fn, scene, w, flags, s, t, du, dv, sp, u, v, lw, d, inv_scale, scale,
+                  plane_d, face_normals, face_material, params, wv, start, edges, area,
+                  power, ignore_back, out, stamp, weight, tag, footprint, occ, wr, lift):
+    """One view, grid to bins in one loop (monostatic or bistatic, flat normals, point or
+    footprint bins). The grid is cast in tiles (:func:`tile_shape`) a band of rows at a
+    time: each packet's float32 origins are built as
+    :func:`meshladar.raytrace.grid.ray_grid` builds them (o = (S u + T v) + L w, S = s
+    (+ δ du), T = t (+ δ dv) when ``du`` is not empty), cast at unit size (×
+    ``inv_scale``), and the band's hits, with Embree's distance scaled back (× ``scale``),
+    are weighed and binned in scan order a cache-sized block at a time by
+    :func:`._kernels.bin_flat_hits`: the numbers of the unfused path, summed in its order,
+    without per-ray arrays. With a receiver direction ``wr`` (3,) (empty: monostatic) each
+    block's hits first cast their occlusion rays toward it with ``occ`` (rtcOccludedW; see
+    :func:`_occlude_block`), and :func:`._kernels.bin_bistatic_hits` bins them with the
+    per-face bistatic weights in ``weight``. Returns (back-face hits, rays cast)."""
+    i32, f32, i64, base = workspace()
+    init_args(i32, i64, base, flags)
+    ns, nt = s.shape[0], t.shape[0]
+    th, tw = tile_shape(w)
+    one = scale == 1.0
+    lanes = np.empty((w, 3), np.float32)          # origins as built (for the ranges)
+    cast = np.empty((w, 3), np.float32)           # and as cast (at unit size)
+    slot = np.empty(w, np.int64)
+    band_prim = np.empty(th * nt, np.int32)
+    band_t = np.empty(th * nt, np.float32)
+    band_o = np.empty((th * nt, 3), np.float32)
+    hits = (np.empty(_BLOCK, np.int32), np.empty(_BLOCK, np.float32),
+            np.empty((_BLOCK, 3), np.float32))
+    bistatic = wr.shape[0] == 3
+    spare = (np.zeros(_BLOCK if bistatic else 0, np.bool_),
+             np.empty((_BLOCK if bistatic else 0, 3), np.float32), np.empty((1, 3), np.float32))
+    for k in range(3 if bistatic else 0):
+        spare[2][0, k] = wr[k]
+    held = 0
+    back = 0
+    for a0 in range(0, ns, th):
+        rows = min(th, ns - a0)
+        for b0 in range(0, nt, tw):
+            m = _tile_origins(a0, b0, rows, min(tw, nt - b0), nt, s, t, du, dv, sp, u, v,
+                              lw, one, inv_scale, lanes, cast, slot)
+            load_packet(f32, i32, cast, d, np.float32(np.inf), 0, m, w)
+            fn(base + VALID_OFF, scene, base, base + ARGS_OFF)
+            _keep_hits(i32, f32, w, m, one, scale, lanes, slot, band_prim, band_t, band_o)
+        for q in range(rows * nt):                # the band's hits in scan order
+            if band_prim[q] < 0:
                 continue
-            tf = f32[TFAR * w + j]
-            hit_prim[held] = i32[PRIMID * w + j]
-            hit_t[held] = tf if one else np.float32(tf * scale)
-            hit_o[held, 0] = lanes[j, 0]
-            hit_o[held, 1] = lanes[j, 1]
-            hit_o[held, 2] = lanes[j, 2]
+            hits[0][held], hits[1][held] = band_prim[q], band_t[q]
+            for k in range(3):
+                hits[2][held, k] = band_o[q, k]
             held += 1
-        if held >= _BLOCK or first + w >= n:
-            if bistatic:
-                _occlude_block(occ, scene, w, i32, f32, base, hit_prim, hit_t, hit_o, held,
-                               plane_d, face_normals, wv, wr32, lift, inv_scale, one,
-                               lifted, blocked)
-                init_args(i32, i64, base, flags)
-                back += bin_bistatic_hits(hit_prim[:held], hit_t[:held], hit_o[:held],
-                                          blocked[:held], plane_d, face_normals, wv, wr,
-                                          start, edges, ignore_back, out, weight)
-            else:
-                back += bin_flat_hits(hit_prim[:held], hit_t[:held], hit_o[:held], plane_d,
-                                      face_normals, face_material, params, wv, start, edges,
-                                      area, power, ignore_back, out, stamp, weight, tag,
-                                      footprint)
-            held = 0
-    return back, n
+            if held == _BLOCK or (a0 + rows == ns and q == rows * nt - 1):
+                back += _bin_block(occ, scene, w, flags, i32, f32, i64, base, hits, held,
+                                   spare, plane_d, face_normals, face_material, params, wv,
+                                   wr, lift, inv_scale, one, start, edges, area, power,
+                                   ignore_back, out, stamp, weight, tag, footprint)
+                held = 0
+    if held:
+        back += _bin_block(occ, scene, w, flags, i32, f32, i64, base, hits, held, spare,
+                           plane_d, face_normals, face_material, params, wv, wr, lift,
+                           inv_scale, one, start, edges, area, power, ignore_back, out,
+                           stamp, weight, tag, footprint)
+    return back, ns * nt
+
+
+@njit(cache=True, nogil=True)
+def _bin_block(occ, scene, w, flags, i32, f32, i64, base, hits, held, spare, plane_d,
+               face_normals, face_material, params, wv, wr, lift, inv_scale, one, start,
+               edges, area, power, ignore_back, out, stamp, weight, tag, footprint):
+    """Weigh and bin the ``held`` hits of ``hits`` (face, distance, origin); bistatic (``wr``
+    not empty) after their occlusion rays toward the receiver (``spare``: blocked, lifted
+    origins, wr in float32). Returns the block's back-face hits."""
+    prim, tf, o = hits[0][:held], hits[1][:held], hits[2][:held]
+    if wr.shape[0] != 3:
+        return bin_flat_hits(prim, tf, o, plane_d, face_normals, face_material, params, wv,
+                             start, edges, area, power, ignore_back, out, stamp, weight, tag,
+                             footprint)
+    blocked, lifted, wr32 = spare
+    _occlude_block(occ, scene, w, i32, f32, base, prim, tf, o, held, plane_d, face_normals,
+                   wv, wr32, lift, inv_scale, one, lifted, blocked)
+    init_args(i32, i64, base, flags)
+    return bin_bistatic_hits(prim, tf, o, blocked[:held], plane_d, face_normals, wv, wr,
+                             start, edges, ignore_back, out, weight)
