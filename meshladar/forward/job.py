@@ -212,9 +212,10 @@ def _bins(job, view, chunk, start):
 def _cast(job, scene, view):
     """One view's parallel rays cast one at a time: (origins, Embree's results)."""
     p = job.plan
-    o = ray_grid(p.geo, view.w, p.mode, p.spacing, p.z0_shifted, view.rng).origins
-    return o, scene.run(o, np.ascontiguousarray((-view.w)[None, :], dtype=np.float32),
-                        output=1)
+    grid = ray_grid(p.geo, view.w, p.mode, p.spacing, p.z0_shifted, view.rng)
+    return grid.origins, scene.run(grid.origins, np.ascontiguousarray((-view.w)[None, :],
+                                                                      dtype=np.float32),
+                                   output=1, columns=grid.columns)
 
 
 def _smooth_stage(job, scene, view, chunk):

@@ -96,8 +96,10 @@ def first_hits(scene, view_vector, *, ray_spacing):
     spacing = check_real("ray_spacing", ray_spacing, low=0.0, low_open=True)
     geo = geometry(scene, "flat")
     emb = embree_scene(geo, resolve_backend("auto"))
-    o = ray_grid(geo, w, "3d", spacing, 0.0, None).origins
-    res = emb.run(o, np.ascontiguousarray((-w)[None, :], dtype=np.float32), output=1)
+    grid = ray_grid(geo, w, "3d", spacing, 0.0, None)
+    o = grid.origins
+    res = emb.run(o, np.ascontiguousarray((-w)[None, :], dtype=np.float32), output=1,
+                  columns=grid.columns)
     hit = res["primID"] >= 0
     prim = res["primID"][hit].astype(np.int64)
     # Embree's float32 t recomputed in float64 against the hit face's plane, as the binning

@@ -127,7 +127,11 @@ class EmbreeScene:
         backend's, :mod:`meshladar.weighing.fused`)."""
         return getattr(self.scene, "fused", False)
 
-    def run(self, origins, directions, **kwargs):
+    def run(self, origins, directions, columns=0, **kwargs):
+        """The backend's ``run`` at unit size; ``columns`` (the rows' length of a grid of
+        rays) lets the packet backend cast it in tiles, and is dropped for the others."""
+        if self.fused and columns:
+            kwargs["columns"] = columns
         if self.scale != 1.0:
             origins = origins * self.inverse
         res = self.scene.run(origins, directions, **kwargs)

@@ -249,7 +249,7 @@ class PacketGeometry:
         return self._live()
 
     def cast_grid(self, origins, direction, *, width=None, coherent=True, tmax=np.inf,
-                  barycentrics=False):
+                  barycentrics=False, columns=0):
         """First hits of rays from ``origins`` (n, 3) all along ``direction`` (3,) (or each
         along its own, (n, 3): coherent when neighbours are nearly parallel):
         ``prim`` (int32, -1 on a miss), ``tfar`` (float32, inf on a miss; distances in
@@ -275,6 +275,11 @@ class PacketGeometry:
             are not reported. Default inf. Rays start at t = 0.
         barycentrics : bool
             Also return the hits' barycentrics (default False).
+        columns : int
+            0 (default): packets of consecutive rays. Else the rays are a grid's, row-major
+            in rows of ``columns`` rays (n a multiple of it), and each packet is a tile of
+            it (4 × 4 rays at width 16, 2 × 4 at 8, 2 × 2 at 4): the same hits, found
+            faster, as a tile's rays share their path through the BVH.
 
         Returns
         -------
@@ -287,7 +292,8 @@ class PacketGeometry:
         Raises
         ------
         ValueError
-            When ``direction`` is neither (3,) nor (n, 3).
+            When ``direction`` is neither (3,) nor (n, 3), or ``columns`` does not divide
+            the rays into rows.
         RuntimeError
             When the scene has been released.
         """
@@ -295,13 +301,16 @@ class PacketGeometry:
         o = np.ascontiguousarray(origins, dtype=np.float32)
         d = _directions(direction, len(o))
         n = len(o)
+        if columns < 0 or (columns and n % columns):
+            raise ValueError(f"columns must be 0 or the length of the grid's rows (a divisor "
+                             f"of its {n} rays); got {columns}")
         prim = np.empty(n, np.int32)
         tfar = np.empty(n, np.float32)
         m = n if barycentrics else 0
         u, v = np.empty(m, np.float32), np.empty(m, np.float32)
         flags = RTC_RAY_QUERY_FLAG_COHERENT if coherent else RTC_RAY_QUERY_FLAG_INCOHERENT
         cast_grid(self.lib.intersect[w], self._live(), o, d, np.float32(tmax), w, flags,
-                  prim, tfar, u, v)
+                  prim, tfar, u, v, int(columns))
         return GridHits(prim, tfar, u, v) if barycentrics else (prim, tfar)
 
     def occluded_grid(self, origins, direction, *, tmax=np.inf, width=None, coherent=True):

@@ -80,9 +80,67 @@ def load_packet(f32, i32, o, d, tmax, start, n, w):
         i32[_INSTID * w + j] = -1        # workspace's reserve either way)
 
 
+@njit(cache=True, nogil=True, inline="always")
+def tile_shape(w):
+    """(rows, columns) of a packet's tile of a ray grid for packet width ``w``: 4 × 4 at
+    16, 2 × 4 at 8, 2 × 2 at 4. Square tiles keep a packet's rays together on the target
+    (one BVH path serves them all), where a 1 × w row spans w ray spacings."""
+    if w == 16:
+        return 4, 4
+    if w == 8:
+        return 2, 4
+    return 2, 2
+
+
 @njit(cache=True, nogil=True)
-def cast_grid(fn, scene, o, d, tmax, w, flags, prim, tfar, u, v):
-    """rtcIntersectW over rays o[i] + t d, in packets of w in scan order (tail masked).
+def _packet_rays(p, n, cols, w, idx):
+    """The ray indices of packet ``p`` into idx[:m]; returns m. ``cols`` 0: rays p·w.. in
+    scan order; else the p-th tile (:func:`tile_shape`, row-major over tiles) of a grid of
+    rows ``cols`` rays long (row-major rays), fewer lanes at its edges."""
+    if cols == 0:
+        m = min(w, n - p * w)
+        for j in range(m):
+            idx[j] = p * w + j
+        return m
+    th, tw = tile_shape(w)
+    across = (cols + tw - 1) // tw
+    a0, b0 = (p // across) * th, (p % across) * tw
+    m = 0
+    for a in range(a0, min(a0 + th, n // cols)):
+        for b in range(b0, min(b0 + tw, cols)):
+            idx[m] = a * cols + b
+            m += 1
+    return m
+
+
+@njit(cache=True, nogil=True)
+def _packets(n, cols, w):
+    """The packets that cover n rays (``cols``: see :func:`_packet_rays`)."""
+    if cols == 0:
+        return (n + w - 1) // w
+    th, tw = tile_shape(w)
+    return ((n // cols + th - 1) // th) * ((cols + tw - 1) // tw)
+
+
+@njit(cache=True, nogil=True)
+def _gather(o, d, idx, m, sub, sub_d):
+    """The packet's origins (and per-ray directions) into ``sub`` (``sub_d``)."""
+    for j in range(m):
+        for k in range(3):
+            sub[j, k] = o[idx[j], k]
+    if d.shape[0] > 1:
+        for j in range(m):
+            for k in range(3):
+                sub_d[j, k] = d[idx[j], k]
+    else:
+        for k in range(3):
+            sub_d[0, k] = d[0, k]
+
+
+@njit(cache=True, nogil=True)
+def cast_grid(fn, scene, o, d, tmax, w, flags, prim, tfar, u, v, cols):
+    """rtcIntersectW over rays o[i] + t d, in packets of w: in scan order (``cols`` 0;
+    the tail masked), or in tiles of a grid whose rows are ``cols`` rays long.
     ``fn`` is the ctypes rtcIntersect{w} (an argument, not a global: cacheable). ``u`` and
     ``v`` receive the barycentrics when they have one entry per ray (else they are empty).
 
@@ -108,25 +166,32 @@ def cast_grid(fn, scene, o, d, tmax, w, flags, prim, tfar, u, v):
         Output: the hit distance, inf on a miss.
     u, v : (n,) or (0,) float32 numpy.ndarray
         Output: the barycentrics, written only when they have n entries.
+    cols : int
+        0: packets of w consecutive rays. Else the rays are a grid, row-major, rows of
+        ``cols`` rays (n a multiple of it), cast in tiles (:func:`tile_shape`).
     """
     i32, f32, i64, base = workspace()
     init_args(i32, i64, base, flags)
     n = o.shape[0]
-    for start in range(0, n, w):
-        load_packet(f32, i32, o, d, tmax, start, n, w)
+    idx = np.empty(w, np.int64)
+    sub = np.empty((w, 3), np.float32)
+    sub_d = np.empty((w if d.shape[0] > 1 else 1, 3), np.float32)
+    for p in range(_packets(n, cols, w)):
+        m = _packet_rays(p, n, cols, w, idx)
+        _gather(o, d, idx, m, sub, sub_d)
+        load_packet(f32, i32, sub, sub_d, tmax, 0, m, w)
         fn(base + _VALID_OFF, scene, base, base + _ARGS_OFF)
-        m = min(w, n - start)
         for j in range(m):
+            r = idx[j]
             if i32[_GEOMID * w + j] == -1:
-                prim[start + j] = -1
-                tfar[start + j] = np.inf
+                prim[r] = -1
+                tfar[r] = np.inf
             else:
-                prim[start + j] = i32[_PRIMID * w + j]
-                tfar[start + j] = f32[_TFAR * w + j]
-        if u.shape[0] == n:
-            for j in range(m):
-                u[start + j] = f32[_U * w + j]
-                v[start + j] = f32[_V * w + j]
+                prim[r] = i32[_PRIMID * w + j]
+                tfar[r] = f32[_TFAR * w + j]
+            if u.shape[0] == n:
+                u[r] = f32[_U * w + j]
+                v[r] = f32[_V * w + j]
 
 
 @njit(cache=True, nogil=True)

@@ -72,12 +72,14 @@ class GridPlan(NamedTuple):
 
 class RayGrid(NamedTuple):
     """A view's rays as :func:`ray_grid` builds them: float32 origins (n, 3) in shifted
-    coordinates, the start distance L and the view's transverse axes u, v."""
+    coordinates, row-major in rows of ``columns`` rays, the start distance L and the
+    view's transverse axes u, v."""
 
     origins: np.ndarray
     L: float
     u: np.ndarray
     v: np.ndarray
+    columns: int = 0
 
 
 def grid_plan(geo, w, mode, spacing, z0_shifted, rng):
@@ -137,7 +139,7 @@ def ray_grid(geo, w, mode, spacing, z0_shifted, rng):
             o[:, :, k] += T * np.float32(v[k])
     for k in range(3):
         o[:, :, k] += np.float32(L * w[k])
-    return RayGrid(o.reshape(-1, 3), L, u, v)
+    return RayGrid(o.reshape(-1, 3), L, u, v, o.shape[1])
 
 
 #: The golden ratio's conjugate: the Kronecker sequence frac(x + kα) is the most evenly

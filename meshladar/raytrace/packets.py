@@ -37,7 +37,7 @@ class PacketScene:
     def __init__(self, scene):
         self.scene = scene
 
-    def run(self, origins, directions, output=None, query="INTERSECT"):
+    def run(self, origins, directions, output=None, query="INTERSECT", columns=0):
         """Cast rays as embreex's ``run`` does: first hits, or occlusion.
 
         Parameters
@@ -53,6 +53,10 @@ class PacketScene:
         query : str
             ``"OCCLUDED"`` for the occlusion query; any other value (default
             ``"INTERSECT"``) casts for first hits.
+        columns : int
+            First hits: the length of the rows of a grid of rays (row-major), cast in tiles
+            (:meth:`meshladar.raytrace.embree4.PacketGeometry.cast_grid`); 0 (default):
+            packets of consecutive rays.
 
         Returns
         -------
@@ -73,7 +77,7 @@ class PacketScene:
         d = np.asarray(directions, dtype=np.float32).reshape(-1, 3)
         if query == "OCCLUDED":
             return np.where(self.scene.occluded_grid(origins, d), 0, -1)
-        got = self.scene.cast_grid(origins, d, barycentrics=True)
+        got = self.scene.cast_grid(origins, d, barycentrics=True, columns=columns)
         return {"primID": got.prim, "tfar": got.tfar, "u": got.u, "v": got.v}
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..raytrace.embree4_kernels import init_args, load_packet, workspace
+from ..raytrace.embree4_kernels import init_args, load_packet, tile_shape, workspace
 from ..raytrace.embree4_ctypes import ARGS_OFF, GEOMID, PRIMID, TFAR, VALID_OFF
 from ._kernels import bin_bistatic_hits, bin_flat_hits, face_hit
 
@@ -41,18 +41,6 @@ def _occlude_block(occ, scene, w, i32, f32, base, prim, tf, o, n, plane_d, face_
 #: Rays per block of hits handed to the weigh-and-bin kernel: small enough to stay in cache,
 #: large enough that the call costs nothing per ray.
 _BLOCK = 1024
-
-
-@njit(cache=True, nogil=True, inline="always")
-def tile_shape(w):
-    """(rows, columns) of a packet's tile of the ray grid for packet width ``w``: 4 × 4 at
-    16, 2 × 4 at 8, 2 × 2 at 4. Square tiles keep a packet's rays together on the target
-    (one BVH path serves them all), where a 1 × w row spans w ray spacings."""
-    if w == 16:
-        return 4, 4
-    if w == 8:
-        return 2, 4
-    return 2, 2
 
 
 @njit(cache=True, nogil=True)

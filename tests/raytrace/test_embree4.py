@@ -47,6 +47,34 @@ def _assert_same_hits(a, b):
         np.testing.assert_allclose(x, y, rtol=SAME_HITS_RTOL, atol=1e-15)
 
 
+@pytest.mark.parametrize("width", [4, 8, 16])
+def test_tiles_of_a_grid_give_the_hits_of_its_rows(width):
+    """A grid cast in tiles (columns=) finds, ray by ray, the face, distance and
+    barycentrics that packets of consecutive rays find: 37 rows of 29 rays, so that the
+    last tiles of each row and of the grid are partial at every width."""
+    scene = _sphere(3)
+    geo = ml.raytrace.embree.Geometry(scene, "flat")
+    pk = ml.raytrace.embree.embree_scene(geo, "packets").scene.scene
+    w = np.array([0.3, -0.5, 0.81])
+    w /= np.linalg.norm(w)
+    u = np.cross(w, [0.0, 0.0, 1.0])
+    u /= np.linalg.norm(u)
+    v = np.cross(w, u)
+    s, t = np.linspace(-0.55, 0.55, 37), np.linspace(-0.55, 0.55, 29)
+    o = (s[:, None, None] * u + t[None, :, None] * v + 2.0 * w).reshape(-1, 3)
+    d = (-w).astype(np.float32)
+    rows = pk.cast_grid(o, d, width=width, barycentrics=True)
+    tiles = pk.cast_grid(o, d, width=width, barycentrics=True, columns=29)
+    hit = rows.prim >= 0
+    assert 0.3 < hit.mean() < 0.9                  # hits and misses, in every tile row
+    np.testing.assert_array_equal(tiles.prim, rows.prim)
+    np.testing.assert_array_equal(tiles.tfar, rows.tfar)
+    np.testing.assert_array_equal(tiles.u[hit], rows.u[hit])
+    np.testing.assert_array_equal(tiles.v[hit], rows.v[hit])
+    with pytest.raises(ValueError, match="columns must be 0 or the length"):
+        pk.cast_grid(o, d, columns=30)
+
+
 @pytest.mark.parametrize("options", [
     {"normals": "flat"},
     {"normals": "smooth"},                          # the hits' barycentrics
