@@ -38,8 +38,8 @@ def _occlude_block(occ, scene, w, i32, f32, base, prim, tf, o, n, plane_d, face_
             blocked[first + j] = f32[TFAR * w + j] == -np.inf
 
 
-#: Rays per block of hits handed to the weigh-and-bin kernel: small enough to stay in cache,
-#: large enough that the call costs nothing per ray.
+#: Bistatic hits per block handed to the occlusion and binning kernels: small enough to
+#: stay in cache, large enough that the call costs nothing per ray.
 _BLOCK = 1024
 
 
@@ -95,11 +95,11 @@ def cast_bin_grid(fn, scene, w, flags, s, t, du, dv, sp, u, v, lw, d, inv_scale,
     time: each packet's float32 origins are built as
     :func:`meshladar.raytrace.grid.ray_grid` builds them (o = (S u + T v) + L w, S = s
     (+ δ du), T = t (+ δ dv) when ``du`` is not empty), cast at unit size (×
-    ``inv_scale``), and the band's hits, with Embree's distance scaled back (× ``scale``),
-    are weighed and binned in scan order a cache-sized block at a time by
+    ``inv_scale``), and the band's hits (a few rows: it stays in cache), with Embree's
+    distance scaled back (× ``scale``), are weighed and binned in scan order by
     :func:`._kernels.bin_flat_hits`: the numbers of the unfused path, summed in its order,
-    without per-ray arrays. With a receiver direction ``wr`` (3,) (empty: monostatic) each
-    block's hits first cast their occlusion rays toward it with ``occ`` (rtcOccludedW; see
+    without per-ray arrays. With a receiver direction ``wr`` (3,) (empty: monostatic) the
+    band's hits are taken a block at a time, and each block's hits first cast their occlusion rays toward it with ``occ`` (rtcOccludedW; see
     :func:`_occlude_block`), and :func:`._kernels.bin_bistatic_hits` bins them with the
     per-face bistatic weights in ``weight``. Returns (back-face hits, rays cast)."""
     i32, f32, i64, base = workspace()
@@ -113,11 +113,12 @@ def cast_bin_grid(fn, scene, w, flags, s, t, du, dv, sp, u, v, lw, d, inv_scale,
     band_prim = np.empty(th * nt, np.int32)
     band_t = np.empty(th * nt, np.float32)
     band_o = np.empty((th * nt, 3), np.float32)
-    hits = (np.empty(_BLOCK, np.int32), np.empty(_BLOCK, np.float32),
-            np.empty((_BLOCK, 3), np.float32))
     bistatic = wr.shape[0] == 3
-    spare = (np.zeros(_BLOCK if bistatic else 0, np.bool_),
-             np.empty((_BLOCK if bistatic else 0, 3), np.float32), np.empty((1, 3), np.float32))
+    block = _BLOCK if bistatic else 0
+    hits = (np.empty(block, np.int32), np.empty(block, np.float32),
+            np.empty((block, 3), np.float32))
+    spare = (np.zeros(block, np.bool_), np.empty((block, 3), np.float32),
+             np.empty((1, 3), np.float32))
     for k in range(3 if bistatic else 0):
         spare[2][0, k] = wr[k]
     held = 0
@@ -130,6 +131,13 @@ def cast_bin_grid(fn, scene, w, flags, s, t, du, dv, sp, u, v, lw, d, inv_scale,
             load_packet(f32, i32, cast, d, np.float32(np.inf), 0, m, w)
             fn(base + VALID_OFF, scene, base, base + ARGS_OFF)
             _keep_hits(i32, f32, w, m, one, scale, lanes, slot, band_prim, band_t, band_o)
+        if not bistatic:                          # the band in scan order (misses: -1)
+            k = rows * nt
+            back += bin_flat_hits(band_prim[:k], band_t[:k], band_o[:k], plane_d,
+                                  face_normals, face_material, params, wv, start, edges,
+                                  area, power, ignore_back, out, stamp, weight, tag,
+                                  footprint)
+            continue
         for q in range(rows * nt):                # the band's hits in scan order
             if band_prim[q] < 0:
                 continue
@@ -137,32 +145,26 @@ def cast_bin_grid(fn, scene, w, flags, s, t, du, dv, sp, u, v, lw, d, inv_scale,
             for k in range(3):
                 hits[2][held, k] = band_o[q, k]
             held += 1
-            if held == _BLOCK or (a0 + rows == ns and q == rows * nt - 1):
+            if held == _BLOCK:
                 back += _bin_block(occ, scene, w, flags, i32, f32, i64, base, hits, held,
-                                   spare, plane_d, face_normals, face_material, params, wv,
-                                   wr, lift, inv_scale, one, start, edges, area, power,
-                                   ignore_back, out, stamp, weight, tag, footprint)
+                                   spare, plane_d, face_normals, wv, wr, lift, inv_scale,
+                                   one, start, edges, ignore_back, out, weight)
                 held = 0
     if held:
         back += _bin_block(occ, scene, w, flags, i32, f32, i64, base, hits, held, spare,
-                           plane_d, face_normals, face_material, params, wv, wr, lift,
-                           inv_scale, one, start, edges, area, power, ignore_back, out,
-                           stamp, weight, tag, footprint)
+                           plane_d, face_normals, wv, wr, lift, inv_scale, one, start,
+                           edges, ignore_back, out, weight)
     return back, ns * nt
 
 
 @njit(cache=True, nogil=True)
 def _bin_block(occ, scene, w, flags, i32, f32, i64, base, hits, held, spare, plane_d,
-               face_normals, face_material, params, wv, wr, lift, inv_scale, one, start,
-               edges, area, power, ignore_back, out, stamp, weight, tag, footprint):
-    """Weigh and bin the ``held`` hits of ``hits`` (face, distance, origin); bistatic (``wr``
-    not empty) after their occlusion rays toward the receiver (``spare``: blocked, lifted
-    origins, wr in float32). Returns the block's back-face hits."""
+               face_normals, wv, wr, lift, inv_scale, one, start, edges, ignore_back, out,
+               weight):
+    """Bin the ``held`` bistatic hits of ``hits`` (face, distance, origin) after their
+    occlusion rays toward the receiver ``wr`` (``spare``: blocked, lifted origins, wr in
+    float32). Returns the block's back-face hits."""
     prim, tf, o = hits[0][:held], hits[1][:held], hits[2][:held]
-    if wr.shape[0] != 3:
-        return bin_flat_hits(prim, tf, o, plane_d, face_normals, face_material, params, wv,
-                             start, edges, area, power, ignore_back, out, stamp, weight, tag,
-                             footprint)
     blocked, lifted, wr32 = spare
     _occlude_block(occ, scene, w, i32, f32, base, prim, tf, o, held, plane_d, face_normals,
                    wv, wr32, lift, inv_scale, one, lifted, blocked)
