@@ -10,7 +10,8 @@ runs the chosen stage on each view. The stages:
 * ``per_hit``: hits weighed and binned in numpy (any normals, coating, receiver, sensor);
 * ``flat``: flat normals, monostatic: F·δA⊥ one number per face and view, binned by the
   compiled loop (in the fused cast-weigh-bin loop on a fused backend);
-* ``smooth``: smooth normals, coatings with a compiled kernel, binned by the compiled loop;
+* ``smooth``: smooth normals, coatings with a compiled kernel, binned by the compiled loop
+  (in the fused cast-weigh-bin loop on a fused backend, the barycentrics kept per band);
 * ``bistatic``: flat normals, a receiver, a fused backend: per-face bistatic weights and
   occlusion rays cast in the fused loop;
 * ``sensor``: a sensor at a finite standoff, flat or smooth normals, compiled coatings;
@@ -79,8 +80,8 @@ class MeshJob:
         ``"flat"``, ``"smooth"``, ``"bistatic"``, ``"sensor"`` or ``"resolved"`` (module
         docstring).
     row_jobs : int
-        Threads one view's rows are split over, in the fused loop of the ``"flat"`` and
-        ``"bistatic"`` stages only (default 1).
+        Threads one view's rows are split over, in the fused loop of the ``"flat"``,
+        ``"smooth"`` and ``"bistatic"`` stages only (default 1).
     fused : bool
         Whether the backend's fused cast-weigh-bin loop casts the grids (default False).
     """
@@ -223,6 +224,16 @@ def _smooth_stage(job, scene, view, chunk):
     start = range_offset(p.geo.center, view.w, None)
     if wg.footprint:
         face_footprints(p.geo, view.w, p.mode, p.spacing, chunk.footprints)
+    if job.fused:
+        # packets: grid, cast, weigh and bin in one loop, the barycentrics kept per band
+        bins = _bins(job, view, chunk, start)
+        smooth = (p.geo.corner, MIN_COS_FACET)
+        grid = grid_plan(p.geo, view.w, p.mode, p.spacing, p.z0_shifted, view.rng)
+        if job.row_jobs > 1:
+            return _rows_on_threads(scene, grid, view.w, p.spacing, bins, job.row_jobs,
+                                    None, smooth)[::-1]
+        back, n = cast_bin_grid(scene, grid, view.w, p.spacing, bins, None, smooth)
+        return n, back
     o, res = _cast(job, scene, view)
     back = bin_smooth_hits(
         res["primID"], res["tfar"], res["u"], res["v"], o, p.geo.plane_d,
@@ -261,7 +272,7 @@ def _flat_stage(job, scene, view, chunk):
     return len(o), bin_flat_hits(res["primID"], res["tfar"], o, *bins)
 
 
-def _rows_on_threads(scene, grid, w, spacing, bins, row_jobs, receiver=None):
+def _rows_on_threads(scene, grid, w, spacing, bins, row_jobs, receiver=None, smooth=None):
     """One big view's grid split into ``row_jobs`` bands of rows, cast on as many threads
     (the fused loop releases the GIL), each band with its own bins and a copy of the weight
     cache (weights already evaluated for the view stay valid); the
@@ -278,8 +289,8 @@ def _rows_on_threads(scene, grid, w, spacing, bins, row_jobs, receiver=None):
                                               stamp=bins.stamp.copy(),
                                               weight=bins.weight.copy())))
     with ThreadPoolExecutor(len(parts)) as ex:
-        done = list(ex.map(lambda p: cast_bin_grid(scene, p[0], w, spacing, p[1], receiver),
-                           parts))
+        done = list(ex.map(lambda p: cast_bin_grid(scene, p[0], w, spacing, p[1], receiver,
+                                                   smooth), parts))
     for _, band in parts:
         bins.out[...] += band.out
     return sum(b for b, _ in done), sum(n for _, n in done)

@@ -274,5 +274,5 @@ class EmbreeLib:
 
 # public names of the packet layout, for the compiled loops beside other stages
 # (meshladar.weighing.fused): field indices of RTCRayHitW and workspace offsets
-TFAR, PRIMID, GEOMID = _TFAR, _PRIMID, _GEOMID
+TFAR, PRIMID, GEOMID, U, V = _TFAR, _PRIMID, _GEOMID, _U, _V
 VALID_OFF, ARGS_OFF = _VALID_OFF, _ARGS_OFF

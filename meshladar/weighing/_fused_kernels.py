@@ -10,8 +10,8 @@ import numpy as np
 from numba import njit
 
 from ..raytrace.embree4_kernels import init_args, load_packet, tile_shape, workspace
-from ..raytrace.embree4_ctypes import ARGS_OFF, GEOMID, PRIMID, TFAR, VALID_OFF
-from ._kernels import bin_bistatic_hits, bin_flat_hits, face_hit
+from ..raytrace.embree4_ctypes import ARGS_OFF, GEOMID, PRIMID, TFAR, U, V, VALID_OFF
+from ._kernels import bin_bistatic_hits, bin_flat_hits, bin_smooth_hits, face_hit
 
 __all__ = ["cast_bin_grid"]
 
@@ -71,9 +71,10 @@ def _tile_origins(a0, b0, rows, cols, nt, s, t, du, dv, sp, u, v, lw, one, inv_s
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _keep_hits(i32, f32, w, m, one, scale, lanes, slot, band_prim, band_t, band_o):
-    """The packet's hits (face, distance scaled back, origin as built) into the band's
-    slots; -1 where a lane missed."""
+def _keep_hits(i32, f32, w, m, one, scale, lanes, slot, band):
+    """The packet's hits (face, distance scaled back, origin as built, barycentrics) into
+    the ``band``'s slots; -1 where a lane missed."""
+    band_prim, band_t, band_o, band_u, band_v = band
     for j in range(m):
         q = slot[j]
         if i32[GEOMID * w + j] == -1:
@@ -84,14 +85,36 @@ def _keep_hits(i32, f32, w, m, one, scale, lanes, slot, band_prim, band_t, band_
         band_t[q] = tf if one else np.float32(tf * scale)
         for k in range(3):
             band_o[q, k] = lanes[j, k]
+        if band_u.shape[0]:
+            band_u[q] = f32[U * w + j]
+            band_v[q] = f32[V * w + j]
+
+
+@njit(cache=True, nogil=True)
+def _bin_band(band, k, plane_d, face_normals, face_material, params, wv, start, edges, area,
+              power, ignore_back, out, stamp, weight, tag, footprint, smooth):
+    """Weigh and bin a band's first k slots in scan order (misses -1, skipped): flat
+    normals, or smooth with ``smooth`` = (corner normals, min_cos_facet) when the corners
+    are not empty. Returns the back-face hits."""
+    prim, tf, o, bu, bv = band[0][:k], band[1][:k], band[2][:k], band[3], band[4]
+    corner, min_cos_facet = smooth
+    if corner.shape[0] == 0:
+        return bin_flat_hits(prim, tf, o, plane_d, face_normals, face_material, params, wv,
+                             start, edges, area, power, ignore_back, out, stamp, weight, tag,
+                             footprint)
+    return bin_smooth_hits(prim, tf, bu[:k], bv[:k], o, plane_d, face_normals, corner,
+                           face_material, params, wv, start, edges, area, power,
+                           ignore_back, min_cos_facet, out, footprint)
 
 
 @njit(cache=True, nogil=True)
 def cast_bin_grid(fn, scene, w, flags, s, t, du, dv, sp, u, v, lw, d, inv_scale, scale,
                   plane_d, face_normals, face_material, params, wv, start, edges, area,
-                  power, ignore_back, out, stamp, weight, tag, footprint, occ, wr, lift):
-    """One view, grid to bins in one loop (monostatic or bistatic, flat normals, point or
-    footprint bins). The grid is cast in tiles (:func:`tile_shape`) a band of rows at a
+                  power, ignore_back, out, stamp, weight, tag, footprint, occ, wr, lift,
+                  corner, min_cos_facet):
+    """One view, grid to bins in one loop (monostatic or bistatic, flat normals; or
+    monostatic with smooth ones, interpolated from the faces' ``corner`` normals when it is
+    not empty, as :func:`._kernels.bin_smooth_hits`; point or footprint bins). The grid is cast in tiles (:func:`tile_shape`) a band of rows at a
     time: each packet's float32 origins are built as
     :func:`meshladar.raytrace.grid.ray_grid` builds them (o = (S u + T v) + L w, S = s
     (+ δ du), T = t (+ δ dv) when ``du`` is not empty), cast at unit size (×
@@ -110,9 +133,11 @@ def cast_bin_grid(fn, scene, w, flags, s, t, du, dv, sp, u, v, lw, d, inv_scale,
     lanes = np.empty((w, 3), np.float32)          # origins as built (for the ranges)
     cast = np.empty((w, 3), np.float32)           # and as cast (at unit size)
     slot = np.empty(w, np.int64)
-    band_prim = np.empty(th * nt, np.int32)
-    band_t = np.empty(th * nt, np.float32)
-    band_o = np.empty((th * nt, 3), np.float32)
+    nb = th * nt if corner.shape[0] else 0        # barycentrics: smooth normals only
+    band = (np.empty(th * nt, np.int32), np.empty(th * nt, np.float32),
+            np.empty((th * nt, 3), np.float32), np.empty(nb, np.float32),
+            np.empty(nb, np.float32))
+    band_prim, band_t, band_o = band[0], band[1], band[2]
     bistatic = wr.shape[0] == 3
     block = _BLOCK if bistatic else 0
     hits = (np.empty(block, np.int32), np.empty(block, np.float32),
@@ -130,13 +155,11 @@ def cast_bin_grid(fn, scene, w, flags, s, t, du, dv, sp, u, v, lw, d, inv_scale,
                               lw, one, inv_scale, lanes, cast, slot)
             load_packet(f32, i32, cast, d, np.float32(np.inf), 0, m, w)
             fn(base + VALID_OFF, scene, base, base + ARGS_OFF)
-            _keep_hits(i32, f32, w, m, one, scale, lanes, slot, band_prim, band_t, band_o)
+            _keep_hits(i32, f32, w, m, one, scale, lanes, slot, band)
         if not bistatic:                          # the band in scan order (misses: -1)
-            k = rows * nt
-            back += bin_flat_hits(band_prim[:k], band_t[:k], band_o[:k], plane_d,
-                                  face_normals, face_material, params, wv, start, edges,
-                                  area, power, ignore_back, out, stamp, weight, tag,
-                                  footprint)
+            back += _bin_band(band, rows * nt, plane_d, face_normals, face_material, params,
+                              wv, start, edges, area, power, ignore_back, out, stamp,
+                              weight, tag, footprint, (corner, min_cos_facet))
             continue
         for q in range(rows * nt):                # the band's hits in scan order
             if band_prim[q] < 0:

@@ -12,7 +12,7 @@ from ._fused_kernels import cast_bin_grid as kernel
 __all__ = ["cast_bin_grid"]
 
 
-def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None):
+def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=None):
     """Cast, weigh and bin one view of the packet scene ``emb``
     (:class:`meshladar.raytrace.embree.EmbreeScene` whose backend is fused): ``plan`` is
     :func:`meshladar.raytrace.grid.grid_plan`'s :class:`~meshladar.raytrace.grid.GridPlan`,
@@ -20,8 +20,8 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None):
     flat for the compiled loop); ``receiver`` (direction, lift) makes the view bistatic.
     Returns (back-face hits, rays cast).
 
-    Monostatic or bistatic, flat normals, binned at a point or over each face's footprint
-    (``bins.footprint`` not empty). The packets are cast with the library's native width,
+    Monostatic or bistatic with flat normals, or monostatic with smooth ones (``smooth``),
+    binned at a point or over each face's footprint (``bins.footprint`` not empty). The packets are cast with the library's native width,
     coherent; the ray origins are built in float32 as ``ray_grid`` builds them and cast at
     unit size (× ``emb.inverse``), Embree's distances scaled back (× ``emb.scale``).
 
@@ -50,6 +50,10 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None):
         it starts; ``bins.weight`` then holds every face's bistatic weight
         (:func:`meshladar.weighing.faces.face_bistatic_weights`). None (default):
         monostatic.
+    smooth : tuple of ((m, 3, 3) numpy.ndarray, float), optional
+        Smooth normals (monostatic): each face's corner normals and the least |cos θ| of
+        the facet in the area factor (:func:`meshladar.weighing._kernels.bin_smooth_hits`);
+        ``bins.stamp`` and ``bins.weight`` are then unused. None (default): flat normals.
 
     Returns
     -------
@@ -71,4 +75,6 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None):
         (-w).astype(np.float32)[None, :], np.float32(emb.inverse), float(emb.scale), *bins,
         lib.occluded[lib.width],
         np.empty(0) if receiver is None else np.asarray(receiver[0], np.float64),
-        0.0 if receiver is None else float(receiver[1]))
+        0.0 if receiver is None else float(receiver[1]),
+        np.empty((0, 3, 3)) if smooth is None else smooth[0],
+        0.0 if smooth is None else float(smooth[1]))

@@ -162,11 +162,14 @@ def test_a_wrong_library_path_is_a_reason_not_a_crash(tmp_path):
     assert ok == "False" and str(fake) in why
 
 
+@pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # coarse on purpose
+@pytest.mark.parametrize("normals", ["flat", "smooth"])
 @pytest.mark.parametrize("sampling", ["regular", "stratified"])
-def test_the_fused_loop_gives_the_unfused_numbers_bit_for_bit(sampling, monkeypatch):
+def test_the_fused_loop_gives_the_unfused_numbers_bit_for_bit(sampling, normals, monkeypatch):
     # grid, cast, weigh and bin in one loop build the same float32 origins and bin the
-    # same hits as the path through per-ray arrays: equal, not merely close; the far,
-    # large sphere makes Embree's unit-size copy a real rescaling
+    # same hits (with smooth normals, the same barycentrics) as the path through per-ray
+    # arrays: equal, not merely close; the far, large sphere makes Embree's unit-size copy
+    # a real rescaling
     from meshladar.raytrace.backends import REGISTRY, backend
     from meshladar.raytrace.embree import EmbreeScene
 
@@ -180,12 +183,12 @@ def test_the_fused_loop_gives_the_unfused_numbers_bit_for_bit(sampling, monkeypa
             ladar = ml.Ladar.covering(scene, n_bins=48,
                                       view_vectors=ml.meshes.fibonacci_sphere(5))
             fused = ml.simulate(scene, ladar, model="mesh", sampling=sampling,
-                                backend="packets")
+                                backend="packets", normals=normals)
             with monkeypatch.context() as m:
                 m.setattr(EmbreeScene, "fused", property(lambda self: False))
                 m.setitem(REGISTRY, "packets", replace(REGISTRY["packets"], fused=False))
                 plain = ml.simulate(scene, ladar, model="mesh", sampling=sampling,
-                                    backend="packets")
+                                    backend="packets", normals=normals)
         assert fused.info["rays"] == plain.info["rays"] > 0
         np.testing.assert_array_equal(fused.values, plain.values)
 
