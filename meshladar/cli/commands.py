@@ -320,13 +320,14 @@ def cmd_bench(args) -> int:
     ----------
     args : argparse.Namespace
         ``repeats``: timed runs per case after one warm-up (int); ``full``: add the
-        Mitsuba 3 + mitransient comparison, the streaming run and the Dask run (bool).
+        Mitsuba 3 + mitransient comparison, the streaming run and the Dask run (bool);
+        ``gpu``: only the GPU line (bool).
 
     Returns
     -------
     int
         0, the exit status.
     """
-    for line in bench.report(repeats=args.repeats, full=args.full):
+    for line in bench.report(repeats=args.repeats, full=args.full, gpu=args.gpu):
         print(line, flush=True)
     return 0

@@ -270,6 +270,10 @@ def _study(sub, commands):
     bch.add_argument("--full", action="store_true",
                      help="also the streaming run: 360 views x 1e6 rays (about a minute) "
                           "(default: off)")
+    bch.add_argument("--gpu", action="store_true",
+                     help="only the GPU line: Warp's first hits against the packet "
+                          "backend's on the same rays, on a CUDA device where there is one "
+                          "(needs meshladar[gpu]) (default: off)")
 
 
 def build_parser(commands) -> argparse.ArgumentParser:

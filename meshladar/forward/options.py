@@ -128,8 +128,10 @@ OPTIONS: tuple[Option, ...] = (
     Option("rays_per_bin", "positive_float", "rays per range-bin width",
            "1 in 3d, at least 128 across the target; 8 in slice", _MESH),
     Option("backend", "choice", "mesh model ray casting: packets (coherent packets, Embree 4 "
-           "from the embreex wheel), embreex (one ray at a time, the reference) or auto",
-           "auto: packets when they load", _MESH, choices=BACKENDS),
+           "from the embreex wheel), embreex (one ray at a time, the reference), warp "
+           "(NVIDIA Warp on a CUDA device; warp-cpu: its kernels on the CPU) or auto",
+           "auto: warp on a CUDA device, else packets when they load", _MESH,
+           choices=BACKENDS),
     Option("sampling", "choice", "rays at a seeded random offset in their cell (stratified: "
            "unbiased) or at cell centres", "stratified in 3d, regular in slice", _MESH,
            choices=SAMPLINGS),

@@ -2,9 +2,10 @@
 
 Each backend module fills :data:`REGISTRY` with a :class:`Backend` when it is imported:
 :mod:`.packets` (coherent Embree 4 packets through ctypes and numba) and
-:mod:`.embreex_backend` (embreex, one ray at a time: the reference). A new backend (a GPU
-one) is a module that calls :func:`register`; :data:`BUILTIN` names the modules loaded on
-first use, so numba and embreex load only when a ray is cast."""
+:mod:`.embreex_backend` (embreex, one ray at a time: the reference) and
+:mod:`.warp_backend` (NVIDIA Warp's ray queries, on a CUDA device or the CPU). A new
+backend is a module that calls :func:`register`; :data:`BUILTIN` names the modules loaded
+on first use, so numba, embreex and Warp load only when a ray is cast."""
 
 from __future__ import annotations
 
@@ -20,12 +21,15 @@ __all__ = ["BACKENDS", "Backend", "REGISTRY", "register", "backend", "choices",
            "resolve_backend"]
 
 #: The ``backend=`` choices; "auto" takes the first of :data:`PREFERENCE` that loads.
-BACKENDS = ("auto", "packets", "embreex")
-#: "auto"'s order of preference.
-PREFERENCE = ("packets", "embreex")
+BACKENDS = ("auto", "packets", "embreex", "warp", "warp-cpu")
+#: "auto"'s order of preference: a CUDA device through Warp where there is one (an
+#: optional backend: passed over in silence where it cannot load), then the packets.
+PREFERENCE = ("warp", "packets", "embreex")
 #: The built-in backends' modules, imported on first use (they register themselves).
 BUILTIN = {"packets": "meshladar.raytrace.packets",
-           "embreex": "meshladar.raytrace.embreex_backend"}
+           "embreex": "meshladar.raytrace.embreex_backend",
+           "warp": "meshladar.raytrace.warp_backend",
+           "warp-cpu": "meshladar.raytrace.warp_backend"}
 
 
 @dataclass(frozen=True)
@@ -35,7 +39,9 @@ class Backend:
     ``build(vertices, faces)`` makes a raw scene of float32 (n, 3) vertices at unit size and
     int32 (m, 3) faces, with embreex's ``run(origins, directions, output=, query=)``
     interface; ``available()`` says (True, where) or (False, why); ``fused`` whether the
-    weigh stage's fused loop (:mod:`meshladar.weighing.fused`) can cast with its scenes.
+    weigh stage's fused loop (:mod:`meshladar.weighing.fused`) can cast with its scenes;
+    ``optional`` whether "auto" passes over it in silence when it cannot load (hardware
+    that may be absent).
 
     Attributes
     ----------
@@ -50,12 +56,15 @@ class Backend:
         ``(False, why)``.
     fused : bool
         Whether the fused cast-weigh-bin loop can cast with its scenes (default False).
+    optional : bool
+        Whether "auto" skips it without a warning when it cannot load (default False).
     """
 
     name: str
     build: Callable
     available: Callable
     fused: bool = False
+    optional: bool = False
 
 
 #: Backends by name, filled by the backend modules themselves.
@@ -138,7 +147,8 @@ def resolve_backend(name):
     -------
     str
         The name of a backend whose ``available()`` is true here: ``name`` itself, or for
-        ``"auto"`` the first of :data:`PREFERENCE` (``"packets"``, then ``"embreex"``).
+        ``"auto"`` the first of :data:`PREFERENCE` (``"warp"`` where a CUDA device is
+        present, then ``"packets"``, then ``"embreex"``).
 
     Raises
     ------
@@ -150,8 +160,8 @@ def resolve_backend(name):
     Warns
     -----
     MeshladarWarning
-        Under ``"auto"``, when a preferred backend cannot load and a later one is used
-        (once per process).
+        Under ``"auto"``, when a preferred backend that is not optional cannot load and a
+        later one is used (once per process).
     """
     global _FALLBACK_SAID
     check_choice("backend", name, choices())
@@ -169,5 +179,6 @@ def resolve_backend(name):
         if name != "auto":
             raise ParameterError(f"backend={name!r} cannot load here ({reason}); use "
                                  "backend='embreex' or 'auto'")
-        why = reason
+        if not backend(candidate).optional:
+            why = reason
     raise ParameterError(f"no ray-casting backend loads here ({why})")

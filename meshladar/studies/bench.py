@@ -24,6 +24,7 @@ from ..sensor import Sensor
 from ..waveforms import GaussianPulse, receive
 from . import peer
 from ._bench_inverse import bench_fbp, bench_fit, bench_sirt, bench_tomography3d
+from .bench_gpu import bench_gpu, gpu_lines  # noqa: F401
 from .bench_mesh import (bench_dask, bench_fused,  # noqa: F401
                          bench_mesh, bench_single_view, bench_streaming)
 from .timing import icosphere_scene as _icosphere_scene
@@ -127,9 +128,10 @@ def bench_sensor(*, subdivisions=6, rays_per_view=1_000_000, views=4, repeats=2)
             "near_mrays": near["sino"].info["rays"] / t["near"] / 1e6,
             "receive_s": float(np.median(t_wave)), "receive_shape": sino.shape}
 
-def report(*, repeats=5, full=False):
+def report(*, repeats=5, full=False, gpu=False):
     """The benchmark report, line by line (what ``meshladar bench`` prints): each model and
-    FBP timed against its peer in the same process; ``full`` adds streaming and Dask.
+    FBP timed against its peer in the same process; ``full`` adds streaming and Dask;
+    ``gpu`` gives the GPU line alone (:func:`meshladar.studies.bench_gpu.bench_gpu`).
 
     The lines, in order: the analytic model (:func:`bench_analytic`), FBP against
     scikit-image (:func:`bench_fbp`; skipped with a line when it is not installed), the
@@ -147,12 +149,18 @@ def report(*, repeats=5, full=False):
         and the mesh engine's main case; the other cases use their own defaults.
     full : bool, keyword-only
         Add the peer renderer, the streaming run and the Dask run (default False).
+    gpu : bool, keyword-only
+        Only Warp's cast against the packet backend's, on a CUDA device where there is
+        one (default False).
 
     Yields
     ------
     str
         One line of the report, each as soon as its case is measured.
     """
+    if gpu:
+        yield from gpu_lines(repeats)
+        return
     yield (f"analytic model, 360 views x 512 bins (A/256), median of {repeats} runs after "
            "one warm-up")
     yield f"  {'case':<40} {'median [s]':>10} {'min [s]':>9} {'max [s]':>9}"
