@@ -268,6 +268,12 @@ def _flat_stage(job, scene, view, chunk):
                                     receiver)[::-1]
         back, n = cast_bin_grid(scene, grid, view.w, p.spacing, bins, receiver)
         return n, back
+    if scene.bins_hits and receiver is None and not wg.footprint:
+        # a backend with its own cast-weigh-bin kernel (Warp): every face's weight first
+        if wg.compiled:
+            face_weights(p.geo, wg.materials, view.w, p.area, chunk.weight, wg.power)
+        grid = ray_grid(p.geo, view.w, p.mode, p.spacing, p.z0_shifted, view.rng)
+        return len(grid.origins), scene.cast_bin(grid.origins, -view.w, bins)
     o, res = _cast(job, scene, view)
     return len(o), bin_flat_hits(res["primID"], res["tfar"], o, *bins)
 

@@ -127,6 +127,17 @@ class EmbreeScene:
         backend's, :mod:`meshladar.weighing.fused`)."""
         return getattr(self.scene, "fused", False)
 
+    @property
+    def bins_hits(self):
+        """Whether the backend weighs and bins its hits in its own kernel
+        (:meth:`cast_bin`: Warp's)."""
+        return hasattr(self.scene, "cast_bin")
+
+    def cast_bin(self, origins, direction, bins):
+        """The backend's own cast-weigh-bin kernel (see :attr:`bins_hits`) on ``origins``
+        as built (shifted coordinates), cast at unit size; returns the back-face hits."""
+        return self.scene.cast_bin(origins, direction, self.inverse, self.scale, bins)
+
     def run(self, origins, directions, columns=0, **kwargs):
         """The backend's ``run`` at unit size; ``columns`` (the rows' length of a grid of
         rays) lets the packet backend cast it in tiles, and is dropped for the others."""

@@ -95,7 +95,56 @@ def _make_kernels(wp):
         else:
             out[i] = -1
 
-    return {"first_hits": first_hits, "blocked": blocked}
+    @wp.func
+    def bin_of(r: wp.float64, edges: wp.array(dtype=wp.float64), inv: wp.float64):
+        # the bin k with edges[k] <= r < edges[k + 1]: guessed from uniform edges, checked,
+        # by bisection when off (meshladar.weighing._kernels._bin_of)
+        nb = edges.shape[0] - 1
+        k = wp.clamp(int((r - edges[0]) * inv), 0, nb - 1)
+        if edges[k] <= r and r < edges[k + 1]:
+            return k
+        lo = int(0)
+        hi = nb
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            if edges[mid] <= r:
+                lo = mid
+            else:
+                hi = mid
+        return lo
+
+    @wp.kernel
+    def cast_bin(mesh: wp.uint64, o: wp.array(dtype=wp.vec3), d: wp.vec3, inverse: float,
+                 scale: float, plane_d: wp.array(dtype=wp.float64),
+                 normals: wp.array(dtype=wp.vec3d), w: wp.vec3d, start: wp.float64,
+                 edges: wp.array(dtype=wp.float64), ignore_back: int,
+                 weight: wp.array(dtype=wp.float64), out: wp.array(dtype=wp.float64),
+                 back: wp.array(dtype=wp.int32)):
+        # one ray: cast, then weigh and bin its hit as weighing._kernels.bin_flat_hits
+        # does (the range recomputed in float64 from the face's plane)
+        i = wp.tid()
+        q = wp.mesh_query_ray(mesh, o[i] * inverse, d, 3.0e38)
+        if not q.result:
+            return
+        p = q.face
+        n = normals[p]
+        x = wp.vec3d(wp.float64(o[i][0]), wp.float64(o[i][1]), wp.float64(o[i][2]))
+        c = n[0] * w[0] + n[1] * w[1] + n[2] * w[2]
+        t = wp.float64(q.t * scale)
+        if wp.abs(c) > wp.float64(1.0e-6):
+            t = (plane_d[p] - (n[0] * x[0] + n[1] * x[1] + n[2] * x[2])) / (-c)
+        r = start + (t - (x[0] * w[0] + x[1] * w[1] + x[2] * w[2]))
+        if c < wp.float64(0.0):
+            wp.atomic_add(back, 0, 1)
+            if ignore_back != 0:
+                return
+        nb = edges.shape[0] - 1
+        if r < edges[0] or r >= edges[nb]:
+            return
+        inv = wp.float64(nb) / (edges[nb] - edges[0])
+        wp.atomic_add(out, bin_of(r, edges, inv), weight[p])
+
+    return {"first_hits": first_hits, "blocked": blocked, "cast_bin": cast_bin}
 
 
 class WarpScene:
@@ -168,6 +217,44 @@ class WarpScene:
         wp.launch(self._kernels["first_hits"], dim=n, inputs=args + res, device=dev)
         prim, tfar, u, v = (a.numpy() for a in res)
         return {"primID": prim, "tfar": tfar, "u": u, "v": v}
+
+    def cast_bin(self, origins, direction, inverse, scale, bins):
+        """Cast, weigh and bin in one kernel: monostatic, flat normals, point bins. Each
+        ray from ``origins`` (float32, as built; cast × ``inverse``) along ``direction``
+        (3,) adds its face's ``bins.weight`` (every face's, for this view) to the bin of
+        its range, recomputed in float64 from the face's plane as
+        :func:`meshladar.weighing._kernels.bin_flat_hits` does; only the bins come back.
+
+        Parameters
+        ----------
+        origins : (n, 3) float32 numpy.ndarray
+            The grid's origins in shifted coordinates.
+        direction : (3,) array_like
+            Every ray's direction (−w).
+        inverse, scale : float
+            The scene's unit-size factor and its inverse (powers of two).
+        bins : meshladar.forward.job.FlatBins
+            ``plane_d``, ``face_normals``, ``w``, ``start``, ``edges``, ``ignore_back``,
+            ``weight`` (read) and ``out`` (added into).
+
+        Returns
+        -------
+        int
+            The back-face hits.
+        """
+        wp, dev = self._wp, self.device
+        arr = functools.partial(wp.array, device=dev)
+        out = arr(np.zeros(bins.out.shape), dtype=wp.float64)
+        back = wp.zeros(1, dtype=wp.int32, device=dev)
+        wp.launch(self._kernels["cast_bin"], dim=len(origins), device=dev, inputs=[
+            self.mesh.id, arr(np.ascontiguousarray(origins, np.float32), dtype=wp.vec3),
+            wp.vec3(*np.asarray(direction, np.float32)), float(inverse), float(scale),
+            arr(bins.plane_d, dtype=wp.float64), arr(bins.face_normals, dtype=wp.vec3d),
+            wp.vec3d(*np.asarray(bins.w, np.float64)), float(bins.start),
+            arr(bins.edges, dtype=wp.float64), int(bins.ignore_back),
+            arr(bins.weight, dtype=wp.float64), out, back])
+        bins.out[...] += out.numpy()
+        return int(back.numpy()[0])
 
 
 def build_cpu(vertices, faces):

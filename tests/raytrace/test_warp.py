@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import importlib.util
 import warnings
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -74,7 +75,13 @@ def test_first_hits_are_the_packet_backends_ray_for_ray():
 
 @pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # coarse on purpose
 @pytest.mark.parametrize("normals, rtol", [("flat", FLAT_RTOL), ("smooth", SMOOTH_RTOL)])
-def test_sinograms_are_the_packet_backends(normals, rtol):
+def test_sinograms_are_the_packet_backends(normals, rtol, monkeypatch):
+    # flat normals: cast, weigh and bin in Warp's one kernel (only the bins come back);
+    # smooth ones: Warp's hits through the compiled per-hit binning
+    kernels = []
+    spy = warp_backend.WarpScene.cast_bin
+    monkeypatch.setattr(warp_backend.WarpScene, "cast_bin",
+                        lambda self, *a: kernels.append(1) or spy(self, *a))
     parts = [ml.meshes.sphere((0.0, 0.0, 0.0), 0.4, 0, subdivisions=3),
              ml.meshes.sphere((0.9, 0.1, 0.0), 0.3, 1, subdivisions=2)]
     scene = ml.Scene.from_parts(parts, [ALUMINUM, DARK_GRAY])
@@ -82,7 +89,34 @@ def test_sinograms_are_the_packet_backends(normals, rtol):
     a = ml.simulate(scene, ladar, model="mesh", normals=normals, backend="packets")
     b = ml.simulate(scene, ladar, model="mesh", normals=normals, backend="warp-cpu")
     assert b.info["backend"] == "warp-cpu" and b.info["rays"] == a.info["rays"]
+    assert len(kernels) == (5 if normals == "flat" else 0)
     np.testing.assert_allclose(b.values, a.values, rtol=0, atol=rtol * a.values.max())
+
+
+@pytest.mark.parametrize("options", [
+    {"back_faces": "ignore", "radiometry": "power"},
+    {"sampling": "regular", "jobs": 2},
+    {"mode": "slice", "z0": 505.0},
+], ids=["ignore-power", "regular-2-jobs", "slice"])
+def test_warps_kernel_bins_as_the_packets_far_from_the_origin(options):
+    # a big sphere far off (a real unit-size rescaling), an open half-sphere's back faces,
+    # a GGX coating (no compiled kernel): the bins of Warp's kernel against the packets'
+    part = ml.meshes.sphere((1e3, -2e3, 5e2), 37.0, 0, subdivisions=4)
+    keep = part.triangles.mean(axis=1)[:, 2] > 5e2 - 10.0    # open: back faces seen
+    half = replace(part, faces=part.faces[keep], material=part.material[keep], name="cap")
+    scene = ml.Scene.from_parts([half, ml.meshes.sphere((1e3 + 80, -2e3, 5e2), 20.0, 1,
+                                                        subdivisions=3)],
+                                [DARK_GRAY, ml.brdf.GGX(alpha=0.3)])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ml.errors.MeshladarWarning)    # far-off bins
+        views = ({"angles_deg": [0.0, 70.0, 200.0]} if options.get("mode") == "slice"
+                 else {"view_vectors": ml.meshes.fibonacci_sphere(4)})
+        ladar = ml.Ladar.covering(scene, n_bins=40, **views)
+        a = ml.simulate(scene, ladar, model="mesh", backend="packets", **options)
+        b = ml.simulate(scene, ladar, model="mesh", backend="warp-cpu", **options)
+    assert a.values.max() > 0 and b.info["rays"] == a.info["rays"]
+    assert b.info["back_face_hits"] == a.info["back_face_hits"]
+    np.testing.assert_allclose(b.values, a.values, rtol=0, atol=FLAT_RTOL * a.values.max())
 
 
 def test_warp_without_a_cuda_device_is_refused_in_one_line():
@@ -116,6 +150,9 @@ def test_the_bench_gpu_line_times_warp_against_the_packets_on_the_same_rays(caps
     assert g["rays"] > 2 * 15_000 and g["same_face"] > 1 - MAX_OTHER_FACE
     assert g["warp_mrays"] > 0 and g["packets_mrays"] > 0
     np.testing.assert_allclose(g["warp_over_packets"], g["warp_mrays"] / g["packets_mrays"])
+    np.testing.assert_allclose(g["bins_warp_over_packets"],
+                               g["warp_bins_mrays"] / g["packets_bins_mrays"])
     assert main(["bench", "--gpu", "--repeats", "1"]) == 0
     out = capsys.readouterr().out.splitlines()
     assert out[0].startswith("first hits, 81920 triangles") and "Mrays/s" in out[0]
+    assert out[1].startswith("  rays to bins (flat normals, 512 bins): warp")
