@@ -30,7 +30,7 @@ def test_a_registered_backend_is_chosen_by_name_and_gives_the_references_numbers
 
     monkeypatch.setitem(backends.REGISTRY, "counting", backends.Backend(
         "counting", lambda v, f: Counting(reference.build(v, f)), lambda: (True, "test")))
-    assert backends.choices() == ("auto", "packets", "embreex", "counting")
+    assert backends.choices() == ("auto", "packets", "embreex", "warp", "warp-cpu", "counting")
     scene = ml.Scene.from_mesh(trimesh.creation.icosphere(subdivisions=2),
                                material=ml.materials.DARK_GRAY)
     ladar = ml.Ladar.covering(scene, n_bins=16, angles_deg=[0.0, 90.0])
@@ -42,5 +42,5 @@ def test_a_registered_backend_is_chosen_by_name_and_gives_the_references_numbers
 
 def test_an_unregistered_backend_names_the_registered_ones():
     with pytest.raises(ParameterError, match=r"backend must be one of \('auto', 'packets', "
-                                             r"'embreex'\); got 'warp'"):
-        backends.resolve_backend("warp")
+                                             r"'embreex', 'warp', 'warp-cpu'\); got 'optix'"):
+        backends.resolve_backend("optix")
