@@ -15,6 +15,7 @@ from scipy.optimize import least_squares
 
 from .._validate import check_real, short
 from ..errors import EnergyConservationWarning, ParameterError
+from ._identify import deviance
 from ._params import _jacobian, _materials
 from ._tables import _table
 
@@ -126,30 +127,48 @@ def _weighted_jacobian(model, sw, z):
     return model.jacobian(z) * sw[:, None]
 
 
-def solve(model, y, x_start):
-    """IRLS from ``x_start`` to data ``y``: (x, model values, solver evaluations)."""
+def solve(model, y, x_start, tol=1e-8):
+    """IRLS from ``x_start`` to data ``y``: (x, model values, solver evaluations); ``tol``
+    is each weighted least-squares solve's relative tolerance (ftol and xtol).
+
+    Counts stop when the reweighting moves no parameter by 1 % of its σ (:func:`_settled`),
+    or when a reweighted solve raises the deviance (:data:`RISE_TOL`): IRLS can cycle
+    between two points (a glint's width and specular share trading places at 10⁴
+    photoelectrons), and each outer iteration's deviance is compared with the best so far,
+    whose point is returned."""
     pr = model.problem
     x = x_start.copy()
     iterations = 0
     m = model.values(x)
     if m is None:
         raise ParameterError("the starting coatings are invalid (initial=)")
+    best = None
     for _ in range(pr.max_iter):
         V = variance(m, pr.noise, pr.M)
         sw = 1.0 / np.sqrt(V)
         sol = least_squares(functools.partial(_residual, model, y, sw), x,
                             jac=functools.partial(_weighted_jacobian, model, sw),
                             bounds=(pr.low, pr.high), x_scale="jac", method="trf",
-                            max_nfev=200)
+                            ftol=tol, xtol=tol, max_nfev=200)
         iterations += sol.nfev
         dx = np.abs(sol.x - x)
         x = sol.x
         m = model.values(x)
         if pr.noise == "gaussian":
             break
+        dev = deviance(y, m, pr.M)
+        if best is not None and dev > best[0] + RISE_TOL * max(abs(best[0]), 1.0):
+            return best[1], best[2], iterations     # a cycle: the best point seen
+        if best is None or dev < best[0]:
+            best = (dev, x, m)
         if _settled(sol.jac, dx, x, len(pr.params)):
             break
     return x, m, iterations
+
+
+#: A reweighted solve whose count deviance exceeds the best so far by more than this
+#: fraction of it stops the iteration (round-off near the optimum is ~1e-15 of it).
+RISE_TOL = 1e-9
 
 
 def _settled(Jw, dx, x, n):

@@ -33,6 +33,10 @@ from ._params import _materials
 
 #: An end is accepted when its signed root is within this fraction of z.
 ROOT_TOL = 0.01
+#: A profile refit's relative tolerance (ftol and xtol of its solves, _irls.solve; the fit
+#: itself uses 1e-8): on the pair of coatings at 10⁴ photoelectrons the ends agree with
+#: 1e-8's to five digits, far inside ROOT_TOL, at 15 % fewer evaluations.
+REFIT_TOL = 1e-6
 #: The most profile refits per end.
 MAX_REFITS = 12
 
@@ -104,7 +108,7 @@ class Profile:
             m = _irls.Model(held).values(np.zeros(0))
         else:
             start = np.clip(self.starts[near], held.low, held.high)
-            self.starts[v], m, _ = _irls.solve(_irls.Model(held), held.data, start)
+            self.starts[v], m, _ = _irls.solve(_irls.Model(held), held.data, start, REFIT_TOL)
         if m is None:
             return math.inf
         return max(misfit(held, m, self.sigma2) - self.base, 0.0)
