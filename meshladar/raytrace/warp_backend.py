@@ -27,8 +27,7 @@ import numpy as np
 
 from .backends import Backend, register
 
-__all__ = ["build_cpu", "build_cuda", "available_cpu", "available_cuda", "HIT_RTOL",
-           "WarpScene"]
+__all__ = ["available_cpu", "available_cuda", "HIT_RTOL", "WarpScene"]
 
 #: Hit distances agree with Embree's to this relative tolerance (a few float32 ulps).
 HIT_RTOL = 1e-5
@@ -149,7 +148,8 @@ def _make_kernels(wp):
 
 class WarpScene:
     """One triangle mesh in Warp's BVH on ``device`` ("cpu" or "cuda:0"), behind embreex's
-    ``run`` interface.
+    ``run`` interface: the backends' ``build`` (backend "warp" on "cuda:0", "warp-cpu" on
+    "cpu").
 
     Parameters
     ----------
@@ -257,42 +257,6 @@ class WarpScene:
         return int(back.numpy()[0])
 
 
-def build_cpu(vertices, faces):
-    """A Warp scene on the CPU (backend "warp-cpu").
-
-    Parameters
-    ----------
-    vertices : (n, 3) numpy.ndarray
-        float32 corners at unit size, as a backend's ``build`` receives them.
-    faces : (m, 3) numpy.ndarray
-        int32 vertex indices.
-
-    Returns
-    -------
-    WarpScene
-        On device "cpu".
-    """
-    return WarpScene(vertices, faces, "cpu")
-
-
-def build_cuda(vertices, faces):
-    """A Warp scene on the first CUDA device (backend "warp").
-
-    Parameters
-    ----------
-    vertices : (n, 3) numpy.ndarray
-        float32 corners at unit size, as a backend's ``build`` receives them.
-    faces : (m, 3) numpy.ndarray
-        int32 vertex indices.
-
-    Returns
-    -------
-    WarpScene
-        On device "cuda:0".
-    """
-    return WarpScene(vertices, faces, "cuda:0")
-
-
 _INSTALL = "warp-lang is not installed (pip install 'meshladar[gpu]')"
 
 
@@ -338,5 +302,6 @@ def available_cuda():
     return True, f"warp-lang {wp.__version__} on {wp.get_device('cuda:0').name}"
 
 
-register(Backend("warp", build_cuda, available_cuda, optional=True))
-register(Backend("warp-cpu", build_cpu, available_cpu))
+register(Backend("warp", functools.partial(WarpScene, device="cuda:0"), available_cuda,
+                 optional=True))
+register(Backend("warp-cpu", functools.partial(WarpScene, device="cpu"), available_cpu))
