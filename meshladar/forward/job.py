@@ -226,14 +226,8 @@ def _smooth_stage(job, scene, view, chunk):
         face_footprints(p.geo, view.w, p.mode, p.spacing, chunk.footprints)
     if job.fused:
         # packets: grid, cast, weigh and bin in one loop, the barycentrics kept per band
-        bins = _bins(job, view, chunk, start)
-        smooth = (p.geo.corner, MIN_COS_FACET)
-        grid = grid_plan(p.geo, view.w, p.mode, p.spacing, p.z0_shifted, view.rng)
-        if job.row_jobs > 1:
-            return _rows_on_threads(scene, grid, view.w, p.spacing, bins, job.row_jobs,
-                                    None, smooth)[::-1]
-        back, n = cast_bin_grid(scene, grid, view.w, p.spacing, bins, None, smooth)
-        return n, back
+        return _fused_view(job, scene, view, _bins(job, view, chunk, start), None,
+                           (p.geo.corner, MIN_COS_FACET))
     o, res = _cast(job, scene, view)
     back = bin_smooth_hits(
         res["primID"], res["tfar"], res["u"], res["v"], o, p.geo.plane_d,
@@ -262,12 +256,7 @@ def _flat_stage(job, scene, view, chunk):
     bins = _bins(job, view, chunk, start)
     if job.fused:
         # packets: grid, cast, weigh and bin in one loop, no per-ray arrays
-        grid = grid_plan(p.geo, view.w, p.mode, p.spacing, p.z0_shifted, view.rng)
-        if job.row_jobs > 1:
-            return _rows_on_threads(scene, grid, view.w, p.spacing, bins, job.row_jobs,
-                                    receiver)[::-1]
-        back, n = cast_bin_grid(scene, grid, view.w, p.spacing, bins, receiver)
-        return n, back
+        return _fused_view(job, scene, view, bins, receiver, None)
     if scene.bins_hits and receiver is None and not wg.footprint:
         # a backend with its own cast-weigh-bin kernel (Warp): every face's weight first
         if wg.compiled:
@@ -276,6 +265,18 @@ def _flat_stage(job, scene, view, chunk):
         return len(grid.origins), scene.cast_bin(grid.origins, -view.w, bins)
     o, res = _cast(job, scene, view)
     return len(o), bin_flat_hits(res["primID"], res["tfar"], o, *bins)
+
+
+def _fused_view(job, scene, view, bins, receiver, smooth):
+    """One view through the fused loop: its grid cast, weighed and binned, on one thread
+    or (``job.row_jobs`` > 1) with its rows split over threads. Returns (rays, back)."""
+    p = job.plan
+    grid = grid_plan(p.geo, view.w, p.mode, p.spacing, p.z0_shifted, view.rng)
+    if job.row_jobs > 1:
+        return _rows_on_threads(scene, grid, view.w, p.spacing, bins, job.row_jobs,
+                                receiver, smooth)[::-1]
+    back, n = cast_bin_grid(scene, grid, view.w, p.spacing, bins, receiver, smooth)
+    return n, back
 
 
 def _rows_on_threads(scene, grid, w, spacing, bins, row_jobs, receiver=None, smooth=None):
