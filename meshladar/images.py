@@ -13,7 +13,6 @@ from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
-from scipy.ndimage import map_coordinates
 
 from . import plotting
 from ._summary import table, text
@@ -133,6 +132,8 @@ class Image:
         p = np.asarray(points, dtype=np.float64)
         col = (p[..., 0] - self.x[0]) / self.pixel_size
         row = (p[..., 1] - self.y[0]) / self.pixel_size
+        from scipy.ndimage import map_coordinates     # here: a slow import
+
         return map_coordinates(self.values, [row.ravel(), col.ravel()], order=1,
                                mode="constant", cval=0.0).reshape(p.shape[:-1])
 
@@ -247,6 +248,8 @@ class Volume:
         p = np.atleast_2d(np.asarray(points, np.float64))
         idx = [(p[:, 2 - a] - ax[0]) / sp for a, (ax, sp) in
                enumerate(zip((self.z, self.y, self.x), self.spacing[::-1]))]
+        from scipy.ndimage import map_coordinates
+
         return map_coordinates(self.values, idx, order=1, mode="constant", cval=0.0)
 
     def radial_profile(self, radii, center=(0.0, 0.0, 0.0), n_directions=2000):

@@ -18,10 +18,11 @@ from ._summary import listing, material_name, table, text
 from ._validate import check_real
 from .errors import MeshladarWarning, ParameterError, user_stacklevel
 from .meshes import convex_hull, inspect_parts, load_parts, prism
+from ._extents import HULL_MIN_VIEWS, circle_about_box, point_ranges, shape_ranges
 from .precision import OVERLAP_RTOL
-from .shapes import Disk, Ellipse, Shape, to_frame
+from .shapes import Disk, Ellipse, Shape
 
-__all__ = ["Shape", "Disk", "Ellipse", "Scene", "OVERLAP_RTOL"]
+__all__ = ["Shape", "Disk", "Ellipse", "Scene", "OVERLAP_RTOL", "HULL_MIN_VIEWS"]
 
 
 class Scene:
@@ -284,8 +285,7 @@ class Scene:
         """
         if not self._parts:
             raise ParameterError("bounds() is for mesh scenes; use bounding_circle()")
-        v = np.concatenate([p.vertices for p in self._parts])
-        return np.stack([v.min(axis=0), v.max(axis=0)])
+        return np.stack([self._vertices.min(axis=0), self._vertices.max(axis=0)])
 
     def hull_points(self) -> np.ndarray:
         """(k, 3) vertices of the convex hull of a mesh scene (all vertices when the hull is
@@ -329,12 +329,44 @@ class Scene:
             derived[key] = make()
         return derived[key]
 
+    def support_points(self, n_views=None) -> np.ndarray:
+        """(k, 3) points of a mesh scene among which every extreme of a linear (or, from a
+        point outside the mesh, perspective) function of position is attained, for
+        ``n_views`` views: the hull's vertices (:meth:`hull_points`) when known already or
+        the views are many (≥ ``HULL_MIN_VIEWS``, 512), else every vertex (the same
+        extremes; a hull costs as much as thousands of projections of every vertex).
+
+        Parameters
+        ----------
+        n_views : int, optional
+            How many views the points will serve. Default None: as many as make the hull
+            worth building.
+
+        Returns
+        -------
+        (k, 3) numpy.ndarray
+            The points, scene units (a view of the scene's own arrays: not to be written).
+
+        Raises
+        ------
+        ParameterError
+            For an analytic scene.
+        """
+        if not self._parts:
+            raise ParameterError("support_points() is for mesh scenes")
+        if "_hull" in self.__dict__ or n_views is None or n_views >= HULL_MIN_VIEWS:
+            return self._hull
+        return self._vertices
+
+    @cached_property
+    def _vertices(self) -> np.ndarray:
+        return np.concatenate([p.vertices for p in self._parts])
+
     @cached_property
     def _hull(self) -> np.ndarray:
-        # one part: the part's own hull, shared by every scene of it (a coating sweep)
-        if len(self._parts) == 1:
+        if len(self._parts) == 1:       # the part's own: shared by every scene of it
             return self._parts[0].hull_points
-        return convex_hull(np.concatenate([p.vertices for p in self._parts]))
+        return convex_hull(self._vertices)
 
     def view_ranges(self, view_vectors) -> tuple[np.ndarray, np.ndarray]:
         """(nearest, farthest) range r = −p·w of the scene in each view, two (n_views,)
@@ -351,28 +383,13 @@ class Scene:
         -------
         nearest, farthest : (n_views,) numpy.ndarray
             The smallest and largest range of the scene in each view, scene units: over
-            the hull's vertices for a mesh scene, over the shapes' exact boundaries for an
-            analytic one.
+            its :meth:`support_points` for a mesh scene, over the shapes' exact boundaries
+            for an analytic one.
         """
         w = np.asarray(view_vectors, dtype=np.float64).reshape(-1, 3)
         if self._parts:
-            pts = self.hull_points()
-            lo, hi = np.empty(len(w)), np.empty(len(w))
-            block = max(1, min(256, int(4e6 // len(pts))))  # bounded memory: hull × block
-            for start in range(0, len(w), block):
-                r = -(pts @ w[start:start + block].T)
-                lo[start:start + block], hi[start:start + block] = r.min(axis=0), r.max(axis=0)
-            return lo, hi
-        lo, hi = np.full(len(w), np.inf), np.full(len(w), -np.inf)
-        for s in self._shapes:
-            # an ellipse's support along −w: centre's range ∓ its half-width along w
-            a, b = s.axes
-            wx, wy = w[:, 0], w[:, 1]
-            xl, yl = to_frame(s.angle, wx, wy)
-            half = np.hypot(a * xl, b * yl)
-            rc = -(s.center[0] * wx + s.center[1] * wy)
-            lo, hi = np.minimum(lo, rc - half), np.maximum(hi, rc + half)
-        return lo, hi
+            return point_ranges(self.support_points(len(w)), w)
+        return shape_ranges(self._shapes, w)
 
     def range_span(self, view_vectors) -> tuple[float, float]:
         """(nearest, farthest) range any point of the scene takes over all the views.
@@ -403,17 +420,9 @@ class Scene:
             (every vertex, for a mesh scene), scene units.
         """
         if self._parts and not self._shapes:
-            b = self.bounds()
-            c = 0.5 * (b[0, :2] + b[1, :2])
-            v = np.concatenate([p.vertices for p in self._parts])[:, :2]
-            return (float(c[0]), float(c[1])), float(np.max(np.hypot(*(v - c).T)))
-        pts = np.array([s.center for s in self._shapes])
-        rad = np.array([s.bounding_radius for s in self._shapes])
-        lo = (pts - rad[:, None]).min(axis=0)
-        hi = (pts + rad[:, None]).max(axis=0)
-        c = 0.5 * (lo + hi)
-        r = float(np.max(np.hypot(*(pts - c).T) + rad))
-        return (float(c[0]), float(c[1])), r
+            return circle_about_box(self._vertices[:, :2], np.zeros(len(self._vertices)))
+        return circle_about_box(np.array([s.center for s in self._shapes]),
+                                np.array([s.bounding_radius for s in self._shapes]))
 
     def _summary(self):
         mats = listing(dict.fromkeys(material_name(m) for m in self.materials))

@@ -11,7 +11,6 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import optimize
 
 from ._validate import check_name, check_real, finite_array
 from .brdf import BRDF, check_brdf
@@ -286,6 +285,8 @@ def _overlap(p: Shape, q: Shape) -> bool:
         return False
     if p.implicit(q.center) < 1.0 or q.implicit(p.center) < 1.0:
         return True
+    from scipy import optimize          # here: a slow import, for overlapping candidates only
+
     for a, b in ((p, q), (q, p)):
         t = np.linspace(0.0, 2.0 * math.pi, 1025)
         f = b.implicit(a.boundary(t))

@@ -31,6 +31,26 @@ def test_import_is_light():
     assert out == "", f"import meshladar pulled in: {out}"
 
 
+#: What a one-view `meshladar simulate` of a mesh file does not need, so does not import:
+#: the studies, the fits, scipy's statistics and matplotlib (trimesh, which reads the file,
+#: brings scipy's optimisers, graphs and spatial trees with it).
+NOT_FOR_SIMULATE = ("meshladar.studies", "meshladar.fit", "scipy.stats", "matplotlib")
+
+
+def test_a_one_view_simulate_imports_only_what_it_uses(tmp_path):
+    """The command line loads a command's heavy modules when that command runs: a mesh
+    simulated from one view (the cold start of the command line) imports none of
+    NOT_FOR_SIMULATE."""
+    ball, result = str(tmp_path / "ball.stl"), str(tmp_path / "ball.npz")
+    _run("-c", f"import trimesh; trimesh.creation.icosphere(2).export({ball!r})")
+    code = ("import sys; from meshladar.cli import main; "
+            f"assert main(['simulate', {ball!r}, '--material', 'dark_gray', '--views', '1', "
+            f"'-o', {result!r}]) == 0; "
+            f"print(','.join(m for m in {NOT_FOR_SIMULATE!r} if m in sys.modules))")
+    out = _run("-c", code).stdout
+    assert out.splitlines()[-1] == "", f"simulate pulled in: {out}"
+
+
 def test_subpackages_install_from_top_level_folders():
     import meshladar.phantoms
     import meshladar.viz

@@ -11,9 +11,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .. import materials, phantoms, plotting, studies
-from ..studies import bench, paper
-from ..studies import reconstruction as study
+import meshladar as _ml   # its studies load when a study, paper or bench command runs
+
+from .. import materials, phantoms, plotting
 from .._validate import check_size
 from ..errors import ParameterError
 from ..io import write_text_atomic
@@ -238,11 +238,11 @@ def cmd_study(args) -> int:
                                  f"{args.kind} study does not use it")
     if args.kind == "tomography3d":
         return _study_3d(args)
-    result = studies.faceting_study(args.setting, progress=not args.quiet,
+    result = _ml.studies.faceting_study(args.setting, progress=not args.quiet,
                                     run_dir=os.path.join(args.outdir, "run"))
-    files = studies.save_study(result, args.outdir)
+    files = _ml.studies.save_study(result, args.outdir)
     figs = plotting.viz("studies").draw(args.outdir)
-    print(studies.report(result))
+    print(_ml.studies.report(result))
     for p in files + figs:
         print(f"  wrote {p}")
     return 0
@@ -268,7 +268,7 @@ def _study_3d(args) -> int:
     setting = _STUDY_3D[args.setting]
     views, size, smooth, rpb = setting.views, setting.size, setting.smooth, \
         setting.rays_per_bin
-    metrics, volumes = paper.run_3d(views=views, size=size, smooth=smooth,
+    metrics, volumes = _ml.studies.paper.run_3d(views=views, size=size, smooth=smooth,
                                     rays_per_bin=rpb)
     os.makedirs(args.outdir, exist_ok=True)
     doc = {"setting": args.setting, "views": views, "size": size, "smooth_bins": smooth,
@@ -291,8 +291,9 @@ _STUDY_COLUMNS = ["phantom", "spacing_deg", "method", "photons", "speckle_cells"
 def _study_reconstruction(args) -> int:
     """The reconstruction study (meshladar.studies.reconstruction): its table as CSV and JSON,
     the 1° and 10° images of every method as a figure."""
-    rows, images = study.run(args.setting, photons=args.photons, speckle_cells=args.speckle,
-                             background=args.background or 0.0)
+    rows, images = _ml.studies.reconstruction.run(
+        args.setting, photons=args.photons, speckle_cells=args.speckle,
+        background=args.background or 0.0)
     os.makedirs(args.outdir, exist_ok=True)
     path = os.path.join(args.outdir, "reconstruction.json")
     write_text_atomic(path, json.dumps({"setting": args.setting, "rows": rows},
@@ -306,7 +307,7 @@ def _study_reconstruction(args) -> int:
     write_text_atomic(table, buf.getvalue())
     (png,) = plotting.viz("studies").draw_reconstruction(images, args.outdir)
     print(f"reconstruction study ({args.setting})")
-    print("\n".join(study.report(rows)))
+    print("\n".join(_ml.studies.reconstruction.report(rows)))
     print(f"  wrote {path}\n  wrote {table}\n  wrote {png}")
     return 0
 
@@ -328,6 +329,7 @@ def cmd_bench(args) -> int:
     int
         0, the exit status.
     """
-    for line in bench.report(repeats=args.repeats, full=args.full, gpu=args.gpu):
+    for line in _ml.studies.bench.report(repeats=args.repeats, full=args.full,
+                                         gpu=args.gpu):
         print(line, flush=True)
     return 0

@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.stats import norm
+from scipy.special import ndtri
 
 from .._summary import table as _html_table
 from .._summary import text as _text
@@ -158,7 +158,7 @@ class CoatingFit:
         """
         level = check_real("level", level, low=0.0, high=1.0, low_open=True, high_open=True)
         method = check_choice("method", method, ("normal", "profile"))
-        z = float(norm.ppf(0.5 + 0.5 * level))
+        z = float(ndtri(0.5 + 0.5 * level))
         low, high = _profile.normal(self.estimate, self.stderr, self.info.get("positive"), z)
         if method == "normal":
             return low, high

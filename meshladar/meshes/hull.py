@@ -9,7 +9,6 @@ then runs on at most 200 000 points.
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import ConvexHull, QhullError
 
 from .directions import fibonacci_sphere
 
@@ -50,6 +49,8 @@ def convex_hull(v):
         Read-only and C-contiguous, of ``v``'s dtype; always a new array (where no point
         was dropped, a copy of ``v``), so ``v`` and its flags are left as they were.
     """
+    from scipy.spatial import ConvexHull, QhullError    # here: a slow import, seldom needed
+
     hull = v
     if len(v) > _HULL_FILTER_ABOVE:
         hull = _outside_extremes(v)
@@ -81,6 +82,8 @@ def _outside_extremes(v):
         better = top > best
         best[better], arg[better] = top[better], a + k[better]
     ext = np.unique(arg)
+    from scipy.spatial import ConvexHull, QhullError
+
     try:
         eq = ConvexHull(v[ext]).equations               # a·x + b <= 0 inside
     except (QhullError, ValueError):

@@ -43,7 +43,10 @@ class Geometry:
         self.face_normals = np.concatenate([p.face_normals_areas()[0] for p in parts])
         # each face's plane n·p = d in shifted coordinates (float64), for exact hit distances
         self.plane_d = np.einsum("ij,ij->i", self.face_normals, shifted[self.faces[:, 0]])
-        self.hull = scene.hull_points() - self.center
+        # every extreme of a grid's extent is attained among these points (shifted): every
+        # vertex, or the hull's vertices once known (for_views)
+        self.support = self.shifted
+        self.for_views(scene, 0)
         self.normals = normals
         self.corner = None
         if normals == "smooth":
@@ -55,6 +58,13 @@ class Geometry:
                                  f"{missing[0]!r} has no exact normal (use 'flat' or 'smooth')")
         self.key = _digest(self.vertices, self.faces)
 
+    def for_views(self, scene, n_views):
+        """Take the extents of ``n_views`` views' grids over the scene's
+        :meth:`~meshladar.scene.Scene.support_points` for that many views (its hull's
+        vertices when known or when the views are many, else every vertex)."""
+        points = scene.support_points(n_views)
+        if len(points) < len(self.support):
+            self.support = points - self.center
 
 
 def geometry(scene: Scene, normals: str) -> Geometry:

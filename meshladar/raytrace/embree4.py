@@ -4,8 +4,8 @@ from numba-jitted loops that release the GIL (:mod:`.embree4_kernels`).
 
 No compiler is needed: ``pip install meshladar`` brings embreex, whose wheel carries the
 library. :func:`library` finds it (``MESHLADAR_EMBREE4`` overrides the path), checks that it
-is Embree 4 and that it answers packets of every width as these layouts expect, and reads
-the packet width the CPU runs natively (16 with AVX-512, 8 with AVX2). Scenes share their
+is Embree 4, reads the packet width the CPU runs natively (16 with AVX-512, 8 with AVX2)
+and checks that it answers packets of that width as these layouts expect. Scenes share their
 buffers with numpy (no per-element copy). Hits equal embreex's (the same library, the same
 robust intersection) except, rarely, which of two triangles a ray exactly along their
 shared edge reports. The loop that casts, weighs and bins a view in one pass is the weigh
@@ -22,7 +22,9 @@ import numpy as np
 from .embree4_ctypes import (EmbreeLib, RTC_BUFFER_TYPE_INDEX, RTC_BUFFER_TYPE_VERTEX,
                              RTC_FORMAT_FLOAT3, RTC_FORMAT_UINT3, RTC_GEOMETRY_TYPE_TRIANGLE,
                              RTC_RAY_QUERY_FLAG_COHERENT, RTC_RAY_QUERY_FLAG_INCOHERENT,
-                             RTC_SCENE_FLAG_ROBUST, library_candidates)
+                             RTC_SCENE_FLAG_ROBUST, _ALIGN, _ARGS_OFF, _CTX_OFF, _DIR_Z,
+                             _GEOMID, _ID, _INSTID, _MASK, _ORG_X, _ORG_Y, _ORG_Z, _PRIMID,
+                             _TFAR, _U, _V, _VALID_OFF, _WS_BYTES, library_candidates)
 # the compiled packet loops, importable from here as before (the fused loop reads the
 # building blocks workspace, init_args and load_packet)
 from .embree4_kernels import cast_grid, init_args, load_packet, occluded_grid, workspace
@@ -32,33 +34,58 @@ __all__ = ["library", "available", "PacketGeometry", "cast_grid", "occluded_grid
 
 
 def _self_test(lib):
-    """Check the struct layouts this module relies on against the library itself, once:
-    one triangle (z = 0, corners (0,0), (1,0), (0,1)) and a packet of every width whose
-    lanes alternate between rays that hit it at known (t, u, v) and rays that miss, plus
-    the occlusion query. A library built with other layouts fails here, not later."""
+    """Check the struct layouts this module relies on against the library itself, once, at
+    the width it will run (``lib.width``): one triangle (z = 0, corners (0,0), (1,0),
+    (0,1)) and one packet whose lanes alternate between rays that hit it at known
+    (t, u, v) and rays that miss, its last lane masked off, then the occlusion query. The
+    packets are filled and read here in numpy and passed to the library through ctypes,
+    so no compiled loop is loaded (or compiled, on a first run) for the check. A library
+    built with other layouts fails here, not later."""
+    w = lib.width
     v = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], np.float32)
-    f = np.array([[0, 1, 2]], np.uint32)
-    scene = PacketGeometry(v, f, lib=lib)
+    scene = PacketGeometry(v, np.array([[0, 1, 2]], np.uint32), lib=lib)
     try:
-        for w in (4, 8, 16):
-            n = w + 3                                   # a full packet and a masked tail
-            k = np.arange(n)
-            x = np.where(k % 2 == 0, 0.25, 2.0).astype(np.float32)     # odd lanes miss
-            o = np.stack([x, np.full(n, 0.125, np.float32), np.full(n, 2.0 + k, np.float32)], 1)
-            got = scene.cast_grid(o, np.array([0, 0, -1], np.float32), width=w,
-                                  barycentrics=True)
-            prim, tfar, u, vv = got.prim, got.tfar, got.u, got.v
-            hit = k % 2 == 0
-            blocked = scene.occluded_grid(o, np.array([0, 0, -1], np.float32), width=w)
-            if not (np.array_equal(prim, np.where(hit, 0, -1))
-                    and np.allclose(tfar[hit], 2.0 + k[hit])
-                    and np.allclose(u[hit], 0.25) and np.allclose(vv[hit], 0.125)
-                    and np.array_equal(blocked, hit)):
-                raise OSError(f"{lib.path}: Embree {'.'.join(map(str, lib.version))} does not "
-                              f"answer a {w}-wide packet as the layouts this module uses "
-                              "expect (a build with other options?)")
+        k = np.arange(w)
+        active = k < w - 1                              # the last lane is masked off
+        hit = (k % 2 == 0) & active                     # odd lanes miss
+        i32, base = _packet(w, np.where(k % 2 == 0, 0.25, 2.0), 0.125, 2.0 + k, active)
+        lib.intersect[w](base + _VALID_OFF, scene.handle, base, base + _ARGS_OFF)
+        field = lambda f: i32[f * w:(f + 1) * w]       # noqa: E731 - one lane per ray
+        tfar, u, uv = (field(f).view(np.float32) for f in (_TFAR, _U, _V))
+        hits = (np.array_equal(field(_PRIMID), np.where(hit, 0, -1))
+                and np.allclose(tfar[hit], 2.0 + k[hit]) and np.all(np.isinf(tfar[~hit]))
+                and np.allclose(u[hit], 0.25) and np.allclose(uv[hit], 0.125))
+        i32, base = _packet(w, np.where(k % 2 == 0, 0.25, 2.0), 0.125, 2.0 + k, active)
+        lib.occluded[w](base + _VALID_OFF, scene.handle, base, base + _ARGS_OFF)
+        blocked = np.isneginf(field(_TFAR).view(np.float32))
+        if not (hits and np.array_equal(blocked, hit)):
+            raise OSError(f"{lib.path}: Embree {'.'.join(map(str, lib.version))} does not "
+                          f"answer a {w}-wide packet as the layouts this module uses "
+                          "expect (a build with other options?)")
     finally:
         scene.release()
+
+
+def _packet(w, x, y, z, active):
+    """A zeroed, 64-aligned workspace holding one w-wide packet of rays from (x, y, z)
+    along -z (lanes where ``active``), its valid mask and its query arguments (the
+    layout the compiled loops fill, :func:`.embree4_kernels.load_packet`): (the int32 view,
+    its address)."""
+    raw = np.zeros((_WS_BYTES + _ALIGN) // 4, np.int32)
+    skip = (-raw.ctypes.data % _ALIGN) // 4
+    i32 = raw[skip:skip + _WS_BYTES // 4]
+    f32, base = i32.view(np.float32), i32.ctypes.data
+    for f, value in ((_ORG_X, x), (_ORG_Y, y), (_ORG_Z, z), (_DIR_Z, -1.0), (_TFAR, np.inf)):
+        f32[f * w:(f + 1) * w] = value
+    for f, value in ((_MASK, -1), (_ID, np.arange(w)), (_PRIMID, -1), (_GEOMID, -1),
+                     (_INSTID, -1)):
+        i32[f * w:(f + 1) * w] = value
+    i32[_VALID_OFF // 4:_VALID_OFF // 4 + w] = np.where(active, -1, 0)
+    i32[_CTX_OFF // 4:_CTX_OFF // 4 + 2] = -1          # instID, instPrimID: invalid
+    i32[_ARGS_OFF // 4] = RTC_RAY_QUERY_FLAG_COHERENT   # flags; feature mask: all
+    i32[_ARGS_OFF // 4 + 1] = -1
+    i32[_ARGS_OFF // 4 + 2:_ARGS_OFF // 4 + 4].view(np.int64)[0] = base + _CTX_OFF
+    return i32, base
 
 
 _LIB = None
@@ -73,7 +100,8 @@ def library():
 
     The first call loads the library (:class:`EmbreeLib`: ``MESHLADAR_EMBREE4``, else the
     copy embreex ships) and checks it against the packet layouts this module uses, with one
-    triangle and packets of width 4, 8 and 16 (hits, barycentrics, misses, occlusion).
+    triangle and one packet of the width it runs natively (hits, barycentrics, misses, a
+    masked lane, occlusion), filled in numpy and passed through ctypes.
     Thread-safe.
 
     Returns

@@ -91,14 +91,14 @@ def grid_plan(geo, w, mode, spacing, z0_shifted, rng):
     T = t_j (+ δ dv_ij), in that order of float32 operations."""
     u, v = frame(w)
     L = (1.0 + _ORIGIN_MARGIN) * geo.radius + spacing
-    su = geo.hull @ u
+    su = geo.support @ u
     s_lo, s_hi = su.min() - spacing, su.max() + spacing
     ns = max(1, int(math.ceil((s_hi - s_lo) / spacing)))
     s = s_lo + (np.arange(ns) + 0.5) * spacing
     if mode == "slice":
         t = np.array([z0_shifted])
     else:
-        tv = geo.hull @ v
+        tv = geo.support @ v
         t_lo, t_hi = tv.min() - spacing, tv.max() + spacing
         nt = max(1, int(math.ceil((t_hi - t_lo) / spacing)))
         t = t_lo + (np.arange(nt) + 0.5) * spacing
@@ -233,14 +233,14 @@ def _largest_grid(geo, vectors, mode, spacing, limit=None):
     if limit is not None and bound <= limit:
         return bound
     largest = 0.0
-    block = max(1, min(256, int(4e6 // max(len(geo.hull), 1))))   # bounded memory
+    block = max(1, min(256, int(4e6 // max(len(geo.support), 1))))   # bounded memory
     for start in range(0, len(vectors), block):
         frames = [frame(w) for w in vectors[start:start + block]]
         u = np.array([f[0] for f in frames])
-        su = geo.hull @ u.T
+        su = geo.support @ u.T
         n = np.ceil((np.ptp(su, axis=0) + 2 * spacing) / spacing)
         if mode == "3d":
-            tv = geo.hull @ np.array([f[1] for f in frames]).T
+            tv = geo.support @ np.array([f[1] for f in frames]).T
             n = n * np.ceil((np.ptp(tv, axis=0) + 2 * spacing) / spacing)
         largest = max(largest, float(n.max()))
     return largest

@@ -49,7 +49,7 @@ def _plane_grid(geo, w, spacing, rng, sensor_pos, standoff, aim):
     """Cell centres (S, T) (n,) float64 on the reference plane (aim + S u + T v) covering
     the hull as projected from the sensor, and (u, v)."""
     u, v = frame(w)
-    q = geo.hull - sensor_pos
+    q = geo.support - sensor_pos
     depth = -(q @ w)                               # distance along the boresight
     if np.min(depth) <= ORIGIN_MARGIN * geo.radius:
         raise ParameterError(

@@ -302,7 +302,7 @@ def _check_standoff(geo, ladar, sensor):
         return
     aim = np.asarray(sensor.aim, np.float64) - geo.center
     for w in np.asarray(ladar.view_vectors, np.float64):
-        depth = -((geo.hull - (aim + sensor.standoff * w)) @ w)
+        depth = -((geo.support - (aim + sensor.standoff * w)) @ w)
         if np.min(depth) <= ORIGIN_MARGIN * geo.radius:
             raise ParameterError(
                 f"standoff {sensor.standoff:g} puts the sensor inside the target's extent "
@@ -388,6 +388,7 @@ def plan_trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided
         narrowest bin.
     """
     mode, geo, z0 = check_scene(scene, ladar, mode, normals, back_faces, z0)
+    geo.for_views(scene, ladar.n_views)
     traced_with = check_sensor(sensor, receiver, mode)
     backend = resolve_backend(backend)
     sampling, seed = _sampling(mode, sampling, seed)

@@ -8,8 +8,20 @@ The faceting study's names are re-exported here, as ``meshladar.studies`` was th
 
 from __future__ import annotations
 
+import importlib
+
 from .faceting import (COATINGS, PHANTOMS, SETTINGS,
                        convergence_orders, faceting_study, report, save_study, study_scene)
 
 __all__ = ["PHANTOMS", "COATINGS", "SETTINGS", "faceting_study", "convergence_orders",
            "study_scene", "save_study", "report"]
+
+#: The studies' modules, loaded on first use as attributes (``meshladar.studies.bench``).
+_SUBMODULES = ("bench", "bench_gpu", "bench_mesh", "faceting", "paper", "peer",
+               "reconstruction", "timing")
+
+
+def __getattr__(name):
+    if name not in _SUBMODULES:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return importlib.import_module(f"{__name__}.{name}")

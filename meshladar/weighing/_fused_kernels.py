@@ -13,7 +13,7 @@ from ..raytrace.embree4_kernels import init_args, load_packet, tile_shape, works
 from ..raytrace.embree4_ctypes import ARGS_OFF, GEOMID, PRIMID, TFAR, U, V, VALID_OFF
 from ._kernels import bin_bistatic_hits, bin_flat_hits, bin_smooth_hits, face_hit
 
-__all__ = ["cast_bin_grid"]
+__all__ = ["cast_bin_flat", "cast_bin_smooth", "cast_bin_bistatic"]
 
 
 @njit(cache=True, nogil=True)
@@ -91,102 +91,136 @@ def _keep_hits(i32, f32, w, m, one, scale, lanes, slot, band):
 
 
 @njit(cache=True, nogil=True)
-def _bin_band(band, k, plane_d, face_normals, face_material, params, wv, start, edges, area,
-              power, ignore_back, out, stamp, weight, tag, footprint, smooth):
-    """Weigh and bin a band's first k slots in scan order (misses -1, skipped): flat
-    normals, or smooth with ``smooth`` = (corner normals, min_cos_facet) when the corners
-    are not empty. Returns the back-face hits."""
-    prim, tf, o, bu, bv = band[0][:k], band[1][:k], band[2][:k], band[3], band[4]
-    corner, min_cos_facet = smooth
-    if corner.shape[0] == 0:
-        return bin_flat_hits(prim, tf, o, plane_d, face_normals, face_material, params, wv,
-                             start, edges, area, power, ignore_back, out, stamp, weight, tag,
-                             footprint)
-    return bin_smooth_hits(prim, tf, bu[:k], bv[:k], o, plane_d, face_normals, corner,
-                           face_material, params, wv, start, edges, area, power,
-                           ignore_back, min_cos_facet, out, footprint)
-
-
-@njit(cache=True, nogil=True)
-def cast_bin_grid(fn, scene, w, flags, s, t, du, dv, sp, u, v, lw, d, inv_scale, scale,
-                  plane_d, face_normals, face_material, params, wv, start, edges, area,
-                  power, ignore_back, out, stamp, weight, tag, footprint, occ, wr, lift,
-                  corner, min_cos_facet):
-    """One view, grid to bins in one loop (monostatic or bistatic, flat normals; or
-    monostatic with smooth ones, interpolated from the faces' ``corner`` normals when it is
-    not empty, as :func:`._kernels.bin_smooth_hits`; point or footprint bins). The grid is cast in tiles (:func:`tile_shape`) a band of rows at a
-    time: each packet's float32 origins are built as
-    :func:`meshladar.raytrace.grid.ray_grid` builds them (o = (S u + T v) + L w, S = s
-    (+ δ du), T = t (+ δ dv) when ``du`` is not empty), cast at unit size (×
-    ``inv_scale``), and the band's hits (a few rows: it stays in cache), with Embree's
-    distance scaled back (× ``scale``), are weighed and binned in scan order by
-    :func:`._kernels.bin_flat_hits`: the numbers of the unfused path, summed in its order,
-    without per-ray arrays. With a receiver direction ``wr`` (3,) (empty: monostatic) the
-    band's hits are taken a block at a time, and each block's hits first cast their occlusion rays toward it with ``occ`` (rtcOccludedW; see
-    :func:`_occlude_block`), and :func:`._kernels.bin_bistatic_hits` bins them with the
-    per-face bistatic weights in ``weight``. Returns (back-face hits, rays cast)."""
-    i32, f32, i64, base = workspace()
-    init_args(i32, i64, base, flags)
-    ns, nt = s.shape[0], t.shape[0]
-    th, tw = tile_shape(w)
-    one = scale == 1.0
-    lanes = np.empty((w, 3), np.float32)          # origins as built (for the ranges)
-    cast = np.empty((w, 3), np.float32)           # and as cast (at unit size)
-    slot = np.empty(w, np.int64)
-    nb = th * nt if corner.shape[0] else 0        # barycentrics: smooth normals only
+def _band_buffers(w, nt, barycentrics):
+    """The loop's buffers for bands of a tile's rows × ``nt`` rays: the packet's origins
+    as built (for the ranges) and as cast (at unit size), each lane's slot, and the band's
+    hits (face, distance, origin; barycentrics when asked)."""
+    th = tile_shape(w)[0]
+    nb = th * nt if barycentrics else 0
     band = (np.empty(th * nt, np.int32), np.empty(th * nt, np.float32),
             np.empty((th * nt, 3), np.float32), np.empty(nb, np.float32),
             np.empty(nb, np.float32))
-    band_prim, band_t, band_o = band[0], band[1], band[2]
-    bistatic = wr.shape[0] == 3
-    block = _BLOCK if bistatic else 0
-    hits = (np.empty(block, np.int32), np.empty(block, np.float32),
-            np.empty((block, 3), np.float32))
-    spare = (np.zeros(block, np.bool_), np.empty((block, 3), np.float32),
-             np.empty((1, 3), np.float32))
-    for k in range(3 if bistatic else 0):
-        spare[2][0, k] = wr[k]
-    held = 0
+    return np.empty((w, 3), np.float32), np.empty((w, 3), np.float32), np.empty(w, np.int64), band
+
+
+@njit(cache=True, nogil=True)
+def _cast_band(fn, scene, w, ws, a0, grid, d, inv_scale, scale, buffers):
+    """Cast the band of rows a0.. of the grid (s, t, du, dv, sp, u, v, lw) in tiles
+    (:func:`tile_shape`): each packet's float32 origins built as
+    :func:`meshladar.raytrace.grid.ray_grid` builds them, cast at unit size with ``fn``
+    (rtcIntersectW), its hits kept in the band's slots in scan order. Returns the band's
+    rays."""
+    i32, f32, _, base = ws
+    s, t, du, dv, sp, u, v, lw = grid
+    lanes, cast, slot, band = buffers
+    ns, nt = s.shape[0], t.shape[0]
+    th, tw = tile_shape(w)
+    rows = min(th, ns - a0)
+    one = scale == 1.0
+    for b0 in range(0, nt, tw):
+        m = _tile_origins(a0, b0, rows, min(tw, nt - b0), nt, s, t, du, dv, sp, u, v, lw,
+                          one, inv_scale, lanes, cast, slot)
+        load_packet(f32, i32, cast, d, np.float32(np.inf), 0, m, w)
+        fn(base + VALID_OFF, scene, base, base + ARGS_OFF)
+        _keep_hits(i32, f32, w, m, one, scale, lanes, slot, band)
+    return rows * nt
+
+
+# Three kernels, one per kind of view, so that a run compiles (on its first use, and loads
+# from the cache after) only the weighing it does: each shares the band cast above and
+# differs in how a band's hits are weighed and binned.
+
+@njit(cache=True, nogil=True)
+def cast_bin_flat(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, face_normals,
+                  face_material, params, wv, start, edges, area, power, ignore_back, out,
+                  stamp, weight, tag, footprint):
+    """One monostatic view with flat normals, grid to bins in one loop: each band's hits
+    (a few rows: they stay in cache), with Embree's distance scaled back (× ``scale``),
+    weighed and binned in scan order by :func:`._kernels.bin_flat_hits` (point or
+    footprint bins): the numbers of the unfused path, summed in its order, without per-ray
+    arrays. Returns (back-face hits, rays cast)."""
+    ws = workspace()
+    init_args(ws[0], ws[2], ws[3], flags)
+    buffers = _band_buffers(w, grid[1].shape[0], False)
+    prim, tf, o = buffers[3][0], buffers[3][1], buffers[3][2]
     back = 0
-    for a0 in range(0, ns, th):
-        rows = min(th, ns - a0)
-        for b0 in range(0, nt, tw):
-            m = _tile_origins(a0, b0, rows, min(tw, nt - b0), nt, s, t, du, dv, sp, u, v,
-                              lw, one, inv_scale, lanes, cast, slot)
-            load_packet(f32, i32, cast, d, np.float32(np.inf), 0, m, w)
-            fn(base + VALID_OFF, scene, base, base + ARGS_OFF)
-            _keep_hits(i32, f32, w, m, one, scale, lanes, slot, band)
-        if not bistatic:                          # the band in scan order (misses: -1)
-            back += _bin_band(band, rows * nt, plane_d, face_normals, face_material, params,
-                              wv, start, edges, area, power, ignore_back, out, stamp,
-                              weight, tag, footprint, (corner, min_cos_facet))
-            continue
-        for q in range(rows * nt):                # the band's hits in scan order
-            if band_prim[q] < 0:
+    for a0 in range(0, grid[0].shape[0], tile_shape(w)[0]):
+        k = _cast_band(fn, scene, w, ws, a0, grid, d, inv_scale, scale, buffers)
+        back += bin_flat_hits(prim[:k], tf[:k], o[:k], plane_d, face_normals, face_material,
+                              params, wv, start, edges, area, power, ignore_back, out, stamp,
+                              weight, tag, footprint)
+    return back, grid[0].shape[0] * grid[1].shape[0]
+
+
+@njit(cache=True, nogil=True)
+def cast_bin_smooth(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, face_normals,
+                    face_material, params, wv, start, edges, area, power, ignore_back, out,
+                    footprint, corner, min_cos_facet):
+    """One monostatic view with smooth normals, as :func:`cast_bin_flat` with the packets'
+    barycentrics kept and the shading normal interpolated from the faces' ``corner``
+    normals (:func:`._kernels.bin_smooth_hits`). Returns (back-face hits, rays cast)."""
+    ws = workspace()
+    init_args(ws[0], ws[2], ws[3], flags)
+    buffers = _band_buffers(w, grid[1].shape[0], True)
+    prim, tf, o, bu, bv = buffers[3]
+    back = 0
+    for a0 in range(0, grid[0].shape[0], tile_shape(w)[0]):
+        k = _cast_band(fn, scene, w, ws, a0, grid, d, inv_scale, scale, buffers)
+        back += bin_smooth_hits(prim[:k], tf[:k], bu[:k], bv[:k], o[:k], plane_d,
+                                face_normals, corner, face_material, params, wv, start,
+                                edges, area, power, ignore_back, min_cos_facet, out,
+                                footprint)
+    return back, grid[0].shape[0] * grid[1].shape[0]
+
+
+@njit(cache=True, nogil=True)
+def cast_bin_bistatic(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, face_normals,
+                      wv, start, edges, ignore_back, out, weight, occ, wr, lift):
+    """One bistatic view (receiver direction ``wr``), flat normals: the bands' hits taken
+    a block at a time; each block's hits first cast their occlusion rays toward the
+    receiver with ``occ`` (rtcOccludedW; see :func:`_occlude_block`), then
+    :func:`._kernels.bin_bistatic_hits` bins them with the per-face bistatic weights in
+    ``weight``. Returns (back-face hits, rays cast)."""
+    ws = workspace()
+    i32, f32, i64, base = ws
+    init_args(i32, i64, base, flags)
+    buffers = _band_buffers(w, grid[1].shape[0], False)
+    band_prim, band_t, band_o = buffers[3][0], buffers[3][1], buffers[3][2]
+    hits = (np.empty(_BLOCK, np.int32), np.empty(_BLOCK, np.float32),
+            np.empty((_BLOCK, 3), np.float32))
+    spare = (np.zeros(_BLOCK, np.bool_), np.empty((_BLOCK, 3), np.float32),
+             np.empty((1, 3), np.float32))
+    for k in range(3):
+        spare[2][0, k] = wr[k]
+    one = scale == 1.0
+    held = back = 0
+    for a0 in range(0, grid[0].shape[0], tile_shape(w)[0]):
+        for q in range(_cast_band(fn, scene, w, ws, a0, grid, d, inv_scale, scale, buffers)):
+            if band_prim[q] < 0:                  # the band's hits in scan order
                 continue
             hits[0][held], hits[1][held] = band_prim[q], band_t[q]
             for k in range(3):
                 hits[2][held, k] = band_o[q, k]
             held += 1
             if held == _BLOCK:
-                back += _bin_block(occ, scene, w, flags, i32, f32, i64, base, hits, held,
-                                   spare, plane_d, face_normals, wv, wr, lift, inv_scale,
-                                   one, start, edges, ignore_back, out, weight)
+                back += _bin_block(occ, scene, w, flags, ws, hits, held, spare, plane_d,
+                                   face_normals, wv, wr, lift, inv_scale, one, start, edges,
+                                   ignore_back, out, weight)
                 held = 0
     if held:
-        back += _bin_block(occ, scene, w, flags, i32, f32, i64, base, hits, held, spare,
-                           plane_d, face_normals, wv, wr, lift, inv_scale, one, start,
-                           edges, ignore_back, out, weight)
-    return back, ns * nt
+        back += _bin_block(occ, scene, w, flags, ws, hits, held, spare, plane_d,
+                           face_normals, wv, wr, lift, inv_scale, one, start, edges,
+                           ignore_back, out, weight)
+    return back, grid[0].shape[0] * grid[1].shape[0]
 
 
 @njit(cache=True, nogil=True)
-def _bin_block(occ, scene, w, flags, i32, f32, i64, base, hits, held, spare, plane_d,
-               face_normals, wv, wr, lift, inv_scale, one, start, edges, ignore_back, out,
-               weight):
+def _bin_block(occ, scene, w, flags, ws, hits, held, spare, plane_d, face_normals, wv, wr,
+               lift, inv_scale, one, start, edges, ignore_back, out, weight):
     """Bin the ``held`` bistatic hits of ``hits`` (face, distance, origin) after their
     occlusion rays toward the receiver ``wr`` (``spare``: blocked, lifted origins, wr in
     float32). Returns the block's back-face hits."""
+    i32, f32, i64, base = ws
     prim, tf, o = hits[0][:held], hits[1][:held], hits[2][:held]
     blocked, lifted, wr32 = spare
     _occlude_block(occ, scene, w, i32, f32, base, prim, tf, o, held, plane_d, face_normals,

@@ -1,5 +1,6 @@
 """The fused path of the packet backend: one view from ray grid to bins in one compiled
-loop (``meshladar.weighing._fused_kernels.cast_bin_grid``), with the weights and bins a
+loop (:mod:`meshladar.weighing._fused_kernels`: one kernel each for flat, smooth and
+bistatic views, so that a run compiles or loads only its own), with the weights and bins a
 :mod:`meshladar.forward.mesh` job prepared for it."""
 
 from __future__ import annotations
@@ -7,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..raytrace.embree4_ctypes import RTC_RAY_QUERY_FLAG_COHERENT
-from ._fused_kernels import cast_bin_grid as kernel
+from ._fused_kernels import cast_bin_bistatic, cast_bin_flat, cast_bin_smooth
 
 __all__ = ["cast_bin_grid"]
 
@@ -67,14 +68,17 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
     lib = sc.lib
     empty = np.empty((0, 0), np.float32)
     w = np.asarray(direction, dtype=np.float64)
-    return kernel(
-        lib.intersect[lib.width], sc.live(), lib.width,
-        RTC_RAY_QUERY_FLAG_COHERENT, s.astype(np.float32), t.astype(np.float32),
-        empty if du is None else du, empty if dv is None else dv, np.float32(spacing),
-        u.astype(np.float32), v.astype(np.float32), (L * w).astype(np.float32),
-        (-w).astype(np.float32)[None, :], np.float32(emb.inverse), float(emb.scale), *bins,
-        lib.occluded[lib.width],
-        np.empty(0) if receiver is None else np.asarray(receiver[0], np.float64),
-        0.0 if receiver is None else float(receiver[1]),
-        np.empty((0, 3, 3)) if smooth is None else smooth[0],
-        0.0 if smooth is None else float(smooth[1]))
+    grid = (s.astype(np.float32), t.astype(np.float32), empty if du is None else du,
+            empty if dv is None else dv, np.float32(spacing), u.astype(np.float32),
+            v.astype(np.float32), (L * w).astype(np.float32))
+    head = (lib.intersect[lib.width], sc.live(), lib.width, RTC_RAY_QUERY_FLAG_COHERENT,
+            grid, (-w).astype(np.float32)[None, :], np.float32(emb.inverse),
+            float(emb.scale))
+    b = bins
+    if receiver is not None:
+        return cast_bin_bistatic(*head, b.plane_d, b.face_normals, b.w, b.start, b.edges,
+                                 b.ignore_back, b.out, b.weight, lib.occluded[lib.width],
+                                 np.asarray(receiver[0], np.float64), float(receiver[1]))
+    if smooth is not None:
+        return cast_bin_smooth(*head, *b[:11], b.footprint, smooth[0], float(smooth[1]))
+    return cast_bin_flat(*head, *bins)

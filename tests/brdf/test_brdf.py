@@ -73,6 +73,19 @@ def test_G_matches_high_precision(b):
     assert abs(diffuse_normalization(b) - float(ref)) <= G_RTOL * float(ref)
 
 
+def test_G_closed_form_is_bit_for_bit_scipy_xlogy():
+    """Where G(b) takes its closed form (c = 1 − b² ≥ 1/2), it is bit for bit the form
+    computed with scipy.special.xlogy for s ln s (what meshladar used before it dropped
+    scipy.special from its import), over 20,000 b and at b = 0."""
+    from scipy.special import xlogy
+
+    b = np.concatenate([[0.0], np.linspace(1e-6, math.sqrt(0.5), 20000)])
+    c = (1.0 - b) * (1.0 + b)
+    b, c = b[c >= 0.5], c[c >= 0.5]                 # the closed form's domain
+    s = b * b
+    np.testing.assert_array_equal(diffuse_normalization(b), (c + xlogy(s, s)) / (c * c))
+
+
 def test_G_dense_grid_and_quadrature():
     bs = np.concatenate([np.linspace(0, 1, 1001), 1 - np.geomspace(1e-15, 1e-1, 60),
                          np.geomspace(1e-15, 1e-1, 60)])

@@ -3,6 +3,7 @@ wheel through ctypes, against embreex itself, the reference."""
 
 from __future__ import annotations
 
+import copy
 import subprocess
 import sys
 import warnings
@@ -33,6 +34,24 @@ def test_the_library_is_embree_4_with_a_native_packet_width():
     lib = embree4.library()
     assert lib.version[0] == 4 and lib.width in (4, 8, 16) and lib.native[lib.width]
     assert embree4.available() == (True, lib.path)
+
+
+@pytest.mark.parametrize("width", [4, 8, 16])
+def test_the_self_test_passes_at_every_width_and_fails_a_library_that_does_not_answer(width):
+    """The check library() runs once (at the native width) holds at every width, and a
+    library whose packet queries leave the packet untouched (as one with other layouts
+    would answer nothing where these layouts read) fails it with an OSError naming the
+    width, not later in a cast."""
+    lib = embree4.library()
+    probe = copy.copy(lib)                      # the same library and device, another width
+    probe.width = width
+    embree4._self_test(probe)
+    probe.intersect = {width: lambda *args: None}
+    with pytest.raises(OSError, match=f"a {width}-wide packet"):
+        embree4._self_test(probe)
+    probe.intersect, probe.occluded = lib.intersect, {width: lambda *args: None}
+    with pytest.raises(OSError, match=f"a {width}-wide packet"):
+        embree4._self_test(probe)
 
 
 def _assert_same_hits(a, b):
