@@ -289,9 +289,8 @@ def _rows_on_threads(scene, grid, w, spacing, bins, row_jobs, receiver=None, smo
     parts = []
     for a0, a1 in zip(cuts[:-1], cuts[1:]):
         if a1 > a0:
-            band = grid._replace(s=grid.s[a0:a1],
-                                 du=None if grid.du is None else grid.du[a0:a1],
-                                 dv=None if grid.dv is None else grid.dv[a0:a1])
+            band = grid._replace(s=grid.s[a0:a1], offsets=None if grid.offsets is None else
+                                 _rows_of(grid.offsets, a0, a1))
             parts.append((band, bins._replace(out=np.zeros_like(bins.out),
                                               stamp=bins.stamp.copy(),
                                               weight=bins.weight.copy())))
@@ -301,6 +300,12 @@ def _rows_on_threads(scene, grid, w, spacing, bins, row_jobs, receiver=None, smo
     for _, band in parts:
         bins.out[...] += band.out
     return sum(b for b, _ in done), sum(n for _, n in done)
+
+
+def _rows_of(offsets, a0, a1):
+    """The stratified offsets' sequences of rows a0..a1 (xi and kv run along the rows)."""
+    xi, ku, kv, eta = offsets
+    return xi[a0:a1], ku, kv[a0:a1], eta
 
 
 def _fused(plan):

@@ -19,7 +19,7 @@ MODES = ("slice", "3d")
 
 #: "regular": rays at cell centres (a midpoint rule: second order on smooth slice profiles,
 #: but it aliases on thin walls seen edge-on); "stratified": one ray per cell at a seeded
-#: random offset (unbiased areas; see _stratified_offsets).
+#: random offset (unbiased areas; see stratified_offsets).
 SAMPLINGS = ("regular", "stratified")
 
 
@@ -63,8 +63,10 @@ class GridPlan(NamedTuple):
 
     s: np.ndarray
     t: np.ndarray
-    du: np.ndarray | None
-    dv: np.ndarray | None
+    #: The stratified offsets' 1-D sequences (xi, ku, kv, eta), float32: the offset of ray
+    #: (i, j) is wrap(xi_i + ku_j) along u and wrap(kv_i + eta_j) along v
+    #: (:func:`stratified_offsets`); None on a regular grid and in slice mode.
+    offsets: tuple | None
     u: np.ndarray
     v: np.ndarray
     L: float
@@ -84,11 +86,12 @@ class RayGrid(NamedTuple):
 
 def grid_plan(geo, w, mode, spacing, z0_shifted, rng):
     """The grid's recipe, for :func:`ray_grid` and the packet backend's fused loop (which
-    builds the same float32 origins ray by ray): (s, t, du, dv, u, v, L) with s (ns,) and
-    t (nt,) the cell centres along u and v, and du, dv (ns, nt) float32 the stratified
-    offsets in 3-D (None on a regular grid, and in slice mode, whose offsets are drawn by
-    :func:`ray_grid` itself). Ray (i, j) is o = S u + T v + L w, S = s_i (+ δ du_ij),
-    T = t_j (+ δ dv_ij), in that order of float32 operations."""
+    builds the same float32 origins ray by ray): (s, t, offsets, u, v, L) with s (ns,) and
+    t (nt,) the cell centres along u and v, and ``offsets`` the 1-D sequences of the
+    stratified offsets du, dv (ns, nt) in 3-D (:func:`stratified_offsets`; None on a
+    regular grid, and in slice mode, whose offsets are drawn by :func:`ray_grid` itself).
+    Ray (i, j) is o = S u + T v + L w, S = s_i (+ δ du_ij), T = t_j (+ δ dv_ij), in that
+    order of float32 operations."""
     u, v = frame(w)
     L = (1.0 + _ORIGIN_MARGIN) * geo.radius + spacing
     su = geo.support @ u
@@ -102,10 +105,10 @@ def grid_plan(geo, w, mode, spacing, z0_shifted, rng):
         t_lo, t_hi = tv.min() - spacing, tv.max() + spacing
         nt = max(1, int(math.ceil((t_hi - t_lo) / spacing)))
         t = t_lo + (np.arange(nt) + 0.5) * spacing
-    du = dv = None
+    offsets = None
     if rng is not None and mode == "3d":
-        du, dv = _stratified_offsets(s.size, t.size, rng)
-    return GridPlan(s, t, du, dv, u, v, L)
+        offsets = _stratified_sequences(s.size, t.size, rng)
+    return GridPlan(s, t, offsets, u, v, L)
 
 
 def ray_grid(geo, w, mode, spacing, z0_shifted, rng):
@@ -114,7 +117,7 @@ def ray_grid(geo, w, mode, spacing, z0_shifted, rng):
     Built component by component in float32 (Embree's precision): o = s u + t v + L w.
     """
     plan = grid_plan(geo, w, mode, spacing, z0_shifted, rng)
-    s, t, du, dv, u, v, L = plan.s, plan.t, plan.du, plan.dv, plan.u, plan.v, plan.L
+    s, t, u, v, L = plan.s, plan.t, plan.u, plan.v, plan.L
     o = np.empty((s.size, t.size, 3), dtype=np.float32)
     if rng is None:
         s32, t32 = s.astype(np.float32), t.astype(np.float32)
@@ -127,6 +130,7 @@ def ray_grid(geo, w, mode, spacing, z0_shifted, rng):
             o[:, :, k] = S * u[k] + T * v[k]
     else:
         # in float32 (Embree's precision, as the regular grid): S = s + δ·du, T = t + δ·dv
+        du, dv = stratified_offsets(plan.offsets)
         sp = np.float32(spacing)
         S = du
         S *= sp
@@ -148,8 +152,23 @@ _GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 
 
 
-def _stratified_offsets(ns, nt, rng):
-    """Offsets in [−½, ½) of each ray from its cell centre, (ns, nt) along u and along v.
+def _stratified_sequences(ns, nt, rng):
+    """The 1-D sequences (xi (ns,), ku (nt,), kv (ns,), eta (nt,)), float32, of a grid's
+    stratified offsets (:func:`stratified_offsets`): the shifts ξ and η drawn from ``rng``
+    (ns, then nt uniforms) and the centred Kronecker sequences frac(kα) − ½."""
+    xi = rng.uniform(0.0, 1.0, ns).astype(np.float32)     # one shift per column (along v)
+    eta = rng.uniform(0.0, 1.0, nt).astype(np.float32)    # one shift per row (along u)
+    # frac(kα) − ½ in float64, then float32 (offsets within a cell: float32 is plenty)
+    ku = (np.mod(np.arange(nt) * _GOLDEN, 1.0) - 0.5).astype(np.float32)
+    kv = (np.mod(np.arange(ns) * _GOLDEN, 1.0) - 0.5).astype(np.float32)
+    return xi, ku, kv, eta
+
+
+def stratified_offsets(sequences):
+    """Offsets du, dv in [−½, ½) of each ray from its cell centre, (ns, nt) float32 along u
+    and along v, from their 1-D ``sequences`` (:func:`_stratified_sequences`): du_ij =
+    ξ_i + ku_j and dv_ij = kv_i + η_j in float32, less 1 where ≥ ½ (the packet backend's
+    fused loop makes the same float32 operations ray by ray).
 
     Every cell holds one ray uniformly distributed in it, so the expected number of rays
     hitting any region is its projected area over δ²: the estimate of every area (a thin
@@ -161,11 +180,7 @@ def _stratified_offsets(ns, nt, rng):
     to it is right to O(log n / n) instead of O(n^-½). Each cell's offset stays uniform
     (η and ξ are uniform and independent), hence the expectation is exact.
     """
-    xi = rng.uniform(0.0, 1.0, ns).astype(np.float32)     # one shift per column (along v)
-    eta = rng.uniform(0.0, 1.0, nt).astype(np.float32)    # one shift per row (along u)
-    # frac(kα) − ½ in float64, then float32 (offsets within a cell: float32 is plenty)
-    ku = (np.mod(np.arange(nt) * _GOLDEN, 1.0) - 0.5).astype(np.float32)
-    kv = (np.mod(np.arange(ns) * _GOLDEN, 1.0) - 0.5).astype(np.float32)
+    xi, ku, kv, eta = sequences
     du = np.add.outer(xi, ku)                             # frac(ξ + jα) − ½ ∈ [−½, 1½) ...
     du -= du >= np.float32(0.5)                           # ... wrapped into [−½, ½)
     dv = np.add.outer(kv, eta)

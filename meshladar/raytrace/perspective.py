@@ -30,7 +30,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..precision import ORIGIN_MARGIN, REFINE_MIN_COS
-from .grid import dot, frame, ray_grid, _stratified_offsets
+from .grid import _stratified_sequences, dot, frame, ray_grid, stratified_offsets
 from ..hits import ViewHits
 from .views import _hit_normals, _shading_factor
 
@@ -67,7 +67,7 @@ def _plane_grid(geo, w, spacing, rng, sensor_pos, standoff, aim):
     S = np.repeat(s, t.size).reshape(s.size, t.size)
     T = np.tile(t, s.size).reshape(s.size, t.size)
     if rng is not None:
-        du, dv = _stratified_offsets(s.size, t.size, rng)
+        du, dv = stratified_offsets(_stratified_sequences(s.size, t.size, rng))
         S = S + du.astype(np.float64) * spacing
         T = T + dv.astype(np.float64) * spacing
     return PlaneGrid(S.ravel(), T.ravel(), u, v)

@@ -44,21 +44,31 @@ _BLOCK = 1024
 
 
 @njit(cache=True, nogil=True)
-def _tile_origins(a0, b0, rows, cols, nt, s, t, du, dv, sp, u, v, lw, one, inv_scale,
+def _tile_origins(a0, b0, rows, cols, nt, s, t, offsets, sp, u, v, lw, one, inv_scale,
                   lanes, cast, slot):
     """The float32 origins of the grid's tile at (a0, b0), ``rows`` × ``cols`` rays, packed
     into the first lanes as :func:`meshladar.raytrace.grid.ray_grid` builds them (``lanes``)
     and at unit size (``cast``); ``slot`` receives each lane's position in the band of rows
-    a0.., in scan order. Returns the lanes filled."""
-    jitter = du.shape[0] > 0
+    a0.., in scan order. The stratified offsets du, dv are made here from their 1-D
+    ``offsets`` (xi, ku, kv, eta; empty: a regular grid) with the float32 operations of
+    :func:`meshladar.raytrace.grid.stratified_offsets`. Returns the lanes filled."""
+    xi, ku, kv, eta = offsets
+    jitter = xi.shape[0] > 0
+    half, one32 = np.float32(0.5), np.float32(1.0)
     m = 0
     for da in range(rows):
         a = a0 + da
         for db in range(cols):
             b = b0 + db
             if jitter:
-                S = np.float32(du[a, b] * sp) + s[a]
-                T = np.float32(dv[a, b] * sp) + t[b]
+                du = np.float32(xi[a] + ku[b])
+                if du >= half:
+                    du = np.float32(du - one32)
+                dv = np.float32(kv[a] + eta[b])
+                if dv >= half:
+                    dv = np.float32(dv - one32)
+                S = np.float32(du * sp) + s[a]
+                T = np.float32(dv * sp) + t[b]
             else:
                 S = s[a]
                 T = t[b]
@@ -105,20 +115,20 @@ def _band_buffers(w, nt, barycentrics):
 
 @njit(cache=True, nogil=True)
 def _cast_band(fn, scene, w, ws, a0, grid, d, inv_scale, scale, buffers):
-    """Cast the band of rows a0.. of the grid (s, t, du, dv, sp, u, v, lw) in tiles
+    """Cast the band of rows a0.. of the grid (s, t, offsets, sp, u, v, lw) in tiles
     (:func:`tile_shape`): each packet's float32 origins built as
     :func:`meshladar.raytrace.grid.ray_grid` builds them, cast at unit size with ``fn``
     (rtcIntersectW), its hits kept in the band's slots in scan order. Returns the band's
     rays."""
     i32, f32, _, base = ws
-    s, t, du, dv, sp, u, v, lw = grid
+    s, t, offsets, sp, u, v, lw = grid
     lanes, cast, slot, band = buffers
     ns, nt = s.shape[0], t.shape[0]
     th, tw = tile_shape(w)
     rows = min(th, ns - a0)
     one = scale == 1.0
     for b0 in range(0, nt, tw):
-        m = _tile_origins(a0, b0, rows, min(tw, nt - b0), nt, s, t, du, dv, sp, u, v, lw,
+        m = _tile_origins(a0, b0, rows, min(tw, nt - b0), nt, s, t, offsets, sp, u, v, lw,
                           one, inv_scale, lanes, cast, slot)
         load_packet(f32, i32, cast, d, np.float32(np.inf), 0, m, w)
         fn(base + VALID_OFF, scene, base, base + ARGS_OFF)

@@ -33,7 +33,7 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
         backend: ``emb.scene.scene`` is its
         :class:`~meshladar.raytrace.embree4.PacketGeometry`.
     plan : GridPlan
-        The view's ray grid (``s``, ``t``, the stratified offsets ``du``, ``dv`` or None,
+        The view's ray grid (``s``, ``t``, the stratified offsets' 1-D sequences or None,
         the axes ``u``, ``v`` and the start distance ``L``, shifted coordinates).
     direction : (3,) array_like
         The view direction w, a unit vector from the scene toward the ladar; the rays
@@ -63,14 +63,13 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
     rays : int
         The rays cast, len(s) × len(t).
     """
-    s, t, du, dv, u, v, L = plan.s, plan.t, plan.du, plan.dv, plan.u, plan.v, plan.L
+    s, t, u, v, L = plan.s, plan.t, plan.u, plan.v, plan.L
     sc = emb.scene.scene
     lib = sc.lib
-    empty = np.empty((0, 0), np.float32)
     w = np.asarray(direction, dtype=np.float64)
-    grid = (s.astype(np.float32), t.astype(np.float32), empty if du is None else du,
-            empty if dv is None else dv, np.float32(spacing), u.astype(np.float32),
-            v.astype(np.float32), (L * w).astype(np.float32))
+    offsets = plan.offsets or (np.empty(0, np.float32),) * 4
+    grid = (s.astype(np.float32), t.astype(np.float32), offsets, np.float32(spacing),
+            u.astype(np.float32), v.astype(np.float32), (L * w).astype(np.float32))
     head = (lib.intersect[lib.width], sc.live(), lib.width, RTC_RAY_QUERY_FLAG_COHERENT,
             grid, (-w).astype(np.float32)[None, :], np.float32(emb.inverse),
             float(emb.scale))
