@@ -1,7 +1,8 @@
 """Benchmarks: medians of several runs in one process (``meshladar bench``).
 
 Speed is measured here, never in timed tests. Each case is run ``repeats`` times after one
-warm-up run, and the median, minimum and maximum wall times are reported. This module
+warm-up run, and the median, minimum and maximum wall times are reported (FBP against
+scikit-image: one thread, CPU seconds, interleaved rounds). This module
 holds the forward models' cases and :func:`report`, the lines ``meshladar bench`` prints.
 The mesh engine's cases are in :mod:`.bench_mesh`, the timing helpers in :mod:`.timing`;
 the cases of the inverse side (FBP, SIRT and SART, 3-D tomography, the coating fit) are
@@ -134,7 +135,8 @@ def report(*, repeats=5, full=False, gpu=False):
     ``gpu`` gives the GPU line alone (:func:`meshladar.studies.bench_gpu.bench_gpu`).
 
     The lines, in order: the analytic model (:func:`bench_analytic`), FBP against
-    scikit-image (:func:`bench_fbp`; skipped with a line when it is not installed), the
+    scikit-image (:func:`bench_fbp`: one thread, CPU seconds, interleaved rounds; skipped
+    with a line when scikit-image is not installed), the
     mesh engine (:mod:`meshladar.studies.bench_mesh`), received power and waveforms
     (:func:`bench_sensor`), SIRT and SART (:func:`bench_sirt`), a two-coating fit, and 3-D
     tomography (:func:`bench_tomography3d`); with ``full`` also Mitsuba 3 + mitransient
@@ -172,9 +174,11 @@ def report(*, repeats=5, full=False, gpu=False):
     except ImportError as exc:
         yield f"FBP vs scikit-image: skipped ({exc})"
     else:
-        yield (f"FBP {r['shape'][0]} x {r['shape'][1]} -> {r['size']}^2, ramp, linear: "
-               f"meshladar {r['ours_s']:.3f} s, skimage.iradon {r['skimage_s']:.3f} s, "
-               f"speed-up {r['speedup']:.1f}x, max |difference| {r['max_diff_rel']:.1e} of max")
+        yield (f"FBP {r['shape'][0]} x {r['shape'][1]} -> {r['size']}^2, ramp, linear, one "
+               f"thread, CPU s, median of {r['rounds']} interleaved rounds: meshladar "
+               f"{r['ours_s']:.3f} s ({r['mpix_views']:.0f} Mpixel-views/s), skimage.iradon "
+               f"{r['skimage_s']:.3f} s, speed-up {r['speedup']:.1f}x, max |difference| "
+               f"{r['max_diff_rel']:.1e} of max")
     yield from _mesh_lines(repeats)
     se = bench_sensor()
     yield (f"received power, {se['faces']} triangles, {se['rays'] / 4:.3g} rays per view: at "

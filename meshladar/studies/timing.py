@@ -9,7 +9,7 @@ import time
 from ..meshes import sphere
 from ..scene import Scene
 
-__all__ = ["time_call", "interleaved", "icosphere_scene"]
+__all__ = ["time_call", "interleaved", "interleaved_times", "icosphere_scene"]
 
 
 def time_call(fn, *, repeats=5):
@@ -55,15 +55,39 @@ def interleaved(fns, *, repeats=3):
     dict of str to float
         Each name's median wall time in seconds.
     """
+    times = interleaved_times(fns, repeats=repeats)
+    return {k: statistics.median(v) for k, v in times.items()}
+
+
+def interleaved_times(fns, *, repeats=3, clock=time.perf_counter):
+    """Every timed call of each of ``fns``, run in rounds as :func:`interleaved` (one call
+    of each per round, after one warm-up round), by ``clock``.
+
+    Parameters
+    ----------
+    fns : dict of str to callable
+        The calls to time, by name; each is called with no arguments.
+    repeats : int, keyword-only
+        Timed rounds after the warm-up round (default 3).
+    clock : callable, keyword-only
+        Returns the time in seconds: ``time.perf_counter`` (wall, the default) or
+        ``time.process_time`` (the CPU seconds of this process, all its threads: on a
+        loaded machine, what one-thread code costs regardless of what else runs).
+
+    Returns
+    -------
+    dict of str to list of float
+        Each name's times in seconds, round by round (round r of every name is entry r).
+    """
     for fn in fns.values():
         fn()
     times = {k: [] for k in fns}
     for _ in range(repeats):
         for k, fn in fns.items():
-            t0 = time.perf_counter()
+            t0 = clock()
             fn()
-            times[k].append(time.perf_counter() - t0)
-    return {k: statistics.median(v) for k, v in times.items()}
+            times[k].append(clock() - t0)
+    return times
 
 
 def icosphere_scene(subdivisions, material):
