@@ -46,16 +46,20 @@ def dot(a, w):
 
 
 def frame(w):
-    """(u, v) completing w to a right-handed orthonormal frame; v = z for horizontal w."""
-    z = np.array([0.0, 0.0, 1.0])
-    u = np.cross(z, w)
+    """(u, v) completing w to a right-handed orthonormal frame; v = z for horizontal w.
+
+    u = z × w / |z × w| and v = w × u, each cross product written out as ``np.cross``
+    computes it (a product, a product, a difference: the same bits, signed zeros
+    included) without its array overhead (tens of µs a call, paid per view)."""
+    w0, w1, w2 = (float(x) for x in w)
+    u = np.array([0.0 * w2 - 1.0 * w1, 1.0 * w0 - 0.0 * w2, 0.0 * w1 - 0.0 * w0])
     n = np.linalg.norm(u)
     if n < PARALLEL_SLACK:                                         # looking along ±z
         u = np.array([1.0, 0.0, 0.0])
     else:
         u = u / n
-    return u, np.cross(w, u)
-
+    u0, u1, u2 = (float(x) for x in u)
+    return u, np.array([w1 * u2 - w2 * u1, w2 * u0 - w0 * u2, w0 * u1 - w1 * u0])
 
 
 class GridPlan(NamedTuple):
