@@ -1,7 +1,8 @@
 """The mesh engine's paths against raw embreex on the same rays, one thread, in interleaved
 rounds, timed in CPU seconds (robust to a loaded machine): raw embreex, the packet cast in
 rows of the packet width and in square tiles of the grid, and the whole run from rays to
-bins (flat normals on a regular and a stratified grid, smooth normals).
+bins (flat normals on a regular and a stratified grid, smooth normals, footprint bins, and
+a bistatic receiver 60° off the first view, the same for every view).
 
     python benchmarks/pipeline.py [--subdivisions 6] [--views 4] [--rounds 3]
 
@@ -60,7 +61,9 @@ def main(argv=None):
            "packet cast, tiles": cast(packets, True),
            "rays to bins, flat, regular grid": pipeline(sampling="regular"),
            "rays to bins, flat, stratified": pipeline(sampling="stratified"),
-           "rays to bins, smooth normals": pipeline(normals="smooth")}
+           "rays to bins, smooth normals": pipeline(normals="smooth"),
+           "rays to bins, footprint bins": pipeline(footprint=True),
+           "rays to bins, bistatic (60 deg off)": pipeline(receiver=_off_axis(vecs[0]))}
     for fn in fns.values():                       # warm-up: compile, build, cache
         fn()
     times = {k: [] for k in fns}
@@ -75,6 +78,14 @@ def main(argv=None):
           f"median of {args.rounds} interleaved rounds, one thread, Mrays per CPU-second")
     for k in fns:
         print(f"  {k:34s} {n / t[k] / 1e6:7.2f}   {ref / t[k]:.2f}x raw embreex")
+
+
+def _off_axis(w, degrees=60.0):
+    """A unit vector ``degrees`` from w (turned about an axis perpendicular to it)."""
+    axis = np.cross(w, [0.0, 0.0, 1.0] if abs(w[2]) < 0.9 else [1.0, 0.0, 0.0])
+    axis /= np.linalg.norm(axis)
+    a = math.radians(degrees)
+    return w * math.cos(a) + np.cross(axis, w) * math.sin(a)
 
 
 if __name__ == "__main__":

@@ -16,7 +16,27 @@ from ..precision import BOX_RATIO as _BOX_RATIO
 from ..precision import TINY as _TINY
 
 __all__ = ["bin_flat_hits", "bin_bistatic_hits", "bin_smooth_hits", "bin_sensor_hits",
-           "face_hit"]
+           "face_hit", "footprint_rows"]
+
+
+@njit(cache=True, nogil=True)
+def footprint_rows(face_normals, vertices, faces, w, u, v, spacing, three_d, ranges, out):
+    """Every face's footprint row for view w into ``out`` (n_faces, 4), in one pass and in
+    the float64 operations of :func:`meshladar.weighing.faces.face_footprints`'s numpy
+    expressions (the same bits): |n·u| / c · ½ · δ, |n·v| / c · ½ · δ (0 in slice mode)
+    with c = max(|n·w|, TINY), then the least and greatest of the corners' ranges −p·w
+    (``ranges``: a scratch array of one value per vertex)."""
+    for k in range(vertices.shape[0]):
+        ranges[k] = -(vertices[k, 0] * w[0] + vertices[k, 1] * w[1] + vertices[k, 2] * w[2])
+    for p in range(faces.shape[0]):
+        n0, n1, n2 = face_normals[p, 0], face_normals[p, 1], face_normals[p, 2]
+        cg = max(abs(n0 * w[0] + n1 * w[1] + n2 * w[2]), _TINY)
+        out[p, 0] = abs(n0 * u[0] + n1 * u[1] + n2 * u[2]) / cg * 0.5 * spacing
+        out[p, 1] = abs(n0 * v[0] + n1 * v[1] + n2 * v[2]) / cg * 0.5 * spacing if three_d \
+            else 0.0
+        r0, r1, r2 = ranges[faces[p, 0]], ranges[faces[p, 1]], ranges[faces[p, 2]]
+        out[p, 2] = min(min(r0, r1), r2)
+        out[p, 3] = max(max(r0, r1), r2)
 
 
 @njit(cache=True, nogil=True)
@@ -118,13 +138,20 @@ def _spread_hit(out, r, r_rel, wt, fp, p, edges, e0, inv):
     k0 = _clipped_bin(r + lo_c, edges, e0, inv)
     k1 = _clipped_bin(r + hi_c, edges, e0, inv)
     box = b <= _BOX_RATIO * max(a, _TINY)
-    mass = _fp_cdf(hi_c, a, b, box) - _fp_cdf(lo_c, a, b, box)
+    c_hi, c_lo = _fp_cdf(hi_c, a, b, box), _fp_cdf(lo_c, a, b, box)
+    mass = c_hi - c_lo
     if mass <= 0:
         mass = 1.0
-    for k in range(k0, k1 + 1):
-        lo = max(edges[k] - r, lo_c)
+    last_x, last_c = lo_c, c_lo        # the CDF is a pure function: a value computed at the
+    for k in range(k0, k1 + 1):        # same x is reused (a bin's upper end is the next
+        lo = max(edges[k] - r, lo_c)   # one's lower), the same bits with half the calls
         hi = min(edges[k + 1] - r, hi_c)
-        frac = (_fp_cdf(hi, a, b, box) - _fp_cdf(lo, a, b, box)) if hi > lo else 0.0
+        frac = 0.0
+        if hi > lo:
+            f_lo = last_c if lo == last_x else _fp_cdf(lo, a, b, box)
+            f_hi = c_hi if hi == hi_c else _fp_cdf(hi, a, b, box)
+            last_x, last_c = hi, f_hi
+            frac = f_hi - f_lo
         out[k] += wt * (frac / mass)
 
 
