@@ -169,6 +169,7 @@ class WarpScene:
         self._indices = wp.array(np.ascontiguousarray(faces, np.int32).ravel(),
                                  dtype=wp.int32, device=device)
         self.mesh = wp.Mesh(points=self._points, indices=self._indices)
+        self._planes = None          # the faces' planes on the device, uploaded once
 
     def run(self, origins, directions, output=None, query="INTERSECT", columns=0):
         """Cast rays as embreex's ``run`` does: first hits, or occlusion.
@@ -244,14 +245,17 @@ class WarpScene:
         """
         wp, dev = self._wp, self.device
         arr = functools.partial(wp.array, device=dev)
+        if self._planes is None or self._planes[0] is not bins.plane_d:
+            # the geometry's own arrays, the same for every view of this scene
+            self._planes = (bins.plane_d, arr(bins.plane_d, dtype=wp.float64),
+                            arr(bins.face_normals, dtype=wp.vec3d))
         out = arr(np.zeros(bins.out.shape), dtype=wp.float64)
         back = wp.zeros(1, dtype=wp.int32, device=dev)
         wp.launch(self._kernels["cast_bin"], dim=len(origins), device=dev, inputs=[
             self.mesh.id, arr(np.ascontiguousarray(origins, np.float32), dtype=wp.vec3),
             wp.vec3(*np.asarray(direction, np.float32)), float(inverse), float(scale),
-            arr(bins.plane_d, dtype=wp.float64), arr(bins.face_normals, dtype=wp.vec3d),
-            wp.vec3d(*np.asarray(bins.w, np.float64)), float(bins.start),
-            arr(bins.edges, dtype=wp.float64), int(bins.ignore_back),
+            self._planes[1], self._planes[2], wp.vec3d(*np.asarray(bins.w, np.float64)),
+            float(bins.start), arr(bins.edges, dtype=wp.float64), int(bins.ignore_back),
             arr(bins.weight, dtype=wp.float64), out, back])
         bins.out[...] += out.numpy()
         return int(back.numpy()[0])
