@@ -25,18 +25,7 @@ import tempfile
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from native import _library  # noqa: E402  (the embreex wheel's Embree library)
-
-
-def _build(include, out):
-    lib = _library()
-    exe = os.path.join(out, "limit")
-    subprocess.run(["gcc", "-O2", "-march=native", "-std=c11", "-D_POSIX_C_SOURCE=200809L",
-                    "-Wall", "-I", include,
-                    os.path.join(os.path.dirname(os.path.abspath(__file__)), "limit.c"),
-                    lib, f"-Wl,-rpath,{os.path.dirname(lib)}", "-lpthread", "-lm", "-o", exe],
-                   check=True)
-    return exe
+from native import _build  # noqa: E402  (compiles a C file of this folder)
 
 
 def _inputs(tmp, views, rays_per_view, subdivisions):
@@ -88,7 +77,7 @@ def main(argv=None):
     width = embree4.library().width
     c_best, job_best, job_rays = math.inf, math.inf, 0
     with tempfile.TemporaryDirectory() as tmp:
-        exe = _build(args.include, tmp)
+        exe = _build(args.include, tmp, "limit")
         mesh, plans, rays, faces = _inputs(tmp, args.views, args.rays_per_view,
                                            args.subdivisions)
         for _ in range(args.rounds):

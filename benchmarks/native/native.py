@@ -55,13 +55,16 @@ def _library():
     return lib
 
 
-def _build(include, out):
+def _build(include, out, name="packets"):
+    """Compile ``name``.c of this folder against the embreex wheel's Embree library (its
+    headers in ``include``) into ``out``; returns the executable's path."""
     lib = _library()
-    exe = os.path.join(out, "packets")
+    exe = os.path.join(out, name)
     subprocess.run(["gcc", "-O2", "-march=native", "-std=c11", "-D_POSIX_C_SOURCE=200809L",
                     "-Wall", "-I", include,
-                    os.path.join(os.path.dirname(os.path.abspath(__file__)), "packets.c"),
-                    lib, f"-Wl,-rpath,{os.path.dirname(lib)}", "-lm", "-o", exe], check=True)
+                    os.path.join(os.path.dirname(os.path.abspath(__file__)), f"{name}.c"),
+                    lib, f"-Wl,-rpath,{os.path.dirname(lib)}", "-lpthread", "-lm", "-o", exe],
+                   check=True)
     return exe
 
 

@@ -27,23 +27,7 @@
 #include <string.h>
 #include <time.h>
 
-static void *slurp(const char *path, size_t *size) {
-  FILE *f = fopen(path, "rb");
-  if (!f) { perror(path); exit(2); }
-  fseek(f, 0, SEEK_END);
-  *size = (size_t)ftell(f);
-  fseek(f, 0, SEEK_SET);
-  void *buf = aligned_alloc(64, (*size + 63) / 64 * 64);
-  if (fread(buf, 1, *size, f) != *size) { perror(path); exit(2); }
-  fclose(f);
-  return buf;
-}
-
-static double now(void) {
-  struct timespec t;
-  clock_gettime(CLOCK_MONOTONIC, &t);
-  return t.tv_sec + 1e-9 * t.tv_nsec;
-}
+#include "common.h"
 
 /* The rays of every view in RAYS.bin (p just after nviews: see the header comment); exits
  * if a view's rays do not fill its rows. */
