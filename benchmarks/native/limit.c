@@ -101,20 +101,8 @@ int main(int argc, char **argv) {
     fprintf(stderr, "WIDTH: 4, 8 or 16; THREADS: 1 to 64\n");
     return 2;
   }
-  int64_t nv = ((int64_t *)mesh)[0], nf = ((int64_t *)mesh)[1];
   RTCDevice dev = rtcNewDevice(NULL);
-  RTCScene scene = rtcNewScene(dev);
-  RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
-  rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, mesh + 16, 0, 12,
-                             nv);
-  rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                             mesh + 16 + 12 * (nv + 1), 0, 12, nf);
-  rtcCommitGeometry(g);
-  rtcAttachGeometry(scene, g);
-  rtcReleaseGeometry(g);
-  rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
-  rtcCommitScene(scene);
-  if (rtcGetDeviceError(dev) != RTC_ERROR_NONE) { fprintf(stderr, "embree error\n"); return 1; }
+  RTCScene scene = mesh_scene(dev, mesh);
 
   int64_t nviews = ((int64_t *)raw)[0];
   float inv = *(float *)(raw + 8);

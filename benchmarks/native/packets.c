@@ -111,21 +111,9 @@ int main(int argc, char **argv) {
   if (!tiles && strcmp(argv[5], "rows")) { fprintf(stderr, "MODE: rows or tiles\n"); return 2; }
   if (tiles && width == 1) { fprintf(stderr, "tiles need a width of 4, 8 or 16\n"); return 2; }
   if (!tiles && argc == 7) { fprintf(stderr, "PRIMS.bin needs tiles\n"); return 2; }
-  int64_t nv = ((int64_t *)mesh)[0], nf = ((int64_t *)mesh)[1];
-  float *vert = (float *)(mesh + 16);
-  uint32_t *faces = (uint32_t *)(mesh + 16 + 12 * (nv + 1));
 
   RTCDevice dev = rtcNewDevice(NULL);
-  RTCScene scene = rtcNewScene(dev);
-  RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
-  rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, vert, 0, 12, nv);
-  rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, faces, 0, 12, nf);
-  rtcCommitGeometry(g);
-  rtcAttachGeometry(scene, g);
-  rtcReleaseGeometry(g);
-  rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
-  rtcCommitScene(scene);
-  if (rtcGetDeviceError(dev) != RTC_ERROR_NONE) { fprintf(stderr, "embree error\n"); return 1; }
+  RTCScene scene = mesh_scene(dev, mesh);
 
   struct RTCIntersectArguments args;
   rtcInitIntersectArguments(&args);
