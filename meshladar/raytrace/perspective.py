@@ -37,12 +37,13 @@ from .views import _hit_normals, _shading_factor
 
 class PlaneGrid(NamedTuple):
     """A sensor view's rays on the reference plane: each ray's grid coordinates S, T (n,)
-    along the view's transverse axes u, v."""
+    along the view's transverse axes u, v, row-major in rows of ``columns`` rays."""
 
     S: np.ndarray
     T: np.ndarray
     u: np.ndarray
     v: np.ndarray
+    columns: int = 0
 
 
 def _plane_grid(geo, w, spacing, rng, sensor_pos, standoff, aim):
@@ -70,7 +71,7 @@ def _plane_grid(geo, w, spacing, rng, sensor_pos, standoff, aim):
         du, dv = stratified_offsets(_stratified_sequences(s.size, t.size, rng))
         S = S + du.astype(np.float64) * spacing
         T = T + dv.astype(np.float64) * spacing
-    return PlaneGrid(S.ravel(), T.ravel(), u, v)
+    return PlaneGrid(S.ravel(), T.ravel(), u, v, t.size)
 
 
 class SensorCast(NamedTuple):
@@ -105,7 +106,9 @@ def sensor_cast(geo, scene, w, spacing, rng, sensor, aim):
     t0 = max(0.0, float(np.linalg.norm(sensor_pos)) - (1.0 + ORIGIN_MARGIN) * geo.radius
              - spacing)
     o = np.ascontiguousarray(sensor_pos + t0 * dirs, dtype=np.float32)
-    res = scene.run(o, np.ascontiguousarray(dirs, dtype=np.float32), output=1)
+    # the packet backend casts the grid in square tiles (neighbouring rays nearly parallel)
+    res = scene.run(o, np.ascontiguousarray(dirs, dtype=np.float32), output=1,
+                    columns=plane.columns)
     return SensorCast(sensor_pos, S, T, u, v, length, dirs, t0, o, res)
 
 
