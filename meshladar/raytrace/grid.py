@@ -111,7 +111,7 @@ def grid_plan(geo, w, mode, spacing, z0_shifted, rng):
         t = t_lo + (np.arange(nt) + 0.5) * spacing
     offsets = None
     if rng is not None and mode == "3d":
-        offsets = _stratified_sequences(s.size, t.size, rng)
+        offsets = stratified_sequences(s.size, t.size, rng)
     return GridPlan(s, t, offsets, u, v, L)
 
 
@@ -156,7 +156,7 @@ _GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 
 
 
-def _stratified_sequences(ns, nt, rng):
+def stratified_sequences(ns, nt, rng):
     """The 1-D sequences (xi (ns,), ku (nt,), kv (ns,), eta (nt,)), float32, of a grid's
     stratified offsets (:func:`stratified_offsets`): the shifts ξ and η drawn from ``rng``
     (ns, then nt uniforms) and the centred Kronecker sequences frac(kα) − ½."""
@@ -170,7 +170,7 @@ def _stratified_sequences(ns, nt, rng):
 
 def stratified_offsets(sequences):
     """Offsets du, dv in [−½, ½) of each ray from its cell centre, (ns, nt) float32 along u
-    and along v, from their 1-D ``sequences`` (:func:`_stratified_sequences`): du_ij =
+    and along v, from their 1-D ``sequences`` (:func:`stratified_sequences`): du_ij =
     ξ_i + ku_j and dv_ij = kv_i + η_j in float32, less 1 where ≥ ½ (the packet backend's
     fused loop makes the same float32 operations ray by ray).
 

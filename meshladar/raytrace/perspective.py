@@ -30,7 +30,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..precision import ORIGIN_MARGIN, REFINE_MIN_COS
-from .grid import _stratified_sequences, dot, frame, ray_grid, stratified_offsets
+from .grid import stratified_sequences, dot, frame, ray_grid, stratified_offsets
 from ..hits import ViewHits
 from .views import _hit_normals, _shading_factor
 
@@ -46,9 +46,11 @@ class PlaneGrid(NamedTuple):
     columns: int = 0
 
 
-def _plane_grid(geo, w, spacing, rng, sensor_pos, standoff, aim):
-    """Cell centres (S, T) (n,) float64 on the reference plane (aim + S u + T v) covering
-    the hull as projected from the sensor, and (u, v)."""
+def plane_axes(geo, w, spacing, sensor_pos, standoff, aim):
+    """(s, t, u, v): the cell centres s (ns,) and t (nt,) along u and v of the reference
+    plane's grid (aim + S u + T v) covering the target's support points as projected from
+    the sensor at ``sensor_pos`` (shifted coordinates); ParameterError when the sensor is
+    inside the target's extent seen from w."""
     u, v = frame(w)
     q = geo.support - sensor_pos
     depth = -(q @ w)                               # distance along the boresight
@@ -65,10 +67,19 @@ def _plane_grid(geo, w, spacing, rng, sensor_pos, standoff, aim):
         n = max(1, int(math.ceil((hi - lo) / spacing)))
         axes.append(lo + (np.arange(n) + 0.5) * spacing)
     s, t = axes
+    return s, t, u, v
+
+
+def _plane_grid(geo, w, spacing, rng, sensor_pos, standoff, aim):
+    """Cell centres (S, T) (n,) float64 on the reference plane (aim + S u + T v) covering
+    the hull as projected from the sensor (:func:`plane_axes`), each moved by its
+    stratified offset (float32 offsets, δ du added in float64) when ``rng`` is given, and
+    (u, v)."""
+    s, t, u, v = plane_axes(geo, w, spacing, sensor_pos, standoff, aim)
     S = np.repeat(s, t.size).reshape(s.size, t.size)
     T = np.tile(t, s.size).reshape(s.size, t.size)
     if rng is not None:
-        du, dv = stratified_offsets(_stratified_sequences(s.size, t.size, rng))
+        du, dv = stratified_offsets(stratified_sequences(s.size, t.size, rng))
         S = S + du.astype(np.float64) * spacing
         T = T + dv.astype(np.float64) * spacing
     return PlaneGrid(S.ravel(), T.ravel(), u, v, t.size)
@@ -103,13 +114,19 @@ def sensor_cast(geo, scene, w, spacing, rng, sensor, aim):
     dirs = q / length[:, None]
     # start each ray where it enters the target's bounding sphere (Embree's float32 stays
     # at the target's scale, however far the sensor)
-    t0 = max(0.0, float(np.linalg.norm(sensor_pos)) - (1.0 + ORIGIN_MARGIN) * geo.radius
-             - spacing)
+    t0 = start_distance(geo, sensor_pos, spacing)
     o = np.ascontiguousarray(sensor_pos + t0 * dirs, dtype=np.float32)
     # the packet backend casts the grid in square tiles (neighbouring rays nearly parallel)
     res = scene.run(o, np.ascontiguousarray(dirs, dtype=np.float32), output=1,
                     columns=plane.columns)
     return SensorCast(sensor_pos, S, T, u, v, length, dirs, t0, o, res)
+
+
+def start_distance(geo, sensor_pos, spacing):
+    """Where a sensor's rays start (distance from the sensor): where they enter the
+    target's bounding sphere, less a margin (0 when the sensor is inside it)."""
+    return max(0.0, float(np.linalg.norm(sensor_pos)) - (1.0 + ORIGIN_MARGIN) * geo.radius
+               - spacing)
 
 
 def trace_sensor_view(plan, scene, view):

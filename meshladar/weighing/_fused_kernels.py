@@ -6,14 +6,17 @@ arrays."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
 from ..raytrace.embree4_kernels import init_args, load_packet, tile_shape, workspace
 from ..raytrace.embree4_ctypes import ARGS_OFF, GEOMID, PRIMID, TFAR, U, V, VALID_OFF
-from ._kernels import bin_bistatic_hits, bin_flat_hits, bin_smooth_hits, face_hit
+from ._kernels import (bin_bistatic_hits, bin_flat_hits, bin_sensor_hits, bin_smooth_hits,
+                       face_hit)
 
-__all__ = ["cast_bin_flat", "cast_bin_smooth", "cast_bin_bistatic"]
+__all__ = ["cast_bin_flat", "cast_bin_smooth", "cast_bin_bistatic", "cast_bin_sensor"]
 
 
 @njit(cache=True, nogil=True)
@@ -238,3 +241,99 @@ def _bin_block(occ, scene, w, flags, ws, hits, held, spare, plane_d, face_normal
     init_args(i32, i64, base, flags)
     return bin_bistatic_hits(prim, tf, o, blocked[:held], plane_d, face_normals, wv, wr,
                              start, edges, ignore_back, out, weight)
+
+
+@njit(cache=True, nogil=True)
+def _sensor_tile(a0, b0, rows, cols, plane, sensor, one, inv_scale, lanes, dirs, slot, band):
+    """The rays of the sensor grid's tile at (a0, b0) into the first lanes, as
+    :func:`meshladar.raytrace.perspective.sensor_cast` builds them in numpy, operation for
+    operation: S = s + δ du, T = t + δ dv in float64 (du, dv the float32 offsets of
+    :func:`_tile_origins`), q = S u + T v − D w, direction q/|q|, origin the sensor's
+    position + t0 × direction in float32 (× ``inv_scale`` to unit size); each ray's float64
+    direction and |q| kept in the band's slots. Returns the lanes filled."""
+    s, t, offsets, sp, u, v, w = plane
+    xi, ku, kv, eta = offsets
+    D, pos, t0 = sensor
+    nt = t.shape[0]
+    half, one32 = np.float32(0.5), np.float32(1.0)
+    m = 0
+    for da in range(rows):
+        a = a0 + da
+        for db in range(cols):
+            b = b0 + db
+            S, T = s[a], t[b]
+            if xi.shape[0] > 0:
+                du = np.float32(xi[a] + ku[b])
+                if du >= half:
+                    du = np.float32(du - one32)
+                dv = np.float32(kv[a] + eta[b])
+                if dv >= half:
+                    dv = np.float32(dv - one32)
+                S = S + np.float64(du) * sp
+                T = T + np.float64(dv) * sp
+            q = da * nt + b
+            length = math.sqrt(S * S + T * T + D * D)
+            band[5][q] = length
+            for k in range(3):
+                dk = (S * u[k] + T * v[k] - D * w[k]) / length
+                band[4][q, k] = dk
+                o = np.float32(pos[k] + t0 * dk)
+                lanes[m, k] = o if one else np.float32(o * inv_scale)
+                dirs[m, k] = np.float32(dk)
+            slot[m] = q
+            m += 1
+    return m
+
+
+@njit(cache=True, nogil=True)
+def cast_bin_sensor(fn, scene, w, flags, plane, sensor, inv_scale, scale, smooth, binning,
+                    out):
+    """One view seen by a sensor at a standoff, grid to bins in one loop: each tile's rays
+    built as :func:`meshladar.raytrace.perspective.sensor_cast` builds them
+    (:func:`_sensor_tile`), cast in a packet with their own directions, and each band of
+    rows weighed and binned in scan order by :func:`._kernels.bin_sensor_hits` (its
+    arguments after ``sensor_pos`` but ``out``: ``binning``), with the hit distance
+    t0 + Embree's (scaled back) as the per-hit path has it. The same numbers, without
+    per-ray arrays. Returns (back-face hits, rays cast)."""
+    ws = workspace()
+    i32, f32, i64, base = ws
+    init_args(i32, i64, base, flags)
+    ns, nt = plane[0].shape[0], plane[1].shape[0]
+    th, tw = tile_shape(w)
+    nb = th * nt if smooth else 0
+    band = (np.empty(th * nt, np.int32), np.empty(th * nt), np.empty(nb, np.float32),
+            np.empty(nb, np.float32), np.empty((th * nt, 3)), np.empty(th * nt))
+    lanes, dirs = np.empty((w, 3), np.float32), np.empty((w, 3), np.float32)
+    slot = np.empty(w, np.int64)
+    one = scale == 1.0
+    back = 0
+    for a0 in range(0, ns, th):
+        rows = min(th, ns - a0)
+        for b0 in range(0, nt, tw):
+            m = _sensor_tile(a0, b0, rows, min(tw, nt - b0), plane, sensor, one, inv_scale,
+                             lanes, dirs, slot, band)
+            load_packet(f32, i32, lanes, dirs, np.float32(np.inf), 0, m, w)
+            fn(base + VALID_OFF, scene, base, base + ARGS_OFF)
+            _keep_sensor_hits(i32, f32, w, m, one, scale, sensor[2], slot, band, smooth)
+        k = rows * nt
+        back += bin_sensor_hits(band[0][:k], band[1][:k], band[4][:k], band[5][:k],
+                                band[2][:k], band[3][:k], sensor[0], sensor[1], *binning,
+                                out)
+    return back, ns * nt
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _keep_sensor_hits(i32, f32, w, m, one, scale, t0, slot, band, smooth):
+    """The packet's hits into the band's slots: face (-1 on a miss), t0 + Embree's distance
+    scaled back (float64, as the per-hit path adds them) and, for smooth normals, the
+    barycentrics."""
+    for j in range(m):
+        q = slot[j]
+        if i32[GEOMID * w + j] == -1:
+            band[0][q] = -1
+            continue
+        tf = f32[TFAR * w + j]
+        band[0][q] = i32[PRIMID * w + j]
+        band[1][q] = t0 + np.float64(tf if one else np.float32(tf * np.float32(scale)))
+        if smooth:
+            band[2][q], band[3][q] = f32[U * w + j], f32[V * w + j]

@@ -283,14 +283,15 @@ def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, 
 
 
 @njit(cache=True, nogil=True)
-def bin_sensor_hits(prim, t_cast, S, T, bu, bv, u, v, w, D, sensor_pos, range_offset,
+def bin_sensor_hits(prim, t_cast, dirs, length, bu, bv, D, sensor_pos, range_offset,
                     plane_d, face_normals, corner, smooth, face_material, params, beam,
                     extinction, edges, area, power, ignore_back, min_cos_facet, refine_min_cos,
                     out):
     """Monostatic weighing and binning of one view seen by a sensor at standoff D, fused
     (the numbers of meshladar.raytrace.perspective.trace_sensor_view then
     meshladar.weighing._bin_one, without per-hit arrays): ray i leaves ``sensor_pos``
-    along q/|q|, q = S[i] u + T[i] v − D w; its hit distance R is recomputed in float64
+    along ``dirs[i]`` = q/|q| (float64), q = S u + T v − D w its offset to its grid point
+    on the reference plane, |q| = ``length[i]``; its hit distance R is recomputed in float64
     against the hit face's plane (``t_cast`` where the plane is edge-on); its weight is
     F·area × cos³α (R/D)² × the beam's relative irradiance (× the smooth normal's area
     factor), and under ``power`` × cos θ (D/R)² exp(−2σR); its range R − ``range_offset``.
@@ -309,11 +310,7 @@ def bin_sensor_hits(prim, t_cast, S, T, bu, bv, u, v, w, D, sensor_pos, range_of
         p = prim[i]
         if p < 0:
             continue
-        qx = S[i] * u[0] + T[i] * v[0] - D * w[0]
-        qy = S[i] * u[1] + T[i] * v[1] - D * w[1]
-        qz = S[i] * u[2] + T[i] * v[2] - D * w[2]
-        length = math.sqrt(S[i] * S[i] + T[i] * T[i] + D * D)
-        dx, dy, dz = qx / length, qy / length, qz / length
+        dx, dy, dz = dirs[i, 0], dirs[i, 1], dirs[i, 2]
         nx, ny, nz = face_normals[p, 0], face_normals[p, 1], face_normals[p, 2]
         denom = nx * dx + ny * dy + nz * dz
         if abs(denom) > refine_min_cos:
@@ -348,7 +345,7 @@ def bin_sensor_hits(prim, t_cast, S, T, bu, bv, u, v, w, D, sensor_pos, range_of
         else:
             wz2 = beam[2] * beam[2] + (beam[3] * z) ** 2
             rel = w_ref * w_ref / wz2 * math.exp(-2.0 * rho2 / wz2)
-        factor = (D / length) ** 3 * (R / D) ** 2 * rel
+        factor = (D / length[i]) ** 3 * (R / D) ** 2 * rel
         if smooth:
             factor *= c / max(abs(cg), min_cos_facet)
         s = math.sqrt(max(1.0 - c * c, 0.0))
@@ -356,8 +353,8 @@ def bin_sensor_hits(prim, t_cast, S, T, bu, bv, u, v, w, D, sensor_pos, range_of
         f = _sr_monostatic(c, s, params[m, 0], params[m, 1], params[m, 2], params[m, 3],
                            params[m, 4], params[m, 5] > 0.5, params[m, 6] > 0.5)
         wt = f * area * factor
-        if power:
-            wt *= c * (D / R) ** 2 * math.exp(-2.0 * extinction * R)
+        if power:                          # exp(−0) = 1 exactly: skipped without extinction
+            wt *= c * (D / R) ** 2 * (math.exp(-2.0 * extinction * R) if extinction else 1.0)
         out[k] += wt
     return back
 

@@ -8,8 +8,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..precision import MIN_COS_FACET, REFINE_MIN_COS
-from ..raytrace.perspective import sensor_cast
+from ..raytrace.embree4_ctypes import RTC_RAY_QUERY_FLAG_COHERENT
+from ..raytrace.grid import stratified_sequences
+from ..raytrace.perspective import plane_axes, sensor_cast, start_distance
 from ..sensor import FloodBeam
+from ._fused_kernels import cast_bin_sensor
 from ._kernels import bin_sensor_hits
 from ..brdf import material_table
 
@@ -61,12 +64,48 @@ def bin_sensor_view(plan, weighing, scene, w, rng, out):
         (``plan_trace`` refuses that for every view first).
     """
     geo, sensor, spacing = plan.geo, plan.traced_with, plan.spacing
+    aim = np.asarray(sensor.aim, np.float64) - geo.center
+    if scene.fused:
+        return _fused_view(plan, weighing, scene, w, rng, out, aim)
+    cast = sensor_cast(geo, scene, w, spacing, rng, sensor, aim)
+    sensor_pos, u, v = cast.sensor_pos, cast.u, cast.v
+    o, res = cast.origins, cast.res
+    smooth = geo.normals == "smooth"
+    empty = np.zeros(0, np.float32)
+    back = bin_sensor_hits(
+        res["primID"], cast.t0 + res["tfar"].astype(np.float64), cast.dirs, cast.length,
+        res["u"] if smooth else empty, res["v"] if smooth else empty,
+        float(sensor.standoff), sensor_pos, *_binning(plan, weighing, aim, u, v, sensor_pos,
+                                                      w), out)
+    return len(o), back
+
+
+def _fused_view(plan, weighing, scene, w, rng, out, aim):
+    """The view through the packet backend's fused loop
+    (:func:`._fused_kernels.cast_bin_sensor`): rays built, cast, weighed and binned a band
+    of rows at a time. Returns (rays cast, back-face hits)."""
+    geo, sensor, spacing = plan.geo, plan.traced_with, plan.spacing
+    D = float(sensor.standoff)
+    sensor_pos = aim + D * w
+    s, t, u, v = plane_axes(geo, w, spacing, sensor_pos, D, aim)
+    offsets = stratified_sequences(s.size, t.size, rng) if rng is not None else \
+        (np.empty(0, np.float32),) * 4
+    plane = (s, t, offsets, float(spacing), u, v, np.asarray(w, np.float64))
+    pk = scene.scene.scene
+    lib = pk.lib
+    back, n = cast_bin_sensor(
+        lib.intersect[lib.width], pk.live(), lib.width, RTC_RAY_QUERY_FLAG_COHERENT, plane,
+        (D, sensor_pos, start_distance(geo, sensor_pos, spacing)), np.float32(scene.inverse),
+        float(scene.scale), geo.normals == "smooth",
+        _binning(plan, weighing, aim, u, v, sensor_pos, w), out)
+    return n, back
+
+
+def _binning(plan, weighing, aim, u, v, sensor_pos, w):
+    """bin_sensor_hits' arguments after the sensor's position, but ``out``."""
+    geo, sensor = plan.geo, plan.traced_with
     back_faces, materials, area = plan.back_faces, weighing.materials, plan.area
     power, edges = weighing.power, weighing.edges[0]
-    aim = np.asarray(sensor.aim, np.float64) - geo.center
-    cast = sensor_cast(geo, scene, w, spacing, rng, sensor, aim)
-    sensor_pos, S, T, u, v = cast.sensor_pos, cast.S, cast.T, cast.u, cast.v
-    t0, o, res = cast.t0, cast.origins, cast.res
     beam = sensor.beam
     off = aim if isinstance(beam, FloodBeam) else \
         aim + beam.offset[0] * u + beam.offset[1] * v
@@ -76,14 +115,8 @@ def bin_sensor_view(plan, weighing, scene, w, rng, out):
     else:
         spec = (1.0, -1.0, beam.waist, beam.divergence)
     smooth = geo.normals == "smooth"
-    empty = np.zeros(0, np.float32)
-    back = bin_sensor_hits(
-        res["primID"], t0 + res["tfar"].astype(np.float64), S, T,
-        res["u"] if smooth else empty, res["v"] if smooth else empty, u, v, w,
-        float(sensor.standoff), sensor_pos,
-        float(sensor.standoff) + float((aim + geo.center) @ w), geo.plane_d,
-        geo.face_normals, geo.corner if smooth else np.zeros((0, 3, 3)), smooth,
-        geo.material, material_table(materials), np.array(spec + tuple(axis)),
-        float(sensor.extinction), edges, float(area), bool(power), back_faces == "ignore",
-        MIN_COS_FACET, REFINE_MIN_COS, out)
-    return len(o), back
+    return (float(sensor.standoff) + float((aim + geo.center) @ w), geo.plane_d,
+            geo.face_normals, geo.corner if smooth else np.zeros((0, 3, 3)), smooth,
+            geo.material, material_table(materials), np.array(spec + tuple(axis)),
+            float(sensor.extinction), edges, float(area), bool(power), back_faces == "ignore",
+            MIN_COS_FACET, REFINE_MIN_COS)

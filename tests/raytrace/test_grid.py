@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from meshladar.precision import PARALLEL_SLACK
-from meshladar.raytrace.grid import _stratified_sequences, frame, stratified_offsets
+from meshladar.raytrace.grid import stratified_sequences, frame, stratified_offsets
 
 
 def _numpy_frame(w):
@@ -38,7 +38,7 @@ def test_stratified_offsets_are_one_per_cell_from_row_and_column_sequences():
     dv_ij − η_j depend only on j and on i (mod 1): the Kronecker sequences along rows
     and columns, each shifted by one uniform."""
     rng = np.random.default_rng(3)
-    seq = _stratified_sequences(37, 53, rng)
+    seq = stratified_sequences(37, 53, rng)
     du, dv = stratified_offsets(seq)
     assert du.shape == dv.shape == (37, 53) and du.dtype == dv.dtype == np.float32
     assert du.min() >= -0.5 and du.max() < 0.5 and dv.min() >= -0.5 and dv.max() < 0.5
