@@ -89,3 +89,19 @@ def test_built_in_models_register_themselves_and_a_users_do_not():
         projected_weight(Brighter(0.5), np.array([0.5]), np.array([0.5]))
     with pytest.raises(TypeError):
         MODELS["Mine"] = Negative                     # read-only
+
+
+@pytest.mark.parametrize("name", ["dark_gray", "aluminum", "glint e=1e-4", "b=1"])
+def test_the_compiled_sr_kernel_holds_at_the_extremes_of_its_arguments(name):
+    """Where the kernel's square-root norms could underflow or lose bits (cos θ and b sin θ
+    both tiny, cos θ = 0 or 1 exactly, θ a hair from 0 or 90°), it stays finite and equal
+    to the model to 1e-13 (the model's hypot), and is 0 or positive as the model is."""
+    m = COATINGS[name]
+    theta = np.array([0.0, 1e-300, 1e-160, 1e-12, math.pi / 2 - 1e-12, math.pi / 2])
+    c, s = np.cos(theta), np.abs(np.sin(theta))
+    c = np.concatenate([c, [1e-160, 1e-300, 0.0]])
+    s = np.concatenate([s, [1.0, 1.0, 1.0]])
+    got = np.array([sr_monostatic(ci, si, *m.kernel_params) for ci, si in zip(c, s)])
+    want = m.value(c, s)
+    assert np.all(np.isfinite(got)) and np.all(got >= 0)
+    np.testing.assert_allclose(got, want, rtol=1e-13, atol=0)
