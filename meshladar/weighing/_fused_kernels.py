@@ -46,6 +46,21 @@ def _occlude_block(occ, scene, w, i32, f32, base, prim, tf, o, n, plane_d, face_
 _BLOCK = 1024
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _offsets(xi, ku, kv, eta, a, b):
+    """Cell (a, b)'s stratified offsets (du, dv) from their 1-D sequences, in the float32
+    operations of :func:`meshladar.raytrace.grid.stratified_offsets`: a sum, less 1 where
+    it reaches ½."""
+    half, one = np.float32(0.5), np.float32(1.0)
+    du = np.float32(xi[a] + ku[b])
+    if du >= half:
+        du = np.float32(du - one)
+    dv = np.float32(kv[a] + eta[b])
+    if dv >= half:
+        dv = np.float32(dv - one)
+    return du, dv
+
+
 @njit(cache=True, nogil=True)
 def _tile_origins(a0, b0, rows, cols, nt, s, t, offsets, sp, u, v, lw, one, inv_scale,
                   lanes, cast, slot):
@@ -57,19 +72,13 @@ def _tile_origins(a0, b0, rows, cols, nt, s, t, offsets, sp, u, v, lw, one, inv_
     :func:`meshladar.raytrace.grid.stratified_offsets`. Returns the lanes filled."""
     xi, ku, kv, eta = offsets
     jitter = xi.shape[0] > 0
-    half, one32 = np.float32(0.5), np.float32(1.0)
     m = 0
     for da in range(rows):
         a = a0 + da
         for db in range(cols):
             b = b0 + db
             if jitter:
-                du = np.float32(xi[a] + ku[b])
-                if du >= half:
-                    du = np.float32(du - one32)
-                dv = np.float32(kv[a] + eta[b])
-                if dv >= half:
-                    dv = np.float32(dv - one32)
+                du, dv = _offsets(xi, ku, kv, eta, a, b)
                 S = np.float32(du * sp) + s[a]
                 T = np.float32(dv * sp) + t[b]
             else:
@@ -255,7 +264,6 @@ def _sensor_tile(a0, b0, rows, cols, plane, sensor, one, inv_scale, lanes, dirs,
     xi, ku, kv, eta = offsets
     D, pos, t0 = sensor
     nt = t.shape[0]
-    half, one32 = np.float32(0.5), np.float32(1.0)
     m = 0
     for da in range(rows):
         a = a0 + da
@@ -263,12 +271,7 @@ def _sensor_tile(a0, b0, rows, cols, plane, sensor, one, inv_scale, lanes, dirs,
             b = b0 + db
             S, T = s[a], t[b]
             if xi.shape[0] > 0:
-                du = np.float32(xi[a] + ku[b])
-                if du >= half:
-                    du = np.float32(du - one32)
-                dv = np.float32(kv[a] + eta[b])
-                if dv >= half:
-                    dv = np.float32(dv - one32)
+                du, dv = _offsets(xi, ku, kv, eta, a, b)
                 S = S + np.float64(du) * sp
                 T = T + np.float64(dv) * sp
             q = da * nt + b
