@@ -51,14 +51,12 @@ def _offsets(xi, ku, kv, eta, a, b):
     """Cell (a, b)'s stratified offsets (du, dv) from their 1-D sequences, in the float32
     operations of :func:`meshladar.raytrace.grid.stratified_offsets`: a sum, less 1 where
     it reaches ½."""
-    half, one = np.float32(0.5), np.float32(1.0)
+    half, one, zero = np.float32(0.5), np.float32(1.0), np.float32(0.0)
     du = np.float32(xi[a] + ku[b])
-    if du >= half:
-        du = np.float32(du - one)
     dv = np.float32(kv[a] + eta[b])
-    if dv >= half:
-        dv = np.float32(dv - one)
-    return du, dv
+    # less 1 or less 0 (x − 0 is x, −0 included): no branch in the ray loop
+    return (np.float32(du - (one if du >= half else zero)),
+            np.float32(dv - (one if dv >= half else zero)))
 
 
 @njit(cache=True, nogil=True)
