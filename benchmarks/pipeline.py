@@ -37,7 +37,7 @@ def main(argv=None):
     from meshladar.raytrace.embree import Geometry, embree_scene
     from meshladar.raytrace.grid import ray_grid
     from meshladar.sensor import Sensor
-    from meshladar.studies.timing import icosphere_scene
+    from meshladar.studies.timing import icosphere_scene, interleaved_times
 
     scene = icosphere_scene(args.subdivisions, materials.DARK_GRAY)
     spacing = 1.0 / math.sqrt(args.rays_per_view)
@@ -71,12 +71,8 @@ def main(argv=None):
            "rays to bins, sensor at 100 radii": pipeline(sensor=Sensor(standoff=50.0),
                                                          radiometry="power")}
     rays = {k: fn() or n for k, fn in fns.items()}   # warm-up: compile, build, cache
-    times = {k: [] for k in fns}
-    for _ in range(args.rounds):
-        for k, fn in fns.items():
-            t0 = time.process_time()
-            fn()
-            times[k].append(time.process_time() - t0)
+    times = interleaved_times(fns, repeats=args.rounds, clock=time.process_time,
+                              warm_up=False)
     t = {k: statistics.median(v) for k, v in times.items()}
     ref = t["raw embreex cast"]
     print(f"{len(geo.faces)} triangles, {n} rays, packet width {embree4.library().width}, "

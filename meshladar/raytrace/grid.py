@@ -8,6 +8,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .._extents import point_ranges
 from .._validate import check_choice, check_real, check_seed
 from ..errors import ParameterError
 from ..precision import ORIGIN_MARGIN as _ORIGIN_MARGIN
@@ -252,16 +253,13 @@ def _largest_grid(geo, vectors, mode, spacing, limit=None):
     if limit is not None and bound <= limit:
         return bound
     largest = 0.0
-    block = max(1, min(256, int(4e6 // max(len(geo.support), 1))))   # bounded memory
-    for start in range(0, len(vectors), block):
-        frames = [frame(w) for w in vectors[start:start + block]]
-        u = np.array([f[0] for f in frames])
-        su = geo.support @ u.T
-        n = np.ceil((np.ptp(su, axis=0) + 2 * spacing) / spacing)
-        if mode == "3d":
-            tv = geo.support @ np.array([f[1] for f in frames]).T
-            n = n * np.ceil((np.ptp(tv, axis=0) + 2 * spacing) / spacing)
-        largest = max(largest, float(n.max()))
+    for start in range(0, len(vectors), 4096):        # the views' frames a block at a time
+        frames = [frame(w) for w in vectors[start:start + 4096]]
+        n = 1.0
+        for axis in range(2 if mode == "3d" else 1):   # extents along u, and v in 3-D
+            lo, hi = point_ranges(geo.support, np.array([f[axis] for f in frames]))
+            n = n * np.ceil((hi - lo + 2 * spacing) / spacing)
+        largest = max(largest, float(np.max(n)))
     return largest
 
 

@@ -59,9 +59,10 @@ def interleaved(fns, *, repeats=3):
     return {k: statistics.median(v) for k, v in times.items()}
 
 
-def interleaved_times(fns, *, repeats=3, clock=time.perf_counter):
+def interleaved_times(fns, *, repeats=3, clock=time.perf_counter, warm_up=True):
     """Every timed call of each of ``fns``, run in rounds as :func:`interleaved` (one call
-    of each per round, after one warm-up round), by ``clock``.
+    of each per round, after one warm-up round unless ``warm_up`` is False: the caller
+    warmed them up), by ``clock``.
 
     Parameters
     ----------
@@ -73,13 +74,15 @@ def interleaved_times(fns, *, repeats=3, clock=time.perf_counter):
         Returns the time in seconds: ``time.perf_counter`` (wall, the default) or
         ``time.process_time`` (the CPU seconds of this process, all its threads: on a
         loaded machine, what one-thread code costs regardless of what else runs).
+    warm_up : bool, keyword-only
+        Call each once, untimed, before the rounds (default True).
 
     Returns
     -------
     dict of str to list of float
         Each name's times in seconds, round by round (round r of every name is entry r).
     """
-    for fn in fns.values():
+    for fn in fns.values() if warm_up else ():
         fn()
     times = {k: [] for k in fns}
     for _ in range(repeats):
