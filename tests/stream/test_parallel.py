@@ -170,38 +170,53 @@ def test_cluster_sizes_are_checked_before_starting(options, message):
 
 def _listener(reply):
     """A local server that is not a Dask scheduler: it answers like a web server, or
-    accepts connections and never says a word."""
+    accepts connections and never says a word. Returns its address and a function that
+    stops it: the serving thread is woken by one last connection, joined, and every
+    socket closed (no thread left blocked in accept on a closed socket, no socket left
+    for the garbage collector)."""
     import socket
     import threading
 
     sock = socket.socket()
     sock.bind(("127.0.0.1", 0))
     sock.listen()
-    held = []
+    held, stopping = [], threading.Event()
 
     def serve():
         while True:
             conn, _ = sock.accept()
             held.append(conn)
+            if stopping.is_set():
+                return
             if reply:
                 conn.sendall(b"HTTP/1.0 200 OK\r\nContent-Length: 5\r\n\r\nhello")
 
-    threading.Thread(target=serve, daemon=True).start()
-    return sock, f"tcp://127.0.0.1:{sock.getsockname()[1]}"
+    thread = threading.Thread(target=serve, daemon=True)
+    thread.start()
+
+    def stop():
+        stopping.set()
+        with socket.create_connection(sock.getsockname()):
+            thread.join()
+        for conn in held:
+            conn.close()
+        sock.close()
+
+    return f"tcp://127.0.0.1:{sock.getsockname()[1]}", stop
 
 
 @pytest.mark.parametrize("reply", [True, False], ids=["web-server", "silent"])
 def test_something_that_is_not_a_scheduler_is_refused(reply):
     """issue 29: a web server's reply was read as a message length (a MemoryError
     traceback); a silent server hung the client for minutes despite ``timeout``."""
-    sock, address = _listener(reply)
+    address, stop = _listener(reply)
     try:
         with pytest.raises(ml.errors.ParameterError,
                            match=f"^scheduler: no Dask scheduler answered at '{address}'"):
             with dask_executor(address, timeout=1):
                 pass
     finally:
-        sock.close()
+        stop()
 
 
 @pytest.mark.parametrize("address, message", [
