@@ -149,19 +149,24 @@ class Misfit(NamedTuple):
     sigma2: float
 
 
-def deviance(y, m, M=None):
-    """The count deviance of counts ``y`` against means ``m``: twice the log-likelihood
-    ratio of the saturated model, 2 Σ [y ln(y/m) − (y − m)] for Poisson and
-    2 Σ [y ln(y/m) − (y + M) ln((y + M)/(m + M))] for the negative binomial of M cells
-    (y ln y = 0 at y = 0; means floored at 1e-300)."""
+def unit_deviance(y, m, M=None):
+    """Each bin's count deviance of counts ``y`` against means ``m``: 2 [y ln(y/m) − (y − m)]
+    for Poisson and 2 [y ln(y/m) − (y + M) ln((y + M)/(m + M))] for the negative binomial
+    of M cells (y ln y = 0 at y = 0; means floored at 1e-300; never below 0)."""
     y = np.asarray(y, float)
     m = np.maximum(np.asarray(m, float), 1e-300)
     pos = y > 0
     ylog = np.zeros_like(y)
     ylog[pos] = y[pos] * np.log(y[pos] / m[pos])
     if M is None:
-        return float(2.0 * np.sum(ylog - (y - m)))
-    return float(2.0 * np.sum(ylog - (y + M) * np.log((y + M) / (m + M))))
+        return np.maximum(2.0 * (ylog - (y - m)), 0.0)
+    return np.maximum(2.0 * (ylog - (y + M) * np.log((y + M) / (m + M))), 0.0)
+
+
+def deviance(y, m, M=None):
+    """The count deviance of counts ``y`` against means ``m``: twice the log-likelihood
+    ratio of the saturated model, the sum of :func:`unit_deviance`."""
+    return float(np.sum(unit_deviance(y, m, M)))
 
 
 def _misfit(problem, m, V, J):

@@ -15,7 +15,7 @@ from scipy.optimize import least_squares
 
 from .._validate import check_real, short
 from ..errors import EnergyConservationWarning, ParameterError
-from ._identify import deviance
+from ._identify import deviance, unit_deviance
 from ._params import _jacobian, _materials
 from ._tables import _table
 
@@ -128,14 +128,15 @@ def _weighted_jacobian(model, sw, z):
 
 
 def solve(model, y, x_start, tol=1e-8):
-    """IRLS from ``x_start`` to data ``y``: (x, model values, solver evaluations); ``tol``
-    is each weighted least-squares solve's relative tolerance (ftol and xtol).
+    """The maximum-likelihood fit from ``x_start`` to data ``y``: (x, model values, solver
+    evaluations); ``tol`` is each least-squares solve's relative tolerance (ftol and xtol).
 
-    Counts stop when the reweighting moves no parameter by 1 % of its σ (:func:`_settled`),
-    or when a reweighted solve raises the deviance (:data:`RISE_TOL`): IRLS can cycle
-    between two points (a glint's width and specular share trading places at 10⁴
-    photoelectrons), and each outer iteration's deviance is compared with the best so far,
-    whose point is returned."""
+    Least squares for Gaussian noise. Counts: IRLS first, which stops when the
+    reweighting moves no parameter by 1 % of its σ (:func:`_settled`), or when a reweighted
+    solve raises the deviance (:data:`RISE_TOL`: IRLS can cycle between two points, a
+    glint's width and specular share trading places at 10⁴ photoelectrons), keeping the
+    best point seen; then the deviance itself is minimised from there (:func:`_polish`), so
+    the estimate is the likelihood's optimum even where IRLS stalled short of it."""
     pr = model.problem
     x = x_start.copy()
     iterations = 0
@@ -155,15 +156,52 @@ def solve(model, y, x_start, tol=1e-8):
         x = sol.x
         m = model.values(x)
         if pr.noise == "gaussian":
-            break
+            return x, m, iterations
         dev = deviance(y, m, pr.M)
         if best is not None and dev > best[0] + RISE_TOL * max(abs(best[0]), 1.0):
-            return best[1], best[2], iterations     # a cycle: the best point seen
+            break                                  # a cycle: polish the best point seen
         if best is None or dev < best[0]:
             best = (dev, x, m)
         if _settled(sol.jac, dx, x, len(pr.params)):
             break
-    return x, m, iterations
+    return _polish(model, y, best, tol, iterations)
+
+
+def _polish(model, y, best, tol, iterations):
+    """The count deviance minimised from IRLS's best point (dev, x, m) by least squares on
+    the deviance residuals sign(y − m) √d (Σ r² is the deviance): (x, m, evaluations), the
+    start kept unless the deviance falls."""
+    pr = model.problem
+    sol = least_squares(functools.partial(_deviance_residual, model, y), best[1],
+                        jac=functools.partial(_deviance_jacobian, model, y),
+                        bounds=(pr.low, pr.high), x_scale="jac", method="trf",
+                        ftol=tol, xtol=tol, max_nfev=200)
+    m = model.values(sol.x)
+    if m is None or deviance(y, m, pr.M) >= best[0]:
+        return best[1], best[2], iterations + sol.nfev
+    return sol.x, m, iterations + sol.nfev
+
+
+def _deviance_residual(model, y, z):
+    m = model.values(z)
+    if m is None:                           # outside the model's valid set
+        return np.full(y.size, 1e6 * (np.sqrt(np.abs(y).max()) + 1.0))
+    return np.sign(y - m) * np.sqrt(unit_deviance(y, m, model.problem.M))
+
+
+def _deviance_jacobian(model, y, z):
+    """∂r/∂x = (m − y) / (V r) · ∂m/∂x (d'(m) = 2 (m − y)/V for both count models), whose
+    limit where y = m is −1/√V."""
+    pr = model.problem
+    m = model.values(z)
+    if m is None:
+        return np.zeros((y.size, len(pr.params)))
+    m = np.maximum(m, 1e-300)
+    V = m + (0.0 if pr.M is None else m * m / pr.M)
+    r = np.sign(y - m) * np.sqrt(unit_deviance(y, m, pr.M))
+    near = np.abs(r) < 1e-6
+    g = np.where(near, -1.0 / np.sqrt(V), (m - y) / (V * np.where(near, 1.0, r)))
+    return model.jacobian(z) * g[:, None]
 
 
 #: A reweighted solve whose count deviance exceeds the best so far by more than this

@@ -20,6 +20,8 @@ import math
 import numpy as np
 from scipy.sparse import csr_matrix
 
+from ._tables import grid_position
+
 #: Most (piece, view) pairs held at once (memory: ~30 float64 arrays of this size).
 _CHUNK = 1_000_000
 
@@ -146,11 +148,12 @@ def analytic_triplets(scene, ladar, power, samples):
 
 def interp_matrix(rows, theta, omega, n_rows, grid, *, cubic=False):
     """The sparse (n_rows, grid) matrix putting weight ω at angle θ into row ``rows`` by
-    interpolation on the θ grid of ``grid`` points on [0, π/2]: linear, or cubic (Keys'
-    a = −½, third order: a 0.007 rad glint's table error falls from ~1e-4 to ~1e-6; the
-    table is even in θ about 0, and the last interval is linear)."""
+    interpolation on the θ grid of ``grid`` points on [0, π/2] (at θ = (π/2) u², u even,
+    :func:`._tables.grid_position`): linear, or cubic in u (Keys' a = −½, third order: a
+    0.007 rad glint's table error falls from ~1e-4 to ~1e-6; the table is even in u about
+    0, as it is in θ, and the last interval is linear)."""
     rows = np.asarray(rows, np.int64)
-    u = np.clip(theta, 0.0, 0.5 * math.pi) * ((grid - 1) / (0.5 * math.pi))
+    u = grid_position(theta, grid)
     j = np.minimum(np.floor(u).astype(np.int64), grid - 2)
     f = u - j
     if not cubic:

@@ -23,7 +23,7 @@ from meshladar.shapes import Disk
 LAD = Ladar(np.arange(0.0, 360.0, 6.0), Ladar.centered(64, 1.6 / 64).bin_edges)
 GLINT = SandfordRobertson(0.1, 0.4, 0.2, 0.02)
 PRISM = Scene([Disk((0.1, 0.0), 0.5, GLINT, name="disk")]).tessellate(256)
-#: The kernel weighs each hit through its material's θ table (8193 points), the mesh model
+#: The kernel weighs each hit through its material's θ table (16385 points), the mesh model
 #: evaluates the BRDF at each hit: they agree to the table's interpolation.
 TABLE_RTOL = 1e-3
 
