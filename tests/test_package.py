@@ -154,6 +154,17 @@ def test_every_public_submodule_is_an_attribute_and_old_names_warn():
     assert res.stdout.split() == ["29", "17"]
 
 
+def test_moved_entry_points_name_a_home_that_holds_them():
+    # meshladar.raytrace.first_hits named meshladar.forward.first_hits, which is not there
+    raytrace = importlib.import_module("meshladar.raytrace")
+    for name in raytrace._ENTRY_POINTS:
+        with pytest.warns(DeprecationWarning) as record:
+            old = getattr(raytrace, name)
+        home = re.search(r"use (meshladar\.[\w.]+)", str(record[0].message)).group(1)
+        module, attr = home.rsplit(".", 1)
+        assert getattr(importlib.import_module(module), attr) is old, (name, home)
+
+
 def test_a_deprecated_module_warns_at_the_users_import_line():
     # the warning points at the line that imported the old name, not at the import
     # machinery, so the default filters show it to the user

@@ -24,8 +24,10 @@ import numpy as np
 NULL_REL = 1e-9
 #: A parameter takes part in a null direction when its (scaled) component exceeds this.
 _SHARE = 0.05
-#: Also undetermined: a σ beyond half the bounds' width (or the value, unbounded), or a
-#: correlation beyond _CORR_LIMIT with another while σ exceeds _LOOSE of the value.
+#: Also undetermined: a σ beyond half the bounds' width (or the value, unbounded), a
+#: non-negative parameter's σ beyond half its value (its 95 % interval spans more than a
+#: factor 7), or a correlation beyond _CORR_LIMIT with another while σ exceeds _LOOSE of
+#: the value.
 _REL_LIMIT = 0.5
 _CORR_LIMIT = 0.995
 _LOOSE = 0.25
@@ -107,13 +109,17 @@ def _combinations(null_user, involved, sub):
 
 def _loose_ones(reasons, live, involved, at, named):
     """Mark, among the determined live parameters, those whose σ exceeds half their range
-    or which trade off with another beyond _CORR_LIMIT while loose."""
+    (or, non-negative, half their value) or which trade off with another beyond
+    _CORR_LIMIT while loose."""
     sub, width, x = at
     params, label = named
     sd = np.sqrt(np.maximum(np.diag(sub), 0.0))
     for a, i in enumerate(live):
         if not involved[a] and sd[a] > _REL_LIMIT * width[i]:
             reasons[i] = f"its uncertainty ({sd[a]:.3g}) exceeds half its range"
+        elif not involved[a] and params[i].low >= 0.0 and sd[a] > _REL_LIMIT * x[i]:
+            reasons[i] = (f"its uncertainty ({sd[a]:.3g}) exceeds half its value "
+                          f"({x[i]:.3g})")
     safe = np.where(sd > 0, sd, 1.0)
     corr = sub / np.outer(safe, safe)
     for a, i in enumerate(live):

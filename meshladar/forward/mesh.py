@@ -32,7 +32,7 @@ from ..stream import MAX_JOBS_PER_CORE, THREADS_FROM, joined, run_chunks
 from ..weighing.record import Weighing
 from .job import mesh_job, plan_job, sensor_offset
 from .sampling import warn_unresolved_lobes
-from ..raytrace.grid import ray_grid
+from ..raytrace.grid import MAX_SPACING, MIN_SPACING, ray_grid
 from ..raytrace.views import range_offset
 from ..raytrace.views import refine_t
 
@@ -71,7 +71,7 @@ def first_hits(scene, view_vector, *, ray_spacing):
         The view w, from the scene toward the ladar (normalised here); rays travel along
         −w.
     ray_spacing : float
-        Distance between neighbouring rays (scene units), > 0.
+        Distance between neighbouring rays (scene units), from 1e-150 to 1e30.
 
     Returns
     -------
@@ -86,14 +86,14 @@ def first_hits(scene, view_vector, *, ray_spacing):
     ------
     ParameterError
         If ``scene`` is not a mesh scene, ``view_vector`` is not one finite non-zero (3,)
-        direction, or ``ray_spacing`` is not a finite real > 0.
+        direction, or ``ray_spacing`` is not a real from 1e-150 to 1e30.
     """
     if not isinstance(scene, Scene) or not scene.is_mesh:
         raise ParameterError("first_hits needs a mesh scene")
     w = unit_vectors("view_vector", view_vector)
     if w.shape != (3,):
         raise ParameterError(f"view_vector must be one (3,) direction; got shape {w.shape}")
-    spacing = check_real("ray_spacing", ray_spacing, low=0.0, low_open=True)
+    spacing = check_real("ray_spacing", ray_spacing, low=MIN_SPACING, high=MAX_SPACING)
     geo = geometry(scene, "flat")
     emb = embree_scene(geo, resolve_backend("auto"))
     grid = ray_grid(geo, w, "3d", spacing, 0.0, None)

@@ -70,6 +70,6 @@ _ENTRY_POINTS = ("trace", "simulate_mesh", "first_hits", "occluded")
 
 def __getattr__(name):
     if name in _ENTRY_POINTS:
-        warn_moved(f"raytrace.{name}", f"forward.{name}")
+        warn_moved(f"raytrace.{name}", f"forward.mesh.{name}")
         return getattr(importlib.import_module("meshladar.forward.mesh"), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -12,7 +12,7 @@ from .._extents import point_ranges
 from .._validate import check_choice, check_real, check_seed
 from ..errors import ParameterError
 from ..precision import ORIGIN_MARGIN as _ORIGIN_MARGIN
-from ..precision import PARALLEL_SLACK
+from ..precision import PARALLEL_SLACK, SCENE_RADIUS_RANGE
 
 
 MODES = ("slice", "3d")
@@ -215,6 +215,9 @@ def _sampling(mode, sampling, seed):
 
 #: The finest ray spacing taken (scene units): its inverse square, a ray count, stays finite.
 MIN_SPACING = 1e-150
+#: The coarsest: the largest scene radius taken (a spacing of 3e38 overflowed the rays'
+#: float32 coordinates, a spacing beside the grid's edges).
+MAX_SPACING = SCENE_RADIUS_RANGE[1]
 #: rays_per_bin taken (subnormal ones made the spacing infinite); the ray budget refuses
 #: what the top allows and the scene cannot hold.
 RAYS_PER_BIN_RANGE = (1e-300, 1e6)
@@ -224,7 +227,7 @@ def _spacing(ladar, mode, ray_spacing, rays_per_bin, radius):
     if ray_spacing is not None and rays_per_bin is not None:
         raise ParameterError("give ray_spacing or rays_per_bin, not both")
     if ray_spacing is not None:
-        return check_real("ray_spacing", ray_spacing, low=MIN_SPACING)
+        return check_real("ray_spacing", ray_spacing, low=MIN_SPACING, high=MAX_SPACING)
     if rays_per_bin is not None:
         rpb = check_real("rays_per_bin", rays_per_bin, low=RAYS_PER_BIN_RANGE[0],
                          high=RAYS_PER_BIN_RANGE[1])

@@ -342,7 +342,7 @@ def plan_trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided
         The slice plane's height (scene coordinates), slice mode only; default the middle
         of the scene's bounding box in z.
     ray_spacing : float, optional
-        The ray spacing δ (scene units, finite, at least 1e-150); not with ``rays_per_bin``.
+        The ray spacing δ (scene units, from 1e-150 to 1e30); not with ``rays_per_bin``.
     rays_per_bin : float, optional
         Rays per width of the narrowest range bin, in [1e-300, 1e6]: δ = narrowest bin
         width / ``rays_per_bin``. Default (neither given): 8 in slice mode, 1 in 3-D, where

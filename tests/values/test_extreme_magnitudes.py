@@ -10,6 +10,7 @@ import trimesh
 
 import meshladar as ml
 from meshladar.errors import ParameterError
+from meshladar.forward.mesh import first_hits
 from meshladar.sensor import MIN_WAIST, GaussianBeam
 
 
@@ -39,3 +40,19 @@ def test_a_slice_height_beyond_the_scenes_range_is_refused(z0):
     ladar = ml.Ladar.covering(ball, n_bins=8, angles_deg=[0.0])
     with pytest.raises(ParameterError, match=r"z0 must be in \[-1e\+30, 1e\+30\]"):
         ml.simulate(ball, ladar, model="mesh", mode="slice", z0=z0)
+
+
+@pytest.mark.parametrize("spacing", [3.05e38, 6.8e38, 1e31])
+def test_a_ray_spacing_beyond_the_scenes_range_is_refused(spacing):
+    # 3e38 overflowed the rays' float32 coordinates in the grid (found by the functions'
+    # fuzzing through resolve); the largest taken, 1e30, traces with finite coordinates
+    ball = ml.Scene.from_mesh(trimesh.creation.icosphere(subdivisions=1),
+                              material=ml.materials.DARK_GRAY)
+    ladar = ml.Ladar.covering(ball, n_bins=8, angles_deg=[0.0])
+    with pytest.raises(ParameterError, match=r"ray_spacing must be in \[1e-150, 1e\+30\]"):
+        ml.simulate(ball, ladar, model="mesh", ray_spacing=spacing)
+    with pytest.raises(ParameterError, match=r"ray_spacing must be in \[1e-150, 1e\+30\]"):
+        first_hits(ball, [0.0, 0.0, 1.0], ray_spacing=spacing)
+    with np.errstate(all="raise"):
+        points, _, ranges = first_hits(ball, [0.0, 0.0, 1.0], ray_spacing=1e30)
+    assert np.all(np.isfinite(points)) and np.all(np.isfinite(ranges))
