@@ -10,17 +10,16 @@ import warnings
 
 import numpy as np
 import pytest
+from _pair import pair_counts
 
 import meshladar as ml
 from meshladar.brdf import GGX, Lambertian, Phong, SandfordRobertson, Tabulated
 from meshladar.errors import ParameterError
 from meshladar import materials
-from meshladar.fit import (IdentifiabilityWarning, KernelErrorWarning, coating_kernel,
-                            fit_coatings)
+from meshladar.fit import IdentifiabilityWarning, KernelErrorWarning, fit_coatings
 from meshladar.ladar import Ladar
 from meshladar.scene import Scene
 from meshladar.shapes import Disk
-from meshladar.studies import paper
 
 LAD = Ladar(np.arange(0.0, 360.0, 5.0), Ladar.centered(64, 1.4 / 64).bin_edges)
 
@@ -154,14 +153,7 @@ def test_a_width_no_larger_than_its_sigma_is_not_called_determined():
     """A non-negative parameter whose σ exceeds half its value is named weakly determined
     (σ kept): on the pair's trial PAIR_SEED the aluminium's e comes out 30 times below the
     truth, many σ away, and the fit says it cannot determine it instead of claiming it."""
-    scene = paper._pair(materials.DARK_GRAY, materials.ALUMINUM)
-    lad = Ladar(np.arange(0.0, 360.0, 6.0), Ladar.centered(64, 1.6 / 64).bin_edges)
-    exact = ml.simulate(scene, lad, model="analytic").values
-    k = 1e4 / exact.max()
-    y = np.random.default_rng(PAIR_SEED).poisson(exact * k) / k
-    measured = ml.Sinogram(y, angles_deg=lad.angles_deg, bin_edges=lad.bin_edges,
-                           info={"radiometry": "paper"})
-    kernel = coating_kernel(scene, lad, samples=2048)
+    _, kernel, measured, k = pair_counts(PAIR_SEED)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", KernelErrorWarning)
         with pytest.warns(IdentifiabilityWarning, match=r"small\.e \(.*half its value"):

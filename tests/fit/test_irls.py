@@ -7,14 +7,11 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
+from _pair import pair_counts
 
 import meshladar as ml
-from meshladar import materials
-from meshladar.fit import coating_kernel, fit_coatings
-from meshladar.ladar import Ladar
-from meshladar.studies import paper
+from meshladar.fit import fit_coatings
 
-LAD = Ladar(np.arange(0.0, 360.0, 6.0), Ladar.centered(64, 1.6 / 64).bin_edges)
 #: The most solver evaluations the cycling fit below may take: before the safeguard it
 #: ran all 50 outer iterations of ~70 evaluations each (3,500) without settling.
 MAX_EVALUATIONS = 600
@@ -28,13 +25,7 @@ DEVIANCE_TOL = 1e-3
 def _pair_fit(seed):
     """Fig. 10(a)'s pair at 10⁴ photoelectrons, Poisson counts of seed ``seed``, fitted with
     its kernel held at 2048 samples: (fit, the true parameters)."""
-    scene = paper._pair(materials.DARK_GRAY, materials.ALUMINUM)
-    exact = ml.simulate(scene, LAD, model="analytic").values
-    k = 1e4 / exact.max()
-    y = np.random.default_rng(seed).poisson(exact * k) / k
-    measured = ml.Sinogram(y, angles_deg=LAD.angles_deg, bin_edges=LAD.bin_edges,
-                           info={"radiometry": "paper"})
-    kernel = coating_kernel(scene, LAD, samples=2048)
+    scene, kernel, measured, k = pair_counts(seed)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ml.fit.IdentifiabilityWarning)
         warnings.simplefilter("ignore", ml.fit.KernelErrorWarning)    # held at 2048
