@@ -135,7 +135,9 @@ cli("simulate.--segments=huge", _SIM + ["--model", "mesh", "--segments", "100000
     _flag_names("--segments"))
 cli("simulate.--ray-spacing=tiny", _MESH + ["--ray-spacing", "1e-9"], "error",
     _flag_names("--ray-spacing"), setup=_SPHERE_FILE)
-cli("simulate.--ray-spacing=huge", _MESH + ["--ray-spacing", "1e300"], "warn",
+cli("simulate.--ray-spacing=huge", _MESH + ["--ray-spacing", "1e300"], "error",
+    _flag_names("--ray-spacing") + ("ray_spacing",), setup=_SPHERE_FILE)
+cli("simulate.--ray-spacing=wide", _MESH + ["--ray-spacing", "1e3"], "warn",
     setup=_SPHERE_FILE, check=_wrote("r.npz"))
 cli("simulate.--rays-per-bin=huge", _MESH + ["--rays-per-bin", "1e300"], "error",
     _flag_names("--rays-per-bin") + ("ray_spacing",), setup=_SPHERE_FILE)
