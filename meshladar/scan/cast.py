@@ -1,0 +1,128 @@
+"""Casting a chunk of pulses: sub-ray directions, first hits, and each sub-ray's expected
+photoelectrons.
+
+Geometry: Embree (the packet engine) picks the face each sub-ray meets first; its distance
+is then recomputed in float64 from the float64 origin and direction against that face's
+float64 plane, so a sensor a kilometre away ranges to ~1e-13 of its distance, not to
+float32's 1e-7. Faces are two-sided: cos θ = |n·d| with n the face's flat normal.
+
+Radiometry (``radiometry="power"``, monostatic, one bounce): a sub-ray carrying energy
+share s of a pulse of energy E that meets a surface at distance R and incidence θ returns
+
+    N = E s · F(θ; −θ) cos θ · (π D²/4) / R² · T η · exp(−2σR) / (h c / λ)
+
+photoelectrons: the surface's irradiance E s cos θ / δA⊥ over the element δA⊥ / cos θ,
+its radiance F E s cos θ / δA⊥, seen over δA⊥ from the aperture's solid angle π D²/4 / R²
+— the link budget of :class:`meshladar.sensor.Sensor` per sub-ray (F cos θ is the
+coating's :meth:`~meshladar.brdf.BRDF.projected` weight).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..raytrace.embree import embree_scene, geometry
+from ..raytrace.backends import resolve_backend
+from ..sensor import PLANCK, SPEED_OF_LIGHT
+
+__all__ = ["sub_directions", "Cast", "cast_chunk", "photoelectrons"]
+
+#: Below this |n·d| a hit's float64 refinement is not trusted (Embree's t is kept).
+_MIN_COS = 1e-9
+
+
+def _perpendiculars(d):
+    """Two unit vectors (n, 3) perpendicular to each unit d and to each other."""
+    ref = np.where(np.abs(d[:, 2:3]) < 0.9, [[0.0, 0.0, 1.0]], [[0.0, 1.0, 0.0]])
+    u = np.cross(ref, d)
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    return u, np.cross(d, u)
+
+
+def sub_directions(directions, offsets, pixel_pitch=None):
+    """Sensor-frame directions (n, m, 3) of each pulse's m sub-rays.
+
+    A beam's ``offsets`` (m, 2) are angles (rad) along two axes perpendicular to the pulse's
+    direction; a flash pixel's (``pixel_pitch`` = tan(IFOV)) are fractions of the pitch on
+    the focal plane (the pulse's direction has x = 1 there).
+    """
+    d = np.asarray(directions, np.float64)
+    if pixel_pitch is not None:
+        f = d / d[:, :1]                                   # back onto the focal plane x = 1
+        sub = np.repeat(f[:, None, :], len(offsets), axis=1)
+        sub[:, :, 1:] += pixel_pitch * offsets[None, :, :]
+    else:
+        u, v = _perpendiculars(d)
+        t = np.tan(offsets)
+        sub = d[:, None, :] + t[None, :, :1] * u[:, None, :] + t[None, :, 1:] * v[:, None, :]
+    return sub / np.linalg.norm(sub, axis=2, keepdims=True)
+
+
+class Cast:
+    """One chunk's first hits: arrays (n, m) per sub-ray (module docstring)."""
+
+    def __init__(self, face, distance, cos, points):
+        self.face = face            # global face index, -1 on a miss
+        self.distance = distance    # one-way distance from the origin, inf on a miss
+        self.cos = cos              # |n·d| at the hit, 0 on a miss
+        self.points = points        # (n, m, 3) hit points, nan on a miss
+
+    @property
+    def hit(self):
+        return self.face >= 0
+
+
+def cast_chunk(scene, origins, directions):
+    """First hits of rays from ``origins`` (n, 3) along unit ``directions`` (n, m, 3),
+    world frame, distances in float64 (module docstring)."""
+    geo = geometry(scene, "flat")
+    emb = embree_scene(geo, resolve_backend("auto"))
+    n, m = directions.shape[:2]
+    o = np.repeat(origins, m, axis=0)
+    d = directions.reshape(n * m, 3)
+    res = emb.run(np.ascontiguousarray(o - geo.center, dtype=np.float32),
+                  np.ascontiguousarray(d, dtype=np.float32))
+    face = res["primID"].astype(np.int64)
+    hit = face >= 0
+    f = face[hit]
+    nrm = geo.face_normals[f]
+    oc = o[hit] - geo.center
+    dd = d[hit]
+    denom = np.einsum("ij,ij->i", nrm, dd)
+    ok = np.abs(denom) > _MIN_COS
+    t = np.where(ok, (geo.plane_d[f] - np.einsum("ij,ij->i", nrm, oc)) / np.where(ok, denom, 1.0),
+                 res["tfar"][hit].astype(np.float64))
+    dist = np.full(n * m, np.inf)
+    dist[hit] = t
+    cos = np.zeros(n * m)
+    cos[hit] = np.abs(denom)
+    pts = np.full((n * m, 3), np.nan)
+    pts[hit] = o[hit] + t[:, None] * dd
+    return Cast(face.reshape(n, m), dist.reshape(n, m), cos.reshape(n, m),
+                pts.reshape(n, m, 3))
+
+
+def photoelectrons(scene, cast, shares, sensor):
+    """Each sub-ray's expected photoelectrons (n, m) (module docstring); 0 on a miss.
+
+    ``shares`` (m,) are the sub-rays' shares of a pulse's energy (summing to 1 for a beam,
+    to the pixel's share of the flash for an array)."""
+    geo = geometry(scene, "flat")
+    hit = cast.hit
+    out = np.zeros(cast.face.shape)
+    f = cast.face[hit]
+    cos = np.minimum(cast.cos[hit], 1.0)
+    sin = np.sqrt(np.maximum(0.0, 1.0 - cos * cos))
+    weight = np.zeros(len(f))
+    mat = geo.material[f]
+    for i, coating in enumerate(scene.materials):
+        sel = mat == i
+        if np.any(sel):
+            weight[sel] = coating.projected(cos[sel], sin[sel])
+    r = cast.distance[hit]
+    photon = PLANCK * SPEED_OF_LIGHT / sensor.wavelength
+    scale = (sensor.pulse_energy * np.pi * sensor.aperture_diameter ** 2 / 4.0
+             * sensor.optics_transmission * sensor.quantum_efficiency / photon)
+    share = np.broadcast_to(shares, cast.face.shape)[hit]
+    out[hit] = scale * share * weight / (r * r) * np.exp(-2.0 * sensor.extinction * r)
+    return out

@@ -1,0 +1,184 @@
+"""Per-pulse waveforms and the returns found in them.
+
+Waveforms: sample j of a pulse's record covers [t₀ + j Δt, t₀ + (j + 1) Δt] after its
+emission; each sub-ray's photoelectrons arrive at its two-way time τ = 2R/c spread by the
+echo's Gaussian (the pulse and the response, :attr:`ScanSensor.sigma
+<meshladar.scan.instrument.ScanSensor.sigma>`), integrated exactly over every sample (a
+difference of erfs): a record's sum is the pulse's photoelectrons where the echo lies
+inside it. t₀ is each pulse's earliest echo less :data:`SUPPORT` σ (rounded down to a
+sample), or, for a pulse that meets nothing, the chunk's earliest.
+
+Detection: :mod:`.instrument`'s :class:`~meshladar.scan.instrument.Detector`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+from scipy.optimize import least_squares
+
+__all__ = ["SUPPORT", "waveforms", "find_returns", "Returns"]
+
+#: The echo's Gaussian is cut beyond this many σ (exp(−32) of its peak).
+SUPPORT = 8.0
+_FWHM_PER_SIGMA = 2.0 * math.sqrt(2.0 * math.log(2.0))
+#: Peaks closer than this many σ are refitted together.
+_OVERLAP_SIGMAS = 4.0
+
+
+@numba.njit(cache=True, nogil=True)
+def _accumulate(tau, pe, start, dt, sigma, out):         # pragma: no cover - compiled
+    n, m = tau.shape
+    ns = out.shape[1]
+    s = sigma / dt
+    r2 = 1.0 / (s * math.sqrt(2.0))
+    for p in range(n):
+        for k in range(m):
+            e = pe[p, k]
+            if e <= 0.0:
+                continue
+            c = (tau[p, k] - start[p]) / dt
+            lo = max(0, int(math.floor(c - SUPPORT * s)))
+            hi = min(ns, int(math.ceil(c + SUPPORT * s)) + 1)
+            prev = math.erf((lo - c) * r2)
+            for j in range(lo, hi):
+                nxt = math.erf((j + 1 - c) * r2)
+                out[p, j] += 0.5 * e * (nxt - prev)
+                prev = nxt
+
+
+def waveforms(tau, pe, sigma, dt, samples=None):
+    """Expected photoelectrons per sample for a chunk's pulses (module docstring).
+
+    Parameters
+    ----------
+    tau, pe : (n, m) numpy.ndarray
+        Each sub-ray's two-way time (s; inf on a miss) and photoelectrons (0 on a miss).
+    sigma, dt : float
+        The echo's σ and the sample interval (s).
+    samples : int, optional
+        The record length; default the chunk's widest spread plus the support each side.
+
+    Returns
+    -------
+    waves : (n, samples) float64
+    start : (n,) float64
+        Each record's start time t₀ after emission, s.
+    """
+    n = len(tau)
+    lit = np.where(pe > 0, tau, np.inf)
+    first, last = lit.min(axis=1), np.where(pe > 0, tau, -np.inf).max(axis=1)
+    seen = np.isfinite(first)
+    floor = first[seen].min() if seen.any() else 0.0
+    first = np.where(seen, first, floor)
+    last = np.where(seen, last, floor)
+    start = np.floor((first - SUPPORT * sigma) / dt) * dt
+    if samples is None:
+        spread = (last - start + SUPPORT * sigma) / dt
+        samples = max(3, int(math.ceil(spread.max())) + 1)
+    out = np.zeros((n, samples))
+    _accumulate(np.where(pe > 0, tau, 0.0), np.ascontiguousarray(pe, np.float64), start,
+                float(dt), float(sigma), out)
+    return out, start
+
+
+class Returns:
+    """A chunk's returns: pulse index (within the chunk), time after emission (s),
+    amplitude (photoelectrons per sample), FWHM width (s), intensity (photoelectrons),
+    return number (1 = first in time) and number of returns of its pulse."""
+
+    def __init__(self, pulse, time, amplitude, width, intensity):
+        order = np.lexsort((time, pulse))
+        self.pulse = pulse[order]
+        self.time = time[order]
+        self.amplitude = amplitude[order]
+        self.width = width[order]
+        self.intensity = intensity[order]
+        counts = np.bincount(self.pulse, minlength=0)
+        self.number_of_returns = counts[self.pulse].astype(np.uint8) if len(self.pulse) else \
+            np.zeros(0, np.uint8)
+        first = np.searchsorted(self.pulse, self.pulse, side="left")
+        self.return_number = (np.arange(len(self.pulse)) - first + 1).astype(np.uint8)
+
+    def __len__(self):
+        return len(self.pulse)
+
+
+def _candidates(waves, level, max_returns):
+    """Local maxima at or above ``level``: (pulse, sample), the strongest ``max_returns``
+    of each pulse."""
+    w = waves
+    left = np.concatenate([np.full((len(w), 1), -np.inf), w[:, :-1]], axis=1)
+    right = np.concatenate([w[:, 1:], np.full((len(w), 1), -np.inf)], axis=1)
+    p, j = np.nonzero((w >= level) & (w >= left) & (w > right))
+    amp = w[p, j]
+    order = np.lexsort((-amp, p))
+    p, j = p[order], j[order]
+    rank = np.arange(len(p)) - np.searchsorted(p, p, side="left")
+    keep = rank < max_returns
+    return p[keep], j[keep]
+
+
+def _interpolate(waves, p, j, sigma_samples):
+    """A Gaussian through each peak's three samples: offset (samples), σ (samples), height."""
+    ns = waves.shape[1]
+    a = waves[p, np.maximum(j - 1, 0)]
+    b = waves[p, j]
+    c = waves[p, np.minimum(j + 1, ns - 1)]
+    tiny = 1e-300
+    la, lb, lc = (np.log(np.maximum(x, tiny)) for x in (a, b, c))
+    curv = la - 2.0 * lb + lc
+    good = (a > 0) & (c > 0) & (curv < 0) & (j > 0) & (j < ns - 1)
+    curv_safe = np.where(good, curv, -1.0)
+    delta = np.where(good, np.clip(0.5 * (la - lc) / curv_safe, -0.5, 0.5), 0.0)
+    s = np.where(good, np.sqrt(-1.0 / curv_safe), sigma_samples)
+    height = np.where(good, np.exp(lb - 0.25 * (la - lc) * delta), b)
+    return delta, s, height
+
+
+def _decompose(waves, p, centre, s, height, sigma_samples):
+    """Refit each pulse's overlapping peaks as one sum of Gaussians (in place)."""
+    ns = waves.shape[1]
+    for q in np.unique(p):
+        idx = np.nonzero(p == q)[0]
+        if len(idx) < 2:
+            continue
+        idx = idx[np.argsort(centre[idx])]
+        close = np.diff(centre[idx]) < _OVERLAP_SIGMAS * sigma_samples
+        if not close.any():
+            continue
+        lo = int(max(0, centre[idx].min() - SUPPORT * sigma_samples))
+        hi = int(min(ns, centre[idx].max() + SUPPORT * sigma_samples + 1))
+        x = np.arange(lo, hi) + 0.5
+        y = waves[q, lo:hi]
+        k = len(idx)
+
+        def model(v):
+            h, mu, sd = v[:k], v[k:2 * k], v[2 * k:]
+            return (h[:, None] * np.exp(-0.5 * ((x[None, :] - mu[:, None]) / sd[:, None]) ** 2)
+                    ).sum(axis=0)
+
+        v0 = np.concatenate([height[idx], centre[idx], np.full(k, sigma_samples)])
+        lower = np.concatenate([np.zeros(k), np.full(k, lo), np.full(k, 0.5 * sigma_samples)])
+        upper = np.concatenate([np.full(k, np.inf), np.full(k, hi),
+                                np.full(k, 3.0 * sigma_samples)])
+        fit = least_squares(lambda v: model(v) - y, np.clip(v0, lower, upper),
+                            bounds=(lower, upper))
+        height[idx], centre[idx], s[idx] = fit.x[:k], fit.x[k:2 * k], fit.x[2 * k:]
+
+
+def find_returns(waves, start, dt, sigma, level, max_returns, decompose):
+    """The returns in a chunk's waveforms (photoelectrons per sample), as :class:`Returns`
+    (:mod:`.instrument`'s detection)."""
+    sigma_samples = sigma / dt
+    p, j = _candidates(waves, level, max_returns)
+    delta, s, height = _interpolate(waves, p, j, sigma_samples)
+    centre = j + 0.5 + delta
+    if decompose and len(p):
+        _decompose(waves, p, centre, s, height, sigma_samples)
+    time = start[p] + centre * dt
+    width = s * dt * _FWHM_PER_SIGMA
+    intensity = height * s * math.sqrt(2.0 * math.pi)
+    return Returns(p, time, height, width, intensity)

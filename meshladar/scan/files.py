@@ -1,0 +1,144 @@
+"""Point-cloud files: LAS 1.4 (through laspy; LAZ when its lazrs backend is installed) and
+HDF5 (through h5py), both written atomically and read without pickle.
+
+LAS: point format 6 with every field of :data:`~meshladar.scan.points.POINT_FIELDS` that
+LAS lacks as a named extra-bytes dimension (its unit in the description): x, y, z are
+stored as integers at ``scale`` (default 0.1 mm) from an offset at the cloud's minimum, so
+they read back within ``scale``/2; LAS's own intensity is the photoelectrons rounded and
+clipped to 16 bits (the exact value is the ``photoelectrons`` extra bytes), its scan angle
+the pattern's in LAS's 0.006° steps, its GPS time the emission time (s). Every extra-bytes
+field reads back exactly (:data:`EXTRA_NAMES`: the exact intensity and scan angle).
+
+HDF5: ``/points`` is one compound dataset of the records (each field's unit in the
+attribute ``units``, a JSON object), ``/waveforms`` (pulses × samples, photoelectrons per
+sample) and ``/starts`` (s) when the cloud holds them, and the root's ``info`` attribute
+the scan's parameters as JSON. Everything reads back exactly.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+
+from .._atomic_write import write_atomic
+from .._validate import check_path, check_real
+from ..errors import ParameterError
+from .points import POINT_DTYPE, POINT_FIELDS, PointCloud
+
+__all__ = ["write_las", "read_las", "write_hdf5", "read_hdf5", "LAS_NATIVE", "EXTRA_NAMES"]
+
+#: The record fields LAS 1.4 stores in its own dimensions (all others are extra bytes).
+LAS_NATIVE = ("x", "y", "z", "return_number", "number_of_returns")
+_SCAN_ANGLE_STEP = 0.006
+#: Extra-bytes names of the fields whose own names LAS's format 6 takes: the exact
+#: photoelectrons (LAS's intensity is 16 bits) and the exact scan angle (LAS's is in steps).
+EXTRA_NAMES = {"intensity": "photoelectrons", "scan_angle": "scan_angle_deg"}
+
+
+def _extra(name):
+    return EXTRA_NAMES.get(name, name)
+
+
+def _need(module):
+    try:
+        return __import__(module)
+    except ImportError:
+        raise ParameterError(f"{module} is not installed: pip install 'meshladar[scan]'") \
+            from None
+
+
+def write_las(path, cloud, *, scale=1e-4):
+    """Write ``cloud`` to a LAS 1.4 file (LAZ if ``path`` ends in ``.laz``), atomically.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file; an existing file is replaced only once the new one is complete.
+    cloud : PointCloud
+        The returns.
+    scale : float
+        The coordinates' resolution (scene units, in [1e-9, 1]; default 1e-4).
+    """
+    laspy = _need("laspy")
+    path = check_path("path", path)
+    if not isinstance(cloud, PointCloud):
+        raise ParameterError(f"cloud must be a PointCloud; got {type(cloud).__name__}")
+    scale = check_real("scale", scale, low=1e-9, high=1.0)
+    pts = cloud.points
+    header = laspy.LasHeader(point_format=6, version="1.4")
+    xyz = cloud.xyz
+    header.offsets = np.floor(xyz.min(axis=0)) if len(pts) else np.zeros(3)
+    header.scales = np.full(3, scale)
+    header.add_extra_dims([laspy.ExtraBytesParams(
+        name=_extra(n), type=np.dtype(t), description=f"{u or 'count'}"[:31])
+        for n, t, u, _ in POINT_FIELDS if n not in LAS_NATIVE])
+    las = laspy.LasData(header)
+    las.x, las.y, las.z = xyz.T
+    las.return_number = np.clip(pts["return_number"], 1, 15)
+    las.number_of_returns = np.clip(pts["number_of_returns"], 1, 15)
+    las.intensity = np.clip(np.rint(pts["intensity"]), 0, 65535).astype(np.uint16)
+    las.scan_angle = np.clip(np.rint(pts["scan_angle"] / _SCAN_ANGLE_STEP), -30000,
+                             30000).astype(np.int16)
+    las.gps_time = pts["emission_time"]
+    for n, _, _, _ in POINT_FIELDS:
+        if n not in LAS_NATIVE:
+            las[_extra(n)] = pts[n]
+    compress = str(path).lower().endswith(".laz")
+    write_atomic(path, lambda fh: las.write(fh, do_compress=compress))
+
+
+def read_las(path):
+    """Read a LAS/LAZ file that :func:`write_las` wrote back into a :class:`PointCloud`
+    (x, y, z as quantised; every other field exact)."""
+    laspy = _need("laspy")
+    las = laspy.read(check_path("path", path))
+    names = set(las.point_format.extra_dimension_names)
+    missing = [_extra(n) for n, *_ in POINT_FIELDS if n not in LAS_NATIVE
+               and _extra(n) not in names]
+    if missing:
+        raise ParameterError(f"{path}: not a meshladar point cloud (no {missing[0]!r} field)")
+    pts = np.zeros(len(las.points), POINT_DTYPE)
+    pts["x"], pts["y"], pts["z"] = np.asarray(las.x), np.asarray(las.y), np.asarray(las.z)
+    pts["return_number"] = np.asarray(las.return_number)
+    pts["number_of_returns"] = np.asarray(las.number_of_returns)
+    for n, *_ in POINT_FIELDS:
+        if n not in LAS_NATIVE:
+            pts[n] = np.asarray(las[_extra(n)])
+    return PointCloud(pts, {"file": os.fspath(path)})
+
+
+def write_hdf5(path, cloud):
+    """Write ``cloud`` (records, waveforms if held, info) to an HDF5 file, atomically
+    (module docstring)."""
+    h5py = _need("h5py")
+    path = check_path("path", path)
+    if not isinstance(cloud, PointCloud):
+        raise ParameterError(f"cloud must be a PointCloud; got {type(cloud).__name__}")
+
+    def fill(fh):
+        with h5py.File(fh, "w") as f:
+            d = f.create_dataset("points", data=cloud.points, chunks=True if len(cloud) else None)
+            d.attrs["units"] = json.dumps({n: u for n, _, u, _ in POINT_FIELDS})
+            d.attrs["meaning"] = json.dumps({n: m for n, _, _, m in POINT_FIELDS})
+            if cloud.waveforms is not None:
+                w = f.create_dataset("waveforms", data=cloud.waveforms, chunks=True)
+                w.attrs["units"] = "photoelectrons per sample"
+                f.create_dataset("starts", data=cloud.starts).attrs["units"] = "s"
+            f.attrs["info"] = json.dumps(cloud.info, default=str)
+
+    write_atomic(path, fill)
+
+
+def read_hdf5(path):
+    """Read an HDF5 file that :func:`write_hdf5` wrote back into a :class:`PointCloud`."""
+    h5py = _need("h5py")
+    with h5py.File(check_path("path", path), "r") as f:
+        if "points" not in f:
+            raise ParameterError(f"{path}: not a meshladar point cloud (no /points)")
+        pts = np.asarray(f["points"][()]).astype(POINT_DTYPE)
+        waves = np.asarray(f["waveforms"][()]) if "waveforms" in f else None
+        starts = np.asarray(f["starts"][()]) if "starts" in f else None
+        info = json.loads(f.attrs.get("info", "{}"))
+    return PointCloud(pts, info, waves, starts)

@@ -1,0 +1,182 @@
+"""The scanner's transmitter, receiver and detector: :class:`ScanSensor` and
+:class:`Detector`.
+
+Linear-mode detection: a return is a local maximum of the (noisy) waveform at or above the
+threshold, in photoelectrons per sample. The threshold is ``threshold`` when given, else
+the Poisson one for the receiver's background and dark counts b per sample: the smallest
+count n with P(N ≥ n | b) ≤ ``false_alarm`` (so a noise-only sample crosses it with
+probability at most ``false_alarm``), and at least one photoelectron. Each return's time
+comes from a Gaussian through its three samples (log-parabola interpolation: exact for a
+sampled Gaussian), its width and intensity (photoelectrons under it) from the same fit.
+Peaks closer than four pulse widths (σ) are refitted together as a sum of Gaussians
+(their Gaussian decomposition); echoes closer than the pulse's resolution merge into one
+maximum and give one return.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from .._pulses import GaussianPulse
+from .._validate import check_count, check_real
+from ..errors import ParameterError
+from ..noise import Noise
+from ..sensor import LIMITS, MIN_WAVELENGTH
+from .footprint import ScanBeam
+
+__all__ = ["ScanSensor", "Detector", "MAX_SAMPLES"]
+
+#: The longest record a pulse's waveform may hold (samples).
+MAX_SAMPLES = 1 << 16
+
+
+@dataclass(frozen=True)
+class Detector:
+    """Linear-mode detection (module docstring).
+
+    Parameters
+    ----------
+    threshold : float, optional
+        Photoelectrons per sample (> 0); default the Poisson threshold for ``false_alarm``.
+    false_alarm : float
+        The largest probability that a noise-only sample crosses the threshold, in
+        (0, 0.5] (default 1e-6).
+    max_returns : int
+        The most returns kept per pulse (the strongest), 1 to 15 (LAS's limit; default 5).
+    decompose : bool
+        Refit overlapping peaks as a sum of Gaussians (default True).
+    """
+
+    threshold: float | None = None
+    false_alarm: float = 1e-6
+    max_returns: int = 5
+    decompose: bool = True
+
+    def __post_init__(self):
+        if self.threshold is not None:
+            object.__setattr__(self, "threshold", check_real(
+                "threshold", self.threshold, low=0.0, low_open=True, high=1e15))
+        object.__setattr__(self, "false_alarm", check_real(
+            "false_alarm", self.false_alarm, low=0.0, low_open=True, high=0.5))
+        object.__setattr__(self, "max_returns", check_count("max_returns", self.max_returns,
+                                                            high=15))
+        if not isinstance(self.decompose, bool):
+            raise ParameterError(f"decompose must be True or False; got {self.decompose!r}")
+
+    def level(self, background):
+        """The threshold (photoelectrons per sample) for ``background`` mean counts per
+        sample (module docstring)."""
+        if self.threshold is not None:
+            return self.threshold
+        from scipy.stats import poisson
+
+        n = poisson.isf(self.false_alarm, background) + 1      # P(N ≥ n) ≤ false_alarm
+        return max(1.0, float(n))
+
+    def describe(self) -> dict:
+        return {"threshold_pe": self.threshold, "false_alarm": self.false_alarm,
+                "max_returns": self.max_returns, "decompose": self.decompose}
+
+
+@dataclass(frozen=True)
+class ScanSensor:
+    """A scanning ladar's transmitter and receiver (monostatic; :mod:`.cast`'s link budget).
+
+    Parameters
+    ----------
+    pulse_energy : float
+        Energy per pulse, J (a flash array's whole frame), in (0, 1e9].
+    aperture_diameter : float
+        Receiver aperture diameter, m, in (0, 1e3].
+    sample_rate : float
+        The digitiser's samples per second, in (0, 1e15].
+    pulse : GaussianPulse
+        The transmitted pulse (default 5 ns FWHM).
+    response : GaussianPulse, optional
+        The receiver's impulse response; the two Gaussians combine (FWHMs in quadrature).
+    beam : ScanBeam
+        The beam's divergence and profile (default one ray per pulse); ignored by a flash
+        array, whose pixels are lit uniformly.
+    noise : meshladar.noise.Noise, optional
+        The receiver's noise (shot noise of signal, background and dark counts, speckle,
+        APD gain); None: the expected waveform, no noise.
+    detector : Detector
+        How returns are found (default :class:`Detector`'s).
+    samples : int, optional
+        The record length per pulse (samples); default each chunk's spread of echoes plus
+        the pulse's support on either side.
+    wavelength, optics_transmission, quantum_efficiency, extinction : float
+        As :class:`meshladar.sensor.Sensor`'s (m; (0, 1]; (0, 1]; 1/m).
+    """
+
+    pulse_energy: float
+    aperture_diameter: float
+    sample_rate: float
+    pulse: GaussianPulse = field(default_factory=lambda: GaussianPulse(5e-9))
+    response: GaussianPulse | None = None
+    beam: ScanBeam = field(default_factory=ScanBeam)
+    noise: Noise | None = None
+    detector: Detector = field(default_factory=Detector)
+    samples: int | None = None
+    wavelength: float = 1.064e-6
+    optics_transmission: float = 1.0
+    quantum_efficiency: float = 1.0
+    extinction: float = 0.0
+
+    def __post_init__(self):
+        for name, high in (("pulse_energy", LIMITS["pulse_energy"]),
+                           ("aperture_diameter", LIMITS["aperture_diameter"]),
+                           ("sample_rate", 1e15)):
+            object.__setattr__(self, name, check_real(name, getattr(self, name), low=0.0,
+                                                      low_open=True, high=high))
+        for name, kind in (("pulse", GaussianPulse), ("response", (GaussianPulse, type(None))),
+                           ("beam", ScanBeam), ("noise", (Noise, type(None))),
+                           ("detector", Detector)):
+            if not isinstance(getattr(self, name), kind):
+                raise ParameterError(f"{name} must be a {getattr(kind, '__name__', kind)}; "
+                                     f"got {type(getattr(self, name)).__name__}")
+        if self.samples is not None:
+            object.__setattr__(self, "samples", check_count("samples", self.samples,
+                                                            low=3, high=MAX_SAMPLES))
+        object.__setattr__(self, "wavelength", check_real(
+            "wavelength", self.wavelength, low=MIN_WAVELENGTH, high=LIMITS["wavelength"]))
+        for name in ("optics_transmission", "quantum_efficiency"):
+            object.__setattr__(self, name, check_real(name, getattr(self, name), low=0.0,
+                                                      low_open=True, high=1.0))
+        object.__setattr__(self, "extinction", check_real("extinction", self.extinction,
+                                                          low=0.0, high=1.0))
+
+    @property
+    def dt(self) -> float:
+        """The sample interval, s."""
+        return 1.0 / self.sample_rate
+
+    @property
+    def sigma(self) -> float:
+        """The received echo's standard deviation in time, s: the pulse's and the
+        response's in quadrature."""
+        f2 = self.pulse.fwhm ** 2 + (self.response.fwhm ** 2 if self.response else 0.0)
+        return f2 ** 0.5 / 2.3548200450309493
+
+    def background(self) -> float:
+        """Mean background and dark counts per sample."""
+        if self.noise is None:
+            return 0.0
+        return (self.noise.background_rate + self.noise.dark_rate) * self.dt
+
+    def describe(self) -> dict:
+        """Every parameter with its unit in its name (for result files)."""
+        return {"pulse_energy_J": self.pulse_energy,
+                "aperture_diameter_m": self.aperture_diameter,
+                "sample_rate_hz": self.sample_rate, "pulse": self.pulse.describe(),
+                "response": self.response.describe() if self.response else None,
+                "beam": self.beam.describe(),
+                "noise": None if self.noise is None else {
+                    k: getattr(self.noise, k) for k in (
+                        "speckle_cells", "background_rate", "dark_rate",
+                        "excess_noise_factor", "gain", "bits", "full_scale")},
+                "detector": self.detector.describe(), "samples": self.samples,
+                "wavelength_m": self.wavelength,
+                "optics_transmission": self.optics_transmission,
+                "quantum_efficiency": self.quantum_efficiency,
+                "extinction_per_m": self.extinction}

@@ -1,0 +1,183 @@
+"""Platforms: the sensor's pose (position and attitude) against time.
+
+Frames (ROS REP 103's): the world's axes are the scene's; the platform's body frame has x
+forward, y left, z up. An attitude is (roll, pitch, yaw) in degrees, applied as
+``scipy.spatial.transform.Rotation.from_euler("ZYX", [yaw, pitch, roll], degrees=True)``:
+yaw about z, then pitch about the new y, then roll about the new x; it maps body vectors to
+world vectors. With z up and y left a positive pitch turns the nose down: pitch 90° points
+the body's x straight down (a nadir-looking sensor).
+
+The sensor sits on the platform at ``mount_offset`` (body frame, scene units) and its own
+frame (:mod:`.patterns`: x the boresight) is turned from the body's by ``boresight_deg``,
+another (roll, pitch, yaw). Every pulse is cast from the sensor's pose at its own emission
+time.
+
+Kinds: :meth:`Platform.static`, :meth:`Platform.moving` (constant velocity),
+:meth:`Platform.waypoints` (positions interpolated linearly or by a cubic spline,
+attitudes by spherical linear interpolation) and :meth:`Platform.from_csv` (a trajectory
+file with the columns ``time, x, y, z, roll, pitch, yaw``: seconds, scene units, degrees in
+the convention above, one header line, comma-separated).
+"""
+
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+from scipy.spatial.transform import Rotation, Slerp
+
+from .._validate import check_choice, check_path, finite_array, readonly_copy
+from ..errors import ParameterError
+
+__all__ = ["Platform", "INTERPOLATIONS", "TRAJECTORY_COLUMNS"]
+
+#: How waypoints' positions are interpolated.
+INTERPOLATIONS = ("linear", "spline")
+#: The columns of a trajectory file, in order.
+TRAJECTORY_COLUMNS = ("time", "x", "y", "z", "roll", "pitch", "yaw")
+
+
+def _triple(name, value, shape=(3,)):
+    a = finite_array(name, value).astype(np.float64)
+    if a.shape != shape:
+        raise ParameterError(f"{name} must have shape {shape}; got {a.shape}")
+    return a
+
+
+def rotation(attitude_deg):
+    """The body-to-world rotation of (roll, pitch, yaw) in degrees, (n, 3) or (3,)."""
+    a = np.asarray(attitude_deg, np.float64)
+    return Rotation.from_euler("ZYX", a[..., ::-1], degrees=True)
+
+
+@dataclass(frozen=True)
+class Platform:
+    """A sensor's carrier: waypoints of position and attitude against time (module
+    docstring). Build it with :meth:`static`, :meth:`moving`, :meth:`waypoints` or
+    :meth:`from_csv`.
+
+    Parameters
+    ----------
+    times : (k,) array_like
+        Waypoint times, s, increasing (one waypoint: a static platform).
+    positions : (k, 3) array_like
+        Positions, scene units.
+    attitudes_deg : (k, 3) array_like
+        (roll, pitch, yaw) at each waypoint, deg.
+    interpolation : str
+        ``"linear"`` (default) or ``"spline"`` (a cubic spline with natural ends; needs
+        ≥ 3 waypoints) for the positions; attitudes always by slerp.
+    mount_offset : (3,) array_like
+        The sensor's position on the platform, body frame, scene units (default 0).
+    boresight_deg : (3,) array_like
+        The sensor frame's (roll, pitch, yaw) in the body frame, deg (default 0).
+
+    Raises
+    ------
+    ParameterError
+        When the arrays' shapes disagree, a value is not finite, the times do not increase,
+        or ``interpolation`` is unknown.
+    """
+
+    times: np.ndarray
+    positions: np.ndarray
+    attitudes_deg: np.ndarray
+    interpolation: str = "linear"
+    mount_offset: tuple = (0.0, 0.0, 0.0)
+    boresight_deg: tuple = (0.0, 0.0, 0.0)
+
+    def __post_init__(self):
+        t = finite_array("times", self.times).astype(np.float64).ravel()
+        k = len(t)
+        if k == 0 or np.any(np.diff(t) <= 0):
+            raise ParameterError(f"times must be 1 or more increasing waypoint times; got {k} "
+                                 "values" + (" not increasing" if k else ""))
+        pos = _triple("positions", self.positions, (k, 3))
+        att = _triple("attitudes_deg", self.attitudes_deg, (k, 3))
+        check_choice("interpolation", self.interpolation, INTERPOLATIONS)
+        if self.interpolation == "spline" and k < 3:
+            raise ParameterError(f"interpolation='spline' needs 3 or more waypoints; got {k}")
+        object.__setattr__(self, "times", readonly_copy(t))
+        object.__setattr__(self, "positions", readonly_copy(pos))
+        object.__setattr__(self, "attitudes_deg", readonly_copy(att))
+        object.__setattr__(self, "mount_offset",
+                           tuple(_triple("mount_offset", self.mount_offset).tolist()))
+        object.__setattr__(self, "boresight_deg",
+                           tuple(_triple("boresight_deg", self.boresight_deg).tolist()))
+
+    # -- constructors ------------------------------------------------------------------
+    @classmethod
+    def static(cls, position, attitude_deg=(0.0, 0.0, 0.0), **mount):
+        """A platform at rest at ``position`` with ``attitude_deg`` (roll, pitch, yaw)."""
+        return cls([0.0], [position], [attitude_deg], **mount)
+
+    @classmethod
+    def moving(cls, position, velocity, attitude_deg=(0.0, 0.0, 0.0), **mount):
+        """A platform at ``position`` at t = 0 moving at constant ``velocity`` (scene units
+        per second) with a fixed attitude."""
+        p0, v = _triple("position", position), _triple("velocity", velocity)
+        return cls([0.0, 1.0], [p0, p0 + v], [attitude_deg, attitude_deg], **mount)
+
+    @classmethod
+    def waypoints(cls, times, positions, attitudes_deg, interpolation="linear", **mount):
+        """Waypoints interpolated between (linearly or by spline) and held beyond the ends
+        (constant velocity for :meth:`moving`'s two waypoints: extrapolated)."""
+        return cls(times, positions, attitudes_deg, interpolation, **mount)
+
+    @classmethod
+    def from_csv(cls, path, interpolation="linear", **mount):
+        """A trajectory file: a header line, then rows of ``time, x, y, z, roll, pitch,
+        yaw`` (:data:`TRAJECTORY_COLUMNS`; s, scene units, deg)."""
+        path = check_path("path", path)
+        with open(path, newline="") as f:
+            rows = list(csv.reader(f))
+        header = [h.strip().lower() for h in rows[0]] if rows else []
+        if tuple(header) != TRAJECTORY_COLUMNS:
+            raise ParameterError(f"{path}: the header must be {','.join(TRAJECTORY_COLUMNS)}; "
+                                 f"got {','.join(header) or 'nothing'}")
+        try:
+            data = np.array([[float(x) for x in r] for r in rows[1:] if r], np.float64)
+        except ValueError as exc:
+            raise ParameterError(f"{path}: every value must be a number ({exc})") from None
+        if data.ndim != 2 or data.shape[1] != 7:
+            raise ParameterError(f"{path}: every row needs 7 values after the header")
+        return cls(data[:, 0], data[:, 1:4], data[:, 4:7], interpolation, **mount)
+
+    # -- poses -------------------------------------------------------------------------
+    def _body(self, t):
+        """Body positions (n, 3) and rotations at times t."""
+        k = len(self.times)
+        if k == 1:
+            return (np.broadcast_to(self.positions[0], (len(t), 3)).copy(),
+                    rotation(np.broadcast_to(self.attitudes_deg[0], (len(t), 3))))
+        if self.interpolation == "spline":
+            pos = CubicSpline(self.times, self.positions, bc_type="natural")(
+                np.clip(t, self.times[0], self.times[-1]))
+        elif k == 2:                 # constant velocity, extrapolated both ways
+            v = (self.positions[1] - self.positions[0]) / (self.times[1] - self.times[0])
+            pos = self.positions[0] + (t - self.times[0])[:, None] * v
+        else:
+            pos = np.stack([np.interp(t, self.times, self.positions[:, i]) for i in range(3)],
+                           axis=1)
+        slerp = Slerp(self.times, rotation(self.attitudes_deg))
+        return pos, slerp(np.clip(t, self.times[0], self.times[-1]))
+
+    def sensor_poses(self, t):
+        """The sensor's origin (n, 3) and sensor-to-world rotation matrices (n, 3, 3) at
+        times ``t`` (s): the body's pose, the mount offset and the boresight."""
+        t = np.asarray(t, np.float64).ravel()
+        pos, rot = self._body(t)
+        origin = pos + rot.apply(np.asarray(self.mount_offset))
+        mats = (rot * rotation(np.asarray(self.boresight_deg))).as_matrix()
+        return origin, mats.reshape(len(t), 3, 3)
+
+    def describe(self) -> dict:
+        """The platform's waypoints and mount, with units in the names (for result files)."""
+        return {"times_s": self.times.tolist(), "positions": self.positions.tolist(),
+                "attitudes_deg": self.attitudes_deg.tolist(),
+                "interpolation": self.interpolation, "mount_offset": list(self.mount_offset),
+                "boresight_deg": list(self.boresight_deg),
+                "attitude_convention": "roll, pitch, yaw: Rotation.from_euler('ZYX', "
+                                       "[yaw, pitch, roll]), body x forward, y left, z up"}

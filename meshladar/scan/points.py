@@ -1,0 +1,87 @@
+"""The point cloud a scan records: one numpy record per return, with its ground truth.
+
+Fields (:data:`POINT_FIELDS`: name, dtype, unit, meaning):
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["POINT_FIELDS", "POINT_DTYPE", "PointCloud", "CONVENTIONS"]
+
+#: Every field of a return: (name, dtype, unit, meaning).
+POINT_FIELDS = (
+    ("x", "f8", "m", "measured position, world frame"),
+    ("y", "f8", "m", "measured position, world frame"),
+    ("z", "f8", "m", "measured position, world frame"),
+    ("range", "f8", "m", "measured one-way range from the sensor, c t / 2"),
+    ("time", "f8", "s", "two-way time of the echo after its pulse's emission"),
+    ("amplitude", "f4", "photoelectrons", "the echo's peak, per sample"),
+    ("width", "f4", "s", "the echo's full width at half maximum"),
+    ("intensity", "f4", "photoelectrons", "the echo's photoelectrons (area under its fit)"),
+    ("return_number", "u1", "", "1 for the first echo of its pulse in time"),
+    ("number_of_returns", "u1", "", "echoes found for its pulse"),
+    ("pulse_id", "u8", "", "the pulse's index in the scan pattern"),
+    ("emission_time", "f8", "s", "when the pulse left, the pattern's clock"),
+    ("scan_angle", "f4", "deg", "the pattern's scan angle of the pulse"),
+    ("channel", "i4", "", "the channel (laser) or pixel (row-major) of the pulse"),
+    ("true_part", "i4", "", "the scene part of the echo's strongest sub-ray (-1: noise)"),
+    ("true_face", "i8", "", "its face, numbered part by part (-1: noise)"),
+    ("true_range", "f8", "m", "the echo's sub-rays' photoelectron-weighted distance"),
+    ("true_x", "f8", "m", "their photoelectron-weighted hit point, world frame"),
+    ("true_y", "f8", "m", "their photoelectron-weighted hit point, world frame"),
+    ("true_z", "f8", "m", "their photoelectron-weighted hit point, world frame"),
+)
+__doc__ += "\n".join(f"\n* ``{n}`` ({u or 'count'}): {m}" for n, _, u, m in POINT_FIELDS)
+
+#: The records' dtype.
+POINT_DTYPE = np.dtype([(n, t) for n, t, _, _ in POINT_FIELDS])
+
+#: What every scan records about its physics.
+CONVENTIONS = {"radiometry": "power", "mode": "monostatic", "normals": "flat, two-sided",
+               "bounces": 1, "units": "photoelectrons", "frame": "world (the scene's)"}
+
+
+@dataclass(frozen=True)
+class PointCloud:
+    """A scan's returns (:data:`POINT_DTYPE` records) and how they were made.
+
+    Attributes
+    ----------
+    points : numpy.ndarray
+        One record per return, in pulse order, then time.
+    info : dict
+        The pattern, platform and sensor (``describe()``), the conventions
+        (:data:`CONVENTIONS`) and the seed.
+    waveforms : numpy.ndarray, optional
+        The pulses' records (n_pulses, samples) in photoelectrons per sample, when asked
+        for and all the same length; else None.
+    starts : numpy.ndarray, optional
+        Each record's start after emission, s.
+    """
+
+    points: np.ndarray
+    info: dict = field(default_factory=dict)
+    waveforms: np.ndarray | None = None
+    starts: np.ndarray | None = None
+
+    def __len__(self):
+        return len(self.points)
+
+    @property
+    def xyz(self) -> np.ndarray:
+        """Measured positions (n, 3)."""
+        return np.stack([self.points["x"], self.points["y"], self.points["z"]], axis=1)
+
+    @property
+    def true_xyz(self) -> np.ndarray:
+        """True positions (n, 3) (nan for noise returns)."""
+        return np.stack([self.points["true_x"], self.points["true_y"], self.points["true_z"]],
+                        axis=1)
+
+    @property
+    def range_error(self) -> np.ndarray:
+        """Measured minus true range (m; nan for noise returns)."""
+        return self.points["range"] - self.points["true_range"]

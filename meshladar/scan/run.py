@@ -1,0 +1,188 @@
+"""``scan``: the point cloud a scanner on a platform records from a mesh scene.
+
+Per chunk of pulses: the sensor's pose at each pulse's emission time (:mod:`.platforms`),
+the pulse's sub-rays (:mod:`.footprint`) turned into the world, their first hits and
+photoelectrons (:mod:`.cast`), the pulse's waveform, its noise and its returns
+(:mod:`.echoes`), each return's position along the pulse's axis at the measured range
+c t / 2, and its ground truth: the sub-rays whose echoes lie nearest it in time give its
+photoelectron-weighted true range and hit point, and the strongest of them its part and
+face. A return no sub-ray explains (a false alarm) has true part and face −1 and nan truth.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._validate import check_count, check_seed
+from ..errors import ParameterError
+from ..noise import draw_noise
+from ..scene import Scene
+from ..sensor import SPEED_OF_LIGHT
+from .cast import cast_chunk, photoelectrons, sub_directions
+from .echoes import find_returns, waveforms
+from .footprint import pixel_offsets
+from .instrument import ScanSensor
+from .patterns import ScanPattern
+from .platforms import Platform
+from .points import CONVENTIONS, POINT_DTYPE, PointCloud
+
+__all__ = ["scan", "CHUNK_RAYS"]
+
+#: Sub-rays cast per chunk (a chunk's pulses × sub-rays per pulse).
+CHUNK_RAYS = 1 << 17
+
+
+def _check(scene, pattern, platform, sensor):
+    if not isinstance(scene, Scene) or not scene.is_mesh:
+        raise ParameterError("scene must be a mesh Scene (Scene.from_mesh, Scene.tessellate)")
+    for name, value, kind in (("pattern", pattern, ScanPattern),
+                              ("platform", platform, Platform),
+                              ("sensor", sensor, ScanSensor)):
+        if not isinstance(value, kind):
+            raise ParameterError(f"{name} must be a {kind.__name__}; got "
+                                 f"{type(value).__name__}")
+
+
+def _footprint(pattern, sensor):
+    """Sub-ray offsets, their energy shares, and the flash pixel pitch (or None)."""
+    if pattern.is_flash:
+        off = pixel_offsets(sensor.beam.tol)
+        pixels = pattern.shape[0] * pattern.shape[1]
+        return off, np.full(len(off), 1.0 / (len(off) * pixels)), \
+            float(np.tan(np.radians(pattern.ifov_deg)))
+    off = sensor.beam.offsets()
+    return off, np.full(len(off), 1.0 / len(off)), None
+
+
+def _truth(ret, cast, pe, tau):
+    """Each return's ground truth from the sub-rays nearest it in time (module docstring)."""
+    n_ret = len(ret)
+    out = {"true_part": np.full(n_ret, -1, np.int32), "true_face": np.full(n_ret, -1, np.int64),
+           "true_range": np.full(n_ret, np.nan), "true_x": np.full(n_ret, np.nan),
+           "true_y": np.full(n_ret, np.nan), "true_z": np.full(n_ret, np.nan)}
+    if n_ret == 0:
+        return out
+    first = np.searchsorted(ret.pulse, np.arange(len(tau)), side="left")
+    counts = np.bincount(ret.pulse, minlength=len(tau))
+    p, k = np.nonzero(pe > 0)
+    has = counts[p] > 0
+    p, k = p[has], k[has]
+    # the nearest return of the sub-ray's own pulse (at most 15 to compare)
+    width = int(counts.max())
+    slots = first[p][:, None] + np.arange(width)[None, :]
+    valid = np.arange(width)[None, :] < counts[p][:, None]
+    gap = np.where(valid, np.abs(ret.time[np.minimum(slots, n_ret - 1)] - tau[p, k][:, None]),
+                   np.inf)
+    owner = slots[np.arange(len(p)), gap.argmin(axis=1)]
+    e = pe[p, k]
+    total = np.bincount(owner, weights=e, minlength=n_ret)
+    seen = total > 0
+    out["true_range"][seen] = (np.bincount(owner, e * cast.distance[p, k], n_ret)[seen]
+                               / total[seen])
+    for axis, name in enumerate(("true_x", "true_y", "true_z")):
+        out[name][seen] = (np.bincount(owner, e * cast.points[p, k, axis], n_ret)[seen]
+                           / total[seen])
+    order = np.lexsort((e, owner))                  # the strongest sub-ray last per owner
+    last = order[np.r_[owner[order][1:] != owner[order][:-1], True]]
+    out["true_face"][owner[last]] = cast.face[p[last], k[last]]
+    return out
+
+
+def _chunk(scene, pattern, platform, sensor, sl, foot, seed, keep_waves):
+    offsets, shares, pitch = foot
+    t = pattern.times[sl]
+    origins, rot = platform.sensor_poses(t)
+    local = pattern.directions[sl]
+    axis = np.einsum("nij,nj->ni", rot, local)
+    sub = np.einsum("nij,nmj->nmi", rot, sub_directions(local, offsets, pitch))
+    cast = cast_chunk(scene, origins, sub)
+    pe = photoelectrons(scene, cast, shares, sensor)
+    tau = 2.0 * cast.distance / SPEED_OF_LIGHT
+    waves, start = waveforms(tau, pe, sensor.sigma, sensor.dt, sensor.samples)
+    measured = waves
+    if sensor.noise is not None:
+        measured = draw_noise(sensor.noise, waves, sensor.dt, 1, seed)[0] / sensor.noise.gain
+    level = sensor.detector.level(sensor.background())
+    ret = find_returns(measured, start, sensor.dt, sensor.sigma, level,
+                       sensor.detector.max_returns, sensor.detector.decompose)
+    rec = np.zeros(len(ret), POINT_DTYPE)
+    rng = 0.5 * SPEED_OF_LIGHT * ret.time
+    pos = origins[ret.pulse] + rng[:, None] * axis[ret.pulse]
+    rec["x"], rec["y"], rec["z"] = pos.T
+    rec["range"], rec["time"] = rng, ret.time
+    rec["amplitude"], rec["width"], rec["intensity"] = ret.amplitude, ret.width, ret.intensity
+    rec["return_number"], rec["number_of_returns"] = ret.return_number, ret.number_of_returns
+    rec["pulse_id"] = sl.start + ret.pulse
+    rec["emission_time"] = t[ret.pulse]
+    rec["scan_angle"] = pattern.scan_angles_deg[sl][ret.pulse]
+    rec["channel"] = pattern.channels[sl][ret.pulse]
+    for name, values in _truth(ret, cast, pe, tau).items():
+        rec[name] = values
+    face = rec["true_face"]
+    rec["true_part"] = np.where(face >= 0, _part_of(scene)[np.maximum(face, 0)], -1)
+    return rec, (measured if keep_waves else None), start
+
+
+def _part_of(scene):
+    counts = [len(p.faces) for p in scene.parts]
+    return np.repeat(np.arange(len(counts), dtype=np.int32), counts)
+
+
+def scan(scene, pattern, platform, sensor, *, seed=0, keep_waveforms=False,
+         chunk_pulses=None):
+    """The point cloud ``sensor``, scanning ``pattern`` from ``platform``, records from
+    ``scene`` (module docstring; physics: :mod:`meshladar.scan.cast`).
+
+    Parameters
+    ----------
+    scene : Scene
+        A mesh scene; its coatings weigh every hit.
+    pattern : ScanPattern
+        When and where each pulse goes (:mod:`meshladar.scan.patterns`).
+    platform : Platform
+        The sensor's pose against time (:mod:`meshladar.scan.platforms`).
+    sensor : ScanSensor
+        Transmitter, receiver, noise and detector.
+    seed : int or None
+        The noise's seed: chunk i draws from ``default_rng([seed, i])`` (default 0).
+    keep_waveforms : bool
+        Return every pulse's record (memory: pulses × samples × 8 bytes).
+    chunk_pulses : int, optional
+        Pulses per chunk (default :data:`CHUNK_RAYS` sub-rays' worth).
+
+    Returns
+    -------
+    PointCloud
+        The returns with their ground truth; ``info`` says the conventions.
+
+    Raises
+    ------
+    ParameterError
+        When an argument is of the wrong kind or out of range, before any ray is cast.
+    """
+    _check(scene, pattern, platform, sensor)
+    seed = check_seed("seed", seed)
+    if not isinstance(keep_waveforms, bool):
+        raise ParameterError(f"keep_waveforms must be True or False; got {keep_waveforms!r}")
+    foot = _footprint(pattern, sensor)
+    per = max(1, CHUNK_RAYS // len(foot[0])) if chunk_pulses is None else check_count(
+        "chunk_pulses", chunk_pulses)
+    if pattern.is_flash:                     # whole frames per chunk
+        frame = pattern.shape[0] * pattern.shape[1]
+        per = max(frame, per // frame * frame)
+    recs, waves, starts = [], [], []
+    for i, lo in enumerate(range(0, len(pattern), per)):
+        sl = slice(lo, min(lo + per, len(pattern)))
+        chunk_seed = None if seed is None else [seed, i] if isinstance(seed, int) \
+            else list(seed) + [i]
+        rec, w, s = _chunk(scene, pattern, platform, sensor, sl, foot, chunk_seed,
+                           keep_waveforms)
+        recs.append(rec)
+        waves.append(w)
+        starts.append(s)
+    info = {"conventions": dict(CONVENTIONS), "pattern": pattern.describe(),
+            "platform": platform.describe(), "sensor": sensor.describe(), "seed": seed}
+    same = keep_waveforms and len({w.shape[1] for w in waves}) == 1
+    return PointCloud(np.concatenate(recs), info,
+                      np.concatenate(waves) if same else None,
+                      np.concatenate(starts) if keep_waveforms else None)
