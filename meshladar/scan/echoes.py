@@ -17,6 +17,7 @@ import math
 
 import numba
 import numpy as np
+from scipy.ndimage import gaussian_filter1d, maximum_filter1d
 from scipy.optimize import least_squares
 
 __all__ = ["SUPPORT", "waveforms", "find_returns", "Returns"]
@@ -26,6 +27,8 @@ SUPPORT = 8.0
 _FWHM_PER_SIGMA = 2.0 * math.sqrt(2.0 * math.log(2.0))
 #: Peaks closer than this many σ are refitted together.
 _OVERLAP_SIGMAS = 4.0
+#: An echo's time is the centroid of its samples within this many σ.
+_CENTROID_SIGMAS = 3.0
 
 
 @numba.njit(cache=True, nogil=True)
@@ -106,16 +109,36 @@ class Returns:
         return len(self.pulse)
 
 
-def _candidates(waves, level, max_returns):
-    """Local maxima at or above ``level``: (pulse, sample), the strongest ``max_returns``
-    of each pulse."""
+def _suppress(p, j, separation):
+    """Keep, pulse by pulse from the strongest down, the maxima farther than
+    ``separation`` samples from every stronger one kept (p sorted, strongest first)."""
+    keep = np.ones(len(p), bool)
+    starts = np.r_[0, np.nonzero(np.diff(p))[0] + 1, len(p)]
+    for a, b in zip(starts[:-1], starts[1:]):
+        if b - a < 2:
+            continue
+        kept = []
+        for i in range(a, b):
+            if any(abs(j[i] - j[k]) <= separation for k in kept):
+                keep[i] = False
+            else:
+                kept.append(i)
+    return keep
+
+
+def _candidates(waves, reach, level, max_returns, separation):
+    """Local maxima of ``waves`` where ``reach`` is at or above ``level``, farther than
+    ``separation`` samples from a stronger one: (pulse, sample), the strongest
+    ``max_returns`` of each pulse."""
     w = waves
     left = np.concatenate([np.full((len(w), 1), -np.inf), w[:, :-1]], axis=1)
     right = np.concatenate([w[:, 1:], np.full((len(w), 1), -np.inf)], axis=1)
-    p, j = np.nonzero((w >= level) & (w >= left) & (w > right))
+    p, j = np.nonzero((reach >= level) & (w > 0) & (w >= left) & (w > right))
     amp = w[p, j]
     order = np.lexsort((-amp, p))
     p, j = p[order], j[order]
+    keep = _suppress(p, j, separation)
+    p, j = p[keep], j[keep]
     rank = np.arange(len(p)) - np.searchsorted(p, p, side="left")
     keep = rank < max_returns
     return p[keep], j[keep]
@@ -169,16 +192,41 @@ def _decompose(waves, p, centre, s, height, sigma_samples):
         height[idx], centre[idx], s[idx] = fit.x[:k], fit.x[k:2 * k], fit.x[2 * k:]
 
 
-def find_returns(waves, start, dt, sigma, level, max_returns, decompose):
+def _centroid(waves, p, centre, half, rounds=2):
+    """Each echo's time (samples): the centroid of ``waves`` within ``half`` samples of
+    ``centre``, re-centred ``rounds`` times (vectorised over echoes)."""
+    ns = waves.shape[1]
+    k = np.arange(-int(math.ceil(half)) - 1, int(math.ceil(half)) + 2)
+    for _ in range(rounds):
+        idx = np.floor(centre).astype(np.int64)[:, None] + k[None, :]
+        x = idx + 0.5
+        inside = (idx >= 0) & (idx < ns) & (np.abs(x - centre[:, None]) <= half)
+        w = np.where(inside, waves[p[:, None], np.clip(idx, 0, ns - 1)], 0.0)
+        total = w.sum(axis=1)
+        ok = total > 0
+        centre = np.where(ok, (w * x).sum(axis=1) / np.where(ok, total, 1.0), centre)
+    return centre
+
+
+def find_returns(waves, start, dt, sigma, level, max_returns, decompose, background=0.0):
     """The returns in a chunk's waveforms (photoelectrons per sample), as :class:`Returns`
-    (:mod:`.instrument`'s detection)."""
-    sigma_samples = sigma / dt
-    p, j = _candidates(waves, level, max_returns)
-    delta, s, height = _interpolate(waves, p, j, sigma_samples)
-    centre = j + 0.5 + delta
+    (:mod:`.instrument`'s detection): maxima of the matched-filtered waveform whose
+    largest sample within the echo's FWHM reaches ``level``, located and sized by a
+    Gaussian through the filtered peak's three samples, and timed by the centroid of the
+    samples within :data:`_CENTROID_SIGMAS` σ of it, less the ``background`` per sample
+    (the maximum-likelihood time of a Gaussian echo in shot noise)."""
+    s = sigma / dt
+    fwhm = _FWHM_PER_SIGMA * s
+    filtered = gaussian_filter1d(waves, s, axis=1, mode="constant", truncate=4.0)
+    reach = maximum_filter1d(waves, 2 * int(fwhm / 2) + 1, axis=1, mode="constant")
+    p, j = _candidates(filtered, reach, level, max_returns, fwhm)
+    delta, s_f, height_f = _interpolate(filtered, p, j, s * math.sqrt(2.0))
+    centre = _centroid(waves - background, p, j + 0.5 + delta, _CENTROID_SIGMAS * s)
+    area = height_f * s_f * math.sqrt(2.0 * math.pi)        # the filter has unit area
+    s_e = np.sqrt(np.maximum(s_f ** 2 - s ** 2, 0.25 * s ** 2))
+    height = area / (s_e * math.sqrt(2.0 * math.pi))
     if decompose and len(p):
-        _decompose(waves, p, centre, s, height, sigma_samples)
+        _decompose(waves, p, centre, s_e, height, s)
     time = start[p] + centre * dt
-    width = s * dt * _FWHM_PER_SIGMA
-    intensity = height * s * math.sqrt(2.0 * math.pi)
-    return Returns(p, time, height, width, intensity)
+    return Returns(p, time, height, s_e * dt * _FWHM_PER_SIGMA,
+                   height * s_e * math.sqrt(2.0 * math.pi))

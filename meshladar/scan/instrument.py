@@ -2,7 +2,8 @@
 :class:`Detector`.
 
 Linear-mode detection: a return is a local maximum of the (noisy) waveform at or above the
-threshold, in photoelectrons per sample. The threshold is ``threshold`` when given, else
+threshold, in photoelectrons per sample, farther than the echo's FWHM from every stronger
+one (weaker maxima within it are noise on the same echo). The threshold is ``threshold`` when given, else
 the Poisson one for the receiver's background and dark counts b per sample: the smallest
 count n with P(N ≥ n | b) ≤ ``false_alarm`` (so a noise-only sample crosses it with
 probability at most ``false_alarm``), and at least one photoelectron. Each return's time

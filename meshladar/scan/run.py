@@ -104,7 +104,8 @@ def _chunk(scene, pattern, platform, sensor, sl, foot, seed, keep_waves):
         measured = draw_noise(sensor.noise, waves, sensor.dt, 1, seed)[0] / sensor.noise.gain
     level = sensor.detector.level(sensor.background())
     ret = find_returns(measured, start, sensor.dt, sensor.sigma, level,
-                       sensor.detector.max_returns, sensor.detector.decompose)
+                       sensor.detector.max_returns, sensor.detector.decompose,
+                       sensor.background())
     rec = np.zeros(len(ret), POINT_DTYPE)
     rng = 0.5 * SPEED_OF_LIGHT * ret.time
     pos = origins[ret.pulse] + rng[:, None] * axis[ret.pulse]
