@@ -67,6 +67,8 @@ def _truth(ret, cast, pe, tau):
     p, k = np.nonzero(pe > 0)
     has = counts[p] > 0
     p, k = p[has], k[has]
+    if len(p) == 0:                     # returns, but no lit sub-ray: all false alarms
+        return out
     # the nearest return of the sub-ray's own pulse (at most 15 to compare)
     width = int(counts.max())
     slots = first[p][:, None] + np.arange(width)[None, :]

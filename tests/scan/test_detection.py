@@ -1,0 +1,71 @@
+"""Detection against the Poisson threshold theory: the threshold's false-alarm bound, the
+false-alarm rate on noise alone, and the detection probability of a weak echo, each
+computed here from Poisson probabilities (scipy.stats), not by the detector."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.special import erf
+from scipy.stats import poisson
+
+from meshladar.noise import Noise
+from meshladar.scan import Detector, Platform, ScanPattern, scan
+
+from _scan_scenes import photoelectrons_by_hand, plate, scene, sensor
+
+R0 = 100.0
+
+
+def _repeat(direction, n):
+    return ScanPattern(np.arange(n) * 1e-4, np.tile(direction, (n, 1)))
+
+
+@pytest.mark.parametrize("b, pfa", [(0.5, 1e-3), (0.05, 1e-6), (3.0, 1e-4)])
+def test_the_threshold_is_the_smallest_count_whose_tail_is_below_the_false_alarm(b, pfa):
+    n = Detector(false_alarm=pfa).level(b)
+    assert poisson.sf(n - 1, b) <= pfa < poisson.sf(n - 2, b)
+
+
+def test_false_alarms_on_noise_alone_follow_the_poisson_tail():
+    """Pulses that meet nothing, 4096 samples each, background 0.5 per sample: each sample
+    at or above the threshold n (P(N ≥ n) = 1.7e-4) gives one false return, less those
+    within one echo width of a stronger one (at most 2 %): the count lies within 4 binomial
+    σ of samples × P(N ≥ n) × (0.98 … 1)."""
+    dt = 0.5e-9
+    sen = sensor(noise=Noise(background_rate=0.5 / dt), samples=4096,
+                 detector=Detector(false_alarm=1e-3))
+    n_pulses = 500
+    pc = scan(scene(plate(R0)), _repeat((-1.0, 0.0, 0.0), n_pulses), Platform.static((0, 0, 0)),
+              sen, seed=3)
+    level = sen.detector.level(0.5)
+    p = poisson.sf(level - 1, 0.5)
+    samples = n_pulses * 4096
+    sd = math.sqrt(samples * p)
+    assert 0.98 * samples * p - 4 * sd <= len(pc) <= samples * p + 4 * sd
+    assert np.all(pc.points["true_face"] == -1) and np.all(np.isnan(pc.points["true_range"]))
+
+
+def test_the_detection_probability_of_a_weak_echo_follows_its_samples_poisson_counts():
+    """An echo of 15 photoelectrons, no background, threshold 3: it is detected when one of
+    its samples reaches 3 counts; P = 1 − Π P(N_j < 3 | λ_j), λ_j the echo's expected
+    photoelectrons in sample j (erf differences, written here). 3000 pulses: the detected
+    fraction within 4 binomial σ."""
+    energy = 15.0 / photoelectrons_by_hand(1.0, 0.05, R0)
+    sen = sensor(noise=Noise(), pulse_energy=energy, detector=Detector(threshold=3.0))
+    n_pulses = 3000
+    pc = scan(scene(plate(R0)), _repeat((1.0, 0.0, 0.0), n_pulses), Platform.static((0, 0, 0)),
+              sen, seed=5)
+    detected = len(np.unique(pc.points["pulse_id"]))
+    total = photoelectrons_by_hand(energy, 0.05, R0)
+    tau = 2 * R0 / 299_792_458.0
+    start = math.floor((tau - 8 * sen.sigma) / sen.dt) * sen.dt
+    edges = start + sen.dt * np.arange(200)
+    z = (edges - tau) / (sen.sigma * math.sqrt(2))
+    lam = 0.5 * total * np.diff(erf(z))
+    p_detect = 1.0 - np.prod(poisson.cdf(2, lam))
+    sd = math.sqrt(n_pulses * p_detect * (1 - p_detect))
+    assert 0.2 < p_detect < 0.95
+    assert abs(detected - n_pulses * p_detect) <= 4 * sd
