@@ -194,14 +194,18 @@ def _decompose(waves, p, centre, s, height, sigma_samples):
 
 def _centroid(waves, p, centre, half, rounds=2):
     """Each echo's time (samples): the centroid of ``waves`` within ``half`` samples of
-    ``centre``, re-centred ``rounds`` times (vectorised over echoes)."""
+    ``centre`` (the samples at the window's edges weighed by the part of them inside it, so
+    the window is symmetric about the centre wherever it falls between samples),
+    re-centred ``rounds`` times (vectorised over echoes)."""
     ns = waves.shape[1]
     k = np.arange(-int(math.ceil(half)) - 1, int(math.ceil(half)) + 2)
     for _ in range(rounds):
         idx = np.floor(centre).astype(np.int64)[:, None] + k[None, :]
         x = idx + 0.5
-        inside = (idx >= 0) & (idx < ns) & (np.abs(x - centre[:, None]) <= half)
-        w = np.where(inside, waves[p[:, None], np.clip(idx, 0, ns - 1)], 0.0)
+        # each sample weighed by the part of it inside the window: no jump as it moves
+        part = np.clip(half + 0.5 - np.abs(x - centre[:, None]), 0.0, 1.0)
+        part = np.where((idx >= 0) & (idx < ns), part, 0.0)
+        w = part * waves[p[:, None], np.clip(idx, 0, ns - 1)]
         total = w.sum(axis=1)
         ok = total > 0
         centre = np.where(ok, (w * x).sum(axis=1) / np.where(ok, total, 1.0), centre)

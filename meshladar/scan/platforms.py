@@ -122,8 +122,9 @@ class Platform:
 
     @classmethod
     def waypoints(cls, times, positions, attitudes_deg, interpolation="linear", **mount):
-        """Waypoints interpolated between (linearly or by spline) and held beyond the ends
-        (constant velocity for :meth:`moving`'s two waypoints: extrapolated)."""
+        """Waypoints interpolated between (linearly or by spline); beyond the ends the
+        first or last pose is held, except that two waypoints (as :meth:`moving`'s) are a
+        constant velocity, extrapolated both ways (the attitude still held)."""
         return cls(times, positions, attitudes_deg, interpolation, **mount)
 
     @classmethod
@@ -131,8 +132,11 @@ class Platform:
         """A trajectory file: a header line, then rows of ``time, x, y, z, roll, pitch,
         yaw`` (:data:`TRAJECTORY_COLUMNS`; s, scene units, deg)."""
         path = check_path("path", path)
-        with open(path, newline="") as f:
-            rows = list(csv.reader(f))
+        try:
+            with open(path, newline="") as f:
+                rows = list(csv.reader(f))
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ParameterError(f"path: cannot read the trajectory {path!r} ({exc})") from None
         header = [h.strip().lower() for h in rows[0]] if rows else []
         if tuple(header) != TRAJECTORY_COLUMNS:
             raise ParameterError(f"{path}: the header must be {','.join(TRAJECTORY_COLUMNS)}; "

@@ -9,6 +9,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..errors import ParameterError
+
 __all__ = ["POINT_FIELDS", "POINT_DTYPE", "PointCloud", "CONVENTIONS"]
 
 #: Every field of a return: (name, dtype, unit, meaning).
@@ -80,6 +82,38 @@ class PointCloud:
         """True positions (n, 3) (nan for noise returns)."""
         return np.stack([self.points["true_x"], self.points["true_y"], self.points["true_z"]],
                         axis=1)
+
+    def image(self, field="range", frame=0, return_number=1):
+        """A flash frame's image of one field: (rows, columns), nan where that pixel has no
+        such return (a flash scan's cloud only).
+
+        Parameters
+        ----------
+        field : str
+            A record field (:data:`POINT_FIELDS`), e.g. ``"range"`` or ``"intensity"``.
+        frame : int
+            The frame (0-based).
+        return_number : int
+            Which of each pixel's returns (1: the first in time).
+
+        Returns
+        -------
+        (rows, columns) numpy.ndarray
+            float64; row 0 the top of the field, column 0 its left (+y).
+        """
+        pattern = self.info.get("pattern", {})
+        if pattern.get("kind") != "flash":
+            raise ParameterError("image() needs a flash scan's cloud (pattern kind 'flash'); "
+                                 f"this one's is {pattern.get('kind')!r}")
+        if field not in POINT_DTYPE.names:
+            raise ParameterError(f"field must be one of {POINT_DTYPE.names}; got {field!r}")
+        rows, cols = pattern["rows"], pattern["columns"]
+        pts = self.points
+        frames = pts["pulse_id"] // (rows * cols)
+        sel = (frames == frame) & (pts["return_number"] == return_number)
+        out = np.full(rows * cols, np.nan)
+        out[pts["channel"][sel]] = pts[field][sel]
+        return out.reshape(rows, cols)
 
     @property
     def range_error(self) -> np.ndarray:
