@@ -126,14 +126,14 @@ def _suppress(p, j, separation):
     return keep
 
 
-def _candidates(waves, reach, level, max_returns, separation):
-    """Local maxima of ``waves`` where ``reach`` is at or above ``level``, farther than
+def _candidates(waves, reach, max_returns, separation):
+    """Local maxima of ``waves`` where ``reach`` is at least 0, farther than
     ``separation`` samples from a stronger one: (pulse, sample), the strongest
     ``max_returns`` of each pulse."""
     w = waves
     left = np.concatenate([np.full((len(w), 1), -np.inf), w[:, :-1]], axis=1)
     right = np.concatenate([w[:, 1:], np.full((len(w), 1), -np.inf)], axis=1)
-    p, j = np.nonzero((reach >= level) & (w > 0) & (w >= left) & (w > right))
+    p, j = np.nonzero((reach >= 0) & (w > 0) & (w >= left) & (w > right))
     amp = w[p, j]
     order = np.lexsort((-amp, p))
     p, j = p[order], j[order]
@@ -212,18 +212,23 @@ def _centroid(waves, p, centre, half, rounds=2):
     return centre
 
 
-def find_returns(waves, start, dt, sigma, level, max_returns, decompose, background=0.0):
+def find_returns(waves, start, dt, sigma, level, max_returns, decompose, background=0.0,
+                 detect=None):
     """The returns in a chunk's waveforms (photoelectrons per sample), as :class:`Returns`
     (:mod:`.instrument`'s detection): maxima of the matched-filtered waveform whose
     largest sample within the echo's FWHM reaches ``level``, located and sized by a
     Gaussian through the filtered peak's three samples, and timed by the centroid of the
     samples within :data:`_CENTROID_SIGMAS` σ of it, less the ``background`` per sample
-    (the maximum-likelihood time of a Gaussian echo in shot noise)."""
+    (the maximum-likelihood time of a Gaussian echo in shot noise). ``level`` is a number
+    or an array like ``waves``; ``detect`` (default ``waves``) is what it applies to (a
+    Geiger-mode histogram, whose level follows its armed shots)."""
     s = sigma / dt
     fwhm = _FWHM_PER_SIGMA * s
     filtered = gaussian_filter1d(waves, s, axis=1, mode="constant", truncate=4.0)
-    reach = maximum_filter1d(waves, 2 * int(fwhm / 2) + 1, axis=1, mode="constant")
-    p, j = _candidates(filtered, reach, level, max_returns, fwhm)
+    margin = (waves if detect is None else detect) - level
+    reach = maximum_filter1d(margin, 2 * int(fwhm / 2) + 1, axis=1, mode="constant",
+                             cval=-np.inf)
+    p, j = _candidates(filtered, reach, max_returns, fwhm)
     delta, s_f, height_f = _interpolate(filtered, p, j, s * math.sqrt(2.0))
     centre = _centroid(waves - background, p, j + 0.5 + delta, _CENTROID_SIGMAS * s)
     area = height_f * s_f * math.sqrt(2.0 * math.pi)        # the filter has unit area

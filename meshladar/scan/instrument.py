@@ -18,12 +18,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from .._pulses import GaussianPulse
 from .._validate import check_count, check_real
 from ..errors import ParameterError
 from ..noise import Noise
 from ..sensor import LIMITS, MIN_WAVELENGTH
 from .footprint import ScanBeam
+from .geiger import GeigerMode
 
 __all__ = ["ScanSensor", "Detector", "MAX_SAMPLES"]
 
@@ -66,13 +69,13 @@ class Detector:
 
     def level(self, background):
         """The threshold (photoelectrons per sample) for ``background`` mean counts per
-        sample (module docstring)."""
+        sample, a number or an array (module docstring)."""
         if self.threshold is not None:
             return self.threshold
         from scipy.stats import poisson
 
         n = poisson.isf(self.false_alarm, background) + 1      # P(N ≥ n) ≤ false_alarm
-        return max(1.0, float(n))
+        return np.maximum(1.0, n) if np.ndim(n) else max(1.0, float(n))
 
     def describe(self) -> dict:
         return {"threshold_pe": self.threshold, "false_alarm": self.false_alarm,
@@ -106,6 +109,10 @@ class ScanSensor:
     samples : int, optional
         The record length per pulse (samples); default each chunk's spread of echoes plus
         the pulse's support on either side.
+    geiger : GeigerMode, optional
+        Geiger-mode pixels instead of a linear receiver (:mod:`.geiger`): each pattern pulse
+        is ``shots`` shots histogrammed and Coates-corrected; the noise's background and
+        dark rates are its b (speckle, gain and quantisation do not apply and are refused).
     wavelength, optics_transmission, quantum_efficiency, extinction : float
         As :class:`meshladar.sensor.Sensor`'s (m; (0, 1]; (0, 1]; 1/m).
     """
@@ -119,6 +126,7 @@ class ScanSensor:
     noise: Noise | None = None
     detector: Detector = field(default_factory=Detector)
     samples: int | None = None
+    geiger: GeigerMode | None = None
     wavelength: float = 1.064e-6
     optics_transmission: float = 1.0
     quantum_efficiency: float = 1.0
@@ -132,13 +140,19 @@ class ScanSensor:
                                                       low_open=True, high=high))
         for name, kind in (("pulse", GaussianPulse), ("response", (GaussianPulse, type(None))),
                            ("beam", ScanBeam), ("noise", (Noise, type(None))),
-                           ("detector", Detector)):
+                           ("detector", Detector), ("geiger", (GeigerMode, type(None)))):
             if not isinstance(getattr(self, name), kind):
                 raise ParameterError(f"{name} must be a {getattr(kind, '__name__', kind)}; "
                                      f"got {type(getattr(self, name)).__name__}")
         if self.samples is not None:
             object.__setattr__(self, "samples", check_count("samples", self.samples,
                                                             low=3, high=MAX_SAMPLES))
+        if self.geiger is not None and self.noise is not None and (
+                self.noise.speckle_cells is not None or self.noise.gain != 1.0
+                or self.noise.excess_noise_factor != 1.0 or self.noise.bits is not None):
+            raise ParameterError("geiger: Geiger-mode pixels count avalanches; the noise's "
+                                 "speckle_cells, gain, excess_noise_factor and bits do not "
+                                 "apply (give only background_rate and dark_rate)")
         object.__setattr__(self, "wavelength", check_real(
             "wavelength", self.wavelength, low=MIN_WAVELENGTH, high=LIMITS["wavelength"]))
         for name in ("optics_transmission", "quantum_efficiency"):
@@ -177,6 +191,7 @@ class ScanSensor:
                         "speckle_cells", "background_rate", "dark_rate",
                         "excess_noise_factor", "gain", "bits", "full_scale")},
                 "detector": self.detector.describe(), "samples": self.samples,
+                "geiger": self.geiger.describe() if self.geiger else None,
                 "wavelength_m": self.wavelength,
                 "optics_transmission": self.optics_transmission,
                 "quantum_efficiency": self.quantum_efficiency,

@@ -21,6 +21,7 @@ from ..sensor import SPEED_OF_LIGHT
 from .cast import cast_chunk, photoelectrons, sub_directions
 from .echoes import find_returns, waveforms
 from .footprint import pixel_offsets
+from .geiger import blind_shots, coates, fire
 from .instrument import ScanSensor
 from .patterns import ScanPattern
 from .platforms import Platform
@@ -101,13 +102,7 @@ def _chunk(scene, pattern, platform, sensor, sl, foot, seed, keep_waves):
     pe = photoelectrons(scene, cast, shares, sensor)
     tau = 2.0 * cast.distance / SPEED_OF_LIGHT
     waves, start = waveforms(tau, pe, sensor.sigma, sensor.dt, sensor.samples)
-    measured = waves
-    if sensor.noise is not None:
-        measured = draw_noise(sensor.noise, waves, sensor.dt, 1, seed)[0] / sensor.noise.gain
-    level = sensor.detector.level(sensor.background())
-    ret = find_returns(measured, start, sensor.dt, sensor.sigma, level,
-                       sensor.detector.max_returns, sensor.detector.decompose,
-                       sensor.background())
+    ret, measured = _detect(sensor, waves, start, seed)
     rec = np.zeros(len(ret), POINT_DTYPE)
     rng = 0.5 * SPEED_OF_LIGHT * ret.time
     pos = origins[ret.pulse] + rng[:, None] * axis[ret.pulse]
@@ -124,6 +119,32 @@ def _chunk(scene, pattern, platform, sensor, sl, foot, seed, keep_waves):
     face = rec["true_face"]
     rec["true_part"] = np.where(face >= 0, _part_of(scene)[np.maximum(face, 0)], -1)
     return rec, (measured if keep_waves else None), start
+
+
+def _detect(sensor, waves, start, seed):
+    """The returns of a chunk's expected waveforms, through the sensor's noise and
+    detector (linear mode) or its Geiger-mode pixels; and the records it measured."""
+    det, b = sensor.detector, sensor.background()
+    if sensor.geiger is not None:
+        gm = sensor.geiger
+        dead = gm.dead_samples(sensor.dt)
+        lam = gm.detection_efficiency * waves + b
+        hist = fire(lam, gm.shots, dead, np.random.default_rng(seed).integers(2 ** 31))
+        counts = gm.shots * coates(hist, gm.shots, dead)        # as K linear shots
+        # each sample's threshold on the histogram: its armed shots' background counts
+        armed = gm.shots - blind_shots(hist, dead)
+        ret = find_returns(counts, start, sensor.dt, sensor.sigma,
+                           det.level(armed * -np.expm1(-b)), det.max_returns, det.decompose,
+                           gm.shots * b, detect=hist)
+        ret.amplitude /= gm.shots                               # per shot
+        ret.intensity /= gm.shots
+        return ret, hist
+    measured = waves
+    if sensor.noise is not None:
+        measured = draw_noise(sensor.noise, waves, sensor.dt, 1, seed)[0] / sensor.noise.gain
+    ret = find_returns(measured, start, sensor.dt, sensor.sigma, det.level(b),
+                       det.max_returns, det.decompose, b)
+    return ret, measured
 
 
 def _part_of(scene):
