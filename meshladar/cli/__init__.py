@@ -22,6 +22,7 @@ from ..errors import MeshladarError
 from .commands import cmd_bench, cmd_demo, cmd_materials, cmd_paper, cmd_study, cmd_view
 from .parser import build_parser
 from .reconstruct import cmd_receive, cmd_reconstruct
+from .scan import cmd_scan
 from .simulate import cmd_simulate, in_flags
 
 __all__ = ["main", "COMMANDS"]
@@ -29,7 +30,7 @@ __all__ = ["main", "COMMANDS"]
 #: Each command's function, looked up when the command runs.
 COMMANDS = {"demo": cmd_demo, "materials": cmd_materials, "paper": cmd_paper,
             "simulate": cmd_simulate, "reconstruct": cmd_reconstruct,
-            "receive": cmd_receive, "view": cmd_view, "study": cmd_study,
+            "receive": cmd_receive, "scan": cmd_scan, "view": cmd_view, "study": cmd_study,
             "bench": cmd_bench}
 
 

@@ -276,6 +276,56 @@ def _study(sub, commands):
                           "(needs meshladar[gpu]) (default: off)")
 
 
+_SCAN_EPILOG = """examples:
+  meshladar scan part.glb --pattern "rotating elevations_deg=-15:15:32 rotation_hz=10 \\
+      pulse_rate=3e5 duration=0.1" --platform "moving position=-20,0,1.5 velocity=10,0,0" \\
+      -o points.las
+  meshladar scan part.glb --pattern "flash rows=64 columns=64 ifov_deg=0.05" \\
+      --platform "static position=-100,0,0" --divergence 0 -o frame.h5 --waveforms w.h5
+  meshladar scan terrain.ply --pattern "oscillating half_angle_deg=20 scan_hz=50 \\
+      pulse_rate=1e5 duration=1" --platform flight.csv -o strip.laz"""
+
+#: scan's sensor flags: (flag, type, default, metavar, help).
+_SCAN_FLAGS = (
+    ("--pulse-energy", positive_float, 1e-6, "J", "energy per pulse"),
+    ("--aperture", positive_float, 0.05, "M", "receiver aperture diameter"),
+    ("--sample-rate", positive_float, 2e9, "HZ", "digitiser samples per second"),
+    ("--pulse-fwhm", positive_float, 5e-9, "S", "the pulse's full width at half maximum"),
+    ("--divergence", nonnegative_float, 5e-4, "RAD", "the beam's 1/e2 half-angle"),
+    ("--tol", positive_float, 0.1, "FRACTION", "largest error in a pulse's energy share "
+     "beyond an edge: sets the sub-rays per pulse"),
+    ("--sub-rays", positive_int, None, "N", "fixed sub-rays per pulse instead of --tol"),
+    ("--background-rate", nonnegative_float, 0.0, "PER_S", "background photoelectrons per s"),
+    ("--dark-rate", nonnegative_float, 0.0, "PER_S", "dark counts per second"),
+    ("--max-returns", positive_int, 5, "N", "most returns per pulse (1-15)"),
+    ("--geiger-shots", positive_int, None, "K", "Geiger-mode pixels: K shots histogrammed "
+     "per pulse, Coates-corrected"),
+    ("--seed", nonnegative_int, 0, "N", "the noise's seed"),
+)
+
+
+def _scan(sub, commands):
+    sc = _sub(sub, "scan", commands, "a scanner's point cloud of a scene (LAS, HDF5)",
+              _SCAN_EPILOG)
+    _scene_args(sc)
+    sc.add_argument("--pattern", required=True, metavar="'KIND key=value ...'",
+                    help="raster, rotating, oscillating, risley or flash, with its "
+                         "constructor's arguments")
+    sc.add_argument("--platform", required=True, metavar="'KIND key=value ...'|FILE.csv",
+                    help="static, moving or waypoints with their arguments, or a "
+                         "trajectory file (time,x,y,z,roll,pitch,yaw)")
+    sc.add_argument("-o", "--output", required=True, help="points file (.las, .laz, .h5)")
+    sc.add_argument("--waveforms", default=None, metavar="FILE.h5",
+                    help="also write every pulse's waveform to HDF5 (default: not written)")
+    sc.add_argument("--profile", choices=("gaussian", "tophat"), default="gaussian",
+                    help="the beam's profile (default: %(default)s)")
+    sc.add_argument("--noise", action="store_true",
+                    help="shot noise even without background (default: expected waveforms)")
+    for flag, kind, default, metavar, text in _SCAN_FLAGS:
+        sc.add_argument(flag, type=kind, default=default, metavar=metavar,
+                        help=f"{text} (default: %(default)s)")
+
+
 def build_parser(commands) -> argparse.ArgumentParser:
     """The parser of every command; ``commands`` maps each command's name to its function
     (its docstring is the command's description).
@@ -284,7 +334,7 @@ def build_parser(commands) -> argparse.ArgumentParser:
     ----------
     commands : dict of str to callable
         Every command's function by name: ``demo``, ``materials``, ``paper``,
-        ``simulate``, ``reconstruct``, ``receive``, ``view``, ``study`` and ``bench``
+        ``simulate``, ``reconstruct``, ``receive``, ``scan``, ``view``, ``study`` and ``bench``
         (:data:`meshladar.cli.COMMANDS`). Only their docstrings are read here; the
         functions are not called.
 
@@ -305,6 +355,6 @@ def build_parser(commands) -> argparse.ArgumentParser:
         epilog=_EPILOG, formatter_class=_RAW)
     p.add_argument("--version", action="version", version=f"meshladar {__version__}")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for add in (_simple, _simulate, _reconstruct, _receive, _view, _study):
+    for add in (_simple, _simulate, _reconstruct, _receive, _scan, _view, _study):
         add(sub, commands)
     return p

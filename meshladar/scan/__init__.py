@@ -18,12 +18,12 @@ normals (:data:`~meshladar.scan.points.CONVENTIONS`, recorded in every result's 
 from .footprint import ScanBeam
 from .geiger import GeigerMode, coates
 from .instrument import Detector, ScanSensor
-from .patterns import ScanPattern, flash, oscillating, raster, risley, rotating
+from .patterns import PATTERNS, ScanPattern, flash, oscillating, raster, risley, rotating
 from .platforms import Platform
 from .points import POINT_DTYPE, POINT_FIELDS, PointCloud
 from .run import scan
 from .files import read_hdf5, read_las, write_hdf5, write_las
 
-__all__ = ["scan", "ScanPattern", "raster", "rotating", "oscillating", "risley", "flash",
+__all__ = ["scan", "PATTERNS", "ScanPattern", "raster", "rotating", "oscillating", "risley", "flash",
            "Platform", "ScanBeam", "ScanSensor", "Detector", "PointCloud", "POINT_DTYPE",
            "POINT_FIELDS", "GeigerMode", "coates", "write_las", "read_las", "write_hdf5", "read_hdf5"]

@@ -10,9 +10,11 @@ the pattern's in LAS's 0.006° steps, its GPS time the emission time (s). Every 
 field reads back exactly (:data:`EXTRA_NAMES`: the exact intensity and scan angle).
 
 HDF5: ``/points`` is one compound dataset of the records (each field's unit in the
-attribute ``units``, a JSON object), ``/waveforms`` (pulses × samples, photoelectrons per
-sample) and ``/starts`` (s) when the cloud holds them, and the root's ``info`` attribute
-the scan's parameters as JSON. Everything reads back exactly.
+attribute ``units``, a JSON object); when the cloud holds waveforms, the group
+``/waveforms`` holds one dataset per block of consecutive pulses, ``block_000000``, …
+(pulses × samples, its ``first_pulse`` as an attribute) and their starts ``starts_000000``,
+… (s); the root's ``info`` attribute holds the scan's parameters as JSON. Everything reads
+back exactly.
 """
 
 from __future__ import annotations
@@ -47,6 +49,21 @@ def _need(module):
     except ImportError:
         raise ParameterError(f"{module} is not installed: pip install 'meshladar[scan]'") \
             from None
+
+
+def _readable(path, what):
+    """``path`` checked to be an existing file before a reader opens it."""
+    path = check_path("path", path)
+    if os.path.isdir(path):
+        raise ParameterError(f"path: {path!r} is a folder, not a {what} file")
+    if not os.path.isfile(path):
+        raise ParameterError(f"path: no such file {path!r}")
+    return path
+
+
+def _unreadable(path, what, exc):
+    first = (str(exc).splitlines() or [type(exc).__name__])[0][:100]
+    return ParameterError(f"path: {path!r} is not a {what} file ({first})")
 
 
 def write_las(path, cloud, *, scale=1e-4):
@@ -93,7 +110,11 @@ def read_las(path):
     """Read a LAS/LAZ file that :func:`write_las` wrote back into a :class:`PointCloud`
     (x, y, z as quantised; every other field exact)."""
     laspy = _need("laspy")
-    las = laspy.read(check_path("path", path))
+    path = _readable(path, "LAS/LAZ")
+    try:
+        las = laspy.read(path)
+    except (OSError, laspy.errors.LaspyException, ValueError) as exc:
+        raise _unreadable(path, "LAS/LAZ", exc) from None
     names = set(las.point_format.extra_dimension_names)
     missing = [_extra(n) for n, *_ in POINT_FIELDS if n not in LAS_NATIVE
                and _extra(n) not in names]
@@ -123,9 +144,14 @@ def write_hdf5(path, cloud):
             d.attrs["units"] = json.dumps({n: u for n, _, u, _ in POINT_FIELDS})
             d.attrs["meaning"] = json.dumps({n: m for n, _, _, m in POINT_FIELDS})
             if cloud.waveforms is not None:
-                w = f.create_dataset("waveforms", data=cloud.waveforms, chunks=True)
-                w.attrs["units"] = "photoelectrons per sample"
-                f.create_dataset("starts", data=cloud.starts).attrs["units"] = "s"
+                g = f.create_group("waveforms")
+                g.attrs["units"] = "photoelectrons per sample; starts: s"
+                first = 0
+                for i, (w, t) in enumerate(zip(cloud.waveforms, cloud.starts)):
+                    d = g.create_dataset(f"block_{i:06d}", data=w, chunks=True)
+                    d.attrs["first_pulse"] = first
+                    g.create_dataset(f"starts_{i:06d}", data=t)
+                    first += len(w)
             f.attrs["info"] = json.dumps(cloud.info, default=str)
 
     write_atomic(path, fill)
@@ -134,11 +160,20 @@ def write_hdf5(path, cloud):
 def read_hdf5(path):
     """Read an HDF5 file that :func:`write_hdf5` wrote back into a :class:`PointCloud`."""
     h5py = _need("h5py")
-    with h5py.File(check_path("path", path), "r") as f:
+    path = _readable(path, "HDF5")
+    try:
+        f = h5py.File(path, "r")
+    except OSError as exc:
+        raise _unreadable(path, "HDF5", exc) from None
+    with f:
         if "points" not in f:
             raise ParameterError(f"{path}: not a meshladar point cloud (no /points)")
         pts = np.asarray(f["points"][()]).astype(POINT_DTYPE)
-        waves = np.asarray(f["waveforms"][()]) if "waveforms" in f else None
-        starts = np.asarray(f["starts"][()]) if "starts" in f else None
+        waves = starts = None
+        if "waveforms" in f:
+            g = f["waveforms"]
+            names = sorted(n for n in g if n.startswith("block_"))
+            waves = tuple(np.asarray(g[n][()]) for n in names)
+            starts = tuple(np.asarray(g[n.replace("block_", "starts_")][()]) for n in names)
         info = json.loads(f.attrs.get("info", "{}"))
     return PointCloud(pts, info, waves, starts)

@@ -57,20 +57,47 @@ class PointCloud:
     info : dict
         The pattern, platform and sensor (``describe()``), the conventions
         (:data:`CONVENTIONS`) and the seed.
-    waveforms : numpy.ndarray, optional
-        The pulses' records (n_pulses, samples) in photoelectrons per sample, when asked
-        for and all the same length; else None.
-    starts : numpy.ndarray, optional
-        Each record's start after emission, s.
+    waveforms : tuple of numpy.ndarray, optional
+        The pulses' records when asked for, in blocks of consecutive pulses (one per chunk
+        of the scan, each (pulses, samples): a block's records share a length): measured
+        photoelectrons per sample (a Geiger-mode scan's: detections per sample over its
+        shots); else None.
+    starts : tuple of numpy.ndarray, optional
+        Each record's start after its pulse's emission, s, block by block.
     """
 
     points: np.ndarray
     info: dict = field(default_factory=dict)
-    waveforms: np.ndarray | None = None
-    starts: np.ndarray | None = None
+    waveforms: tuple | None = None
+    starts: tuple | None = None
 
     def __len__(self):
         return len(self.points)
+
+    def waveform(self, pulse_id):
+        """One pulse's record and its start: ``(samples, start_s)``.
+
+        Parameters
+        ----------
+        pulse_id : int
+            The pulse's index in the scan pattern.
+
+        Returns
+        -------
+        tuple
+            ``(numpy.ndarray, float)``: the record (per sample) and its start after the
+            pulse's emission (s).
+        """
+        if self.waveforms is None:
+            raise ParameterError("this cloud holds no waveforms: scan(..., "
+                                 "keep_waveforms=True)")
+        k = int(pulse_id)
+        for block, start in zip(self.waveforms, self.starts):
+            if 0 <= k < len(block):
+                return block[k], float(start[k])
+            k -= len(block)
+        raise ParameterError(f"pulse_id must be in [0, {sum(map(len, self.starts))}); got "
+                             f"{pulse_id!r}")
 
     @property
     def xyz(self) -> np.ndarray:

@@ -153,7 +153,7 @@ def _part_of(scene):
 
 
 def scan(scene, pattern, platform, sensor, *, seed=0, keep_waveforms=False,
-         chunk_pulses=None):
+         chunk_pulses=None, progress=None):
     """The point cloud ``sensor``, scanning ``pattern`` from ``platform``, records from
     ``scene`` (module docstring; physics: :mod:`meshladar.scan.cast`).
 
@@ -173,6 +173,8 @@ def scan(scene, pattern, platform, sensor, *, seed=0, keep_waveforms=False,
         Return every pulse's record (memory: pulses × samples × 8 bytes).
     chunk_pulses : int, optional
         Pulses per chunk (default :data:`CHUNK_RAYS` sub-rays' worth).
+    progress : callable, optional
+        Called as ``progress(pulses_done, pulses_total)`` after each chunk.
 
     Returns
     -------
@@ -186,6 +188,8 @@ def scan(scene, pattern, platform, sensor, *, seed=0, keep_waveforms=False,
     """
     _check(scene, pattern, platform, sensor)
     seed = check_seed("seed", seed)
+    if progress is not None and not callable(progress):
+        raise ParameterError(f"progress must be callable or None; got {progress!r}")
     if not isinstance(keep_waveforms, bool):
         raise ParameterError(f"keep_waveforms must be True or False; got {keep_waveforms!r}")
     foot = _footprint(pattern, sensor)
@@ -204,9 +208,10 @@ def scan(scene, pattern, platform, sensor, *, seed=0, keep_waveforms=False,
         recs.append(rec)
         waves.append(w)
         starts.append(s)
+        if progress is not None:
+            progress(sl.stop, len(pattern))
     info = {"conventions": dict(CONVENTIONS), "pattern": pattern.describe(),
             "platform": platform.describe(), "sensor": sensor.describe(), "seed": seed}
-    same = keep_waveforms and len({w.shape[1] for w in waves}) == 1
     return PointCloud(np.concatenate(recs), info,
-                      np.concatenate(waves) if same else None,
-                      np.concatenate(starts) if keep_waveforms else None)
+                      tuple(waves) if keep_waveforms else None,
+                      tuple(starts) if keep_waveforms else None)

@@ -43,8 +43,8 @@ def test_the_detection_histogram_piles_up_as_the_first_photon_law_says(piled):
     """With one detection per shot, E[h_j] = K (1 − e^{−λ_j}) exp(−Σ_{i<j} λ_i): every bin
     within 5 Poisson σ (+1 count)."""
     sen, pc = piled
-    hist = pc.waveforms[0]
-    lam = _expected_events(sen, 3.0, 0.002, pc.starts[0], len(hist))
+    hist, start = pc.waveform(0)
+    lam = _expected_events(sen, 3.0, 0.002, start, len(hist))
     expect = SHOTS * -np.expm1(-lam) * np.exp(-(np.cumsum(lam) - lam))
     assert np.all(np.abs(hist - expect) <= 5 * np.sqrt(expect) + 1)
     assert hist.sum() <= SHOTS
@@ -55,8 +55,9 @@ def test_coates_recovers_the_echo_that_pile_up_pulls_early(piled):
     range is within 1 cm of the plate (0.13 of a sample), and its photoelectrons per shot
     within 5 % of the 3 sent."""
     sen, pc = piled
-    hist = pc.waveforms[0].astype(float)
-    x = pc.starts[0] + (np.arange(len(hist)) + 0.5) * sen.dt
+    hist, start = pc.waveform(0)
+    hist = hist.astype(float)
+    x = start + (np.arange(len(hist)) + 0.5) * sen.dt
     raw_range = 0.5 * SPEED_OF_LIGHT * np.sum(hist * x) / hist.sum()
     assert raw_range < R0 - 0.1                                   # pulled early
     assert len(pc) == 1

@@ -1,0 +1,155 @@
+"""``meshladar scan``: a scanner's point cloud of a scene, to LAS/LAZ or HDF5.
+
+``--pattern`` and ``--platform`` take a kind and ``key=value`` words, one string: the
+keys are the Python constructor's keyword arguments (:mod:`meshladar.scan.patterns`,
+:class:`meshladar.scan.Platform`), a value is a number, a comma list (``0,0,1.5``) or an
+evenly spaced range ``start:stop:count`` (``-15:15:32``). A ``--platform`` ending in
+``.csv`` is a trajectory file.
+"""
+
+from __future__ import annotations
+
+import inspect
+import sys
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..noise import Noise
+from ..scan import (PATTERNS, Detector, GeigerMode, Platform, ScanBeam, ScanSensor, scan,
+                    write_hdf5, write_las)
+from ..waveforms import GaussianPulse
+from .checks import check_output
+from .simulate import load_scene
+
+__all__ = ["cmd_scan", "parse_spec", "PLATFORM_KINDS"]
+
+#: ``--platform`` kinds and the Platform constructor each names.
+PLATFORM_KINDS = {"static": Platform.static, "moving": Platform.moving,
+                  "waypoints": Platform.waypoints}
+#: The point files ``-o`` writes, by extension.
+POINT_SUFFIXES = (".las", ".laz", ".h5", ".hdf5")
+
+
+def _value(flag, key, text):
+    try:
+        if text.count(":") == 2:
+            lo, hi, n = text.split(":")
+            if float(n) != int(float(n)) or int(float(n)) < 1:
+                raise ValueError
+            return np.linspace(float(lo), float(hi), int(float(n)))
+        if "," in text:
+            return [float(x) for x in text.split(",")]
+        return float(text)
+    except ValueError:
+        raise ParameterError(f"{flag}: {key}={text!r} is not a number, a comma list or "
+                             "start:stop:count") from None
+
+
+def parse_spec(flag, text, kinds):
+    """``(kind, keyword arguments)`` from a ``KIND key=value ...`` string, checked against
+    the kind's constructor's parameters (named in the messages)."""
+    words = text.split() if isinstance(text, str) else []
+    if not words or words[0] not in kinds:
+        raise ParameterError(f"{flag}: the kind must be one of {sorted(kinds)}; got "
+                             f"{text!r}")
+    make = kinds[words[0]]
+    params = [n for n, p in inspect.signature(make).parameters.items()
+              if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
+    kwargs = {}
+    for word in words[1:]:
+        key, eq, val = word.partition("=")
+        if not eq or key not in params:
+            raise ParameterError(f"{flag}: {words[0]} takes {', '.join(params)} as key=value; "
+                                 f"got {word!r}")
+        kwargs[key] = _value(flag, key, val)
+    for key in ("rows", "columns", "frames"):
+        if isinstance(kwargs.get(key), float) and kwargs[key].is_integer():
+            kwargs[key] = int(kwargs[key])
+    return make, kwargs
+
+
+def _build(make, kwargs, flag):
+    try:
+        return make(**kwargs)
+    except TypeError as exc:            # a required key missing
+        raise ParameterError(f"{flag}: {exc}") from None
+    except ParameterError as exc:
+        raise ParameterError(f"{flag}: {exc}") from None
+
+
+def _platform(args):
+    if args.platform.lower().endswith(".csv"):
+        return _build(Platform.from_csv, {"path": args.platform}, "--platform")
+    make, kwargs = parse_spec("--platform", args.platform, PLATFORM_KINDS)
+    return _build(make, kwargs, "--platform")
+
+
+def _sensor(args):
+    noise = None
+    if args.background_rate or args.dark_rate or args.noise:
+        noise = Noise(background_rate=args.background_rate, dark_rate=args.dark_rate)
+    geiger = GeigerMode(shots=args.geiger_shots) if args.geiger_shots else None
+    return ScanSensor(pulse_energy=args.pulse_energy, aperture_diameter=args.aperture,
+                      sample_rate=args.sample_rate, pulse=GaussianPulse(args.pulse_fwhm),
+                      beam=ScanBeam(args.divergence, profile=args.profile, tol=args.tol,
+                                    sub_rays=args.sub_rays),
+                      noise=noise, geiger=geiger,
+                      detector=Detector(max_returns=args.max_returns))
+
+
+def _progress(quiet):
+    if quiet:
+        return None
+
+    def show(done, total):
+        width = 30
+        k = int(width * done / total)
+        sys.stderr.write(f"\rscan [{'#' * k}{'.' * (width - k)}] {done}/{total} pulses")
+        if done == total:
+            sys.stderr.write("\n")
+        sys.stderr.flush()
+    return show
+
+
+def cmd_scan(args) -> int:
+    """Scan a scene with a pattern from a platform and write its point cloud (LAS 1.4, LAZ
+    or HDF5 by -o's extension), each return with its ground truth (part, face, true range
+    and point); --waveforms also writes every pulse's record to HDF5.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``scene``, ``material``, ``coating``, ``materials`` (as ``simulate``'s),
+        ``pattern`` and ``platform`` (module docstring), the sensor's flags, ``output``,
+        ``waveforms``, ``seed`` and ``quiet``.
+
+    Returns
+    -------
+    int
+        0, the exit status.
+    """
+    inputs = [args.scene, args.materials, args.platform]
+    check_output(args.output, POINT_SUFFIXES, inputs)
+    if args.waveforms is not None:
+        check_output(args.waveforms, (".h5", ".hdf5"), inputs + [args.output], "--waveforms")
+    make, kwargs = parse_spec("--pattern", args.pattern, PATTERNS)
+    pattern = _build(make, kwargs, "--pattern")
+    platform = _platform(args)
+    sensor = _sensor(args)
+    scene, _, _ = load_scene(args)
+    if not scene.is_mesh:
+        scene = scene.tessellate()
+    cloud = scan(scene, pattern, platform, sensor, seed=args.seed,
+                 keep_waveforms=args.waveforms is not None, progress=_progress(args.quiet))
+    if args.output.lower().endswith((".h5", ".hdf5")):
+        write_hdf5(args.output, cloud)
+    else:
+        write_las(args.output, cloud)
+    if args.waveforms is not None:
+        write_hdf5(args.waveforms, cloud)
+    if not args.quiet:
+        pts = cloud.points
+        print(f"{len(pts)} returns from {len(pattern)} pulses -> {args.output}"
+              + (f" (max {int(pts['number_of_returns'].max())} per pulse)" if len(pts) else ""))
+    return 0
