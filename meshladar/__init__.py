@@ -27,7 +27,7 @@ _SUBMODULES = (
     "brdf", "materials", "shapes", "meshes", "scene", "ladar", "sensor", "motion", "noise",
     "hits", "sinogram", "returns", "waveforms", "images",
     "raytrace", "weighing", "stream", "runs", "io",
-    "forward", "reconstruct", "fit", "studies", "cli",
+    "forward", "scan", "reconstruct", "fit", "studies", "cli",
     "phantoms", "viz",
 )
 
