@@ -10,7 +10,6 @@ evenly spaced range ``start:stop:count`` (``-15:15:32``). A ``--platform`` endin
 from __future__ import annotations
 
 import inspect
-import sys
 
 import numpy as np
 
@@ -98,20 +97,6 @@ def _sensor(args):
                       detector=Detector(max_returns=args.max_returns))
 
 
-def _progress(quiet):
-    if quiet:
-        return None
-
-    def show(done, total):
-        width = 30
-        k = int(width * done / total)
-        sys.stderr.write(f"\rscan [{'#' * k}{'.' * (width - k)}] {done}/{total} pulses")
-        if done == total:
-            sys.stderr.write("\n")
-        sys.stderr.flush()
-    return show
-
-
 def cmd_scan(args) -> int:
     """Scan a scene with a pattern from a platform and write its point cloud (LAS 1.4, LAZ
     or HDF5 by -o's extension), each return with its ground truth (part, face, true range
@@ -141,7 +126,7 @@ def cmd_scan(args) -> int:
     if not scene.is_mesh:
         scene = scene.tessellate()
     cloud = scan(scene, pattern, platform, sensor, seed=args.seed,
-                 keep_waveforms=args.waveforms is not None, progress=_progress(args.quiet))
+                 keep_waveforms=args.waveforms is not None, progress=not args.quiet)
     if args.output.lower().endswith((".h5", ".hdf5")):
         write_hdf5(args.output, cloud)
     else:

@@ -16,7 +16,9 @@ import numpy as np
 from .._validate import check_count, check_seed
 from ..errors import ParameterError
 from ..noise import draw_noise
+from ..raytrace.embree import geometry
 from ..scene import Scene
+from ..stream import run_chunks
 from ..sensor import SPEED_OF_LIGHT
 from .cast import cast_chunk, photoelectrons, sub_directions
 from .echoes import find_returns, waveforms
@@ -26,6 +28,7 @@ from .instrument import ScanSensor
 from .patterns import ScanPattern
 from .platforms import Platform
 from .points import CONVENTIONS, POINT_DTYPE, PointCloud
+from .streaming import ScanJob, chunk_arrays, job_description, records, scan_chunk
 
 __all__ = ["scan", "CHUNK_RAYS"]
 
@@ -91,8 +94,10 @@ def _truth(ret, cast, pe, tau):
     return out
 
 
-def _chunk(scene, pattern, platform, sensor, sl, foot, seed, keep_waves):
-    offsets, shares, pitch = foot
+def _chunk(job, sl, seed):
+    """One chunk's records, its measured waveforms (when kept) and their starts."""
+    scene, pattern, platform, sensor = job.scene, job.pattern, job.platform, job.sensor
+    offsets, shares, pitch = job.foot
     t = pattern.times[sl]
     origins, rot = platform.sensor_poses(t)
     local = pattern.directions[sl]
@@ -118,7 +123,7 @@ def _chunk(scene, pattern, platform, sensor, sl, foot, seed, keep_waves):
         rec[name] = values
     face = rec["true_face"]
     rec["true_part"] = np.where(face >= 0, _part_of(scene)[np.maximum(face, 0)], -1)
-    return rec, (measured if keep_waves else None), start
+    return rec, (measured if job.keep else None), start
 
 
 def _detect(sensor, waves, start, seed):
@@ -153,7 +158,7 @@ def _part_of(scene):
 
 
 def scan(scene, pattern, platform, sensor, *, seed=0, keep_waveforms=False,
-         chunk_pulses=None, progress=None):
+         chunk_pulses=None, jobs=None, executor=None, progress=False, run_dir=None):
     """The point cloud ``sensor``, scanning ``pattern`` from ``platform``, records from
     ``scene`` (module docstring; physics: :mod:`meshladar.scan.cast`).
 
@@ -168,13 +173,23 @@ def scan(scene, pattern, platform, sensor, *, seed=0, keep_waveforms=False,
     sensor : ScanSensor
         Transmitter, receiver, noise and detector.
     seed : int or None
-        The noise's seed: chunk i draws from ``default_rng([seed, i])`` (default 0).
+        The noise's seed: the chunk from pulse k draws from ``default_rng([seed, k])``
+        (default 0), whatever the threads or executor.
     keep_waveforms : bool
-        Return every pulse's record (memory: pulses × samples × 8 bytes).
+        Return every pulse's record (memory: pulses × samples × 8 bytes); with
+        ``run_dir`` the sensor's ``samples`` must fix their length.
     chunk_pulses : int, optional
-        Pulses per chunk (default :data:`CHUNK_RAYS` sub-rays' worth).
-    progress : callable, optional
-        Called as ``progress(pulses_done, pulses_total)`` after each chunk.
+        Pulses per chunk (default :data:`CHUNK_RAYS` sub-rays' worth; a flash scan's
+        chunks hold whole frames).
+    jobs : int, optional
+        Threads (default: one per core for long scans, as :func:`meshladar.stream.run_chunks`).
+    executor : concurrent.futures.Executor, optional
+        Any executor (a Dask cluster's: :func:`meshladar.stream.dask_executor`).
+    progress : bool
+        A progress bar over the pulses, on a terminal only (default False).
+    run_dir : str or os.PathLike, optional
+        A run folder: a scan stopped at any point and run again computes only the chunks
+        it lacks, and gives the same points.
 
     Returns
     -------
@@ -188,30 +203,29 @@ def scan(scene, pattern, platform, sensor, *, seed=0, keep_waveforms=False,
     """
     _check(scene, pattern, platform, sensor)
     seed = check_seed("seed", seed)
-    if progress is not None and not callable(progress):
-        raise ParameterError(f"progress must be callable or None; got {progress!r}")
     if not isinstance(keep_waveforms, bool):
         raise ParameterError(f"keep_waveforms must be True or False; got {keep_waveforms!r}")
+    if keep_waveforms and run_dir is not None and sensor.samples is None:
+        raise ParameterError("keep_waveforms with run_dir needs the sensor's samples (a "
+                             "fixed record length), so that every chunk's records fit")
     foot = _footprint(pattern, sensor)
     per = max(1, CHUNK_RAYS // len(foot[0])) if chunk_pulses is None else check_count(
         "chunk_pulses", chunk_pulses)
     if pattern.is_flash:                     # whole frames per chunk
         frame = pattern.shape[0] * pattern.shape[1]
         per = max(frame, per // frame * frame)
-    recs, waves, starts = [], [], []
-    for i, lo in enumerate(range(0, len(pattern), per)):
-        sl = slice(lo, min(lo + per, len(pattern)))
-        chunk_seed = None if seed is None else [seed, i] if isinstance(seed, int) \
-            else list(seed) + [i]
-        rec, w, s = _chunk(scene, pattern, platform, sensor, sl, foot, chunk_seed,
-                           keep_waveforms)
-        recs.append(rec)
-        waves.append(w)
-        starts.append(s)
-        if progress is not None:
-            progress(sl.stop, len(pattern))
+    slots = sensor.detector.max_returns
+    job = ScanJob(scene, pattern, platform, sensor, foot, seed, keep_waveforms, slots, _chunk)
+    description = None if run_dir is None else job_description(
+        scene, pattern, platform, sensor, seed, keep_waveforms,
+        geometry(scene, "flat").key)
+    results = run_chunks(scan_chunk, job, len(pattern), chunk_size=per, jobs=jobs,
+                         executor=executor, progress=progress, unit="pulses",
+                         work=float(len(pattern) * len(foot[0])), run_dir=run_dir,
+                         job=description, arrays=chunk_arrays(slots, sensor.samples,
+                                                              keep_waveforms),
+                         threads=True)
+    points, waves, starts = records(results, slots)
     info = {"conventions": dict(CONVENTIONS), "pattern": pattern.describe(),
             "platform": platform.describe(), "sensor": sensor.describe(), "seed": seed}
-    return PointCloud(np.concatenate(recs), info,
-                      tuple(waves) if keep_waveforms else None,
-                      tuple(starts) if keep_waveforms else None)
+    return PointCloud(points, info, waves, starts)

@@ -54,7 +54,6 @@ api("scan.sensor=None", lambda: _scan(sensor=None), "error", "sensor")
 api("scan.seed=-1", lambda: _scan(seed=-1), "error", "seed")
 api("scan.keep_waveforms=str", lambda: _scan(keep_waveforms="yes"), "error", "keep_waveforms")
 api("scan.chunk_pulses=0", lambda: _scan(chunk_pulses=0), "error", "chunk_pulses")
-api("scan.progress=int", lambda: _scan(progress=3), "error", "progress")
 for _key, _v in {"zero": 0.0, "nan": nan, "inf": inf, "str": "1"}.items():
     api(f"ScanSensor.pulse_energy={_key}", lambda v=_v: _sensor(pulse_energy=v), "error",
         "pulse_energy")
@@ -119,3 +118,7 @@ for _flag, _v in (("--tol", "0"), ("--divergence", "-1"), ("--max-returns", "16"
                   ("--pulse-energy", "nan"), ("--sub-rays", "0")):
     cli(f"scan.{_flag}={_v}", _SCAN + _RASTER + [_flag, _v], "error",
         (_flag, _flag.lstrip("-").replace("-", "_")), setup=_SPHERE, forbid=_WORK)
+api("scan.keep_waveforms+run_dir-without-samples", lambda: _scan(
+    keep_waveforms=True, run_dir="never-made"), "error", ("samples", "run_dir"))
+api("scan.jobs=0", lambda: _scan(jobs=0), "error", "jobs")
+api("scan.progress=str", lambda: _scan(progress="yes"), "error", "progress")

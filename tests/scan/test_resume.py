@@ -1,0 +1,58 @@
+"""Long scans: threads give the same points as one thread, and a scan stopped midway and
+run again from its run folder computes only the chunks it lacked and gives the same
+points as a scan never stopped (synchronised on the chunks, not on time)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from meshladar.noise import Noise
+from meshladar.scan import Platform, ScanBeam, rotating, scan
+from meshladar.scan import run as scan_run
+
+from _scan_scenes import plate, scene, sensor
+
+
+def _setup():
+    sc = scene(plate(30.0, half=40.0))
+    pat = rotating(np.linspace(-10, 10, 8), rotation_hz=2, pulse_rate=4e4, duration=0.05)
+    sen = sensor(noise=Noise(background_rate=2e7), beam=ScanBeam(1e-3, sub_rays=8),
+                 samples=128)
+    return sc, pat, Platform.static((0.0, 0.0, 0.0)), sen
+
+
+def test_threads_give_the_points_of_one_thread():
+    sc, pat, plat, sen = _setup()
+    one = scan(sc, pat, plat, sen, jobs=1, chunk_pulses=300, seed=4)
+    two = scan(sc, pat, plat, sen, jobs=2, chunk_pulses=300, seed=4)
+    assert len(one) > 500
+    assert one.points.tobytes() == two.points.tobytes()
+
+
+def test_a_stopped_scan_resumes_from_its_run_folder_with_identical_points(tmp_path,
+                                                                         monkeypatch):
+    sc, pat, plat, sen = _setup()
+    fresh = scan(sc, pat, plat, sen, chunk_pulses=300, seed=4, keep_waveforms=True)
+    real = scan_run._chunk
+    calls = []
+
+    def stop_at_third(job, sl, seed):
+        calls.append(sl.start)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return real(job, sl, seed)
+
+    monkeypatch.setattr(scan_run, "_chunk", stop_at_third)
+    with pytest.raises(KeyboardInterrupt):
+        scan(sc, pat, plat, sen, jobs=1, chunk_pulses=300, seed=4, keep_waveforms=True,
+             run_dir=tmp_path / "run")
+    calls.clear()
+    monkeypatch.setattr(scan_run, "_chunk", lambda job, sl, seed: (calls.append(sl.start),
+                                                                  real(job, sl, seed))[1])
+    resumed = scan(sc, pat, plat, sen, jobs=1, chunk_pulses=300, seed=4, keep_waveforms=True,
+                   run_dir=tmp_path / "run")
+    assert len(calls) == -(-len(pat) // 300) - 2          # the two saved chunks not redone
+    assert resumed.points.tobytes() == fresh.points.tobytes()
+    for a, b in zip(resumed.waveforms, fresh.waveforms):
+        assert np.array_equal(a, b)
