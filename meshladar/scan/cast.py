@@ -24,8 +24,9 @@ import numpy as np
 from ..raytrace.embree import embree_scene, geometry
 from ..raytrace.backends import resolve_backend
 from ..sensor import PLANCK, SPEED_OF_LIGHT
+from ._kernels import refine_hits, world_sub_rays
 
-__all__ = ["sub_directions", "Cast", "cast_chunk", "photoelectrons"]
+__all__ = ["sub_directions", "world_directions", "Cast", "cast_chunk", "photoelectrons"]
 
 #: Below this |n·d| a hit's float64 refinement is not trusted (Embree's t is kept).
 _MIN_COS = 1e-9
@@ -37,6 +38,18 @@ def _perpendiculars(d):
     u = np.cross(ref, d)
     u /= np.linalg.norm(u, axis=1, keepdims=True)
     return u, np.cross(d, u)
+
+
+def world_directions(rot, directions, offsets, pixel_pitch=None):
+    """World-frame directions (n, m, 3) of each pulse's m sub-rays: :func:`sub_directions`
+    turned by the sensor's rotations ``rot`` (n, 3, 3), in one compiled pass."""
+    n, m = len(directions), len(offsets)
+    out = np.empty((n, m, 3))
+    world_sub_rays(np.ascontiguousarray(rot, np.float64),
+                   np.ascontiguousarray(directions, np.float64),
+                   np.ascontiguousarray(offsets, np.float64),
+                   -1.0 if pixel_pitch is None else float(pixel_pitch), out)
+    return out
 
 
 def sub_directions(directions, offsets, pixel_pitch=None):
@@ -78,28 +91,17 @@ def cast_chunk(scene, origins, directions):
     geo = geometry(scene, "flat")
     emb = embree_scene(geo, resolve_backend("auto"))
     n, m = directions.shape[:2]
-    o = np.repeat(origins, m, axis=0)
-    d = directions.reshape(n * m, 3)
-    res = emb.run(np.ascontiguousarray(o - geo.center, dtype=np.float32),
-                  np.ascontiguousarray(d, dtype=np.float32))
+    shifted = origins - geo.center
+    res = emb.run(np.ascontiguousarray(np.repeat(shifted, m, axis=0), dtype=np.float32),
+                  np.ascontiguousarray(directions.reshape(n * m, 3), dtype=np.float32))
     face = res["primID"].astype(np.int64)
-    hit = face >= 0
-    f = face[hit]
-    nrm = geo.face_normals[f]
-    oc = o[hit] - geo.center
-    dd = d[hit]
-    denom = np.einsum("ij,ij->i", nrm, dd)
-    ok = np.abs(denom) > _MIN_COS
-    t = np.where(ok, (geo.plane_d[f] - np.einsum("ij,ij->i", nrm, oc)) / np.where(ok, denom, 1.0),
-                 res["tfar"][hit].astype(np.float64))
-    dist = np.full(n * m, np.inf)
-    dist[hit] = t
-    cos = np.zeros(n * m)
-    cos[hit] = np.abs(denom)
-    pts = np.full((n * m, 3), np.nan)
-    pts[hit] = o[hit] + t[:, None] * dd
-    return Cast(face.reshape(n, m), dist.reshape(n, m), cos.reshape(n, m),
-                pts.reshape(n, m, 3))
+    dist, cos = np.empty((n, m)), np.empty((n, m))
+    pts = np.empty((n, m, 3))
+    refine_hits(face, res["tfar"].astype(np.float64), np.ascontiguousarray(shifted),
+                np.ascontiguousarray(directions), geo.face_normals, geo.plane_d, _MIN_COS,
+                dist, cos, pts)
+    pts += geo.center
+    return Cast(face.reshape(n, m), dist, cos, pts)
 
 
 def photoelectrons(scene, cast, shares, sensor):

@@ -18,8 +18,9 @@ import math
 
 import numba
 import numpy as np
-from scipy.ndimage import gaussian_filter1d, maximum_filter1d
 from scipy.optimize import least_squares
+
+from ._kernels import centroids, find_peaks
 
 __all__ = ["SUPPORT", "waveforms", "find_returns", "Returns"]
 
@@ -129,47 +130,11 @@ class Returns:
         return len(self.pulse)
 
 
-def _suppress(p, j, separation):
-    """Keep, pulse by pulse from the strongest down, the maxima farther than
-    ``separation`` samples from every stronger one kept (p sorted, strongest first)."""
-    keep = np.ones(len(p), bool)
-    starts = np.r_[0, np.nonzero(np.diff(p))[0] + 1, len(p)]
-    for a, b in zip(starts[:-1], starts[1:]):
-        if b - a < 2:
-            continue
-        kept = []
-        for i in range(a, b):
-            if any(abs(j[i] - j[k]) <= separation for k in kept):
-                keep[i] = False
-            else:
-                kept.append(i)
-    return keep
-
-
-def _candidates(waves, reach, max_returns, separation):
-    """Local maxima of ``waves`` where ``reach`` is at least 0, farther than
-    ``separation`` samples from a stronger one: (pulse, sample), the strongest
-    ``max_returns`` of each pulse."""
-    w = waves
-    left = np.concatenate([np.full((len(w), 1), -np.inf), w[:, :-1]], axis=1)
-    right = np.concatenate([w[:, 1:], np.full((len(w), 1), -np.inf)], axis=1)
-    p, j = np.nonzero((reach >= 0) & (w > 0) & (w >= left) & (w > right))
-    amp = w[p, j]
-    order = np.lexsort((-amp, p))
-    p, j = p[order], j[order]
-    keep = _suppress(p, j, separation)
-    p, j = p[keep], j[keep]
-    rank = np.arange(len(p)) - np.searchsorted(p, p, side="left")
-    keep = rank < max_returns
-    return p[keep], j[keep]
-
-
-def _interpolate(waves, p, j, sigma_samples):
-    """A Gaussian through each peak's three samples: offset (samples), σ (samples), height."""
-    ns = waves.shape[1]
-    a = waves[p, np.maximum(j - 1, 0)]
-    b = waves[p, j]
-    c = waves[p, np.minimum(j + 1, ns - 1)]
+def _interpolate3(f3, j, ns, sigma_samples):
+    """A Gaussian through each peak's three filtered samples ``f3`` (j − 1, j, j + 1):
+    offset (samples), σ (samples), height; the fallback (σ of the filtered pulse, no
+    offset) where they do not make a downward parabola in the log or j is an end."""
+    a, b, c = f3[:, 0], f3[:, 1], f3[:, 2]
     tiny = 1e-300
     la, lb, lc = (np.log(np.maximum(x, tiny)) for x in (a, b, c))
     curv = la - 2.0 * lb + lc
@@ -214,26 +179,6 @@ def _decompose(waves, p, centre, s, height, sigma_samples):
         height[idx], centre[idx], s[idx] = fit.x[:k], fit.x[k:2 * k], fit.x[2 * k:]
 
 
-def _centroid(waves, p, centre, half, rounds=2):
-    """Each echo's time (samples): the centroid of ``waves`` within ``half`` samples of
-    ``centre`` (the samples at the window's edges weighed by the part of them inside it, so
-    the window is symmetric about the centre wherever it falls between samples),
-    re-centred ``rounds`` times (vectorised over echoes)."""
-    ns = waves.shape[1]
-    k = np.arange(-int(math.ceil(half)) - 1, int(math.ceil(half)) + 2)
-    for _ in range(rounds):
-        idx = np.floor(centre).astype(np.int64)[:, None] + k[None, :]
-        x = idx + 0.5
-        # each sample weighed by the part of it inside the window: no jump as it moves
-        part = np.clip(half + 0.5 - np.abs(x - centre[:, None]), 0.0, 1.0)
-        part = np.where((idx >= 0) & (idx < ns), part, 0.0)
-        w = part * waves[p[:, None], np.clip(idx, 0, ns - 1)]
-        total = w.sum(axis=1)
-        ok = total > 0
-        centre = np.where(ok, (w * x).sum(axis=1) / np.where(ok, total, 1.0), centre)
-    return centre
-
-
 def find_returns(waves, start, dt, sigma, level, max_returns, decompose, background=0.0,
                  detect=None):
     """The returns in a chunk's waveforms (photoelectrons per sample), as :class:`Returns`
@@ -246,13 +191,19 @@ def find_returns(waves, start, dt, sigma, level, max_returns, decompose, backgro
     Geiger-mode histogram, whose level follows its armed shots)."""
     s = sigma / dt
     fwhm = _FWHM_PER_SIGMA * s
-    filtered = gaussian_filter1d(waves, s, axis=1, mode="constant", truncate=4.0)
-    margin = (waves if detect is None else detect) - level
-    reach = maximum_filter1d(margin, 2 * int(fwhm / 2) + 1, axis=1, mode="constant",
-                             cval=-np.inf)
-    p, j = _candidates(filtered, reach, max_returns, fwhm)
-    delta, s_f, height_f = _interpolate(filtered, p, j, s * math.sqrt(2.0))
-    centre = _centroid(waves - background, p, j + 0.5 + delta, _CENTROID_SIGMAS * s)
+    margin = np.ascontiguousarray((waves if detect is None else detect) - level, np.float64)
+    waves = np.ascontiguousarray(waves, np.float64)
+    r = int(4.0 * s + 0.5)                       # scipy's gaussian_filter1d, truncate=4
+    weights = np.exp(-0.5 * (np.arange(-r, r + 1) / s) ** 2)
+    weights /= weights.sum()
+    cap = len(waves) * max_returns
+    p, j = np.empty(cap, np.int64), np.empty(cap, np.int64)
+    f3 = np.empty((cap, 3))
+    k = find_peaks(waves, margin, weights, int(fwhm / 2), float(fwhm), max_returns, p, j, f3)
+    p, j, f3 = p[:k], j[:k], f3[:k]
+    delta, s_f, height_f = _interpolate3(f3, j, waves.shape[1], s * math.sqrt(2.0))
+    centre = j + 0.5 + delta
+    centroids(waves, float(background), p, centre, _CENTROID_SIGMAS * s, 2)
     area = height_f * s_f * math.sqrt(2.0 * math.pi)        # the filter has unit area
     s_e = np.sqrt(np.maximum(s_f ** 2 - s ** 2, 0.25 * s ** 2))
     height = area / (s_e * math.sqrt(2.0 * math.pi))

@@ -150,21 +150,24 @@ class Platform:
         return cls(data[:, 0], data[:, 1:4], data[:, 4:7], interpolation, **mount)
 
     # -- poses -------------------------------------------------------------------------
+    def _positions(self, t):
+        """Body positions (n, 3) at times t (two or more waypoints)."""
+        if self.interpolation == "spline":
+            return CubicSpline(self.times, self.positions, bc_type="natural")(
+                np.clip(t, self.times[0], self.times[-1]))
+        if len(self.times) == 2:     # constant velocity, extrapolated both ways
+            v = (self.positions[1] - self.positions[0]) / (self.times[1] - self.times[0])
+            return self.positions[0] + (t - self.times[0])[:, None] * v
+        return np.stack([np.interp(t, self.times, self.positions[:, i]) for i in range(3)],
+                        axis=1)
+
     def _body(self, t):
         """Body positions (n, 3) and rotations at times t."""
         k = len(self.times)
         if k == 1:
             return (np.broadcast_to(self.positions[0], (len(t), 3)).copy(),
                     rotation(np.broadcast_to(self.attitudes_deg[0], (len(t), 3))))
-        if self.interpolation == "spline":
-            pos = CubicSpline(self.times, self.positions, bc_type="natural")(
-                np.clip(t, self.times[0], self.times[-1]))
-        elif k == 2:                 # constant velocity, extrapolated both ways
-            v = (self.positions[1] - self.positions[0]) / (self.times[1] - self.times[0])
-            pos = self.positions[0] + (t - self.times[0])[:, None] * v
-        else:
-            pos = np.stack([np.interp(t, self.times, self.positions[:, i]) for i in range(3)],
-                           axis=1)
+        pos = self._positions(t)
         slerp = Slerp(self.times, rotation(self.attitudes_deg))
         return pos, slerp(np.clip(t, self.times[0], self.times[-1]))
 
@@ -172,6 +175,13 @@ class Platform:
         """The sensor's origin (n, 3) and sensor-to-world rotation matrices (n, 3, 3) at
         times ``t`` (s): the body's pose, the mount offset and the boresight."""
         t = np.asarray(t, np.float64).ravel()
+        if np.all(self.attitudes_deg == self.attitudes_deg[0]):      # one attitude: once
+            pos = (np.broadcast_to(self.positions[0], (len(t), 3)) if len(self.times) == 1
+                   else self._positions(t))
+            rot = rotation(self.attitudes_deg[0])
+            mats = (rot * rotation(np.asarray(self.boresight_deg))).as_matrix()
+            origin = pos + rot.apply(np.asarray(self.mount_offset))
+            return origin, np.broadcast_to(mats, (len(t), 3, 3))
         pos, rot = self._body(t)
         origin = pos + rot.apply(np.asarray(self.mount_offset))
         mats = (rot * rotation(np.asarray(self.boresight_deg))).as_matrix()

@@ -20,7 +20,8 @@ from ..raytrace.embree import geometry
 from ..scene import Scene
 from ..stream import run_chunks
 from ..sensor import SPEED_OF_LIGHT
-from .cast import cast_chunk, photoelectrons, sub_directions
+from ._kernels import assign_truth
+from .cast import cast_chunk, photoelectrons, world_directions
 from .echoes import find_returns, waveforms
 from .footprint import pixel_offsets
 from .geiger import blind_shots, coates, fire
@@ -61,37 +62,14 @@ def _footprint(pattern, sensor):
 def _truth(ret, cast, pe, tau):
     """Each return's ground truth from the sub-rays nearest it in time (module docstring)."""
     n_ret = len(ret)
-    out = {"true_part": np.full(n_ret, -1, np.int32), "true_face": np.full(n_ret, -1, np.int64),
-           "true_range": np.full(n_ret, np.nan), "true_x": np.full(n_ret, np.nan),
-           "true_y": np.full(n_ret, np.nan), "true_z": np.full(n_ret, np.nan)}
-    if n_ret == 0:
-        return out
-    first = np.searchsorted(ret.pulse, np.arange(len(tau)), side="left")
-    counts = np.bincount(ret.pulse, minlength=len(tau))
-    p, k = np.nonzero(pe > 0)
-    has = counts[p] > 0
-    p, k = p[has], k[has]
-    if len(p) == 0:                     # returns, but no lit sub-ray: all false alarms
-        return out
-    # the nearest return of the sub-ray's own pulse (at most 15 to compare)
-    width = int(counts.max())
-    slots = first[p][:, None] + np.arange(width)[None, :]
-    valid = np.arange(width)[None, :] < counts[p][:, None]
-    gap = np.where(valid, np.abs(ret.time[np.minimum(slots, n_ret - 1)] - tau[p, k][:, None]),
-                   np.inf)
-    owner = slots[np.arange(len(p)), gap.argmin(axis=1)]
-    e = pe[p, k]
-    total = np.bincount(owner, weights=e, minlength=n_ret)
-    seen = total > 0
-    out["true_range"][seen] = (np.bincount(owner, e * cast.distance[p, k], n_ret)[seen]
-                               / total[seen])
-    for axis, name in enumerate(("true_x", "true_y", "true_z")):
-        out[name][seen] = (np.bincount(owner, e * cast.points[p, k, axis], n_ret)[seen]
-                           / total[seen])
-    order = np.lexsort((e, owner))                  # the strongest sub-ray last per owner
-    last = order[np.r_[owner[order][1:] != owner[order][:-1], True]]
-    out["true_face"][owner[last]] = cast.face[p[last], k[last]]
-    return out
+    first = np.searchsorted(ret.pulse, np.arange(len(tau)), side="left").astype(np.int64)
+    count = np.bincount(ret.pulse, minlength=len(tau)).astype(np.int64)
+    true_range, xyz = np.zeros(n_ret), np.zeros((n_ret, 3))
+    face = np.full(n_ret, -1, np.int64)
+    assign_truth(first, count, np.ascontiguousarray(ret.time, np.float64), tau, pe,
+                 cast.distance, cast.points, cast.face, true_range, xyz, face)
+    return {"true_face": face, "true_range": true_range, "true_x": xyz[:, 0],
+            "true_y": xyz[:, 1], "true_z": xyz[:, 2]}
 
 
 def _chunk(job, sl, seed):
@@ -102,7 +80,7 @@ def _chunk(job, sl, seed):
     origins, rot = platform.sensor_poses(t)
     local = pattern.directions[sl]
     axis = np.einsum("nij,nj->ni", rot, local)
-    sub = np.einsum("nij,nmj->nmi", rot, sub_directions(local, offsets, pitch))
+    sub = world_directions(rot, local, offsets, pitch)
     cast = cast_chunk(scene, origins, sub)
     pe = photoelectrons(scene, cast, shares, sensor)
     tau = 2.0 * cast.distance / SPEED_OF_LIGHT

@@ -1,0 +1,213 @@
+"""The scan's compiled loops: sub-ray directions in the world, hits refined in float64,
+and each return's ground truth; each the twin of the numpy it replaced (the docstrings of
+:mod:`.cast` and :mod:`.run` say what they compute)."""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+__all__ = ["world_sub_rays", "refine_hits", "assign_truth"]
+
+
+@numba.njit(cache=True, nogil=True)
+def world_sub_rays(rot, local, offsets, pitch, out):     # pragma: no cover - compiled
+    """out[p, k] = rot[p] @ (pulse p's sub-ray k in the sensor frame), normalised; a beam's
+    offsets are angles about the pulse's direction (pitch < 0), a flash pixel's fractions
+    of ``pitch`` on the focal plane x = 1."""
+    n = local.shape[0]
+    m = offsets.shape[0]
+    s = np.empty(3)
+    for p in range(n):
+        dx, dy, dz = local[p, 0], local[p, 1], local[p, 2]
+        if pitch >= 0.0:
+            ux, uy, uz = 0.0, pitch, 0.0
+            vx, vy, vz = 0.0, 0.0, pitch
+            dx, dy, dz = 1.0, dy / local[p, 0], dz / local[p, 0]
+        else:
+            # u = ref × d normalised, v = d × u (ref = z unless d is near z)
+            if abs(dz) < 0.9:
+                ux, uy, uz = -dy, dx, 0.0
+            else:
+                ux, uy, uz = dz, 0.0, -dx
+            nu = math.sqrt(ux * ux + uy * uy + uz * uz)
+            ux, uy, uz = ux / nu, uy / nu, uz / nu
+            vx, vy, vz = dy * uz - dz * uy, dz * ux - dx * uz, dx * uy - dy * ux
+        for k in range(m):
+            a = offsets[k, 0] if pitch >= 0.0 else math.tan(offsets[k, 0])
+            b = offsets[k, 1] if pitch >= 0.0 else math.tan(offsets[k, 1])
+            s[0] = dx + a * ux + b * vx
+            s[1] = dy + a * uy + b * vy
+            s[2] = dz + a * uz + b * vz
+            inv = 1.0 / math.sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2])
+            for i in range(3):
+                out[p, k, i] = inv * (rot[p, i, 0] * s[0] + rot[p, i, 1] * s[1]
+                                      + rot[p, i, 2] * s[2])
+
+
+@numba.njit(cache=True, nogil=True)
+def refine_hits(face, tfar, origins, dirs, normals, plane_d, min_cos, dist, cos,
+                points):                                  # pragma: no cover - compiled
+    """Per sub-ray (flat index i = p m + k): the float64 distance from the float64 origin
+    (shifted) to the hit face's plane, |n·d|, and the hit point (shifted)."""
+    n, m = dirs.shape[0], dirs.shape[1]
+    for p in range(n):
+        for k in range(m):
+            i = p * m + k
+            f = face[i]
+            if f < 0:
+                dist[p, k] = np.inf
+                cos[p, k] = 0.0
+                points[p, k, 0] = points[p, k, 1] = points[p, k, 2] = np.nan
+                continue
+            den = (normals[f, 0] * dirs[p, k, 0] + normals[f, 1] * dirs[p, k, 1]
+                   + normals[f, 2] * dirs[p, k, 2])
+            if abs(den) > min_cos:
+                num = plane_d[f] - (normals[f, 0] * origins[p, 0] + normals[f, 1]
+                                    * origins[p, 1] + normals[f, 2] * origins[p, 2])
+                t = num / den
+            else:
+                t = tfar[i]
+            dist[p, k] = t
+            cos[p, k] = abs(den)
+            for j in range(3):
+                points[p, k, j] = origins[p, j] + t * dirs[p, k, j]
+
+
+@numba.njit(cache=True, nogil=True)
+def assign_truth(first, count, ret_time, tau, pe, distance, points, face, true_range,
+                 true_xyz, true_face):                    # pragma: no cover - compiled
+    """Each return's photoelectron-weighted true range and point, and the face of its
+    strongest sub-ray, from the lit sub-rays whose echo lies nearest it in time."""
+    n, m = tau.shape
+    n_ret = ret_time.shape[0]
+    total = np.zeros(n_ret)
+    best = np.zeros(n_ret)
+    for p in range(n):
+        c = count[p]
+        if c == 0:
+            continue
+        for k in range(m):
+            e = pe[p, k]
+            if e <= 0.0:
+                continue
+            r = first[p]
+            gap = abs(ret_time[r] - tau[p, k])
+            for q in range(first[p] + 1, first[p] + c):
+                g = abs(ret_time[q] - tau[p, k])
+                if g < gap:
+                    gap, r = g, q
+            total[r] += e
+            true_range[r] += e * distance[p, k]
+            for j in range(3):
+                true_xyz[r, j] += e * points[p, k, j]
+            if e > best[r]:
+                best[r] = e
+                true_face[r] = face[p, k]
+    for r in range(n_ret):
+        if total[r] > 0.0:
+            true_range[r] /= total[r]
+            for j in range(3):
+                true_xyz[r, j] /= total[r]
+        else:
+            true_range[r] = np.nan
+            true_xyz[r, 0] = true_xyz[r, 1] = true_xyz[r, 2] = np.nan
+
+
+@numba.njit(cache=True, nogil=True)
+def _filtered(waves, p, j, weights, cache):               # pragma: no cover - compiled
+    """The matched-filtered sample j of pulse p (zeros beyond the record), cached."""
+    ns = waves.shape[1]
+    if j < 0 or j >= ns:
+        return -np.inf
+    if not np.isnan(cache[j]):
+        return cache[j]
+    r = (weights.shape[0] - 1) // 2
+    acc = 0.0
+    for k in range(weights.shape[0]):
+        i = j + k - r
+        if 0 <= i < ns:
+            acc += weights[k] * waves[p, i]
+    cache[j] = acc
+    return acc
+
+
+@numba.njit(cache=True, nogil=True)
+def find_peaks(waves, margin, weights, half, separation, max_returns, out_p, out_j,
+               out_f):                                    # pragma: no cover - compiled
+    """Per pulse, the maxima of the matched-filtered waveform (``weights``, zero beyond the
+    record) where the largest ``margin`` within ``half`` samples is ≥ 0, farther than
+    ``separation`` samples from a stronger one, the strongest ``max_returns`` first; their
+    pulse, sample and filtered values at j − 1, j, j + 1. Returns how many."""
+    n, ns = waves.shape
+    cache = np.empty(ns)
+    amp = np.empty(ns)
+    at = np.empty(ns, np.int64)
+    kept = np.empty(max_returns, np.int64)
+    count = 0
+    for p in range(n):
+        cache[:] = np.nan
+        c = 0
+        for j in range(ns):
+            best = -np.inf
+            for i in range(max(0, j - half), min(ns, j + half + 1)):
+                if margin[p, i] > best:
+                    best = margin[p, i]
+            if best < 0.0:
+                continue
+            f = _filtered(waves, p, j, weights, cache)
+            if f > 0.0 and f >= _filtered(waves, p, j - 1, weights, cache) and \
+                    f > _filtered(waves, p, j + 1, weights, cache):
+                amp[c] = f
+                at[c] = j
+                c += 1
+        if c == 0:
+            continue
+        order = np.argsort(-amp[:c], kind="mergesort")
+        nk = 0
+        for o in order:
+            if nk == max_returns:
+                break
+            ok = True
+            for q in range(nk):
+                if abs(at[o] - kept[q]) <= separation:
+                    ok = False
+                    break
+            if not ok:
+                continue
+            kept[nk] = at[o]
+            nk += 1
+            j = at[o]
+            out_p[count] = p
+            out_j[count] = j
+            out_f[count, 0] = _filtered(waves, p, j - 1, weights, cache)
+            out_f[count, 1] = amp[o]
+            out_f[count, 2] = _filtered(waves, p, j + 1, weights, cache)
+            count += 1
+    return count
+
+
+@numba.njit(cache=True, nogil=True)
+def centroids(waves, background, p, centre, half, rounds):  # pragma: no cover - compiled
+    """Each echo's centroid (samples) within ``half`` of its centre, the edge samples
+    weighed by their part inside the window, re-centred ``rounds`` times (in place)."""
+    ns = waves.shape[1]
+    reach = int(math.ceil(half)) + 1
+    for e in range(p.shape[0]):
+        for _ in range(rounds):
+            c = centre[e]
+            base = int(math.floor(c))
+            tot = 0.0
+            mom = 0.0
+            for i in range(base - reach, base + reach + 1):
+                if i < 0 or i >= ns:
+                    continue
+                x = i + 0.5
+                part = min(1.0, max(0.0, half + 0.5 - abs(x - c)))
+                w = part * (waves[p[e], i] - background)
+                tot += w
+                mom += w * x
+            if tot > 0.0:
+                centre[e] = mom / tot
