@@ -321,6 +321,9 @@ def _scan(sub, commands):
                     help="the beam's profile (default: %(default)s)")
     sc.add_argument("--noise", action="store_true",
                     help="shot noise even without background (default: expected waveforms)")
+    sc.add_argument("--cfar", action="store_true",
+                    help="threshold from each record's own background (default: from "
+                         "--background-rate and --dark-rate)")
     for flag, kind, default, metavar, text in _SCAN_FLAGS:
         sc.add_argument(flag, type=kind, default=default, metavar=metavar,
                         help=f"{text} (default: %(default)s)")

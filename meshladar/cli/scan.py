@@ -94,7 +94,7 @@ def _sensor(args):
                       beam=ScanBeam(args.divergence, profile=args.profile, tol=args.tol,
                                     sub_rays=args.sub_rays),
                       noise=noise, geiger=geiger,
-                      detector=Detector(max_returns=args.max_returns))
+                      detector=Detector(max_returns=args.max_returns, cfar=args.cfar))
 
 
 def cmd_scan(args) -> int:

@@ -191,8 +191,9 @@ def find_peaks(waves, margin, weights, half, separation, max_returns, out_p, out
 
 @numba.njit(cache=True, nogil=True)
 def centroids(waves, background, p, centre, half, rounds):  # pragma: no cover - compiled
-    """Each echo's centroid (samples) within ``half`` of its centre, the edge samples
-    weighed by their part inside the window, re-centred ``rounds`` times (in place)."""
+    """Each echo's centroid (samples) within ``half`` of its centre, less its record's
+    ``background`` per sample, the edge samples weighed by their part inside the window,
+    re-centred ``rounds`` times (in place)."""
     ns = waves.shape[1]
     reach = int(math.ceil(half)) + 1
     for e in range(p.shape[0]):
@@ -206,7 +207,7 @@ def centroids(waves, background, p, centre, half, rounds):  # pragma: no cover -
                     continue
                 x = i + 0.5
                 part = min(1.0, max(0.0, half + 0.5 - abs(x - c)))
-                w = part * (waves[p[e], i] - background)
+                w = part * (waves[p[e], i] - background[e])
                 tot += w
                 mom += w * x
             if tot > 0.0:

@@ -22,7 +22,7 @@ from scipy.optimize import least_squares
 
 from ._kernels import centroids, find_peaks
 
-__all__ = ["SUPPORT", "waveforms", "find_returns", "Returns"]
+__all__ = ["SUPPORT", "waveforms", "find_returns", "cfar_background", "Returns"]
 
 #: The echo's Gaussian is cut beyond this many σ (exp(−32) of its peak).
 SUPPORT = 8.0
@@ -179,13 +179,24 @@ def _decompose(waves, p, centre, s, height, sigma_samples):
         height[idx], centre[idx], s[idx] = fit.x[:k], fit.x[k:2 * k], fit.x[2 * k:]
 
 
+def cfar_background(waves, guard):
+    """Each record's background per sample, estimated from the record itself (cell
+    averaging): the mean of its samples farther than ``guard`` samples from its largest."""
+    ns = waves.shape[1]
+    peak = np.argmax(waves, axis=1)
+    far = np.abs(np.arange(ns)[None, :] - peak[:, None]) > guard
+    count = far.sum(axis=1)
+    return np.where(count > 0, (waves * far).sum(axis=1) / np.maximum(count, 1), 0.0)
+
+
 def find_returns(waves, start, dt, sigma, level, max_returns, decompose, background=0.0,
                  detect=None):
     """The returns in a chunk's waveforms (photoelectrons per sample), as :class:`Returns`
     (:mod:`.instrument`'s detection): maxima of the matched-filtered waveform whose
     largest sample within the echo's FWHM reaches ``level``, located and sized by a
     Gaussian through the filtered peak's three samples, and timed by the centroid of the
-    samples within :data:`_CENTROID_SIGMAS` σ of it, less the ``background`` per sample
+    samples within :data:`_CENTROID_SIGMAS` σ of it, less the ``background`` per sample (a
+    number, or one per record)
     (the maximum-likelihood time of a Gaussian echo in shot noise). ``level`` is a number
     or an array like ``waves``; ``detect`` (default ``waves``) is what it applies to (a
     Geiger-mode histogram, whose level follows its armed shots)."""
@@ -203,7 +214,8 @@ def find_returns(waves, start, dt, sigma, level, max_returns, decompose, backgro
     p, j, f3 = p[:k], j[:k], f3[:k]
     delta, s_f, height_f = _interpolate3(f3, j, waves.shape[1], s * math.sqrt(2.0))
     centre = j + 0.5 + delta
-    centroids(waves, float(background), p, centre, _CENTROID_SIGMAS * s, 2)
+    back = np.broadcast_to(np.asarray(background, np.float64), (len(waves),))[p]
+    centroids(waves, np.ascontiguousarray(back), p, centre, _CENTROID_SIGMAS * s, 2)
     area = height_f * s_f * math.sqrt(2.0 * math.pi)        # the filter has unit area
     s_e = np.sqrt(np.maximum(s_f ** 2 - s ** 2, 0.25 * s ** 2))
     height = area / (s_e * math.sqrt(2.0 * math.pi))

@@ -6,7 +6,9 @@ threshold, in photoelectrons per sample, farther than the echo's FWHM from every
 one (weaker maxima within it are noise on the same echo). The threshold is ``threshold`` when given, else
 the Poisson one for the receiver's background and dark counts b per sample: the smallest
 count n with P(N ≥ n | b) ≤ ``false_alarm`` (so a noise-only sample crosses it with
-probability at most ``false_alarm``), and at least one photoelectron. Each return's time
+probability at most ``false_alarm``), and at least one photoelectron; with ``cfar=True``
+b is each record's own background, estimated from the record (a background the sensor
+does not know: sunlight on a bright field). Each return's time
 comes from a Gaussian through its three samples (log-parabola interpolation: exact for a
 sampled Gaussian), its width and intensity (photoelectrons under it) from the same fit.
 Peaks closer than four pulse widths (σ) are refitted together as a sum of Gaussians
@@ -49,12 +51,17 @@ class Detector:
         The most returns kept per pulse (the strongest), 1 to 15 (LAS's limit; default 5).
     decompose : bool
         Refit overlapping peaks as a sum of Gaussians (default True).
+    cfar : bool
+        Constant false-alarm rate: the Poisson threshold of each record's own background,
+        estimated from it (the mean of its samples beyond two echo widths of its largest:
+        cell averaging), not the sensor's stated rates (default False). Linear mode only.
     """
 
     threshold: float | None = None
     false_alarm: float = 1e-6
     max_returns: int = 5
     decompose: bool = True
+    cfar: bool = False
 
     def __post_init__(self):
         if self.threshold is not None:
@@ -64,8 +71,13 @@ class Detector:
             "false_alarm", self.false_alarm, low=0.0, low_open=True, high=0.5))
         object.__setattr__(self, "max_returns", check_count("max_returns", self.max_returns,
                                                             high=15))
-        if not isinstance(self.decompose, bool):
-            raise ParameterError(f"decompose must be True or False; got {self.decompose!r}")
+        for name in ("decompose", "cfar"):
+            if not isinstance(getattr(self, name), bool):
+                raise ParameterError(f"{name} must be True or False; got "
+                                     f"{getattr(self, name)!r}")
+        if self.cfar and self.threshold is not None:
+            raise ParameterError("cfar sets the threshold from each record's background; "
+                                 f"give cfar=True or threshold={self.threshold:g}, not both")
 
     def level(self, background):
         """The threshold (photoelectrons per sample) for ``background`` mean counts per
@@ -79,7 +91,8 @@ class Detector:
 
     def describe(self) -> dict:
         return {"threshold_pe": self.threshold, "false_alarm": self.false_alarm,
-                "max_returns": self.max_returns, "decompose": self.decompose}
+                "max_returns": self.max_returns, "decompose": self.decompose,
+                "cfar": self.cfar}
 
 
 @dataclass(frozen=True)
@@ -153,6 +166,9 @@ class ScanSensor:
             raise ParameterError("geiger: Geiger-mode pixels count avalanches; the noise's "
                                  "speckle_cells, gain, excess_noise_factor and bits do not "
                                  "apply (give only background_rate and dark_rate)")
+        if self.geiger is not None and self.detector.cfar:
+            raise ParameterError("detector: cfar applies to a linear receiver's records; "
+                                 "Geiger-mode thresholds follow each sample's armed shots")
         object.__setattr__(self, "wavelength", check_real(
             "wavelength", self.wavelength, low=MIN_WAVELENGTH, high=LIMITS["wavelength"]))
         for name in ("optics_transmission", "quantum_efficiency"):

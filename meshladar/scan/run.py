@@ -22,7 +22,7 @@ from ..stream import run_chunks
 from ..sensor import SPEED_OF_LIGHT
 from ._kernels import assign_truth
 from .cast import cast_chunk, photoelectrons, world_directions
-from .echoes import find_returns, waveforms
+from .echoes import cfar_background, find_returns, waveforms
 from .footprint import pixel_offsets
 from .geiger import blind_shots, coates, fire
 from .instrument import ScanSensor
@@ -125,8 +125,11 @@ def _detect(sensor, waves, start, seed):
     measured = waves
     if sensor.noise is not None:
         measured = draw_noise(sensor.noise, waves, sensor.dt, 1, seed)[0] / sensor.noise.gain
-    ret = find_returns(measured, start, sensor.dt, sensor.sigma, det.level(b),
-                       det.max_returns, det.decompose, b)
+    if det.cfar:                       # each record's own background, not the sensor's
+        b = cfar_background(measured, 2.0 * 2.3548200450309493 * sensor.sigma / sensor.dt)
+    level = det.level(b[:, None] if det.cfar else b)
+    ret = find_returns(measured, start, sensor.dt, sensor.sigma, level, det.max_returns,
+                       det.decompose, b)
     return ret, measured
 
 

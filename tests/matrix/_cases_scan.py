@@ -122,3 +122,9 @@ api("scan.keep_waveforms+run_dir-without-samples", lambda: _scan(
     keep_waveforms=True, run_dir="never-made"), "error", ("samples", "run_dir"))
 api("scan.jobs=0", lambda: _scan(jobs=0), "error", "jobs")
 api("scan.progress=str", lambda: _scan(progress="yes"), "error", "progress")
+api("Detector.cfar=str", lambda: _sc().Detector(cfar="yes"), "error", "cfar")
+api("Detector.cfar+threshold", lambda: _sc().Detector(cfar=True, threshold=3.0), "error",
+    ("cfar", "threshold"))
+api("ScanSensor.geiger+cfar", lambda: _sensor(geiger=_sc().GeigerMode(),
+                                              detector=_sc().Detector(cfar=True)),
+    "error", "cfar")

@@ -69,3 +69,36 @@ def test_the_detection_probability_of_a_weak_echo_follows_its_samples_poisson_co
     sd = math.sqrt(n_pulses * p_detect * (1 - p_detect))
     assert 0.2 < p_detect < 0.95
     assert abs(detected - n_pulses * p_detect) <= 4 * sd
+
+
+def test_cfar_estimates_each_records_background_and_keeps_the_poisson_false_alarm_rate():
+    """The same noise-only pulses as above with a cell-averaging CFAR detector: each
+    record's background is estimated from it (4096 samples: 0.5 ± 0.011), and the false
+    returns stay within the Poisson bound of the true background."""
+    dt = 0.5e-9
+    sen = sensor(noise=Noise(background_rate=0.5 / dt), samples=4096,
+                 detector=Detector(false_alarm=1e-3, cfar=True))
+    n_pulses = 500
+    pc = scan(scene(plate(R0)), _repeat((-1.0, 0.0, 0.0), n_pulses), Platform.static((0, 0, 0)),
+              sen, seed=3)
+    p = poisson.sf(Detector(false_alarm=1e-3).level(0.5) - 1, 0.5)
+    samples = n_pulses * 4096
+    sd = math.sqrt(samples * p)
+    assert 0.98 * samples * p - 4 * sd <= len(pc) <= samples * p + 4 * sd
+
+
+def test_cfar_finds_an_echo_over_a_background_the_detector_was_not_told():
+    """An echo of 300 photoelectrons over 2 background counts per sample: CFAR's
+    threshold (from the record) finds it in every pulse, at the plate's range within
+    5 σ of the shot-noise bound (σ = 1.8 cm at 300 photoelectrons) and unbiased within
+    1 cm over the 50 pulses."""
+    dt = 0.5e-9
+    energy = 300.0 / photoelectrons_by_hand(1.0, 0.05, R0)
+    sen = sensor(noise=Noise(background_rate=2.0 / dt), pulse_energy=energy, samples=1024,
+                 detector=Detector(cfar=True))
+    pc = scan(scene(plate(R0)), _repeat((1.0, 0.0, 0.0), 50), Platform.static((0, 0, 0)),
+              sen, seed=8)
+    first = pc.points[pc.points["true_face"] >= 0]
+    assert len(np.unique(first["pulse_id"])) == 50
+    assert np.all(np.abs(first["range"] - R0) < 5 * 0.018)
+    assert abs(np.mean(first["range"] - R0)) < 0.01
