@@ -77,10 +77,11 @@ def refine_hits(face, tfar, origins, dirs, normals, plane_d, min_cos, dist, cos,
 
 
 @numba.njit(cache=True, nogil=True)
-def assign_truth(first, count, ret_time, tau, pe, distance, points, face, true_range,
-                 true_xyz, true_face):                    # pragma: no cover - compiled
-    """Each return's photoelectron-weighted true range and point, and the face of its
-    strongest sub-ray, from the lit sub-rays whose echo lies nearest it in time."""
+def assign_truth(first, count, ret_time, tau, pe, distance, points, face, shift,
+                 true_range, true_xyz, true_face, doppler):   # pragma: no cover - compiled
+    """Each return's photoelectron-weighted true range, point and Doppler ``shift``, and
+    the face of its strongest sub-ray, from the lit sub-rays whose echo lies nearest it
+    in time."""
     n, m = tau.shape
     n_ret = ret_time.shape[0]
     total = np.zeros(n_ret)
@@ -101,6 +102,7 @@ def assign_truth(first, count, ret_time, tau, pe, distance, points, face, true_r
                     gap, r = g, q
             total[r] += e
             true_range[r] += e * distance[p, k]
+            doppler[r] += e * shift[p, k]
             for j in range(3):
                 true_xyz[r, j] += e * points[p, k, j]
             if e > best[r]:
@@ -109,6 +111,7 @@ def assign_truth(first, count, ret_time, tau, pe, distance, points, face, true_r
     for r in range(n_ret):
         if total[r] > 0.0:
             true_range[r] /= total[r]
+            doppler[r] /= total[r]
             for j in range(3):
                 true_xyz[r, j] /= total[r]
         else:

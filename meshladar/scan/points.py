@@ -29,6 +29,8 @@ POINT_FIELDS = (
     ("emission_time", "f8", "s", "when the pulse left, the pattern's clock"),
     ("scan_angle", "f4", "deg", "the pattern's scan angle of the pulse"),
     ("channel", "i4", "", "the channel (laser) or pixel (row-major) of the pulse"),
+    ("doppler", "f4", "Hz", "the echo's sub-rays' photoelectron-weighted Doppler shift, "
+                            "positive closing"),
     ("true_part", "i4", "", "the scene part of the echo's strongest sub-ray (-1: noise)"),
     ("true_face", "i8", "", "its face, numbered part by part (-1: noise)"),
     ("true_range", "f8", "m", "the echo's sub-rays' photoelectron-weighted distance"),

@@ -26,6 +26,7 @@ from .echoes import cfar_background, find_returns, waveforms
 from .footprint import pixel_offsets
 from .geiger import blind_shots, coates, fire
 from .instrument import ScanSensor
+from .moving import cast_moving, doppler, moving_parts
 from .patterns import ScanPattern
 from .platforms import Platform
 from .points import CONVENTIONS, POINT_DTYPE, PointCloud
@@ -59,17 +60,18 @@ def _footprint(pattern, sensor):
     return off, np.full(len(off), 1.0 / len(off)), None
 
 
-def _truth(ret, cast, pe, tau):
+def _truth(ret, cast, pe, tau, shift):
     """Each return's ground truth from the sub-rays nearest it in time (module docstring)."""
     n_ret = len(ret)
     first = np.searchsorted(ret.pulse, np.arange(len(tau)), side="left").astype(np.int64)
     count = np.bincount(ret.pulse, minlength=len(tau)).astype(np.int64)
     true_range, xyz = np.zeros(n_ret), np.zeros((n_ret, 3))
     face = np.full(n_ret, -1, np.int64)
+    dop = np.zeros(n_ret)
     assign_truth(first, count, np.ascontiguousarray(ret.time, np.float64), tau, pe,
-                 cast.distance, cast.points, cast.face, true_range, xyz, face)
+                 cast.distance, cast.points, cast.face, shift, true_range, xyz, face, dop)
     return {"true_face": face, "true_range": true_range, "true_x": xyz[:, 0],
-            "true_y": xyz[:, 1], "true_z": xyz[:, 2]}
+            "true_y": xyz[:, 1], "true_z": xyz[:, 2], "doppler": dop}
 
 
 def _chunk(job, sl, seed):
@@ -81,8 +83,12 @@ def _chunk(job, sl, seed):
     local = pattern.directions[sl]
     axis = np.einsum("nij,nj->ni", rot, local)
     sub = world_directions(rot, local, offsets, pitch)
-    cast = cast_chunk(scene, origins, sub)
+    if job.split is None:
+        cast = cast_chunk(scene, origins, sub)
+    else:
+        cast = cast_moving(job.split, origins, sub, t)
     pe = photoelectrons(scene, cast, shares, sensor)
+    shift = doppler(job.split, platform, cast, origins, t, sensor.wavelength)
     tau = 2.0 * cast.distance / SPEED_OF_LIGHT
     waves, start = waveforms(tau, pe, sensor.sigma, sensor.dt, sensor.samples)
     ret, measured = _detect(sensor, waves, start, seed)
@@ -97,7 +103,7 @@ def _chunk(job, sl, seed):
     rec["emission_time"] = t[ret.pulse]
     rec["scan_angle"] = pattern.scan_angles_deg[sl][ret.pulse]
     rec["channel"] = pattern.channels[sl][ret.pulse]
-    for name, values in _truth(ret, cast, pe, tau).items():
+    for name, values in _truth(ret, cast, pe, tau, shift).items():
         rec[name] = values
     face = rec["true_face"]
     rec["true_part"] = np.where(face >= 0, _part_of(scene)[np.maximum(face, 0)], -1)
@@ -138,7 +144,7 @@ def _part_of(scene):
     return np.repeat(np.arange(len(counts), dtype=np.int32), counts)
 
 
-def scan(scene, pattern, platform, sensor, *, seed=0, keep_waveforms=False,
+def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_waveforms=False,
          chunk_pulses=None, jobs=None, executor=None, progress=False, run_dir=None):
     """The point cloud ``sensor``, scanning ``pattern`` from ``platform``, records from
     ``scene`` (module docstring; physics: :mod:`meshladar.scan.cast`).
@@ -153,6 +159,9 @@ def scan(scene, pattern, platform, sensor, *, seed=0, keep_waveforms=False,
         The sensor's pose against time (:mod:`meshladar.scan.platforms`).
     sensor : ScanSensor
         Transmitter, receiver, noise and detector.
+    motions : dict, optional
+        ``{part (index or name): meshladar.motion.Motion}``: parts that move rigidly
+        while the scan runs (:mod:`meshladar.scan.moving`: motion blur and Doppler).
     seed : int or None
         The noise's seed: the chunk from pulse k draws from ``default_rng([seed, k])``
         (default 0), whatever the threads or executor.
@@ -183,6 +192,7 @@ def scan(scene, pattern, platform, sensor, *, seed=0, keep_waveforms=False,
         When an argument is of the wrong kind or out of range, before any ray is cast.
     """
     _check(scene, pattern, platform, sensor)
+    split = moving_parts(scene, motions)
     seed = check_seed("seed", seed)
     if not isinstance(keep_waveforms, bool):
         raise ParameterError(f"keep_waveforms must be True or False; got {keep_waveforms!r}")
@@ -196,10 +206,11 @@ def scan(scene, pattern, platform, sensor, *, seed=0, keep_waveforms=False,
         frame = pattern.shape[0] * pattern.shape[1]
         per = max(frame, per // frame * frame)
     slots = sensor.detector.max_returns
-    job = ScanJob(scene, pattern, platform, sensor, foot, seed, keep_waveforms, slots, _chunk)
+    job = ScanJob(scene, pattern, platform, sensor, foot, seed, keep_waveforms, slots, _chunk,
+                  split)
     description = None if run_dir is None else job_description(
         scene, pattern, platform, sensor, seed, keep_waveforms,
-        geometry(scene, "flat").key)
+        geometry(scene, "flat").key, motions)
     results = run_chunks(scan_chunk, job, len(pattern), chunk_size=per, jobs=jobs,
                          executor=executor, progress=progress, unit="pulses",
                          work=float(len(pattern) * len(foot[0])), run_dir=run_dir,
@@ -208,5 +219,6 @@ def scan(scene, pattern, platform, sensor, *, seed=0, keep_waveforms=False,
                          threads=True)
     points, waves, starts = records(results, slots)
     info = {"conventions": dict(CONVENTIONS), "pattern": pattern.describe(),
-            "platform": platform.describe(), "sensor": sensor.describe(), "seed": seed}
+            "platform": platform.describe(), "sensor": sensor.describe(), "seed": seed,
+            "motions": {str(k): m.describe() for k, m in (motions or {}).items()}}
     return PointCloud(points, info, waves, starts)

@@ -35,6 +35,7 @@ class ScanJob(NamedTuple):
     keep: bool
     slots: int
     run: object          # the chunk function: (job, slice, seed) -> (records, waves, starts)
+    split: object        # the moving parts (meshladar.scan.moving.MovingParts) or None
 
 
 def _chunk_seed(seed, first):
@@ -91,11 +92,12 @@ def records(results, slots):
     return np.concatenate(parts) if parts else np.zeros(0, POINT_DTYPE), waves, starts
 
 
-def job_description(scene, pattern, platform, sensor, seed, keep, geometry_key):
+def job_description(scene, pattern, platform, sensor, seed, keep, geometry_key, motions):
     """Everything that determines a scan's points, for its run folder."""
     return {"kind": "scan", "geometry": geometry_key,
             "materials": [repr(m) for m in scene.materials],
             "times": array_digest(pattern.times), "directions": array_digest(pattern.directions),
             "channels": array_digest(pattern.channels), "pattern": pattern.describe(),
             "platform": platform.describe(), "sensor": sensor.describe(), "seed": seed,
-            "waveforms": keep}
+            "waveforms": keep,
+            "motions": {str(k): m.describe() for k, m in (motions or {}).items()}}

@@ -128,3 +128,6 @@ api("Detector.cfar+threshold", lambda: _sc().Detector(cfar=True, threshold=3.0),
 api("ScanSensor.geiger+cfar", lambda: _sensor(geiger=_sc().GeigerMode(),
                                               detector=_sc().Detector(cfar=True)),
     "error", "cfar")
+api("scan.motions=unknown-part", lambda: _scan(motions={7: ml.motion.Motion()}), "error",
+    "motions")
+api("scan.motions=list", lambda: _scan(motions=[ml.motion.Motion()]), "error", "motions")
