@@ -68,8 +68,8 @@ def viz(module: str):
     ----------
     module : str
         The module's name under ``meshladar.viz``: ``"quick"``, ``"paper"``,
-        ``"studies"``, ``"viewer"``, ``"waveforms"``, ``"fitting"``, ``"resolved"`` or
-        ``"style"``.
+        ``"studies"``, ``"viewer"``, ``"points"``, ``"waveforms"``, ``"fitting"``,
+        ``"resolved"`` or ``"style"``.
 
     Returns
     -------

@@ -17,6 +17,7 @@ from .. import materials, phantoms, plotting
 from .._validate import check_size
 from ..errors import ParameterError
 from ..io import write_text_atomic
+from ..scan import read_hdf5, read_las
 from .checks import check_outdir, check_output
 from .simulate import load_scene
 
@@ -156,8 +157,10 @@ def cmd_view(args) -> int:
         :func:`meshladar.cli.simulate.load_scene`); ``view_angle``: the view's angle about z
         in degrees; ``screenshot``: a ``.png`` path to render off screen into, or None to
         open a window; ``log``: colour by log10 of the return; ``size``: the window's
-        (width, height) in pixels; ``camera``: ``"oblique"`` or ``"view"``; ``quiet``:
-        no "wrote" line.
+        (width, height) in pixels; ``camera``: ``"oblique"`` or ``"view"``; ``points``: a
+        point cloud file (``meshladar scan``'s LAS, LAZ or HDF5) drawn over the scene by
+        :func:`meshladar.viz.points.show_points`, coloured by ``color_by``, or None;
+        ``quiet``: no "wrote" line.
 
     Returns
     -------
@@ -174,20 +177,35 @@ def cmd_view(args) -> int:
         When pyvista is not installed (checked before the scene is loaded).
     """
     if args.screenshot is not None:
-        check_output(args.screenshot, (".png",), [args.scene, args.materials],
+        check_output(args.screenshot, (".png",), [args.scene, args.materials, args.points],
                      "--screenshot")
+    cloud = None if args.points is None else _read_points(args.points)
     plotting.require("pyvista")                 # before loading the scene
     scene, default_ladar, _ = load_scene(args)
     if args.screenshot is None and not (os.environ.get("DISPLAY")
                                         or os.environ.get("WAYLAND_DISPLAY")):
         raise ParameterError("no display to open a window on: use --screenshot PNG")
-    plotting.viz("viewer").show_scene(
-        scene, view_angle_deg=args.view_angle, ladar=default_ladar,
-        off_screen=args.screenshot is not None, screenshot=args.screenshot,
-        log_scale=args.log, window_size=args.size, camera=args.camera)
+    if args.points is not None:
+        plotting.viz("points").show_points(
+            cloud, scene if scene.is_mesh else None, color_by=args.color_by,
+            off_screen=args.screenshot is not None, screenshot=args.screenshot,
+            window_size=args.size)
+    else:
+        plotting.viz("viewer").show_scene(
+            scene, view_angle_deg=args.view_angle, ladar=default_ladar,
+            off_screen=args.screenshot is not None, screenshot=args.screenshot,
+            log_scale=args.log, window_size=args.size, camera=args.camera)
     if args.screenshot and not args.quiet:
         print(f"wrote {args.screenshot}")
     return 0
+
+
+def _read_points(path):
+    """A point cloud file (LAS/LAZ, or HDF5 by extension), its errors naming --points."""
+    try:
+        return (read_hdf5 if path.lower().endswith((".h5", ".hdf5")) else read_las)(path)
+    except ParameterError as exc:
+        raise ParameterError(f"--points: {exc}") from None
 
 
 def cmd_study(args) -> int:

@@ -223,7 +223,8 @@ def _receive(sub, commands):
 def _view(sub, commands):
     vw = _sub(sub, "view", commands, "3-D view of a scene coloured by its return",
               "examples:\n  meshladar view disk_pair --view-angle 0 --screenshot pair.png\n"
-              "  meshladar view part.glb --material aluminum")
+              "  meshladar view part.glb --material aluminum\n"
+              "  meshladar view room.stl --points room.las --color-by range_error")
     _scene_args(vw)
     vw.add_argument("--view-angle", type=KIND_TYPES["finite_float"], default=90.0,
                     help="view angle about z in degrees (default: %(default)s)")
@@ -233,6 +234,12 @@ def _view(sub, commands):
                     help="colour by log10 of the return (default: linear)")
     vw.add_argument("--size", type=window_size, default=(900, 700), metavar="WxH",
                     help="window or screenshot size in pixels (default: 900x700)")
+    vw.add_argument("--points", default=None, metavar="FILE",
+                    help="a point cloud written by meshladar scan (.las, .laz, .h5), drawn "
+                         "over the scene (default: the scene coloured by its return)")
+    vw.add_argument("--color-by", default="intensity",
+                    choices=("intensity", "range", "return_number", "range_error", "doppler"),
+                    help="the points' colour, with --points (default: %(default)s)")
     vw.add_argument("--camera", choices=("oblique", "view"), default="oblique",
                     help="oblique: beside and above the ladar; view: along the beam from "
                          "the ladar (default: %(default)s)")

@@ -131,3 +131,11 @@ api("ScanSensor.geiger+cfar", lambda: _sensor(geiger=_sc().GeigerMode(),
 api("scan.motions=unknown-part", lambda: _scan(motions={7: ml.motion.Motion()}), "error",
     "motions")
 api("scan.motions=list", lambda: _scan(motions=[ml.motion.Motion()]), "error", "motions")
+cli("view.--points=missing", ["view", "{tmp}/sphere.stl", "--points", "{tmp}/none.las",
+                              "--screenshot", "{tmp}/v.png"], "error", "--points",
+    setup=_SPHERE)
+cli("view.--points=junk", ["view", "{tmp}/sphere.stl", "--points", "{tmp}/junk.las",
+                           "--screenshot", "{tmp}/v.png"], "error", "--points",
+    setup=files({"sphere.stl": _stl, "junk.las": b"not a las file" * 20}))
+cli("view.--color-by=x", ["view", "{tmp}/sphere.stl", "--points", "{tmp}/p.las",
+                          "--color-by", "colour"], "error", "--color-by", setup=_SPHERE)
