@@ -46,8 +46,29 @@ def _value(flag, key, text):
 
 
 def parse_spec(flag, text, kinds):
-    """``(kind, keyword arguments)`` from a ``KIND key=value ...`` string, checked against
-    the kind's constructor's parameters (named in the messages)."""
+    """``(constructor, keyword arguments)`` from a ``KIND key=value ...`` string, checked
+    against the kind's constructor's parameters (named in the messages).
+
+    Parameters
+    ----------
+    flag : str
+        The option's name, for the messages (``"--pattern"``).
+    text : str
+        The option's value.
+    kinds : dict of str to callable
+        The constructors by kind.
+
+    Returns
+    -------
+    tuple
+        ``(constructor, {key: number, list or numpy.ndarray})``.
+
+    Raises
+    ------
+    ParameterError
+        When the kind is unknown, a word is not ``key=value`` of one of the constructor's
+        parameters, or a value is not a number, a comma list or ``start:stop:count``.
+    """
     words = text.split() if isinstance(text, str) else []
     if not words or words[0] not in kinds:
         raise ParameterError(f"{flag}: the kind must be one of {sorted(kinds)}; got "
@@ -100,7 +121,7 @@ def _sensor(args):
 def cmd_scan(args) -> int:
     """Scan a scene with a pattern from a platform and write its point cloud (LAS 1.4, LAZ
     or HDF5 by -o's extension), each return with its ground truth (part, face, true range
-    and point); --waveforms also writes every pulse's record to HDF5.
+    and point); --waveforms also streams every pulse's record to HDF5 as the scan runs.
 
     Parameters
     ----------
@@ -126,13 +147,11 @@ def cmd_scan(args) -> int:
     if not scene.is_mesh:
         scene = scene.tessellate()
     cloud = scan(scene, pattern, platform, sensor, seed=args.seed,
-                 keep_waveforms=args.waveforms is not None, progress=not args.quiet)
+                 waveforms_file=args.waveforms, progress=not args.quiet)
     if args.output.lower().endswith((".h5", ".hdf5")):
         write_hdf5(args.output, cloud)
     else:
         write_las(args.output, cloud)
-    if args.waveforms is not None:
-        write_hdf5(args.waveforms, cloud)
     if not args.quiet:
         pts = cloud.points
         print(f"{len(pts)} returns from {len(pattern)} pulses -> {args.output}"

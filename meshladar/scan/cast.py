@@ -41,8 +41,25 @@ def _perpendiculars(d):
 
 
 def world_directions(rot, directions, offsets, pixel_pitch=None):
-    """World-frame directions (n, m, 3) of each pulse's m sub-rays: :func:`sub_directions`
-    turned by the sensor's rotations ``rot`` (n, 3, 3), in one compiled pass."""
+    """World-frame directions of each pulse's sub-rays: :func:`sub_directions` turned by
+    the sensor's rotations, in one compiled pass.
+
+    Parameters
+    ----------
+    rot : (n, 3, 3) array_like
+        Sensor-to-world rotations, one per pulse.
+    directions : (n, 3) array_like
+        The pulses' unit directions in the sensor frame.
+    offsets : (m, 2) array_like
+        The sub-rays' offsets (as :func:`sub_directions`).
+    pixel_pitch : float, optional
+        A flash pixel's pitch tan(IFOV), or None for a beam.
+
+    Returns
+    -------
+    (n, m, 3) numpy.ndarray
+        Unit directions, world frame.
+    """
     n, m = len(directions), len(offsets)
     out = np.empty((n, m, 3))
     world_sub_rays(np.ascontiguousarray(rot, np.float64),
@@ -53,11 +70,23 @@ def world_directions(rot, directions, offsets, pixel_pitch=None):
 
 
 def sub_directions(directions, offsets, pixel_pitch=None):
-    """Sensor-frame directions (n, m, 3) of each pulse's m sub-rays.
+    """Sensor-frame directions of each pulse's sub-rays.
 
-    A beam's ``offsets`` (m, 2) are angles (rad) along two axes perpendicular to the pulse's
-    direction; a flash pixel's (``pixel_pitch`` = tan(IFOV)) are fractions of the pitch on
-    the focal plane (the pulse's direction has x = 1 there).
+    Parameters
+    ----------
+    directions : (n, 3) array_like
+        The pulses' unit directions in the sensor frame.
+    offsets : (m, 2) array_like
+        A beam's: angles (rad) along two axes perpendicular to the pulse's direction; a
+        flash pixel's: fractions of the pitch on the focal plane (where the pulse's
+        direction has x = 1).
+    pixel_pitch : float, optional
+        A flash pixel's pitch tan(IFOV), or None for a beam.
+
+    Returns
+    -------
+    (n, m, 3) numpy.ndarray
+        Unit directions.
     """
     d = np.asarray(directions, np.float64)
     if pixel_pitch is not None:
@@ -72,7 +101,19 @@ def sub_directions(directions, offsets, pixel_pitch=None):
 
 
 class Cast:
-    """One chunk's first hits: arrays (n, m) per sub-ray (module docstring)."""
+    """One chunk's first hits, per sub-ray (module docstring).
+
+    Attributes
+    ----------
+    face : (n, m) int64 numpy.ndarray
+        The global face index hit, −1 on a miss.
+    distance : (n, m) numpy.ndarray
+        One-way distance from the pulse's origin (float64), inf on a miss.
+    cos : (n, m) numpy.ndarray
+        |n·d| at the hit, 0 on a miss.
+    points : (n, m, 3) numpy.ndarray
+        Hit points, world frame, nan on a miss.
+    """
 
     def __init__(self, face, distance, cos, points):
         self.face = face            # global face index, -1 on a miss
@@ -86,8 +127,22 @@ class Cast:
 
 
 def cast_chunk(scene, origins, directions):
-    """First hits of rays from ``origins`` (n, 3) along unit ``directions`` (n, m, 3),
-    world frame, distances in float64 (module docstring)."""
+    """First hits, distances in float64 (module docstring).
+
+    Parameters
+    ----------
+    scene : Scene
+        A mesh scene (its flat-normal geometry, the ``"auto"`` backend).
+    origins : (n, 3) numpy.ndarray
+        Pulse origins, world frame.
+    directions : (n, m, 3) numpy.ndarray
+        Unit sub-ray directions, world frame.
+
+    Returns
+    -------
+    Cast
+        The sub-rays' first hits.
+    """
     geo = geometry(scene, "flat")
     emb = embree_scene(geo, resolve_backend("auto"))
     n, m = directions.shape[:2]
@@ -105,10 +160,25 @@ def cast_chunk(scene, origins, directions):
 
 
 def photoelectrons(scene, cast, shares, sensor):
-    """Each sub-ray's expected photoelectrons (n, m) (module docstring); 0 on a miss.
+    """Each sub-ray's expected photoelectrons (module docstring).
 
-    ``shares`` (m,) are the sub-rays' shares of a pulse's energy (summing to 1 for a beam,
-    to the pixel's share of the flash for an array)."""
+    Parameters
+    ----------
+    scene : Scene
+        The scene whose coatings weigh the hits.
+    cast : Cast
+        The sub-rays' hits.
+    shares : (m,) array_like
+        The sub-rays' shares of a pulse's energy (summing to 1 for a beam, to the pixel's
+        share of the flash for an array).
+    sensor : ScanSensor
+        The link budget's parameters.
+
+    Returns
+    -------
+    (n, m) numpy.ndarray
+        Photoelectrons, 0 on a miss.
+    """
     geo = geometry(scene, "flat")
     hit = cast.hit
     out = np.zeros(cast.face.shape)

@@ -109,9 +109,23 @@ def waveforms(tau, pe, sigma, dt, samples=None):
 
 
 class Returns:
-    """A chunk's returns: pulse index (within the chunk), time after emission (s),
-    amplitude (photoelectrons per sample), FWHM width (s), intensity (photoelectrons),
-    return number (1 = first in time) and number of returns of its pulse."""
+    """A chunk's returns, sorted by pulse then time.
+
+    Attributes
+    ----------
+    pulse : numpy.ndarray
+        The pulse's index within the chunk.
+    time : numpy.ndarray
+        Two-way time after emission, s.
+    amplitude : numpy.ndarray
+        Peak, photoelectrons per sample.
+    width : numpy.ndarray
+        FWHM, s.
+    intensity : numpy.ndarray
+        Photoelectrons under the echo.
+    return_number, number_of_returns : numpy.ndarray
+        1 for the first in time; the pulse's count.
+    """
 
     def __init__(self, pulse, time, amplitude, width, intensity):
         order = np.lexsort((time, pulse))
@@ -181,7 +195,20 @@ def _decompose(waves, p, centre, s, height, sigma_samples):
 
 def cfar_background(waves, guard):
     """Each record's background per sample, estimated from the record itself (cell
-    averaging): the mean of its samples farther than ``guard`` samples from its largest."""
+    averaging).
+
+    Parameters
+    ----------
+    waves : (n, samples) numpy.ndarray
+        The measured records.
+    guard : float
+        Samples either side of a record's largest that are left out.
+
+    Returns
+    -------
+    (n,) numpy.ndarray
+        The mean of each record's other samples (0 where none is left).
+    """
     ns = waves.shape[1]
     peak = np.argmax(waves, axis=1)
     far = np.abs(np.arange(ns)[None, :] - peak[:, None]) > guard
@@ -199,7 +226,31 @@ def find_returns(waves, start, dt, sigma, level, max_returns, decompose, backgro
     number, or one per record)
     (the maximum-likelihood time of a Gaussian echo in shot noise). ``level`` is a number
     or an array like ``waves``; ``detect`` (default ``waves``) is what it applies to (a
-    Geiger-mode histogram, whose level follows its armed shots)."""
+    Geiger-mode histogram, whose level follows its armed shots).
+    Parameters
+    ----------
+    waves : (n, samples) numpy.ndarray
+        The records, photoelectrons per sample.
+    start : (n,) numpy.ndarray
+        Each record's start after emission, s.
+    dt, sigma : float
+        The sample interval and the echo's σ, s.
+    level : float or numpy.ndarray
+        The threshold (broadcasting with ``waves``).
+    max_returns : int
+        The most returns per record.
+    decompose : bool
+        Refit overlapping peaks as a sum of Gaussians.
+    background : float or (n,) numpy.ndarray
+        Background per sample, taken off before the centroid.
+    detect : numpy.ndarray, optional
+        What ``level`` applies to (default ``waves``).
+
+    Returns
+    -------
+    Returns
+        The returns found.
+    """
     s = sigma / dt
     fwhm = _FWHM_PER_SIGMA * s
     margin = np.ascontiguousarray((waves if detect is None else detect) - level, np.float64)

@@ -11,9 +11,9 @@ field reads back exactly (:data:`EXTRA_NAMES`: the exact intensity and scan angl
 
 HDF5: ``/points`` is one compound dataset of the records (each field's unit in the
 attribute ``units``, a JSON object); when the cloud holds waveforms, the group
-``/waveforms`` holds one dataset per block of consecutive pulses, ``block_000000``, …
-(pulses × samples, its ``first_pulse`` as an attribute) and their starts ``starts_000000``,
-… (s); the root's ``info`` attribute holds the scan's parameters as JSON. Everything reads
+``/waveforms`` holds one dataset per block of consecutive pulses, ``block_<first pulse, 12
+digits>`` (pulses × samples, its ``first_pulse`` as an attribute) and their starts
+``starts_<first pulse>`` (s), … (s); the root's ``info`` attribute holds the scan's parameters as JSON. Everything reads
 back exactly.
 """
 
@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import json
 import os
+import threading
 
 import numpy as np
 
@@ -29,7 +30,8 @@ from .._validate import check_path, check_real
 from ..errors import ParameterError
 from .points import POINT_DTYPE, POINT_FIELDS, PointCloud
 
-__all__ = ["write_las", "read_las", "write_hdf5", "read_hdf5", "LAS_NATIVE", "EXTRA_NAMES"]
+__all__ = ["write_las", "read_las", "write_hdf5", "read_hdf5", "LAS_NATIVE", "EXTRA_NAMES",
+           "WaveformSink"]
 
 #: The record fields LAS 1.4 stores in its own dimensions (all others are extra bytes).
 LAS_NATIVE = ("x", "y", "z", "return_number", "number_of_returns")
@@ -107,8 +109,23 @@ def write_las(path, cloud, *, scale=1e-4):
 
 
 def read_las(path):
-    """Read a LAS/LAZ file that :func:`write_las` wrote back into a :class:`PointCloud`
-    (x, y, z as quantised; every other field exact)."""
+    """Read a LAS/LAZ file that :func:`write_las` wrote back into a :class:`PointCloud`.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+
+    Returns
+    -------
+    PointCloud
+        x, y, z as quantised; every other field exact; ``info`` names the file.
+
+    Raises
+    ------
+    ParameterError
+        When the file is missing, a folder, not LAS/LAZ, or lacks meshladar's fields.
+    """
     laspy = _need("laspy")
     path = _readable(path, "LAS/LAZ")
     try:
@@ -132,7 +149,15 @@ def read_las(path):
 
 def write_hdf5(path, cloud):
     """Write ``cloud`` (records, waveforms if held, info) to an HDF5 file, atomically
-    (module docstring)."""
+    (module docstring).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file; an existing one is replaced only once the new one is complete.
+    cloud : PointCloud
+        The returns.
+    """
     h5py = _need("h5py")
     path = check_path("path", path)
     if not isinstance(cloud, PointCloud):
@@ -140,25 +165,113 @@ def write_hdf5(path, cloud):
 
     def fill(fh):
         with h5py.File(fh, "w") as f:
-            d = f.create_dataset("points", data=cloud.points, chunks=True if len(cloud) else None)
-            d.attrs["units"] = json.dumps({n: u for n, _, u, _ in POINT_FIELDS})
-            d.attrs["meaning"] = json.dumps({n: m for n, _, _, m in POINT_FIELDS})
+            _write_points(f, cloud)
             if cloud.waveforms is not None:
-                g = f.create_group("waveforms")
-                g.attrs["units"] = "photoelectrons per sample; starts: s"
+                g = _waveform_group(f)
                 first = 0
-                for i, (w, t) in enumerate(zip(cloud.waveforms, cloud.starts)):
-                    d = g.create_dataset(f"block_{i:06d}", data=w, chunks=True)
-                    d.attrs["first_pulse"] = first
-                    g.create_dataset(f"starts_{i:06d}", data=t)
+                for w, t in zip(cloud.waveforms, cloud.starts):
+                    _write_block(g, first, w, t)
                     first += len(w)
-            f.attrs["info"] = json.dumps(cloud.info, default=str)
 
     write_atomic(path, fill)
 
 
+def _waveform_group(f):
+    g = f.create_group("waveforms")
+    g.attrs["units"] = "photoelectrons per sample; starts: s"
+    return g
+
+
+def _write_block(group, first, waves, starts):
+    d = group.create_dataset(f"block_{first:012d}", data=waves, chunks=True)
+    d.attrs["first_pulse"] = int(first)
+    group.create_dataset(f"starts_{first:012d}", data=starts)
+
+
+def _write_points(f, cloud):
+    d = f.create_dataset("points", data=cloud.points, chunks=True if len(cloud) else None)
+    d.attrs["units"] = json.dumps({n: u for n, _, u, _ in POINT_FIELDS})
+    d.attrs["meaning"] = json.dumps({n: m for n, _, _, m in POINT_FIELDS})
+    f.attrs["info"] = json.dumps(cloud.info, default=str)
+
+
+class WaveformSink:
+    """An HDF5 file that a running scan streams its waveforms into, block by block as
+    chunks finish (any order, any thread), so that a long scan's records never sit in
+    memory; :meth:`finish` adds the points and the parameters and puts the file in place
+    (written beside it until then: a scan that fails leaves no partial file).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The HDF5 file to make (its folder must exist).
+    """
+
+    def __init__(self, path):
+        h5py = _need("h5py")
+        self.path = check_path("waveforms_file", path)
+        folder = os.path.dirname(os.path.abspath(self.path))
+        if not os.path.isdir(folder):
+            raise ParameterError(f"waveforms_file: no folder {folder!r} to write into")
+        self.partial = f"{self.path}.partial-{os.getpid()}"
+        self.file = h5py.File(self.partial, "w")
+        self.group = _waveform_group(self.file)
+        self.lock = threading.Lock()
+
+    def write(self, first, waves, starts):
+        """Add one block of records.
+
+        Parameters
+        ----------
+        first : int
+            The block's first pulse.
+        waves : (k, samples) numpy.ndarray
+            Its records.
+        starts : (k,) numpy.ndarray
+            Their starts, s.
+        """
+        with self.lock:
+            _write_block(self.group, first, waves, starts)
+
+    def finish(self, cloud):
+        """Add the points and info and move the file into place.
+
+        Parameters
+        ----------
+        cloud : PointCloud
+            The scan's returns.
+        """
+        with self.lock:
+            _write_points(self.file, cloud)
+            self.file.close()
+            os.replace(self.partial, self.path)
+
+    def abandon(self):
+        """Drop the partial file (the scan failed or was stopped)."""
+        with self.lock:
+            self.file.close()
+            if os.path.exists(self.partial):
+                os.remove(self.partial)
+
+
 def read_hdf5(path):
-    """Read an HDF5 file that :func:`write_hdf5` wrote back into a :class:`PointCloud`."""
+    """Read an HDF5 file that :func:`write_hdf5` (or a scan's ``waveforms_file``) wrote.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+
+    Returns
+    -------
+    PointCloud
+        The records, waveform blocks (if any) and info, exactly as written.
+
+    Raises
+    ------
+    ParameterError
+        When the file is missing, a folder, not HDF5, or has no ``/points``.
+    """
     h5py = _need("h5py")
     path = _readable(path, "HDF5")
     try:
@@ -172,7 +285,8 @@ def read_hdf5(path):
         waves = starts = None
         if "waveforms" in f:
             g = f["waveforms"]
-            names = sorted(n for n in g if n.startswith("block_"))
+            names = sorted((n for n in g if n.startswith("block_")),
+                           key=lambda n: int(g[n].attrs["first_pulse"]))
             waves = tuple(np.asarray(g[n][()]) for n in names)
             starts = tuple(np.asarray(g[n.replace("block_", "starts_")][()]) for n in names)
         info = json.loads(f.attrs.get("info", "{}"))

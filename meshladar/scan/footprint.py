@@ -95,8 +95,18 @@ def edge_error(offsets, profile):
 
 
 def pixel_offsets(tol):
-    """A flash pixel's sub-ray offsets in units of its pitch ((m², 2), cell centres in
-    [−½, ½]²) with m = ⌈1/(2 tol)⌉ (module docstring)."""
+    """A flash pixel's sub-ray offsets (module docstring).
+
+    Parameters
+    ----------
+    tol : float
+        The edge tolerance: m = ⌈1/(2 tol)⌉ sub-rays a side.
+
+    Returns
+    -------
+    (m², 2) numpy.ndarray
+        Cell centres in [−½, ½]², in units of the pixel's pitch.
+    """
     m = max(1, math.ceil(0.5 / tol - 1e-12))
     c = (np.arange(m) + 0.5) / m - 0.5
     y, z = np.meshgrid(c, c, indexing="ij")
@@ -164,7 +174,13 @@ class ScanBeam:
                              "sub-rays per pulse; loosen it")
 
     def describe(self) -> dict:
-        """The beam's parameters, with units in their names."""
+        """The beam's parameters, with units in their names.
+
+        Returns
+        -------
+        dict
+            ``divergence_rad``, ``profile``, ``tol`` and ``sub_rays`` (the number used).
+        """
         n = len(self.offsets())
         return {"divergence_rad": self.divergence, "profile": self.profile, "tol": self.tol,
                 "sub_rays": n}

@@ -64,10 +64,28 @@ class GeigerMode:
             high=1.0))
 
     def dead_samples(self, dt):
-        """The dead time in samples (rounded up), or 0 for an infinite one."""
+        """The dead time in samples.
+
+        Parameters
+        ----------
+        dt : float
+            The sample interval, s.
+
+        Returns
+        -------
+        int
+            Samples, rounded up (at least 1), or 0 for an infinite dead time.
+        """
         return 0 if self.dead_time == math.inf else max(1, math.ceil(self.dead_time / dt))
 
     def describe(self) -> dict:
+        """The parameters, with units in their names.
+
+        Returns
+        -------
+        dict
+            ``shots``, ``dead_time_s`` and ``detection_efficiency``.
+        """
         return {"shots": self.shots, "dead_time_s": self.dead_time,
                 "detection_efficiency": self.detection_efficiency}
 
@@ -98,16 +116,44 @@ def _fire(lam, shots, dead, seed, out):                 # pragma: no cover - com
 
 
 def fire(lam, shots, dead, seed):
-    """Detection histograms (n, samples), int64, of ``shots`` shots with mean events ``lam``
-    (n, samples) per sample and ``dead`` dead samples (0: one detection per shot)."""
+    """Detection histograms of ``shots`` shots (module docstring).
+
+    Parameters
+    ----------
+    lam : (n, samples) array_like
+        Mean primary events per sample.
+    shots : int
+        Shots per record.
+    dead : int
+        Dead samples after a detection (0: one detection per shot).
+    seed : int
+        The compiled generator's seed.
+
+    Returns
+    -------
+    (n, samples) numpy.ndarray
+        Detections per sample, int64.
+    """
     out = np.zeros(lam.shape, np.int64)
     _fire(np.ascontiguousarray(lam, np.float64), int(shots), int(dead), int(seed), out)
     return out
 
 
 def blind_shots(hist, dead):
-    """D_j (n, samples): the shots blind in each sample, those that fired in the ``dead``
-    samples before it (all earlier samples when ``dead`` is 0: once per shot)."""
+    """The shots blind in each sample: those that fired in the ``dead`` samples before it.
+
+    Parameters
+    ----------
+    hist : (n, samples) array_like
+        Detections per sample.
+    dead : int
+        Dead samples (0: all earlier samples, one detection per shot).
+
+    Returns
+    -------
+    (n, samples) numpy.ndarray
+        D_j, float64.
+    """
     h = np.asarray(hist, np.float64)
     before = np.cumsum(h, axis=1) - h                     # detections before each sample
     if dead == 0:

@@ -80,8 +80,19 @@ class Detector:
                                  f"give cfar=True or threshold={self.threshold:g}, not both")
 
     def level(self, background):
-        """The threshold (photoelectrons per sample) for ``background`` mean counts per
-        sample, a number or an array (module docstring)."""
+        """The threshold for a background (module docstring).
+
+        Parameters
+        ----------
+        background : float or numpy.ndarray
+            Mean background counts per sample.
+
+        Returns
+        -------
+        float or numpy.ndarray
+            Photoelectrons per sample (``threshold`` when given), the shape of
+            ``background``.
+        """
         if self.threshold is not None:
             return self.threshold
         from scipy.stats import poisson
@@ -90,6 +101,13 @@ class Detector:
         return np.maximum(1.0, n) if np.ndim(n) else max(1.0, float(n))
 
     def describe(self) -> dict:
+        """The parameters (for result files).
+
+        Returns
+        -------
+        dict
+            ``threshold_pe``, ``false_alarm``, ``max_returns``, ``decompose``, ``cfar``.
+        """
         return {"threshold_pe": self.threshold, "false_alarm": self.false_alarm,
                 "max_returns": self.max_returns, "decompose": self.decompose,
                 "cfar": self.cfar}
@@ -190,13 +208,27 @@ class ScanSensor:
         return f2 ** 0.5 / 2.3548200450309493
 
     def background(self) -> float:
-        """Mean background and dark counts per sample."""
+        """Mean background and dark counts per sample.
+
+        Returns
+        -------
+        float
+            (background_rate + dark_rate) Δt, 0 without noise.
+        """
         if self.noise is None:
             return 0.0
         return (self.noise.background_rate + self.noise.dark_rate) * self.dt
 
     def describe(self) -> dict:
-        """Every parameter with its unit in its name (for result files)."""
+        """Every parameter with its unit in its name (for result files).
+
+        Returns
+        -------
+        dict
+            The energy, aperture, sample rate, pulse, response, beam, noise, detector,
+            record length, Geiger mode, wavelength, optics, quantum efficiency and
+            extinction.
+        """
         return {"pulse_energy_J": self.pulse_energy,
                 "aperture_diameter_m": self.aperture_diameter,
                 "sample_rate_hz": self.sample_rate, "pulse": self.pulse.describe(),

@@ -27,13 +27,13 @@ from ..motion import Motion
 from ..scene import Scene
 from .cast import Cast, cast_chunk
 
-__all__ = ["MovingParts", "moving_parts", "cast_moving", "doppler"]
+__all__ = ["moving_parts", "cast_moving", "doppler"]
 
 #: The platform velocity's central difference step (s).
 _VELOCITY_STEP = 1e-6
 
 
-class MovingParts:
+class _MovingParts:
     """The scene split for casting: its static parts (one scene, or None) and each moving
     part (its own scene, its motion, its first global face index)."""
 
@@ -55,8 +55,26 @@ def _part_index(scene, key):
 
 
 def moving_parts(scene, motions):
-    """The :class:`MovingParts` of ``scene`` for ``motions`` (``{part index or name:
-    Motion}``), or None when nothing moves; checked before any ray is cast."""
+    """The scene split into its static and moving parts, checked before any ray is cast.
+
+    Parameters
+    ----------
+    scene : Scene
+        A mesh scene.
+    motions : dict or None
+        ``{part index or name: Motion}``.
+
+    Returns
+    -------
+    object or None
+        The split (static parts as one scene, each moving part as its own with its
+        motion and first face index), or None when nothing moves.
+
+    Raises
+    ------
+    ParameterError
+        When ``motions`` is not a dict, a key is not a part, or a value not a Motion.
+    """
     if motions is None or len(motions) == 0:
         return None
     if not isinstance(motions, dict):
@@ -78,7 +96,7 @@ def moving_parts(scene, motions):
                   for i, m in sorted(chosen.items())]
     faces = (np.concatenate([np.arange(first[i], first[i + 1]) for i in rest]) if rest
              else np.zeros(0, np.int64))
-    return MovingParts(static, faces, moving)
+    return _MovingParts(static, faces, moving)
 
 
 def _pose(motion, t):
@@ -89,9 +107,24 @@ def _pose(motion, t):
 
 
 def cast_moving(split, origins, directions, t):
-    """First hits (a :class:`~meshladar.scan.cast.Cast`, faces numbered globally) of rays
-    from ``origins`` (n, 3) along ``directions`` (n, m, 3) at emission times ``t`` (n,)
-    among the static and the moving parts (module docstring)."""
+    """First hits among the static and the moving parts (module docstring).
+
+    Parameters
+    ----------
+    split : object
+        :func:`moving_parts`'s split.
+    origins : (n, 3) numpy.ndarray
+        Pulse origins, world frame.
+    directions : (n, m, 3) numpy.ndarray
+        Unit sub-ray directions, world frame.
+    t : (n,) numpy.ndarray
+        Emission times, s.
+
+    Returns
+    -------
+    Cast
+        The nearest hit of each sub-ray, faces numbered over the whole scene.
+    """
     n, m = directions.shape[:2]
     best = Cast(np.full((n, m), -1, np.int64), np.full((n, m), np.inf), np.zeros((n, m)),
                 np.full((n, m, 3), np.nan))
@@ -122,7 +155,28 @@ def _take(best, c, faces):
 
 
 def doppler(split, platform, cast, origins, t, wavelength):
-    """Each sub-ray's Doppler shift (n, m), Hz (module docstring); 0 on a miss."""
+    """Each sub-ray's Doppler shift (module docstring).
+
+    Parameters
+    ----------
+    split : object or None
+        :func:`moving_parts`'s split (None: nothing moves).
+    platform : Platform
+        The sensor's carrier (its velocity counts).
+    cast : Cast
+        The sub-rays' hits.
+    origins : (n, 3) numpy.ndarray
+        Pulse origins, world frame.
+    t : (n,) numpy.ndarray
+        Emission times, s.
+    wavelength : float
+        λ, m.
+
+    Returns
+    -------
+    (n, m) numpy.ndarray
+        f_D, Hz, positive closing; 0 on a miss.
+    """
     step = _VELOCITY_STEP
     v_s = (platform.sensor_poses(t + step)[0] - platform.sensor_poses(t - step)[0]) / (2 * step)
     vel = np.zeros(cast.points.shape)

@@ -116,7 +116,14 @@ class ScanPattern:
         return self.shape is not None
 
     def describe(self) -> dict:
-        """The pattern's summary, with units in the names (for result files)."""
+        """The pattern's summary, with units in the names (for result files).
+
+        Returns
+        -------
+        dict
+            ``kind``, ``pulses``, ``duration_s``, ``channels`` (and a flash array's
+            ``rows``, ``columns``, ``ifov_deg``).
+        """
         out = {"kind": self.kind, "pulses": len(self), "duration_s": float(self.times[-1]
                                                                            - self.times[0]),
                "channels": int(self.channels.max()) + 1}

@@ -110,13 +110,42 @@ class Platform:
     # -- constructors ------------------------------------------------------------------
     @classmethod
     def static(cls, position, attitude_deg=(0.0, 0.0, 0.0), **mount):
-        """A platform at rest at ``position`` with ``attitude_deg`` (roll, pitch, yaw)."""
+        """A platform at rest.
+
+        Parameters
+        ----------
+        position : (3,) array_like
+            Where it is.
+        attitude_deg : (3,) array_like
+            (roll, pitch, yaw), deg.
+        **mount
+            ``mount_offset`` and ``boresight_deg``.
+
+        Returns
+        -------
+        Platform
+        """
         return cls([0.0], [position], [attitude_deg], **mount)
 
     @classmethod
     def moving(cls, position, velocity, attitude_deg=(0.0, 0.0, 0.0), **mount):
-        """A platform at ``position`` at t = 0 moving at constant ``velocity`` (scene units
-        per second) with a fixed attitude."""
+        """A platform moving at constant velocity with a fixed attitude.
+
+        Parameters
+        ----------
+        position : (3,) array_like
+            Where it is at t = 0.
+        velocity : (3,) array_like
+            Scene units per second.
+        attitude_deg : (3,) array_like
+            (roll, pitch, yaw), deg.
+        **mount
+            ``mount_offset`` and ``boresight_deg``.
+
+        Returns
+        -------
+        Platform
+        """
         p0, v = _triple("position", position), _triple("velocity", velocity)
         return cls([0.0, 1.0], [p0, p0 + v], [attitude_deg, attitude_deg], **mount)
 
@@ -124,13 +153,44 @@ class Platform:
     def waypoints(cls, times, positions, attitudes_deg, interpolation="linear", **mount):
         """Waypoints interpolated between (linearly or by spline); beyond the ends the
         first or last pose is held, except that two waypoints (as :meth:`moving`'s) are a
-        constant velocity, extrapolated both ways (the attitude still held)."""
+        constant velocity, extrapolated both ways (the attitude still held).
+
+        Parameters
+        ----------
+        times, positions, attitudes_deg, interpolation
+            As the class's.
+        **mount
+            ``mount_offset`` and ``boresight_deg``.
+
+        Returns
+        -------
+        Platform
+        """
         return cls(times, positions, attitudes_deg, interpolation, **mount)
 
     @classmethod
     def from_csv(cls, path, interpolation="linear", **mount):
         """A trajectory file: a header line, then rows of ``time, x, y, z, roll, pitch,
-        yaw`` (:data:`TRAJECTORY_COLUMNS`; s, scene units, deg)."""
+        yaw`` (:data:`TRAJECTORY_COLUMNS`; s, scene units, deg).
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The CSV file.
+        interpolation : str
+            ``"linear"`` or ``"spline"``.
+        **mount
+            ``mount_offset`` and ``boresight_deg``.
+
+        Returns
+        -------
+        Platform
+
+        Raises
+        ------
+        ParameterError
+            When the file cannot be read, its header differs, or a value is not a number.
+        """
         path = check_path("path", path)
         try:
             with open(path, newline="") as f:
@@ -172,8 +232,21 @@ class Platform:
         return pos, slerp(np.clip(t, self.times[0], self.times[-1]))
 
     def sensor_poses(self, t):
-        """The sensor's origin (n, 3) and sensor-to-world rotation matrices (n, 3, 3) at
-        times ``t`` (s): the body's pose, the mount offset and the boresight."""
+        """The sensor's pose at times ``t``: the body's pose, the mount offset and the
+        boresight.
+
+        Parameters
+        ----------
+        t : array_like
+            Times, s.
+
+        Returns
+        -------
+        origin : (n, 3) numpy.ndarray
+            The sensor's position, world frame.
+        rotation : (n, 3, 3) numpy.ndarray
+            Sensor-to-world rotation matrices.
+        """
         t = np.asarray(t, np.float64).ravel()
         if np.all(self.attitudes_deg == self.attitudes_deg[0]):      # one attitude: once
             pos = (np.broadcast_to(self.positions[0], (len(t), 3)) if len(self.times) == 1
@@ -188,7 +261,14 @@ class Platform:
         return origin, mats.reshape(len(t), 3, 3)
 
     def describe(self) -> dict:
-        """The platform's waypoints and mount, with units in the names (for result files)."""
+        """The platform's waypoints and mount, with units in the names (for result files).
+
+        Returns
+        -------
+        dict
+            ``times_s``, ``positions``, ``attitudes_deg``, ``interpolation``,
+            ``mount_offset``, ``boresight_deg`` and ``attitude_convention``.
+        """
         return {"times_s": self.times.tolist(), "positions": self.positions.tolist(),
                 "attitudes_deg": self.attitudes_deg.tolist(),
                 "interpolation": self.interpolation, "mount_offset": list(self.mount_offset),

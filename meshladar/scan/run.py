@@ -23,6 +23,7 @@ from ..sensor import SPEED_OF_LIGHT
 from ._kernels import assign_truth
 from .cast import cast_chunk, photoelectrons, world_directions
 from .echoes import cfar_background, find_returns, waveforms
+from .files import WaveformSink
 from .footprint import pixel_offsets
 from .geiger import blind_shots, coates, fire
 from .instrument import ScanSensor
@@ -30,7 +31,7 @@ from .moving import cast_moving, doppler, moving_parts
 from .patterns import ScanPattern
 from .platforms import Platform
 from .points import CONVENTIONS, POINT_DTYPE, PointCloud
-from .streaming import ScanJob, chunk_arrays, job_description, records, scan_chunk
+from ._streaming import ScanJob, chunk_arrays, job_description, records, scan_chunk
 
 __all__ = ["scan", "CHUNK_RAYS"]
 
@@ -107,7 +108,7 @@ def _chunk(job, sl, seed):
         rec[name] = values
     face = rec["true_face"]
     rec["true_part"] = np.where(face >= 0, _part_of(scene)[np.maximum(face, 0)], -1)
-    return rec, (measured if job.keep else None), start
+    return rec, (measured if job.keep or job.sink is not None else None), start
 
 
 def _detect(sensor, waves, start, seed):
@@ -145,7 +146,8 @@ def _part_of(scene):
 
 
 def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_waveforms=False,
-         chunk_pulses=None, jobs=None, executor=None, progress=False, run_dir=None):
+         waveforms_file=None, chunk_pulses=None, jobs=None, executor=None, progress=False,
+         run_dir=None):
     """The point cloud ``sensor``, scanning ``pattern`` from ``platform``, records from
     ``scene`` (module docstring; physics: :mod:`meshladar.scan.cast`).
 
@@ -168,6 +170,11 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
     keep_waveforms : bool
         Return every pulse's record (memory: pulses × samples × 8 bytes); with
         ``run_dir`` the sensor's ``samples`` must fix their length.
+    waveforms_file : str or os.PathLike, optional
+        An HDF5 file that every chunk's records stream into as it finishes (they are
+        not kept in memory), completed with the points and parameters at the end:
+        :func:`~meshladar.scan.files.read_hdf5` reads it. Not with ``keep_waveforms`` or
+        ``run_dir``.
     chunk_pulses : int, optional
         Pulses per chunk (default :data:`CHUNK_RAYS` sub-rays' worth; a flash scan's
         chunks hold whole frames).
@@ -194,31 +201,71 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
     _check(scene, pattern, platform, sensor)
     split = moving_parts(scene, motions)
     seed = check_seed("seed", seed)
-    if not isinstance(keep_waveforms, bool):
-        raise ParameterError(f"keep_waveforms must be True or False; got {keep_waveforms!r}")
-    if keep_waveforms and run_dir is not None and sensor.samples is None:
-        raise ParameterError("keep_waveforms with run_dir needs the sensor's samples (a "
-                             "fixed record length), so that every chunk's records fit")
+    _check_keep(keep_waveforms, run_dir, sensor)
     foot = _footprint(pattern, sensor)
-    per = max(1, CHUNK_RAYS // len(foot[0])) if chunk_pulses is None else check_count(
-        "chunk_pulses", chunk_pulses)
-    if pattern.is_flash:                     # whole frames per chunk
-        frame = pattern.shape[0] * pattern.shape[1]
-        per = max(frame, per // frame * frame)
+    per = _chunk_pulses(pattern, chunk_pulses, len(foot[0]))
     slots = sensor.detector.max_returns
+    sink = _sink(waveforms_file, keep_waveforms, run_dir)
     job = ScanJob(scene, pattern, platform, sensor, foot, seed, keep_waveforms, slots, _chunk,
-                  split)
+                  split, sink)
     description = None if run_dir is None else job_description(
         scene, pattern, platform, sensor, seed, keep_waveforms,
         geometry(scene, "flat").key, motions)
-    results = run_chunks(scan_chunk, job, len(pattern), chunk_size=per, jobs=jobs,
-                         executor=executor, progress=progress, unit="pulses",
-                         work=float(len(pattern) * len(foot[0])), run_dir=run_dir,
-                         job=description, arrays=chunk_arrays(slots, sensor.samples,
-                                                              keep_waveforms),
-                         threads=True)
+    results = _stream(job, per, dict(jobs=jobs, executor=executor, progress=progress,
+                                     run_dir=run_dir, job=description))
     points, waves, starts = records(results, slots)
     info = {"conventions": dict(CONVENTIONS), "pattern": pattern.describe(),
             "platform": platform.describe(), "sensor": sensor.describe(), "seed": seed,
             "motions": {str(k): m.describe() for k, m in (motions or {}).items()}}
-    return PointCloud(points, info, waves, starts)
+    cloud = PointCloud(points, info, waves, starts)
+    if sink is not None:
+        sink.finish(cloud)
+    return cloud
+
+
+def _stream(job, per, options):
+    """The chunks' results (:func:`meshladar.stream.run_chunks`, threads); a streaming
+    waveform file is dropped if the run fails or is stopped."""
+    try:
+        return run_chunks(scan_chunk, job, len(job.pattern), chunk_size=per, unit="pulses",
+                          work=float(len(job.pattern) * len(job.foot[0])),
+                          arrays=chunk_arrays(job.slots, job.sensor.samples, job.keep),
+                          threads=True, **options)
+    except BaseException:
+        if job.sink is not None:
+            job.sink.abandon()
+        raise
+
+
+def _check_keep(keep, run_dir, sensor):
+    if not isinstance(keep, bool):
+        raise ParameterError(f"keep_waveforms must be True or False; got {keep!r}")
+    if keep and run_dir is not None and sensor.samples is None:
+        raise ParameterError("keep_waveforms with run_dir needs the sensor's samples (a "
+                             "fixed record length), so that every chunk's records fit")
+
+
+def _chunk_pulses(pattern, chunk_pulses, sub_rays):
+    """Pulses per chunk: :data:`CHUNK_RAYS` sub-rays' worth, or the user's; whole frames
+    of a flash array."""
+    per = max(1, CHUNK_RAYS // sub_rays) if chunk_pulses is None else check_count(
+        "chunk_pulses", chunk_pulses)
+    if pattern.is_flash:
+        frame = pattern.shape[0] * pattern.shape[1]
+        per = max(frame, per // frame * frame)
+    return per
+
+
+def _sink(path, keep, run_dir):
+    """The waveform file a scan streams into, or None; refused with ``keep_waveforms``
+    (in memory instead) or ``run_dir`` (a resumed scan would lack the chunks done before)."""
+    if path is None:
+        return None
+    if keep:
+        raise ParameterError("waveforms_file streams the records to disk; keep_waveforms "
+                             "keeps them in memory: give one of them")
+    if run_dir is not None:
+        raise ParameterError("waveforms_file with run_dir: a resumed scan would not write "
+                             "the chunks done before; use keep_waveforms=True with run_dir "
+                             "(and the sensor's samples), then write_hdf5")
+    return WaveformSink(path)

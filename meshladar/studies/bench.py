@@ -137,11 +137,10 @@ def report(*, repeats=5, full=False, gpu=False):
 
     The lines, in order: the analytic model (:func:`bench_analytic`), FBP against
     scikit-image (:func:`bench_fbp`: one thread, CPU seconds, interleaved rounds; skipped
-    with a line when scikit-image is not installed), the
-    mesh engine (:mod:`meshladar.studies.bench_mesh`), received power and waveforms
+    with a line when scikit-image is not installed), the mesh engine
+    (:mod:`meshladar.studies.bench_mesh`), received power and waveforms
     (:func:`bench_sensor`), SIRT and SART (:func:`bench_sirt`), a two-coating fit, the
-    imaging ladar (:func:`meshladar.studies.bench_scan.bench_scan`), and 3-D
-    tomography (:func:`bench_tomography3d`); with ``full`` also Mitsuba 3 + mitransient
+    imaging ladar (:func:`scan_line`), and 3-D tomography (:func:`bench_tomography3d`); with ``full`` also Mitsuba 3 + mitransient
     (:func:`meshladar.studies.peer.bench_time_to_accuracy`), streaming
     (:func:`bench_streaming`) and Dask (:func:`bench_dask`; skipped with a line when Dask
     is not installed).
@@ -204,19 +203,30 @@ def report(*, repeats=5, full=False, gpu=False):
            f"(every estimate within {fb['max_z']:.1f} sigma); one re-weighing: kernel "
            f"{fb['predict_s'] * 1e3:.0f} ms, weigh {fb['weigh_s'] * 1e3:.0f} ms "
            f"({fb['weigh_s'] / fb['predict_s']:.1f}x)")
-    sb = bench_scan()
-    yield (f"scan, rotating 32 channels at 3e5 pulses/s x 16 sub-rays, {sb['faces']} "
-           f"triangles, {sb['sub_rays']:,} sub-rays, CPU s: bare packet cast "
-           f"{sb['packet_mrays']:.1f} Msubrays/s, scan (cast + waveforms + returns + truth) "
-           f"{sb['scan_mrays']:.2f} Msubrays/s ({sb['scan_over_cast']:.2f} of the cast), two "
-           f"threads {sb['two_over_one']:.2f}x one; flash 128 x 128, 512 samples: "
-           f"{sb['flash_fps']:.1f} frames/s")
+    yield scan_line()
     tb = bench_tomography3d()
     yield (f"3-D tomography, {tb['faces']} triangles, {tb['views']} views, {tb['size']}^3: "
            f"profiles {tb['simulate_s']:.1f} s ({tb['rays']:,} rays, 2 threads), inversion "
            f"{tb['reconstruct_s']:.1f} s, total {tb['simulate_s'] + tb['reconstruct_s']:.1f} s")
     if full:
         yield from _full_lines()
+
+
+def scan_line():
+    """The report's imaging-ladar line (:func:`meshladar.studies.bench_scan.bench_scan`).
+
+    Returns
+    -------
+    str
+        The line.
+    """
+    sb = bench_scan()
+    return (f"scan, rotating 32 channels at 3e5 pulses/s x 16 sub-rays, {sb['faces']} "
+            f"triangles, {sb['sub_rays']:,} sub-rays, CPU s: bare packet cast "
+            f"{sb['packet_mrays']:.1f} Msubrays/s, scan (cast + waveforms + returns + truth) "
+            f"{sb['scan_mrays']:.2f} Msubrays/s ({sb['scan_over_cast']:.2f} of the cast), two "
+            f"threads {sb['two_over_one']:.2f}x one; flash 128 x 128, 512 samples: "
+            f"{sb['flash_fps']:.1f} frames/s")
 
 
 def _full_lines():

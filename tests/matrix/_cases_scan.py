@@ -139,3 +139,9 @@ cli("view.--points=junk", ["view", "{tmp}/sphere.stl", "--points", "{tmp}/junk.l
     setup=files({"sphere.stl": _stl, "junk.las": b"not a las file" * 20}))
 cli("view.--color-by=x", ["view", "{tmp}/sphere.stl", "--points", "{tmp}/p.las",
                           "--color-by", "colour"], "error", "--color-by", setup=_SPHERE)
+api("scan.waveforms_file+keep", lambda: _scan(waveforms_file="w.h5", keep_waveforms=True),
+    "error", ("waveforms_file", "keep_waveforms"))
+api("scan.waveforms_file+run_dir", lambda: _scan(waveforms_file="w.h5", run_dir="r"),
+    "error", ("waveforms_file", "run_dir"))
+api("scan.waveforms_file=no-folder", lambda: _scan(waveforms_file="/no/such/folder/w.h5"),
+    "error", "waveforms_file")

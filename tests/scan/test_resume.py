@@ -56,3 +56,37 @@ def test_a_stopped_scan_resumes_from_its_run_folder_with_identical_points(tmp_pa
     assert resumed.points.tobytes() == fresh.points.tobytes()
     for a, b in zip(resumed.waveforms, fresh.waveforms):
         assert np.array_equal(a, b)
+
+
+def test_waveforms_stream_to_a_file_block_by_block_with_the_points(tmp_path):
+    """``waveforms_file``: the records go to disk as chunks finish (threads, any order)
+    and read back equal to those kept in memory, with the points and parameters."""
+    from meshladar.scan import read_hdf5
+
+    sc, pat, plat, sen = _setup()
+    kept = scan(sc, pat, plat, sen, chunk_pulses=300, seed=4, keep_waveforms=True)
+    streamed = scan(sc, pat, plat, sen, chunk_pulses=300, seed=4, jobs=2,
+                    waveforms_file=tmp_path / "w.h5")
+    assert streamed.waveforms is None
+    back = read_hdf5(tmp_path / "w.h5")
+    assert back.points.tobytes() == kept.points.tobytes() == streamed.points.tobytes()
+    assert len(back.waveforms) == len(kept.waveforms)
+    for a, b in zip(back.waveforms + back.starts, kept.waveforms + kept.starts):
+        assert np.array_equal(a, b)
+    assert [p.name for p in tmp_path.iterdir()] == ["w.h5"]        # no partial file left
+
+
+def test_a_failed_streaming_scan_leaves_no_file(tmp_path, monkeypatch):
+    sc, pat, plat, sen = _setup()
+    real = scan_run._chunk
+
+    def fail_second(job, sl, seed, calls=[]):
+        calls.append(1)
+        if len(calls) == 2:
+            raise RuntimeError("boom")
+        return real(job, sl, seed)
+
+    monkeypatch.setattr(scan_run, "_chunk", fail_second)
+    with pytest.raises(RuntimeError, match="boom"):
+        scan(sc, pat, plat, sen, chunk_pulses=300, jobs=1, waveforms_file=tmp_path / "w.h5")
+    assert list(tmp_path.iterdir()) == []

@@ -36,6 +36,7 @@ class ScanJob(NamedTuple):
     slots: int
     run: object          # the chunk function: (job, slice, seed) -> (records, waves, starts)
     split: object        # the moving parts (meshladar.scan.moving.MovingParts) or None
+    sink: object = None  # a WaveformSink the chunks stream their records into, or None
 
 
 def _chunk_seed(seed, first):
@@ -59,7 +60,9 @@ def scan_chunk(job, items):
             values = np.where(np.isnan(values), 0.0, values)
         a[local, slot] = values
         out[name] = a
-    if job.keep:
+    if job.sink is not None:
+        job.sink.write(lo, waves, starts)
+    elif job.keep:
         out["waveform"], out["start"] = waves, starts
     return out
 
