@@ -215,3 +215,36 @@ def centroids(waves, background, p, centre, half, rounds):  # pragma: no cover -
                 mom += w * x
             if tot > 0.0:
                 centre[e] = mom / tot
+
+
+@numba.njit(cache=True, nogil=True)
+def accumulate_table(tau, pe, start, dt, t0, step, cdf, out):   # pragma: no cover
+    """out[p, j] += e (C(t_{j+1} − τ) − C(t_j − τ)) for every lit sub-ray, with C the echo
+    shape's CDF tabulated at t0 + i·step (0 before, 1 after the table)."""
+    n, m = tau.shape
+    ns = out.shape[1]
+    last = cdf.shape[0] - 1
+    for p in range(n):
+        for k in range(m):
+            e = pe[p, k]
+            if e <= 0.0:
+                continue
+            c = tau[p, k] - start[p]
+            lo = max(0, int(math.floor((c + t0) / dt)))
+            hi = min(ns, int(math.ceil((c + t0 + last * step) / dt)) + 1)
+            prev = _table(cdf, (lo * dt - c - t0) / step, last)
+            for j in range(lo, hi):
+                nxt = _table(cdf, ((j + 1) * dt - c - t0) / step, last)
+                out[p, j] += e * (nxt - prev)
+                prev = nxt
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _table(cdf, x, last):                                 # pragma: no cover - compiled
+    if x <= 0.0:
+        return 0.0
+    if x >= last:
+        return 1.0
+    i = int(x)
+    f = x - i
+    return cdf[i] * (1.0 - f) + cdf[i + 1] * f

@@ -20,9 +20,10 @@ import numba
 import numpy as np
 from scipy.optimize import least_squares
 
-from ._kernels import centroids, find_peaks
+from .._pulses import GaussianPulse
+from ._kernels import accumulate_table, centroids, find_peaks
 
-__all__ = ["SUPPORT", "waveforms", "find_returns", "cfar_background", "Returns"]
+__all__ = ["SUPPORT", "waveforms", "echo_shape", "find_returns", "cfar_background", "Returns"]
 
 #: The echo's Gaussian is cut beyond this many σ (exp(−32) of its peak).
 SUPPORT = 8.0
@@ -73,7 +74,43 @@ def _accumulate(tau, pe, start, dt, sigma, merge, out):   # pragma: no cover - c
                 prev = nxt
 
 
-def waveforms(tau, pe, sigma, dt, samples=None):
+def echo_shape(pulse, response, dt):
+    """The echo's shape, the pulse convolved with the response: None for two Gaussians
+    (exact erf integrals), else its CDF tabulated on a step of a 64th of the finer of Δt
+    and the shapes' own widths, ``(t0, step, cdf)``.
+
+    Parameters
+    ----------
+    pulse : GaussianPulse or SampledPulse
+        The transmitted pulse.
+    response : GaussianPulse, SampledPulse or None
+        The receiver's impulse response.
+    dt : float
+        The sample interval, s.
+
+    Returns
+    -------
+    tuple or None
+        ``(t0, step, cdf)``: the table's first time (s), its step (s) and the CDF at
+        ``t0 + i·step``.
+    """
+    shapes = [pulse] + ([response] if response is not None else [])
+    if all(isinstance(x, GaussianPulse) for x in shapes):
+        return None
+    widths = [x.fwhm if isinstance(x, GaussianPulse) else x.interval for x in shapes]
+    step = min([dt] + widths) / 64.0
+    lo = sum(x.support[0] for x in shapes)
+    dens = None
+    for x in shapes:
+        a, b = x.support
+        k0 = math.floor(a / step)
+        d = np.diff(x.cdf(step * np.arange(k0, math.ceil(b / step) + 1)))
+        dens = d if dens is None else np.convolve(dens, d)
+    cdf = np.concatenate([[0.0], np.cumsum(dens / dens.sum())])
+    return step * sum(math.floor(x.support[0] / step) for x in shapes), step, cdf
+
+
+def waveforms(tau, pe, sigma, dt, samples=None, shape=None):
     """Expected photoelectrons per sample for a chunk's pulses (module docstring).
 
     Parameters
@@ -81,9 +118,11 @@ def waveforms(tau, pe, sigma, dt, samples=None):
     tau, pe : (n, m) numpy.ndarray
         Each sub-ray's two-way time (s; inf on a miss) and photoelectrons (0 on a miss).
     sigma, dt : float
-        The echo's σ and the sample interval (s).
+        The echo's σ (its RMS width) and the sample interval (s).
     samples : int, optional
         The record length; default the chunk's widest spread plus the support each side.
+    shape : tuple, optional
+        :func:`echo_shape`'s table for a shape that is not a Gaussian (None: Gaussian).
 
     Returns
     -------
@@ -91,20 +130,27 @@ def waveforms(tau, pe, sigma, dt, samples=None):
     start : (n,) float64
         Each record's start time t₀ after emission, s.
     """
-    n = len(tau)
     lit = np.where(pe > 0, tau, np.inf)
     first, last = lit.min(axis=1), np.where(pe > 0, tau, -np.inf).max(axis=1)
     seen = np.isfinite(first)
     floor = first[seen].min() if seen.any() else 0.0
     first = np.where(seen, first, floor)
     last = np.where(seen, last, floor)
-    start = np.floor((first - SUPPORT * sigma) / dt) * dt
+    before, after = SUPPORT * sigma, SUPPORT * sigma
+    if shape is not None:
+        before, after = -shape[0], shape[0] + shape[1] * (len(shape[2]) - 1)
+    start = np.floor((first - before) / dt) * dt
     if samples is None:
-        spread = (last - start + SUPPORT * sigma) / dt
+        spread = (last - start + after) / dt
         samples = max(3, int(math.ceil(spread.max())) + 1)
-    out = np.zeros((n, samples))
-    _accumulate(np.where(pe > 0, tau, np.inf), np.ascontiguousarray(pe, np.float64), start,
-                float(dt), float(sigma), MERGE * float(sigma), out)
+    out = np.zeros((len(tau), samples))
+    times = np.where(pe > 0, tau, np.inf)
+    if shape is None:
+        _accumulate(times, np.ascontiguousarray(pe, np.float64), start, float(dt),
+                    float(sigma), MERGE * float(sigma), out)
+    else:
+        accumulate_table(times, np.ascontiguousarray(pe, np.float64), start, float(dt),
+                         float(shape[0]), float(shape[1]), shape[2], out)
     return out, start
 
 

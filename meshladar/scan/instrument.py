@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._pulses import GaussianPulse
+from .._pulses import GaussianPulse, SampledPulse
 from .._validate import check_count, check_real
 from ..errors import ParameterError
 from ..noise import Noise
@@ -34,6 +34,16 @@ __all__ = ["ScanSensor", "Detector", "MAX_SAMPLES"]
 
 #: The longest record a pulse's waveform may hold (samples).
 MAX_SAMPLES = 1 << 16
+
+
+def _moments(shape):
+    """(mean, variance) of a pulse shape's time, s."""
+    if isinstance(shape, GaussianPulse):
+        return 0.0, (shape.fwhm / 2.3548200450309493) ** 2
+    k = np.arange(shape.samples.size)
+    t = shape.start + (k + 0.5) * shape.interval
+    mean = float(np.sum(shape.samples * t))
+    return mean, float(np.sum(shape.samples * (t - mean) ** 2)) + shape.interval ** 2 / 12.0
 
 
 @dataclass(frozen=True)
@@ -125,10 +135,13 @@ class ScanSensor:
         Receiver aperture diameter, m, in (0, 1e3].
     sample_rate : float
         The digitiser's samples per second, in (0, 1e15].
-    pulse : GaussianPulse
-        The transmitted pulse (default 5 ns FWHM).
-    response : GaussianPulse, optional
-        The receiver's impulse response; the two Gaussians combine (FWHMs in quadrature).
+    pulse : GaussianPulse or SampledPulse
+        The transmitted pulse (default a Gaussian of 5 ns FWHM).
+    response : GaussianPulse or SampledPulse, optional
+        The receiver's impulse response. Two Gaussians combine exactly (FWHMs in
+        quadrature, erf integrals); any other pair is convolved on a fine table. A
+        return's time is its echo's centroid less the combined shape's mean
+        (:attr:`delay`), so a shape that does not start at t = 0 ranges true.
     beam : ScanBeam
         The beam's divergence and profile (default one ray per pulse); ignored by a flash
         array, whose pixels are lit uniformly.
@@ -151,8 +164,8 @@ class ScanSensor:
     pulse_energy: float
     aperture_diameter: float
     sample_rate: float
-    pulse: GaussianPulse = field(default_factory=lambda: GaussianPulse(5e-9))
-    response: GaussianPulse | None = None
+    pulse: GaussianPulse | SampledPulse = field(default_factory=lambda: GaussianPulse(5e-9))
+    response: GaussianPulse | SampledPulse | None = None
     beam: ScanBeam = field(default_factory=ScanBeam)
     noise: Noise | None = None
     detector: Detector = field(default_factory=Detector)
@@ -169,7 +182,8 @@ class ScanSensor:
                            ("sample_rate", 1e15)):
             object.__setattr__(self, name, check_real(name, getattr(self, name), low=0.0,
                                                       low_open=True, high=high))
-        for name, kind in (("pulse", GaussianPulse), ("response", (GaussianPulse, type(None))),
+        for name, kind in (("pulse", (GaussianPulse, SampledPulse)),
+                           ("response", (GaussianPulse, SampledPulse, type(None))),
                            ("beam", ScanBeam), ("noise", (Noise, type(None))),
                            ("detector", Detector), ("geiger", (GeigerMode, type(None)))):
             if not isinstance(getattr(self, name), kind):
@@ -202,10 +216,17 @@ class ScanSensor:
 
     @property
     def sigma(self) -> float:
-        """The received echo's standard deviation in time, s: the pulse's and the
-        response's in quadrature."""
-        f2 = self.pulse.fwhm ** 2 + (self.response.fwhm ** 2 if self.response else 0.0)
-        return f2 ** 0.5 / 2.3548200450309493
+        """The received echo's standard deviation (RMS width) in time, s: the pulse's and
+        the response's in quadrature."""
+        shapes = [self.pulse] + ([self.response] if self.response is not None else [])
+        return sum(_moments(x)[1] for x in shapes) ** 0.5
+
+    @property
+    def delay(self) -> float:
+        """The echo shape's mean time after the surface's two-way time, s (0 for
+        Gaussians)."""
+        shapes = [self.pulse] + ([self.response] if self.response is not None else [])
+        return sum(_moments(x)[0] for x in shapes)
 
     def background(self) -> float:
         """Mean background and dark counts per sample.

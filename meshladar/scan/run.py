@@ -22,7 +22,7 @@ from ..stream import run_chunks
 from ..sensor import SPEED_OF_LIGHT
 from ._kernels import assign_truth
 from .cast import cast_chunk, photoelectrons, world_directions
-from .echoes import cfar_background, find_returns, waveforms
+from .echoes import cfar_background, echo_shape, find_returns, waveforms
 from .files import WaveformSink
 from .footprint import pixel_offsets
 from .geiger import blind_shots, coates, fire
@@ -91,8 +91,10 @@ def _chunk(job, sl, seed):
     pe = photoelectrons(scene, cast, shares, sensor)
     shift = doppler(job.split, platform, cast, origins, t, sensor.wavelength)
     tau = 2.0 * cast.distance / SPEED_OF_LIGHT
-    waves, start = waveforms(tau, pe, sensor.sigma, sensor.dt, sensor.samples)
+    shape = echo_shape(sensor.pulse, sensor.response, sensor.dt)
+    waves, start = waveforms(tau, pe, sensor.sigma, sensor.dt, sensor.samples, shape)
     ret, measured = _detect(sensor, waves, start, seed)
+    ret.time = ret.time - sensor.delay             # the shape's own delay taken off
     rec = np.zeros(len(ret), POINT_DTYPE)
     rng = 0.5 * SPEED_OF_LIGHT * ret.time
     pos = origins[ret.pulse] + rng[:, None] * axis[ret.pulse]
