@@ -5,7 +5,9 @@ half transparent, and every return as a point coloured by ``color_by`` with one 
 colour bar (its unit in the title): ``"intensity"`` (photoelectrons, on a log scale: a glint
 and a matte wall differ by 10⁴; titled "log10 photoelectrons"), ``"range"`` (m), ``"return_number"``, ``"range_error"``
 (measured minus true range, m, on a diverging map centred on 0: blue short, red long; false
-alarms, which have no truth, in black) or ``"doppler"`` (Hz, diverging). Off screen it
+alarms, which have no truth, in black), ``"doppler"`` (Hz, diverging), or the pattern's
+``"channel"``, ``"scan_angle"`` (deg) or ``"emission_time"`` (s): a scan pattern's
+footprint on the scene is a scan with a single-ray beam coloured by one of these. Off screen it
 returns the rendered image (:class:`~meshladar.viz.viewer.Shown`), as every viewer entry
 point does.
 """
@@ -26,7 +28,8 @@ __all__ = ["show_points", "COLOR_BY", "NOISE_COLOR"]
 #: The fields a cloud can be coloured by, with the colour bar's title.
 COLOR_BY = {"intensity": "log10 photoelectrons", "range": "range [m]",
             "return_number": "return number", "range_error": "range error [m]",
-            "doppler": "Doppler [Hz]"}
+            "doppler": "Doppler [Hz]", "channel": "channel", "scan_angle": "scan angle [deg]",
+            "emission_time": "emission time [s]"}
 #: The colour of returns without truth (false alarms) when coloured by range error.
 NOISE_COLOR = (0.0, 0.0, 0.0)
 _DIVERGING = ("range_error", "doppler")

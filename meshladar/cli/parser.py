@@ -238,7 +238,8 @@ def _view(sub, commands):
                     help="a point cloud written by meshladar scan (.las, .laz, .h5), drawn "
                          "over the scene (default: the scene coloured by its return)")
     vw.add_argument("--color-by", default="intensity",
-                    choices=("intensity", "range", "return_number", "range_error", "doppler"),
+                    choices=("intensity", "range", "return_number", "range_error", "doppler",
+                             "channel", "scan_angle", "emission_time"),
                     help="the points' colour, with --points (default: %(default)s)")
     vw.add_argument("--camera", choices=("oblique", "view"), default="oblique",
                     help="oblique: beside and above the ladar; view: along the beam from "

@@ -51,3 +51,12 @@ def test_range_errors_draw_on_a_diverging_map_and_bad_fields_are_refused(room):
         points.show_points(cloud, sc, color_by="colour", off_screen=True)
     with pytest.raises(ParameterError, match="cloud"):
         points.show_points(cloud.points, sc, off_screen=True)
+
+
+def test_a_patterns_footprint_is_drawn_by_channel(room):
+    from meshladar.viz import points
+
+    sc, cloud = room
+    shown = points.show_points(cloud, sc, color_by="channel", off_screen=True,
+                               window_size=(300, 200))
+    assert shown.scalar_bars[0].title == "channel"
