@@ -253,13 +253,17 @@ def cfar_background(waves, guard):
     Returns
     -------
     (n,) numpy.ndarray
-        The mean of each record's other samples (0 where none is left).
+        (the sum of each record's other samples + 1) / their number: the mean, kept off
+        0 where few quiet samples would say no background at all (the threshold would
+        then be a single count).
     """
     ns = waves.shape[1]
     peak = np.argmax(waves, axis=1)
     far = np.abs(np.arange(ns)[None, :] - peak[:, None]) > guard
     count = far.sum(axis=1)
-    return np.where(count > 0, (waves * far).sum(axis=1) / np.maximum(count, 1), 0.0)
+    # (counts + 1) / samples: a record of few quiet samples is not taken for a background
+    # of 0, whose threshold (1 count) every stray photon would cross
+    return ((waves * far).sum(axis=1) + 1.0) / np.maximum(count, 1)
 
 
 def find_returns(waves, start, dt, sigma, level, max_returns, decompose, background=0.0,

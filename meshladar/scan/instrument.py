@@ -63,8 +63,9 @@ class Detector:
         Refit overlapping peaks as a sum of Gaussians (default True).
     cfar : bool
         Constant false-alarm rate: the Poisson threshold of each record's own background,
-        estimated from it (the mean of its samples beyond two echo widths of its largest:
-        cell averaging), not the sensor's stated rates (default False). Linear mode only.
+        estimated from it (its samples beyond two echo widths of its largest, their sum
+        plus one over their number: cell averaging kept off zero), not the sensor's
+        stated rates (default False). Linear mode only.
     """
 
     threshold: float | None = None
