@@ -248,3 +248,61 @@ def _table(cdf, x, last):                                 # pragma: no cover - c
     i = int(x)
     f = x - i
     return cdf[i] * (1.0 - f) + cdf[i + 1] * f
+
+
+@numba.njit(cache=True, nogil=True)
+def _gauss_cost(x, y, v, k, r):                           # pragma: no cover - compiled
+    cost = 0.0
+    for j in range(x.shape[0]):
+        m = 0.0
+        for i in range(k):
+            d = (x[j] - v[k + i]) / v[2 * k + i]
+            m += v[i] * math.exp(-0.5 * d * d)
+        r[j] = m - y[j]
+        cost += r[j] * r[j]
+    return cost
+
+
+@numba.njit(cache=True, nogil=True)
+def fit_gaussians(x, y, v, lower, upper, iterations):    # pragma: no cover - compiled
+    """Least squares of a sum of k Gaussians (heights, centres, widths in ``v``, 3k) to
+    (x, y) by Levenberg-Marquardt, each step clipped to [lower, upper] (in place)."""
+    k = v.shape[0] // 3
+    n = x.shape[0]
+    r = np.empty(n)
+    jac = np.empty((n, 3 * k))
+    trial = np.empty(3 * k)
+    cost = _gauss_cost(x, y, v, k, r)
+    lam = 1e-3
+    for _ in range(iterations):
+        for j in range(n):
+            for i in range(k):
+                s = v[2 * k + i]
+                d = x[j] - v[k + i]
+                g = math.exp(-0.5 * d * d / (s * s))
+                jac[j, i] = g
+                jac[j, k + i] = v[i] * g * d / (s * s)
+                jac[j, 2 * k + i] = v[i] * g * d * d / (s * s * s)
+        jtj = jac.T @ jac
+        grad = jac.T @ r
+        improved = False
+        for _attempt in range(10):
+            a = jtj.copy()
+            for i in range(3 * k):
+                a[i, i] += lam * (jtj[i, i] + 1e-300)
+            step = np.linalg.solve(a, -grad)
+            for i in range(3 * k):
+                trial[i] = min(max(v[i] + step[i], lower[i]), upper[i])
+            new = _gauss_cost(x, y, trial, k, np.empty(n))
+            if new < cost:
+                change = cost - new
+                v[:] = trial
+                cost = _gauss_cost(x, y, v, k, r)
+                lam = max(lam / 3.0, 1e-12)
+                improved = True
+                if change <= 1e-12 * cost:
+                    return
+                break
+            lam *= 5.0
+        if not improved:
+            return

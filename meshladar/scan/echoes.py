@@ -18,10 +18,9 @@ import math
 
 import numba
 import numpy as np
-from scipy.optimize import least_squares
 
 from .._pulses import GaussianPulse
-from ._kernels import accumulate_table, centroids, find_peaks
+from ._kernels import accumulate_table, centroids, find_peaks, fit_gaussians
 
 __all__ = ["SUPPORT", "waveforms", "echo_shape", "find_returns", "cfar_background", "Returns"]
 
@@ -34,6 +33,8 @@ MERGE = 1.0 / 64.0
 _FWHM_PER_SIGMA = 2.0 * math.sqrt(2.0 * math.log(2.0))
 #: Peaks closer than this many σ are refitted together.
 _OVERLAP_SIGMAS = 4.0
+#: The most Levenberg-Marquardt steps of a decomposition.
+_FIT_ITERATIONS = 100
 #: An echo's time is the centroid of its samples within this many σ.
 _CENTROID_SIGMAS = 3.0
 
@@ -207,7 +208,9 @@ def _interpolate3(f3, j, ns, sigma_samples):
 
 
 def _decompose(waves, p, centre, s, height, sigma_samples):
-    """Refit each pulse's overlapping peaks as one sum of Gaussians (in place)."""
+    """Refit each pulse's overlapping peaks as one sum of Gaussians (in place), by a
+    compiled Levenberg-Marquardt within bounds (heights ≥ 0, centres in the window,
+    widths 0.5 to 3 σ)."""
     ns = waves.shape[1]
     bounds = np.r_[0, np.nonzero(np.diff(p))[0] + 1, len(p)]        # p is sorted
     for a, b in zip(bounds[:-1], bounds[1:]):
@@ -222,21 +225,15 @@ def _decompose(waves, p, centre, s, height, sigma_samples):
         lo = int(max(0, centre[idx].min() - SUPPORT * sigma_samples))
         hi = int(min(ns, centre[idx].max() + SUPPORT * sigma_samples + 1))
         x = np.arange(lo, hi) + 0.5
-        y = waves[q, lo:hi]
+        y = np.ascontiguousarray(waves[q, lo:hi], np.float64)
         k = len(idx)
-
-        def model(v):
-            h, mu, sd = v[:k], v[k:2 * k], v[2 * k:]
-            return (h[:, None] * np.exp(-0.5 * ((x[None, :] - mu[:, None]) / sd[:, None]) ** 2)
-                    ).sum(axis=0)
-
-        v0 = np.concatenate([height[idx], centre[idx], np.full(k, sigma_samples)])
         lower = np.concatenate([np.zeros(k), np.full(k, lo), np.full(k, 0.5 * sigma_samples)])
         upper = np.concatenate([np.full(k, np.inf), np.full(k, hi),
                                 np.full(k, 3.0 * sigma_samples)])
-        fit = least_squares(lambda v: model(v) - y, np.clip(v0, lower, upper),
-                            bounds=(lower, upper))
-        height[idx], centre[idx], s[idx] = fit.x[:k], fit.x[k:2 * k], fit.x[2 * k:]
+        v = np.clip(np.concatenate([height[idx], centre[idx], np.full(k, sigma_samples)]),
+                    lower, upper)
+        fit_gaussians(x, y, v, lower, upper, _FIT_ITERATIONS)
+        height[idx], centre[idx], s[idx] = v[:k], v[k:2 * k], v[2 * k:]
 
 
 def cfar_background(waves, guard):
