@@ -329,6 +329,9 @@ def _scan(sub, commands):
                     help="the beam's profile (default: %(default)s)")
     sc.add_argument("--noise", action="store_true",
                     help="shot noise even without background (default: expected waveforms)")
+    sc.add_argument("--discrete", action="store_true",
+                    help="discrete returns: no waveform, a pulse's sub-rays grouped in "
+                         "range, expected values (default: waveforms and their returns)")
     sc.add_argument("--cfar", action="store_true",
                     help="threshold from each record's own background (default: from "
                          "--background-rate and --dark-rate)")

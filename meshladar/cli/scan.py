@@ -115,6 +115,7 @@ def _sensor(args):
                       beam=ScanBeam(args.divergence, profile=args.profile, tol=args.tol,
                                     sub_rays=args.sub_rays),
                       noise=noise, geiger=geiger,
+                      echoes="discrete" if args.discrete else "waveform",
                       detector=Detector(max_returns=args.max_returns, cfar=args.cfar))
 
 

@@ -306,3 +306,50 @@ def fit_gaussians(x, y, v, lower, upper, iterations):    # pragma: no cover - co
             lam *= 5.0
         if not improved:
             return
+
+
+@numba.njit(cache=True, nogil=True)
+def discrete_returns(tau, pe, gap, level, max_returns, out_p, out_t, out_e, out_w):
+    """Per pulse, its lit sub-rays grouped in time (a new group where the next arrival is
+    more than ``gap`` after the last), each group at or above ``level`` photoelectrons a
+    return at its photoelectron-weighted time with its photoelectrons and RMS spread, the
+    strongest ``max_returns`` kept. Returns how many."""        # pragma: no cover
+    n, m = tau.shape
+    count = 0
+    gt = np.empty(m)
+    ge = np.empty(m)
+    gs = np.empty(m)
+    for p in range(n):
+        order = np.argsort(tau[p])
+        g = -1
+        prev = -np.inf
+        for o in order:
+            e = pe[p, o]
+            if e <= 0.0:
+                continue
+            t = tau[p, o]
+            if g < 0 or t - prev > gap:
+                g += 1
+                gt[g] = 0.0
+                ge[g] = 0.0
+                gs[g] = 0.0
+            gt[g] += e * t
+            ge[g] += e
+            gs[g] += e * t * t
+            prev = t
+        if g < 0:
+            continue
+        strength = -ge[:g + 1]
+        rank = np.argsort(strength, kind="mergesort")
+        kept = 0
+        for r in rank:
+            if kept == max_returns or ge[r] < level:
+                break
+            mean = gt[r] / ge[r]
+            out_p[count] = p
+            out_t[count] = mean
+            out_e[count] = ge[r]
+            out_w[count] = math.sqrt(max(gs[r] / ge[r] - mean * mean, 0.0))
+            count += 1
+            kept += 1
+    return count

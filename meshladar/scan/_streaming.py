@@ -60,9 +60,9 @@ def scan_chunk(job, items):
             values = np.where(np.isnan(values), 0.0, values)
         a[local, slot] = values
         out[name] = a
-    if job.sink is not None:
+    if job.sink is not None and waves is not None:
         job.sink.write(lo, waves, starts)
-    elif job.keep:
+    elif job.keep and waves is not None:
         out["waveform"], out["start"] = waves, starts
     return out
 

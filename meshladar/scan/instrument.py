@@ -23,14 +23,17 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._pulses import GaussianPulse, SampledPulse
-from .._validate import check_count, check_real
+from .._validate import check_choice, check_count, check_real
 from ..errors import ParameterError
 from ..noise import Noise
 from ..sensor import LIMITS, MIN_WAVELENGTH
 from .footprint import ScanBeam
 from .geiger import GeigerMode
 
-__all__ = ["ScanSensor", "Detector", "MAX_SAMPLES"]
+__all__ = ["ScanSensor", "Detector", "MAX_SAMPLES", "ECHO_MODELS"]
+
+#: How a pulse's echoes become returns (:class:`ScanSensor`'s ``echoes``).
+ECHO_MODELS = ("waveform", "discrete")
 
 #: The longest record a pulse's waveform may hold (samples).
 MAX_SAMPLES = 1 << 16
@@ -154,6 +157,14 @@ class ScanSensor:
     samples : int, optional
         The record length per pulse (samples); default each chunk's spread of echoes plus
         the pulse's support on either side.
+    echoes : str
+        ``"waveform"`` (default): each pulse's record synthesised, with its noise, and
+        searched for returns. ``"discrete"``: no record; a pulse's lit sub-rays grouped
+        in time (a new return where arrivals are more than the echo's FWHM apart), each
+        group at or above the detector's threshold (1 photoelectron by default) a return
+        at its photoelectron-weighted range, expected values without noise (the fast,
+        ideal point cloud; ``noise``, ``geiger``, ``samples`` and CFAR do not apply and are
+        refused).
     geiger : GeigerMode, optional
         Geiger-mode pixels instead of a linear receiver (:mod:`.geiger`): each pattern pulse
         is ``shots`` shots histogrammed and Coates-corrected; the noise's background and
@@ -171,6 +182,7 @@ class ScanSensor:
     noise: Noise | None = None
     detector: Detector = field(default_factory=Detector)
     samples: int | None = None
+    echoes: str = "waveform"
     geiger: GeigerMode | None = None
     wavelength: float = 1.064e-6
     optics_transmission: float = 1.0
@@ -199,6 +211,13 @@ class ScanSensor:
             raise ParameterError("geiger: Geiger-mode pixels count avalanches; the noise's "
                                  "speckle_cells, gain, excess_noise_factor and bits do not "
                                  "apply (give only background_rate and dark_rate)")
+        check_choice("echoes", self.echoes, ECHO_MODELS)
+        if self.echoes == "discrete":
+            given = [n for n in ("noise", "geiger", "samples") if getattr(self, n) is not None]
+            if given or self.detector.cfar:
+                raise ParameterError(f"echoes='discrete' has no records: "
+                                     f"{(given or ['detector.cfar'])[0]} does not apply "
+                                     "(use echoes='waveform')")
         if self.geiger is not None and self.detector.cfar:
             raise ParameterError("detector: cfar applies to a linear receiver's records; "
                                  "Geiger-mode thresholds follow each sample's armed shots")
@@ -261,6 +280,7 @@ class ScanSensor:
                         "speckle_cells", "background_rate", "dark_rate",
                         "excess_noise_factor", "gain", "bits", "full_scale")},
                 "detector": self.detector.describe(), "samples": self.samples,
+                "echoes": self.echoes,
                 "geiger": self.geiger.describe() if self.geiger else None,
                 "wavelength_m": self.wavelength,
                 "optics_transmission": self.optics_transmission,

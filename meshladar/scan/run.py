@@ -11,6 +11,8 @@ face. A return no sub-ray explains (a false alarm) has true part and face −1 a
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .._validate import check_count, check_seed
@@ -20,9 +22,9 @@ from ..raytrace.embree import geometry
 from ..scene import Scene
 from ..stream import run_chunks
 from ..sensor import SPEED_OF_LIGHT
-from ._kernels import assign_truth
+from ._kernels import assign_truth, discrete_returns
 from .cast import cast_chunk, photoelectrons, world_directions
-from .echoes import cfar_background, echo_shape, find_returns, waveforms
+from .echoes import Returns, cfar_background, echo_shape, find_returns, waveforms
 from .files import WaveformSink
 from .footprint import pixel_offsets
 from .geiger import blind_shots, coates, fire
@@ -91,10 +93,13 @@ def _chunk(job, sl, seed):
     pe = photoelectrons(scene, cast, shares, sensor)
     shift = doppler(job.split, platform, cast, origins, t, sensor.wavelength)
     tau = 2.0 * cast.distance / SPEED_OF_LIGHT
-    shape = echo_shape(sensor.pulse, sensor.response, sensor.dt)
-    waves, start = waveforms(tau, pe, sensor.sigma, sensor.dt, sensor.samples, shape)
-    ret, measured = _detect(sensor, waves, start, seed)
-    ret.time = ret.time - sensor.delay             # the shape's own delay taken off
+    if sensor.echoes == "discrete":
+        ret, measured, start = _discrete(sensor, tau, pe), None, None
+    else:
+        shape = echo_shape(sensor.pulse, sensor.response, sensor.dt)
+        waves, start = waveforms(tau, pe, sensor.sigma, sensor.dt, sensor.samples, shape)
+        ret, measured = _detect(sensor, waves, start, seed)
+        ret.time = ret.time - sensor.delay             # the shape's own delay taken off
     rec = np.zeros(len(ret), POINT_DTYPE)
     rng = 0.5 * SPEED_OF_LIGHT * ret.time
     pos = origins[ret.pulse] + rng[:, None] * axis[ret.pulse]
@@ -111,6 +116,20 @@ def _chunk(job, sl, seed):
     face = rec["true_face"]
     rec["true_part"] = np.where(face >= 0, _part_of(scene)[np.maximum(face, 0)], -1)
     return rec, (measured if job.keep or job.sink is not None else None), start
+
+
+def _discrete(sensor, tau, pe):
+    """Discrete returns (:class:`~meshladar.scan.instrument.ScanSensor`'s ``echoes``):
+    a pulse's sub-rays grouped in time, no record, no noise."""
+    det = sensor.detector
+    n = len(tau) * det.max_returns
+    p, t = np.empty(n, np.int64), np.empty(n)
+    e, w = np.empty(n), np.empty(n)
+    fwhm = 2.3548200450309493 * sensor.sigma
+    k = discrete_returns(tau, pe, fwhm, det.threshold or 1.0, det.max_returns, p, t, e, w)
+    spread = np.sqrt(sensor.sigma ** 2 + w[:k] ** 2)          # the pulse and the group
+    return Returns(p[:k], t[:k], e[:k] * sensor.dt / (spread * math.sqrt(2 * math.pi)),
+                   2.3548200450309493 * spread, e[:k])
 
 
 def _detect(sensor, waves, start, seed):
@@ -207,6 +226,9 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
     foot = _footprint(pattern, sensor)
     per = _chunk_pulses(pattern, chunk_pulses, len(foot[0]))
     slots = sensor.detector.max_returns
+    if waveforms_file is not None and sensor.echoes == "discrete":
+        raise ParameterError("waveforms_file: a sensor with echoes='discrete' makes no "
+                             "records; use echoes='waveform'")
     sink = _sink(waveforms_file, keep_waveforms, run_dir)
     job = ScanJob(scene, pattern, platform, sensor, foot, seed, keep_waveforms, slots, _chunk,
                   split, sink)
@@ -242,6 +264,9 @@ def _stream(job, per, options):
 def _check_keep(keep, run_dir, sensor):
     if not isinstance(keep, bool):
         raise ParameterError(f"keep_waveforms must be True or False; got {keep!r}")
+    if keep and sensor.echoes == "discrete":
+        raise ParameterError("keep_waveforms: a sensor with echoes='discrete' makes no "
+                             "records; use echoes='waveform'")
     if keep and run_dir is not None and sensor.samples is None:
         raise ParameterError("keep_waveforms with run_dir needs the sensor's samples (a "
                              "fixed record length), so that every chunk's records fit")

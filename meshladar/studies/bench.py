@@ -224,8 +224,10 @@ def scan_line():
     return (f"scan, rotating 32 channels at 3e5 pulses/s x 16 sub-rays, {sb['faces']} "
             f"triangles, {sb['sub_rays']:,} sub-rays, CPU s: bare packet cast "
             f"{sb['packet_mrays']:.1f} Msubrays/s, scan (cast + waveforms + returns + truth) "
-            f"{sb['scan_mrays']:.2f} Msubrays/s ({sb['scan_over_cast']:.2f} of the cast), two "
-            f"threads {sb['two_over_one']:.2f}x one; flash 128 x 128, 512 samples: "
+            f"{sb['scan_mrays']:.2f} Msubrays/s ({sb['scan_over_cast']:.2f} of the cast), "
+            f"discrete returns {sb['discrete_mrays']:.2f} Msubrays/s "
+            f"({sb['discrete_over_cast']:.2f}), two threads {sb['two_over_one']:.2f}x one; "
+            f"flash 128 x 128, 512 samples: "
             f"{sb['flash_fps']:.1f} frames/s")
 
 

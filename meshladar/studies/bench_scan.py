@@ -7,6 +7,7 @@ interleaved, in CPU seconds; and a 128 × 128 flash frame's rate with 512-sample
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -45,7 +46,9 @@ def bench_scan(*, subdivisions=6, duration=0.1, rounds=3):
     -------
     dict
         ``faces``, ``sub_rays``, ``packet_mrays``, ``scan_mrays``, ``scan_over_cast``,
-        ``two_over_one`` (wall-clock speed-up of two threads), ``flash_fps``.
+        ``discrete_mrays`` and ``discrete_over_cast`` (``echoes="discrete"``: no
+        records), ``two_over_one`` (wall-clock speed-up of two threads, waveforms),
+        ``flash_fps``.
     """
     part = sphere((0.0, 0.0, 0.0), 30.0, 0, subdivisions=subdivisions)
     scene = Scene.from_parts([part], [Lambertian(0.3)])
@@ -61,8 +64,10 @@ def bench_scan(*, subdivisions=6, duration=0.1, rounds=3):
     o32 = np.ascontiguousarray(np.repeat(origins - geo.center, 16, axis=0), np.float32)
     d32 = np.ascontiguousarray(dirs, np.float32)
     emb.run(o32[:4096], d32[:4096])
+    discrete = replace(sensor, echoes="discrete")
     scan(scene, pattern, platform, sensor, jobs=1)                    # warm-up: compile
-    cast, one, wall1, wall2 = [], [], [], []
+    scan(scene, pattern, platform, discrete, jobs=1)
+    cast, one, fast, wall1, wall2 = [], [], [], [], []
     for _ in range(rounds):
         cast.append(_cpu(lambda: emb.run(o32, d32)))
         t = time.perf_counter()
@@ -71,6 +76,7 @@ def bench_scan(*, subdivisions=6, duration=0.1, rounds=3):
         t = time.perf_counter()
         scan(scene, pattern, platform, sensor, jobs=2)
         wall2.append(time.perf_counter() - t)
+        fast.append(_cpu(lambda: scan(scene, pattern, platform, discrete, jobs=1)))
     n = len(o32)
     frame = flash(128, 128, ifov_deg=0.05)
     fsensor = ScanSensor(pulse_energy=1e-3, aperture_diameter=0.05, sample_rate=2e9,
@@ -82,5 +88,7 @@ def bench_scan(*, subdivisions=6, duration=0.1, rounds=3):
     return {"faces": len(part.faces), "sub_rays": n,
             "packet_mrays": n / np.median(cast) / 1e6, "scan_mrays": n / np.median(one) / 1e6,
             "scan_over_cast": float(np.median(cast) / np.median(one)),
+            "discrete_mrays": n / np.median(fast) / 1e6,
+            "discrete_over_cast": float(np.median(cast) / np.median(fast)),
             "two_over_one": float(np.median(wall1) / np.median(wall2)),
             "flash_fps": 1.0 / flash_s}
