@@ -319,8 +319,17 @@ def discrete_returns(tau, pe, gap, level, max_returns, out_p, out_t, out_e, out_
     gt = np.empty(m)
     ge = np.empty(m)
     gs = np.empty(m)
+    order = np.empty(m, np.int64)
     for p in range(n):
-        order = np.argsort(tau[p])
+        if m > 64:
+            order[:] = np.argsort(tau[p])
+        else:
+            for i in range(m):               # insertion sort: a pulse has few sub-rays
+                j = i
+                while j > 0 and tau[p, order[j - 1]] > tau[p, i]:
+                    order[j] = order[j - 1]
+                    j -= 1
+                order[j] = i
         g = -1
         prev = -np.inf
         for o in order:

@@ -177,6 +177,8 @@ def doppler(split, platform, cast, origins, t, wavelength):
     (n, m) numpy.ndarray
         f_D, Hz, positive closing; 0 on a miss.
     """
+    if split is None and platform.is_static:             # nothing moves: no shift at all
+        return np.zeros(cast.face.shape)
     step = _VELOCITY_STEP
     v_s = (platform.sensor_poses(t + step)[0] - platform.sensor_poses(t - step)[0]) / (2 * step)
     vel = np.zeros(cast.points.shape)

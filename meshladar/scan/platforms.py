@@ -210,6 +210,12 @@ class Platform:
         return cls(data[:, 0], data[:, 1:4], data[:, 4:7], interpolation, **mount)
 
     # -- poses -------------------------------------------------------------------------
+    @property
+    def is_static(self) -> bool:
+        """Whether the platform never moves (one position and one attitude throughout)."""
+        return bool(np.all(self.positions == self.positions[0])
+                    and np.all(self.attitudes_deg == self.attitudes_deg[0]))
+
     def _positions(self, t):
         """Body positions (n, 3) at times t (two or more waypoints)."""
         if self.interpolation == "spline":
