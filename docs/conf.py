@@ -139,6 +139,9 @@ def _api_pages():
         page = folder / f"{name}.rst"
         if not page.exists() or page.read_text() != text:
             page.write_text(text)
+    for stale in folder.glob("*.rst"):         # a module renamed or removed since
+        if stale.stem != "index" and stale.stem not in pages:
+            stale.unlink()
     index = ("API reference\n=============\n\nEvery public module, in the engine's layer "
              "order (foundation first), then the modules whose names their package does not "
              "re-export. The commonly used names are also ``meshladar.<name>``.\n\n"

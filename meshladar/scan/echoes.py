@@ -269,11 +269,9 @@ def find_returns(waves, start, dt, sigma, level, max_returns, decompose, backgro
     (:mod:`.instrument`'s detection): maxima of the matched-filtered waveform whose
     largest sample within the echo's FWHM reaches ``level``, located and sized by a
     Gaussian through the filtered peak's three samples, and timed by the centroid of the
-    samples within :data:`_CENTROID_SIGMAS` σ of it, less the ``background`` per sample (a
-    number, or one per record)
-    (the maximum-likelihood time of a Gaussian echo in shot noise). ``level`` is a number
-    or an array like ``waves``; ``detect`` (default ``waves``) is what it applies to (a
-    Geiger-mode histogram, whose level follows its armed shots).
+    samples within three σ of it, less the background per sample (the maximum-likelihood
+    time of a Gaussian echo in shot noise).
+
     Parameters
     ----------
     waves : (n, samples) numpy.ndarray

@@ -68,7 +68,7 @@ def _exact_share(s, profile):
 
 def edge_error(offsets, profile):
     """The largest error of the sub-rays' equal shares in the energy beyond any straight
-    edge, over :data:`_EDGE_DIRECTIONS` directions and every offset (the worst offsets are
+    edge, over 36 directions and every offset (the worst offsets are
     the sub-rays' own projections, approached from either side).
 
     Parameters
