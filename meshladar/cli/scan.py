@@ -17,6 +17,7 @@ from ..errors import ParameterError
 from ..noise import Noise
 from ..scan import (PATTERNS, Detector, GeigerMode, Platform, ScanBeam, ScanSensor, scan,
                     write_hdf5, write_las)
+from ..scan.files import check_writable
 from ..waveforms import GaussianPulse
 from .checks import check_output
 from .simulate import load_scene
@@ -138,8 +139,10 @@ def cmd_scan(args) -> int:
     """
     inputs = [args.scene, args.materials, args.platform]
     check_output(args.output, POINT_SUFFIXES, inputs)
+    check_writable(args.output, "-o")
     if args.waveforms is not None:
         check_output(args.waveforms, (".h5", ".hdf5"), inputs + [args.output], "--waveforms")
+        check_writable(args.waveforms, "--waveforms")
     make, kwargs = parse_spec("--pattern", args.pattern, PATTERNS)
     pattern = _build(make, kwargs, "--pattern")
     platform = _platform(args)

@@ -19,6 +19,7 @@ back exactly.
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import os
 import threading
@@ -31,7 +32,7 @@ from ..errors import ParameterError
 from .points import POINT_DTYPE, POINT_FIELDS, PointCloud
 
 __all__ = ["write_las", "read_las", "write_hdf5", "read_hdf5", "LAS_NATIVE", "EXTRA_NAMES",
-           "WaveformSink"]
+           "WaveformSink", "check_writable"]
 
 #: The record fields LAS 1.4 stores in its own dimensions (all others are extra bytes).
 LAS_NATIVE = ("x", "y", "z", "return_number", "number_of_returns")
@@ -51,6 +52,32 @@ def _need(module):
     except ImportError:
         raise ParameterError(f"{module} is not installed: pip install 'meshladar[scan]'") \
             from None
+
+
+def check_writable(path, flag="path"):
+    """Refuse, before any work, a points file whose writer is not installed: laspy for
+    ``.las``, laspy and lazrs (or laszip) for ``.laz``, h5py for ``.h5``/``.hdf5``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to write.
+    flag : str
+        The option or argument named in the message.
+
+    Raises
+    ------
+    ParameterError
+        Naming the missing package and the extra that installs it.
+    """
+    name = os.fspath(path).lower()
+    need = (["h5py"] if name.endswith((".h5", ".hdf5"))
+            else ["laspy"] + ([("lazrs", "laszip")] if name.endswith(".laz") else []))
+    for module in need:
+        options = module if isinstance(module, tuple) else (module,)
+        if not any(importlib.util.find_spec(m) is not None for m in options):
+            raise ParameterError(f"{flag}: writing {os.fspath(path)!r} needs {options[0]}, "
+                                 "which is not installed: pip install 'meshladar[scan]'")
 
 
 def _readable(path, what):

@@ -102,3 +102,28 @@ def test_writing_never_leaves_a_partial_file(cloud, tmp_path, monkeypatch):
     with pytest.raises(OSError):
         write_las(path, cloud)
     assert path.read_bytes() == b"user's file"
+
+
+def test_a_missing_writer_is_named_before_any_work(monkeypatch, tmp_path):
+    """Without laspy (or lazrs for .laz, h5py for .h5) ``meshladar scan`` stops before
+    scanning, naming the package and the extra."""
+    import importlib.util
+
+    from meshladar.cli import main
+    from meshladar.errors import ParameterError
+    from meshladar.scan.files import check_writable
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *a: None if name in ("lazrs", "laszip", "h5py")
+                        else real(name, *a))
+    check_writable("p.las")
+    for name in ("p.laz", "p.h5"):
+        with pytest.raises(ParameterError, match=r"meshladar\[scan\]"):
+            check_writable(name)
+    import meshladar.cli.scan as cli_scan
+    monkeypatch.setattr(cli_scan, "scan", lambda *a, **k: pytest.fail("scanned"))
+    trimesh.creation.box((2.0, 2.0, 2.0)).export(tmp_path / "b.stl")
+    assert main(["scan", str(tmp_path / "b.stl"), "--quiet", "-o", str(tmp_path / "p.laz"),
+                 "--pattern", "raster azimuth_deg=0 elevation_deg=0 pulse_rate=1",
+                 "--platform", "static position=-5,0,0"]) == 2
