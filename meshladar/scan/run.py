@@ -273,10 +273,14 @@ def _check_keep(keep, run_dir, sensor):
 
 
 def _chunk_pulses(pattern, chunk_pulses, sub_rays):
-    """Pulses per chunk: :data:`CHUNK_RAYS` sub-rays' worth, or the user's; whole frames
-    of a flash array."""
-    per = max(1, CHUNK_RAYS // sub_rays) if chunk_pulses is None else check_count(
-        "chunk_pulses", chunk_pulses)
+    """Pulses per chunk: at most :data:`CHUNK_RAYS` sub-rays' worth, the pattern split into
+    chunks of equal size (so that threads finish together), or the user's; whole frames of
+    a flash array."""
+    if chunk_pulses is None:
+        per = max(1, CHUNK_RAYS // sub_rays)
+        per = -(-len(pattern) // -(-len(pattern) // per))   # equal chunks: threads balance
+    else:
+        per = check_count("chunk_pulses", chunk_pulses)
     if pattern.is_flash:
         frame = pattern.shape[0] * pattern.shape[1]
         per = max(frame, per // frame * frame)
