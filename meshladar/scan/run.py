@@ -194,8 +194,8 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
     waveforms_file : str or os.PathLike, optional
         An HDF5 file that every chunk's records stream into as it finishes (they are
         not kept in memory), completed with the points and parameters at the end:
-        :func:`~meshladar.scan.files.read_hdf5` reads it. Not with ``keep_waveforms`` or
-        ``run_dir``.
+        :func:`~meshladar.scan.files.read_hdf5` reads it. Not with ``keep_waveforms``,
+        ``run_dir`` or ``executor``.
     chunk_pulses : int, optional
         Pulses per chunk (default :data:`CHUNK_RAYS` sub-rays' worth; a flash scan's
         chunks hold whole frames).
@@ -229,6 +229,9 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
     if waveforms_file is not None and sensor.echoes == "discrete":
         raise ParameterError("waveforms_file: a sensor with echoes='discrete' makes no "
                              "records; use echoes='waveform'")
+    if waveforms_file is not None and executor is not None:
+        raise ParameterError("waveforms_file is written by this process's threads; with an "
+                             "executor, use keep_waveforms=True and write_hdf5")
     sink = _sink(waveforms_file, keep_waveforms, run_dir)
     job = ScanJob(scene, pattern, platform, sensor, foot, seed, keep_waveforms, slots, _chunk,
                   split, sink)

@@ -20,7 +20,7 @@ asserted elsewhere it is not repeated; the module that holds it is named here:
   budget: ``tests/values/test_sensor_beams.py``; samples summing to bins (1e-12), noise
   moments: ``tests/records/test_waveforms.py``; Mitsuba within 1e-3:
   ``tests/studies/test_peer_mitsuba.py``.
-* The bad-input matrix's 1250 cases: ``tests/matrix/test_matrix.py``; modules ≤ 450 lines,
+* The bad-input matrix's 1251 cases: ``tests/matrix/test_matrix.py``; modules ≤ 450 lines,
   functions ≤ 80: ``tests/test_house.py``.
 
 Timings (seconds, Mrays/s, speed-ups) are measurements of one machine and are not asserted

@@ -151,3 +151,5 @@ api("ScanSensor.discrete+noise", lambda: _sensor(echoes="discrete", noise=ml.noi
 api("scan.discrete+waveforms_file", lambda: _scan(sensor=_sensor(echoes="discrete"),
                                                   waveforms_file="w.h5"),
     "error", "waveforms_file")
+api("scan.waveforms_file+executor", lambda: _scan(waveforms_file="w.h5", executor=object()),
+    "error", ("waveforms_file", "executor"))

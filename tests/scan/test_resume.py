@@ -90,3 +90,16 @@ def test_a_failed_streaming_scan_leaves_no_file(tmp_path, monkeypatch):
     with pytest.raises(RuntimeError, match="boom"):
         scan(sc, pat, plat, sen, chunk_pulses=300, jobs=1, waveforms_file=tmp_path / "w.h5")
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.slow
+def test_a_dask_cluster_gives_the_points_of_one_thread():
+    """Chunks sent to a local Dask cluster (two workers, TLS) come back as one thread's."""
+    pytest.importorskip("distributed")
+    from meshladar.stream import dask_executor
+
+    sc, pat, plat, sen = _setup()
+    one = scan(sc, pat, plat, sen, jobs=1, chunk_pulses=300, seed=4)
+    with dask_executor(workers=2) as ex:
+        far = scan(sc, pat, plat, sen, chunk_pulses=300, seed=4, executor=ex)
+    assert len(one) > 500 and one.points.tobytes() == far.points.tobytes()
