@@ -229,10 +229,7 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
     if waveforms_file is not None and sensor.echoes == "discrete":
         raise ParameterError("waveforms_file: a sensor with echoes='discrete' makes no "
                              "records; use echoes='waveform'")
-    if waveforms_file is not None and executor is not None:
-        raise ParameterError("waveforms_file is written by this process's threads; with an "
-                             "executor, use keep_waveforms=True and write_hdf5")
-    sink = _sink(waveforms_file, keep_waveforms, run_dir)
+    sink = _sink(waveforms_file, keep_waveforms, run_dir, executor)
     job = ScanJob(scene, pattern, platform, sensor, foot, seed, keep_waveforms, slots, _chunk,
                   split, sink)
     description = None if run_dir is None else job_description(
@@ -290,11 +287,15 @@ def _chunk_pulses(pattern, chunk_pulses, sub_rays):
     return per
 
 
-def _sink(path, keep, run_dir):
+def _sink(path, keep, run_dir, executor):
     """The waveform file a scan streams into, or None; refused with ``keep_waveforms``
-    (in memory instead) or ``run_dir`` (a resumed scan would lack the chunks done before)."""
+    (in memory instead), ``run_dir`` (a resumed scan would lack the chunks done before) or
+    an ``executor`` (the file is written by this process's threads)."""
     if path is None:
         return None
+    if executor is not None:
+        raise ParameterError("waveforms_file is written by this process's threads; with an "
+                             "executor, use keep_waveforms=True and write_hdf5")
     if keep:
         raise ParameterError("waveforms_file streams the records to disk; keep_waveforms "
                              "keeps them in memory: give one of them")
