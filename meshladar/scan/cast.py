@@ -26,23 +26,18 @@ from ..raytrace.backends import resolve_backend
 from ..sensor import PLANCK, SPEED_OF_LIGHT
 from ._kernels import refine_hits, world_sub_rays
 
-__all__ = ["sub_directions", "world_directions", "Cast", "cast_chunk", "photoelectrons"]
+__all__ = ["world_directions", "Cast", "cast_chunk", "photoelectrons"]
 
 #: Below this |n·d| a hit's float64 refinement is not trusted (Embree's t is kept).
 _MIN_COS = 1e-9
 
 
-def _perpendiculars(d):
-    """Two unit vectors (n, 3) perpendicular to each unit d and to each other."""
-    ref = np.where(np.abs(d[:, 2:3]) < 0.9, [[0.0, 0.0, 1.0]], [[0.0, 1.0, 0.0]])
-    u = np.cross(ref, d)
-    u /= np.linalg.norm(u, axis=1, keepdims=True)
-    return u, np.cross(d, u)
-
-
 def world_directions(rot, directions, offsets, pixel_pitch=None):
-    """World-frame directions of each pulse's sub-rays: :func:`sub_directions` turned by
-    the sensor's rotations, in one compiled pass.
+    """World-frame directions of each pulse's sub-rays, in one compiled pass: in the
+    sensor frame, a beam's sub-ray is the pulse's direction d offset by tan(offset) along
+    two unit axes perpendicular to it (u = z × d normalised, or y × d where d is near z;
+    v = d × u), a flash pixel's the pixel's point on the focal plane x = 1 moved by
+    offset × pitch; each normalised and turned by the sensor's rotation.
 
     Parameters
     ----------
@@ -51,7 +46,8 @@ def world_directions(rot, directions, offsets, pixel_pitch=None):
     directions : (n, 3) array_like
         The pulses' unit directions in the sensor frame.
     offsets : (m, 2) array_like
-        The sub-rays' offsets (as :func:`sub_directions`).
+        A beam's: angles (rad) about the pulse's direction; a flash pixel's: fractions of
+        the pitch on the focal plane.
     pixel_pitch : float, optional
         A flash pixel's pitch tan(IFOV), or None for a beam.
 
@@ -67,37 +63,6 @@ def world_directions(rot, directions, offsets, pixel_pitch=None):
                    np.ascontiguousarray(offsets, np.float64),
                    -1.0 if pixel_pitch is None else float(pixel_pitch), out)
     return out
-
-
-def sub_directions(directions, offsets, pixel_pitch=None):
-    """Sensor-frame directions of each pulse's sub-rays.
-
-    Parameters
-    ----------
-    directions : (n, 3) array_like
-        The pulses' unit directions in the sensor frame.
-    offsets : (m, 2) array_like
-        A beam's: angles (rad) along two axes perpendicular to the pulse's direction; a
-        flash pixel's: fractions of the pitch on the focal plane (where the pulse's
-        direction has x = 1).
-    pixel_pitch : float, optional
-        A flash pixel's pitch tan(IFOV), or None for a beam.
-
-    Returns
-    -------
-    (n, m, 3) numpy.ndarray
-        Unit directions.
-    """
-    d = np.asarray(directions, np.float64)
-    if pixel_pitch is not None:
-        f = d / d[:, :1]                                   # back onto the focal plane x = 1
-        sub = np.repeat(f[:, None, :], len(offsets), axis=1)
-        sub[:, :, 1:] += pixel_pitch * offsets[None, :, :]
-    else:
-        u, v = _perpendiculars(d)
-        t = np.tan(offsets)
-        sub = d[:, None, :] + t[None, :, :1] * u[:, None, :] + t[None, :, 1:] * v[:, None, :]
-    return sub / np.linalg.norm(sub, axis=2, keepdims=True)
 
 
 class Cast:

@@ -21,6 +21,7 @@ import numpy as np
 
 from .._pulses import GaussianPulse
 from ._kernels import accumulate_table, centroids, find_peaks, fit_gaussians
+from .instrument import FWHM_PER_SIGMA
 
 __all__ = ["SUPPORT", "waveforms", "echo_shape", "find_returns", "cfar_background", "Returns"]
 
@@ -30,7 +31,6 @@ SUPPORT = 8.0
 #: their photoelectron-weighted mean time: the record's sum and first moment are exact,
 #: its shape off by the group's time spread squared over σ², at most (1/64)² here.
 MERGE = 1.0 / 64.0
-_FWHM_PER_SIGMA = 2.0 * math.sqrt(2.0 * math.log(2.0))
 #: Peaks closer than this many σ are refitted together.
 _OVERLAP_SIGMAS = 4.0
 #: The most Levenberg-Marquardt steps of a decomposition.
@@ -131,7 +131,7 @@ def waveforms(tau, pe, sigma, dt, samples=None, shape=None):
     start : (n,) float64
         Each record's start time t₀ after emission, s.
     """
-    lit = np.where(pe > 0, tau, np.inf)
+    lit = np.where(pe > 0, tau, np.inf)                  # a miss, or no light: never arrives
     first, last = lit.min(axis=1), np.where(pe > 0, tau, -np.inf).max(axis=1)
     seen = np.isfinite(first)
     floor = first[seen].min() if seen.any() else 0.0
@@ -145,12 +145,11 @@ def waveforms(tau, pe, sigma, dt, samples=None, shape=None):
         spread = (last - start + after) / dt
         samples = max(3, int(math.ceil(spread.max())) + 1)
     out = np.zeros((len(tau), samples))
-    times = np.where(pe > 0, tau, np.inf)
     if shape is None:
-        _accumulate(times, np.ascontiguousarray(pe, np.float64), start, float(dt),
+        _accumulate(lit, np.ascontiguousarray(pe, np.float64), start, float(dt),
                     float(sigma), MERGE * float(sigma), out)
     else:
-        accumulate_table(times, np.ascontiguousarray(pe, np.float64), start, float(dt),
+        accumulate_table(lit, np.ascontiguousarray(pe, np.float64), start, float(dt),
                          float(shape[0]), float(shape[1]), shape[2], out)
     return out, start
 
@@ -297,7 +296,7 @@ def find_returns(waves, start, dt, sigma, level, max_returns, decompose, backgro
         The returns found.
     """
     s = sigma / dt
-    fwhm = _FWHM_PER_SIGMA * s
+    fwhm = FWHM_PER_SIGMA * s
     margin = np.ascontiguousarray((waves if detect is None else detect) - level, np.float64)
     waves = np.ascontiguousarray(waves, np.float64)
     r = int(4.0 * s + 0.5)                       # scipy's gaussian_filter1d, truncate=4
@@ -318,5 +317,5 @@ def find_returns(waves, start, dt, sigma, level, max_returns, decompose, backgro
     if decompose and len(p):
         _decompose(waves, p, centre, s_e, height, s)
     time = start[p] + centre * dt
-    return Returns(p, time, height, s_e * dt * _FWHM_PER_SIGMA,
+    return Returns(p, time, height, s_e * dt * FWHM_PER_SIGMA,
                    height * s_e * math.sqrt(2.0 * math.pi))

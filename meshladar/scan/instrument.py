@@ -18,6 +18,7 @@ maximum and give one return.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -30,7 +31,10 @@ from ..sensor import LIMITS, MIN_WAVELENGTH
 from .footprint import ScanBeam
 from .geiger import GeigerMode
 
-__all__ = ["ScanSensor", "Detector", "MAX_SAMPLES", "ECHO_MODELS"]
+__all__ = ["ScanSensor", "Detector", "MAX_SAMPLES", "ECHO_MODELS", "FWHM_PER_SIGMA"]
+
+#: A Gaussian's full width at half maximum over its σ, 2 sqrt(2 ln 2).
+FWHM_PER_SIGMA = 2.0 * math.sqrt(2.0 * math.log(2.0))
 
 #: How a pulse's echoes become returns (:class:`ScanSensor`'s ``echoes``).
 ECHO_MODELS = ("waveform", "discrete")
@@ -42,7 +46,7 @@ MAX_SAMPLES = 1 << 16
 def _moments(shape):
     """(mean, variance) of a pulse shape's time, s."""
     if isinstance(shape, GaussianPulse):
-        return 0.0, (shape.fwhm / 2.3548200450309493) ** 2
+        return 0.0, (shape.fwhm / FWHM_PER_SIGMA) ** 2
     k = np.arange(shape.samples.size)
     t = shape.start + (k + 0.5) * shape.interval
     mean = float(np.sum(shape.samples * t))
@@ -240,6 +244,11 @@ class ScanSensor:
         the response's in quadrature."""
         shapes = [self.pulse] + ([self.response] if self.response is not None else [])
         return sum(_moments(x)[1] for x in shapes) ** 0.5
+
+    @property
+    def fwhm(self) -> float:
+        """The received echo's full width at half maximum, s (:attr:`sigma` × 2.3548)."""
+        return FWHM_PER_SIGMA * self.sigma
 
     @property
     def delay(self) -> float:

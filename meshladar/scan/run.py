@@ -28,7 +28,7 @@ from .echoes import Returns, cfar_background, echo_shape, find_returns, waveform
 from .files import WaveformSink
 from .footprint import pixel_offsets
 from .geiger import blind_shots, coates, fire
-from .instrument import ScanSensor
+from .instrument import FWHM_PER_SIGMA, ScanSensor
 from .moving import cast_moving, doppler, moving_parts
 from .patterns import ScanPattern
 from .platforms import Platform
@@ -125,11 +125,10 @@ def _discrete(sensor, tau, pe):
     n = len(tau) * det.max_returns
     p, t = np.empty(n, np.int64), np.empty(n)
     e, w = np.empty(n), np.empty(n)
-    fwhm = 2.3548200450309493 * sensor.sigma
-    k = discrete_returns(tau, pe, fwhm, det.threshold or 1.0, det.max_returns, p, t, e, w)
+    k = discrete_returns(tau, pe, sensor.fwhm, det.threshold or 1.0, det.max_returns, p, t, e, w)
     spread = np.sqrt(sensor.sigma ** 2 + w[:k] ** 2)          # the pulse and the group
     return Returns(p[:k], t[:k], e[:k] * sensor.dt / (spread * math.sqrt(2 * math.pi)),
-                   2.3548200450309493 * spread, e[:k])
+                   FWHM_PER_SIGMA * spread, e[:k])
 
 
 def _detect(sensor, waves, start, seed):
@@ -154,7 +153,7 @@ def _detect(sensor, waves, start, seed):
     if sensor.noise is not None:
         measured = draw_noise(sensor.noise, waves, sensor.dt, 1, seed)[0] / sensor.noise.gain
     if det.cfar:                       # each record's own background, not the sensor's
-        b = cfar_background(measured, 2.0 * 2.3548200450309493 * sensor.sigma / sensor.dt)
+        b = cfar_background(measured, 2.0 * sensor.fwhm / sensor.dt)
     level = det.level(b[:, None] if det.cfar else b)
     ret = find_returns(measured, start, sensor.dt, sensor.sigma, level, det.max_returns,
                        det.decompose, b)
