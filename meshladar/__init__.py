@@ -18,7 +18,7 @@ _NAMES = {
     "SandfordRobertson": "brdf", "Disk": "shapes", "Ellipse": "shapes", "Scene": "scene",
     "Ladar": "ladar", "Sinogram": "sinogram", "simulate": "forward", "fbp": "reconstruct",
     "Image": "images", "log_radiance": "reconstruct", "clip_radiance": "reconstruct",
-    "trace": "forward", "weigh": "weighing", "Hits": "hits",
+    "trace": "forward", "weigh": "weighing", "Hits": "hits", "lrcs": "forward.lrcs",
 }
 
 #: the public submodules, in layer order (DESIGN.md), each ``meshladar.<name>``

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import html
 
-__all__ = ["text", "table", "listing", "material_name"]
+__all__ = ["text", "table", "listing", "material_name", "scene_summary"]
 
 #: The longest repr a result gives (tested).
 MAX_REPR = 400
@@ -52,3 +52,24 @@ def material_name(material):
     """A coating's name, or its class for an unnamed BRDF."""
     return getattr(material, "name", None) or type(material).__name__
 
+
+def scene_summary(scene):
+    """The (label, value) rows of a Scene's repr: its kind, parts or shapes, materials,
+    bounds or bounding circle."""
+    mats = listing(dict.fromkeys(material_name(m) for m in scene.materials))
+    if scene.parts:
+        lo, hi = scene.bounds()
+        rep = scene.report
+        return (("kind", "mesh"),
+                ("parts", listing(f"{p.name} ({len(p.faces)} faces)" for p in scene.parts)),
+                ("faces", rep.get("faces")), ("materials", mats),
+                ("bounds", f"[{', '.join(f'{a:.4g}' for a in lo)}] to "
+                           f"[{', '.join(f'{b:.4g}' for b in hi)}]"),
+                ("watertight", all(rep.get("watertight") or [False])),
+                ("inverted_bodies", rep.get("inverted_bodies") or None))
+    (cx, cy), r = scene.bounding_circle()
+    return (("kind", "analytic"),
+            ("shapes", listing(f"{s.name or type(s).__name__}: {type(s).__name__}"
+                               for s in scene.shapes)),
+            ("materials", mats), ("bounding_circle", f"center ({cx:.4g}, {cy:.4g}), "
+                                                     f"radius {r:.4g}"))

@@ -19,6 +19,7 @@ __all__ = [
     "ModelError",
     "MeshladarWarning",
     "LobeSamplingWarning",
+    "BounceWarning",
     "EnergyConservationWarning",
     "user_stacklevel",
 ]
@@ -132,6 +133,17 @@ class MeshladarWarning(UserWarning):
 class LobeSamplingWarning(MeshladarWarning):
     """The rays are too sparse for a coating's specular lobe on a curved part: its glint is
     undersampled (the warning names the ray spacing that resolves it).
+
+    Parameters
+    ----------
+    *args : object
+        The message (a ``str``), passed on to :class:`UserWarning` unchanged.
+    """
+
+
+class BounceWarning(MeshladarWarning):
+    """A single-bounce run of a scene whose second bounce is estimated above the threshold
+    (the warning gives the estimate; ``bounces=2`` or ``"auto"`` includes it).
 
     Parameters
     ----------

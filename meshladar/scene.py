@@ -14,10 +14,11 @@ import numpy as np
 
 from ._scene_inputs import (checked_coatings, checked_shapes, parts_by_face, parts_by_name,
                             parts_of_items)
-from ._summary import listing, material_name, table, text
+from ._summary import scene_summary, table, text
 from ._validate import check_real
 from .errors import MeshladarWarning, ParameterError, user_stacklevel
 from .meshes import convex_hull, inspect_parts, load_parts, prism
+from .meshes.visibility import Visibility, scene_visibility
 from ._extents import HULL_MIN_VIEWS, circle_about_box, point_ranges, shape_ranges
 from .precision import OVERLAP_RTOL
 from .shapes import Disk, Ellipse, Shape
@@ -329,6 +330,19 @@ class Scene:
             derived[key] = make()
         return derived[key]
 
+    def visibility(self) -> Visibility:
+        """Which parts can send light to which, once per scene (exact where a part cannot
+        see itself: flat, or closed and convex; :mod:`meshladar.meshes.visibility`).
+
+        Returns
+        -------
+        Visibility
+            ``sees`` (n, n) bool, ``convex`` per part, ``needs_bounces``.
+        """
+        return self.cached("visibility", lambda: scene_visibility(
+            [p.name for p in self._parts], self._parts) if self._parts else scene_visibility(
+            [s.name or f"shape {i}" for i, s in enumerate(self._shapes)]))
+
     def support_points(self, n_views=None) -> np.ndarray:
         """(k, 3) points of a mesh scene among which every extreme of a linear (or, from a
         point outside the mesh, perspective) function of position is attained, for
@@ -425,23 +439,7 @@ class Scene:
                                 np.array([s.bounding_radius for s in self._shapes]))
 
     def _summary(self):
-        mats = listing(dict.fromkeys(material_name(m) for m in self.materials))
-        if self._parts:
-            lo, hi = self.bounds()
-            rep = self._report
-            return (("kind", "mesh"),
-                    ("parts", listing(f"{p.name} ({len(p.faces)} faces)" for p in self._parts)),
-                    ("faces", rep.get("faces")), ("materials", mats),
-                    ("bounds", f"[{', '.join(f'{a:.4g}' for a in lo)}] to "
-                               f"[{', '.join(f'{b:.4g}' for b in hi)}]"),
-                    ("watertight", all(rep.get("watertight") or [False])),
-                    ("inverted_bodies", rep.get("inverted_bodies") or None))
-        (cx, cy), r = self.bounding_circle()
-        return (("kind", "analytic"),
-                ("shapes", listing(f"{s.name or type(s).__name__}: {type(s).__name__}"
-                                   for s in self._shapes)),
-                ("materials", mats), ("bounding_circle", f"center ({cx:.4g}, {cy:.4g}), "
-                                                         f"radius {r:.4g}"))
+        return scene_summary(self)
 
     def __repr__(self) -> str:
         return text("Scene", *self._summary())

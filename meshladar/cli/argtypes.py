@@ -8,7 +8,7 @@ import math
 
 __all__ = ["KIND_TYPES", "positive_int", "nonnegative_int", "positive_float",
            "finite_float", "unit_fraction", "nonnegative_float", "pair", "direction",
-           "angle_list", "window_size", "coatings", "MergeCoatings"]
+           "angle_list", "window_size", "bounces", "coatings", "MergeCoatings"]
 
 
 def _number(parse, ok, what):
@@ -58,6 +58,28 @@ finite_float = _number(float, math.isfinite, "finite number")
 unit_fraction = _number(float, lambda v: 0 < v <= 1, "number in (0, 1]")
 nonnegative_float = _number(float, lambda v: v >= 0 and math.isfinite(v),
                             "non-negative finite number")
+_count = _number(int, lambda v: 1 <= v <= 8, "integer from 1 to 8 or 'auto'")
+
+
+def bounces(text: str):
+    """An order of bounces: an integer from 1 to 8, or ``auto``.
+
+    Parameters
+    ----------
+    text : str
+        As typed.
+
+    Returns
+    -------
+    int or str
+        The integer, or ``"auto"``.
+
+    Raises
+    ------
+    argparse.ArgumentTypeError
+        When ``text`` is neither.
+    """
+    return "auto" if text == "auto" else _count(text)
 
 
 def pair(text: str):
@@ -229,4 +251,4 @@ class MergeCoatings(argparse.Action):
 KIND_TYPES = {"positive_float": positive_float, "nonnegative_float": nonnegative_float,
               "finite_float": finite_float, "unit_fraction": unit_fraction,
               "positive_int": positive_int, "nonnegative_int": nonnegative_int,
-              "direction": direction, "pair": pair, "path": str}
+              "direction": direction, "pair": pair, "path": str, "bounces": bounces}

@@ -13,6 +13,7 @@ from ..scene import Scene
 from ..sinogram import Sinogram
 from ..stream import check_jobs
 from .analytic import simulate_analytic
+from .orders import add_bounces, check_bounces
 from .mesh import simulate_mesh, trace
 from .options import MODELS, OPTIONS, options_of
 from .pixel import simulate_pixel
@@ -111,7 +112,18 @@ def _check_call(scene, ladar, model, options):
 
 
 def _run_mesh(scene, ladar, options):
-    """The mesh model: one run, or the accuracy knob's refinement (``tol``)."""
+    """The mesh model: one run, or the accuracy knob's refinement (``tol``); then the
+    orders of bounces beyond the first (:mod:`meshladar.forward.bounces`)."""
+    bounces, samples = check_bounces(scene, options.pop("bounces", None),
+                                     options.pop("bounce_samples", None), options)
+    tol = options.get("tol")
+    sino = _single_bounce(scene, ladar, options)
+    return add_bounces(scene, ladar, sino, bounces, samples, tol=tol,
+                       seed=options.get("seed"))
+
+
+def _single_bounce(scene, ladar, options):
+    """One run, or the accuracy knob's refinement (``tol``)."""
     tol, max_rays = options.pop("tol", None), options.pop("max_rays", None)
     if tol is not None:
         if options.get("run_dir") is not None:

@@ -34,7 +34,7 @@ MODELS = ("analytic", "mesh", "pixel")
 #: The kinds of value an option takes; the command line parses each with its own checker.
 KINDS = ("choice", "flag", "positive_float", "nonnegative_float", "finite_float",
          "unit_fraction", "positive_int", "nonnegative_int", "direction", "pair", "object",
-         "path")
+         "path", "bounces")
 
 
 @dataclass(frozen=True)
@@ -142,6 +142,12 @@ OPTIONS: tuple[Option, ...] = (
            "the facet", "point binning", _MESH),
     Option("tol", "positive_float", "relative sinogram accuracy: meshladar picks rays and "
            "segments (meshladar.forward.refine)", "off", _MESH),
+    Option("bounces", "bounces", "surface interactions per path: 1 (single bounce), up to "
+           "8, or auto (orders added until the next is below --tol, else 0.01, of the "
+           "single bounce); a convex scene never samples a second bounce "
+           "(meshladar.forward.bounces)", "1", _MESH),
+    Option("bounce_samples", "positive_int", "sampled paths per view and order beyond the "
+           "first", "32768", _MESH),
     Option("max_rays", "positive_float", "budget of rays for --tol over all its refinement "
            "runs", "2e9", _MESH),
     Option("sensor", "object", "a meshladar.sensor.Sensor: a ladar at a finite standoff, its "

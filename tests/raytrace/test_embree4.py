@@ -274,6 +274,7 @@ def test_smooth_normals_take_a_compiled_loop_with_the_general_paths_numbers(back
                                    atol=SAME_HITS_RTOL * general.values.max())
 
 
+@pytest.mark.filterwarnings("ignore::meshladar.errors.BounceWarning")  # two glinting bodies
 @pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # coarse on purpose
 @pytest.mark.parametrize("mode, normals", [("3d", "flat"), ("slice", "flat"),
                                            ("3d", "smooth")])
@@ -325,6 +326,7 @@ def test_footprints_take_the_fused_loop_with_the_general_paths_numbers(mode, nor
                                    atol=SAME_HITS_RTOL * one.values.max())
 
 
+@pytest.mark.filterwarnings("ignore::meshladar.errors.BounceWarning")  # two glinting bodies
 @pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # faceted on purpose
 @pytest.mark.slow
 @pytest.mark.parametrize("mode", ["3d", "slice"])

@@ -73,6 +73,7 @@ def test_first_hits_are_the_packet_backends_ray_for_ray():
                                       pk.run(o, dirs, query="OCCLUDED"))
 
 
+@pytest.mark.filterwarnings("ignore::meshladar.errors.BounceWarning")  # two glinting bodies
 @pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # coarse on purpose
 @pytest.mark.parametrize("normals, rtol", [("flat", FLAT_RTOL), ("smooth", SMOOTH_RTOL)])
 def test_sinograms_are_the_packet_backends(normals, rtol, monkeypatch):

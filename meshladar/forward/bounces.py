@@ -1,0 +1,290 @@
+"""Light after more than one bounce: orders 2, 3, … of a mesh scene's monostatic returns,
+by Monte Carlo path sampling with next-event estimation toward the receiver.
+
+A path enters along a view's ray (−w), meets the scene at x₁, leaves in a sampled
+direction ω₁, meets x₂, …, and at each vertex x_k (k ≥ 2) is joined to the receiver (at
+infinity along w) by a shadow ray: the order-k return. Per unit incident irradiance, the
+order-2 intensity toward the receiver is
+
+    I₂ = ∫∫ F₁(w, ω) cos θ₁ · F₂(−ω, w) · cos θ₁ₒ cos θ₂ᵢ / r² · cos θ₂ᵣ · V dA₁ dA₂
+
+in the received-power radiometry (the paper's Eq. 8, one cosine fewer, is single-bounce:
+without the last cos θ₂ᵣ an SR coating's F at a grazing exit is unbounded),
+sampled per first hit as δA⊥ · F₁ cos θ₁ₒ / p(ω) · F₂ cos θ₂ᵣ · V, with δA⊥ the ray's
+cross-section and p the density of the sampled direction. Higher orders multiply in one
+factor F cos θ / p per vertex. Each return is binned at its apparent range, half the
+total optical path: r(x₁) + (L + (x₁ − x_k)·w) / 2 with L the path's length from x₁ to
+x_k and r(p) = −p·w.
+
+Directions are sampled from a one-sample mixture (the density is the mixture's, so the
+estimate is unbiased whichever branch drew): cosine-weighted about the normal, and, for a
+coating with a specular lobe of width s (SR's e, GGX's α, Phong's √(2/(n + 2))), a half
+vector drawn from the Beckmann distribution of width s about the normal, reflected about
+it: narrow glints (e = 0.007) are sampled where they are. The bistatic weights are each
+coating's own :meth:`~meshladar.brdf.BRDF.bistatic` (every built-in model; a user's model
+without one is refused before any ray). Faces are two-sided: a vertex's normal is turned
+toward the side the light arrives on.
+
+The first hits are a view's regular ray grid at the main run's spacing (so every part the
+single bounce sees is sampled), of which ``samples / BRANCHES`` are drawn at random with
+replacement (their weight scaled by hits / drawn), each with :data:`BRANCHES` independent
+paths. The standard error per bin is the spread of the drawn hits' totals over √draws.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..brdf import GGX, Phong, SandfordRobertson
+from ..errors import ModelError, ParameterError
+from ..raytrace.backends import resolve_backend
+from ..raytrace.embree import embree_scene, geometry
+from .mesh import first_hits, occluded
+
+__all__ = ["BRANCHES", "BOUNCE_SAMPLES", "Orders", "higher_orders", "check_bistatic"]
+
+#: Independent paths per drawn first hit (the spread among them gives the standard error).
+BRANCHES = 8
+#: Paths per view and order by default.
+BOUNCE_SAMPLES = 1 << 15
+#: A sampled ray starts this fraction of the scene's radius off its face, along its normal.
+_LIFT = 1e-7
+#: Lobes at least this wide are sampled by the cosine alone.
+_WIDE_LOBE = 0.5
+
+
+@dataclass(frozen=True)
+class Orders:
+    """The orders of bounces beyond the first, per view and bin.
+
+    Attributes
+    ----------
+    orders : tuple of int
+        The orders held (2, 3, …).
+    values : (n_orders, n_views, n_bins) numpy.ndarray
+        Each order's bin integrals, in the single bounce's radiometry and units.
+    stderr : (n_orders, n_views, n_bins) numpy.ndarray
+        Their Monte Carlo standard errors (0 where no path was sampled: a convex scene).
+    samples : int
+        Paths per view and order.
+    radiometry : str
+        ``"power"`` (module docstring).
+    """
+
+    orders: tuple
+    values: np.ndarray
+    stderr: np.ndarray
+    samples: int
+    radiometry: str = "power"
+
+
+def check_bistatic(materials):
+    """Refuse, before any ray, a coating without a bistatic evaluation.
+
+    Parameters
+    ----------
+    materials : sequence of BRDF
+        The scene's coatings.
+
+    Raises
+    ------
+    ModelError
+        Naming the first coating whose :meth:`bistatic` is the base class's.
+    """
+    for m in materials:
+        try:
+            m.bistatic(1.0, 0.0, 1.0, 0.0, 1.0, 0.0)
+        except ModelError:
+            raise ModelError(f"bounces > 1 needs each coating's bistatic evaluation; "
+                             f"{type(m).__name__} has none (define bistatic())") from None
+
+
+def _lobe_width(m):
+    """The width of a coating's specular lobe, or nan where it has none to sample."""
+    if isinstance(m, SandfordRobertson) and m.lobes != "diffuse" and m.epsilon > 0:
+        return float(m.e)
+    if isinstance(m, GGX) and m.reflectance > 0:
+        return float(m.alpha)
+    if isinstance(m, Phong) and m.ks > 0:
+        return float(np.sqrt(2.0 / (m.exponent + 2.0)))
+    return np.nan
+
+
+def _frame(n):
+    """Two unit vectors completing each normal (k, 3) to an orthonormal frame."""
+    helper = np.where(np.abs(n[:, 2:3]) < 0.9, [[0.0, 0.0, 1.0]], [[1.0, 0.0, 0.0]])
+    u = np.cross(helper, n)
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    return u, np.cross(n, u)
+
+
+def _dot(a, b):
+    return np.einsum("ij,ij->i", a, b)
+
+
+def _lobe_pdf(n, wi, width, d):
+    """Density (1/sr) of direction d under the lobe sampling: Beckmann half vector of
+    width ``width`` about n, reflected; 0 where there is no lobe."""
+    h = wi + d
+    h /= np.maximum(np.linalg.norm(h, axis=1, keepdims=True), 1e-300)
+    c = np.clip(_dot(n, h), 1e-100, 1.0)
+    s = np.nan_to_num(width, nan=1.0)
+    tan2 = np.maximum(1.0 - c * c, 0.0) / (c * c)
+    ph = np.exp(-np.minimum(tan2 / (s * s), 700.0)) / (np.pi * s * s * c ** 3)
+    return np.where(np.isnan(width), 0.0, ph / (4.0 * np.maximum(_dot(d, h), 1e-300)))
+
+
+def _sample(n, wi, width, rng):
+    """Directions (k, 3) from the mixture (module docstring) and their densities (k,)."""
+    k = len(n)
+    q = np.where(np.isnan(width) | (width >= _WIDE_LOBE), 0.0, 0.5)
+    u1, u2, pick = rng.random(k), rng.random(k), rng.random(k)
+    u, v = _frame(n)
+    phi = 2.0 * np.pi * u2
+    lobe = pick < q
+    # cosine: sin θ = √u1; lobe: tan² θh = −s² ln(1 − u1)
+    s = np.nan_to_num(width, nan=1.0)
+    tan2 = -s * s * np.log1p(-u1)
+    cos_t = np.where(lobe, 1.0 / np.sqrt(1.0 + tan2), np.sqrt(1.0 - u1))
+    sin_t = np.sqrt(np.maximum(0.0, 1.0 - cos_t * cos_t))
+    m = (cos_t[:, None] * n + (sin_t * np.cos(phi))[:, None] * u
+         + (sin_t * np.sin(phi))[:, None] * v)
+    d = np.where(lobe[:, None], 2.0 * _dot(wi, m)[:, None] * m - wi, m)
+    cos_d = _dot(n, d)
+    pdf = (1.0 - q) * np.maximum(cos_d, 0.0) / np.pi + q * _lobe_pdf(n, wi, width, d)
+    return d, np.where(cos_d > 0, pdf, 0.0)
+
+
+def _weight(materials, mat, n, wi, wo):
+    """F(wi, wo)·cos θo per vertex, each coating's own bistatic evaluation."""
+    ci, co = _dot(n, wi), _dot(n, wo)
+    h = wi + wo
+    h /= np.maximum(np.linalg.norm(h, axis=1, keepdims=True), 1e-300)
+    ch = np.clip(_dot(n, h), -1.0, 1.0)
+    out = np.zeros(len(n))
+    ok = (ci > 0) & (co > 0)
+    for i, m in enumerate(materials):
+        sel = ok & (mat == i)
+        if np.any(sel):
+            c = [np.clip(x[sel], 0.0, 1.0) for x in (ci, co, ch)]
+            out[sel] = m.bistatic(c[0], np.sqrt(1.0 - c[0] ** 2), c[1],
+                                  np.sqrt(1.0 - c[1] ** 2), c[2], np.sqrt(1.0 - c[2] ** 2))
+    return out
+
+
+def _cast(emb, geo, points, normals, d):
+    """Sampled rays from ``points`` (lifted along their normals) along ``d``: the face hit
+    (−1 on a miss) and the distance."""
+    o = points - geo.center + _LIFT * geo.radius * normals
+    res = emb.run(np.ascontiguousarray(o, dtype=np.float32),
+                  np.ascontiguousarray(d, dtype=np.float32))
+    return res["primID"].astype(np.int64), res["tfar"].astype(np.float64)
+
+
+def _bin_stats(edges, ranges, values, path_id, draws):
+    """Per bin: the sum of ``values`` at ``ranges`` and its variance, estimated from the
+    spread of the ``draws`` first hits' totals (each hit drawn independently, its
+    BRANCHES paths numbered ``path_id // BRANCHES``; a hit with no path in a bin counts
+    as a zero there)."""
+    k = len(edges) - 1
+    b = np.searchsorted(edges, ranges, side="right") - 1
+    keep = (b >= 0) & (b < k)
+    b, v, hit = b[keep], values[keep], path_id[keep] // BRANCHES
+    total = np.bincount(b, v, k)
+    key, inverse = np.unique(hit * k + b, return_inverse=True)
+    per_hit = np.bincount(inverse, v, len(key))
+    squares = np.bincount(key % k, per_hit * per_hit, k)
+    var = draws / max(draws - 1.0, 1.0) * np.maximum(squares - total * total / draws, 0.0)
+    return total, var
+
+
+def _view_orders(scene, geo, emb, w, edges, spacing, plan, rng):
+    """One view's orders 2..n: (sums (n−1, bins), variances (n−1, bins))."""
+    bounces, samples = plan
+    materials = scene.materials
+    out = np.zeros((2, bounces - 1, len(edges) - 1))
+    p, f, r = first_hits(scene, w, ray_spacing=spacing)
+    if not len(f):
+        return out
+    draw = max(2, samples // BRANCHES)
+    pick = rng.integers(0, len(f), draw)
+    area = spacing * spacing * len(f) / draw / BRANCHES
+    x1 = np.repeat(p[pick], BRANCHES, axis=0)
+    face = np.repeat(f[pick], BRANCHES)
+    r1 = np.repeat(r[pick], BRANCHES)
+    ident = np.arange(len(face))
+    x, n = x1, geo.face_normals[face]
+    wi = np.broadcast_to(w, n.shape)
+    n = n * np.sign(_dot(n, wi))[:, None]
+    beta = np.full(len(face), area)
+    length = np.zeros(len(face))
+    for order in range(bounces - 1):
+        width = np.array([_lobe_width(m) for m in materials])[geo.material[face]]
+        d, pdf = _sample(n, wi, width, rng)
+        beta = beta * _weight(materials, geo.material[face], n, wi, d) / np.where(
+            pdf > 0, pdf, np.inf)
+        go = beta > 0
+        f2, t = _cast(emb, geo, x[go], n[go], d[go])
+        alive = np.flatnonzero(go)[f2 >= 0]
+        f2, t = f2[f2 >= 0], t[f2 >= 0]
+        x = x[alive] + t[:, None] * d[alive]
+        wi = -d[alive]
+        n = geo.face_normals[f2]
+        n = n * np.sign(_dot(n, wi))[:, None]
+        beta, length, x1, r1, ident = (a[alive] for a in (beta, length, x1, r1, ident))
+        length = length + t
+        face = f2
+        to_rx = np.broadcast_to(w, n.shape)
+        g = _weight(materials, geo.material[face], n, wi, to_rx)
+        seen = g > 0
+        seen[seen] = ~occluded(scene, x[seen], w)
+        rng_app = r1 + 0.5 * (length + (x1 - x) @ w)
+        out[:, order] = _bin_stats(edges, rng_app[seen], (beta * g)[seen], ident[seen],
+                                   draw)
+    return out
+
+
+def higher_orders(scene, ladar, *, bounces, ray_spacing, samples=BOUNCE_SAMPLES,
+                  seed=None) -> Orders:
+    """Orders 2..``bounces`` of a mesh scene's monostatic returns (module docstring).
+
+    A scene whose :meth:`~meshladar.scene.Scene.visibility` needs no bounce gets exact
+    zeros without a ray cast.
+
+    Parameters
+    ----------
+    scene : Scene
+        A mesh scene.
+    ladar : Ladar
+        Views (parallel, monostatic) and range bins.
+    bounces : int
+        The highest order, ≥ 2.
+    ray_spacing : float
+        The first hits' grid spacing (the single bounce's).
+    samples : int
+        Paths per view and order, ≥ BRANCHES.
+    seed : int, optional
+        Seeds the sampling (view i draws from ``default_rng([seed, i])``); None: fresh.
+
+    Returns
+    -------
+    Orders
+        Values and standard errors per order, view and bin.
+    """
+    if samples < BRANCHES:
+        raise ParameterError(f"bounce_samples must be at least {BRANCHES}; got {samples}")
+    check_bistatic(scene.materials)
+    shape = (bounces - 1, ladar.n_views, ladar.n_bins)
+    values, var = np.zeros(shape), np.zeros(shape)
+    if scene.visibility().needs_bounces:
+        geo = geometry(scene, "flat")
+        emb = embree_scene(geo, resolve_backend("auto"))
+        root = np.random.SeedSequence(seed)
+        plan = (bounces, samples)
+        for i, (w, rng) in enumerate(zip(ladar.view_vectors, root.spawn(ladar.n_views))):
+            values[:, i], var[:, i] = _view_orders(
+                scene, geo, emb, np.asarray(w, np.float64), ladar.bin_edges, ray_spacing,
+                plan, np.random.default_rng(rng))
+    return Orders(tuple(range(2, bounces + 1)), values, np.sqrt(var), samples)

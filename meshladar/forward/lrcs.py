@@ -1,0 +1,194 @@
+"""Laser radar cross sections: σ = 4π × the power returned toward the receiver per unit
+solid angle per unit incident irradiance (m², scene units squared).
+
+With a plane wave of unit irradiance along −w, the received-power radiometry's bin
+integrals ∫ F cos θᵢ cos θᵣ dA are exactly the radiant intensity (power per steradian)
+toward the receiver, so σ = 4π Σₖ P[k] and the range-resolved profile 4π P[k] sums to it.
+A Lambertian sphere of albedo ρ and radius R gives (8/3)πρR², a Lambertian plate of area A
+at incidence θ gives 4ρA cos²θ (both tested). Analytic (2-D) scenes give σ per unit
+height (the extruded target's, m² per metre). ``bounces`` counts as for
+:func:`meshladar.simulate`; a convex scene's σ is exactly single-bounce.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .._validate import check_choice, check_count, unit_vectors
+from ..brdf import Lambertian
+from ..errors import ParameterError
+from ..ladar import Ladar
+from ..meshes import MeshPart
+from ..scene import Scene
+from ..sinogram import Sinogram
+from . import simulate
+
+__all__ = ["CrossSection", "LRCS_BINS", "CONVENTION", "lrcs"]
+
+#: Range bins of the profile by default.
+LRCS_BINS = 256
+#: The convention every cross section states.
+CONVENTION = ("sigma = 4 pi x power toward the receiver per unit solid angle per unit "
+              "incident irradiance (received-power radiometry, plane wave, far field)")
+
+
+@dataclass(frozen=True)
+class CrossSection:
+    """Laser radar cross sections per view (module docstring).
+
+    Attributes
+    ----------
+    values : (n_views,) numpy.ndarray
+        σ per view, in scene units squared (per unit height for a 2-D scene).
+    per_part : (n_views, n_parts) numpy.ndarray or None
+        Each part's (or shape's) share, when asked for: single bounce, the others' light
+        blocked by them but not reflected.
+    profile : Sinogram
+        The range-resolved cross section 4π P[k] per view and bin; it sums to ``values``.
+    names : tuple of str
+        The parts' names (the columns of ``per_part``).
+    bounces : int
+        The orders summed.
+    units : str
+        ``"m^2"`` (scene units squared) or ``"m^2 per unit height"``.
+    convention : str
+        :data:`CONVENTION`.
+    """
+
+    values: np.ndarray
+    per_part: np.ndarray | None
+    profile: Sinogram
+    names: tuple
+    bounces: int
+    units: str
+    convention: str = CONVENTION
+
+    @property
+    def dbsm(self) -> np.ndarray:
+        """σ in dB relative to one square scene unit (dBsm for metres), −inf where 0."""
+        with np.errstate(divide="ignore"):
+            return 10.0 * np.log10(self.values)
+
+
+def _ladar(scene, views, bounces, n_bins, bistatic):
+    """A ladar over ``views`` whose bins hold every return up to ``bounces`` orders (and,
+    ``bistatic``, every point's range (−p·(w + w_r)/2) for any receiver: the span widened
+    by the scene's size on each side)."""
+    v = np.asarray(views, dtype=np.float64)
+    if v.ndim == 2:
+        w = unit_vectors("views", v)
+        kw = {"view_vectors": w}
+    elif v.ndim == 1:
+        if not np.all(np.isfinite(v)):
+            raise ParameterError(f"views (angles in degrees) must be finite; got {views!r}")
+        w = np.stack([np.cos(np.radians(v)), np.sin(np.radians(v)), np.zeros_like(v)], 1)
+        kw = {"angles_deg": v}
+    else:
+        raise ParameterError(f"views must be angles in degrees (n,) or view vectors (n, 3); "
+                             f"got shape {v.shape}")
+    lo, hi = scene.view_ranges(w)
+    size = float(np.max(hi - lo))
+    top = 1 if bounces == "auto" and not scene.visibility().needs_bounces else (
+        8 if bounces == "auto" else bounces)
+    if bistatic:
+        reach = float(np.linalg.norm(np.ptp(scene.hull_points(), axis=0))) if \
+            scene.is_mesh else 2.0 * scene.bounding_circle()[1]
+        lo, hi, size = lo - reach, hi + reach, size + 2 * reach
+    a, b = float(lo.min()), float(hi.max()) + (top - 1) * size
+    pad = max(0.5 * (b - a) / n_bins, 1e-9 * max(abs(a), abs(b), size, 1e-300))
+    edges = np.linspace(a - pad, b + pad, n_bins + 1)
+    return Ladar(kw.get("angles_deg"), view_vectors=kw.get("view_vectors"), bin_edges=edges)
+
+
+def _alone(scene, i):
+    """``scene`` with every part (or shape) but the i-th made black (Lambertian 0)."""
+    black = Lambertian(0.0, name="black")
+    if not scene.is_mesh:
+        return Scene([s if j == i else replace(s, material=black)
+                      for j, s in enumerate(scene.shapes)])
+    n = len(scene.materials)
+    parts = [p if j == i else MeshPart(p.vertices, p.faces, n, p.name, p.exact_normal)
+             for j, p in enumerate(scene.parts)]
+    return Scene.from_parts(parts, [*scene.materials, black])
+
+
+def lrcs(scene, views, *, model=None, bounces=1, per_part=False, n_bins=LRCS_BINS,
+         **options) -> CrossSection:
+    """Laser radar cross sections of ``scene`` from ``views`` (module docstring).
+
+    Parameters
+    ----------
+    scene : Scene
+        Analytic shapes (σ per unit height) or meshes.
+    views : (n,) or (n, 3) array_like
+        View angles about z in degrees, or view vectors w (from the target toward the
+        ladar; normalised here).
+    model : {"analytic", "mesh", "pixel"}, optional
+        The forward model; default "analytic" for analytic shapes, "mesh" for meshes.
+    bounces : int or "auto"
+        Orders of bounces, as :func:`meshladar.simulate` (mesh model).
+    per_part : bool
+        Also each part's share (single bounce only).
+    n_bins : int
+        Range bins of the profile (default :data:`LRCS_BINS`), spanning the scene's
+        ranges over the views (and the longer paths of higher orders).
+    **options
+        The model's other options (``ray_spacing``, ``tol``, ``receiver`` for a bistatic
+        σ, ``seed``, …); not ``radiometry`` (always ``"power"``) or ``sensor``.
+
+    Returns
+    -------
+    CrossSection
+        ``values`` (n,) σ, ``profile``, ``per_part``, ``units``, ``convention``.
+
+    Raises
+    ------
+    ParameterError
+        For a ``radiometry`` or ``sensor`` option, ``per_part`` with ``bounces`` other
+        than 1, bad ``views`` or ``n_bins``; and whatever :func:`meshladar.simulate`
+        refuses, before any ray.
+
+    Examples
+    --------
+    >>> import numpy as np, meshladar as ml
+    >>> ball = ml.Scene.from_parts([ml.meshes.sphere((0, 0, 0), 1.0, 0, subdivisions=5)],
+    ...                            [ml.brdf.Lambertian(0.5)])
+    >>> s = ml.lrcs(ball, [0.0], ray_spacing=2e-3)
+    >>> round(float(s.values[0] / (8 / 3 * np.pi * 0.5)), 3)      # (8/3) pi rho R^2
+    1.0
+    """
+    if not isinstance(scene, Scene):
+        raise ParameterError(f"scene must be a meshladar.Scene; got {type(scene).__name__}")
+    for name in ("radiometry", "sensor"):
+        if name in options:
+            raise ParameterError(f"lrcs takes no {name} option: a cross section is the "
+                                 "received power per unit irradiance, in the far field")
+    model = check_choice("model", model or ("mesh" if scene.is_mesh else "analytic"),
+                         ("analytic", "mesh", "pixel"))
+    n_bins = check_count("n_bins", n_bins)
+    if per_part not in (True, False):
+        raise ParameterError(f"per_part must be True or False; got {per_part!r}")
+    if per_part and bounces != 1:
+        raise ParameterError(f"per_part is single-bounce in this version; got "
+                             f"bounces={bounces!r}")
+    ladar = _ladar(scene, views, bounces, n_bins, options.get("receiver") is not None)
+    if model == "mesh":
+        options["bounces"] = bounces
+    elif bounces != 1:
+        raise ParameterError(f"bounces > 1 needs model='mesh'; got model={model!r}")
+    sino = simulate(scene, ladar, model=model, radiometry="power", **options)
+    profile = replace(sino, values=4.0 * np.pi * sino.values,
+                      info=dict(sino.info, quantity="laser radar cross section"))
+    names = tuple(p.name for p in scene.parts) if scene.is_mesh else tuple(
+        s.name or f"shape {i}" for i, s in enumerate(scene.shapes))
+    shares = None
+    if per_part:
+        shares = np.stack([4.0 * np.pi * simulate(_alone(scene, i), ladar, model=model,
+                                                  radiometry="power", **options)
+                           .values.sum(axis=1) for i in range(len(names))], axis=1)
+    units = "m^2" if scene.is_mesh or model == "mesh" and options.get("mode") == "3d" \
+        else "m^2 per unit height"
+    return CrossSection(profile.values.sum(axis=1), shares, profile, names,
+                        int(sino.info.get("bounces", 1)), units)

@@ -1,0 +1,187 @@
+"""Which orders of bounces a mesh run sums: the ``bounces`` and ``bounce_samples`` options
+checked before any ray, orders 2.. added to the single bounce (:mod:`.bounces`), and the
+single bounce's check of a scene that needs more (:class:`~meshladar.errors.BounceWarning`).
+A scene whose :meth:`~meshladar.scene.Scene.visibility` needs no bounce is never sampled:
+its orders beyond the first are exact zeros."""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import replace
+
+import numpy as np
+
+from ..errors import BounceWarning, ModelError, ParameterError, user_stacklevel
+from ..raytrace.backends import resolve_backend
+from ..raytrace.embree import embree_scene, geometry
+from ..scene import Scene
+from .bounces import (BOUNCE_SAMPLES, BRANCHES, _view_orders, _weight, check_bistatic,
+                      higher_orders)
+from .mesh import first_hits
+
+__all__ = ["MAX_BOUNCES", "BOUNCE_SHARE", "check_bounces", "add_bounces"]
+
+
+#: The highest order ``bounces`` takes.
+MAX_BOUNCES = 8
+#: ``bounces="auto"`` and the single bounce's check: an order whose total is below this
+#: share of the single bounce's (unless ``tol`` is given) is left out or not warned about.
+BOUNCE_SHARE = 1e-2
+#: The single bounce's check of a scene that needs bounces: paths per view on at most this
+#: many views, first hits on a grid of about CHECK_GRID rays across the scene.
+CHECK_SAMPLES, CHECK_VIEWS, CHECK_GRID = 4096, 8, 64
+
+
+def check_bounces(scene, bounces, samples, options):
+    """Refuse, before any ray, what the bounce orders cannot do (module docstring).
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene simulated.
+    bounces : int or "auto" or None
+        1..MAX_BOUNCES, ``"auto"``, or None (1).
+    samples : int or None
+        Paths per view and order, ≥ BRANCHES; None: BOUNCE_SAMPLES.
+    options : dict
+        The mesh model's other options (``sensor``, ``receiver`` and ``mode`` are read).
+
+    Returns
+    -------
+    bounces : int or "auto"
+        As given (1 for None).
+    samples : int
+        As given, or BOUNCE_SAMPLES.
+
+    Raises
+    ------
+    ParameterError
+        Naming the value and what is valid; ModelError for a coating without a bistatic
+        evaluation (:func:`check_bistatic`).
+    """
+    bounces = 1 if bounces is None else bounces
+    if bounces != "auto" and (isinstance(bounces, bool) or not isinstance(
+            bounces, (int, np.integer)) or not 1 <= bounces <= MAX_BOUNCES):
+        raise ParameterError(f"bounces must be an integer from 1 to {MAX_BOUNCES} or "
+                             f"'auto'; got {bounces!r}")
+    samples = BOUNCE_SAMPLES if samples is None else samples
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or \
+            samples < BRANCHES:
+        raise ParameterError(f"bounce_samples must be an integer of at least {BRANCHES}; "
+                             f"got {samples!r}")
+    if bounces != 1 and isinstance(scene, Scene) and scene.visibility().needs_bounces:
+        for name in ("sensor", "receiver"):
+            if options.get(name) is not None:
+                raise ParameterError(f"bounces > 1 is computed for a monostatic ladar at "
+                                     f"infinity in this version; got {name}=...")
+        if options.get("radiometry", "paper") != "power":
+            raise ParameterError("bounces > 1 needs radiometry='power': the paper's Eq. 8 "
+                                 "is single-bounce (its one cosine fewer leaves F at a "
+                                 "grazing exit unbounded)")
+        if options.get("mode") == "slice" or (options.get("mode") is None and scene.shapes):
+            raise ParameterError("bounces > 1 needs mode='3d' (a slice's light leaves "
+                                 "its plane)")
+        check_bistatic(scene.materials)
+    return bounces, int(samples)
+
+
+def add_bounces(scene, ladar, sino, bounces, samples, *, tol=None, seed=None):
+    """The single bounce's sinogram with orders 2.. added (``bounces`` > 1 or ``"auto"``),
+    or, for ``bounces=1`` on a scene that needs bounces, checked by a cheap pass that
+    warns when the second order's share exceeds the threshold.
+
+    Parameters
+    ----------
+    scene : Scene
+        The scene (a mesh scene, or analytic shapes tessellated as the run did).
+    ladar : Ladar
+        The run's views and bins.
+    sino : Sinogram
+        The single bounce (its ``info["ray_spacing"]`` and ``radiometry`` are used).
+    bounces : int or "auto"
+        As checked by :func:`check_bounces`.
+    samples : int
+        Paths per view and order.
+    tol : float, optional
+        The share below which an order is left out (``"auto"``) or not warned about;
+        default :data:`BOUNCE_SHARE`.
+    seed : int, optional
+        Seeds the sampling.
+
+    Returns
+    -------
+    Sinogram
+        ``values`` the sum of the orders; ``info["bounces"]`` the orders summed,
+        ``info["order_totals"]`` and ``info["order_stderr"]`` each order's total over
+        the sinogram and its standard error (order 1 exact: 0).
+
+    Warns
+    -----
+    MeshladarWarning
+        With ``bounces=1``, when the cheap pass puts the second order above the share.
+    """
+    share = BOUNCE_SHARE if tol is None else tol
+    if not scene.is_mesh:
+        scene = scene.tessellate(1024)
+    needs = scene.visibility().needs_bounces
+    first = float(sino.values.sum())
+    if bounces == 1 or not needs:
+        if bounces == 1 and needs and sino.info.get("mode") != "slice":
+            _check_second_order(scene, ladar, sino, share, seed)
+        n = 1 if bounces == "auto" else bounces                  # exact zeros beyond 1
+        return _with_orders(sino, sino.values, n, [first] + [0.0] * (n - 1), [0.0] * n)
+    top = MAX_BOUNCES if bounces == "auto" else bounces
+    orders = higher_orders(scene, ladar, bounces=top, ray_spacing=sino.info["ray_spacing"],
+                           samples=samples, seed=seed)
+    totals = orders.values.sum(axis=(1, 2))
+    errors = np.sqrt((orders.stderr ** 2).sum(axis=(1, 2)))
+    keep = top - 1
+    if bounces == "auto":
+        below = np.flatnonzero(np.abs(totals) < share * abs(first))
+        keep = int(below[0]) if below.size else top - 1
+    values = sino.values + orders.values[:keep].sum(axis=0)
+    return _with_orders(sino, values, keep + 1, [first, *totals[:keep]],
+                        [0.0, *errors[:keep]])
+
+
+def _with_orders(sino, values, n, totals, errors):
+    """``sino`` with ``values`` and the orders' provenance."""
+    return replace(sino, values=values, info=dict(
+        sino.info, bounces=n, order_totals=[float(t) for t in totals],
+        order_stderr=[float(e) for e in errors]))
+
+
+def _check_second_order(scene, ladar, sino, share, seed):
+    """The cheap pass of a single bounce on a scene that needs bounces: on at most
+    CHECK_VIEWS of the views, first hits on a grid of about CHECK_GRID rays across the
+    scene, the single bounce and CHECK_SAMPLES second-bounce paths summed over all ranges
+    (both in received power);
+    warns when their ratio exceeds ``share``. Not done where a coating has no bistatic
+    evaluation."""
+    try:
+        check_bistatic(scene.materials)
+    except ModelError:
+        return
+    pick = np.unique(np.linspace(0, ladar.n_views - 1, CHECK_VIEWS).round().astype(int))
+    lo, hi = scene.bounds()
+    spacing = max(float(sino.info["ray_spacing"]),
+                  float(np.linalg.norm(hi - lo)) / CHECK_GRID)
+    geo = geometry(scene, "flat")
+    emb = embree_scene(geo, resolve_backend("auto"))
+    first = second = 0.0
+    for i, rng in zip(pick, np.random.SeedSequence(seed).spawn(len(pick))):
+        w = np.asarray(ladar.view_vectors[i], np.float64)
+        _, f, _ = first_hits(scene, w, ray_spacing=spacing)
+        n = geo.face_normals[f]
+        n = n * np.sign(n @ w)[:, None]
+        g = _weight(scene.materials, geo.material[f], n, np.broadcast_to(w, n.shape),
+                    np.broadcast_to(w, n.shape))
+        first += spacing * spacing * float(g.sum())
+        second += float(_view_orders(scene, geo, emb, w, np.array([-np.inf, np.inf]),
+                                     spacing, (2, CHECK_SAMPLES),
+                                     np.random.default_rng(rng))[0].sum())
+    if first > 0 and second > share * first:
+        warnings.warn(f"this scene is not convex and its second bounce adds about "
+                      f"{100 * second / first:.2g} % to the single bounce (a cheap estimate "
+                      f"on {len(pick)} views); bounces=2 or bounces='auto' includes it",
+                      BounceWarning, stacklevel=user_stacklevel())

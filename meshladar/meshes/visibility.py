@@ -1,0 +1,127 @@
+"""Which parts of a scene can send light to which: whether a part can see itself (the
+second-order term of a convex scene is exactly zero, so it is never sampled).
+
+A part cannot see itself when it is **flat** (every vertex within :data:`CONVEX_RTOL` of
+the diagonal from the plane of its largest face; open or closed, one- or two-sided) or
+**a closed convex body**: one connected body, closed (each undirected edge met by exactly
+two faces, once in each direction) and convex at every edge (the far vertex of each face
+across an edge is not in front of the other face's plane, by more than the tolerance; a
+body whose faces are all wound inward is convex when every such vertex is in front). A
+closed, connected, embedded surface that is convex at every edge bounds a convex solid,
+so no segment between two of its points leaves it: no light goes from it to itself. Any
+other part (an open curved shell, a body with a dent, several bodies in one part) is taken
+to see itself: the test is exact where it says "cannot", conservative where it says
+"can". Two different parts are taken to see each other (two convex bodies side by side
+do).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .checks import components
+from .part import MeshPart
+
+__all__ = ["CONVEX_RTOL", "Visibility", "part_sees_itself", "scene_visibility"]
+
+#: A vertex within this fraction of its part's bounding-box diagonal of a face's plane is
+#: on the plane (flat parts, convex edges): the rounding of coordinates written to files.
+CONVEX_RTOL = 1e-9
+
+
+@dataclass(frozen=True)
+class Visibility:
+    """Which parts can send light to which (module docstring).
+
+    Attributes
+    ----------
+    names : tuple of str
+        The parts' (or shapes') names, in scene order.
+    sees : (n, n) numpy.ndarray of bool
+        ``sees[i, j]``: light can go from part i to part j (symmetric); the diagonal says
+        whether a part can see itself.
+    """
+
+    names: tuple
+    sees: np.ndarray
+
+    @property
+    def convex(self) -> tuple:
+        """Per part, whether it cannot see itself."""
+        return tuple(not bool(s) for s in np.diag(self.sees))
+
+    @property
+    def needs_bounces(self) -> bool:
+        """Whether any light can leave a surface for another (or itself): False for a
+        convex scene, whose returns are exactly single-bounce."""
+        return bool(self.sees.any())
+
+
+def part_sees_itself(part: MeshPart) -> bool:
+    """Whether a part can send light to itself (module docstring: exact when False).
+
+    Parameters
+    ----------
+    part : MeshPart
+        A cleaned part (degenerate faces dropped).
+
+    Returns
+    -------
+    bool
+        False for a flat part or a closed convex body, True otherwise.
+    """
+    f = part.faces
+    if not len(f):
+        return False
+    v = part.vertices
+    tol = CONVEX_RTOL * float(np.linalg.norm(np.ptp(v, axis=0)))
+    normals, areas = part.face_normals_areas()
+    big = int(np.argmax(areas))
+    if np.all(np.abs((v - v[f[big, 0]]) @ normals[big]) <= tol):
+        return False                                          # flat
+    a = np.concatenate([f[:, 0], f[:, 1], f[:, 2]])
+    b = np.concatenate([f[:, 1], f[:, 2], f[:, 0]])
+    far = np.concatenate([f[:, 2], f[:, 0], f[:, 1]])         # each edge's opposite vertex
+    face = np.tile(np.arange(len(f)), 3)
+    used = np.unique(f)
+    if np.unique(components(len(v), a, b)[used]).size != 1:
+        return True                                           # several bodies
+    forward = a < b
+    key = np.where(forward, a, b) * len(v) + np.where(forward, b, a)
+    order = np.argsort(key, kind="stable")
+    k = key[order]
+    if k.size % 2 or np.any(k[0::2] != k[1::2]) or np.any(k[1:-1:2] == k[2::2]):
+        return True                                           # open, or non-manifold
+    first, second = order[0::2], order[1::2]
+    if np.any(forward[first] == forward[second]):
+        return True                                           # not consistently wound
+    # the far vertex of each face across the edge, against the other face's plane
+    s = np.concatenate([
+        np.einsum("ij,ij->i", v[far[second]] - v[a[first]], normals[face[first]]),
+        np.einsum("ij,ij->i", v[far[first]] - v[a[second]], normals[face[second]])])
+    return not (np.all(s <= tol) or np.all(s >= -tol))
+
+
+def scene_visibility(names, parts=None) -> Visibility:
+    """The :class:`Visibility` of a scene's parts (or of analytic shapes, each convex).
+
+    Parameters
+    ----------
+    names : sequence of str
+        The parts' or shapes' names.
+    parts : sequence of MeshPart, optional
+        A mesh scene's parts; None for analytic shapes (disks and ellipses: convex).
+
+    Returns
+    -------
+    Visibility
+        Different parts see each other; a part sees itself per :func:`part_sees_itself`.
+    """
+    n = len(names)
+    sees = ~np.eye(n, dtype=bool)
+    if parts is not None:
+        sees[np.diag_indices(n)] = [part_sees_itself(p) for p in parts]
+    sees.flags.writeable = False
+    return Visibility(tuple(names), sees)
