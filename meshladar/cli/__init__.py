@@ -22,6 +22,7 @@ from ..errors import MeshladarError
 from .commands import cmd_bench, cmd_demo, cmd_materials, cmd_paper, cmd_study, cmd_view
 from .parser import build_parser
 from .reconstruct import cmd_receive, cmd_reconstruct
+from .lrcs import cmd_lrcs
 from .scan import cmd_scan
 from .simulate import cmd_simulate, in_flags
 
@@ -30,8 +31,8 @@ __all__ = ["main", "COMMANDS"]
 #: Each command's function, looked up when the command runs.
 COMMANDS = {"demo": cmd_demo, "materials": cmd_materials, "paper": cmd_paper,
             "simulate": cmd_simulate, "reconstruct": cmd_reconstruct,
-            "receive": cmd_receive, "scan": cmd_scan, "view": cmd_view, "study": cmd_study,
-            "bench": cmd_bench}
+            "receive": cmd_receive, "scan": cmd_scan, "lrcs": cmd_lrcs, "view": cmd_view,
+            "study": cmd_study, "bench": cmd_bench}
 
 
 def _one_line_warning(message, category, filename, lineno, line=None, *, words=str):

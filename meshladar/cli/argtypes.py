@@ -58,7 +58,7 @@ finite_float = _number(float, math.isfinite, "finite number")
 unit_fraction = _number(float, lambda v: 0 < v <= 1, "number in (0, 1]")
 nonnegative_float = _number(float, lambda v: v >= 0 and math.isfinite(v),
                             "non-negative finite number")
-_count = _number(int, lambda v: 1 <= v <= 8, "integer from 1 to 8 or 'auto'")
+_count = _number(int, lambda v: 1 <= v <= 8, "number of bounces from 1 to 8 or 'auto'")
 
 
 def bounces(text: str):

@@ -11,8 +11,9 @@ import re
 from .. import __version__
 from ..forward.options import MODELS, OPTIONS, SENSOR_OPTIONS
 from ..reconstruct import FILTERS
-from .argtypes import (KIND_TYPES, MergeCoatings, angle_list, coatings, nonnegative_float, nonnegative_int,
-                    positive_float, positive_int, unit_fraction, window_size)
+from .argtypes import (KIND_TYPES, MergeCoatings, angle_list, bounces, coatings,
+                       nonnegative_float, nonnegative_int, positive_float, positive_int,
+                       unit_fraction, window_size)
 
 __all__ = ["build_parser"]
 
@@ -340,6 +341,34 @@ def _scan(sub, commands):
                         help=f"{text} (default: %(default)s)")
 
 
+_LRCS_EPILOG = """examples:
+  meshladar lrcs part.stl --views 72 -o sigma.csv
+  meshladar lrcs bracket.glb --view-vectors 200 --per-part
+  meshladar lrcs disk_pair --angles-deg 0,45,90"""
+
+
+def _lrcs(sub, commands):
+    lr = _sub(sub, "lrcs", commands, "laser radar cross sections per view (and part)",
+              _LRCS_EPILOG)
+    _scene_args(lr)
+    lr.add_argument("-o", "--output", default=None,
+                    help="also write the table to this CSV file (default: printed only)")
+    lr.add_argument("--views", type=positive_int, default=None,
+                    help="views evenly over 360 degrees about z (default: 36)")
+    lr.add_argument("--angles-deg", type=angle_list, default=None,
+                    help="view angles about z in degrees, comma-separated")
+    lr.add_argument("--view-vectors", type=positive_int, default=None, metavar="N",
+                    help="N view directions spread evenly over the sphere (meshes)")
+    lr.add_argument("--bounces", type=bounces, default=1,
+                    help="orders of bounces, 1-8 or auto (meshes; default: %(default)s)")
+    lr.add_argument("--per-part", action="store_true",
+                    help="each part's cross section too (single bounce; default: off)")
+    lr.add_argument("--ray-spacing", type=positive_float, default=None,
+                    help="distance between rays, scene units (default: the model's)")
+    lr.add_argument("--seed", type=nonnegative_int, default=None,
+                    help="seed of the sampling (default: 0)")
+
+
 def build_parser(commands) -> argparse.ArgumentParser:
     """The parser of every command; ``commands`` maps each command's name to its function
     (its docstring is the command's description).
@@ -348,7 +377,8 @@ def build_parser(commands) -> argparse.ArgumentParser:
     ----------
     commands : dict of str to callable
         Every command's function by name: ``demo``, ``materials``, ``paper``,
-        ``simulate``, ``reconstruct``, ``receive``, ``scan``, ``view``, ``study`` and ``bench``
+        ``simulate``, ``reconstruct``, ``receive``, ``scan``, ``lrcs``, ``view``, ``study``
+        and ``bench``
         (:data:`meshladar.cli.COMMANDS`). Only their docstrings are read here; the
         functions are not called.
 
@@ -369,6 +399,6 @@ def build_parser(commands) -> argparse.ArgumentParser:
         epilog=_EPILOG, formatter_class=_RAW)
     p.add_argument("--version", action="version", version=f"meshladar {__version__}")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for add in (_simple, _simulate, _reconstruct, _receive, _scan, _view, _study):
+    for add in (_simple, _simulate, _reconstruct, _receive, _scan, _lrcs, _view, _study):
         add(sub, commands)
     return p

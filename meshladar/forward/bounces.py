@@ -38,6 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..brdf import GGX, Phong, SandfordRobertson
+from ..precision import RECEIVER_LIFT
 from ..errors import ModelError, ParameterError
 from ..raytrace.backends import resolve_backend
 from ..raytrace.embree import embree_scene, geometry
@@ -49,8 +50,9 @@ __all__ = ["BRANCHES", "BOUNCE_SAMPLES", "Orders", "higher_orders", "check_bista
 BRANCHES = 8
 #: Paths per view and order by default.
 BOUNCE_SAMPLES = 1 << 15
-#: A sampled ray starts this fraction of the scene's radius off its face, along its normal.
-_LIFT = 1e-7
+#: A sampled ray starts this fraction of the scene's radius off its face, along its normal
+#: (float32 origins would otherwise hit their own face again).
+_LIFT = RECEIVER_LIFT
 #: Lobes at least this wide are sampled by the cosine alone.
 _WIDE_LOBE = 0.5
 

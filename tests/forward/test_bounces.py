@@ -162,3 +162,17 @@ def test_a_coating_without_a_bistatic_evaluation_is_refused():
     lad = ml.Ladar(np.array([30.0]), EDGES)
     with pytest.raises(ModelError, match="bistatic evaluation; Tabulated has none"):
         ml.simulate(dihedral(table), lad, model="mesh", bounces=2, radiometry="power")
+
+
+def test_the_guide_states_the_constants():
+    """The numbers docs/guide/bounces.md states about the check and the options."""
+    from pathlib import Path
+
+    from meshladar.forward import orders, specular
+    text = Path(__file__).parents[2].joinpath("docs", "guide", "bounces.md").read_text()
+    assert (orders.CHECK_VIEWS, orders.CHECK_GRID, orders.CHECK_SAMPLES) == (8, 64, 4096)
+    assert "8 of its views, a 64-ray grid across the scene, 4096 second-bounce paths" in \
+        " ".join(text.split())
+    assert orders.BOUNCE_SHARE == 0.01 and "(default 0.01)" in text
+    assert orders.MAX_BOUNCES == 8 and "(up to 8)" in text
+    assert specular.RETRO_CONE == 1e-3 and "(default 1 mrad)" in text

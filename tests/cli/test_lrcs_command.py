@@ -1,0 +1,72 @@
+"""``meshladar lrcs``: the table printed and written, against the closed form of a
+Lambertian sphere, and bad input as one line."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from meshladar import cli
+
+
+def _ball(tmp_path):
+    path = tmp_path / "ball.stl"
+    trimesh.creation.icosphere(5, radius=2.0).export(path)
+    return path
+
+
+def _rows(text):
+    lines = [ln for ln in text.splitlines() if ln and not ln.startswith("#")]
+    head = lines[0].split(",")
+    return head, np.array([[float(x) for x in ln.split(",")] for ln in lines[1:]])
+
+
+def test_a_sphere_table_matches_the_closed_form(tmp_path, capsys):
+    """A radius-2 icosphere (5 subdivisions) in a Lambertian coating of albedo 0.5 from a
+    user's table (SR, diffuse only, b = 0): σ = (8/3)πρR² to the faceting error (3e-4 at 5 subdivisions), per view,
+    printed and in the CSV alike, dBsm = 10 log10 σ."""
+    table = tmp_path / "mine.toml"
+    table.write_text('[white]\nrho_d = 0.5\nepsilon = 0.0\nb = 0.0\ne = 1.0\n'
+                     'lobes = "diffuse"\n')
+    out = tmp_path / "sigma.csv"
+    code = cli.main(["lrcs", str(_ball(tmp_path)), "--views", "4", "--materials", str(table),
+                     "--material", "white", "--per-part", "--ray-spacing", "0.005",
+                     "-o", str(out)])
+    assert code == 0
+    printed = capsys.readouterr().out
+    head, rows = _rows(out.read_text())
+    assert head == ["angle_deg", "sigma", "dbsm", "sigma_mesh"]
+    assert _rows(printed)[1].tolist() == rows.tolist()
+    np.testing.assert_allclose(rows[:, 0], [0, 90, 180, 270])
+    np.testing.assert_allclose(rows[:, 1], 8 / 3 * np.pi * 0.5 * 4.0, rtol=1e-3)
+    np.testing.assert_allclose(rows[:, 2], 10 * np.log10(rows[:, 1]), atol=1e-8)
+    np.testing.assert_allclose(rows[:, 3], rows[:, 1], rtol=1e-9)
+    assert "m^2, 1 bounce" in printed
+
+
+def test_view_vectors_and_a_phantom(tmp_path, capsys):
+    assert cli.main(["lrcs", str(_ball(tmp_path)), "--view-vectors", "3", "--quiet",
+                     "-o", str(tmp_path / "s.csv")]) == 0
+    head, rows = _rows((tmp_path / "s.csv").read_text())
+    assert head[:3] == ["wx", "wy", "wz"] and rows.shape == (3, 5)
+    assert cli.main(["lrcs", "disk", "--angles-deg", "0,90"]) == 0
+    assert "m^2 per unit height" in capsys.readouterr().out
+
+
+def test_a_bad_bounce_count_is_argparses_usage_error(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        cli.main(["lrcs", str(_ball(tmp_path)), "--bounces", "9"])
+    assert exit_.value.code == 2
+    assert "number of bounces from 1 to 8 or 'auto'; got '9'" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("argv, match", [
+    (["--views", "2", "--angles-deg", "0"], "give one of --views, --angles-deg"),
+    (["-o", "sigma.npz"], "-o"),
+    (["--per-part", "--bounces", "2"], "per_part is single-bounce"),
+])
+def test_bad_input_is_one_line(tmp_path, capsys, argv, match):
+    code = cli.main(["lrcs", str(_ball(tmp_path))] + argv)
+    err = capsys.readouterr().err
+    assert code == 2 and match in err and "Traceback" not in err
