@@ -177,12 +177,24 @@ def _weight(materials, mat, n, wi, wo):
 
 
 def _cast(emb, geo, points, normals, d):
-    """Sampled rays from ``points`` (lifted along their normals) along ``d``: the face hit
-    (−1 on a miss) and the distance."""
-    o = points - geo.center + _LIFT * geo.radius * normals
+    """Rays from ``points`` (lifted along their normals) along ``d``: the face hit (−1 on
+    a miss) and the distance from the point, recomputed in float64 against the hit face's
+    plane (Embree's float32 distance from a float32 origin leaves the hit ~1e-7 off its
+    face: enough for a shadow ray from it to hit that face again)."""
+    shifted = points - geo.center
+    o = shifted + _LIFT * geo.radius * normals
     res = emb.run(np.ascontiguousarray(o, dtype=np.float32),
                   np.ascontiguousarray(d, dtype=np.float32))
-    return res["primID"].astype(np.int64), res["tfar"].astype(np.float64)
+    face = res["primID"].astype(np.int64)
+    t = res["tfar"].astype(np.float64)
+    hit = face >= 0
+    n = geo.face_normals[face[hit]]
+    cos = np.einsum("ij,ij->i", n, d[hit])
+    exact = np.abs(cos) > 1e-9
+    t_plane = (geo.plane_d[face[hit]] - np.einsum("ij,ij->i", n, shifted[hit])) / np.where(
+        exact, cos, 1.0)
+    t[hit] = np.where(exact, t_plane, t[hit])
+    return face, t
 
 
 def _bin_stats(edges, ranges, values, path_id, draws):

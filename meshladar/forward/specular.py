@@ -27,20 +27,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..brdf import GGX, Lambertian, SandfordRobertson
-from ..precision import RECEIVER_LIFT
 from ..errors import ModelError, ParameterError
 from ..raytrace.backends import resolve_backend
 from ..raytrace.embree import embree_scene, geometry
 from ..scene import Scene
+from .bounces import _cast
 from .mesh import first_hits
 
 __all__ = ["SpecularReturns", "specular_albedo", "specular_chain", "RETRO_CONE"]
 
 #: Paths leaving within this angle (radians) of the receiver's direction are returns.
 RETRO_CONE = 1e-3
-#: A reflected ray starts this fraction of the scene's radius off its face (float32 origins
-#: would otherwise hit their own face again).
-_LIFT = RECEIVER_LIFT
 
 
 @dataclass(frozen=True)
@@ -153,15 +150,12 @@ def _view_chain(scene, geo, emb, w, edges, spacing, plan):
         d = d - 2.0 * np.einsum("ij,ij->i", d, n)[:, None] * n
         go = beta > 0
         x, n, d, beta, length, x1, r1 = (a[go] for a in (x, n, d, beta, length, x1, r1))
-        o = x - geo.center + _LIFT * geo.radius * n
-        res = emb.run(np.ascontiguousarray(o, dtype=np.float32),
-                      np.ascontiguousarray(d, dtype=np.float32))
-        f = res["primID"].astype(np.int64)
+        f, t = _cast(emb, geo, x, n, d)
         leave = (f < 0) & (d @ w >= cos_cone)
         rng = r1[leave] + 0.5 * (length[leave] + (x1[leave] - x[leave]) @ w)
         out[k] = np.histogram(rng, edges, weights=beta[leave])[0]
         hit = f >= 0
-        t = res["tfar"].astype(np.float64)[hit]
+        t = t[hit]
         x = x[hit] + t[:, None] * d[hit]
         f, d, beta, x1, r1 = f[hit], d[hit], beta[hit], x1[hit], r1[hit]
         length = length[hit] + t

@@ -57,8 +57,10 @@ def _samples(spp, sampler):
 
 
 def _target(mi, v, f, reflectance, two_sided):
-    """The mesh as a Mitsuba shape with its (two-sided) diffuse BSDF."""
-    bsdf = {"type": "diffuse", "reflectance": {"type": "uniform", "value": float(reflectance)}}
+    """The mesh as a Mitsuba shape with its (two-sided) BSDF: diffuse of ``reflectance``,
+    or ``reflectance`` itself when it is a Mitsuba BSDF dictionary."""
+    bsdf = reflectance if isinstance(reflectance, dict) else {
+        "type": "diffuse", "reflectance": {"type": "uniform", "value": float(reflectance)}}
     if two_sided:
         bsdf = {"type": "twosided", "bsdf": bsdf}
     props = mi.Properties()
@@ -71,12 +73,13 @@ def _target(mi, v, f, reflectance, two_sided):
     return mesh
 
 
-def _transient_scene(mi, mesh, w, fr, sampling):
-    """The single-bounce transient scene: a directional emitter along −w, the orthographic
-    sensor of frame ``fr`` with ``sampling``'s sampler and film."""
+def _transient_scene(mi, mesh, w, fr, sampling, max_depth=2):
+    """The transient scene: a directional emitter along −w, the orthographic sensor of frame
+    ``fr`` with ``sampling``'s sampler and film; ``max_depth`` 2 is the single bounce, each
+    more one bounce more."""
     return mi.load_dict({
         "type": "scene",
-        "integrator": {"type": "transient_path", "max_depth": 2},
+        "integrator": {"type": "transient_path", "max_depth": int(max_depth)},
         "emitter": {"type": "directional", "direction": (-w).tolist(), "irradiance": 1.0},
         "target": mesh,
         "sensor": {"type": "orthographic", "to_world": fr.to_world, "near_clip": fr.near,
