@@ -33,6 +33,7 @@ paths. The standard error per bin is the spread of the drawn hits' totals over â
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -184,7 +185,7 @@ def _cast(emb, geo, points, normals, d):
     shifted = points - geo.center
     o = shifted + _LIFT * geo.radius * normals
     res = emb.run(np.ascontiguousarray(o, dtype=np.float32),
-                  np.ascontiguousarray(d, dtype=np.float32))
+                  np.ascontiguousarray(d, dtype=np.float32), output=1)
     face = res["primID"].astype(np.int64)
     t = res["tfar"].astype(np.float64)
     hit = face >= 0
@@ -261,7 +262,7 @@ def _view_orders(scene, geo, emb, w, edges, spacing, plan, rng):
 
 
 def higher_orders(scene, ladar, *, bounces, ray_spacing, samples=BOUNCE_SAMPLES,
-                  seed=None) -> Orders:
+                  seed=None, jobs=1, backend="embreex") -> Orders:
     """Orders 2..``bounces`` of a mesh scene's monostatic returns (module docstring).
 
     A scene whose :meth:`~meshladar.scene.Scene.visibility` needs no bounce gets exact
@@ -281,6 +282,12 @@ def higher_orders(scene, ladar, *, bounces, ray_spacing, samples=BOUNCE_SAMPLES,
         Paths per view and order, â‰¥ BRANCHES.
     seed : int, optional
         Seeds the sampling (view i draws from ``default_rng([seed, i])``); None: fresh.
+    jobs : int
+        Threads over the views (the same numbers for any count: each view has its seed).
+    backend : str
+        The ray-casting backend of the bounce segments (:mod:`meshladar.raytrace.backends`);
+        default ``"embreex"``, one ray at a time: the bounce rays are incoherent, and the
+        packet backend ran them at 0.89 of its speed (``meshladar bench``, bounce line).
 
     Returns
     -------
@@ -294,11 +301,14 @@ def higher_orders(scene, ladar, *, bounces, ray_spacing, samples=BOUNCE_SAMPLES,
     values, var = np.zeros(shape), np.zeros(shape)
     if scene.visibility().needs_bounces:
         geo = geometry(scene, "flat")
-        emb = embree_scene(geo, resolve_backend("auto"))
-        root = np.random.SeedSequence(seed)
-        plan = (bounces, samples)
-        for i, (w, rng) in enumerate(zip(ladar.view_vectors, root.spawn(ladar.n_views))):
-            values[:, i], var[:, i] = _view_orders(
-                scene, geo, emb, np.asarray(w, np.float64), ladar.bin_edges, ray_spacing,
-                plan, np.random.default_rng(rng))
+        emb = embree_scene(geo, resolve_backend(backend))
+        seeds = np.random.SeedSequence(seed).spawn(ladar.n_views)
+
+        def view(i):
+            return _view_orders(scene, geo, emb, np.asarray(ladar.view_vectors[i], np.float64),
+                                ladar.bin_edges, ray_spacing, (bounces, samples),
+                                np.random.default_rng(seeds[i]))
+        with ThreadPoolExecutor(max(1, int(jobs))) as pool:
+            for i, (v, e) in enumerate(pool.map(view, range(ladar.n_views))):
+                values[:, i], var[:, i] = v, e
     return Orders(tuple(range(2, bounces + 1)), values, np.sqrt(var), samples)

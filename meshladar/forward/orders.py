@@ -19,9 +19,12 @@ from .bounces import (BOUNCE_SAMPLES, BRANCHES, _view_orders, _weight, check_bis
                       higher_orders)
 from .mesh import first_hits
 
-__all__ = ["MAX_BOUNCES", "BOUNCE_SHARE", "check_bounces", "add_bounces"]
+__all__ = ["MAX_BOUNCES", "MAX_BOUNCE_SAMPLES", "BOUNCE_SHARE", "check_bounces",
+           "add_bounces"]
 
 
+#: The most paths per view and order that ``tol`` asks for.
+MAX_BOUNCE_SAMPLES = 1 << 24
 #: The highest order ``bounces`` takes.
 MAX_BOUNCES = 8
 #: ``bounces="auto"`` and the single bounce's check: an order whose total is below this
@@ -103,8 +106,10 @@ def add_bounces(scene, ladar, sino, bounces, samples, *, tol=None, seed=None):
     samples : int
         Paths per view and order.
     tol : float, optional
-        The share below which an order is left out (``"auto"``) or not warned about;
-        default :data:`BOUNCE_SHARE`.
+        The share below which an order is left out (``"auto"``) or not warned about
+        (default :data:`BOUNCE_SHARE`); given, also the accuracy: the paths per view grow
+        until the bounce terms' standard error is at most ``tol / 2`` of the sinogram
+        (relative L2; :func:`_sampled`).
     seed : int, optional
         Seeds the sampling.
 
@@ -113,7 +118,8 @@ def add_bounces(scene, ladar, sino, bounces, samples, *, tol=None, seed=None):
     Sinogram
         ``values`` the sum of the orders; ``info["bounces"]`` the orders summed,
         ``info["order_totals"]`` and ``info["order_stderr"]`` each order's total over
-        the sinogram and its standard error (order 1 exact: 0).
+        the sinogram and its standard error (order 1 exact: 0), ``info["bounce_samples"]``
+        the paths per view and order used.
 
     Warns
     -----
@@ -131,8 +137,7 @@ def add_bounces(scene, ladar, sino, bounces, samples, *, tol=None, seed=None):
         n = 1 if bounces == "auto" else bounces                  # exact zeros beyond 1
         return _with_orders(sino, sino.values, n, [first] + [0.0] * (n - 1), [0.0] * n)
     top = MAX_BOUNCES if bounces == "auto" else bounces
-    orders = higher_orders(scene, ladar, bounces=top, ray_spacing=sino.info["ray_spacing"],
-                           samples=samples, seed=seed)
+    orders = _sampled(scene, ladar, sino, top, samples, tol, seed)
     totals = orders.values.sum(axis=(1, 2))
     errors = np.sqrt((orders.stderr ** 2).sum(axis=(1, 2)))
     keep = top - 1
@@ -140,8 +145,27 @@ def add_bounces(scene, ladar, sino, bounces, samples, *, tol=None, seed=None):
         below = np.flatnonzero(np.abs(totals) < share * abs(first))
         keep = int(below[0]) if below.size else top - 1
     values = sino.values + orders.values[:keep].sum(axis=0)
-    return _with_orders(sino, values, keep + 1, [first, *totals[:keep]],
-                        [0.0, *errors[:keep]])
+    out = _with_orders(sino, values, keep + 1, [first, *totals[:keep]],
+                       [0.0, *errors[:keep]])
+    return replace(out, info=dict(out.info, bounce_samples=orders.samples))
+
+
+def _sampled(scene, ladar, sino, top, samples, tol, seed):
+    """The orders 2..top at ``samples`` paths a view; with ``tol``, that run is a pilot:
+    when the bounce terms' standard error (relative L2 over the sinogram) exceeds half of
+    ``tol``, the paths grow by the square of the ratio (with 20 % to spare, at most
+    MAX_BOUNCE_SAMPLES) and the orders are sampled again."""
+    orders = higher_orders(scene, ladar, bounces=top, ray_spacing=sino.info["ray_spacing"],
+                           samples=samples, seed=seed)
+    if tol is None:
+        return orders
+    norm = float(np.linalg.norm(sino.values + orders.values.sum(axis=0)))
+    error = float(np.sqrt((orders.stderr ** 2).sum())) / norm if norm > 0 else 0.0
+    if error <= 0.5 * tol or samples >= MAX_BOUNCE_SAMPLES:
+        return orders
+    more = int(min(MAX_BOUNCE_SAMPLES, np.ceil(1.2 * samples * (error / (0.5 * tol)) ** 2)))
+    return higher_orders(scene, ladar, bounces=top, ray_spacing=sino.info["ray_spacing"],
+                         samples=more, seed=seed)
 
 
 def _with_orders(sino, values, n, totals, errors):

@@ -26,6 +26,7 @@ from ..waveforms import GaussianPulse, receive
 from . import peer
 from ._bench_inverse import bench_fbp, bench_fit, bench_sirt, bench_tomography3d
 from .bench_gpu import bench_gpu, gpu_lines  # noqa: F401
+from .bench_bounces import bench_bounces
 from .bench_scan import bench_scan
 from .bench_mesh import (bench_dask, bench_fused,  # noqa: F401
                          bench_mesh, bench_single_view, bench_streaming)
@@ -140,7 +141,8 @@ def report(*, repeats=5, full=False, gpu=False):
     with a line when scikit-image is not installed), the mesh engine
     (:mod:`meshladar.studies.bench_mesh`), received power and waveforms
     (:func:`bench_sensor`), SIRT and SART (:func:`bench_sirt`), a two-coating fit, the
-    imaging ladar (:func:`scan_line`), and 3-D tomography (:func:`bench_tomography3d`); with ``full`` also Mitsuba 3 + mitransient
+    imaging ladar (:func:`scan_line`), light beyond one bounce (:func:`bounce_line`), and
+    3-D tomography (:func:`bench_tomography3d`); with ``full`` also Mitsuba 3 + mitransient
     (:func:`meshladar.studies.peer.bench_time_to_accuracy`), streaming
     (:func:`bench_streaming`) and Dask (:func:`bench_dask`; skipped with a line when Dask
     is not installed).
@@ -204,6 +206,7 @@ def report(*, repeats=5, full=False, gpu=False):
            f"{fb['predict_s'] * 1e3:.0f} ms, weigh {fb['weigh_s'] * 1e3:.0f} ms "
            f"({fb['weigh_s'] / fb['predict_s']:.1f}x)")
     yield scan_line()
+    yield bounce_line()
     tb = bench_tomography3d()
     yield (f"3-D tomography, {tb['faces']} triangles, {tb['views']} views, {tb['size']}^3: "
            f"profiles {tb['simulate_s']:.1f} s ({tb['rays']:,} rays, 2 threads), inversion "
@@ -229,6 +232,23 @@ def scan_line():
             f"({sb['discrete_over_cast']:.2f}), two threads {sb['two_over_one']:.2f}x one; "
             f"flash 128 x 128, 512 samples: "
             f"{sb['flash_fps']:.1f} frames/s")
+
+
+def bounce_line():
+    """The report's line of light beyond one bounce
+    (:func:`meshladar.studies.bench_bounces.bench_bounces`).
+
+    Returns
+    -------
+    str
+        The line.
+    """
+    b = bench_bounces()
+    return (f"bounces, {b['faces']}-triangle bowl, second bounce, {b['paths']:,} paths: "
+            f"{b['one_thread'] / 1e6:.2f} Mpaths/s one thread, {b['two_threads'] / 1e6:.2f} "
+            f"two ({b['two_threads'] / b['one_thread']:.2f}x); packet backend "
+            f"{b['packets_over_embreex']:.2f}x embreex on the bounce rays; a convex sphere's "
+            f"bounces='auto' {b['auto_over_one']:.2f}x bounces=1")
 
 
 def _full_lines():

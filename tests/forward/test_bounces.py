@@ -160,6 +160,21 @@ def test_simulate_adds_orders_and_says_so():
     assert more.info["order_totals"][n] < 0.01 * first
 
 
+def test_tol_sets_the_paths_from_a_variance_estimate():
+    """With tol, a pilot of 2¹¹ paths a view whose standard error is above tol / 2 is
+    sampled again with more paths; the result's standard error (relative L2 over the
+    sinogram, as the pilot's) is then within tol / 2 (to the 20 % of the estimate's own
+    spread)."""
+    scene = dihedral(Lambertian(RHO))
+    lad = ml.Ladar(np.arange(15.0, 90.0, 30.0), np.linspace(-1.5, 1.5, 61))
+    tol = 2e-3
+    sino = ml.simulate(scene, lad, model="mesh", radiometry="power", bounces=2, tol=tol,
+                       bounce_samples=1 << 11, seed=0)
+    assert sino.info["bounce_samples"] > 1 << 11
+    rel = sino.info["order_stderr"][1] / np.linalg.norm(sino.values)
+    assert rel <= 1.2 * 0.5 * tol
+
+
 @pytest.mark.parametrize("kwargs, match", [
     ({"bounces": 0}, "bounces must be an integer from 1 to 8"),
     ({"bounces": 9}, "bounces must be an integer from 1 to 8"),
