@@ -21,6 +21,7 @@ _DRAWERS = {
     "Volume": ("quick", "volume"),
     "Waveforms": ("waveforms", "figure"),
     "ViewDesign": ("fitting", "design_figure"),
+    "CrossSection": ("lrcs", "signature"),
 }
 
 
@@ -31,12 +32,13 @@ def plot(record, **options):
 
     Parameters
     ----------
-    record : Sinogram, Image, Volume, Waveforms or ViewDesign
+    record : Sinogram, Image, Volume, Waveforms, ViewDesign or CrossSection
         The record to draw, chosen by its class's name: a Sinogram by
         :func:`meshladar.viz.quick.sinogram`, an Image by :func:`meshladar.viz.quick.image`,
         a Volume by :func:`meshladar.viz.quick.volume`, Waveforms by
-        :func:`meshladar.viz.waveforms.figure` and a ViewDesign by
-        :func:`meshladar.viz.fitting.design_figure`.
+        :func:`meshladar.viz.waveforms.figure`, a ViewDesign by
+        :func:`meshladar.viz.fitting.design_figure` and a CrossSection by
+        :func:`meshladar.viz.lrcs.signature`.
     **options
         Keyword arguments of that function.
 

@@ -21,6 +21,7 @@ from ..brdf import Lambertian
 from ..errors import ParameterError
 from ..ladar import Ladar
 from ..meshes import MeshPart
+from ..plotting import plot
 from ..scene import Scene
 from ..sinogram import Sinogram
 from . import simulate
@@ -64,6 +65,22 @@ class CrossSection:
     bounces: int
     units: str
     convention: str = CONVENTION
+
+    def plot(self, *, floor_db=60.0):
+        """The signature over the views and the brightest view's range-resolved cross
+        section (:func:`meshladar.viz.lrcs.signature`, through :mod:`meshladar.plotting`).
+
+        Parameters
+        ----------
+        floor_db : float
+            Decibels below the largest σ where the scale stops. Keyword-only.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            The figure.
+        """
+        return plot(self, floor_db=floor_db)
 
     @property
     def dbsm(self) -> np.ndarray:
