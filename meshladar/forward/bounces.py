@@ -1,5 +1,6 @@
-"""Light after more than one bounce: orders 2, 3, … of a mesh scene's monostatic returns,
-by Monte Carlo path sampling with next-event estimation toward the receiver.
+"""Light after more than one bounce: orders 2, 3, … of a mesh scene's returns (monostatic,
+or with bistatic receivers), by Monte Carlo path sampling with next-event estimation toward
+the receiver.
 
 A path enters along a view's ray (−w), meets the scene at x₁, leaves in a sampled
 direction ω₁, meets x₂, …, and at each vertex x_k (k ≥ 2) is joined to the receiver (at
@@ -216,8 +217,10 @@ def _bin_stats(edges, ranges, values, path_id, draws):
 
 
 def _view_orders(scene, geo, emb, w, edges, spacing, plan, rng):
-    """One view's orders 2..n: (sums (n−1, bins), variances (n−1, bins))."""
+    """One view's orders 2..n: (sums (n−1, bins), variances (n−1, bins)); ``w`` is the
+    view, or (view, receiver) for a bistatic receiver."""
     bounces, samples = plan
+    w, w_r = (w, w) if np.ndim(w) == 1 else w
     materials = scene.materials
     out = np.zeros((2, bounces - 1, len(edges) - 1))
     p, f, r = first_hits(scene, w, ray_spacing=spacing)
@@ -251,18 +254,17 @@ def _view_orders(scene, geo, emb, w, edges, spacing, plan, rng):
         beta, length, x1, r1, ident = (a[alive] for a in (beta, length, x1, r1, ident))
         length = length + t
         face = f2
-        to_rx = np.broadcast_to(w, n.shape)
-        g = _weight(materials, geo.material[face], n, wi, to_rx)
+        g = _weight(materials, geo.material[face], n, wi, np.broadcast_to(w_r, n.shape))
         seen = g > 0
-        seen[seen] = ~occluded(scene, x[seen], w)
-        rng_app = r1 + 0.5 * (length + (x1 - x) @ w)
+        seen[seen] = ~occluded(scene, x[seen], w_r)
+        rng_app = 0.5 * (r1 + length - x @ w_r)      # r1 = −x₁·w, the way in
         out[:, order] = _bin_stats(edges, rng_app[seen], (beta * g)[seen], ident[seen],
                                    draw)
     return out
 
 
 def higher_orders(scene, ladar, *, bounces, ray_spacing, samples=BOUNCE_SAMPLES,
-                  seed=None, jobs=1, backend="embreex") -> Orders:
+                  seed=None, jobs=1, backend="embreex", receivers=None) -> Orders:
     """Orders 2..``bounces`` of a mesh scene's monostatic returns (module docstring).
 
     A scene whose :meth:`~meshladar.scene.Scene.visibility` needs no bounce gets exact
@@ -289,6 +291,11 @@ def higher_orders(scene, ladar, *, bounces, ray_spacing, samples=BOUNCE_SAMPLES,
         default ``"embreex"``, one ray at a time: the bounce rays are incoherent, and the
         packet backend ran them at 0.89 of its speed (``meshladar bench``, bounce line).
 
+    receivers : (n_views, 3) array_like, optional
+        Bistatic receivers' unit directions, one per view (None: monostatic); a path's
+        last vertex is joined to its view's receiver, and binned at half of
+        −x₁·w + L − x_k·w_r (the single bounce's bistatic range −p·(w + w_r)/2).
+
     Returns
     -------
     Orders
@@ -305,9 +312,10 @@ def higher_orders(scene, ladar, *, bounces, ray_spacing, samples=BOUNCE_SAMPLES,
         seeds = np.random.SeedSequence(seed).spawn(ladar.n_views)
 
         def view(i):
-            return _view_orders(scene, geo, emb, np.asarray(ladar.view_vectors[i], np.float64),
-                                ladar.bin_edges, ray_spacing, (bounces, samples),
-                                np.random.default_rng(seeds[i]))
+            w = np.asarray(ladar.view_vectors[i], np.float64)
+            pair = w if receivers is None else (w, np.asarray(receivers[i], np.float64))
+            return _view_orders(scene, geo, emb, pair, ladar.bin_edges, ray_spacing,
+                                (bounces, samples), np.random.default_rng(seeds[i]))
         with ThreadPoolExecutor(max(1, int(jobs))) as pool:
             for i, (v, e) in enumerate(pool.map(view, range(ladar.n_views))):
                 values[:, i], var[:, i] = v, e

@@ -73,10 +73,9 @@ def check_bounces(scene, bounces, samples, options):
         raise ParameterError(f"bounce_samples must be an integer of at least {BRANCHES}; "
                              f"got {samples!r}")
     if bounces != 1 and isinstance(scene, Scene) and scene.visibility().needs_bounces:
-        for name in ("sensor", "receiver"):
-            if options.get(name) is not None:
-                raise ParameterError(f"bounces > 1 is computed for a monostatic ladar at "
-                                     f"infinity in this version; got {name}=...")
+        if options.get("sensor") is not None:
+            raise ParameterError("bounces > 1 is computed for a ladar at infinity in this "
+                                 "version; got sensor=...")
         if options.get("radiometry", "paper") != "power":
             raise ParameterError("bounces > 1 needs radiometry='power': the paper's Eq. 8 "
                                  "is single-bounce (its one cosine fewer leaves F at a "
@@ -156,7 +155,7 @@ def _sampled(scene, ladar, sino, top, samples, tol, seed):
     ``tol``, the paths grow by the square of the ratio (with 20 % to spare, at most
     MAX_BOUNCE_SAMPLES) and the orders are sampled again."""
     orders = higher_orders(scene, ladar, bounces=top, ray_spacing=sino.info["ray_spacing"],
-                           samples=samples, seed=seed)
+                           samples=samples, seed=seed, receivers=_receivers(sino, ladar))
     if tol is None:
         return orders
     norm = float(np.linalg.norm(sino.values + orders.values.sum(axis=0)))
@@ -165,7 +164,14 @@ def _sampled(scene, ladar, sino, top, samples, tol, seed):
         return orders
     more = int(min(MAX_BOUNCE_SAMPLES, np.ceil(1.2 * samples * (error / (0.5 * tol)) ** 2)))
     return higher_orders(scene, ladar, bounces=top, ray_spacing=sino.info["ray_spacing"],
-                         samples=more, seed=seed)
+                         samples=more, seed=seed, receivers=_receivers(sino, ladar))
+
+
+def _receivers(sino, ladar):
+    """The run's bistatic receivers, one per view, or None (monostatic)."""
+    r = sino.info.get("receiver")
+    return None if r is None else np.broadcast_to(np.asarray(r, np.float64),
+                                                  (ladar.n_views, 3))
 
 
 def _with_orders(sino, values, n, totals, errors):
