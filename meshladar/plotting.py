@@ -70,8 +70,8 @@ def viz(module: str):
     ----------
     module : str
         The module's name under ``meshladar.viz``: ``"quick"``, ``"paper"``,
-        ``"studies"``, ``"viewer"``, ``"points"``, ``"waveforms"``, ``"fitting"``,
-        ``"resolved"`` or ``"style"``.
+        ``"studies"``, ``"viewer"``, ``"bounce_view"``, ``"points"``, ``"waveforms"``,
+        ``"fitting"``, ``"resolved"``, ``"lrcs"`` or ``"style"``.
 
     Returns
     -------

@@ -160,7 +160,8 @@ def cmd_view(args) -> int:
         (width, height) in pixels; ``camera``: ``"oblique"`` or ``"view"``; ``points``: a
         point cloud file (``meshladar scan``'s LAS, LAZ or HDF5) drawn over the scene by
         :func:`meshladar.viz.points.show_points`, coloured by ``color_by``, or None;
-        ``quiet``: no "wrote" line.
+        ``bounces``: with a number, :func:`meshladar.viz.bounce_view.show_bounces` instead
+        (a mesh scene); ``quiet``: no "wrote" line.
 
     Returns
     -------
@@ -185,7 +186,15 @@ def cmd_view(args) -> int:
     if args.screenshot is None and not (os.environ.get("DISPLAY")
                                         or os.environ.get("WAYLAND_DISPLAY")):
         raise ParameterError("no display to open a window on: use --screenshot PNG")
-    if args.points is not None:
+    if args.bounces is not None:
+        if not scene.is_mesh:
+            raise ParameterError("--bounces views a mesh (a phantom's light stays in its "
+                                 "plane); give a mesh file")
+        plotting.viz("bounce_view").show_bounces(
+            scene, view_angle_deg=args.view_angle, bounces=args.bounces,
+            off_screen=args.screenshot is not None, screenshot=args.screenshot,
+            window_size=args.size, camera=args.camera)
+    elif args.points is not None:
         plotting.viz("points").show_points(
             cloud, scene if scene.is_mesh else None, color_by=args.color_by,
             off_screen=args.screenshot is not None, screenshot=args.screenshot,

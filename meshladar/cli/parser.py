@@ -225,7 +225,8 @@ def _view(sub, commands):
     vw = _sub(sub, "view", commands, "3-D view of a scene coloured by its return",
               "examples:\n  meshladar view disk_pair --view-angle 0 --screenshot pair.png\n"
               "  meshladar view part.glb --material aluminum\n"
-              "  meshladar view room.stl --points room.las --color-by range_error")
+              "  meshladar view room.stl --points room.las --color-by range_error\n"
+              "  meshladar view bracket.glb --bounces 3 --screenshot bounces.png")
     _scene_args(vw)
     vw.add_argument("--view-angle", type=KIND_TYPES["finite_float"], default=90.0,
                     help="view angle about z in degrees (default: %(default)s)")
@@ -242,6 +243,10 @@ def _view(sub, commands):
                     choices=("intensity", "range", "return_number", "range_error", "doppler",
                              "channel", "scan_angle", "emission_time"),
                     help="the points' colour, with --points (default: %(default)s)")
+    vw.add_argument("--bounces", type=positive_int, default=None, metavar="N",
+                    help="colour faces by the order of bounces (1 to N, at most 8) that "
+                         "dominates their return and draw sampled paths (a mesh; default: "
+                         "the single bounce's return)")
     vw.add_argument("--camera", choices=("oblique", "view"), default="oblique",
                     help="oblique: beside and above the ladar; view: along the beam from "
                          "the ladar (default: %(default)s)")

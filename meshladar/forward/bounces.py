@@ -36,6 +36,7 @@ from __future__ import annotations
 
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -46,7 +47,7 @@ from ..raytrace.backends import resolve_backend
 from ..raytrace.embree import embree_scene, geometry
 from .mesh import first_hits, occluded
 
-__all__ = ["BRANCHES", "BOUNCE_SAMPLES", "Orders", "higher_orders", "check_bistatic"]
+__all__ = ["BRANCHES", "BOUNCE_SAMPLES", "Orders", "higher_orders", "check_bistatic", "walk"]
 
 #: Independent paths per drawn first hit (the spread among them gives the standard error).
 BRANCHES = 8
@@ -216,19 +217,30 @@ def _bin_stats(edges, ranges, values, path_id, draws):
     return total, var
 
 
-def _view_orders(scene, geo, emb, w, edges, spacing, plan, rng):
-    """One view's orders 2..n: (sums (n−1, bins), variances (n−1, bins)); ``w`` is the
-    view, or (view, receiver) for a bistatic receiver."""
+class _Leg(NamedTuple):
+    """One order's returns of a view's sampled paths: the face each leaves from toward the
+    receiver, the point, its power per unit irradiance, apparent range and path number."""
+
+    face: np.ndarray
+    point: np.ndarray
+    value: np.ndarray
+    range: np.ndarray
+    path: np.ndarray
+
+
+def walk(scene, geo, emb, w, spacing, plan, rng, trail=None):
+    """A view's sampled paths (module docstring), one :class:`_Leg` per order 2..n as they
+    are built; ``w`` is the view, or (view, receiver); ``trail``, a list, receives each
+    order's (path numbers, points) to draw the paths. Yields nothing for a view that
+    meets nothing. The number of drawn first hits is ``max(2, samples // BRANCHES)``."""
     bounces, samples = plan
     w, w_r = (w, w) if np.ndim(w) == 1 else w
     materials = scene.materials
-    out = np.zeros((2, bounces - 1, len(edges) - 1))
     p, f, r = first_hits(scene, w, ray_spacing=spacing)
     if not len(f):
-        return out
+        return
     draw = max(2, samples // BRANCHES)
     pick = rng.integers(0, len(f), draw)
-    area = spacing * spacing * len(f) / draw / BRANCHES
     x1 = np.repeat(p[pick], BRANCHES, axis=0)
     face = np.repeat(f[pick], BRANCHES)
     r1 = np.repeat(r[pick], BRANCHES)
@@ -236,9 +248,11 @@ def _view_orders(scene, geo, emb, w, edges, spacing, plan, rng):
     x, n = x1, geo.face_normals[face]
     wi = np.broadcast_to(w, n.shape)
     n = n * np.sign(_dot(n, wi))[:, None]
-    beta = np.full(len(face), area)
+    beta = np.full(len(face), spacing * spacing * len(f) / draw / BRANCHES)
     length = np.zeros(len(face))
-    for order in range(bounces - 1):
+    if trail is not None:
+        trail.append((ident, x))
+    for _ in range(bounces - 1):
         width = np.array([_lobe_width(m) for m in materials])[geo.material[face]]
         d, pdf = _sample(n, wi, width, rng)
         beta = beta * _weight(materials, geo.material[face], n, wi, d) / np.where(
@@ -251,15 +265,24 @@ def _view_orders(scene, geo, emb, w, edges, spacing, plan, rng):
         wi = -d[alive]
         n = geo.face_normals[f2]
         n = n * np.sign(_dot(n, wi))[:, None]
-        beta, length, x1, r1, ident = (a[alive] for a in (beta, length, x1, r1, ident))
+        beta, length, r1, ident = (a[alive] for a in (beta, length, r1, ident))
         length = length + t
         face = f2
+        if trail is not None:
+            trail.append((ident, x))
         g = _weight(materials, geo.material[face], n, wi, np.broadcast_to(w_r, n.shape))
         seen = g > 0
         seen[seen] = ~occluded(scene, x[seen], w_r)
-        rng_app = 0.5 * (r1 + length - x @ w_r)      # r1 = −x₁·w, the way in
-        out[:, order] = _bin_stats(edges, rng_app[seen], (beta * g)[seen], ident[seen],
-                                   draw)
+        yield _Leg(face[seen], x[seen], (beta * g)[seen],
+                   0.5 * (r1 + length - x @ w_r)[seen], ident[seen])   # r1 = −x₁·w
+
+
+def _view_orders(scene, geo, emb, w, edges, spacing, plan, rng):
+    """One view's orders 2..n binned: (sums (n−1, bins), variances (n−1, bins))."""
+    out = np.zeros((2, plan[0] - 1, len(edges) - 1))
+    draw = max(2, plan[1] // BRANCHES)
+    for order, leg in enumerate(walk(scene, geo, emb, w, spacing, plan, rng)):
+        out[:, order] = _bin_stats(edges, leg.range, leg.value, leg.path, draw)
     return out
 
 

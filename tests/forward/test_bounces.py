@@ -240,3 +240,23 @@ def test_the_guide_states_the_constants():
     assert orders.BOUNCE_SHARE == 0.01 and "(default 0.01)" in text
     assert orders.MAX_BOUNCES == 8 and "(up to 8)" in text
     assert specular.RETRO_CONE == 1e-3 and "(default 1 mrad)" in text
+
+
+def test_face_orders_and_sampled_paths():
+    """Per face: order 1 sums to a Lambertian ball's received power (ρ/π)(2π/3)R² (to the
+    faceting at 4 subdivisions, 1.2e-3); a convex ball's orders beyond 1 are zero and its
+    paths stop at their first hit; the dihedral's paths go from one plate to the other."""
+    from meshladar.forward.bounce_paths import dominant_order, face_orders, sample_paths
+    ball = ml.Scene.from_parts([ml.meshes.sphere((0, 0, 0), 1.0, 0, subdivisions=4)],
+                               [Lambertian(0.5)])
+    o = face_orders(ball, (0.0, 0.0, 1.0), ray_spacing=2e-3)
+    assert not o[:, 1:].any()
+    assert o[:, 0].sum() == pytest.approx(2 / 3 * 0.5, rel=3e-3)     # (ρ/π)(2π/3)R²
+    assert set(np.unique(dominant_order(o))) == {0, 1}
+    assert all(len(p) == 1 for p in sample_paths(ball, (0.0, 0.0, 1.0), paths=5))
+    paths = sample_paths(dihedral(Lambertian(RHO)), W, paths=20, bounces=2, seed=1)
+    two = [p for p in paths if len(p) == 2]
+    assert len(paths) == 20 and two
+    for p in two:                                  # from one plate (y = 0 or x = 0) to the other
+        on_a = np.isclose(p[:, 1], 0.0, atol=1e-9)
+        assert on_a[0] != on_a[1]

@@ -191,3 +191,43 @@ def test_volume_default_is_a_surface_not_fog():
     assert img[..., :3].std() > 5
     with pytest.raises(ValueError, match="render"):
         viewer.show_volume(images, zs, render="fog", off_screen=True)
+
+
+def _dihedral(coating):
+    from meshladar.meshes import MeshPart
+    return ml.Scene.from_parts(
+        [MeshPart([[0, 0, 0], [1, 0, 0], [1, 0, 0.7], [0, 0, 0.7]], [[0, 1, 2], [0, 2, 3]], 0,
+                  "a"),
+         MeshPart([[0, 0, 0], [0, 0, 0.7], [0, 1, 0.7], [0, 1, 0]], [[0, 1, 2], [0, 2, 3]], 0,
+                  "b")], [coating])
+
+
+def test_the_bounce_view_colours_a_mirror_dihedral_by_its_second_order(tmp_path, capsys):
+    """An aluminium dihedral seen square to its edge at 45° retroreflects: the second order
+    dominates every face, and the sampled paths are drawn; a Lambertian ball's faces are
+    all single-bounce and no path goes beyond its first hit. The command line draws the
+    same."""
+    from meshladar.viz import bounce_view
+
+    shown = bounce_view.show_bounces(_dihedral(ALUMINUM), view_vector=(1.0, 1.0, 0.0),
+                                     off_screen=True, window_size=(400, 300))
+    img = shown.image
+    assert _is(img, bounce_view.ORDER_COLORS[1]).sum() > 5000
+    assert _is(img, bounce_view.ORDER_COLORS[0]).sum() < 50     # the legend's text edges
+    assert _is(img, bounce_view.PATH_COLOR).sum() > 200
+    assert shown.legend.labels[0] == "order 2 dominates"
+    ball = ml.Scene.from_parts([ml.meshes.sphere((0, 0, 0), 0.5, 0, subdivisions=3)],
+                               [lambertian(0.9)])
+    img = bounce_view.show_bounces(ball, view_vector=(0.0, 0.0, 1.0), off_screen=True,
+                                   window_size=(400, 300)).image
+    assert _is(img, bounce_view.ORDER_COLORS[0]).sum() > 5000
+    assert _is(img, bounce_view.ORDER_COLORS[1]).sum() < 50
+    path = tmp_path / "dihedral.stl"
+    import trimesh
+    v = np.array([[0, 0, 0], [1, 0, 0], [1, 0, 0.7], [0, 0, 0.7], [0, 1, 0.7], [0, 1, 0]], float)
+    trimesh.Trimesh(v, [[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 5]]).export(path)
+    shot = tmp_path / "bounces.png"
+    assert ml.cli.main(["view", str(path), "--material", "aluminum", "--bounces", "2",
+                        "--view-angle", "45", "--screenshot", str(shot), "--size",
+                        "400x300"]) == 0
+    assert shot.stat().st_size > 0 and "wrote" in capsys.readouterr().out
