@@ -27,6 +27,7 @@ from . import peer
 from ._bench_inverse import bench_fbp, bench_fit, bench_sirt, bench_tomography3d
 from .bench_gpu import bench_gpu, gpu_lines  # noqa: F401
 from .bench_bounces import bench_bounces
+from .peer_bounces import bench_second_bounce
 from .bench_scan import bench_scan
 from .bench_mesh import (bench_dask, bench_fused,  # noqa: F401
                          bench_mesh, bench_single_view, bench_streaming)
@@ -261,6 +262,11 @@ def _full_lines():
             yield (f"time to {target:g} relative L2, Lambertian {pt['faces']}-face sphere, "
                    f"received power: meshladar {tools.get('meshladar') or float('nan'):.2f} s, "
                    f"mitransient {tools.get('mitransient') or float('nan'):.2f} s")
+        sb = bench_second_bounce()
+        yield (f"time to a 1e-3 relative standard error of the second bounce, Lambertian "
+               f"bowl (2,560 faces): meshladar {sb['meshladar_s']:.2f} s, mitransient "
+               f"{sb['mitransient_s']:.2f} s (errors at the budget "
+               f"{sb['meshladar_error']:.1e} and {sb['mitransient_error']:.1e})")
     st = bench_streaming()
     yield (f"streaming 360 views x 1e6 rays, 2 threads: {st['seconds']:.1f} s, "
            f"{st['mrays']:.2f} Mrays/s, peak RSS {st['peak_rss_mb']:.0f} MB")

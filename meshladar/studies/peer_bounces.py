@@ -10,12 +10,14 @@ power each order carries is the same.
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from .peer import _mitsuba, _uniform_width
 from ._mitsuba_scene import _checked, _frame, _opl_mapping, _samples, _target, _transient_scene
 
-__all__ = ["mitransient_orders"]
+__all__ = ["mitransient_orders", "bench_second_bounce"]
 
 
 def mitransient_orders(vertices, faces, view, *, bsdf, bounces=2, spp=256, film=(128, 128),
@@ -72,3 +74,62 @@ def mitransient_orders(vertices, faces, view, *, bsdf, bounces=2, spp=256, film=
                       * (2.0 * fr.h / nx) ** 2)
         dr.sync_thread()
     return np.diff(np.r_[0.0, totals])
+
+
+def bench_second_bounce(*, target=1e-3, rounds=4, spp=64, samples=1 << 17, seed=0):
+    """Seconds to a relative standard error ``target`` of the second order's total on a
+    Lambertian hemispherical bowl (a 5 120-face icosphere's lower half, seen 17° off its
+    axis), meshladar against mitransient, interleaved; each tool's error measured at one
+    budget and its time scaled by (error / target)² (Monte Carlo: error ∝ 1/√time).
+
+    meshladar's error is its own standard error estimate; mitransient's the spread of its
+    second order over ``rounds`` seeds (renders at ``max_depth`` 2 and 3).
+
+    Parameters
+    ----------
+    target : float
+        The relative standard error to reach.
+    rounds : int
+        Interleaved rounds (mitransient seeds), at least 2.
+    spp : int
+        mitransient's samples per pixel (128 × 128 pixels).
+    samples : int
+        meshladar's paths per run.
+    seed : int
+        The first seed.
+
+    Returns
+    -------
+    dict
+        ``meshladar_s``, ``mitransient_s`` (seconds to ``target``), ``meshladar_error``,
+        ``mitransient_error`` (at the budget), ``order2`` (meshladar's mean total).
+    """
+    from ..brdf import Lambertian
+    from ..forward import simulate
+    from ..ladar import Ladar
+    from ..meshes import MeshPart, icosphere
+    from ..scene import Scene
+
+    v, f = icosphere(4)
+    f = f[v[f].mean(axis=1)[:, 2] < 0]
+    w = np.array([0.3, 0.1, 1.0]) / np.linalg.norm([0.3, 0.1, 1.0])
+    scene = Scene.from_parts([MeshPart(v, f, 0, "bowl")], [Lambertian(0.6)])
+    ladar = Ladar(None, view_vectors=w[None], bin_edges=np.linspace(-4.0, 4.0, 9))
+    bsdf = {"type": "diffuse", "reflectance": {"type": "uniform", "value": 0.6}}
+    ours, theirs = [], []
+    for k in range(rounds):
+        t = time.perf_counter()
+        sino = simulate(scene, ladar, model="mesh", radiometry="power", bounces=2,
+                        bounce_samples=samples, ray_spacing=4e-3, seed=seed + k)
+        ours.append((time.perf_counter() - t, sino.info["order_totals"][1],
+                     sino.info["order_stderr"][1]))
+        t = time.perf_counter()
+        o = mitransient_orders(v, f, w, bsdf=bsdf, bounces=2, spp=spp, seed=seed + k)
+        theirs.append((time.perf_counter() - t, o[1]))
+    ot, ov, oe = (np.array(c) for c in zip(*ours))
+    tt, tv = (np.array(c) for c in zip(*theirs))
+    ours_err, their_err = float(np.mean(oe / ov)), float(np.std(tv, ddof=1) / np.mean(tv))
+    return {"meshladar_s": float(np.median(ot)) * (ours_err / target) ** 2,
+            "mitransient_s": float(np.median(tt)) * (their_err / target) ** 2,
+            "meshladar_error": ours_err, "mitransient_error": their_err,
+            "order2": float(np.mean(ov))}
