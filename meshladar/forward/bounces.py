@@ -229,10 +229,32 @@ class _Leg(NamedTuple):
 
 
 def walk(scene, geo, emb, w, spacing, plan, rng, trail=None):
-    """A view's sampled paths (module docstring), one :class:`_Leg` per order 2..n as they
-    are built; ``w`` is the view, or (view, receiver); ``trail``, a list, receives each
-    order's (path numbers, points) to draw the paths. Yields nothing for a view that
-    meets nothing. The number of drawn first hits is ``max(2, samples // BRANCHES)``."""
+    """A view's sampled paths (module docstring), one leg per order 2..n as they are built.
+
+    Parameters
+    ----------
+    scene : Scene
+        The mesh scene.
+    geo, emb :
+        Its flat-normal geometry and Embree scene (:mod:`meshladar.raytrace.embree`).
+    w : (3,) numpy.ndarray or tuple
+        The view, or (view, receiver) for a bistatic receiver.
+    spacing : float
+        The first hits' grid spacing.
+    plan : (int, int)
+        (bounces, samples): max(2, samples // BRANCHES) first hits are drawn.
+    rng : numpy.random.Generator
+        The sampling's generator.
+    trail : list, optional
+        Receives each vertex's (path numbers, points), x₁ first, to draw the paths.
+
+    Yields
+    ------
+    _Leg
+        Per order 2..bounces: the face each return leaves from toward the receiver, the
+        point, its power per unit irradiance, apparent range and path number. Nothing for
+        a view that meets nothing.
+    """
     bounces, samples = plan
     w, w_r = (w, w) if np.ndim(w) == 1 else w
     materials = scene.materials

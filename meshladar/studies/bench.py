@@ -206,14 +206,19 @@ def report(*, repeats=5, full=False, gpu=False):
            f"(every estimate within {fb['max_z']:.1f} sigma); one re-weighing: kernel "
            f"{fb['predict_s'] * 1e3:.0f} ms, weigh {fb['weigh_s'] * 1e3:.0f} ms "
            f"({fb['weigh_s'] / fb['predict_s']:.1f}x)")
+    yield from _scene_lines()
+    if full:
+        yield from _full_lines()
+
+
+def _scene_lines():
+    """The report's lines of the imaging ladar, light beyond one bounce and 3-D tomography."""
     yield scan_line()
     yield bounce_line()
     tb = bench_tomography3d()
     yield (f"3-D tomography, {tb['faces']} triangles, {tb['views']} views, {tb['size']}^3: "
            f"profiles {tb['simulate_s']:.1f} s ({tb['rays']:,} rays, 2 threads), inversion "
            f"{tb['reconstruct_s']:.1f} s, total {tb['simulate_s'] + tb['reconstruct_s']:.1f} s")
-    if full:
-        yield from _full_lines()
 
 
 def scan_line():

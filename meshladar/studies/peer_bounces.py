@@ -14,6 +14,11 @@ import time
 
 import numpy as np
 
+from ..brdf import Lambertian
+from ..forward import simulate
+from ..ladar import Ladar
+from ..meshes import MeshPart, icosphere
+from ..scene import Scene
 from .peer import _mitsuba, _uniform_width
 from ._mitsuba_scene import _checked, _frame, _opl_mapping, _samples, _target, _transient_scene
 
@@ -104,12 +109,6 @@ def bench_second_bounce(*, target=1e-3, rounds=4, spp=64, samples=1 << 17, seed=
         ``meshladar_s``, ``mitransient_s`` (seconds to ``target``), ``meshladar_error``,
         ``mitransient_error`` (at the budget), ``order2`` (meshladar's mean total).
     """
-    from ..brdf import Lambertian
-    from ..forward import simulate
-    from ..ladar import Ladar
-    from ..meshes import MeshPart, icosphere
-    from ..scene import Scene
-
     v, f = icosphere(4)
     f = f[v[f].mean(axis=1)[:, 2] < 0]
     w = np.array([0.3, 0.1, 1.0]) / np.linalg.norm([0.3, 0.1, 1.0])

@@ -255,6 +255,7 @@ def test_any_coating_takes_the_fused_path_with_the_general_paths_numbers(backend
 
 
 @pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # coarse on purpose
+@pytest.mark.filterwarnings("ignore::meshladar.errors.BounceWarning")  # two glinting bodies
 @pytest.mark.parametrize("back_faces", ["two-sided", "ignore"])
 def test_smooth_normals_take_a_compiled_loop_with_the_general_paths_numbers(back_faces):
     # smooth normals with SR coatings are weighed and binned in one compiled loop from the
