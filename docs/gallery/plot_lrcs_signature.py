@@ -23,7 +23,17 @@ plates = [MeshPart([[0, 0, 0], [1, 0, 0], [1, 0, 0.7], [0, 0, 0.7]], [[0, 1, 2],
 dihedral = ml.Scene.from_parts(plates, [ml.materials.DARK_GRAY])
 angles = np.arange(0.0, 360.0, 5.0)
 both = ml.lrcs(dihedral, angles, bounces="auto", ray_spacing=5e-3, seed=0)
-fig = both.plot(floor_db=40.0)
+fig = plt.figure(figsize=(10, 4.2), layout="constrained")    # both.plot() draws the same
+polar = fig.add_subplot(1, 2, 1, projection="polar")
+polar.plot(np.radians(np.r_[angles, angles[:1]]), np.r_[both.dbsm, both.dbsm[:1]], "k.-", ms=3)
+polar.set_title("σ [dB re 1 m²] against the view angle", fontsize=9)
+brightest = int(np.argmax(both.values))
+right = fig.add_subplot(1, 2, 2)
+right.stairs(both.profile.values[brightest], both.profile.bin_edges, color="k")
+right.set_xlim(-1.0, 1.0)
+right.set_xlabel("range r = −p·w [m]")
+right.set_ylabel("σ per bin [m²]")
+right.set_title(f"view {angles[brightest]:.0f}°: range-resolved σ", fontsize=9)
 plt.show()
 
 # %%

@@ -96,7 +96,7 @@ def check_bistatic(materials):
     Raises
     ------
     ModelError
-        Naming the first coating whose :meth:`bistatic` is the base class's.
+        Naming the first coating whose :meth:`~meshladar.brdf.BRDF.bistatic` is the base class's.
     """
     for m in materials:
         try:
