@@ -9,7 +9,6 @@ tests/studies/test_peer_mitsuba.py)."""
 
 from __future__ import annotations
 
-import os
 
 import numpy as np
 import pytest
@@ -17,7 +16,6 @@ import trimesh
 
 import meshladar as ml
 from meshladar.meshes import MeshPart
-from meshladar.studies import peer
 
 #: Orders 1-3 summed: the issue's bar on the received power (measured 2026-12-04: at most
 #: 3e-5 apart; order 1 is exact in both up to sampling).
@@ -49,15 +47,6 @@ def _bowl():
     keep = s.triangles_center[:, 2] < 0
     w = np.array([0.3, 0.1, 1.0])
     return np.asarray(s.vertices), np.asarray(s.faces)[keep], w / np.linalg.norm(w)
-
-
-@pytest.fixture(scope="module")
-def renderer():
-    ok, msg = peer.available(reason=True)
-    if not ok:
-        if os.environ.get("CI"):
-            pytest.fail(msg)
-        pytest.skip(msg)
 
 
 @pytest.mark.slow

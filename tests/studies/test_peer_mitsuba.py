@@ -55,15 +55,6 @@ def _rel(a, b):
     return float(np.linalg.norm(np.asarray(a) - b) / np.linalg.norm(b))
 
 
-@pytest.fixture(scope="module")
-def renderer():
-    ok, msg = peer.available(reason=True)
-    if not ok:
-        if os.environ.get("CI"):
-            pytest.fail(msg)
-        pytest.skip(msg)
-
-
 def _meshladar_power(mesh, view, edges, rho, spacing, seed=0):
     scene = ml.Scene.from_mesh(mesh, lambertian(rho))
     ladar = ml.Ladar(None, edges, view_vectors=np.asarray(view)[None])
