@@ -367,7 +367,8 @@ def _lrcs(sub, commands):
     lr.add_argument("--bounces", type=bounces, default=1,
                     help="orders of bounces, 1-8 or auto (meshes; default: %(default)s)")
     lr.add_argument("--per-part", action="store_true",
-                    help="each part's cross section too (single bounce; default: off)")
+                    help="each part's cross section too (its single bounce and the paths "
+                         "leaving from it; default: off)")
     lr.add_argument("--ray-spacing", type=positive_float, default=None,
                     help="distance between rays, scene units (default: the model's)")
     lr.add_argument("--seed", type=nonnegative_int, default=None,

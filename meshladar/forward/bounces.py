@@ -76,6 +76,9 @@ class Orders:
         Paths per view and order.
     radiometry : str
         ``"power"`` (module docstring).
+    per_part : (n_orders, n_views, n_parts) numpy.ndarray or None
+        Each order's total per part of the scene, by the part of each path's last surface
+        (they sum to ``values`` over the bins).
     """
 
     orders: tuple
@@ -83,6 +86,7 @@ class Orders:
     stderr: np.ndarray
     samples: int
     radiometry: str = "power"
+    per_part: np.ndarray | None = None
 
 
 def check_bistatic(materials):
@@ -300,12 +304,15 @@ def walk(scene, geo, emb, w, spacing, plan, rng, trail=None):
 
 
 def _view_orders(scene, geo, emb, w, edges, spacing, plan, rng):
-    """One view's orders 2..n binned: (sums (n−1, bins), variances (n−1, bins))."""
+    """One view's orders 2..n binned: (sums (n−1, bins), variances (n−1, bins)), and each
+    part's share of each order (n−1, parts): by the part of the path's last surface."""
     out = np.zeros((2, plan[0] - 1, len(edges) - 1))
+    parts = np.zeros((plan[0] - 1, len(scene.parts)))
     draw = max(2, plan[1] // BRANCHES)
     for order, leg in enumerate(walk(scene, geo, emb, w, spacing, plan, rng)):
         out[:, order] = _bin_stats(edges, leg.range, leg.value, leg.path, draw)
-    return out
+        parts[order] = np.bincount(geo.part_of[leg.face], leg.value, len(scene.parts))
+    return out, parts
 
 
 def higher_orders(scene, ladar, *, bounces, ray_spacing, samples=BOUNCE_SAMPLES,
@@ -351,6 +358,7 @@ def higher_orders(scene, ladar, *, bounces, ray_spacing, samples=BOUNCE_SAMPLES,
     check_bistatic(scene.materials)
     shape = (bounces - 1, ladar.n_views, ladar.n_bins)
     values, var = np.zeros(shape), np.zeros(shape)
+    per_part = np.zeros((bounces - 1, ladar.n_views, len(scene.parts)))
     if scene.visibility().needs_bounces:
         geo = geometry(scene, "flat")
         emb = embree_scene(geo, resolve_backend(backend))
@@ -362,6 +370,7 @@ def higher_orders(scene, ladar, *, bounces, ray_spacing, samples=BOUNCE_SAMPLES,
             return _view_orders(scene, geo, emb, pair, ladar.bin_edges, ray_spacing,
                                 (bounces, samples), np.random.default_rng(seeds[i]))
         with ThreadPoolExecutor(max(1, int(jobs))) as pool:
-            for i, (v, e) in enumerate(pool.map(view, range(ladar.n_views))):
-                values[:, i], var[:, i] = v, e
-    return Orders(tuple(range(2, bounces + 1)), values, np.sqrt(var), samples)
+            for i, ((v, e), share) in enumerate(pool.map(view, range(ladar.n_views))):
+                values[:, i], var[:, i], per_part[:, i] = v, e, share
+    return Orders(tuple(range(2, bounces + 1)), values, np.sqrt(var), samples,
+                  per_part=per_part)

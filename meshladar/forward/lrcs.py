@@ -12,13 +12,14 @@ height (the extruded target's, m² per metre). ``bounces`` counts as for
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from .._validate import check_choice, check_count, unit_vectors
 from ..brdf import Lambertian
-from ..errors import ParameterError
+from ..errors import BounceWarning, ParameterError
 from ..ladar import Ladar
 from ..meshes import MeshPart
 from ..plotting import plot
@@ -44,8 +45,9 @@ class CrossSection:
     values : (n_views,) numpy.ndarray
         σ per view, in scene units squared (per unit height for a 2-D scene).
     per_part : (n_views, n_parts) numpy.ndarray or None
-        Each part's (or shape's) share, when asked for: single bounce, the others' light
-        blocked by them but not reflected.
+        Each part's (or shape's) share, when asked for: its single bounce (the other parts
+        shadow it but reflect nothing), plus the orders beyond the first whose paths leave
+        from it toward the receiver; the shares sum to ``values``.
     profile : Sinogram
         The range-resolved cross section 4π P[k] per view and bin; it sums to ``values``.
     names : tuple of str
@@ -147,7 +149,7 @@ def lrcs(scene, views, *, model=None, bounces=1, per_part=False, n_bins=LRCS_BIN
     bounces : int or "auto"
         Orders of bounces, as :func:`meshladar.simulate` (mesh model).
     per_part : bool
-        Also each part's share (single bounce only).
+        Also each part's share (:class:`CrossSection`).
     n_bins : int
         Range bins of the profile (default :data:`LRCS_BINS`), spanning the scene's
         ranges over the views (and the longer paths of higher orders).
@@ -163,9 +165,8 @@ def lrcs(scene, views, *, model=None, bounces=1, per_part=False, n_bins=LRCS_BIN
     Raises
     ------
     ParameterError
-        For a ``radiometry`` or ``sensor`` option, ``per_part`` with ``bounces`` other
-        than 1, bad ``views`` or ``n_bins``; and whatever :func:`meshladar.simulate`
-        refuses, before any ray.
+        For a ``radiometry`` or ``sensor`` option, bad ``views``, ``per_part`` or
+        ``n_bins``; and whatever :func:`meshladar.simulate` refuses, before any ray.
 
     Examples
     --------
@@ -187,9 +188,6 @@ def lrcs(scene, views, *, model=None, bounces=1, per_part=False, n_bins=LRCS_BIN
     n_bins = check_count("n_bins", n_bins)
     if per_part not in (True, False):
         raise ParameterError(f"per_part must be True or False; got {per_part!r}")
-    if per_part and bounces != 1:
-        raise ParameterError(f"per_part is single-bounce in this version; got "
-                             f"bounces={bounces!r}")
     ladar = _ladar(scene, views, bounces, n_bins, options.get("receiver") is not None)
     if model == "mesh":
         options["bounces"] = bounces
@@ -202,9 +200,14 @@ def lrcs(scene, views, *, model=None, bounces=1, per_part=False, n_bins=LRCS_BIN
         s.name or f"shape {i}" for i, s in enumerate(scene.shapes))
     shares = None
     if per_part:
-        shares = np.stack([4.0 * np.pi * simulate(_alone(scene, i), ladar, model=model,
-                                                  radiometry="power", **options)
-                           .values.sum(axis=1) for i in range(len(names))], axis=1)
+        single = {**options, "bounces": 1} if model == "mesh" else options
+        with warnings.catch_warnings():       # the bounce check spoke for the whole scene
+            warnings.simplefilter("ignore", BounceWarning)
+            shares = np.stack([4.0 * np.pi * simulate(_alone(scene, i), ladar, model=model,
+                                                      radiometry="power", **single)
+                               .values.sum(axis=1) for i in range(len(names))], axis=1)
+        if "bounce_part_totals" in sino.info:
+            shares = shares + 4.0 * np.pi * np.asarray(sino.info["bounce_part_totals"])
     units = "m^2" if scene.is_mesh or model == "mesh" and options.get("mode") == "3d" \
         else "m^2 per unit height"
     return CrossSection(profile.values.sum(axis=1), shares, profile, names,

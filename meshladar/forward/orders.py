@@ -118,7 +118,9 @@ def add_bounces(scene, ladar, sino, bounces, samples, *, tol=None, seed=None):
         ``values`` the sum of the orders; ``info["bounces"]`` the orders summed,
         ``info["order_totals"]`` and ``info["order_stderr"]`` each order's total over
         the sinogram and its standard error (order 1 exact: 0), ``info["bounce_samples"]``
-        the paths per view and order used.
+        the paths per view and order used, ``info["bounce_part_totals"]`` (n_views,
+        n_parts) the orders beyond the first per part of each path's last surface (when
+        sampled).
 
     Warns
     -----
@@ -146,7 +148,9 @@ def add_bounces(scene, ladar, sino, bounces, samples, *, tol=None, seed=None):
     values = sino.values + orders.values[:keep].sum(axis=0)
     out = _with_orders(sino, values, keep + 1, [first, *totals[:keep]],
                        [0.0, *errors[:keep]])
-    return replace(out, info=dict(out.info, bounce_samples=orders.samples))
+    shares = orders.per_part[:keep].sum(axis=0)
+    return replace(out, info=dict(out.info, bounce_samples=orders.samples,
+                                  bounce_part_totals=shares.tolist()))
 
 
 def _sampled(scene, ladar, sino, top, samples, tol, seed):
@@ -209,7 +213,7 @@ def _check_second_order(scene, ladar, sino, share, seed):
         first += spacing * spacing * float(g.sum())
         second += float(_view_orders(scene, geo, emb, w, np.array([-np.inf, np.inf]),
                                      spacing, (2, CHECK_SAMPLES),
-                                     np.random.default_rng(rng))[0].sum())
+                                     np.random.default_rng(rng))[0][0].sum())
     if first > 0 and second > share * first:
         warnings.warn(f"this scene is not convex and its second bounce adds about "
                       f"{100 * second / first:.2g} % to the single bounce (a cheap estimate "

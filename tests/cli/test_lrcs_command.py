@@ -64,7 +64,6 @@ def test_a_bad_bounce_count_is_argparses_usage_error(tmp_path, capsys):
 @pytest.mark.parametrize("argv, match", [
     (["--views", "2", "--angles-deg", "0"], "give one of --views, --angles-deg"),
     (["-o", "sigma.npz"], "-o"),
-    (["--per-part", "--bounces", "2"], "per_part is single-bounce"),
 ])
 def test_bad_input_is_one_line(tmp_path, capsys, argv, match):
     code = cli.main(["lrcs", str(_ball(tmp_path))] + argv)
