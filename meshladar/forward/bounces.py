@@ -45,6 +45,7 @@ from ..precision import RECEIVER_LIFT
 from ..errors import ModelError, ParameterError
 from ..raytrace.backends import resolve_backend
 from ..raytrace.embree import embree_scene, geometry
+from ._bounce_kernels import sample_mixture
 from .mesh import first_hits, occluded
 
 __all__ = ["BRANCHES", "BOUNCE_SAMPLES", "Orders", "higher_orders", "check_bistatic", "walk"]
@@ -121,49 +122,21 @@ def _lobe_width(m):
     return np.nan
 
 
-def _frame(n):
-    """Two unit vectors completing each normal (k, 3) to an orthonormal frame."""
-    helper = np.where(np.abs(n[:, 2:3]) < 0.9, [[0.0, 0.0, 1.0]], [[1.0, 0.0, 0.0]])
-    u = np.cross(helper, n)
-    u /= np.linalg.norm(u, axis=1, keepdims=True)
-    return u, np.cross(n, u)
-
-
 def _dot(a, b):
     return np.einsum("ij,ij->i", a, b)
 
 
-def _lobe_pdf(n, wi, width, d):
-    """Density (1/sr) of direction d under the lobe sampling: Beckmann half vector of
-    width ``width`` about n, reflected; 0 where there is no lobe."""
-    h = wi + d
-    h /= np.maximum(np.linalg.norm(h, axis=1, keepdims=True), 1e-300)
-    c = np.clip(_dot(n, h), 1e-100, 1.0)
-    s = np.nan_to_num(width, nan=1.0)
-    tan2 = np.maximum(1.0 - c * c, 0.0) / (c * c)
-    ph = np.exp(-np.minimum(tan2 / (s * s), 700.0)) / (np.pi * s * s * c ** 3)
-    return np.where(np.isnan(width), 0.0, ph / (4.0 * np.maximum(_dot(d, h), 1e-300)))
-
-
 def _sample(n, wi, width, rng):
-    """Directions (k, 3) from the mixture (module docstring) and their densities (k,)."""
+    """Directions (k, 3) from the mixture (module docstring) and their densities (k,), in
+    one compiled pass (:mod:`._bounce_kernels`): cosine-weighted, sin θ = √u₁; the lobe's
+    half vector, tan² θh = −s² ln(1 − u₁), reflected; the lobe taken with probability ½
+    where a coating has one narrower than 0.5."""
     k = len(n)
-    q = np.where(np.isnan(width) | (width >= _WIDE_LOBE), 0.0, 0.5)
     u1, u2, pick = rng.random(k), rng.random(k), rng.random(k)
-    u, v = _frame(n)
-    phi = 2.0 * np.pi * u2
-    lobe = pick < q
-    # cosine: sin θ = √u1; lobe: tan² θh = −s² ln(1 − u1)
-    s = np.nan_to_num(width, nan=1.0)
-    tan2 = -s * s * np.log1p(-u1)
-    cos_t = np.where(lobe, 1.0 / np.sqrt(1.0 + tan2), np.sqrt(1.0 - u1))
-    sin_t = np.sqrt(np.maximum(0.0, 1.0 - cos_t * cos_t))
-    m = (cos_t[:, None] * n + (sin_t * np.cos(phi))[:, None] * u
-         + (sin_t * np.sin(phi))[:, None] * v)
-    d = np.where(lobe[:, None], 2.0 * _dot(wi, m)[:, None] * m - wi, m)
-    cos_d = _dot(n, d)
-    pdf = (1.0 - q) * np.maximum(cos_d, 0.0) / np.pi + q * _lobe_pdf(n, wi, width, d)
-    return d, np.where(cos_d > 0, pdf, 0.0)
+    d, pdf = np.empty((k, 3)), np.empty(k)
+    sample_mixture(np.ascontiguousarray(n, np.float64), np.ascontiguousarray(wi, np.float64),
+                   np.ascontiguousarray(width, np.float64), u1, u2, pick, _WIDE_LOBE, d, pdf)
+    return d, pdf
 
 
 def _weight(materials, mat, n, wi, wo):

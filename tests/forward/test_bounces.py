@@ -260,3 +260,22 @@ def test_face_orders_and_sampled_paths():
     for p in two:                                  # from one plate (y = 0 or x = 0) to the other
         on_a = np.isclose(p[:, 1], 0.0, atol=1e-9)
         assert on_a[0] != on_a[1]
+
+
+@pytest.mark.parametrize("width", [np.nan, 0.3, 0.05, 0.007])
+def test_the_sampled_densities_integrate_known_functions(width):
+    """E[f(d) / p(d)] over sampled directions is ∫ f dω over the hemisphere, for cos θ (π)
+    and cos⁸ θ (2π/9), whatever the lobe mixed in (an incidence of 40°): the density the
+    compiled sampler reports is the one it draws from. 400,000 draws: within 5 standard
+    errors of the mean."""
+    from meshladar.forward.bounces import _sample
+    k = 400_000
+    n = np.tile([0.0, 0.0, 1.0], (k, 1))
+    t = np.radians(40.0)
+    wi = np.tile([np.sin(t), 0.0, np.cos(t)], (k, 1))
+    d, pdf = _sample(n, wi, np.full(k, width), np.random.default_rng(4))
+    ok = pdf > 0
+    assert np.allclose(np.linalg.norm(d, axis=1), 1.0) and np.all(d[ok, 2] > 0)
+    for power, exact in ((1, np.pi), (8, 2 * np.pi / 9)):
+        x = np.where(ok, d[:, 2] ** power / np.where(ok, pdf, 1.0), 0.0)
+        assert abs(x.mean() - exact) <= 5 * x.std() / np.sqrt(k)
