@@ -39,7 +39,7 @@ def signature(cross_section, *, floor_db=60.0):
     shown = np.maximum(np.where(np.isfinite(db), db, top - floor_db), top - floor_db)
     fig = Figure(figsize=(10.0, 4.2), dpi=style.STYLE["savefig.dpi"])
     w = np.asarray(prof.view_vectors, dtype=float)
-    units = f"dB re 1 {cs.units.replace('^2', '²')}"
+    units = f"dB re 1 {cs.units.replace('^2', '²')}"           # unit²: the scene's
     if prof.planar:
         a = fig.add_subplot(1, 2, 1, projection="polar")
         phi = np.radians(np.asarray(prof.angles_deg, dtype=float))

@@ -76,7 +76,8 @@ def cmd_lrcs(args) -> int:
     if args.output is not None:
         write_atomic(args.output, lambda fh: fh.write(text.encode()))
     if not args.quiet:
-        print(f"# laser radar cross section, {result.units}, {result.bounces} "
+        print(f"# laser radar cross section, {result.units} (the scene's length unit: m^2 "
+              f"and dBsm for metres), {result.bounces} "
               f"bounce{'s' if result.bounces > 1 else ''}; {result.convention}")
         print(text, end="")
     return 0

@@ -55,7 +55,8 @@ class CrossSection:
     bounces : int
         The orders summed.
     units : str
-        ``"m^2"`` (scene units squared) or ``"m^2 per unit height"``.
+        ``"unit^2"`` (the scene's length unit squared: m² for a scene in metres, mm² for
+        one in millimetres) or ``"unit^2 per unit height"`` (2-D scenes).
     convention : str
         :data:`CONVENTION`.
     """
@@ -86,7 +87,8 @@ class CrossSection:
 
     @property
     def dbsm(self) -> np.ndarray:
-        """σ in dB relative to one square scene unit (dBsm for metres), −inf where 0."""
+        """σ in dB relative to one square scene unit (dBsm for a scene in metres), −inf
+        where 0."""
         with np.errstate(divide="ignore"):
             return 10.0 * np.log10(self.values)
 
@@ -208,7 +210,7 @@ def lrcs(scene, views, *, model=None, bounces=1, per_part=False, n_bins=LRCS_BIN
                                .values.sum(axis=1) for i in range(len(names))], axis=1)
         if "bounce_part_totals" in sino.info:
             shares = shares + 4.0 * np.pi * np.asarray(sino.info["bounce_part_totals"])
-    units = "m^2" if scene.is_mesh or model == "mesh" and options.get("mode") == "3d" \
-        else "m^2 per unit height"
+    units = "unit^2" if scene.is_mesh or model == "mesh" and options.get("mode") == "3d" \
+        else "unit^2 per unit height"
     return CrossSection(profile.values.sum(axis=1), shares, profile, names,
                         int(sino.info.get("bounces", 1)), units)

@@ -42,7 +42,7 @@ def test_a_sphere_table_matches_the_closed_form(tmp_path, capsys):
     np.testing.assert_allclose(rows[:, 1], 8 / 3 * np.pi * 0.5 * 4.0, rtol=1e-3)
     np.testing.assert_allclose(rows[:, 2], 10 * np.log10(rows[:, 1]), atol=1e-8)
     np.testing.assert_allclose(rows[:, 3], rows[:, 1], rtol=1e-9)
-    assert "m^2, 1 bounce" in printed
+    assert "unit^2 (the scene's length unit: m^2 and dBsm for metres), 1 bounce" in printed
 
 
 def test_view_vectors_and_a_phantom(tmp_path, capsys):
@@ -51,7 +51,7 @@ def test_view_vectors_and_a_phantom(tmp_path, capsys):
     head, rows = _rows((tmp_path / "s.csv").read_text())
     assert head[:3] == ["wx", "wy", "wz"] and rows.shape == (3, 5)
     assert cli.main(["lrcs", "disk", "--angles-deg", "0,90"]) == 0
-    assert "m^2 per unit height" in capsys.readouterr().out
+    assert "unit^2 per unit height" in capsys.readouterr().out
 
 
 def test_a_bad_bounce_count_is_argparses_usage_error(tmp_path, capsys):

@@ -24,7 +24,7 @@ def test_a_lambertian_sphere_converges_at_the_faceting_order():
                                    [Lambertian(RHO)])
         s = ml.lrcs(ball, [0.0, 37.0], ray_spacing=2e-3)
         errors.append(abs(s.values[0] / (8 / 3 * np.pi * RHO) - 1))
-        assert s.units == "m^2" and s.bounces == 1
+        assert s.units == "unit^2" and s.bounces == 1
         np.testing.assert_allclose(s.profile.values.sum(axis=1), s.values, rtol=1e-12)
     assert errors[2] < 4e-4
     assert 3.0 < errors[0] / errors[1] < 5.0 and 3.0 < errors[1] / errors[2] < 5.0
@@ -34,7 +34,7 @@ def test_an_analytic_disk_is_exact_per_unit_height():
     disk = ml.Scene([ml.Disk((0.2, 0.1), 0.7, Lambertian(RHO))])
     s = ml.lrcs(disk, [0.0, 90.0, 233.0])
     np.testing.assert_allclose(s.values, 2 * np.pi * RHO * 0.7, rtol=1e-12)
-    assert s.units == "m^2 per unit height"
+    assert s.units == "unit^2 per unit height"
 
 
 @pytest.mark.parametrize("theta_deg", [0.0, 30.0, 60.0, 85.0])
