@@ -340,7 +340,8 @@ class Scene:
             ``sees`` (n, n) bool, ``convex`` per part, ``needs_bounces``.
         """
         return self.cached("visibility", lambda: scene_visibility(
-            [p.name for p in self._parts], self._parts) if self._parts else scene_visibility(
+            [p.name for p in self._parts], self._parts, self._report.get("bodies"))
+            if self._parts else scene_visibility(
             [s.name or f"shape {i}" for i, s in enumerate(self._shapes)]))
 
     def support_points(self, n_views=None) -> np.ndarray:

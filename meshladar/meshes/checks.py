@@ -117,6 +117,7 @@ def inspect_parts(parts):
         bool, one per part): every body of the part is closed (False for a part left
         without faces). ``"inverted"`` (list of bool, one per part): some closed body has
         negative signed volume. ``"inverted_bodies"`` (int): such bodies in all parts.
+        ``"bodies"`` (list of int, one per part): its connected bodies.
         ``"faces"`` (int): the faces left in all parts.
 
     Raises
@@ -124,7 +125,7 @@ def inspect_parts(parts):
     GeometryError
         When no part has any face left (all degenerate, or none given).
     """
-    cleaned, dropped, watertight, inverted, n_inverted = [], 0, [], [], 0
+    cleaned, dropped, watertight, inverted, n_inverted, bodies = [], 0, [], [], 0, []
     for p in parts:
         q, k = _clean(p)
         cleaned.append(q)
@@ -134,11 +135,12 @@ def inspect_parts(parts):
             bad = int(np.count_nonzero(closed & (volume < 0)))
         else:
             closed, bad = np.array([False]), 0
+        bodies.append(int(closed.size) if len(q.faces) else 0)
         watertight.append(bool(closed.all()))
         inverted.append(bad > 0)
         n_inverted += bad
     if not any(len(p.faces) for p in cleaned):
         raise GeometryError("the mesh scene has no faces (all degenerate or none given)")
     return cleaned, {"degenerate_faces": dropped, "watertight": watertight,
-                     "inverted": inverted, "inverted_bodies": n_inverted,
+                     "inverted": inverted, "inverted_bodies": n_inverted, "bodies": bodies,
                      "faces": sum(len(p.faces) for p in cleaned)}

@@ -59,13 +59,16 @@ class Visibility:
         return bool(self.sees.any())
 
 
-def part_sees_itself(part: MeshPart) -> bool:
+def part_sees_itself(part: MeshPart, bodies=None) -> bool:
     """Whether a part can send light to itself (module docstring: exact when False).
 
     Parameters
     ----------
     part : MeshPart
         A cleaned part (degenerate faces dropped).
+    bodies : int, optional
+        Its connected bodies, when known (the scene's ``report["bodies"]``); counted here
+        otherwise.
 
     Returns
     -------
@@ -85,8 +88,9 @@ def part_sees_itself(part: MeshPart) -> bool:
     b = np.concatenate([f[:, 1], f[:, 2], f[:, 0]])
     far = np.concatenate([f[:, 2], f[:, 0], f[:, 1]])         # each edge's opposite vertex
     face = np.tile(np.arange(len(f)), 3)
-    used = np.unique(f)
-    if np.unique(components(len(v), a, b)[used]).size != 1:
+    if bodies is None:
+        bodies = np.unique(components(len(v), a, b)[np.unique(f)]).size
+    if bodies != 1:
         return True                                           # several bodies
     forward = a < b
     key = np.where(forward, a, b) * len(v) + np.where(forward, b, a)
@@ -104,7 +108,7 @@ def part_sees_itself(part: MeshPart) -> bool:
     return not (np.all(s <= tol) or np.all(s >= -tol))
 
 
-def scene_visibility(names, parts=None) -> Visibility:
+def scene_visibility(names, parts=None, bodies=None) -> Visibility:
     """The :class:`Visibility` of a scene's parts (or of analytic shapes, each convex).
 
     Parameters
@@ -113,6 +117,8 @@ def scene_visibility(names, parts=None) -> Visibility:
         The parts' or shapes' names.
     parts : sequence of MeshPart, optional
         A mesh scene's parts; None for analytic shapes (disks and ellipses: convex).
+    bodies : sequence of int, optional
+        Each part's connected bodies, when known.
 
     Returns
     -------
@@ -122,6 +128,7 @@ def scene_visibility(names, parts=None) -> Visibility:
     n = len(names)
     sees = ~np.eye(n, dtype=bool)
     if parts is not None:
-        sees[np.diag_indices(n)] = [part_sees_itself(p) for p in parts]
+        counts = [None] * len(parts) if bodies is None else bodies
+        sees[np.diag_indices(n)] = [part_sees_itself(p, c) for p, c in zip(parts, counts)]
     sees.flags.writeable = False
     return Visibility(tuple(names), sees)

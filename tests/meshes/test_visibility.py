@@ -90,3 +90,14 @@ def test_scene_visibility():
     assert not one.visibility().needs_bounces
     pair = ml.Scene([ml.Disk((-0.4, 0), 0.3, GRAY), ml.Disk((0.4, 0), 0.3, GRAY)])
     assert pair.visibility().needs_bounces
+
+
+def test_the_scene_counts_bodies_once():
+    """The scene's report counts each part's bodies (the visibility test reads it instead
+    of counting again): one for a box, two for two boxes in one part."""
+    one = ml.Scene.from_mesh(trimesh.creation.box(), material=GRAY)
+    two = ml.Scene.from_mesh(trimesh.util.concatenate(
+        [trimesh.creation.box(), trimesh.creation.box().apply_translation([3, 0, 0])]),
+        material=GRAY)
+    assert one.report["bodies"] == [1] and two.report["bodies"] == [2]
+    assert one.visibility().convex == (True,) and two.visibility().convex == (False,)
