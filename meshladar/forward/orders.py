@@ -124,8 +124,11 @@ def add_bounces(scene, ladar, sino, bounces, samples, *, tol=None, seed=None):
 
     Warns
     -----
-    MeshladarWarning
-        With ``bounces=1``, when the cheap pass puts the second order above the share.
+    BounceWarning
+        With ``bounces=1`` and the received-power radiometry, when the cheap pass (seeded:
+        the same scene warns or not every time) puts the second order above the share.
+        The paper's radiometry is its single-bounce Eq. 8 by definition, and is not
+        checked.
     """
     share = BOUNCE_SHARE if tol is None else tol
     if not scene.is_mesh:
@@ -133,8 +136,9 @@ def add_bounces(scene, ladar, sino, bounces, samples, *, tol=None, seed=None):
     needs = scene.visibility().needs_bounces
     first = float(sino.values.sum())
     if bounces == 1 or not needs:
-        if bounces == 1 and needs and sino.info.get("mode") != "slice":
-            _check_second_order(scene, ladar, sino, share, seed)
+        if bounces == 1 and needs and sino.radiometry == "power" and \
+                sino.info.get("mode") != "slice":
+            _check_second_order(scene, ladar, sino, share, 0 if seed is None else seed)
         n = 1 if bounces == "auto" else bounces                  # exact zeros beyond 1
         return _with_orders(sino, sino.values, n, [first] + [0.0] * (n - 1), [0.0] * n)
     top = MAX_BOUNCES if bounces == "auto" else bounces
