@@ -23,8 +23,9 @@ __all__ = ["MAX_BOUNCES", "MAX_BOUNCE_SAMPLES", "BOUNCE_SHARE", "check_bounces",
            "add_bounces"]
 
 
-#: The most paths per view and order that ``tol`` asks for.
-MAX_BOUNCE_SAMPLES = 1 << 24
+#: The most paths per view and order (given, or asked for by ``tol``): ~0.8 GB while a
+#: view is sampled.
+MAX_BOUNCE_SAMPLES = 1 << 22
 #: The highest order ``bounces`` takes.
 MAX_BOUNCES = 8
 #: ``bounces="auto"`` and the single bounce's check: an order whose total is below this
@@ -45,7 +46,7 @@ def check_bounces(scene, bounces, samples, options):
     bounces : int or "auto" or None
         1..MAX_BOUNCES, ``"auto"``, or None (1).
     samples : int or None
-        Paths per view and order, ≥ BRANCHES; None: BOUNCE_SAMPLES.
+        Paths per view and order, BRANCHES to MAX_BOUNCE_SAMPLES; None: BOUNCE_SAMPLES.
     options : dict
         The mesh model's other options (``sensor``, ``receiver`` and ``mode`` are read).
 
@@ -63,15 +64,17 @@ def check_bounces(scene, bounces, samples, options):
         evaluation (:func:`check_bistatic`).
     """
     bounces = 1 if bounces is None else bounces
-    if bounces != "auto" and (isinstance(bounces, bool) or not isinstance(
+    auto = isinstance(bounces, str) and bounces == "auto"
+    if not auto and (isinstance(bounces, bool) or not isinstance(
             bounces, (int, np.integer)) or not 1 <= bounces <= MAX_BOUNCES):
         raise ParameterError(f"bounces must be an integer from 1 to {MAX_BOUNCES} or "
                              f"'auto'; got {bounces!r}")
     samples = BOUNCE_SAMPLES if samples is None else samples
     if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or \
-            samples < BRANCHES:
-        raise ParameterError(f"bounce_samples must be an integer of at least {BRANCHES}; "
-                             f"got {samples!r}")
+            not BRANCHES <= samples <= MAX_BOUNCE_SAMPLES:
+        raise ParameterError(f"bounce_samples must be an integer from {BRANCHES} to "
+                             f"{MAX_BOUNCE_SAMPLES} (a path holds ~200 bytes while a view "
+                             f"is sampled); got {samples!r}")
     if bounces != 1 and isinstance(scene, Scene) and scene.visibility().needs_bounces:
         if options.get("sensor") is not None:
             raise ParameterError("bounces > 1 is computed for a ladar at infinity in this "
