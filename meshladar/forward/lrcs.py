@@ -26,6 +26,7 @@ from ..plotting import plot
 from ..scene import Scene
 from ..sinogram import Sinogram
 from . import simulate
+from .orders import MAX_BOUNCES, check_bounces
 
 __all__ = ["CrossSection", "LRCS_BINS", "CONVENTION", "lrcs"]
 
@@ -110,14 +111,16 @@ def _ladar(scene, views, bounces, n_bins, bistatic):
         raise ParameterError(f"views must be angles in degrees (n,) or view vectors (n, 3); "
                              f"got shape {v.shape}")
     lo, hi = scene.view_ranges(w)
-    size = float(np.max(hi - lo))
     top = 1 if bounces == "auto" and not scene.visibility().needs_bounces else (
-        8 if bounces == "auto" else bounces)
+        MAX_BOUNCES if bounces == "auto" else bounces)
+    # the scene's diameter D: a k-bounce path's apparent range is at most the farthest
+    # range plus (k − 1) D / 2; a bistatic one's within D of the monostatic span
+    reach = float(np.linalg.norm(np.ptp(scene.hull_points(), axis=0))) if scene.is_mesh \
+        else 2.0 * scene.bounding_circle()[1]
     if bistatic:
-        reach = float(np.linalg.norm(np.ptp(scene.hull_points(), axis=0))) if \
-            scene.is_mesh else 2.0 * scene.bounding_circle()[1]
-        lo, hi, size = lo - reach, hi + reach, size + 2 * reach
-    a, b = float(lo.min()), float(hi.max()) + (top - 1) * size
+        lo, hi = lo - reach, hi + reach
+    size = float(np.max(hi - lo))
+    a, b = float(lo.min()), float(hi.max()) + 0.5 * (top - 1) * reach
     pad = max(0.5 * (b - a) / n_bins, 1e-9 * max(abs(a), abs(b), size, 1e-300))
     edges = np.linspace(a - pad, b + pad, n_bins + 1)
     return Ladar(kw.get("angles_deg"), view_vectors=kw.get("view_vectors"), bin_edges=edges)
@@ -190,6 +193,8 @@ def lrcs(scene, views, *, model=None, bounces=1, per_part=False, n_bins=LRCS_BIN
     n_bins = check_count("n_bins", n_bins)
     if per_part not in (True, False):
         raise ParameterError(f"per_part must be True or False; got {per_part!r}")
+    check_bounces(scene, bounces, options.get("bounce_samples"),
+                  {**options, "radiometry": "power"})
     ladar = _ladar(scene, views, bounces, n_bins, options.get("receiver") is not None)
     if model == "mesh":
         options["bounces"] = bounces

@@ -76,6 +76,7 @@ def test_a_bistatic_plate():
     ({"radiometry": "paper"}, "lrcs takes no radiometry option"),
     ({"per_part": "yes"}, "per_part must be True or False"),
     ({"bounces": 9}, "bounces must be an integer from 1 to 8"),
+    ({"bounces": "x"}, "bounces must be an integer from 1 to 8"),
     ({"n_bins": 0}, "n_bins"),
     ({"model": "ray"}, "model"),
 ])
@@ -110,3 +111,20 @@ def test_per_part_shares_with_bounces_sum_to_the_whole():
     single = 4 * RHO * 0.7 * np.cos(np.radians(45.0)) ** 2      # each plate: 4ρA cos²θ
     assert np.all(s.per_part[0] > single)
     assert s.per_part[0, 0] == pytest.approx(s.per_part[0, 1], rel=0.02)
+
+
+def test_the_bins_hold_every_higher_order_return():
+    """σ with three bounces equals 4π × the same paths' totals in bins ten scene sizes
+    wide (same seed, same spacing: the same paths): no return falls outside the bins that
+    lrcs chooses (the farthest range plus (k − 1) D / 2)."""
+    from meshladar.meshes import MeshPart as Part
+    plates = [Part([[0, 0, 0], [1, 0, 0], [1, 0, 0.7], [0, 0, 0.7]], [[0, 1, 2], [0, 2, 3]], 0,
+                   "a"),
+              Part([[0, 0, 0], [0, 0, 0.7], [0, 1, 0.7], [0, 1, 0]], [[0, 1, 2], [0, 2, 3]], 0,
+                   "b")]
+    scene = ml.Scene.from_parts(plates, [Lambertian(0.9)])
+    s = ml.lrcs(scene, [20.0], bounces=3, ray_spacing=1e-2, bounce_samples=1 << 14, seed=3)
+    wide = ml.simulate(scene, ml.Ladar([20.0], np.linspace(-10.0, 10.0, 101)), model="mesh",
+                       radiometry="power", ray_spacing=1e-2, bounces=3,
+                       bounce_samples=1 << 14, seed=3)
+    assert s.values[0] == pytest.approx(4 * np.pi * sum(wide.info["order_totals"]), rel=1e-9)
