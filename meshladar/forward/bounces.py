@@ -14,11 +14,11 @@ without the last cos θ₂ᵣ an SR coating's F at a grazing exit is unbounded),
 sampled per first hit as δA⊥ · F₁ cos θ₁ₒ / p(ω) · F₂ cos θ₂ᵣ · V, with δA⊥ the ray's
 cross-section and p the density of the sampled direction. Higher orders multiply in one
 factor F cos θ / p per vertex. Each return is binned at its apparent range, half the
-total optical path: r(x₁) + (L + (x₁ − x_k)·w) / 2 with L the path's length from x₁ to
-x_k and r(p) = −p·w.
+total optical path: (r(x₁) + L − x_k·w_r) / 2 with r(p) = −p·w, L the path's length from
+x₁ to x_k and w_r the receiver's direction (w when monostatic).
 
 Directions are sampled from a one-sample mixture (the density is the mixture's, so the
-estimate is unbiased whichever branch drew): cosine-weighted about the normal, and, for a
+estimate is unbiased whichever branch drew; one compiled pass, :mod:`._bounce_kernels`): cosine-weighted about the normal, and, for a
 coating with a specular lobe of width s (SR's e, GGX's α, Phong's √(2/(n + 2))), a half
 vector drawn from the Beckmann distribution of width s about the normal, reflected about
 it: narrow glints (e = 0.007) are sampled where they are. The bistatic weights are each
@@ -30,6 +30,9 @@ The first hits are a view's regular ray grid at the main run's spacing (so every
 single bounce sees is sampled), of which ``samples / BRANCHES`` are drawn at random with
 replacement (their weight scaled by hits / drawn), each with :data:`BRANCHES` independent
 paths. The standard error per bin is the spread of the drawn hits' totals over √draws.
+Each vertex's hit distance is recomputed in float64 against its face's plane: Embree's
+float32 distance leaves a hit ~1e-7 off its face, enough for its own shadow ray to hit
+that face again (a bowl's second order came out 31 % low that way).
 """
 
 from __future__ import annotations
@@ -50,7 +53,7 @@ from .mesh import first_hits, occluded
 
 __all__ = ["BRANCHES", "BOUNCE_SAMPLES", "Orders", "higher_orders", "check_bistatic", "walk"]
 
-#: Independent paths per drawn first hit (the spread among them gives the standard error).
+#: Independent paths per drawn first hit.
 BRANCHES = 8
 #: Paths per view and order by default.
 BOUNCE_SAMPLES = 1 << 15
