@@ -242,6 +242,9 @@ def test_the_guide_states_the_constants():
     assert orders.BOUNCE_SHARE == 0.01 and "(default 0.01)" in text
     assert orders.MAX_BOUNCES == 8 and "(up to 8)" in text
     assert specular.RETRO_CONE == 1e-3 and "(default 1 mrad)" in text
+    flat = " ".join(text.split())
+    assert orders.MAX_BOUNCE_SAMPLES == 4194304 and "at most 4194304" in flat
+    assert orders.BOUNCE_SAMPLES == 32768 and "default 32768" in flat
 
 
 def test_face_orders_and_sampled_paths():
