@@ -147,8 +147,7 @@ def lrcs(scene, views, *, model=None, bounces=1, per_part=False, n_bins=LRCS_BIN
     scene : Scene
         Analytic shapes (σ per unit height) or meshes.
     views : (n,) or (n, 3) array_like
-        View angles about z in degrees, or view vectors w (from the target toward the
-        ladar; normalised here).
+        View angles about z in degrees, or view vectors w (toward the ladar; normalised).
     model : {"analytic", "mesh", "pixel"}, optional
         The forward model; default "analytic" for analytic shapes, "mesh" for meshes.
     bounces : int or "auto"
