@@ -11,8 +11,8 @@ from ..errors import ParameterError
 from ..raytrace.backends import resolve_backend
 from ..raytrace.embree import embree_scene, geometry
 from ..scene import Scene
-from .bounces import BRANCHES, _weight, check_bistatic, walk
-from .mesh import first_hits
+from .bounces import BRANCHES, check_bistatic, single_bounce, walk
+from .orders import MAX_BOUNCES
 
 __all__ = ["face_orders", "dominant_order", "sample_paths", "GRID_RAYS"]
 
@@ -26,7 +26,7 @@ def _prepared(scene, view_vector, bounces, ray_spacing):
     w = unit_vectors("view_vector", view_vector)
     if w.shape != (3,):
         raise ParameterError(f"view_vector must be one (3,) direction; got shape {w.shape}")
-    bounces = check_count("bounces", bounces, 1, 8)
+    bounces = check_count("bounces", bounces, 1, MAX_BOUNCES)
     check_bistatic(scene.materials)
     lo, hi = scene.bounds()
     spacing = float(np.linalg.norm(hi - lo)) / GRID_RAYS if ray_spacing is None else \
@@ -70,12 +70,7 @@ def face_orders(scene, view_vector, *, bounces=3, samples=1 << 14, ray_spacing=N
     w, bounces, spacing, geo, emb = _prepared(scene, view_vector, bounces, ray_spacing)
     m = len(geo.faces)
     out = np.zeros((m, bounces))
-    _, f, _ = first_hits(scene, w, ray_spacing=spacing)
-    n = geo.face_normals[f]
-    n = n * np.sign(n @ w)[:, None]
-    ww = np.broadcast_to(w, n.shape)
-    out[:, 0] = np.bincount(f, spacing * spacing * _weight(scene.materials, geo.material[f],
-                                                            n, ww, ww), m)
+    out[:, 0] = np.bincount(*single_bounce(scene, geo, w, spacing), m)
     if bounces > 1 and scene.visibility().needs_bounces:
         legs = walk(scene, geo, emb, w, spacing, (bounces, samples),
                     np.random.default_rng(seed))

@@ -51,7 +51,8 @@ from ..raytrace.embree import embree_scene, geometry
 from ._bounce_kernels import sample_mixture
 from .mesh import first_hits, occluded
 
-__all__ = ["BRANCHES", "BOUNCE_SAMPLES", "Orders", "higher_orders", "check_bistatic", "walk"]
+__all__ = ["BRANCHES", "BOUNCE_SAMPLES", "Orders", "higher_orders", "check_bistatic", "walk",
+           "single_bounce"]
 
 #: Independent paths per drawn first hit.
 BRANCHES = 8
@@ -197,6 +198,35 @@ def _bin_stats(edges, ranges, values, path_id, draws):
     return total, var
 
 
+def single_bounce(scene, geo, w, spacing):
+    """A view's single bounce on a regular grid, monostatic, received power: (faces hit,
+    each ray's F·cos θ·δA⊥), the first order :func:`walk`'s paths start from.
+
+    Parameters
+    ----------
+    scene : Scene
+        The mesh scene.
+    geo :
+        Its flat-normal geometry (:mod:`meshladar.raytrace.embree`).
+    w : (3,) numpy.ndarray
+        The unit view.
+    spacing : float
+        The grid's spacing.
+
+    Returns
+    -------
+    faces : (k,) numpy.ndarray of int
+        The global face of each ray's first hit.
+    power : (k,) numpy.ndarray
+        Each hit's received power per unit irradiance.
+    """
+    _, f, _ = first_hits(scene, w, ray_spacing=spacing)
+    n = geo.face_normals[f]
+    n = n * np.sign(n @ w)[:, None]
+    ww = np.broadcast_to(w, n.shape)
+    return f, spacing * spacing * _weight(scene.materials, geo.material[f], n, ww, ww)
+
+
 class _Leg(NamedTuple):
     """One order's returns of a view's sampled paths: the face each leaves from toward the
     receiver, the point, its power per unit irradiance, apparent range and path number."""
@@ -254,9 +284,9 @@ def walk(scene, geo, emb, w, spacing, plan, rng, trail=None):
     length = np.zeros(len(face))
     if trail is not None:
         trail.append((ident, x))
+    widths = np.array([_lobe_width(m) for m in materials])
     for _ in range(bounces - 1):
-        width = np.array([_lobe_width(m) for m in materials])[geo.material[face]]
-        d, pdf = _sample(n, wi, width, rng)
+        d, pdf = _sample(n, wi, widths[geo.material[face]], rng)
         beta = beta * _weight(materials, geo.material[face], n, wi, d) / np.where(
             pdf > 0, pdf, np.inf)
         go = beta > 0

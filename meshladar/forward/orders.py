@@ -15,9 +15,8 @@ from ..errors import BounceWarning, ModelError, ParameterError, user_stacklevel
 from ..raytrace.backends import resolve_backend
 from ..raytrace.embree import embree_scene, geometry
 from ..scene import Scene
-from .bounces import (BOUNCE_SAMPLES, BRANCHES, _view_orders, _weight, check_bistatic,
-                      higher_orders)
-from .mesh import first_hits
+from .bounces import (BOUNCE_SAMPLES, BRANCHES, _view_orders, check_bistatic,
+                      higher_orders, single_bounce)
 
 __all__ = ["MAX_BOUNCES", "MAX_BOUNCE_SAMPLES", "BOUNCE_SHARE", "check_bounces",
            "add_bounces"]
@@ -208,16 +207,11 @@ def _check_second_order(scene, ladar, sino, share, seed):
     spacing = max(float(sino.info["ray_spacing"]),
                   float(np.linalg.norm(hi - lo)) / CHECK_GRID)
     geo = geometry(scene, "flat")
-    emb = embree_scene(geo, resolve_backend("auto"))
+    emb = embree_scene(geo, resolve_backend("embreex"))      # as higher_orders: incoherent
     first = second = 0.0
     for i, rng in zip(pick, np.random.SeedSequence(seed).spawn(len(pick))):
         w = np.asarray(ladar.view_vectors[i], np.float64)
-        _, f, _ = first_hits(scene, w, ray_spacing=spacing)
-        n = geo.face_normals[f]
-        n = n * np.sign(n @ w)[:, None]
-        g = _weight(scene.materials, geo.material[f], n, np.broadcast_to(w, n.shape),
-                    np.broadcast_to(w, n.shape))
-        first += spacing * spacing * float(g.sum())
+        first += float(single_bounce(scene, geo, w, spacing)[1].sum())
         second += float(_view_orders(scene, geo, emb, w, np.array([-np.inf, np.inf]),
                                      spacing, (2, CHECK_SAMPLES),
                                      np.random.default_rng(rng))[0][0].sum())
