@@ -119,7 +119,7 @@ def _run_mesh(scene, ladar, options):
     tol = options.get("tol")
     sino = _single_bounce(scene, ladar, options)
     return add_bounces(scene, ladar, sino, bounces, samples, tol=tol,
-                       seed=options.get("seed"))
+                       seed=options.get("seed"), sensor=options.get("sensor"))
 
 
 def _single_bounce(scene, ladar, options):

@@ -9,13 +9,17 @@ order-2 intensity toward the receiver is
 
     I₂ = ∫∫ F₁(w, ω) cos θ₁ · F₂(−ω, w) · cos θ₁ₒ cos θ₂ᵢ / r² · cos θ₂ᵣ · V dA₁ dA₂
 
-in the received-power radiometry (the paper's Eq. 8, one cosine fewer, is single-bounce:
-without the last cos θ₂ᵣ an SR coating's F at a grazing exit is unbounded),
+in the received-power radiometry (under the paper's Eq. 8, one cosine fewer, the last
+vertex weighs F₂ without cos θ₂ᵣ, as the single bounce's bistatic weight does; an SR
+coating's F grows as 1/cos θ₂ᵣ toward an edge-on exit, warned as there),
 sampled per first hit as δA⊥ · F₁ cos θ₁ₒ / p(ω) · F₂ cos θ₂ᵣ · V, with δA⊥ the ray's
 cross-section and p the density of the sampled direction. Higher orders multiply in one
 factor F cos θ / p per vertex. Each return is binned at its apparent range, half the
 total optical path: (r(x₁) + L − x_k·w_r) / 2 with r(p) = −p·w, L the path's length from
-x₁ to x_k and w_r the receiver's direction (w when monostatic).
+x₁ to x_k and w_r the receiver's direction (w when monostatic). A sensor's beam weighs the
+first hits, and a sensor at a finite standoff starts the paths on its own rays and ends
+them at itself, with its receiver's solid angle and the atmosphere
+(:mod:`.bounce_ends`).
 
 Directions are sampled from a one-sample mixture (the density is the mixture's, so the
 estimate is unbiased whichever branch drew; one compiled pass, :mod:`._bounce_kernels`): cosine-weighted about the normal, and, for a
@@ -37,6 +41,7 @@ that face again (a bowl's second order came out 31 % low that way).
 
 from __future__ import annotations
 
+import warnings
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -44,12 +49,14 @@ from typing import NamedTuple
 import numpy as np
 
 from ..brdf import GGX, Phong, SandfordRobertson
-from ..precision import RECEIVER_LIFT
-from ..errors import ModelError, ParameterError
+from ..precision import COS_HORIZON, RECEIVER_LIFT
+from ..errors import MeshladarWarning, ModelError, ParameterError, user_stacklevel
 from ..raytrace.backends import resolve_backend
 from ..raytrace.embree import embree_scene, geometry
 from ._bounce_kernels import sample_mixture
-from .mesh import first_hits, occluded
+from ..weighing.hit_weights import GRAZING_RECEIVER_COS
+from .bounce_ends import Ends, entries, to_receiver, view_ends
+from .mesh import first_hits
 
 __all__ = ["BRANCHES", "BOUNCE_SAMPLES", "Orders", "higher_orders", "check_bistatic", "walk",
            "single_bounce"]
@@ -80,7 +87,7 @@ class Orders:
     samples : int
         Paths per view and order.
     radiometry : str
-        ``"power"`` (module docstring).
+        ``"power"`` or ``"paper"`` (module docstring).
     per_part : (n_orders, n_views, n_parts) numpy.ndarray or None
         Each order's total per part of the scene, by the part of each path's last surface
         (they sum to ``values`` over the bins).
@@ -143,8 +150,11 @@ def _sample(n, wi, width, rng):
     return d, pdf
 
 
-def _weight(materials, mat, n, wi, wo):
-    """F(wi, wo)·cos θo per vertex, each coating's own bistatic evaluation."""
+def _weight(materials, mat, n, wi, wo, power=True):
+    """F(wi, wo)·cos θo per vertex, each coating's own bistatic evaluation; F alone where
+    not ``power`` (the paper's Eq. 8 at the last vertex: divided by cos θo floored at
+    COS_HORIZON, warned where a contributing vertex is within GRAZING_RECEIVER_COS of
+    edge-on, as the single bounce's bistatic weight is)."""
     ci, co = _dot(n, wi), _dot(n, wo)
     h = wi + wo
     h /= np.maximum(np.linalg.norm(h, axis=1, keepdims=True), 1e-300)
@@ -157,7 +167,15 @@ def _weight(materials, mat, n, wi, wo):
             c = [np.clip(x[sel], 0.0, 1.0) for x in (ci, co, ch)]
             out[sel] = m.bistatic(c[0], np.sqrt(1.0 - c[0] ** 2), c[1],
                                   np.sqrt(1.0 - c[1] ** 2), c[2], np.sqrt(1.0 - c[2] ** 2))
-    return out
+    if power:
+        return out
+    if np.any((out > 0) & (co < GRAZING_RECEIVER_COS)):
+        warnings.warn("surfaces that light reaches after a bounce lie edge-on to the receiver "
+                      "(cos θr < 1e-6): under radiometry='paper' a return weighs F, which "
+                      "grows as 1/cos θr there, so they dominate the profile; "
+                      "radiometry='power' (received power, F·cos θr) is finite",
+                      MeshladarWarning, stacklevel=user_stacklevel())
+    return out / np.maximum(co, COS_HORIZON)
 
 
 def _cast(emb, geo, points, normals, d):
@@ -198,9 +216,10 @@ def _bin_stats(edges, ranges, values, path_id, draws):
     return total, var
 
 
-def single_bounce(scene, geo, w, spacing):
-    """A view's single bounce on a regular grid, monostatic, received power: (faces hit,
-    each ray's F·cos θ·δA⊥), the first order :func:`walk`'s paths start from.
+def single_bounce(scene, geo, w, spacing, power=True):
+    """A view's single bounce on a regular grid, monostatic, at infinity: (faces hit, each
+    ray's F·cos θ·δA⊥, or F·δA⊥ where not ``power``), the first order :func:`walk`'s paths
+    start from.
 
     Parameters
     ----------
@@ -212,19 +231,21 @@ def single_bounce(scene, geo, w, spacing):
         The unit view.
     spacing : float
         The grid's spacing.
+    power : bool
+        Received power (default) or the paper's Eq. 8.
 
     Returns
     -------
     faces : (k,) numpy.ndarray of int
         The global face of each ray's first hit.
-    power : (k,) numpy.ndarray
-        Each hit's received power per unit irradiance.
+    value : (k,) numpy.ndarray
+        Each hit's value per unit irradiance.
     """
     _, f, _ = first_hits(scene, w, ray_spacing=spacing)
     n = geo.face_normals[f]
     n = n * np.sign(n @ w)[:, None]
     ww = np.broadcast_to(w, n.shape)
-    return f, spacing * spacing * _weight(scene.materials, geo.material[f], n, ww, ww)
+    return f, spacing * spacing * _weight(scene.materials, geo.material[f], n, ww, ww, power)
 
 
 class _Leg(NamedTuple):
@@ -247,8 +268,9 @@ def walk(scene, geo, emb, w, spacing, plan, rng, trail=None):
         The mesh scene.
     geo, emb :
         Its flat-normal geometry and Embree scene (:mod:`meshladar.raytrace.embree`).
-    w : (3,) numpy.ndarray or tuple
-        The view, or (view, receiver) for a bistatic receiver.
+    w : (3,) numpy.ndarray or tuple or Ends
+        The view, (view, receiver) for a bistatic receiver, or the view's
+        :class:`~meshladar.forward.bounce_ends.Ends` (a sensor, the radiometry).
     spacing : float
         The first hits' grid spacing.
     plan : (int, int)
@@ -262,25 +284,24 @@ def walk(scene, geo, emb, w, spacing, plan, rng, trail=None):
     ------
     _Leg
         Per order 2..bounces: the face each return leaves from toward the receiver, the
-        point, its power per unit irradiance, apparent range and path number. Nothing for
-        a view that meets nothing.
+        point, its value per unit irradiance (in the ends' radiometry), apparent range and
+        path number. Nothing for a view that meets nothing.
     """
     bounces, samples = plan
-    w, w_r = (w, w) if np.ndim(w) == 1 else w
+    ends = w if isinstance(w, Ends) else view_ends(*((w,) if np.ndim(w) == 1 else w))
     materials = scene.materials
-    p, f, r = first_hits(scene, w, ray_spacing=spacing)
+    p, f, r, power = entries(scene, geo, emb, ends, spacing)
     if not len(f):
         return
     draw = max(2, samples // BRANCHES)
     pick = rng.integers(0, len(f), draw)
-    x1 = np.repeat(p[pick], BRANCHES, axis=0)
-    face = np.repeat(f[pick], BRANCHES)
-    r1 = np.repeat(r[pick], BRANCHES)
+    x, face, r1 = p[pick].repeat(BRANCHES, 0), f[pick].repeat(BRANCHES), r[pick].repeat(BRANCHES)
     ident = np.arange(len(face))
-    x, n = x1, geo.face_normals[face]
-    wi = np.broadcast_to(w, n.shape)
+    wi = (ends.position - x) / r1[:, None] if ends.position is not None else \
+        np.broadcast_to(ends.w, x.shape)
+    n = geo.face_normals[face]
     n = n * np.sign(_dot(n, wi))[:, None]
-    beta = np.full(len(face), spacing * spacing * len(f) / draw / BRANCHES)
+    beta = power[pick].repeat(BRANCHES) * (len(f) / draw / BRANCHES)
     length = np.zeros(len(face))
     if trail is not None:
         trail.append((ident, x))
@@ -302,11 +323,28 @@ def walk(scene, geo, emb, w, spacing, plan, rng, trail=None):
         face = f2
         if trail is not None:
             trail.append((ident, x))
-        g = _weight(materials, geo.material[face], n, wi, np.broadcast_to(w_r, n.shape))
-        seen = g > 0
-        seen[seen] = ~occluded(scene, x[seen], w_r)
-        yield _Leg(face[seen], x[seen], (beta * g)[seen],
-                   0.5 * (r1 + length - x @ w_r)[seen], ident[seen])   # r1 = −x₁·w
+        yield _leg(scene, geo, emb, ends, face, x, n, wi, beta, r1, length, ident)
+
+
+def _leg(scene, geo, emb, ends, face, x, n, wi, beta, r1, length, ident):
+    """The vertices' returns: each joined to the receiver by a shadow ray (a :class:`_Leg`
+    of those that reach it)."""
+    d_r, out, receive = to_receiver(ends, x, r1, length)
+    g = _weight(scene.materials, geo.material[face], n, wi, d_r, power=ends.power)
+    if receive is not None:
+        g = g * receive
+    seen = g > 0
+    seen[seen] = ~_blocked(emb, geo, x[seen], d_r[seen])
+    return _Leg(face[seen], x[seen], (beta * g)[seen],
+                (0.5 * (r1 + length + out) - ends.offset)[seen], ident[seen])
+
+
+def _blocked(emb, geo, points, d):
+    """Whether the ray from each point (scene coordinates, lifted along its direction)
+    along ``d`` meets the scene (the receiver lies beyond every face)."""
+    o = points - geo.center + _LIFT * geo.radius * d
+    return emb.run(np.ascontiguousarray(o, dtype=np.float32),
+                   np.ascontiguousarray(d, dtype=np.float32), query="OCCLUDED") != -1
 
 
 def _view_orders(scene, geo, emb, w, edges, spacing, plan, rng):
@@ -322,8 +360,9 @@ def _view_orders(scene, geo, emb, w, edges, spacing, plan, rng):
 
 
 def higher_orders(scene, ladar, *, bounces, ray_spacing, samples=BOUNCE_SAMPLES,
-                  seed=None, jobs=1, backend="embreex", receivers=None) -> Orders:
-    """Orders 2..``bounces`` of a mesh scene's monostatic returns (module docstring).
+                  seed=None, jobs=1, backend="embreex", receivers=None, sensor=None,
+                  radiometry="power") -> Orders:
+    """Orders 2..``bounces`` of a mesh scene's returns (module docstring).
 
     A scene whose :meth:`~meshladar.scene.Scene.visibility` needs no bounce gets exact
     zeros without a ray cast.
@@ -333,7 +372,7 @@ def higher_orders(scene, ladar, *, bounces, ray_spacing, samples=BOUNCE_SAMPLES,
     scene : Scene
         A mesh scene.
     ladar : Ladar
-        Views (parallel, monostatic) and range bins.
+        Views and range bins.
     bounces : int
         The highest order, ≥ 2.
     ray_spacing : float
@@ -348,11 +387,18 @@ def higher_orders(scene, ladar, *, bounces, ray_spacing, samples=BOUNCE_SAMPLES,
         The ray-casting backend of the bounce segments (:mod:`meshladar.raytrace.backends`);
         default ``"embreex"``, one ray at a time: the bounce rays are incoherent, and the
         packet backend ran them at 0.89 of its speed (``meshladar bench``, bounce line).
-
     receivers : (n_views, 3) array_like, optional
         Bistatic receivers' unit directions, one per view (None: monostatic); a path's
         last vertex is joined to its view's receiver, and binned at half of
         −x₁·w + L − x_k·w_r (the single bounce's bistatic range −p·(w + w_r)/2).
+    sensor : Sensor, optional
+        The run's sensor (monostatic): its beam weighs the first hits, and at a finite
+        standoff paths start on its rays and end at it (:mod:`.bounce_ends`). Values are
+        per unit of the aim point's irradiance, as the single bounce's before its
+        photoelectrons.
+    radiometry : {"power", "paper"}
+        Received power (default), or the paper's Eq. 8: the last vertex weighs F, not
+        F·cos θr.
 
     Returns
     -------
@@ -371,12 +417,13 @@ def higher_orders(scene, ladar, *, bounces, ray_spacing, samples=BOUNCE_SAMPLES,
         seeds = np.random.SeedSequence(seed).spawn(ladar.n_views)
 
         def view(i):
-            w = np.asarray(ladar.view_vectors[i], np.float64)
-            pair = w if receivers is None else (w, np.asarray(receivers[i], np.float64))
-            return _view_orders(scene, geo, emb, pair, ladar.bin_edges, ray_spacing,
+            ends = view_ends(ladar.view_vectors[i],
+                             None if receivers is None else receivers[i], sensor,
+                             radiometry == "power")
+            return _view_orders(scene, geo, emb, ends, ladar.bin_edges, ray_spacing,
                                 (bounces, samples), np.random.default_rng(seeds[i]))
         with ThreadPoolExecutor(max(1, int(jobs))) as pool:
             for i, ((v, e), share) in enumerate(pool.map(view, range(ladar.n_views))):
                 values[:, i], var[:, i], per_part[:, i] = v, e, share
-    return Orders(tuple(range(2, bounces + 1)), values, np.sqrt(var), samples,
+    return Orders(tuple(range(2, bounces + 1)), values, np.sqrt(var), samples, radiometry,
                   per_part=per_part)

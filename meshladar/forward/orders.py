@@ -75,13 +75,6 @@ def check_bounces(scene, bounces, samples, options):
                              f"{MAX_BOUNCE_SAMPLES} (a path holds ~200 bytes while a view "
                              f"is sampled); got {samples!r}")
     if bounces != 1 and isinstance(scene, Scene) and scene.visibility().needs_bounces:
-        if options.get("sensor") is not None:
-            raise ParameterError("bounces > 1 is computed for a ladar at infinity in this "
-                                 "version; got sensor=...")
-        if options.get("radiometry", "paper") != "power":
-            raise ParameterError("bounces > 1 needs radiometry='power': the paper's Eq. 8 "
-                                 "is single-bounce (its one cosine fewer leaves F at a "
-                                 "grazing exit unbounded)")
         if options.get("mode") == "slice" or (options.get("mode") is None and scene.shapes):
             raise ParameterError("bounces > 1 needs mode='3d' (a slice's light leaves "
                                  "its plane)")
@@ -89,7 +82,7 @@ def check_bounces(scene, bounces, samples, options):
     return bounces, int(samples)
 
 
-def add_bounces(scene, ladar, sino, bounces, samples, *, tol=None, seed=None):
+def add_bounces(scene, ladar, sino, bounces, samples, *, tol=None, seed=None, sensor=None):
     """The single bounce's sinogram with orders 2.. added (``bounces`` > 1 or ``"auto"``),
     or, for ``bounces=1`` on a scene that needs bounces, checked by a cheap pass that
     warns when the second order's share exceeds the threshold.
@@ -113,6 +106,9 @@ def add_bounces(scene, ladar, sino, bounces, samples, *, tol=None, seed=None):
         (relative L2; :func:`_sampled`).
     seed : int, optional
         Seeds the sampling.
+    sensor : Sensor, optional
+        The run's sensor: the orders are sampled from it (its beam, its standoff) and
+        scaled to photoelectrons as the single bounce is, when it counts them.
 
     Returns
     -------
@@ -127,10 +123,8 @@ def add_bounces(scene, ladar, sino, bounces, samples, *, tol=None, seed=None):
     Warns
     -----
     BounceWarning
-        With ``bounces=1`` and the received-power radiometry, when the cheap pass (seeded:
-        the same scene warns or not every time) puts the second order above the share.
-        The paper's radiometry is its single-bounce Eq. 8 by definition, and is not
-        checked.
+        With ``bounces=1``, when the cheap pass (seeded: the same scene warns or not every
+        time; parallel rays, in received power) puts the second order above the share.
     """
     share = BOUNCE_SHARE if tol is None else tol
     if not scene.is_mesh:
@@ -138,13 +132,12 @@ def add_bounces(scene, ladar, sino, bounces, samples, *, tol=None, seed=None):
     needs = scene.visibility().needs_bounces
     first = float(sino.values.sum())
     if bounces == 1 or not needs:
-        if bounces == 1 and needs and sino.radiometry == "power" and \
-                sino.info.get("mode") != "slice":
+        if bounces == 1 and needs and sino.info.get("mode") != "slice":
             _check_second_order(scene, ladar, sino, share, 0 if seed is None else seed)
         n = 1 if bounces == "auto" else bounces                  # exact zeros beyond 1
         return _with_orders(sino, sino.values, n, [first] + [0.0] * (n - 1), [0.0] * n)
     top = MAX_BOUNCES if bounces == "auto" else bounces
-    orders = _sampled(scene, ladar, sino, top, samples, tol, seed)
+    orders = _sampled(scene, ladar, sino, (top, samples), tol, seed, sensor)
     totals = orders.values.sum(axis=(1, 2))
     errors = np.sqrt((orders.stderr ** 2).sum(axis=(1, 2)))
     keep = top - 1
@@ -159,22 +152,30 @@ def add_bounces(scene, ladar, sino, bounces, samples, *, tol=None, seed=None):
                                   bounce_part_totals=shares.tolist()))
 
 
-def _sampled(scene, ladar, sino, top, samples, tol, seed):
-    """The orders 2..top at ``samples`` paths a view; with ``tol``, that run is a pilot:
-    when the bounce terms' standard error (relative L2 over the sinogram) exceeds half of
-    ``tol``, the paths grow by the square of the ratio (with 20 % to spare, at most
-    MAX_BOUNCE_SAMPLES) and the orders are sampled again."""
-    orders = higher_orders(scene, ladar, bounces=top, ray_spacing=sino.info["ray_spacing"],
-                           samples=samples, seed=seed, receivers=_receivers(sino, ladar))
+def _sampled(scene, ladar, sino, plan, tol, seed, sensor):
+    """The orders 2..top at ``samples`` paths a view (``plan``: (top, samples)), in the
+    sinogram's units; with ``tol``, that run is a pilot: when the bounce terms' standard
+    error (relative L2 over the sinogram) exceeds half of ``tol``, the paths grow by the
+    square of the ratio (with 20 % to spare, at most MAX_BOUNCE_SAMPLES) and the orders are
+    sampled again."""
+    top, samples = plan
+
+    def run(n):
+        o = higher_orders(scene, ladar, bounces=top, ray_spacing=sino.info["ray_spacing"],
+                          samples=n, seed=seed, receivers=_receivers(sino, ladar),
+                          sensor=sensor, radiometry=sino.radiometry)
+        if sensor is None or not sensor.counts_photons:
+            return o
+        k = sensor.photoelectrons_per_unit()
+        return replace(o, values=o.values * k, stderr=o.stderr * k, per_part=o.per_part * k)
+    orders = run(samples)
     if tol is None:
         return orders
     norm = float(np.linalg.norm(sino.values + orders.values.sum(axis=0)))
     error = float(np.sqrt((orders.stderr ** 2).sum())) / norm if norm > 0 else 0.0
     if error <= 0.5 * tol or samples >= MAX_BOUNCE_SAMPLES:
         return orders
-    more = int(min(MAX_BOUNCE_SAMPLES, np.ceil(1.2 * samples * (error / (0.5 * tol)) ** 2)))
-    return higher_orders(scene, ladar, bounces=top, ray_spacing=sino.info["ray_spacing"],
-                         samples=more, seed=seed, receivers=_receivers(sino, ladar))
+    return run(int(min(MAX_BOUNCE_SAMPLES, np.ceil(1.2 * samples * (error / (0.5 * tol)) ** 2))))
 
 
 def _receivers(sino, ladar):
@@ -195,7 +196,8 @@ def _check_second_order(scene, ladar, sino, share, seed):
     """The cheap pass of a single bounce on a scene that needs bounces: on at most
     CHECK_VIEWS of the views, first hits on a grid of about CHECK_GRID rays across the
     scene, the single bounce and CHECK_SAMPLES second-bounce paths summed over all ranges
-    (both in received power);
+    (both in received power, whichever the run's radiometry: the physical share; parallel
+    rays);
     warns when their ratio exceeds ``share``. Not done where a coating has no bistatic
     evaluation."""
     try:
@@ -217,6 +219,7 @@ def _check_second_order(scene, ladar, sino, share, seed):
                                      np.random.default_rng(rng))[0][0].sum())
     if first > 0 and second > share * first:
         warnings.warn(f"this scene is not convex and its second bounce adds about "
-                      f"{100 * second / first:.2g} % to the single bounce (a cheap estimate "
+                      f"{100 * second / first:.2g} % to the single bounce's received power "
+                      f"(a cheap estimate "
                       f"on {len(pick)} views); bounces=2 or bounces='auto' includes it",
                       BounceWarning, stacklevel=user_stacklevel())

@@ -187,28 +187,63 @@ def trace_sensor_view(plan, scene, view):
         factor = _shading_factor(cos_t, cos_geo)
     if back_faces == "ignore":
         cos_t = np.where(back, -1.0, cos_t)
-    beam = sensor.beam
-    off = aim + beam.offset[0] * u + beam.offset[1] * v if hasattr(beam, "offset") else aim
+    beam_factor, receive = sensor_factors(sensor, w, aim, p, sensor_pos, t, cos3)
+    factor = factor * beam_factor
     if D is None:
-        rel = p - off
-        along = dot(rel, w)
-        rho = np.linalg.norm(rel - along[:, None] * w, axis=1)
-        factor = factor * beam.relative(rho, None, None)
-        receive = None                              # (a sensor at infinity: no extinction)
         rng_rel = t - dot(start, w)                # r = −p·w relative to the shifted centre
     else:
-        axis = off - sensor_pos
-        axis = axis / np.linalg.norm(axis)
-        rel = p - sensor_pos
-        z = dot(rel, axis)
-        rho = np.linalg.norm(rel - z[:, None] * axis, axis=1)
-        R = t
-        factor = factor * cos3 * (R / D) ** 2 * beam.relative(rho, z, D)
-        receive = (D / R) ** 2 * np.exp(-2.0 * sensor.extinction * R)
-        rng_rel = R - D - float((aim + geo.center) @ w)
+        rng_rel = t - D - float((aim + geo.center) @ w)
     across = np.stack([dot(p, u), dot(p, v)], -1)       # shifted, as trace_view's
     return ViewHits(rng_rel, cos_t, sin_t, geo.material[prim], np.zeros((prim.size, 4)),
                     n_rays, int(back.sum()), None, factor, None, receive, across)
+
+
+def sensor_factors(sensor, w, aim, p, sensor_pos=None, R=None, cos3=1.0):
+    """Per hit, the sensor's ``weight_factor`` (the beam's irradiance at the hit relative to
+    the aim point's, and at a finite standoff the ray's cross-section cos³α (R/D)²) and
+    ``receive_factor`` ((D/R)² exp(−2σR); None at infinity), as the module docstring
+    gives them; the shading factor of smooth normals is not included.
+
+    Parameters
+    ----------
+    sensor : meshladar.sensor.Sensor
+        The sensor.
+    w : (3,) numpy.ndarray
+        The unit view.
+    aim : (3,) numpy.ndarray
+        The aim point, in the same coordinates as ``p`` and ``sensor_pos``.
+    p : (k, 3) numpy.ndarray
+        The hits.
+    sensor_pos : (3,) numpy.ndarray, optional
+        The sensor's position at a finite standoff (None: at infinity).
+    R : (k,) numpy.ndarray, optional
+        The hits' distances from the sensor (at a finite standoff).
+    cos3 : float or (k,) numpy.ndarray
+        cos³α of each ray against the boresight (1 at infinity).
+
+    Returns
+    -------
+    factor : (k,) numpy.ndarray
+        The weight factor.
+    receive : (k,) numpy.ndarray or None
+        The receive factor (None at infinity: no extinction, the receiver's solid angle
+        the same for every hit).
+    """
+    beam, D = sensor.beam, sensor.standoff
+    u, v = frame(w)
+    off = aim + beam.offset[0] * u + beam.offset[1] * v if hasattr(beam, "offset") else aim
+    if sensor_pos is None:
+        rel = p - off
+        along = dot(rel, w)
+        rho = np.linalg.norm(rel - along[:, None] * w, axis=1)
+        return beam.relative(rho, None, None), None
+    axis = off - sensor_pos
+    axis = axis / np.linalg.norm(axis)
+    rel = p - sensor_pos
+    z = dot(rel, axis)
+    rho = np.linalg.norm(rel - z[:, None] * axis, axis=1)
+    return (cos3 * (R / D) ** 2 * beam.relative(rho, z, D),
+            (D / R) ** 2 * np.exp(-2.0 * sensor.extinction * R))
 
 
 def _rowdot(a, b):

@@ -10,7 +10,7 @@ import pytest
 import meshladar as ml
 from meshladar.brdf import Lambertian, SandfordRobertson, Tabulated
 from meshladar.errors import MeshladarWarning, ModelError, ParameterError
-from meshladar.forward import bounces as bounce_module
+from meshladar.forward import bounce_ends, bounces as bounce_module
 from meshladar.forward.bounces import higher_orders
 from meshladar.meshes import MeshPart
 
@@ -35,15 +35,17 @@ def dihedral(material):
                                [material])
 
 
-def quadrature(n, phi_r=None):
+def quadrature(n, phi_r=None, paper=False):
     """The Lambertian dihedral's two-bounce return per bin, by a midpoint rule written
     here: points x on A and y on B, the height difference u = z_B − z_A (weight B − |u|
     for the pairs of heights), kernel x y / r⁴ (both cosines over r²) times
     (ρ/π)² cos θ₁ (the entering cosine) cos θᵣ (the leaving one), both ways round; every
     pair sees the other, no shadowing at 0 < φ < 90°; binned at half the optical path,
     (−x₁·w + r − x₂·w_r) / 2. ``phi_r``: a bistatic receiver w_r at that angle in the x-y
-    plane (default: the view's)."""
+    plane (default: the view's). ``paper``: the paper's Eq. 8, without the leaving
+    cosine."""
     phi_r = PHI if phi_r is None else phi_r
+    leave_b, leave_a = (1.0, 1.0) if paper else (np.cos(phi_r), np.sin(phi_r))
     h, hu = A / n, 2 * B / (2 * n)
     xs = (np.arange(n) + 0.5) * h
     us = -B + (np.arange(2 * n) + 0.5) * hu
@@ -54,10 +56,10 @@ def quadrature(n, phi_r=None):
         s2 = x * x + y * y + u * u
         k = x * y * (B - np.abs(u)) / s2 ** 2
         # A -> B: enters A at (x, 0) (cos = sin φ), leaves B at (0, y) (cos = cos φ_r)
-        out += c * np.sin(PHI) * np.cos(phi_r) * np.histogram(
+        out += c * np.sin(PHI) * leave_b * np.histogram(
             0.5 * (-x * np.cos(PHI) + np.sqrt(s2) - y * np.sin(phi_r)), EDGES, weights=k)[0]
         # B -> A: enters B at (0, y) (cos φ), leaves A at (x, 0) (sin φ_r)
-        out += c * np.cos(PHI) * np.sin(phi_r) * np.histogram(
+        out += c * np.cos(PHI) * leave_a * np.histogram(
             0.5 * (-y * np.sin(PHI) + np.sqrt(s2) - x * np.cos(phi_r)), EDGES, weights=k)[0]
     return out * h * h * hu
 
@@ -80,6 +82,32 @@ def test_the_dihedral_matches_the_quadrature(reference):
     total_se = np.sqrt(np.sum(se ** 2))
     assert abs(v.sum() - q.sum()) <= SIGMAS * total_se + abs(q.sum() - coarse.sum())
     assert total_se < 5e-3 * q.sum()                     # the comparison means something
+
+
+def test_the_papers_radiometry_drops_the_leaving_cosine():
+    """Under radiometry="paper" the last vertex weighs F, not F·cos θr: the dihedral's
+    second order against the quadrature without the leaving cosine (φ = 30°: the two
+    plates' shares change by 1/cos 30° and 1/sin 30°, unevenly), per bin and in total; and
+    through simulate, whose single bounce is the paper's Eq. 8 run."""
+    q, coarse = quadrature(400, paper=True), quadrature(200, paper=True)
+    lad = ml.Ladar(None, view_vectors=W[None], bin_edges=EDGES)
+    o = higher_orders(dihedral(Lambertian(RHO)), lad, bounces=2, ray_spacing=2e-3,
+                      samples=SAMPLES, seed=5, radiometry="paper")
+    v, se = o.values[0, 0], o.stderr[0, 0]
+    assert o.radiometry == "paper"
+    slack = SIGMAS * se + np.abs(q - coarse)
+    assert np.all(np.abs(v - q) <= slack + 1e-3 * q.max()), np.round((v - q) / q.max(), 4)
+    power = quadrature(200)
+    assert abs(q.sum() / power.sum() - 1.0) > 0.3             # the two differ
+    sino = ml.simulate(dihedral(Lambertian(RHO)), lad, model="mesh", bounces=2,
+                       bounce_samples=1 << 16, seed=1, ray_spacing=4e-3)
+    with pytest.warns(ml.errors.BounceWarning, match="second bounce adds about"):
+        single = ml.simulate(dihedral(Lambertian(RHO)), lad, model="mesh",
+                             ray_spacing=4e-3, bounces=1, seed=1)
+    assert sino.radiometry == "paper" and sino.info["bounces"] == 2
+    np.testing.assert_allclose(sino.info["order_totals"][0], single.values.sum(), rtol=1e-12)
+    second, err = sino.info["order_totals"][1], sino.info["order_stderr"][1]
+    assert abs(second - q.sum()) <= SIGMAS * err + abs(q.sum() - coarse.sum())
 
 
 def test_a_lambertian_bowl_matches_the_integrating_sphere_closed_form():
@@ -211,13 +239,12 @@ def test_tol_sets_the_paths_from_a_variance_estimate():
     ({"bounces": 2, "bounce_samples": 4}, "bounce_samples must be an integer from 8 to"),
     ({"bounces": 2, "bounce_samples": 1 << 23}, "bounce_samples must be an integer from 8 to"),
     ({"bounces": np.array([2])}, "bounces must be"),
-    ({"bounces": 2, "sensor": ml.sensor.Sensor(standoff=100.0), "radiometry": "power"},
-     "ladar at infinity"),
     ({"bounces": 2, "mode": "slice", "radiometry": "power"}, "needs mode='3d'"),
-    ({"bounces": 2}, "needs radiometry='power'"),
+    ({"bounces": 2, "mode": "slice"}, "needs mode='3d'"),
 ])
 def test_bad_bounce_options_are_refused_before_work(monkeypatch, kwargs, match):
     monkeypatch.setattr(bounce_module, "first_hits", None)      # any ray would fail
+    monkeypatch.setattr(bounce_ends, "first_hits", None)
     lad = ml.Ladar(np.array([30.0]), EDGES)
     with pytest.raises(ParameterError, match=match):
         ml.simulate(dihedral(Lambertian(RHO)), lad, model="mesh", **kwargs)
