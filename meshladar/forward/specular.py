@@ -4,8 +4,9 @@ in geometric optics: corner reflectors, dihedrals, mirrors.
 Where a coating's specular lobe is narrow (SR's e, GGX's α of 0.01 and below), sampling a
 path that leaves toward a receiver at infinity is hopeless: each ray is instead reflected
 as in a mirror (about the hit face's flat normal, turned toward the light), its power
-multiplied at each vertex by the coating's specular albedo (SR's ε, GGX's reflectance:
-the lobe's directional-hemispherical reflectance in the narrow-lobe limit; a Lambertian
+multiplied at each vertex by the coating's specular albedo at its incidence θ (SR's
+ρs(θ) = 1 − (ε + ρd) g(θ)/G(b), Eq. A8; GGX's reflectance: the lobe's
+directional-hemispherical reflectance in the narrow-lobe limit; a Lambertian
 surface reflects nothing specularly and ends the chain), until it leaves the scene. A
 path that leaves after k reflections within ``cone`` of the receiver's direction w is a
 k-bounce return: its power per unit incident irradiance (an area, δA⊥ Π ρₛ summed over
@@ -62,32 +63,51 @@ class SpecularReturns:
     cone: float
 
 
-def specular_albedo(coating) -> float:
-    """A coating's specular albedo in the narrow-lobe limit (module docstring).
+def specular_albedo(coating, cos_theta=1.0):
+    """A coating's specular albedo in the narrow-lobe limit (module docstring): the
+    specular lobe's directional-hemispherical reflectance at incidence θ.
 
     Parameters
     ----------
     coating : BRDF
         SandfordRobertson, GGX or Lambertian.
+    cos_theta : float or array_like
+        cos θ of the incidence (default 1: normal incidence); clipped to [0, 1].
 
     Returns
     -------
-    float
-        SR's ε (0 for ``lobes="diffuse"``), GGX's reflectance, 0 for Lambertian.
+    float or numpy.ndarray
+        SR's ρs(θ) = 1 − (ε + ρd) g(θ)/G(b) (A8; ε is the emissivity, not the
+        reflectance; 0 for ``lobes="diffuse"``), GGX's reflectance, 0 for Lambertian; of
+        ``cos_theta``'s shape.
 
     Raises
     ------
     ModelError
         For any other model (its specular albedo is not known here).
     """
+    c = np.clip(np.asarray(cos_theta, np.float64), 0.0, 1.0)
     if isinstance(coating, SandfordRobertson):
-        return 0.0 if coating.lobes == "diffuse" else float(coating.epsilon)
-    if isinstance(coating, GGX):
-        return float(coating.reflectance)
-    if isinstance(coating, Lambertian):
-        return 0.0
-    raise ModelError(f"the specular chain knows the specular albedo of SandfordRobertson, "
+        out = c * 0.0 if coating.lobes == "diffuse" else \
+            coating.specular_reflectance(np.arccos(c)) + c * 0.0
+    elif isinstance(coating, GGX):
+        out = c * 0.0 + float(coating.reflectance)
+    elif isinstance(coating, Lambertian):
+        out = c * 0.0
+    else:
+        raise ModelError(f"the specular chain knows the specular albedo of SandfordRobertson, "
                      f"GGX and Lambertian coatings; got {type(coating).__name__}")
+    return float(out) if out.ndim == 0 else out
+
+
+def _albedos(materials, mat, cos_theta):
+    """Each vertex's specular albedo at its incidence (:func:`specular_albedo`)."""
+    out = np.zeros(len(mat))
+    for i, m in enumerate(materials):
+        sel = mat == i
+        if np.any(sel):
+            out[sel] = specular_albedo(m, cos_theta[sel])
+    return out
 
 
 def specular_chain(scene, ladar, *, bounces=3, ray_spacing, cone=RETRO_CONE):
@@ -125,19 +145,20 @@ def specular_chain(scene, ladar, *, bounces=3, ray_spacing, cone=RETRO_CONE):
         raise ParameterError(f"bounces must be an integer from 1 to 8; got {bounces!r}")
     if not 0 < cone <= np.pi / 2:
         raise ParameterError(f"cone must be an angle in (0, pi/2] radians; got {cone!r}")
-    albedo = np.array([specular_albedo(m) for m in scene.materials])
+    for m in scene.materials:
+        specular_albedo(m)                                  # known, before any ray
     geo = geometry(scene, "flat")
     emb = embree_scene(geo, resolve_backend("auto"))
     out = np.zeros((bounces, ladar.n_views, ladar.n_bins))
     for i, w in enumerate(np.asarray(ladar.view_vectors, np.float64)):
         out[:, i] = _view_chain(scene, geo, emb, w, ladar.bin_edges, ray_spacing,
-                                (bounces, np.cos(cone), albedo))
+                                (bounces, np.cos(cone)))
     return SpecularReturns(tuple(range(1, bounces + 1)), out, out.sum(axis=2), float(cone))
 
 
 def _view_chain(scene, geo, emb, w, edges, spacing, plan):
     """One view's mirror chains: (bounces, bins) returned power."""
-    bounces, cos_cone, albedo = plan
+    bounces, cos_cone = plan
     out = np.zeros((bounces, len(edges) - 1))
     x, f, r1 = first_hits(scene, w, ray_spacing=spacing)
     x1, d = x, np.broadcast_to(-w, x.shape)
@@ -146,7 +167,8 @@ def _view_chain(scene, geo, emb, w, edges, spacing, plan):
     for k in range(bounces):
         n = geo.face_normals[f]
         n = n * np.sign(-np.einsum("ij,ij->i", n, d))[:, None]
-        beta = beta * albedo[geo.material[f]]
+        beta = beta * _albedos(scene.materials, geo.material[f],
+                               -np.einsum("ij,ij->i", n, d))
         d = d - 2.0 * np.einsum("ij,ij->i", d, n)[:, None] * n
         go = beta > 0
         x, n, d, beta, length, x1, r1 = (a[go] for a in (x, n, d, beta, length, x1, r1))
