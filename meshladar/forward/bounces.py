@@ -41,22 +41,19 @@ that face again (a bowl's second order came out 31 % low that way).
 
 from __future__ import annotations
 
-import warnings
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
-from typing import NamedTuple
 
 import numpy as np
 
-from ..brdf import GGX, Phong, SandfordRobertson
-from ..precision import COS_HORIZON, RECEIVER_LIFT
-from ..errors import MeshladarWarning, ModelError, ParameterError, user_stacklevel
+from ..errors import ModelError, ParameterError
 from ..raytrace.backends import resolve_backend
 from ..raytrace.embree import embree_scene, geometry
 from ._bounce_kernels import sample_mixture
-from ..weighing.hit_weights import GRAZING_RECEIVER_COS
+from ._paths import Leg, Paths, blocked, cast, dot, lobe_width, weight
 from .bounce_ends import Ends, entries, to_receiver, view_ends
 from .mesh import first_hits
+from .mirrors import MIRROR_CHAIN, find_mirrors, through_mirrors
 
 __all__ = ["BRANCHES", "BOUNCE_SAMPLES", "Orders", "higher_orders", "check_bistatic", "walk",
            "single_bounce"]
@@ -65,9 +62,6 @@ __all__ = ["BRANCHES", "BOUNCE_SAMPLES", "Orders", "higher_orders", "check_bista
 BRANCHES = 8
 #: Paths per view and order by default.
 BOUNCE_SAMPLES = 1 << 15
-#: A sampled ray starts this fraction of the scene's radius off its face, along its normal
-#: (float32 origins would otherwise hit their own face again).
-_LIFT = RECEIVER_LIFT
 #: Lobes at least this wide are sampled by the cosine alone.
 _WIDE_LOBE = 0.5
 
@@ -122,21 +116,6 @@ def check_bistatic(materials):
                              f"{type(m).__name__} has none (define bistatic())") from None
 
 
-def _lobe_width(m):
-    """The width of a coating's specular lobe, or nan where it has none to sample."""
-    if isinstance(m, SandfordRobertson) and m.lobes != "diffuse" and m.epsilon > 0:
-        return float(m.e)
-    if isinstance(m, GGX) and m.reflectance > 0:
-        return float(m.alpha)
-    if isinstance(m, Phong) and m.ks > 0:
-        return float(np.sqrt(2.0 / (m.exponent + 2.0)))
-    return np.nan
-
-
-def _dot(a, b):
-    return np.einsum("ij,ij->i", a, b)
-
-
 def _sample(n, wi, width, rng):
     """Directions (k, 3) from the mixture (module docstring) and their densities (k,), in
     one compiled pass (:mod:`._bounce_kernels`): cosine-weighted, sin θ = √u₁; the lobe's
@@ -148,55 +127,6 @@ def _sample(n, wi, width, rng):
     sample_mixture(np.ascontiguousarray(n, np.float64), np.ascontiguousarray(wi, np.float64),
                    np.ascontiguousarray(width, np.float64), u1, u2, pick, _WIDE_LOBE, d, pdf)
     return d, pdf
-
-
-def _weight(materials, mat, n, wi, wo, power=True):
-    """F(wi, wo)·cos θo per vertex, each coating's own bistatic evaluation; F alone where
-    not ``power`` (the paper's Eq. 8 at the last vertex: divided by cos θo floored at
-    COS_HORIZON, warned where a contributing vertex is within GRAZING_RECEIVER_COS of
-    edge-on, as the single bounce's bistatic weight is)."""
-    ci, co = _dot(n, wi), _dot(n, wo)
-    h = wi + wo
-    h /= np.maximum(np.linalg.norm(h, axis=1, keepdims=True), 1e-300)
-    ch = np.clip(_dot(n, h), -1.0, 1.0)
-    out = np.zeros(len(n))
-    ok = (ci > 0) & (co > 0)
-    for i, m in enumerate(materials):
-        sel = ok & (mat == i)
-        if np.any(sel):
-            c = [np.clip(x[sel], 0.0, 1.0) for x in (ci, co, ch)]
-            out[sel] = m.bistatic(c[0], np.sqrt(1.0 - c[0] ** 2), c[1],
-                                  np.sqrt(1.0 - c[1] ** 2), c[2], np.sqrt(1.0 - c[2] ** 2))
-    if power:
-        return out
-    if np.any((out > 0) & (co < GRAZING_RECEIVER_COS)):
-        warnings.warn("surfaces that light reaches after a bounce lie edge-on to the receiver "
-                      "(cos θr < 1e-6): under radiometry='paper' a return weighs F, which "
-                      "grows as 1/cos θr there, so they dominate the profile; "
-                      "radiometry='power' (received power, F·cos θr) is finite",
-                      MeshladarWarning, stacklevel=user_stacklevel())
-    return out / np.maximum(co, COS_HORIZON)
-
-
-def _cast(emb, geo, points, normals, d):
-    """Rays from ``points`` (lifted along their normals) along ``d``: the face hit (−1 on
-    a miss) and the distance from the point, recomputed in float64 against the hit face's
-    plane (Embree's float32 distance from a float32 origin leaves the hit ~1e-7 off its
-    face: enough for a shadow ray from it to hit that face again)."""
-    shifted = points - geo.center
-    o = shifted + _LIFT * geo.radius * normals
-    res = emb.run(np.ascontiguousarray(o, dtype=np.float32),
-                  np.ascontiguousarray(d, dtype=np.float32), output=1)
-    face = res["primID"].astype(np.int64)
-    t = res["tfar"].astype(np.float64)
-    hit = face >= 0
-    n = geo.face_normals[face[hit]]
-    cos = np.einsum("ij,ij->i", n, d[hit])
-    exact = np.abs(cos) > 1e-9
-    t_plane = (geo.plane_d[face[hit]] - np.einsum("ij,ij->i", n, shifted[hit])) / np.where(
-        exact, cos, 1.0)
-    t[hit] = np.where(exact, t_plane, t[hit])
-    return face, t
 
 
 def _bin_stats(edges, ranges, values, path_id, draws):
@@ -245,18 +175,7 @@ def single_bounce(scene, geo, w, spacing, power=True):
     n = geo.face_normals[f]
     n = n * np.sign(n @ w)[:, None]
     ww = np.broadcast_to(w, n.shape)
-    return f, spacing * spacing * _weight(scene.materials, geo.material[f], n, ww, ww, power)
-
-
-class _Leg(NamedTuple):
-    """One order's returns of a view's sampled paths: the face each leaves from toward the
-    receiver, the point, its power per unit irradiance, apparent range and path number."""
-
-    face: np.ndarray
-    point: np.ndarray
-    value: np.ndarray
-    range: np.ndarray
-    path: np.ndarray
+    return f, spacing * spacing * weight(scene.materials, geo.material[f], n, ww, ww, power)
 
 
 def walk(scene, geo, emb, w, spacing, plan, rng, trail=None):
@@ -282,69 +201,98 @@ def walk(scene, geo, emb, w, spacing, plan, rng, trail=None):
 
     Yields
     ------
-    _Leg
+    Leg
         Per order 2..bounces: the face each return leaves from toward the receiver, the
         point, its value per unit irradiance (in the ends' radiometry), apparent range and
         path number. Nothing for a view that meets nothing.
     """
     bounces, samples = plan
     ends = w if isinstance(w, Ends) else view_ends(*((w,) if np.ndim(w) == 1 else w))
-    materials = scene.materials
+    paths = _start(scene, geo, emb, ends, spacing, (samples, rng))
+    if paths is None:
+        return
+    mirrors = find_mirrors(scene, geo)
+    pending = {}
+    if trail is not None:
+        trail.append((paths.ident, paths.x))
+    widths = np.array([lobe_width(m) for m in scene.materials])
+    for order in range(2, bounces + 1):
+        if mirrors is not None:            # the glints of flat mirrors, without sampling
+            for m, leg in through_mirrors(scene, geo, emb, ends, mirrors, paths,
+                                          bounces - order + 1):
+                pending.setdefault(order - 1 + m, []).append(leg)
+        paths = _step(scene, geo, emb, paths, (widths, rng), mirrors)
+        if trail is not None:
+            trail.append((paths.ident, paths.x))
+        legs = [_leg(scene, geo, emb, ends, paths, mirrors), *pending.pop(order, [])]
+        yield Leg(*(np.concatenate(a) for a in zip(*legs)))
+
+
+def _start(scene, geo, emb, ends, spacing, draws):
+    """The paths at their first hits: ``samples // BRANCHES`` hits drawn with replacement
+    (at least 2), BRANCHES paths each; None where the view meets nothing."""
+    samples, rng = draws
     p, f, r, power = entries(scene, geo, emb, ends, spacing)
     if not len(f):
-        return
+        return None
     draw = max(2, samples // BRANCHES)
     pick = rng.integers(0, len(f), draw)
     x, face, r1 = p[pick].repeat(BRANCHES, 0), f[pick].repeat(BRANCHES), r[pick].repeat(BRANCHES)
-    ident = np.arange(len(face))
     wi = (ends.position - x) / r1[:, None] if ends.position is not None else \
         np.broadcast_to(ends.w, x.shape)
     n = geo.face_normals[face]
-    n = n * np.sign(_dot(n, wi))[:, None]
+    n = n * np.sign(dot(n, wi))[:, None]
     beta = power[pick].repeat(BRANCHES) * (len(f) / draw / BRANCHES)
-    length = np.zeros(len(face))
-    if trail is not None:
-        trail.append((ident, x))
-    widths = np.array([_lobe_width(m) for m in materials])
-    for _ in range(bounces - 1):
-        d, pdf = _sample(n, wi, widths[geo.material[face]], rng)
-        beta = beta * _weight(materials, geo.material[face], n, wi, d) / np.where(
-            pdf > 0, pdf, np.inf)
-        go = beta > 0
-        f2, t = _cast(emb, geo, x[go], n[go], d[go])
-        alive = np.flatnonzero(go)[f2 >= 0]
-        f2, t = f2[f2 >= 0], t[f2 >= 0]
-        x = x[alive] + t[:, None] * d[alive]
-        wi = -d[alive]
-        n = geo.face_normals[f2]
-        n = n * np.sign(_dot(n, wi))[:, None]
-        beta, length, r1, ident = (a[alive] for a in (beta, length, r1, ident))
-        length = length + t
-        face = f2
-        if trail is not None:
-            trail.append((ident, x))
-        yield _leg(scene, geo, emb, ends, face, x, n, wi, beta, r1, length, ident)
+    zero = np.zeros(len(face))
+    return Paths(face, x, n, wi, beta, r1, zero, np.arange(len(face)), zero.astype(np.int64))
 
 
-def _leg(scene, geo, emb, ends, face, x, n, wi, beta, r1, length, ident):
-    """The vertices' returns: each joined to the receiver by a shadow ray (a :class:`_Leg`
-    of those that reach it)."""
-    d_r, out, receive = to_receiver(ends, x, r1, length)
-    g = _weight(scene.materials, geo.material[face], n, wi, d_r, power=ends.power)
+def _step(scene, geo, emb, paths, draws, mirrors):
+    """The paths one vertex on: a direction sampled at each, its ray cast, the survivors
+    at their new vertex (their run of flat mirrors counted, :mod:`.mirrors`)."""
+    widths, rng = draws
+    mat = geo.material[paths.face]
+    d, pdf = _sample(paths.n, paths.wi, widths[mat], rng)
+    beta = paths.beta * weight(scene.materials, mat, paths.n, paths.wi, d) / np.where(
+        pdf > 0, pdf, np.inf)
+    go = beta > 0
+    f2, t = cast(emb, geo, paths.x[go], paths.n[go], d[go])
+    alive = np.flatnonzero(go)[f2 >= 0]
+    f2, t = f2[f2 >= 0], t[f2 >= 0]
+    wi = -d[alive]
+    n = geo.face_normals[f2]
+    n = n * np.sign(dot(n, wi))[:, None]
+    run = np.zeros(len(f2), np.int64)
+    if mirrors is not None:
+        before = paths.face[alive]
+        run = np.where(mirrors.of_face[f2] < 0, 0, np.where(
+            mirrors.emits[geo.material[before]], 1,
+            np.where((mirrors.of_face[before] >= 0) & (paths.run[alive] >= 1),
+                     paths.run[alive] + 1, 0)))
+    return Paths(f2, paths.x[alive] + t[:, None] * d[alive], n, wi, beta[alive],
+                 paths.r1[alive], paths.length[alive] + t, paths.ident[alive], run)
+
+
+def _leg(scene, geo, emb, ends, paths, mirrors):
+    """The vertices' returns: each joined to the receiver by a shadow ray (a :class:`Leg`
+    of those that reach it). A flat mirror that ends a run from an emitter weighs its
+    coating without the glint, which :func:`.mirrors.through_mirrors` counted."""
+    face, x, n, wi = paths.face, paths.x, paths.n, paths.wi
+    d_r, out, receive = to_receiver(ends, x, paths.r1, paths.length)
+    mat = geo.material[face]
+    g = weight(scene.materials, mat, n, wi, d_r, power=ends.power)
+    if mirrors is not None:
+        ex = (paths.run >= 1) & (paths.run <= MIRROR_CHAIN)
+        if ex.any():
+            g[ex] = np.maximum(g[ex] - weight(mirrors.glints, mat[ex], n[ex], wi[ex],
+                                              d_r[ex], power=ends.power), 0.0)
     if receive is not None:
         g = g * receive
     seen = g > 0
-    seen[seen] = ~_blocked(emb, geo, x[seen], d_r[seen])
-    return _Leg(face[seen], x[seen], (beta * g)[seen],
-                (0.5 * (r1 + length + out) - ends.offset)[seen], ident[seen])
-
-
-def _blocked(emb, geo, points, d):
-    """Whether the ray from each point (scene coordinates, lifted along its direction)
-    along ``d`` meets the scene (the receiver lies beyond every face)."""
-    o = points - geo.center + _LIFT * geo.radius * d
-    return emb.run(np.ascontiguousarray(o, dtype=np.float32),
-                   np.ascontiguousarray(d, dtype=np.float32), query="OCCLUDED") != -1
+    seen[seen] = ~blocked(emb, geo, x[seen], d_r[seen])
+    return Leg(face[seen], x[seen], (paths.beta * g)[seen],
+               (0.5 * (paths.r1 + paths.length + out) - ends.offset)[seen],
+               paths.ident[seen])
 
 
 def _view_orders(scene, geo, emb, w, edges, spacing, plan, rng):

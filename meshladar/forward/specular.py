@@ -32,7 +32,7 @@ from ..errors import ModelError, ParameterError
 from ..raytrace.backends import resolve_backend
 from ..raytrace.embree import embree_scene, geometry
 from ..scene import Scene
-from .bounces import _cast
+from ._paths import cast
 from .mesh import first_hits
 
 __all__ = ["SpecularReturns", "specular_albedo", "specular_chain", "RETRO_CONE"]
@@ -172,7 +172,7 @@ def _view_chain(scene, geo, emb, w, edges, spacing, plan):
         d = d - 2.0 * np.einsum("ij,ij->i", d, n)[:, None] * n
         go = beta > 0
         x, n, d, beta, length, x1, r1 = (a[go] for a in (x, n, d, beta, length, x1, r1))
-        f, t = _cast(emb, geo, x, n, d)
+        f, t = cast(emb, geo, x, n, d)
         leave = (f < 0) & (d @ w >= cos_cone)
         rng = r1[leave] + 0.5 * (length[leave] + (x1[leave] - x[leave]) @ w)
         out[k] = np.histogram(rng, edges, weights=beta[leave])[0]

@@ -24,7 +24,7 @@ import numpy as np
 from .checks import components
 from .part import MeshPart
 
-__all__ = ["CONVEX_RTOL", "Visibility", "part_sees_itself", "scene_visibility"]
+__all__ = ["CONVEX_RTOL", "Visibility", "part_plane", "part_sees_itself", "scene_visibility"]
 
 #: A vertex within this fraction of its part's bounding-box diagonal of a face's plane is
 #: on the plane (flat parts, convex edges): the rounding of coordinates written to files.
@@ -59,6 +59,31 @@ class Visibility:
         return bool(self.sees.any())
 
 
+def part_plane(part: MeshPart):
+    """The plane of a flat part (every vertex within CONVEX_RTOL of its diagonal from the
+    plane of its largest face), or None.
+
+    Parameters
+    ----------
+    part : MeshPart
+        A cleaned part with at least one face.
+
+    Returns
+    -------
+    tuple of numpy.ndarray or None
+        (unit normal (3,), a point on the plane (3,)), the largest face's; None when the
+        part is not flat.
+    """
+    f, v = part.faces, part.vertices
+    tol = CONVEX_RTOL * float(np.linalg.norm(np.ptp(v, axis=0)))
+    normals, areas = part.face_normals_areas()
+    big = int(np.argmax(areas))
+    point = v[f[big, 0]]
+    if np.all(np.abs((v - point) @ normals[big]) <= tol):
+        return normals[big], point
+    return None
+
+
 def part_sees_itself(part: MeshPart, bodies=None) -> bool:
     """Whether a part can send light to itself (module docstring: exact when False).
 
@@ -78,12 +103,11 @@ def part_sees_itself(part: MeshPart, bodies=None) -> bool:
     f = part.faces
     if not len(f):
         return False
+    if part_plane(part) is not None:
+        return False                                          # flat
     v = part.vertices
     tol = CONVEX_RTOL * float(np.linalg.norm(np.ptp(v, axis=0)))
-    normals, areas = part.face_normals_areas()
-    big = int(np.argmax(areas))
-    if np.all(np.abs((v - v[f[big, 0]]) @ normals[big]) <= tol):
-        return False                                          # flat
+    normals, _ = part.face_normals_areas()
     a = np.concatenate([f[:, 0], f[:, 1], f[:, 2]])
     b = np.concatenate([f[:, 1], f[:, 2], f[:, 0]])
     far = np.concatenate([f[:, 2], f[:, 0], f[:, 1]])         # each edge's opposite vertex

@@ -11,6 +11,7 @@ import meshladar as ml
 from meshladar.brdf import Lambertian, SandfordRobertson, Tabulated
 from meshladar.errors import MeshladarWarning, ModelError, ParameterError
 from meshladar.forward import bounce_ends, bounces as bounce_module
+from meshladar.forward._paths import lobe_width
 from meshladar.forward.bounces import higher_orders
 from meshladar.meshes import MeshPart
 
@@ -171,7 +172,7 @@ def test_glossy_lobes_are_sampled_where_they_are():
     lad = ml.Ladar(None, view_vectors=W[None], bin_edges=EDGES)
     mixed = higher_orders(scene, lad, bounces=2, ray_spacing=5e-3, samples=1 << 16, seed=1)
     wide = SandfordRobertson(0.1, 0.6, 0.5, 0.05)
-    assert np.isfinite(bounce_module._lobe_width(wide))
+    assert np.isfinite(lobe_width(wide))
     se_mixed = np.sqrt(np.sum(mixed.stderr ** 2))
     total = mixed.values.sum()
     assert total > 0 and se_mixed < 0.05 * total

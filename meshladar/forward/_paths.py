@@ -1,0 +1,129 @@
+"""The pieces a bounce path is built of (:mod:`.bounces`, :mod:`.mirrors`,
+:mod:`.specular`): a coating's lobe width and bistatic weight at a vertex, a cast from
+points on faces with float64 distances, a shadow ray, and one order's returns."""
+
+from __future__ import annotations
+
+import warnings
+from typing import NamedTuple
+
+import numpy as np
+
+from ..brdf import GGX, Phong, SandfordRobertson
+from ..errors import MeshladarWarning, user_stacklevel
+from ..precision import COS_HORIZON, RECEIVER_LIFT
+from ..weighing.hit_weights import GRAZING_RECEIVER_COS
+
+__all__ = ["LIFT", "Leg", "Paths", "lobe_width", "dot", "weight", "as_paper", "cast",
+           "blocked"]
+
+#: A sampled ray starts this fraction of the scene's radius off its face, along its normal
+#: (float32 origins would otherwise hit their own face again).
+LIFT = RECEIVER_LIFT
+
+
+def lobe_width(m):
+    """The width of a coating's specular lobe, or nan where it has none to sample."""
+    if isinstance(m, SandfordRobertson) and m.has_specular:
+        return float(m.e)
+    if isinstance(m, GGX) and m.reflectance > 0:
+        return float(m.alpha)
+    if isinstance(m, Phong) and m.ks > 0:
+        return float(np.sqrt(2.0 / (m.exponent + 2.0)))
+    return np.nan
+
+
+def dot(a, b):
+    """Row-wise dot products of two (k, 3) arrays."""
+    return np.einsum("ij,ij->i", a, b)
+
+
+def weight(materials, mat, n, wi, wo, power=True):
+    """F(wi, wo)·cos θo per vertex, each coating's own bistatic evaluation; F alone where
+    not ``power`` (the paper's Eq. 8 at the last vertex: divided by cos θo floored at
+    COS_HORIZON, warned where a contributing vertex is within GRAZING_RECEIVER_COS of
+    edge-on, as the single bounce's bistatic weight is)."""
+    ci, co = dot(n, wi), dot(n, wo)
+    h = wi + wo
+    h /= np.maximum(np.linalg.norm(h, axis=1, keepdims=True), 1e-300)
+    ch = np.clip(dot(n, h), -1.0, 1.0)
+    out = np.zeros(len(n))
+    ok = (ci > 0) & (co > 0)
+    for i, m in enumerate(materials):
+        sel = ok & (mat == i)
+        if np.any(sel):
+            c = [np.clip(x[sel], 0.0, 1.0) for x in (ci, co, ch)]
+            out[sel] = m.bistatic(c[0], np.sqrt(1.0 - c[0] ** 2), c[1],
+                                  np.sqrt(1.0 - c[1] ** 2), c[2], np.sqrt(1.0 - c[2] ** 2))
+    return out if power else as_paper(out, co)
+
+
+def as_paper(out, co):
+    """Received-power weights F·cos θr as the paper's Eq. 8 weighs the last vertex: F,
+    divided by cos θr floored at COS_HORIZON; warned where a contributing vertex is within
+    GRAZING_RECEIVER_COS of edge-on, as the single bounce's bistatic weight is."""
+    if np.any((out > 0) & (co < GRAZING_RECEIVER_COS)):
+        warnings.warn("surfaces that light reaches after a bounce lie edge-on to the receiver "
+                      "(cos θr < 1e-6): under radiometry='paper' a return weighs F, which "
+                      "grows as 1/cos θr there, so they dominate the profile; "
+                      "radiometry='power' (received power, F·cos θr) is finite",
+                      MeshladarWarning, stacklevel=user_stacklevel())
+    return out / np.maximum(co, COS_HORIZON)
+
+
+def cast(emb, geo, points, normals, d):
+    """Rays from ``points`` (lifted along their normals) along ``d``: the face hit (−1 on
+    a miss) and the distance from the point, recomputed in float64 against the hit face's
+    plane (Embree's float32 distance from a float32 origin leaves the hit ~1e-7 off its
+    face: enough for a shadow ray from it to hit that face again)."""
+    shifted = points - geo.center
+    o = shifted + LIFT * geo.radius * normals
+    res = emb.run(np.ascontiguousarray(o, dtype=np.float32),
+                  np.ascontiguousarray(d, dtype=np.float32), output=1)
+    face = res["primID"].astype(np.int64)
+    t = res["tfar"].astype(np.float64)
+    hit = face >= 0
+    n = geo.face_normals[face[hit]]
+    cos = np.einsum("ij,ij->i", n, d[hit])
+    exact = np.abs(cos) > 1e-9
+    t_plane = (geo.plane_d[face[hit]] - np.einsum("ij,ij->i", n, shifted[hit])) / np.where(
+        exact, cos, 1.0)
+    t[hit] = np.where(exact, t_plane, t[hit])
+    return face, t
+
+
+class Paths(NamedTuple):
+    """A view's live paths at their current vertex: its face, point, normal (turned toward
+    the light's side), the direction back toward where the light came from, the path's
+    weight so far, its incoming path (−x₁·w, or R₁ from a sensor), its length from x₁, its
+    number, and how many flat mirrors it has just met in a row after a surface that is not
+    one (:mod:`.mirrors`; 0 otherwise)."""
+
+    face: np.ndarray
+    x: np.ndarray
+    n: np.ndarray
+    wi: np.ndarray
+    beta: np.ndarray
+    r1: np.ndarray
+    length: np.ndarray
+    ident: np.ndarray
+    run: np.ndarray
+
+
+class Leg(NamedTuple):
+    """One order's returns of a view's sampled paths: the face each leaves from toward the
+    receiver, the point, its power per unit irradiance, apparent range and path number."""
+
+    face: np.ndarray
+    point: np.ndarray
+    value: np.ndarray
+    range: np.ndarray
+    path: np.ndarray
+
+
+def blocked(emb, geo, points, d):
+    """Whether the ray from each point (scene coordinates, lifted along its direction)
+    along ``d`` meets the scene (the receiver lies beyond every face)."""
+    o = points - geo.center + LIFT * geo.radius * d
+    return emb.run(np.ascontiguousarray(o, dtype=np.float32),
+                   np.ascontiguousarray(d, dtype=np.float32), query="OCCLUDED") != -1
