@@ -47,6 +47,13 @@ SECTIONS = (
      "profile likelihood against closed forms, the kernel's error, recovery of coatings",
      ("tests/fit/test_profile.py", "tests/fit/test_kernel_error.py",
       "tests/fit/test_fitting.py")),
+    ("Beyond one bounce, and laser radar cross sections",
+     "the two-bounce integral by quadrature (at infinity, bistatic, from a sensor, both "
+     "radiometries), integrating-sphere and mirror-image closed forms, geometric optics of "
+     "corner reflectors, cross sections of spheres and plates, Mitsuba 3 + mitransient",
+     ("tests/forward/test_bounces.py", "tests/forward/test_bounce_sensor.py",
+      "tests/forward/test_mirrors.py", "tests/forward/test_specular_chain.py",
+      "tests/forward/test_lrcs.py", "tests/studies/test_peer_bounces.py")),
     ("The paper's findings (Jin & Levine 2009, Figs 5–11)",
      "each finding as a number",
      ("tests/studies/test_paper.py",)),
