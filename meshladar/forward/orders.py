@@ -123,8 +123,10 @@ def add_bounces(scene, ladar, sino, bounces, samples, *, tol=None, seed=None, se
     Warns
     -----
     BounceWarning
-        With ``bounces=1``, when the cheap pass (seeded: the same scene warns or not every
-        time; parallel rays, in received power) puts the second order above the share.
+        With ``bounces=1`` and the received-power radiometry, when the cheap pass (seeded:
+        the same scene warns or not every time; parallel rays) puts the second order above
+        the share. The paper's radiometry (the default) is the paper's single-bounce model
+        unless bounces are asked for, and is not checked.
     """
     share = BOUNCE_SHARE if tol is None else tol
     if not scene.is_mesh:
@@ -132,7 +134,8 @@ def add_bounces(scene, ladar, sino, bounces, samples, *, tol=None, seed=None, se
     needs = scene.visibility().needs_bounces
     first = float(sino.values.sum())
     if bounces == 1 or not needs:
-        if bounces == 1 and needs and sino.info.get("mode") != "slice":
+        if bounces == 1 and needs and sino.radiometry == "power" and \
+                sino.info.get("mode") != "slice":
             _check_second_order(scene, ladar, sino, share, 0 if seed is None else seed)
         n = 1 if bounces == "auto" else bounces                  # exact zeros beyond 1
         return _with_orders(sino, sino.values, n, [first] + [0.0] * (n - 1), [0.0] * n)
@@ -196,8 +199,7 @@ def _check_second_order(scene, ladar, sino, share, seed):
     """The cheap pass of a single bounce on a scene that needs bounces: on at most
     CHECK_VIEWS of the views, first hits on a grid of about CHECK_GRID rays across the
     scene, the single bounce and CHECK_SAMPLES second-bounce paths summed over all ranges
-    (both in received power, whichever the run's radiometry: the physical share; parallel
-    rays);
+    (both in received power; parallel rays);
     warns when their ratio exceeds ``share``. Not done where a coating has no bistatic
     evaluation."""
     try:

@@ -102,9 +102,8 @@ def test_the_papers_radiometry_drops_the_leaving_cosine():
     assert abs(q.sum() / power.sum() - 1.0) > 0.3             # the two differ
     sino = ml.simulate(dihedral(Lambertian(RHO)), lad, model="mesh", bounces=2,
                        bounce_samples=1 << 16, seed=1, ray_spacing=4e-3)
-    with pytest.warns(ml.errors.BounceWarning, match="second bounce adds about"):
-        single = ml.simulate(dihedral(Lambertian(RHO)), lad, model="mesh",
-                             ray_spacing=4e-3, bounces=1, seed=1)
+    single = ml.simulate(dihedral(Lambertian(RHO)), lad, model="mesh", ray_spacing=4e-3,
+                         bounces=1, seed=1)                 # not checked: the paper's model
     assert sino.radiometry == "paper" and sino.info["bounces"] == 2
     np.testing.assert_allclose(sino.info["order_totals"][0], single.values.sum(), rtol=1e-12)
     second, err = sino.info["order_totals"][1], sino.info["order_stderr"][1]
