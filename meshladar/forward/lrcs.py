@@ -98,7 +98,13 @@ def _ladar(scene, views, bounces, n_bins, bistatic):
     """A ladar over ``views`` whose bins hold every return up to ``bounces`` orders (and,
     ``bistatic``, every point's range (−p·(w + w_r)/2) for any receiver: the span widened
     by the scene's size on each side)."""
-    v = np.asarray(views, dtype=np.float64)
+    try:
+        v = np.asarray(views, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ParameterError(f"views must be angles in degrees (n,) or view vectors (n, 3); "
+                             f"got {views!r}") from None
+    if v.size == 0:
+        raise ParameterError("views must hold at least one view; got none")
     if v.ndim == 2:
         w = unit_vectors("views", v)
         kw = {"view_vectors": w}

@@ -386,3 +386,21 @@ _file_cases("view.mesh-file", "cli", lambda p: ["view", p, "--screenshot", "{tmp
             ".stl", {"empty": b"", "junk": JUNK, "truncated": _truncated_stl}, ("bad.stl",))
 _file_cases("view.--materials", "cli", lambda p: _VIEW + ["--materials", p], ".toml",
             {"junk": JUNK, "not-utf8": NOT_UTF8_TOML, "deep": DEEP_TOML}, ("bad.toml",))
+
+# ------------------------------------------------------------------ bounces, lrcs (issue 33)
+for _key, _v in {"zero": "0", "nine": "9", "float": "2.5", "word": "two"}.items():
+    cli(f"simulate.--bounces={_key}", _MESH + ["--radiometry", "power", "--bounces", _v],
+        "error", _flag_names("--bounces"), setup=_SPHERE_FILE)
+    cli(f"lrcs.--bounces={_key}", ["lrcs", "{tmp}/sphere.stl", "--views", "2", "--bounces",
+                                   _v], "error", _flag_names("--bounces"),
+        setup=_SPHERE_FILE)
+for _key, _v in {"zero": "0", "float": "1e3", "huge": str(1 << 30)}.items():
+    cli(f"simulate.--bounce-samples={_key}", _MESH + ["--bounces", "2", "--bounce-samples",
+                                                      _v],
+        "error", _flag_names("--bounce-samples"), setup=_SPHERE_FILE)
+for _key, _v in {"zero": "0", "neg": "-3", "word": "many"}.items():
+    cli(f"lrcs.--views={_key}", ["lrcs", "{tmp}/sphere.stl", "--views", _v], "error",
+        _flag_names("--views"), setup=_SPHERE_FILE)
+cli("lrcs.views-and-angles", ["lrcs", "{tmp}/sphere.stl", "--views", "2", "--angles-deg",
+                              "0,90"], "error", ("--views", "--angles-deg"),
+    setup=_SPHERE_FILE)

@@ -500,3 +500,32 @@ api("viewer.show_scene.window_size=0", lambda: _show(window_size=(0, 0)), "error
     "window_size")
 api("viewer.show_scene.scene=str", lambda: _viewer().show_scene("disk", off_screen=True),
     "error", "scene")
+
+# ------------------------------------------------------------------ bounces, lrcs (issue 33)
+_BOUNCES = {"zero": 0, "neg": -1, "nine": 9, "float": 2.0, "nan": nan, "str": "two",
+            "bool": True, "list": [2]}
+for _key, _v in _BOUNCES.items():
+    api(f"simulate.mesh.bounces={_key}",
+        lambda v=_v: _mesh_sim(bounces=v, radiometry="power"), "error", "bounces")
+for _key, _v in COUNTS.items():
+    api(f"simulate.mesh.bounce_samples={_key}",
+        lambda v=_v: _mesh_sim(bounces=2, bounce_samples=v),
+        "ok" if _v is None else "error", "bounce_samples")
+api("simulate.mesh.bounces=auto-convex", lambda: _mesh_sim(bounces="auto"), "ok",
+    check=lambda s: s.info["bounces"] == 1)
+for _key, _v in {"nan": [nan], "inf": [0.0, inf], "str": "x", "2d": [[1.0, 0.0]],
+                 "empty": [], "none": None}.items():
+    api(f"lrcs.views={_key}", lambda v=_v: ml.lrcs(_sphere(), v), "error", "views")
+for _key, _v in _BOUNCES.items():
+    api(f"lrcs.bounces={_key}", lambda v=_v: ml.lrcs(_sphere(), [0.0], bounces=v), "error",
+        "bounces")
+api("lrcs.per_part=str", lambda: ml.lrcs(_sphere(), [0.0], per_part="yes"), "error",
+    "per_part")
+api("lrcs.radiometry", lambda: ml.lrcs(_sphere(), [0.0], radiometry="paper"), "error",
+    "radiometry")
+for _key, _v in {"zero": 0, "nine": 9, "float": 2.0, "bool": True}.items():
+    api(f"specular_chain.bounces={_key}", lambda v=_v: ml.forward.specular.specular_chain(
+        _sphere(), _lad(), bounces=v, ray_spacing=0.1), "error", "bounces")
+for _key, _v in {"zero": 0.0, "neg": -1.0, "nan": nan, "wide": 2.0}.items():
+    api(f"specular_chain.cone={_key}", lambda v=_v: ml.forward.specular.specular_chain(
+        _sphere(), _lad(), cone=v, ray_spacing=0.1), "error", "cone")
