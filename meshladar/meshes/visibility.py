@@ -12,7 +12,8 @@ so no segment between two of its points leaves it: no light goes from it to itse
 other part (an open curved shell, a body with a dent, several bodies in one part) is taken
 to see itself: the test is exact where it says "cannot", conservative where it says
 "can". Two different parts are taken to see each other (two convex bodies side by side
-do).
+do), except two flat parts in one plane (tiles of a floor, panels of one face), which
+cannot: no segment between them leaves the plane.
 """
 
 from __future__ import annotations
@@ -40,8 +41,9 @@ class Visibility:
     names : tuple of str
         The parts' (or shapes') names, in scene order.
     sees : (n, n) numpy.ndarray of bool
-        ``sees[i, j]``: light can go from part i to part j (symmetric); the diagonal says
-        whether a part can see itself.
+        ``sees[i, j]``: light can go from part i to part j (symmetric; False exactly for
+        coplanar flat parts and parts without faces, True, conservatively, for any other
+        two); the diagonal says whether a part can see itself.
     """
 
     names: tuple
@@ -147,12 +149,33 @@ def scene_visibility(names, parts=None, bodies=None) -> Visibility:
     Returns
     -------
     Visibility
-        Different parts see each other; a part sees itself per :func:`part_sees_itself`.
+        Different parts see each other unless both are flat and coplanar (or one has no
+        face); a part sees itself per :func:`part_sees_itself`.
     """
     n = len(names)
     sees = ~np.eye(n, dtype=bool)
     if parts is not None:
         counts = [None] * len(parts) if bodies is None else bodies
         sees[np.diag_indices(n)] = [part_sees_itself(p, c) for p, c in zip(parts, counts)]
+        _coplanar(parts, sees)
     sees.flags.writeable = False
     return Visibility(tuple(names), sees)
+
+
+def _coplanar(parts, sees):
+    """Clear ``sees`` between parts that cannot exchange light: a part without faces, and
+    two flat parts in one plane (every vertex of each within CONVEX_RTOL of their joint
+    bounding-box diagonal from the other's plane)."""
+    planes = [part_plane(p) if len(p.faces) else None for p in parts]
+    for i, p in enumerate(parts):
+        if not len(p.faces):
+            sees[i, :] = sees[:, i] = False
+    flat = [i for i, plane in enumerate(planes) if plane is not None]
+    for a in flat:
+        for b in flat:
+            if a < b:
+                both = np.concatenate([parts[a].vertices, parts[b].vertices])
+                tol = CONVEX_RTOL * float(np.linalg.norm(np.ptp(both, axis=0)))
+                if all(np.all(np.abs((parts[k].vertices - planes[j][1]) @ planes[j][0]) <= tol)
+                       for j, k in ((a, b), (b, a))):
+                    sees[a, b] = sees[b, a] = False

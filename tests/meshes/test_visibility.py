@@ -101,3 +101,21 @@ def test_the_scene_counts_bodies_once():
         material=GRAY)
     assert one.report["bodies"] == [1] and two.report["bodies"] == [2]
     assert one.visibility().convex == (True,) and two.visibility().convex == (False,)
+
+
+def test_coplanar_flat_parts_cannot_see_each_other():
+    """Tiles of one floor (1e4 off the origin, tilted) exchange no light: a scene of them
+    needs no bounce and is never sampled; lift one tile by 1e-3 and they can."""
+    tilt = np.array([[1.0, 0.0, 0.0], [0.0, 0.8, 0.6], [0.0, -0.6, 0.8]])
+
+    def tile(x0, z=0.0, name="t"):
+        v = (np.array([[0, 0, z], [1, 0, z], [1, 1, z], [0, 1, z]]) + [x0, 0, 0]) @ tilt.T
+        return MeshPart(v + 1e4, [[0, 1, 2], [0, 2, 3]], 0, name)
+    floor = ml.Scene.from_parts([tile(0.0, name="a"), tile(1.5, name="b"),
+                                 tile(3.0, name="c")], [GRAY])
+    assert not floor.visibility().needs_bounces
+    lad = ml.Ladar(None, view_vectors=[[0.3, 0.2, 1.0]], bin_edges=np.linspace(-2e4, 0, 5))
+    sino = ml.simulate(floor, lad, model="mesh", radiometry="power", bounces=3)
+    assert sino.info["order_totals"][1:] == [0.0, 0.0]
+    step = ml.Scene.from_parts([tile(0.0, name="a"), tile(1.5, 1e-3, name="b")], [GRAY])
+    assert step.visibility().sees.tolist() == [[False, True], [True, False]]
