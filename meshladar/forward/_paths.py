@@ -5,6 +5,7 @@ points on faces with float64 distances, a shadow ray, and one order's returns.""
 from __future__ import annotations
 
 import warnings
+from dataclasses import replace
 from typing import NamedTuple
 
 import numpy as np
@@ -14,12 +15,15 @@ from ..errors import MeshladarWarning, user_stacklevel
 from ..precision import COS_HORIZON, RECEIVER_LIFT
 from ..weighing.hit_weights import GRAZING_RECEIVER_COS
 
-__all__ = ["LIFT", "Leg", "Paths", "lobe_width", "dot", "weight", "as_paper", "cast",
+__all__ = ["LIFT", "GRAZING_SHARE", "Leg", "Paths", "lobe_width", "dot", "weight", "edge_on_glints", "warn_edge_on", "glint_of", "cast",
            "blocked"]
 
 #: A sampled ray starts this fraction of the scene's radius off its face, along its normal
 #: (float32 origins would otherwise hit their own face again).
 LIFT = RECEIVER_LIFT
+#: Under the paper's radiometry, returns from surfaces edge-on to the receiver are warned
+#: about when they carry more than this share of an order's return.
+GRAZING_SHARE = 1e-3
 
 
 def lobe_width(m):
@@ -41,8 +45,7 @@ def dot(a, b):
 def weight(materials, mat, n, wi, wo, power=True):
     """F(wi, wo)·cos θo per vertex, each coating's own bistatic evaluation; F alone where
     not ``power`` (the paper's Eq. 8 at the last vertex: divided by cos θo floored at
-    COS_HORIZON, warned where a contributing vertex is within GRAZING_RECEIVER_COS of
-    edge-on, as the single bounce's bistatic weight is)."""
+    COS_HORIZON, as the single bounce's bistatic weight is; :func:`warn_edge_on`)."""
     ci, co = dot(n, wi), dot(n, wo)
     h = wi + wo
     h /= np.maximum(np.linalg.norm(h, axis=1, keepdims=True), 1e-300)
@@ -55,20 +58,54 @@ def weight(materials, mat, n, wi, wo, power=True):
             c = [np.clip(x[sel], 0.0, 1.0) for x in (ci, co, ch)]
             out[sel] = m.bistatic(c[0], np.sqrt(1.0 - c[0] ** 2), c[1],
                                   np.sqrt(1.0 - c[1] ** 2), c[2], np.sqrt(1.0 - c[2] ** 2))
-    return out if power else as_paper(out, co)
+    return out if power else out / np.maximum(co, COS_HORIZON)
 
 
-def as_paper(out, co):
-    """Received-power weights F·cos θr as the paper's Eq. 8 weighs the last vertex: F,
-    divided by cos θr floored at COS_HORIZON; warned where a contributing vertex is within
-    GRAZING_RECEIVER_COS of edge-on, as the single bounce's bistatic weight is."""
-    if np.any((out > 0) & (co < GRAZING_RECEIVER_COS)):
-        warnings.warn("surfaces that light reaches after a bounce lie edge-on to the receiver "
-                      "(cos θr < 1e-6): under radiometry='paper' a return weighs F, which "
-                      "grows as 1/cos θr there, so they dominate the profile; "
-                      "radiometry='power' (received power, F·cos θr) is finite",
-                      MeshladarWarning, stacklevel=user_stacklevel())
-    return out / np.maximum(co, COS_HORIZON)
+def edge_on_glints(materials, mat, n, wi, wo):
+    """Per vertex, the part of its paper-radiometry weight F (:func:`weight`) that an SR
+    glint gives (its F grows as 1/cos θo, A5) where the vertex is within
+    GRAZING_RECEIVER_COS of edge-on to ``wo``; 0 elsewhere (every other built-in F is
+    bounded there)."""
+    co = dot(n, wo)
+    out = np.zeros(len(n))
+    near = (co > 0) & (co < GRAZING_RECEIVER_COS)
+    for i, m in enumerate(materials):
+        sel = near & (mat == i)
+        if np.any(sel) and isinstance(m, SandfordRobertson) and m.has_specular:
+            out[sel] = weight([glint_of(m)], np.zeros(int(sel.sum()), int), n[sel],
+                              wi[sel], wo[sel], power=False)
+    return out
+
+
+def warn_edge_on(glint, value):
+    """Warn when the edge-on glints (:func:`edge_on_glints`) of the returns ``value`` that
+    reach the receiver carry more than GRAZING_SHARE of them."""
+    total = float(value.sum())
+    share = float(glint.sum()) / total if total > 0 else 0.0
+    if share > GRAZING_SHARE:
+        warnings.warn(f"surfaces that light reaches after a bounce lie edge-on to the "
+                      f"receiver (cos θr < 1e-6), and their glint carries {100 * share:.3g} % "
+                      f"of an order's return: under radiometry='paper' a glint's F grows as "
+                      f"1/cos θr there; radiometry='power' (received power, F·cos θr) is "
+                      f"finite", MeshladarWarning, stacklevel=user_stacklevel())
+
+
+def glint_of(m):
+    """A coating's specular lobe alone (SR's ``lobes="specular"``; GGX is one).
+
+    Parameters
+    ----------
+    m : BRDF
+        The coating.
+
+    Returns
+    -------
+    BRDF
+        Its specular part; ``m`` itself for any other model.
+    """
+    if isinstance(m, SandfordRobertson) and m.lobes == "both":
+        return replace(m, lobes="specular")
+    return m
 
 
 def cast(emb, geo, points, normals, d):

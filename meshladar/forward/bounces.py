@@ -50,7 +50,8 @@ from ..errors import ModelError, ParameterError
 from ..raytrace.backends import resolve_backend
 from ..raytrace.embree import embree_scene, geometry
 from ._bounce_kernels import sample_mixture
-from ._paths import Leg, Paths, blocked, cast, dot, lobe_width, weight
+from ._paths import (Leg, Paths, blocked, cast, dot, edge_on_glints, lobe_width,
+                     warn_edge_on, weight)
 from .bounce_ends import Ends, entries, to_receiver, view_ends
 from .mesh import first_hits
 from .mirrors import MIRROR_CHAIN, find_mirrors, through_mirrors
@@ -290,6 +291,10 @@ def _leg(scene, geo, emb, ends, paths, mirrors):
         g = g * receive
     seen = g > 0
     seen[seen] = ~blocked(emb, geo, x[seen], d_r[seen])
+    if not ends.power:
+        warn_edge_on(paths.beta[seen] * edge_on_glints(scene.materials, mat[seen], n[seen],
+                                                        wi[seen], d_r[seen]),
+                     paths.beta[seen] * g[seen])
     return Leg(face[seen], x[seen], (paths.beta * g)[seen],
                (0.5 * (paths.r1 + paths.length + out) - ends.offset)[seen],
                paths.ident[seen])

@@ -36,21 +36,19 @@ does not degrade with s.
 
 from __future__ import annotations
 
-from dataclasses import replace
 from itertools import product
 from typing import NamedTuple
 
 import numpy as np
 
-from ..brdf import SandfordRobertson
 from ..errors import ModelError
 from ..meshes.visibility import part_plane
 from ..precision import COS_HORIZON
-from ._paths import Leg, as_paper, blocked, cast, dot, lobe_width, weight
+from ._paths import Leg, blocked, cast, dot, glint_of, lobe_width, weight
 from .specular import specular_albedo
 
 __all__ = ["MIRROR_LOBE", "MIRROR_CHAIN", "Mirrors", "find_mirrors", "chains",
-           "through_mirrors", "glint_of"]
+           "through_mirrors"]
 
 #: Coatings whose specular lobe is no wider than this are mirrors on flat parts.
 MIRROR_LOBE = 1e-2
@@ -92,24 +90,6 @@ def _narrow(m):
     except ModelError:
         return False
     return True
-
-
-def glint_of(m):
-    """A near-mirror coating's specular lobe alone (SR's ``lobes="specular"``; GGX is one).
-
-    Parameters
-    ----------
-    m : BRDF
-        The coating.
-
-    Returns
-    -------
-    BRDF
-        Its specular part; ``m`` itself for any other model.
-    """
-    if isinstance(m, SandfordRobertson) and m.lobes == "both":
-        return replace(m, lobes="specular")
-    return m
 
 
 def find_mirrors(scene, geo):
@@ -279,5 +259,5 @@ def _leave(ends, geo, emb, state, paths, keep):
             beta = beta * (ends.sensor.standoff / unfolded) ** 2 * np.exp(
                 -ends.sensor.extinction * (r1 + length + out))
     if not ends.power:
-        beta = as_paper(beta, np.maximum(dot(n, d), COS_HORIZON))
+        beta = beta / np.maximum(dot(n, d), COS_HORIZON)   # bounded: one cos θr per mirror
     return Leg(face, y, beta, 0.5 * (r1 + length + out) - ends.offset, paths.ident[keep])

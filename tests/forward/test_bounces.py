@@ -311,3 +311,21 @@ def test_the_sampled_densities_integrate_known_functions(width):
     for power, exact in ((1, np.pi), (8, 2 * np.pi / 9)):
         x = np.where(ok, d[:, 2] ** power / np.where(ok, pdf, 1.0), 0.0)
         assert abs(x.mean() - exact) <= 5 * x.std() / np.sqrt(k)
+
+
+def test_an_edge_on_glint_under_the_papers_radiometry_is_warned():
+    """Under radiometry="paper" the last vertex weighs F; an SR glint's F grows as 1/cos θr
+    toward an edge-on exit (A5), a Lambertian F does not: the glint's share is reported and
+    warned above GRAZING_SHARE, nothing for the Lambertian."""
+    from meshladar.forward._paths import GRAZING_SHARE, edge_on_glints, warn_edge_on, weight
+    n = np.array([[1.0, 0.0, 0.0]])
+    wo = np.array([[1e-8, 1.0, 0.0]])                       # cos θr = 1e-8
+    wi = np.array([[1e-3, -1.0, 0.0]]) / np.hypot(1e-3, 1.0)     # near the mirror direction
+    glossy = SandfordRobertson(0.1, 0.1, 0.0, 0.05)
+    glint = edge_on_glints([glossy], np.array([0]), n, wi, wo)
+    value = weight([glossy], np.array([0]), n, wi, wo, power=False)
+    assert glint[0] > 1e6 and glint[0] <= value[0]
+    with pytest.warns(MeshladarWarning, match=r"glint carries \d+ % of an order"):
+        warn_edge_on(glint, value)
+    assert not edge_on_glints([Lambertian(0.5)], np.array([0]), n, wi, wo).any()
+    warn_edge_on(np.array([GRAZING_SHARE * 0.5]), np.array([1.0]))     # below: silent
