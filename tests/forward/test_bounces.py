@@ -272,6 +272,10 @@ def test_the_guide_states_the_constants():
     flat = " ".join(text.split())
     assert orders.MAX_BOUNCE_SAMPLES == 4194304 and "at most 4194304" in flat
     assert orders.BOUNCE_SAMPLES == 32768 and "default 32768" in flat
+    from meshladar.forward import _paths, mirrors
+    assert _paths.GRAZING_SHARE == 1e-3 and "more than 0.1 % of an order's return" in flat
+    assert mirrors.MIRROR_LOBE == 0.01 and "a lobe no wider than 0.01" in flat
+    assert mirrors.MIRROR_CHAIN == 3 and "chain of up to three mirrors" in flat
 
 
 def test_face_orders_and_sampled_paths():
