@@ -106,8 +106,12 @@ def find_mirrors(scene, geo):
     Returns
     -------
     Mirrors or None
-        The mirrors.
+        The mirrors (found once per scene and MIRROR_LOBE: every view's walk asks).
     """
+    return scene.cached(("mirrors", MIRROR_LOBE), lambda: _found(scene, geo))
+
+
+def _found(scene, geo):
     narrow = np.array([_narrow(m) for m in scene.materials])
     emits = np.array([not (lobe_width(m) <= MIRROR_LOBE) for m in scene.materials])
     found = []
