@@ -160,7 +160,9 @@ class Leg(NamedTuple):
 
 def blocked(emb, geo, points, d):
     """Whether the ray from each point (scene coordinates, lifted along its direction)
-    along ``d`` meets the scene (the receiver lies beyond every face)."""
+    along ``d`` meets the scene (the receiver lies beyond every face: at infinity, or a
+    sensor every face is in front of, as its ray planning checks, so that nothing lies
+    beyond it along a ray from the scene)."""
     o = points - geo.center + LIFT * geo.radius * d
     return emb.run(np.ascontiguousarray(o, dtype=np.float32),
                    np.ascontiguousarray(d, dtype=np.float32), query="OCCLUDED") != -1

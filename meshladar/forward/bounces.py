@@ -282,8 +282,8 @@ def _leg(scene, geo, emb, ends, paths, mirrors):
     d_r, out, receive = to_receiver(ends, x, paths.r1, paths.length)
     mat = geo.material[face]
     g = weight(scene.materials, mat, n, wi, d_r, power=ends.power)
+    ex = (paths.run >= 1) & (paths.run <= MIRROR_CHAIN)
     if mirrors is not None:
-        ex = (paths.run >= 1) & (paths.run <= MIRROR_CHAIN)
         if ex.any():
             g[ex] = np.maximum(g[ex] - weight(mirrors.glints, mat[ex], n[ex], wi[ex],
                                               d_r[ex], power=ends.power), 0.0)
@@ -291,10 +291,11 @@ def _leg(scene, geo, emb, ends, paths, mirrors):
         g = g * receive
     seen = g > 0
     seen[seen] = ~blocked(emb, geo, x[seen], d_r[seen])
-    if not ends.power:
-        warn_edge_on(paths.beta[seen] * edge_on_glints(scene.materials, mat[seen], n[seen],
-                                                        wi[seen], d_r[seen]),
-                     paths.beta[seen] * g[seen])
+    if not ends.power:                 # the glints that reached it (not those left out)
+        glint = edge_on_glints(scene.materials, mat[seen], n[seen], wi[seen], d_r[seen])
+        if mirrors is not None:
+            glint[ex[seen]] = 0.0
+        warn_edge_on(paths.beta[seen] * glint, paths.beta[seen] * g[seen])
     return Leg(face[seen], x[seen], (paths.beta * g)[seen],
                (0.5 * (paths.r1 + paths.length + out) - ends.offset)[seen],
                paths.ident[seen])

@@ -9,8 +9,9 @@ paths: relative standard errors of 12 % and a total 30 % low). Here such returns
 computed without sampling the glint.
 
 A **mirror** is a flat part (:func:`~meshladar.meshes.visibility.part_plane`) whose every
-face's coating has a specular lobe no wider than :data:`MIRROR_LOBE` (SR's e or GGX's α)
-and a known specular albedo (:func:`~meshladar.forward.specular.specular_albedo`). An
+face's coating has a specular lobe no wider than :data:`MIRROR_LOBE` (SR's e or GGX's α),
+no diffuse lobe (a mirror vertex emits no chain, so light its diffuse lobe sent on through
+another mirror would be counted by neither estimate) and a known specular albedo (:func:`~meshladar.forward.specular.specular_albedo`). An
 **emitter** is a vertex whose coating has no lobe that narrow. From each emitter x, for
 each chain of up to :data:`MIRROR_CHAIN` mirrors P₁ … P_m (consecutive ones distinct), the
 direction d₀ that leaves the last mirror toward the receiver is found by reflecting the
@@ -25,7 +26,8 @@ at its incidence: the glint taken as a delta about the mirror direction, whose e
 the order of s² where the light arriving varies slowly over the lobe), at half the
 unfolded optical path, and with a sensor at a finite standoff its solid angle (D/R)² for
 R the unfolded distance from x to the sensor. Under the paper's Eq. 8 the last mirror
-weighs ρs/cos θr.
+weighs ρs/cos θr (and, toward a sensor at a finite standoff, its area per emitter area
+(R_y/R)², R_y its own distance from the sensor).
 
 So that no path counts twice, the shadow ray from a mirror vertex that ends such a run
 (a path that met an emitter and then 1 … MIRROR_CHAIN mirrors, every one flat) weighs the
@@ -41,10 +43,12 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..brdf import SandfordRobertson
 from ..errors import ModelError
 from ..meshes.visibility import part_plane
 from ..precision import COS_HORIZON
-from ._paths import Leg, blocked, cast, dot, glint_of, lobe_width, weight
+from ..weighing.hit_weights import GRAZING_RECEIVER_COS
+from ._paths import Leg, blocked, cast, dot, glint_of, lobe_width, warn_edge_on, weight
 from .specular import specular_albedo
 
 __all__ = ["MIRROR_LOBE", "MIRROR_CHAIN", "Mirrors", "find_mirrors", "chains",
@@ -82,8 +86,11 @@ class Mirrors(NamedTuple):
 
 
 def _narrow(m):
+    """Whether a coating makes a mirror: a glint no wider than MIRROR_LOBE, no diffuse lobe
+    (a mirror vertex is never an emitter, so light its diffuse lobe sent on through another
+    mirror would be counted by neither estimate), and a known specular albedo."""
     width = lobe_width(m)
-    if not width <= MIRROR_LOBE:
+    if not width <= MIRROR_LOBE or (isinstance(m, SandfordRobertson) and m.has_diffuse):
         return False
     try:
         specular_albedo(m)
@@ -257,11 +264,19 @@ def _leave(ends, geo, emb, state, paths, keep):
     if ends.position is None:
         out = -(y @ ends.w_r)
     else:
+        # the sensor seen from the emitter through the mirrors is its image, `unfolded`
+        # away: the receiver's solid angle (D/unfolded)² under power; under the paper's
+        # Eq. 8 (no receiver factor) the last mirror's area per emitter area,
+        # (out/unfolded)² (times the cosines below)
         out = np.linalg.norm(ends.position - y, axis=1)
+        unfolded = travelled + out
         if ends.power:
-            unfolded = travelled + out
             beta = beta * (ends.sensor.standoff / unfolded) ** 2 * np.exp(
                 -ends.sensor.extinction * (r1 + length + out))
+        else:
+            beta = beta * (out / unfolded) ** 2
     if not ends.power:
-        beta = beta / np.maximum(dot(n, d), COS_HORIZON)   # bounded: one cos θr per mirror
+        cos = dot(n, d)
+        beta = beta / np.maximum(cos, COS_HORIZON)
+        warn_edge_on(beta * (cos < GRAZING_RECEIVER_COS), beta)
     return Leg(face, y, beta, 0.5 * (r1 + length + out) - ends.offset, paths.ident[keep])

@@ -88,6 +88,24 @@ def test_with_and_without_the_chain_agree_where_both_converge():
         assert abs(a - b) <= SIGMAS * se + 2e-3 * b, (k, a, b, se)
 
 
+@pytest.mark.parametrize("radiometry", ["power", "paper"])
+def test_with_and_without_the_chain_agree_from_a_near_sensor(radiometry):
+    """A sensor 2 units away (its image through the mirror 2-3 units from the plate): the
+    chain's unfolded solid angle (power) and the mirror's area per emitter area (paper)
+    against sampling alone, at e = 0.03 counted a mirror or not."""
+    lad = ml.Ladar(None, view_vectors=W[None], bin_edges=np.linspace(-3.0, 3.0, 9))
+    scene, sensor = dihedral(3e-2), Sensor(standoff=2.0, aim=(0.3, 0.3, 0.35))
+    kw = dict(bounces=2, ray_spacing=4e-3, sensor=sensor, radiometry=radiometry)
+    sampled = higher_orders(scene, lad, samples=1 << 20, seed=2, **kw)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(mirror_module, "MIRROR_LOBE", 0.05)
+        chained = higher_orders(scene, lad, samples=1 << 16, seed=3, **kw)
+    a, b = sampled.values.sum(), chained.values.sum()
+    se = np.hypot(np.sqrt(np.sum(sampled.stderr ** 2)), np.sqrt(np.sum(chained.stderr ** 2)))
+    assert abs(a - b) <= SIGMAS * se + 2e-3 * b, (a, b, se)
+    assert se < 0.03 * b
+
+
 def test_a_distant_sensor_sees_what_the_ladar_at_infinity_sees():
     """At D = 1e5 the sensor's image through the mirror is along the mirrored direction,
     and its solid angle (D/R)² within 1e-4 of 1."""
@@ -106,4 +124,7 @@ def test_which_parts_are_mirrors():
     np.testing.assert_allclose(np.abs(found.normal[0]), [1.0, 0.0, 0.0])
     assert find_mirrors(dihedral(2 * MIRROR_LOBE), geometry(dihedral(2 * MIRROR_LOBE),
                                                             "flat")) is None
+    glossy = ml.Scene.from_parts(dihedral(1e-3).parts,
+                                 [Lambertian(RHO), SandfordRobertson(0.3, 0.1, 0.0, 1e-3)])
+    assert find_mirrors(glossy, geometry(glossy, "flat")) is None     # a diffuse lobe too
     assert chains(3, 2) == [(0,), (1,), (2,), (0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1)]
