@@ -54,7 +54,7 @@ from ._paths import (Leg, Paths, blocked, cast, dot, edge_on_glints, lobe_width,
                      warn_edge_on, weight)
 from .bounce_ends import Ends, entries, to_receiver, view_ends
 from .mesh import first_hits
-from .mirrors import MIRROR_CHAIN, find_mirrors, through_mirrors
+from .mirrors import find_mirrors, through_mirrors
 
 __all__ = ["BRANCHES", "BOUNCE_SAMPLES", "Orders", "higher_orders", "check_bistatic", "walk",
            "single_bounce"]
@@ -282,7 +282,7 @@ def _leg(scene, geo, emb, ends, paths, mirrors):
     d_r, out, receive = to_receiver(ends, x, paths.r1, paths.length)
     mat = geo.material[face]
     g = weight(scene.materials, mat, n, wi, d_r, power=ends.power)
-    ex = (paths.run >= 1) & (paths.run <= MIRROR_CHAIN)
+    ex = (paths.run >= 1) & (paths.run <= (0 if mirrors is None else mirrors.longest))
     if mirrors is not None:
         if ex.any():
             g[ex] = np.maximum(g[ex] - weight(mirrors.glints, mat[ex], n[ex], wi[ex],

@@ -45,19 +45,22 @@ import numpy as np
 
 from ..brdf import SandfordRobertson
 from ..errors import ModelError
-from ..meshes.visibility import part_plane
+from ..meshes.visibility import CONVEX_RTOL, part_plane
 from ..precision import COS_HORIZON
 from ..weighing.hit_weights import GRAZING_RECEIVER_COS
 from ._paths import Leg, blocked, cast, dot, glint_of, lobe_width, warn_edge_on, weight
 from .specular import specular_albedo
 
-__all__ = ["MIRROR_LOBE", "MIRROR_CHAIN", "Mirrors", "find_mirrors", "chains",
+__all__ = ["MIRROR_LOBE", "MIRROR_CHAIN", "MAX_CHAINS", "Mirrors", "find_mirrors", "chains",
            "through_mirrors"]
 
 #: Coatings whose specular lobe is no wider than this are mirrors on flat parts.
 MIRROR_LOBE = 1e-2
 #: The most mirrors one chain from an emitter passes through.
 MIRROR_CHAIN = 3
+#: The most chains followed from each vertex: with more mirror planes the chains are
+#: shortened, and with more than this many planes the mirrors are sampled like any surface.
+MAX_CHAINS = 64
 
 
 class Mirrors(NamedTuple):
@@ -65,22 +68,27 @@ class Mirrors(NamedTuple):
 
     Attributes
     ----------
-    part : (m,) numpy.ndarray of int
-        Each mirror's part.
+    part : tuple of tuple of int
+        Each mirror plane's parts (coplanar mirror parts are one mirror: the same
+        reflection).
     normal, point : (m, 3) numpy.ndarray
         Each mirror's plane: unit normal and a point on it (scene coordinates).
     of_face : (n_faces,) numpy.ndarray of int
         Each face's mirror, −1 for a face on none.
+    longest : int
+        The longest chain followed: MIRROR_CHAIN, or fewer where the chains of that many
+        mirrors would exceed MAX_CHAINS.
     emits : (n_materials,) numpy.ndarray of bool
         Coatings without a lobe as narrow as MIRROR_LOBE.
     glints : tuple of BRDF
         Per coating, its specular lobe alone (the coating itself where it is no mirror's).
     """
 
-    part: np.ndarray
+    part: tuple
     normal: np.ndarray
     point: np.ndarray
     of_face: np.ndarray
+    longest: int
     emits: np.ndarray
     glints: tuple
 
@@ -121,20 +129,35 @@ def find_mirrors(scene, geo):
 def _found(scene, geo):
     narrow = np.array([_narrow(m) for m in scene.materials])
     emits = np.array([not (lobe_width(m) <= MIRROR_LOBE) for m in scene.materials])
-    found = []
+    planes = []                                 # [normal, point, parts]
     for i, part in enumerate(scene.parts):
         if len(part.faces) and np.all(narrow[part.material]):
             plane = part_plane(part)
             if plane is not None:
-                found.append((i, *plane))
-    if not found or not emits.any():
+                _join(planes, plane, i, part)
+    m = len(planes)                             # chains of k: m (m − 1)^(k − 1)
+    longest = max([k for k in range(1, MIRROR_CHAIN + 1)
+                   if m * (m - 1) ** (k - 1) <= MAX_CHAINS], default=0)
+    if not planes or not longest or not emits.any():
         return None
-    part = np.array([f[0] for f in found])
     of_part = np.full(len(scene.parts), -1)
-    of_part[part] = np.arange(len(part))
-    return Mirrors(part, np.array([f[1] for f in found], np.float64),
-                   np.array([f[2] for f in found], np.float64), of_part[geo.part_of],
-                   emits, tuple(glint_of(m) for m in scene.materials))
+    for k, (_, _, parts) in enumerate(planes):
+        of_part[parts] = k
+    return Mirrors(tuple(tuple(p[2]) for p in planes), np.array([p[0] for p in planes]),
+                   np.array([p[1] for p in planes]), of_part[geo.part_of], longest, emits,
+                   tuple(glint_of(m) for m in scene.materials))
+
+
+def _join(planes, plane, index, part):
+    """Add a mirror part to the plane it lies in, or as a new plane."""
+    normal, point = plane
+    tol = CONVEX_RTOL * float(np.linalg.norm(np.ptp(part.vertices, axis=0)))
+    for p in planes:
+        if abs(abs(float(p[0] @ normal)) - 1.0) <= 1e-12 and \
+                np.all(np.abs((part.vertices - p[1]) @ p[0]) <= max(tol, 1e-300)):
+            p[2].append(index)
+            return
+    planes.append([np.asarray(normal, np.float64), np.asarray(point, np.float64), [index]])
 
 
 def chains(count, longest):
@@ -208,7 +231,7 @@ def through_mirrors(scene, geo, emb, ends, mirrors, paths, longest):
     if not go.any() or longest < 1:
         return []
     out = []
-    for chain in chains(len(mirrors.part), min(longest, MIRROR_CHAIN)):
+    for chain in chains(len(mirrors.part), min(longest, mirrors.longest)):
         leg = _one_chain(scene, geo, emb, ends, mirrors, paths, go, chain)
         if leg is not None:
             out.append((len(chain), leg))

@@ -276,6 +276,8 @@ def test_the_guide_states_the_constants():
     assert _paths.GRAZING_SHARE == 1e-3 and "more than 0.1 % of an order's return" in flat
     assert mirrors.MIRROR_LOBE == 0.01 and "a lobe no wider than 0.01" in flat
     assert mirrors.MIRROR_CHAIN == 3 and "chain of up to three mirrors" in flat
+    assert mirrors.MAX_CHAINS == 64 and "more than 64 chains of three" in flat and \
+        "more than 64 mirror planes" in flat
 
 
 def test_face_orders_and_sampled_paths():

@@ -120,7 +120,8 @@ def test_a_distant_sensor_sees_what_the_ladar_at_infinity_sees():
 def test_which_parts_are_mirrors():
     scene = dihedral(1e-3)
     found = find_mirrors(scene, geometry(scene, "flat"))
-    assert found.part.tolist() == [1] and found.emits.tolist() == [True, False]
+    assert found.part == ((1,),) and found.emits.tolist() == [True, False]
+    assert found.longest == 3                           # (no chain of two exists)
     np.testing.assert_allclose(np.abs(found.normal[0]), [1.0, 0.0, 0.0])
     assert find_mirrors(dihedral(2 * MIRROR_LOBE), geometry(dihedral(2 * MIRROR_LOBE),
                                                             "flat")) is None
@@ -128,3 +129,32 @@ def test_which_parts_are_mirrors():
                                  [Lambertian(RHO), SandfordRobertson(0.3, 0.1, 0.0, 1e-3)])
     assert find_mirrors(glossy, geometry(glossy, "flat")) is None     # a diffuse lobe too
     assert chains(3, 2) == [(0,), (1,), (2,), (0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1)]
+
+
+def test_coplanar_mirrors_are_one_and_many_mirrors_shorten_the_chains():
+    """Mirror tiles in one plane reflect alike: one mirror. Five mirror planes make
+    5·4·4 = 80 chains of three, more than MAX_CHAINS: chains of two (20); and with more
+    than MAX_CHAINS planes the mirrors are sampled like any surface (None)."""
+    from meshladar.forward.mirrors import MAX_CHAINS
+    glint = SandfordRobertson(0.0, 0.1, 0.0, 1e-3)
+
+    def tile(x0, normal_axis, name):
+        v = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float) + [x0, 0, 0]
+        v = np.roll(v, normal_axis, axis=1)
+        return MeshPart(v, [[0, 1, 2], [0, 2, 3]], 1, name)
+
+    floor = MeshPart(np.array([[0, 0, -5], [9, 0, -5], [9, 9, -5], [0, 9, -5]], float),
+                     [[0, 1, 2], [0, 2, 3]], 0, "floor")
+    tiles = ml.Scene.from_parts([floor, tile(0, 0, "t0"), tile(2, 0, "t1")],
+                                [Lambertian(0.5), glint])
+    found = find_mirrors(tiles, geometry(tiles, "flat"))
+    assert found.part == ((1, 2),) and found.of_face.tolist() == [-1, -1, 0, 0, 0, 0]
+
+    def plates(n):
+        parts = [floor] + [MeshPart(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.1 * k]], float)
+                                    + [3.0 * k, 0, 0], [[0, 1, 2]], 1, f"p{k}")
+                           for k in range(n)]
+        scene = ml.Scene.from_parts(parts, [Lambertian(0.5), glint])
+        return find_mirrors(scene, geometry(scene, "flat"))
+    assert MAX_CHAINS == 64 and plates(5).longest == 2 and plates(3).longest == 3
+    assert plates(10).longest == 1 and plates(65) is None          # 10·9 = 90 > 64
