@@ -13,6 +13,7 @@ import numpy as np
 from ..brdf import GGX, Phong, SandfordRobertson
 from ..errors import MeshladarWarning, user_stacklevel
 from ..precision import COS_HORIZON, RECEIVER_LIFT
+from ..raytrace.views import refine_t_along
 from ..weighing.hit_weights import GRAZING_RECEIVER_COS
 
 __all__ = ["LIFT", "GRAZING_SHARE", "Leg", "Paths", "lobe_width", "dot", "weight", "edge_on_glints", "warn_edge_on", "glint_of", "cast",
@@ -120,12 +121,7 @@ def cast(emb, geo, points, normals, d):
     face = res["primID"].astype(np.int64)
     t = res["tfar"].astype(np.float64)
     hit = face >= 0
-    n = geo.face_normals[face[hit]]
-    cos = np.einsum("ij,ij->i", n, d[hit])
-    exact = np.abs(cos) > 1e-9
-    t_plane = (geo.plane_d[face[hit]] - np.einsum("ij,ij->i", n, shifted[hit])) / np.where(
-        exact, cos, 1.0)
-    t[hit] = np.where(exact, t_plane, t[hit])
+    t[hit] = refine_t_along(geo, face[hit], shifted[hit], d[hit], t[hit])
     return face, t
 
 

@@ -25,8 +25,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..precision import REFINE_MIN_COS
 from ..raytrace.perspective import sensor_cast, sensor_factors
+from ..raytrace.views import refine_t_along
 from .mesh import first_hits
 
 __all__ = ["Ends", "view_ends", "entries", "to_receiver"]
@@ -128,12 +128,8 @@ def entries(scene, geo, emb, ends, spacing):
     prim = cast.res["primID"].astype(np.int64)
     hit = prim >= 0
     prim, dirs = prim[hit], cast.dirs[hit]
-    n = geo.face_normals[prim]
-    denom = np.einsum("ij,ij->i", n, dirs)
-    t32 = cast.t0 + cast.res["tfar"][hit].astype(np.float64)
-    ok = np.abs(denom) > REFINE_MIN_COS
-    t = np.where(ok, (geo.plane_d[prim] - n @ cast.sensor_pos) / np.where(ok, denom, 1.0),
-                 t32)
+    t = refine_t_along(geo, prim, cast.sensor_pos, dirs,
+                       cast.t0 + cast.res["tfar"][hit].astype(np.float64))
     p = cast.sensor_pos + t[:, None] * dirs
     cos3 = (sensor.standoff / cast.length[hit]) ** 3
     factor = sensor_factors(sensor, w, aim, p, cast.sensor_pos, t, cos3)[0]

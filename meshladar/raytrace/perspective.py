@@ -29,10 +29,10 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import ParameterError
-from ..precision import ORIGIN_MARGIN, REFINE_MIN_COS
+from ..precision import ORIGIN_MARGIN
 from .grid import stratified_sequences, dot, frame, ray_grid, stratified_offsets
 from ..hits import ViewHits
-from .views import _hit_normals, _shading_factor
+from .views import _hit_normals, _shading_factor, refine_t_along
 
 
 class PlaneGrid(NamedTuple):
@@ -167,13 +167,9 @@ def trace_sensor_view(plan, scene, view):
         t32 = t0_all + res["tfar"][hit].astype(np.float64)
         n_rays = len(o)
         cos3 = (D / length[hit]) ** 3
-    # float64 distance from the ray's start to the hit face's plane
-    n_geo = geo.face_normals[prim]
-    denom = _rowdot(n_geo, dirs)
-    num = geo.plane_d[prim] - _rowdot(n_geo, start)
-    ok = np.abs(denom) > REFINE_MIN_COS
-    t = np.where(ok, num / np.where(ok, denom, 1.0), t32)
+    t = refine_t_along(geo, prim, start, dirs, t32)    # float64, to the hit face's plane
     p = start + t[:, None] * dirs
+    n_geo = geo.face_normals[prim]
     toward = -dirs                                   # from the hit toward the sensor
     cos_geo = _rowdot(n_geo, toward)
     back = cos_geo < 0

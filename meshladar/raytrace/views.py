@@ -195,6 +195,19 @@ def refine_t(geo, prim, origins32, w, t32):
 
 
 
+def refine_t_along(geo, prim, start, dirs, t32):
+    """:func:`refine_t` for rays of their own directions: the float64 distance along each
+    unit direction ``dirs`` (k, 3) from ``start`` (k, 3) or (3,) (float64, the coordinates
+    the geometry is shifted to) to its hit face's plane, Embree's ``t32`` where the ray is
+    within REFINE_MIN_COS of the plane."""
+    n = geo.face_normals[prim]
+    o = np.broadcast_to(start, dirs.shape)
+    denom = n[:, 0] * dirs[:, 0] + n[:, 1] * dirs[:, 1] + n[:, 2] * dirs[:, 2]
+    num = geo.plane_d[prim] - (n[:, 0] * o[:, 0] + n[:, 1] * o[:, 1] + n[:, 2] * o[:, 2])
+    ok = np.abs(denom) > _REFINE_MIN_COS
+    return np.where(ok, num / np.where(ok, denom, 1.0), np.asarray(t32, np.float64))
+
+
 def range_offset(center, w, w_r):
     """−c·w (monostatic) or −c·(w + w_r)/2 (bistatic): the range of the shifted origin."""
     return -float(center @ w) if w_r is None else -0.5 * float(center @ (w + w_r))
