@@ -25,7 +25,8 @@ from ..ladar import Ladar
 from ..meshes import MeshPart, icosphere
 from ..scene import Scene
 from .peer import _mitsuba, _uniform_width
-from ._mitsuba_scene import _checked, _frame, _samples, _target
+from ._mitsuba_scene import (_checked, _frame, _opl_mapping, _samples, _target,
+                             _transient_scene)
 
 __all__ = ["LIGHT_DISTANCE", "mitransient_profiles", "mitransient_orders",
            "bench_second_bounce"]
@@ -117,8 +118,11 @@ def _rendered(mi, mesh, target, plan, distance):
 
 def mitransient_orders(vertices, faces, view, *, bsdf, bounces=2, spp=256, film=(128, 128),
                        seed=0, sampler="independent"):
-    """Total received power of orders 1..``bounces`` rendered by mitransient: the
-    profiles of :func:`mitransient_profiles` in one bin holding every path.
+    """Total received power of orders 1..``bounces`` rendered by mitransient, one render
+    per ``max_depth`` = order + 1 with its directional emitter (whose constant light leg
+    leaves totals exact: one bin holds every path), the same seed and sampler, so that
+    each difference is that order's own estimate. The cheapest way mitransient has to a
+    total, which :func:`bench_second_bounce` times.
 
     Parameters
     ----------
@@ -145,13 +149,28 @@ def mitransient_orders(vertices, faces, view, *, bsdf, bounces=2, spp=256, film=
         Each order's total, ∫ F cos θi cos θr dA and its higher-order analogues, in
         meshladar's units (per unit irradiance).
     """
-    v = np.asarray(vertices, np.float64)
-    w = np.asarray(view, np.float64) / np.linalg.norm(view)
-    r = -(v @ w)
-    reach = float(np.linalg.norm(np.ptp(v, axis=0))) * (bounces + 1)
-    return mitransient_profiles(vertices, faces, view, [r.min() - reach, r.max() + reach],
-                                bsdf=bsdf, bounces=bounces, spp=spp, film=film, seed=seed,
-                                sampler=sampler)[:, 0]
+    v, f, w, _ = _checked(vertices, faces, view, [0.0, 1.0])
+    nx, ny = int(film[0]), int(film[1])
+    spp = _samples(spp, sampler)
+    mi, dr = _mitsuba()
+    mesh = _target(mi, v, f, bsdf, True)
+    fr = _frame(mi, v, w, nx, ny)
+    reach = 2.0 * (bounces + 2) * fr.rad
+    edges = np.array([float(-(fr.origin @ w)) - reach, float(-(fr.origin @ w)) + 2 * reach])
+    mapping = _opl_mapping(mi, mesh, w, fr, edges, _uniform_width(edges))
+    totals = []
+    for depth in range(2, bounces + 2):
+        scene = _transient_scene(mi, mesh, w, fr, {
+            "sampler": {"type": sampler, "sample_count": spp, "seed": int(seed)},
+            "film": {"type": "transient_hdr_film", "width": nx, "height": ny,
+                     "temporal_bins": 1, "bin_width_opl": mapping["bin_width_opl"],
+                     "start_opl": max(mapping["start_opl"], 0.0),
+                     "rfilter": {"type": "box"}}}, max_depth=depth)
+        _, transient = mi.render(scene, spp=spp, seed=int(seed))
+        totals.append(float(np.array(transient, dtype=np.float64)[..., 0].sum())
+                      * (2.0 * fr.h / nx) ** 2)
+        dr.sync_thread()
+    return np.diff(np.r_[0.0, totals])
 
 
 def bench_second_bounce(*, target=1e-3, rounds=4, spp=64, samples=1 << 17, seed=0):
