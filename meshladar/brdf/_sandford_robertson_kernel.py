@@ -5,7 +5,9 @@ numba is imported here, at the top; the pure-numpy model module stays light, and
 compiled stages import this file. Each coating's row is its ``kernel_params``
 (:class:`~meshladar.brdf.kernel_table.KernelRow`); :func:`material_table` stacks them.
 The tests hold :func:`sr_monostatic` to :meth:`SandfordRobertson.value` to 1e-13 on a grid
-through 90° (and at the extremes of its arguments) (tests/brdf/test_sandford_robertson_kernel.py).
+through 90° (and at the extremes of its arguments), and :func:`sr_bistatic` to
+:meth:`SandfordRobertson.bistatic` and ``bistatic_value`` to 1e-13 over pairs of directions
+(tests/brdf/test_sandford_robertson_kernel.py).
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from numba import njit
 from ..precision import COS_HORIZON as _COS_HORIZON
 from .kernel_table import KernelRow, material_table
 
-__all__ = ["sr_monostatic", "material_table", "KernelRow"]
+__all__ = ["sr_monostatic", "sr_bistatic", "material_table", "KernelRow"]
 
 #: Below this, x² + y² could underflow: such norms go through hypot.
 _UNDERFLOW = 1e-150
@@ -47,4 +49,40 @@ def sr_monostatic(c, s, rho_d, eps, b, e, G, diffuse, specular):
         kc = k * c
         h_scaled = kc + (2.0 * e * e + kc * kc) / math.sqrt(4.0 * e * e + kc * kc)  # 2e²H, A9
         out += rho_s * (2.0 * e * e / (d * d * h_scaled)) / (4.0 * math.pi) / max(c, _COS_HORIZON)
+    return out
+
+
+@njit(cache=True, inline="always")
+def _norm(x, y):
+    """|(x, y)| for x, y ≥ 0 as sqrt(x² + y²), through hypot only against underflow."""
+    return math.sqrt(x * x + y * y) if max(x, y) > _UNDERFLOW else math.hypot(x, y)
+
+
+@njit(cache=True, inline="always")
+def _g(c, s, b):
+    """The diffuse shape g (A2) from cos θ ≥ 0 and sin θ: 1 where both terms vanish."""
+    den = _norm(c, b * s)
+    return (c / den) ** 2 if den > 0.0 else 1.0
+
+
+@njit(cache=True)
+def sr_bistatic(ci, si, cr, sr, ca, sa, rho_d, eps, b, e, G, diffuse, specular, projected):
+    """F(w_i, w_r) of meshladar.brdf.SandfordRobertson (``projected``: F·cos θr, its
+    ``bistatic``; else F, its ``bistatic_value``) from the cosines and sines of θi, θr and
+    the glint angle α: the same expressions as SandfordRobertson._core, with the norms of
+    :func:`sr_monostatic`; 0 where cos θi < 0 or cos θr < 0."""
+    if ci < 0.0 or cr < 0.0:
+        return 0.0
+    g_i = _g(ci, si, b)
+    out = 0.0
+    if diffuse:
+        f_d = rho_d / (math.pi * G * G) * g_i * _g(cr, sr, b)       # A1
+        out += f_d * cr if projected else f_d
+    if specular:
+        rho_s = max(1.0 - (eps + rho_d) / G * g_i, 0.0)              # A8
+        d = _norm(abs(e * ca), sa) ** 2                               # 1/sqrt(h(α)), A6
+        kc = (1.0 - e) * (1.0 + e) * ci
+        h_scaled = kc + (2.0 * e * e + kc * kc) / math.sqrt(4.0 * e * e + kc * kc)  # 2e²H, A9
+        f_s_cos = rho_s * (2.0 * e * e / (d * d * h_scaled)) / (4.0 * math.pi)     # A5·cos θr
+        out += f_s_cos if projected else f_s_cos / max(cr, _COS_HORIZON)
     return out

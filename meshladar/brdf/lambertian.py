@@ -113,6 +113,30 @@ class Lambertian(BRDF, builtin=True):
         return np.where((cos_i >= 0) & (cos_r >= 0),
                         self.albedo / math.pi * np.maximum(cos_r, 0.0), 0.0)
 
+    def bistatic_value(self, cos_i, sin_i, cos_r, sin_r, cos_h, sin_h):
+        """F(w_i, w_r) = albedo/π in 1/sr where cos θi ≥ 0 and cos θr ≥ 0, 0 below either
+        horizon (the constant itself, also at θr = π/2, as :meth:`value` monostatic).
+
+        Parameters
+        ----------
+        cos_i : array_like
+            Cosine of θi, the polar angle of the direction to the source.
+        sin_i : array_like
+            Not used.
+        cos_r : array_like
+            Cosine of θr, the polar angle of the direction to the receiver; broadcasts with
+            ``cos_i``.
+        sin_r, cos_h, sin_h : array_like
+            Not used.
+
+        Returns
+        -------
+        ndarray
+            F in 1/sr, of the broadcast shape of ``cos_i`` and ``cos_r``.
+        """
+        return np.where((np.asarray(cos_i) >= 0) & (np.asarray(cos_r) >= 0),
+                        self.albedo / math.pi, 0.0)
+
     @property
     def kernel_params(self):
         # SR with b = 0 (g ≡ 1, G = 1), diffuse only: F = rho_d / π

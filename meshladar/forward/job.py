@@ -37,7 +37,8 @@ from ..raytrace.views import range_offset
 from ..raytrace.views import trace_view
 from ..weighing import bin_one as _bin_one
 from ..brdf import material_table
-from ..weighing.faces import face_bistatic_weights, face_footprints, face_weights
+from ..weighing.faces import (check_edge_on_receiver, face_bistatic_weights, face_footprints,
+                              face_weights)
 from ..weighing.fused import cast_bin_grid
 from ..weighing.record import Weighing
 from ..weighing._kernels import bin_flat_hits, bin_smooth_hits
@@ -246,9 +247,12 @@ def _flat_stage(job, scene, view, chunk):
         face_footprints(p.geo, view.w, p.mode, p.spacing, chunk.footprints)
     receiver = None
     if view.w_r is not None:
-        face_bistatic_weights(p.geo, wg.materials, view.w, view.w_r, p.area, chunk.weight,
-                              wg.power, p.ignore_back)
-        chunk.stamp[:] = view.slot + 1
+        if not wg.compiled_bistatic:                 # F in numpy, every face first
+            face_bistatic_weights(p.geo, wg.materials, view.w, view.w_r, p.area,
+                                  chunk.weight, wg.power, p.ignore_back)
+            chunk.stamp[:] = view.slot + 1
+        elif not wg.power:                           # each face's first hit weighs it
+            check_edge_on_receiver(p.geo, view.w, view.w_r, p.ignore_back)
         receiver = (view.w_r, RECEIVER_LIFT * p.geo.radius)
     elif not wg.compiled:
         face_weights(p.geo, wg.materials, view.w, p.area, chunk.weight, wg.power)

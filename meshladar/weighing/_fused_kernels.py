@@ -195,12 +195,14 @@ def cast_bin_smooth(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, fac
 
 @njit(cache=True, nogil=True)
 def cast_bin_bistatic(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, face_normals,
-                      wv, start, edges, ignore_back, out, weight, occ, wr, lift):
+                      wv, start, edges, ignore_back, out, weight, occ, wr, lift, stamp, tag,
+                      coating):
     """One bistatic view (receiver direction ``wr``), flat normals: the bands' hits taken
     a block at a time; each block's hits first cast their occlusion rays toward the
     receiver with ``occ`` (rtcOccludedW; see :func:`_occlude_block`), then
     :func:`._kernels.bin_bistatic_hits` bins them with the per-face bistatic weights in
-    ``weight``. Returns (back-face hits, rays cast)."""
+    ``weight`` (those whose ``stamp`` is not ``tag`` evaluated at their first hit from
+    ``coating``). Returns (back-face hits, rays cast)."""
     ws = workspace()
     i32, f32, i64, base = ws
     init_args(i32, i64, base, flags)
@@ -225,21 +227,22 @@ def cast_bin_bistatic(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, f
             if held == _BLOCK:
                 back += _bin_block(occ, scene, w, flags, ws, hits, held, spare, plane_d,
                                    face_normals, wv, wr, lift, inv_scale, one, start, edges,
-                                   ignore_back, out, weight)
+                                   ignore_back, out, (weight, stamp, tag, coating))
                 held = 0
     if held:
         back += _bin_block(occ, scene, w, flags, ws, hits, held, spare, plane_d,
                            face_normals, wv, wr, lift, inv_scale, one, start, edges,
-                           ignore_back, out, weight)
+                           ignore_back, out, (weight, stamp, tag, coating))
     return back, grid[0].shape[0] * grid[1].shape[0]
 
 
 @njit(cache=True, nogil=True)
 def _bin_block(occ, scene, w, flags, ws, hits, held, spare, plane_d, face_normals, wv, wr,
-               lift, inv_scale, one, start, edges, ignore_back, out, weight):
+               lift, inv_scale, one, start, edges, ignore_back, out, faces):
     """Bin the ``held`` bistatic hits of ``hits`` (face, distance, origin) after their
     occlusion rays toward the receiver ``wr`` (``spare``: blocked, lifted origins, wr in
-    float32). Returns the block's back-face hits."""
+    float32); ``faces`` = (weight, stamp, tag, coating), the per-face weights as
+    :func:`._kernels.bin_bistatic_hits` takes them. Returns the block's back-face hits."""
     i32, f32, i64, base = ws
     prim, tf, o = hits[0][:held], hits[1][:held], hits[2][:held]
     blocked, lifted, wr32 = spare
@@ -247,7 +250,7 @@ def _bin_block(occ, scene, w, flags, ws, hits, held, spare, plane_d, face_normal
                    wv, wr32, lift, inv_scale, one, lifted, blocked)
     init_args(i32, i64, base, flags)
     return bin_bistatic_hits(prim, tf, o, blocked[:held], plane_d, face_normals, wv, wr,
-                             start, edges, ignore_back, out, weight)
+                             start, edges, ignore_back, out, *faces)
 
 
 @njit(cache=True, nogil=True)

@@ -11,12 +11,13 @@ import math
 
 from numba import njit
 
+from ..brdf._sandford_robertson_kernel import sr_bistatic as _sr_bistatic
 from ..brdf._sandford_robertson_kernel import sr_monostatic as _sr_monostatic
 from ..precision import BOX_RATIO as _BOX_RATIO
 from ..precision import TINY as _TINY
 
 __all__ = ["bin_flat_hits", "bin_bistatic_hits", "bin_smooth_hits", "bin_sensor_hits",
-           "face_hit", "footprint_rows"]
+           "face_hit", "footprint_rows", "edge_on_receiver"]
 
 
 @njit(cache=True, nogil=True)
@@ -206,12 +207,14 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
 
 @njit(cache=True, nogil=True)
 def bin_bistatic_hits(prim, tfar, origins, blocked, plane_d, face_normals, w, wr, start,
-                      edges, ignore_back, out, weight):
+                      edges, ignore_back, out, weight, stamp, tag, coating):
     """Bistatic (receiver direction ``wr``), flat-normal binning of one view's hits, fused:
     ``weight`` holds each face's F·area for the pair (w, wr) (0 where either direction is
-    below the face's horizon), ``blocked`` whether the ray from the hit toward the receiver
-    meets the scene. A hit at p = o − t w has range start + ((t − o·w) − p·wr)/2, the
-    two-way path, as meshladar.raytrace.views.trace_view. Returns the back-face hits."""
+    below the face's horizon), valid where ``stamp`` equals ``tag``; a face whose weight
+    is not yet the view's gets it at its first hit from ``coating`` (:func:`_bistatic_face`),
+    so the BRDF costs O(faces hit). ``blocked`` says whether the ray from the hit toward the
+    receiver meets the scene. A hit at p = o − t w has range start + ((t − o·w) − p·wr)/2,
+    the two-way path, as meshladar.raytrace.views.trace_view. Returns the back-face hits."""
     nb = edges.size - 1
     e0 = edges[0]
     inv = nb / (edges[nb] - edges[0])
@@ -233,8 +236,50 @@ def bin_bistatic_hits(prim, tfar, origins, blocked, plane_d, face_normals, w, wr
         r = start + 0.5 * (r_rel + -(px * wr[0] + py * wr[1] + pz * wr[2]))
         if r < edges[0] or r >= edges[nb]:
             continue
+        if stamp[p] != tag:
+            weight[p] = _bistatic_face(face_normals, p, c, wr, coating)
+            stamp[p] = tag
         out[_bin_of(r, edges, e0, inv)] += weight[p]
     return back
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _bistatic_face(face_normals, p, c, wr, coating):
+    """F·area of face p (flat normal, c = n·w, turned toward the ladar on a back face) for
+    the receiver along ``wr``, as meshladar.weighing.faces.face_bistatic_weights computes
+    it for a built-in coating: ``coating`` = (face_material, params, half, area, power),
+    ``half`` the unit half vector of w and wr, ``params`` the SR table's rows; F·cos θr
+    under ``power``, F otherwise (:func:`sr_bistatic`)."""
+    face_material, params, half, area, power = coating
+    sign = -1.0 if c < 0.0 else 1.0
+    n0, n1, n2 = face_normals[p, 0] * sign, face_normals[p, 1] * sign, face_normals[p, 2] * sign
+    c = c * sign
+    cr = n0 * wr[0] + n1 * wr[1] + n2 * wr[2]
+    x, y, z = n1 * wr[2] - n2 * wr[1], n2 * wr[0] - n0 * wr[2], n0 * wr[1] - n1 * wr[0]
+    sr = math.sqrt(x * x + y * y + z * z)
+    ca = n0 * half[0] + n1 * half[1] + n2 * half[2]
+    x, y, z = n1 * half[2] - n2 * half[1], n2 * half[0] - n0 * half[2], n0 * half[1] - n1 * half[0]
+    sa = math.sqrt(x * x + y * y + z * z)
+    m = face_material[p]
+    return _sr_bistatic(c, math.sqrt(max(1.0 - c * c, 0.0)), cr, sr, ca, sa, params[m, 0],
+                        params[m, 1], params[m, 2], params[m, 3], params[m, 4],
+                        params[m, 5] > 0.5, params[m, 6] > 0.5, power) * area
+
+
+@njit(cache=True, nogil=True)
+def edge_on_receiver(face_normals, w, wr, ignore_back, cos_max):
+    """Whether a face toward the ladar (a back face turned toward it, unless back faces
+    are ignored) lies edge-on to the receiver, 0 ≤ cos θr < ``cos_max``: the faces
+    meshladar.weighing.hit_weights warns of under the paper's radiometry, in one pass."""
+    for p in range(face_normals.shape[0]):
+        n0, n1, n2 = face_normals[p, 0], face_normals[p, 1], face_normals[p, 2]
+        c = n0 * w[0] + n1 * w[1] + n2 * w[2]
+        if c == 0.0 or (c < 0.0 and ignore_back):
+            continue
+        cr = (n0 * wr[0] + n1 * wr[1] + n2 * wr[2]) * (-1.0 if c < 0.0 else 1.0)
+        if 0.0 <= cr < cos_max:
+            return True
+    return False
 
 
 @njit(cache=True, nogil=True)

@@ -10,10 +10,10 @@ import numpy as np
 from ..raytrace.grid import dot
 from ..raytrace.grid import frame
 from ..raytrace.views import bistatic_angles
-from ._kernels import footprint_rows
-from .hit_weights import weights
+from ._kernels import edge_on_receiver, footprint_rows
+from .hit_weights import GRAZING_RECEIVER_COS, warn_edge_on_receiver, weights
 
-__all__ = ["face_footprints", "face_weights", "face_bistatic_weights"]
+__all__ = ["face_footprints", "face_weights", "face_bistatic_weights", "check_edge_on_receiver"]
 
 
 def face_footprints(geo, w, mode, spacing, out):
@@ -93,6 +93,32 @@ def face_bistatic_weights(geo, materials, w, w_r, area, out, power, ignore_back)
         out[a:a + step] = _bistatic_weights(geo.face_normals[a:a + step],
                                             geo.material[a:a + step], materials, w, w_r,
                                             area, power, ignore_back)
+
+
+def check_edge_on_receiver(geo, w, w_r, ignore_back):
+    """Warn, as :func:`face_bistatic_weights` does under the paper's radiometry, when a
+    face toward the ladar lies edge-on to the receiver: for the fused loop that weighs
+    built-in coatings at each face's first hit, in one compiled pass over the faces.
+
+    Parameters
+    ----------
+    geo : Geometry
+        The traced geometry (``TracePlan.geo``): its flat face normals.
+    w, w_r : (3,) numpy.ndarray
+        The view direction and the receiver's direction, unit vectors from the scene.
+    ignore_back : bool
+        Whether back faces are ignored (never weighed) rather than turned toward the
+        ladar.
+
+    Warns
+    -----
+    MeshladarWarning
+        When 0 ≤ cos θr < :data:`meshladar.weighing.hit_weights.GRAZING_RECEIVER_COS` on a
+        face toward the ladar.
+    """
+    if edge_on_receiver(geo.face_normals, np.asarray(w, np.float64),
+                        np.asarray(w_r, np.float64), bool(ignore_back), GRAZING_RECEIVER_COS):
+        warn_edge_on_receiver()
 
 
 def _bistatic_weights(n, material, materials, w, w_r, area, power, ignore_back):

@@ -48,8 +48,10 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
     receiver : tuple of ((3,) array_like, float), optional
         Bistatic: the receiver's direction w_r and the lift (scene units) along the hit
         face's normal, turned toward the ladar, from which each hit's occlusion ray toward
-        it starts; ``bins.weight`` then holds every face's bistatic weight
-        (:func:`meshladar.weighing.faces.face_bistatic_weights`). None (default):
+        it starts. A face whose ``bins.stamp`` is not ``bins.tag`` gets its bistatic
+        weight at its first hit, from the SR table ``bins.params`` (built-in coatings);
+        for other coatings the job stamps every face's weight
+        (:func:`meshladar.weighing.faces.face_bistatic_weights`) first. None (default):
         monostatic.
     smooth : tuple of ((m, 3, 3) numpy.ndarray, float), optional
         Smooth normals (monostatic): each face's corner normals and the least |cos θ| of
@@ -75,9 +77,12 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
             float(emb.scale))
     b = bins
     if receiver is not None:
+        wr = np.asarray(receiver[0], np.float64)
+        coating = (b.face_material, b.params, (w + wr) / np.linalg.norm(w + wr),
+                   float(b.area), bool(b.power))
         return cast_bin_bistatic(*head, b.plane_d, b.face_normals, b.w, b.start, b.edges,
                                  b.ignore_back, b.out, b.weight, lib.occluded[lib.width],
-                                 np.asarray(receiver[0], np.float64), float(receiver[1]))
+                                 wr, float(receiver[1]), b.stamp, b.tag, coating)
     if smooth is not None:
         return cast_bin_smooth(*head, *b[:11], b.footprint, smooth[0], float(smooth[1]))
     return cast_bin_flat(*head, *bins)

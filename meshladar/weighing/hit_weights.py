@@ -14,7 +14,8 @@ from ..brdf import projected_weight
 from ..errors import MeshladarWarning, user_stacklevel
 from ..precision import COS_HORIZON
 
-__all__ = ["weights", "scaled", "per_table_weight", "GRAZING_RECEIVER_COS"]
+__all__ = ["weights", "scaled", "per_table_weight", "warn_edge_on_receiver",
+           "GRAZING_RECEIVER_COS"]
 
 
 #: Below this cos θr a lit surface is edge-on to the receiver: under Eq. 8 a bistatic
@@ -84,16 +85,22 @@ def weights(cos_t, sin_t, mat, materials, area, bi=None, power=False):
 
 def _warn_grazing_receiver(cos_t, cos_r):
     """Warn when surfaces facing the ladar are edge-on to the receiver under
-    radiometry="paper" (the mesh engine's fused loop checks faces, the per-hit path hits):
-    there F
-    (not F·cos θr) is weighed, and its 1/cos θr makes a flat facet parallel to the
-    receiver's direction dominate the profile without bound (received power is finite)."""
+    radiometry="paper" (:func:`warn_edge_on_receiver`): per hit, or per face where the
+    fused loop weighs faces in numpy."""
     if np.any((cos_t > 0) & (cos_r >= 0) & (cos_r < GRAZING_RECEIVER_COS)):
-        warnings.warn("surfaces facing the ladar lie edge-on to the receiver (cos θr < "
-                      "1e-6): under radiometry='paper' a bistatic return weighs F, which "
-                      "grows as 1/cos θr there, so they dominate the profile; "
-                      "radiometry='power' (received power, F·cos θr) is finite",
-                      MeshladarWarning, stacklevel=user_stacklevel())
+        warn_edge_on_receiver()
+
+
+def warn_edge_on_receiver():
+    """The warning that surfaces facing the ladar lie edge-on to the receiver under
+    radiometry="paper" (the mesh engine's fused loop checks faces, the per-hit path hits):
+    there F (not F·cos θr) is weighed, and its 1/cos θr makes a flat facet parallel to the
+    receiver's direction dominate the profile without bound (received power is finite)."""
+    warnings.warn("surfaces facing the ladar lie edge-on to the receiver (cos θr < "
+                  "1e-6): under radiometry='paper' a bistatic return weighs F, which "
+                  "grows as 1/cos θr there, so they dominate the profile; "
+                  "radiometry='power' (received power, F·cos θr) is finite",
+                  MeshladarWarning, stacklevel=user_stacklevel())
 
 
 def scaled(wt, factor=None, receive=None, *, power=False):

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._validate import check_flag
-from ..brdf import BRDF
+from ..brdf import BRDF, is_builtin
 from ..errors import ModelError, ParameterError
 from ..motion import Motion
 from ..raytrace.plan import TracePlan
@@ -77,6 +77,13 @@ class Weighing:
         """Whether every coating has a compiled kernel (``kernel_params``: SR, Lambertian),
         so the compiled loops can evaluate F at each hit."""
         return all(m.kernel_params is not None for m in self.materials)
+
+    @property
+    def compiled_bistatic(self) -> bool:
+        """Whether every coating is a built-in model with a compiled kernel (SR,
+        Lambertian), so the fused bistatic loop can evaluate F(w, w_r) at each face's first
+        hit (a user's ``kernel_params`` row speaks for its monostatic F only)."""
+        return self.compiled and all(is_builtin(m) for m in self.materials)
 
     def check(self, plan: TracePlan) -> None:
         """Refuse every combination of this weighing and ``plan`` that no ray can honour,

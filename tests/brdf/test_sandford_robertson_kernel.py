@@ -10,7 +10,7 @@ import pytest
 
 import meshladar as ml
 from meshladar.brdf import MODELS, BRDF, KernelRow, is_builtin, projected_weight
-from meshladar.brdf._sandford_robertson_kernel import material_table, sr_monostatic
+from meshladar.brdf._sandford_robertson_kernel import material_table, sr_bistatic, sr_monostatic
 from meshladar.errors import ParameterError
 from meshladar.materials import ALUMINUM, DARK_GRAY, glint, lambertian
 
@@ -105,3 +105,33 @@ def test_the_compiled_sr_kernel_holds_at_the_extremes_of_its_arguments(name):
     want = m.value(c, s)
     assert np.all(np.isfinite(got)) and np.all(got >= 0)
     np.testing.assert_allclose(got, want, rtol=1e-13, atol=0)
+
+
+def _pairs(n, seed=3):
+    """``n`` random incidence/exit pairs over the hemisphere (three tenths of them at the
+    horizon or the normal) as the six cosines and sines the bistatic models take."""
+    rng = np.random.default_rng(seed)
+    v = rng.normal(size=(2, n, 3))
+    v[:, :, 2] = np.abs(v[:, :, 2])
+    v[0, : n // 10, 2] = 0.0                               # incidence at the horizon
+    v[1, n // 10: n // 5, :2] = 0.0                        # exit along the normal
+    v[1, n // 5: 3 * n // 10, 2] = 0.0                     # exit at the horizon
+    v /= np.linalg.norm(v, axis=2, keepdims=True)
+    wi, wr = v
+    h = (wi + wr) / np.linalg.norm(wi + wr, axis=1, keepdims=True)
+    norm_xy = lambda x: np.hypot(x[:, 0], x[:, 1])          # noqa: E731
+    return wi[:, 2], norm_xy(wi), wr[:, 2], norm_xy(wr), h[:, 2], norm_xy(h)
+
+
+@pytest.mark.parametrize("name", list(COATINGS))
+@pytest.mark.parametrize("projected", [True, False])
+def test_the_compiled_bistatic_sr_kernel_equals_the_model(name, projected):
+    """sr_bistatic against the numpy model's bistatic (F·cos θr) and bistatic_value (F) on
+    2000 pairs of directions, horizon and normal included, and 0 below either horizon."""
+    m = COATINGS[name]
+    args = _pairs(2000)
+    got = np.array([sr_bistatic(*a, *m.kernel_params, projected) for a in zip(*args)])
+    want = m.bistatic(*args) if projected else m.bistatic_value(*args)
+    np.testing.assert_allclose(got, want, rtol=1e-13, atol=0)
+    assert sr_bistatic(-1e-9, 1.0, 0.5, 0.8, 0.9, 0.4, *m.kernel_params, projected) == 0.0
+    assert sr_bistatic(0.5, 0.8, -1e-9, 1.0, 0.9, 0.4, *m.kernel_params, projected) == 0.0

@@ -334,8 +334,9 @@ def test_footprints_take_the_fused_loop_with_the_general_paths_numbers(mode, nor
 def test_bistatic_views_take_the_fused_loop_with_the_references_numbers(mode, monkeypatch):
     # a receiver off the ladar's axis (flat normals, any coating, either radiometry, back
     # faces two-sided or ignored, views on threads or one view's rows): each face's weight
-    # for the pair of directions before the cast, each hit's occlusion ray toward the
-    # receiver cast in packets inside the loop; the numbers of embreex's per-hit path
+    # for the pair of directions at its first hit (built-in coatings, compiled) or before
+    # the cast (GGX, numpy), each hit's occlusion ray toward the receiver cast in packets
+    # inside the loop; the numbers of embreex's per-hit path
     from meshladar.forward import job as model
     from meshladar.weighing import faces
 
