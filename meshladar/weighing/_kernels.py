@@ -209,8 +209,8 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
 def bin_bistatic_hits(prim, tfar, origins, blocked, plane_d, face_normals, w, wr, start,
                       edges, ignore_back, out, weight, stamp, tag, coating):
     """Bistatic (receiver direction ``wr``), flat-normal binning of one view's hits, fused:
-    ``weight`` holds each face's F·area for the pair (w, wr) (0 where either direction is
-    below the face's horizon), valid where ``stamp`` equals ``tag``; a face whose weight
+    ``weight`` holds each face's F·area for the pair (w, wr) (F·cos θr·area under received
+    power; 0 where either direction is below the face's horizon), valid where ``stamp`` equals ``tag``; a face whose weight
     is not yet the view's gets it at its first hit from ``coating`` (:func:`_bistatic_face`),
     so the BRDF costs O(faces hit). ``blocked`` says whether the ray from the hit toward the
     receiver meets the scene. A hit at p = o − t w has range start + ((t − o·w) − p·wr)/2,
@@ -245,8 +245,8 @@ def bin_bistatic_hits(prim, tfar, origins, blocked, plane_d, face_normals, w, wr
 
 @njit(cache=True, nogil=True, inline="always")
 def _bistatic_face(face_normals, p, c, wr, coating):
-    """F·area of face p (flat normal, c = n·w, turned toward the ladar on a back face) for
-    the receiver along ``wr``, as meshladar.weighing.faces.face_bistatic_weights computes
+    """F·area of face p for the receiver along ``wr`` (flat normal n, c = n·w as the hit
+    found it; a back face's normal and c are turned toward the ladar here), as meshladar.weighing.faces.face_bistatic_weights computes
     it for a built-in coating: ``coating`` = (face_material, params, half, area, power),
     ``half`` the unit half vector of w and wr, ``params`` the SR table's rows; F·cos θr
     under ``power``, F otherwise (:func:`sr_bistatic`)."""

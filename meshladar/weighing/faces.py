@@ -1,7 +1,10 @@
 """Per-face weights and footprints of one view, for the fused loops: with flat normals
-F·δA⊥ (and a footprint's range extent) is one number per face and view, evaluated for all
-faces before the view is cast, in the float64 operations the per-hit path applies to each
-hit (:func:`meshladar.raytrace.views.trace_view`, :func:`meshladar.weighing.weights`)."""
+F·δA⊥ (and a footprint's range extent) is one number per face and view. For coatings
+without a compiled kernel (monostatic) or that are not built in (bistatic) the loops
+cannot evaluate it at a hit, so it is evaluated here for all faces before the view is
+cast, in the float64 operations the per-hit path applies to each hit
+(:func:`meshladar.raytrace.views.trace_view`, :func:`meshladar.weighing.weights`); the
+compiled loops weigh the others at each face's first hit."""
 
 from __future__ import annotations
 

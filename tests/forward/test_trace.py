@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -16,6 +17,7 @@ from meshladar import meshes as mlmesh
 from meshladar.errors import (GeometryError, LobeSamplingWarning, MeshladarWarning,
                               ParameterError)
 from meshladar.forward.mesh import first_hits
+from meshladar.weighing.faces import check_edge_on_receiver
 from meshladar.materials import ALUMINUM, DARK_GRAY, lambertian
 
 from conftest import PAIR  # noqa: E402  (the shared disk pair)
@@ -500,3 +502,27 @@ def test_a_receiver_edge_on_to_a_lit_face_is_said_under_eq8(backend):
     power = ml.simulate(scene, lad, model="mesh", receiver=(0.0, 1.0, 0.0),
                         radiometry="power", backend=backend)
     assert paper.values.max() > 1e12 * power.values.max() > 0
+
+
+@pytest.mark.parametrize("normal, ignore_back, warns", [
+    ((1.0, 0.0, 0.0), False, True),          # a lit face exactly edge-on to the receiver
+    ((1.0, 0.0, 0.0), True, True),
+    ((-1.0, 0.0, 0.0), False, True),         # a back face, two-sided: turned, edge-on
+    ((-1.0, 0.0, 0.0), True, False),         # an ignored back face is never weighed
+    ((0.0, 1.0, 0.0), False, False),         # edge-on to the ladar: not lit
+    ((1.0, -1e-7, 0.0), False, False),       # the receiver below the face's horizon
+    ((1.0, 5e-7, 0.0), False, True),         # cos θr = 5e-7 < 1e-6
+    ((1.0, 2e-6, 0.0), False, False),        # cos θr = 2e-6: not edge-on
+])
+def test_the_fused_loops_edge_on_check_finds_the_faces_the_per_hit_path_would(
+        normal, ignore_back, warns):
+    """The compiled pass over the faces (built-in coatings weighed at their first hit)
+    warns for exactly the faces toward the ladar (w = x) with 0 ≤ cos θr < 1e-6 for the
+    receiver along y: closed-form cosines of single unit normals."""
+    n = np.array([normal], dtype=np.float64)
+    geo = SimpleNamespace(face_normals=n / np.linalg.norm(n))
+    w, w_r = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        check_edge_on_receiver(geo, w, w_r, ignore_back)
+    assert any("edge-on to the receiver" in str(x.message) for x in seen) == warns
