@@ -32,9 +32,12 @@ def test_import_is_light():
 
 
 #: What a one-view `meshladar simulate` of a mesh file does not need, so does not import:
-#: the studies, the fits, scipy's statistics and matplotlib (trimesh, which reads the file,
-#: brings scipy's optimisers, graphs and spatial trees with it).
-NOT_FOR_SIMULATE = ("meshladar.studies", "meshladar.fit", "scipy.stats", "matplotlib")
+#: the studies, the fits, the scanner's modules (scipy's interpolation with them), scipy's
+#: statistics and matplotlib (trimesh, which reads the file, brings scipy's optimisers,
+#: graphs, images and spatial trees with it).
+NOT_FOR_SIMULATE = ("meshladar.studies", "meshladar.fit", "meshladar.scan.run",
+                    "meshladar.scan.geiger", "meshladar.scan.platforms", "scipy.interpolate",
+                    "scipy.stats", "matplotlib")
 
 
 def test_a_one_view_simulate_imports_only_what_it_uses(tmp_path):

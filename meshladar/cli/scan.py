@@ -13,10 +13,9 @@ import inspect
 
 import numpy as np
 
+from .. import scan as scanning          # its modules load when a scan runs
 from ..errors import ParameterError
 from ..noise import Noise
-from ..scan import (PATTERNS, Detector, GeigerMode, Platform, ScanBeam, ScanSensor, scan,
-                    write_hdf5, write_las)
 from ..scan.files import check_writable
 from ..waveforms import GaussianPulse
 from .checks import check_output
@@ -24,9 +23,8 @@ from .simulate import load_scene
 
 __all__ = ["cmd_scan", "parse_spec", "PLATFORM_KINDS"]
 
-#: ``--platform`` kinds and the Platform constructor each names.
-PLATFORM_KINDS = {"static": Platform.static, "moving": Platform.moving,
-                  "waypoints": Platform.waypoints}
+#: ``--platform`` kinds: each names its :class:`meshladar.scan.Platform` constructor.
+PLATFORM_KINDS = ("static", "moving", "waypoints")
 #: The point files ``-o`` writes, by extension.
 POINT_SUFFIXES = (".las", ".laz", ".h5", ".hdf5")
 
@@ -101,8 +99,9 @@ def _build(make, kwargs, flag):
 
 def _platform(args):
     if args.platform.lower().endswith(".csv"):
-        return _build(Platform.from_csv, {"path": args.platform}, "--platform")
-    make, kwargs = parse_spec("--platform", args.platform, PLATFORM_KINDS)
+        return _build(scanning.Platform.from_csv, {"path": args.platform}, "--platform")
+    kinds = {kind: getattr(scanning.Platform, kind) for kind in PLATFORM_KINDS}
+    make, kwargs = parse_spec("--platform", args.platform, kinds)
     return _build(make, kwargs, "--platform")
 
 
@@ -110,14 +109,15 @@ def _sensor(args):
     noise = None
     if args.background_rate or args.dark_rate or args.noise:
         noise = Noise(background_rate=args.background_rate, dark_rate=args.dark_rate)
-    geiger = GeigerMode(shots=args.geiger_shots) if args.geiger_shots else None
-    return ScanSensor(pulse_energy=args.pulse_energy, aperture_diameter=args.aperture,
-                      sample_rate=args.sample_rate, pulse=GaussianPulse(args.pulse_fwhm),
-                      beam=ScanBeam(args.divergence, profile=args.profile, tol=args.tol,
-                                    sub_rays=args.sub_rays),
-                      noise=noise, geiger=geiger,
-                      echoes="discrete" if args.discrete else "waveform",
-                      detector=Detector(max_returns=args.max_returns, cfar=args.cfar))
+    sc = scanning
+    geiger = sc.GeigerMode(shots=args.geiger_shots) if args.geiger_shots else None
+    beam = sc.ScanBeam(args.divergence, profile=args.profile, tol=args.tol,
+                       sub_rays=args.sub_rays)
+    return sc.ScanSensor(pulse_energy=args.pulse_energy, aperture_diameter=args.aperture,
+                         sample_rate=args.sample_rate, pulse=GaussianPulse(args.pulse_fwhm),
+                         beam=beam, noise=noise, geiger=geiger,
+                         echoes="discrete" if args.discrete else "waveform",
+                         detector=sc.Detector(max_returns=args.max_returns, cfar=args.cfar))
 
 
 def cmd_scan(args) -> int:
@@ -143,19 +143,19 @@ def cmd_scan(args) -> int:
     if args.waveforms is not None:
         check_output(args.waveforms, (".h5", ".hdf5"), inputs + [args.output], "--waveforms")
         check_writable(args.waveforms, "--waveforms")
-    make, kwargs = parse_spec("--pattern", args.pattern, PATTERNS)
+    make, kwargs = parse_spec("--pattern", args.pattern, scanning.PATTERNS)
     pattern = _build(make, kwargs, "--pattern")
     platform = _platform(args)
     sensor = _sensor(args)
     scene, _, _ = load_scene(args)
     if not scene.is_mesh:
         scene = scene.tessellate()
-    cloud = scan(scene, pattern, platform, sensor, seed=args.seed,
+    cloud = scanning.scan(scene, pattern, platform, sensor, seed=args.seed,
                  waveforms_file=args.waveforms, progress=not args.quiet)
     if args.output.lower().endswith((".h5", ".hdf5")):
-        write_hdf5(args.output, cloud)
+        scanning.write_hdf5(args.output, cloud)
     else:
-        write_las(args.output, cloud)
+        scanning.write_las(args.output, cloud)
     if not args.quiet:
         pts = cloud.points
         print(f"{len(pts)} returns from {len(pattern)} pulses -> {args.output}"

@@ -12,7 +12,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import fft as sfft
 
 from .._validate import check_choice, check_size, short
 from ..errors import ParameterError
@@ -63,6 +62,8 @@ def fourier_filter(n_padded, filter="ramp"):
     (1988), Ch. 3, Eq. (61) (the band-limited Ram-Lak kernel); scikit-image's
     ``skimage.transform.iradon`` (its filters and discretisation).
     """
+    from scipy import fft as sfft       # scipy.fft: only where it is used (startup)
+
     check_choice("filter", filter, FILTERS)
     n_padded = _check_length(n_padded)
     n = np.concatenate((np.arange(1, n_padded / 2 + 1, 2, dtype=int),
@@ -103,6 +104,8 @@ def _check_length(n_padded):
 def _filtered(values, filter):
     """Each view's profile filtered with :func:`fourier_filter`, zero-padded to a power of
     two >= 2 n_bins (no wrap-around), as scikit-image."""
+    from scipy import fft as sfft       # scipy.fft: only where it is used (startup)
+
     n = values.shape[1]
     n_pad = max(64, int(2 ** math.ceil(math.log2(2 * n))))
     response = fourier_filter(n_pad, filter)

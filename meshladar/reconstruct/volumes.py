@@ -30,8 +30,6 @@ from typing import NamedTuple
 import warnings
 
 import numpy as np
-from scipy.ndimage import gaussian_filter1d
-from scipy.spatial import cKDTree
 
 from .._validate import check_count, check_real, check_sinogram, check_size, finite_array
 from ..errors import MeshladarWarning, ParameterError, user_stacklevel
@@ -100,6 +98,8 @@ def coverage_gap_deg(view_vectors) -> float:
         The angle in degrees, in [0, 180], from the probe direction farthest from every
         view to its nearest view.
     """
+    from scipy.spatial import cKDTree        # scipy.spatial: only where it is used (startup)
+
     w = np.asarray(view_vectors, np.float64)
     chord, _ = cKDTree(w).query(fibonacci_sphere(20_000))
     return float(np.degrees(2 * np.arcsin(min(1.0, chord.max() / 2))))
@@ -149,6 +149,8 @@ def sphere_weights(view_vectors) -> np.ndarray:
         Each view's solid angle, steradians: 4π / 2e5 times the number of probe points
         nearest to it (they sum to 4π).
     """
+    from scipy.spatial import cKDTree        # scipy.spatial: only where it is used (startup)
+
     w = np.asarray(view_vectors, np.float64)
     probe = fibonacci_sphere(200_000)
     _, owner = cKDTree(w).query(probe)
@@ -274,6 +276,8 @@ def _second_differences(sino, dr, smooth):
     """The profiles' −∂²g/∂s² / (8π²), g = values / ``dr`` smoothed by a Gaussian of
     ``smooth`` bins (when > 0), by the three-point stencil with zeros beyond the bins:
     what :func:`fbp3d` backprojects."""
+    from scipy.ndimage import gaussian_filter1d   # only where it is used (startup)
+
     g = sino.values / dr
     if smooth > 0:
         g = gaussian_filter1d(g, smooth, axis=1, mode="constant", truncate=4.0)

@@ -15,15 +15,35 @@ Conventions: monostatic, received power in photoelectrons, one bounce, flat two-
 normals (:data:`~meshladar.scan.points.CONVENTIONS`, recorded in every result's ``info``).
 """
 
-from .footprint import ScanBeam
-from .geiger import GeigerMode, coates
-from .instrument import Detector, ScanSensor
-from .patterns import PATTERNS, ScanPattern, flash, oscillating, raster, risley, rotating
-from .platforms import Platform
-from .points import POINT_DTYPE, POINT_FIELDS, PointCloud
-from .run import scan
-from .files import read_hdf5, read_las, write_hdf5, write_las
+from __future__ import annotations
+
+import importlib
 
 __all__ = ["scan", "PATTERNS", "ScanPattern", "raster", "rotating", "oscillating", "risley", "flash",
            "Platform", "ScanBeam", "ScanSensor", "Detector", "PointCloud", "POINT_DTYPE",
            "POINT_FIELDS", "GeigerMode", "coates", "write_las", "read_las", "write_hdf5", "read_hdf5"]
+
+#: Each public name's module: loaded on first use (``meshladar.scan.Platform``,
+#: ``from meshladar.scan import scan``), so that the command line, which names this
+#: package for every command, loads scipy's interpolation and special functions, numba's
+#: Geiger-mode loops and the scan's kernels only when a scan runs.
+_HOMES = {"ScanBeam": "footprint", "GeigerMode": "geiger", "coates": "geiger",
+          "Detector": "instrument", "ScanSensor": "instrument", "PATTERNS": "patterns",
+          "ScanPattern": "patterns", "flash": "patterns", "oscillating": "patterns",
+          "raster": "patterns", "risley": "patterns", "rotating": "patterns",
+          "Platform": "platforms", "POINT_DTYPE": "points", "POINT_FIELDS": "points",
+          "PointCloud": "points", "scan": "run", "read_hdf5": "files", "read_las": "files",
+          "write_hdf5": "files", "write_las": "files"}
+
+
+def __getattr__(name):
+    home = _HOMES.get(name)
+    if home is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{home}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

@@ -122,7 +122,7 @@ def test_a_missing_writer_is_named_before_any_work(monkeypatch, tmp_path):
         with pytest.raises(ParameterError, match=r"meshladar\[scan\]"):
             check_writable(name)
     import meshladar.cli.scan as cli_scan
-    monkeypatch.setattr(cli_scan, "scan", lambda *a, **k: pytest.fail("scanned"))
+    monkeypatch.setattr(cli_scan.scanning, "scan", lambda *a, **k: pytest.fail("scanned"))
     trimesh.creation.box((2.0, 2.0, 2.0)).export(tmp_path / "b.stl")
     assert main(["scan", str(tmp_path / "b.stl"), "--quiet", "-o", str(tmp_path / "p.laz"),
                  "--pattern", "raster azimuth_deg=0 elevation_deg=0 pulse_rate=1",
