@@ -31,13 +31,13 @@ def test_import_is_light():
     assert out == "", f"import meshladar pulled in: {out}"
 
 
-#: What a one-view `meshladar simulate` of a mesh file does not need, so does not import:
+#: What a one-view `meshladar simulate` of a binary STL does not need, so does not import:
 #: the studies, the fits, the scanner's modules (scipy's interpolation with them), scipy's
-#: statistics and matplotlib (trimesh, which reads the file, brings scipy's optimisers,
-#: graphs, images and spatial trees with it).
+#: statistics and matplotlib, and trimesh (numpy reads the file; trimesh would bring
+#: scipy's optimisers, graphs, images and spatial trees with it).
 NOT_FOR_SIMULATE = ("meshladar.studies", "meshladar.fit", "meshladar.scan.run",
                     "meshladar.scan.geiger", "meshladar.scan.platforms", "scipy.interpolate",
-                    "scipy.stats", "matplotlib")
+                    "scipy.stats", "matplotlib", "trimesh", "scipy.spatial", "scipy.optimize")
 
 
 def test_a_one_view_simulate_imports_only_what_it_uses(tmp_path):

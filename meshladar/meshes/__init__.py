@@ -3,14 +3,15 @@ tessellations of analytic shapes, convex hulls and normals.
 
 A mesh scene is a list of :class:`MeshPart` (vertices, faces, a material index per face, and
 optionally the exact normal of the analytic shape it approximates). trimesh is imported only
-when a mesh is loaded or built.
+when a mesh other than a binary STL is loaded, or a mesh is built.
 
 =================  ===========================================================================
 module             holds
 =================  ===========================================================================
 ``part``           :class:`MeshPart`, :func:`part_from_trimesh`
-``formats``        :func:`load_parts`: files, trimesh objects (``archives``: sniffing,
-                   decompression, archive listings, messages)
+``formats``        :func:`load_parts`, :class:`TriangleMesh`: files, trimesh objects
+                   (``archives``: sniffing, decompression, archive listings, messages;
+                   ``stl``: binary STL read with numpy)
 ``checks``         :func:`inspect_parts`: degenerate faces, watertight bodies, signed volumes
 ``primitives``     :func:`prism`, :func:`ellipsoid`, :func:`sphere`, :func:`icosphere`,
                    :func:`fibonacci_sphere`
@@ -30,12 +31,12 @@ from __future__ import annotations
 import importlib
 
 from .checks import inspect_parts
-from .formats import load_parts
+from .formats import TriangleMesh, load_parts
 from .hull import convex_hull
 from .part import MeshPart, part_from_trimesh
 from .primitives import ellipsoid, fibonacci_sphere, icosphere, prism, sphere
 
-__all__ = ["MeshPart", "load_parts", "part_from_trimesh", "prism", "sphere", "ellipsoid",
+__all__ = ["MeshPart", "load_parts", "TriangleMesh", "part_from_trimesh", "prism", "sphere", "ellipsoid",
            "fibonacci_sphere", "icosphere", "corner_normals", "curved_edge_angles", "CREASE_DEG",
            "inspect_parts",
            "convex_hull"]

@@ -2,8 +2,9 @@
 
 Any format trimesh reads: STL, OBJ (its named objects as parts), PLY, OFF, GLB/glTF with
 parts, ZIP and tar archives, .gz/.bz2/.xz files, 3MF and COLLADA with their optional
-readers. Only vertices, faces and part names are read; vertices at the same position are
-merged. trimesh is imported lazily, when a file is read. Every way a file can fail is one
+readers. Only vertices, faces and part names are read (a :class:`TriangleMesh` per part);
+vertices at the same position are merged. trimesh is imported lazily, when a file other
+than a binary STL (:mod:`.stl`, read with numpy) is read. Every way a file can fail is one
 :class:`~meshladar.errors.GeometryError` naming the file; what a reader prints while it reads
 is kept off the terminal (and quoted in that error).
 """
@@ -13,6 +14,7 @@ from __future__ import annotations
 import io
 import os
 import re
+from typing import NamedTuple
 
 import numpy as np
 
@@ -23,8 +25,25 @@ from .archives import (_COMPRESSED, _DRAWINGS, _HEAD_BYTES, _NAMES, _OPTIONAL_RE
                        _one_line, _printable, _quiet_reader, _readable_formats, _sniff,
                        _suffix, _with_output)
 from .part import _point_index
+from .stl import binary_stl
 
-__all__ = ["load_parts"]
+__all__ = ["load_parts", "TriangleMesh"]
+
+
+class TriangleMesh(NamedTuple):
+    """A part as :func:`load_parts` reads it: its vertices and faces, nothing else
+    (``trimesh.Trimesh(*mesh)`` makes a trimesh of it).
+
+    Attributes
+    ----------
+    vertices : (n, 3) float64 numpy.ndarray
+        The vertices, in the file's units and world coordinates.
+    faces : (m, 3) int64 numpy.ndarray
+        Each triangle's three vertex indices, in the file's order and winding.
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
 
 
 def load_parts(mesh_or_path):
@@ -43,9 +62,9 @@ def load_parts(mesh_or_path):
 
     Returns
     -------
-    list of (str, trimesh.Trimesh)
-        Part names and meshes in world coordinates, each a fresh mesh of vertices and faces
-        only, with vertices at the same position merged (positions rounded to a grid of
+    list of (str, TriangleMesh)
+        Part names and meshes in world coordinates, each fresh arrays of vertices and faces
+        only (:class:`TriangleMesh`), with vertices at the same position merged (positions rounded to a grid of
         2⁻⁴⁰ times the mesh's largest extent, from its lowest corner) and unreferenced
         vertices dropped.
 
@@ -96,6 +115,9 @@ def _read_file(path):
                      _suffix(inner), data[:_HEAD_BYTES], len(data),
                      resolver=trimesh.resolvers.FilePathResolver(path),
                      default_name=inner or "mesh")
+    corners = binary_stl(path, size, head) if suffix == "stl" else None
+    if corners is not None:                 # trimesh's reading, without importing it
+        return [("mesh", TriangleMesh(*_weld(*corners, where)))]
     return _read(where, lambda: path, suffix, head, size, resolver=None, default_name="mesh")
 
 
@@ -217,9 +239,11 @@ def _parts_of(loaded, where, default_name="mesh"):
             g = loaded.geometry[geom_name]
             if isinstance(g, trimesh.Trimesh) and len(g.faces):
                 name = _part_name(str(node), str(geom_name), {n for n, _ in out})
-                m = _welded(g, f"{where}: part {name!r}")
+                m = trimesh.Trimesh(*_weld(g.vertices, g.faces, f"{where}: part {name!r}"),
+                                    process=False)
                 m.apply_transform(transform)
-                out.append((name, m))
+                out.append((name, TriangleMesh(np.asarray(m.vertices, np.float64),
+                                               np.asarray(m.faces, np.int64))))
             else:
                 other.append(g)
         if not out:
@@ -232,7 +256,8 @@ def _parts_of(loaded, where, default_name="mesh"):
         return out
     if isinstance(loaded, trimesh.Trimesh) and len(loaded.faces):
         meta = getattr(loaded, "metadata", None) or {}
-        return [(str(meta.get("name") or default_name), _welded(loaded, where))]
+        return [(str(meta.get("name") or default_name),
+                 TriangleMesh(*_weld(loaded.vertices, loaded.faces, where)))]
     raise GeometryError(f"{where}: {_not_a_mesh(loaded)}")
 
 
@@ -263,11 +288,11 @@ def _not_a_mesh(g):
     return f"expected a triangle mesh or a scene of meshes; got {type(g).__name__}"
 
 
-def _welded(mesh, where):
-    """A fresh trimesh.Trimesh of ``mesh``'s vertices and faces only, with the vertices at
-    the same position merged into one (STL stores each triangle's own) and unreferenced
-    vertices dropped, after checking that every vertex is finite and every face indexes a
-    vertex.
+def _weld(vertices, faces, where):
+    """(vertices, faces): fresh arrays of a mesh's vertices and faces only, with the
+    vertices at the same position merged into one (STL stores each triangle's own) and
+    unreferenced vertices dropped, after checking that every vertex is finite and every
+    face indexes a vertex.
 
     Nothing else is kept: meshladar needs positions and faces, and copying a texture needs
     Pillow. Merging by position alone also joins the vertices a file splits at UV seams and
@@ -276,10 +301,8 @@ def _welded(mesh, where):
     1e-8 absolute, which merges the vertices of a nanometre-sized part and overflows far
     from the origin. Positions are compared relative to the mesh's size (_WELD_REL).
     """
-    import trimesh
-
-    v = np.array(mesh.vertices, dtype=np.float64)         # a copy: the caller's mesh stays
-    f = np.asarray(mesh.faces)
+    v = np.array(vertices, dtype=np.float64)              # a copy: the caller's mesh stays
+    f = np.asarray(faces)
     if v.ndim != 2 or v.shape[1] != 3:
         raise GeometryError(f"{where}: vertices must have shape (n, 3); got {v.shape}")
     if not np.all(np.isfinite(v)):
@@ -307,4 +330,4 @@ def _welded(mesh, where):
         rank = np.empty(n, dtype=np.int64)
         rank[np.argsort(first)] = np.arange(n)               # points numbered in file order
         v, f = v[np.sort(first)], rank[point][f]
-    return trimesh.Trimesh(vertices=v, faces=f.astype(np.int64), process=False)
+    return v, f.astype(np.int64)

@@ -136,11 +136,12 @@ class MeshPart:
 
 
 def part_from_trimesh(mesh, material_index, *, name="mesh", transform=None):
-    """A MeshPart from a trimesh.Trimesh (optionally transformed by a 4×4 matrix).
+    """A MeshPart from a trimesh.Trimesh or a :class:`~meshladar.meshes.TriangleMesh`
+    (optionally transformed by a 4×4 matrix).
 
     Parameters
     ----------
-    mesh : trimesh.Trimesh
+    mesh : trimesh.Trimesh or TriangleMesh
         Read through its ``vertices`` and ``faces`` only.
     material_index : int or (m,) int
         Index into the scene's material list, for all faces or per face.

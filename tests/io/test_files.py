@@ -395,8 +395,8 @@ def test_not_a_mesh_in_memory_says_what_it_is():
 
 
 def test_reader_errors_become_one_chained_line(tmp_path, monkeypatch):
-    path = tmp_path / "box.stl"
-    path.write_bytes(_stl_bytes())
+    path = tmp_path / "box.stl"                   # ASCII: trimesh reads it (binary: numpy)
+    path.write_bytes(_box().export(file_type="stl_ascii").encode())
     boom = ValueError("first line\n\n   second line\twith tabs " + "x" * 5000)
 
     def broken(*args, **kwargs):
@@ -450,8 +450,8 @@ def test_a_missing_reader_package_is_named_by_the_readers_import_error(tmp_path,
 def test_what_a_reader_prints_stays_off_the_terminal_unless_the_file_fails(
         tmp_path, monkeypatch, capfd):
     # meshio prints "Error: Couldn't read file ... as ansys" while it tries formats
-    path = tmp_path / "box.stl"
-    path.write_bytes(_stl_bytes())
+    path = tmp_path / "box.stl"                   # ASCII: trimesh reads it (binary: numpy)
+    path.write_bytes(_box().export(file_type="stl_ascii").encode())
     real_load = trimesh.load
     outcome = {"fail": False}
 
@@ -660,7 +660,7 @@ def test_recomputed_positions_weld_into_one_point():
     loaded = ml.meshes.load_parts(trimesh.Trimesh(noisy, np.arange(len(tri)).reshape(-1, 3),
                                                 process=False))
     (_, mesh), = loaded
-    assert len(mesh.vertices) == 8 and mesh.is_watertight
+    assert len(mesh.vertices) == 8 and trimesh.Trimesh(*mesh).is_watertight
 
 
 def _two_primitive_gltf(path):
@@ -706,3 +706,29 @@ def test_part_names_are_the_same_on_every_load(tmp_path):
     assert _part_name("geometry_06ec728accc3a", "geometry_1", set()) == "geometry_1"
     assert _part_name("body", "geometry_0", set()) == "body"
     assert _part_name("0_33d0cd", "Truck", {"Truck", "Truck#2"}) == "Truck#3"
+
+
+@pytest.mark.parametrize("header", [b"", b"solid box exported as binary"])
+def test_a_binary_stl_is_read_as_trimesh_reads_it(tmp_path, header):
+    """A binary STL (the CAD tools' format; also one whose header starts with "solid", as
+    many exporters write) read without trimesh gives trimesh's own reading of the file,
+    welded: the same vertices and faces bit for bit, on a 2,562-vertex sphere moved far
+    from the origin in millimetres; a file whose size does not match its count is left to
+    trimesh (and named as not a readable STL)."""
+    ball = trimesh.creation.icosphere(4, radius=25.0)
+    ball.apply_translation([1.5e5, -2.0e4, 3.0e3])
+    data = bytearray(ball.export(file_type="stl"))
+    data[:len(header)] = header
+    path = tmp_path / "ball.stl"
+    path.write_bytes(bytes(data))
+    (name, mesh), = ml.meshes.load_parts(path)
+    ref = trimesh.load(path, file_type="stl", process=False)
+    (_, welded), = ml.meshes.load_parts(trimesh.Trimesh(ref.vertices, ref.faces,
+                                                        process=False))
+    assert name == "mesh" and isinstance(mesh, ml.meshes.TriangleMesh)
+    assert len(mesh.vertices) == 2562 and len(mesh.faces) == 5120
+    np.testing.assert_array_equal(mesh.vertices, welded.vertices)
+    np.testing.assert_array_equal(mesh.faces, welded.faces)
+    (tmp_path / "cut.stl").write_bytes(bytes(data[:-10]))
+    with pytest.raises(GeometryError, match=r"cut\.stl: not a readable STL file"):
+        ml.meshes.load_parts(tmp_path / "cut.stl")
