@@ -9,7 +9,7 @@ import numpy as np
 
 from _matrix import BAD_FILES, _file_cases, _stl, api, cli, files, ml
 
-_WORK = ("meshladar.cli.scan:scan",)
+_WORK = ("meshladar.scan:scan",)
 
 
 def _scan_kit():
