@@ -21,24 +21,40 @@ __all__ = ["cast_bin_flat", "cast_bin_smooth", "cast_bin_bistatic", "cast_bin_se
 
 @njit(cache=True, nogil=True)
 def _occlude_block(occ, scene, w, i32, f32, base, prim, tf, o, n, plane_d, face_normals, wv,
-                   wr32, lift, inv_scale, one, lifted, blocked):
+                   wr32, lift, inv_scale, one, spare, needed):
     """Occlusion toward the receiver of n hits (face ``prim``, Embree's ``tf``, float32
     origin ``o`` as built): from p = o − t w (t in float64 against the face's plane) lifted
     by ``lift`` along the face's normal turned toward the ladar, rounded to float32 (and
     to unit size), cast along ``wr32`` in packets of w by ``occ`` (rtcOccludedW): the rays
-    of meshladar.raytrace.views.trace_view. Fills blocked[:n]."""
+    of meshladar.raytrace.views.trace_view. Fills blocked[:n] (``spare`` = (blocked,
+    lifted origins, their hits' indices)). ``needed`` = (wr, ignore_back, skip_below):
+    a hit that cannot weigh anything casts no ray and is marked blocked, an ignored back
+    face's and, with ``skip_below`` (built-in coatings, whose F is 0 there), one whose face
+    turns away from the receiver (n·wr < 0 in float64, the weight's own cosine)."""
+    blocked, lifted, index = spare
+    wr, ignore_back, skip_below = needed
+    m = 0
     for i in range(n):
         p = prim[i]
         c, t, _ = face_hit(p, tf[i], o, i, wv, plane_d, face_normals)
         sign = -1.0 if c < 0.0 else 1.0
+        if c < 0.0 and ignore_back:
+            blocked[i] = True
+            continue
+        if skip_below and sign * (face_normals[p, 0] * wr[0] + face_normals[p, 1] * wr[1]
+                                  + face_normals[p, 2] * wr[2]) < 0.0:
+            blocked[i] = True
+            continue
         for k in range(3):
             q = np.float32((o[i, k] * 1.0 - t * wv[k]) + lift * (face_normals[p, k] * sign))
-            lifted[i, k] = q if one else q * inv_scale
-    for first in range(0, n, w):
-        load_packet(f32, i32, lifted, wr32, np.float32(np.inf), first, n, w)
+            lifted[m, k] = q if one else q * inv_scale
+        index[m] = i
+        m += 1
+    for first in range(0, m, w):
+        load_packet(f32, i32, lifted, wr32, np.float32(np.inf), first, m, w)
         occ(base + VALID_OFF, scene, base, base + ARGS_OFF)
-        for j in range(min(w, n - first)):
-            blocked[first + j] = f32[TFAR * w + j] == -np.inf
+        for j in range(min(w, m - first)):
+            blocked[index[first + j]] = f32[TFAR * w + j] == -np.inf
 
 
 #: Bistatic hits per block handed to the occlusion and binning kernels: small enough to
@@ -211,9 +227,9 @@ def cast_bin_bistatic(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, f
     hits = (np.empty(_BLOCK, np.int32), np.empty(_BLOCK, np.float32),
             np.empty((_BLOCK, 3), np.float32))
     spare = (np.zeros(_BLOCK, np.bool_), np.empty((_BLOCK, 3), np.float32),
-             np.empty((1, 3), np.float32))
+             np.empty(_BLOCK, np.int64), np.empty((1, 3), np.float32))
     for k in range(3):
-        spare[2][0, k] = wr[k]
+        spare[3][0, k] = wr[k]
     one = scale == 1.0
     held = back = 0
     for a0 in range(0, grid[0].shape[0], tile_shape(w)[0]):
@@ -240,14 +256,17 @@ def cast_bin_bistatic(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, f
 def _bin_block(occ, scene, w, flags, ws, hits, held, spare, plane_d, face_normals, wv, wr,
                lift, inv_scale, one, start, edges, ignore_back, out, faces):
     """Bin the ``held`` bistatic hits of ``hits`` (face, distance, origin) after their
-    occlusion rays toward the receiver ``wr`` (``spare``: blocked, lifted origins, wr in
-    float32); ``faces`` = (weight, stamp, tag, coating), the per-face weights as
-    :func:`._kernels.bin_bistatic_hits` takes them. Returns the block's back-face hits."""
+    occlusion rays toward the receiver ``wr`` (``spare``: blocked, lifted origins, their
+    hits' indices, wr in float32); ``faces`` = (weight, stamp, tag, coating), the per-face
+    weights as :func:`._kernels.bin_bistatic_hits` takes them (``coating[5]``: whether a
+    hit whose face turns away from the receiver may skip its occlusion ray). Returns the
+    block's back-face hits."""
     i32, f32, i64, base = ws
     prim, tf, o = hits[0][:held], hits[1][:held], hits[2][:held]
-    blocked, lifted, wr32 = spare
+    blocked, wr32 = spare[0], spare[3]
     _occlude_block(occ, scene, w, i32, f32, base, prim, tf, o, held, plane_d, face_normals,
-                   wv, wr32, lift, inv_scale, one, lifted, blocked)
+                   wv, wr32, lift, inv_scale, one, spare[:3],
+                   (wr, ignore_back, faces[3][5]))
     init_args(i32, i64, base, flags)
     return bin_bistatic_hits(prim, tf, o, blocked[:held], plane_d, face_normals, wv, wr,
                              start, edges, ignore_back, out, *faces)

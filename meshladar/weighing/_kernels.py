@@ -247,10 +247,10 @@ def bin_bistatic_hits(prim, tfar, origins, blocked, plane_d, face_normals, w, wr
 def _bistatic_face(face_normals, p, c, wr, coating):
     """F·area of face p for the receiver along ``wr`` (flat normal n, c = n·w as the hit
     found it; a back face's normal and c are turned toward the ladar here), as meshladar.weighing.faces.face_bistatic_weights computes
-    it for a built-in coating: ``coating`` = (face_material, params, half, area, power),
-    ``half`` the unit half vector of w and wr, ``params`` the SR table's rows; F·cos θr
-    under ``power``, F otherwise (:func:`sr_bistatic`)."""
-    face_material, params, half, area, power = coating
+    it for a built-in coating: ``coating`` = (face_material, params, half, area, power,
+    built-in), ``half`` the unit half vector of w and wr, ``params`` the SR table's rows;
+    F·cos θr under ``power``, F otherwise (:func:`sr_bistatic`)."""
+    face_material, params, half, area, power = coating[:5]
     sign = -1.0 if c < 0.0 else 1.0
     n0, n1, n2 = face_normals[p, 0] * sign, face_normals[p, 1] * sign, face_normals[p, 2] * sign
     c = c * sign

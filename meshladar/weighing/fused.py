@@ -45,10 +45,11 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
         ``face_normals``, ``face_material``, ``params``, ``w``, ``start``, ``edges``,
         ``area``, ``power``, ``ignore_back``, ``out``, ``stamp``, ``weight``, ``tag``,
         ``footprint``. The weights are added into ``out`` (n_bins,).
-    receiver : tuple of ((3,) array_like, float), optional
-        Bistatic: the receiver's direction w_r and the lift (scene units) along the hit
+    receiver : tuple of ((3,) array_like, float, bool), optional
+        Bistatic: the receiver's direction w_r, the lift (scene units) along the hit
         face's normal, turned toward the ladar, from which each hit's occlusion ray toward
-        it starts. A face whose ``bins.stamp`` is not ``bins.tag`` gets its bistatic
+        it starts, and whether the coatings are built in (their F is 0 where the face turns
+        away from the receiver, so such hits cast no occlusion ray). A face whose ``bins.stamp`` is not ``bins.tag`` gets its bistatic
         weight at its first hit, from the SR table ``bins.params`` (built-in coatings);
         for other coatings the job stamps every face's weight
         (:func:`meshladar.weighing.faces.face_bistatic_weights`) first. None (default):
@@ -79,7 +80,7 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
     if receiver is not None:
         wr = np.asarray(receiver[0], np.float64)
         coating = (b.face_material, b.params, (w + wr) / np.linalg.norm(w + wr),
-                   float(b.area), bool(b.power))
+                   float(b.area), bool(b.power), bool(receiver[2]))
         return cast_bin_bistatic(*head, b.plane_d, b.face_normals, b.w, b.start, b.edges,
                                  b.ignore_back, b.out, b.weight, lib.occluded[lib.width],
                                  wr, float(receiver[1]), b.stamp, b.tag, coating)
