@@ -26,7 +26,7 @@ __all__ = ["MeshPart", "load_parts", "part_from_trimesh", "prism", "sphere", "el
 #: (``_icosphere`` is now the public ``icosphere``).
 _MOVED = {"_clean": "checks", "_bodies": "checks", "_read_file": "formats", "_read": "formats",
           "_part_name": "formats", "_parts_of": "formats", "_describe": "formats",
-          "_not_a_mesh": "formats", "_welded": "formats", "_sniff": "archives",
+          "_not_a_mesh": "formats", "_weld": "formats", "_sniff": "archives",
           "_suffix": "archives", "_is_binary": "archives", "_decompress": "archives",
           "_members": "archives", "_needs": "archives", "_readable_formats": "archives",
           "_one_line": "archives", "_printable": "archives", "_point_index": "part",

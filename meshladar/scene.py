@@ -152,7 +152,7 @@ class Scene:
 
         Parameters
         ----------
-        mesh_or_path : trimesh.Trimesh, trimesh.Scene or path
+        mesh_or_path : trimesh.Trimesh, trimesh.Scene, meshladar.meshes.TriangleMesh or path
         material : BRDF, optional
             The coating of every part (unless ``materials`` names a part's own).
         materials : dict, optional

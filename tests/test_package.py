@@ -199,3 +199,16 @@ def test_the_guide_views_formula_gives_the_numbers_it_states():
     for count, n, sigma in stated:
         views = 4 * math.pi * (int(n) / 2) ** 2 / (2 * float(sigma)) ** 2
         assert abs(int(count.replace(",", "")) - views) <= 0.01 * views, (count, views)
+
+
+def test_the_scanner_loads_on_first_use_and_its_modules_are_attributes():
+    """meshladar.scan names its public names and its modules without importing them at
+    the command line's start; each resolves on first use, as the package used to."""
+    code = ("import sys, meshladar.cli, meshladar as ml; "
+            "before = 'meshladar.scan.run' in sys.modules; "
+            "from meshladar.scan import *; "
+            "print(before, scan.__module__, Platform.__module__, ml.scan.points.__name__, "
+            "sorted(set(ml.scan.__all__) - set(dir(ml.scan))))")
+    assert _run("-c", code).stdout.split() == [
+        "False", "meshladar.scan.run", "meshladar.scan.platforms", "meshladar.scan.points",
+        "[]"]

@@ -151,7 +151,7 @@ def cmd_scan(args) -> int:
     if not scene.is_mesh:
         scene = scene.tessellate()
     cloud = scanning.scan(scene, pattern, platform, sensor, seed=args.seed,
-                 waveforms_file=args.waveforms, progress=not args.quiet)
+                          waveforms_file=args.waveforms, progress=not args.quiet)
     if args.output.lower().endswith((".h5", ".hdf5")):
         scanning.write_hdf5(args.output, cloud)
     else:

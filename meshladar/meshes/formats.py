@@ -51,7 +51,7 @@ def load_parts(mesh_or_path):
 
     Parameters
     ----------
-    mesh_or_path : str, os.PathLike, trimesh.Trimesh or trimesh.Scene
+    mesh_or_path : str, os.PathLike, trimesh.Trimesh, trimesh.Scene or TriangleMesh
         A file of any format trimesh reads: STL (ASCII or binary), OBJ, PLY, OFF, GLB/glTF
         (several parts, each placed by its node's transform), OBJ with named objects (one
         part per ``o NAME``, in file order), ZIP and tar archives; 3MF,
@@ -115,7 +115,11 @@ def _read_file(path):
                      _suffix(inner), data[:_HEAD_BYTES], len(data),
                      resolver=trimesh.resolvers.FilePathResolver(path),
                      default_name=inner or "mesh")
-    corners = binary_stl(path, size, head) if suffix == "stl" else None
+    try:
+        corners = binary_stl(path, size, head) if suffix == "stl" else None
+    except (OSError, MemoryError) as exc:
+        raise GeometryError(f"{where}: cannot read the file "
+                            f"({_one_line(getattr(exc, 'strerror', None) or exc)})") from exc
     if corners is not None:                 # trimesh's reading, without importing it
         return [("mesh", TriangleMesh(*_weld(*corners, where)))]
     return _read(where, lambda: path, suffix, head, size, resolver=None, default_name="mesh")
@@ -228,8 +232,11 @@ def _part_name(node, geometry, taken):
 
 
 def _parts_of(loaded, where, default_name="mesh"):
-    """(name, welded mesh) of each triangle mesh in a trimesh object, or a GeometryError
-    saying what the object holds instead."""
+    """(name, welded mesh) of each triangle mesh in a trimesh object (or in a
+    :class:`TriangleMesh`, as :func:`load_parts` gives), or a GeometryError saying what the
+    object holds instead."""
+    if isinstance(loaded, TriangleMesh):
+        return [(default_name, TriangleMesh(*_weld(loaded.vertices, loaded.faces, where)))]
     import trimesh
 
     if isinstance(loaded, trimesh.Scene):

@@ -36,14 +36,21 @@ _HOMES = {"ScanBeam": "footprint", "GeigerMode": "geiger", "coates": "geiger",
           "write_hdf5": "files", "write_las": "files"}
 
 
+#: The package's modules, also reached as attributes (``meshladar.scan.points``).
+_SUBMODULES = ("patterns", "platforms", "footprint", "instrument", "cast", "echoes", "points",
+               "run", "files", "geiger", "moving")
+
+
 def __getattr__(name):
-    home = _HOMES.get(name)
-    if home is None:
+    if name in _HOMES:
+        value = getattr(importlib.import_module(f"{__name__}.{_HOMES[name]}"), name)
+    elif name in _SUBMODULES:
+        value = importlib.import_module(f"{__name__}.{name}")
+    else:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{home}"), name)
-    globals()[name] = value
+    globals()[name] = value                               # looked up once
     return value
 
 
 def __dir__():
-    return sorted(set(globals()) | set(__all__))
+    return sorted(set(__all__) | set(_SUBMODULES))

@@ -729,6 +729,9 @@ def test_a_binary_stl_is_read_as_trimesh_reads_it(tmp_path, header):
     assert len(mesh.vertices) == 2562 and len(mesh.faces) == 5120
     np.testing.assert_array_equal(mesh.vertices, welded.vertices)
     np.testing.assert_array_equal(mesh.faces, welded.faces)
+    (_, again), = ml.meshes.load_parts(mesh)             # its own output taken back
+    np.testing.assert_array_equal(again.vertices, mesh.vertices)
+    assert ml.Scene.from_mesh(mesh, DARK_GRAY).report["faces"] == 5120
     (tmp_path / "cut.stl").write_bytes(bytes(data[:-10]))
     with pytest.raises(GeometryError, match=r"cut\.stl: not a readable STL file"):
         ml.meshes.load_parts(tmp_path / "cut.stl")
