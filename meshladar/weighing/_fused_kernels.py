@@ -57,11 +57,6 @@ def _occlude_block(occ, scene, w, i32, f32, base, prim, tf, o, n, plane_d, face_
             blocked[index[first + j]] = f32[TFAR * w + j] == -np.inf
 
 
-#: Bistatic hits per block handed to the occlusion and binning kernels: small enough to
-#: stay in cache, large enough that the call costs nothing per ray.
-_BLOCK = 1024
-
-
 @njit(cache=True, nogil=True, inline="always")
 def _offsets(xi, ku, kv, eta, a, b):
     """Cell (a, b)'s stratified offsets (du, dv) from their 1-D sequences, in the float32
@@ -213,63 +208,64 @@ def cast_bin_smooth(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, fac
 def cast_bin_bistatic(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, face_normals,
                       wv, start, edges, ignore_back, out, weight, occ, wr, lift, stamp, tag,
                       coating):
-    """One bistatic view (receiver direction ``wr``), flat normals: the bands' hits taken
-    a block at a time; each block's hits first cast their occlusion rays toward the
-    receiver with ``occ`` (rtcOccludedW; see :func:`_occlude_block`), then
-    :func:`._kernels.bin_bistatic_hits` bins them with the per-face bistatic weights in
-    ``weight`` (those whose ``stamp`` is not ``tag`` evaluated at their first hit from
-    ``coating``). Returns (back-face hits, rays cast)."""
+    """One bistatic view (receiver direction ``wr``), flat normals: each band's hits first
+    cast their occlusion rays toward the receiver with ``occ`` (rtcOccludedW; see
+    :func:`_occlude_band`), then :func:`._kernels.bin_bistatic_hits` bins the band in scan
+    order with the per-face bistatic weights in ``weight`` (those whose ``stamp`` is not
+    ``tag`` evaluated at their first hit from ``coating``). Returns (back-face hits, rays
+    cast)."""
     ws = workspace()
     i32, f32, i64, base = ws
     init_args(i32, i64, base, flags)
-    buffers = _band_buffers(w, grid[1].shape[0], False)
+    nt = grid[1].shape[0]
+    buffers = _band_buffers(w, nt, False)
     band_prim, band_t, band_o = buffers[3][0], buffers[3][1], buffers[3][2]
-    hits = (np.empty(_BLOCK, np.int32), np.empty(_BLOCK, np.float32),
-            np.empty((_BLOCK, 3), np.float32))
-    spare = (np.zeros(_BLOCK, np.bool_), np.empty((_BLOCK, 3), np.float32),
-             np.empty(_BLOCK, np.int64), np.empty((1, 3), np.float32))
+    size = band_prim.shape[0]
+    hits = (np.empty(size, np.int32), np.empty(size, np.float32),
+            np.empty((size, 3), np.float32), np.empty(size, np.int64))
+    spare = (np.zeros(size, np.bool_), np.empty((size, 3), np.float32),
+             np.empty(size, np.int64), np.empty((1, 3), np.float32), np.zeros(size, np.bool_))
     for k in range(3):
         spare[3][0, k] = wr[k]
     one = scale == 1.0
-    held = back = 0
+    back = 0
     for a0 in range(0, grid[0].shape[0], tile_shape(w)[0]):
-        for q in range(_cast_band(fn, scene, w, ws, a0, grid, d, inv_scale, scale, buffers)):
-            if band_prim[q] < 0:                  # the band's hits in scan order
-                continue
-            hits[0][held], hits[1][held] = band_prim[q], band_t[q]
-            for k in range(3):
-                hits[2][held, k] = band_o[q, k]
-            held += 1
-            if held == _BLOCK:
-                back += _bin_block(occ, scene, w, flags, ws, hits, held, spare, plane_d,
-                                   face_normals, wv, wr, lift, inv_scale, one, start, edges,
-                                   ignore_back, out, (weight, stamp, tag, coating))
-                held = 0
-    if held:
-        back += _bin_block(occ, scene, w, flags, ws, hits, held, spare, plane_d,
-                           face_normals, wv, wr, lift, inv_scale, one, start, edges,
-                           ignore_back, out, (weight, stamp, tag, coating))
+        k = _cast_band(fn, scene, w, ws, a0, grid, d, inv_scale, scale, buffers)
+        _occlude_band(occ, scene, w, ws, buffers[3], k // nt, nt, hits, spare, plane_d,
+                      face_normals, wv, lift, inv_scale, one, (wr, ignore_back, coating[5]))
+        init_args(i32, i64, base, flags)
+        back += bin_bistatic_hits(band_prim[:k], band_t[:k], band_o[:k], spare[4][:k],
+                                  plane_d, face_normals, wv, wr, start, edges, ignore_back,
+                                  out, weight, stamp, tag, coating)
     return back, grid[0].shape[0] * grid[1].shape[0]
 
 
 @njit(cache=True, nogil=True)
-def _bin_block(occ, scene, w, flags, ws, hits, held, spare, plane_d, face_normals, wv, wr,
-               lift, inv_scale, one, start, edges, ignore_back, out, faces):
-    """Bin the ``held`` bistatic hits of ``hits`` (face, distance, origin) after their
-    occlusion rays toward the receiver ``wr`` (``spare``: blocked, lifted origins, their
-    hits' indices, wr in float32); ``faces`` = (weight, stamp, tag, coating), the per-face
-    weights as :func:`._kernels.bin_bistatic_hits` takes them (``coating[5]``: whether a
-    hit whose face turns away from the receiver may skip its occlusion ray). Returns the
-    block's back-face hits."""
-    i32, f32, i64, base = ws
-    prim, tf, o = hits[0][:held], hits[1][:held], hits[2][:held]
-    blocked, wr32 = spare[0], spare[3]
-    _occlude_block(occ, scene, w, i32, f32, base, prim, tf, o, held, plane_d, face_normals,
-                   wv, wr32, lift, inv_scale, one, spare[:3],
-                   (wr, ignore_back, faces[3][5]))
-    init_args(i32, i64, base, flags)
-    return bin_bistatic_hits(prim, tf, o, blocked[:held], plane_d, face_normals, wv, wr,
-                             start, edges, ignore_back, out, *faces)
+def _occlude_band(occ, scene, w, ws, band, rows, nt, hits, spare, plane_d, face_normals, wv,
+                  lift, inv_scale, one, needed):
+    """The occlusion of a band's hits (``band``: face, distance, origin per slot, rows ×
+    ``nt`` in scan order) toward the receiver, into ``spare[4]`` per slot: the hits taken
+    in tile order (:func:`tile_shape`: a packet's occlusion rays leave neighbouring points,
+    as its first rays did) into ``hits`` (face, distance, origin, slot), then cast by
+    :func:`_occlude_block` (``spare``: blocked, lifted origins, indices, wr in float32,
+    and the band's blocked flags)."""
+    i32, f32, _, base = ws
+    tw = tile_shape(w)[1]
+    held = 0
+    for b0 in range(0, nt, tw):
+        for da in range(rows):
+            for db in range(min(tw, nt - b0)):
+                q = da * nt + b0 + db
+                if band[0][q] < 0:
+                    continue
+                hits[0][held], hits[1][held], hits[3][held] = band[0][q], band[1][q], q
+                for k in range(3):
+                    hits[2][held, k] = band[2][q, k]
+                held += 1
+    _occlude_block(occ, scene, w, i32, f32, base, hits[0], hits[1], hits[2], held, plane_d,
+                   face_normals, wv, spare[3], lift, inv_scale, one, spare[:3], needed)
+    for j in range(held):
+        spare[4][hits[3][j]] = spare[0][j]
 
 
 @njit(cache=True, nogil=True)
