@@ -109,15 +109,15 @@ def _sensor(args):
     noise = None
     if args.background_rate or args.dark_rate or args.noise:
         noise = Noise(background_rate=args.background_rate, dark_rate=args.dark_rate)
-    sc = scanning
-    geiger = sc.GeigerMode(shots=args.geiger_shots) if args.geiger_shots else None
-    beam = sc.ScanBeam(args.divergence, profile=args.profile, tol=args.tol,
-                       sub_rays=args.sub_rays)
-    return sc.ScanSensor(pulse_energy=args.pulse_energy, aperture_diameter=args.aperture,
-                         sample_rate=args.sample_rate, pulse=GaussianPulse(args.pulse_fwhm),
-                         beam=beam, noise=noise, geiger=geiger,
-                         echoes="discrete" if args.discrete else "waveform",
-                         detector=sc.Detector(max_returns=args.max_returns, cfar=args.cfar))
+    geiger = scanning.GeigerMode(shots=args.geiger_shots) if args.geiger_shots else None
+    beam = scanning.ScanBeam(args.divergence, profile=args.profile, tol=args.tol,
+                             sub_rays=args.sub_rays)
+    detector = scanning.Detector(max_returns=args.max_returns, cfar=args.cfar)
+    return scanning.ScanSensor(pulse_energy=args.pulse_energy, aperture_diameter=args.aperture,
+                               sample_rate=args.sample_rate,
+                               pulse=GaussianPulse(args.pulse_fwhm), beam=beam, noise=noise,
+                               geiger=geiger, detector=detector,
+                               echoes="discrete" if args.discrete else "waveform")
 
 
 def cmd_scan(args) -> int:
