@@ -44,9 +44,13 @@ class CoatingFit:
     undetermined : tuple of str
         The names the data cannot determine.
     combinations : tuple of (str, float, float)
-        The combinations of undetermined parameters that the data do determine (the
-        directions of the Fisher matrix orthogonal to its near-null ones), as (text,
-        value, σ): e.g. ("disk.rho_d + disk.epsilon", 0.5, 0.0027).
+        The combinations the data do determine, as (text, value, σ): of undetermined
+        parameters, the directions of the Fisher matrix orthogonal to its near-null ones
+        (e.g. ("disk.rho_d + disk.epsilon", 0.5, 0.0027)); and across a ridge, parameters
+        correlated beyond 0.99, the best-measured one (e.g. the paper's aluminium at 10⁴
+        photoelectrons, ("0.01805·small.epsilon + small.e", 0.01663, 8.2e-05): each of
+        ε and e loose and skewed, the combination unbiased). Their coefficients over
+        ``names`` are ``info["combination_coefficients"]``, in the same order.
     kernel_error : float or None
         The kernel's error: the largest change of the model at the estimate over the bins
         from N to 2N pieces per boundary (or rays per bin width of a mesh traced from its

@@ -10,6 +10,11 @@ together without changing the data (for a unit-diagonal S, the direction's σ is
 a share of such a direction are undetermined (σ = inf); the combinations orthogonal to the
 null directions are determined, and are named with their σ from the generalised inverse
 D S⁺ D restricted to the other directions.
+
+A ridge is nearly null: parameters correlated beyond :data:`RIDGE_CORR` (a narrow glint's
+ε and e, of which the data see mostly one combination at 10⁴ photoelectrons) are each
+loosely determined and their estimates skewed along it, while the combination across the
+ridge is well measured: it is named with its σ among the combinations too.
 """
 
 from __future__ import annotations
@@ -34,6 +39,12 @@ _LOOSE = 0.25
 #: A parameter whose effect on the data over its range is below this share of the largest
 #: one's does not act on the data.
 _DEAD = 1e-14
+#: A ridge: parameters correlated beyond this (in absolute value) are each loosely
+#: determined along it, and the fit names the combination across it that the data measure
+#: (:func:`_ridges`), with the eigenvectors of their unit-diagonal covariance whose
+#: variance is at most RIDGE_REL of the largest (σ at most a tenth of the ridge's).
+RIDGE_CORR = 0.99
+RIDGE_REL = 0.01
 
 
 class Identified(NamedTuple):
@@ -82,6 +93,8 @@ def _uncertainty(fisher, x, params, label):
             for a in np.flatnonzero(involved):
                 reasons[live[a]] = f"the data determine only a combination of {names}"
         _loose_ones(reasons, live, involved, (sub, width, x), (params, label))
+        combinations += _ridges(sub, involved)
+        combinations = [(_widened(c, live, n), s) for c, s in combinations]
     unknown = [i for i in range(n) if i not in live]
     unknown += [i for a, i in enumerate(live) if involved[a]]
     for i in unknown:
@@ -105,6 +118,42 @@ def _combinations(null_user, involved, sub):
         full[idx] = c
         out.append((full, math.sqrt(max(float(full @ sub @ full), 0.0))))
     return out
+
+
+def _ridges(sub, involved):
+    """The best-determined combinations along ridges: groups of parameters (outside the
+    null directions) linked by correlations beyond :data:`RIDGE_CORR`; in each group's
+    unit-diagonal covariance, the eigenvectors whose variance is at most
+    :data:`RIDGE_REL` of the largest, in user units (scaled to a largest coefficient of
+    1), with their σ from ``sub``. Along such a ridge the parameters are each loosely
+    determined and their estimates skewed, while these combinations stay well measured."""
+    sd = np.sqrt(np.maximum(np.diag(sub), 0.0))
+    ok = (sd > 0) & ~involved
+    safe = np.where(ok, sd, 1.0)
+    linked = (np.abs(sub / np.outer(safe, safe)) > RIDGE_CORR) & np.outer(ok, ok)
+    group = np.arange(len(sd))
+    for a, b in zip(*np.nonzero(np.triu(linked, 1))):          # union of linked pairs
+        group[group == group[b]] = group[a]
+    out = []
+    for g in np.unique(group):
+        idx = np.flatnonzero(group == g)
+        if len(idx) < 2:
+            continue
+        block = sub[np.ix_(idx, idx)] / np.outer(sd[idx], sd[idx])
+        lam, vec = np.linalg.eigh(block)
+        for k in np.flatnonzero(lam <= RIDGE_REL * lam[-1]):
+            c = vec[:, k] / sd[idx]
+            full = np.zeros(len(sd))
+            full[idx] = c / c[np.argmax(np.abs(c))]
+            out.append((full, math.sqrt(max(float(full @ sub @ full), 0.0))))
+    return out
+
+
+def _widened(coefficients, live, n):
+    """A combination's coefficients over the live parameters, over all ``n``."""
+    full = np.zeros(n)
+    full[live] = coefficients
+    return full
 
 
 def _loose_ones(reasons, live, involved, at, named):

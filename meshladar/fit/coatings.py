@@ -170,6 +170,7 @@ def _result(model, solved, ladder, boot):
                       {"photons_per_unit": scale if problem.noise == "poisson" else None,
                        "positive": tuple(bool(p.low >= 0.0) for p in params),
                        "radiometry": kernel.radiometry, "source": kernel.source,
+                       "combination_coefficients": tuple(c for c, _ in found.combinations),
                        "covariance": "inverse Fisher information of the user's parameters "
                                      f"(null directions: eigenvalue ≤ {NULL_REL:g} of the "
                                      "largest of the unit-diagonal Fisher matrix)"

@@ -188,6 +188,95 @@ def test_the_pair_at_1e4_covers_the_truth_with_profile_intervals():
     assert np.all(np.abs(bias) < MAX_BIAS), (dict(zip(names, np.round(bias, 2))), cover)
 
 
+#: The pair at 10⁴ with normal intervals: the aluminium's ε and e lie on a ridge
+#: (correlated at −0.997 to −0.999 in all but two of the 200 trials), each loose and
+#: skewed (mean bias +0.42 and −0.48 σ), and the fit names the combination across it.
+RIDGE_TRIALS = 200
+RIDGE = ("small.epsilon", "small.e")
+
+
+def _pair_ridge(seeds):
+    """One worker's share of the pair's ridge trials at 10⁴ photoelectrons: per trial, the
+    z of every parameter, whether its normal 95 % interval holds the truth, and the z of
+    the combination across the ridge (NaN when the fit names none)."""
+    scene = SCENES["pair"]
+    exact = ml.simulate(scene, LAD, model="analytic").values
+    kernel = coating_kernel(scene, LAD, samples=2048)
+    k = 1e4 / exact.max()
+    rows = []
+    for seed in seeds:
+        y = np.random.default_rng(seed).poisson(exact * k) / k
+        measured = ml.Sinogram(y, angles_deg=LAD.angles_deg, bin_edges=LAD.bin_edges,
+                               info={"radiometry": "paper"})
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ml.fit.IdentifiabilityWarning)
+            warnings.simplefilter("ignore", ml.fit.KernelErrorWarning)
+            fit = fit_coatings(kernel, measured, noise="poisson", photons_per_unit=k)
+        true = np.array([getattr(scene.shapes[kernel.part_index(n.split(".")[0])]
+                                 .material, n.split(".")[1]) for n in fit.names])
+        lo, hi = fit.interval(0.95)
+        ridge = [i for i, c in enumerate(fit.info["combination_coefficients"])
+                 if set(np.array(fit.names)[c != 0]) == set(RIDGE)]
+        zc = np.nan
+        if ridge:
+            (_, value, sigma), c = (fit.combinations[ridge[0]],
+                                    fit.info["combination_coefficients"][ridge[0]])
+            zc = (value - c @ true) / sigma
+        rows.append(((fit.estimate - true) / fit.stderr, (lo <= true) & (true <= hi), zc))
+    return fit.names, rows
+
+
+@pytest.mark.slow
+def test_the_ridge_the_guide_shows():
+    """The coatings guide's example, seed 0 of the ridge trials: the fit names
+    0.01805·small.epsilon + small.e = 0.016633 ± 8.2e-05, whose truth is 0.016565."""
+    scene = SCENES["pair"]
+    exact = ml.simulate(scene, LAD, model="analytic").values
+    k = 1e4 / exact.max()
+    y = np.random.default_rng(0).poisson(exact * k) / k
+    measured = ml.Sinogram(y, angles_deg=LAD.angles_deg, bin_edges=LAD.bin_edges,
+                           info={"radiometry": "paper"})
+    fit = fit_coatings(scene, measured, noise="poisson", photons_per_unit=k, samples=2048)
+    (text, value, sigma), = fit.combinations
+    assert text == "0.01805·small.epsilon + small.e"
+    assert round(value, 6) == 0.016633 and f"{sigma:.2g}" == "8.2e-05"
+    c, = fit.info["combination_coefficients"]
+    true = np.array([getattr(scene.shapes[fit.names.index(n) // 4].material,
+                             n.split(".")[1]) for n in fit.names])
+    assert round(float(c @ true), 6) == 0.016565
+
+
+@pytest.mark.slow
+def test_the_pair_at_1e4_names_the_ridge_and_measures_across_it():
+    """The paper's pair at 10⁴ photoelectrons over RIDGE_TRIALS seeded trials (on every
+    core), normal intervals: the fit names the combination across the aluminium's ε-e
+    ridge in at least 98 % of them, and that combination's mean bias is below 0.25 σ and
+    its 95 % interval (value ∓ 1.96 σ) holds the truth's combination within the sampling
+    error of 0.90 (_floor); the other six parameters have mean bias below 0.25 σ and
+    cover as well. (Measured 2026-12-05: named in 198 of 200, mean bias −0.07 σ, spread 1.10 σ,
+    coverage 0.91.)"""
+    cores = len(os.sched_getaffinity(0))
+    seeds = [range(i, RIDGE_TRIALS, cores) for i in range(cores)]
+    with ProcessPoolExecutor(cores, mp_context=multiprocessing.get_context("spawn")) as pool:
+        parts = list(pool.map(_pair_ridge, seeds))
+    names = np.array(parts[0][0])
+    rows = [r for p in parts for r in p[1]]
+    assert len(rows) == RIDGE_TRIALS
+    z = np.array([r[0] for r in rows])
+    inside = np.array([r[1] for r in rows])
+    zc = np.array([r[2] for r in rows])
+    named = np.isfinite(zc)
+    assert named.mean() >= 0.98, named.mean()
+    cover = float(np.mean(np.abs(zc[named]) <= 1.959964))
+    assert abs(zc[named].mean()) < MAX_BIAS and cover >= _floor(named.sum()), (
+        zc[named].mean(), cover)
+    others = ~np.isin(names, RIDGE)
+    bias = z[:, others].mean(axis=0)
+    assert np.all(np.abs(bias) < MAX_BIAS), dict(zip(names[others], bias))
+    assert np.all(inside[:, others].mean(axis=0) >= _floor(RIDGE_TRIALS)), dict(
+        zip(names[others], inside[:, others].mean(axis=0)))
+
+
 #: The mesh model's data: 4096 rays per bin width, twice the most the kernel's refinement
 #: reaches on this scene (2048, capped by MAX_KERNEL_RAYS), through simulate's own loop.
 MESH_DATA_RAYS = 4096

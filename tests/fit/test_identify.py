@@ -164,3 +164,34 @@ def test_a_width_no_larger_than_its_sigma_is_not_called_determined():
     assert sd > 0.5 * e
     assert "half its value" in fit.identifiable["small.e"]
     assert all(fit.identifiable[n] is True for n in fit.names if n != "small.e")
+
+
+#: Two parameters' σ and correlations: along a ridge (|ρ| > 0.99) and off it.
+RIDGE_SIGMAS = (0.1, 0.002)
+
+
+@pytest.mark.parametrize("rho", [-0.999, 0.995, -0.98])
+def test_a_ridge_names_the_combination_across_it(rho):
+    """Two parameters correlated at ρ (σ1 = 0.1, σ2 = 0.002) beside an independent third:
+    beyond |ρ| = 0.99 the one combination across the ridge is named, its coefficients
+    (σ2/σ1 · −sign ρ, 1) (the unit-diagonal covariance's eigenvector (1, −sign ρ)/√2 in
+    user units, largest coefficient 1) and its σ = σ2 √(2 (1 − |ρ|)) in closed form; at
+    −0.98 none. The parameters keep their σ, and stay determined."""
+    from meshladar.fit._identify import _uncertainty
+    from meshladar.fit._params import _Param
+
+    s1, s2 = RIDGE_SIGMAS
+    cov = np.array([[s1 ** 2, rho * s1 * s2, 0.0], [rho * s1 * s2, s2 ** 2, 0.0],
+                    [0.0, 0.0, 0.01 ** 2]])
+    params = [_Param(0, "epsilon", 0.0, 1.0), _Param(0, "e", 1e-4, 1.0),
+              _Param(1, "rho_d", 0.0, 1.0)]
+    x = np.array([0.5, 0.02, 0.3])
+    found = _uncertainty(np.linalg.inv(cov), x, params, lambda i: params[i].label)
+    assert np.allclose(np.sqrt(np.diag(found.covariance)), [s1, s2, 0.01], rtol=1e-9)
+    assert found.reasons == [True, True, True]
+    if abs(rho) < 0.99:
+        assert found.combinations == []
+        return
+    (c, sigma), = found.combinations
+    assert np.allclose(c, [-np.sign(rho) * s2 / s1, 1.0, 0.0], rtol=1e-9, atol=1e-15)
+    assert sigma == pytest.approx(s2 * np.sqrt(2.0 * (1.0 - abs(rho))), rel=1e-6)
