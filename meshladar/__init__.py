@@ -9,7 +9,7 @@ for one release: they warn with the new name.
 
 from __future__ import annotations
 
-import importlib
+from ._lazy import lazy_attributes
 
 from ._version import __version__
 
@@ -43,19 +43,8 @@ _DEPRECATED = {
 }
 
 
-def __getattr__(name):
-    if name in _NAMES:
-        value = getattr(importlib.import_module(f"{__name__}.{_NAMES[name]}"), name)
-    elif name in _SUBMODULES or name in _DEPRECATED:
-        value = importlib.import_module(f"{__name__}.{name}")
-    else:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    globals()[name] = value        # looked up once
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_NAMES) | set(_SUBMODULES))
+__getattr__, __dir__ = lazy_attributes(__name__, globals(), _NAMES, _SUBMODULES,
+                                      _DEPRECATED)
 
 
 __all__ = ["SandfordRobertson", "Disk", "Ellipse", "Scene", "Ladar", "Sinogram", "simulate",

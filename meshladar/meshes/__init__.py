@@ -28,7 +28,7 @@ normal toward the ladar, ``"ignore"`` lets the face block the ray and return not
 
 from __future__ import annotations
 
-import importlib
+from .._lazy import lazy_attributes
 
 from .checks import inspect_parts
 from .formats import TriangleMesh, load_parts
@@ -42,17 +42,6 @@ __all__ = ["MeshPart", "load_parts", "TriangleMesh", "part_from_trimesh", "prism
            "convex_hull"]
 
 #: Names reached lazily (their module imports numba): name -> submodule.
-_LAZY = {"corner_normals": "normals", "curved_edge_angles": "normals", "CREASE_DEG": "normals",
-         "normals": None,
-         "_normals_kernel": None}
-
-
-def __getattr__(name):
-    if name in _LAZY:
-        module = importlib.import_module(f"{__name__}.{_LAZY[name] or name}")
-        return module if _LAZY[name] is None else getattr(module, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_LAZY))
+__getattr__, __dir__ = lazy_attributes(
+    __name__, globals(), {"corner_normals": "normals", "curved_edge_angles": "normals",
+                          "CREASE_DEG": "normals"}, ("normals", "_normals_kernel"))

@@ -17,7 +17,7 @@ normals (:data:`~meshladar.scan.points.CONVENTIONS`, recorded in every result's 
 
 from __future__ import annotations
 
-import importlib
+from .._lazy import lazy_attributes
 
 __all__ = ["scan", "PATTERNS", "ScanPattern", "raster", "rotating", "oscillating", "risley", "flash",
            "Platform", "ScanBeam", "ScanSensor", "Detector", "PointCloud", "POINT_DTYPE",
@@ -41,16 +41,4 @@ _SUBMODULES = ("patterns", "platforms", "footprint", "instrument", "cast", "echo
                "run", "files", "geiger", "moving")
 
 
-def __getattr__(name):
-    if name in _HOMES:
-        value = getattr(importlib.import_module(f"{__name__}.{_HOMES[name]}"), name)
-    elif name in _SUBMODULES:
-        value = importlib.import_module(f"{__name__}.{name}")
-    else:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    globals()[name] = value                               # looked up once
-    return value
-
-
-def __dir__():
-    return sorted(set(__all__) | set(_SUBMODULES))
+__getattr__, __dir__ = lazy_attributes(__name__, globals(), _HOMES, _SUBMODULES)

@@ -8,7 +8,7 @@ The faceting study's names are re-exported here, as ``meshladar.studies`` was th
 
 from __future__ import annotations
 
-import importlib
+from .._lazy import lazy_attributes
 
 from .faceting import (COATINGS, PHANTOMS, SETTINGS,
                        convergence_orders, faceting_study, report, save_study, study_scene)
@@ -21,7 +21,4 @@ _SUBMODULES = ("bench", "bench_gpu", "bench_mesh", "faceting", "paper", "peer",
                "reconstruction", "timing")
 
 
-def __getattr__(name):
-    if name not in _SUBMODULES:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return importlib.import_module(f"{__name__}.{name}")
+__getattr__, __dir__ = lazy_attributes(__name__, globals(), submodules=_SUBMODULES)
