@@ -57,6 +57,23 @@ def _floor(n):
     return MIN_COVERAGE - SAMPLING_SIGMAS * np.sqrt(MIN_COVERAGE * (1 - MIN_COVERAGE) / n)
 
 
+def _seeded_fit(scene, kernel, exact, k, seed):
+    """(fit, true values of its parameters) of the exact profiles ``exact`` with seeded
+    Poisson noise at ``k`` counts per unit, started from the truth."""
+    y = np.random.default_rng(seed).poisson(exact * k) / k
+    measured = ml.Sinogram(y, angles_deg=LAD.angles_deg, bin_edges=LAD.bin_edges,
+                           info={"radiometry": "paper"})
+    with warnings.catch_warnings():
+        # a weakly determined parameter at 10³ photons is named; it keeps its σ
+        warnings.simplefilter("ignore", ml.fit.IdentifiabilityWarning)
+        # a mesh kernel capped above kernel_tol says so; its error is in σ
+        warnings.simplefilter("ignore", ml.fit.KernelErrorWarning)
+        fit = fit_coatings(kernel, measured, noise="poisson", photons_per_unit=k)
+    true = np.array([getattr(scene.shapes[kernel.part_index(n.split(".")[0])].material,
+                             n.split(".")[1]) for n in fit.names])
+    return fit, true
+
+
 def _trials(scene, levels=LEVELS, trials=TRIALS, mesh=False, profile=()):
     """Per level, (inside (trials, n) bool, z (trials, n), kernel errors, determined
     (trials, n) bool, half-widths (trials, n)) of the 95 % intervals against the truth
@@ -76,17 +93,7 @@ def _trials(scene, levels=LEVELS, trials=TRIALS, mesh=False, profile=()):
         k = level / exact.max()
         inside, z, kerr, known, half = [], [], [], [], []
         for seed in range(trials) if isinstance(trials, int) else trials:
-            y = np.random.default_rng(seed).poisson(exact * k) / k
-            measured = ml.Sinogram(y, angles_deg=LAD.angles_deg, bin_edges=LAD.bin_edges,
-                                   info={"radiometry": "paper"})
-            with warnings.catch_warnings():
-                # a weakly determined parameter at 10³ photons is named; it keeps its σ
-                warnings.simplefilter("ignore", ml.fit.IdentifiabilityWarning)
-                # a mesh kernel capped above kernel_tol says so; its error is in σ
-                warnings.simplefilter("ignore", ml.fit.KernelErrorWarning)
-                fit = fit_coatings(kernel, measured, noise="poisson", photons_per_unit=k)
-            true = np.array([getattr(scene.shapes[kernel.part_index(n.split(".")[0])]
-                                     .material, n.split(".")[1]) for n in fit.names])
+            fit, true = _seeded_fit(scene, kernel, exact, k, seed)
             lo, hi = fit.interval(0.95, method="profile", parameters=list(profile))
             inside.append((lo <= true) & (true <= hi))
             half.append(0.5 * (hi - lo))
@@ -205,15 +212,7 @@ def _pair_ridge(seeds):
     k = 1e4 / exact.max()
     rows = []
     for seed in seeds:
-        y = np.random.default_rng(seed).poisson(exact * k) / k
-        measured = ml.Sinogram(y, angles_deg=LAD.angles_deg, bin_edges=LAD.bin_edges,
-                               info={"radiometry": "paper"})
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", ml.fit.IdentifiabilityWarning)
-            warnings.simplefilter("ignore", ml.fit.KernelErrorWarning)
-            fit = fit_coatings(kernel, measured, noise="poisson", photons_per_unit=k)
-        true = np.array([getattr(scene.shapes[kernel.part_index(n.split(".")[0])]
-                                 .material, n.split(".")[1]) for n in fit.names])
+        fit, true = _seeded_fit(scene, kernel, exact, k, seed)
         lo, hi = fit.interval(0.95)
         ridge = [i for i, c in enumerate(fit.info["combination_coefficients"])
                  if set(np.array(fit.names)[c != 0]) == set(RIDGE)]
