@@ -84,13 +84,16 @@ def curved_edge_angles(part: MeshPart, *, crease_deg=CREASE_DEG):
         The material index of the two faces at each curved edge.
     """
     fn, _ = part.face_normals_areas()
-    point, _ = _point_index(part.vertices)
+    point, count = _point_index(part.vertices)
     f = point[part.faces]
-    edges = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
-    face = np.tile(np.arange(len(f)), 3)
-    order = np.lexsort(edges.T[::-1])
-    edges, face = edges[order], face[order]
-    pair = np.flatnonzero(np.all(edges[1:] == edges[:-1], axis=1))   # an edge's two faces
+    a = np.concatenate([f[:, 0], f[:, 1], f[:, 2]])
+    b = np.concatenate([f[:, 1], f[:, 2], f[:, 0]])
+    # an edge as one number, its lower position's index first: sorted by it (stably), an
+    # edge's faces are neighbours
+    key = np.minimum(a, b) * count + np.maximum(a, b)
+    order = np.argsort(key, kind="stable")
+    key, face = key[order], np.tile(np.arange(len(f)), 3)[order]
+    pair = np.flatnonzero(key[1:] == key[:-1])                       # an edge's two faces
     a, b = face[pair], face[pair + 1]
     mats = np.broadcast_to(np.asarray(part.material), (len(f),))
     angle = np.arccos(np.clip(np.einsum("ij,ij->i", fn[a], fn[b]), -1.0, 1.0))
