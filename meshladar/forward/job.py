@@ -125,7 +125,7 @@ class FlatBins(NamedTuple):
     stamp: np.ndarray
     weight: np.ndarray
     tag: int
-    footprint: np.ndarray
+    footprint: np.ndarray | None
 
 
 def sensor_offset(geo, w, sensor):
@@ -387,7 +387,9 @@ def _chunk(job, n_views):
             np.zeros((len(wg.materials), 7))
         chunk.stamp = np.zeros(len(geo.faces), np.int64)
         chunk.weight = np.empty(len(geo.faces))
-        chunk.footprints = np.zeros((len(geo.faces) if wg.footprint else 0, 4))
+        # None for point bins: the compiled loops then leave out (and do not compile)
+        # the footprint's spreading
+        chunk.footprints = np.zeros((len(geo.faces), 4)) if wg.footprint else None
     return chunk
 
 

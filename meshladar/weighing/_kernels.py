@@ -170,13 +170,13 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
     number unique to the view), so the BRDF costs O(faces hit), not O(rays). The bin is
     found in O(1) on uniform edges (a guess from the first and last edge, checked against
     the edges exactly as a binary search would place the range), by bisection otherwise.
-    ``footprint`` (n_faces, 4), when not empty, spreads each hit over its footprint's
-    ranges (:func:`_spread_hit`) instead of binning it at a point.
+    ``footprint`` (n_faces, 4) spreads each hit over its footprint's ranges
+    (:func:`_spread_hit`) instead of binning it at a point; None bins at a point (numba
+    then prunes the spreading branches: a run of point bins does not compile them).
     Returns the number of back-face hits."""
     nb = edges.size - 1
     e0 = edges[0]
     inv = nb / (edges[nb] - edges[0])
-    spread = footprint.shape[0] > 0
     back = 0
     for i in range(prim.size):
         p = prim[i]
@@ -189,8 +189,9 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
                 continue
             c = -c
         r = start + r_rel
-        if not spread and (r < edges[0] or r >= edges[nb]):
-            continue
+        if footprint is None:
+            if r < edges[0] or r >= edges[nb]:
+                continue
         if stamp[p] != tag:
             s = math.sqrt(max(1.0 - c * c, 0.0))
             m = face_material[p]
@@ -198,10 +199,10 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
                                        params[m, 3], params[m, 4], params[m, 5] > 0.5,
                                        params[m, 6] > 0.5) * (area * c if power else area)
             stamp[p] = tag
-        if spread:
-            _spread_hit(out, r, r_rel, weight[p], footprint, p, edges, e0, inv)
-        else:
+        if footprint is None:
             out[_bin_of(r, edges, e0, inv)] += weight[p]
+        else:
+            _spread_hit(out, r, r_rel, weight[p], footprint, p, edges, e0, inv)
     return back
 
 
@@ -296,7 +297,6 @@ def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, 
     nb = edges.size - 1
     e0 = edges[0]
     inv = nb / (edges[nb] - edges[0])
-    spread = footprint.shape[0] > 0
     back = 0
     for i in range(prim.size):
         p = prim[i]
@@ -312,18 +312,19 @@ def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, 
         if c <= 0.0:
             continue                                   # the shading normal faces away
         r = start + r_rel
-        if not spread and (r < edges[0] or r >= edges[nb]):
-            continue
+        if footprint is None:
+            if r < edges[0] or r >= edges[nb]:
+                continue
         s = math.sqrt(max(1.0 - c * c, 0.0))
         m = face_material[p]
         f = _sr_monostatic(c, s, params[m, 0], params[m, 1], params[m, 2], params[m, 3],
                            params[m, 4], params[m, 5] > 0.5, params[m, 6] > 0.5)
         f = f * c if power else f
         wt = f * area * (c / max(abs(cg), min_cos_facet))
-        if spread:
-            _spread_hit(out, r, r_rel, wt, footprint, p, edges, e0, inv)
-        else:
+        if footprint is None:
             out[_bin_of(r, edges, e0, inv)] += wt
+        else:
+            _spread_hit(out, r, r_rel, wt, footprint, p, edges, e0, inv)
     return back
 
 

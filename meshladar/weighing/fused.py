@@ -22,7 +22,7 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
     Returns (back-face hits, rays cast).
 
     Monostatic or bistatic with flat normals, or monostatic with smooth ones (``smooth``),
-    binned at a point or over each face's footprint (``bins.footprint`` not empty). The packets are cast with the library's native width,
+    binned at a point (``bins.footprint`` None) or over each face's footprint. The packets are cast with the library's native width,
     coherent; the ray origins are built in float32 as ``ray_grid`` builds them and cast at
     unit size (× ``emb.inverse``), Embree's distances scaled back (× ``emb.scale``).
 
