@@ -153,12 +153,16 @@ def find_peaks(waves, margin, weights, half, separation, max_returns, out_p, out
     for p in range(n):
         cache[:] = np.nan
         c = 0
+        # the window [j − half, j + half] holds a margin ≥ 0 when the last such sample up
+        # to j + half lies at j − half or later: one pass, not one window per sample
+        last = -ns - half - 1
+        for i in range(min(half, ns)):
+            if margin[p, i] >= 0.0:
+                last = i
         for j in range(ns):
-            best = -np.inf
-            for i in range(max(0, j - half), min(ns, j + half + 1)):
-                if margin[p, i] > best:
-                    best = margin[p, i]
-            if best < 0.0:
+            if j + half < ns and margin[p, j + half] >= 0.0:
+                last = j + half
+            if last < j - half:
                 continue
             f = _filtered(waves, p, j, weights, cache)
             if f > 0.0 and f >= _filtered(waves, p, j - 1, weights, cache) and \
