@@ -9,7 +9,7 @@ for one release: they warn with the new name.
 
 from __future__ import annotations
 
-from ._lazy import lazy_attributes
+from ._lazy import lazy_attributes as _lazy_attributes
 
 from ._version import __version__
 
@@ -43,7 +43,7 @@ _DEPRECATED = {
 }
 
 
-__getattr__, __dir__ = lazy_attributes(__name__, globals(), _NAMES, _SUBMODULES,
+__getattr__, __dir__ = _lazy_attributes(__name__, globals(), _NAMES, _SUBMODULES,
                                       _DEPRECATED)
 
 

@@ -28,7 +28,7 @@ normal toward the ladar, ``"ignore"`` lets the face block the ray and return not
 
 from __future__ import annotations
 
-from .._lazy import lazy_attributes
+from .._lazy import lazy_attributes as _lazy_attributes
 
 from .checks import inspect_parts
 from .formats import TriangleMesh, load_parts
@@ -41,7 +41,7 @@ __all__ = ["MeshPart", "load_parts", "TriangleMesh", "part_from_trimesh", "prism
            "inspect_parts",
            "convex_hull"]
 
-#: Names reached lazily (their module imports numba): name -> submodule.
-__getattr__, __dir__ = lazy_attributes(
+# names reached lazily (their module imports numba): name -> submodule
+__getattr__, __dir__ = _lazy_attributes(
     __name__, globals(), {"corner_normals": "normals", "curved_edge_angles": "normals",
                           "CREASE_DEG": "normals"}, ("normals", "_normals_kernel"))

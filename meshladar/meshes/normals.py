@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from ._normals_kernel import accumulate_corner_normals
-from .part import MeshPart, _point_index
+from .part import MeshPart, _edges, _point_index
 
 __all__ = ["corner_normals", "curved_edge_angles", "CREASE_DEG"]
 
@@ -86,11 +86,7 @@ def curved_edge_angles(part: MeshPart, *, crease_deg=CREASE_DEG):
     fn, _ = part.face_normals_areas()
     point, count = _point_index(part.vertices)
     f = point[part.faces]
-    a = np.concatenate([f[:, 0], f[:, 1], f[:, 2]])
-    b = np.concatenate([f[:, 1], f[:, 2], f[:, 0]])
-    # an edge as one number, its lower position's index first: sorted by it (stably), an
-    # edge's faces are neighbours
-    key = np.minimum(a, b) * count + np.maximum(a, b)
+    key = _edges(f, count)[3]                                   # edges by position
     order = np.argsort(key, kind="stable")
     key, face = key[order], np.tile(np.arange(len(f)), 3)[order]
     pair = np.flatnonzero(key[1:] == key[:-1])                       # an edge's two faces

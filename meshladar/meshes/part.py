@@ -183,3 +183,15 @@ def _point_index(vertices):
     out = np.empty(len(v), dtype=np.int64)
     out[order] = np.cumsum(new) - 1
     return out, int(new.sum())
+
+
+def _edges(faces, n):
+    """Every face's three directed edges a → b (face i's at rows i, m + i and 2m + i of the
+    m faces) with (a, b, forward, key): ``forward`` is a < b and ``key`` the undirected
+    edge as one integer, the lower of its ``n`` vertex indices × n + the higher, equal for
+    an edge's two directions (sorted stably by it, an edge's faces are neighbours)."""
+    f = np.asarray(faces, dtype=np.int64)
+    a = np.concatenate([f[:, 0], f[:, 1], f[:, 2]])
+    b = np.concatenate([f[:, 1], f[:, 2], f[:, 0]])
+    forward = a < b
+    return a, b, forward, np.where(forward, a, b) * n + np.where(forward, b, a)

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .checks import components
-from .part import MeshPart
+from .part import MeshPart, _edges
 
 __all__ = ["CONVEX_RTOL", "Visibility", "part_plane", "part_sees_itself", "scene_visibility"]
 
@@ -110,16 +110,13 @@ def part_sees_itself(part: MeshPart, bodies=None) -> bool:
     v = part.vertices
     tol = CONVEX_RTOL * float(np.linalg.norm(np.ptp(v, axis=0)))
     normals, _ = part.face_normals_areas()
-    a = np.concatenate([f[:, 0], f[:, 1], f[:, 2]])
-    b = np.concatenate([f[:, 1], f[:, 2], f[:, 0]])
+    a, b, forward, key = _edges(f, len(v))
     far = np.concatenate([f[:, 2], f[:, 0], f[:, 1]])         # each edge's opposite vertex
     face = np.tile(np.arange(len(f)), 3)
     if bodies is None:
         bodies = np.unique(components(len(v), a, b)[np.unique(f)]).size
     if bodies != 1:
         return True                                           # several bodies
-    forward = a < b
-    key = np.where(forward, a, b) * len(v) + np.where(forward, b, a)
     order = np.argsort(key, kind="stable")
     k = key[order]
     if k.size % 2 or np.any(k[0::2] != k[1::2]) or np.any(k[1:-1:2] == k[2::2]):

@@ -17,7 +17,7 @@ normals (:data:`~meshladar.scan.points.CONVENTIONS`, recorded in every result's 
 
 from __future__ import annotations
 
-from .._lazy import lazy_attributes
+from .._lazy import lazy_attributes as _lazy_attributes
 
 __all__ = ["scan", "PATTERNS", "ScanPattern", "raster", "rotating", "oscillating", "risley", "flash",
            "Platform", "ScanBeam", "ScanSensor", "Detector", "PointCloud", "POINT_DTYPE",
@@ -41,4 +41,4 @@ _SUBMODULES = ("patterns", "platforms", "footprint", "instrument", "cast", "echo
                "run", "files", "geiger", "moving")
 
 
-__getattr__, __dir__ = lazy_attributes(__name__, globals(), _HOMES, _SUBMODULES)
+__getattr__, __dir__ = _lazy_attributes(__name__, globals(), _HOMES, _SUBMODULES)

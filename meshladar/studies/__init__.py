@@ -8,7 +8,7 @@ The faceting study's names are re-exported here, as ``meshladar.studies`` was th
 
 from __future__ import annotations
 
-from .._lazy import lazy_attributes
+from .._lazy import lazy_attributes as _lazy_attributes
 
 from .faceting import (COATINGS, PHANTOMS, SETTINGS,
                        convergence_orders, faceting_study, report, save_study, study_scene)
@@ -21,4 +21,4 @@ _SUBMODULES = ("bench", "bench_gpu", "bench_mesh", "faceting", "paper", "peer",
                "reconstruction", "timing")
 
 
-__getattr__, __dir__ = lazy_attributes(__name__, globals(), submodules=_SUBMODULES)
+__getattr__, __dir__ = _lazy_attributes(__name__, globals(), submodules=_SUBMODULES)

@@ -231,17 +231,12 @@ def test_the_ridge_the_guide_shows():
     0.01805·small.epsilon + small.e = 0.016633 ± 8.2e-05, whose truth is 0.016565."""
     scene = SCENES["pair"]
     exact = ml.simulate(scene, LAD, model="analytic").values
-    k = 1e4 / exact.max()
-    y = np.random.default_rng(0).poisson(exact * k) / k
-    measured = ml.Sinogram(y, angles_deg=LAD.angles_deg, bin_edges=LAD.bin_edges,
-                           info={"radiometry": "paper"})
-    fit = fit_coatings(scene, measured, noise="poisson", photons_per_unit=k, samples=2048)
+    fit, true = _seeded_fit(scene, coating_kernel(scene, LAD, samples=2048), exact,
+                            1e4 / exact.max(), 0)
     (text, value, sigma), = fit.combinations
     assert text == "0.01805·small.epsilon + small.e"
     assert round(value, 6) == 0.016633 and f"{sigma:.2g}" == "8.2e-05"
     c, = fit.info["combination_coefficients"]
-    true = np.array([getattr(scene.shapes[fit.names.index(n) // 4].material,
-                             n.split(".")[1]) for n in fit.names])
     assert round(float(c @ true), 6) == 0.016565
 
 
