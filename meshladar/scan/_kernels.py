@@ -120,21 +120,38 @@ def assign_truth(first, count, ret_time, tau, pe, distance, points, face, shift,
 
 
 @numba.njit(cache=True, nogil=True)
-def _filtered(waves, p, j, weights, cache):               # pragma: no cover - compiled
-    """The matched-filtered sample j of pulse p (zeros beyond the record), cached."""
+def _filter_span(waves, p, lo, hi, weights, filt):       # pragma: no cover - compiled
+    """filt[j + 1] = the matched-filtered sample j of pulse p (zeros beyond the record)
+    for lo ≤ j ≤ hi: taps outer, samples inner, each sample's sum in tap order."""
     ns = waves.shape[1]
-    if j < 0 or j >= ns:
-        return -np.inf
-    if not np.isnan(cache[j]):
-        return cache[j]
     r = (weights.shape[0] - 1) // 2
-    acc = 0.0
+    row = waves[p]
+    for j in range(lo, hi + 1):
+        filt[j + 1] = 0.0
     for k in range(weights.shape[0]):
-        i = j + k - r
-        if 0 <= i < ns:
-            acc += weights[k] * waves[p, i]
-    cache[j] = acc
-    return acc
+        off = k - r
+        w = weights[k]
+        a = max(lo, -off)
+        b = min(hi, ns - 1 - off) + 1
+        src = row[a + off:b + off]                # 1-D slices: the loop vectorises
+        dst = filt[a + 1:b + 1]
+        for j in range(b - a):
+            dst[j] += w * src[j]
+
+
+@numba.njit(cache=True, nogil=True)
+def _active(margin, p, half, act):                        # pragma: no cover - compiled
+    """act[j]: the window [j − half, j + half] of pulse p holds a margin ≥ 0 (one pass:
+    the last such sample up to j + half lies at j − half or later)."""
+    ns = margin.shape[1]
+    last = -ns - half - 1
+    for i in range(min(half, ns)):
+        if margin[p, i] >= 0.0:
+            last = i
+    for j in range(ns):
+        if j + half < ns and margin[p, j + half] >= 0.0:
+            last = j + half
+        act[j] = last >= j - half
 
 
 @numba.njit(cache=True, nogil=True)
@@ -143,33 +160,34 @@ def find_peaks(waves, margin, weights, half, separation, max_returns, out_p, out
     """Per pulse, the maxima of the matched-filtered waveform (``weights``, zero beyond the
     record) where the largest ``margin`` within ``half`` samples is ≥ 0, farther than
     ``separation`` samples from a stronger one, the strongest ``max_returns`` first; their
-    pulse, sample and filtered values at j − 1, j, j + 1. Returns how many."""
+    pulse, sample and filtered values at j − 1, j, j + 1. Returns how many. The filter
+    runs over each stretch of such samples and one beyond, not the whole record."""
     n, ns = waves.shape
-    cache = np.empty(ns)
+    filt = np.empty(ns + 2)                  # filt[j + 1]: sample j; −inf beyond the ends
+    filt[0] = filt[ns + 1] = -np.inf
+    act = np.empty(ns, np.bool_)
     amp = np.empty(ns)
     at = np.empty(ns, np.int64)
     kept = np.empty(max_returns, np.int64)
     count = 0
     for p in range(n):
-        cache[:] = np.nan
+        _active(margin, p, half, act)
         c = 0
-        # the window [j − half, j + half] holds a margin ≥ 0 when the last such sample up
-        # to j + half lies at j − half or later: one pass, not one window per sample
-        last = -ns - half - 1
-        for i in range(min(half, ns)):
-            if margin[p, i] >= 0.0:
-                last = i
-        for j in range(ns):
-            if j + half < ns and margin[p, j + half] >= 0.0:
-                last = j + half
-            if last < j - half:
+        j = 0
+        while j < ns:
+            if not act[j]:
+                j += 1
                 continue
-            f = _filtered(waves, p, j, weights, cache)
-            if f > 0.0 and f >= _filtered(waves, p, j - 1, weights, cache) and \
-                    f > _filtered(waves, p, j + 1, weights, cache):
-                amp[c] = f
-                at[c] = j
-                c += 1
+            a = j
+            while j < ns and act[j]:
+                j += 1
+            _filter_span(waves, p, max(a - 1, 0), min(j, ns - 1), weights, filt)
+            for i in range(a, j):
+                f = filt[i + 1]
+                if f > 0.0 and f >= filt[i] and f > filt[i + 2]:
+                    amp[c] = f
+                    at[c] = i
+                    c += 1
         if c == 0:
             continue
         order = np.argsort(-amp[:c], kind="mergesort")
@@ -186,12 +204,12 @@ def find_peaks(waves, margin, weights, half, separation, max_returns, out_p, out
                 continue
             kept[nk] = at[o]
             nk += 1
-            j = at[o]
+            i = at[o]
             out_p[count] = p
-            out_j[count] = j
-            out_f[count, 0] = _filtered(waves, p, j - 1, weights, cache)
+            out_j[count] = i
+            out_f[count, 0] = filt[i]
             out_f[count, 1] = amp[o]
-            out_f[count, 2] = _filtered(waves, p, j + 1, weights, cache)
+            out_f[count, 2] = filt[i + 2]
             count += 1
     return count
 
