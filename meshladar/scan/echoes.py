@@ -20,7 +20,7 @@ import numba
 import numpy as np
 
 from .._pulses import GaussianPulse
-from ._kernels import accumulate_table, centroids, find_peaks, fit_gaussians
+from ._kernels import accumulate_table, centroids, erf, find_peaks, fit_gaussians, sort_small
 from .instrument import FWHM_PER_SIGMA
 
 __all__ = ["SUPPORT", "waveforms", "echo_shape", "find_returns", "cfar_background", "Returns"]
@@ -46,8 +46,10 @@ def _accumulate(tau, pe, start, dt, sigma, merge, out):   # pragma: no cover - c
     s = sigma / dt
     r2 = 1.0 / (s * math.sqrt(2.0))
     order = np.empty(m, np.int64)
+    edges = np.empty(ns + 1)
     for p in range(n):
-        order[:] = np.argsort(tau[p])
+        sort_small(tau[p], order)
+        row = out[p]
         k = 0
         while k < m:
             # merge the sub-rays arriving within `merge` of the group's first, at their
@@ -68,11 +70,11 @@ def _accumulate(tau, pe, start, dt, sigma, merge, out):   # pragma: no cover - c
             c = (et / e - start[p]) / dt
             lo = max(0, int(math.floor(c - SUPPORT * s)))
             hi = min(ns, int(math.ceil(c + SUPPORT * s)) + 1)
-            prev = math.erf((lo - c) * r2)
-            for j in range(lo, hi):
-                nxt = math.erf((j + 1 - c) * r2)
-                out[p, j] += 0.5 * e * (nxt - prev)
-                prev = nxt
+            for j in range(hi - lo + 1):             # the samples' edges, then their parts
+                edges[j] = erf((lo + j - c) * r2)
+            half = 0.5 * e
+            for j in range(hi - lo):
+                row[lo + j] += half * (edges[j + 1] - edges[j])
 
 
 def echo_shape(pulse, response, dt):
