@@ -278,17 +278,19 @@ def _fused_view(job, scene, view, bins, receiver, smooth):
     grid = grid_plan(p.geo, view.w, p.mode, p.spacing, p.z0_shifted, view.rng)
     if job.row_jobs > 1:
         return _rows_on_threads(scene, grid, view.w, p.spacing, bins, job.row_jobs,
-                                receiver, smooth)[::-1]
-    back, n = cast_bin_grid(scene, grid, view.w, p.spacing, bins, receiver, smooth)
+                                (receiver, smooth, p.coherent))[::-1]
+    back, n = cast_bin_grid(scene, grid, view.w, p.spacing, bins, receiver, smooth,
+                            p.coherent)
     return n, back
 
 
-def _rows_on_threads(scene, grid, w, spacing, bins, row_jobs, receiver=None, smooth=None):
+def _rows_on_threads(scene, grid, w, spacing, bins, row_jobs, how=(None, None, True)):
     """One big view's grid split into ``row_jobs`` bands of rows, cast on as many threads
     (the fused loop releases the GIL), each band with its own bins and a copy of the weight
     cache (weights already evaluated for the view stay valid); the
     bands' bins are added in order, so a given ``row_jobs`` always gives the same numbers
-    (and the one-thread numbers to rounding). Returns (back-face hits, rays cast)."""
+    (and the one-thread numbers to rounding). ``how``: :func:`cast_bin_grid`'s
+    (receiver, smooth, coherent). Returns (back-face hits, rays cast)."""
     cuts = np.linspace(0, grid.s.size, row_jobs + 1).astype(int)
     parts = []
     for a0, a1 in zip(cuts[:-1], cuts[1:]):
@@ -299,8 +301,8 @@ def _rows_on_threads(scene, grid, w, spacing, bins, row_jobs, receiver=None, smo
                                               stamp=bins.stamp.copy(),
                                               weight=bins.weight.copy())))
     with ThreadPoolExecutor(len(parts)) as ex:
-        done = list(ex.map(lambda p: cast_bin_grid(scene, p[0], w, spacing, p[1], receiver,
-                                                   smooth), parts))
+        done = list(ex.map(lambda p: cast_bin_grid(scene, p[0], w, spacing, p[1], *how),
+                           parts))
     for _, band in parts:
         bins.out[...] += band.out
     return sum(b for b, _ in done), sum(n for _, n in done)

@@ -15,8 +15,14 @@ from ..precision import FAR_RATIO as _FAR_RATIO
 from ..precision import SCENE_RADIUS_RANGE
 from ..meshes import corner_normals
 from ..scene import Scene
+from ._support import ClusteredPoints
 from .backends import BACKENDS, resolve_backend
 from .backends import backend as get_backend
+from .grid import dot
+
+#: From this many support points on, a view's extents are found over clusters of them
+#: (:mod:`._support`): 41k hull points of a sphere take 10 µs a view so, 70 µs projected.
+CLUSTER_MIN_POINTS = 4096
 
 
 class Geometry:
@@ -41,6 +47,11 @@ class Geometry:
         self.faces32 = np.ascontiguousarray(self.faces, dtype=np.int32)
         # the parts' own face normals (computed once per part, whatever the calls)
         self.face_normals = np.concatenate([p.face_normals_areas()[0] for p in parts])
+        # the area of the face a ray hits, on average over rays spread evenly over the
+        # surface (Σa² / Σa): how many rays of a grid share a face
+        areas = np.concatenate([p.face_normals_areas()[1] for p in parts])
+        total = float(areas.sum())
+        self.hit_face_area = float(areas @ areas) / total if total > 0 else 0.0
         # each face's plane n·p = d in shifted coordinates (float64), for exact hit distances
         self.plane_d = np.einsum("ij,ij->i", self.face_normals, shifted[self.faces[:, 0]])
         # every extreme of a grid's extent is attained among these points (shifted): every
@@ -65,6 +76,18 @@ class Geometry:
         points = scene.support_points(n_views)
         if len(points) < len(self.support):
             self.support = points - self.center
+            self._clusters = None
+
+    def extent(self, u):
+        """(least, greatest) p·u over the support points (shifted), exactly: over clusters
+        of them (:mod:`._support`, built on first use) from :data:`CLUSTER_MIN_POINTS`
+        points on, else over every point."""
+        if len(self.support) < CLUSTER_MIN_POINTS:
+            x = dot(self.support, u)
+            return float(x.min()), float(x.max())
+        if getattr(self, "_clusters", None) is None:
+            self._clusters = ClusteredPoints(self.support)
+        return self._clusters.extent(u)
 
 
 def geometry(scene: Scene, normals: str) -> Geometry:

@@ -99,15 +99,15 @@ def grid_plan(geo, w, mode, spacing, z0_shifted, rng):
     order of float32 operations."""
     u, v = frame(w)
     L = (1.0 + _ORIGIN_MARGIN) * geo.radius + spacing
-    su = geo.support @ u
-    s_lo, s_hi = su.min() - spacing, su.max() + spacing
+    s_lo, s_hi = geo.extent(u)
+    s_lo, s_hi = s_lo - spacing, s_hi + spacing
     ns = max(1, int(math.ceil((s_hi - s_lo) / spacing)))
     s = s_lo + (np.arange(ns) + 0.5) * spacing
     if mode == "slice":
         t = np.array([z0_shifted])
     else:
-        tv = geo.support @ v
-        t_lo, t_hi = tv.min() - spacing, tv.max() + spacing
+        t_lo, t_hi = geo.extent(v)
+        t_lo, t_hi = t_lo - spacing, t_hi + spacing
         nt = max(1, int(math.ceil((t_hi - t_lo) / spacing)))
         t = t_lo + (np.arange(nt) + 0.5) * spacing
     offsets = None

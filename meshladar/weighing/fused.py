@@ -7,13 +7,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..raytrace.embree4_ctypes import RTC_RAY_QUERY_FLAG_COHERENT
+from ..raytrace.embree4_ctypes import RTC_RAY_QUERY_FLAG_COHERENT, RTC_RAY_QUERY_FLAG_INCOHERENT
 from ._fused_kernels import cast_bin_bistatic, cast_bin_flat, cast_bin_smooth
 
 __all__ = ["cast_bin_grid"]
 
 
-def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=None):
+def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=None,
+                  coherent=True):
     """Cast, weigh and bin one view of the packet scene ``emb``
     (:class:`meshladar.raytrace.embree.EmbreeScene` whose backend is fused): ``plan`` is
     :func:`meshladar.raytrace.grid.grid_plan`'s :class:`~meshladar.raytrace.grid.GridPlan`,
@@ -58,6 +59,9 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
         Smooth normals (monostatic): each face's corner normals and the least |cos θ| of
         the facet in the area factor (:func:`meshladar.weighing._kernels.bin_smooth_hits`);
         ``bins.stamp`` and ``bins.weight`` are then unused. None (default): flat normals.
+    coherent : bool
+        Embree's coherent flag for the packets (default True); False on grids sparser
+        than their faces (:attr:`meshladar.raytrace.plan.TracePlan.coherent`).
 
     Returns
     -------
@@ -73,7 +77,8 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
     offsets = plan.offsets or (np.empty(0, np.float32),) * 4
     grid = (s.astype(np.float32), t.astype(np.float32), offsets, np.float32(spacing),
             u.astype(np.float32), v.astype(np.float32), (L * w).astype(np.float32))
-    head = (lib.intersect[lib.width], sc.live(), lib.width, RTC_RAY_QUERY_FLAG_COHERENT,
+    flags = RTC_RAY_QUERY_FLAG_COHERENT if coherent else RTC_RAY_QUERY_FLAG_INCOHERENT
+    head = (lib.intersect[lib.width], sc.live(), lib.width, flags,
             grid, (-w).astype(np.float32)[None, :], np.float32(emb.inverse),
             float(emb.scale))
     b = bins

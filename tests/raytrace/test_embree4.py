@@ -212,6 +212,44 @@ def test_the_fused_loop_gives_the_unfused_numbers_bit_for_bit(sampling, normals,
         np.testing.assert_array_equal(fused.values, plain.values)
 
 
+def test_grids_sparser_than_their_faces_are_cast_incoherent_with_the_same_numbers(monkeypatch):
+    """A grid with fewer rays than a face's area holds (Σa²/Σa over δ²: 0.3 here) is cast
+    without Embree's coherent flag, a dense one (12) with it; either flag gives the same
+    hits, so the same sinogram."""
+    from meshladar.forward import job
+    from meshladar.raytrace import plan as plan_module
+    from meshladar.raytrace.plan import plan_trace
+
+    flags, cast = [], job.cast_bin_grid
+    def spy(*args):
+        flags.append(args[-1])
+        return cast(*args)
+
+    scene = _sphere(5)
+    ladar = ml.Ladar.covering(scene, n_bins=32, view_vectors=ml.meshes.fibonacci_sphere(7))
+    area = scene.parts[0].face_normals_areas()[1]
+    typical = float(area @ area / area.sum())
+    for per_face, coherent in ((0.3, False), (12.0, True)):
+        spacing = (typical / per_face) ** 0.5
+        plan = plan_trace(scene, ladar, ray_spacing=spacing, backend="packets")
+        assert plan.geo.hit_face_area == pytest.approx(typical, rel=1e-12)
+        assert plan.coherent is coherent
+        monkeypatch.setattr(job, "cast_bin_grid", spy)
+        flags.clear()
+        chosen = ml.simulate(scene, ladar, model="mesh", ray_spacing=spacing,
+                             backend="packets")
+        assert flags == [coherent] * 7                              # what the loop got
+        monkeypatch.setattr(plan_module, "COHERENT_RAYS_PER_FACE",
+                            np.inf if coherent else 0.0)            # the other flag
+        other = ml.simulate(scene, ladar, model="mesh", ray_spacing=spacing,
+                            backend="packets")
+        assert flags[7:] == [not coherent] * 7
+        monkeypatch.undo()
+        assert chosen.info["rays"] == other.info["rays"] > 0
+        np.testing.assert_allclose(other.values, chosen.values, rtol=SAME_HITS_RTOL,
+                                   atol=SAME_HITS_RTOL * np.abs(chosen.values).max())
+
+
 @pytest.mark.parametrize("sampling", ["regular", "stratified"])
 def test_one_big_view_splits_its_rows_over_threads(sampling):
     # a single view is one chunk: its rows go to threads instead, each band with its own

@@ -48,3 +48,30 @@ def test_stratified_offsets_are_one_per_cell_from_row_and_column_sequences():
     np.testing.assert_allclose(np.mod(dv - eta[None, :] + 0.5, 1.0),
                                np.broadcast_to(np.mod(kv + 0.5, 1.0)[:, None], dv.shape),
                                atol=1e-6)
+
+
+def test_a_views_extent_over_clusters_is_every_points_extent():
+    """The least and greatest p·u found over clusters of the points equal numpy's over
+    every point (the same products and sums: equal, not close), for a sphere's hull, an
+    anisotropic cloud far from the origin, a flat disk, a line, repeated points and a box,
+    along unit and non-unit directions and the axes."""
+    import trimesh
+
+    from meshladar.meshes import fibonacci_sphere
+    from meshladar.raytrace._support import ClusteredPoints
+    from meshladar.raytrace.grid import dot
+
+    rng = np.random.default_rng(5)
+    sets = [trimesh.creation.icosphere(5).vertices,
+            rng.normal(size=(30_000, 3)) * [5.0, 1.0, 0.1] + [100.0, -3.0, 7.0],
+            np.c_[rng.uniform(-1, 1, (8000, 2)), np.zeros(8000)],
+            np.c_[np.linspace(0.0, 1.0, 5000), np.zeros(5000), np.zeros(5000)],
+            np.repeat(rng.normal(size=(50, 3)), 100, axis=0),
+            trimesh.creation.box((3.0, 1.0, 0.2)).vertices]
+    dirs = np.vstack([fibonacci_sphere(400), np.eye(3), -np.eye(3),
+                      rng.normal(size=(100, 3)) * 7.0])
+    for points in sets:
+        clusters = ClusteredPoints(points)
+        for u in dirs:
+            x = dot(np.asarray(points, np.float64), u)
+            assert clusters.extent(u) == (x.min(), x.max())
