@@ -20,9 +20,12 @@ from .backends import BACKENDS, resolve_backend
 from .backends import backend as get_backend
 from .grid import dot
 
-#: From this many support points on, a view's extents are found over clusters of them
-#: (:mod:`._support`): 41k hull points of a sphere take 10 µs a view so, 70 µs projected.
+#: From this many support points and views on, a view's extents are found over clusters
+#: of the points (:mod:`._support`): an extent over a sphere's 41k hull points takes 10 µs
+#: so and 100 µs projected, but the clusters cost as much as some 55 extents to build (5 ms;
+#: 0.1 s for 655k points), about 30 views' planning.
 CLUSTER_MIN_POINTS = 4096
+CLUSTER_MIN_VIEWS = 32
 
 
 class Geometry:
@@ -74,15 +77,17 @@ class Geometry:
         :meth:`~meshladar.scene.Scene.support_points` for that many views (its hull's
         vertices when known or when the views are many, else every vertex)."""
         points = scene.support_points(n_views)
+        self._views = max(getattr(self, "_views", 0), n_views)
         if len(points) < len(self.support):
             self.support = points - self.center
             self._clusters = None
 
     def extent(self, u):
         """(least, greatest) p·u over the support points (shifted), exactly: over clusters
-        of them (:mod:`._support`, built on first use) from :data:`CLUSTER_MIN_POINTS`
-        points on, else over every point."""
-        if len(self.support) < CLUSTER_MIN_POINTS:
+        of them (:mod:`._support`, built on first use) for runs of
+        :data:`CLUSTER_MIN_VIEWS` views or more over :data:`CLUSTER_MIN_POINTS` points or
+        more, else over every point (the same products and sums: the same bits)."""
+        if len(self.support) < CLUSTER_MIN_POINTS or self._views < CLUSTER_MIN_VIEWS:
             x = dot(self.support, u)
             return float(x.min()), float(x.max())
         if getattr(self, "_clusters", None) is None:

@@ -75,3 +75,24 @@ def test_a_views_extent_over_clusters_is_every_points_extent():
         for u in dirs:
             x = dot(np.asarray(points, np.float64), u)
             assert clusters.extent(u) == (x.min(), x.max())
+
+
+def test_a_geometry_takes_its_extents_over_clusters_only_for_many_views():
+    """A run of few views projects every support point; from CLUSTER_MIN_VIEWS views the
+    geometry builds the clusters once and keeps to them: the same extents either way."""
+    import meshladar as ml
+    from meshladar.raytrace.embree import CLUSTER_MIN_VIEWS, Geometry
+    from meshladar.raytrace.grid import dot
+
+    scene = ml.Scene.from_parts([ml.meshes.sphere((3.0, -1.0, 2.0), 0.5, 0, subdivisions=5)],
+                                [ml.materials.DARK_GRAY])
+    geo = Geometry(scene, "flat")
+    u = np.array([0.48, -0.6, 0.64])
+    x = dot(geo.support, u)
+    geo.for_views(scene, 1)
+    assert geo.extent(u) == (x.min(), x.max())
+    assert getattr(geo, "_clusters", None) is None
+    geo.for_views(scene, CLUSTER_MIN_VIEWS)
+    x = dot(geo.support, u)
+    assert geo.extent(u) == (x.min(), x.max())
+    assert geo._clusters is not None
