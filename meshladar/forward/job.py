@@ -37,7 +37,7 @@ from ..raytrace.views import range_offset
 from ..raytrace.views import trace_view
 from ..weighing import bin_one as _bin_one
 from ..brdf import material_table
-from ..weighing.faces import (check_edge_on_receiver, face_bistatic_weights, face_footprints,
+from ..weighing.faces import (check_edge_on_receiver, face_bistatic_weights, footprint_args,
                               face_weights)
 from ..weighing.fused import cast_bin_grid
 from ..weighing.record import Weighing
@@ -98,14 +98,15 @@ class MeshJob:
 @dataclass(eq=False)
 class Chunk:
     """A chunk's output and working state: bins (or hits), and the compiled loops' per-face
-    weight cache (``stamp`` tags the faces whose ``weight`` is the current view's)."""
+    weight cache (``stamp`` tags the faces whose ``weight`` is the current view's) and
+    footprint rows and their stamps ((n_faces, 4), (n_faces,))."""
 
     values: np.ndarray | None
     hits: list
     params: np.ndarray | None = None
     stamp: np.ndarray | None = None
     weight: np.ndarray | None = None
-    footprints: np.ndarray | None = None
+    footprints: tuple | None = None
 
 
 class FlatBins(NamedTuple):
@@ -125,7 +126,7 @@ class FlatBins(NamedTuple):
     stamp: np.ndarray
     weight: np.ndarray
     tag: int
-    footprint: np.ndarray | None
+    footprint: tuple | None
 
 
 def sensor_offset(geo, w, sensor):
@@ -205,10 +206,15 @@ def _sensor_stage(job, scene, view, chunk):
 
 def _bins(job, view, chunk, start):
     p, wg = job.plan, job.weighing
+    # a dense grid hits most faces: every row in one pass over the mesh beats making each
+    # at its face's first hit (1.31M faces: 5.0 against 4.6 Mrays/s); a sparse one makes
+    # only the rows of the faces it hits
+    fp = None if chunk.footprints is None else footprint_args(
+        p.geo, view.w, p.mode, p.spacing, chunk.footprints,
+        -1 if p.coherent else view.slot + 1)
     return FlatBins(p.geo.plane_d, p.geo.face_normals, p.geo.material, chunk.params, view.w,
                     start, wg.edges[0], p.area, wg.power, p.ignore_back,
-                    chunk.values[view.slot], chunk.stamp, chunk.weight, view.slot + 1,
-                    chunk.footprints)
+                    chunk.values[view.slot], chunk.stamp, chunk.weight, view.slot + 1, fp)
 
 
 def _cast(job, scene, view):
@@ -223,8 +229,6 @@ def _cast(job, scene, view):
 def _smooth_stage(job, scene, view, chunk):
     p, wg = job.plan, job.weighing
     start = range_offset(p.geo.center, view.w, None)
-    if wg.footprint:
-        face_footprints(p.geo, view.w, p.mode, p.spacing, chunk.footprints)
     if job.fused:
         # packets: grid, cast, weigh and bin in one loop, the barycentrics kept per band
         return _fused_view(job, scene, view, _bins(job, view, chunk, start), None,
@@ -234,7 +238,7 @@ def _smooth_stage(job, scene, view, chunk):
         res["primID"], res["tfar"], res["u"], res["v"], o, p.geo.plane_d,
         p.geo.face_normals, p.geo.corner, p.geo.material, chunk.params, view.w, start,
         wg.edges[0], p.area, wg.power, p.ignore_back, MIN_COS_FACET,
-        chunk.values[view.slot], chunk.footprints)
+        chunk.values[view.slot], _bins(job, view, chunk, start).footprint)
     return len(o), back
 
 
@@ -243,8 +247,6 @@ def _flat_stage(job, scene, view, chunk):
     view before the cast where the compiled kernel cannot evaluate it at a hit."""
     p, wg = job.plan, job.weighing
     start = range_offset(p.geo.center, view.w, view.w_r)
-    if wg.footprint:
-        face_footprints(p.geo, view.w, p.mode, p.spacing, chunk.footprints)
     receiver = None
     if view.w_r is not None:
         if not wg.compiled_bistatic:                 # F in numpy, every face first
@@ -297,9 +299,12 @@ def _rows_on_threads(scene, grid, w, spacing, bins, row_jobs, how=(None, None, T
         if a1 > a0:
             band = grid._replace(s=grid.s[a0:a1], offsets=None if grid.offsets is None else
                                  _rows_of(grid.offsets, a0, a1))
+            fp = bins.footprint                # each band makes its own faces' rows
             parts.append((band, bins._replace(out=np.zeros_like(bins.out),
                                               stamp=bins.stamp.copy(),
-                                              weight=bins.weight.copy())))
+                                              weight=bins.weight.copy(),
+                                              footprint=fp and (fp[0].copy(), fp[1].copy())
+                                              + fp[2:])))
     with ThreadPoolExecutor(len(parts)) as ex:
         done = list(ex.map(lambda p: cast_bin_grid(scene, p[0], w, spacing, p[1], *how),
                            parts))
@@ -391,7 +396,8 @@ def _chunk(job, n_views):
         chunk.weight = np.empty(len(geo.faces))
         # None for point bins: the compiled loops then leave out (and do not compile)
         # the footprint's spreading
-        chunk.footprints = np.zeros((len(geo.faces), 4)) if wg.footprint else None
+        chunk.footprints = (np.zeros((len(geo.faces), 4)), np.zeros(len(geo.faces), np.int64)) \
+            if wg.footprint else None
     return chunk
 
 

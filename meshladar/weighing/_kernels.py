@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 from ..brdf._sandford_robertson_kernel import sr_bistatic as _sr_bistatic
@@ -16,28 +17,57 @@ from ..brdf._sandford_robertson_kernel import sr_monostatic as _sr_monostatic
 from ..precision import BOX_RATIO as _BOX_RATIO
 from ..precision import TINY as _TINY
 
+#: The footprint rows and stamps of a run of point bins (none).
+_NO_ROWS = np.empty((0, 4))
+_NO_STAMPS = np.empty(0, np.int64)
+
 __all__ = ["bin_flat_hits", "bin_bistatic_hits", "bin_smooth_hits", "bin_sensor_hits",
-           "face_hit", "footprint_rows", "edge_on_receiver"]
+           "face_hit", "footprint_row", "footprint_rows", "edge_on_receiver"]
 
 
 @njit(cache=True, nogil=True)
-def footprint_rows(face_normals, vertices, faces, w, u, v, spacing, three_d, ranges, out):
-    """Every face's footprint row for view w into ``out`` (n_faces, 4), in one pass and in
-    the float64 operations of :func:`meshladar.weighing.faces.face_footprints`'s numpy
-    expressions (the same bits): |n·u| / c · ½ · δ, |n·v| / c · ½ · δ (0 in slice mode)
-    with c = max(|n·w|, TINY), then the least and greatest of the corners' ranges −p·w
-    (``ranges``: a scratch array of one value per vertex)."""
+def footprint_row(fp, p, face_normals):                   # pragma: no cover - compiled
+    """Face p's footprint row for the view, made at its first hit (called once per face:
+    the loops check ``stamps[p]`` themselves): ``fp`` = (rows (n_faces, 4), stamps
+    (n_faces,), shifted vertices, faces, w, u, v (3-tuples), spacing δ, 3-D, tag); a row is
+    the view's where its stamp is ``tag`` (every row is where ``tag`` < 0:
+    :func:`footprint_rows` made them all)."""
+    rows, stamps, vertices, faces, w, u, v, spacing, three_d, tag = fp
+    r = np.empty(3)
+    for k in range(3):
+        q = faces[p, k]
+        r[k] = -(vertices[q, 0] * w[0] + vertices[q, 1] * w[1] + vertices[q, 2] * w[2])
+    rows[p, 0], rows[p, 1], rows[p, 2], rows[p, 3] = _row(
+        face_normals[p, 0], face_normals[p, 1], face_normals[p, 2], w, u, v, spacing,
+        three_d, r[0], r[1], r[2])
+    stamps[p] = tag
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _row(n0, n1, n2, w, u, v, spacing, three_d, r0, r1, r2):   # pragma: no cover
+    """A footprint row from scalars (no array: inlined in loops without reference
+    counting): |n·u| / c · ½ · δ, |n·v| / c · ½ · δ (0 in slice mode) with
+    c = max(|n·w|, TINY), then the least and greatest of the corners' ranges, in the
+    float64 operations of :func:`meshladar.weighing.faces.face_footprints`."""
+    cg = max(abs(n0 * w[0] + n1 * w[1] + n2 * w[2]), _TINY)
+    a = abs(n0 * u[0] + n1 * u[1] + n2 * u[2]) / cg * 0.5 * spacing
+    b = abs(n0 * v[0] + n1 * v[1] + n2 * v[2]) / cg * 0.5 * spacing if three_d else 0.0
+    return a, b, min(min(r0, r1), r2), max(max(r0, r1), r2)
+
+
+@njit(cache=True, nogil=True)
+def footprint_rows(fp, face_normals):                     # pragma: no cover - compiled
+    """Every face's footprint row (:func:`footprint_row`, the same bits) for the view of
+    ``fp``, in one pass over the vertices (their ranges) and one over the faces: what a
+    dense grid, which hits most faces, does before its cast (then passed with tag −1)."""
+    rows, _, vertices, faces, w, u, v, spacing, three_d, _ = fp
+    ranges = np.empty(vertices.shape[0])
     for k in range(vertices.shape[0]):
         ranges[k] = -(vertices[k, 0] * w[0] + vertices[k, 1] * w[1] + vertices[k, 2] * w[2])
     for p in range(faces.shape[0]):
-        n0, n1, n2 = face_normals[p, 0], face_normals[p, 1], face_normals[p, 2]
-        cg = max(abs(n0 * w[0] + n1 * w[1] + n2 * w[2]), _TINY)
-        out[p, 0] = abs(n0 * u[0] + n1 * u[1] + n2 * u[2]) / cg * 0.5 * spacing
-        out[p, 1] = abs(n0 * v[0] + n1 * v[1] + n2 * v[2]) / cg * 0.5 * spacing if three_d \
-            else 0.0
-        r0, r1, r2 = ranges[faces[p, 0]], ranges[faces[p, 1]], ranges[faces[p, 2]]
-        out[p, 2] = min(min(r0, r1), r2)
-        out[p, 3] = max(max(r0, r1), r2)
+        rows[p, 0], rows[p, 1], rows[p, 2], rows[p, 3] = _row(
+            face_normals[p, 0], face_normals[p, 1], face_normals[p, 2], w, u, v, spacing,
+            three_d, ranges[faces[p, 0]], ranges[faces[p, 1]], ranges[faces[p, 2]])
 
 
 @njit(cache=True, nogil=True)
@@ -170,14 +200,18 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
     number unique to the view), so the BRDF costs O(faces hit), not O(rays). The bin is
     found in O(1) on uniform edges (a guess from the first and last edge, checked against
     the edges exactly as a binary search would place the range), by bisection otherwise.
-    ``footprint`` (n_faces, 4) spreads each hit over its footprint's ranges
-    (:func:`_spread_hit`) instead of binning it at a point; None bins at a point (numba
-    then prunes the spreading branches: a run of point bins does not compile them).
+    ``footprint`` (:func:`footprint_row`'s tuple: each face's row made at its first hit)
+    spreads each hit over its footprint's ranges (:func:`_spread_hit`) instead of binning
+    it at a point; None bins at a point (numba then prunes the spreading branches: a run
+    of point bins does not compile them).
     Returns the number of back-face hits."""
     nb = edges.size - 1
     e0 = edges[0]
     inv = nb / (edges[nb] - edges[0])
     back = 0
+    rows, stamps, tag_fp = _NO_ROWS, _NO_STAMPS, -1    # out of the tuple once, not per hit
+    if footprint is not None:
+        rows, stamps, tag_fp = footprint[0], footprint[1], footprint[9]
     for i in range(prim.size):
         p = prim[i]
         if p < 0:
@@ -202,7 +236,9 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
         if footprint is None:
             out[_bin_of(r, edges, e0, inv)] += weight[p]
         else:
-            _spread_hit(out, r, r_rel, weight[p], footprint, p, edges, e0, inv)
+            if tag_fp >= 0 and stamps[p] != tag_fp:
+                footprint_row(footprint, p, face_normals)
+            _spread_hit(out, r, r_rel, weight[p], rows, p, edges, e0, inv)
     return back
 
 
@@ -298,6 +334,9 @@ def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, 
     e0 = edges[0]
     inv = nb / (edges[nb] - edges[0])
     back = 0
+    rows, stamps, tag_fp = _NO_ROWS, _NO_STAMPS, -1    # out of the tuple once, not per hit
+    if footprint is not None:
+        rows, stamps, tag_fp = footprint[0], footprint[1], footprint[9]
     for i in range(prim.size):
         p = prim[i]
         if p < 0:
@@ -324,7 +363,9 @@ def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, 
         if footprint is None:
             out[_bin_of(r, edges, e0, inv)] += wt
         else:
-            _spread_hit(out, r, r_rel, wt, footprint, p, edges, e0, inv)
+            if tag_fp >= 0 and stamps[p] != tag_fp:
+                footprint_row(footprint, p, face_normals)
+            _spread_hit(out, r, r_rel, wt, rows, p, edges, e0, inv)
     return back
 
 

@@ -16,16 +16,52 @@ from ..raytrace.views import bistatic_angles
 from ._kernels import edge_on_receiver, footprint_rows
 from .hit_weights import GRAZING_RECEIVER_COS, warn_edge_on_receiver, weights
 
-__all__ = ["face_footprints", "face_weights", "face_bistatic_weights", "check_edge_on_receiver"]
+__all__ = ["footprint_args", "face_footprints", "face_weights", "face_bistatic_weights",
+           "check_edge_on_receiver"]
+
+
+def footprint_args(geo, w, mode, spacing, rows, tag):
+    """The compiled loops' ``footprint`` argument for view w: each face's row made at its
+    first hit (:func:`._kernels.footprint_row`) into ``rows``, whose stamps say for which
+    view (``tag``, > 0) a row holds; or, with ``tag`` < 0, every row made now, in one pass
+    over the mesh (:func:`._kernels.footprint_rows`), and no check per hit.
+
+    Parameters
+    ----------
+    geo : Geometry
+        The traced geometry: its face normals, shifted vertices and faces.
+    w : (3,) numpy.ndarray
+        The view direction, a unit vector from the scene toward the ladar.
+    mode : {"slice", "3d"}
+        The run's mode; in slice mode the half-width along v is 0.
+    spacing : float
+        The ray spacing δ (scene units).
+    rows : tuple of ((n_faces, 4) float64, (n_faces,) int64 numpy.ndarray)
+        The rows and their stamps, kept between the views of a chunk (zeros: none made).
+    tag : int
+        The view's number within the chunk, from 1; or −1: every row now.
+
+    Returns
+    -------
+    tuple
+        (rows, stamps, vertices, faces, w, u, v (3-tuples of floats), spacing, 3-D, tag).
+    """
+    w = np.asarray(w, np.float64)
+    u, v = frame(w)
+    fp = (rows[0], rows[1], geo.shifted, geo.faces, *(tuple(float(x) for x in a)
+                                                       for a in (w, u, v)),
+          float(spacing), mode == "3d", int(tag))
+    if tag < 0:
+        footprint_rows(fp, geo.face_normals)
+    return fp
 
 
 def face_footprints(geo, w, mode, spacing, out):
     """Each face's footprint for view w, into out (n_faces, 4): the range half-widths a ray
     cell spreads over along the grid's u and v (v only in 3-D), and the face's own range
     interval (min, max of its corners' −p·w), in the same float64 operations as the
-    per-hit footprint of :func:`meshladar.raytrace.views.trace_view`, in one compiled pass
-    over the faces (:func:`._kernels.footprint_rows`: a numpy pass made ten temporaries of
-    the mesh's size; 162 ms a view at 1.3M faces).
+    per-hit footprint of :func:`meshladar.raytrace.views.trace_view`: the rows of
+    :func:`footprint_args`, every one made in one pass.
 
     Parameters
     ----------
@@ -44,9 +80,7 @@ def face_footprints(geo, w, mode, spacing, out):
         minimum and maximum of its corners' ranges −p·w (p in shifted coordinates, scene
         units).
     """
-    u, v = frame(w)
-    footprint_rows(geo.face_normals, geo.shifted, geo.faces, np.asarray(w, np.float64), u, v,
-                   float(spacing), mode == "3d", np.empty(len(geo.shifted)), out)
+    footprint_args(geo, w, mode, spacing, (out, np.zeros(len(geo.faces), np.int64)), -1)
 
 
 #: Faces per block of the per-view face weights (bounded temporaries on huge meshes).
