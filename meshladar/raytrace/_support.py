@@ -4,13 +4,18 @@ hold one (a view's grid planning, per view, over a hull of thousands of points).
 
 The points are grouped by their direction from the centroid (an octahedral map of
 :data:`SIDE` × :data:`SIDE` cells); each cluster keeps its mean c and radius r (the
-farthest of its points from c), so its projections lie in c·u ± r|u|, and its greatest is at
-least c·u (a mean is no more than the largest). The greatest c·u is therefore a lower bound
-of the extent's top, every cluster whose c·u + r falls below it is skipped, and the others
-are projected in the order of their bounds until the next bound falls below the top found.
+farthest of its points from c), so its projections lie in c·u ± r|u|. The cluster with
+the greatest such bound is projected first; every other cluster whose bound falls below
+the top found is skipped. Seen in perspective from a pinhole o (a sensor at a standoff),
+a point's value is (q·u)·D / (−q·w), q = p − o: its numerator and depth each lie within
+r|u| and r|w| of the centre's, which bounds the ratio the same way (a cluster that
+reaches the pinhole's plane is always projected). Bounds are widened by
+:data:`_BOUND_SLACK` of their terms for rounding, so the extents are exact.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 from numba import njit
@@ -50,61 +55,101 @@ class ClusteredPoints:
         self.centres = np.ascontiguousarray(sums / counts[:, None])
         far = np.linalg.norm(self.points - np.repeat(self.centres, counts, axis=0), axis=1)
         self.radii = np.maximum.reduceat(far, self.starts[:-1])
-        # a bound's rounding (c·u + r in float64) is far below this
-        self.slack = 1e-12 * float(np.abs(self.points).max() + self.radii.max() + 1.0)
 
-    def extent(self, u):
-        """(least, greatest) p·u over every point, with p·u = p₀u₀ + p₁u₁ + p₂u₂ in that
-        order.
+    def extent(self, u, origin=None):
+        """(least, greatest) q·u over every point, q = p − ``origin``, with
+        q·u = q₀u₀ + q₁u₁ + q₂u₂ in that order.
 
         Parameters
         ----------
         u : (3,) array_like
             The direction (any length).
+        origin : (3,) array_like, optional
+            Subtracted from every point first (default none: q = p, the same bits).
 
         Returns
         -------
         (float, float)
         """
-        return _extent(self.points, self.starts, self.centres, self.radii,
-                       np.asarray(u, dtype=np.float64), self.slack)
+        return self._both(u, _NO_AXIS, 1.0, origin)
+
+    def seen_extent(self, u, w, scale, origin):
+        """(least, greatest) of (q·u)·scale / d over every point, q = p − ``origin`` and
+        d = −q·w > 0 (its depth along −w: a point as a pinhole at ``origin`` looking along
+        −w projects it, scaled to a plane at ``scale``), in that order of operations.
+
+        Parameters
+        ----------
+        u, w : (3,) array_like
+            The plane's axis and the viewing direction (unit vectors).
+        scale : float
+            The plane's distance from the origin, > 0.
+        origin : (3,) array_like
+            The pinhole; every point must lie in front of it (d > 0).
+
+        Returns
+        -------
+        (float, float)
+        """
+        return self._both(u, np.asarray(w, dtype=np.float64), float(scale), origin)
+
+    def _both(self, u, w, scale, origin):
+        u = np.asarray(u, dtype=np.float64)
+        o = _NO_AXIS if origin is None else np.asarray(origin, dtype=np.float64)
+        args = (self.points, self.starts, self.centres, self.radii, o)
+        return -_top(*args, -u, w, scale), _top(*args, u, w, scale)
+
+
+#: No origin (q = p) / no depth (a plain projection).
+_NO_AXIS = np.zeros(3)
+#: A bound is widened by this fraction of the magnitudes it is made of (its rounding is
+#: some 1e-15 of them).
+_BOUND_SLACK = 1e-9
 
 
 @njit(cache=True, nogil=True)
-def _top(points, starts, centres, radii, u, slack):     # pragma: no cover - compiled
-    """The greatest p·u (module docstring)."""
-    k = centres.shape[0]
-    norm = np.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
-    slack = slack * norm
-    proj = np.empty(k)
-    floor = -np.inf
-    for c in range(k):
-        proj[c] = centres[c, 0] * u[0] + centres[c, 1] * u[1] + centres[c, 2] * u[2]
-        floor = max(floor, proj[c])
-    cand = np.empty(k, np.int64)
-    bound = np.empty(k)
-    m = 0
-    for c in range(k):
-        if proj[c] + radii[c] * norm + slack >= floor:
-            cand[m] = c
-            bound[m] = -(proj[c] + radii[c] * norm)
-            m += 1
+def _cluster_top(points, lo, hi, o, a, b, scale, seen):   # pragma: no cover - compiled
+    """The greatest value over points lo..hi (:func:`_top`)."""
     top = -np.inf
-    for j in np.argsort(bound[:m]):
-        c = cand[j]
-        if -bound[j] + slack < top:
-            break
-        for i in range(starts[c], starts[c + 1]):
-            x = points[i, 0] * u[0] + points[i, 1] * u[1] + points[i, 2] * u[2]
-            if x > top:
-                top = x
+    for i in range(lo, hi):
+        q0, q1, q2 = points[i, 0] - o[0], points[i, 1] - o[1], points[i, 2] - o[2]
+        x = q0 * a[0] + q1 * a[1] + q2 * a[2]
+        if seen:
+            x = x * scale / -(q0 * b[0] + q1 * b[1] + q2 * b[2])
+        top = max(top, x)
     return top
 
 
 @njit(cache=True, nogil=True)
-def _extent(points, starts, centres, radii, u, slack):  # pragma: no cover - compiled
-    neg = np.empty(3)
-    for i in range(3):
-        neg[i] = -u[i]
-    return -_top(points, starts, centres, radii, neg, slack), \
-        _top(points, starts, centres, radii, u, slack)
+def _top(points, starts, centres, radii, o, a, b, scale):  # pragma: no cover - compiled
+    """The greatest of q·a (b = 0) or of (q·a)·scale / (−q·b) over the points, q = p − o
+    (module docstring): the cluster of the greatest bound projected first, then every
+    cluster whose bound reaches the top found."""
+    seen = b[0] != 0.0 or b[1] != 0.0 or b[2] != 0.0
+    la = math.sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
+    lb = math.sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2])
+    k = centres.shape[0]
+    bounds = np.empty(k)
+    first = 0
+    for c in range(k):
+        q0, q1, q2 = centres[c, 0] - o[0], centres[c, 1] - o[1], centres[c, 2] - o[2]
+        na = q0 * a[0] + q1 * a[1] + q2 * a[2]
+        ra = radii[c] * la
+        hi = na + ra + _BOUND_SLACK * (abs(na) + ra)
+        if seen:
+            nb = -(q0 * b[0] + q1 * b[1] + q2 * b[2])
+            rb = radii[c] * lb
+            near = nb - rb - _BOUND_SLACK * (abs(nb) + rb)
+            if near <= 0.0:
+                hi = np.inf                   # the cluster reaches the pinhole's plane
+            else:
+                hi = hi * scale / (near if hi >= 0.0 else nb + rb)
+        bounds[c] = hi
+        if hi > bounds[first]:
+            first = c
+    top = _cluster_top(points, starts[first], starts[first + 1], o, a, b, scale, seen)
+    for c in range(k):
+        if c != first and bounds[c] >= top:
+            top = max(top, _cluster_top(points, starts[c], starts[c + 1], o, a, b, scale,
+                                        seen))
+    return top

@@ -82,18 +82,35 @@ class Geometry:
             self.support = points - self.center
             self._clusters = None
 
-    def extent(self, u):
-        """(least, greatest) p·u over the support points (shifted), exactly: over clusters
-        of them (:mod:`._support`, built on first use) for runs of
-        :data:`CLUSTER_MIN_VIEWS` views or more over :data:`CLUSTER_MIN_POINTS` points or
-        more, else over every point (the same products and sums: the same bits)."""
+    def extent(self, u, origin=None):
+        """(least, greatest) q·u over the support points (shifted), q = p − ``origin``
+        (default q = p), exactly: over clusters of them (:mod:`._support`, built on first
+        use) for runs of :data:`CLUSTER_MIN_VIEWS` views or more over
+        :data:`CLUSTER_MIN_POINTS` points or more, else over every point (the same
+        operations: the same bits)."""
+        clusters = self._clustered()
+        if clusters is not None:
+            return clusters.extent(u, origin)
+        x = dot(self.support if origin is None else self.support - origin, u)
+        return float(x.min()), float(x.max())
+
+    def seen_extent(self, u, w, scale, origin):
+        """(least, greatest) (q·u)·scale / (−q·w) over the support points (shifted),
+        q = p − ``origin``: their coordinate along u on a plane ``scale`` in front of a
+        pinhole at ``origin`` looking along −w; as :meth:`extent`, exactly."""
+        clusters = self._clustered()
+        if clusters is not None:
+            return clusters.seen_extent(u, w, scale, origin)
+        q = self.support - origin
+        x = dot(q, u) * scale / -dot(q, w)
+        return float(x.min()), float(x.max())
+
+    def _clustered(self):
         if len(self.support) < CLUSTER_MIN_POINTS or self._views < CLUSTER_MIN_VIEWS:
-            x = dot(self.support, u)
-            return float(x.min()), float(x.max())
+            return None
         if getattr(self, "_clusters", None) is None:
             self._clusters = ClusteredPoints(self.support)
-        return self._clusters.extent(u)
-
+        return self._clusters
 
 def geometry(scene: Scene, normals: str) -> Geometry:
     """The scene's traced geometry for a normal mode, built once per scene and mode: a

@@ -52,18 +52,19 @@ def plane_axes(geo, w, spacing, sensor_pos, standoff, aim):
     the sensor at ``sensor_pos`` (shifted coordinates); ParameterError when the sensor is
     inside the target's extent seen from w."""
     u, v = frame(w)
-    q = geo.support - sensor_pos
-    depth = -(q @ w)                               # distance along the boresight
-    if np.min(depth) <= ORIGIN_MARGIN * geo.radius:
+    near = -geo.extent(w, sensor_pos)[1]           # the least distance along the boresight
+    if near <= ORIGIN_MARGIN * geo.radius:
         raise ParameterError(
             f"standoff {standoff:g} puts the sensor inside the target's extent (the target "
-            f"reaches {standoff - float(np.min(depth)):.6g} toward it from the aim point): "
+            f"reaches {standoff - near:.6g} toward it from the aim point): "
             "give a larger standoff")
-    su = (q @ u) * standoff / depth + (sensor_pos - aim) @ u
-    tv = (q @ v) * standoff / depth + (sensor_pos - aim) @ v
     axes = []
-    for c in (su, tv):
-        lo, hi = c.min() - spacing, c.max() + spacing
+    for a in (u, v):
+        # (q·a)·D/depth + (sensor − aim)·a over the points: the least and greatest of the
+        # first term, then the sum (rounding is monotonic: the same extremes)
+        lo, hi = geo.seen_extent(a, w, standoff, sensor_pos)
+        off = (sensor_pos - aim) @ a
+        lo, hi = (lo + off) - spacing, (hi + off) + spacing
         n = max(1, int(math.ceil((hi - lo) / spacing)))
         axes.append(lo + (np.arange(n) + 0.5) * spacing)
     s, t = axes

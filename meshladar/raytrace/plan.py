@@ -321,11 +321,11 @@ def _check_standoff(geo, ladar, sensor):
         return
     aim = np.asarray(sensor.aim, np.float64) - geo.center
     for w in np.asarray(ladar.view_vectors, np.float64):
-        depth = -((geo.support - (aim + sensor.standoff * w)) @ w)
-        if np.min(depth) <= ORIGIN_MARGIN * geo.radius:
+        near = -geo.extent(w, aim + sensor.standoff * w)[1]    # as each view's grid does
+        if near <= ORIGIN_MARGIN * geo.radius:
             raise ParameterError(
                 f"standoff {sensor.standoff:g} puts the sensor inside the target's extent "
-                f"(the target reaches {sensor.standoff - float(np.min(depth)):.6g} toward "
+                f"(the target reaches {sensor.standoff - near:.6g} toward "
                 "it from the aim point): give a larger standoff")
     # ranges R − D: differences of numbers ~D, each rounded to D·2⁻⁵³
     rounding = (sensor.standoff + float(np.linalg.norm(aim))) * 2.0 ** -53

@@ -54,7 +54,8 @@ def test_a_views_extent_over_clusters_is_every_points_extent():
     """The least and greatest p·u found over clusters of the points equal numpy's over
     every point (the same products and sums: equal, not close), for a sphere's hull, an
     anisotropic cloud far from the origin, a flat disk, a line, repeated points and a box,
-    along unit and non-unit directions and the axes."""
+    along unit and non-unit directions and the axes; and so do the extents from an origin
+    and in perspective from a pinhole (a sensor at a standoff)."""
     import trimesh
 
     from meshladar.meshes import fibonacci_sphere
@@ -71,10 +72,22 @@ def test_a_views_extent_over_clusters_is_every_points_extent():
     dirs = np.vstack([fibonacci_sphere(400), np.eye(3), -np.eye(3),
                       rng.normal(size=(100, 3)) * 7.0])
     for points in sets:
+        points = np.asarray(points, np.float64)
         clusters = ClusteredPoints(points)
+        centre = points.mean(axis=0)
+        reach = np.linalg.norm(points - centre, axis=1).max()
         for u in dirs:
-            x = dot(np.asarray(points, np.float64), u)
+            x = dot(points, u)
             assert clusters.extent(u) == (x.min(), x.max())
+            # from a pinhole three reaches away along w, in perspective onto a plane D
+            # in front of it: (q·a)·D / (−q·w), q = p − pinhole
+            w = u / np.linalg.norm(u)
+            pinhole = centre + 3.0 * reach * w
+            q = points - pinhole
+            assert clusters.extent(w, pinhole) == (dot(q, w).min(), dot(q, w).max())
+            for a in frame(w):
+                seen = dot(q, a) * 2.5 / -dot(q, w)
+                assert clusters.seen_extent(a, w, 2.5, pinhole) == (seen.min(), seen.max())
 
 
 def test_a_geometry_takes_its_extents_over_clusters_only_for_many_views():
@@ -88,11 +101,18 @@ def test_a_geometry_takes_its_extents_over_clusters_only_for_many_views():
                                 [ml.materials.DARK_GRAY])
     geo = Geometry(scene, "flat")
     u = np.array([0.48, -0.6, 0.64])
-    x = dot(geo.support, u)
+    v = frame(u)[0]
+    pinhole = 4.0 * u
+
+    def expect():
+        q = geo.support - pinhole
+        seen = dot(q, v) * 3.0 / -dot(q, u)
+        return (dot(geo.support, u).min(), dot(geo.support, u).max()), \
+            (seen.min(), seen.max())
+
     geo.for_views(scene, 1)
-    assert geo.extent(u) == (x.min(), x.max())
+    assert (geo.extent(u), geo.seen_extent(v, u, 3.0, pinhole)) == expect()
     assert getattr(geo, "_clusters", None) is None
     geo.for_views(scene, CLUSTER_MIN_VIEWS)
-    x = dot(geo.support, u)
-    assert geo.extent(u) == (x.min(), x.max())
+    assert (geo.extent(u), geo.seen_extent(v, u, 3.0, pinhole)) == expect()
     assert geo._clusters is not None
