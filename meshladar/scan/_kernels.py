@@ -214,6 +214,8 @@ def find_peaks(waves, margin, weights, half, separation, max_returns, out_p, out
     filt[0] = filt[ns + 1] = -np.inf
     act = np.empty(ns, np.bool_)
     amp = np.empty(ns)
+    neg = np.empty(ns)
+    order = np.empty(ns, np.int64)
     at = np.empty(ns, np.int64)
     kept = np.empty(max_returns, np.int64)
     count = 0
@@ -237,9 +239,11 @@ def find_peaks(waves, margin, weights, half, separation, max_returns, out_p, out
                     c += 1
         if c == 0:
             continue
-        order = np.argsort(-amp[:c], kind="mergesort")
+        for i in range(c):
+            neg[i] = -amp[i]
+        sort_small(neg[:c], order[:c])             # strongest first, ties in time order
         nk = 0
-        for o in order:
+        for o in order[:c]:
             if nk == max_returns:
                 break
             ok = True
