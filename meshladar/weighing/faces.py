@@ -65,15 +65,8 @@ def face_footprints(geo, w, mode, spacing, out):
 
     Parameters
     ----------
-    geo : Geometry
-        The traced geometry (``TracePlan.geo``): its flat face normals, shifted vertices
-        and faces.
-    w : (3,) numpy.ndarray
-        The view direction, a unit vector from the scene toward the ladar.
-    mode : {"slice", "3d"}
-        The run's mode; in slice mode the half-width along v is 0.
-    spacing : float
-        The ray spacing δ (scene units).
+    geo, w, mode, spacing : Geometry, (3,) numpy.ndarray, str, float
+        As :func:`footprint_args`.
     out : (n_faces, 4) float64 numpy.ndarray
         Output, overwritten: per face, the range half-widths |n·u| / |n·w| · δ/2 and
         |n·v| / |n·w| · δ/2 (|n·w| floored at ``meshladar.precision.TINY``), then the
