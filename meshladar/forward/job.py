@@ -303,8 +303,8 @@ def _rows_on_threads(scene, grid, w, spacing, bins, row_jobs, how=(None, None, T
             parts.append((band, bins._replace(out=np.zeros_like(bins.out),
                                               stamp=bins.stamp.copy(),
                                               weight=bins.weight.copy(),
-                                              footprint=fp and (fp[0].copy(), fp[1].copy())
-                                              + fp[2:])))
+                                              footprint=None if fp is None else
+                                              (fp[0].copy(), fp[1].copy()) + fp[2:])))
     with ThreadPoolExecutor(len(parts)) as ex:
         done = list(ex.map(lambda p: cast_bin_grid(scene, p[0], w, spacing, p[1], *how),
                            parts))

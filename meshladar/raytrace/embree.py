@@ -60,6 +60,7 @@ class Geometry:
         # every extreme of a grid's extent is attained among these points (shifted): every
         # vertex, or the hull's vertices once known (for_views)
         self.support = self.shifted
+        self._views, self._clusters = 0, None      # the runs' most views; extents' clusters
         self.for_views(scene, 0)
         self.normals = normals
         self.corner = None
@@ -77,7 +78,7 @@ class Geometry:
         :meth:`~meshladar.scene.Scene.support_points` for that many views (its hull's
         vertices when known or when the views are many, else every vertex)."""
         points = scene.support_points(n_views)
-        self._views = max(getattr(self, "_views", 0), n_views)
+        self._views = max(self._views, n_views)
         if len(points) < len(self.support):
             self.support = points - self.center
             self._clusters = None
@@ -108,9 +109,10 @@ class Geometry:
     def _clustered(self):
         if len(self.support) < CLUSTER_MIN_POINTS or self._views < CLUSTER_MIN_VIEWS:
             return None
-        if getattr(self, "_clusters", None) is None:
+        if self._clusters is None:
             self._clusters = ClusteredPoints(self.support)
         return self._clusters
+
 
 def geometry(scene: Scene, normals: str) -> Geometry:
     """The scene's traced geometry for a normal mode, built once per scene and mode: a

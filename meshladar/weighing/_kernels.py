@@ -33,13 +33,12 @@ def footprint_row(fp, p, face_normals):                   # pragma: no cover - c
     the view's where its stamp is ``tag`` (every row is where ``tag`` < 0:
     :func:`footprint_rows` made them all)."""
     rows, stamps, vertices, faces, w, u, v, spacing, three_d, tag = fp
-    r = np.empty(3)
-    for k in range(3):
-        q = faces[p, k]
-        r[k] = -(vertices[q, 0] * w[0] + vertices[q, 1] * w[1] + vertices[q, 2] * w[2])
+    a, b, c = faces[p, 0], faces[p, 1], faces[p, 2]
     rows[p, 0], rows[p, 1], rows[p, 2], rows[p, 3] = _row(
         face_normals[p, 0], face_normals[p, 1], face_normals[p, 2], w, u, v, spacing,
-        three_d, r[0], r[1], r[2])
+        three_d, -(vertices[a, 0] * w[0] + vertices[a, 1] * w[1] + vertices[a, 2] * w[2]),
+        -(vertices[b, 0] * w[0] + vertices[b, 1] * w[1] + vertices[b, 2] * w[2]),
+        -(vertices[c, 0] * w[0] + vertices[c, 1] * w[1] + vertices[c, 2] * w[2]))
     stamps[p] = tag
 
 

@@ -212,15 +212,19 @@ def test_the_fused_loop_gives_the_unfused_numbers_bit_for_bit(sampling, normals,
         np.testing.assert_array_equal(fused.values, plain.values)
 
 
-def test_grids_sparser_than_their_faces_are_cast_incoherent_with_the_same_numbers(monkeypatch):
+@pytest.mark.parametrize("footprint", [False, True])
+def test_grids_sparser_than_their_faces_are_cast_incoherent_with_the_same_numbers(
+        footprint, monkeypatch):
     """A grid with fewer rays than a face's area holds (Σa²/Σa over δ²: 0.3 here) is cast
     without Embree's coherent flag, a dense one (12) with it; either flag gives the same
-    hits, so the same sinogram."""
+    hits, so the same sinogram. With footprint bins, a sparse grid makes each face's row
+    at its first hit and a dense one every row before the cast: the same rows."""
     from meshladar.forward import job
     from meshladar.raytrace import plan as plan_module
     from meshladar.raytrace.plan import plan_trace
 
     flags, cast = [], job.cast_bin_grid
+
     def spy(*args):
         flags.append(args[-1])
         return cast(*args)
@@ -237,12 +241,12 @@ def test_grids_sparser_than_their_faces_are_cast_incoherent_with_the_same_number
         monkeypatch.setattr(job, "cast_bin_grid", spy)
         flags.clear()
         chosen = ml.simulate(scene, ladar, model="mesh", ray_spacing=spacing,
-                             backend="packets")
+                             backend="packets", footprint=footprint)
         assert flags == [coherent] * 7                              # what the loop got
         monkeypatch.setattr(plan_module, "COHERENT_RAYS_PER_FACE",
                             np.inf if coherent else 0.0)            # the other flag
         other = ml.simulate(scene, ladar, model="mesh", ray_spacing=spacing,
-                            backend="packets")
+                            backend="packets", footprint=footprint)
         assert flags[7:] == [not coherent] * 7
         monkeypatch.undo()
         assert chosen.info["rays"] == other.info["rays"] > 0

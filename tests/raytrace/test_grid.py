@@ -112,7 +112,7 @@ def test_a_geometry_takes_its_extents_over_clusters_only_for_many_views():
 
     geo.for_views(scene, 1)
     assert (geo.extent(u), geo.seen_extent(v, u, 3.0, pinhole)) == expect()
-    assert getattr(geo, "_clusters", None) is None
+    assert geo._clusters is None
     geo.for_views(scene, CLUSTER_MIN_VIEWS)
     assert (geo.extent(u), geo.seen_extent(v, u, 3.0, pinhole)) == expect()
     assert geo._clusters is not None
