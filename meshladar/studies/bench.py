@@ -306,6 +306,11 @@ def _mesh_lines(repeats):
                f"packet cast {o['packet_mrays']:5.2f} ({o['packet_over_raw']:.2f}x), "
                f"pipeline {o['pipeline_mrays']:5.2f} ({o['pipeline_over_raw']:.2f}x), "
                f"2 threads {o['two_thread_mrays']:5.2f} Mrays/s")
+    sp = bench_mesh(repeats=2, views=2000, rays_per_view=1296, build=False)
+    yield (f"  many small views, {sp['views']} views x {sp['rays'] // sp['views']} rays: raw "
+           f"embreex {sp['raw_mrays']:5.2f}, pipeline {sp['pipeline_mrays']:5.2f} "
+           f"({sp['pipeline_over_raw']:.2f}x), stratified {sp['stratified_mrays']:5.2f}, "
+           f"2 threads {sp['two_thread_mrays']:5.2f} Mrays/s")
     fu = bench_fused()
     yield (f"  compiled loop against per-hit arrays, {fu['faces']} triangles, 4 views x 1e6 "
            f"rays, 1 thread: footprint bins {fu['footprint_mrays']:.2f} against "
