@@ -48,7 +48,7 @@ class ClusteredPoints:
         order = np.argsort(cell, kind="stable")
         cell = cell[order]
         self.points = np.ascontiguousarray(p[order])
-        used, self.starts = np.unique(cell, return_index=True)
+        _, self.starts = np.unique(cell, return_index=True)
         self.starts = np.append(self.starts, len(cell)).astype(np.int64)
         counts = np.diff(self.starts)
         sums = np.add.reduceat(self.points, self.starts[:-1], axis=0)
