@@ -24,7 +24,8 @@ from .embree4_ctypes import (EmbreeLib, RTC_BUFFER_TYPE_INDEX, RTC_BUFFER_TYPE_V
                              RTC_RAY_QUERY_FLAG_COHERENT, RTC_RAY_QUERY_FLAG_INCOHERENT,
                              RTC_SCENE_FLAG_ROBUST, _ALIGN, _ARGS_OFF, _CTX_OFF, _DIR_Z,
                              _GEOMID, _ID, _INSTID, _MASK, _ORG_X, _ORG_Y, _ORG_Z, _PRIMID,
-                             _TFAR, _U, _V, _VALID_OFF, _WS_BYTES, library_candidates)
+                             _TFAR, _U, _V, _VALID_OFF, _WS_BYTES, library_candidates,
+                             query_flags)
 # the compiled packet loops, importable from here as before (the fused loop reads the
 # building blocks workspace, init_args and load_packet)
 from .embree4_kernels import cast_grid, init_args, load_packet, occluded_grid, workspace
@@ -336,7 +337,7 @@ class PacketGeometry:
         tfar = np.empty(n, np.float32)
         m = n if barycentrics else 0
         u, v = np.empty(m, np.float32), np.empty(m, np.float32)
-        flags = RTC_RAY_QUERY_FLAG_COHERENT if coherent else RTC_RAY_QUERY_FLAG_INCOHERENT
+        flags = query_flags(coherent)
         cast_grid(self.lib.intersect[w], self._live(), o, d, np.float32(tmax), w, flags,
                   prim, tfar, u, v, int(columns))
         return GridHits(prim, tfar, u, v) if barycentrics else (prim, tfar)
@@ -373,7 +374,7 @@ class PacketGeometry:
         o = np.ascontiguousarray(origins, dtype=np.float32)
         d = _directions(direction, len(o))
         out = np.empty(len(o), np.bool_)
-        flags = RTC_RAY_QUERY_FLAG_COHERENT if coherent else RTC_RAY_QUERY_FLAG_INCOHERENT
+        flags = query_flags(coherent)
         occluded_grid(self.lib.occluded[w], self._live(), o, d, np.float32(tmax), w,
                       flags, out)
         return out

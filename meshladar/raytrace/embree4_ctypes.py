@@ -87,7 +87,7 @@ import os
 import sys
 
 __all__ = ["EmbreeLib", "library_candidates", "TFAR", "PRIMID", "GEOMID", "VALID_OFF",
-           "ARGS_OFF"]
+           "ARGS_OFF", "query_flags"]
 
 # ---------------------------------------------------------------- constants (see docstring)
 RTC_INVALID_GEOMETRY_ID = 0xFFFFFFFF
@@ -107,6 +107,12 @@ RTC_SCENE_FLAG_ROBUST = 1 << 2
 RTC_BUILD_QUALITY_LOW, RTC_BUILD_QUALITY_MEDIUM, RTC_BUILD_QUALITY_HIGH = 0, 1, 2
 RTC_RAY_QUERY_FLAG_INCOHERENT = 0
 RTC_RAY_QUERY_FLAG_COHERENT = 1 << 16
+
+
+def query_flags(coherent):
+    """Embree's ray query flags for packets that are (True) or are not coherent."""
+    return RTC_RAY_QUERY_FLAG_COHERENT if coherent else RTC_RAY_QUERY_FLAG_INCOHERENT
+
 RTC_FEATURE_FLAG_ALL = 0xFFFFFFFF
 
 # field indices k of RTCRayHitW (byte offset k * 4 * W)

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..raytrace.embree4_ctypes import RTC_RAY_QUERY_FLAG_COHERENT, RTC_RAY_QUERY_FLAG_INCOHERENT
+from ..raytrace.embree4_ctypes import query_flags
 from ._fused_kernels import cast_bin_bistatic, cast_bin_flat, cast_bin_smooth
 
 __all__ = ["cast_bin_grid"]
@@ -77,7 +77,7 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
     offsets = plan.offsets or (np.empty(0, np.float32),) * 4
     grid = (s.astype(np.float32), t.astype(np.float32), offsets, np.float32(spacing),
             u.astype(np.float32), v.astype(np.float32), (L * w).astype(np.float32))
-    flags = RTC_RAY_QUERY_FLAG_COHERENT if coherent else RTC_RAY_QUERY_FLAG_INCOHERENT
+    flags = query_flags(coherent)
     head = (lib.intersect[lib.width], sc.live(), lib.width, flags,
             grid, (-w).astype(np.float32)[None, :], np.float32(emb.inverse),
             float(emb.scale))

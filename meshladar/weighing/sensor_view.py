@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..precision import MIN_COS_FACET, REFINE_MIN_COS
-from ..raytrace.embree4_ctypes import RTC_RAY_QUERY_FLAG_COHERENT, RTC_RAY_QUERY_FLAG_INCOHERENT
+from ..raytrace.embree4_ctypes import query_flags
 from ..raytrace.grid import stratified_sequences
 from ..raytrace.perspective import plane_axes, sensor_cast, start_distance
 from ..sensor import FloodBeam
@@ -93,7 +93,7 @@ def _fused_view(plan, weighing, scene, w, rng, out, aim):
     plane = (s, t, offsets, float(spacing), u, v, np.asarray(w, np.float64))
     pk = scene.scene.scene
     lib = pk.lib
-    flags = RTC_RAY_QUERY_FLAG_COHERENT if plan.coherent else RTC_RAY_QUERY_FLAG_INCOHERENT
+    flags = query_flags(plan.coherent)
     back, n = cast_bin_sensor(
         lib.intersect[lib.width], pk.live(), lib.width, flags, plane,
         (D, sensor_pos, start_distance(geo, sensor_pos, spacing)), np.float32(scene.inverse),
