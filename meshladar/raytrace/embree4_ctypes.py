@@ -110,7 +110,18 @@ RTC_RAY_QUERY_FLAG_COHERENT = 1 << 16
 
 
 def query_flags(coherent):
-    """Embree's ray query flags for packets that are (True) or are not coherent."""
+    """Embree's ray query flags for packets that are (True) or are not coherent.
+
+    Parameters
+    ----------
+    coherent : bool
+        Whether the packet's rays are nearly parallel and close together.
+
+    Returns
+    -------
+    int
+        ``RTC_RAY_QUERY_FLAG_COHERENT`` or ``RTC_RAY_QUERY_FLAG_INCOHERENT``.
+    """
     return RTC_RAY_QUERY_FLAG_COHERENT if coherent else RTC_RAY_QUERY_FLAG_INCOHERENT
 
 RTC_FEATURE_FLAG_ALL = 0xFFFFFFFF
