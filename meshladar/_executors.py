@@ -171,6 +171,7 @@ def _stop_workers(ex):
     # the pool's internals, read before shutdown() drops its references to them
     processes = dict(getattr(ex, "_processes", None) or {})
     queue = getattr(ex, "_call_queue", None)
+    results = getattr(ex, "_result_queue", None)
     wakeup = getattr(ex, "_executor_manager_thread_wakeup", None)
     ex.shutdown(wait=False, cancel_futures=True)
     for p in list(processes.values()):
@@ -188,6 +189,12 @@ def _stop_workers(ex):
     if queue is not None:
         queue.cancel_join_thread()
         queue._reader.close()
+    # a worker ended mid-way through sending its result leaves the manager reading the rest
+    # of that message for good (the pipe's other writer is this process, so no end of file
+    # comes), and the interpreter's exit joins the manager: with the workers gone, this
+    # process's copy of the write end is the last, and closing it ends that read
+    if results is not None:
+        results._writer.close()
     if wakeup is not None:
         try:
             wakeup.wakeup()

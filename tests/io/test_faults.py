@@ -275,7 +275,7 @@ def test_a_stopped_run_takes_its_workers_with_it(tmp_path, sig, model):
             for p in psutil.Process(proc.pid).children(recursive=True):
                 p.kill()
             proc.kill()
-            proc.wait()
+            proc.communicate()                 # closes its stderr pipe too
     if sig != "SIGKILL":                       # one line and a resume hint
         assert proc.returncode == 130 and "Traceback" not in err
         assert "interrupted; finished chunks are kept" in err
@@ -284,6 +284,28 @@ def test_a_stopped_run_takes_its_workers_with_it(tmp_path, sig, model):
     gone, alive = psutil.wait_procs(workers, timeout=60)
     assert not alive, [p.pid for p in alive]
     assert list(run.glob("chunk_*.npz"))       # the chunks finished before the stop are kept
+
+
+def test_a_stop_while_a_worker_sends_its_result_still_ends_the_pool():
+    """A worker ended mid-way through sending its result left the pool's manager thread
+    reading the rest of that message for good, and the interpreter's exit joining it: a
+    SIGTERMed CLI run hung so in about one stop in ten. The half-sent message is written
+    here by hand (a 1,000-byte result's header and 10 of its bytes), so the case is certain,
+    not a matter of timing."""
+    import os
+    import struct
+
+    from meshladar import _executors
+
+    ex, own = _executors.choose_executor(2, None, 0, 2)
+    assert own and ex.submit(abs, -1).result() == 1      # the workers and manager started
+    manager, writer = ex._executor_manager_thread, ex._result_queue._writer
+    os.write(writer.fileno(), struct.pack("!i", 1000) + b"x" * 10)
+    _executors._stop_workers(ex)
+    manager.join(timeout=60)        # a bound on an exit already under way, not a delay
+    hung = manager.is_alive()
+    writer.close()                  # (if it hung: so that this test process can still exit)
+    assert not hung
 
 
 # ------------------------------------------------------------------ sizes refused up front
