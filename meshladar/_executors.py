@@ -174,6 +174,18 @@ def _stop_workers(ex):
     results = getattr(ex, "_result_queue", None)
     wakeup = getattr(ex, "_executor_manager_thread_wakeup", None)
     ex.shutdown(wait=False, cancel_futures=True)
+    # this process's ends of the pool's pipes are closed while every worker still holds its
+    # own, so none of them is closed twice: the manager closes the task pipe's read end
+    # itself once it sees a worker gone (and two threads closing one descriptor race). The
+    # feeder thread may be blocked writing a task no worker will read: nobody joins it (the
+    # queue is abandoned), and with the workers gone its write fails (cpython gh-94777). The
+    # manager may be reading the rest of a result a worker was sending when it ended: with
+    # the workers gone this process's write end was the last, and the read meets the end.
+    if queue is not None:
+        queue.cancel_join_thread()
+        queue._reader.close()
+    if results is not None:
+        results._writer.close()
     for p in list(processes.values()):
         if p.is_alive():
             p.terminate()
@@ -182,19 +194,7 @@ def _stop_workers(ex):
         if p.is_alive():                   # then SIGKILL, so the stop always completes
             p.kill()
             p.join()
-    # the pool's feeder thread may be blocked writing a task no worker will read, and the
-    # interpreter's exit joins it: nobody joins it (the queue is abandoned), its read end is
-    # closed as the pool itself does when broken (cpython gh-94777), and its manager woken
-    # to notice the dead workers
-    if queue is not None:
-        queue.cancel_join_thread()
-        queue._reader.close()
-    # a worker ended mid-way through sending its result leaves the manager reading the rest
-    # of that message for good (the pipe's other writer is this process, so no end of file
-    # comes), and the interpreter's exit joins the manager: with the workers gone, this
-    # process's copy of the write end is the last, and closing it ends that read
-    if results is not None:
-        results._writer.close()
+    # and the manager woken to notice the dead workers
     if wakeup is not None:
         try:
             wakeup.wakeup()
