@@ -112,8 +112,10 @@ def cast_chunk(scene, origins, directions):
     emb = embree_scene(geo, resolve_backend("auto"))
     n, m = directions.shape[:2]
     shifted = origins - geo.center
-    res = emb.run(np.ascontiguousarray(np.repeat(shifted, m, axis=0), dtype=np.float32),
-                  np.ascontiguousarray(directions.reshape(n * m, 3), dtype=np.float32))
+    o32 = np.empty((n, m, 3), np.float32)       # each pulse's origin for its sub-rays: a
+    o32[...] = shifted[:, None, :]              # broadcast assignment (np.repeat holds the
+    res = emb.run(o32.reshape(n * m, 3),        # GIL that other threads' chunks wait for)
+                  directions.reshape(n * m, 3).astype(np.float32))
     face = res["primID"].astype(np.int64)
     dist, cos = np.empty((n, m)), np.empty((n, m))
     pts = np.empty((n, m, 3))

@@ -214,9 +214,8 @@ def _decompose(waves, p, centre, s, height, sigma_samples):
     widths 0.5 to 3 σ)."""
     ns = waves.shape[1]
     bounds = np.r_[0, np.nonzero(np.diff(p))[0] + 1, len(p)]        # p is sorted
-    for a, b in zip(bounds[:-1], bounds[1:]):
-        if b - a < 2:
-            continue
+    several = np.flatnonzero(np.diff(bounds) >= 2)   # pulses of one peak need no refit
+    for a, b in zip(bounds[several].tolist(), bounds[several + 1].tolist()):
         q = p[a]
         idx = np.arange(a, b)
         idx = idx[np.argsort(centre[idx])]
