@@ -22,6 +22,7 @@ the convention above, one header line, comma-separated).
 from __future__ import annotations
 
 import csv
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -237,6 +238,17 @@ class Platform:
         slerp = Slerp(self.times, rotation(self.attitudes_deg))
         return pos, slerp(np.clip(t, self.times[0], self.times[-1]))
 
+    @functools.cached_property
+    def _one_attitude(self):
+        """(sensor-to-world matrix, the mount offset in the world frame) of a platform of
+        one attitude, made once (scipy's rotations, per chunk of a scan, held the GIL its
+        other threads wait for); None when the attitude changes."""
+        if not np.all(self.attitudes_deg == self.attitudes_deg[0]):
+            return None
+        rot = rotation(self.attitudes_deg[0])
+        mats = (rot * rotation(np.asarray(self.boresight_deg))).as_matrix()
+        return mats, rot.apply(np.asarray(self.mount_offset))
+
     def sensor_poses(self, t):
         """The sensor's pose at times ``t``: the body's pose, the mount offset and the
         boresight.
@@ -254,13 +266,11 @@ class Platform:
             Sensor-to-world rotation matrices.
         """
         t = np.asarray(t, np.float64).ravel()
-        if np.all(self.attitudes_deg == self.attitudes_deg[0]):      # one attitude: once
+        if self._one_attitude is not None:                          # one attitude: once
             pos = (np.broadcast_to(self.positions[0], (len(t), 3)) if len(self.times) == 1
                    else self._positions(t))
-            rot = rotation(self.attitudes_deg[0])
-            mats = (rot * rotation(np.asarray(self.boresight_deg))).as_matrix()
-            origin = pos + rot.apply(np.asarray(self.mount_offset))
-            return origin, np.broadcast_to(mats, (len(t), 3, 3))
+            mats, mount = self._one_attitude
+            return pos + mount, np.broadcast_to(mats, (len(t), 3, 3))
         pos, rot = self._body(t)
         origin = pos + rot.apply(np.asarray(self.mount_offset))
         mats = (rot * rotation(np.asarray(self.boresight_deg))).as_matrix()
