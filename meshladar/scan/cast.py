@@ -153,15 +153,21 @@ def photoelectrons(scene, cast, shares, sensor):
     cos = np.minimum(cast.cos[hit], 1.0)
     sin = np.sqrt(np.maximum(0.0, 1.0 - cos * cos))
     weight = np.zeros(len(f))
-    mat = geo.material[f]
-    for i, coating in enumerate(scene.materials):
-        sel = mat == i
-        if np.any(sel):
-            weight[sel] = coating.projected(cos[sel], sin[sel])
+    if len(scene.materials) == 1:              # one coating: no selection to make
+        weight[...] = scene.materials[0].projected(cos, sin)
+    else:
+        mat = geo.material[f]
+        for i, coating in enumerate(scene.materials):
+            sel = mat == i
+            if np.any(sel):
+                weight[sel] = coating.projected(cos[sel], sin[sel])
     r = cast.distance[hit]
     photon = PLANCK * SPEED_OF_LIGHT / sensor.wavelength
     scale = (sensor.pulse_energy * np.pi * sensor.aperture_diameter ** 2 / 4.0
              * sensor.optics_transmission * sensor.quantum_efficiency / photon)
     share = np.broadcast_to(shares, cast.face.shape)[hit]
-    out[hit] = scale * share * weight / (r * r) * np.exp(-2.0 * sensor.extinction * r)
+    pe = scale * share * weight / (r * r)
+    if sensor.extinction:                      # (× exp(−0) = 1 would change no bit)
+        pe = pe * np.exp(-2.0 * sensor.extinction * r)
+    out[hit] = pe
     return out

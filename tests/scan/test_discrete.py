@@ -26,6 +26,20 @@ def test_a_plate_returns_its_link_budget_at_its_true_range():
     np.testing.assert_allclose(pc.points["range"], [R0, R0 / c], rtol=1e-12)
 
 
+def test_the_atmosphere_takes_its_two_way_transmission_off_the_link_budget():
+    """Extinction σ = 2e-3 /m over R and back: exp(−2σR) of the clear link budget, by hand,
+    at both ranges of the plate (normal and oblique)."""
+    sigma = 2e-3
+    pc = scan(scene(plate(R0)), ScanPattern([0.0, 0.0], [[1, 0, 0], [1, 0.1, 0]]),
+              Platform.static((0, 0, 0)), sensor(echoes="discrete", extinction=sigma))
+    c = 1 / np.sqrt(1.01)
+    np.testing.assert_allclose(pc.points["intensity"],
+                               [photoelectrons_by_hand(1e-6, 0.05, R0)
+                                * np.exp(-2 * sigma * R0),
+                                photoelectrons_by_hand(1e-6, 0.05, R0 / c, c)
+                                * np.exp(-2 * sigma * R0 / c)], rtol=1e-6)
+
+
 @pytest.mark.parametrize("ratio, returns", [(0.9, 1), (1.1, 2), (3.0, 2)])
 def test_two_plates_in_one_footprint_split_where_their_arrivals_are_a_fwhm_apart(ratio,
                                                                                  returns):
