@@ -235,7 +235,8 @@ def scan_line():
             f"{sb['packet_mrays']:.1f} Msubrays/s, scan (cast + waveforms + returns + truth) "
             f"{sb['scan_mrays']:.2f} Msubrays/s ({sb['scan_over_cast']:.2f} of the cast), "
             f"discrete returns {sb['discrete_mrays']:.2f} Msubrays/s "
-            f"({sb['discrete_over_cast']:.2f}), two threads {sb['two_over_one']:.2f}x one; "
+            f"({sb['discrete_over_cast']:.2f}), two threads {sb['two_over_one']:.2f}x one "
+            f"(the bare cast {sb['cast_two_over_one']:.2f}x); "
             f"flash 128 x 128, 512 samples: "
             f"{sb['flash_fps']:.1f} frames/s")
 

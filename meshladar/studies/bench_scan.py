@@ -6,6 +6,7 @@ interleaved, in CPU seconds; and a 128 × 128 flash frame's rate with 512-sample
 
 from __future__ import annotations
 
+import threading
 import time
 from dataclasses import replace
 
@@ -28,6 +29,21 @@ def _cpu(fn):
     return time.process_time() - t
 
 
+def _wall(fn):
+    t = time.perf_counter()
+    fn()
+    return time.perf_counter() - t
+
+
+def _two_threads(emb, o32, d32):
+    """The bare cast of the same sub-rays, half on each of two threads."""
+    half = len(o32) // 2
+    other = threading.Thread(target=emb.run, args=(o32[half:], d32[half:]))
+    other.start()
+    emb.run(o32[:half], d32[:half])
+    other.join()
+
+
 def bench_scan(*, subdivisions=6, duration=0.1, rounds=3):
     """Sub-rays per CPU-second of :func:`meshladar.scan.scan` (one thread, two threads)
     against the bare packet cast of the same sub-rays, medians of interleaved rounds; and
@@ -48,7 +64,9 @@ def bench_scan(*, subdivisions=6, duration=0.1, rounds=3):
         ``faces``, ``sub_rays``, ``packet_mrays``, ``scan_mrays``, ``scan_over_cast``,
         ``discrete_mrays`` and ``discrete_over_cast`` (``echoes="discrete"``: no
         records), ``two_over_one`` (wall-clock speed-up of two threads, waveforms),
-        ``flash_fps``.
+        ``cast_two_over_one`` (the same for the bare cast of the same sub-rays, half on
+        each thread: what two threads give on this machine now, the reference for
+        ``two_over_one`` on a shared or throttled machine), ``flash_fps``.
     """
     part = sphere((0.0, 0.0, 0.0), 30.0, 0, subdivisions=subdivisions)
     scene = Scene.from_parts([part], [Lambertian(0.3)])
@@ -67,9 +85,11 @@ def bench_scan(*, subdivisions=6, duration=0.1, rounds=3):
     discrete = replace(sensor, echoes="discrete")
     scan(scene, pattern, platform, sensor, jobs=1)                    # warm-up: compile
     scan(scene, pattern, platform, discrete, jobs=1)
-    cast, one, fast, wall1, wall2 = [], [], [], [], []
+    cast, one, fast, wall1, wall2, bare1, bare2 = [], [], [], [], [], [], []
     for _ in range(rounds):
         cast.append(_cpu(lambda: emb.run(o32, d32)))
+        bare1.append(_wall(lambda: emb.run(o32, d32)))
+        bare2.append(_wall(lambda: _two_threads(emb, o32, d32)))
         t = time.perf_counter()
         one.append(_cpu(lambda: scan(scene, pattern, platform, sensor, jobs=1)))
         wall1.append(time.perf_counter() - t)
@@ -91,4 +111,5 @@ def bench_scan(*, subdivisions=6, duration=0.1, rounds=3):
             "discrete_mrays": n / np.median(fast) / 1e6,
             "discrete_over_cast": float(np.median(cast) / np.median(fast)),
             "two_over_one": float(np.median(wall1) / np.median(wall2)),
+            "cast_two_over_one": float(np.median(bare1) / np.median(bare2)),
             "flash_fps": 1.0 / flash_s}

@@ -17,4 +17,4 @@ def test_the_scan_benchmark_reports_the_scan_below_its_own_cast():
     assert 0 < r["scan_over_cast"] < r["discrete_over_cast"] < 1
     assert all(math.isfinite(r[k]) and r[k] > 0 for k in
                ("packet_mrays", "scan_mrays", "discrete_mrays", "two_over_one",
-                          "flash_fps"))
+                "cast_two_over_one", "flash_fps"))
