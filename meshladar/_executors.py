@@ -118,8 +118,7 @@ def choose_executor(jobs, executor, work, n_chunks, *, threads=False):
     if jobs == 1:
         return None, False
     if threads:
-        _steady_heap()
-        return ThreadPoolExecutor(max_workers=int(jobs)), True
+        return thread_pool(jobs), True
     return ProcessPoolExecutor(max_workers=int(jobs), initializer=_worker_init), True
 
 
@@ -136,6 +135,25 @@ _HEAP_SET = []
 #: Environment variables with which a user sets glibc malloc's thresholds: then left alone.
 _MALLOC_ENV = ("MALLOC_MMAP_THRESHOLD_", "MALLOC_TRIM_THRESHOLD_", "MALLOC_TOP_PAD_",
                "MALLOC_MMAP_MAX_")
+
+
+def thread_pool(workers):
+    """A pool of ``workers`` threads for a run's compiled loops (which release the GIL),
+    with the heap thresholds set (:data:`HEAP_THRESHOLDS`): every thread pool of meshladar's
+    runs is made here.
+
+    Parameters
+    ----------
+    workers : int
+        Threads.
+
+    Returns
+    -------
+    concurrent.futures.ThreadPoolExecutor
+        The pool (the caller shuts it down).
+    """
+    _steady_heap()
+    return ThreadPoolExecutor(max_workers=max(1, int(workers)))
 
 
 def _steady_heap():

@@ -41,11 +41,11 @@ that face again (a bowl's second order came out 31 % low that way).
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
 
+from .._executors import thread_pool
 from ..errors import ModelError, ParameterError
 from ..raytrace.backends import resolve_backend
 from ..raytrace.embree import embree_scene, geometry
@@ -376,7 +376,7 @@ def higher_orders(scene, ladar, *, bounces, ray_spacing, samples=BOUNCE_SAMPLES,
                              radiometry == "power")
             return _view_orders(scene, geo, emb, ends, ladar.bin_edges, ray_spacing,
                                 (bounces, samples), np.random.default_rng(seeds[i]))
-        with ThreadPoolExecutor(max(1, int(jobs))) as pool:
+        with thread_pool(jobs) as pool:
             for i, ((v, e), share) in enumerate(pool.map(view, range(ladar.n_views))):
                 values[:, i], var[:, i], per_part[:, i] = v, e, share
     return Orders(tuple(range(2, bounces + 1)), values, np.sqrt(var), samples, radiometry,

@@ -20,12 +20,12 @@ runs the chosen stage on each view. The stages:
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Callable, NamedTuple
 
 import numpy as np
 
+from .._executors import thread_pool
 from ..precision import MIN_COS_FACET, RECEIVER_LIFT
 from ..raytrace.backends import backend as get_backend
 from ..raytrace.embree import embree_scene
@@ -305,7 +305,7 @@ def _rows_on_threads(scene, grid, w, spacing, bins, row_jobs, how=(None, None, T
                                               weight=bins.weight.copy(),
                                               footprint=None if fp is None else
                                               (fp[0].copy(), fp[1].copy()) + fp[2:])))
-    with ThreadPoolExecutor(len(parts)) as ex:
+    with thread_pool(len(parts)) as ex:
         done = list(ex.map(lambda p: cast_bin_grid(scene, p[0], w, spacing, p[1], *how),
                            parts))
     for _, band in parts:
