@@ -157,8 +157,11 @@ def thread_pool(workers):
 
 
 def _steady_heap():
-    """Set :data:`HEAP_THRESHOLDS` once per process, under glibc only, unless the user set
-    malloc's thresholds (:data:`_MALLOC_ENV`, or GLIBC_TUNABLES naming glibc.malloc)."""
+    """Set :data:`HEAP_THRESHOLDS` once per process, under glibc only, unless the process
+    was started with malloc's thresholds set (:data:`_MALLOC_ENV`, or GLIBC_TUNABLES naming
+    glibc.malloc): glibc reads them at start only, so the environment it started with is
+    what counts (Dask's nanny puts MALLOC_TRIM_THRESHOLD_ in os.environ for its workers,
+    which changes nothing in this process)."""
     if _HEAP_SET:
         return
     _HEAP_SET.append(True)
@@ -166,14 +169,26 @@ def _steady_heap():
         glibc = os.confstr("CS_GNU_LIBC_VERSION") or ""
     except (AttributeError, ValueError, OSError):
         glibc = ""
-    if (not glibc.startswith("glibc") or any(k in os.environ for k in _MALLOC_ENV)
-            or "glibc.malloc" in os.environ.get("GLIBC_TUNABLES", "")):
+    start = _starting_environment()
+    if (not glibc.startswith("glibc") or any(k in start for k in _MALLOC_ENV)
+            or "glibc.malloc" in start.get("GLIBC_TUNABLES", "")):
         return
     import ctypes
 
     mallopt = ctypes.CDLL(None).mallopt
     mallopt(-3, HEAP_THRESHOLDS["mmap"])                   # M_MMAP_THRESHOLD
     mallopt(-1, HEAP_THRESHOLDS["trim"])                   # M_TRIM_THRESHOLD
+
+
+def _starting_environment():
+    """The environment this process started with (Linux: /proc/self/environ, which later
+    changes to os.environ do not touch); os.environ where it cannot be read."""
+    try:
+        with open("/proc/self/environ", "rb") as f:
+            pairs = f.read().split(b"\0")
+    except OSError:
+        return dict(os.environ)
+    return dict(p.decode("utf-8", "replace").partition("=")[::2] for p in pairs if p)
 
 
 #: True in a worker process of this module's pools (see :func:`in_worker`).
