@@ -23,8 +23,8 @@ from ._dask import connect
 from ._validate import check_count, check_real
 from .errors import ParameterError
 
-__all__ = ["check_jobs", "choose_executor", "in_worker", "dask_executor", "MAX_JOBS_PER_CORE",
-           "THREADS_FROM", "PARALLEL_FROM"]
+__all__ = ["check_jobs", "choose_executor", "in_worker", "dask_executor", "thread_pool",
+           "HEAP_THRESHOLDS", "MAX_JOBS_PER_CORE", "THREADS_FROM", "PARALLEL_FROM"]
 
 #: Worker processes allowed per core (``jobs``): more only compete for the cores.
 MAX_JOBS_PER_CORE = 4

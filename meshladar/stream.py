@@ -43,7 +43,7 @@ from .runs import RunFolder
 
 __all__ = ["run_chunks", "joined", "dask_executor", "Progress", "choose_executor",
            "check_jobs", "check_run_dir", "in_worker", "MAX_JOBS_PER_CORE", "THREADS_FROM",
-           "PARALLEL_FROM"]
+           "PARALLEL_FROM", "HEAP_THRESHOLDS"]
 
 # the executors' limits, documented here, where they are public
 #: Worker processes allowed per core (``jobs``): more only compete for the cores.
@@ -54,6 +54,11 @@ PARALLEL_FROM = _executors.PARALLEL_FROM
 #: The same for threads, which cost next to nothing to start: from 5e4 rays a view's rows
 #: on two threads pay (a 1e5-ray view of an 82k-face sphere: 15-18 ms against 24-30 ms).
 THREADS_FROM = _executors.THREADS_FROM
+#: glibc malloc's thresholds a run sets when it starts threads (bytes): blocks above
+#: ``mmap`` mapped from the system, a heap's free top beyond ``trim`` given back; the
+#: largest values glibc's own dynamic thresholds reach. Not set where the process started
+#: with malloc's thresholds in its environment (the Long runs guide).
+HEAP_THRESHOLDS = _executors.HEAP_THRESHOLDS
 
 
 class Progress:
