@@ -1,7 +1,7 @@
 """A threaded run keeps its threads' heaps: glibc malloc's thresholds
-(:data:`meshladar._executors.HEAP_THRESHOLDS`) set when a run starts threads, unless the
-user set them. Counted in page faults (events), in a fresh process each time, since the
-thresholds are the process's."""
+(:data:`meshladar.stream.HEAP_THRESHOLDS`) set when a run starts threads, unless the
+process started with its own. Read as resident memory (the kernel's page count, no
+timing), in a fresh process each time, since the thresholds are the process's."""
 
 from __future__ import annotations
 
@@ -58,8 +58,8 @@ def _resident(*args, **env):
 def test_a_threads_freed_memory_is_kept_for_its_next_chunk():
     """After a threaded run, a thread's freed 24 MiB stay resident, for the next chunk to
     reuse, where glibc's default (its first large block mapped afresh) gives them back,
-    and the next chunk faults every page in again: a scan's chunks on two threads took
-    8,000 page faults each and ran 1.3x one thread."""
+    and the next chunk faults every page in again: a scan on two threads took 8,000 page
+    faults and ran 1.3x one thread."""
     held, kept = _resident("run")
     assert held > 20 and kept > 20
     held, kept = _resident()                 # no threaded run: the default
