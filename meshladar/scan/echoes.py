@@ -3,9 +3,10 @@
 Waveforms: sample j of a pulse's record covers [t₀ + j Δt, t₀ + (j + 1) Δt] after its
 emission; each sub-ray's photoelectrons arrive at its two-way time τ = 2R/c spread by the
 echo's Gaussian (the pulse and the response, :attr:`ScanSensor.sigma
-<meshladar.scan.instrument.ScanSensor.sigma>`), integrated exactly over every sample (a
-difference of erfs): a record's sum is the pulse's photoelectrons where the echo lies
-inside it (sub-rays arriving within :data:`MERGE` σ of each other are spread as one, at
+<meshladar.scan.instrument.ScanSensor.sigma>`), integrated over every sample (a
+difference of erfs, read from a table of the chunk's sample integrals by cubic Hermite
+interpolation to 3.4e-14 of the echo's photoelectrons: :mod:`._sampling`): a record's sum
+is the pulse's photoelectrons where the echo lies inside it (sub-rays arriving within :data:`MERGE` σ of each other are spread as one, at
 their weighted mean time). t₀ is each pulse's earliest echo less :data:`SUPPORT` σ (rounded down to a
 sample), or, for a pulse that meets nothing, the chunk's earliest.
 
@@ -16,65 +17,26 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
 from .._pulses import GaussianPulse
-from ._kernels import accumulate_table, centroids, erf, find_peaks, fit_gaussians, sort_small
+from ._kernels import accumulate_table, centroids, find_peaks, fit_gaussians
+from ._sampling import SUPPORT, accumulate, lit_spans, sample_table
 from .instrument import FWHM_PER_SIGMA
 
 __all__ = ["SUPPORT", "waveforms", "echo_shape", "find_returns", "cfar_background", "Returns"]
 
-#: The echo's Gaussian is cut beyond this many σ (exp(−32) of its peak).
-SUPPORT = 8.0
 #: A pulse's sub-rays arriving within this many σ of each other are spread as one, at
 #: their photoelectron-weighted mean time: the record's sum and first moment are exact,
 #: its shape off by the group's time spread squared over σ², at most (1/64)² here.
 MERGE = 1.0 / 64.0
+_NO_TABLE = np.zeros((1, 1))
 #: Peaks closer than this many σ are refitted together.
 _OVERLAP_SIGMAS = 4.0
 #: The most Levenberg-Marquardt steps of a decomposition.
 _FIT_ITERATIONS = 100
 #: An echo's time is the centroid of its samples within this many σ.
 _CENTROID_SIGMAS = 3.0
-
-
-@numba.njit(cache=True, nogil=True)
-def _accumulate(tau, pe, start, dt, sigma, merge, out):   # pragma: no cover - compiled
-    n, m = tau.shape
-    ns = out.shape[1]
-    s = sigma / dt
-    r2 = 1.0 / (s * math.sqrt(2.0))
-    order = np.empty(m, np.int64)
-    edges = np.empty(ns + 1)
-    for p in range(n):
-        sort_small(tau[p], order)
-        row = out[p]
-        k = 0
-        while k < m:
-            # merge the sub-rays arriving within `merge` of the group's first, at their
-            # photoelectron-weighted mean time (energy and first moment kept exactly)
-            e = 0.0
-            et = 0.0
-            t0 = tau[p, order[k]]
-            if not t0 < math.inf:                    # the rest missed (sorted: inf last)
-                break
-            while k < m and tau[p, order[k]] - t0 <= merge:
-                w = pe[p, order[k]]
-                if w > 0.0:
-                    e += w
-                    et += w * tau[p, order[k]]
-                k += 1
-            if e <= 0.0:
-                continue
-            c = (et / e - start[p]) / dt
-            lo = max(0, int(math.floor(c - SUPPORT * s)))
-            hi = min(ns, int(math.ceil(c + SUPPORT * s)) + 1)
-            for j in range(hi - lo + 1):             # the samples' edges, then their parts
-                edges[j] = erf((lo + j - c) * r2)
-            half = 0.5 * e
-            for j in range(hi - lo):
-                row[lo + j] += half * (edges[j + 1] - edges[j])
 
 
 def echo_shape(pulse, response, dt):
@@ -133,8 +95,9 @@ def waveforms(tau, pe, sigma, dt, samples=None, shape=None):
     start : (n,) float64
         Each record's start time t₀ after emission, s.
     """
-    lit = np.where(pe > 0, tau, np.inf)                  # a miss, or no light: never arrives
-    first, last = lit.min(axis=1), np.where(pe > 0, tau, -np.inf).max(axis=1)
+    tau = np.ascontiguousarray(tau, np.float64)
+    pe = np.ascontiguousarray(pe, np.float64)
+    first, last = lit_spans(tau, pe)                     # a miss, or no light: never arrives
     seen = np.isfinite(first)
     floor = first[seen].min() if seen.any() else 0.0
     first = np.where(seen, first, floor)
@@ -148,10 +111,12 @@ def waveforms(tau, pe, sigma, dt, samples=None, shape=None):
         samples = max(3, int(math.ceil(spread.max())) + 1)
     out = np.zeros((len(tau), samples))
     if shape is None:
-        _accumulate(lit, np.ascontiguousarray(pe, np.float64), start, float(dt),
-                    float(sigma), MERGE * float(sigma), out)
+        table = sample_table(float(sigma) / float(dt))
+        value, slope, q, reach = table if table is not None else (_NO_TABLE, _NO_TABLE, 0, 0)
+        accumulate(tau, pe, start, float(dt), float(sigma), MERGE * float(sigma), value,
+                   slope, q, reach, out)
     else:
-        accumulate_table(lit, np.ascontiguousarray(pe, np.float64), start, float(dt),
+        accumulate_table(tau, pe, start, float(dt),
                          float(shape[0]), float(shape[1]), shape[2], out)
     return out, start
 
