@@ -3,10 +3,11 @@ a progress bar and resumable run folders, as for sinograms.
 
 A chunk is a run of consecutive pulses; its noise is seeded by ``[seed, first pulse]``, so
 the points do not depend on how chunks are scheduled, and a run resumed from its folder
-gives the same points as one that was never stopped. A chunk's result is kept as fixed
-slots, ``max_returns`` per pulse, one array per record field (``returns`` counts each
-pulse's), which the run folder stores and checks; a false alarm's truth (nan) is kept as
-0 and restored from its face, −1.
+gives the same points as one that was never stopped. Where a run folder keeps the chunks,
+a chunk's result is fixed slots, ``max_returns`` per pulse, one array per record field
+(``returns`` counts each pulse's), which the folder stores and checks; a false alarm's
+truth (nan) is kept as 0 and restored from its face, −1. Without a folder a chunk's
+result is its records as they are.
 """
 
 from __future__ import annotations
@@ -37,6 +38,7 @@ class ScanJob(NamedTuple):
     run: object          # the chunk function: (job, slice, seed) -> (records, waves, starts)
     split: object        # the moving parts (meshladar.scan.moving.MovingParts) or None
     sink: object = None  # a WaveformSink the chunks stream their records into, or None
+    folder: bool = False  # a run folder keeps the chunks: fixed slots, not records
 
 
 def _chunk_seed(seed, first):
@@ -46,24 +48,31 @@ def _chunk_seed(seed, first):
 
 
 def scan_chunk(job, items):
-    """One chunk's slots (module docstring): ``job.run`` on the pulses ``items``."""
+    """One chunk's slots (module docstring), or its records as they are where no run
+    folder keeps them: ``job.run`` on the pulses ``items``."""
     lo, hi = int(items[0]), int(items[-1]) + 1
     rec, waves, starts = job.run(job, slice(lo, hi), _chunk_seed(job.seed, lo))
+    out = _slots(rec, lo, hi, job.slots) if job.folder else {"records": rec}
+    if job.sink is not None and waves is not None:
+        job.sink.write(lo, waves, starts)
+    elif job.keep and waves is not None:
+        out["waveform"], out["start"] = waves, starts
+    return out
+
+
+def _slots(rec, lo, hi, slots):
+    """A chunk's records as ``slots`` fixed slots per pulse, one array per field."""
     n = hi - lo
     local = (rec["pulse_id"] - lo).astype(np.int64)
     slot = rec["return_number"].astype(np.int64) - 1
     out = {"returns": np.bincount(local, minlength=n).astype(np.int64)}
     for name in POINT_DTYPE.names:
-        a = np.zeros((n, job.slots), POINT_DTYPE[name])
+        a = np.zeros((n, slots), POINT_DTYPE[name])
         values = rec[name]
         if name in _TRUTH:
             values = np.where(np.isnan(values), 0.0, values)
         a[local, slot] = values
         out[name] = a
-    if job.sink is not None and waves is not None:
-        job.sink.write(lo, waves, starts)
-    elif job.keep and waves is not None:
-        out["waveform"], out["start"] = waves, starts
     return out
 
 
@@ -77,10 +86,14 @@ def chunk_arrays(slots, samples, keep):
 
 
 def records(results, slots):
-    """The records of every chunk's slots, in pulse order then time; and the waveform
-    blocks and starts (None when not kept). Written field by field into one array made
-    once (a chunk's records joined after being made each in a zeroed array took 2.5x as
-    long)."""
+    """The records of every chunk, in pulse order then time; and the waveform blocks and
+    starts (None when not kept). Chunks that kept their records (no run folder) are joined
+    as they are; slots are written field by field into one array made once."""
+    waves = "waveform" in results[0] if results else False
+    waves = (tuple(np.asarray(r["waveform"]) for r in results) if waves else None,
+             tuple(np.asarray(r["start"]) for r in results) if waves else None)
+    if results and "records" in results[0]:
+        return (np.concatenate([r["records"] for r in results]),) + waves
     kept = [np.flatnonzero(np.arange(slots)[None, :] < np.asarray(res["returns"])[:, None])
             for res in results]
     rec = np.empty(sum(len(k) for k in kept), POINT_DTYPE)
@@ -94,9 +107,7 @@ def records(results, slots):
     if noise.any():
         for name in _TRUTH:
             rec[name][noise] = np.nan
-    waves = "waveform" in results[0] if results else False
-    return (rec, tuple(np.asarray(r["waveform"]) for r in results) if waves else None,
-            tuple(np.asarray(r["start"]) for r in results) if waves else None)
+    return (rec,) + waves
 
 
 def job_description(scene, pattern, platform, sensor, seed, keep, geometry_key, motions):

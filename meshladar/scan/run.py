@@ -230,7 +230,7 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
                              "records; use echoes='waveform'")
     sink = _sink(waveforms_file, keep_waveforms, run_dir, executor)
     job = ScanJob(scene, pattern, platform, sensor, foot, seed, keep_waveforms, slots, _chunk,
-                  split, sink)
+                  split, sink, folder=run_dir is not None)
     description = None if run_dir is None else job_description(
         scene, pattern, platform, sensor, seed, keep_waveforms,
         geometry(scene, "flat").key, motions)
