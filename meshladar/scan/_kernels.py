@@ -9,7 +9,7 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["world_sub_rays", "refine_hits", "assign_truth", "erf", "sort_small"]
+__all__ = ["world_sub_rays", "pack_rays", "refine_hits", "assign_truth", "erf", "sort_small"]
 
 #: :func:`erf`'s table: nodes every 1/64 on [−6, 6] (beyond, erf is ±1 in float64:
 #: erfc(5.93) < 2⁻⁵⁴), the erf and 2/√π exp(−x²) at each.
@@ -95,15 +95,28 @@ def world_sub_rays(rot, local, offsets, pitch, out):     # pragma: no cover - co
 
 
 @numba.njit(cache=True, nogil=True)
-def refine_hits(face, tfar, origins, dirs, normals, plane_d, min_cos, dist, cos,
-                points):                                  # pragma: no cover - compiled
-    """Per sub-ray (flat index i = p m + k): the float64 distance from the float64 origin
-    (shifted) to the hit face's plane, |n·d|, and the hit point (shifted)."""
+def pack_rays(origins, dirs, o32, d32):                   # pragma: no cover - compiled
+    """The cast's float32 rays: o32[p m + k] = origins[p], d32[p m + k] = dirs[p, k]."""
+    n, m = dirs.shape[0], dirs.shape[1]
+    for p in range(n):
+        for k in range(m):
+            for j in range(3):
+                o32[p * m + k, j] = origins[p, j]
+                d32[p * m + k, j] = dirs[p, k, j]
+
+
+@numba.njit(cache=True, nogil=True)
+def refine_hits(prim, tfar, origins, dirs, normals, plane_d, min_cos, center, face, dist,
+                cos, points):                             # pragma: no cover - compiled
+    """Per sub-ray (flat index i = p m + k): the hit face (−1 on a miss), the float64
+    distance from the float64 origin (shifted by ``center``) to its plane, |n·d|, and
+    the hit point, (shifted origin + t d) + center."""
     n, m = dirs.shape[0], dirs.shape[1]
     for p in range(n):
         for k in range(m):
             i = p * m + k
-            f = face[i]
+            f = prim[i]
+            face[p, k] = f
             if f < 0:
                 dist[p, k] = np.inf
                 cos[p, k] = 0.0
@@ -116,11 +129,11 @@ def refine_hits(face, tfar, origins, dirs, normals, plane_d, min_cos, dist, cos,
                                     * origins[p, 1] + normals[f, 2] * origins[p, 2])
                 t = num / den
             else:
-                t = tfar[i]
+                t = np.float64(tfar[i])
             dist[p, k] = t
             cos[p, k] = abs(den)
             for j in range(3):
-                points[p, k, j] = origins[p, j] + t * dirs[p, k, j]
+                points[p, k, j] = (origins[p, j] + t * dirs[p, k, j]) + center[j]
 
 
 @numba.njit(cache=True, nogil=True)

@@ -19,12 +19,15 @@ coating's :meth:`~meshladar.brdf.BRDF.projected` weight).
 
 from __future__ import annotations
 
+import math
+
+import numba
 import numpy as np
 
 from ..raytrace.embree import embree_scene, geometry
 from ..raytrace.backends import resolve_backend
 from ..sensor import PLANCK, SPEED_OF_LIGHT
-from ._kernels import refine_hits, world_sub_rays
+from ._kernels import pack_rays, refine_hits, world_sub_rays
 
 __all__ = ["world_directions", "Cast", "cast_chunk", "photoelectrons"]
 
@@ -111,19 +114,18 @@ def cast_chunk(scene, origins, directions):
     geo = geometry(scene, "flat")
     emb = embree_scene(geo, resolve_backend("auto"))
     n, m = directions.shape[:2]
-    shifted = origins - geo.center
-    o32 = np.empty((n, m, 3), np.float32)       # each pulse's origin for its sub-rays: a
-    o32[...] = shifted[:, None, :]              # broadcast assignment (np.repeat holds the
-    res = emb.run(o32.reshape(n * m, 3),        # GIL that other threads' chunks wait for)
-                  directions.reshape(n * m, 3).astype(np.float32))
-    face = res["primID"].astype(np.int64)
+    shifted = np.ascontiguousarray(origins - geo.center)
+    directions = np.ascontiguousarray(directions, np.float64)
+    o32, d32 = np.empty((n * m, 3), np.float32), np.empty((n * m, 3), np.float32)
+    pack_rays(shifted, directions, o32, d32)            # compiled: no GIL held
+    res = emb.run(o32, d32)
+    face = np.empty((n, m), np.int64)
     dist, cos = np.empty((n, m)), np.empty((n, m))
     pts = np.empty((n, m, 3))
-    refine_hits(face, res["tfar"].astype(np.float64), np.ascontiguousarray(shifted),
-                np.ascontiguousarray(directions), geo.face_normals, geo.plane_d, _MIN_COS,
-                dist, cos, pts)
-    pts += geo.center
-    return Cast(face.reshape(n, m), dist, cos, pts)
+    refine_hits(res["primID"], res["tfar"], shifted, directions, geo.face_normals,
+                geo.plane_d, _MIN_COS, np.asarray(geo.center, np.float64), face, dist, cos,
+                pts)
+    return Cast(face, dist, cos, pts)
 
 
 def photoelectrons(scene, cast, shares, sensor):
@@ -147,27 +149,55 @@ def photoelectrons(scene, cast, shares, sensor):
         Photoelectrons, 0 on a miss.
     """
     geo = geometry(scene, "flat")
-    hit = cast.hit
-    out = np.zeros(cast.face.shape)
-    f = cast.face[hit]
-    cos = np.minimum(cast.cos[hit], 1.0)
-    sin = np.sqrt(np.maximum(0.0, 1.0 - cos * cos))
-    weight = np.zeros(len(f))
+    size = cast.face.size
+    at, face = np.empty(size, np.int64), np.empty(size, np.int64)
+    cos, sin, r, share = np.empty(size), np.empty(size), np.empty(size), np.empty(size)
+    shares = np.ascontiguousarray(np.broadcast_to(shares, cast.face.shape[1:]), np.float64)
+    k = _hit_terms(cast.face, cast.cos, cast.distance, shares, at, face, cos, sin, r, share)
+    cos, sin = cos[:k], sin[:k]
     if len(scene.materials) == 1:              # one coating: no selection to make
-        weight[...] = scene.materials[0].projected(cos, sin)
+        weight = np.asarray(scene.materials[0].projected(cos, sin), np.float64)
     else:
-        mat = geo.material[f]
+        weight = np.zeros(k)
+        mat = geo.material[face[:k]]
         for i, coating in enumerate(scene.materials):
             sel = mat == i
             if np.any(sel):
                 weight[sel] = coating.projected(cos[sel], sin[sel])
-    r = cast.distance[hit]
     photon = PLANCK * SPEED_OF_LIGHT / sensor.wavelength
     scale = (sensor.pulse_energy * np.pi * sensor.aperture_diameter ** 2 / 4.0
              * sensor.optics_transmission * sensor.quantum_efficiency / photon)
-    share = np.broadcast_to(shares, cast.face.shape)[hit]
-    pe = scale * share * weight / (r * r)
-    if sensor.extinction:                      # (× exp(−0) = 1 would change no bit)
-        pe = pe * np.exp(-2.0 * sensor.extinction * r)
-    out[hit] = pe
+    out = np.zeros(cast.face.shape)
+    _link(at[:k], np.broadcast_to(weight, (k,)), r, share, float(scale),
+          float(sensor.extinction), out.reshape(-1))
     return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _hit_terms(face, cos, dist, shares, at, hit_face, c, s, r, share):   # pragma: no cover
+    """The hits' flat indices, faces, cos θ (at most 1), sin θ, distances and energy
+    shares, packed; returns how many."""
+    n, m = face.shape
+    k = 0
+    for p in range(n):
+        for q in range(m):
+            if face[p, q] < 0:
+                continue
+            at[k] = p * m + q
+            hit_face[k] = face[p, q]
+            c[k] = min(cos[p, q], 1.0)
+            s[k] = math.sqrt(max(0.0, 1.0 - c[k] * c[k]))
+            r[k] = dist[p, q]
+            share[k] = shares[q]
+            k += 1
+    return k
+
+
+@numba.njit(cache=True, nogil=True)
+def _link(at, weight, r, share, scale, extinction, out):   # pragma: no cover - compiled
+    """out[at] = the link budget's photoelectrons (module docstring) of each hit."""
+    for i in range(at.shape[0]):
+        pe = scale * share[i] * weight[i] / (r[i] * r[i])
+        if extinction:                     # (× exp(−0) = 1 would change no bit)
+            pe = pe * math.exp(-2.0 * extinction * r[i])
+        out[at[i]] = pe
