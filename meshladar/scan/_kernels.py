@@ -215,10 +215,10 @@ def _active(margin, p, half, act):                        # pragma: no cover - c
 
 
 @numba.njit(cache=True, nogil=True)
-def find_peaks(waves, margin, weights, half, separation, max_returns, out_p, out_j,
+def find_peaks(waves, known, margin, weights, half, separation, max_returns, out_p, out_j,
                out_f):                                    # pragma: no cover - compiled
     """Per pulse, the maxima of the matched-filtered waveform (``weights``, zero beyond the
-    record) where the largest ``margin`` within ``half`` samples is ≥ 0, farther than
+    record; read from ``known`` where it has rows) where the largest ``margin`` within ``half`` samples is ≥ 0, farther than
     ``separation`` samples from a stronger one, the strongest ``max_returns`` first; their
     pulse, sample and filtered values at j − 1, j, j + 1. Returns how many. The filter
     runs over each stretch of such samples and one beyond, not the whole record."""
@@ -243,7 +243,11 @@ def find_peaks(waves, margin, weights, half, separation, max_returns, out_p, out
             a = j
             while j < ns and act[j]:
                 j += 1
-            _filter_span(waves, p, max(a - 1, 0), min(j, ns - 1), weights, filt)
+            if known.shape[0]:
+                for i in range(max(a - 1, 0), min(j, ns - 1) + 1):
+                    filt[i + 1] = known[p, i]
+            else:
+                _filter_span(waves, p, max(a - 1, 0), min(j, ns - 1), weights, filt)
             for i in range(a, j):
                 f = filt[i + 1]
                 if f > 0.0 and f >= filt[i] and f > filt[i + 2]:

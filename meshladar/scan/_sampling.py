@@ -24,7 +24,8 @@ import numpy as np
 
 from ._kernels import erf, sort_small
 
-__all__ = ["SUPPORT", "NODES_PER_R", "TABLE_BYTES", "sample_table", "lit_spans", "accumulate"]
+__all__ = ["SUPPORT", "NODES_PER_R", "TABLE_BYTES", "sample_table", "matched_filter", "lit_spans",
+           "accumulate"]
 
 #: The echo's Gaussian is cut beyond this many σ (exp(−32) of its peak).
 SUPPORT = 8.0
@@ -68,26 +69,62 @@ def sample_table(s):
     Returns
     -------
     tuple or None
-        ``(value, slope, q, reach)``: K_d and its derivative over Q at the Q + 1 phases,
-        for offsets d = −reach … reach + 1 (the support's samples either side).
+        ``(value, slope, q, reach, filtered, filtered_slope)``: K_d and its derivative over
+        Q at the Q + 1 phases, for offsets d = −reach … reach + 1 (the support's samples
+        either side); and the same of the matched-filtered record
+        (:func:`matched_filter`), Σₜ wₜ K_{d+t−h}, for d = −reach − h … reach + 1 + h.
     """
     r = 1.0 / (s * math.sqrt(2.0))
     q = max(16, int(math.ceil(NODES_PER_R * r)))
     reach = int(math.ceil(SUPPORT * s)) + 2
-    if 16 * (q + 1) * (2 * reach + 2) > TABLE_BYTES:
+    taps = matched_filter(s)
+    if 16 * (q + 1) * (4 * reach + 4 + 2 * len(taps)) > TABLE_BYTES:
         return None
     value, slope = _build(r, q, reach)
-    value.setflags(write=False)
-    slope.setflags(write=False)
-    return value, slope, q, reach
+    filtered, filtered_slope = _filtered(value, taps), _filtered(slope, taps)
+    for a in (value, slope, filtered, filtered_slope):
+        a.setflags(write=False)
+    return value, slope, q, reach, filtered, filtered_slope
+
+
+def matched_filter(s):
+    """The matched filter's taps for an echo of σ = ``s`` samples: a Gaussian of that σ
+    at the integers −h … h, h = round(4 s) (scipy's ``gaussian_filter1d``, truncate=4),
+    summing to 1.
+
+    Parameters
+    ----------
+    s : float
+        The echo's σ over the sample interval.
+
+    Returns
+    -------
+    (2 h + 1,) numpy.ndarray
+        The taps.
+    """
+    h = int(4.0 * s + 0.5)
+    taps = np.exp(-0.5 * (np.arange(-h, h + 1) / s) ** 2)
+    return taps / taps.sum()
+
+
+def _filtered(table, taps):
+    """Σₜ wₜ table[:, i + t − 2h] (zero beyond the table): the filter of each phase's
+    row, on 2h more offsets."""
+    h = (len(taps) - 1) // 2
+    nd = table.shape[1]
+    out = np.zeros((table.shape[0], nd + 2 * h))
+    for t, w in enumerate(taps):
+        out[:, 2 * h - t:2 * h - t + nd] += w * table
+    return out
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def _group(row, e, c, s, r2, value, slope, q, reach):     # pragma: no cover - compiled
-    """row[j] += e K_{j−b}(φ) over the support's samples of a group centred at c."""
+def _group(row, e, c, s, r2, value, slope, q, reach, widen):   # pragma: no cover
+    """row[j] += e K_{j−b}(φ) over the support's samples of a group centred at c, and
+    ``widen`` more each side (the filtered table's)."""
     ns = row.shape[0]
-    lo = max(0, int(math.floor(c - SUPPORT * s)))
-    hi = min(ns, int(math.ceil(c + SUPPORT * s)) + 1)
+    lo = max(0, int(math.floor(c - SUPPORT * s)) - widen)
+    hi = min(ns, int(math.ceil(c + SUPPORT * s)) + 1 + widen)
     if q == 0:                                   # no table: the erf differences
         prev = erf((lo - c) * r2)
         half = 0.5 * e
@@ -127,17 +164,35 @@ def lit_spans(tau, pe):                                   # pragma: no cover - c
 
 
 @numba.njit(cache=True, nogil=True)
-def accumulate(tau, pe, start, dt, sigma, merge, value, slope, q, reach,
-               out):                                      # pragma: no cover - compiled
+def _spread(p, e, et, start, dt, s, r2, tables, out, filt):   # pragma: no cover
+    """A group's samples into out[p] and, where ``filt`` has rows, its matched-filtered
+    samples into filt[p]; returns whether the record cut its support (the filtered
+    samples are then not the filter of the record's)."""
+    value, slope, q, reach, fvalue, fslope = tables
+    c = (et / e - start[p]) / dt
+    _group(out[p], e, c, s, r2, value, slope, q, reach, 0)
+    if filt.shape[0] == 0:
+        return False
+    _group(filt[p], e, c, s, r2, fvalue, fslope, q, reach + (fvalue.shape[1]
+                                                             - value.shape[1]) // 2,
+           (fvalue.shape[1] - value.shape[1]) // 2)
+    return c - SUPPORT * s < 0.0 or math.ceil(c + SUPPORT * s) + 1 > out.shape[1]
+
+
+@numba.njit(cache=True, nogil=True)
+def accumulate(tau, pe, start, dt, sigma, merge, tables, out, filt):   # pragma: no cover
     """out[p] += each of pulse p's groups of lit sub-rays (photoelectrons > 0; those within
     ``merge`` s of the group's earliest, at their photoelectron-weighted mean time) spread
-    over its samples; ``q`` 0: no table. A pulse whose lit sub-rays all lie within
-    ``merge`` of its earliest is one group, summed in index order without sorting."""
+    over its samples (``tables``: :func:`sample_table`'s, q 0 for none); and filt[p] +=
+    their matched-filtered samples where ``filt`` has rows. A pulse whose lit sub-rays
+    all lie within ``merge`` of its earliest is one group, summed in index order without
+    sorting. Returns how many groups the records cut."""
     n, m = tau.shape
     s = sigma / dt
     r2 = 1.0 / (s * math.sqrt(2.0))
     order = np.empty(m, np.int64)
     lit = np.empty(m)
+    cut = 0
     for p in range(n):
         lo, hi, e, et = math.inf, -math.inf, 0.0, 0.0
         for k in range(m):
@@ -149,7 +204,7 @@ def accumulate(tau, pe, start, dt, sigma, merge, value, slope, q, reach,
                 et += w * t
         if hi - lo <= merge:                     # one group (or nothing lit)
             if e > 0.0:
-                _group(out[p], e, (et / e - start[p]) / dt, s, r2, value, slope, q, reach)
+                cut += _spread(p, e, et, start, dt, s, r2, tables, out, filt)
             continue
         for k in range(m):                       # an unlit sub-ray never arrives
             lit[k] = tau[p, k] if pe[p, k] > 0.0 else math.inf
@@ -165,4 +220,5 @@ def accumulate(tau, pe, start, dt, sigma, merge, value, slope, q, reach,
                 e += w
                 et += w * lit[order[k]]
                 k += 1
-            _group(out[p], e, (et / e - start[p]) / dt, s, r2, value, slope, q, reach)
+            cut += _spread(p, e, et, start, dt, s, r2, tables, out, filt)
+    return cut

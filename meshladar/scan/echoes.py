@@ -21,7 +21,7 @@ import numpy as np
 
 from .._pulses import GaussianPulse
 from ._kernels import accumulate_table, centroids, find_peaks, fit_gaussians
-from ._sampling import SUPPORT, accumulate, lit_spans, sample_table
+from ._sampling import SUPPORT, accumulate, lit_spans, matched_filter, sample_table
 from .instrument import FWHM_PER_SIGMA
 
 __all__ = ["SUPPORT", "waveforms", "echo_shape", "find_returns", "cfar_background", "Returns"]
@@ -30,7 +30,8 @@ __all__ = ["SUPPORT", "waveforms", "echo_shape", "find_returns", "cfar_backgroun
 #: their photoelectron-weighted mean time: the record's sum and first moment are exact,
 #: its shape off by the group's time spread squared over σ², at most (1/64)² here.
 MERGE = 1.0 / 64.0
-_NO_TABLE = np.zeros((1, 1))
+_EMPTY = np.zeros((0, 0))
+_NO_TABLE = (np.zeros((1, 1)), np.zeros((1, 1)), 0, 0, np.zeros((1, 1)), np.zeros((1, 1)))
 #: Peaks closer than this many σ are refitted together.
 _OVERLAP_SIGMAS = 4.0
 #: The most Levenberg-Marquardt steps of a decomposition.
@@ -95,6 +96,30 @@ def waveforms(tau, pe, sigma, dt, samples=None, shape=None):
     start : (n,) float64
         Each record's start time t₀ after emission, s.
     """
+    return filtered_waveforms(tau, pe, sigma, dt, samples, shape)[:2]
+
+
+def filtered_waveforms(tau, pe, sigma, dt, samples=None, shape=None, filtered=False):
+    """:func:`waveforms`, and with ``filtered`` the matched-filtered records made beside
+    them from :mod:`._sampling`'s filtered table, which :func:`find_returns` then need
+    not filter (they agree with the filter of the records to the table's 3.4e-14 of an
+    echo's photoelectrons).
+
+    Parameters
+    ----------
+    tau, pe, sigma, dt, samples, shape
+        As :func:`waveforms`.
+    filtered : bool
+        Make the matched-filtered records too.
+
+    Returns
+    -------
+    waves, start
+        As :func:`waveforms`.
+    filtered : (n, samples) numpy.ndarray or None
+        The matched-filtered records; None unless asked for, and where the echo's shape is
+        not a Gaussian, no table is made, or a record cuts an echo's support.
+    """
     tau = np.ascontiguousarray(tau, np.float64)
     pe = np.ascontiguousarray(pe, np.float64)
     first, last = lit_spans(tau, pe)                     # a miss, or no light: never arrives
@@ -110,15 +135,15 @@ def waveforms(tau, pe, sigma, dt, samples=None, shape=None):
         spread = (last - start + after) / dt
         samples = max(3, int(math.ceil(spread.max())) + 1)
     out = np.zeros((len(tau), samples))
-    if shape is None:
-        table = sample_table(float(sigma) / float(dt))
-        value, slope, q, reach = table if table is not None else (_NO_TABLE, _NO_TABLE, 0, 0)
-        accumulate(tau, pe, start, float(dt), float(sigma), MERGE * float(sigma), value,
-                   slope, q, reach, out)
-    else:
-        accumulate_table(tau, pe, start, float(dt),
-                         float(shape[0]), float(shape[1]), shape[2], out)
-    return out, start
+    if shape is not None:
+        accumulate_table(tau, pe, start, float(dt), float(shape[0]), float(shape[1]),
+                         shape[2], out)
+        return out, start, None
+    tables = sample_table(float(sigma) / float(dt))
+    filt = np.zeros(out.shape if filtered and tables is not None else (0, 0))
+    cut = accumulate(tau, pe, start, float(dt), float(sigma), MERGE * float(sigma),
+                     tables or _NO_TABLE, out, filt)
+    return out, start, (filt if len(filt) and not cut else None)
 
 
 class Returns:
@@ -229,7 +254,7 @@ def cfar_background(waves, guard):
 
 
 def find_returns(waves, start, dt, sigma, level, max_returns, decompose, background=0.0,
-                 detect=None):
+                 detect=None, filtered=None):
     """The returns in a chunk's waveforms (photoelectrons per sample), as :class:`Returns`
     (:mod:`.instrument`'s detection): maxima of the matched-filtered waveform whose
     largest sample within the echo's FWHM reaches ``level``, located and sized by a
@@ -255,6 +280,9 @@ def find_returns(waves, start, dt, sigma, level, max_returns, decompose, backgro
         Background per sample, taken off before the centroid.
     detect : numpy.ndarray, optional
         What ``level`` applies to (default ``waves``).
+    filtered : (n, samples) numpy.ndarray, optional
+        The matched-filtered ``waves`` where already known (:func:`filtered_waveforms`); default:
+        filtered here.
 
     Returns
     -------
@@ -265,13 +293,13 @@ def find_returns(waves, start, dt, sigma, level, max_returns, decompose, backgro
     fwhm = FWHM_PER_SIGMA * s
     margin = np.ascontiguousarray((waves if detect is None else detect) - level, np.float64)
     waves = np.ascontiguousarray(waves, np.float64)
-    r = int(4.0 * s + 0.5)                       # scipy's gaussian_filter1d, truncate=4
-    weights = np.exp(-0.5 * (np.arange(-r, r + 1) / s) ** 2)
-    weights /= weights.sum()
+    weights = matched_filter(s)
+    known = _EMPTY if filtered is None else np.ascontiguousarray(filtered, np.float64)
     cap = len(waves) * max_returns
     p, j = np.empty(cap, np.int64), np.empty(cap, np.int64)
     f3 = np.empty((cap, 3))
-    k = find_peaks(waves, margin, weights, int(fwhm / 2), float(fwhm), max_returns, p, j, f3)
+    k = find_peaks(waves, known, margin, weights, int(fwhm / 2), float(fwhm), max_returns,
+                   p, j, f3)
     p, j, f3 = p[:k], j[:k], f3[:k]
     delta, s_f, height_f = _interpolate3(f3, j, waves.shape[1], s * math.sqrt(2.0))
     centre = j + 0.5 + delta

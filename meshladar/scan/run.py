@@ -24,7 +24,7 @@ from ..stream import run_chunks
 from ..sensor import SPEED_OF_LIGHT
 from ._kernels import assign_truth, discrete_returns
 from .cast import cast_chunk, photoelectrons, world_directions
-from .echoes import Returns, cfar_background, echo_shape, find_returns, waveforms
+from .echoes import Returns, cfar_background, echo_shape, filtered_waveforms, find_returns
 from .files import WaveformSink
 from .footprint import pixel_offsets
 from .geiger import blind_shots, coates, fire
@@ -97,8 +97,10 @@ def _chunk(job, sl, seed):
         ret, measured, start = _discrete(sensor, tau, pe), None, None
     else:
         shape = echo_shape(sensor.pulse, sensor.response, sensor.dt)
-        waves, start = waveforms(tau, pe, sensor.sigma, sensor.dt, sensor.samples, shape)
-        ret, measured = _detect(sensor, waves, start, seed)
+        clean = sensor.noise is None and sensor.geiger is None    # the records as measured
+        waves, start, filt = filtered_waveforms(tau, pe, sensor.sigma, sensor.dt,
+                                                sensor.samples, shape, filtered=clean)
+        ret, measured = _detect(sensor, waves, start, seed, filt)
         ret.time = ret.time - sensor.delay             # the shape's own delay taken off
     rec = np.zeros(len(ret), POINT_DTYPE)
     rng = 0.5 * SPEED_OF_LIGHT * ret.time
@@ -131,9 +133,10 @@ def _discrete(sensor, tau, pe):
                    FWHM_PER_SIGMA * spread, e[:k])
 
 
-def _detect(sensor, waves, start, seed):
+def _detect(sensor, waves, start, seed, filtered=None):
     """The returns of a chunk's expected waveforms, through the sensor's noise and
-    detector (linear mode) or its Geiger-mode pixels; and the records it measured."""
+    detector (linear mode) or its Geiger-mode pixels; and the records it measured.
+    ``filtered``: the matched-filtered ``waves``, where known and measured as they are."""
     det, b = sensor.detector, sensor.background()
     if sensor.geiger is not None:
         gm = sensor.geiger
@@ -156,7 +159,7 @@ def _detect(sensor, waves, start, seed):
         b = cfar_background(measured, 2.0 * sensor.fwhm / sensor.dt)
     level = det.level(b[:, None] if det.cfar else b)
     ret = find_returns(measured, start, sensor.dt, sensor.sigma, level, det.max_returns,
-                       det.decompose, b)
+                       det.decompose, b, filtered=filtered if measured is waves else None)
     return ret, measured
 
 

@@ -190,3 +190,38 @@ def test_a_records_samples_are_the_gaussian_echos_integrals_over_them(sigma_samp
     x = (edges[:, None, :] - np.where(pe > 0, tau, 0.0)[:, :, None]) / (sigma * math.sqrt(2))
     expect = (0.5 * pe[:, :, None] * np.diff(scipy_erf(x), axis=2)).sum(axis=1)
     assert np.abs(waves - expect).max() <= tol * pe.sum(axis=1).max()
+
+
+def test_the_records_filtered_beside_them_are_scipys_gaussian_filter_of_the_records():
+    """The matched-filtered records made from the filtered table against scipy's
+    gaussian_filter1d (σ the echo's, truncate 4, zeros beyond the record) of the records
+    computed with scipy's erf (and of the records made, where sub-rays merge), to the
+    table's error; None where a fixed record length cuts
+    an echo; and the returns found from them those found by filtering the records."""
+    from scipy.ndimage import gaussian_filter1d
+    from scipy.special import erf as scipy_erf
+
+    from meshladar.scan.echoes import filtered_waveforms, find_returns
+
+    tol = 1e-13                         # of the pulse's photoelectrons, per sample
+    dt, sigma = 0.5e-9, 2.1e-9
+    rng = np.random.default_rng(5)
+    tau = 600e-9 + np.cumsum(rng.uniform(0.5, 6.0, (60, 3)) * sigma, axis=1)
+    tau[:20, 1:] = tau[:20, :1] + rng.uniform(0, 1e-12, (20, 2))   # sub-rays merged
+    pe = rng.uniform(1.0, 1e4, (60, 3))
+    waves, start, filt = filtered_waveforms(tau, pe, sigma, dt, filtered=True)
+    edges = start[:, None] + dt * np.arange(waves.shape[1] + 1)
+    x = (edges[:, None, :] - tau[:, :, None]) / (sigma * math.sqrt(2))
+    expect = (0.5 * pe[:, :, None] * np.diff(scipy_erf(x), axis=2)).sum(axis=1)
+    want = gaussian_filter1d(expect, sigma / dt, axis=1, mode="constant", truncate=4.0)
+    apart = slice(20, None)             # merged sub-rays are one echo at their mean time
+    assert np.abs(filt - want)[apart].max() <= tol * pe.sum(axis=1).max()
+    assert np.abs(filt - gaussian_filter1d(waves, sigma / dt, axis=1, mode="constant",
+                                           truncate=4.0)).max() <= tol * pe.sum(axis=1).max()
+    assert filtered_waveforms(tau, pe, sigma, dt, samples=20, filtered=True)[2] is None
+    got = find_returns(waves, start, dt, sigma, 1.0, 5, True, filtered=filt)
+    ref = find_returns(waves, start, dt, sigma, 1.0, 5, True)
+    assert len(got) == len(ref) > 60
+    np.testing.assert_array_equal(got.pulse, ref.pulse)
+    np.testing.assert_allclose(got.time, ref.time, rtol=0, atol=1e-9 * dt)
+    np.testing.assert_allclose(got.intensity, ref.intensity, rtol=1e-9)
