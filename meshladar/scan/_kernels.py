@@ -9,7 +9,7 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["world_sub_rays", "pack_rays", "refine_hits", "assign_truth", "erf", "sort_small"]
+__all__ = ["order_returns", "world_sub_rays", "pack_rays", "refine_hits", "assign_truth", "erf", "sort_small"]
 
 #: :func:`erf`'s table: nodes every 1/64 on [−6, 6] (beyond, erf is ±1 in float64:
 #: erfc(5.93) < 2⁻⁵⁴), the erf and 2/√π exp(−x²) at each.
@@ -59,13 +59,35 @@ def sort_small(values, order):                           # pragma: no cover - co
 
 
 @numba.njit(cache=True, nogil=True)
+def order_returns(pulse, time, order, number, count):    # pragma: no cover - compiled
+    """order: returns sorted by pulse, then time (stable), where ``pulse`` is already in
+    order; each return's number within its pulse and its pulse's count, in that order.
+    Returns False (nothing written) where ``pulse`` is out of order."""
+    n = pulse.shape[0]
+    for i in range(1, n):
+        if pulse[i] < pulse[i - 1]:
+            return False
+    a = 0
+    while a < n:
+        b = a
+        while b < n and pulse[b] == pulse[a]:
+            b += 1
+        sort_small(time[a:b], order[a:b])
+        for i in range(a, b):
+            order[i] += a
+            number[i] = i - a + 1
+            count[i] = b - a
+        a = b
+    return True
+
+
+@numba.njit(cache=True, nogil=True)
 def world_sub_rays(rot, local, offsets, pitch, out):     # pragma: no cover - compiled
     """out[p, k] = rot[p] @ (pulse p's sub-ray k in the sensor frame), normalised; a beam's
     offsets are angles about the pulse's direction (pitch < 0), a flash pixel's fractions
     of ``pitch`` on the focal plane x = 1."""
     n = local.shape[0]
     m = offsets.shape[0]
-    s = np.empty(3)
     ab = offsets.copy() if pitch >= 0.0 else np.tan(offsets)     # once, not per pulse
     for p in range(n):
         dx, dy, dz = local[p, 0], local[p, 1], local[p, 2]
@@ -82,16 +104,17 @@ def world_sub_rays(rot, local, offsets, pitch, out):     # pragma: no cover - co
             nu = math.sqrt(ux * ux + uy * uy + uz * uz)
             ux, uy, uz = ux / nu, uy / nu, uz / nu
             vx, vy, vz = dy * uz - dz * uy, dz * ux - dx * uz, dx * uy - dy * ux
+        r = rot[p]
+        o = out[p]
         for k in range(m):
             a = ab[k, 0]
             b = ab[k, 1]
-            s[0] = dx + a * ux + b * vx
-            s[1] = dy + a * uy + b * vy
-            s[2] = dz + a * uz + b * vz
-            inv = 1.0 / math.sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2])
+            s0 = dx + a * ux + b * vx
+            s1 = dy + a * uy + b * vy
+            s2 = dz + a * uz + b * vz
+            inv = 1.0 / math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
             for i in range(3):
-                out[p, k, i] = inv * (rot[p, i, 0] * s[0] + rot[p, i, 1] * s[1]
-                                      + rot[p, i, 2] * s[2])
+                o[k, i] = inv * (r[i, 0] * s0 + r[i, 1] * s1 + r[i, 2] * s2)
 
 
 @numba.njit(cache=True, nogil=True)

@@ -141,11 +141,11 @@ def _group(row, e, c, s, r2, value, slope, q, reach, widen):   # pragma: no cove
     t3 = t2 * t
     h00, h10 = e * (2.0 * t3 - 3.0 * t2 + 1.0), e * (t3 - 2.0 * t2 + t)
     h01, h11 = e * (3.0 * t2 - 2.0 * t3), e * (t3 - t2)
-    va, da, vb, db = value[k], slope[k], value[k + 1], slope[k + 1]
-    off = reach - base
-    for j in range(lo, hi):
-        i = j + off
-        row[j] += h00 * va[i] + h10 * da[i] + h01 * vb[i] + h11 * db[i]
+    a, b = lo + reach - base, hi + reach - base
+    va, da, vb, db = value[k, a:b], slope[k, a:b], value[k + 1, a:b], slope[k + 1, a:b]
+    dst = row[lo:hi]                             # 1-D slices from 0: the loop vectorises
+    for j in range(hi - lo):
+        dst[j] += h00 * va[j] + h10 * da[j] + h01 * vb[j] + h11 * db[j]
 
 
 @numba.njit(cache=True, nogil=True)

@@ -20,7 +20,7 @@ import math
 import numpy as np
 
 from .._pulses import GaussianPulse
-from ._kernels import accumulate_table, centroids, find_peaks, fit_gaussians
+from ._kernels import accumulate_table, centroids, find_peaks, fit_gaussians, order_returns
 from ._sampling import SUPPORT, accumulate, lit_spans, matched_filter, sample_table
 from .instrument import FWHM_PER_SIGMA
 
@@ -147,7 +147,8 @@ def filtered_waveforms(tau, pe, sigma, dt, samples=None, shape=None, filtered=Fa
 
 
 class Returns:
-    """A chunk's returns, sorted by pulse then time.
+    """A chunk's returns, sorted by pulse then time (given in pulse order, each pulse's
+    returns in any order).
 
     Attributes
     ----------
@@ -166,17 +167,19 @@ class Returns:
     """
 
     def __init__(self, pulse, time, amplitude, width, intensity):
-        order = np.lexsort((time, pulse))
+        pulse = np.ascontiguousarray(pulse, np.int64)
+        time = np.ascontiguousarray(time, np.float64)
+        order = np.empty(len(pulse), np.int64)
+        self.return_number = np.empty(len(pulse), np.uint8)
+        self.number_of_returns = np.empty(len(pulse), np.uint8)
+        if not order_returns(pulse, time, order, self.return_number,
+                             self.number_of_returns):
+            raise ValueError("Returns: the pulses must come in ascending order")
         self.pulse = pulse[order]
         self.time = time[order]
         self.amplitude = amplitude[order]
         self.width = width[order]
         self.intensity = intensity[order]
-        counts = np.bincount(self.pulse, minlength=0)
-        self.number_of_returns = counts[self.pulse].astype(np.uint8) if len(self.pulse) else \
-            np.zeros(0, np.uint8)
-        first = np.searchsorted(self.pulse, self.pulse, side="left")
-        self.return_number = (np.arange(len(self.pulse)) - first + 1).astype(np.uint8)
 
     def __len__(self):
         return len(self.pulse)

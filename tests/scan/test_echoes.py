@@ -225,3 +225,24 @@ def test_the_records_filtered_beside_them_are_scipys_gaussian_filter_of_the_reco
     np.testing.assert_array_equal(got.pulse, ref.pulse)
     np.testing.assert_allclose(got.time, ref.time, rtol=0, atol=1e-9 * dt)
     np.testing.assert_allclose(got.intensity, ref.intensity, rtol=1e-9)
+
+
+def test_returns_are_ordered_by_time_within_each_pulse_and_numbered():
+    """A chunk's returns, each pulse's in any order, come out as numpy's lexsort orders
+    them (stable: equal times keep their order), numbered from 1 with their pulse's
+    count; pulses out of order are refused."""
+    from meshladar.scan.echoes import Returns
+
+    rng = np.random.default_rng(8)
+    pulse = np.sort(rng.integers(0, 300, 1000))
+    time = rng.choice([1.0, 2.0, 3.0, 4.0], 1000)             # ties on purpose
+    value = np.arange(1000.0)
+    ret = Returns(pulse, time, value, value, value)
+    order = np.lexsort((time, pulse))
+    np.testing.assert_array_equal(ret.amplitude, value[order])
+    counts = np.bincount(pulse)
+    np.testing.assert_array_equal(ret.number_of_returns, counts[pulse[order]])
+    first = np.searchsorted(pulse[order], pulse[order])
+    np.testing.assert_array_equal(ret.return_number, np.arange(1000) - first + 1)
+    with pytest.raises(ValueError, match="ascending"):
+        Returns(pulse[::-1], time, value, value, value)
