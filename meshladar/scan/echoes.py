@@ -20,8 +20,9 @@ import math
 import numpy as np
 
 from .._pulses import GaussianPulse
-from ._kernels import accumulate_table, centroids, find_peaks, fit_gaussians, order_returns
-from ._sampling import SUPPORT, accumulate, lit_spans, matched_filter, sample_table
+from ._peaks import centroids, find_peaks, fit_gaussians, order_returns
+from ._sampling import (SUPPORT, accumulate, accumulate_table, lit_spans, matched_filter,
+                        sample_table)
 from .instrument import FWHM_PER_SIGMA
 
 __all__ = ["SUPPORT", "waveforms", "echo_shape", "find_returns", "cfar_background", "Returns"]
@@ -65,7 +66,6 @@ def echo_shape(pulse, response, dt):
         return None
     widths = [x.fwhm if isinstance(x, GaussianPulse) else x.interval for x in shapes]
     step = min([dt] + widths) / 64.0
-    lo = sum(x.support[0] for x in shapes)
     dens = None
     for x in shapes:
         a, b = x.support
