@@ -58,26 +58,28 @@ def _filter_span(waves, p, lo, hi, weights, filt):       # pragma: no cover - co
 
 
 @numba.njit(cache=True, nogil=True)
-def _active(margin, p, half, act):                        # pragma: no cover - compiled
-    """act[j]: the window [j − half, j + half] of pulse p holds a margin ≥ 0 (one pass:
-    the last such sample up to j + half lies at j − half or later)."""
-    ns = margin.shape[1]
+def _active(detect, level, p, half, act):                 # pragma: no cover - compiled
+    """act[j]: the window [j − half, j + half] of pulse p holds a sample of ``detect`` at
+    or above its ``level`` (one pass: the last such sample up to j + half lies at
+    j − half or later)."""
+    ns = detect.shape[1]
     last = -ns - half - 1
     for i in range(min(half, ns)):
-        if margin[p, i] >= 0.0:
+        if detect[p, i] >= level[p, i]:
             last = i
     for j in range(ns):
-        if j + half < ns and margin[p, j + half] >= 0.0:
+        if j + half < ns and detect[p, j + half] >= level[p, j + half]:
             last = j + half
         act[j] = last >= j - half
 
 
 @numba.njit(cache=True, nogil=True)
-def find_peaks(waves, known, margin, weights, half, separation, max_returns, out_p, out_j,
-               out_f):                                    # pragma: no cover - compiled
+def find_peaks(waves, known, detect, level, weights, half, separation, max_returns, out_p,
+               out_j, out_f):                             # pragma: no cover - compiled
     """Per pulse, the maxima of the matched-filtered waveform (``weights``, zero beyond the
-    record; read from ``known`` where it has rows) where the largest ``margin`` within ``half`` samples is ≥ 0, farther than
-    ``separation`` samples from a stronger one, the strongest ``max_returns`` first; their
+    record; read from ``known`` where it has rows) where a sample of ``detect`` within
+    ``half`` samples reaches its ``level``, farther than ``separation`` samples from a
+    stronger one, the strongest ``max_returns`` first; their
     pulse, sample and filtered values at j − 1, j, j + 1. Returns how many. The filter
     runs over each stretch of such samples and one beyond, not the whole record."""
     n, ns = waves.shape
@@ -91,7 +93,7 @@ def find_peaks(waves, known, margin, weights, half, separation, max_returns, out
     kept = np.empty(max_returns, np.int64)
     count = 0
     for p in range(n):
-        _active(margin, p, half, act)
+        _active(detect, level, p, half, act)
         c = 0
         j = 0
         while j < ns:

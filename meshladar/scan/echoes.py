@@ -284,8 +284,8 @@ def find_returns(waves, start, dt, sigma, level, max_returns, decompose, backgro
     detect : numpy.ndarray, optional
         What ``level`` applies to (default ``waves``).
     filtered : (n, samples) numpy.ndarray, optional
-        The matched-filtered ``waves`` where already known (:func:`filtered_waveforms`); default:
-        filtered here.
+        The matched-filtered ``waves`` where already known
+        (:func:`filtered_waveforms`); default: filtered here.
 
     Returns
     -------
@@ -294,15 +294,16 @@ def find_returns(waves, start, dt, sigma, level, max_returns, decompose, backgro
     """
     s = sigma / dt
     fwhm = FWHM_PER_SIGMA * s
-    margin = np.ascontiguousarray((waves if detect is None else detect) - level, np.float64)
     waves = np.ascontiguousarray(waves, np.float64)
+    detect = waves if detect is None else np.ascontiguousarray(detect, np.float64)
+    level = np.broadcast_to(np.asarray(level, np.float64), detect.shape)   # (a view)
     weights = matched_filter(s)
     known = _EMPTY if filtered is None else np.ascontiguousarray(filtered, np.float64)
     cap = len(waves) * max_returns
     p, j = np.empty(cap, np.int64), np.empty(cap, np.int64)
     f3 = np.empty((cap, 3))
-    k = find_peaks(waves, known, margin, weights, int(fwhm / 2), float(fwhm), max_returns,
-                   p, j, f3)
+    k = find_peaks(waves, known, detect, level, weights, int(fwhm / 2), float(fwhm),
+                   max_returns, p, j, f3)
     p, j, f3 = p[:k], j[:k], f3[:k]
     delta, s_f, height_f = _interpolate3(f3, j, waves.shape[1], s * math.sqrt(2.0))
     centre = j + 0.5 + delta
