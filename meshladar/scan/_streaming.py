@@ -39,6 +39,7 @@ class ScanJob(NamedTuple):
     split: object        # the moving parts (meshladar.scan.moving.MovingParts) or None
     sink: object = None  # a WaveformSink the chunks stream their records into, or None
     folder: bool = False  # a run folder keeps the chunks: fixed slots, not records
+    backend: str = None   # the ray-casting backend, resolved once (None: "auto" per chunk)
 
 
 def _chunk_seed(seed, first):

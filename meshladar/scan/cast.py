@@ -94,17 +94,20 @@ class Cast:
         return self.face >= 0
 
 
-def cast_chunk(scene, origins, directions):
+def cast_chunk(scene, origins, directions, backend=None):
     """First hits, distances in float64 (module docstring).
 
     Parameters
     ----------
     scene : Scene
-        A mesh scene (its flat-normal geometry, the ``"auto"`` backend).
+        A mesh scene (its flat-normal geometry).
     origins : (n, 3) numpy.ndarray
         Pulse origins, world frame.
     directions : (n, m, 3) numpy.ndarray
         Unit sub-ray directions, world frame.
+    backend : str, optional
+        The backend (:func:`meshladar.raytrace.backends.resolve_backend`'s answer, found
+        once per scan); default ``"auto"``'s.
 
     Returns
     -------
@@ -112,7 +115,7 @@ def cast_chunk(scene, origins, directions):
         The sub-rays' first hits.
     """
     geo = geometry(scene, "flat")
-    emb = embree_scene(geo, resolve_backend("auto"))
+    emb = embree_scene(geo, backend or resolve_backend("auto"))
     n, m = directions.shape[:2]
     shifted = np.ascontiguousarray(origins - geo.center)
     directions = np.ascontiguousarray(directions, np.float64)

@@ -106,7 +106,7 @@ def _pose(motion, t):
     return rot, shift
 
 
-def cast_moving(split, origins, directions, t):
+def cast_moving(split, origins, directions, t, backend=None):
     """First hits among the static and the moving parts (module docstring).
 
     Parameters
@@ -119,6 +119,8 @@ def cast_moving(split, origins, directions, t):
         Unit sub-ray directions, world frame.
     t : (n,) numpy.ndarray
         Emission times, s.
+    backend : str, optional
+        As :func:`~meshladar.scan.cast.cast_chunk`'s.
 
     Returns
     -------
@@ -129,7 +131,7 @@ def cast_moving(split, origins, directions, t):
     best = Cast(np.full((n, m), -1, np.int64), np.full((n, m), np.inf), np.zeros((n, m)),
                 np.full((n, m, 3), np.nan))
     if split.static is not None:
-        c = cast_chunk(split.static, origins, directions)
+        c = cast_chunk(split.static, origins, directions, backend)
         _take(best, c, np.where(c.face >= 0, split.static_faces[np.maximum(c.face, 0)], -1))
     for scene, motion, first in split.moving:
         rot, shift = _pose(motion, t)
@@ -137,7 +139,7 @@ def cast_moving(split, origins, directions, t):
         c0 = np.asarray(motion.center)
         o_body = inv.apply(origins - shift) + c0
         d_body = np.einsum("nji,nmj->nmi", rot.as_matrix(), directions)   # R(t)^T d
-        c = cast_chunk(scene, o_body, np.ascontiguousarray(d_body))
+        c = cast_chunk(scene, o_body, np.ascontiguousarray(d_body), backend)
         hit = c.face >= 0
         world = np.einsum("nij,nmj->nmi", rot.as_matrix(), c.points - c0) + shift[:, None, :]
         c.points = np.where(hit[..., None], world, np.nan)

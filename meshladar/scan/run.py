@@ -18,6 +18,7 @@ import numpy as np
 from .._validate import check_count, check_seed
 from ..errors import ParameterError
 from ..noise import draw_noise
+from ..raytrace.backends import resolve_backend
 from ..raytrace.embree import geometry
 from ..scene import Scene
 from ..stream import run_chunks
@@ -87,9 +88,9 @@ def _chunk(job, sl, seed):
     axis = np.einsum("nij,nj->ni", rot, local)
     sub = world_directions(rot, local, offsets, pitch)
     if job.split is None:
-        cast = cast_chunk(scene, origins, sub)
+        cast = cast_chunk(scene, origins, sub, job.backend)
     else:
-        cast = cast_moving(job.split, origins, sub, t)
+        cast = cast_moving(job.split, origins, sub, t, job.backend)
     pe = photoelectrons(scene, cast, shares, sensor)
     shift = doppler(job.split, platform, cast, origins, t, sensor.wavelength)
     tau = 2.0 * cast.distance / SPEED_OF_LIGHT
@@ -233,7 +234,7 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
                              "records; use echoes='waveform'")
     sink = _sink(waveforms_file, keep_waveforms, run_dir, executor)
     job = ScanJob(scene, pattern, platform, sensor, foot, seed, keep_waveforms, slots, _chunk,
-                  split, sink, folder=run_dir is not None)
+                  split, sink, folder=run_dir is not None, backend=resolve_backend("auto"))
     description = None if run_dir is None else job_description(
         scene, pattern, platform, sensor, seed, keep_waveforms,
         geometry(scene, "flat").key, motions)
