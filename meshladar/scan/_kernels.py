@@ -9,7 +9,7 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["world_sub_rays", "pack_rays", "refine_hits", "assign_truth", "erf", "sort_small",
+__all__ = ["world_sub_rays", "pulse_sub_rays", "pack_rays", "refine_hits", "refine_hit", "assign_truth", "erf", "sort_small",
            "discrete_returns"]
 
 #: :func:`erf`'s table: nodes every 1/64 on [−6, 6] (beyond, erf is ±1 in float64:
@@ -63,35 +63,38 @@ def world_sub_rays(rot, local, offsets, pitch, out):     # pragma: no cover - co
     """out[p, k] = rot[p] @ (pulse p's sub-ray k in the sensor frame), normalised; a beam's
     offsets are angles about the pulse's direction (pitch < 0), a flash pixel's fractions
     of ``pitch`` on the focal plane x = 1."""
-    n = local.shape[0]
-    m = offsets.shape[0]
     ab = offsets.copy() if pitch >= 0.0 else np.tan(offsets)     # once, not per pulse
-    for p in range(n):
-        dx, dy, dz = local[p, 0], local[p, 1], local[p, 2]
-        if pitch >= 0.0:
-            ux, uy, uz = 0.0, pitch, 0.0
-            vx, vy, vz = 0.0, 0.0, pitch
-            dx, dy, dz = 1.0, dy / local[p, 0], dz / local[p, 0]
+    for p in range(local.shape[0]):
+        pulse_sub_rays(rot[p], local[p], ab, pitch, out[p])
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def pulse_sub_rays(r, d, ab, pitch, out):                 # pragma: no cover - compiled
+    """out[k] = r @ (the sub-ray k of a pulse along d in the sensor frame), normalised
+    (:func:`world_sub_rays`; ``ab`` the offsets, a beam's as their tangents)."""
+    dx, dy, dz = d[0], d[1], d[2]
+    if pitch >= 0.0:
+        ux, uy, uz = 0.0, pitch, 0.0
+        vx, vy, vz = 0.0, 0.0, pitch
+        dx, dy, dz = 1.0, dy / d[0], dz / d[0]
+    else:
+        # u = ref × d normalised, v = d × u (ref = z unless d is near z)
+        if abs(dz) < 0.9:
+            ux, uy, uz = -dy, dx, 0.0
         else:
-            # u = ref × d normalised, v = d × u (ref = z unless d is near z)
-            if abs(dz) < 0.9:
-                ux, uy, uz = -dy, dx, 0.0
-            else:
-                ux, uy, uz = dz, 0.0, -dx
-            nu = math.sqrt(ux * ux + uy * uy + uz * uz)
-            ux, uy, uz = ux / nu, uy / nu, uz / nu
-            vx, vy, vz = dy * uz - dz * uy, dz * ux - dx * uz, dx * uy - dy * ux
-        r = rot[p]
-        o = out[p]
-        for k in range(m):
-            a = ab[k, 0]
-            b = ab[k, 1]
-            s0 = dx + a * ux + b * vx
-            s1 = dy + a * uy + b * vy
-            s2 = dz + a * uz + b * vz
-            inv = 1.0 / math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
-            for i in range(3):
-                o[k, i] = inv * (r[i, 0] * s0 + r[i, 1] * s1 + r[i, 2] * s2)
+            ux, uy, uz = dz, 0.0, -dx
+        nu = math.sqrt(ux * ux + uy * uy + uz * uz)
+        ux, uy, uz = ux / nu, uy / nu, uz / nu
+        vx, vy, vz = dy * uz - dz * uy, dz * ux - dx * uz, dx * uy - dy * ux
+    for k in range(ab.shape[0]):
+        a = ab[k, 0]
+        b = ab[k, 1]
+        s0 = dx + a * ux + b * vx
+        s1 = dy + a * uy + b * vy
+        s2 = dz + a * uz + b * vz
+        inv = 1.0 / math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
+        for i in range(3):
+            out[k, i] = inv * (r[i, 0] * s0 + r[i, 1] * s1 + r[i, 2] * s2)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -115,25 +118,32 @@ def refine_hits(prim, tfar, origins, dirs, normals, plane_d, min_cos, center, fa
     for p in range(n):
         for k in range(m):
             i = p * m + k
-            f = prim[i]
-            face[p, k] = f
-            if f < 0:
-                dist[p, k] = np.inf
-                cos[p, k] = 0.0
-                points[p, k, 0] = points[p, k, 1] = points[p, k, 2] = np.nan
-                continue
-            den = (normals[f, 0] * dirs[p, k, 0] + normals[f, 1] * dirs[p, k, 1]
-                   + normals[f, 2] * dirs[p, k, 2])
-            if abs(den) > min_cos:
-                num = plane_d[f] - (normals[f, 0] * origins[p, 0] + normals[f, 1]
-                                    * origins[p, 1] + normals[f, 2] * origins[p, 2])
-                t = num / den
-            else:
-                t = np.float64(tfar[i])
-            dist[p, k] = t
-            cos[p, k] = abs(den)
-            for j in range(3):
-                points[p, k, j] = (origins[p, j] + t * dirs[p, k, j]) + center[j]
+            refine_hit(prim[i], np.float64(tfar[i]), origins[p], dirs[p, k], normals,
+                       plane_d, min_cos, center, face, dist, cos, points, p, k)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def refine_hit(f, tf, o, d, normals, plane_d, min_cos, center, face, dist, cos, points, p,
+               k):                                        # pragma: no cover - compiled
+    """:func:`refine_hits` of one sub-ray (p, k) from origin o along d: face f (−1: a
+    miss), Embree's distance tf (kept where |n·d| ≤ ``min_cos``)."""
+    face[p, k] = f
+    if f < 0:
+        dist[p, k] = np.inf
+        cos[p, k] = 0.0
+        points[p, k, 0] = points[p, k, 1] = points[p, k, 2] = np.nan
+        return
+    den = normals[f, 0] * d[0] + normals[f, 1] * d[1] + normals[f, 2] * d[2]
+    if abs(den) > min_cos:
+        num = plane_d[f] - (normals[f, 0] * o[0] + normals[f, 1] * o[1]
+                            + normals[f, 2] * o[2])
+        t = num / den
+    else:
+        t = tf
+    dist[p, k] = t
+    cos[p, k] = abs(den)
+    for j in range(3):
+        points[p, k, j] = (o[j] + t * d[j]) + center[j]
 
 
 @numba.njit(cache=True, nogil=True)

@@ -26,10 +26,12 @@ import numpy as np
 
 from ..raytrace.embree import embree_scene, geometry
 from ..raytrace.backends import resolve_backend
+from ..raytrace.embree4_ctypes import query_flags
 from ..sensor import PLANCK, SPEED_OF_LIGHT
 from ._kernels import pack_rays, refine_hits, world_sub_rays
+from ._packets import cast_pulses
 
-__all__ = ["world_directions", "Cast", "cast_chunk", "photoelectrons"]
+__all__ = ["world_directions", "Cast", "cast_chunk", "cast_static", "photoelectrons"]
 
 #: Below this |n·d| a hit's float64 refinement is not trusted (Embree's t is kept).
 _MIN_COS = 1e-9
@@ -129,6 +131,48 @@ def cast_chunk(scene, origins, directions, backend=None):
                 geo.plane_d, _MIN_COS, np.asarray(geo.center, np.float64), face, dist, cos,
                 pts)
     return Cast(face, dist, cos, pts)
+
+
+def cast_static(scene, origins, rot, directions, offsets, pixel_pitch, backend):
+    """:func:`cast_chunk` of :func:`world_directions`' sub-rays in one compiled loop where
+    the backend's scenes allow it (the packet backend's: :mod:`._packets`), the same hits
+    number for number; else the two in turn.
+
+    Parameters
+    ----------
+    scene : Scene
+        A mesh scene that does not move.
+    origins : (n, 3) numpy.ndarray
+        Pulse origins, world frame.
+    rot, directions, offsets, pixel_pitch
+        As :func:`world_directions`.
+    backend : str
+        The resolved backend.
+
+    Returns
+    -------
+    Cast
+        The sub-rays' first hits.
+    """
+    geo = geometry(scene, "flat")
+    emb = embree_scene(geo, backend)
+    if not emb.fused:
+        return cast_chunk(scene, origins, world_directions(rot, directions, offsets,
+                                                            pixel_pitch), backend)
+    sc = emb.scene.scene
+    n, m = len(directions), len(offsets)
+    out = (np.empty((n, m), np.int64), np.empty((n, m)), np.empty((n, m)),
+           np.empty((n, m, 3)))
+    cast_pulses(sc.lib.intersect[sc.lib.width], sc.live(), sc.lib.width, query_flags(True),
+                np.ascontiguousarray(origins - geo.center, np.float64),
+                np.ascontiguousarray(rot, np.float64),
+                np.ascontiguousarray(directions, np.float64),
+                np.ascontiguousarray(offsets, np.float64),
+                -1.0 if pixel_pitch is None else float(pixel_pitch), emb.inverse,
+                np.float32(emb.scale),
+                (geo.face_normals, geo.plane_d, _MIN_COS, np.asarray(geo.center, np.float64)),
+                out)
+    return Cast(*out)
 
 
 def photoelectrons(scene, cast, shares, sensor):

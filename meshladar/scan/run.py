@@ -24,7 +24,7 @@ from ..scene import Scene
 from ..stream import run_chunks
 from ..sensor import SPEED_OF_LIGHT
 from ._kernels import assign_truth, discrete_returns
-from .cast import cast_chunk, photoelectrons, world_directions
+from .cast import cast_static, photoelectrons, world_directions
 from .echoes import Returns, cfar_background, echo_shape, filtered_waveforms, find_returns
 from .files import WaveformSink
 from .footprint import pixel_offsets
@@ -86,11 +86,11 @@ def _chunk(job, sl, seed):
     origins, rot = platform.sensor_poses(t)
     local = pattern.directions[sl]
     axis = np.einsum("nij,nj->ni", rot, local)
-    sub = world_directions(rot, local, offsets, pitch)
     if job.split is None:
-        cast = cast_chunk(scene, origins, sub, job.backend)
+        cast = cast_static(scene, origins, rot, local, offsets, pitch, job.backend)
     else:
-        cast = cast_moving(job.split, origins, sub, t, job.backend)
+        cast = cast_moving(job.split, origins, world_directions(rot, local, offsets, pitch),
+                           t, job.backend)
     pe = photoelectrons(scene, cast, shares, sensor)
     shift = doppler(job.split, platform, cast, origins, t, sensor.wavelength)
     tau = 2.0 * cast.distance / SPEED_OF_LIGHT

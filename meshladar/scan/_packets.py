@@ -1,0 +1,66 @@
+"""A static scan's cast in one compiled loop (the packet backend's): each pulse's sub-ray
+directions (:func:`._kernels.pulse_sub_rays`), the sub-rays in packets of the library's
+width in their flat order (a packet may hold the end of one pulse and the start of the
+next), Embree's first hits, and each hit refined in float64 (:func:`._kernels.refine_hit`).
+The rays, packets and hits are those of the staged path (:func:`.cast.cast_chunk` over
+:func:`.cast.world_directions`) number for number, without its per-sub-ray direction,
+origin and distance arrays."""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from ..raytrace.embree4_ctypes import ARGS_OFF, GEOMID, PRIMID, TFAR, VALID_OFF
+from ..raytrace.embree4_kernels import init_args, load_packet, workspace
+from ._kernels import pulse_sub_rays, refine_hit
+
+__all__ = ["cast_pulses"]
+
+
+@numba.njit(cache=True, nogil=True)
+def cast_pulses(fn, handle, w, flags, origins, rot, local, offsets, pitch, inverse, scale,
+                geometry, out):                           # pragma: no cover - compiled
+    """First hits of every pulse's sub-rays, refined (module docstring).
+
+    ``fn``, ``handle``, ``w``, ``flags``: the library's rtcIntersect{w}, the scene, the
+    width and the query flags; ``origins`` (n, 3) the pulses' origins less the geometry's
+    center; ``rot``, ``local``, ``offsets``, ``pitch`` as :func:`._kernels.world_sub_rays`;
+    ``inverse`` and ``scale`` (float32) the Embree scene's unit-size factors;
+    ``geometry`` = (normals, plane_d, min_cos, center); ``out`` = (face, dist, cos,
+    points), each (n, m[, 3])."""
+    normals, plane_d, min_cos, center = geometry
+    face, dist, cos, points = out
+    i32, f32, i64, base = workspace()
+    init_args(i32, i64, base, flags)
+    n, m = local.shape[0], offsets.shape[0]
+    ab = offsets.copy() if pitch >= 0.0 else np.tan(offsets)
+    dirs = np.empty((m, 3))                       # the current pulse's sub-rays, float64
+    lane_d = np.empty((w, 3))                     # each lane's, float64, and its pulse
+    lane_p = np.empty(w, np.int64)
+    sub = np.empty((w, 3), np.float32)
+    sub_d = np.empty((w, 3), np.float32)
+    current = -1
+    total = n * m
+    for i0 in range(0, total, w):
+        lanes = min(w, total - i0)
+        for j in range(lanes):
+            p, k = (i0 + j) // m, (i0 + j) % m
+            if p != current:
+                pulse_sub_rays(rot[p], local[p], ab, pitch, dirs)
+                current = p
+            lane_p[j] = p
+            for c in range(3):
+                lane_d[j, c] = dirs[k, c]
+                sub[j, c] = np.float32(origins[p, c]) * inverse
+                sub_d[j, c] = np.float32(dirs[k, c])
+        load_packet(f32, i32, sub, sub_d, np.float32(np.inf), 0, lanes, w)
+        fn(base + VALID_OFF, handle, base, base + ARGS_OFF)
+        for j in range(lanes):
+            p, k = lane_p[j], (i0 + j) % m
+            f, tf = -1, np.inf
+            if i32[GEOMID * w + j] != -1:
+                f = i32[PRIMID * w + j]
+                tf = np.float64(f32[TFAR * w + j] * scale)
+            refine_hit(f, tf, origins[p], lane_d[j], normals, plane_d, min_cos, center,
+                       face, dist, cos, points, p, k)
