@@ -65,18 +65,19 @@ def world_sub_rays(rot, local, offsets, pitch, out):     # pragma: no cover - co
     of ``pitch`` on the focal plane x = 1."""
     ab = offsets.copy() if pitch >= 0.0 else np.tan(offsets)     # once, not per pulse
     for p in range(local.shape[0]):
-        pulse_sub_rays(rot[p], local[p], ab, pitch, out[p])
+        pulse_sub_rays(rot, local, p, ab, pitch, out, p)
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def pulse_sub_rays(r, d, ab, pitch, out):                 # pragma: no cover - compiled
-    """out[k] = r @ (the sub-ray k of a pulse along d in the sensor frame), normalised
-    (:func:`world_sub_rays`; ``ab`` the offsets, a beam's as their tangents)."""
-    dx, dy, dz = d[0], d[1], d[2]
+def pulse_sub_rays(rot, local, p, ab, pitch, out, q):     # pragma: no cover - compiled
+    """out[q, k] = rot[p] @ (pulse p's sub-ray k in the sensor frame), normalised
+    (:func:`world_sub_rays`; ``ab`` the offsets, a beam's as their tangents; indices, not
+    array views, in the hot loop)."""
+    dx, dy, dz = local[p, 0], local[p, 1], local[p, 2]
     if pitch >= 0.0:
         ux, uy, uz = 0.0, pitch, 0.0
         vx, vy, vz = 0.0, 0.0, pitch
-        dx, dy, dz = 1.0, dy / d[0], dz / d[0]
+        dx, dy, dz = 1.0, dy / local[p, 0], dz / local[p, 0]
     else:
         # u = ref × d normalised, v = d × u (ref = z unless d is near z)
         if abs(dz) < 0.9:
@@ -94,7 +95,7 @@ def pulse_sub_rays(r, d, ab, pitch, out):                 # pragma: no cover - c
         s2 = dz + a * uz + b * vz
         inv = 1.0 / math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
         for i in range(3):
-            out[k, i] = inv * (r[i, 0] * s0 + r[i, 1] * s1 + r[i, 2] * s2)
+            out[q, k, i] = inv * (rot[p, i, 0] * s0 + rot[p, i, 1] * s1 + rot[p, i, 2] * s2)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -118,32 +119,34 @@ def refine_hits(prim, tfar, origins, dirs, normals, plane_d, min_cos, center, fa
     for p in range(n):
         for k in range(m):
             i = p * m + k
-            refine_hit(prim[i], np.float64(tfar[i]), origins[p], dirs[p, k], normals,
+            refine_hit(prim[i], np.float64(tfar[i]), origins[p, 0], origins[p, 1],
+                       origins[p, 2], dirs[p, k, 0], dirs[p, k, 1], dirs[p, k, 2], normals,
                        plane_d, min_cos, center, face, dist, cos, points, p, k)
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def refine_hit(f, tf, o, d, normals, plane_d, min_cos, center, face, dist, cos, points, p,
-               k):                                        # pragma: no cover - compiled
-    """:func:`refine_hits` of one sub-ray (p, k) from origin o along d: face f (−1: a
-    miss), Embree's distance tf (kept where |n·d| ≤ ``min_cos``)."""
+def refine_hit(f, tf, o0, o1, o2, d0, d1, d2, normals, plane_d, min_cos, center, face, dist,
+               cos, points, p, k):                        # pragma: no cover - compiled
+    """:func:`refine_hits` of one sub-ray (p, k) from origin o along d (scalars: no array
+    views in the hot loop): face f (−1: a miss), Embree's distance tf (kept where
+    |n·d| ≤ ``min_cos``)."""
     face[p, k] = f
     if f < 0:
         dist[p, k] = np.inf
         cos[p, k] = 0.0
         points[p, k, 0] = points[p, k, 1] = points[p, k, 2] = np.nan
         return
-    den = normals[f, 0] * d[0] + normals[f, 1] * d[1] + normals[f, 2] * d[2]
+    den = normals[f, 0] * d0 + normals[f, 1] * d1 + normals[f, 2] * d2
     if abs(den) > min_cos:
-        num = plane_d[f] - (normals[f, 0] * o[0] + normals[f, 1] * o[1]
-                            + normals[f, 2] * o[2])
+        num = plane_d[f] - (normals[f, 0] * o0 + normals[f, 1] * o1 + normals[f, 2] * o2)
         t = num / den
     else:
         t = tf
     dist[p, k] = t
     cos[p, k] = abs(den)
-    for j in range(3):
-        points[p, k, j] = (o[j] + t * d[j]) + center[j]
+    points[p, k, 0] = (o0 + t * d0) + center[0]
+    points[p, k, 1] = (o1 + t * d1) + center[1]
+    points[p, k, 2] = (o2 + t * d2) + center[2]
 
 
 @numba.njit(cache=True, nogil=True)

@@ -35,7 +35,7 @@ def cast_pulses(fn, handle, w, flags, origins, rot, local, offsets, pitch, inver
     init_args(i32, i64, base, flags)
     n, m = local.shape[0], offsets.shape[0]
     ab = offsets.copy() if pitch >= 0.0 else np.tan(offsets)
-    dirs = np.empty((m, 3))                       # the current pulse's sub-rays, float64
+    dirs = np.empty((1, m, 3))                    # the current pulse's sub-rays, float64
     lane_d = np.empty((w, 3))                     # each lane's, float64, and its pulse
     lane_p = np.empty(w, np.int64)
     sub = np.empty((w, 3), np.float32)
@@ -47,13 +47,13 @@ def cast_pulses(fn, handle, w, flags, origins, rot, local, offsets, pitch, inver
         for j in range(lanes):
             p, k = (i0 + j) // m, (i0 + j) % m
             if p != current:
-                pulse_sub_rays(rot[p], local[p], ab, pitch, dirs)
+                pulse_sub_rays(rot, local, p, ab, pitch, dirs, 0)
                 current = p
             lane_p[j] = p
             for c in range(3):
-                lane_d[j, c] = dirs[k, c]
+                lane_d[j, c] = dirs[0, k, c]
                 sub[j, c] = np.float32(origins[p, c]) * inverse
-                sub_d[j, c] = np.float32(dirs[k, c])
+                sub_d[j, c] = np.float32(dirs[0, k, c])
         load_packet(f32, i32, sub, sub_d, np.float32(np.inf), 0, lanes, w)
         fn(base + VALID_OFF, handle, base, base + ARGS_OFF)
         for j in range(lanes):
@@ -62,5 +62,6 @@ def cast_pulses(fn, handle, w, flags, origins, rot, local, offsets, pitch, inver
             if i32[GEOMID * w + j] != -1:
                 f = i32[PRIMID * w + j]
                 tf = np.float64(f32[TFAR * w + j] * scale)
-            refine_hit(f, tf, origins[p], lane_d[j], normals, plane_d, min_cos, center,
-                       face, dist, cos, points, p, k)
+            refine_hit(f, tf, origins[p, 0], origins[p, 1], origins[p, 2], lane_d[j, 0],
+                       lane_d[j, 1], lane_d[j, 2], normals, plane_d, min_cos, center, face,
+                       dist, cos, points, p, k)
