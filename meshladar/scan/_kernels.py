@@ -9,8 +9,8 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["world_sub_rays", "pulse_sub_rays", "pack_rays", "refine_hits", "refine_hit", "assign_truth", "erf", "sort_small",
-           "discrete_returns"]
+__all__ = ["world_sub_rays", "pulse_sub_rays", "pack_rays", "refine_hits", "refine_hit",
+           "assign_truth", "erf", "sort_small", "discrete_returns"]
 
 #: :func:`erf`'s table: nodes every 1/64 on [−6, 6] (beyond, erf is ±1 in float64:
 #: erfc(5.93) < 2⁻⁵⁴), the erf and 2/√π exp(−x²) at each.
@@ -197,37 +197,40 @@ def discrete_returns(tau, pe, gap, level, max_returns, out_p, out_t, out_e, out_
     """Per pulse, its lit sub-rays grouped in time (a new group where the next arrival is
     more than ``gap`` after the last), each group at or above ``level`` photoelectrons a
     return at its photoelectron-weighted time with its photoelectrons and RMS spread, the
-    strongest ``max_returns`` kept. Returns how many."""        # pragma: no cover
+    strongest ``max_returns`` kept. Returns how many. A pulse whose lit sub-rays all
+    arrive within ``gap`` of its first is one group (index order)."""  # pragma: no cover
     n, m = tau.shape
     count = 0
     gt = np.empty(m)
     ge = np.empty(m)
     gs = np.empty(m)
     order = np.empty(m, np.int64)
+    rank = np.empty(m, np.int64)
+    lit = np.empty(m)
     for p in range(n):
-        sort_small(tau[p], order)
-        g = -1
-        prev = -np.inf
-        for o in order:
-            e = pe[p, o]
-            if e <= 0.0:
-                continue
-            t = tau[p, o]
-            if g < 0 or t - prev > gap:
-                g += 1
-                gt[g] = 0.0
-                ge[g] = 0.0
-                gs[g] = 0.0
-            gt[g] += e * t
-            ge[g] += e
-            gs[g] += e * t * t
-            prev = t
-        if g < 0:
+        lo, hi = np.inf, -np.inf
+        for k in range(m):
+            if pe[p, k] > 0.0:
+                lo, hi = min(lo, tau[p, k]), max(hi, tau[p, k])
+        if hi < lo:                                  # nothing lit
             continue
-        strength = -ge[:g + 1]
-        rank = np.argsort(strength, kind="mergesort")
+        if hi - lo <= gap:                           # one group
+            g = 0
+            gt[0] = ge[0] = gs[0] = 0.0
+            for k in range(m):
+                e = pe[p, k]
+                if e > 0.0:
+                    t = tau[p, k]
+                    gt[0] += e * t
+                    ge[0] += e
+                    gs[0] += e * t * t
+        else:
+            g = _groups(tau, pe, p, gap, lit, order, gt, ge, gs)
+        for r in range(g + 1):
+            lit[r] = -ge[r]
+        sort_small(lit[:g + 1], rank[:g + 1])        # strongest first, ties in time order
         kept = 0
-        for r in rank:
+        for r in rank[:g + 1]:
             if kept == max_returns or ge[r] < level:
                 break
             mean = gt[r] / ge[r]
@@ -238,3 +241,30 @@ def discrete_returns(tau, pe, gap, level, max_returns, out_p, out_t, out_e, out_
             count += 1
             kept += 1
     return count
+
+
+@numba.njit(cache=True, nogil=True)
+def _groups(tau, pe, p, gap, lit, order, gt, ge, gs):      # pragma: no cover - compiled
+    """:func:`discrete_returns`' groups of pulse p in time order (their sums into gt, ge,
+    gs); returns the last group's index."""
+    m = tau.shape[1]
+    for k in range(m):
+        lit[k] = tau[p, k]
+    sort_small(lit, order)
+    g = -1
+    prev = -np.inf
+    for o in order:
+        e = pe[p, o]
+        if e <= 0.0:
+            continue
+        t = tau[p, o]
+        if g < 0 or t - prev > gap:
+            g += 1
+            gt[g] = 0.0
+            ge[g] = 0.0
+            gs[g] = 0.0
+        gt[g] += e * t
+        ge[g] += e
+        gs[g] += e * t * t
+        prev = t
+    return g

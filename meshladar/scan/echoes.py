@@ -6,9 +6,10 @@ echo's Gaussian (the pulse and the response, :attr:`ScanSensor.sigma
 <meshladar.scan.instrument.ScanSensor.sigma>`), integrated over every sample (a
 difference of erfs, read from a table of the chunk's sample integrals by cubic Hermite
 interpolation to 3.4e-14 of the echo's photoelectrons: :mod:`._sampling`): a record's sum
-is the pulse's photoelectrons where the echo lies inside it (sub-rays arriving within :data:`MERGE` σ of each other are spread as one, at
-their weighted mean time). t₀ is each pulse's earliest echo less :data:`SUPPORT` σ (rounded down to a
-sample), or, for a pulse that meets nothing, the chunk's earliest.
+is the pulse's photoelectrons where the echo lies inside it (sub-rays arriving within
+:data:`MERGE` σ of each other are spread as one, at their weighted mean time). t₀ is each
+pulse's earliest echo less :data:`SUPPORT` σ (rounded down to a sample), or, for a pulse
+that meets nothing, the chunk's earliest.
 
 Detection: :mod:`.instrument`'s :class:`~meshladar.scan.instrument.Detector`.
 """
