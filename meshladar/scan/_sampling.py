@@ -10,8 +10,11 @@ Q is set from the interpolant's error bound, h⁴/384 max|K⁗| with h = 1/Q: K�
 times a difference of two values of erf⁗, each at most 4.41 in size, so the error is at
 most 0.0115 (r/Q)⁴ e, and Q = ⌈:data:`NODES_PER_R` r⌉ holds it to 3.4e-14 of e (the
 records promise 1e-13). Where that table would exceed :data:`TABLE_BYTES` (σ under a
-sixtieth of a sample or over some 960 samples) the erf differences are evaluated
-directly. An echo shape that is not a Gaussian is spread through its tabulated CDF
+thirtieth of a sample or over some 385 samples) the erf differences are evaluated
+directly. The matched filter (:func:`matched_filter`) is linear, so the filtered record
+of a group is e times the filter of K_d, tabulated beside it the same way: a record
+without noise gets its filtered samples here, and peak finding need not filter it. An
+echo shape that is not a Gaussian is spread through its tabulated CDF
 (:func:`accumulate_table`).
 """
 
@@ -33,7 +36,7 @@ SUPPORT = 8.0
 #: Table nodes per unit of r = Δt/(σ√2): the interpolant's error is at most
 #: 0.0115 (r/Q)⁴ = 3.4e-14 of a group's photoelectrons (module docstring).
 NODES_PER_R = 762.0
-#: The largest table made (both arrays); beyond it the erf differences are evaluated.
+#: The largest table made (its four arrays); beyond it the erf differences are evaluated.
 TABLE_BYTES = 4 << 20
 
 
@@ -79,7 +82,7 @@ def sample_table(s):
     q = max(16, int(math.ceil(NODES_PER_R * r)))
     reach = int(math.ceil(SUPPORT * s)) + 2
     taps = matched_filter(s)
-    if 16 * (q + 1) * (4 * reach + 4 + 2 * len(taps)) > TABLE_BYTES:
+    if 16 * (q + 1) * (4 * reach + 3 + len(taps)) > TABLE_BYTES:     # the four arrays
         return None
     value, slope = _build(r, q, reach)
     filtered, filtered_slope = _filtered(value, taps), _filtered(slope, taps)
