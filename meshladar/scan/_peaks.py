@@ -10,6 +10,7 @@ import numba
 import numpy as np
 
 from ._kernels import sort_small
+from ._sampling import filtered_span
 
 __all__ = ["order_returns", "find_peaks", "centroids", "fit_gaussians"]
 
@@ -74,10 +75,11 @@ def _active(detect, level, p, half, act):                 # pragma: no cover - c
 
 
 @numba.njit(cache=True, nogil=True)
-def find_peaks(waves, known, detect, level, weights, half, separation, max_returns, out_p,
-               out_j, out_f):                             # pragma: no cover - compiled
+def find_peaks(waves, echoes, tables, detect, level, weights, half, separation, max_returns,
+               out_p, out_j, out_f):                      # pragma: no cover - compiled
     """Per pulse, the maxima of the matched-filtered waveform (``weights``, zero beyond the
-    record; read from ``known`` where it has rows) where a sample of ``detect`` within
+    record; from the filtered table ``tables`` where ``echoes`` has rows and gives the
+    record's one echo, :func:`._sampling.filtered_span`) where a sample of ``detect`` within
     ``half`` samples reaches its ``level``, farther than ``separation`` samples from a
     stronger one, the strongest ``max_returns`` first; their
     pulse, sample and filtered values at j − 1, j, j + 1. Returns how many. The filter
@@ -103,9 +105,9 @@ def find_peaks(waves, known, detect, level, weights, half, separation, max_retur
             a = j
             while j < ns and act[j]:
                 j += 1
-            if known.shape[0]:
-                for i in range(max(a - 1, 0), min(j, ns - 1) + 1):
-                    filt[i + 1] = known[p, i]
+            if echoes.shape[0] and echoes[p, 0] > 0.0:
+                filtered_span(echoes[p, 0], echoes[p, 1], tables, max(a - 1, 0),
+                              min(j, ns - 1), filt)
             else:
                 _filter_span(waves, p, max(a - 1, 0), min(j, ns - 1), weights, filt)
             for i in range(a, j):

@@ -12,8 +12,9 @@ most 0.0115 (r/Q)⁴ e, and Q = ⌈:data:`NODES_PER_R` r⌉ holds it to 3.4e-14 
 records promise 1e-13). Where that table would exceed :data:`TABLE_BYTES` (σ under a
 thirtieth of a sample or over some 385 samples) the erf differences are evaluated
 directly. The matched filter (:func:`matched_filter`) is linear, so the filtered record
-of a group is e times the filter of K_d, tabulated beside it the same way: a record
-without noise gets its filtered samples here, and peak finding need not filter it. An
+of a group is e times the filter of K_d, tabulated beside it the same way: where a
+record without noise holds one echo, peak finding reads its filtered samples from the
+table (:func:`filtered_span`) instead of filtering the record. An
 echo shape that is not a Gaussian is spread through its tabulated CDF
 (:func:`accumulate_table`).
 """
@@ -29,7 +30,7 @@ import numpy as np
 from ._kernels import erf, sort_small
 
 __all__ = ["SUPPORT", "NODES_PER_R", "TABLE_BYTES", "sample_table", "matched_filter", "lit_spans",
-           "accumulate", "accumulate_table"]
+           "accumulate", "filtered_span", "accumulate_table"]
 
 #: The echo's Gaussian is cut beyond this many σ (exp(−32) of its peak).
 SUPPORT = 8.0
@@ -123,12 +124,25 @@ def _filtered(table, taps):
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def _group(row, e, c, s, r2, value, slope, q, reach, widen):   # pragma: no cover
-    """row[j] += e K_{j−b}(φ) over the support's samples of a group centred at c, and
-    ``widen`` more each side (the filtered table's)."""
+def _hermite(e, c, q):                                    # pragma: no cover - compiled
+    """A group at c's table row k (its phase's node below), its base b and the cubic
+    Hermite weights of the nodes k, k + 1 and their slopes, times e."""
+    base = int(math.floor(c))
+    x = (c - base) * q
+    k = min(int(x), q - 1)
+    t = x - k
+    t2 = t * t
+    t3 = t2 * t
+    return (k, base, e * (2.0 * t3 - 3.0 * t2 + 1.0), e * (t3 - 2.0 * t2 + t),
+            e * (3.0 * t2 - 2.0 * t3), e * (t3 - t2))
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _group(row, e, c, s, r2, value, slope, q, reach):     # pragma: no cover - compiled
+    """row[j] += e K_{j−b}(φ) over the support's samples of a group centred at c."""
     ns = row.shape[0]
-    lo = max(0, int(math.floor(c - SUPPORT * s)) - widen)
-    hi = min(ns, int(math.ceil(c + SUPPORT * s)) + 1 + widen)
+    lo = max(0, int(math.floor(c - SUPPORT * s)))
+    hi = min(ns, int(math.ceil(c + SUPPORT * s)) + 1)
     if q == 0:                                   # no table: the erf differences
         prev = erf((lo - c) * r2)
         half = 0.5 * e
@@ -137,19 +151,29 @@ def _group(row, e, c, s, r2, value, slope, q, reach, widen):   # pragma: no cove
             row[j] += half * (nxt - prev)
             prev = nxt
         return
-    base = int(math.floor(c))
-    x = (c - base) * q
-    k = min(int(x), q - 1)
-    t = x - k
-    t2 = t * t
-    t3 = t2 * t
-    h00, h10 = e * (2.0 * t3 - 3.0 * t2 + 1.0), e * (t3 - 2.0 * t2 + t)
-    h01, h11 = e * (3.0 * t2 - 2.0 * t3), e * (t3 - t2)
+    k, base, h00, h10, h01, h11 = _hermite(e, c, q)
     a, b = lo + reach - base, hi + reach - base
     va, da, vb, db = value[k, a:b], slope[k, a:b], value[k + 1, a:b], slope[k + 1, a:b]
     dst = row[lo:hi]                             # 1-D slices from 0: the loop vectorises
     for j in range(hi - lo):
         dst[j] += h00 * va[j] + h10 * da[j] + h01 * vb[j] + h11 * db[j]
+
+
+@numba.njit(cache=True, nogil=True)
+def filtered_span(e, c, tables, lo, hi, filt):            # pragma: no cover - compiled
+    """filt[j + 1] = sample j of the matched-filtered record of one echo of e
+    photoelectrons centred at c, for lo ≤ j ≤ hi, from the filtered table (``tables``:
+    :func:`sample_table`'s; 0 beyond the table's offsets)."""
+    value, q, fvalue, fslope = tables[0], tables[2], tables[4], tables[5]
+    reach = tables[3] + (fvalue.shape[1] - value.shape[1]) // 2
+    k, base, h00, h10, h01, h11 = _hermite(e, c, q)
+    va, da, vb, db = fvalue[k], fslope[k], fvalue[k + 1], fslope[k + 1]
+    for j in range(lo, hi + 1):
+        i = j + reach - base
+        if 0 <= i < va.shape[0]:
+            filt[j + 1] = h00 * va[i] + h10 * da[i] + h01 * vb[i] + h11 * db[i]
+        else:
+            filt[j + 1] = 0.0
 
 
 @numba.njit(cache=True, nogil=True)
@@ -168,36 +192,22 @@ def lit_spans(tau, pe):                                   # pragma: no cover - c
 
 
 @numba.njit(cache=True, nogil=True)
-def _spread(p, e, et, start, dt, s, r2, tables, out, filt):   # pragma: no cover
-    """A group's samples into out[p] and, where ``filt`` has rows, its matched-filtered
-    samples into filt[p]; returns whether the record cut its support (the filtered
-    samples are then not the filter of the record's)."""
-    value, slope, q, reach, fvalue, fslope = tables
-    c = (et / e - start[p]) / dt
-    _group(out[p], e, c, s, r2, value, slope, q, reach, 0)
-    if filt.shape[0] == 0:
-        return False
-    _group(filt[p], e, c, s, r2, fvalue, fslope, q, reach + (fvalue.shape[1]
-                                                             - value.shape[1]) // 2,
-           (fvalue.shape[1] - value.shape[1]) // 2)
-    return c - SUPPORT * s < 0.0 or math.ceil(c + SUPPORT * s) + 1 > out.shape[1]
-
-
-@numba.njit(cache=True, nogil=True)
-def accumulate(tau, pe, start, dt, sigma, merge, tables, out, filt):   # pragma: no cover
+def accumulate(tau, pe, start, dt, sigma, merge, tables, out, echo):   # pragma: no cover
     """out[p] += each of pulse p's groups of lit sub-rays (photoelectrons > 0; those within
     ``merge`` s of the group's earliest, at their photoelectron-weighted mean time) spread
-    over its samples (``tables``: :func:`sample_table`'s, q 0 for none); and filt[p] +=
-    their matched-filtered samples where ``filt`` has rows. A pulse whose lit sub-rays
-    all lie within ``merge`` of its earliest is one group, summed in index order without
-    sorting. Returns how many groups the records cut."""
+    over its samples (``tables``: :func:`sample_table`'s, q 0 for none); echo[p] = the
+    group's (photoelectrons, centre in samples) where pulse p has exactly one and its
+    record holds its support whole, else (0, 0). A pulse whose lit sub-rays all lie
+    within ``merge`` of its earliest is one group, summed in index order without
+    sorting."""
     n, m = tau.shape
     s = sigma / dt
     r2 = 1.0 / (s * math.sqrt(2.0))
+    value, slope, q, reach = tables[0], tables[1], tables[2], tables[3]
     order = np.empty(m, np.int64)
     lit = np.empty(m)
-    cut = 0
     for p in range(n):
+        echo[p, 0] = echo[p, 1] = 0.0
         lo, hi, e, et = math.inf, -math.inf, 0.0, 0.0
         for k in range(m):
             w = pe[p, k]
@@ -208,7 +218,10 @@ def accumulate(tau, pe, start, dt, sigma, merge, tables, out, filt):   # pragma:
                 et += w * t
         if hi - lo <= merge:                     # one group (or nothing lit)
             if e > 0.0:
-                cut += _spread(p, e, et, start, dt, s, r2, tables, out, filt)
+                c = (et / e - start[p]) / dt
+                _group(out[p], e, c, s, r2, value, slope, q, reach)
+                if c - SUPPORT * s >= 0.0 and math.ceil(c + SUPPORT * s) + 1 <= out.shape[1]:
+                    echo[p, 0], echo[p, 1] = e, c
             continue
         for k in range(m):                       # an unlit sub-ray never arrives
             lit[k] = tau[p, k] if pe[p, k] > 0.0 else math.inf
@@ -224,8 +237,7 @@ def accumulate(tau, pe, start, dt, sigma, merge, tables, out, filt):   # pragma:
                 e += w
                 et += w * lit[order[k]]
                 k += 1
-            cut += _spread(p, e, et, start, dt, s, r2, tables, out, filt)
-    return cut
+            _group(out[p], e, (et / e - start[p]) / dt, s, r2, value, slope, q, reach)
 
 
 @numba.njit(cache=True, nogil=True)

@@ -32,7 +32,7 @@ __all__ = ["SUPPORT", "waveforms", "echo_shape", "find_returns", "cfar_backgroun
 #: their photoelectron-weighted mean time: the record's sum and first moment are exact,
 #: its shape off by the group's time spread squared over σ², at most (1/64)² here.
 MERGE = 1.0 / 64.0
-_EMPTY = np.zeros((0, 0))
+_NO_ECHOES = np.zeros((0, 2))
 _NO_TABLE = (np.zeros((1, 1)), np.zeros((1, 1)), 0, 0, np.zeros((1, 1)), np.zeros((1, 1)))
 #: Peaks closer than this many σ are refitted together.
 _OVERLAP_SIGMAS = 4.0
@@ -97,29 +97,29 @@ def waveforms(tau, pe, sigma, dt, samples=None, shape=None):
     start : (n,) float64
         Each record's start time t₀ after emission, s.
     """
-    return filtered_waveforms(tau, pe, sigma, dt, samples, shape)[:2]
+    return waveforms_with_echoes(tau, pe, sigma, dt, samples, shape)[:2]
 
 
-def filtered_waveforms(tau, pe, sigma, dt, samples=None, shape=None, filtered=False):
-    """:func:`waveforms`, and with ``filtered`` the matched-filtered records made beside
-    them from :mod:`._sampling`'s filtered table, which :func:`find_returns` then need
-    not filter (they agree with the filter of the records to the table's 3.4e-14 of an
-    echo's photoelectrons).
+def waveforms_with_echoes(tau, pe, sigma, dt, samples=None, shape=None):
+    """:func:`waveforms`, and each record's one echo where it holds just one, whole: its
+    matched-filtered samples are then read from :mod:`._sampling`'s filtered table by
+    :func:`find_returns` (``echoes=``) instead of filtering the record (they agree to the
+    table's 3.4e-14 of the echo's photoelectrons).
 
     Parameters
     ----------
     tau, pe, sigma, dt, samples, shape
         As :func:`waveforms`.
-    filtered : bool
-        Make the matched-filtered records too.
 
     Returns
     -------
     waves, start
         As :func:`waveforms`.
-    filtered : (n, samples) numpy.ndarray or None
-        The matched-filtered records; None unless asked for, and where the echo's shape is
-        not a Gaussian, no table is made, or a record cuts an echo's support.
+    echoes : (n, 2) numpy.ndarray or None
+        Each record's echo, (photoelectrons, centre in samples from the record's start),
+        where its sub-rays make one group whose support the record holds; (0, 0) where
+        they make none or several. None where the echo's shape is not a Gaussian or no
+        table is made.
     """
     tau = np.ascontiguousarray(tau, np.float64)
     pe = np.ascontiguousarray(pe, np.float64)
@@ -141,10 +141,10 @@ def filtered_waveforms(tau, pe, sigma, dt, samples=None, shape=None, filtered=Fa
                          shape[2], out)
         return out, start, None
     tables = sample_table(float(sigma) / float(dt))
-    filt = np.zeros(out.shape if filtered and tables is not None else (0, 0))
-    cut = accumulate(tau, pe, start, float(dt), float(sigma), MERGE * float(sigma),
-                     tables or _NO_TABLE, out, filt)
-    return out, start, (filt if len(filt) and not cut else None)
+    echoes = np.empty((len(tau), 2))
+    accumulate(tau, pe, start, float(dt), float(sigma), MERGE * float(sigma),
+               tables or _NO_TABLE, out, echoes)
+    return out, start, (echoes if tables is not None else None)
 
 
 class Returns:
@@ -258,7 +258,7 @@ def cfar_background(waves, guard):
 
 
 def find_returns(waves, start, dt, sigma, level, max_returns, decompose, background=0.0,
-                 detect=None, filtered=None):
+                 detect=None, echoes=None):
     """The returns in a chunk's waveforms (photoelectrons per sample), as :class:`Returns`
     (:mod:`.instrument`'s detection): maxima of the matched-filtered waveform whose
     largest sample within the echo's FWHM reaches ``level``, located and sized by a
@@ -284,9 +284,10 @@ def find_returns(waves, start, dt, sigma, level, max_returns, decompose, backgro
         Background per sample, taken off before the centroid.
     detect : numpy.ndarray, optional
         What ``level`` applies to (default ``waves``).
-    filtered : (n, samples) numpy.ndarray, optional
-        The matched-filtered ``waves`` where already known
-        (:func:`filtered_waveforms`); default: filtered here.
+    echoes : (n, 2) numpy.ndarray, optional
+        Each record's one echo (:func:`waveforms_with_echoes`) where ``waves`` are the
+        records as made: their filtered samples come from the filtered table; default:
+        every record is filtered here.
 
     Returns
     -------
@@ -299,11 +300,12 @@ def find_returns(waves, start, dt, sigma, level, max_returns, decompose, backgro
     detect = waves if detect is None else np.ascontiguousarray(detect, np.float64)
     level = np.broadcast_to(np.asarray(level, np.float64), detect.shape)   # (a view)
     weights = matched_filter(s)
-    known = _EMPTY if filtered is None else np.ascontiguousarray(filtered, np.float64)
+    known = _NO_ECHOES if echoes is None else np.ascontiguousarray(echoes, np.float64)
+    tables = (sample_table(s) or _NO_TABLE) if echoes is not None else _NO_TABLE
     cap = len(waves) * max_returns
     p, j = np.empty(cap, np.int64), np.empty(cap, np.int64)
     f3 = np.empty((cap, 3))
-    k = find_peaks(waves, known, detect, level, weights, int(fwhm / 2), float(fwhm),
+    k = find_peaks(waves, known, tables, detect, level, weights, int(fwhm / 2), float(fwhm),
                    max_returns, p, j, f3)
     p, j, f3 = p[:k], j[:k], f3[:k]
     delta, s_f, height_f = _interpolate3(f3, j, waves.shape[1], s * math.sqrt(2.0))

@@ -25,7 +25,7 @@ from ..stream import run_chunks
 from ..sensor import SPEED_OF_LIGHT
 from ._kernels import assign_truth, discrete_returns
 from .cast import cast_static, photoelectrons, world_directions
-from .echoes import Returns, cfar_background, echo_shape, filtered_waveforms, find_returns
+from .echoes import Returns, cfar_background, echo_shape, find_returns, waveforms_with_echoes
 from .files import WaveformSink
 from .footprint import pixel_offsets
 from .geiger import blind_shots, coates, fire
@@ -98,10 +98,9 @@ def _chunk(job, sl, seed):
         ret, measured, start = _discrete(sensor, tau, pe), None, None
     else:
         shape = echo_shape(sensor.pulse, sensor.response, sensor.dt)
-        clean = sensor.noise is None and sensor.geiger is None    # the records as measured
-        waves, start, filt = filtered_waveforms(tau, pe, sensor.sigma, sensor.dt,
-                                                sensor.samples, shape, filtered=clean)
-        ret, measured = _detect(sensor, waves, start, seed, filt)
+        waves, start, echoes = waveforms_with_echoes(tau, pe, sensor.sigma, sensor.dt,
+                                                     sensor.samples, shape)
+        ret, measured = _detect(sensor, waves, start, seed, echoes)
         ret.time = ret.time - sensor.delay             # the shape's own delay taken off
     rec = np.zeros(len(ret), POINT_DTYPE)
     rng = 0.5 * SPEED_OF_LIGHT * ret.time
@@ -134,10 +133,11 @@ def _discrete(sensor, tau, pe):
                    FWHM_PER_SIGMA * spread, e[:k])
 
 
-def _detect(sensor, waves, start, seed, filtered=None):
+def _detect(sensor, waves, start, seed, echoes=None):
     """The returns of a chunk's expected waveforms, through the sensor's noise and
     detector (linear mode) or its Geiger-mode pixels; and the records it measured.
-    ``filtered``: the matched-filtered ``waves``, where known and measured as they are."""
+    ``echoes``: each record's one echo (:func:`.echoes.waveforms_with_echoes`), whose
+    filtered samples stand for the record's where it is measured as it is (no noise)."""
     det, b = sensor.detector, sensor.background()
     if sensor.geiger is not None:
         gm = sensor.geiger
@@ -160,7 +160,7 @@ def _detect(sensor, waves, start, seed, filtered=None):
         b = cfar_background(measured, 2.0 * sensor.fwhm / sensor.dt)
     level = det.level(b[:, None] if det.cfar else b)
     ret = find_returns(measured, start, sensor.dt, sensor.sigma, level, det.max_returns,
-                       det.decompose, b, filtered=filtered if measured is waves else None)
+                       det.decompose, b, echoes=echoes if measured is waves else None)
     return ret, measured
 
 

@@ -192,34 +192,43 @@ def test_a_records_samples_are_the_gaussian_echos_integrals_over_them(sigma_samp
     assert np.abs(waves - expect).max() <= tol * pe.sum(axis=1).max()
 
 
-def test_the_records_filtered_beside_them_are_scipys_gaussian_filter_of_the_records():
-    """The matched-filtered records made from the filtered table against scipy's
-    gaussian_filter1d (σ the echo's, truncate 4, zeros beyond the record) of the records
-    computed with scipy's erf (and of the records made, where sub-rays merge), to the
-    table's error; None where a fixed record length cuts
-    an echo; and the returns found from them those found by filtering the records."""
+def test_an_echos_filtered_samples_from_the_table_are_scipys_gaussian_filter_of_its_record():
+    """A record's one echo, filtered through the filtered table, against scipy's
+    gaussian_filter1d (σ the echo's, truncate 4, zeros beyond the record) of the record
+    computed with scipy's erf, to the table's error, at every phase; records of one echo
+    (merged sub-rays too) are marked, those of two or of an echo the record cuts are not;
+    and the returns found with the marked echoes are those found by filtering."""
     from scipy.ndimage import gaussian_filter1d
     from scipy.special import erf as scipy_erf
 
-    from meshladar.scan.echoes import filtered_waveforms, find_returns
+    from meshladar.scan._sampling import filtered_span, sample_table
+    from meshladar.scan.echoes import find_returns, waveforms_with_echoes
 
-    tol = 1e-13                         # of the pulse's photoelectrons, per sample
+    tol = 1e-13                         # of the echo's photoelectrons, per sample
     dt, sigma = 0.5e-9, 2.1e-9
+    s = sigma / dt
+    tables = sample_table(s)
+    ns = 120
+    centres = np.linspace(40.0, 41.0, 33)
+    x = (np.arange(ns + 1)[None, :] - centres[:, None]) / (s * math.sqrt(2))
+    record = 0.5 * np.diff(scipy_erf(x), axis=1)          # one photoelectron at 40 … 41
+    want = gaussian_filter1d(record, s, axis=1, mode="constant", truncate=4.0)
+    for c, row in zip(centres, want):
+        filt = np.empty(ns + 2)
+        filtered_span(1.0, c, tables, 0, ns - 1, filt)
+        assert np.abs(filt[1:-1] - row).max() <= tol
     rng = np.random.default_rng(5)
     tau = 600e-9 + np.cumsum(rng.uniform(0.5, 6.0, (60, 3)) * sigma, axis=1)
-    tau[:20, 1:] = tau[:20, :1] + rng.uniform(0, 1e-12, (20, 2))   # sub-rays merged
-    pe = rng.uniform(1.0, 1e4, (60, 3))
-    waves, start, filt = filtered_waveforms(tau, pe, sigma, dt, filtered=True)
-    edges = start[:, None] + dt * np.arange(waves.shape[1] + 1)
-    x = (edges[:, None, :] - tau[:, :, None]) / (sigma * math.sqrt(2))
-    expect = (0.5 * pe[:, :, None] * np.diff(scipy_erf(x), axis=2)).sum(axis=1)
-    want = gaussian_filter1d(expect, sigma / dt, axis=1, mode="constant", truncate=4.0)
-    apart = slice(20, None)             # merged sub-rays are one echo at their mean time
-    assert np.abs(filt - want)[apart].max() <= tol * pe.sum(axis=1).max()
-    assert np.abs(filt - gaussian_filter1d(waves, sigma / dt, axis=1, mode="constant",
-                                           truncate=4.0)).max() <= tol * pe.sum(axis=1).max()
-    assert filtered_waveforms(tau, pe, sigma, dt, samples=20, filtered=True)[2] is None
-    got = find_returns(waves, start, dt, sigma, 1.0, 5, True, filtered=filt)
+    tau[:20, 1:] = tau[:20, :1] + rng.uniform(0, 1e-12, (20, 2))   # merged: one echo
+    tau[20:30, 1:], pe = np.inf, rng.uniform(1.0, 1e4, (60, 3))   # one sub-ray lit
+    pe[20:30, 1:] = 0.0
+    waves, start, echoes = waveforms_with_echoes(tau, pe, sigma, dt)
+    np.testing.assert_array_equal(echoes[:30, 0] > 0, True)
+    np.testing.assert_array_equal(echoes[30:, 0], 0.0)                # several echoes
+    np.testing.assert_allclose(echoes[:30, 0], pe[:30].sum(axis=1), rtol=1e-15)
+    cut = waveforms_with_echoes(tau, pe, sigma, dt, samples=20)[2]
+    np.testing.assert_array_equal(cut[:, 0], 0.0)                     # cut by the record
+    got = find_returns(waves, start, dt, sigma, 1.0, 5, True, echoes=echoes)
     ref = find_returns(waves, start, dt, sigma, 1.0, 5, True)
     assert len(got) == len(ref) > 60
     np.testing.assert_array_equal(got.pulse, ref.pulse)
