@@ -58,20 +58,26 @@ def _filter_span(waves, p, lo, hi, weights, filt):       # pragma: no cover - co
             dst[j] += w * src[j]
 
 
-@numba.njit(cache=True, nogil=True)
-def _active(detect, level, p, half, act):                 # pragma: no cover - compiled
-    """act[j]: the window [j − half, j + half] of pulse p holds a sample of ``detect`` at
-    or above its ``level`` (one pass: the last such sample up to j + half lies at
-    j − half or later)."""
+@numba.njit(cache=True, nogil=True, inline="always")
+def _stretch(detect, level, p, half, i):                  # pragma: no cover - compiled
+    """The next stretch [a, b) of pulse p's samples whose window [j − half, j + half]
+    holds a sample of ``detect`` at or above its ``level``, from the first such sample at
+    or after i: (a, b, where the search for the next goes on); (ns, ns, ns) if none. A
+    stretch is the union of its samples' windows, up to where a gap of more than
+    2 half + 1 samples holds none."""
     ns = detect.shape[1]
-    last = -ns - half - 1
-    for i in range(min(half, ns)):
+    while i < ns and not detect[p, i] >= level[p, i]:
+        i += 1
+    if i >= ns:
+        return ns, ns, ns
+    a = max(i - half, 0)
+    end = i + half + 1                        # exclusive: the windows so far
+    i += 1
+    while i < ns and i - half <= end:
         if detect[p, i] >= level[p, i]:
-            last = i
-    for j in range(ns):
-        if j + half < ns and detect[p, j + half] >= level[p, j + half]:
-            last = j + half
-        act[j] = last >= j - half
+            end = i + half + 1
+        i += 1
+    return a, min(end, ns), i
 
 
 @numba.njit(cache=True, nogil=True)
@@ -87,7 +93,6 @@ def find_peaks(waves, echoes, tables, detect, level, weights, half, separation, 
     n, ns = waves.shape
     filt = np.empty(ns + 2)                  # filt[j + 1]: sample j; −inf beyond the ends
     filt[0] = filt[ns + 1] = -np.inf
-    act = np.empty(ns, np.bool_)
     amp = np.empty(ns)
     neg = np.empty(ns)
     order = np.empty(ns, np.int64)
@@ -95,16 +100,12 @@ def find_peaks(waves, echoes, tables, detect, level, weights, half, separation, 
     kept = np.empty(max_returns, np.int64)
     count = 0
     for p in range(n):
-        _active(detect, level, p, half, act)
         c = 0
-        j = 0
-        while j < ns:
-            if not act[j]:
-                j += 1
-                continue
-            a = j
-            while j < ns and act[j]:
-                j += 1
+        nxt = 0
+        while nxt < ns:
+            a, j, nxt = _stretch(detect, level, p, half, nxt)
+            if a >= ns:
+                break
             if echoes.shape[0] and echoes[p, 0] > 0.0:
                 filtered_span(echoes[p, 0], echoes[p, 1], tables, max(a - 1, 0),
                               min(j, ns - 1), filt)
