@@ -115,3 +115,43 @@ def test_cfar_on_short_quiet_records_does_not_take_the_background_for_zero():
     pc = scan(scene(plate(R0)), _repeat((-1.0, 0.0, 0.0), 500), Platform.static((0, 0, 0)),
               sen, seed=6)
     assert len(pc) == 0
+
+
+@pytest.mark.parametrize("half, samples", [(0, 40), (2, 1), (2, 3), (5, 200), (9, 64)])
+def test_peaks_are_the_filtered_records_maxima_where_a_window_holds_a_detection(half,
+                                                                               samples):
+    """The compiled peak search against scipy: the records' gaussian_filter1d (truncate
+    4, zeros beyond the ends), the samples whose window of ±``half`` holds a sample at or
+    above the level (maximum_filter1d), their local maxima (ties to the later neighbour
+    excluded), strongest first, each farther than the separation from a stronger one kept,
+    at most three a record; continuous random records, so no two filtered values tie."""
+    from scipy.ndimage import gaussian_filter1d, maximum_filter1d
+
+    from meshladar.scan._peaks import find_peaks
+    from meshladar.scan._sampling import matched_filter
+
+    s, level, separation, most = 2.0, 2.5, 4.0, 3
+    rng = np.random.default_rng(half + samples)
+    n = 400
+    waves = rng.uniform(0.0, 1.0, (n, samples)) ** 8 * rng.uniform(0.0, 6.0, (n, 1))
+    p, j = np.empty(n * most, np.int64), np.empty(n * most, np.int64)
+    f3 = np.empty((n * most, 3))
+    no_table = (np.zeros((1, 1)), np.zeros((1, 1)), 0, 0, np.zeros((1, 1)), np.zeros((1, 1)))
+    k = find_peaks(waves, np.zeros((0, 2)), no_table, waves,
+                   np.broadcast_to(np.asarray(level), waves.shape), matched_filter(s), half,
+                   separation, most, p, j, f3)
+    filt = gaussian_filter1d(waves, s, axis=1, mode="constant", truncate=4.0)
+    active = maximum_filter1d((waves >= level).astype(np.uint8), 2 * half + 1, axis=1,
+                              mode="constant") > 0
+    want = []
+    for q in range(n):
+        f = np.concatenate([[-np.inf], filt[q], [-np.inf]])
+        cand = [i for i in range(samples) if active[q, i] and f[i + 1] > 0
+                and f[i + 1] >= f[i] and f[i + 1] > f[i + 2]]
+        kept = []
+        for i in sorted(cand, key=lambda i: -f[i + 1]):
+            if len(kept) < most and all(abs(i - o) > separation for o in kept):
+                kept.append(i)
+        want += [(q, i) for i in kept]
+    assert list(zip(p[:k].tolist(), j[:k].tolist())) == want
+    assert k > 0 or samples < 3
