@@ -167,13 +167,16 @@ def filtered_span(e, c, tables, lo, hi, filt):            # pragma: no cover - c
     value, q, fvalue, fslope = tables[0], tables[2], tables[4], tables[5]
     reach = tables[3] + (fvalue.shape[1] - value.shape[1]) // 2
     k, base, h00, h10, h01, h11 = _hermite(e, c, q)
-    va, da, vb, db = fvalue[k], fslope[k], fvalue[k + 1], fslope[k + 1]
-    for j in range(lo, hi + 1):
-        i = j + reach - base
-        if 0 <= i < va.shape[0]:
-            filt[j + 1] = h00 * va[i] + h10 * da[i] + h01 * vb[i] + h11 * db[i]
-        else:
-            filt[j + 1] = 0.0
+    off = reach - base                           # table offset i = j + off
+    a = min(max(lo, -off), hi + 1)               # the samples within the table: a … b − 1
+    b = max(min(hi + 1, fvalue.shape[1] - off), a)
+    filt[lo + 1:a + 1] = 0.0
+    filt[b + 1:hi + 2] = 0.0
+    va, da = fvalue[k, a + off:b + off], fslope[k, a + off:b + off]
+    vb, db = fvalue[k + 1, a + off:b + off], fslope[k + 1, a + off:b + off]
+    dst = filt[a + 1:b + 1]                      # 1-D slices from 0: the loop vectorises
+    for j in range(b - a):
+        dst[j] = h00 * va[j] + h10 * da[j] + h01 * vb[j] + h11 * db[j]
 
 
 @numba.njit(cache=True, nogil=True)
