@@ -94,7 +94,10 @@ def records(results, slots):
     waves = (tuple(np.asarray(r["waveform"]) for r in results) if waves else None,
              tuple(np.asarray(r["start"]) for r in results) if waves else None)
     if results and "records" in results[0]:
-        return (np.concatenate([r["records"] for r in results]),) + waves
+        # joined as bytes (numpy joins structured arrays field by field, 2-5x slower)
+        joined = np.concatenate([np.ascontiguousarray(r["records"]).view(np.uint8)
+                                 for r in results])
+        return (joined.view(POINT_DTYPE),) + waves
     kept = [np.flatnonzero(np.arange(slots)[None, :] < np.asarray(res["returns"])[:, None])
             for res in results]
     rec = np.empty(sum(len(k) for k in kept), POINT_DTYPE)
