@@ -23,7 +23,8 @@ from ..raytrace.embree import geometry
 from ..scene import Scene
 from ..stream import run_chunks
 from ..sensor import SPEED_OF_LIGHT
-from ._kernels import assign_truth, discrete_returns
+from ._kernels import discrete_returns
+from ._records import fill_records
 from .cast import cast_static, photoelectrons, world_directions
 from .echoes import Returns, cfar_background, echo_shape, find_returns, waveforms_with_echoes
 from .files import WaveformSink
@@ -64,20 +65,6 @@ def _footprint(pattern, sensor):
     return off, np.full(len(off), 1.0 / len(off)), None
 
 
-def _truth(ret, cast, pe, tau, shift):
-    """Each return's ground truth from the sub-rays nearest it in time (module docstring)."""
-    n_ret = len(ret)
-    first = np.searchsorted(ret.pulse, np.arange(len(tau)), side="left").astype(np.int64)
-    count = np.bincount(ret.pulse, minlength=len(tau)).astype(np.int64)
-    true_range, xyz = np.zeros(n_ret), np.zeros((n_ret, 3))
-    face = np.full(n_ret, -1, np.int64)
-    dop = np.zeros(n_ret)
-    assign_truth(first, count, np.ascontiguousarray(ret.time, np.float64), tau, pe,
-                 cast.distance, cast.points, cast.face, shift, true_range, xyz, face, dop)
-    return {"true_face": face, "true_range": true_range, "true_x": xyz[:, 0],
-            "true_y": xyz[:, 1], "true_z": xyz[:, 2], "doppler": dop}
-
-
 def _chunk(job, sl, seed):
     """One chunk's records, its measured waveforms (when kept) and their starts."""
     scene, pattern, platform, sensor = job.scene, job.pattern, job.platform, job.sensor
@@ -102,21 +89,12 @@ def _chunk(job, sl, seed):
                                                      sensor.samples, shape)
         ret, measured = _detect(sensor, waves, start, seed, echoes)
         ret.time = ret.time - sensor.delay             # the shape's own delay taken off
-    rec = np.zeros(len(ret), POINT_DTYPE)
-    rng = 0.5 * SPEED_OF_LIGHT * ret.time
-    pos = origins[ret.pulse] + rng[:, None] * axis[ret.pulse]
-    rec["x"], rec["y"], rec["z"] = pos.T
-    rec["range"], rec["time"] = rng, ret.time
-    rec["amplitude"], rec["width"], rec["intensity"] = ret.amplitude, ret.width, ret.intensity
-    rec["return_number"], rec["number_of_returns"] = ret.return_number, ret.number_of_returns
-    rec["pulse_id"] = sl.start + ret.pulse
-    rec["emission_time"] = t[ret.pulse]
-    rec["scan_angle"] = pattern.scan_angles_deg[sl][ret.pulse]
-    rec["channel"] = pattern.channels[sl][ret.pulse]
-    for name, values in _truth(ret, cast, pe, tau, shift).items():
-        rec[name] = values
-    face = rec["true_face"]
-    rec["true_part"] = np.where(face >= 0, _part_of(scene)[np.maximum(face, 0)], -1)
+    rec = np.empty(len(ret), POINT_DTYPE)
+    fill_records(rec, (ret.pulse, np.ascontiguousarray(ret.time, np.float64), ret.amplitude,
+                       ret.width, ret.intensity, ret.return_number, ret.number_of_returns),
+                 (sl.start, t, pattern.scan_angles_deg[sl], pattern.channels[sl]),
+                 (origins, axis, 0.5 * SPEED_OF_LIGHT),
+                 (tau, pe, cast.distance, cast.points, cast.face, shift), _part_of(scene))
     return rec, (measured if job.keep or job.sink is not None else None), start
 
 
