@@ -12,7 +12,7 @@ import numpy as np
 from ._kernels import sort_small
 from ._sampling import filtered_span
 
-__all__ = ["order_returns", "find_peaks", "centroids", "fit_gaussians"]
+__all__ = ["order_returns", "find_peaks", "size_peaks", "centroids", "fit_gaussians"]
 
 
 @numba.njit(cache=True, nogil=True)
@@ -143,6 +143,30 @@ def find_peaks(waves, echoes, tables, detect, level, weights, half, separation, 
             out_f[count, 2] = filt[i + 2]
             count += 1
     return count
+
+
+@numba.njit(cache=True, nogil=True)
+def size_peaks(f3, j, ns, s, centre, s_e, height):        # pragma: no cover - compiled
+    """Each peak's Gaussian through its three filtered samples ``f3`` (j − 1, j, j + 1):
+    its centre (samples, from the record's start), the echo's σ (the filtered one's less
+    the filter's σ = ``s`` in quadrature, at least s/2) and height (the filter has unit
+    area); where the samples do not make a downward parabola in the log, or j is an end,
+    the filtered echo's σ, s√2, at the middle sample."""
+    tiny = 1e-300
+    root = math.sqrt(2.0 * math.pi)
+    for i in range(j.shape[0]):
+        a, b, c = f3[i, 0], f3[i, 1], f3[i, 2]
+        la, lb, lc = math.log(max(a, tiny)), math.log(max(b, tiny)), math.log(max(c, tiny))
+        curv = la - 2.0 * lb + lc
+        if a > 0 and c > 0 and curv < 0 and 0 < j[i] < ns - 1:
+            delta = min(max(0.5 * (la - lc) / curv, -0.5), 0.5)
+            s_f = math.sqrt(-1.0 / curv)
+            h_f = math.exp(lb - 0.25 * (la - lc) * delta)
+        else:
+            delta, s_f, h_f = 0.0, s * math.sqrt(2.0), b
+        centre[i] = j[i] + 0.5 + delta
+        s_e[i] = math.sqrt(max(s_f ** 2 - s ** 2, 0.25 * s ** 2))
+        height[i] = h_f * s_f * root / (s_e[i] * root)
 
 
 @numba.njit(cache=True, nogil=True)

@@ -92,10 +92,11 @@ def sample_table(s):
     return value, slope, q, reach, filtered, filtered_slope
 
 
+@functools.lru_cache(maxsize=8)
 def matched_filter(s):
     """The matched filter's taps for an echo of σ = ``s`` samples: a Gaussian of that σ
     at the integers −h … h, h = round(4 s) (scipy's ``gaussian_filter1d``, truncate=4),
-    summing to 1.
+    summing to 1 (made once per σ; read-only).
 
     Parameters
     ----------
@@ -109,7 +110,9 @@ def matched_filter(s):
     """
     h = int(4.0 * s + 0.5)
     taps = np.exp(-0.5 * (np.arange(-h, h + 1) / s) ** 2)
-    return taps / taps.sum()
+    taps /= taps.sum()
+    taps.setflags(write=False)
+    return taps
 
 
 def _filtered(table, taps):

@@ -40,6 +40,7 @@ class ScanJob(NamedTuple):
     sink: object = None  # a WaveformSink the chunks stream their records into, or None
     folder: bool = False  # a run folder keeps the chunks: fixed slots, not records
     backend: str = None   # the ray-casting backend, resolved once (None: "auto" per chunk)
+    part_of: object = None  # each face's part (int32), made once
 
 
 def _chunk_seed(seed, first):

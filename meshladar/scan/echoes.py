@@ -21,7 +21,7 @@ import math
 import numpy as np
 
 from .._pulses import GaussianPulse
-from ._peaks import centroids, find_peaks, fit_gaussians, order_returns
+from ._peaks import centroids, find_peaks, fit_gaussians, order_returns, size_peaks
 from ._sampling import (SUPPORT, accumulate, accumulate_table, lit_spans, matched_filter,
                         sample_table)
 from .instrument import FWHM_PER_SIGMA
@@ -186,29 +186,16 @@ class Returns:
         return len(self.pulse)
 
 
-def _interpolate3(f3, j, ns, sigma_samples):
-    """A Gaussian through each peak's three filtered samples ``f3`` (j − 1, j, j + 1):
-    offset (samples), σ (samples), height; the fallback (σ of the filtered pulse, no
-    offset) where they do not make a downward parabola in the log or j is an end."""
-    a, b, c = f3[:, 0], f3[:, 1], f3[:, 2]
-    tiny = 1e-300
-    la, lb, lc = (np.log(np.maximum(x, tiny)) for x in (a, b, c))
-    curv = la - 2.0 * lb + lc
-    good = (a > 0) & (c > 0) & (curv < 0) & (j > 0) & (j < ns - 1)
-    curv_safe = np.where(good, curv, -1.0)
-    delta = np.where(good, np.clip(0.5 * (la - lc) / curv_safe, -0.5, 0.5), 0.0)
-    s = np.where(good, np.sqrt(-1.0 / curv_safe), sigma_samples)
-    height = np.where(good, np.exp(lb - 0.25 * (la - lc) * delta), b)
-    return delta, s, height
-
-
 def _decompose(waves, p, centre, s, height, sigma_samples):
     """Refit each pulse's overlapping peaks as one sum of Gaussians (in place), by a
     compiled Levenberg-Marquardt within bounds (heights ≥ 0, centres in the window,
     widths 0.5 to 3 σ)."""
     ns = waves.shape[1]
-    bounds = np.r_[0, np.nonzero(np.diff(p))[0] + 1, len(p)]        # p is sorted
-    several = np.flatnonzero(np.diff(bounds) >= 2)   # pulses of one peak need no refit
+    change = np.diff(p)                                             # p is sorted
+    if change.all():                                 # pulses of one peak need no refit
+        return
+    bounds = np.concatenate(([0], np.flatnonzero(change) + 1, [len(p)]))
+    several = np.flatnonzero(np.diff(bounds) >= 2)
     for a, b in zip(bounds[several].tolist(), bounds[several + 1].tolist()):
         q = p[a]
         idx = np.arange(a, b)
@@ -308,13 +295,10 @@ def find_returns(waves, start, dt, sigma, level, max_returns, decompose, backgro
     k = find_peaks(waves, known, tables, detect, level, weights, int(fwhm / 2), float(fwhm),
                    max_returns, p, j, f3)
     p, j, f3 = p[:k], j[:k], f3[:k]
-    delta, s_f, height_f = _interpolate3(f3, j, waves.shape[1], s * math.sqrt(2.0))
-    centre = j + 0.5 + delta
+    centre, s_e, height = np.empty(k), np.empty(k), np.empty(k)
+    size_peaks(f3, j, waves.shape[1], s, centre, s_e, height)
     back = np.broadcast_to(np.asarray(background, np.float64), (len(waves),))[p]
     centroids(waves, np.ascontiguousarray(back), p, centre, _CENTROID_SIGMAS * s, 2)
-    area = height_f * s_f * math.sqrt(2.0 * math.pi)        # the filter has unit area
-    s_e = np.sqrt(np.maximum(s_f ** 2 - s ** 2, 0.25 * s ** 2))
-    height = area / (s_e * math.sqrt(2.0 * math.pi))
     if decompose and len(p):
         _decompose(waves, p, centre, s_e, height, s)
     time = start[p] + centre * dt

@@ -211,9 +211,10 @@ class Platform:
         return cls(data[:, 0], data[:, 1:4], data[:, 4:7], interpolation, **mount)
 
     # -- poses -------------------------------------------------------------------------
-    @property
+    @functools.cached_property
     def is_static(self) -> bool:
-        """Whether the platform never moves (one position and one attitude throughout)."""
+        """Whether the platform never moves (one position and one attitude throughout;
+        found once, the platform being immutable)."""
         return bool(np.all(self.positions == self.positions[0])
                     and np.all(self.attitudes_deg == self.attitudes_deg[0]))
 

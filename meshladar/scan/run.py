@@ -94,7 +94,7 @@ def _chunk(job, sl, seed):
                        ret.width, ret.intensity, ret.return_number, ret.number_of_returns),
                  (sl.start, t, pattern.scan_angles_deg[sl], pattern.channels[sl]),
                  (origins, axis, 0.5 * SPEED_OF_LIGHT),
-                 (tau, pe, cast.distance, cast.points, cast.face, shift), _part_of(scene))
+                 (tau, pe, cast.distance, cast.points, cast.face, shift), job.part_of)
     return rec, (measured if job.keep or job.sink is not None else None), start
 
 
@@ -212,7 +212,8 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
                              "records; use echoes='waveform'")
     sink = _sink(waveforms_file, keep_waveforms, run_dir, executor)
     job = ScanJob(scene, pattern, platform, sensor, foot, seed, keep_waveforms, slots, _chunk,
-                  split, sink, folder=run_dir is not None, backend=resolve_backend("auto"))
+                  split, sink, folder=run_dir is not None, backend=resolve_backend("auto"),
+                  part_of=_part_of(scene))
     description = None if run_dir is None else job_description(
         scene, pattern, platform, sensor, seed, keep_waveforms,
         geometry(scene, "flat").key, motions)
