@@ -36,32 +36,39 @@ def cast_pulses(fn, handle, w, flags, origins, rot, local, offsets, pitch, inver
     n, m = local.shape[0], offsets.shape[0]
     ab = offsets.copy() if pitch >= 0.0 else np.tan(offsets)
     dirs = np.empty((1, m, 3))                    # the current pulse's sub-rays, float64
-    lane_d = np.empty((w, 3))                     # each lane's, float64, and its pulse
+    lane_d = np.empty((w, 3))                     # each lane's, float64, and its sub-ray
     lane_p = np.empty(w, np.int64)
+    lane_k = np.empty(w, np.int64)
     sub = np.empty((w, 3), np.float32)
     sub_d = np.empty((w, 3), np.float32)
+    o32 = np.empty(3, np.float32)                 # the current pulse's origin, as cast
+    p, k = 0, 0                                   # the next sub-ray (counted, not divided)
     current = -1
     total = n * m
     for i0 in range(0, total, w):
         lanes = min(w, total - i0)
         for j in range(lanes):
-            p, k = (i0 + j) // m, (i0 + j) % m
             if p != current:
                 pulse_sub_rays(rot, local, p, ab, pitch, dirs, 0)
+                for c in range(3):
+                    o32[c] = np.float32(origins[p, c]) * inverse
                 current = p
-            lane_p[j] = p
+            lane_p[j], lane_k[j] = p, k
             for c in range(3):
                 lane_d[j, c] = dirs[0, k, c]
-                sub[j, c] = np.float32(origins[p, c]) * inverse
+                sub[j, c] = o32[c]
                 sub_d[j, c] = np.float32(dirs[0, k, c])
+            k += 1
+            if k == m:
+                p, k = p + 1, 0
         load_packet(f32, i32, sub, sub_d, np.float32(np.inf), 0, lanes, w)
         fn(base + VALID_OFF, handle, base, base + ARGS_OFF)
         for j in range(lanes):
-            p, k = lane_p[j], (i0 + j) % m
+            q = lane_p[j]
             f, tf = -1, np.inf
             if i32[GEOMID * w + j] != -1:
                 f = i32[PRIMID * w + j]
                 tf = np.float64(f32[TFAR * w + j] * scale)
-            refine_hit(f, tf, origins[p, 0], origins[p, 1], origins[p, 2], lane_d[j, 0],
+            refine_hit(f, tf, origins[q, 0], origins[q, 1], origins[q, 2], lane_d[j, 0],
                        lane_d[j, 1], lane_d[j, 2], normals, plane_d, min_cos, center, face,
-                       dist, cos, points, p, k)
+                       dist, cos, points, q, lane_k[j])
