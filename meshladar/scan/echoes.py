@@ -26,7 +26,8 @@ from ._sampling import (SUPPORT, accumulate, accumulate_table, lit_spans, matche
                         sample_table)
 from .instrument import FWHM_PER_SIGMA
 
-__all__ = ["SUPPORT", "waveforms", "echo_shape", "find_returns", "cfar_background", "Returns"]
+__all__ = ["SUPPORT", "waveforms", "waveforms_with_echoes", "echo_shape", "find_returns",
+           "cfar_background", "Returns"]
 
 #: A pulse's sub-rays arriving within this many σ of each other are spread as one, at
 #: their photoelectron-weighted mean time: the record's sum and first moment are exact,
