@@ -152,9 +152,9 @@ def refine_hit(f, tf, o0, o1, o2, d0, d1, d2, normals, plane_d, min_cos, center,
 @numba.njit(cache=True, nogil=True)
 def assign_truth(first, count, ret_time, tau, pe, distance, points, face, shift,
                  true_range, true_xyz, true_face, doppler):   # pragma: no cover - compiled
-    """Each return's photoelectron-weighted true range, point and Doppler ``shift``, and
-    the face of its strongest sub-ray, from the lit sub-rays whose echo lies nearest it
-    in time."""
+    """Each return's photoelectron-weighted true range, point and Doppler ``shift`` (0 where
+    ``shift`` has no rows), and the face of its strongest sub-ray, from the lit sub-rays
+    whose echo lies nearest it in time."""
     n, m = tau.shape
     n_ret = ret_time.shape[0]
     total = np.zeros(n_ret)
@@ -175,7 +175,8 @@ def assign_truth(first, count, ret_time, tau, pe, distance, points, face, shift,
                     gap, r = g, q
             total[r] += e
             true_range[r] += e * distance[p, k]
-            doppler[r] += e * shift[p, k]
+            if shift.shape[0]:                   # (none: nothing moves)
+                doppler[r] += e * shift[p, k]
             for j in range(3):
                 true_xyz[r, j] += e * points[p, k, j]
             if e > best[r]:

@@ -65,6 +65,9 @@ def _footprint(pattern, sensor):
     return off, np.full(len(off), 1.0 / len(off)), None
 
 
+_NO_SHIFT = np.zeros((0, 0))
+
+
 def _chunk(job, sl, seed):
     """One chunk's records, its measured waveforms (when kept) and their starts."""
     scene, pattern, platform, sensor = job.scene, job.pattern, job.platform, job.sensor
@@ -79,7 +82,9 @@ def _chunk(job, sl, seed):
         cast = cast_moving(job.split, origins, world_directions(rot, local, offsets, pitch),
                            t, job.backend)
     pe = photoelectrons(scene, cast, shares, sensor)
-    shift = doppler(job.split, platform, cast, origins, t, sensor.wavelength)
+    still = job.split is None and platform.is_static      # no Doppler shift to weigh
+    shift = _NO_SHIFT if still else doppler(job.split, platform, cast, origins, t,
+                                            sensor.wavelength)
     tau = 2.0 * cast.distance / SPEED_OF_LIGHT
     if sensor.echoes == "discrete":
         ret, measured, start = _discrete(sensor, tau, pe), None, None
