@@ -8,9 +8,12 @@ origin and distance arrays."""
 
 from __future__ import annotations
 
+import math
+
 import numba
 import numpy as np
 
+from ..brdf._sandford_robertson_kernel import sr_monostatic
 from ..raytrace.embree4_ctypes import ARGS_OFF, GEOMID, PRIMID, TFAR, VALID_OFF
 from ..raytrace.embree4_kernels import init_args, load_packet, workspace
 from ._kernels import pulse_sub_rays, refine_hit
@@ -20,7 +23,7 @@ __all__ = ["cast_pulses"]
 
 @numba.njit(cache=True, nogil=True)
 def cast_pulses(fn, handle, w, flags, origins, rot, local, offsets, pitch, inverse, scale,
-                geometry, out):                           # pragma: no cover - compiled
+                geometry, out, link):                     # pragma: no cover - compiled
     """First hits of every pulse's sub-rays, refined (module docstring).
 
     ``fn``, ``handle``, ``w``, ``flags``: the library's rtcIntersect{w}, the scene, the
@@ -28,9 +31,12 @@ def cast_pulses(fn, handle, w, flags, origins, rot, local, offsets, pitch, inver
     center; ``rot``, ``local``, ``offsets``, ``pitch`` as :func:`._kernels.world_sub_rays`;
     ``inverse`` and ``scale`` (float32) the Embree scene's unit-size factors;
     ``geometry`` = (normals, plane_d, min_cos, center); ``out`` = (face, dist, cos,
-    points), each (n, m[, 3])."""
+    points), each (n, m[, 3]); ``link`` = (each face's material, the coatings' compiled
+    rows, the sub-rays' energy shares, the link budget's scale, the extinction, pe): where
+    pe has rows, each sub-ray's photoelectrons (:func:`.cast.photoelectrons`) into it."""
     normals, plane_d, min_cos, center = geometry
     face, dist, cos, points = out
+    material, params, shares, budget, extinction, pe = link
     i32, f32, i64, base = workspace()
     init_args(i32, i64, base, flags)
     n, m = local.shape[0], offsets.shape[0]
@@ -72,3 +78,21 @@ def cast_pulses(fn, handle, w, flags, origins, rot, local, offsets, pitch, inver
             refine_hit(f, tf, origins[q, 0], origins[q, 1], origins[q, 2], lane_d[j, 0],
                        lane_d[j, 1], lane_d[j, 2], normals, plane_d, min_cos, center, face,
                        dist, cos, points, q, lane_k[j])
+            if pe.shape[0]:
+                pe[q, lane_k[j]] = 0.0 if f < 0 else _photoelectrons(
+                    min(cos[q, lane_k[j]], 1.0), dist[q, lane_k[j]], params, material[f],
+                    shares[lane_k[j]], budget, extinction)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _photoelectrons(c, r, params, i, share, budget, extinction):   # pragma: no cover
+    """A hit's photoelectrons: the link budget (:mod:`.cast`) with F·cos θ from its
+    coating's compiled row, params[i] (read by index: no row view per hit; F·cos θ of a
+    Lambertian row is its numpy value bit for bit)."""
+    s = math.sqrt(max(0.0, 1.0 - c * c))
+    weight = sr_monostatic(c, s, params[i, 0], params[i, 1], params[i, 2], params[i, 3],
+                           params[i, 4], params[i, 5] > 0.5, params[i, 6] > 0.5) * c
+    out = budget * share * weight / (r * r)
+    if extinction:                         # (× exp(−0) = 1 would change no bit)
+        out = out * math.exp(-2.0 * extinction * r)
+    return out

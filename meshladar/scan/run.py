@@ -77,11 +77,12 @@ def _chunk(job, sl, seed):
     local = pattern.directions[sl]
     axis = np.einsum("nij,nj->ni", rot, local)
     if job.split is None:
-        cast = cast_static(scene, origins, rot, local, offsets, pitch, job.backend)
+        cast = cast_static(scene, origins, rot, local, offsets, pitch, job.backend, sensor,
+                           shares)
     else:
         cast = cast_moving(job.split, origins, world_directions(rot, local, offsets, pitch),
                            t, job.backend)
-    pe = photoelectrons(scene, cast, shares, sensor)
+    pe = cast.pe if cast.pe is not None else photoelectrons(scene, cast, shares, sensor)
     still = job.split is None and platform.is_static      # no Doppler shift to weigh
     shift = _NO_SHIFT if still else doppler(job.split, platform, cast, origins, t,
                                             sensor.wavelength)

@@ -156,3 +156,37 @@ def test_the_one_loop_cast_gives_the_staged_casts_hits_number_for_number(sub_ray
     assert (one.face >= 0).all()                                 # inside the room
     for name in ("face", "distance", "cos", "points"):
         np.testing.assert_array_equal(getattr(one, name), getattr(two, name))
+
+
+@pytest.mark.parametrize("coating, extinction", [
+    (ml.brdf.Lambertian(0.4), 0.0),
+    (ml.brdf.SandfordRobertson(rho_d=0.05, epsilon=0.4, b=0.5, e=0.1), 2e-3),
+    (ml.brdf.Phong(0.3, 0.2, 20.0), 0.0)])
+def test_the_one_loop_cast_weighs_its_hits_as_the_link_budget_does(coating, extinction):
+    """Photoelectrons weighed in the one-loop cast against :func:`photoelectrons` on its
+    hits: to 1e-13 for SR (its compiled twin); a Lambertian scene (numpy's budget is
+    faster there) and a coating without a compiled row (Phong) are not weighed in the loop
+    (None: the staged budget)."""
+    from meshladar.raytrace.backends import resolve_backend
+    from meshladar.scan.cast import cast_static, photoelectrons
+
+    room = trimesh.creation.box(2 * ROOM)
+    sc = ml.Scene.from_meshes([(room, coating)])
+    sensor = ScanSensor(pulse_energy=1e-7, aperture_diameter=0.05, sample_rate=2e9,
+                        extinction=extinction, beam=ScanBeam(5e-4, sub_rays=7))
+    rng = np.random.default_rng(12)
+    n = 400
+    origins = rng.uniform(-5, 5, (n, 3))
+    rot = np.linalg.qr(rng.normal(size=(n, 3, 3)))[0]
+    local = rng.normal(size=(n, 3))
+    local /= np.linalg.norm(local, axis=1)[:, None]
+    offsets = rng.uniform(-1e-3, 1e-3, (7, 2))
+    shares = rng.uniform(0.05, 0.3, 7)
+    cast = cast_static(sc, origins, rot, local, offsets, None, resolve_backend("auto"),
+                       sensor, shares)
+    want = photoelectrons(sc, cast, shares, sensor)
+    if not isinstance(coating, ml.brdf.SandfordRobertson):
+        assert cast.pe is None
+        return
+    assert (want > 0).all()
+    np.testing.assert_allclose(cast.pe, want, rtol=1e-13, atol=0)
