@@ -18,7 +18,7 @@ from ..raytrace.embree4_ctypes import ARGS_OFF, GEOMID, PRIMID, TFAR, VALID_OFF
 from ..raytrace.embree4_kernels import init_args, load_packet, workspace
 from ._kernels import pulse_sub_rays, refine_hit
 
-__all__ = ["cast_pulses"]
+__all__ = ["cast_pulses", "projected", "projected_weights"]
 
 
 @numba.njit(cache=True, nogil=True)
@@ -87,12 +87,26 @@ def cast_pulses(fn, handle, w, flags, origins, rot, local, offsets, pitch, inver
 @numba.njit(cache=True, nogil=True, inline="always")
 def _photoelectrons(c, r, params, i, share, budget, extinction):   # pragma: no cover
     """A hit's photoelectrons: the link budget (:mod:`.cast`) with F·cos θ from its
-    coating's compiled row, params[i] (read by index: no row view per hit; F·cos θ of a
-    Lambertian row is its numpy value bit for bit)."""
-    s = math.sqrt(max(0.0, 1.0 - c * c))
-    weight = sr_monostatic(c, s, params[i, 0], params[i, 1], params[i, 2], params[i, 3],
-                           params[i, 4], params[i, 5] > 0.5, params[i, 6] > 0.5) * c
+    coating's compiled row, params[i]."""
+    weight = projected(c, math.sqrt(max(0.0, 1.0 - c * c)), params, i)
     out = budget * share * weight / (r * r)
     if extinction:                         # (× exp(−0) = 1 would change no bit)
         out = out * math.exp(-2.0 * extinction * r)
     return out
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def projected(c, s, params, i):                           # pragma: no cover - compiled
+    """F(θ; −θ)·cos θ of the coating whose compiled row is params[i] (read by index: no
+    row view per hit), from cos θ and sin θ; a Lambertian row's is its numpy
+    ``projected`` bit for bit."""
+    return sr_monostatic(c, s, params[i, 0], params[i, 1], params[i, 2], params[i, 3],
+                         params[i, 4], params[i, 5] > 0.5, params[i, 6] > 0.5) * c
+
+
+@numba.njit(cache=True, nogil=True)
+def projected_weights(c, s, face, material, params, out):    # pragma: no cover - compiled
+    """out[i] = :func:`projected` of hit i on face ``face[i]``, its coating's row
+    params[material[face[i]]]."""
+    for i in range(c.shape[0]):
+        out[i] = projected(c[i], s[i], params, material[face[i]])

@@ -30,7 +30,7 @@ from ..raytrace.backends import resolve_backend
 from ..raytrace.embree4_ctypes import query_flags
 from ..sensor import PLANCK, SPEED_OF_LIGHT
 from ._kernels import pack_rays, refine_hits, world_sub_rays
-from ._packets import cast_pulses
+from ._packets import cast_pulses, projected_weights
 
 __all__ = ["world_directions", "Cast", "cast_chunk", "cast_static", "photoelectrons"]
 
@@ -146,10 +146,10 @@ def cast_static(scene, origins, rot, directions, offsets, pixel_pitch, backend,
     number for number; else the two in turn. With ``sensor`` and ``shares``, and where
     every coating has a compiled row (``kernel_params``: Lambertian, SandfordRobertson)
     and not all are Lambertian, the loop also weighs each hit: the result's ``pe`` is
-    then :func:`photoelectrons`' to 1e-13 (the SR model's compiled twin takes its norms as
-    square roots). Measured per 120,000 sub-rays: an SR coating weighed in the loop costs
-    4.9 ms against 14 for :func:`photoelectrons`; a Lambertian one 1.9 against 0.9 (numpy's
-    vectorised cosine), so a Lambertian scene is weighed after the cast.
+    then :func:`photoelectrons`' bit for bit. Measured per 120,000 sub-rays: an SR coating
+    weighed in the loop costs 4.9 ms (through its numpy model, 14); a Lambertian one 1.9
+    against 0.9 for numpy's vectorised cosine, so a Lambertian scene is weighed after the
+    cast.
 
     Parameters
     ----------
@@ -180,10 +180,10 @@ def cast_static(scene, origins, rot, directions, offsets, pixel_pitch, backend,
     n, m = len(directions), len(offsets)
     out = (np.empty((n, m), np.int64), np.empty((n, m)), np.empty((n, m)),
            np.empty((n, m, 3)))
-    weigh = (sensor is not None and not all(isinstance(c, Lambertian) for c in scene.materials)
-             and all(getattr(c, "kernel_params", None) is not None for c in scene.materials))
+    rows = _compiled_rows(scene) if sensor is not None else None
+    weigh = rows is not None
     pe = np.empty((n, m) if weigh else (0, 0))
-    link = (geo.material, material_table(list(scene.materials)) if weigh else _NO_ROWS,
+    link = (geo.material, rows if weigh else _NO_ROWS,
             np.ascontiguousarray(np.broadcast_to(shares if weigh else 0.0, (m,)), np.float64),
             _budget(sensor) if weigh else 0.0,
             float(sensor.extinction) if weigh else 0.0, pe)
@@ -201,6 +201,17 @@ def cast_static(scene, origins, rot, directions, offsets, pixel_pitch, backend,
     return cast
 
 
+def _compiled_rows(scene):
+    """The coatings' compiled rows (:func:`meshladar.brdf.material_table`) where every
+    coating has one and not all are Lambertian (numpy's vectorised cosine is faster for
+    those); else None."""
+    coatings = list(scene.materials)
+    if all(isinstance(c, Lambertian) for c in coatings) or \
+            any(getattr(c, "kernel_params", None) is None for c in coatings):
+        return None
+    return material_table(coatings)
+
+
 def _budget(sensor):
     """The link budget's factor (module docstring): photoelectrons per unit of a sub-ray's
     share × F cos θ / R²."""
@@ -210,7 +221,10 @@ def _budget(sensor):
 
 
 def photoelectrons(scene, cast, shares, sensor):
-    """Each sub-ray's expected photoelectrons (module docstring).
+    """Each sub-ray's expected photoelectrons (module docstring). Where every coating has
+    a compiled row and not all are Lambertian, F·cos θ comes from the coatings' compiled
+    twins (held to their numpy models to 1e-13 by the BRDF tests); else from each
+    coating's ``projected``.
 
     Parameters
     ----------
@@ -236,7 +250,11 @@ def photoelectrons(scene, cast, shares, sensor):
     shares = np.ascontiguousarray(np.broadcast_to(shares, cast.face.shape[1:]), np.float64)
     k = _hit_terms(cast.face, cast.cos, cast.distance, shares, at, face, cos, sin, r, share)
     cos, sin = cos[:k], sin[:k]
-    if len(scene.materials) == 1:              # one coating: no selection to make
+    rows = _compiled_rows(scene)
+    if rows is not None:                       # the coatings' compiled twins
+        weight = np.empty(k)
+        projected_weights(cos, sin, face[:k], geo.material, rows, weight)
+    elif len(scene.materials) == 1:            # one coating: no selection to make
         weight = np.asarray(scene.materials[0].projected(cos, sin), np.float64)
     else:
         weight = np.zeros(k)
