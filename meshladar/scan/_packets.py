@@ -4,7 +4,9 @@ width in their flat order (a packet may hold the end of one pulse and the start 
 next), Embree's first hits, and each hit refined in float64 (:func:`._kernels.refine_hit`).
 The rays, packets and hits are those of the staged path (:func:`.cast.cast_chunk` over
 :func:`.cast.world_directions`) number for number, without its per-sub-ray direction,
-origin and distance arrays."""
+origin and distance arrays. Where the coatings have compiled rows (and are not all
+Lambertian), each hit is weighed in the loop too: its photoelectrons, those of
+:func:`.cast.photoelectrons` bit for bit (the same compiled twin, :func:`projected`)."""
 
 from __future__ import annotations
 
