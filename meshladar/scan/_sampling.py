@@ -140,7 +140,7 @@ def _hermite(e, c, q):                                    # pragma: no cover - c
             e * (3.0 * t2 - 2.0 * t3), e * (t3 - t2))
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(cache=True, nogil=True)
 def _group(row, e, c, s, r2, value, slope, q, reach):     # pragma: no cover - compiled
     """row[j] += e K_{j−b}(φ) over the support's samples of a group centred at c."""
     ns = row.shape[0]
