@@ -20,7 +20,7 @@ from ..raytrace.embree4_ctypes import ARGS_OFF, GEOMID, PRIMID, TFAR, VALID_OFF
 from ..raytrace.embree4_kernels import init_args, load_packet, workspace
 from ._kernels import pulse_sub_rays, refine_hit
 
-__all__ = ["cast_pulses", "projected", "projected_weights"]
+__all__ = ["cast_pulses", "projected", "projected_weights", "link_budget"]
 
 
 @numba.njit(cache=True, nogil=True)
@@ -90,7 +90,15 @@ def cast_pulses(fn, handle, w, flags, origins, rot, local, offsets, pitch, inver
 def _photoelectrons(c, r, params, i, share, budget, extinction):   # pragma: no cover
     """A hit's photoelectrons: the link budget (:mod:`.cast`) with F·cos θ from its
     coating's compiled row, params[i]."""
-    weight = projected(c, math.sqrt(max(0.0, 1.0 - c * c)), params, i)
+    return link_budget(projected(c, math.sqrt(max(0.0, 1.0 - c * c)), params, i), r, share,
+                       budget, extinction)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def link_budget(weight, r, share, budget, extinction):    # pragma: no cover - compiled
+    """A hit's photoelectrons from its F·cos θ ``weight`` at distance r (the link budget,
+    :mod:`.cast`'s module docstring): the one formula of both the cast's loop and
+    :func:`.cast.photoelectrons`."""
     out = budget * share * weight / (r * r)
     if extinction:                         # (× exp(−0) = 1 would change no bit)
         out = out * math.exp(-2.0 * extinction * r)

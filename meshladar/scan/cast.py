@@ -30,7 +30,7 @@ from ..raytrace.backends import resolve_backend
 from ..raytrace.embree4_ctypes import query_flags
 from ..sensor import PLANCK, SPEED_OF_LIGHT
 from ._kernels import pack_rays, refine_hits, world_sub_rays
-from ._packets import cast_pulses, projected_weights
+from ._packets import cast_pulses, link_budget, projected_weights
 
 __all__ = ["world_directions", "Cast", "cast_chunk", "cast_static", "photoelectrons"]
 
@@ -293,7 +293,4 @@ def _hit_terms(face, cos, dist, shares, at, hit_face, c, s, r, share):   # pragm
 def _link(at, weight, r, share, scale, extinction, out):   # pragma: no cover - compiled
     """out[at] = the link budget's photoelectrons (module docstring) of each hit."""
     for i in range(at.shape[0]):
-        pe = scale * share[i] * weight[i] / (r[i] * r[i])
-        if extinction:                     # (× exp(−0) = 1 would change no bit)
-            pe = pe * math.exp(-2.0 * extinction * r[i])
-        out[at[i]] = pe
+        out[at[i]] = link_budget(weight[i], r[i], share[i], scale, extinction)
