@@ -13,8 +13,10 @@ from numba import njit
 
 from ..raytrace.embree4_kernels import init_args, load_packet, tile_shape, workspace
 from ..raytrace.embree4_ctypes import ARGS_OFF, GEOMID, PRIMID, TFAR, U, V, VALID_OFF
-from ._kernels import (bin_bistatic_hits, bin_flat_hits, bin_sensor_hits, bin_smooth_hits,
-                       face_hit)
+from ._kernels import bin_bistatic_hits, bin_flat_hits, bin_smooth_hits, face_hit
+from ._sensor_kernels import bin_sensor_hits
+from ._prefetch import ahead as _ahead
+from ._prefetch import prefetch as _prefetch
 
 __all__ = ["cast_bin_flat", "cast_bin_smooth", "cast_bin_bistatic", "cast_bin_sensor"]
 
@@ -34,7 +36,11 @@ def _occlude_block(occ, scene, w, i32, f32, base, prim, tf, o, n, plane_d, face_
     blocked, lifted, index = spare
     wr, ignore_back, skip_below = needed
     m = 0
+    ahead = _ahead(face_normals)
     for i in range(n):
+        if i + ahead < n:                        # a later hit's face rows (._prefetch)
+            _prefetch(face_normals, prim[i + ahead])
+            _prefetch(plane_d, prim[i + ahead])
         p = prim[i]
         c, t, _ = face_hit(p, tf[i], o, i, wv, plane_d, face_normals)
         sign = -1.0 if c < 0.0 else 1.0
@@ -310,7 +316,7 @@ def cast_bin_sensor(fn, scene, w, flags, plane, sensor, inv_scale, scale, smooth
     """One view seen by a sensor at a standoff, grid to bins in one loop: each tile's rays
     built as :func:`meshladar.raytrace.perspective.sensor_cast` builds them
     (:func:`_sensor_tile`), cast in a packet with their own directions, and each band of
-    rows weighed and binned in scan order by :func:`._kernels.bin_sensor_hits` (its
+    rows weighed and binned in scan order by :func:`._sensor_kernels.bin_sensor_hits` (its
     arguments after ``sensor_pos`` but ``out``: ``binning``), with the hit distance
     t0 + Embree's (scaled back) as the per-hit path has it. The same numbers, without
     per-ray arrays. Returns (back-face hits, rays cast)."""

@@ -1,6 +1,6 @@
 """A view seen by a sensor at a finite standoff, cast by
 :func:`meshladar.raytrace.perspective.sensor_cast` and weighed and binned by the compiled
-loop ``meshladar.weighing._kernels.bin_sensor_hits`` (flat or smooth normals, coatings with
+loop ``meshladar.weighing._sensor_kernels.bin_sensor_hits`` (flat or smooth normals, coatings with
 ``kernel_params``): the numbers of the per-hit path."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from ..raytrace.grid import stratified_sequences
 from ..raytrace.perspective import plane_axes, sensor_cast, start_distance
 from ..sensor import FloodBeam
 from ._fused_kernels import cast_bin_sensor
-from ._kernels import bin_sensor_hits
+from ._sensor_kernels import bin_sensor_hits
 from ..brdf import material_table
 
 __all__ = ["bin_sensor_view"]
@@ -21,7 +21,7 @@ __all__ = ["bin_sensor_view"]
 
 def bin_sensor_view(plan, weighing, scene, w, rng, out):
     """One view seen by the plan's sensor at a finite standoff, weighed and binned into
-    ``out`` by the compiled loop (``meshladar.weighing._kernels.bin_sensor_hits``; flat or
+    ``out`` by the compiled loop (``meshladar.weighing._sensor_kernels.bin_sensor_hits``; flat or
     smooth normals, coatings with ``kernel_params``): the numbers of
     :func:`meshladar.raytrace.perspective.trace_sensor_view` then weighing. Returns
     (rays cast, back-face hits).

@@ -1,0 +1,65 @@
+"""A software prefetch for the weigh stage's compiled loops (numba): the loops read each
+hit's face rows (normal, plane offset, weight cache) at random, and on meshes whose face
+arrays outgrow the last-level cache every new face is a trip to memory. Asking for the rows
+of the hit :data:`AHEAD` places later lets those trips overlap the work on the hits between.
+
+Measured on a 2-core AVX-512 EPYC (32 MiB L3), rays to bins of 1e6-ray views of
+icospheres, flat normals, SR, one thread: 1.31M faces 6.5 % faster, 5.2M 7.7 %, 328k
+faces unchanged, 82k 1.2 % slower (there every row is in cache and the prefetches are pure
+cost): the loops prefetch from :data:`PREFETCH_FROM` faces on. A prefetch changes no
+number: the same bits either way.
+"""
+
+from __future__ import annotations
+
+from llvmlite import ir
+from numba import njit
+from numba.core import cgutils, types
+from numba.extending import intrinsic
+
+__all__ = ["prefetch", "ahead", "AHEAD", "PREFETCH_FROM"]
+
+#: How many hits ahead the loops prefetch (24 to 64 measured alike at 1.31M faces).
+AHEAD = 32
+#: Meshes of this many faces or more prefetch (their per-face arrays, ~52 bytes a face,
+#: exceed a 16–32 MiB last-level cache).
+PREFETCH_FROM = 1 << 19
+#: A distance beyond any view's hits: no prefetch.
+_NEVER = 1 << 62
+
+
+@njit(cache=True, nogil=True, inline="always")
+def ahead(face_normals):                                  # pragma: no cover - compiled
+    """How many hits ahead a loop over the hits on this mesh (``face_normals``, one row a
+    face) prefetches their faces' rows: :data:`AHEAD`, or from :data:`PREFETCH_FROM` faces
+    down a distance past every hit (none). The loops write the prefetch out themselves
+    (``if i + ahead < n: prefetch(rows, prim[i + ahead])``): an inlined helper made them
+    slower."""
+    return AHEAD if face_normals.shape[0] >= PREFETCH_FROM else _NEVER
+
+
+@intrinsic
+def prefetch(typingctx, array, index):                    # pragma: no cover - compiled
+    """Prefetch the cache line of ``array[index, 0, ...]`` (an integer ``index`` into the
+    first axis, not checked: the callers pass face indices of hits) for reading, into every
+    cache level (LLVM's ``llvm.prefetch``, locality 3); no effect on any value."""
+    if not isinstance(array, types.Array) or not isinstance(index, types.Integer):
+        return None
+    sig = types.void(array, index)
+
+    def codegen(context, builder, signature, args):
+        aryty = signature.args[0]
+        ary = context.make_array(aryty)(context, builder, args[0])
+        zero = context.get_constant(types.intp, 0)
+        at = [context.cast(builder, args[1], signature.args[1], types.intp)]
+        ptr = cgutils.get_item_pointer(context, builder, aryty, ary,
+                                       at + [zero] * (aryty.ndim - 1), wraparound=False)
+        i8p = ir.IntType(8).as_pointer()
+        i32 = ir.IntType(32)
+        fnty = ir.FunctionType(ir.VoidType(), [i8p, i32, i32, i32])
+        fn = cgutils.get_or_insert_function(builder.module, fnty, "llvm.prefetch.p0")
+        builder.call(fn, [builder.bitcast(ptr, i8p), ir.Constant(i32, 0), ir.Constant(i32, 3),
+                          ir.Constant(i32, 1)])
+        return context.get_dummy_value()
+
+    return sig, codegen
