@@ -211,7 +211,7 @@ def _bins(job, view, chunk, start):
     # only the rows of the faces it hits
     fp = None if chunk.footprints is None else footprint_args(
         p.geo, view.w, p.mode, p.spacing, chunk.footprints,
-        -1 if p.coherent else view.slot + 1)
+        -1 if p.dense else view.slot + 1)
     return FlatBins(p.geo.plane_d, p.geo.face_normals, p.geo.material, chunk.params, view.w,
                     start, wg.edges[0], p.area, wg.power, p.ignore_back,
                     chunk.values[view.slot], chunk.stamp, chunk.weight, view.slot + 1, fp)

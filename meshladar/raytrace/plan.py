@@ -29,16 +29,18 @@ from .grid import (MAX_RAYS_PER_VIEW, MODES, _estimate_rays, _largest_grid, _sam
 from .views import BACK_FACES, NORMALS
 
 __all__ = ["TracePlan", "View", "plan_trace", "check_scene", "check_sensor", "check_receivers",
-           "COHERENT_RAYS_PER_FACE"]
+           "COHERENT_RAYS_PER_FACE", "COHERENT_SCALE"]
 
-#: The packets are cast with Embree's coherent flag (one traversal for the packet) where the
-#: face a ray hits holds at least this many rays of the grid (``geo.hit_face_area`` / δ² in
-#: 3-D, its square root / δ in a slice), and without it (Embree's hybrid traversal, which
-#: follows rays singly where they part) on sparser grids. Measured with 4 × 4 tiles of
-#: width 16 on icospheres: at 0.63 rays a face, incoherent 1.06× raw embreex against
-#: coherent 0.77× (82k faces) and 1.05× against 1.10× (1.31M); at 2.5, 1.03× against 1.23×
-#: and 1.05× against 1.40×; at 0.2, 1.01× against 0.60×.
+#: A grid is dense from this many rays on the face a ray hits (TracePlan.rays_per_face):
+#: a slice's packets are cast with Embree's coherent flag from there on (below it its
+#: hybrid traversal follows rays singly where they part), footprints made before the cast.
 COHERENT_RAYS_PER_FACE = 1.0
+#: 3-D grids are cast in coherent tiles from COHERENT_SCALE / √faces rays a face on (a
+#: bigger BVH has more levels that a tile's rays share). Measured on icospheres, the same
+#: tiles with and without the flag, one thread: even at 0.45 rays a face at 82k faces,
+#: 0.25 at 328k, 0.11 at 1.31M, 0.06 at 5.2M (× √faces: 129, 143, 126, 137); at 0.6 the
+#: coherent tiles 1.16× faster at 82k and 1.36× at 5.2M, at 0.1 0.64× at 82k.
+COHERENT_SCALE = 128.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -90,12 +92,26 @@ class TracePlan:
         return self.spacing if self.mode == "slice" else self.spacing * self.spacing
 
     @property
-    def coherent(self) -> bool:
-        """Whether the grid's packets are cast coherent: at least
-        :data:`COHERENT_RAYS_PER_FACE` rays on the face a ray hits."""
+    def rays_per_face(self) -> float:
+        """The grid's rays on the face a ray hits: ``geo.hit_face_area`` / δ² in 3-D, its
+        square root / δ in a slice."""
         a = self.geo.hit_face_area
-        per_face = a / self.area if self.mode == "3d" else math.sqrt(a) / self.spacing
-        return per_face >= COHERENT_RAYS_PER_FACE
+        return a / self.area if self.mode == "3d" else math.sqrt(a) / self.spacing
+
+    @property
+    def dense(self) -> bool:
+        """Whether the grid is dense: at least :data:`COHERENT_RAYS_PER_FACE` rays on the
+        face a ray hits (footprint bins then make every face's row before the cast)."""
+        return self.rays_per_face >= COHERENT_RAYS_PER_FACE
+
+    @property
+    def coherent(self) -> bool:
+        """Whether the grid's packets are cast coherent: in 3-D from
+        :data:`COHERENT_SCALE` / √faces rays on the face a ray hits, in a slice where the
+        grid is :attr:`dense`."""
+        if self.mode == "3d":
+            return self.rays_per_face * math.sqrt(len(self.geo.faces)) >= COHERENT_SCALE
+        return self.dense
 
     @property
     def z0_shifted(self) -> float:

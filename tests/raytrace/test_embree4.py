@@ -243,7 +243,7 @@ def test_grids_sparser_than_their_faces_are_cast_incoherent_with_the_same_number
         chosen = ml.simulate(scene, ladar, model="mesh", ray_spacing=spacing,
                              backend="packets", footprint=footprint)
         assert flags == [coherent] * 7                              # what the loop got
-        monkeypatch.setattr(plan_module, "COHERENT_RAYS_PER_FACE",
+        monkeypatch.setattr(plan_module, "COHERENT_SCALE",
                             np.inf if coherent else 0.0)            # the other flag
         other = ml.simulate(scene, ladar, model="mesh", ray_spacing=spacing,
                             backend="packets", footprint=footprint)
@@ -252,6 +252,28 @@ def test_grids_sparser_than_their_faces_are_cast_incoherent_with_the_same_number
         assert chosen.info["rays"] == other.info["rays"] > 0
         np.testing.assert_allclose(other.values, chosen.values, rtol=SAME_HITS_RTOL,
                                    atol=SAME_HITS_RTOL * np.abs(chosen.values).max())
+
+
+def test_the_coherent_flag_pays_from_fewer_rays_a_face_on_bigger_meshes():
+    """3-D grids are cast coherent from COHERENT_SCALE / √faces rays on the face a ray hits
+    (the break-even measured on icospheres): 0.6 rays a face is incoherent on 20k faces
+    (0.6 √20480 = 86 < 128) and coherent on 82k (0.6 √81920 = 172); a slice's rows keep
+    one ray a face; footprints are made before the cast from one ray a face on."""
+    from meshladar.raytrace.plan import COHERENT_SCALE, plan_trace
+
+    assert COHERENT_SCALE == 128.0
+    for subdivisions, per_face, coherent in ((5, 0.6, False), (6, 0.6, True), (6, 0.4, False),
+                                             (5, 0.95, True)):
+        scene = _sphere(subdivisions)
+        ladar = ml.Ladar.covering(scene, n_bins=8, angles_deg=[0.0])
+        area = scene.parts[0].face_normals_areas()[1]
+        spacing = (float(area @ area / area.sum()) / per_face) ** 0.5
+        plan = plan_trace(scene, ladar, ray_spacing=spacing, backend="packets")
+        assert plan.rays_per_face == pytest.approx(per_face, rel=1e-12)
+        assert plan.coherent is coherent, (subdivisions, per_face)
+        assert plan.dense is False
+        flat = plan_trace(scene, ladar, mode="slice", ray_spacing=spacing, backend="packets")
+        assert flat.coherent is flat.dense is (flat.rays_per_face >= 1.0)
 
 
 @pytest.mark.parametrize("sampling", ["regular", "stratified"])
