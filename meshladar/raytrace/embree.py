@@ -15,7 +15,7 @@ from ..precision import FAR_RATIO as _FAR_RATIO
 from ..precision import SCENE_RADIUS_RANGE
 from ..meshes import corner_normals
 from ..scene import Scene
-from ._support import ClusteredPoints
+from ._support import ClusteredPoints, points_extent
 from .backends import BACKENDS, resolve_backend
 from .backends import backend as get_backend
 from .grid import dot
@@ -92,8 +92,7 @@ class Geometry:
         clusters = self._clustered()
         if clusters is not None:
             return clusters.extent(u, origin)
-        x = dot(self.support if origin is None else self.support - origin, u)
-        return float(x.min()), float(x.max())
+        return points_extent(self.support, u, origin)
 
     def seen_extent(self, u, w, scale, origin):
         """(least, greatest) (q·u)·scale / (−q·w) over the support points (shifted),

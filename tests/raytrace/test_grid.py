@@ -59,7 +59,7 @@ def test_a_views_extent_over_clusters_is_every_points_extent():
     import trimesh
 
     from meshladar.meshes import fibonacci_sphere
-    from meshladar.raytrace._support import ClusteredPoints
+    from meshladar.raytrace._support import ClusteredPoints, points_extent
     from meshladar.raytrace.grid import dot
 
     rng = np.random.default_rng(5)
@@ -79,12 +79,14 @@ def test_a_views_extent_over_clusters_is_every_points_extent():
         for u in dirs:
             x = dot(points, u)
             assert clusters.extent(u) == (x.min(), x.max())
+            assert points_extent(points, u) == (x.min(), x.max())       # one pass, no clusters
             # from a pinhole three reaches away along w, in perspective onto a plane D
             # in front of it: (q·a)·D / (−q·w), q = p − pinhole
             w = u / np.linalg.norm(u)
             pinhole = centre + 3.0 * reach * w
             q = points - pinhole
             assert clusters.extent(w, pinhole) == (dot(q, w).min(), dot(q, w).max())
+            assert points_extent(points, w, pinhole) == (dot(q, w).min(), dot(q, w).max())
             for a in frame(w):
                 seen = dot(q, a) * 2.5 / -dot(q, w)
                 assert clusters.seen_extent(a, w, 2.5, pinhole) == (seen.min(), seen.max())
