@@ -255,7 +255,7 @@ def _flat_stage(job, scene, view, chunk):
             chunk.stamp[:] = view.slot + 1
         elif not wg.power:                           # each face's first hit weighs it
             check_edge_on_receiver(p.geo, view.w, view.w_r, p.ignore_back)
-        receiver = (view.w_r, RECEIVER_LIFT * p.geo.radius, wg.compiled_bistatic)
+        receiver = (view.w_r, RECEIVER_LIFT * p.geo.radius, wg.compiled_bistatic, p.geo.lone)
     elif not wg.compiled:
         face_weights(p.geo, wg.materials, view.w, p.area, chunk.weight, wg.power)
         chunk.stamp[:] = view.slot + 1               # every face's weight is this view's

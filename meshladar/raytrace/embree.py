@@ -61,6 +61,7 @@ class Geometry:
         # vertex, or the hull's vertices once known (for_views)
         self.support = self.shifted
         self._views, self._clusters = 0, None      # the runs' most views; extents' clusters
+        self.lone = None                           # :meth:`for_receivers`
         self.for_views(scene, 0)
         self.normals = normals
         self.corner = None
@@ -72,6 +73,16 @@ class Geometry:
             raise ParameterError(f"normals='exact' needs parts tessellated from analytic shapes; "
                                  f"{missing[0]!r} has no exact normal (use 'flat' or 'smooth')")
         self.key = _digest(self.vertices, self.faces)
+
+    def for_receivers(self, scene, receivers):
+        """With bistatic ``receivers`` (not None), set ``lone`` (n_faces,) uint8, once: 1
+        on the faces of parts that can see no part, themselves included
+        (:meth:`meshladar.scene.Scene.visibility`: a flat part, or a closed convex body,
+        alone or among coplanar flat parts), so that no ray leaving the front of such a
+        face can meet the scene (a receiver's occlusion ray then need not be cast)."""
+        if self.lone is None and receivers is not None:
+            free = ~np.asarray(scene.visibility().sees, dtype=bool).any(axis=1)
+            self.lone = np.ascontiguousarray(free.astype(np.uint8)[self.part_of])
 
     def for_views(self, scene, n_views):
         """Take the extents of ``n_views`` views' grids over the scene's

@@ -36,10 +36,9 @@ __all__ = ["TracePlan", "View", "plan_trace", "check_scene", "check_sensor", "ch
 #: hybrid traversal follows rays singly where they part), footprints made before the cast.
 COHERENT_RAYS_PER_FACE = 1.0
 #: 3-D grids are cast in coherent tiles from COHERENT_SCALE / √faces rays a face on (a
-#: bigger BVH has more levels that a tile's rays share). Measured on icospheres, the same
-#: tiles with and without the flag, one thread: even at 0.45 rays a face at 82k faces,
-#: 0.25 at 328k, 0.11 at 1.31M, 0.06 at 5.2M (× √faces: 129, 143, 126, 137); at 0.6 the
-#: coherent tiles 1.16× faster at 82k and 1.36× at 5.2M, at 0.1 0.64× at 82k.
+#: bigger BVH has more levels that a tile's rays share): icospheres' same tiles with and
+#: without the flag even out at 0.45 rays a face at 82k faces, 0.25 at 328k, 0.11 at
+#: 1.31M, 0.06 at 5.2M (× √faces: 129, 143, 126, 137; the guide's Sparse grids).
 COHERENT_SCALE = 128.0
 
 
@@ -390,8 +389,7 @@ def plan_trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided
         The stratified offsets' seed, a non-negative integer (default 0 when stratified);
         refused with ``sampling="regular"``.
     receiver : (3,) or (n_views, 3) array_like, optional
-        A bistatic receiver's direction(s) (:func:`check_receivers`); default None,
-        monostatic.
+        Bistatic receivers' direction(s) (:func:`check_receivers`); default None.
     backend : str
         The ray caster, one of ``"auto"`` (default), ``"packets"``, ``"embreex"`` or a
         registered backend (:func:`meshladar.raytrace.backends.resolve_backend`).
@@ -428,6 +426,7 @@ def plan_trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided
     backend = resolve_backend(backend)
     sampling, seed = _sampling(mode, sampling, seed)
     receivers = check_receivers(receiver, ladar, mode)
+    geo.for_receivers(scene, receivers)
     spacing, rays = _checked_spacing(geo, ladar, mode, ray_spacing, rays_per_bin)
     _check_standoff(geo, ladar, traced_with)
     return TracePlan(geo=geo, mode=mode, normals=normals, back_faces=back_faces, z0=z0,

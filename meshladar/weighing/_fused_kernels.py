@@ -32,9 +32,11 @@ def _occlude_block(occ, scene, w, i32, f32, base, prim, tf, o, n, plane_d, face_
     lifted origins, their hits' indices)). ``needed`` = (wr, ignore_back, skip_below):
     a hit that cannot weigh anything casts no ray and is marked blocked, an ignored back
     face's and, with ``skip_below`` (built-in coatings, whose F is 0 there), one whose face
-    turns away from the receiver (n·wr < 0 in float64, the weight's own cosine)."""
+    turns away from the receiver (n·wr < 0 in float64, the weight's own cosine); and a hit
+    on the front of a ``lone`` face (its part sees no part: a convex body alone) casts none
+    and is free, as its ray would be."""
     blocked, lifted, index = spare
-    wr, ignore_back, skip_below = needed
+    wr, ignore_back, skip_below, lone = needed
     m = 0
     ahead = _ahead(face_normals)
     for i in range(n):
@@ -50,6 +52,9 @@ def _occlude_block(occ, scene, w, i32, f32, base, prim, tf, o, n, plane_d, face_
         if skip_below and sign * (face_normals[p, 0] * wr[0] + face_normals[p, 1] * wr[1]
                                   + face_normals[p, 2] * wr[2]) < 0.0:
             blocked[i] = True
+            continue
+        if c > 0.0 and lone[p]:
+            blocked[i] = False
             continue
         for k in range(3):
             q = np.float32((o[i, k] * 1.0 - t * wv[k]) + lift * (face_normals[p, k] * sign))
@@ -213,13 +218,13 @@ def cast_bin_smooth(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, fac
 @njit(cache=True, nogil=True)
 def cast_bin_bistatic(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, face_normals,
                       wv, start, edges, ignore_back, out, weight, occ, wr, lift, stamp, tag,
-                      coating):
+                      coating, lone):
     """One bistatic view (receiver direction ``wr``), flat normals: each band's hits first
     cast their occlusion rays toward the receiver with ``occ`` (rtcOccludedW; see
     :func:`_occlude_band`), then :func:`._kernels.bin_bistatic_hits` bins the band in scan
     order with the per-face bistatic weights in ``weight`` (those whose ``stamp`` is not
-    ``tag`` evaluated at their first hit from ``coating``). Returns (back-face hits, rays
-    cast)."""
+    ``tag`` evaluated at their first hit from ``coating``); hits on the front of ``lone``
+    faces cast no occlusion ray. Returns (back-face hits, rays cast)."""
     ws = workspace()
     i32, f32, i64, base = ws
     init_args(i32, i64, base, flags)
@@ -238,7 +243,8 @@ def cast_bin_bistatic(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, f
     for a0 in range(0, grid[0].shape[0], tile_shape(w)[0]):
         k = _cast_band(fn, scene, w, ws, a0, grid, d, inv_scale, scale, buffers)
         _occlude_band(occ, scene, w, ws, buffers[3], k // nt, nt, hits, spare, plane_d,
-                      face_normals, wv, lift, inv_scale, one, (wr, ignore_back, coating[5]))
+                      face_normals, wv, lift, inv_scale, one,
+                      (wr, ignore_back, coating[5], lone))
         init_args(i32, i64, base, flags)
         back += bin_bistatic_hits(band_prim[:k], band_t[:k], band_o[:k], spare[4][:k],
                                   plane_d, face_normals, wv, wr, start, edges, ignore_back,

@@ -149,7 +149,7 @@ def _clipped_bin(x, edges, e0, inv):
     return _bin_of(x, edges, e0, inv)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _spread_hit(out, r, r_rel, wt, fp, p, edges, e0, inv):
     """Add one hit's weight over the bins its footprint's ranges cover, as
     meshladar.weighing._bin_one with ``footprint``: ``fp[p]`` holds face p's half-widths

@@ -46,11 +46,12 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
         ``face_normals``, ``face_material``, ``params``, ``w``, ``start``, ``edges``,
         ``area``, ``power``, ``ignore_back``, ``out``, ``stamp``, ``weight``, ``tag``,
         ``footprint``. The weights are added into ``out`` (n_bins,).
-    receiver : tuple of ((3,) array_like, float, bool), optional
+    receiver : tuple of ((3,) array_like, float, bool, (n_faces,) uint8), optional
         Bistatic: the receiver's direction w_r, the lift (scene units) along the hit
         face's normal, turned toward the ladar, from which each hit's occlusion ray toward
-        it starts, and whether the coatings are built in (their F is 0 where the face turns
-        away from the receiver, so such hits cast no occlusion ray). A face whose ``bins.stamp`` is not ``bins.tag`` gets its bistatic
+        it starts, whether the coatings are built in (F is 0 where the face turns away
+        from the receiver: no occlusion ray), and the ``lone`` faces (a hit on the front
+        of one casts none: :meth:`~meshladar.raytrace.embree.Geometry.for_receivers`). A face whose ``bins.stamp`` is not ``bins.tag`` gets its bistatic
         weight at its first hit, from the SR table ``bins.params`` (built-in coatings);
         for other coatings the job stamps every face's weight
         (:func:`meshladar.weighing.faces.face_bistatic_weights`) first. None (default):
@@ -88,7 +89,7 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
                    float(b.area), bool(b.power), bool(receiver[2]))
         return cast_bin_bistatic(*head, b.plane_d, b.face_normals, b.w, b.start, b.edges,
                                  b.ignore_back, b.out, b.weight, lib.occluded[lib.width],
-                                 wr, float(receiver[1]), b.stamp, b.tag, coating)
+                                 wr, float(receiver[1]), b.stamp, b.tag, coating, receiver[3])
     if smooth is not None:
         return cast_bin_smooth(*head, *b[:11], b.footprint, smooth[0], float(smooth[1]))
     return cast_bin_flat(*head, *bins)
