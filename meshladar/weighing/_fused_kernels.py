@@ -29,7 +29,7 @@ def _occlude_block(occ, scene, w, i32, f32, base, prim, tf, o, n, plane_d, face_
     by ``lift`` along the face's normal turned toward the ladar, rounded to float32 (and
     to unit size), cast along ``wr32`` in packets of w by ``occ`` (rtcOccludedW): the rays
     of meshladar.raytrace.views.trace_view. Fills blocked[:n] (``spare`` = (blocked,
-    lifted origins, their hits' indices)). ``needed`` = (wr, ignore_back, skip_below):
+    lifted origins, their hits' indices)). ``needed`` = (wr, ignore_back, skip_below, lone):
     a hit that cannot weigh anything casts no ray and is marked blocked, an ignored back
     face's and, with ``skip_below`` (built-in coatings, whose F is 0 there), one whose face
     turns away from the receiver (n·wr < 0 in float64, the weight's own cosine); and a hit

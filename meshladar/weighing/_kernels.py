@@ -1,6 +1,8 @@
 """The weigh stage's compiled loops (numba): binning of first hits per ray, flat and smooth
-normals, bistatic, seen by a sensor, at a point or over a footprint (moved here from the
-dissolved ``meshladar/_kernels.py``: each compiled loop lives beside its stage).
+normals, bistatic, at a point or over a footprint (moved here from the dissolved
+``meshladar/_kernels.py``: each compiled loop lives beside its stage; a sensor's loop is in
+:mod:`._sensor_kernels`). On big meshes each loop prefetches the face rows of a later hit
+(:mod:`._prefetch`).
 
 numba is imported here; the stages that use these loops import this module, never
 ``import meshladar`` itself. Kernels are cached on disk (``cache=True``)."""
