@@ -18,7 +18,6 @@ from ..scene import Scene
 from ._support import ClusteredPoints, points_extent
 from .backends import BACKENDS, resolve_backend
 from .backends import backend as get_backend
-from .grid import dot
 
 #: From this many support points and views on, a view's extents are found over clusters
 #: of the points (:mod:`._support`): an extent over a sphere's 41k hull points takes 10 µs
@@ -112,9 +111,7 @@ class Geometry:
         clusters = self._clustered()
         if clusters is not None:
             return clusters.seen_extent(u, w, scale, origin)
-        q = self.support - origin
-        x = dot(q, u) * scale / -dot(q, w)
-        return float(x.min()), float(x.max())
+        return points_extent(self.support, u, origin, w, scale)
 
     def _clustered(self):
         if len(self.support) < CLUSTER_MIN_POINTS or self._views < CLUSTER_MIN_VIEWS:

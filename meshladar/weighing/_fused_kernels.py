@@ -41,8 +41,7 @@ def _occlude_block(occ, scene, w, i32, f32, base, prim, tf, o, n, plane_d, face_
     ahead = _ahead(face_normals)
     for i in range(n):
         if i + ahead < n:                        # a later hit's face rows (._prefetch)
-            _prefetch(face_normals, prim[i + ahead])
-            _prefetch(plane_d, prim[i + ahead])
+            _prefetch((face_normals, plane_d), prim[i + ahead])
         p = prim[i]
         c, t, _ = face_hit(p, tf[i], o, i, wv, plane_d, face_normals)
         sign = -1.0 if c < 0.0 else 1.0

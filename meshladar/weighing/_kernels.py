@@ -217,15 +217,10 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
         rows, stamps, tag_fp = footprint[0], footprint[1], footprint[9]
     ahead, n = _ahead(face_normals), prim.size
     for i in range(n):
-        if i + ahead < n:                   # a later hit's face rows (._prefetch)
-            q = prim[i + ahead]
-            if q >= 0:
-                _prefetch(face_normals, q)
-                _prefetch(plane_d, q)
-                _prefetch(stamp, q)
-                _prefetch(weight, q)
-                if footprint is not None:
-                    _prefetch(rows, q)
+        if i + ahead < n and prim[i + ahead] >= 0:   # a later hit's rows (._prefetch)
+            _prefetch((face_normals, plane_d, stamp, weight), prim[i + ahead])
+            if footprint is not None:
+                _prefetch(rows, prim[i + ahead])
         p = prim[i]
         if p < 0:
             continue
@@ -271,13 +266,8 @@ def bin_bistatic_hits(prim, tfar, origins, blocked, plane_d, face_normals, w, wr
     back = 0
     ahead, n = _ahead(face_normals), prim.size
     for i in range(n):
-        if i + ahead < n:                   # a later hit's face rows (._prefetch)
-            q = prim[i + ahead]
-            if q >= 0:
-                _prefetch(face_normals, q)
-                _prefetch(plane_d, q)
-                _prefetch(stamp, q)
-                _prefetch(weight, q)
+        if i + ahead < n and prim[i + ahead] >= 0:   # a later hit's rows (._prefetch)
+            _prefetch((face_normals, plane_d, stamp, weight), prim[i + ahead])
         p = prim[i]
         if p < 0:
             continue
@@ -360,13 +350,8 @@ def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, 
         rows, stamps, tag_fp = footprint[0], footprint[1], footprint[9]
     ahead, n = _ahead(face_normals), prim.size
     for i in range(n):
-        if i + ahead < n:                   # a later hit's face rows (._prefetch)
-            q = prim[i + ahead]
-            if q >= 0:
-                _prefetch(face_normals, q)
-                _prefetch(plane_d, q)
-                _prefetch(corner, q)
-                _prefetch(face_material, q)
+        if i + ahead < n and prim[i + ahead] >= 0:   # a later hit's rows (._prefetch)
+            _prefetch((face_normals, plane_d, corner, face_material), prim[i + ahead])
         p = prim[i]
         if p < 0:
             continue

@@ -32,35 +32,46 @@ _NEVER = 1 << 62
 def ahead(face_normals):                                  # pragma: no cover - compiled
     """How many hits ahead a loop over the hits on this mesh (``face_normals``, one row a
     face) prefetches their faces' rows: :data:`AHEAD`, or from :data:`PREFETCH_FROM` faces
-    down a distance past every hit (none). The loops write the prefetch out themselves
-    (``if i + ahead < n: prefetch(rows, prim[i + ahead])``): an inlined helper made them
-    slower."""
+    down a distance past every hit (none). The loops write the test out themselves
+    (``if i + ahead < n and prim[i + ahead] >= 0: prefetch((a, b), prim[i + ahead])``):
+    a helper function holding it, even inlined, made them slower."""
     return AHEAD if face_normals.shape[0] >= PREFETCH_FROM else _NEVER
 
 
 @intrinsic
-def prefetch(typingctx, array, index):                    # pragma: no cover - compiled
-    """Prefetch the cache line of ``array[index, 0, ...]`` (an integer ``index`` into the
-    first axis, not checked: the callers pass face indices of hits) for reading, into every
-    cache level (LLVM's ``llvm.prefetch``, locality 3); no effect on any value."""
-    if not isinstance(array, types.Array) or not isinstance(index, types.Integer):
+def prefetch(typingctx, arrays, index):                   # pragma: no cover - compiled
+    """Prefetch the cache line of ``a[index, 0, ...]`` for reading, for ``arrays`` one
+    array a or a tuple of them (an integer ``index`` into the first axis, not checked: the
+    callers pass face indices of hits), into every cache level (LLVM's ``llvm.prefetch``,
+    locality 3); no effect on any value."""
+    group = arrays if isinstance(arrays, types.BaseTuple) else (arrays,)
+    if not all(isinstance(a, types.Array) for a in group) or \
+            not isinstance(index, types.Integer):
         return None
-    sig = types.void(array, index)
+    sig = types.void(arrays, index)
 
     def codegen(context, builder, signature, args):
-        aryty = signature.args[0]
-        ary = context.make_array(aryty)(context, builder, args[0])
-        zero = context.get_constant(types.intp, 0)
-        at = [context.cast(builder, args[1], signature.args[1], types.intp)]
-        ptr = cgutils.get_item_pointer(context, builder, aryty, ary,
-                                       at + [zero] * (aryty.ndim - 1), wraparound=False)
-        i8p = ir.IntType(8).as_pointer()
-        i32 = ir.IntType(32)
-        fnty = ir.FunctionType(ir.VoidType(), [i8p, i32, i32, i32])
-        # named by llvmlite for its pointer type (p0i8; LLVM 15 on renames it p0 itself)
-        fn = builder.module.declare_intrinsic("llvm.prefetch", [i8p], fnty)
-        builder.call(fn, [builder.bitcast(ptr, i8p), ir.Constant(i32, 0), ir.Constant(i32, 3),
-                          ir.Constant(i32, 1)])
+        at = context.cast(builder, args[1], signature.args[1], types.intp)
+        if isinstance(signature.args[0], types.BaseTuple):
+            for k, aryty in enumerate(signature.args[0]):
+                _fetch_row(context, builder, aryty, builder.extract_value(args[0], k), at)
+        else:
+            _fetch_row(context, builder, signature.args[0], args[0], at)
         return context.get_dummy_value()
 
     return sig, codegen
+
+
+def _fetch_row(context, builder, aryty, value, at):
+    """Emit the prefetch of row ``at`` of one array (``value`` of numba type ``aryty``)."""
+    ary = context.make_array(aryty)(context, builder, value)
+    zero = context.get_constant(types.intp, 0)
+    ptr = cgutils.get_item_pointer(context, builder, aryty, ary,
+                                   [at] + [zero] * (aryty.ndim - 1), wraparound=False)
+    i8p = ir.IntType(8).as_pointer()
+    i32 = ir.IntType(32)
+    fnty = ir.FunctionType(ir.VoidType(), [i8p, i32, i32, i32])
+    # named by llvmlite for its pointer type (p0i8; LLVM 15 on renames it p0 itself)
+    fn = builder.module.declare_intrinsic("llvm.prefetch", [i8p], fnty)
+    builder.call(fn, [builder.bitcast(ptr, i8p), ir.Constant(i32, 0), ir.Constant(i32, 3),
+                      ir.Constant(i32, 1)])

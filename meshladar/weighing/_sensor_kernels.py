@@ -44,14 +44,10 @@ def bin_sensor_hits(prim, t_cast, dirs, length, bu, bv, D, sensor_pos, range_off
     w_ref = math.sqrt(beam[2] * beam[2] + (beam[3] * D) ** 2)
     ahead, n = _ahead(face_normals), prim.size
     for i in range(n):
-        if i + ahead < n:                   # a later hit's face rows (._prefetch)
-            q = prim[i + ahead]
-            if q >= 0:
-                _prefetch(face_normals, q)
-                _prefetch(plane_d, q)
-                _prefetch(face_material, q)
-                if smooth:                      # (an empty array otherwise)
-                    _prefetch(corner, q)
+        if i + ahead < n and prim[i + ahead] >= 0:   # a later hit's rows (._prefetch)
+            _prefetch((face_normals, plane_d, face_material), prim[i + ahead])
+            if smooth:                          # (an empty array otherwise)
+                _prefetch(corner, prim[i + ahead])
         p = prim[i]
         if p < 0:
             continue

@@ -90,6 +90,7 @@ def test_a_views_extent_over_clusters_is_every_points_extent():
             for a in frame(w):
                 seen = dot(q, a) * 2.5 / -dot(q, w)
                 assert clusters.seen_extent(a, w, 2.5, pinhole) == (seen.min(), seen.max())
+                assert points_extent(points, a, pinhole, w, 2.5) == (seen.min(), seen.max())
 
 
 def test_a_geometry_takes_its_extents_over_clusters_only_for_many_views():
