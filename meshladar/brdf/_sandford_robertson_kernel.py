@@ -35,29 +35,35 @@ def _norm(x, y):
 
 
 @njit(cache=True, inline="always")
-def _g(c, s, b):
-    """The diffuse shape g (A2) from cos θ ≥ 0 and sin θ: 1 where both terms vanish."""
-    den = _norm(c, b * s)
+def _g(c, s2, b):
+    """The diffuse shape g (A2) from cos θ ≥ 0 and sin²θ, as c² / (c² + b² sin²θ) (no
+    square root); through hypot where that sum could have underflowed (below
+    _UNDERFLOW²), 1 where both terms vanish."""
+    den2 = c * c + b * b * s2
+    if den2 > _UNDERFLOW * _UNDERFLOW:
+        return c * c / den2
+    den = math.hypot(c, b * math.sqrt(s2))
     return (c / den) ** 2 if den > 0.0 else 1.0
 
 
-@njit(cache=True)
-def sr_monostatic(c, s, rho_d, eps, b, e, G, diffuse, specular):
-    """F(θ; −θ) of meshladar.brdf.SandfordRobertson from cos θ ≥ 0 and sin θ: the same
-    expressions as SandfordRobertson._core, with the Euclidean norms of numbers in [0, 1]
-    taken as square roots of sums of squares instead of ``hypot`` (2.4× faster: 10.5
-    against 25.6 ns; on a million angles of the paper's coatings the two differ by at most
-    7e-15 relative; the tests hold the kernel to the model to 1e-13), and the specular
-    term's three divisions made one (2e²H = kc + (2e² + k²c²)/root multiplied through by
-    the root: 2.9 ms of 31 off the smooth-normal binning of a million rays)."""
-    g = _g(c, s, b)                                                # A2
+@njit(cache=True, inline="always")
+def sr_monostatic(c, s2, rho_d, eps, b, e, G, diffuse, specular):
+    """F(θ; −θ) of meshladar.brdf.SandfordRobertson from cos θ ≥ 0 and sin²θ: the same
+    expressions as SandfordRobertson._core, rearranged so that one square root and two
+    divisions remain: sin θ enters only squared (in g and in 1/√h(α), so the caller's
+    square root goes), g is c² / (c² + b² sin²θ) (:func:`_g`: no norm to square), and the
+    specular term's three divisions are one (2e²H = kc + (2e² + k²c²)/root multiplied
+    through by the root). 5.3 ns a call against 13.6 for the form with sin θ and norms,
+    which was itself 2.4× faster than ``hypot``'s; on a million angles of the paper's
+    coatings the two differ by at most 6e-15 relative, and the tests hold the kernel to
+    the model to 1e-13."""
+    g = _g(c, s2, b)                                               # A2
     out = 0.0
     if diffuse:
         out += rho_d / (math.pi * G * G) * g * g                   # A1
     if specular:
         rho_s = max(1.0 - (eps + rho_d) / G * g, 0.0)              # A8
-        ec = e * c
-        d = ec * ec + s * s                                        # 1/sqrt(h(α)), A6
+        d = e * e * (c * c) + s2                                   # 1/sqrt(h(α)), A6
         k = (1.0 - e) * (1.0 + e)
         kc = k * c
         root = math.sqrt(4.0 * e * e + kc * kc)
@@ -75,10 +81,10 @@ def sr_bistatic(ci, si, cr, sr, ca, sa, rho_d, eps, b, e, G, diffuse, specular, 
     :func:`sr_monostatic`; 0 where cos θi < 0 or cos θr < 0."""
     if ci < 0.0 or cr < 0.0:
         return 0.0
-    g_i = _g(ci, si, b)
+    g_i = _g(ci, si * si, b)
     out = 0.0
     if diffuse:
-        f_d = rho_d / (math.pi * G * G) * g_i * _g(cr, sr, b)       # A1
+        f_d = rho_d / (math.pi * G * G) * g_i * _g(cr, sr * sr, b)  # A1
         out += f_d * cr if projected else f_d
     if specular:
         rho_s = max(1.0 - (eps + rho_d) / G * g_i, 0.0)              # A8

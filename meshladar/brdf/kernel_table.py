@@ -24,7 +24,7 @@ __all__ = ["KernelRow", "material_table"]
 
 class KernelRow(NamedTuple):
     """One coating's row of the compiled SR kernel's material table (the flat arguments of
-    the compiled ``sr_monostatic`` after cos θ, sin θ).
+    the compiled ``sr_monostatic`` after cos θ, sin²θ).
 
     Attributes
     ----------

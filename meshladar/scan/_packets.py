@@ -90,7 +90,7 @@ def cast_pulses(fn, handle, w, flags, origins, rot, local, offsets, pitch, inver
 def _photoelectrons(c, r, params, i, share, budget, extinction):   # pragma: no cover
     """A hit's photoelectrons: the link budget (:mod:`.cast`) with F·cos θ from its
     coating's compiled row, params[i]."""
-    return link_budget(projected(c, math.sqrt(max(0.0, 1.0 - c * c)), params, i), r, share,
+    return link_budget(projected(c, max(0.0, 1.0 - c * c), params, i), r, share,
                        budget, extinction)
 
 
@@ -106,17 +106,17 @@ def link_budget(weight, r, share, budget, extinction):    # pragma: no cover - c
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def projected(c, s, params, i):                           # pragma: no cover - compiled
+def projected(c, s2, params, i):                          # pragma: no cover - compiled
     """F(θ; −θ)·cos θ of the coating whose compiled row is params[i] (read by index: no
-    row view per hit), from cos θ and sin θ; a Lambertian row's is its numpy
+    row view per hit), from cos θ and sin²θ; a Lambertian row's is its numpy
     ``projected`` bit for bit."""
-    return sr_monostatic(c, s, params[i, 0], params[i, 1], params[i, 2], params[i, 3],
+    return sr_monostatic(c, s2, params[i, 0], params[i, 1], params[i, 2], params[i, 3],
                          params[i, 4], params[i, 5] > 0.5, params[i, 6] > 0.5) * c
 
 
 @numba.njit(cache=True, nogil=True)
-def projected_weights(c, s, face, material, params, out):    # pragma: no cover - compiled
-    """out[i] = :func:`projected` of hit i on face ``face[i]``, its coating's row
-    params[material[face[i]]]."""
+def projected_weights(c, face, material, params, out):     # pragma: no cover - compiled
+    """out[i] = :func:`projected` of hit i (cos θ ``c[i]``) on face ``face[i]``, its
+    coating's row params[material[face[i]]]."""
     for i in range(c.shape[0]):
-        out[i] = projected(c[i], s[i], params, material[face[i]])
+        out[i] = projected(c[i], max(0.0, 1.0 - c[i] * c[i]), params, material[face[i]])

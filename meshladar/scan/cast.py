@@ -253,7 +253,7 @@ def photoelectrons(scene, cast, shares, sensor):
     rows = _compiled_rows(scene)
     if rows is not None:                       # the coatings' compiled twins
         weight = np.empty(k)
-        projected_weights(cos, sin, face[:k], geo.material, rows, weight)
+        projected_weights(cos, face[:k], geo.material, rows, weight)
     elif len(scene.materials) == 1:            # one coating: no selection to make
         weight = np.asarray(scene.materials[0].projected(cos, sin), np.float64)
     else:

@@ -235,9 +235,8 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
             if r < edges[0] or r >= edges[nb]:
                 continue
         if stamp[p] != tag:
-            s = math.sqrt(max(1.0 - c * c, 0.0))
             m = face_material[p]
-            weight[p] = _sr_monostatic(c, s, params[m, 0], params[m, 1], params[m, 2],
+            weight[p] = _sr_monostatic(c, max(1.0 - c * c, 0.0), params[m, 0], params[m, 1], params[m, 2],
                                        params[m, 3], params[m, 4], params[m, 5] > 0.5,
                                        params[m, 6] > 0.5) * (area * c if power else area)
             stamp[p] = tag
@@ -368,9 +367,8 @@ def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, 
         if footprint is None:
             if r < edges[0] or r >= edges[nb]:
                 continue
-        s = math.sqrt(max(1.0 - c * c, 0.0))
         m = face_material[p]
-        f = _sr_monostatic(c, s, params[m, 0], params[m, 1], params[m, 2], params[m, 3],
+        f = _sr_monostatic(c, max(1.0 - c * c, 0.0), params[m, 0], params[m, 1], params[m, 2], params[m, 3],
                            params[m, 4], params[m, 5] > 0.5, params[m, 6] > 0.5)
         f = f * c if power else f
         wt = f * area * (c / max(abs(cg), min_cos_facet))

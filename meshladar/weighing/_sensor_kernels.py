@@ -86,9 +86,8 @@ def bin_sensor_hits(prim, t_cast, dirs, length, bu, bv, D, sensor_pos, range_off
         factor = (D / length[i]) ** 3 * (R / D) ** 2 * rel
         if smooth:
             factor *= c / max(abs(cg), min_cos_facet)
-        s = math.sqrt(max(1.0 - c * c, 0.0))
         m = face_material[p]
-        f = _sr_monostatic(c, s, params[m, 0], params[m, 1], params[m, 2], params[m, 3],
+        f = _sr_monostatic(c, max(1.0 - c * c, 0.0), params[m, 0], params[m, 1], params[m, 2], params[m, 3],
                            params[m, 4], params[m, 5] > 0.5, params[m, 6] > 0.5)
         wt = f * area * factor
         if power:                          # exp(−0) = 1 exactly: skipped without extinction

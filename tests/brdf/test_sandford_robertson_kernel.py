@@ -26,7 +26,7 @@ THETA = np.concatenate([np.linspace(0.0, math.pi / 2, 1001), [math.pi / 2, 1e-9]
 def test_the_compiled_sr_kernel_equals_the_model_on_a_grid_through_90_degrees(name):
     m = COATINGS[name]
     c, s = np.cos(THETA), np.abs(np.sin(THETA))
-    got = np.array([sr_monostatic(ci, si, *m.kernel_params) for ci, si in zip(c, s)])
+    got = np.array([sr_monostatic(ci, si * si, *m.kernel_params) for ci, si in zip(c, s)])
     # the same expressions in the same order: equal to a few ulps (F spans 1e-3..1e16)
     np.testing.assert_allclose(got, m.value(c, s), rtol=1e-13, atol=0)
 
@@ -101,7 +101,7 @@ def test_the_compiled_sr_kernel_holds_at_the_extremes_of_its_arguments(name):
     c, s = np.cos(theta), np.abs(np.sin(theta))
     c = np.concatenate([c, [1e-160, 1e-300, 0.0]])
     s = np.concatenate([s, [1.0, 1.0, 1.0]])
-    got = np.array([sr_monostatic(ci, si, *m.kernel_params) for ci, si in zip(c, s)])
+    got = np.array([sr_monostatic(ci, si * si, *m.kernel_params) for ci, si in zip(c, s)])
     want = m.value(c, s)
     assert np.all(np.isfinite(got)) and np.all(got >= 0)
     np.testing.assert_allclose(got, want, rtol=1e-13, atol=0)
