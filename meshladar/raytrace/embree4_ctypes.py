@@ -87,7 +87,7 @@ import os
 import sys
 
 __all__ = ["EmbreeLib", "library_candidates", "TFAR", "PRIMID", "GEOMID", "VALID_OFF",
-           "ARGS_OFF", "query_flags"]
+           "ARGS_OFF", "WORKSPACE_BYTES", "WORKSPACE_ALIGN", "query_flags"]
 
 # ---------------------------------------------------------------- constants (see docstring)
 RTC_INVALID_GEOMETRY_ID = 0xFFFFFFFF
@@ -293,3 +293,6 @@ class EmbreeLib:
 # (meshladar.weighing.fused): field indices of RTCRayHitW and workspace offsets
 TFAR, PRIMID, GEOMID, U, V = _TFAR, _PRIMID, _GEOMID, _U, _V
 VALID_OFF, ARGS_OFF = _VALID_OFF, _ARGS_OFF
+#: the workspace's bytes and alignment (one packet, its valid mask and query arguments),
+#: for the loops whose caller allocates it (meshladar.weighing._scratch)
+WORKSPACE_BYTES, WORKSPACE_ALIGN = _WS_BYTES, _ALIGN

@@ -11,7 +11,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..raytrace.embree4_kernels import init_args, load_packet, tile_shape, workspace
+from ..raytrace.embree4_kernels import init_args, load_packet, tile_shape
 from ..raytrace.embree4_ctypes import ARGS_OFF, GEOMID, PRIMID, TFAR, U, V, VALID_OFF
 from ._kernels import bin_bistatic_hits, bin_flat_hits, bin_smooth_hits, face_hit
 from ._sensor_kernels import bin_sensor_hits
@@ -132,19 +132,6 @@ def _keep_hits(i32, f32, w, m, one, scale, lanes, slot, band):
 
 
 @njit(cache=True, nogil=True)
-def _band_buffers(w, nt, barycentrics):
-    """The loop's buffers for bands of a tile's rows × ``nt`` rays: the packet's origins
-    as built (for the ranges) and as cast (at unit size), each lane's slot, and the band's
-    hits (face, distance, origin; barycentrics when asked)."""
-    th = tile_shape(w)[0]
-    nb = th * nt if barycentrics else 0
-    band = (np.empty(th * nt, np.int32), np.empty(th * nt, np.float32),
-            np.empty((th * nt, 3), np.float32), np.empty(nb, np.float32),
-            np.empty(nb, np.float32))
-    return np.empty((w, 3), np.float32), np.empty((w, 3), np.float32), np.empty(w, np.int64), band
-
-
-@njit(cache=True, nogil=True)
 def _cast_band(fn, scene, w, ws, a0, grid, d, inv_scale, scale, buffers):
     """Cast the band of rows a0.. of the grid (s, t, offsets, sp, u, v, lw) in tiles
     (:func:`tile_shape`): each packet's float32 origins built as
@@ -174,15 +161,15 @@ def _cast_band(fn, scene, w, ws, a0, grid, d, inv_scale, scale, buffers):
 @njit(cache=True, nogil=True)
 def cast_bin_flat(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, face_normals,
                   face_material, params, wv, start, edges, area, power, ignore_back, out,
-                  stamp, weight, tag, footprint):
+                  stamp, weight, tag, footprint, scratch):
     """One monostatic view with flat normals, grid to bins in one loop: each band's hits
     (a few rows: they stay in cache), with Embree's distance scaled back (× ``scale``),
     weighed and binned in scan order by :func:`._kernels.bin_flat_hits` (point or
     footprint bins): the numbers of the unfused path, summed in its order, without per-ray
-    arrays. Returns (back-face hits, rays cast)."""
-    ws = workspace()
+    arrays; ``scratch`` (:func:`._scratch.scratch`) holds the workspace and the band's
+    buffers. Returns (back-face hits, rays cast)."""
+    ws, buffers = scratch
     init_args(ws[0], ws[2], ws[3], flags)
-    buffers = _band_buffers(w, grid[1].shape[0], False)
     prim, tf, o = buffers[3][0], buffers[3][1], buffers[3][2]
     back = 0
     for a0 in range(0, grid[0].shape[0], tile_shape(w)[0]):
@@ -196,13 +183,12 @@ def cast_bin_flat(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, face_
 @njit(cache=True, nogil=True)
 def cast_bin_smooth(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, face_normals,
                     face_material, params, wv, start, edges, area, power, ignore_back, out,
-                    footprint, corner, min_cos_facet):
+                    footprint, corner, min_cos_facet, scratch):
     """One monostatic view with smooth normals, as :func:`cast_bin_flat` with the packets'
     barycentrics kept and the shading normal interpolated from the faces' ``corner``
     normals (:func:`._kernels.bin_smooth_hits`). Returns (back-face hits, rays cast)."""
-    ws = workspace()
+    ws, buffers = scratch
     init_args(ws[0], ws[2], ws[3], flags)
-    buffers = _band_buffers(w, grid[1].shape[0], True)
     prim, tf, o, bu, bv = buffers[3]
     back = 0
     for a0 in range(0, grid[0].shape[0], tile_shape(w)[0]):
@@ -217,24 +203,19 @@ def cast_bin_smooth(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, fac
 @njit(cache=True, nogil=True)
 def cast_bin_bistatic(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, face_normals,
                       wv, start, edges, ignore_back, out, weight, occ, wr, lift, stamp, tag,
-                      coating, lone):
+                      coating, lone, scratch):
     """One bistatic view (receiver direction ``wr``), flat normals: each band's hits first
     cast their occlusion rays toward the receiver with ``occ`` (rtcOccludedW; see
     :func:`_occlude_band`), then :func:`._kernels.bin_bistatic_hits` bins the band in scan
     order with the per-face bistatic weights in ``weight`` (those whose ``stamp`` is not
     ``tag`` evaluated at their first hit from ``coating``); hits on the front of ``lone``
-    faces cast no occlusion ray. Returns (back-face hits, rays cast)."""
-    ws = workspace()
+    faces cast no occlusion ray; ``scratch``: the workspace, the band's buffers and the
+    occlusion pass's (:func:`._scratch.scratch`). Returns (back-face hits, rays cast)."""
+    ws, buffers, hits, spare = scratch
     i32, f32, i64, base = ws
     init_args(i32, i64, base, flags)
     nt = grid[1].shape[0]
-    buffers = _band_buffers(w, nt, False)
     band_prim, band_t, band_o = buffers[3][0], buffers[3][1], buffers[3][2]
-    size = band_prim.shape[0]
-    hits = (np.empty(size, np.int32), np.empty(size, np.float32),
-            np.empty((size, 3), np.float32), np.empty(size, np.int64))
-    spare = (np.zeros(size, np.bool_), np.empty((size, 3), np.float32),
-             np.empty(size, np.int64), np.empty((1, 3), np.float32), np.zeros(size, np.bool_))
     for k in range(3):
         spare[3][0, k] = wr[k]
     one = scale == 1.0
@@ -317,24 +298,20 @@ def _sensor_tile(a0, b0, rows, cols, plane, sensor, one, inv_scale, lanes, dirs,
 
 @njit(cache=True, nogil=True)
 def cast_bin_sensor(fn, scene, w, flags, plane, sensor, inv_scale, scale, smooth, binning,
-                    out):
+                    out, scratch):
     """One view seen by a sensor at a standoff, grid to bins in one loop: each tile's rays
     built as :func:`meshladar.raytrace.perspective.sensor_cast` builds them
     (:func:`_sensor_tile`), cast in a packet with their own directions, and each band of
     rows weighed and binned in scan order by :func:`._sensor_kernels.bin_sensor_hits` (its
     arguments after ``sensor_pos`` but ``out``: ``binning``), with the hit distance
     t0 + Embree's (scaled back) as the per-hit path has it. The same numbers, without
-    per-ray arrays. Returns (back-face hits, rays cast)."""
-    ws = workspace()
+    per-ray arrays; ``scratch``: the workspace, (lanes, directions, slots) and the band's
+    buffers (:func:`._scratch.scratch`). Returns (back-face hits, rays cast)."""
+    ws, (lanes, dirs, slot), band = scratch
     i32, f32, i64, base = ws
     init_args(i32, i64, base, flags)
     ns, nt = plane[0].shape[0], plane[1].shape[0]
     th, tw = tile_shape(w)
-    nb = th * nt if smooth else 0
-    band = (np.empty(th * nt, np.int32), np.empty(th * nt), np.empty(nb, np.float32),
-            np.empty(nb, np.float32), np.empty((th * nt, 3)), np.empty(th * nt))
-    lanes, dirs = np.empty((w, 3), np.float32), np.empty((w, 3), np.float32)
-    slot = np.empty(w, np.int64)
     one = scale == 1.0
     back = 0
     for a0 in range(0, ns, th):

@@ -9,6 +9,7 @@ import numpy as np
 
 from ..raytrace.embree4_ctypes import query_flags
 from ._fused_kernels import cast_bin_bistatic, cast_bin_flat, cast_bin_smooth
+from ._scratch import scratch
 
 __all__ = ["cast_bin_grid"]
 
@@ -78,10 +79,8 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
     offsets = plan.offsets or (np.empty(0, np.float32),) * 4
     grid = (s.astype(np.float32), t.astype(np.float32), offsets, np.float32(spacing),
             u.astype(np.float32), v.astype(np.float32), (L * w).astype(np.float32))
-    flags = query_flags(coherent)
-    head = (lib.intersect[lib.width], sc.live(), lib.width, flags,
-            grid, (-w).astype(np.float32)[None, :], np.float32(emb.inverse),
-            float(emb.scale))
+    head = (lib.intersect[lib.width], sc.live(), lib.width, query_flags(coherent), grid,
+            (-w).astype(np.float32)[None, :], np.float32(emb.inverse), float(emb.scale))
     b = bins
     if receiver is not None:
         wr = np.asarray(receiver[0], np.float64)
@@ -89,7 +88,9 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
                    float(b.area), bool(b.power), bool(receiver[2]))
         return cast_bin_bistatic(*head, b.plane_d, b.face_normals, b.w, b.start, b.edges,
                                  b.ignore_back, b.out, b.weight, lib.occluded[lib.width],
-                                 wr, float(receiver[1]), b.stamp, b.tag, coating, receiver[3])
+                                 wr, float(receiver[1]), b.stamp, b.tag, coating, receiver[3],
+                                 scratch("bistatic", lib.width, t.size))
     if smooth is not None:
-        return cast_bin_smooth(*head, *b[:11], b.footprint, smooth[0], float(smooth[1]))
-    return cast_bin_flat(*head, *bins)
+        return cast_bin_smooth(*head, *b[:11], b.footprint, smooth[0], float(smooth[1]),
+                               scratch("smooth", lib.width, t.size))
+    return cast_bin_flat(*head, *bins, scratch("flat", lib.width, t.size))

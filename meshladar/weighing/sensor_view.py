@@ -13,6 +13,7 @@ from ..raytrace.grid import stratified_sequences
 from ..raytrace.perspective import plane_axes, sensor_cast, start_distance
 from ..sensor import FloodBeam
 from ._fused_kernels import cast_bin_sensor
+from ._scratch import scratch
 from ._sensor_kernels import bin_sensor_hits
 from ..brdf import material_table
 
@@ -98,7 +99,8 @@ def _fused_view(plan, weighing, scene, w, rng, out, aim):
         lib.intersect[lib.width], pk.live(), lib.width, flags, plane,
         (D, sensor_pos, start_distance(geo, sensor_pos, spacing)), np.float32(scene.inverse),
         float(scene.scale), geo.normals == "smooth",
-        _binning(plan, weighing, aim, u, v, sensor_pos, w), out)
+        _binning(plan, weighing, aim, u, v, sensor_pos, w), out,
+        scratch("sensor", lib.width, t.size))
     return n, back
 
 
