@@ -20,7 +20,7 @@ the source and to the receiver. For the collocated (monostatic) ladar, θr = θi
 Its compiled twin, ``meshladar.brdf._sandford_robertson_kernel.sr_monostatic``, takes
 the coating's :attr:`SandfordRobertson.kernel_params` (a :class:`KernelRow`, from
 :mod:`meshladar.brdf.kernel_table`) and evaluates the same expressions, rearranged to one
-square root and two divisions (from cos θ and sin²θ; equal to 1e-13).
+square root instead of three (from cos θ and sin²θ; equal to 1e-13).
 The functions g, G, h and H are in :mod:`meshladar.brdf.sandford_robertson_functions`, the
 rules the parameters follow in ``_sandford_robertson_checks``; the public names of both are
 importable from here as well.

@@ -4,9 +4,11 @@ ray packets (:mod:`.embree4_ctypes`' layouts) in an aligned workspace and call t
 
 :func:`cast_grid` and :func:`occluded_grid` cast every ray of a grid in packets of the
 library's width (:meth:`meshladar.raytrace.embree4.PacketGeometry.cast_grid` and
-``occluded_grid`` call them). Their building blocks, :func:`workspace`, :func:`init_args`
-and :func:`load_packet`, are public for the compiled loops beside other stages (the weigh
-stage's cast-weigh-bin loop, :mod:`meshladar.weighing.fused`).
+``occluded_grid`` call them). Their building blocks, :func:`workspace`, :func:`init_args`,
+:func:`load_packet` and :func:`tile_shape`, are public for the compiled loops beside other
+stages (the scanner's pulse loop; the weigh stage's cast-weigh-bin loops,
+:mod:`meshladar.weighing.fused`, take a workspace their caller made in numpy with the
+layout's ``WORKSPACE_BYTES`` and ``WORKSPACE_ALIGN``).
 """
 
 from __future__ import annotations

@@ -236,9 +236,10 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
                 continue
         if stamp[p] != tag:
             m = face_material[p]
-            weight[p] = _sr_monostatic(c, max(1.0 - c * c, 0.0), params[m, 0], params[m, 1], params[m, 2],
-                                       params[m, 3], params[m, 4], params[m, 5] > 0.5,
-                                       params[m, 6] > 0.5) * (area * c if power else area)
+            weight[p] = _sr_monostatic(c, max(1.0 - c * c, 0.0), params[m, 0], params[m, 1],
+                                       params[m, 2], params[m, 3], params[m, 4],
+                                       params[m, 5] > 0.5, params[m, 6] > 0.5
+                                       ) * (area * c if power else area)
             stamp[p] = tag
         if footprint is None:
             out[_bin_of(r, edges, e0, inv)] += weight[p]
@@ -368,8 +369,8 @@ def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, 
             if r < edges[0] or r >= edges[nb]:
                 continue
         m = face_material[p]
-        f = _sr_monostatic(c, max(1.0 - c * c, 0.0), params[m, 0], params[m, 1], params[m, 2], params[m, 3],
-                           params[m, 4], params[m, 5] > 0.5, params[m, 6] > 0.5)
+        f = _sr_monostatic(c, max(1.0 - c * c, 0.0), params[m, 0], params[m, 1], params[m, 2],
+                           params[m, 3], params[m, 4], params[m, 5] > 0.5, params[m, 6] > 0.5)
         f = f * c if power else f
         wt = f * area * (c / max(abs(cg), min_cos_facet))
         if footprint is None:

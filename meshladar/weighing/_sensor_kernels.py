@@ -87,8 +87,8 @@ def bin_sensor_hits(prim, t_cast, dirs, length, bu, bv, D, sensor_pos, range_off
         if smooth:
             factor *= c / max(abs(cg), min_cos_facet)
         m = face_material[p]
-        f = _sr_monostatic(c, max(1.0 - c * c, 0.0), params[m, 0], params[m, 1], params[m, 2], params[m, 3],
-                           params[m, 4], params[m, 5] > 0.5, params[m, 6] > 0.5)
+        f = _sr_monostatic(c, max(1.0 - c * c, 0.0), params[m, 0], params[m, 1], params[m, 2],
+                           params[m, 3], params[m, 4], params[m, 5] > 0.5, params[m, 6] > 0.5)
         wt = f * area * factor
         if power:                          # exp(−0) = 1 exactly: skipped without extinction
             wt *= c * (D / R) ** 2 * (math.exp(-2.0 * extinction * R) if extinction else 1.0)

@@ -27,7 +27,8 @@ def test_the_compiled_sr_kernel_equals_the_model_on_a_grid_through_90_degrees(na
     m = COATINGS[name]
     c, s = np.cos(THETA), np.abs(np.sin(THETA))
     got = np.array([sr_monostatic(ci, si * si, *m.kernel_params) for ci, si in zip(c, s)])
-    # the same expressions in the same order: equal to a few ulps (F spans 1e-3..1e16)
+    # the same expressions rearranged (g without a norm, one square root): equal to a few
+    # ulps (F spans 1e-3..1e16)
     np.testing.assert_allclose(got, m.value(c, s), rtol=1e-13, atol=0)
 
 
@@ -91,16 +92,18 @@ def test_built_in_models_register_themselves_and_a_users_do_not():
         MODELS["Mine"] = Negative                     # read-only
 
 
-@pytest.mark.parametrize("name", ["dark_gray", "aluminum", "glint e=1e-4", "b=1"])
+@pytest.mark.parametrize("name", ["dark_gray", "aluminum", "glint e=1e-4", "b=1",
+                                  "b=1e-149"])
 def test_the_compiled_sr_kernel_holds_at_the_extremes_of_its_arguments(name):
-    """Where the kernel's square-root norms could underflow or lose bits (cos θ and b sin θ
-    both tiny, cos θ = 0 or 1 exactly, θ a hair from 0 or 90°), it stays finite and equal
-    to the model to 1e-13 (the model's hypot), and is 0 or positive as the model is."""
-    m = COATINGS[name]
+    """Where the kernel's squares could underflow or lose bits (cos θ and b sin θ both
+    tiny, cos θ² subnormal beside a small b² sin²θ, cos θ = 0 or 1 exactly, θ a hair from
+    0 or 90°), it stays finite and equal to the model to 1e-13 (the model's hypot), and is
+    0 or positive as the model is."""
+    m = COATINGS.get(name) or ml.SandfordRobertson(0.5, 0.0, 1e-149, 1.0, lobes="diffuse")
     theta = np.array([0.0, 1e-300, 1e-160, 1e-12, math.pi / 2 - 1e-12, math.pi / 2])
     c, s = np.cos(theta), np.abs(np.sin(theta))
-    c = np.concatenate([c, [1e-160, 1e-300, 0.0]])
-    s = np.concatenate([s, [1.0, 1.0, 1.0]])
+    c = np.concatenate([c, [1e-160, 1e-300, 0.0, 1e-152, 1e-156, 1e-158]])
+    s = np.concatenate([s, [1.0, 1.0, 1.0, 1.0, 1.0, 1.0]])
     got = np.array([sr_monostatic(ci, si * si, *m.kernel_params) for ci, si in zip(c, s)])
     want = m.value(c, s)
     assert np.all(np.isfinite(got)) and np.all(got >= 0)

@@ -52,22 +52,41 @@ def _run(scene, ladar, options, backend="packets"):
                        **options)
 
 
+@pytest.fixture(autouse=True)
+def _own_buffers():
+    """Each test starts with new buffers and leaves the thread's as they were."""
+    held = getattr(_scratch._HELD, "buffers", None)
+    _scratch._HELD.buffers = {}
+    yield
+    if held is None:
+        del _scratch._HELD.buffers
+    else:
+        _scratch._HELD.buffers = held
+
+
 @pytest.mark.parametrize("kind", list(KINDS))
-def test_junk_in_reused_buffers_changes_no_bit(kind):
+def test_junk_in_reused_buffers_changes_no_bit(kind, monkeypatch):
     scene = ml.Scene.from_parts(
         [ml.meshes.sphere((0.1, -0.2, 0.3), 0.5, 0, subdivisions=3),
          _box((2.5, 0.0, 0.0), (0.2, 0.4, 0.3), 1)], [DARK_GRAY, ALUMINUM])
     ladar = ml.Ladar.covering(scene, n_bins=48, view_vectors=ml.meshes.fibonacci_sphere(4))
     options = KINDS[kind]
-    _scratch._HELD.buffers = {}                                  # new buffers
     fresh = _run(scene, ladar, options)
-    held = _scratch._HELD.buffers
-    assert held, "the fused loop took no buffers from the scratch"
+    assert _scratch._HELD.buffers, "the fused loop took no buffers from the scratch"
     rng = np.random.default_rng(5)
-    for _, buffers in held.values():
-        _poison(buffers, rng)
+    poisoned = []
+
+    def junk_scratch(*args):
+        buffers = _scratch.scratch(*args)
+        _poison(buffers, rng)                           # junk before every view
+        poisoned.append(args)
+        return buffers
+
+    from meshladar.weighing import fused, sensor_view
+    monkeypatch.setattr(fused, "scratch", junk_scratch)
+    monkeypatch.setattr(sensor_view, "scratch", junk_scratch)
     again = _run(scene, ladar, options)
-    assert _scratch._HELD.buffers is held                        # the same, reused
+    assert len(poisoned) == 4                           # every view's buffers
     np.testing.assert_array_equal(again.values, fresh.values)
     ref = _run(scene, ladar, options, backend="embreex")
     assert fresh.values.max() > 0
@@ -76,7 +95,6 @@ def test_junk_in_reused_buffers_changes_no_bit(kind):
 
 
 def test_buffers_grow_for_longer_rows_are_reused_and_are_per_thread():
-    _scratch._HELD.buffers = {}
     small = _scratch.scratch("flat", 16, 10)
     assert small[1][3][0].size == 4 * 10                        # a 4-row tile's band
     big = _scratch.scratch("flat", 16, 100)
