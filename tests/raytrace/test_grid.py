@@ -4,6 +4,7 @@ the stratified offsets' 1-D form against their definition."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from meshladar.precision import PARALLEL_SLACK
 from meshladar.raytrace.grid import stratified_sequences, frame, stratified_offsets
@@ -50,17 +51,24 @@ def test_stratified_offsets_are_one_per_cell_from_row_and_column_sequences():
                                atol=1e-6)
 
 
-def test_a_views_extent_over_clusters_is_every_points_extent():
+@pytest.mark.parametrize("compiled_from", [0, None])
+def test_a_views_extent_over_clusters_is_every_points_extent(compiled_from, monkeypatch):
     """The least and greatest p·u found over clusters of the points equal numpy's over
     every point (the same products and sums: equal, not close), for a sphere's hull, an
     anisotropic cloud far from the origin, a flat disk, a line, repeated points and a box,
     along unit and non-unit directions and the axes; and so do the extents from an origin
-    and in perspective from a pinhole (a sensor at a standoff)."""
+    and in perspective from a pinhole (a sensor at a standoff). points_extent's compiled
+    pass (every set, with COMPILED_FROM 0) and its numpy branch (these sets are below the
+    default) alike."""
     import trimesh
 
     from meshladar.meshes import fibonacci_sphere
+    from meshladar.raytrace import _support
     from meshladar.raytrace._support import ClusteredPoints, points_extent
     from meshladar.raytrace.grid import dot
+
+    if compiled_from is not None:
+        monkeypatch.setattr(_support, "COMPILED_FROM", compiled_from)
 
     rng = np.random.default_rng(5)
     sets = [trimesh.creation.icosphere(5).vertices,
