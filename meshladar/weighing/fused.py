@@ -21,12 +21,12 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
     :func:`meshladar.raytrace.grid.grid_plan`'s :class:`~meshladar.raytrace.grid.GridPlan`,
     ``bins`` the weigh-and-bin arguments (:class:`~meshladar.forward.job.FlatBins`,
     flat for the compiled loop); ``receiver`` (direction, lift) makes the view bistatic.
-    Returns (back-face hits, rays cast).
 
     Monostatic or bistatic with flat normals, or monostatic with smooth ones (``smooth``),
-    binned at a point (``bins.footprint`` None) or over each face's footprint. The packets are cast with the library's native width,
-    coherent; the ray origins are built in float32 as ``ray_grid`` builds them and cast at
-    unit size (× ``emb.inverse``), Embree's distances scaled back (× ``emb.scale``).
+    binned at a point (``bins.footprint`` None) or over each face's footprint, in packets
+    of the library's native width; the ray origins built in float32 as ``ray_grid`` builds
+    them, cast at unit size (× ``emb.inverse``), Embree's distances scaled back
+    (× ``emb.scale``); the loop's buffers this thread's (:func:`._scratch.scratch`).
 
     Parameters
     ----------
