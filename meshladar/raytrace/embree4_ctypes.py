@@ -86,8 +86,10 @@ import importlib.util
 import os
 import sys
 
+import numpy as np
+
 __all__ = ["EmbreeLib", "library_candidates", "TFAR", "PRIMID", "GEOMID", "VALID_OFF",
-           "ARGS_OFF", "WORKSPACE_BYTES", "WORKSPACE_ALIGN", "query_flags"]
+           "ARGS_OFF", "new_workspace", "query_flags"]
 
 # ---------------------------------------------------------------- constants (see docstring)
 RTC_INVALID_GEOMETRY_ID = 0xFFFFFFFF
@@ -293,6 +295,19 @@ class EmbreeLib:
 # (meshladar.weighing.fused): field indices of RTCRayHitW and workspace offsets
 TFAR, PRIMID, GEOMID, U, V = _TFAR, _PRIMID, _GEOMID, _U, _V
 VALID_OFF, ARGS_OFF = _VALID_OFF, _ARGS_OFF
-#: the workspace's bytes and alignment (one packet, its valid mask and query arguments),
-#: for the loops whose caller allocates it (meshladar.weighing._scratch)
-WORKSPACE_BYTES, WORKSPACE_ALIGN = _WS_BYTES, _ALIGN
+
+
+def new_workspace():
+    """A packet workspace made in numpy (zeroed, its first byte 64-aligned), as the
+    compiled :func:`meshladar.raytrace.embree4_kernels.workspace` makes it inside a loop:
+    for the loops whose caller allocates it (:mod:`meshladar.weighing._scratch`).
+
+    Returns
+    -------
+    tuple
+        (int32 view, float32 view, int64 view, base address) of the one buffer.
+    """
+    raw = np.zeros((_WS_BYTES + _ALIGN) // 8, np.int64)
+    skip = ((_ALIGN - raw.ctypes.data % _ALIGN) % _ALIGN) // 8   # int64: addr % 8 == 0
+    ws = raw[skip:skip + _WS_BYTES // 8]
+    return ws.view(np.int32), ws.view(np.float32), ws, raw.ctypes.data + skip * 8

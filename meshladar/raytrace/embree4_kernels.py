@@ -7,8 +7,8 @@ library's width (:meth:`meshladar.raytrace.embree4.PacketGeometry.cast_grid` and
 ``occluded_grid`` call them). Their building blocks, :func:`workspace`, :func:`init_args`,
 :func:`load_packet` and :func:`tile_shape`, are public for the compiled loops beside other
 stages (the scanner's pulse loop; the weigh stage's cast-weigh-bin loops,
-:mod:`meshladar.weighing.fused`, take a workspace their caller made in numpy with the
-layout's ``WORKSPACE_BYTES`` and ``WORKSPACE_ALIGN``).
+:mod:`meshladar.weighing.fused`, take a workspace their caller made in numpy,
+:func:`meshladar.raytrace.embree4_ctypes.new_workspace`).
 """
 
 from __future__ import annotations

@@ -16,23 +16,12 @@ import threading
 
 import numpy as np
 
-from ..raytrace.embree4_ctypes import WORKSPACE_ALIGN as _ALIGN
-from ..raytrace.embree4_ctypes import WORKSPACE_BYTES as _WS_BYTES
+from ..raytrace.embree4_ctypes import new_workspace
 from ..raytrace.embree4_kernels import tile_shape
 
 __all__ = ["scratch"]
 
 _HELD = threading.local()
-
-
-def _workspace():
-    """The packet workspace (zeroed, its first byte 64-aligned) as the compiled
-    :func:`meshladar.raytrace.embree4_kernels.workspace` makes it: (int32 view, float32
-    view, int64 view, base address)."""
-    raw = np.zeros((_WS_BYTES + _ALIGN) // 8, np.int64)
-    skip = ((_ALIGN - raw.ctypes.data % _ALIGN) % _ALIGN) // 8
-    ws = raw[skip:skip + _WS_BYTES // 8]
-    return ws.view(np.int32), ws.view(np.float32), ws, raw.ctypes.data + skip * 8
 
 
 def _make(kind, w, size):
@@ -42,11 +31,11 @@ def _make(kind, w, size):
     if kind == "sensor":
         band = (np.empty(size, np.int32), np.empty(size), np.empty(size, f32),
                 np.empty(size, f32), np.empty((size, 3)), np.empty(size))
-        return _workspace(), lanes, band
+        return new_workspace(), lanes, band
     nb = size if kind == "smooth" else 0
     band = (np.empty(size, np.int32), np.empty(size, f32), np.empty((size, 3), f32),
             np.empty(nb, f32), np.empty(nb, f32))
-    out = (_workspace(), lanes + (band,))
+    out = (new_workspace(), lanes + (band,))
     if kind == "bistatic":
         hits = (np.empty(size, np.int32), np.empty(size, f32), np.empty((size, 3), f32),
                 np.empty(size, i64))
