@@ -73,7 +73,8 @@ def _is_kernel(node) -> bool:
     for d in node.decorator_list:
         f = d.func if isinstance(d, ast.Call) else d
         name = f.attr if isinstance(f, ast.Attribute) else getattr(f, "id", "")
-        if name in ("njit", "jit", "vectorize", "guvectorize", "cfunc"):
+        if name in ("njit", "jit", "vectorize", "guvectorize", "cfunc",
+                    "njit_loop"):                  # meshladar.weighing._compiled's njit
             return True
     return False
 

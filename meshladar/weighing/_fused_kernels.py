@@ -9,19 +9,19 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
 from ..raytrace.embree4_kernels import init_args, load_packet, tile_shape
 from ..raytrace.embree4_ctypes import ARGS_OFF, GEOMID, PRIMID, TFAR, U, V, VALID_OFF
 from ._kernels import bin_bistatic_hits, bin_flat_hits, bin_smooth_hits, face_hit
 from ._sensor_kernels import bin_sensor_hits
+from ._compiled import njit_loop
 from ._prefetch import ahead as _ahead
 from ._prefetch import prefetch as _prefetch
 
 __all__ = ["cast_bin_flat", "cast_bin_smooth", "cast_bin_bistatic", "cast_bin_sensor"]
 
 
-@njit(cache=True, nogil=True)
+@njit_loop()
 def _occlude_block(occ, scene, w, i32, f32, base, prim, tf, o, n, plane_d, face_normals, wv,
                    wr32, lift, inv_scale, one, spare, needed):
     """Occlusion toward the receiver of n hits (face ``prim``, Embree's ``tf``, float32
@@ -67,7 +67,7 @@ def _occlude_block(occ, scene, w, i32, f32, base, prim, tf, o, n, plane_d, face_
             blocked[index[first + j]] = f32[TFAR * w + j] == -np.inf
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit_loop(inline="always")
 def _offsets(xi, ku, kv, eta, a, b):
     """Cell (a, b)'s stratified offsets (du, dv) from their 1-D sequences, in the float32
     operations of :func:`meshladar.raytrace.grid.stratified_offsets`: a sum, less 1 where
@@ -80,7 +80,7 @@ def _offsets(xi, ku, kv, eta, a, b):
             np.float32(dv - (one if dv >= half else zero)))
 
 
-@njit(cache=True, nogil=True)
+@njit_loop()
 def _tile_origins(a0, b0, rows, cols, nt, s, t, offsets, sp, u, v, lw, one, inv_scale,
                   lanes, cast, slot):
     """The float32 origins of the grid's tile at (a0, b0), ``rows`` × ``cols`` rays, packed
@@ -111,7 +111,7 @@ def _tile_origins(a0, b0, rows, cols, nt, s, t, offsets, sp, u, v, lw, one, inv_
     return m
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit_loop(inline="always")
 def _keep_hits(i32, f32, w, m, one, scale, lanes, slot, band):
     """The packet's hits (face, distance scaled back, origin as built, barycentrics) into
     the ``band``'s slots; -1 where a lane missed."""
@@ -131,7 +131,7 @@ def _keep_hits(i32, f32, w, m, one, scale, lanes, slot, band):
             band_v[q] = f32[V * w + j]
 
 
-@njit(cache=True, nogil=True)
+@njit_loop()
 def _cast_band(fn, scene, w, ws, a0, grid, d, inv_scale, scale, buffers):
     """Cast the band of rows a0.. of the grid (s, t, offsets, sp, u, v, lw) in tiles
     (:func:`tile_shape`): each packet's float32 origins built as
@@ -158,7 +158,7 @@ def _cast_band(fn, scene, w, ws, a0, grid, d, inv_scale, scale, buffers):
 # from the cache after) only the weighing it does: each shares the band cast above and
 # differs in how a band's hits are weighed and binned.
 
-@njit(cache=True, nogil=True)
+@njit_loop()
 def cast_bin_flat(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, face_normals,
                   face_material, params, wv, start, edges, area, power, ignore_back, out,
                   stamp, weight, tag, footprint, scratch):
@@ -180,7 +180,7 @@ def cast_bin_flat(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, face_
     return back, grid[0].shape[0] * grid[1].shape[0]
 
 
-@njit(cache=True, nogil=True)
+@njit_loop()
 def cast_bin_smooth(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, face_normals,
                     face_material, params, wv, start, edges, area, power, ignore_back, out,
                     footprint, corner, min_cos_facet, scratch):
@@ -200,7 +200,7 @@ def cast_bin_smooth(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, fac
     return back, grid[0].shape[0] * grid[1].shape[0]
 
 
-@njit(cache=True, nogil=True)
+@njit_loop()
 def cast_bin_bistatic(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, face_normals,
                       wv, start, edges, ignore_back, out, weight, occ, wr, lift, stamp, tag,
                       coating, lone, scratch):
@@ -232,7 +232,7 @@ def cast_bin_bistatic(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, f
     return back, grid[0].shape[0] * grid[1].shape[0]
 
 
-@njit(cache=True, nogil=True)
+@njit_loop()
 def _occlude_band(occ, scene, w, ws, band, rows, nt, hits, spare, plane_d, face_normals, wv,
                   lift, inv_scale, one, needed):
     """The occlusion of a band's hits (``band``: face, distance, origin per slot, rows ×
@@ -260,7 +260,7 @@ def _occlude_band(occ, scene, w, ws, band, rows, nt, hits, spare, plane_d, face_
         spare[4][hits[3][j]] = spare[0][j]
 
 
-@njit(cache=True, nogil=True)
+@njit_loop()
 def _sensor_tile(a0, b0, rows, cols, plane, sensor, one, inv_scale, lanes, dirs, slot, band):
     """The rays of the sensor grid's tile at (a0, b0) into the first lanes, as
     :func:`meshladar.raytrace.perspective.sensor_cast` builds them in numpy, operation for
@@ -296,7 +296,7 @@ def _sensor_tile(a0, b0, rows, cols, plane, sensor, one, inv_scale, lanes, dirs,
     return m
 
 
-@njit(cache=True, nogil=True)
+@njit_loop()
 def cast_bin_sensor(fn, scene, w, flags, plane, sensor, inv_scale, scale, smooth, binning,
                     out, scratch):
     """One view seen by a sensor at a standoff, grid to bins in one loop: each tile's rays
@@ -329,7 +329,7 @@ def cast_bin_sensor(fn, scene, w, flags, plane, sensor, inv_scale, scale, smooth
     return back, ns * nt
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit_loop(inline="always")
 def _keep_sensor_hits(i32, f32, w, m, one, scale, t0, slot, band, smooth):
     """The packet's hits into the band's slots: face (-1 on a miss), t0 + Embree's distance
     scaled back (float64, as the per-hit path adds them) and, for smooth normals, the

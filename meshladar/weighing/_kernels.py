@@ -18,6 +18,7 @@ from ..brdf._sandford_robertson_kernel import sr_bistatic as _sr_bistatic
 from ..brdf._sandford_robertson_kernel import sr_monostatic as _sr_monostatic
 from ..precision import BOX_RATIO as _BOX_RATIO
 from ..precision import TINY as _TINY
+from ._compiled import njit_loop
 from ._prefetch import ahead as _ahead
 from ._prefetch import prefetch as _prefetch
 
@@ -29,7 +30,7 @@ __all__ = ["bin_flat_hits", "bin_bistatic_hits", "bin_smooth_hits",
            "face_hit", "footprint_row", "footprint_rows", "edge_on_receiver"]
 
 
-@njit(cache=True, nogil=True)
+@njit_loop()
 def footprint_row(fp, p, face_normals):                   # pragma: no cover - compiled
     """Face p's footprint row for the view, made at its first hit (called once per face:
     the loops check ``stamps[p]`` themselves): ``fp`` = (rows (n_faces, 4), stamps
@@ -46,7 +47,7 @@ def footprint_row(fp, p, face_normals):                   # pragma: no cover - c
     stamps[p] = tag
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit_loop(inline="always")
 def _row(n0, n1, n2, w, u, v, spacing, three_d, r0, r1, r2):   # pragma: no cover
     """A footprint row from scalars (no array: inlined in loops without reference
     counting): |n·u| / c · ½ · δ, |n·v| / c · ½ · δ (0 in slice mode) with
@@ -73,7 +74,7 @@ def footprint_rows(fp, face_normals):                     # pragma: no cover - c
             three_d, ranges[faces[p, 0]], ranges[faces[p, 1]], ranges[faces[p, 2]])
 
 
-@njit(cache=True, nogil=True)
+@njit_loop()
 def _hit_distance(p, c, tf, origins, i, plane_d, face_normals):
     """Ray i's distance to face p, recomputed in float64 against the face's plane from the
     float32 origin as cast (c = n·w); Embree's float32 ``tf`` where the plane is edge-on
@@ -84,7 +85,7 @@ def _hit_distance(p, c, tf, origins, i, plane_d, face_normals):
                           + face_normals[p, 2] * origins[i, 2])) / (-c)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit_loop(inline="always")
 def face_hit(p, tf, origins, i, w, plane_d, face_normals):
     """Ray i's hit on face p seen along w: (c, t, r) with c = n·w the flat normal's cosine
     (negative on a back face), t the float64 distance (:func:`_hit_distance`) and
@@ -94,7 +95,7 @@ def face_hit(p, tf, origins, i, w, plane_d, face_normals):
     return c, t, t - (origins[i, 0] * w[0] + origins[i, 1] * w[1] + origins[i, 2] * w[2])
 
 
-@njit(cache=True, nogil=True)
+@njit_loop()
 def _bin_of(r, edges, e0, inv):
     """The bin k with edges[k] <= r < edges[k + 1] (r inside the edges): guessed in O(1)
     from uniform edges (``inv`` bins per unit range from ``e0``), checked against the
@@ -114,7 +115,7 @@ def _bin_of(r, edges, e0, inv):
     return lo
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit_loop(inline="always")
 def _smooth_cos(corner, p, a, b, wx, wy, wz):
     """cos θ of face p's shading normal, interpolated from its ``corner`` normals with
     Embree's barycentrics (a, b) and normalised, against the direction (wx, wy, wz)."""
@@ -125,7 +126,7 @@ def _smooth_cos(corner, p, a, b, wx, wy, wz):
     return (nx / norm) * wx + (ny / norm) * wy + (nz / norm) * wz
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit_loop(inline="always")
 def _fp_cdf(x, a, b, box):
     """CDF at x of the footprint's range offset A + B, A ~ U(−a, a), B ~ U(−b, b) (a box
     when ``box``): meshladar.weighing._box_cdf and _trap_cdf, one value at a time."""
@@ -135,12 +136,12 @@ def _fp_cdf(x, a, b, box):
     return min(max(num / (4 * a * b if a * b > 0 else 1.0), 0.0), 1.0)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit_loop(inline="always")
 def _half_sq(y):
     return 0.5 * max(y, 0.0) ** 2
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit_loop(inline="always")
 def _clipped_bin(x, edges, e0, inv):
     """searchsorted(edges, x, "right") − 1 clipped to the bins (as weighing._bin_one)."""
     nb = edges.size - 1
@@ -151,7 +152,7 @@ def _clipped_bin(x, edges, e0, inv):
     return _bin_of(x, edges, e0, inv)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit_loop(inline="always")
 def _spread_hit(out, r, r_rel, wt, fp, p, edges, e0, inv):
     """Add one hit's weight over the bins its footprint's ranges cover, as
     meshladar.weighing._bin_one with ``footprint``: ``fp[p]`` holds face p's half-widths
@@ -189,7 +190,7 @@ def _spread_hit(out, r, r_rel, wt, fp, p, edges, e0, inv):
         out[k] += wt * (frac / mass)
 
 
-@njit(cache=True, nogil=True)
+@njit_loop()
 def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, params,
                   w, start, edges, area, power, ignore_back, out, stamp, weight, tag,
                   footprint):
@@ -250,7 +251,7 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
     return back
 
 
-@njit(cache=True, nogil=True)
+@njit_loop()
 def bin_bistatic_hits(prim, tfar, origins, blocked, plane_d, face_normals, w, wr, start,
                       edges, ignore_back, out, weight, stamp, tag, coating):
     """Bistatic (receiver direction ``wr``), flat-normal binning of one view's hits, fused:
@@ -291,7 +292,7 @@ def bin_bistatic_hits(prim, tfar, origins, blocked, plane_d, face_normals, w, wr
     return back
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit_loop(inline="always")
 def _bistatic_face(face_normals, p, c, wr, coating):
     """F·area of face p for the receiver along ``wr`` (flat normal n, c = n·w as the hit
     found it; a back face's normal and c are turned toward the ladar here), as meshladar.weighing.faces.face_bistatic_weights computes
@@ -314,7 +315,7 @@ def _bistatic_face(face_normals, p, c, wr, coating):
                         params[m, 5] > 0.5, params[m, 6] > 0.5, power) * area
 
 
-@njit(cache=True, nogil=True)
+@njit_loop()
 def edge_on_receiver(face_normals, w, wr, ignore_back, cos_max):
     """Whether a face toward the ladar (a back face turned toward it, unless back faces
     are ignored) lies edge-on to the receiver, 0 ≤ cos θr < ``cos_max``: the faces
@@ -330,7 +331,7 @@ def edge_on_receiver(face_normals, w, wr, ignore_back, cos_max):
     return False
 
 
-@njit(cache=True, nogil=True)
+@njit_loop()
 def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, face_material,
                     params, w, start, edges, area, power, ignore_back, min_cos_facet, out,
                     footprint):

@@ -9,17 +9,16 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
 from ._kernels import _bin_of, _smooth_cos
 from ..brdf._sandford_robertson_kernel import sr_monostatic as _sr_monostatic
+from ._compiled import njit_loop
 from ._prefetch import ahead as _ahead
 from ._prefetch import prefetch as _prefetch
 
 __all__ = ["bin_sensor_hits"]
 
 
-@njit(cache=True, nogil=True)
+@njit_loop()
 def bin_sensor_hits(prim, t_cast, dirs, length, bu, bv, D, sensor_pos, range_offset,
                     plane_d, face_normals, corner, smooth, face_material, params, beam,
                     extinction, edges, area, power, ignore_back, min_cos_facet, refine_min_cos,

@@ -6,13 +6,16 @@ embreex's per-hit path, which uses none of them."""
 
 import threading
 
+import numba
 import numpy as np
 import pytest
 import trimesh
+from numba.core.dispatcher import Dispatcher
 
 import meshladar as ml
 from meshladar.materials import ALUMINUM, DARK_GRAY
-from meshladar.weighing import _scratch
+from meshladar.weighing import _fused_kernels, _kernels, _scratch, _sensor_kernels
+from meshladar.weighing._compiled import njit_loop
 
 #: The fused loop against the per-hit path (their summation orders differ).
 SAME_RTOL = 1e-12
@@ -132,3 +135,26 @@ def test_narrower_packets_take_buffers_of_their_own_tiles(kind, width, monkeypat
     assert narrow.values.max() > 0
     np.testing.assert_allclose(narrow.values, ref.values, rtol=SAME_RTOL,
                                atol=SAME_RTOL * ref.values.max())
+
+
+@njit_loop()
+def _allocates(n):                                        # pragma: no cover - compiled
+    return np.empty(n).sum()
+
+
+def test_a_weigh_loop_cannot_allocate():
+    """The loops are compiled without numba's runtime (meshladar.weighing._compiled):
+    one that allocated fails to compile instead."""
+    with pytest.raises(numba.core.errors.TypingError, match="returning of array"):
+        _allocates(3)
+
+
+def test_every_weigh_loop_is_compiled_without_the_runtime():
+    """Every compiled loop of the weigh stage's kernel modules but the one that makes
+    its own buffer (footprint_rows)."""
+    loops = {f"{m.__name__}.{k}": v.targetoptions.get("_nrt", True)
+             for m in (_kernels, _fused_kernels, _sensor_kernels)
+             for k, v in vars(m).items() if isinstance(v, Dispatcher)
+             and v.py_func.__module__ == m.__name__}
+    assert loops.pop("meshladar.weighing._kernels.footprint_rows") is True
+    assert len(loops) >= 25 and not any(loops.values()), loops
