@@ -119,7 +119,7 @@ def choose_executor(jobs, executor, work, n_chunks, *, threads=False):
     if jobs == 1:
         return None, False
     if threads:
-        return thread_pool(jobs), True
+        return thread_pool(min(jobs, max(1, n_chunks))), True
     return ProcessPoolExecutor(max_workers=int(jobs), initializer=_worker_init), True
 
 
@@ -143,12 +143,10 @@ def thread_pool(workers):
     with the heap thresholds set (:data:`HEAP_THRESHOLDS`), its threads all started
     before it is returned: every thread pool of meshladar's runs is made here.
 
-    ``ThreadPoolExecutor`` starts a thread at each task submitted while none is idle, and
-    ``submit`` waits until the new thread runs, which needs the GIL: started so, the second
-    thread of a scan waited for the first chunk's Python, the first chunk for the GIL
-    behind the thread starting, and the run submitted its chunks ~3 ms late (two threads
-    1.46-1.52× one in ``meshladar.studies.bench_scan``; 1.74-1.80× with the threads started
-    here first, each waiting at a barrier until all run).
+    ``ThreadPoolExecutor`` starts a thread per task while none is idle, ``submit`` waiting
+    until it runs, which needs the GIL: started so, a scan's second thread waited behind
+    the first chunk's Python and the first chunk behind it (two threads 1.46-1.52× one in
+    ``bench_scan(rounds=7)``; 1.74-1.80× with the threads started here, at a barrier).
 
     Parameters
     ----------
@@ -159,19 +157,30 @@ def thread_pool(workers):
     -------
     concurrent.futures.ThreadPoolExecutor
         The pool (the caller shuts it down).
+
+    Raises
+    ------
+    RuntimeError
+        When a thread cannot be started (the threads already started end).
     """
     _steady_heap()
     workers = max(1, int(workers))
     pool = ThreadPoolExecutor(max_workers=workers)
-    met = threading.Barrier(workers)
+    met = threading.Barrier(workers, timeout=_START_BOUND)
     try:
         for f in [pool.submit(met.wait) for _ in range(workers)]:
             f.result()
     except BaseException:                # no thread, or interrupted: free those waiting
         met.abort()
-        pool.shutdown(wait=False)
+        pool.shutdown(wait=False, cancel_futures=True)
         raise
     return pool
+
+
+#: Seconds a new pool's threads may take to meet (:func:`thread_pool`; they meet in
+#: microseconds): only a pool that started fewer threads than tasks (not CPython's) would
+#: wait so long, and it then fails with BrokenBarrierError instead of waiting for ever.
+_START_BOUND = 60.0
 
 
 def _steady_heap():

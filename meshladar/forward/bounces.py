@@ -376,7 +376,7 @@ def higher_orders(scene, ladar, *, bounces, ray_spacing, samples=BOUNCE_SAMPLES,
                              radiometry == "power")
             return _view_orders(scene, geo, emb, ends, ladar.bin_edges, ray_spacing,
                                 (bounces, samples), np.random.default_rng(seeds[i]))
-        with thread_pool(jobs) as pool:
+        with thread_pool(min(jobs, ladar.n_views)) as pool:
             for i, ((v, e), share) in enumerate(pool.map(view, range(ladar.n_views))):
                 values[:, i], var[:, i], per_part[:, i] = v, e, share
     return Orders(tuple(range(2, bounces + 1)), values, np.sqrt(var), samples, radiometry,

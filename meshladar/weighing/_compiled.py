@@ -4,9 +4,17 @@ GIL-free, and compiled without numba's reference-counted runtime (NRT).
 The loops allocate nothing (the caller passes their buffers: :mod:`._scratch`), so NRT
 would only count references to the arrays they are handed and the views they slice: code
 to compile and to run for nothing. Without it, a loop that allocated would fail to compile
-instead of allocating, and a loop may not return an array (none does). Measured on a
-one-view ``simulate`` of an 82k-triangle STL, its first run after an install (no cache):
-the flat loop's tree compiles in 2.19–2.22 s against 2.34–2.52 s with NRT.
+instead of allocating, and a loop may not return an array (none does). numba passes the
+option down to the compiled helpers a loop calls that do not set their own (the scalar
+``brdf._sandford_robertson_kernel.sr_bistatic``), so an allocation in one of those fails
+to compile too. Measured on a one-view ``simulate`` of an 82k-triangle STL, its first run
+after an install (no cache): the flat loop's tree compiles in 2.10–2.28 s against
+2.41–2.45 s with NRT (four paired runs).
+
+numba's cache does not key on these options: it is invalidated by a change to the file
+that defines a loop. After editing :func:`njit_loop`, clear the cache (the ``*.nbi`` and
+``*.nbc`` files of ``meshladar/weighing/__pycache__``) or loops compiled with the old
+options are loaded.
 """
 
 from __future__ import annotations

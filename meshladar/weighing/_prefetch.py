@@ -13,9 +13,10 @@ number: the same bits either way.
 from __future__ import annotations
 
 from llvmlite import ir
-from numba import njit
 from numba.core import cgutils, types
 from numba.extending import intrinsic
+
+from ._compiled import njit_loop
 
 __all__ = ["prefetch", "ahead", "AHEAD", "PREFETCH_FROM"]
 
@@ -28,7 +29,7 @@ PREFETCH_FROM = 1 << 19
 _NEVER = 1 << 62
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit_loop(inline="always")
 def ahead(face_normals):                                  # pragma: no cover - compiled
     """How many hits ahead a loop over the hits on this mesh (``face_normals``, one row a
     face) prefetches their faces' rows: :data:`AHEAD`, or from :data:`PREFETCH_FROM` faces
