@@ -99,6 +99,31 @@ def test_a_views_extent_over_clusters_is_every_points_extent(compiled_from, monk
                 seen = dot(q, a) * 2.5 / -dot(q, w)
                 assert clusters.seen_extent(a, w, 2.5, pinhole) == (seen.min(), seen.max())
                 assert points_extent(points, a, pinhole, w, 2.5) == (seen.min(), seen.max())
+        # and against plain Python floats, point by point (not numpy's expression, which
+        # points_extent's numpy branch shares), along a few of the directions
+        for u in dirs[::97]:
+            w = u / np.linalg.norm(u)
+            pinhole = centre + 3.0 * reach * w
+            a = frame(w)[0]
+            assert points_extent(points, u) == _python_extent(points, u)
+            assert points_extent(points, w, pinhole) == _python_extent(points, w, pinhole)
+            assert points_extent(points, a, pinhole, w, 2.5) == _python_extent(
+                points, a, pinhole, w, 2.5)
+
+
+def _python_extent(points, u, origin=(0.0, 0.0, 0.0), w=None, scale=1.0):
+    """(least, greatest) of q·u (or (q·u)·scale / (−q·w)), q = p − origin, one point at
+    a time in Python floats (q·u summed q₀u₀ + q₁u₁ + q₂u₂, as the engine defines it)."""
+    u0, u1, u2 = (float(x) for x in u)
+    o0, o1, o2 = (float(x) for x in origin)
+    values = []
+    for p0, p1, p2 in points.tolist():
+        q0, q1, q2 = (p0 - o0, p1 - o1, p2 - o2) if any(origin) else (p0, p1, p2)
+        x = q0 * u0 + q1 * u1 + q2 * u2
+        if w is not None:
+            x = x * scale / -(q0 * float(w[0]) + q1 * float(w[1]) + q2 * float(w[2]))
+        values.append(x)
+    return min(values), max(values)
 
 
 def test_a_geometry_takes_its_extents_over_clusters_only_for_many_views():
