@@ -5,7 +5,9 @@ each finished chunk is written atomically as ``chunk_00012.npz`` holding its arr
 its metadata, the SHA-256 of their bytes; ``manifest.json`` holds the job's full parameters
 and meshladar's version. Re-running the same job in the same folder verifies every chunk file
 (readable, checksum, shape) and reuses it; only missing or corrupt chunks are computed. A
-different job pointed at the same folder is refused (:class:`RunFolderError`), never mixed.
+different job pointed at the same folder is refused (:class:`RunFolderError`), never mixed;
+so is a folder holding a file of a run folder's names that meshladar did not write
+(:class:`ForeignFileError`): a run never overwrites a file it did not write.
 """
 
 from __future__ import annotations
@@ -18,16 +20,32 @@ import warnings
 
 import numpy as np
 
+from ._run_files import (MANIFEST_MAX_BYTES, chunk_kind, jsonable as _jsonable, lock_is_ours,
+                         manifest_kind, non_finite as _non_finite, owned as _owned, refusal)
 from ._version import __version__
-from .errors import MeshladarError, MeshladarWarning, user_stacklevel
+from .errors import MeshladarError, MeshladarWarning, ParameterError, user_stacklevel
 from .io import (ResultFileError, load_result, regular_file, save_result, temporary_writer,
                  write_text_atomic)
 
-__all__ = ["RunFolder", "RunFolderError", "job_digest", "array_digest", "chunk_digest"]
+__all__ = ["RunFolder", "RunFolderError", "ForeignFileError", "job_digest", "array_digest",
+           "chunk_digest"]
 
 
 class RunFolderError(MeshladarError, ValueError):
     """A run folder holds another job, or cannot be used.
+
+    Parameters
+    ----------
+    *args : object
+        The message (a ``str``), passed on to the builtin exception unchanged.
+    """
+
+
+class ForeignFileError(RunFolderError, ParameterError):
+    """The run folder holds a file of a run folder's names (``manifest.json``, a
+    ``chunk_*.npz``, ``.lock``) that meshladar did not write: refused before any work, since
+    a run would overwrite it. Also a :class:`~meshladar.errors.ParameterError`: ``run_dir``
+    names the wrong folder.
 
     Parameters
     ----------
@@ -100,9 +118,21 @@ class RunFolder:
     ``save(i, arrays)`` writes it atomically.
 
     Opening one takes an exclusive lock on the folder (``.lock``, on POSIX systems; released
-    by :meth:`close`, on leaving a ``with`` block, or when the process ends), removes
-    temporaries left by killed writes, and checks the manifest, writing it when there is
-    none (or a damaged one) and no chunk of another job.
+    by :meth:`close`, on leaving a ``with`` block, or when the process ends), checks the
+    folder's own files, removes temporaries left by killed writes, and writes the manifest
+    when there is none (or a damaged one) and no chunk of another job. Other files in the
+    folder are never read or touched.
+
+    A run never overwrites a file it did not write: before any work, a file under a run
+    folder's names that is readably someone else's is refused (a ``manifest.json`` that is a
+    JSON object with keys a manifest never has, a ``chunk_*.npz`` that is an ``.npz`` or zip
+    without a chunk's metadata, a ``.lock`` holding other text). A file that cannot be read
+    (a manifest that is not JSON, or JSON of another shape such as ``[]`` or ``{}``; a chunk
+    that is not a readable ``.npz``) cannot tell whose it is, so the folder decides:
+    beside the manifest or a chunk of this job it is meshladar's own, damaged, and is
+    rewritten (the manifest) or recomputed (the chunk), as a resume must; in a folder with
+    nothing of this job's it is refused. Meshladar writes these files atomically, so a
+    damaged one comes from the disk or a hand, never from a killed run.
 
     Parameters
     ----------
@@ -131,6 +161,10 @@ class RunFolder:
         manifest is missing or damaged and some readable chunk files belong to another
         job; or one of the folder's own files (``.lock``, ``manifest.json``, a chunk) is
         a link, a FIFO, a folder or a device, or cannot be opened.
+    ForeignFileError
+        (a RunFolderError and a :class:`~meshladar.errors.ParameterError`) When one of
+        those names holds a file meshladar did not write, as above; the message names the
+        file and says to choose an empty or new folder, or move the file away.
     """
 
     def __init__(self, path, job: dict, n_chunks: int):
@@ -147,63 +181,93 @@ class RunFolder:
             raise
 
     def _start(self):
-        """Clean temporaries and check (or write) the manifest, holding the lock."""
+        """Check the folder's own files, then clean temporaries and write the manifest when
+        it has none (or a damaged one), holding the lock: every refusal comes before any
+        file is touched."""
+        names = sorted(os.listdir(self.path))
+        for name in names:
+            if _owned(name):
+                _check_regular(os.path.join(self.path, name))
+        kind, old = self._manifest()
+        if kind == "ours" and old["digest"] != self.digest:
+            changed = sorted(k for k in set(old.get("job", {})) | set(self.job)
+                             if old.get("job", {}).get(k) != _jsonable(self.job.get(k)))
+            raise RunFolderError(
+                f"{self.path}: this run folder holds a different job (differs in "
+                f"{', '.join(changed[:5]) or 'its parameters'}); use another folder, or "
+                "delete this one to start over")
+        chunks = self._chunks(names)
+        if kind != "ours":
+            self._check_unproven(kind, old, chunks)
         # temporaries of writes cut short by a kill: never under a final name, removed here
         # (only while holding the lock, so never another run's in-flight files; only
         # meshladar's own names, regular files, never a user's file or a link)
-        for name in os.listdir(self.path):
+        for name in names:
             full = os.path.join(self.path, name)
-            if _owned(name):
-                _check_regular(full)
-            elif temporary_writer(name) is not None and regular_file(full):
+            if temporary_writer(name) is not None and regular_file(full):
                 try:
                     os.remove(full)
                 except OSError:
                     pass
-        manifest = os.path.join(self.path, "manifest.json")
-        old, damage = None, None
-        if os.path.lexists(manifest):
-            try:
-                with _open_plain(manifest) as fh:
-                    old = json.load(fh)
-                if not (isinstance(old, dict) and isinstance(old.get("digest"), str)
-                        and isinstance(old.get("job", {}), dict)):
-                    raise ValueError(f"a JSON {type(old).__name__} without a job digest")
-            except (OSError, ValueError, RecursionError) as exc:
-                old, damage = None, " ".join(str(exc).split())[:120]
-        if old is None:
-            # no manifest, or a damaged one: the chunks name their job themselves, so the
-            # manifest is (re)written when they are this job's, and the folder refused when not
-            foreign = self._foreign_chunks()
-            if foreign:
-                what = (f"{manifest}: unreadable manifest ({damage})" if damage else
-                        f"{self.path}: no manifest")
-                raise RunFolderError(f"{what}, and {foreign} chunk files belong to another "
-                                     "job; use another folder")
-        if old is not None:
-            if old.get("digest") != self.digest:
-                changed = sorted(k for k in set(old.get("job", {})) | set(self.job)
-                                 if old.get("job", {}).get(k) != _jsonable(self.job.get(k)))
-                raise RunFolderError(
-                    f"{self.path}: this run folder holds a different job (differs in "
-                    f"{', '.join(changed[:5]) or 'its parameters'}); use another folder, or "
-                    "delete this one to start over")
-        else:
-            write_text_atomic(manifest, json.dumps(
+        if kind != "ours":
+            write_text_atomic(os.path.join(self.path, "manifest.json"), json.dumps(
                 {"digest": self.digest, "job": _jsonable(self.job),
                  "meshladar_version": __version__}, indent=1, sort_keys=True))
 
-    def _foreign_chunks(self):
-        """How many readable chunk files in the folder were written for another job."""
-        count = 0
-        for name in os.listdir(self.path):
+    def _manifest(self):
+        """The manifest's verdict (:func:`~meshladar._run_files.manifest_kind`), ``("absent",
+        None)`` when there is none; someone else's manifest is refused here."""
+        manifest = os.path.join(self.path, "manifest.json")
+        if not os.path.lexists(manifest):
+            return "absent", None
+        with _open_plain(manifest, binary=True) as fh:
+            try:
+                raw = fh.read(MANIFEST_MAX_BYTES + 1)
+            except OSError as exc:
+                raw = None
+                kind, old = "damaged", f"cannot be read ({exc.strerror})"
+        if raw is not None:
+            kind, old = manifest_kind(raw)
+        if kind == "foreign":
+            raise ForeignFileError(refusal(self.path, "manifest.json",
+                                           f"not a meshladar run manifest ({old})"))
+        return kind, old
+
+    def _chunks(self, names):
+        """Each chunk file's verdict by name (:func:`~meshladar._run_files.chunk_kind`);
+        someone else's file under a chunk's name is refused here."""
+        verdicts = {}
+        for name in names:
             if name.startswith("chunk_") and name.endswith(".npz"):
-                try:
-                    _, meta = load_result(os.path.join(self.path, name))
-                except ResultFileError:
-                    continue                    # unreadable: recomputed, not evidence
-                count += meta.get("job") != self.digest
-        return count
+                with _open_plain(os.path.join(self.path, name), binary=True) as fh:
+                    kind, detail = verdicts[name] = chunk_kind(fh)
+                if kind == "foreign":
+                    raise ForeignFileError(refusal(self.path, name,
+                                                   f"not a meshladar chunk ({detail})"))
+        return verdicts
+
+    def _check_unproven(self, kind, damage, chunks):
+        """With no manifest of this job, the chunks must prove the folder this job's: one
+        chunk of another job refuses it (never mixed), and a file that cannot be read (the
+        manifest, a chunk) is taken for meshladar's own, damaged, only beside a chunk of this
+        job; with none, whose it is cannot be told, and it is refused, never overwritten."""
+        manifest = os.path.join(self.path, "manifest.json")
+        foreign = sum(k == "chunk" and d != self.digest for k, d in chunks.values())
+        if foreign:
+            what = (f"{manifest}: unreadable manifest ({damage})" if kind == "damaged" else
+                    f"{self.path}: no manifest")
+            raise RunFolderError(f"{what}, and {foreign} chunk files belong to another "
+                                 "job; use another folder")
+        if any(k == "chunk" for k, _ in chunks.values()):
+            return
+        unknown = [(n, f"not a meshladar chunk ({d})") for n, (k, d) in chunks.items()
+                   if k == "damaged"]
+        if kind == "damaged":
+            unknown.insert(0, ("manifest.json", f"not a meshladar run manifest ({damage})"))
+        if unknown:
+            name, what = unknown[0]
+            raise ForeignFileError(refusal(self.path, name, f"{what}, and no chunk of this job "
+                                           "beside it shows the folder is this run's"))
 
     def close(self):
         """Release the folder for other runs (also when this object is collected)."""
@@ -329,16 +393,15 @@ def _lock(path):
         raise RunFolderError(f"{path}: run folder in use by another run ({holder}); wait for "
                              "it to finish, or use another folder") from None
     fh.seek(0)
+    if not lock_is_ours(fh):
+        fh.close()
+        raise ForeignFileError(refusal(path, ".lock", "a lock file of another program (not "
+                                       "empty, nor a process id)"))
+    fh.seek(0)
     fh.truncate()
     fh.write(f"pid {os.getpid()}")
     fh.flush()
     return fh
-
-
-#: The names a run folder's own files have: the lock, the manifest and the chunks.
-def _owned(name):
-    return name in (".lock", "manifest.json") or (name.startswith("chunk_")
-                                                   and name.endswith(".npz"))
 
 
 def _check_regular(path):
@@ -356,9 +419,10 @@ def _check_regular(path):
                              "remove it, or use another folder")
 
 
-def _open_plain(path, create=False):
-    """Open a run-folder file for reading (and, with ``create``, writing) without following
-    a link, without blocking on a FIFO, and only if it is a regular file."""
+def _open_plain(path, create=False, binary=False):
+    """Open a run-folder file for reading (and, with ``create``, writing; text, or bytes with
+    ``binary``) without following a link, without blocking on a FIFO, and only if it is a
+    regular file."""
     _check_regular(path)
     flags = os.O_NOFOLLOW | os.O_NONBLOCK | (os.O_RDWR | os.O_CREAT if create else os.O_RDONLY)
     try:
@@ -371,17 +435,6 @@ def _open_plain(path, create=False):
         _check_regular(path)
         raise RunFolderError(f"{path}: not a regular file; remove it, or use another folder")
     os.set_blocking(fd, True)
+    if binary:
+        return os.fdopen(fd, "r+b" if create else "rb")
     return os.fdopen(fd, "r+" if create else "r", encoding="utf-8")
-
-
-def _non_finite(arrays):
-    """The name of the first floating or complex array holding NaN or inf, else None."""
-    for k in sorted(arrays):
-        a = arrays[k]
-        if a.dtype.kind in "fc" and not np.all(np.isfinite(a)):
-            return k
-    return None
-
-
-def _jsonable(x):
-    return json.loads(json.dumps(x, sort_keys=True, default=str))

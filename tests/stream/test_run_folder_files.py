@@ -1,17 +1,21 @@
 """A run folder opens only its own regular files: a link is never followed, a FIFO never
-waited on, a user's file never removed, a chunk of NaN named and recomputed (issue 29)."""
+waited on, a user's file never removed, a chunk of NaN named and recomputed (issue 29); a
+user's own file under a run folder's name (``manifest.json``, ``chunk_*.npz``, ``.lock``)
+refused before any work and never overwritten, meshladar's own damaged files rewritten."""
 
 from __future__ import annotations
 
+import json
 import os
 import threading
 
 import numpy as np
 import pytest
 
-from meshladar.errors import MeshladarWarning
+from meshladar.errors import MeshladarWarning, ParameterError
 from meshladar.io import save_result
-from meshladar.runs import RunFolder, RunFolderError, chunk_digest
+from meshladar.runs import ForeignFileError, RunFolder, RunFolderError, chunk_digest
+from meshladar.stream import joined, run_chunks
 
 JOB = {"kind": "test"}
 
@@ -95,3 +99,116 @@ def test_a_chunk_of_nan_is_named_and_recomputed(tmp_path):
             assert folder.load(0) is None
         folder.save(0, {"values": np.array([2.0, 1.0])})
         np.testing.assert_array_equal(folder.load(0)["values"], [2.0, 1.0])
+
+
+# ------------------------------------- someone else's file under a run folder's name (defect)
+
+def _user_npz(path):
+    np.savez(path, mine=np.arange(4.0))
+
+
+def _user_result(path):
+    save_result(path, {"values": np.ones(3)}, {"note": "a result of the user's"})
+
+
+#: Files a user made under a run folder's names; each must stop a run before any work.
+USERS_FILES = {
+    "a JSON object of another program": ("manifest.json", b'{"mine": 1}\n'),
+    "a text manifest": ("manifest.json", b"my notes, not JSON\n"),
+    "an empty JSON object": ("manifest.json", b"{}"),
+    "a user's npz": ("chunk_00000.npz", _user_npz),
+    "a user's text": ("chunk_00000.npz", b"plain text of mine\n"),
+    "a meshladar result that is no chunk": ("chunk_00001.npz", _user_result),
+    "another program's lock": (".lock", b"locked by my editor\n"),
+}
+
+
+def _counting():
+    """A per-chunk job that records each call, and the list of calls."""
+    calls = []
+
+    def fn(payload, items):
+        calls.append(items.tolist())
+        return {"values": items.astype(float)[:, None] * payload}
+
+    return fn, calls
+
+
+def _run(folder, fn, job=None):
+    return run_chunks(fn, 2.0, 6, chunk_size=3, run_dir=folder, job=job or {"kind": "count"},
+                      arrays={"values": (1,)})
+
+
+def _put(path, content):
+    if callable(content):
+        content(path)
+    else:
+        path.write_bytes(content)
+    return path.read_bytes()
+
+
+@pytest.mark.parametrize("case", sorted(USERS_FILES))
+def test_a_users_file_under_a_run_folders_name_is_refused_before_any_work(tmp_path, case):
+    name, content = USERS_FILES[case]
+    mine = tmp_path / name
+    before = _put(mine, content)
+    (tmp_path / "notes.txt").write_text("notes")
+    fn, calls = _counting()
+    with pytest.raises(ParameterError) as exc:
+        _run(tmp_path, fn)
+    assert isinstance(exc.value, RunFolderError)
+    msg = str(exc.value)
+    assert str(mine) in msg and "\n" not in msg
+    assert "choose an empty or new folder" in msg and f"move {name} out of {tmp_path}" in msg
+    assert mine.read_bytes() == before and calls == []
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted({name, "notes.txt", ".lock"})
+    assert (tmp_path / "notes.txt").read_text() == "notes"
+
+
+@pytest.mark.parametrize("name, content", [("manifest.json", b'{"mine": 1}'),
+                                           ("chunk_00001.npz", _user_npz)])
+def test_someone_elses_file_is_refused_even_beside_this_jobs_chunks(tmp_path, name, content):
+    fn, calls = _counting()
+    _run(tmp_path, fn)
+    (tmp_path / "chunk_00001.npz").unlink()
+    ours = (tmp_path / "chunk_00000.npz").read_bytes()
+    before = _put(tmp_path / name, content)
+    calls.clear()
+    with pytest.raises(ForeignFileError, match=name.replace(".", r"\.") + ": not a meshladar"):
+        _run(tmp_path, fn)
+    assert (tmp_path / name).read_bytes() == before and calls == []
+    assert (tmp_path / "chunk_00000.npz").read_bytes() == ours
+
+
+def test_meshladars_own_damaged_files_are_rewritten_and_other_files_left_alone(tmp_path):
+    fn, calls = _counting()
+    (tmp_path / "notes.txt").write_text("notes")
+    first = joined(_run(tmp_path, fn), "values")
+    assert len(calls) == 2
+    # a truncated manifest (not JSON) beside this job's chunks: meshladar's own, damaged:
+    # rewritten, the chunks reused
+    manifest = tmp_path / "manifest.json"
+    manifest.write_bytes(manifest.read_bytes()[:40])
+    calls.clear()
+    np.testing.assert_array_equal(joined(_run(tmp_path, fn), "values"), first)
+    assert calls == [] and json.loads(manifest.read_text())["digest"]
+    # a chunk that no longer reads, in this job's folder: recomputed, alone
+    (tmp_path / "chunk_00001.npz").write_bytes(b"garbage")
+    np.testing.assert_array_equal(joined(_run(tmp_path, fn), "values"), first)
+    assert calls == [[3, 4, 5]]
+    assert (tmp_path / "notes.txt").read_text() == "notes"
+
+
+def test_an_unreadable_manifest_alone_is_refused_not_guessed(tmp_path):
+    # the same truncated manifest with no chunk of this job beside it: whose it is cannot be
+    # told, so it is kept and the folder refused
+    fn, calls = _counting()
+    _run(tmp_path, fn)
+    for chunk in tmp_path.glob("chunk_*.npz"):
+        chunk.unlink()
+    manifest = tmp_path / "manifest.json"
+    manifest.write_bytes(manifest.read_bytes()[:40])
+    before, calls[:] = manifest.read_bytes(), []
+    with pytest.raises(ForeignFileError, match="no chunk of this job beside it"):
+        _run(tmp_path, fn)
+    assert manifest.read_bytes() == before and calls == []

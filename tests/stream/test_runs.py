@@ -165,3 +165,27 @@ def test_a_lone_disk_resumes_its_distinct_profiles(tmp_path):
     np.testing.assert_array_equal(sino.values, ml.simulate(disk, ladar).values)
     np.testing.assert_array_equal(ml.simulate(disk, ladar, run_dir=tmp_path).values,
                                   sino.values)
+
+
+@pytest.mark.parametrize("name, content", [("manifest.json", b'{"mine": 1}\n'),
+                                           ("chunk_00000.npz", b"my own notes\n")])
+def test_run_dir_never_overwrites_a_users_file(tmp_path, capsys, name, content):
+    # a folder of the user's holding a file under a run folder's name: simulate and the
+    # command line refuse it before any chunk, and the file is left byte for byte
+    from meshladar.cli import main
+    from meshladar.errors import ParameterError
+
+    mine = tmp_path / "project" / name
+    mine.parent.mkdir()
+    mine.write_bytes(content)
+    ladar = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 30.0))
+    with pytest.raises(ParameterError, match=r"project/" + name.replace(".", r"\.") +
+                       r": not a meshladar .*choose an empty or new folder"):
+        ml.simulate(PAIR, ladar, model="analytic", run_dir=mine.parent)
+    out = tmp_path / "s.npz"
+    assert main(["simulate", "disk_pair", "--model", "analytic", "--views", "12", "--run-dir",
+                 str(mine.parent), "-o", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and str(mine) in err and "Traceback" not in err
+    assert mine.read_bytes() == content and not out.exists()
+    assert sorted(p.name for p in mine.parent.iterdir()) == sorted({name, ".lock"})
