@@ -297,7 +297,14 @@ _SCAN_EPILOG = """examples:
   meshladar scan part.glb --pattern "flash rows=64 columns=64 ifov_deg=0.05" \\
       --platform "static position=-100,0,0" --divergence 0 -o frame.h5 --waveforms w.h5
   meshladar scan terrain.ply --pattern "oscillating half_angle_deg=20 scan_hz=50 \\
-      pulse_rate=1e5 duration=1" --platform flight.csv -o strip.laz"""
+      pulse_rate=1e5 duration=1" --platform flight.csv -o strip.laz
+  meshladar scan terrain.ply --pattern "oscillating half_angle_deg=20 scan_hz=50 \\
+      pulse_rate=1e5 duration=1" --platform "gps_week.csv time_offset=345000 \\
+      boresight_deg=0,0,0.5" -o strip.laz
+  meshladar scan terrain.ply --pattern "oscillating half_angle_deg=20 scan_hz=50 \\
+      pulse_rate=1e4 duration=0.1" --platform "waypoints times=0,0.05,0.1 \\
+      positions=0,0,300,3,0,300,6,0,300 attitudes_deg=0,90,0,0,90,0,0,90,0 \\
+      interpolation=spline mount_offset=0,0,-0.5" -o strip.las"""
 
 #: scan's sensor flags: (flag, type, default, metavar, help).
 _SCAN_FLAGS = (
@@ -326,8 +333,12 @@ def _scan(sub, commands):
                     help="raster, rotating, oscillating, risley or flash, with its "
                          "constructor's arguments")
     sc.add_argument("--platform", required=True, metavar="'KIND key=value ...'|FILE.csv",
-                    help="static, moving or waypoints with their arguments, or a "
-                         "trajectory file (time,x,y,z,roll,pitch,yaw)")
+                    help="static, moving or waypoints with their arguments (each key "
+                         "once; any platform's mount_offset and boresight_deg; a waypoints' "
+                         "positions and attitudes_deg flat, three values a waypoint), or "
+                         "a trajectory file (time,x,y,z,roll,pitch,yaw), optionally "
+                         "followed by interpolation=, time_offset= (the file's time at "
+                         "the pattern's t = 0), mount_offset=, boresight_deg=")
     sc.add_argument("-o", "--output", required=True, help="points file (.las, .laz, .h5)")
     sc.add_argument("--waveforms", default=None, metavar="FILE.h5",
                     help="also write every pulse's waveform to HDF5 (default: not written)")

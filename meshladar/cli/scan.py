@@ -1,15 +1,22 @@
 """``meshladar scan``: a scanner's point cloud of a scene, to LAS/LAZ or HDF5.
 
-``--pattern`` and ``--platform`` take a kind and ``key=value`` words, one string: the
-keys are the Python constructor's keyword arguments (:mod:`meshladar.scan.patterns`,
-:class:`meshladar.scan.Platform`), a value is a number, a comma list (``0,0,1.5``) or an
-evenly spaced range ``start:stop:count`` (``-15:15:32``). A ``--platform`` ending in
-``.csv`` is a trajectory file.
+``--pattern`` and ``--platform`` take a kind and ``key=value`` words, one string (a key
+at most once): the keys are the Python constructor's keyword arguments
+(:mod:`meshladar.scan.patterns`, :class:`meshladar.scan.Platform`, every platform's
+``mount_offset`` and ``boresight_deg`` too), a value is a number, a comma list
+(``0,0,1.5``), an evenly spaced range ``start:stop:count`` (``-15:15:32``), a word where
+the keyword takes one (``interpolation=spline``) or ``true``/``false``. A waypoints
+platform's ``positions`` and ``attitudes_deg`` are flat lists, three values a waypoint
+(``positions=0,0,300,3,0,300``). A ``--platform`` ending in ``.csv`` is a trajectory
+file; ``FILE.csv key=value ...`` gives it ``interpolation``, ``time_offset`` (the file's
+time at the pattern's t = 0, s), ``mount_offset`` or ``boresight_deg``.
 """
 
 from __future__ import annotations
 
+import functools
 import inspect
+import os
 
 import numpy as np
 
@@ -25,11 +32,28 @@ __all__ = ["cmd_scan", "parse_spec", "PLATFORM_KINDS"]
 
 #: ``--platform`` kinds: each names its :class:`meshladar.scan.Platform` constructor.
 PLATFORM_KINDS = ("static", "moving", "waypoints")
+#: The keys every ``--platform`` takes besides its constructor's own (its ``**mount``).
+MOUNT_KEYS = ("mount_offset", "boresight_deg")
+#: A waypoints platform's keys given as flat lists, three values a waypoint.
+ROW_KEYS = ("positions", "attitudes_deg")
 #: The point files ``-o`` writes, by extension.
 POINT_SUFFIXES = (".las", ".laz", ".h5", ".hdf5")
+#: The sensor's API arguments and the flags that set them (named in the messages).
+SENSOR_FLAGS = {"max_returns": "--max-returns", "shots": "--geiger-shots",
+                "divergence": "--divergence", "sub_rays": "--sub-rays", "tol": "--tol",
+                "pulse_energy": "--pulse-energy", "aperture_diameter": "--aperture",
+                "sample_rate": "--sample-rate", "fwhm": "--pulse-fwhm",
+                "background_rate": "--background-rate", "dark_rate": "--dark-rate"}
+_TRUE, _FALSE = ("true", "yes", "on", "1"), ("false", "no", "off", "0")
 
 
-def _value(flag, key, text):
+def _value(flag, key, text, default=None):
+    if isinstance(default, bool):
+        if text.lower() in _TRUE + _FALSE:
+            return text.lower() in _TRUE
+        raise ParameterError(f"{flag}: {key}={text!r} must be true or false")
+    if isinstance(default, str):
+        return text
     try:
         if text.count(":") == 2:
             lo, hi, n = text.split(":")
@@ -44,7 +68,7 @@ def _value(flag, key, text):
                              "start:stop:count") from None
 
 
-def parse_spec(flag, text, kinds):
+def parse_spec(flag, text, kinds, extra=()):
     """``(constructor, keyword arguments)`` from a ``KIND key=value ...`` string, checked
     against the kind's constructor's parameters (named in the messages).
 
@@ -56,32 +80,40 @@ def parse_spec(flag, text, kinds):
         The option's value.
     kinds : dict of str to callable
         The constructors by kind.
+    extra : sequence of str
+        Numeric keys every kind takes besides its parameters (those its ``**kwargs``
+        pass on).
 
     Returns
     -------
     tuple
-        ``(constructor, {key: number, list or numpy.ndarray})``.
+        ``(constructor, {key: number, list, numpy.ndarray, str or bool})``: a value is
+        a word for a parameter whose default is a string, true or false for a boolean's.
 
     Raises
     ------
     ParameterError
         When the kind is unknown, a word is not ``key=value`` of one of the constructor's
-        parameters, or a value is not a number, a comma list or ``start:stop:count``.
+        parameters, a key is given twice, or a value is not a number, a comma list or
+        ``start:stop:count`` (or true/false for a boolean).
     """
     words = text.split() if isinstance(text, str) else []
     if not words or words[0] not in kinds:
         raise ParameterError(f"{flag}: the kind must be one of {sorted(kinds)}; got "
                              f"{text!r}")
     make = kinds[words[0]]
-    params = [n for n, p in inspect.signature(make).parameters.items()
-              if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
+    defaults = {n: p.default for n, p in inspect.signature(make).parameters.items()
+                if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)}
+    defaults.update({n: None for n in extra})
     kwargs = {}
     for word in words[1:]:
         key, eq, val = word.partition("=")
-        if not eq or key not in params:
-            raise ParameterError(f"{flag}: {words[0]} takes {', '.join(params)} as key=value; "
-                                 f"got {word!r}")
-        kwargs[key] = _value(flag, key, val)
+        if not eq or key not in defaults:
+            raise ParameterError(f"{flag}: {words[0]} takes {', '.join(defaults)} as "
+                                 f"key=value; got {word!r}")
+        if key in kwargs:
+            raise ParameterError(f"{flag}: {key} is given twice; give each key once")
+        kwargs[key] = _value(flag, key, val, defaults[key])
     for key in ("rows", "columns", "frames"):
         if isinstance(kwargs.get(key), float) and kwargs[key].is_integer():
             kwargs[key] = int(kwargs[key])
@@ -97,27 +129,91 @@ def _build(make, kwargs, flag):
         raise ParameterError(f"{flag}: {exc}") from None
 
 
-def _platform(args):
-    if args.platform.lower().endswith(".csv"):
-        return _build(scanning.Platform.from_csv, {"path": args.platform}, "--platform")
-    kinds = {kind: getattr(scanning.Platform, kind) for kind in PLATFORM_KINDS}
-    make, kwargs = parse_spec("--platform", args.platform, kinds)
+def _rows(key, value):
+    """A flat list of a waypoints key as (n, 3) rows."""
+    a = np.atleast_1d(np.asarray(value, np.float64)).ravel()
+    if a.size % 3:
+        raise ParameterError(f"--platform: {key} takes three values a waypoint, in turn "
+                             f"(x,y,z,x,y,z...), a multiple of 3; got {a.size}")
+    return a.reshape(-1, 3)
+
+
+def _platform(text):
+    """The ``--platform`` of the module docstring: a platform kind's spec, a trajectory
+    file, or a trajectory file and its keys."""
+    first = text.split()[0] if text.split() else ""
+    if text.lower().endswith(".csv") and (os.path.exists(text) or "=" not in text):
+        return _build(scanning.Platform.from_csv, {"path": text}, "--platform")
+    if first.lower().endswith(".csv"):
+        kinds = {first: functools.partial(scanning.Platform.from_csv, first)}
+    else:
+        kinds = {kind: getattr(scanning.Platform, kind) for kind in PLATFORM_KINDS}
+    make, kwargs = parse_spec("--platform", text, kinds, MOUNT_KEYS)
+    for key in ROW_KEYS:
+        if key in kwargs and make == scanning.Platform.waypoints:
+            kwargs[key] = _rows(key, kwargs[key])
     return _build(make, kwargs, "--platform")
 
 
+def _flagged(exc):
+    """``exc`` with the sensor's argument it names as its flag (:data:`SENSOR_FLAGS`)."""
+    msg = str(exc)
+    for name, flag in SENSOR_FLAGS.items():
+        rest = msg[len(name):]
+        if msg.startswith(name) and not rest[:1].isidentifier():
+            return ParameterError(flag + (" " + rest[1:] if rest[:1] == "=" else rest))
+    return exc
+
+
+def _check_discrete(args):
+    """``--discrete`` makes no records: the flags that need them are refused."""
+    given = [f for f, v in (("--geiger-shots", args.geiger_shots), ("--noise", args.noise),
+                            ("--background-rate", args.background_rate),
+                            ("--dark-rate", args.dark_rate), ("--cfar", args.cfar),
+                            ("--waveforms", args.waveforms)) if v]
+    if args.discrete and given:
+        raise ParameterError(f"--discrete makes no waveform records: {given[0]} does not "
+                             "apply (leave out --discrete for waveforms)")
+
+
 def _sensor(args):
-    noise = None
-    if args.background_rate or args.dark_rate or args.noise:
-        noise = Noise(background_rate=args.background_rate, dark_rate=args.dark_rate)
-    geiger = scanning.GeigerMode(shots=args.geiger_shots) if args.geiger_shots else None
-    beam = scanning.ScanBeam(args.divergence, profile=args.profile, tol=args.tol,
-                             sub_rays=args.sub_rays)
-    detector = scanning.Detector(max_returns=args.max_returns, cfar=args.cfar)
-    return scanning.ScanSensor(pulse_energy=args.pulse_energy, aperture_diameter=args.aperture,
-                               sample_rate=args.sample_rate,
-                               pulse=GaussianPulse(args.pulse_fwhm), beam=beam, noise=noise,
-                               geiger=geiger, detector=detector,
-                               echoes="discrete" if args.discrete else "waveform")
+    _check_discrete(args)
+    try:
+        noise = None
+        if args.background_rate or args.dark_rate or args.noise:
+            noise = Noise(background_rate=args.background_rate, dark_rate=args.dark_rate)
+        geiger = scanning.GeigerMode(shots=args.geiger_shots) if args.geiger_shots else None
+        beam = scanning.ScanBeam(args.divergence, profile=args.profile, tol=args.tol,
+                                 sub_rays=args.sub_rays)
+        beam.offsets()                  # refuses a --tol that needs too many sub-rays
+        detector = scanning.Detector(max_returns=args.max_returns, cfar=args.cfar)
+        return scanning.ScanSensor(
+            pulse_energy=args.pulse_energy, aperture_diameter=args.aperture,
+            sample_rate=args.sample_rate, pulse=GaussianPulse(args.pulse_fwhm), beam=beam,
+            noise=noise, geiger=geiger, detector=detector,
+            echoes="discrete" if args.discrete else "waveform")
+    except ParameterError as exc:
+        raise _flagged(exc) from None
+
+
+def _check_outputs(args):
+    """-o and --waveforms: writable files of known formats, never an input, never one
+    file (compared as real paths: links resolved)."""
+    words = args.platform.split()
+    trajectory = [p for p in (args.platform, words[0] if words else None)
+                  if p and p.lower().endswith(".csv")]
+    inputs = [args.scene, args.materials] + trajectory
+    check_output(args.output, POINT_SUFFIXES, inputs)
+    check_writable(args.output, "-o")
+    if args.waveforms is not None:
+        real = os.path.realpath
+        if real(args.waveforms) == real(args.output) or (
+                os.path.exists(args.waveforms) and os.path.exists(args.output)
+                and os.path.samefile(args.waveforms, args.output)):
+            raise ParameterError(f"--waveforms {args.waveforms!r} and -o {args.output!r} are "
+                                 "the same file: give each its own")
+        check_output(args.waveforms, (".h5", ".hdf5"), inputs, "--waveforms")
+        check_writable(args.waveforms, "--waveforms")
 
 
 def cmd_scan(args) -> int:
@@ -137,15 +233,14 @@ def cmd_scan(args) -> int:
     int
         0, the exit status.
     """
-    inputs = [args.scene, args.materials, args.platform]
-    check_output(args.output, POINT_SUFFIXES, inputs)
-    check_writable(args.output, "-o")
-    if args.waveforms is not None:
-        check_output(args.waveforms, (".h5", ".hdf5"), inputs + [args.output], "--waveforms")
-        check_writable(args.waveforms, "--waveforms")
+    _check_outputs(args)
     make, kwargs = parse_spec("--pattern", args.pattern, scanning.PATTERNS)
     pattern = _build(make, kwargs, "--pattern")
-    platform = _platform(args)
+    platform = _platform(args.platform)
+    try:
+        platform.check_covers(pattern.times)
+    except ParameterError as exc:
+        raise ParameterError(f"--platform: {str(exc).removeprefix('platform: ')}") from None
     sensor = _sensor(args)
     scene, _, _ = load_scene(args)
     if not scene.is_mesh:

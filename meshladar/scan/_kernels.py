@@ -9,8 +9,14 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["world_sub_rays", "pulse_sub_rays", "pack_rays", "refine_hits", "refine_hit",
-           "assign_truth", "erf", "sort_small", "discrete_returns"]
+__all__ = ["MIN_RANGE", "world_sub_rays", "pulse_sub_rays", "pack_rays", "refine_hits",
+           "refine_hit", "assign_truth", "erf", "sort_small", "discrete_returns"]
+
+#: The nearest hit a sub-ray can range, m: a hit at this distance from its origin or
+#: nearer (zero or, by rounding, negative: a sensor on a surface) is a miss, and the
+#: sub-ray ends there. Far below any ladar's range; far above float64's rounding of a hit
+#: at the origin (~1e-16 of the scene's size) in any scene under 10⁹ m.
+MIN_RANGE = 1e-6
 
 #: :func:`erf`'s table: nodes every 1/64 on [−6, 6] (beyond, erf is ±1 in float64:
 #: erfc(5.93) < 2⁻⁵⁴), the erf and 2/√π exp(−x²) at each.
@@ -164,7 +170,8 @@ def refine_hit(f, tf, o0, o1, o2, d0, d1, d2, normals, plane_d, min_cos, center,
                cos, points, p, k):                        # pragma: no cover - compiled
     """:func:`refine_hits` of one sub-ray (p, k) from origin o along d (scalars: no array
     views in the hot loop): face f (−1: a miss), Embree's distance tf (kept where
-    |n·d| ≤ ``min_cos``)."""
+    |n·d| ≤ ``min_cos``). A hit at :data:`MIN_RANGE` or nearer (a surface through the
+    sensor's origin) cannot be ranged: it is a miss, and the sub-ray ends there."""
     face[p, k] = f
     if f < 0:
         dist[p, k] = np.inf
@@ -177,11 +184,17 @@ def refine_hit(f, tf, o0, o1, o2, d0, d1, d2, normals, plane_d, min_cos, center,
         t = num / den
     else:
         t = tf
-    dist[p, k] = t
-    cos[p, k] = abs(den)
-    points[p, k, 0] = (o0 + t * d0) + center[0]
-    points[p, k, 1] = (o1 + t * d1) + center[1]
-    points[p, k, 2] = (o2 + t * d2) + center[2]
+    if t > MIN_RANGE:
+        dist[p, k] = t
+        cos[p, k] = abs(den)
+        points[p, k, 0] = (o0 + t * d0) + center[0]
+        points[p, k, 1] = (o1 + t * d1) + center[1]
+        points[p, k, 2] = (o2 + t * d2) + center[2]
+    else:                                # a surface through the origin: not ranged
+        face[p, k] = -1
+        dist[p, k] = np.inf
+        cos[p, k] = 0.0
+        points[p, k, 0] = points[p, k, 1] = points[p, k, 2] = np.nan
 
 
 @numba.njit(cache=True, nogil=True)

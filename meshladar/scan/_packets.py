@@ -80,7 +80,8 @@ def cast_pulses(fn, handle, w, flags, origins, rot, local, offsets, pitch, inver
             refine_hit(f, tf, origins[q, 0], origins[q, 1], origins[q, 2], lane_d[j, 0],
                        lane_d[j, 1], lane_d[j, 2], normals, plane_d, min_cos, center, face,
                        dist, cos, points, q, lane_k[j])
-            if pe.shape[0]:
+            if pe.shape[0]:                 # (a hit at the origin is a miss by now)
+                f = face[q, lane_k[j]]
                 pe[q, lane_k[j]] = 0.0 if f < 0 else _photoelectrons(
                     min(cos[q, lane_k[j]], 1.0), dist[q, lane_k[j]], params, material[f],
                     shares[lane_k[j]], budget, extinction)

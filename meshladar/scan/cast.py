@@ -88,6 +88,10 @@ class Cast:
         Hit points, world frame, nan on a miss.
     pe : (n, m) numpy.ndarray or None
         Each sub-ray's photoelectrons where the cast weighed them (:func:`cast_static`).
+    blocked : (n, m) bool numpy.ndarray or None
+        Where :func:`cast_chunk` found a first hit too near to range
+        (:data:`._kernels.MIN_RANGE`: a surface through the origin), a miss that no other
+        part's hit may fill (:func:`.moving.cast_moving`).
     """
 
     def __init__(self, face, distance, cos, points):
@@ -96,6 +100,7 @@ class Cast:
         self.cos = cos              # |n·d| at the hit, 0 on a miss
         self.points = points        # (n, m, 3) hit points, nan on a miss
         self.pe = None              # photoelectrons, where the cast weighed its hits
+        self.blocked = None         # first hits too near to range (cast_chunk's)
 
     @property
     def hit(self):
@@ -136,7 +141,9 @@ def cast_chunk(scene, origins, directions, backend=None):
     refine_hits(res["primID"], res["tfar"], shifted, directions, geo.face_normals,
                 geo.plane_d, _MIN_COS, np.asarray(geo.center, np.float64), face, dist, cos,
                 pts)
-    return Cast(face, dist, cos, pts)
+    cast = Cast(face, dist, cos, pts)
+    cast.blocked = (face < 0) & (np.asarray(res["primID"]).reshape(n, m) >= 0)
+    return cast
 
 
 def cast_static(scene, origins, rot, directions, offsets, pixel_pitch, backend,

@@ -1,10 +1,12 @@
 """Point-cloud files: LAS 1.4 (through laspy; LAZ when its lazrs backend is installed) and
 HDF5 (through h5py), both written atomically and read without pickle.
 
-LAS: point format 6 with every field of :data:`~meshladar.scan.points.POINT_FIELDS` that
-LAS lacks as a named extra-bytes dimension (its unit in the description): x, y, z are
-stored as integers at ``scale`` (default 0.1 mm) from an offset at the cloud's minimum, so
-they read back within ``scale``/2; LAS's own intensity is the photoelectrons rounded and
+LAS: point format 6 (its global encoding's WKT bit set, as LAS 1.4 requires of formats
+6-10) with every field of :data:`~meshladar.scan.points.POINT_FIELDS` that LAS lacks as a
+named extra-bytes dimension (its unit in the description): x, y, z are stored as 32-bit
+integers at ``scale`` (default 0.1 mm, coarser where the cloud spans more than 2³¹ − 1
+steps: :func:`write_las`) from an offset at the cloud's minimum, so they read back within
+``scale``/2; LAS's own intensity is the photoelectrons rounded and
 clipped to 16 bits (the exact value is the ``photoelectrons`` extra bytes), its scan angle
 the pattern's in LAS's 0.006° steps, its GPS time the emission time (s). Every extra-bytes
 field reads back exactly (:data:`EXTRA_NAMES`: the exact intensity and scan angle).
@@ -13,14 +15,16 @@ HDF5: ``/points`` is one compound dataset of the records (each field's unit in t
 attribute ``units``, a JSON object); when the cloud holds waveforms, the group
 ``/waveforms`` holds one dataset per block of consecutive pulses, ``block_<first pulse, 12
 digits>`` (pulses × samples, its ``first_pulse`` as an attribute) and their starts
-``starts_<first pulse>`` (s), … (s); the root's ``info`` attribute holds the scan's parameters as JSON. Everything reads
-back exactly.
+``starts_<first pulse>`` (s); the root's ``info`` attribute holds the scan's parameters as
+strict JSON (a non-finite number, such as a Geiger-mode dead time of inf, as the string
+``"inf"``, ``"-inf"`` or ``"nan"``, read back as the float). Everything reads back exactly.
 """
 
 from __future__ import annotations
 
 import importlib.util
 import json
+import math
 import os
 import threading
 
@@ -32,11 +36,15 @@ from ..errors import ParameterError
 from .points import POINT_DTYPE, POINT_FIELDS, PointCloud
 
 __all__ = ["write_las", "read_las", "write_hdf5", "read_hdf5", "LAS_NATIVE", "EXTRA_NAMES",
-           "WaveformSink", "check_writable"]
+           "WaveformSink", "check_writable", "NON_FINITE"]
 
 #: The record fields LAS 1.4 stores in its own dimensions (all others are extra bytes).
 LAS_NATIVE = ("x", "y", "z", "return_number", "number_of_returns")
 _SCAN_ANGLE_STEP = 0.006
+#: The largest coordinate LAS stores, in steps of its scale (a signed 32-bit integer).
+_LAS_STEPS = 2 ** 31 - 1
+#: The strings that stand for the non-finite floats in the HDF5 file's strict JSON.
+NON_FINITE = {"inf": math.inf, "-inf": -math.inf, "nan": math.nan}
 #: Extra-bytes names of the fields whose own names LAS's format 6 takes: the exact
 #: photoelectrons (LAS's intensity is 16 bits) and the exact scan angle (LAS's is in steps).
 EXTRA_NAMES = {"intensity": "photoelectrons", "scan_angle": "scan_angle_deg"}
@@ -55,8 +63,9 @@ def _need(module):
 
 
 def check_writable(path, flag="path"):
-    """Refuse, before any work, a points file whose writer is not installed: laspy for
-    ``.las``, laspy and lazrs (or laszip) for ``.laz``, h5py for ``.h5``/``.hdf5``.
+    """Refuse, before any work, a points file that cannot be written: a folder, a file in
+    a folder that does not exist, or one whose writer is not installed (laspy for
+    ``.las``, laspy and lazrs (or laszip) for ``.laz``, h5py for ``.h5``/``.hdf5``).
 
     Parameters
     ----------
@@ -65,19 +74,37 @@ def check_writable(path, flag="path"):
     flag : str
         The option or argument named in the message.
 
+    Returns
+    -------
+    str
+        The path, as a string.
+
     Raises
     ------
     ParameterError
-        Naming the missing package and the extra that installs it.
+        Naming the folder, or the missing package and the extra that installs it.
     """
-    name = os.fspath(path).lower()
+    path = _target(path, flag)
+    name = path.lower()
     need = (["h5py"] if name.endswith((".h5", ".hdf5"))
             else ["laspy"] + ([("lazrs", "laszip")] if name.endswith(".laz") else []))
     for module in need:
         options = module if isinstance(module, tuple) else (module,)
         if not any(importlib.util.find_spec(m) is not None for m in options):
-            raise ParameterError(f"{flag}: writing {os.fspath(path)!r} needs {options[0]}, "
+            raise ParameterError(f"{flag}: writing {path!r} needs {options[0]}, "
                                  "which is not installed: pip install 'meshladar[scan]'")
+    return path
+
+
+def _target(path, flag):
+    """``path`` checked to name a file in a folder that exists (not a folder)."""
+    path = check_path(flag, path)
+    if os.path.isdir(path):
+        raise ParameterError(f"{flag}: {path!r} is a folder; name a file in it")
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise ParameterError(f"{flag}: no folder {folder!r} to write {path!r} into")
+    return path
 
 
 def _readable(path, what):
@@ -95,7 +122,7 @@ def _unreadable(path, what, exc):
     return ParameterError(f"path: {path!r} is not a {what} file ({first})")
 
 
-def write_las(path, cloud, *, scale=1e-4):
+def write_las(path, cloud, *, scale=None):
     """Write ``cloud`` to a LAS 1.4 file (LAZ if ``path`` ends in ``.laz``), atomically.
 
     Parameters
@@ -104,19 +131,29 @@ def write_las(path, cloud, *, scale=1e-4):
         The file; an existing file is replaced only once the new one is complete.
     cloud : PointCloud
         The returns.
-    scale : float
-        The coordinates' resolution (scene units, in [1e-9, 1]; default 1e-4).
+    scale : float, optional
+        The coordinates' resolution (scene units, in [1e-9, 1]). Coordinates are 32-bit
+        integers from an offset at the cloud's minimum, so a scale covers a span of
+        2³¹ − 1 of its steps: by default 1e-4 (214 km), or the smallest power of ten that
+        covers the cloud's span (1e-3 to 2,147 km, ...).
+
+    Raises
+    ------
+    ParameterError
+        Before anything is written: when ``path`` is a folder or in a folder that does not
+        exist, ``cloud`` is not a PointCloud, or ``scale`` is out of range or too fine for
+        the cloud's span (the message names the finest scale that fits).
     """
     laspy = _need("laspy")
-    path = check_path("path", path)
+    path = check_writable(path, "path")
     if not isinstance(cloud, PointCloud):
         raise ParameterError(f"cloud must be a PointCloud; got {type(cloud).__name__}")
-    scale = check_real("scale", scale, low=1e-9, high=1.0)
     pts = cloud.points
     header = laspy.LasHeader(point_format=6, version="1.4")
+    header.global_encoding.wkt = True        # LAS 1.4: required of point formats 6-10
     xyz = cloud.xyz
     header.offsets = np.floor(xyz.min(axis=0)) if len(pts) else np.zeros(3)
-    header.scales = np.full(3, scale)
+    header.scales = np.full(3, _las_scale(xyz, header.offsets, scale))
     header.add_extra_dims([laspy.ExtraBytesParams(
         name=_extra(n), type=np.dtype(t), description=f"{u or 'count'}"[:31])
         for n, t, u, _ in POINT_FIELDS if n not in LAS_NATIVE])
@@ -133,6 +170,25 @@ def write_las(path, cloud, *, scale=1e-4):
             las[_extra(n)] = pts[n]
     compress = str(path).lower().endswith(".laz")
     write_atomic(path, lambda fh: las.write(fh, do_compress=compress))
+
+
+def _las_scale(xyz, offsets, scale):
+    """:func:`write_las`'s scale: the user's, checked to cover the cloud's span from
+    ``offsets`` in 2³¹ − 1 steps, or the default's."""
+    span = float(np.max(xyz - offsets)) if len(xyz) else 0.0
+    need = span / (_LAS_STEPS - 1)                   # a step's margin for the rounding
+    if scale is None:
+        scale = 1e-4 if need <= 1e-4 else 10.0 ** math.ceil(math.log10(need))
+        if scale > 1.0:
+            raise ParameterError(f"cloud: its coordinates span {span:.6g} from their "
+                                 "minimum, more than LAS's 2³¹ − 1 steps of scale 1")
+        return scale
+    scale = check_real("scale", scale, low=1e-9, high=1.0)
+    if scale < need:
+        raise ParameterError(f"scale={scale:g} is too fine for this cloud: its coordinates "
+                             f"span {span:.6g} from their minimum, more than LAS's 2³¹ − 1 "
+                             f"steps; give scale >= {need:.3g} (or leave it out)")
+    return scale
 
 
 def read_las(path):
@@ -184,9 +240,15 @@ def write_hdf5(path, cloud):
         The file; an existing one is replaced only once the new one is complete.
     cloud : PointCloud
         The returns.
+
+    Raises
+    ------
+    ParameterError
+        Before anything is written: when ``path`` is a folder or in a folder that does not
+        exist, or ``cloud`` is not a PointCloud.
     """
     h5py = _need("h5py")
-    path = check_path("path", path)
+    path = _target(path, "path")
     if not isinstance(cloud, PointCloud):
         raise ParameterError(f"cloud must be a PointCloud; got {type(cloud).__name__}")
 
@@ -219,7 +281,27 @@ def _write_points(f, cloud):
     d = f.create_dataset("points", data=cloud.points, chunks=True if len(cloud) else None)
     d.attrs["units"] = json.dumps({n: u for n, _, u, _ in POINT_FIELDS})
     d.attrs["meaning"] = json.dumps({n: m for n, _, _, m in POINT_FIELDS})
-    f.attrs["info"] = json.dumps(cloud.info, default=str)
+    f.attrs["info"] = json.dumps(_strict(cloud.info), default=str, allow_nan=False)
+
+
+def _strict(value):
+    """``value`` with its non-finite floats as :data:`NON_FINITE`'s strings (strict JSON)."""
+    if isinstance(value, dict):
+        return {k: _strict(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_strict(v) for v in value]
+    if isinstance(value, (float, np.floating)) and not math.isfinite(value):
+        return "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
+    return value
+
+
+def _loose(value):
+    """:func:`_strict` undone: :data:`NON_FINITE`'s strings as their floats."""
+    if isinstance(value, dict):
+        return {k: _loose(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_loose(v) for v in value]
+    return NON_FINITE.get(value, value) if isinstance(value, str) else value
 
 
 class WaveformSink:
@@ -316,5 +398,5 @@ def read_hdf5(path):
                            key=lambda n: int(g[n].attrs["first_pulse"]))
             waves = tuple(np.asarray(g[n][()]) for n in names)
             starts = tuple(np.asarray(g[n.replace("block_", "starts_")][()]) for n in names)
-        info = json.loads(f.attrs.get("info", "{}"))
+        info = _loose(json.loads(f.attrs.get("info", "{}")))
     return PointCloud(pts, info, waves, starts)

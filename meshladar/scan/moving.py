@@ -125,14 +125,17 @@ def cast_moving(split, origins, directions, t, backend=None):
     Returns
     -------
     Cast
-        The nearest hit of each sub-ray, faces numbered over the whole scene.
+        The nearest hit of each sub-ray, faces numbered over the whole scene; a miss where
+        any part's surface passes through the sub-ray's origin (as a static scan's).
     """
     n, m = directions.shape[:2]
     best = Cast(np.full((n, m), -1, np.int64), np.full((n, m), np.inf), np.zeros((n, m)),
                 np.full((n, m, 3), np.nan))
+    blocked = np.zeros((n, m), bool)
     if split.static is not None:
         c = cast_chunk(split.static, origins, directions, backend)
         _take(best, c, np.where(c.face >= 0, split.static_faces[np.maximum(c.face, 0)], -1))
+        blocked |= c.blocked
     for scene, motion, first in split.moving:
         rot, shift = _pose(motion, t)
         inv = rot.inv()
@@ -144,6 +147,10 @@ def cast_moving(split, origins, directions, t, backend=None):
         world = np.einsum("nij,nmj->nmi", rot.as_matrix(), c.points - c0) + shift[:, None, :]
         c.points = np.where(hit[..., None], world, np.nan)
         _take(best, c, np.where(hit, first + c.face, -1))
+        blocked |= c.blocked
+    if blocked.any():             # a surface through the origin: nothing ranged beyond
+        best.face[blocked], best.distance[blocked] = -1, np.inf
+        best.cos[blocked], best.points[blocked] = 0.0, np.nan
     return best
 
 

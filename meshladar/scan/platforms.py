@@ -12,11 +12,14 @@ frame (:mod:`.patterns`: x the boresight) is turned from the body's by ``boresig
 another (roll, pitch, yaw). Every pulse is cast from the sensor's pose at its own emission
 time.
 
-Kinds: :meth:`Platform.static`, :meth:`Platform.moving` (constant velocity),
+Kinds: :meth:`Platform.static`, :meth:`Platform.moving` (constant velocity, at any time),
 :meth:`Platform.waypoints` (positions interpolated linearly or by a cubic spline,
 attitudes by spherical linear interpolation) and :meth:`Platform.from_csv` (a trajectory
 file with the columns ``time, x, y, z, roll, pitch, yaw``: seconds, scene units, degrees in
-the convention above, one header line, comma-separated).
+the convention above, one header line, comma-separated). Waypoints hold a pose only
+between their first and last times: a scan refuses a pattern whose pulses leave outside
+them (:meth:`Platform.check_covers`); a trajectory in GPS time reads with ``time_offset``,
+its time at the pattern's t = 0.
 """
 
 from __future__ import annotations
@@ -29,7 +32,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation, Slerp
 
-from .._validate import check_choice, check_path, finite_array, readonly_copy
+from .._validate import check_choice, check_path, check_real, finite_array, readonly_copy
 from ..errors import ParameterError
 
 __all__ = ["Platform", "INTERPOLATIONS", "TRAJECTORY_COLUMNS"]
@@ -38,6 +41,9 @@ __all__ = ["Platform", "INTERPOLATIONS", "TRAJECTORY_COLUMNS"]
 INTERPOLATIONS = ("linear", "spline")
 #: The columns of a trajectory file, in order.
 TRAJECTORY_COLUMNS = ("time", "x", "y", "z", "roll", "pitch", "yaw")
+#: How far beyond its waypoints' ends a time still counts as covered, s: the rounding of a
+#: GPS time less its offset (~1e-10 s), not a pose anyone could tell from the end's.
+_TIME_SLACK = 1e-9
 
 
 def _triple(name, value, shape=(3,)):
@@ -45,6 +51,18 @@ def _triple(name, value, shape=(3,)):
     if a.shape != shape:
         raise ParameterError(f"{name} must have shape {shape}; got {a.shape}")
     return a
+
+
+def _row(path, line, values):
+    """One trajectory row's 7 numbers (``line``: its line in the file, 1-based)."""
+    if len(values) != len(TRAJECTORY_COLUMNS):
+        raise ParameterError(f"{path}, line {line}: a row holds {len(TRAJECTORY_COLUMNS)} "
+                             f"values ({','.join(TRAJECTORY_COLUMNS)}); got {len(values)}")
+    try:
+        return [float(x) for x in values]
+    except ValueError as exc:
+        raise ParameterError(f"{path}, line {line}: every value must be a number "
+                             f"({exc})") from None
 
 
 def rotation(attitude_deg):
@@ -74,12 +92,16 @@ class Platform:
         The sensor's position on the platform, body frame, scene units (default 0).
     boresight_deg : (3,) array_like
         The sensor frame's (roll, pitch, yaw) in the body frame, deg (default 0).
+    extrapolate : bool
+        Two waypoints' constant velocity holds at every time (:meth:`moving`'s); default
+        False: the poses are the waypoints' between their first and last times only.
 
     Raises
     ------
     ParameterError
         When the arrays' shapes disagree, a value is not finite, the times do not increase,
-        or ``interpolation`` is unknown.
+        ``interpolation`` is unknown, or ``extrapolate`` is given to other than two
+        waypoints interpolated linearly.
     """
 
     times: np.ndarray
@@ -88,6 +110,7 @@ class Platform:
     interpolation: str = "linear"
     mount_offset: tuple = (0.0, 0.0, 0.0)
     boresight_deg: tuple = (0.0, 0.0, 0.0)
+    extrapolate: bool = False
 
     def __post_init__(self):
         t = finite_array("times", self.times).astype(np.float64).ravel()
@@ -100,6 +123,12 @@ class Platform:
         check_choice("interpolation", self.interpolation, INTERPOLATIONS)
         if self.interpolation == "spline" and k < 3:
             raise ParameterError(f"interpolation='spline' needs 3 or more waypoints; got {k}")
+        if not isinstance(self.extrapolate, bool):
+            raise ParameterError(f"extrapolate must be True or False; got {self.extrapolate!r}")
+        if self.extrapolate and (k != 2 or self.interpolation != "linear"):
+            raise ParameterError("extrapolate=True is a constant velocity: it needs 2 "
+                                 f"waypoints interpolated linearly; got {k}, "
+                                 f"{self.interpolation!r}")
         object.__setattr__(self, "times", readonly_copy(t))
         object.__setattr__(self, "positions", readonly_copy(pos))
         object.__setattr__(self, "attitudes_deg", readonly_copy(att))
@@ -148,13 +177,14 @@ class Platform:
         Platform
         """
         p0, v = _triple("position", position), _triple("velocity", velocity)
-        return cls([0.0, 1.0], [p0, p0 + v], [attitude_deg, attitude_deg], **mount)
+        return cls([0.0, 1.0], [p0, p0 + v], [attitude_deg, attitude_deg], extrapolate=True,
+                   **mount)
 
     @classmethod
     def waypoints(cls, times, positions, attitudes_deg, interpolation="linear", **mount):
-        """Waypoints interpolated between (linearly or by spline); beyond the ends the
-        first or last pose is held, except that two waypoints (as :meth:`moving`'s) are a
-        constant velocity, extrapolated both ways (the attitude still held).
+        """Waypoints interpolated between (linearly or by spline). They cover their first
+        to last time: :func:`~meshladar.scan.scan` refuses pulses outside it
+        (:meth:`check_covers`; :meth:`sensor_poses` holds the first or last pose there).
 
         Parameters
         ----------
@@ -170,9 +200,10 @@ class Platform:
         return cls(times, positions, attitudes_deg, interpolation, **mount)
 
     @classmethod
-    def from_csv(cls, path, interpolation="linear", **mount):
+    def from_csv(cls, path, interpolation="linear", time_offset=0.0, **mount):
         """A trajectory file: a header line, then rows of ``time, x, y, z, roll, pitch,
-        yaw`` (:data:`TRAJECTORY_COLUMNS`; s, scene units, deg).
+        yaw`` (:data:`TRAJECTORY_COLUMNS`; s, scene units, deg; UTF-8, a byte-order mark
+        allowed).
 
         Parameters
         ----------
@@ -180,6 +211,9 @@ class Platform:
             The CSV file.
         interpolation : str
             ``"linear"`` or ``"spline"``.
+        time_offset : float
+            The file's time at the pattern's t = 0, s (default 0): the platform's times
+            are the file's less it (a trajectory in GPS seconds of week, its scan's start).
         **mount
             ``mount_offset`` and ``boresight_deg``.
 
@@ -190,11 +224,13 @@ class Platform:
         Raises
         ------
         ParameterError
-            When the file cannot be read, its header differs, or a value is not a number.
+            When the file cannot be read, its header differs, a row does not hold 7
+            values (its line named), or a value is not a number.
         """
         path = check_path("path", path)
+        offset = check_real("time_offset", time_offset)
         try:
-            with open(path, newline="") as f:
+            with open(path, newline="", encoding="utf-8-sig") as f:
                 rows = list(csv.reader(f))
         except (OSError, UnicodeDecodeError) as exc:
             raise ParameterError(f"path: cannot read the trajectory {path!r} ({exc})") from None
@@ -202,13 +238,9 @@ class Platform:
         if tuple(header) != TRAJECTORY_COLUMNS:
             raise ParameterError(f"{path}: the header must be {','.join(TRAJECTORY_COLUMNS)}; "
                                  f"got {','.join(header) or 'nothing'}")
-        try:
-            data = np.array([[float(x) for x in r] for r in rows[1:] if r], np.float64)
-        except ValueError as exc:
-            raise ParameterError(f"{path}: every value must be a number ({exc})") from None
-        if data.ndim != 2 or data.shape[1] != 7:
-            raise ParameterError(f"{path}: every row needs 7 values after the header")
-        return cls(data[:, 0], data[:, 1:4], data[:, 4:7], interpolation, **mount)
+        data = np.array([_row(path, line, r) for line, r in enumerate(rows[1:], 2) if r],
+                        np.float64).reshape(-1, len(TRAJECTORY_COLUMNS))
+        return cls(data[:, 0] - offset, data[:, 1:4], data[:, 4:7], interpolation, **mount)
 
     # -- poses -------------------------------------------------------------------------
     @functools.cached_property
@@ -223,7 +255,7 @@ class Platform:
         if self.interpolation == "spline":
             return CubicSpline(self.times, self.positions, bc_type="natural")(
                 np.clip(t, self.times[0], self.times[-1]))
-        if len(self.times) == 2:     # constant velocity, extrapolated both ways
+        if self.extrapolate:         # constant velocity, extrapolated both ways
             v = (self.positions[1] - self.positions[0]) / (self.times[1] - self.times[0])
             return self.positions[0] + (t - self.times[0])[:, None] * v
         return np.stack([np.interp(t, self.times, self.positions[:, i]) for i in range(3)],
@@ -250,9 +282,39 @@ class Platform:
         mats = (rot * rotation(np.asarray(self.boresight_deg))).as_matrix()
         return mats, rot.apply(np.asarray(self.mount_offset))
 
+    def check_covers(self, t, name="pattern"):
+        """Refuse times outside the waypoints' first to last, to 1 ns (a static or
+        constant-velocity platform covers every time).
+
+        Parameters
+        ----------
+        t : array_like
+            Times, s (the pattern's emission times).
+        name : str
+            What the times are, for the message.
+
+        Raises
+        ------
+        ParameterError
+            Naming both spans, when a time lies outside the waypoints'.
+        """
+        t = np.asarray(t, np.float64)
+        if len(self.times) == 1 or self.extrapolate or not t.size:
+            return
+        lo, hi = float(t.min()), float(t.max())
+        first, last = float(self.times[0]), float(self.times[-1])
+        if lo < first - _TIME_SLACK or hi > last + _TIME_SLACK:
+            raise ParameterError(
+                f"platform: the {name}'s pulses leave from {lo:.9g} s to {hi:.9g} s, outside "
+                f"the platform's waypoints, from {first:.9g} s to {last:.9g} s: they must "
+                "cover the scan (a GPS-time file: Platform.from_csv(path, time_offset=its "
+                "time at the pattern's t = 0), on the command line 'FILE.csv "
+                "time_offset=SECONDS')")
+
     def sensor_poses(self, t):
         """The sensor's pose at times ``t``: the body's pose, the mount offset and the
-        boresight.
+        boresight (beyond the waypoints' times, unless :attr:`extrapolate`, the first or
+        last pose held).
 
         Parameters
         ----------
@@ -284,11 +346,12 @@ class Platform:
         -------
         dict
             ``times_s``, ``positions``, ``attitudes_deg``, ``interpolation``,
-            ``mount_offset``, ``boresight_deg`` and ``attitude_convention``.
+            ``mount_offset``, ``boresight_deg``, ``extrapolate`` and
+            ``attitude_convention``.
         """
         return {"times_s": self.times.tolist(), "positions": self.positions.tolist(),
                 "attitudes_deg": self.attitudes_deg.tolist(),
                 "interpolation": self.interpolation, "mount_offset": list(self.mount_offset),
-                "boresight_deg": list(self.boresight_deg),
+                "boresight_deg": list(self.boresight_deg), "extrapolate": self.extrapolate,
                 "attitude_convention": "roll, pitch, yaw: Rotation.from_euler('ZYX', "
                                        "[yaw, pitch, roll]), body x forward, y left, z up"}

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._validate import check_count
 from ..errors import ParameterError
 
 __all__ = ["POINT_FIELDS", "POINT_DTYPE", "PointCloud", "CONVENTIONS"]
@@ -121,14 +122,21 @@ class PointCloud:
         field : str
             A record field (:data:`POINT_FIELDS`), e.g. ``"range"`` or ``"intensity"``.
         frame : int
-            The frame (0-based).
+            The frame, 0-based: in [0, frames) (no negative index, as :meth:`waveform`'s
+            ``pulse_id``).
         return_number : int
-            Which of each pixel's returns (1: the first in time).
+            Which of each pixel's returns (1: the first in time), in [1, 15].
 
         Returns
         -------
         (rows, columns) numpy.ndarray
             float64; row 0 the top of the field, column 0 its left (+y).
+
+        Raises
+        ------
+        ParameterError
+            When the cloud is not a flash scan's, ``field`` is not a record field, or
+            ``frame`` or ``return_number`` is out of its range.
         """
         pattern = self.info.get("pattern", {})
         if pattern.get("kind") != "flash":
@@ -137,9 +145,15 @@ class PointCloud:
         if field not in POINT_DTYPE.names:
             raise ParameterError(f"field must be one of {POINT_DTYPE.names}; got {field!r}")
         rows, cols = pattern["rows"], pattern["columns"]
+        frames = max(pattern["pulses"] // (rows * cols), 1)
+        if isinstance(frame, bool) or not isinstance(frame, (int, np.integer)) or \
+                not 0 <= frame < frames:
+            raise ParameterError(f"frame must be an integer in [0, {frames - 1}] (the "
+                                 f"cloud's {frames} frames, 0-based); got {frame!r}")
+        check_count("return_number", return_number, high=15)
         pts = self.points
-        frames = pts["pulse_id"] // (rows * cols)
-        sel = (frames == frame) & (pts["return_number"] == return_number)
+        sel = ((pts["pulse_id"] // (rows * cols) == frame)
+               & (pts["return_number"] == return_number))
         out = np.full(rows * cols, np.nan)
         out[pts["channel"][sel]] = pts[field][sel]
         return out.reshape(rows, cols)

@@ -52,6 +52,7 @@ def _check(scene, pattern, platform, sensor):
         if not isinstance(value, kind):
             raise ParameterError(f"{name} must be a {kind.__name__}; got "
                                  f"{type(value).__name__}")
+    platform.check_covers(pattern.times)          # a trajectory must span the pulses
 
 
 def _footprint(pattern, sensor):
@@ -204,7 +205,8 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
     Raises
     ------
     ParameterError
-        When an argument is of the wrong kind or out of range, before any ray is cast.
+        When an argument is of the wrong kind or out of range (waypoints not spanning the
+        pulses: :meth:`Platform.check_covers`), before any ray is cast.
     """
     _check(scene, pattern, platform, sensor)
     split = moving_parts(scene, motions)
@@ -213,10 +215,7 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
     foot = _footprint(pattern, sensor)
     per = _chunk_pulses(pattern, chunk_pulses, len(foot[0]))
     slots = sensor.detector.max_returns
-    if waveforms_file is not None and sensor.echoes == "discrete":
-        raise ParameterError("waveforms_file: a sensor with echoes='discrete' makes no "
-                             "records; use echoes='waveform'")
-    sink = _sink(waveforms_file, keep_waveforms, run_dir, executor)
+    sink = _sink(waveforms_file, keep_waveforms, run_dir, executor, sensor)
     job = ScanJob(scene, pattern, platform, sensor, foot, seed, keep_waveforms, slots, _chunk,
                   split, sink, folder=run_dir is not None, backend=resolve_backend("auto"),
                   part_of=_part_of(scene))
@@ -275,12 +274,16 @@ def _chunk_pulses(pattern, chunk_pulses, sub_rays):
     return per
 
 
-def _sink(path, keep, run_dir, executor):
-    """The waveform file a scan streams into, or None; refused with ``keep_waveforms``
-    (in memory instead), ``run_dir`` (a resumed scan would lack the chunks done before) or
-    an ``executor`` (the file is written by this process's threads)."""
+def _sink(path, keep, run_dir, executor, sensor):
+    """The waveform file a scan streams into, or None; refused with a discrete-return
+    ``sensor`` (no records), ``keep_waveforms`` (in memory instead), ``run_dir`` (a
+    resumed scan would lack the chunks done before) or an ``executor`` (the file is
+    written by this process's threads)."""
     if path is None:
         return None
+    if sensor.echoes == "discrete":
+        raise ParameterError("waveforms_file: a sensor with echoes='discrete' makes no "
+                             "records; use echoes='waveform'")
     if executor is not None:
         raise ParameterError("waveforms_file is written by this process's threads; with an "
                              "executor, use keep_waveforms=True and write_hdf5")

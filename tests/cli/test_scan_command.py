@@ -3,6 +3,8 @@ and HDF5 files read back, its points on the room's walls (closed-form distances)
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 import trimesh
@@ -71,3 +73,98 @@ def test_view_draws_a_scans_points_over_the_room(tmp_path):
     assert img.shape[:2] == (300, 400)
     spread = img.max(axis=2) - img.min(axis=2)          # coloured, not grey or white
     assert (spread > 0.15).sum() > 300
+
+
+_OSC = "oscillating half_angle_deg=10 scan_hz=20 pulse_rate=1000 duration=0.1"
+
+
+def _room(tmp_path):
+    trimesh.creation.box(2 * HALF).export(tmp_path / "room.stl")
+    return str(tmp_path / "room.stl")
+
+
+def test_a_waypoints_platform_takes_flat_lists_a_word_and_the_mount(tmp_path):
+    """positions and attitudes_deg flat (three values a waypoint), interpolation=spline,
+    mount_offset and boresight_deg: 60 m/s along x, nadir; the sensor 1 m ahead on the body
+    (pitch 90°: body z is world +x, so mount_offset=0,0,1 puts it 1 m ahead); every point
+    on the floor at x = 60 t + 1."""
+    argv = ["scan", _room(tmp_path), "--quiet", "--pattern", _OSC, "--platform",
+            "waypoints times=0,0.05,0.1 positions=0,0,0,3,0,0,6,0,0 "
+            "attitudes_deg=0,90,0,0,90,0,0,90,0 interpolation=spline mount_offset=0,0,1 "
+            "boresight_deg=0,0,0", "-o", str(tmp_path / "p.h5")]
+    assert main(argv) == 0
+    cloud = read_hdf5(tmp_path / "p.h5")
+    platform = cloud.info["platform"]
+    assert platform["positions"] == [[0, 0, 0], [3, 0, 0], [6, 0, 0]]
+    assert platform["interpolation"] == "spline" and platform["mount_offset"] == [0, 0, 1]
+    assert len(cloud) == 100
+    np.testing.assert_allclose(cloud.points["z"], -6.0, atol=1e-3)
+    np.testing.assert_allclose(cloud.points["x"], 60 * cloud.points["emission_time"] + 1.0,
+                               atol=1e-3)
+
+
+@pytest.mark.parametrize("platform, message", [
+    ("waypoints times=0,0.1 positions=0,0,0,3,0,0,1 attitudes_deg=0,90,0,0,90,0",
+     "--platform: positions takes three values a waypoint.*a multiple of 3; got 7"),
+    ("static position=0,0,0 mount_offset=1,2", "--platform: mount_offset must have shape"),
+    ("static position=0,0,0 position=1,0,0", "--platform: position is given twice"),
+    ("waypoints times=0,0.1 positions=0,0,0,1,0,0 attitudes_deg=0,0,0,0,0,0 "
+     "interpolation=cubic", "--platform: interpolation must be one of"),
+    ("waypoints times=0,0.05 positions=0,0,0,1,0,0 attitudes_deg=0,0,0,0,0,0",
+     r"--platform: the pattern's pulses leave from 0 s to 0\.099 s, outside .* 0 s to "
+     r"0\.05 s")])
+def test_a_bad_platform_spec_is_refused_by_flag_before_scanning(tmp_path, capsys,
+                                                                monkeypatch, platform,
+                                                                message):
+    import meshladar.cli.scan as cli_scan
+    monkeypatch.setattr(cli_scan.scanning, "scan", lambda *a, **k: pytest.fail("scanned"))
+    argv = ["scan", _room(tmp_path), "--quiet", "--pattern", _OSC, "--platform", platform,
+            "-o", str(tmp_path / "p.las")]
+    assert main(argv) == 2
+    assert re.search(message, capsys.readouterr().err)
+
+
+def test_a_gps_time_trajectory_file_takes_its_time_offset(tmp_path, capsys):
+    """'FILE.csv time_offset=345000': the file's 345000 s is the pattern's 0 (60 m/s along
+    x); without it the file is refused, naming --platform and both time spans."""
+    (tmp_path / "t.csv").write_text("time,x,y,z,roll,pitch,yaw\n345000,0,0,0,0,90,0\n"
+                                    "345010,600,0,0,0,90,0\n")
+    base = ["scan", _room(tmp_path), "--quiet", "--pattern", _OSC, "-o",
+            str(tmp_path / "p.h5"), "--platform"]
+    assert main(base + [str(tmp_path / "t.csv")]) == 2
+    assert re.search(r"--platform: the pattern's pulses leave from 0 s to 0\.099 s, outside "
+                     r"the platform's waypoints, from 345000 s to 345010 s",
+                     capsys.readouterr().err)
+    assert main(base + [f"{tmp_path / 't.csv'} time_offset=345000 boresight_deg=0,0,0"]) == 0
+    cloud = read_hdf5(tmp_path / "p.h5")
+    np.testing.assert_allclose(cloud.points["x"], 60 * cloud.points["emission_time"],
+                               atol=1e-3)
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--max-returns", "16"], r"--max-returns must be an integer in \[1, 15\]; got 16"),
+    (["--geiger-shots", "10", "--discrete"],
+     "--discrete makes no waveform records: --geiger-shots does not apply"),
+    (["--discrete", "--waveforms", "w.h5"], "--discrete .* --waveforms does not apply"),
+    (["--tol", "1e-9"], "--tol 1e-09 needs more than 4096 sub-rays"),
+    (["--pattern", "rotating elevations_deg=0 rotation_hz=10 pulse_rate=1e3 duration=0.02 "
+                   "duration=0.01"], "--pattern: duration is given twice"),
+    (["--pattern", "raster azimuth_deg=0 elevation_deg=0 pulse_rate=1 bidirectional=maybe"],
+     "--pattern: bidirectional='maybe' must be true or false"),
+    (["-o", "./same.h5", "--waveforms", "same.h5"], "are the same file"),
+    (["-o", "real.h5", "--waveforms", "link.h5"], "are the same file"),
+    (["-o", "nowhere/p.las"], "-o: no folder .*nowhere"),
+])
+def test_sensor_and_output_flags_are_refused_by_their_names(tmp_path, capsys, monkeypatch,
+                                                            extra, message):
+    """The API's names come back as the flags (max_returns, echoes='waveform'); a key given
+    twice is refused; -o and --waveforms are compared as real paths (link.h5 links to
+    real.h5, which does not exist yet); all before scanning."""
+    import meshladar.cli.scan as cli_scan
+    monkeypatch.setattr(cli_scan.scanning, "scan", lambda *a, **k: pytest.fail("scanned"))
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "link.h5").symlink_to(tmp_path / "real.h5")
+    argv = ["scan", _room(tmp_path), "--quiet", "--pattern", _OSC, "--platform",
+            "static position=0,0,0", "-o", "p.las"]
+    assert main(argv + extra) == 2
+    assert re.search(message, capsys.readouterr().err)

@@ -1,0 +1,101 @@
+"""Point files beyond their round trips: strict JSON in HDF5, LAS 1.4's global encoding,
+coordinates that need a coarser LAS scale, paths refused before writing, and a flash
+cloud's frames."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from meshladar.errors import ParameterError
+from meshladar.scan import (GeigerMode, Platform, PointCloud, flash, read_hdf5, read_las,
+                            scan, write_hdf5, write_las)
+from meshladar.scan.points import POINT_DTYPE
+
+from _scan_scenes import plate, scene, sensor
+
+
+def _strict(text):
+    def refuse(constant):
+        raise ValueError(f"not strict JSON: {constant}")
+    return json.loads(text, parse_constant=refuse)
+
+
+def _cloud(x, info=None):
+    pts = np.zeros(len(x), POINT_DTYPE)
+    pts["x"], pts["y"], pts["z"] = x, 4e6, 100.0
+    pts["return_number"] = pts["number_of_returns"] = 1
+    return PointCloud(pts, info or {})
+
+
+def test_a_geiger_scans_info_is_strict_json_and_reads_back_its_infinite_dead_time(tmp_path):
+    """dead_time=inf was written as JSON's non-standard ``Infinity``: now the string
+    "inf", a float again when read (as are -inf and nan anywhere in the info)."""
+    h5py = pytest.importorskip("h5py")
+    geiger = sensor(pulse_energy=1e-12, geiger=GeigerMode(shots=10))
+    cloud = scan(scene(plate(50.0)), flash(2, 2, ifov_deg=0.1), Platform.static((0, 0, 0)),
+                 geiger)
+    cloud = PointCloud(cloud.points, dict(cloud.info, extra=[-math.inf, math.nan]))
+    write_hdf5(tmp_path / "g.h5", cloud)
+    with h5py.File(tmp_path / "g.h5", "r") as f:
+        raw = _strict(f.attrs["info"])
+    assert raw["sensor"]["geiger"]["dead_time_s"] == "inf"
+    assert raw["extra"] == ["-inf", "nan"]
+    back = read_hdf5(tmp_path / "g.h5").info
+    assert back["sensor"]["geiger"]["dead_time_s"] == math.inf
+    assert back["extra"][0] == -math.inf and math.isnan(back["extra"][1])
+    assert back["sensor"]["geiger"]["shots"] == 10
+
+
+def test_las_14_format_6_sets_the_wkt_bit_of_its_global_encoding(tmp_path):
+    """LAS 1.4 R15 §2.4: bit 4 (WKT) must be set for point formats 6-10."""
+    laspy = pytest.importorskip("laspy")
+    write_las(tmp_path / "p.las", _cloud([0.0, 1.0]))
+    header = laspy.read(tmp_path / "p.las").header
+    assert header.point_format.id == 6 and header.global_encoding.wkt
+    raw = (tmp_path / "p.las").read_bytes()
+    assert int.from_bytes(raw[6:8], "little") & 16 == 16
+
+
+def test_a_cloud_spanning_300_km_is_written_at_a_coarser_scale_that_fits_int32(tmp_path):
+    """500 km to 800 km east (a UTM strip): 1e-4 m steps would overflow LAS's int32, so
+    the default scale is 1e-3 (2,147 km), the points back to half of it; a scale the user
+    gives that is too fine is refused naming the finest that fits."""
+    pytest.importorskip("laspy")
+    x = np.array([500000.12345, 500100.0, 800000.0])
+    write_las(tmp_path / "big.las", _cloud(x))
+    back = read_las(tmp_path / "big.las")
+    np.testing.assert_allclose(back.points["x"], x, atol=0.5e-3 + 1e-9)
+    assert np.abs(back.points["x"] - x).max() > 0.5e-4          # not the 1e-4 default
+    with pytest.raises(ParameterError, match=r"scale=0\.0001 is too fine .* give scale "
+                                             r">= 0\.00014"):
+        write_las(tmp_path / "big2.las", _cloud(x), scale=1e-4)
+    write_las(tmp_path / "small.las", _cloud(x[:2]))               # 100 m: 1e-4 kept
+    np.testing.assert_allclose(read_las(tmp_path / "small.las").points["x"], x[:2],
+                               atol=0.5e-4 + 1e-9)
+
+
+@pytest.mark.parametrize("write", [write_las, write_hdf5])
+def test_a_folder_or_a_missing_folder_is_refused_before_writing(tmp_path, write):
+    pytest.importorskip("laspy" if write is write_las else "h5py")
+    with pytest.raises(ParameterError, match=r"path: .* is a folder; name a file in it"):
+        write(tmp_path, _cloud([0.0]))
+    with pytest.raises(ParameterError, match=r"path: no folder .*nowhere"):
+        write(tmp_path / "nowhere" / "p.las", _cloud([0.0]))
+
+
+def test_a_flash_image_refuses_a_frame_it_does_not_hold():
+    """Two frames: frame 1 is the plate at 50 m; frame 2 and −1 are refused with the
+    valid range (they gave all-nan images), as is return 0."""
+    cloud = scan(scene(plate(50.0)), flash(3, 4, ifov_deg=0.1, frames=2),
+                 Platform.static((0, 0, 0)), sensor())
+    np.testing.assert_allclose(cloud.image("range", frame=1), 50.0, rtol=1e-4)
+    for frame in (2, -1, 0.5):
+        with pytest.raises(ParameterError, match=r"frame must be an integer in \[0, 1\] "
+                                                 r"\(the cloud's 2 frames"):
+            cloud.image("range", frame=frame)
+    with pytest.raises(ParameterError, match="return_number"):
+        cloud.image("range", return_number=0)
