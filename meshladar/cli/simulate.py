@@ -6,6 +6,7 @@ The model options' flags, checks and "does not apply" errors come from
 from __future__ import annotations
 
 import re
+import warnings
 
 import numpy as np
 
@@ -14,13 +15,15 @@ from ..errors import ParameterError
 from ..forward import simulate
 from ..ladar import MAX_VIEWS, Ladar
 from ..meshes import fibonacci_sphere
+from ..forward.job import QUICK_RAYS
 from ..forward.options import OPTIONS, SENSOR_OPTIONS
+from ..raytrace.plan import plan_trace
 from ..sensor import FloodBeam, GaussianBeam, Sensor
 from ..stream import dask_executor
 from .checks import check_output
 from .sources import load_source
 
-__all__ = ["cmd_simulate", "load_scene", "SCENE_LABELS"]
+__all__ = ["cmd_simulate", "load_scene", "quick_backend", "SCENE_LABELS"]
 
 #: What the command line calls load_source()'s arguments, in its errors.
 SCENE_LABELS = {"source": "SCENE", "material": "--material", "coatings": "--coating"}
@@ -204,6 +207,50 @@ def _model_options(args, model):
     return opts
 
 
+#: plan_trace's options among simulate's.
+_PLAN_OPTIONS = ("mode", "normals", "back_faces", "z0", "ray_spacing", "rays_per_bin",
+                 "sampling", "seed", "receiver", "sensor")
+
+
+def quick_backend(scene, ladar, model, opts):
+    """The backend ``auto`` stands for on the command line: embreex for a mesh run of at
+    most :data:`meshladar.forward.job.QUICK_RAYS` rays (its plan's estimate), which is then
+    cast one ray at a time and weighed in numpy, calling none of numba's compiled loops:
+    a command does not load them (0.2-0.3 s) or compile them (2-3 s, on its first run
+    after an install). Otherwise (a bigger run, another model, a backend
+    named, ``--tol``, ``--bounces``), ``opts`` as they are.
+
+    Parameters
+    ----------
+    scene : meshladar.Scene
+        The run's scene (a mesh, or a phantom tessellated for the mesh model).
+    ladar : meshladar.Ladar
+        Its views and bins.
+    model : str
+        The model that runs; only ``"mesh"`` is concerned.
+    opts : dict
+        simulate's options from the flags (``backend`` among them where given).
+
+    Returns
+    -------
+    dict
+        ``opts``, with ``backend="embreex"`` where the run is that small.
+
+    Raises
+    ------
+    ParameterError
+        The plan's refusals (:func:`meshladar.raytrace.plan.plan_trace`), before any work.
+    """
+    if model != "mesh" or opts.get("backend", "auto") != "auto" or "tol" in opts \
+            or opts.get("bounces", 1) != 1:
+        return opts
+    with warnings.catch_warnings():        # the run's own plan gives them, once
+        warnings.simplefilter("ignore")
+        plan = plan_trace(scene, ladar, backend="embreex",
+                          **{k: opts[k] for k in _PLAN_OPTIONS if k in opts})
+    return {**opts, "backend": "embreex"} if plan.rays <= QUICK_RAYS else opts
+
+
 def cmd_simulate(args) -> int:
     """Simulate a scene's range profiles and save them (sinogram, scene, parameters).
 
@@ -256,6 +303,7 @@ def cmd_simulate(args) -> int:
         scene = scene.tessellate(args.segments or 1024)
     opts = _model_options(args, model)
     try:                                   # (the Dask cluster's own checks too)
+        opts = quick_backend(scene, ladar, model, opts)
         if args.scheduler or args.workers:
             with dask_executor(args.scheduler, workers=args.workers or 2) as ex:
                 sino = simulate(scene, ladar, model=model, executor=ex,

@@ -7,7 +7,9 @@ the chunk's state (its bins, and the per-face weight cache the compiled loops re
 runs the chosen stage on each view. The stages:
 
 * ``hits``: each view's :class:`~meshladar.hits.ViewHits` (:func:`meshladar.trace`);
-* ``per_hit``: hits weighed and binned in numpy (any normals, coating, receiver, sensor);
+* ``per_hit``: hits weighed and binned in numpy (any normals, coating, receiver, sensor),
+  and every run of at most :data:`QUICK_RAYS` rays on a ``quick_start`` backend (embreex),
+  which then calls none of numba's compiled loops;
 * ``flat``: flat normals, monostatic: F·δA⊥ one number per face and view, binned by the
   compiled loop (in the fused cast-weigh-bin loop on a fused backend);
 * ``smooth``: smooth normals, coatings with a compiled kernel, binned by the compiled loop
@@ -29,12 +31,10 @@ from .._executors import thread_pool
 from ..precision import MIN_COS_FACET, RECEIVER_LIFT
 from ..raytrace.backends import backend as get_backend
 from ..raytrace.embree import embree_scene
-from ..raytrace.grid import grid_plan
-from ..raytrace.grid import ray_grid
+from ..raytrace.grid import grid_plan, ray_grid
 from ..raytrace.perspective import trace_sensor_view
 from ..raytrace.plan import TracePlan, View
-from ..raytrace.views import range_offset
-from ..raytrace.views import trace_view
+from ..raytrace.views import range_offset, trace_view
 from ..weighing import bin_one as _bin_one
 from ..brdf import material_table
 from ..weighing.faces import (check_edge_on_receiver, face_bistatic_weights, footprint_args,
@@ -45,7 +45,7 @@ from ..weighing._kernels import bin_flat_hits, bin_smooth_hits
 from ..weighing.resolved import bin_resolved
 from ..weighing.sensor_view import bin_sensor_view
 
-__all__ = ["MeshJob", "plan_job", "mesh_job", "sensor_offset"]
+__all__ = ["MeshJob", "plan_job", "mesh_job", "sensor_offset", "QUICK_RAYS"]
 
 
 class Stage(NamedTuple):
@@ -62,9 +62,7 @@ class Stage(NamedTuple):
 class MeshJob:
     """Everything a chunk needs, decided once: the plan, the weighing (None: keep hits),
     the views, the stage, threads for one view's rows, and whether the backend's fused
-    loop casts the grids.
-
-    Built by :func:`plan_job`; frozen.
+    loop casts the grids. Built by :func:`plan_job`; frozen.
 
     Attributes
     ----------
@@ -325,6 +323,12 @@ def _fused(plan):
     return get_backend(plan.backend).fused and (plan.mode == "3d" or plan.seed is None)
 
 
+#: The most rays (the plan's estimate) a run on a ``quick_start`` backend (embreex) weighs
+#: in numpy, calling no compiled loop: numba's compiling (2-3 s) or loading (0.3-0.4 s) of
+#: one costs more than it saves on this many rays (150-230 ns a ray). The command line's
+#: ``--backend auto`` casts such runs with embreex (:mod:`meshladar.cli.simulate`).
+QUICK_RAYS = 1 << 20
+
 STAGES = {s.name: s for s in (
     Stage("hits", _hits_stage), Stage("per_hit", _per_hit_stage),
     Stage("resolved", _resolved_stage), Stage("sensor", _sensor_stage),
@@ -337,6 +341,8 @@ def _stage_name(plan, weighing):
         return "hits"
     if weighing.resolved:
         return "resolved"
+    if get_backend(plan.backend).quick_start and plan.rays <= QUICK_RAYS:
+        return "per_hit"
     normals, compiled = plan.normals, weighing.compiled
     if plan.traced_with is not None:
         fast = plan.traced_with.standoff is not None and normals in ("flat", "smooth") \
@@ -354,7 +360,9 @@ def _stage_name(plan, weighing):
 def plan_job(plan, weighing, vectors, row_jobs=1) -> MeshJob:
     """The chunk job of a plan and a weighing (None: keep hits), its stage chosen once.
 
-    The stage: ``"hits"`` without a weighing; ``"resolved"`` for resolved returns; with a
+    The stage: ``"hits"`` without a weighing; ``"resolved"`` for resolved returns;
+    ``"per_hit"`` for a run of at most :data:`QUICK_RAYS` rays on a backend whose
+    ``quick_start`` is set (embreex); with a
     sensor traced, ``"sensor"`` at a finite standoff with flat or smooth normals and
     compiled coatings, else ``"per_hit"``; monostatic, ``"flat"`` for flat normals and
     ``"smooth"`` for smooth normals with compiled coatings; ``"bistatic"`` for flat normals

@@ -123,14 +123,17 @@ OPTIONS: tuple[Option, ...] = (
     Option("normals", "choice", "mesh model shading normals",
            "flat; with --tol smooth for meshes, exact for phantoms", _MESH, choices=NORMALS),
     Option("back_faces", "choice", "faces seen from behind: two-sided (they return as if "
-           "seen from the front) or ignore (rays pass through them)", "two-sided", _MESH,
+           "seen from the front) or ignore (they stop the ray and return nothing)",
+           "two-sided", _MESH,
            choices=BACK_FACES),
     Option("rays_per_bin", "positive_float", "rays per range-bin width",
            "1 in 3d, at least 128 across the target; 8 in slice", _MESH),
     Option("backend", "choice", "mesh model ray casting: packets (coherent packets, Embree 4 "
            "from the embreex wheel), embreex (one ray at a time, the reference), warp "
            "(NVIDIA Warp on a CUDA device; warp-cpu: its kernels on the CPU) or auto",
-           "auto: warp on a CUDA device, else packets when they load", _MESH,
+           "auto: warp on a CUDA device, else packets when they load; on the command "
+           "line, embreex for a run of at most 2^20 rays (it starts without numba's "
+           "compiled loops)", _MESH,
            choices=BACKENDS),
     Option("sampling", "choice", "rays at a seeded random offset in their cell (stratified: "
            "unbiased) or at cell centres", "stratified in 3d, regular in slice", _MESH,

@@ -38,10 +38,11 @@ from .primitives import ellipsoid, fibonacci_sphere, icosphere, prism, sphere
 
 __all__ = ["MeshPart", "load_parts", "TriangleMesh", "part_from_trimesh", "prism", "sphere", "ellipsoid",
            "fibonacci_sphere", "icosphere", "corner_normals", "curved_edge_angles", "CREASE_DEG",
-           "inspect_parts",
+           "curved_edge_rates", "inspect_parts",
            "convex_hull"]
 
 # names reached lazily (their module imports numba): name -> submodule
 __getattr__, __dir__ = _lazy_attributes(
     __name__, globals(), {"corner_normals": "normals", "curved_edge_angles": "normals",
-                          "CREASE_DEG": "normals"}, ("normals", "_normals_kernel"))
+                          "curved_edge_rates": "normals", "CREASE_DEG": "normals"},
+    ("normals", "_normals_kernel"))

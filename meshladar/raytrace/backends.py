@@ -41,7 +41,8 @@ class Backend:
     interface; ``available()`` says (True, where) or (False, why); ``fused`` whether the
     weigh stage's fused loop (:mod:`meshladar.weighing.fused`) can cast with its scenes;
     ``optional`` whether "auto" passes over it in silence when it cannot load (hardware
-    that may be absent).
+    that may be absent); ``quick_start`` whether a small run on it is weighed in numpy
+    (embreex's, which casts without numba).
 
     Attributes
     ----------
@@ -58,6 +59,9 @@ class Backend:
         Whether the fused cast-weigh-bin loop can cast with its scenes (default False).
     optional : bool
         Whether "auto" skips it without a warning when it cannot load (default False).
+    quick_start : bool
+        Whether a run on it of at most :data:`meshladar.forward.job.QUICK_RAYS` rays is
+        weighed in numpy, so that it calls none of numba's compiled loops (default False).
     """
 
     name: str
@@ -65,6 +69,7 @@ class Backend:
     available: Callable
     fused: bool = False
     optional: bool = False
+    quick_start: bool = False
 
 
 #: Backends by name, filled by the backend modules themselves.

@@ -56,4 +56,4 @@ def available():
     return True, "embreex"
 
 
-register(Backend("embreex", build, available, fused=False))
+register(Backend("embreex", build, available, fused=False, quick_start=True))

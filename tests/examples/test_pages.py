@@ -58,7 +58,7 @@ SLOW = {
     ("In ten lines", 0), ("A tour", 0), ("Getting started", 1), ("Getting started", 2),
     ("Reconstruction", 2), ("Reconstruction", 3), ("Meshes", 0), ("The sensor", 0),
     ("The sensor", 1), ("The sensor", 2), ("The sensor", 3), ("Beyond range", 2),
-    ("Long runs", 0), ("Long runs", 1), ("Accuracy", 1),
+    ("Long runs", 0), ("Long runs", 1), ("Accuracy", 1), ("Command line", 1),
 }
 
 SETUP = ("pip install", "python3 -m venv", "git clone")
@@ -233,7 +233,9 @@ def _namespace_for(block):
     """The section's namespace with every earlier block of the section run in it."""
     key = (block.page, block.section)
     if key not in _NAMESPACES:
-        _NAMESPACES[key] = [{"__name__": "__readme__"}, 0]
+        # a script's name: a block's `if __name__ == "__main__":` runs, as in the user's
+        # script (where Dask's and --jobs' worker processes import it without running it)
+        _NAMESPACES[key] = [{"__name__": "__main__"}, 0]
     ns, done = _NAMESPACES[key]
     earlier = [b for b in PYTHON if (b.page, b.section) == key and b.ordinal < block.ordinal]
     for b in earlier[done:]:

@@ -12,7 +12,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import meshladar as ml
-from meshladar.errors import GeometryError, MeshladarError, ParameterError
+from meshladar.errors import GeometryError, LobeSamplingWarning, MeshladarError, ParameterError
 
 FAST = settings(max_examples=60, deadline=None,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
@@ -98,10 +98,14 @@ def test_random_ladar_setups(edges, angles, spacing):
             warnings.simplefilter("always")
             sino = ml.simulate(scene, lad, **kw)
         assert np.all(np.isfinite(sino.values)) and np.all(sino.values >= 0)
-        # a run that returns nothing says so, and only then
+        # a run that returns nothing says so, and only then; the mesh model's rays, 0.005
+        # apart or more, cannot find aluminium's glint (two rays across its lobe need
+        # 0.0023 on the disk's 1024 facets) and say that, always
         empty = [w for w in caught if "all zeros" in str(w.message)]
         assert len(empty) == (0 if sino.values.any() else 1)
-        assert len(caught) == len(empty)
+        lobes = [w for w in caught if issubclass(w.category, LobeSamplingWarning)]
+        assert len(lobes) == (1 if kw else 0)
+        assert len(caught) == len(empty) + len(lobes)
     # the analytic total never exceeds the unbinned total (bins may cut part of it off)
     full = ml.simulate(scene, ml.Ladar(angles, [-3.0, 3.0])).total()
     with warnings.catch_warnings():

@@ -28,8 +28,10 @@ def test_a_registered_backend_is_chosen_by_name_and_gives_the_references_numbers
             cast.append(len(origins))
             return self.raw.run(origins, directions, **kwargs)
 
+    # weighed as the reference's runs are (a small one in numpy: its quick_start)
     monkeypatch.setitem(backends.REGISTRY, "counting", backends.Backend(
-        "counting", lambda v, f: Counting(reference.build(v, f)), lambda: (True, "test")))
+        "counting", lambda v, f: Counting(reference.build(v, f)), lambda: (True, "test"),
+        quick_start=reference.quick_start))
     assert backends.choices() == ("auto", "packets", "embreex", "warp", "warp-cpu", "counting")
     scene = ml.Scene.from_mesh(trimesh.creation.icosphere(subdivisions=2),
                                material=ml.materials.DARK_GRAY)

@@ -374,6 +374,7 @@ def test_footprints_take_the_fused_loop_with_the_general_paths_numbers(mode, nor
                                    radiometry=options.get("radiometry", "paper"))
                 with monkeypatch.context() as m:
                     m.setattr(model, "_bin_one", None)           # the per-hit path is not used
+                    m.setattr(model, "QUICK_RAYS", 0)     # (small embreex runs would take it)
                     fused = ml.simulate(scene, ladar, model="mesh", mode=mode,
                                         normals=normals, backend=backend, footprint=True,
                                         rays_per_bin=3, **options)
