@@ -229,9 +229,10 @@ def profile(sino, reference, *, view=0, label="closed form"):
     ----------
     sino : Sinogram
         The simulated profiles.
-    reference : (n_bins,) array_like or callable
-        The view's reference bin values, or a function of the bin edges (n_bins + 1,)
-        that returns them.
+    reference : Sinogram, (n_bins,) array_like or callable
+        The reference: a sinogram on the same bins (its same view is taken, e.g. the
+        analytic model's), the view's bin values, or a function of the bin edges
+        (n_bins + 1,) that returns them.
     view : int, keyword-only
         The view's index (default 0).
     label : str, keyword-only
@@ -246,12 +247,23 @@ def profile(sino, reference, *, view=0, label="closed form"):
     Raises
     ------
     ParameterError
-        When the reference does not have the view's n_bins values.
+        When the reference does not have the view's n_bins values (a sinogram: on the same
+        bin edges), or is not numbers.
     """
     plt = style.use()
     got = np.asarray(sino.values[view], dtype=float)
     e = sino.bin_edges
-    ref = np.asarray(reference(e) if callable(reference) else reference, dtype=float)
+    if hasattr(reference, "values") and hasattr(reference, "bin_edges"):    # a Sinogram
+        if not np.array_equal(reference.bin_edges, e):
+            raise ParameterError("reference: a sinogram on other bin edges than sino's; "
+                                 "simulate it with the same Ladar")
+        reference = reference.values[view]
+    try:
+        ref = np.asarray(reference(e) if callable(reference) else reference, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ParameterError(f"reference must be a Sinogram, the view's {got.size} bin "
+                             f"values or a function of the bin edges; got "
+                             f"{type(reference).__name__} ({exc})") from None
     if ref.shape != got.shape:
         raise ParameterError(f"reference must give the view's {got.size} bins; got shape "
                              f"{ref.shape}")

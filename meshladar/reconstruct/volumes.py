@@ -289,7 +289,7 @@ def _second_differences(sino, dr, smooth):
 def _fbp3d_info(sino, smooth, grid):
     """The ``info`` of :func:`fbp3d`'s volume: the method, its smoothing, the views, the
     data's radiometry and preprocessing, and the voxel grid."""
-    info = {"method": "radon3d", "filter": "second difference", "smooth_bins": smooth,
+    info = {"method": "fbp3d", "filter": "second difference", "smooth_bins": smooth,
             "views": sino.n_views,
             "radiometry": sino.radiometry, "size": grid.n, "extent": grid.e,
             "center": grid.c.tolist()}

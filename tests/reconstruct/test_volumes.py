@@ -52,7 +52,7 @@ def test_uniform_ball_inverts_to_the_ball():
     # the centre voxel and an off-centre one, sampled directly
     np.testing.assert_allclose(vol.sample([[0.0, 0.0, 0.0], [0.2, -0.1, 0.15]]), 1.0,
                                rtol=BALL_RTOL)
-    assert vol.info["method"] == "radon3d" and vol.shape == (96, 96, 96)
+    assert vol.info["method"] == "fbp3d" and vol.shape == (96, 96, 96)
 
 
 @pytest.mark.slow

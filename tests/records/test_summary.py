@@ -11,6 +11,7 @@ from meshladar import materials
 from meshladar.studies import paper
 from meshladar._summary import MAX_REPR
 from meshladar.ladar import Ladar
+from meshladar.errors import ParameterError
 
 
 @pytest.fixture(scope="module")
@@ -120,6 +121,18 @@ def test_profile_against_a_closed_form_and_waveform_quick_look():
     fig = quick.profile(sino, closed, label="closed form")
     assert style.overlapping_texts(fig) == []
     assert "relative L2 difference" in fig.axes[1].get_title()
+    # a sinogram on the same bins is a reference too (its same view); others are refused
+    mesh = ml.simulate(Scene([Disk((0.0, 0.0), R, Lambertian(1.0))]), lad, model="mesh",
+                       mode="slice", ray_spacing=1e-3)
+    fig = quick.profile(mesh, sino, label="analytic")
+    drawn = fig.axes[0].patches[1].get_data().values
+    np.testing.assert_array_equal(drawn, sino.values[0])
+    other = ml.simulate(Scene([Disk((0.0, 0.0), R, Lambertian(1.0))]),
+                        Ladar([90.0], Ladar.centered(32, 1.2 / 32).bin_edges))
+    with pytest.raises(ParameterError, match="other bin edges"):
+        quick.profile(sino, other)
+    with pytest.raises(ParameterError, match="must be a Sinogram"):
+        quick.profile(sino, "closed form")
     waves = results_waves()
     fig = waves.plot(noise=Noise(), realisations=4)
     assert style.overlapping_texts(fig) == []
