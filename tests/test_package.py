@@ -212,3 +212,11 @@ def test_the_scanner_loads_on_first_use_and_its_modules_are_attributes():
     assert _run("-c", code).stdout.split() == [
         "False", "meshladar.scan.run", "meshladar.scan.platforms", "meshladar.scan.points",
         "[]"]
+
+
+def test_test_modules_have_unique_names():
+    # the suite imports test modules by their file name (no packages): two of one name in
+    # different folders stop the whole collection
+    names = [p.name for p in (ROOT / "tests").rglob("test_*.py")]
+    assert len(names) > 100
+    assert sorted({n for n in names if names.count(n) > 1}) == []
