@@ -17,6 +17,7 @@ from ..ladar import MAX_VIEWS, Ladar
 from ..meshes import fibonacci_sphere
 from ..forward.job import QUICK_RAYS
 from ..forward.options import OPTIONS, SENSOR_OPTIONS
+from ..raytrace.backends import backend
 from ..raytrace.plan import plan_trace
 from ..sensor import FloodBeam, GaussianBeam, Sensor
 from ..stream import dask_executor
@@ -218,7 +219,7 @@ def quick_backend(scene, ladar, model, opts):
     cast one ray at a time and weighed in numpy, calling none of numba's compiled loops:
     a command does not load them (0.2-0.3 s) or compile them (2-3 s, on its first run
     after an install). Otherwise (a bigger run, another model, a backend
-    named, ``--tol``, ``--bounces``), ``opts`` as they are.
+    named, ``--tol``, ``--bounces``, no embreex here), ``opts`` as they are.
 
     Parameters
     ----------
@@ -242,7 +243,7 @@ def quick_backend(scene, ladar, model, opts):
         The plan's refusals (:func:`meshladar.raytrace.plan.plan_trace`), before any work.
     """
     if model != "mesh" or opts.get("backend", "auto") != "auto" or "tol" in opts \
-            or opts.get("bounces", 1) != 1:
+            or opts.get("bounces", 1) != 1 or not backend("embreex").available()[0]:
         return opts
     with warnings.catch_warnings():        # the run's own plan gives them, once
         warnings.simplefilter("ignore")

@@ -4,6 +4,7 @@ numbers are the compiled loop's to rounding."""
 
 from __future__ import annotations
 
+import dataclasses
 import subprocess
 import sys
 
@@ -18,6 +19,7 @@ from meshladar.forward import job
 from meshladar.forward.job import QUICK_RAYS, plan_job
 from meshladar.forward.mesh import simulate_mesh
 from meshladar.meshes import sphere
+from meshladar.raytrace import backends
 from meshladar.raytrace.plan import plan_trace
 from meshladar.weighing.record import Weighing
 
@@ -46,6 +48,14 @@ def test_small_runs_take_embreex_and_the_rest_stays_as_asked(ball, ladar):
     for kept in ({"backend": "packets"}, {"tol": 1e-2}, {"bounces": 2}, {"bounces": "auto"}):
         assert quick_backend(ball, ladar, "mesh", kept) == kept
     assert quick_backend(ball, ladar, "analytic", {}) == {}
+
+
+def test_without_embreex_the_command_line_keeps_auto(ball, ladar, monkeypatch):
+    # a platform without embreex's wheel: "auto" stays the packets' choice, never an error
+    reference = backends.backend("embreex")
+    monkeypatch.setitem(backends.REGISTRY, "embreex", dataclasses.replace(
+        reference, available=lambda: (False, "no wheel here")))
+    assert quick_backend(ball, ladar, "mesh", {"ray_spacing": 0.01}) == {"ray_spacing": 0.01}
 
 
 def test_a_small_embreex_run_is_weighed_in_numpy_and_a_big_one_compiled(ball, ladar):
