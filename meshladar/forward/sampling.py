@@ -25,8 +25,9 @@ comes from the few facets inside the lobe, a strip 2w/κ wide, which the rays mu
 find: the criterion above holds with κ the rate the faces' own normals turn across the
 part's curved edges (:func:`~meshladar.meshes.curved_edge_rates`; the most-turning 5 % of
 edges), asking two rays across the lobe whatever the sampling (they find its facets; the
-error left is each facet's area counted in rays: 3-13 % at two on a 1024-gon's glint). Unchecked, a 1024-gon aluminium disk of radius 0.4 traced at 0.02 returned 4-6 %
-of its total without a word.
+error left is each facet's area counted in rays: 3-13 % at two on a 1024-gon's glint).
+Unchecked, a 1024-gon aluminium disk of radius 0.4 traced at 0.02 returned 4-6 % of its
+total without a word.
 """
 
 from __future__ import annotations
