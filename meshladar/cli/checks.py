@@ -6,7 +6,7 @@ import os
 
 from ..errors import ParameterError
 
-__all__ = ["check_output", "check_outdir", "check_not_input"]
+__all__ = ["check_output", "check_outdir", "check_not_input", "same_file"]
 
 
 def check_outdir(outdir):
@@ -29,6 +29,24 @@ def check_outdir(outdir):
                              + (" (a file)" if outdir and os.path.exists(outdir) else ""))
 
 
+def same_file(a, b):
+    """Whether paths ``a`` and ``b`` name one file: the same path with links resolved (so
+    also before either exists), or, when both exist, the same file.
+
+    Parameters
+    ----------
+    a, b : str
+        The paths.
+
+    Returns
+    -------
+    bool
+        True when writing one would overwrite the other.
+    """
+    return os.path.realpath(a) == os.path.realpath(b) or (
+        os.path.exists(a) and os.path.exists(b) and os.path.samefile(a, b))
+
+
 def check_output(output, suffixes, inputs, flag="-o"):
     """An output path must never name an input, and must name a file of a known format.
 
@@ -41,8 +59,8 @@ def check_output(output, suffixes, inputs, flag="-o"):
         output's extension is compared in lower case.
     inputs : iterable of str or None
         The command's input paths; None entries (inputs not given) are skipped. The
-        output may not be any of them: neither the same absolute path nor, when both
-        exist, the same file (a link to it).
+        output may not be any of them (:func:`same_file`: the same path, links resolved,
+        or when both exist the same file).
     flag : str
         The output's flag, named in the messages (default ``"-o"``).
 
@@ -56,9 +74,7 @@ def check_output(output, suffixes, inputs, flag="-o"):
     if not output or os.path.basename(output) in ("", ".", "..") or os.path.isdir(output):
         raise ParameterError(f"{flag}: must name a file, not a folder; got {output!r}")
     for src in filter(None, inputs):
-        if os.path.abspath(src) == os.path.abspath(output) or (
-                os.path.exists(src) and os.path.exists(output)
-                and os.path.samefile(src, output)):
+        if same_file(src, output):
             raise ParameterError(f"{flag} {output!r} is the input {src!r}: meshladar never "
                                  "overwrites an input; choose another output name")
     ext = os.path.splitext(output)[1].lower()
@@ -84,11 +100,9 @@ def check_not_input(output, data, source, what):
     Raises
     ------
     ParameterError
-        When ``data`` and ``source`` are the same absolute path or, ``data`` existing,
-        the same file.
+        When ``data`` and ``source`` are one file (:func:`same_file`).
     """
-    if os.path.abspath(data) == os.path.abspath(source) or (
-            os.path.exists(data) and os.path.samefile(data, source)):
+    if same_file(data, source):
         raise ParameterError(f"-o {output!r} would write the {what} to {data!r}, the "
                              "input: meshladar never overwrites an input; choose another "
                              "output name")

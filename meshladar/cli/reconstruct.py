@@ -102,13 +102,11 @@ def _reconstruct_3d(args, sino, extent) -> int:
     if args.filter is not None:
         raise ParameterError("--filter applies to FBP of views about the z axis; 3-D views "
                              "are inverted with a second difference (use --smooth BINS)")
+    data = os.path.splitext(args.output)[0] + ".volume.npz"
+    check_not_input(args.output, data, args.result, "volume")     # before the work
     size = args.size or 128
     vol = fbp3d(sino, size=size, extent=extent, smooth=args.smooth or 0.0)
     extent = vol.info["extent"]
-    data = os.path.splitext(args.output)[0] + ".volume.npz"
-    if os.path.abspath(data) == os.path.abspath(args.result):
-        raise ParameterError(f"-o {args.output!r} would write the volume to the input "
-                             f"{data!r}; choose another output name")
     fig = plotting.viz("quick").volume(
         vol, title=f"3-D Radon inversion of {os.path.basename(args.result)} "
                    f"({sino.n_views} views, {size}^3)")

@@ -25,7 +25,7 @@ from ..errors import ParameterError
 from ..noise import Noise
 from ..scan.files import check_writable
 from ..waveforms import GaussianPulse
-from .checks import check_output
+from .checks import check_output, same_file
 from .simulate import load_scene
 
 __all__ = ["cmd_scan", "parse_spec", "PLATFORM_KINDS"]
@@ -206,10 +206,7 @@ def _check_outputs(args):
     check_output(args.output, POINT_SUFFIXES, inputs)
     check_writable(args.output, "-o")
     if args.waveforms is not None:
-        real = os.path.realpath
-        if real(args.waveforms) == real(args.output) or (
-                os.path.exists(args.waveforms) and os.path.exists(args.output)
-                and os.path.samefile(args.waveforms, args.output)):
+        if same_file(args.waveforms, args.output):
             raise ParameterError(f"--waveforms {args.waveforms!r} and -o {args.output!r} are "
                                  "the same file: give each its own")
         check_output(args.waveforms, (".h5", ".hdf5"), inputs, "--waveforms")

@@ -59,3 +59,21 @@ def test_the_command_lines_volume_is_the_apis_default_volume(tmp_path):
     # the same sums, in an order the saved copy's memory layout may change: rounding apart
     np.testing.assert_allclose(cli.values, api.values, rtol=0,
                                atol=1e-12 * np.abs(api.values).max())
+
+
+def test_a_volume_that_would_overwrite_its_input_is_refused_before_the_work(
+        tmp_path, monkeypatch, capsys):
+    # -o a.png writes a.volume.npz beside it: an input of that name is refused, untouched,
+    # before the inversion runs (it is not there to run)
+    from meshladar.cli import main, reconstruct
+
+    W = fibonacci_sphere(50)
+    sino = ml.Sinogram(np.ones((50, 8)), angles_deg=np.zeros(50),
+                       bin_edges=np.linspace(-1.0, 1.0, 9), view_vectors=W)
+    path = tmp_path / "a.volume.npz"
+    ml.io.save_sinogram(path, sino)
+    before = path.read_bytes()
+    monkeypatch.setattr(reconstruct, "fbp3d", None)
+    assert main(["reconstruct", str(path), "-o", str(tmp_path / "a.png"), "--quiet"]) == 2
+    assert "would write the volume" in capsys.readouterr().err
+    assert path.read_bytes() == before
