@@ -10,6 +10,7 @@ from numbers import Real
 import numpy as np
 
 from .errors import ParameterError
+from .precision import ANGLE_TOL_DEG
 
 __all__: list[str] = []
 
@@ -63,6 +64,8 @@ def check_choice(name: str, value, choices: tuple[str, ...]) -> str:
 
 def finite_array(name: str, value) -> np.ndarray:
     """Return ``value`` as a float64 array, raising if any element is NaN or infinite."""
+    if value is None:
+        raise ParameterError(f"{name} must be an array of real numbers; got None")
     try:
         if np.iscomplexobj(value):
             raise ParameterError(f"{name} must be real numbers; got a complex array (take "
@@ -114,6 +117,22 @@ def unit_vectors(name: str, value) -> np.ndarray:
     if np.any(norm == 0):
         raise ParameterError(f"{name} must be non-zero direction vectors; got a zero vector")
     return a / norm
+
+
+def check_views_agree(angles_deg, view_vectors) -> None:
+    """Refuse view angles (degrees) that differ from their unit view vectors' azimuths by
+    more than :data:`meshladar.precision.ANGLE_TOL_DEG` (vectors along ±z excepted): the
+    analytic and pixel models and 2-D FBP read the angles, the mesh model and 3-D
+    reconstruction the vectors, so a contradiction would give each its own views."""
+    azimuth = np.degrees(np.arctan2(view_vectors[:, 1], view_vectors[:, 0]))
+    off = np.abs((angles_deg - azimuth + 180.0) % 360.0 - 180.0)
+    off = np.where(np.hypot(view_vectors[:, 0], view_vectors[:, 1]) > 0, off, 0.0)
+    if np.any(off > ANGLE_TOL_DEG):
+        k = int(np.argmax(off))
+        raise ParameterError(
+            f"angles_deg and view_vectors disagree: view {k} has angle "
+            f"{float(angles_deg[k]):g} deg but vector {view_vectors[k].tolist()} (azimuth "
+            f"{float(azimuth[k]):g} deg); give one of them")
 
 
 def check_size(name: str, count, bytes_each: int, what: str, reduce: str) -> None:

@@ -16,7 +16,7 @@ import numpy as np
 
 from . import plotting
 from ._summary import table, text
-from ._validate import finite_array, readonly_copy
+from ._validate import check_real, finite_array, readonly_copy
 from .errors import ParameterError
 from .meshes import fibonacci_sphere
 
@@ -37,6 +37,12 @@ class Image:
         Centre (x, y) of the square.
     info : dict
         How it was made (filter, interpolation, preprocessing).
+
+    Raises
+    ------
+    ParameterError
+        When ``values`` is not a finite (size, size) array with size ≥ 1, ``extent`` not a
+        finite real > 0, or ``center`` not two finite reals.
     """
 
     values: np.ndarray
@@ -45,9 +51,17 @@ class Image:
     info: dict = field(default_factory=dict)
 
     def __post_init__(self):
-        v = np.array(self.values, dtype=np.float64, copy=True)
-        v.flags.writeable = False
-        object.__setattr__(self, "values", v)
+        v = finite_array("values", self.values)
+        if v.ndim != 2 or v.shape[0] != v.shape[1] or v.size == 0:
+            raise ParameterError(f"values must be a square (size, size) array; got shape "
+                                 f"{v.shape}")
+        extent = check_real("extent", self.extent, low=0.0, low_open=True)
+        center = finite_array("center", self.center)
+        if center.shape != (2,):
+            raise ParameterError(f"center must be two numbers (x, y); got {self.center!r}")
+        object.__setattr__(self, "values", readonly_copy(v))
+        object.__setattr__(self, "extent", extent)
+        object.__setattr__(self, "center", (float(center[0]), float(center[1])))
 
     @property
     def size(self) -> int:

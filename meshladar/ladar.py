@@ -15,10 +15,9 @@ from functools import cached_property
 import numpy as np
 
 from ._summary import table, text
-from ._validate import (check_count, check_real, check_size, finite_array, readonly_copy,
-                        unit_vectors)
+from ._validate import (check_count, check_real, check_size, check_views_agree, finite_array,
+                        readonly_copy, unit_vectors)
 from .errors import MeshladarWarning, ParameterError, user_stacklevel
-from .precision import ANGLE_TOL_DEG as _ANGLE_TOL_DEG
 from .precision import COUNT_SLACK, SCENE_RADIUS_RANGE, SPAN_FLOOR
 from .scene import Scene
 
@@ -91,14 +90,7 @@ class Ladar:
                 if given.shape == azimuth.shape:
                     # the same views, or a contradiction the forward models would read
                     # differently (the analytic and pixel models use the angles)
-                    off = np.abs((given - azimuth + 180.0) % 360.0 - 180.0)
-                    off = np.where(np.hypot(vec[:, 0], vec[:, 1]) > 0, off, 0.0)
-                    if np.any(off > _ANGLE_TOL_DEG):
-                        k = int(np.argmax(off))
-                        raise ParameterError(
-                            f"angles_deg and view_vectors disagree: view {k} has angle "
-                            f"{float(given[k]):g} deg but vector {vec[k].tolist()} (azimuth "
-                            f"{float(azimuth[k]):g} deg); give one of them")
+                    check_views_agree(given, vec)
             object.__setattr__(self, "view_vectors", readonly_copy(vec))
         elif self.angles_deg is None:
             raise ParameterError("give angles_deg or view_vectors; got neither")

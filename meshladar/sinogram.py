@@ -15,7 +15,7 @@ import numpy as np
 
 from . import plotting
 from ._summary import table, text
-from ._validate import finite_array, readonly_copy, unit_vectors
+from ._validate import check_views_agree, finite_array, readonly_copy, unit_vectors
 from .errors import ParameterError
 
 __all__ = ["Sinogram", "RecordInfo", "TYPED_INFO_KEYS", "check_sinogram", "split_info"]
@@ -179,7 +179,9 @@ class Sinogram:
         When an array is not finite real numbers; ``values`` is not 2-D with at least one
         view and one bin; ``angles_deg`` has not one angle per view; ``bin_edges`` has not
         n_bins + 1 strictly increasing entries; ``model`` is not a string; ``view_vectors``
-        is not (n_views, 3) non-zero vectors (normalised to unit length); ``info`` is not
+        is not (n_views, 3) non-zero vectors (normalised to unit length), or an angle
+        differs from its vector's azimuth by more than
+        :data:`meshladar.precision.ANGLE_TOL_DEG` (vectors along ±z excepted); ``info`` is not
         a mapping; or ``radiometry`` or ``units`` is neither a string nor None.
     """
 
@@ -222,6 +224,7 @@ class Sinogram:
                 raise ParameterError(f"view_vectors must have shape ({values.shape[0]}, 3); got "
                                      f"{vec.shape}")
             vec = unit_vectors("view_vectors", vec)
+            check_views_agree(angles, vec)
         object.__setattr__(self, "view_vectors", readonly_copy(vec))
 
     @property

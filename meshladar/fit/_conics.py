@@ -1,6 +1,7 @@
 """Circles and ellipses among the surface points of a first reconstruction, for
 :func:`~meshladar.fit.shapes.find_shapes`: circles found by RANSAC (three points define a
-circle; the one with the most points within ``tol`` wins), groups of points connected
+circle; of those whose points go round at least :data:`MIN_ARC` of it and that overlap no
+circle already found, the one with the most points within ``tol`` wins), groups of points connected
 within a reach, and each set of points fitted by geometric least squares (a circle from
 Kåsa's algebraic start, an ellipse from Fitzgibbon's direct fit) with the covariance of its
 parameters from the residuals.
@@ -17,6 +18,12 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from ..errors import ParameterError
+
+#: A circle RANSAC keeps has points in at least this share of its ARC_SECTORS equal
+#: sectors: a shape's boundary reconstructed from views all round shows most of its circle,
+#: while a circle through pieces of two shapes' boundaries holds a few arcs of its own.
+MIN_ARC = 0.5
+ARC_SECTORS = 36
 
 
 def _circle_lsq(p):
@@ -88,28 +95,45 @@ def _components(points, reach, min_points):
 def _ransac_circles(points, tol, min_points, max_shapes, seed):
     rng = np.random.default_rng(seed)
     left = np.arange(points.shape[0])
-    found = []
+    found, circles = [], []
     while left.size >= min_points and len(found) < max_shapes:
         p = points[left]
-        best = None
+        best, most = None, min_points - 1
         for _ in range(400):
-            i, j, k = rng.choice(p.shape[0], 3, replace=False)
-            (ax, ay), (bx, by), (cx_, cy_) = p[i], p[j], p[k]
-            d = 2 * (ax * (by - cy_) + bx * (cy_ - ay) + cx_ * (ay - by))
-            if abs(d) < 1e-12:
+            q = _circle_through(p[rng.choice(p.shape[0], 3, replace=False)])
+            if q is None:
                 continue
-            ux = ((ax * ax + ay * ay) * (by - cy_) + (bx * bx + by * by) * (cy_ - ay)
-                  + (cx_ * cx_ + cy_ * cy_) * (ay - by)) / d
-            uy = ((ax * ax + ay * ay) * (cx_ - bx) + (bx * bx + by * by) * (ax - cx_)
-                  + (cx_ * cx_ + cy_ * cy_) * (bx - ax)) / d
-            r = math.hypot(ax - ux, ay - uy)
-            inl = np.abs(np.hypot(p[:, 0] - ux, p[:, 1] - uy) - r) < tol
-            if best is None or inl.sum() > best.sum():
-                best = inl
-        if best is None or best.sum() < min_points:
+            inl = np.abs(np.hypot(p[:, 0] - q[0], p[:, 1] - q[1]) - q[2]) < tol
+            if inl.sum() > most and _kept(p[inl], q, circles):
+                best, most = inl, int(inl.sum())
+        if best is None:
             break
         q, _, _ = _circle_lsq(p[best])                       # refine, then re-collect
         inl = np.abs(np.hypot(p[:, 0] - q[0], p[:, 1] - q[1]) - q[2]) < tol
         found.append(left[inl])
+        circles.append(q)
         left = left[~inl]
     return found
+
+
+def _circle_through(abc):
+    """(x, y, r) of the circle through three points, None when they are in a line."""
+    (ax, ay), (bx, by), (cx_, cy_) = abc
+    d = 2 * (ax * (by - cy_) + bx * (cy_ - ay) + cx_ * (ay - by))
+    if abs(d) < 1e-12:
+        return None
+    ux = ((ax * ax + ay * ay) * (by - cy_) + (bx * bx + by * by) * (cy_ - ay)
+          + (cx_ * cx_ + cy_ * cy_) * (ay - by)) / d
+    uy = ((ax * ax + ay * ay) * (cx_ - bx) + (bx * bx + by * by) * (ax - cx_)
+          + (cx_ * cx_ + cy_ * cy_) * (bx - ax)) / d
+    return ux, uy, math.hypot(ax - ux, ay - uy)
+
+
+def _kept(p, q, circles):
+    """Whether the circle ``q`` with its points ``p`` goes round MIN_ARC of itself and
+    overlaps none of ``circles`` (shapes in a scene do not overlap)."""
+    sector = np.floor((np.arctan2(p[:, 1] - q[1], p[:, 0] - q[0]) + math.pi)
+                      * (ARC_SECTORS / (2 * math.pi))).astype(np.int64) % ARC_SECTORS
+    if np.unique(sector).size < MIN_ARC * ARC_SECTORS:
+        return False
+    return all(math.hypot(q[0] - c[0], q[1] - c[1]) >= q[2] + c[2] for c in circles)

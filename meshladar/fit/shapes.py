@@ -56,8 +56,11 @@ def find_shapes(sino, *, size=512, extent=1.0, center=(0.0, 0.0), kind="disk", f
         across [−extent, extent]² about ``center`` (defaults 512, 1.0, (0, 0)); unused
         when ``first`` is given.
     kind : {"disk", "ellipse"}
-        ``"disk"`` (default): circles found by RANSAC; ``"ellipse"``: each connected group
-        of surface points (neighbours within 2.5 pixels) fitted as an ellipse.
+        ``"disk"`` (default): circles found by RANSAC, each with surface points in at
+        least half of its 36 equal sectors and none overlapping another (a circle
+        through pieces of two shapes' boundaries is not a shape); ``"ellipse"``: each
+        connected group of surface points (neighbours within 2.5 pixels) fitted as an
+        ellipse.
     first : Image, optional
         The first reconstruction.
     tol_bins : float

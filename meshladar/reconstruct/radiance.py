@@ -11,6 +11,7 @@ records itself in the sinogram's ``info["preprocess"]``, in order.
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 
@@ -23,6 +24,10 @@ __all__ = ["log_radiance", "clip_radiance", "noise_floor", "LOG_FLOOR", "PAPER_C
 LOG_FLOOR = 1e-6
 #: The paper's clipping threshold, as a fraction of the maximum (Fig. 11b).
 PAPER_CLIP = 0.008
+
+#: float64's smallest normal number: a floor, or a floor times the maximum, below it is
+#: taken on ratios to the maximum (no underflow to 0, no 1 / floor overflow).
+_TINY = float(np.finfo(np.float64).tiny)
 
 
 def _preprocessed(sinogram, step):
@@ -117,9 +122,11 @@ def log_radiance(sinogram: Sinogram, *, floor=LOG_FLOOR) -> Sinogram:
     vmax = float(sinogram.values.max(initial=0.0))
     if vmax <= 0:
         out = np.zeros_like(sinogram.values)
-    else:
+    elif min(floor, floor * vmax) >= _TINY:
         m = floor * vmax
         out = np.log(np.maximum(sinogram.values, m) / m)
+    else:       # m or 1 / floor beyond float64's normal range: the same on ratios to vmax
+        out = np.log(np.maximum(sinogram.values / vmax, floor)) - math.log(floor)
     info = _preprocessed(sinogram, f"log(floor={floor:g})")
     info["units"] = "dimensionless (natural log of the ratio to the floor)"
     return dataclasses.replace(sinogram, values=out, info=info)
