@@ -155,7 +155,8 @@ class Sinogram:
         with a sensor that counts them (``units``).
     angles_deg : (n_views,) array_like, keyword-only
         View angles φ in degrees, about the z axis: the ladar looks from
-        w = (cos φ, sin φ, 0) toward the scene; φ = 90° is the paper's Fig. 1.
+        w = (cos φ, sin φ, 0) toward the scene; φ = 90° is the paper's Fig. 1. Optional
+        with ``view_vectors`` (default: their azimuths).
     bin_edges : (n_bins + 1,) array_like, keyword-only
         Strictly increasing range bin edges; range r = −p·w grows away from the ladar.
     model : str, keyword-only
@@ -176,7 +177,8 @@ class Sinogram:
     Raises
     ------
     ParameterError
-        When an array is not finite real numbers; ``values`` is not 2-D with at least one
+        When neither ``angles_deg`` nor ``view_vectors`` is given; an array is not finite
+        real numbers; ``values`` is not 2-D with at least one
         view and one bin; ``angles_deg`` has not one angle per view; ``bin_edges`` has not
         n_bins + 1 strictly increasing entries; ``model`` is not a string; ``view_vectors``
         is not (n_views, 3) non-zero vectors (normalised to unit length), or an angle
@@ -186,7 +188,7 @@ class Sinogram:
     """
 
     values: np.ndarray
-    angles_deg: np.ndarray = field(kw_only=True)
+    angles_deg: np.ndarray = field(default=None, kw_only=True)
     bin_edges: np.ndarray = field(kw_only=True)
     model: str = field(default="measured", kw_only=True)
     info: dict = field(default_factory=dict, kw_only=True)
@@ -196,7 +198,16 @@ class Sinogram:
 
     def __post_init__(self):
         values = finite_array("values", self.values)
-        angles = finite_array("angles_deg", self.angles_deg)
+        given = self.angles_deg
+        if given is None and self.view_vectors is None:
+            raise ParameterError("give angles_deg or view_vectors; got neither")
+        if given is None:                       # the views' azimuths
+            vec = finite_array("view_vectors", self.view_vectors)
+            if vec.ndim != 2 or vec.shape[1] != 3:
+                raise ParameterError(f"view_vectors must have shape (n_views, 3); got "
+                                     f"{vec.shape}")
+            given = np.degrees(np.arctan2(vec[:, 1], vec[:, 0]))
+        angles = finite_array("angles_deg", given)
         edges = finite_array("bin_edges", self.bin_edges)
         if values.ndim != 2 or 0 in values.shape:
             raise ParameterError(f"values must be a 2-D array (n_views, n_bins) of at least one "

@@ -43,7 +43,7 @@ __all__ = ["find_shapes", "fit_scene", "SceneFit", "SHAPE_KINDS"]
 SHAPE_KINDS = ("disk", "ellipse")
 
 
-def find_shapes(sino, *, size=512, extent=1.0, center=(0.0, 0.0), kind="disk", first=None,
+def find_shapes(sino, *, size=512, extent=None, center=(0.0, 0.0), kind="disk", first=None,
                 tol_bins=1.5, min_share=0.05, max_shapes=8, seed=0, material=None):
     """Shapes found in a sinogram's first reconstruction.
 
@@ -53,8 +53,9 @@ def find_shapes(sino, *, size=512, extent=1.0, center=(0.0, 0.0), kind="disk", f
         Views about z, uniform bins.
     size, extent, center
         The first reconstruction's grid (default FBP of the log radiance): ``size`` pixels
-        across [−extent, extent]² about ``center`` (defaults 512, 1.0, (0, 0)); unused
-        when ``first`` is given.
+        across [−extent, extent]² about ``center`` (defaults 512, the bins' reach as
+        :func:`~meshladar.reconstruct.fbp2d.fbp`'s, and (0, 0)); unused when ``first``
+        is given.
     kind : {"disk", "ellipse"}
         ``"disk"`` (default): circles found by RANSAC, each with surface points in at
         least half of its 36 equal sectors and none overlapping another (a circle
@@ -198,7 +199,7 @@ class SceneFit:
         return out
 
 
-def fit_scene(sino, *, kind="disk", size=512, extent=1.0, center=(0.0, 0.0), first=None,
+def fit_scene(sino, *, kind="disk", size=512, extent=None, center=(0.0, 0.0), first=None,
               noise="gaussian", photons_per_unit=None, speckle_cells=None, samples=4096,
               **find):
     """Shapes, then coatings, from a sinogram alone; see the module docstring.

@@ -4,7 +4,9 @@ and FISTA with the TV proximal map; each records its run and returns the result 
 
 The run's bookkeeping is shared: :class:`_Progress` keeps the residual history, the progress
 bar and the stopping rule; residuals are weighted (‖W^½ r‖) and relative to the weighted
-‖b‖.
+‖b‖. Every loop runs on the problem's data at unit scale (b divided by a power of two,
+``_problem``): the image is multiplied back at the end (:func:`_image`), so a run on data
+scaled by 2^k gives the image scaled by 2^k and the same residuals, bit for bit.
 """
 
 from __future__ import annotations
@@ -49,10 +51,16 @@ class _Progress:
             self.bar.close()
 
 
-def _image(x, image, info):
-    """The result: ``x`` on the image grid (size, extent, center) the caller gave."""
-    _, extent, center = image
-    return Image(x, extent, tuple(float(c) for c in center), info=info)
+def _image(x, pr, info):
+    """The result: ``x`` (at the data's unit scale) times the problem's scale, on the image
+    grid (size, extent, center) the caller gave; refused beyond float64's range."""
+    _, extent, center = pr.image
+    with np.errstate(over="ignore"):
+        values = x * pr.scale
+    if not np.all(np.isfinite(values)):
+        raise ParameterError(f"sino: values of order {pr.scale:.3g} give an image beyond "
+                             "float64's range (1.8e308); rescale the values")
+    return Image(values, extent, tuple(float(c) for c in center), info=info)
 
 
 def _norm(r, W):
@@ -95,7 +103,7 @@ def _sirt(sino, pr, run, nonneg):
             "stopped": track.stopped, "nonneg": bool(nonneg),
             "projector": _projector_name(run.projector, sino), "rays_per_bin": run.rays_per_bin,
             "radiometry": sino.radiometry}
-    return _image(x, pr.image, info)
+    return _image(x, pr, info)
 
 
 def _groups(sino, pr, n_sub, projector, relax, rays_per_bin):
@@ -143,7 +151,7 @@ def _sart(sino, pr, run, subsets, relax, nonneg):
             "iterations": len(track.values), "residuals": track.values,
             "stopped": track.stopped, "nonneg": bool(nonneg), "projector": projector,
             "rays_per_bin": run.rays_per_bin, "radiometry": sino.radiometry}
-    return _image(x, pr.image, info)
+    return _image(x, pr, info)
 
 
 def _cgls(sino, pr, run):
@@ -179,7 +187,7 @@ def _cgls(sino, pr, run):
     info = {"method": "cgls", "iterations": len(track.values), "residuals": track.values,
             "stopped": track.stopped, "projector": _projector_name(run.projector, sino),
             "rays_per_bin": run.rays_per_bin, "radiometry": sino.radiometry}
-    return _image(x, pr.image, info)
+    return _image(x, pr, info)
 
 
 def _lipschitz(pr):
@@ -202,9 +210,9 @@ def _fista(sino, pr, run, tv, nonneg):
     A, b, W, M, x = pr.A, pr.b, pr.W, pr.M, pr.x
     L = _lipschitz(pr)
     size, extent, center = pr.image
-    first = quiet_fbp(sino, size, extent, center=center)
-    scale = float(np.percentile(np.abs(first), 99)) or 1.0
-    lam = tv * L * scale
+    first = quiet_fbp(pr.sino, size, extent, center=center)     # at the data's unit scale
+    level = float(np.percentile(np.abs(first), 99)) or 1.0
+    lam = tv * L * level
     bnorm = _norm(b, W) or 1.0
     y, t = x.copy(), 1.0
     dual = None
@@ -218,12 +226,13 @@ def _fista(sino, pr, run, tv, nonneg):
         x, t = x_new, t_new
         r = A @ x - b
         gx, gy = gradient(x)
-        objective.append(0.5 * float(np.sum(W * r * r)) + lam * float(np.sum(np.hypot(gx, gy))))
+        objective.append((0.5 * float(np.sum(W * r * r))
+                          + lam * float(np.sum(np.hypot(gx, gy)))) / (0.5 * bnorm * bnorm))
         if track.step(_norm(r, W) / bnorm, objective):
             break
     track.close()
-    info = {"method": "tv_fista", "tv": tv, "lambda": lam, "lipschitz": L,
+    info = {"method": "tv_fista", "tv": tv, "lambda": lam * pr.scale, "lipschitz": L,
             "iterations": len(track.values), "residuals": track.values, "objective": objective,
             "stopped": track.stopped, "nonneg": bool(nonneg),
             "projector": _projector_name(run.projector, sino), "radiometry": sino.radiometry}
-    return _image(x, pr.image, info)
+    return _image(x, pr, info)

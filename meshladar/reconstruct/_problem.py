@@ -8,6 +8,7 @@ the mask M and the start x). The iterations that solve it are in ``_iterations``
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -54,7 +55,9 @@ class _Start(NamedTuple):
 class _Problem(NamedTuple):
     """The solvers' problem: the image grid as the caller gave it (size, extent, center: the
     result's), its pixel grid, the projector A (None when not built), the data b, the
-    weights W, the mask M and the start x."""
+    weights W, the mask M and the start x, b and x at unit scale: the sinogram's values and
+    the start divided by ``scale`` (:func:`_kept_at_unit_scale`: a power of two, exact), the
+    result to be multiplied back; ``sino`` the sinogram with the values b."""
 
     image: tuple
     grid: PixelGrid
@@ -63,6 +66,8 @@ class _Problem(NamedTuple):
     W: np.ndarray
     M: np.ndarray
     x: np.ndarray
+    scale: float
+    sino: object
 
 
 def _setup(sino, image, start, run, build_projector=True):
@@ -82,8 +87,9 @@ def _setup(sino, image, start, run, build_projector=True):
     check_size("size", float(size) ** 2, 8 * 8, f"a {size}² image", "give a smaller size")
     extent = check_real("extent", extent, low=EXTENT_RANGE[0], high=EXTENT_RANGE[1])
     grid = PixelGrid.square(size, extent, center)
+    W = _weights(weights, sino.values)
+    sino, scale = _kept_at_unit_scale(sino, W)
     b = sino.values
-    W = _weights(weights, b)
     M = np.ones((size, size)) if mask is None else np.asarray(mask, dtype=bool).astype(float)
     if M.shape != (size, size):
         raise ParameterError(f"mask must be a ({size}, {size}) array; got {M.shape}")
@@ -91,41 +97,62 @@ def _setup(sino, image, start, run, build_projector=True):
         raise ParameterError("mask is empty (no pixel is True): there is nothing to "
                              "reconstruct (mark the pixels the target may occupy)")
     A = build(run.projector, grid, sino, run.rays_per_bin) if build_projector else None
-    x = _start(sino, x0, W, (size, extent, center))
+    x = _start(sino, x0, (size, extent, center), scale)
     x *= M
     if nonneg:
         x = np.maximum(x, 0.0)
-    return _Problem(image, grid, A, b, W, M, x)
+    return _Problem(image, grid, A, b, W, M, x, scale, sino)
+
+
+def _kept_at_unit_scale(sino, W):
+    """(sinogram, scale): ``sino`` with the values the weights W keep (W > 0) divided by
+    ``scale`` and the dropped bins at 0, ``scale`` the power of two 2^k that puts the
+    largest kept |value| in [1, 2) (1 when they keep only zeros). Dividing by it is exact,
+    and the solvers run on data of order 1 whatever its magnitude (1e-300 to 1e307), their
+    products (W r², the normal equations) neither underflowing nor overflowing; a dropped
+    bin (a glint of any size) sets neither the scale nor, at 0, anything else."""
+    keep = W > 0
+    peak = float(np.max(np.abs(sino.values[keep])))
+    scale = math.ldexp(1.0, math.frexp(peak)[1] - 1) if peak > 0 else 1.0
+    if scale == 1.0 and np.all(keep):
+        return sino, scale
+    b = np.zeros(sino.shape)
+    b[keep] = sino.values[keep] / scale
+    return dataclasses.replace(sino, values=b), scale
 
 
 def _weights(weights, b):
     """The per-bin weights W, checked (finite, ≥ 0, one per bin, not all 0) and divided by
     their largest: relative, as every solver is invariant to their scale. None: all 1."""
     W = np.ones_like(b) if weights is None else finite_array("weights", weights)
-    if W.shape != b.shape or np.any(W < 0):
-        raise ParameterError(f"weights must be non-negative, one per bin {b.shape}; got "
-                             f"shape {W.shape}")
+    if W.shape != b.shape:
+        raise ParameterError(f"weights must be one value >= 0 per bin, shape {b.shape} "
+                             f"(n_views, n_bins); got shape {W.shape}")
+    if np.any(W < 0):
+        idx = tuple(int(i) for i in np.argwhere(W < 0)[0])
+        raise ParameterError(f"weights must be >= 0 (0 drops a bin); got {W[idx]:g} at "
+                             f"index {idx} (of shape {W.shape})")
     if not np.any(W > 0):
-        raise ParameterError("weights are all zero: every bin is dropped, so there is no "
-                             "data to reconstruct from (keep some bins, weight > 0)")
+        raise ParameterError(f"weights are all zero (shape {W.shape}): every bin is dropped, "
+                             "so there is no data to reconstruct from (keep some bins, "
+                             "weight > 0)")
     return W / W.max()
 
 
-def _start(sino, x0, W, square):
-    """The warm start as a new (size, size) array: zeros (``x0`` None), FBP of the data the
-    weights W keep (the dropped bins set to 0) on ``square`` (size, extent, center) for
-    "fbp", an Image's values, or a finite array."""
+def _start(sino, x0, square, scale):
+    """The warm start as a new (size, size) array at the data's unit scale (``sino`` holds
+    the values the weights keep divided by ``scale``, the dropped bins at 0): zeros (``x0``
+    None), FBP of ``sino`` on ``square`` (size, extent, center) for "fbp", or an Image's
+    values or a finite array divided by ``scale``."""
     size, extent, center = square
-    b = sino.values
     if x0 is None:
         x = np.zeros((size, size))
     elif isinstance(x0, str) and x0 == "fbp":      # the data the weights keep (dropped: 0)
-        kept = sino if np.all(W > 0) else dataclasses.replace(sino, values=np.where(W > 0, b, 0))
-        x = np.array(quiet_fbp(kept, size, extent, center=center))
+        x = np.array(quiet_fbp(sino, size, extent, center=center))
     elif isinstance(x0, Image):
-        x = np.array(x0.values)
+        x = np.array(x0.values) / scale
     else:
-        x = np.array(finite_array("x0", x0))
+        x = np.array(finite_array("x0", x0)) / scale
     if x.shape != (size, size):
         raise ParameterError(f"x0 must be None, 'fbp', an Image or a ({size}, {size}) array")
     return x

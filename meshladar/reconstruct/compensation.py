@@ -38,11 +38,12 @@ import numpy as np
 from .._validate import check_choice, check_count, check_sinogram, finite_array
 from ..errors import MeshladarWarning, ParameterError, user_stacklevel
 from ._kernels import surface_backproject
-from .fbp2d import fbp
+from .fbp2d import _image_square, default_extent, fbp
 from .iterative import ImageGrid, cgls, sirt
 from .operators import SurfaceProjector
 from .radiance import log_radiance, noise_floor
-from .surface import Surface, _segments, _subset, _uniform, estimate_surface, surface_weights
+from .surface import (Surface, _checked_labels, _materials, _segments, _subset, _uniform,
+                      estimate_surface, surface_weights)
 
 __all__ = ["Surface", "estimate_surface", "surface_weights", "SurfaceProjector", "compensate",
            "first_image", "SOLVERS", "MAX_PIXEL_BINS", "needed_size"]
@@ -55,7 +56,7 @@ __all__ = ["Surface", "estimate_surface", "surface_weights", "SurfaceProjector",
 MAX_PIXEL_BINS = 1.5
 
 
-def needed_size(sino, extent=1.0):
+def needed_size(sino, extent=None):
     """The smallest image size whose pixels (2 ``extent`` / size) are at most
     :data:`MAX_PIXEL_BINS` of the sinogram's bin width wide.
 
@@ -63,17 +64,23 @@ def needed_size(sino, extent=1.0):
     ----------
     sino : Sinogram
         The data; its bin width is the mean of ``bin_edges``' differences (scene units).
-        Not checked.
-    extent : float, default 1.0
-        Half-width of the image square, scene units.
+    extent : float, optional
+        Half-width of the image square, scene units. Default: :func:`compensate`'s, the
+        bins' reach max(|r_0|, |r_n|) (:func:`~meshladar.reconstruct.fbp2d.bins_reach`).
 
     Returns
     -------
     int
         The size ceil(2 ``extent`` / (:data:`MAX_PIXEL_BINS` × bin width) − 1e-9): 1e-9 keeps
-        a quotient a rounding error above an integer at that integer (427 for the paper's
-        512 bins of 0.8/256 at extent 1).
+        a quotient a rounding error above an integer at that integer (342 for the paper's
+        512 bins of 0.8/256 at their reach 0.8; 427 at extent 1).
+
+    Raises
+    ------
+    ParameterError
+        When ``sino`` is not a :class:`~meshladar.Sinogram`.
     """
+    extent = default_extent(sino, extent)
     width = float(np.mean(np.diff(sino.bin_edges)))
     return math.ceil(2.0 * float(extent) / (MAX_PIXEL_BINS * width) - 1e-9)
 
@@ -109,7 +116,7 @@ def _backed(surface, H, sino, keep, share=0.5):
     return hits >= share * strong.sum(axis=1)
 
 
-def first_image(sino, size, extent=1.0, center=(0.0, 0.0)):
+def first_image(sino, size, extent=None, center=(0.0, 0.0)):
     """The default first reconstruction: FBP of the log radiance, its floor at half a
     count (or above the noise) so weak surfaces next to glints show and noise does not
     (FBP's warnings are for FBP's own output, not for this intermediate: every
@@ -122,8 +129,9 @@ def first_image(sino, size, extent=1.0, center=(0.0, 0.0)):
         The returns (not their log: it is taken here).
     size : int >= 1
         Pixels along each side of the square image.
-    extent : float in [1e-150, 1e300], default 1.0
-        Half-width of the image square, scene units.
+    extent : float in [1e-150, 1e300], optional
+        Half-width of the image square, scene units; default the bins' reach, as
+        :func:`~meshladar.reconstruct.fbp2d.fbp`'s.
     center : (2,) float, default (0, 0)
         Centre of the image square.
 
@@ -158,8 +166,11 @@ def _seen(surface, H, sino):
     seen = total > 0.05 * float(np.median(total[total > 0])) if total.any() else total > 0
     seen[seen] = _backed(surface, H, sino, seen)
     if not seen.any():
-        raise ParameterError("no surface point of the first reconstruction is seen by the "
-                             "data; give first= or a lower threshold")
+        raise ParameterError(
+            "no surface point of the first reconstruction is seen and backed by the data in "
+            f"the square extent={surface.extent:g} about center={tuple(surface.center)}: "
+            "check that it holds the scene (default extent: the bins' reach), or give "
+            "first= or a lower threshold")
     if not seen.all():
         surface = _subset(surface, seen)
         H = H[seen]
@@ -223,7 +234,7 @@ def _check_returns(sino):
                              "the log input of the first reconstruction is made inside)")
 
 
-def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first=None,
+def compensate(sino, material, *, size=256, extent=None, center=(0.0, 0.0), first=None,
                labels=None, method="cgls", n_iter=30, weights=None, threshold=0.2, sigma=1.5,
                shadows=True, blur_deg=1.0, smooth=2.0, surface=None, tol=None, progress=False):
     """BRDF- and shadow-compensated reconstruction (see the module docstring).
@@ -234,33 +245,32 @@ def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first
         Views about z, uniform bins; its ``info["radiometry"]`` picks h(θ).
     material : BRDF or sequence of BRDFs
         The coatings (with ``labels`` when several).
-    size, extent, center : int >= 1, float, (2,) float
-        The image grid (defaults 256, 1.0 and (0, 0): the extent is not the bins' reach
-        here); pixels at most :data:`MAX_PIXEL_BINS` (1.5) bins wide, or the
-        one-pixel-thick surface comes out low and uneven (warned; :func:`needed_size`:
-        427 for the paper's 512 bins at extent 1).
+    size, extent, center : int >= 1, float in [1e-150, 1e300] or None, (2,) float
+        The image grid, as :func:`~meshladar.reconstruct.fbp2d.fbp`'s (defaults 256, None:
+        the bins' reach max(|r_0|, |r_n|), the square about the origin that holds all the
+        bins see, in any units; and (0, 0)). Pixels at most :data:`MAX_PIXEL_BINS` (1.5)
+        bins wide, or the one-pixel-thick surface comes out low and uneven (warned;
+        :func:`needed_size`: 342 for the paper's 512 bins at their reach 0.8).
     first : Image, optional
-        The first reconstruction on that grid (default FBP of the log radiance).
+        The first reconstruction on that grid (default :func:`first_image`).
     labels : (size, size) int array, optional
-        Each pixel's index into ``material``.
+        Each pixel's index into ``material``; needed for several, checked whenever given.
     method : {"cgls", "sirt"}, default "cgls"
-        The solver (:mod:`meshladar.reconstruct.iterative`), ``n_iter`` iterations,
-        warm-started from the uniform surface that fits the data best (the multiple of
-        the surface mask with the least weighted residual), masked to the surface pixels.
+        The solver (:mod:`meshladar.reconstruct.iterative`), warm-started from the uniform
+        surface that fits the data best (the multiple of the surface mask with the least
+        weighted residual), masked to the surface pixels.
     n_iter : int >= 1, default 30
         Most iterations of the solver.
     weights : (n_views, n_bins) array, optional
         Per-bin data weights (e.g. :func:`~meshladar.reconstruct.iterative.glint_weights`).
     threshold, sigma, shadows : float, float, bool
-        :func:`estimate_surface`'s (defaults 0.2, 1.5 pixels and True); unused when
-        ``surface`` is given.
+        :func:`estimate_surface`'s (defaults 0.2, 1.5 pixels, True); unused with ``surface``.
     blur_deg : float in [0, 90], default 1.0
-        Angular blur of h(θ), degrees, for the normals' uncertainty (at most 90).
+        Angular blur of h(θ), degrees, for the normals' uncertainty.
     smooth : float in [0, size], default 2.0
         Width, pixels, of the Gaussian along the surface that the solution is built from
         (x = S z, :class:`SurfaceProjector`): neighbouring surface points share their
-        ranges in most views, and without it the solution speckles along the surface.
-        0 solves for every point independently.
+        ranges in most views; without it (0) the solution speckles along the surface.
     surface : Surface, optional
         Use these surface pixels and normals instead of estimating them.
     tol, progress : float or None, bool
@@ -279,8 +289,10 @@ def compensate(sino, material, *, size=256, extent=1.0, center=(0.0, 0.0), first
     ------
     ParameterError
         When ``sino`` is not a :class:`~meshladar.Sinogram`, holds no value > 0 or has
-        non-uniform bins; when ``method`` is not one of :data:`SOLVERS` or ``size`` is not
-        an integer >= 1; when ``surface`` is not a
+        non-uniform bins; before any work, when ``method``, ``size``, ``extent`` or
+        ``center`` is invalid (as fbp's), a material is not a BRDF, or ``labels`` is
+        missing for several materials or not a (size, size) image of whole numbers in [0,
+        len(material)); when ``surface`` is not a
         :class:`~meshladar.reconstruct.surface.Surface` or not on the grid (size, extent,
         center); when no surface point is seen and backed by the data; and as
         :func:`estimate_surface`, :func:`surface_weights`, :class:`SurfaceProjector` and
@@ -340,10 +352,13 @@ def _compensated(sino, material, image, surfacing, solving):
     _check_returns(sino)
     method = check_choice("method", solving.method, SOLVERS)
     size = check_count("size", image.size)
-    extent, center = image.extent, image.center
+    extent, c = _image_square(sino, image.extent, image.center)
+    center = (float(c[0]), float(c[1]))
+    mats = _materials(material)
+    labels = _checked_labels(surfacing.labels, size, len(mats))
     radiometry = sino.radiometry or "paper"
-    surface = _surface_on_grid(sino, image._replace(size=size), surfacing)
-    H = surface_weights(surface, sino.angles_deg, material, labels=surfacing.labels,
+    surface = _surface_on_grid(sino, ImageGrid(size, extent, center), surfacing)
+    H = surface_weights(surface, sino.angles_deg, mats, labels=labels,
                         radiometry=radiometry, blur_deg=surfacing.blur_deg)
     surface, H = _seen(surface, H, sino)
     _check_resolution(sino, size, extent)
@@ -381,7 +396,8 @@ def _surface_on_grid(sino, image, surfacing):
     elif not isinstance(surface, Surface):
         raise ParameterError(f"surface must be a meshladar.reconstruct.surface.Surface; got "
                              f"{type(surface).__name__}")
-    if (surface.size, surface.extent, tuple(surface.center)) != (
-            size, float(extent), tuple(float(c) for c in center)):
-        raise ParameterError("surface must be on the image grid (size, extent, center)")
+    if (surface.size, surface.extent, tuple(surface.center)) != (size, extent, center):
+        raise ParameterError(f"surface must be on the image grid (size, extent, center) = "
+                             f"({size}, {extent:g}, {center}); got ({surface.size}, "
+                             f"{surface.extent:g}, {tuple(surface.center)})")
     return surface

@@ -40,7 +40,7 @@ from .._validate import (check_choice, check_count, check_real, check_sinogram, 
                          finite_array)
 from ..errors import MeshladarWarning, ParameterError, user_stacklevel
 from ..images import Image, pixel_centres
-from ..precision import COUNT_SLACK
+from ..precision import ANGLE_TOL_DEG, COUNT_SLACK
 from ..precision import UNIFORM_RTOL as _UNIFORM_RTOL
 from ..sinogram import Sinogram
 from ._kernels import backproject
@@ -53,8 +53,8 @@ __all__ = ["Image", "fbp", "bins_reach", "default_extent", "fourier_filter", "lo
 
 #: Interpolation of filtered projections at each pixel's range.
 INTERPOLATIONS = ("linear", "nearest")
-#: A gap between consecutive views wider than this many times the median spacing warns that
-#: the views do not cover the circle.
+#: A gap between consecutive distinct view angles wider than this many times their median
+#: spacing warns that the views do not cover the circle.
 _GAP_FACTOR = 3.0
 #: FBP samples the angles fully with about π/2 views per bin across the target's returns
 #: (π·bins_across/views ≲ 1). Measured on the disk phantom, streaks away from the disk as a
@@ -108,27 +108,45 @@ def resample_uniform(sino: Sinogram, n_bins=None) -> Sinogram:
                                info=dict(sino.info, resampled_from=sino.n_bins))
 
 
+def _distinct_angles(angles_deg):
+    """(distinct, index): the distinct view angles (radians in [0, 2π), sorted) and each
+    view's index into them. Angles (mod 360°) within ANGLE_TOL_DEG (1e-6°) of a neighbour's
+    are one (chained: sorted angles each within it of the next; 0° and 360° included)."""
+    a = np.mod(np.deg2rad(np.asarray(angles_deg, dtype=np.float64)), 2 * math.pi)
+    order = np.argsort(a, kind="stable")
+    s = a[order]
+    tol = math.radians(ANGLE_TOL_DEG)
+    new = np.concatenate([[True], np.diff(s) > tol])
+    group = np.cumsum(new) - 1
+    if group[-1] > 0 and s[0] + 2 * math.pi - s[-1] <= tol:      # across 0°: one angle
+        new[np.flatnonzero(new)[-1]] = False
+        group[group == group[-1]] = 0
+    index = np.empty(a.size, dtype=np.intp)
+    index[order] = group
+    return s[new], index
+
+
 def _view_weights(angles_deg):
-    """Half of each view's share of the circle (trapezoid on the sorted, wrapped angles)."""
-    a = np.mod(np.deg2rad(np.asarray(angles_deg)), 2 * math.pi)
-    if a.size == 1:
+    """Half of each view's share of the circle: the trapezoid on the distinct angles
+    (sorted, wrapped; :func:`_distinct_angles`), each angle's share split evenly among the
+    views taken at it. Warns for one view, or for a gap between distinct angles wider than
+    :data:`_GAP_FACTOR` times their median spacing."""
+    if np.size(angles_deg) == 1:
         warnings.warn("one view does not cover the circle: reflective FBP assumes views all "
                       "around the scene; the image is that view's backprojection, streaks "
                       "along its iso-range lines", MeshladarWarning, stacklevel=user_stacklevel())
         return np.array([math.pi])
-    order = np.argsort(a, kind="stable")
-    s = a[order]
-    gaps = np.diff(np.concatenate([s, [s[0] + 2 * math.pi]]))     # gap after each view
+    s, index = _distinct_angles(angles_deg)
+    gaps = np.diff(np.concatenate([s, [s[0] + 2 * math.pi]]))     # gap after each angle
     share = 0.5 * (gaps + np.roll(gaps, 1))
-    w = np.empty_like(a)
-    w[order] = 0.5 * share
+    w = 0.5 * share[index] / np.bincount(index)[index]
     med = float(np.median(gaps))
-    if med > 0 and gaps.max() > _GAP_FACTOR * med:
+    if gaps.max() > _GAP_FACTOR * med:
         warnings.warn(
             f"views do not cover the full circle: largest gap {math.degrees(gaps.max()):.3g}° "
-            f"vs median spacing {math.degrees(med):.3g}°; reflective FBP assumes views all "
-            "around the scene, and the missing ones will streak the image",
-            MeshladarWarning, stacklevel=user_stacklevel())
+            f"vs median spacing {math.degrees(med):.3g}° (of {s.size} distinct angles); "
+            "reflective FBP assumes views all around the scene, and the missing ones will "
+            "streak the image", MeshladarWarning, stacklevel=user_stacklevel())
     return w
 
 
@@ -175,6 +193,18 @@ def default_extent(sino, extent):
     return bins_reach(sino) if extent is None else extent
 
 
+def _image_square(sino, extent, center):
+    """(extent, centre) of :func:`fbp`'s and compensate's square, checked before any work:
+    ``extent`` (None: :func:`default_extent`, the bins' reach) in :data:`EXTENT_RANGE`,
+    ``center`` a finite (2,) point."""
+    extent = check_real("extent", default_extent(sino, extent), low=EXTENT_RANGE[0],
+                        high=EXTENT_RANGE[1])
+    c = finite_array("center", center)
+    if c.shape != (2,):
+        raise ParameterError(f"center must be a point (x, y); got shape {c.shape}")
+    return extent, c
+
+
 def bins_reach(sinogram) -> float:
     """The default half-width of a reconstruction's square (cube) about the origin: the
     bins' reach max(|r_0|, |r_n|), r_0 and r_n the first and last bin edges.
@@ -204,14 +234,17 @@ def bins_reach(sinogram) -> float:
 
 
 def _check_view_sampling(sinogram):
-    """Warn when the views are too few for the bins across the target (streaks)."""
+    """Warn when the distinct view angles (:func:`_distinct_angles`: a view repeated is
+    one angle) are too few for the bins across the target (streaks)."""
     across = bins_across(sinogram)
-    if sinogram.n_views < 2 or across == 0:
+    n = _distinct_angles(sinogram.angles_deg)[0].size
+    if n < 2 or across == 0:
         return
-    ratio = math.pi * across / sinogram.n_views
-    if ratio > _UNDERSAMPLED_RATIO:
+    if math.pi * across / n > _UNDERSAMPLED_RATIO:
         need = int(math.ceil(math.pi * across / 2.0))
-        warnings.warn(f"{sinogram.n_views} views are too few for the {across} bins across the "
+        views = (f"{n} views" if n == sinogram.n_views else f"{n} distinct views (the "
+                 f"{sinogram.n_views} views repeat {n} angles, within {ANGLE_TOL_DEG:g} deg)")
+        warnings.warn(f"{views} are too few for the {across} bins across the "
                       f"target's returns: FBP samples the angles fully with about {need} (pi/2 "
                       "per bin across); expect streaks around it, or use wider bins "
                       "(meshladar.reconstruct.resample_uniform) or more views", MeshladarWarning, stacklevel=user_stacklevel())
@@ -261,14 +294,14 @@ def fbp(sinogram, size=512, extent=None, *, filter="ramp", interpolation="linear
     MeshladarWarning
         When all views are at one angle, there is one range bin, there is one view, the
         views leave a gap wider than 3× their median spacing, or the views are too few for
-        the bins across the target (π · bins across / n_views above 8: streaks).
+        the bins across the target (π · bins across / n_views above 8: streaks). Both
+        coverage checks count distinct angles: views within 1e-6° (mod 360°) are one.
 
     Notes
     -----
     Normalised so that the FBP of the exact Radon transform of f over 360° returns f:
-    image = Σ_v w_v q_v(r), w_v half of view v's share of 2π, q_v the ramp-filtered
-    projection values_v / bin_width². Views that leave a gap of more than 3× the median
-    spacing warn (missing views streak the image).
+    image = Σ_v w_v q_v(r), w_v half of view v's share of 2π (an angle's share split evenly
+    among the views repeating it), q_v the ramp-filtered projection values_v / bin_width².
 
     References
     ----------
@@ -357,21 +390,16 @@ def _check_fbp(sinogram, size, extent, filter, interpolation, center):
     _warn_degenerate(sinogram)
     size = check_count("size", size)
     check_size("size", size * size, 8 * 3, f"a {size} x {size} image", "use a smaller size")
-    extent = bins_reach(sinogram) if extent is None else extent
-    extent = check_real("extent", extent, low=EXTENT_RANGE[0], high=EXTENT_RANGE[1])
+    extent, c = _image_square(sinogram, extent, center)
     check_choice("filter", filter, FILTERS)
     check_choice("interpolation", interpolation, INTERPOLATIONS)
-    c = finite_array("center", center)
-    if c.shape != (2,):
-        raise ParameterError(f"center must be a point (x, y); got shape {c.shape}")
     return size, extent, c
 
 
 def _warn_degenerate(sinogram):
     """Warn (issue 29: silently a streak or zeros) when the data cannot make an image: all
     views at one angle, or a single range bin."""
-    distinct = np.unique(np.round(np.mod(sinogram.angles_deg, 360.0), 9)).size
-    if distinct < 2 and sinogram.n_views > 1:
+    if _distinct_angles(sinogram.angles_deg)[0].size < 2 and sinogram.n_views > 1:
         warnings.warn(f"all {sinogram.n_views} views are at "
                       f"{float(np.mod(sinogram.angles_deg[0], 360.0)):g} degrees: FBP smears "
                       "one profile into a streak; it needs views all around the scene",

@@ -18,6 +18,11 @@ down-weight glint bins or shadow-gapped views instead of clipping them; 0 drops 
 Each solver here checks its arguments and sets up its problem (the private ``_problem``:
 the checks the solvers share, the grid, projector, data, weights, mask and start), then
 runs its iterations (the private ``_iterations``: each method's loop and record).
+
+The solvers are invariant to the data's scale: they run on the values divided by the power
+of two 2^k nearest below the largest value the weights keep, and multiply the image back,
+so data of any magnitude (1e-300 to 1e307) gives the unit-scale run's image times the scale
+(exactly, for a power of two) and the same residuals, without underflow or overflow.
 """
 
 from __future__ import annotations
@@ -109,7 +114,9 @@ def sirt(sino, size=256, extent=None, *, center=(0.0, 0.0), n_iter=50, x0=None, 
     Image
         ``info``: method, iterations, ``residuals`` (weighted ‖A x − b‖ per iteration,
         relative to the weighted ‖b‖), stopped ("n_iter" or "tol"), projector (the pair
-        used, or the operator's class name), nonneg, rays_per_bin, radiometry.
+        used, or the operator's class name), nonneg, rays_per_bin, radiometry. Scaling the
+        data by 2^k scales the image by 2^k exactly and leaves the residuals as they are
+        (module docstring).
 
     Raises
     ------
@@ -119,7 +126,8 @@ def sirt(sino, size=256, extent=None, *, center=(0.0, 0.0), n_iter=50, x0=None, 
         would pass meshladar's 4 GiB allocation limit; ``extent`` is outside [1e-150,
         1e300]; ``n_iter`` is not an integer >= 1, or ``rays_per_bin`` where the Siddon
         projector is built; ``tol`` is not > 0; ``weights`` are not finite, one per bin
-        and ≥ 0, or are all 0; ``mask`` is not (size, size) or is empty; ``x0`` is not
+        and ≥ 0 (the first negative named, with its index), or are all 0; ``mask`` is not
+        (size, size) or is empty; the image would pass float64's range; ``x0`` is not
         None, "fbp", an Image or a finite (size, size) array; or ``projector`` is neither
         a name above nor an operator with ``@``, ``.T`` and a matching ``grid`` (the
         linear pair also refuses non-uniform bins).
@@ -335,12 +343,13 @@ def tv_fista(sino, size=256, extent=None, *, center=(0.0, 0.0), tv=0.005, n_iter
     steps, warm-started from the previous step's dual).
 
     ``tv`` sets λ relative to the image's scale: λ = tv · L · s with s the 99th percentile
-    of |FBP image|, so each step smooths away jumps below about tv × s (the default 0.005:
+    of |FBP image| of the data the weights keep (dropped bins at 0), so each step smooths away jumps below about tv × s (the default 0.005:
     half a per cent of the image's level; on an exact disk sinogram at 10° view spacing
     the error is then 0.092, below FBP's 0.104 at 1°). Other parameters as :func:`sirt`
     (default warm start from FBP). ``info["residuals"]`` holds the data term,
-    ``info["objective"]`` the whole objective per iteration (monotone only on average:
-    FISTA is not a descent method).
+    ``info["objective"]`` the whole objective per iteration relative to ½‖W^½ b‖² (its value
+    at x = 0, so that, like the residuals, it does not change with the data's scale;
+    monotone only on average: FISTA is not a descent method).
 
     L is estimated by 15 power iterations on M Aᵀ W A M from a seeded random start
     (``numpy.random.default_rng(0)``), so runs repeat exactly. TV is the sum over pixels
@@ -379,9 +388,10 @@ def tv_fista(sino, size=256, extent=None, *, center=(0.0, 0.0), tv=0.005, n_iter
     Returns
     -------
     Image
-        ``info``: method "tv_fista", tv, lambda (λ), lipschitz (L), iterations, residuals
-        (weighted ‖A x − b‖ relative to the weighted ‖b‖, per iteration), objective,
-        stopped ("n_iter" or "tol"), nonneg, projector, radiometry.
+        ``info``: method "tv_fista", tv, lambda (λ, in the data's units), lipschitz (L),
+        iterations, residuals (weighted ‖A x − b‖ relative to the weighted ‖b‖, per
+        iteration), objective (relative to ½‖W^½ b‖²), stopped ("n_iter" or "tol"), nonneg,
+        projector, radiometry.
 
     Raises
     ------

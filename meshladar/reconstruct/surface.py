@@ -286,8 +286,8 @@ def surface_weights(surface, angles_deg, material, *, labels=None, radiometry="p
     material : BRDF or sequence of BRDF
         The coatings.
     labels : (size, size) int array_like, keyword-only, optional
-        Each pixel's index into ``material``; needed when it holds more than one BRDF,
-        ignored otherwise.
+        Each pixel's index into ``material``, whole numbers in [0, len(material)); needed
+        when it holds more than one BRDF, and checked whenever given.
     radiometry : {"paper", "power"}, keyword-only, default "paper"
         h = F cos θ (the paper's Eq. 8) or the received power F cos² θ.
     blur_deg : float in [0, 90], keyword-only, default 1.0
@@ -305,8 +305,9 @@ def surface_weights(surface, angles_deg, material, *, labels=None, radiometry="p
     ParameterError
         When ``radiometry`` or ``blur_deg`` is invalid; a material is not a
         :class:`~meshladar.brdf.BRDF` or returns no light to a monostatic ladar; several
-        materials come without ``labels``, or ``labels`` is not (size, size) or holds an
-        index outside [0, len(material)) on the surface; ``angles_deg`` is not finite; or
+        materials come without ``labels``, or ``labels`` (whenever given) is not (size,
+        size) or holds a value that is not a whole number in [0, len(material)) (the first
+        named, with its pixel); ``angles_deg`` is not finite; or
         the shadow map's views do not match ``angles_deg``.
     ModelError
         When a material's class does not define ``projected``.
@@ -317,9 +318,7 @@ def surface_weights(surface, angles_deg, material, *, labels=None, radiometry="p
     """
     radiometry = "power" if check_radiometry(radiometry) else "paper"
     blur_deg = check_real("blur_deg", blur_deg, low=0.0, high=MAX_BLUR_DEG)
-    mats = [material] if isinstance(material, BRDF) else list(material)
-    for i, m in enumerate(mats):
-        check_brdf(f"material[{i}]", m)
+    mats = _materials(material)
     which = _material_of(surface, len(mats), labels)
     phi = np.deg2rad(finite_array("angles_deg", angles_deg).ravel())
     cos_t = surface.normals[:, :1] * np.cos(phi) + surface.normals[:, 1:] * np.sin(phi)
@@ -338,23 +337,40 @@ def surface_weights(surface, angles_deg, material, *, labels=None, radiometry="p
     return H
 
 
-def _material_of(surface, n_materials, labels):
-    """Each surface point's index into the materials: 0 for one material, else ``labels``
-    (a (size, size) int image) at the point's pixel, checked in [0, n_materials)."""
-    if n_materials == 1:
-        return np.zeros(surface.rows.size, int)
+def _materials(material):
+    """``material`` as a list of checked BRDFs: one BRDF, or a sequence of them."""
+    mats = [material] if isinstance(material, BRDF) else list(material)
+    for i, m in enumerate(mats):
+        check_brdf(f"material[{i}]", m)
+    return mats
+
+
+def _checked_labels(labels, size, n_materials):
+    """``labels`` as a (size, size) int array, each pixel's index into ``n_materials``
+    materials, checked whenever given (one material included): finite whole numbers in
+    [0, n_materials). None is refused for several materials and stands for all 0."""
     if labels is None:
-        raise ParameterError("several materials need labels: a (size, size) int image "
-                             "of indices into material")
-    lab = np.asarray(labels)
-    if lab.shape != (surface.size, surface.size):
-        raise ParameterError(f"labels must be a ({surface.size}, {surface.size}) array; "
-                             f"got {lab.shape}")
-    which = lab[surface.rows, surface.cols].astype(int)
-    if which.min() < 0 or which.max() >= n_materials:
-        raise ParameterError(f"labels on the surface must be in [0, {n_materials}); got "
-                             f"{which.min()}..{which.max()}")
-    return which
+        if n_materials > 1:
+            raise ParameterError(f"several materials ({n_materials}) need labels: a ({size}, "
+                                 f"{size}) int image of indices into material")
+        return np.zeros((size, size), dtype=np.intp)
+    lab = finite_array("labels", labels)
+    if lab.shape != (size, size):
+        raise ParameterError(f"labels must be a ({size}, {size}) array of indices into "
+                             f"material; got shape {lab.shape}")
+    bad = (lab != np.round(lab)) | (lab < 0) | (lab >= n_materials)
+    if np.any(bad):
+        i, j = (int(k) for k in np.argwhere(bad)[0])
+        raise ParameterError(f"labels must be whole numbers in [0, {n_materials}) (indices "
+                             f"into the {n_materials} material(s)); got {lab[i, j]:g} at "
+                             f"index ({i}, {j})")
+    return lab.astype(np.intp)
+
+
+def _material_of(surface, n_materials, labels):
+    """Each surface point's index into the materials: ``labels`` (a (size, size) image,
+    :func:`_checked_labels`) at the point's pixel; 0 for one material without labels."""
+    return _checked_labels(labels, surface.size, n_materials)[surface.rows, surface.cols]
 
 
 def _subset(surface, keep):

@@ -97,21 +97,46 @@ def coverage_gap_deg(view_vectors) -> float:
     float
         The angle in degrees, in [0, 180], from the probe direction farthest from every
         view to its nearest view.
+
+    Raises
+    ------
+    ParameterError
+        When ``view_vectors`` is not a finite (n, 3) array with n >= 1.
     """
     from scipy.spatial import cKDTree        # scipy.spatial: only where it is used (startup)
 
-    w = np.asarray(view_vectors, np.float64)
+    w = _view_vectors(view_vectors)
     chord, _ = cKDTree(w).query(fibonacci_sphere(20_000))
     return float(np.degrees(2 * np.arcsin(min(1.0, chord.max() / 2))))
 
 
+def _view_vectors(value):
+    """``value`` as a finite (n, 3) float64 array of view directions, n >= 1 (checked before
+    scipy's tree, whose own error names neither the argument nor the shape wanted)."""
+    w = finite_array("view_vectors", value)
+    if w.ndim != 2 or w.shape[1] != 3 or w.shape[0] < 1:
+        raise ParameterError(f"view_vectors must be an (n, 3) array of view directions, "
+                             f"n >= 1; got shape {w.shape}")
+    return w
+
+
 def _view_weights(weights, n):
-    """The views' solid angles: ``weights`` checked, or 4π/n each."""
+    """The views' solid angles: ``weights`` checked (finite, one per view, ≥ 0, not all
+    0), or 4π/n each."""
     if weights is None:
         return np.full(n, 4 * math.pi / n)
     wts = finite_array("weights", weights)
-    if wts.shape != (n,) or np.any(wts < 0):
-        raise ParameterError(f"weights must be {n} non-negative solid angles")
+    if wts.shape != (n,):
+        raise ParameterError(f"weights must be {n} solid angles >= 0, shape ({n},) (one per "
+                             f"view); got shape {wts.shape}")
+    if np.any(wts < 0):
+        k = int(np.argmax(wts < 0))
+        raise ParameterError(f"weights must be solid angles >= 0 (one per view); got "
+                             f"{wts[k]:g} at index {k} (of shape {wts.shape})")
+    if not np.any(wts > 0):
+        raise ParameterError(f"weights are all zero (shape {wts.shape}): every view is "
+                             "dropped and the volume would be 0; give each view's solid "
+                             "angle (> 0 for some), e.g. sphere_weights(sino.view_vectors)")
     return wts
 
 
@@ -148,10 +173,15 @@ def sphere_weights(view_vectors) -> np.ndarray:
     (n_views,) ndarray of float64
         Each view's solid angle, steradians: 4π / 2e5 times the number of probe points
         nearest to it (they sum to 4π).
+
+    Raises
+    ------
+    ParameterError
+        When ``view_vectors`` is not a finite (n, 3) array with n >= 1.
     """
     from scipy.spatial import cKDTree        # scipy.spatial: only where it is used (startup)
 
-    w = np.asarray(view_vectors, np.float64)
+    w = _view_vectors(view_vectors)
     probe = fibonacci_sphere(200_000)
     _, owner = cKDTree(w).query(probe)
     return np.bincount(owner, minlength=len(w)) * (4 * math.pi / probe.shape[0])
@@ -221,7 +251,8 @@ def fbp3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None,
         ``MAX_GAP_DEG`` (30°) from every view; ``size`` is not an integer >= 1 or a
         ``size``³ volume (16 bytes a voxel) would pass meshladar's 4 GiB allocation limit;
         ``extent`` is outside [1e-150, 1e300]; ``center`` is not a finite (3,) point;
-        ``weights`` are not n_views finite values ≥ 0; or ``smooth`` is outside [0,
+        ``weights`` are not n_views finite values ≥ 0 or are all 0 (the message names the
+        shape, or the first negative value and its index); or ``smooth`` is outside [0,
         n_bins].
 
     Warns
@@ -236,11 +267,12 @@ def fbp3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None,
     F. Natterer, *The Mathematics of Computerized Tomography*, Wiley (1986), Ch. II (the
     inversion formula of the Radon transform; its local form in three dimensions).
     """
+    check_sinogram("sino", sino)
+    wts = _view_weights(weights, sino.n_views)
     dr = _check_views_and_bins(sino)
     grid = _grid(size, bins_reach(sino) if extent is None else extent, center)
     n, (x, y, z) = grid.n, grid.centers
     check_size("size", float(n) ** 3, 8 * 2, f"a {n}^3 volume", "give a smaller size")
-    wts = _view_weights(weights, sino.n_views)
     smooth = _check_view_sampling(sino, smooth)
     q = _second_differences(sino, dr, smooth)
     out = np.zeros((n, n, n))

@@ -91,8 +91,8 @@ def _compensated(sino, size, n_iter, scene):
     if glints:
         mats = [dataclasses.replace(m, lobes="diffuse") if isinstance(m, SandfordRobertson)
                 and m.has_diffuse else m for m in mats]
-    return compensate(sino, mats, labels=labels, size=size, method="sirt", n_iter=n_iter,
-                      weights=glint_weights(sino) if glints else None)
+    return compensate(sino, mats, labels=labels, size=size, extent=1.0, method="sirt",
+                      n_iter=n_iter, weights=glint_weights(sino) if glints else None)
 
 
 def _iterate(method, sino, size, n_iter):

@@ -52,17 +52,20 @@ def test_the_disk_pair_is_found():
 OFF_CENTRE = ((0.625, -0.4167, 0.1667), (0.2083, 0.1042, 0.1042))
 
 
-@pytest.mark.parametrize("step, bins", [(2.0, 256), (1.0, 512)])
-def test_only_the_disks_are_found_not_a_circle_through_both(step, bins):
+@pytest.mark.parametrize("step, bins, unit", [(2.0, 256, 1.0), (1.0, 512, 1.0),
+                                              (2.0, 256, 480.0)])
+def test_only_the_disks_are_found_not_a_circle_through_both(step, bins, unit):
     """Exactly the two true disks, largest first, centres within half a bin and radii
     within two bins of the truth (the surface estimate's inward bias on convex
-    boundaries, ~1 % here), and no two of them overlap."""
-    scene = Scene([ml.Disk(c[:2], c[2], materials.DARK_GRAY) for c in OFF_CENTRE])
-    lad = Ladar(np.arange(0.0, 360.0, step), np.linspace(-1.0, 1.0, bins + 1))
+    boundaries, ~1 % here), and no two of them overlap; in millimetres too (unit 480:
+    the default square is the bins' reach, not [−1, 1]²)."""
+    truth = unit * np.array(OFF_CENTRE)
+    scene = Scene([ml.Disk(c[:2], c[2], materials.DARK_GRAY) for c in truth])
+    lad = Ladar(np.arange(0.0, 360.0, step), unit * np.linspace(-1.0, 1.0, bins + 1))
     shapes = find_shapes(ml.simulate(scene, lad))
-    dr = 2.0 / bins
+    dr = 2.0 * unit / bins
     assert len(shapes) == 2
-    for (disk, _, _), (x, y, r) in zip(shapes, OFF_CENTRE):
+    for (disk, _, _), (x, y, r) in zip(shapes, truth):
         assert np.hypot(disk.center[0] - x, disk.center[1] - y) < 0.5 * dr
         assert abs(disk.radius - r) < 2.0 * dr
     (a, _, _), (b, _, _) = shapes

@@ -281,7 +281,7 @@ def test_tol_on_a_real_run_reports_how_it_stopped():
 
 def test_fbp_refuses_3d_views_and_preprocessing_keeps_them():
     views = ml.meshes.fibonacci_sphere(4)
-    sino = ml.Sinogram(np.ones((4, 8)), angles_deg=np.zeros(4), bin_edges=np.linspace(-1, 1, 9),
+    sino = ml.Sinogram(np.ones((4, 8)), bin_edges=np.linspace(-1, 1, 9),
                        view_vectors=views)
     with pytest.raises(ParameterError, match="view vectors off the x-y plane"):
         ml.fbp(sino, size=8)

@@ -161,8 +161,8 @@ def test_shadow_awareness_drops_hidden_points_on_the_gray_pair():
     inside = np.hypot(X - cx, Y - cy) < 1.05 * radius
     got = {}
     for shadows in (True, False):
-        img = compensate(sino, materials.DARK_GRAY, size=128, method="sirt", n_iter=40,
-                         shadows=shadows)
+        img = compensate(sino, materials.DARK_GRAY, size=128, extent=1.0, method="sirt",
+                         n_iter=40, shadows=shadows)
         got[shadows] = (study._error(img.values, ideal, points),
                         study._clutter(img.values, band, inside))
     assert got[True][1] < 0.002 < got[False][1]
@@ -178,7 +178,7 @@ def test_compensation_removes_edge_darkening(material, method):
     surface uniform at ⟨h⟩ · 2πR."""
     sino = _disk(material)
     power = float(sino.total().mean())
-    img = compensate(sino, material, size=SIZE, method=method,
+    img = compensate(sino, material, size=SIZE, extent=1.0, method=method,
                      n_iter=100 if method == "sirt" else 30)
     dark, _ = paper.disk_darkening(img, R, power)
     assert abs(dark) <= 0.2
@@ -197,7 +197,7 @@ def test_compensation_in_received_power():
     """With radiometry='power' h gains a cos θ; the level is still ⟨h⟩ · 2πR."""
     m = paper._diffuse(0.99)
     sino = ml.simulate(Scene([Disk((0.0, 0.0), R, m)]), LADAR, radiometry="power")
-    img = compensate(sino, m, size=SIZE, method="sirt", n_iter=100)
+    img = compensate(sino, m, size=SIZE, extent=1.0, method="sirt", n_iter=100)
     level, spread = _ring_stats(img)
     assert img.info["radiometry"] == "power"
     assert abs(level / (_mean_weight(m, "power") * 2 * np.pi * R) - 1) < LEVEL_TOL
@@ -238,7 +238,7 @@ def test_compensation_with_photon_noise():
     noisy = study._noisy(clean, 1000.0, 7)
     assert noise_floor(clean) == pytest.approx(1e-6)
     assert noise_floor(noisy) == pytest.approx(3.0 / 1000.0, rel=0.2)   # three photons
-    img = compensate(noisy, m, size=SIZE, method="sirt", n_iter=100)
+    img = compensate(noisy, m, size=SIZE, extent=1.0, method="sirt", n_iter=100)
     dark, _ = paper.disk_darkening(img, R, float(clean.total().mean()))
     assert abs(dark) <= 0.2
     level, spread = _ring_stats(img)
@@ -285,15 +285,15 @@ def test_compensation_warns_below_the_resolution_it_needs():
     m = paper._diffuse(0.99)
     sino = ml.simulate(Scene([Disk((0.0, 0.0), R, m)]), Ladar.paper())
     bw = float(np.diff(sino.bin_edges)[0])
-    need = needed_size(sino)
+    need = needed_size(sino, 1.0)
     assert need == math.ceil(2.0 / (MAX_PIXEL_BINS * bw)) == 427
     expected = _mean_weight(m) * 2 * np.pi * R
     for size, (level, spread, offset) in STATED_BAND.items():
         if size < need:
             with pytest.warns(MeshladarWarning, match=r"size=256 .*2\.50 range bins.*size=427"):
-                img = compensate(sino, m, size=size)
+                img = compensate(sino, m, size=size, extent=1.0)
         else:
-            img = compensate(sino, m, size=size)            # warnings are errors here
+            img = compensate(sino, m, size=size, extent=1.0)   # warnings are errors here
         got = _band_stats(img, bw)
         assert abs(got[0] / expected - level) < BAND_LEVEL_TOL, (size, got)
         assert abs(got[1] - spread) < BAND_SPREAD_TOL, (size, got)

@@ -146,7 +146,7 @@ def test_volume_checks():
         Volume(np.zeros((2, 2)), x=[0, 1], y=[0, 1], z=[0])
     # views that do not cover the sphere: a hemisphere, a plane of views (a 2-D sinogram)
     hemi = fibonacci_sphere(300, hemisphere=True)
-    half = ml.Sinogram(np.ones((300, 16)), angles_deg=np.zeros(300),
+    half = ml.Sinogram(np.ones((300, 16)),
                        bin_edges=np.linspace(-1, 1, 17), view_vectors=hemi)
     with pytest.raises(ml.errors.ParameterError, match="whole sphere"):
         fbp3d(half, size=8)

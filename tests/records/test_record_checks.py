@@ -37,6 +37,20 @@ def test_a_sinogram_refuses_angles_that_contradict_its_view_vectors():
     assert up.view_vectors[0, 2] == 1.0
 
 
+def test_a_sinogram_of_3d_views_takes_their_azimuths():
+    """angles_deg is optional with view_vectors: it is their azimuths (as for Ladar), so
+    a hemisphere of views needs no made-up angles; with neither, the error says so."""
+    vec = ml.meshes.fibonacci_sphere(5)
+    sino = ml.Sinogram(np.ones((5, 32)), bin_edges=EDGES, view_vectors=vec)
+    np.testing.assert_allclose(sino.angles_deg, np.degrees(np.arctan2(vec[:, 1], vec[:, 0])),
+                               atol=1e-12)
+    with pytest.raises(ParameterError, match="give angles_deg or view_vectors; got neither"):
+        ml.Sinogram(np.ones((5, 32)), bin_edges=EDGES)
+    with pytest.raises(ParameterError, match=r"view_vectors must have shape \(n_views, 3\); "
+                                             r"got \(5, 2\)"):
+        ml.Sinogram(np.ones((5, 32)), bin_edges=EDGES, view_vectors=vec[:, :2])
+
+
 def test_a_sinogram_of_none_says_so():
     with pytest.raises(ParameterError, match="values must be an array of real numbers; "
                                              "got None"):

@@ -107,7 +107,7 @@ def test_show_volume_of_a_reconstructed_ball():
     edges = np.linspace(-1.0, 1.0, 49)
     lo, hi = np.clip(edges[:-1], -a, a), np.clip(edges[1:], -a, a)
     vals = np.broadcast_to(np.pi * (a * a * (hi - lo) - (hi ** 3 - lo ** 3) / 3), (200, 48))
-    sino = ml.Sinogram(vals, angles_deg=np.zeros(200), bin_edges=edges, view_vectors=W)
+    sino = ml.Sinogram(vals, bin_edges=edges, view_vectors=W)
     vol = radon3d(sino, size=32, extent=1.0)
     surf = viewer.volume_surface(vol)
     r = np.linalg.norm(np.asarray(surf.points), axis=1)
