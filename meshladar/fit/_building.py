@@ -18,9 +18,29 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..forward.mesh import trace
+from ..scene import Scene
 from ..weighing import per_table_weight
 from ._sampling import analytic_triplets, interp_matrix
 from ._tables import GRID
+
+
+def parts_of(geometry):
+    """(part names, coatings) of the kernel of ``geometry`` (an analytic or mesh Scene, or
+    Hits), known before it is traced: an analytic scene's shape names (``"shape <i>"``
+    where unnamed, the index added where two agree), else the coatings' names
+    (``"material <i>"`` where unnamed or two agree)."""
+    if isinstance(geometry, Scene) and not geometry.is_mesh:
+        names = [s.name if s.name is not None else f"shape {i}"
+                 for i, s in enumerate(geometry.shapes)]
+        if len(set(names)) != len(names):
+            names = [f"{nm} ({i})" for i, nm in enumerate(names)]
+        return tuple(names), tuple(s.material for s in geometry.shapes)
+    materials = tuple(geometry.materials)
+    names = tuple(getattr(m, "name", None) or f"material {i}"
+                  for i, m in enumerate(materials))
+    if len(set(names)) != len(names):
+        names = tuple(f"material {i}" for i in range(len(names)))
+    return names, materials
 
 
 def analytic_fields(scene, ladar, radiometry, samples):
@@ -28,14 +48,12 @@ def analytic_fields(scene, ladar, radiometry, samples):
     n_views, n_bins = ladar.n_views, ladar.bin_edges.size - 1
     mats = [interp_matrix(r, t, w, n_views * n_bins, GRID, cubic=True) for r, t, w in
             analytic_triplets(scene, ladar, radiometry == "power", samples)]
-    names = [s.name if s.name is not None else f"shape {i}"
-             for i, s in enumerate(scene.shapes)]
-    if len(set(names)) != len(names):
-        names = [f"{nm} ({i})" for i, nm in enumerate(names)]
-    return dict(matrices=tuple(mats), parts=tuple(names),
-                materials=tuple(s.material for s in scene.shapes), shape=(n_views, n_bins),
-                angles_deg=ladar.angles_deg, bin_edges=ladar.bin_edges, radiometry=radiometry,
-                source="analytic", info={"samples_per_shape": samples, "units": "length/sr"},
+    names, materials = parts_of(scene)
+    return dict(matrices=tuple(mats), parts=names, materials=materials,
+                shape=(n_views, n_bins), angles_deg=ladar.angles_deg,
+                bin_edges=ladar.bin_edges, view_vectors=ladar.view_vectors,
+                radiometry=radiometry, source="analytic",
+                info={"samples_per_shape": samples, "units": "length/sr"},
                 _traced=(scene, ladar))
 
 
@@ -55,13 +73,10 @@ def hits_fields(hits, radiometry):
     for m in range(len(hits.materials)):
         sel = ok & (hits.material == m)
         mats.append(interp_matrix(rows[sel], theta[sel], omega[sel], n_views * n_bins, GRID))
-    names = tuple(getattr(m, "name", None) or f"material {i}"
-                  for i, m in enumerate(hits.materials))
-    if len(set(names)) != len(names):
-        names = tuple(f"material {i}" for i in range(len(names)))
-    return dict(matrices=tuple(mats), parts=names, materials=tuple(hits.materials),
+    names, materials = parts_of(hits)
+    return dict(matrices=tuple(mats), parts=names, materials=materials,
                 shape=(n_views, n_bins), angles_deg=hits.ladar.angles_deg, bin_edges=edges,
-                radiometry=radiometry, source="mesh",
+                view_vectors=hits.ladar.view_vectors, radiometry=radiometry, source="mesh",
                 info={"mode": hits.mode, "normals": hits.normals,
                       "rays": int(np.sum(hits.rays))})
 

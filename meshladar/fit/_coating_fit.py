@@ -120,7 +120,8 @@ class CoatingFit:
         """(low, high) arrays of the ``level`` intervals.
 
         ``method="normal"`` (z the normal quantile): a parameter whose valid range starts
-        at 0 or above (``info["positive"]``: every SR parameter) has a positive estimate,
+        at 0 or above (``info["positive"]``: every built-in coating's parameter, as its
+        bounds) has a positive estimate,
         and a finite σ gets its interval on the log scale, estimate · exp(∓ z σ /
         estimate) (the delta method's σ of the logarithm): it stays positive and follows
         the right skew of a width's estimates (the glinting disk's b at 10³ photons covers

@@ -29,16 +29,17 @@ import numpy as np
 NULL_REL = 1e-9
 #: A parameter takes part in a null direction when its (scaled) component exceeds this.
 _SHARE = 0.05
-#: Also undetermined: a σ beyond half the bounds' width (or the value, unbounded), a
-#: non-negative parameter's σ beyond half its value (its 95 % interval spans more than a
-#: factor 7), or a correlation beyond _CORR_LIMIT with another while σ exceeds _LOOSE of
-#: the value.
+#: Also undetermined: a σ beyond half the bounds' width, a non-negative or unbounded
+#: parameter's σ beyond half its value (its 95 % interval spans more than a factor 7), or a
+#: correlation beyond _CORR_LIMIT with another while σ exceeds _LOOSE of the value.
 _REL_LIMIT = 0.5
 _CORR_LIMIT = 0.995
 _LOOSE = 0.25
 #: A parameter whose effect on the data over its range is below this share of the largest
 #: one's does not act on the data.
 _DEAD = 1e-14
+#: The scale of that effect for an unbounded parameter whose value is below it.
+_UNIT = 1.0
 #: A ridge: parameters correlated beyond this (in absolute value) are each loosely
 #: determined along it, and the fit names the combination across it that the data measure
 #: (:func:`_ridges`), with the eigenvectors of their unit-diagonal covariance whose
@@ -58,9 +59,11 @@ class Identified(NamedTuple):
     combinations: list
 
 
-def _scales(params, x):
+def _scales(params, x, floor=1e-12):
+    """Each parameter's range: its bounds' width, or (unbounded) its value, at least
+    ``floor``."""
     return np.array([p.high - p.low if math.isfinite(p.high - p.low) else
-                     max(abs(v), 1e-12) for p, v in zip(params, x)])
+                     max(abs(v), floor) for p, v in zip(params, x)])
 
 
 def _uncertainty(fisher, x, params, label):
@@ -69,7 +72,9 @@ def _uncertainty(fisher, x, params, label):
     n = len(params)
     fisher = 0.5 * (fisher + fisher.T)
     width = _scales(params, x)
-    effect = np.diag(fisher) * width ** 2
+    # the data's dependence over the range; an unbounded parameter at 0 on a unit scale
+    # (its value's scale would make any effect vanish)
+    effect = np.diag(fisher) * _scales(params, x, floor=_UNIT) ** 2
     reasons = [True] * n
     top = float(effect.max(initial=0.0))
     for i in range(n):
@@ -158,15 +163,17 @@ def _widened(coefficients, live, n):
 
 def _loose_ones(reasons, live, involved, at, named):
     """Mark, among the determined live parameters, those whose σ exceeds half their range
-    (or, non-negative, half their value) or which trade off with another beyond
-    _CORR_LIMIT while loose."""
+    (or, non-negative or unbounded, half their value) or which trade off with another
+    beyond _CORR_LIMIT while loose."""
     sub, width, x = at
     params, label = named
     sd = np.sqrt(np.maximum(np.diag(sub), 0.0))
     for a, i in enumerate(live):
-        if not involved[a] and sd[a] > _REL_LIMIT * width[i]:
+        bounded = math.isfinite(params[i].high - params[i].low)
+        if not involved[a] and bounded and sd[a] > _REL_LIMIT * width[i]:
             reasons[i] = f"its uncertainty ({sd[a]:.3g}) exceeds half its range"
-        elif not involved[a] and params[i].low >= 0.0 and sd[a] > _REL_LIMIT * x[i]:
+        elif (not involved[a] and (params[i].low >= 0.0 or not bounded)
+              and sd[a] > _REL_LIMIT * abs(x[i])):
             reasons[i] = (f"its uncertainty ({sd[a]:.3g}) exceeds half its value "
                           f"({x[i]:.3g})")
     safe = np.where(sd > 0, sd, 1.0)

@@ -7,7 +7,9 @@ model at the estimate over the bins, in units of each bin's noise σ (an upper e
 the error of the kernel it used), and the largest shift of a parameter that change causes,
 in its σ (many bins each under 0.1 σ may shift a parameter by more). The sample count
 doubles until both are at most ``kernel_tol`` (default :data:`KERNEL_TOL` = 0.1), up to
-``max_samples``.
+``max_samples``. Stopped there, a :class:`KernelErrorWarning` gives the max_samples that
+would do, never more than fit_coatings takes (``MAX_KERNEL_SAMPLES`` = 2^20); where even
+that would not, the error expected there and the kernel_tol that accepts it.
 
 A mesh kernel traced from its Scene climbs the same ladder in rays per range-bin width
 (the scene traced again at half the ray spacing), up to :data:`MAX_KERNEL_RAYS` rays over
@@ -30,6 +32,7 @@ import numpy as np
 from ..errors import MeshladarWarning, user_stacklevel
 from . import _irls
 from ._params import _materials
+from .kernels import MAX_KERNEL_SAMPLES
 
 #: Largest kernel error allowed in any bin, in units of that bin's noise σ.
 KERNEL_TOL = 0.1
@@ -127,10 +130,8 @@ class Ladder:
                         "do (the error falls ~2× per doubling): trace fewer views at a time, "
                         "or accept it")
             else:
-                need = n * 2 ** min(64, math.ceil(0.5 * math.log2(worst / self.tol)))
                 text = (f"with {n} samples per boundary (kernel_tol={self.tol:g}, capped by "
-                        f"max_samples={self.cap}); pass max_samples={need} (the error falls "
-                        "~4× per doubling) or accept it")
+                        f"max_samples={self.cap}); " + _analytic_advice(n, worst, self.tol))
             warnings.warn(head + text, KernelErrorWarning, stacklevel=user_stacklevel())
 
     def info(self):
@@ -154,6 +155,30 @@ class Ladder:
                                           "used)") + "; kernel_shift: the largest shift of "
                                       "a parameter, in its σ, that change causes (scaled "
                                       "alike)")}
+
+
+def _analytic_advice(n, worst, tol):
+    """What to do about an analytic kernel of ``n`` samples per boundary whose error (or
+    shift) ``worst`` exceeds ``tol``: the max_samples that would do (the error falls ~4×
+    per doubling), never beyond what fit_coatings takes (:data:`MAX_KERNEL_SAMPLES`); past
+    it, the error expected there and how to accept it."""
+    need = n * 2 ** min(64, math.ceil(0.5 * math.log2(worst / tol)))
+    if need <= MAX_KERNEL_SAMPLES:
+        return f"pass max_samples={need} (the error falls ~4× per doubling) or accept it"
+    if n >= MAX_KERNEL_SAMPLES:
+        return (f"this is the most max_samples takes ({MAX_KERNEL_SAMPLES}): accept it "
+                f"(kernel_tol={_up(worst)} allows it; kernel_tol=None skips the check)")
+    there = worst / 4.0 ** math.log2(MAX_KERNEL_SAMPLES / n)
+    return (f"even the most max_samples takes, {MAX_KERNEL_SAMPLES}, leaves about "
+            f"{there:.2g} σ (the error falls ~4× per doubling): pass "
+            f"max_samples={MAX_KERNEL_SAMPLES} with kernel_tol={_up(there)}, or accept it "
+            "(kernel_tol=None skips the check)")
+
+
+def _up(value):
+    """``value`` rounded up to two significant digits, as text."""
+    digits = math.floor(math.log10(value)) - 1
+    return f"{math.ceil(value / 10.0 ** digits) * 10.0 ** digits:.2g}"
 
 
 def _unit(kernel):

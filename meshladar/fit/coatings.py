@@ -22,18 +22,23 @@ import functools
 import math
 import warnings
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
-from .._validate import check_choice, check_count, check_real, check_seed, check_sinogram
+from .._validate import (check_choice, check_count, check_real, check_seed, check_sinogram,
+                         short)
 from ..errors import MeshladarWarning, ParameterError, user_stacklevel
+from ..hits import Hits
 from ..ladar import Ladar
+from ..precision import ANGLE_TOL_DEG
 from ..waveforms import Waveforms
 from ..scene import Scene
 from . import _irls, _profile
 from ._coating_fit import CoatingFit
 from ._identify import NULL_REL, _correlation, _misfit, _uncertainty, describe
-from ._params import _materials, _resolve_params
+from ._building import parts_of
+from ._params import PartList, _materials, _resolve_params
 from ._resolution import (KERNEL_TOL, MAX_SAMPLES, MIN_KERNEL_TOL, KernelErrorWarning, Ladder,
                           kernel_shift, with_kernel_error)
 from ._tables import _table
@@ -61,7 +66,8 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
     geometry : CoatingKernel, Scene or Hits
         The traced geometry (:func:`coating_kernel`); a Scene (analytic or mesh, with
         trace's defaults) is traced on the measured views and bins. The kernel of the
-        user's own Hits is used as it is, its error not estimated.
+        user's own Hits is used as it is, its error not estimated. A kernel (or Hits) must
+        have the data's views, bin edges and radiometry (where ``measured`` says).
     measured : Sinogram or Waveforms
         The data (its ``info["radiometry"]`` picks the radiometry for a Scene); waveforms
         need a waveform kernel (:meth:`CoatingKernel.received`).
@@ -71,10 +77,12 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
     free : sequence or dict, optional
         Parameter names to fit (dataclass fields of each part's BRDF; default all four SR
         parameters, or ρd and b of a diffuse-only SR coating, or every float field of
-        another BRDF); a dict gives them per part.
+        another BRDF); a dict gives them per part (its keys parts that are fitted).
     bounds : dict, optional
-        "part.param", "index.param" or "param" → (low, high) (default SR's valid ranges,
-        others unbounded): they limit the search only, not σ.
+        "part.param", "index.param" or "param" of a free parameter → (low, high)
+        (default, and at most, a built-in coating's valid ranges: :data:`SR_BOUNDS`; [0, 1]
+        but Phong's exponent, ≥ 0, and GGX's α, [1e-4, 1]; a user's own BRDF's fields
+        unbounded): they limit the search only, not σ.
     initial : dict, optional
         part → BRDF to start from (default the geometry's own coatings).
     noise : {"gaussian", "poisson"}
@@ -95,8 +103,8 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
         this in each bin and in each parameter's shift (a mesh: the shift alone,
         :mod:`._resolution`); the fit uses 2N. None: no check.
     max_samples : int
-        The most N (default 2^16; a mesh stops at 2^23 rays too); above it a
-        :class:`KernelErrorWarning` gives the error and the N that would do.
+        The most N (default 2^16, at most 2^20; a mesh stops at 2^23 rays too); above it
+        a :class:`KernelErrorWarning` gives the error and the N that would do.
     max_iter : int
         Most outer (reweighting) iterations.
 
@@ -106,17 +114,14 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
         Warns :class:`IdentifiabilityWarning` naming any parameter the data cannot
         determine and the combinations they do.
     """
-    waveforms = isinstance(measured, Waveforms)
-    if not waveforms:
-        check_sinogram("measured", measured)
-    noise = _check_measured(measured.values, noise)
+    noise, waveforms = _check_measured(measured, noise)
     bootstrap, seed = check_count("bootstrap", bootstrap, low=0), check_seed("seed", seed)
     kernel_tol, max_samples, max_iter = _check_solver(kernel_tol, max_samples, max_iter)
     scale, M, background = _noise_options(noise, photons_per_unit, speckle_cells, background,
                                           float(np.max(measured.values)))
-    kernel = _kernel_for(geometry, measured, waveforms=waveforms, samples=samples)
+    kernel, mats, params = _kernel_and_params(geometry, measured, (parts, free, bounds,
+                                                                   initial), waveforms, samples)
     ladder = Ladder(kernel, kernel_tol, max_samples)
-    mats, params = _resolve_params(kernel, parts, free, bounds, initial)
     opts = _Options(noise, scale, M, background, max_iter)
     x = np.clip([float(getattr(mats[p.part], p.name)) for p in params],
                 [p.low for p in params], [p.high for p in params])
@@ -210,9 +215,13 @@ def _noise_sigma(measured, opts, n):
     return sigma_of
 
 
-def _check_measured(values, noise):
-    """``noise`` checked, and data a fit cannot use refused: nothing returned, or negative
-    counts."""
+def _check_measured(measured, noise):
+    """(``noise`` checked, whether ``measured`` are waveforms); data a fit cannot use
+    refused: not a Sinogram or Waveforms, nothing returned, or negative counts."""
+    waveforms = isinstance(measured, Waveforms)
+    if not waveforms:
+        check_sinogram("measured", measured)
+    values = measured.values
     noise = check_choice("noise", noise, NOISE_MODELS)
     if not np.any(values > 0):
         raise ParameterError("measured has no positive value: nothing returned, so there is "
@@ -222,31 +231,107 @@ def _check_measured(values, noise):
                              f"{int(np.count_nonzero(values < 0))} negative values (smallest "
                              f"{float(values.min()):.4g}): subtract no background, or use "
                              "noise='gaussian'")
-    return noise
+    return noise, waveforms
 
 
-def _kernel_for(geometry, measured, *, waveforms, samples):
-    """The coating kernel of ``geometry`` on the measured views and bins, checked."""
+def _kernel_and_params(geometry, measured, choice, waveforms, samples):
+    """(the kernel, each part's coating, the free parameters): the parts, free names and
+    bounds of ``choice`` = (parts, free, bounds, initial) checked before a Scene or Hits
+    is traced, a kernel's views, bins and radiometry checked against ``measured``."""
+    given = _geometry_parts(geometry, measured, waveforms=waveforms)
+    mats, params = _resolve_params(given, *choice)
+    kernel = (given if isinstance(given, CoatingKernel)
+              else _traced_kernel(geometry, measured, samples=samples))
+    return kernel, mats, params
+
+
+def _geometry_parts(geometry, measured, *, waveforms):
+    """The geometry's kernel, checked against ``measured`` (its views, bins and
+    radiometry); or the parts of a Scene or Hits (:class:`PartList`), before anything is
+    traced (Hits' views and bins checked)."""
     if waveforms and not (isinstance(geometry, CoatingKernel)
                           and geometry.source.endswith("waveforms")):
         raise ParameterError("measured waveforms need the geometry as a waveform kernel: "
                              "coating_kernel(...).received(sample_rate, pulse=...)")
     if isinstance(geometry, CoatingKernel):
-        kernel = geometry
-    elif isinstance(geometry, Scene):
+        _check_agreement(geometry, measured, waveforms, "the kernel")
+        return geometry
+    if isinstance(geometry, Hits):
+        lad = geometry.ladar
+        _check_agreement(_Views((lad.n_views, lad.bin_edges.size - 1), lad.angles_deg,
+                                lad.bin_edges, lad.view_vectors, None), measured, False,
+                         "the hits' ladar")
+    elif not isinstance(geometry, Scene):
+        raise ParameterError(f"geometry must be a CoatingKernel, a Scene or Hits; got "
+                             f"{type(geometry).__name__}")
+    return PartList(*parts_of(geometry))
+
+
+class _Views(NamedTuple):
+    """What a kernel's data must share with it (:func:`_check_agreement`)."""
+
+    shape: tuple
+    angles_deg: np.ndarray
+    bin_edges: np.ndarray
+    view_vectors: np.ndarray | None
+    radiometry: str | None
+
+
+#: The largest difference of a bin edge between the data and the kernel taken as none, in
+#: units of the kernel's narrowest bin (view angles: ANGLE_TOL_DEG degrees, modulo 360).
+EDGE_TOL = 1e-6
+
+
+def _check_agreement(views, measured, waveforms, whose):
+    """Refuse ``measured`` unless its shape, views (angles modulo 360°, and the view
+    vectors where both have them), bin edges (a waveform's time edges) and radiometry
+    (where it says) are those of ``views`` (a kernel, or Hits' ladar), named ``whose``."""
+    if measured.values.shape != tuple(views.shape):
+        raise ParameterError(f"measured has shape {measured.values.shape}; the geometry's "
+                             f"views and bins give {tuple(views.shape)}")
+    angles = np.asarray(measured.angles_deg, float)
+    turn = (angles - views.angles_deg + 180.0) % 360.0 - 180.0
+    _refuse_where("angles_deg", np.abs(turn) > ANGLE_TOL_DEG, angles, views.angles_deg, whose)
+    name, edges = ("time_edges", measured.time_edges) if waveforms else ("bin_edges",
+                                                                          measured.bin_edges)
+    width = float(np.min(np.diff(views.bin_edges)))
+    _refuse_where(name, np.abs(edges - views.bin_edges) > EDGE_TOL * width, edges,
+                  views.bin_edges, whose)
+    mine = np.asarray(measured.view_vectors, float)
+    if views.view_vectors is not None and mine.shape == views.view_vectors.shape:
+        off = np.max(np.abs(mine - views.view_vectors), axis=1) > np.deg2rad(ANGLE_TOL_DEG)
+        _refuse_where("view_vectors", off, mine, views.view_vectors, whose)
+    if None not in (measured.radiometry, views.radiometry) and \
+            measured.radiometry != views.radiometry:
+        raise ParameterError(f"measured has radiometry {measured.radiometry!r}, {whose}'s is "
+                             f"{views.radiometry!r}: make the kernel with coating_kernel(..., "
+                             f"radiometry={measured.radiometry!r}), or fit data of "
+                             f"radiometry {views.radiometry!r}")
+
+
+def _refuse_where(name, differ, mine, theirs, whose):
+    """A ParameterError naming ``name``, the first entry where ``differ`` and both values."""
+    if not np.any(differ):
+        return
+    i = int(np.argmax(differ))
+    raise ParameterError(f"measured.{name} differ from {whose}'s in {int(np.sum(differ))} of "
+                         f"{len(differ)} entries: entry {i} is {np.round(mine[i], 10)} in "
+                         f"measured, {np.round(theirs[i], 10)} in {whose} (measured "
+                         f"{short(np.asarray(mine))}; {whose} {short(np.asarray(theirs))}): "
+                         "fit the kernel made for the data's ladar (coating_kernel(scene, "
+                         "ladar)), or the Scene itself")
+
+
+def _traced_kernel(geometry, measured, *, samples):
+    """The coating kernel of a Scene (on the measured views and bins) or of Hits."""
+    if isinstance(geometry, Scene):
         if samples is None and not geometry.is_mesh:
             samples = 2048
         views = (dict(angles_deg=measured.angles_deg) if measured.planar
                  else dict(angles_deg=None, view_vectors=measured.view_vectors))
-        kernel = coating_kernel(geometry, Ladar(bin_edges=measured.bin_edges, **views),
-                                radiometry=measured.radiometry or "paper",
-                                samples=samples)
-    else:
-        kernel = coating_kernel(geometry, radiometry=measured.radiometry or "paper")
-    if measured.values.shape != kernel.shape:
-        raise ParameterError(f"measured has shape {measured.values.shape}; the geometry's "
-                             f"views and bins give {kernel.shape}")
-    return kernel
+        return coating_kernel(geometry, Ladar(bin_edges=measured.bin_edges, **views),
+                              radiometry=measured.radiometry or "paper", samples=samples)
+    return coating_kernel(geometry, radiometry=measured.radiometry or "paper")
 
 
 def _noise_options(noise, photons_per_unit, speckle_cells, background, peak):

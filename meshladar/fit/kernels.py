@@ -46,6 +46,7 @@ from ..scene import Scene
 from ..sensor import check_radiometry
 from ..sinogram import Sinogram
 from ._building import analytic_fields, hits_fields, traced_mesh_fields
+from ._params import part_index
 from ._tables import GRID, _table
 
 __all__ = ["CoatingKernel", "coating_kernel", "GRID"]
@@ -79,6 +80,9 @@ class CoatingKernel:
         Provenance: ``samples_per_shape`` and ``units`` (analytic); ``mode``, ``normals``,
         ``rays``, and ``ray_spacing`` and ``rays_per_bin`` when traced from a Scene
         (mesh); ``sample_rate``, ``pulse``, ``response`` added by :meth:`received`.
+    view_vectors : (n_views, 3) array or None
+        The views' unit vectors (the ladar's; None when not known). :func:`fit_coatings`
+        refuses data whose views, bin edges or radiometry are not the kernel's.
     """
 
     matrices: tuple
@@ -90,6 +94,7 @@ class CoatingKernel:
     radiometry: str
     source: str
     info: dict = field(default_factory=dict)
+    view_vectors: np.ndarray | None = None
     _traced: tuple | None = field(default=None, repr=False)
     _finer: dict = field(default_factory=dict, repr=False)
 
@@ -179,13 +184,7 @@ class CoatingKernel:
         ParameterError
             If ``part`` is neither.
         """
-        if isinstance(part, (int, np.integer)) and not isinstance(part, bool):
-            if 0 <= part < len(self.parts):
-                return int(part)
-        elif part in self.parts:
-            return self.parts.index(part)
-        raise ParameterError(f"part must be one of {list(self.parts)} or an index below "
-                             f"{len(self.parts)}; got {part!r}")
+        return part_index(self.parts, part)
 
     def contribution(self, part, material) -> np.ndarray:
         """One part's sinogram values (n_views, n_bins) with ``material``.
@@ -286,7 +285,8 @@ class CoatingKernel:
                              np.asarray(w.time_edges), self.radiometry,
                              f"{self.source} waveforms",
                              {**self.info, "sample_rate": float(sample_rate),
-                              "pulse": repr(pulse), "response": repr(response)})
+                              "pulse": repr(pulse), "response": repr(response)},
+                             self.view_vectors)
 
     def sinogram(self, materials=None):
         """:meth:`predict` as a :class:`~meshladar.Sinogram`.
