@@ -2,8 +2,9 @@
 (:func:`script`; :func:`run` for a caller in the same process).
 
 The command line imports the whole engine (about a second); a Ctrl-C or SIGTERM during that
-import is one line and status 130, like one during a run, not a traceback from inside
-whichever module was loading. The import stands at the top of this module, under the guard.
+import is one line and status 130 (Ctrl-C) or 143 (SIGTERM), like one during a run, not a
+traceback from inside whichever module was loading. The import stands at the top of this
+module, under the guard.
 """
 
 import os
@@ -11,7 +12,12 @@ import signal
 import sys
 
 
+#: The signal that interrupted the import, if one did (SIGTERM; a Ctrl-C raises by itself).
+_stopped_by = []
+
+
 def _interrupt(signum, frame):
+    _stopped_by.append(int(signum))
     raise KeyboardInterrupt
 
 
@@ -25,10 +31,22 @@ finally:
 
 
 def run(argv=None) -> int:
-    """Run the command line with ``argv`` (default the process's)."""
+    """Run the command line with ``argv`` (default the process's).
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        The arguments after the program's name (default ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        :func:`meshladar.cli.main`'s status; when loading the command line was interrupted,
+        128 + the signal's number (130 for Ctrl-C, 143 for SIGTERM) after one line.
+    """
     if main is None:
         print("meshladar: interrupted", file=sys.stderr)
-        return 130
+        return 128 + (_stopped_by[-1] if _stopped_by else int(signal.SIGINT))
     return main(argv)
 
 

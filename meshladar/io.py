@@ -119,9 +119,12 @@ def load_result(path):
     ParameterError
         When ``path`` is not a non-empty str or os.PathLike.
     ResultFileError
-        When the file is missing, unreadable, not a regular file, not an ``.npz``, damaged
-        (a member declaring more bytes than it holds, or failing to read), too large to
-        unpack, without metadata, or with metadata that is not a JSON object.
+        When the file is missing, unreadable, not a regular file, not an ``.npz`` (a file
+        that does not begin as a zip archive is refused before numpy reads it, its kind
+        named where its first bytes tell: an STL or PLY mesh, a LAS or HDF5 file, a bare
+        ``.npy``), damaged (a member declaring more bytes than it holds, or failing to
+        read), too large to unpack, without metadata, or with metadata that is not a JSON
+        object.
     """
     path = check_path("path", path)
     try:
@@ -134,9 +137,11 @@ def load_result(path):
         # a FIFO or a device would block or stream forever: refused before opening
         raise ResultFileError(f"{path}: not a regular file (a result file is an .npz)")
     try:
-        with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
-            _check_declared_sizes(path, z)
-            arrays = {k: z[k] for k in z.files}
+        with open(path, "rb") as fh:
+            _check_zip(path, fh)
+            with np.load(fh, allow_pickle=False) as z:
+                _check_declared_sizes(path, z)
+                arrays = {k: z[k] for k in z.files}
     except ResultFileError:
         raise
     except FileNotFoundError:
@@ -156,6 +161,32 @@ def load_result(path):
         raise ResultFileError(f"{path}: damaged metadata (a JSON {type(meta).__name__}, not "
                               "an object)")
     return arrays, meta
+
+
+#: A zip archive's first bytes (a local file header, or an empty archive's end record).
+_ZIP_MAGIC = (b"PK\x03\x04", b"PK\x05\x06")
+#: The first bytes of files a result is mistaken for, and what they are.
+_NOT_NPZ = ((b"\x93NUMPY", "a bare .npy array"), (b"\x89HDF", "an HDF5 file"),
+            (b"LASF", "a LAS point cloud"), (b"ply", "a PLY mesh"),
+            (b"solid", "an ASCII STL mesh"), (b"glTF", "a GLB model"))
+
+
+def _check_zip(path, fh):
+    """Refuse a file that does not begin as a zip archive, before numpy's reader (which
+    takes any other file for a pickle and says so), naming what it looks like; ``fh`` is
+    left at its start."""
+    head = fh.read(84)
+    fh.seek(0)
+    if head[:4] in _ZIP_MAGIC:
+        return
+    kinds = [kind for magic, kind in _NOT_NPZ if head.startswith(magic)]
+    if len(head) == 84 and 84 + 50 * int.from_bytes(head[80:], "little") == \
+            os.fstat(fh.fileno()).st_size:       # a binary STL's size is its triangles'
+        kinds.insert(0, "a binary STL mesh")
+    what = (f"it looks like {kinds[0]}" if kinds else "an empty file" if not head
+            else "its first bytes are not a zip archive's")
+    raise ResultFileError(f"{path}: not a readable result file: not an .npz archive "
+                          f"({what}); give an .npz file that meshladar wrote")
 
 
 def _check_declared_sizes(path, z):

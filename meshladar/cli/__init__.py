@@ -11,6 +11,7 @@ body only calls the API.
 from __future__ import annotations
 
 import functools
+import os
 import signal
 import sys
 import tempfile
@@ -39,8 +40,9 @@ def _one_line_warning(message, category, filename, lineno, line=None, *, words=s
     return f"meshladar: warning: {words(str(message))}\n"
 
 
-#: Per command, how an API message is put in its flags' words (simulate's: ``normals=
-#: 'smooth'`` becomes ``--normals smooth``).
+#: Per command, how an API message (an error's or a warning's) is put in its flags' words
+#: (simulate's: ``normals='smooth'`` becomes ``--normals smooth``, ``ray_spacing``
+#: ``--ray-spacing``): the one place the command's messages are translated.
 _WORDS = {"simulate": in_flags}
 
 
@@ -64,10 +66,11 @@ def main(argv=None) -> int:
     -------
     int
         The exit status: the command's own (0 on success); 2 for a
-        :class:`~meshladar.errors.MeshladarError`, an ``ImportError`` (a missing extra) or
-        an ``OSError``; 130 when interrupted (Ctrl-C, or SIGTERM on the main thread), with
-        a hint to resume when ``--run-dir`` was given; 1 for any other
-        exception (a bug), its traceback written to a new temporary file
+        :class:`~meshladar.errors.MeshladarError` (its message in the command's flags'
+        words), an ``ImportError`` (a missing extra) or an ``OSError``; 128 + the signal's
+        number when interrupted (130 for Ctrl-C, 143 for SIGTERM on the main thread), with
+        a hint to resume when ``--run-dir`` was given or a faceting study was running; 1
+        for any other exception (a bug), its traceback written to a new temporary file
         ``meshladar-traceback-*.txt``.
 
     Raises
@@ -77,13 +80,17 @@ def main(argv=None) -> int:
         parse (a flag's value checker's message), 0 after ``--help`` or ``--version``.
     """
     args = build_parser(COMMANDS).parse_args(argv)
-    previous = _terminate_as_interrupt()
+    stop = _Stop()
+    previous = _terminate_as_interrupt(stop)
+    words = _WORDS.get(args.command, str)
     format_before = warnings.formatwarning
-    warnings.formatwarning = functools.partial(_one_line_warning,
-                                               words=_WORDS.get(args.command, str))
+    warnings.formatwarning = functools.partial(_one_line_warning, words=words)
     try:
         return COMMANDS[args.command](args)
-    except (MeshladarError, ImportError) as exc:  # ImportError: a missing extra, named there
+    except MeshladarError as exc:
+        print(f"meshladar: error: {words(str(exc))}", file=sys.stderr)
+        return 2
+    except ImportError as exc:                  # a missing extra, named there
         print(f"meshladar: error: {exc}", file=sys.stderr)
         return 2
     except OSError as exc:
@@ -91,12 +98,8 @@ def main(argv=None) -> int:
         print(f"meshladar: error:{where} {exc.strerror or exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        hint = ""
-        if getattr(args, "run_dir", None):
-            hint = (f"; finished chunks are kept in {args.run_dir}: run the same command "
-                    "again to resume")
-        print(f"meshladar: interrupted{hint}", file=sys.stderr)
-        return 130
+        print(f"meshladar: interrupted{_resume_hint(args)}", file=sys.stderr)
+        return 128 + stop.signum
     except Exception as exc:  # noqa: BLE001 - a bug of meshladar's own: say so in one line
         path = _save_traceback()
         print(f"meshladar: internal error ({type(exc).__name__}: "
@@ -117,13 +120,37 @@ def _save_traceback():
     return path
 
 
-def _interrupt(signum, frame):
-    raise KeyboardInterrupt
+def _resume_hint(args):
+    """What an interrupted command kept, and how to go on: a run folder's finished chunks,
+    a faceting study's finished points (in OUTDIR/run); the other studies keep nothing."""
+    if getattr(args, "run_dir", None):
+        return (f"; finished chunks are kept in {args.run_dir}: run the same command again "
+                "to resume")
+    if args.command == "study" and args.kind == "faceting":
+        return (f"; finished study points are kept in {os.path.join(args.outdir, 'run')}: "
+                "run the same command again to resume")
+    if args.command == "study":
+        return (f"; the {args.kind} study keeps no finished part: running it again starts "
+                "over")
+    return ""
 
 
-def _terminate_as_interrupt():
+class _Stop:
+    """The signal that stopped the command: SIGINT (Ctrl-C) unless SIGTERM's handler ran.
+    Called as SIGTERM's handler, it records the signal and stops the run as Ctrl-C does."""
+
+    def __init__(self):
+        self.signum = int(signal.SIGINT)
+
+    def __call__(self, signum, frame):
+        self.signum = int(signum)
+        raise KeyboardInterrupt
+
+
+def _terminate_as_interrupt(stop):
     """SIGTERM stops a run as Ctrl-C does (workers cancelled, finished chunks kept, a
-    resume hint); returns the previous handler, or None off the main thread."""
+    resume hint), ``stop`` recording it; returns the previous handler, or None off the main
+    thread."""
     if threading.current_thread() is not threading.main_thread():
         return None
-    return signal.signal(signal.SIGTERM, _interrupt)
+    return signal.signal(signal.SIGTERM, stop)

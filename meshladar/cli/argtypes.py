@@ -8,7 +8,8 @@ import math
 
 __all__ = ["KIND_TYPES", "positive_int", "nonnegative_int", "positive_float",
            "finite_float", "unit_fraction", "nonnegative_float", "pair", "direction",
-           "angle_list", "window_size", "bounces", "coatings", "MergeCoatings"]
+           "angle_list", "window_size", "bounces", "bounce_count", "coatings",
+           "MergeCoatings"]
 
 
 def _number(parse, ok, what):
@@ -59,6 +60,18 @@ unit_fraction = _number(float, lambda v: 0 < v <= 1, "number in (0, 1]")
 nonnegative_float = _number(float, lambda v: v >= 0 and math.isfinite(v),
                             "non-negative finite number")
 _count = _number(int, lambda v: 1 <= v <= 8, "number of bounces from 1 to 8 or 'auto'")
+#: An order of bounces from 1 to 8 (``view --bounces``: no ``auto``).
+bounce_count = _number(int, lambda v: 1 <= v <= 8, "number of bounces from 1 to 8")
+
+
+def _items(text, what):
+    """``text`` split at its commas, each item stripped; an empty item (``0,,5``, a
+    trailing comma) is refused, naming its position and ``what`` is valid."""
+    items = [v.strip() for v in text.split(",")]
+    for k, item in enumerate(items, 1):
+        if not item:
+            raise argparse.ArgumentTypeError(f"item {k} of {text!r} is empty; give {what}")
+    return items
 
 
 def bounces(text: str):
@@ -98,10 +111,11 @@ def pair(text: str):
     Raises
     ------
     argparse.ArgumentTypeError
-        When ``text`` is not exactly two numbers, or either is not finite.
+        When ``text`` is not exactly two numbers (an empty item named by its position), or
+        either is not finite.
     """
     try:
-        values = tuple(float(v) for v in text.split(","))
+        values = tuple(float(v) for v in _items(text, "two finite numbers U,V"))
     except ValueError:
         values = ()
     if len(values) != 2 or not all(math.isfinite(v) for v in values):
@@ -125,11 +139,11 @@ def direction(text: str):
     Raises
     ------
     argparse.ArgumentTypeError
-        When ``text`` is not exactly three numbers, one is not finite, or all three are
-        zero.
+        When ``text`` is not exactly three numbers (an empty item named by its position),
+        one is not finite, or all three are zero.
     """
     try:
-        values = [float(v) for v in text.split(",")]
+        values = [float(v) for v in _items(text, "a direction X,Y,Z")]
     except ValueError:
         values = []
     if len(values) != 3 or not all(math.isfinite(v) for v in values) or \
@@ -145,8 +159,8 @@ def angle_list(text: str):
     Parameters
     ----------
     text : str
-        Numbers separated by commas, e.g. ``"0,1,5,45,90"``; empty items (``"0,,1"``, a
-        trailing comma) are skipped. Any finite value is accepted (no range is imposed).
+        Numbers separated by commas, e.g. ``"0,1,5,45,90"``, spaces around them allowed.
+        Any finite value is accepted (no range is imposed).
 
     Returns
     -------
@@ -156,10 +170,12 @@ def angle_list(text: str):
     Raises
     ------
     argparse.ArgumentTypeError
-        When an item is not a number, none is given, or one is not finite.
+        When an item is empty (``"0,,5"``, a trailing comma: its position is named), not a
+        number, or not finite.
     """
+    items = _items(text, "comma-separated numbers in degrees")
     try:
-        values = [float(v) for v in text.split(",") if v.strip()]
+        values = [float(v) for v in items]
     except ValueError:
         raise argparse.ArgumentTypeError(
             f"must be comma-separated numbers in degrees; got {text!r}") from None
@@ -206,8 +222,7 @@ def coatings(text):
     ----------
     text : str
         ``PART=COATING`` pairs separated by commas, e.g. ``"small=aluminum"``; spaces
-        around names and empty items are ignored. A part given the same coating twice is
-        accepted.
+        around names are ignored. A part given the same coating twice is accepted.
 
     Returns
     -------
@@ -219,10 +234,11 @@ def coatings(text):
     Raises
     ------
     argparse.ArgumentTypeError
-        When an item has no ``=``, or a part is given two different coatings.
+        When an item is empty (its position named), has no ``=``, or a part is given two
+        different coatings.
     """
     out = {}
-    for item in filter(None, (x.strip() for x in text.split(","))):
+    for item in _items(text, "PART=COATING pairs"):
         if "=" not in item:
             raise argparse.ArgumentTypeError(f"must be PART=COATING pairs; got {item!r}")
         k, v = (x.strip() for x in item.split("=", 1))

@@ -155,13 +155,15 @@ def cmd_view(args) -> int:
     args : argparse.Namespace
         The scene's options (``scene``, ``material``, ``coating``, ``materials``: see
         :func:`meshladar.cli.simulate.load_scene`); ``view_angle``: the view's angle about z
-        in degrees; ``screenshot``: a ``.png`` path to render off screen into, or None to
-        open a window; ``log``: colour by log10 of the return; ``size``: the window's
-        (width, height) in pixels; ``camera``: ``"oblique"`` or ``"view"``; ``points``: a
-        point cloud file (``meshladar scan``'s LAS, LAZ or HDF5) drawn over the scene by
-        :func:`meshladar.viz.points.show_points`, coloured by ``color_by``, or None;
-        ``bounces``: with a number, :func:`meshladar.viz.bounce_view.show_bounces` instead
-        (a mesh scene); ``quiet``: no "wrote" line.
+        in degrees (None: 90); ``screenshot``: a ``.png`` path to render off screen into,
+        or None to open a window; ``log``: colour by log10 of the return; ``size``: the
+        window's (width, height) in pixels; ``camera``: ``"oblique"`` or ``"view"`` (None:
+        oblique); ``points``: a point cloud file (``meshladar scan``'s LAS, LAZ or HDF5)
+        drawn over the scene by :func:`meshladar.viz.points.show_points`, coloured by
+        ``color_by`` (None: intensity), or None; ``bounces``: with a number,
+        :func:`meshladar.viz.bounce_view.show_bounces` instead (a mesh scene); ``quiet``:
+        no "wrote" line. Options that do not apply to the drawing chosen are refused
+        (:func:`check_view_options`).
 
     Returns
     -------
@@ -171,12 +173,16 @@ def cmd_view(args) -> int:
     Raises
     ------
     ParameterError
-        When ``screenshot`` is not a ``.png`` path or names an input, when the scene
+        When an option does not apply to what is drawn (:func:`check_view_options`), when
+        ``screenshot`` is not a ``.png`` path or names an input, when the scene
         cannot be loaded, or when there is no display (neither ``DISPLAY`` nor
         ``WAYLAND_DISPLAY`` set) and no ``screenshot``.
     ImportError
         When pyvista is not installed (checked before the scene is loaded).
     """
+    check_view_options(args)
+    view_angle = 90.0 if args.view_angle is None else args.view_angle
+    camera = args.camera or "oblique"
     if args.screenshot is not None:
         check_output(args.screenshot, (".png",), [args.scene, args.materials, args.points],
                      "--screenshot")
@@ -191,22 +197,62 @@ def cmd_view(args) -> int:
             raise ParameterError("--bounces views a mesh (a phantom's light stays in its "
                                  "plane); give a mesh file")
         plotting.viz("bounce_view").show_bounces(
-            scene, view_angle_deg=args.view_angle, bounces=args.bounces,
+            scene, view_angle_deg=view_angle, bounces=args.bounces,
             off_screen=args.screenshot is not None, screenshot=args.screenshot,
-            window_size=args.size, camera=args.camera)
+            window_size=args.size, camera=camera)
     elif args.points is not None:
         plotting.viz("points").show_points(
-            cloud, scene if scene.is_mesh else None, color_by=args.color_by,
+            cloud, scene if scene.is_mesh else None, color_by=args.color_by or "intensity",
             off_screen=args.screenshot is not None, screenshot=args.screenshot,
             window_size=args.size)
     else:
         plotting.viz("viewer").show_scene(
-            scene, view_angle_deg=args.view_angle, ladar=default_ladar,
+            scene, view_angle_deg=view_angle, ladar=default_ladar,
             off_screen=args.screenshot is not None, screenshot=args.screenshot,
-            log_scale=args.log, window_size=args.size, camera=args.camera)
+            log_scale=args.log, window_size=args.size, camera=camera)
     if args.screenshot and not args.quiet:
         print(f"wrote {args.screenshot}")
     return 0
+
+
+#: What each of view's drawings takes no option of: (the drawing's flag, why, the flags).
+_VIEW_REFUSES = (
+    ("--bounces", "faces are coloured by the order of bounces that dominates their return",
+     ("--points", "--color-by", "--log")),
+    ("--points", "an isometric camera frames the scene and its points, coloured by "
+     "--color-by",
+     ("--view-angle", "--camera", "--log")))
+
+
+def check_view_options(args):
+    """``view``'s options that do not apply to what is drawn are errors, never ignored:
+    the bounces' view takes no points, colouring or log scale; the points' view no view
+    angle, camera or log scale; ``--color-by`` colours the points only.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``view``'s options (``bounces``, ``points``, ``color_by``, ``log``,
+        ``view_angle``, ``camera``: None or False when not given).
+
+    Raises
+    ------
+    ParameterError
+        Naming the first option that does not apply and the one that rules it out.
+    """
+    given = {"--bounces": args.bounces is not None, "--points": args.points is not None,
+             "--color-by": args.color_by is not None, "--log": bool(args.log),
+             "--view-angle": args.view_angle is not None,
+             "--camera": args.camera is not None}
+    for mode, why, flags in _VIEW_REFUSES:
+        refused = [f for f in flags if given[f]]
+        if given[mode] and refused:
+            raise ParameterError(f"{refused[0]} does not apply with {mode} ({why}); leave "
+                                 f"{refused[0]} out")
+    if given["--color-by"] and not given["--points"]:
+        raise ParameterError(f"--color-by {args.color_by} colours the points of --points; "
+                             "give --points FILE, or leave --color-by out (the scene is "
+                             "coloured by its return)")
 
 
 def _read_points(path):
@@ -248,21 +294,25 @@ def cmd_study(args) -> int:
     Raises
     ------
     ParameterError
-        When ``outdir`` is not a folder name; when ``photons``, ``speckle`` or
-        ``background`` is given to a study other than reconstruction; when ``speckle`` or
-        ``background`` is given without ``photons``.
+        When ``outdir`` is not a folder name (or lies under a file); when ``photons``,
+        ``speckle`` or ``background`` is given to a study other than reconstruction; when
+        ``speckle`` or ``background`` is given without ``photons``; all before the work.
     ImportError
         When matplotlib is not installed (checked before the work).
     """
+    noise = (("--photons", args.photons), ("--speckle", args.speckle),
+             ("--background", args.background))
+    for flag, value in noise:
+        if value is not None and args.kind != "reconstruction":
+            raise ParameterError(f"{flag} is an option of the reconstruction study; the "
+                                 f"{args.kind} study does not use it")
+        if value is not None and args.photons is None:
+            raise ParameterError(f"{flag} needs --photons (the signal's scale in "
+                                 "photoelectrons): give --photons N too")
     check_outdir(args.outdir)
     plotting.require("matplotlib")              # before the work, not after it
     if args.kind == "reconstruction":
         return _study_reconstruction(args)
-    for flag, value in (("--photons", args.photons), ("--speckle", args.speckle),
-                        ("--background", args.background)):
-        if value is not None:
-            raise ParameterError(f"{flag} is an option of the reconstruction study; the "
-                                 f"{args.kind} study does not use it")
     if args.kind == "tomography3d":
         return _study_3d(args)
     result = _ml.studies.faceting_study(args.setting, progress=not args.quiet,

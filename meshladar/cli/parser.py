@@ -11,9 +11,11 @@ import re
 from .. import __version__
 from ..forward.options import MODELS, OPTIONS, SENSOR_OPTIONS
 from ..reconstruct import FILTERS
-from .argtypes import (KIND_TYPES, MergeCoatings, angle_list, bounces, coatings,
-                       nonnegative_float, nonnegative_int, positive_float, positive_int,
-                       unit_fraction, window_size)
+from .argtypes import (KIND_TYPES, MergeCoatings, angle_list, bounce_count, bounces,
+                       coatings, nonnegative_float, nonnegative_int, positive_float,
+                       positive_int, unit_fraction, window_size)
+from .argv import Parser
+from .scan import BEAM_DEFAULTS
 
 __all__ = ["build_parser"]
 
@@ -150,7 +152,9 @@ def _simulate(sub, commands):
 
 
 def _reconstruct(sub, commands):
-    rec = _sub(sub, "reconstruct", commands, "FBP of a saved sinogram into a PNG",
+    rec = _sub(sub, "reconstruct", commands,
+               "invert a saved sinogram (FBP about z, or 3-D over the sphere) into a "
+               "figure (PNG, PDF, SVG, JPEG, TIFF) and its values (.npz)",
                "examples:\n  meshladar reconstruct pair.npz -o pair.png\n"
                "  meshladar reconstruct pair.npz -o pair-log.png --log")
     rec.add_argument("result", help="a result file written by meshladar simulate")
@@ -228,32 +232,34 @@ def _view(sub, commands):
               "  meshladar view room.stl --points room.las --color-by range_error\n"
               "  meshladar view bracket.glb --bounces 3 --screenshot bounces.png")
     _scene_args(vw)
-    vw.add_argument("--view-angle", type=KIND_TYPES["finite_float"], default=90.0,
-                    help="view angle about z in degrees (default: %(default)s)")
+    vw.add_argument("--view-angle", type=KIND_TYPES["finite_float"], default=None,
+                    help="view angle about z in degrees (not with --points) (default: 90)")
     vw.add_argument("--screenshot", default=None,
                     help="render off screen into this PNG (default: open a window)")
     vw.add_argument("--log", action="store_true",
-                    help="colour by log10 of the return (default: linear)")
+                    help="colour by log10 of the return (the scene alone: not with --points "
+                         "or --bounces) (default: linear)")
     vw.add_argument("--size", type=window_size, default=(900, 700), metavar="WxH",
                     help="window or screenshot size in pixels (default: 900x700)")
     vw.add_argument("--points", default=None, metavar="FILE",
                     help="a point cloud written by meshladar scan (.las, .laz, .h5), drawn "
                          "over the scene (default: the scene coloured by its return)")
-    vw.add_argument("--color-by", default="intensity",
+    vw.add_argument("--color-by", default=None,
                     choices=("intensity", "range", "return_number", "range_error", "doppler",
                              "channel", "scan_angle", "emission_time"),
-                    help="the points' colour, with --points (default: %(default)s)")
-    vw.add_argument("--bounces", type=positive_int, default=None, metavar="N",
+                    help="the points' colour, with --points only (default: intensity)")
+    vw.add_argument("--bounces", type=bounce_count, default=None, metavar="N",
                     help="colour faces by the order of bounces (1 to N, at most 8) that "
                          "dominates their return and draw sampled paths (a mesh; default: "
-                         "the single bounce's return)")
-    vw.add_argument("--camera", choices=("oblique", "view"), default="oblique",
+                         "the single bounce's return; not with --points)")
+    vw.add_argument("--camera", choices=("oblique", "view"), default=None,
                     help="oblique: beside and above the ladar; view: along the beam from "
-                         "the ladar (default: %(default)s)")
+                         "the ladar (not with --points) (default: oblique)")
 
 
 def _study(sub, commands):
-    st = _sub(sub, "study", commands, "faceting-vs-analytic study into a folder",
+    st = _sub(sub, "study", commands,
+              "run a study (faceting, tomography3d or reconstruction) into a folder",
               "examples:\n  meshladar study faceting study/\n"
               "  meshladar study faceting study-full/ --full\n\nFinished study points are "
               "kept in OUTDIR/run: re-running the same command resumes an interrupted "
@@ -295,7 +301,7 @@ _SCAN_EPILOG = """examples:
       pulse_rate=3e5 duration=0.1" --platform "moving position=-20,0,1.5 velocity=10,0,0" \\
       -o points.las
   meshladar scan part.glb --pattern "flash rows=64 columns=64 ifov_deg=0.05" \\
-      --platform "static position=-100,0,0" --divergence 0 -o frame.h5 --waveforms w.h5
+      --platform "static position=-100,0,0" --tol 0.05 -o frame.h5 --waveforms w.h5
   meshladar scan terrain.ply --pattern "oscillating half_angle_deg=20 scan_hz=50 \\
       pulse_rate=1e5 duration=1" --platform flight.csv -o strip.laz
   meshladar scan terrain.ply --pattern "oscillating half_angle_deg=20 scan_hz=50 \\
@@ -312,10 +318,13 @@ _SCAN_FLAGS = (
     ("--aperture", positive_float, 0.05, "M", "receiver aperture diameter"),
     ("--sample-rate", positive_float, 2e9, "HZ", "digitiser samples per second"),
     ("--pulse-fwhm", positive_float, 5e-9, "S", "the pulse's full width at half maximum"),
-    ("--divergence", nonnegative_float, 5e-4, "RAD", "the beam's 1/e2 half-angle"),
-    ("--tol", positive_float, 0.1, "FRACTION", "largest error in a pulse's energy share "
-     "beyond an edge: sets the sub-rays per pulse"),
-    ("--sub-rays", positive_int, None, "N", "fixed sub-rays per pulse instead of --tol"),
+    ("--divergence", nonnegative_float, BEAM_DEFAULTS["divergence"], "RAD",
+     "the beam's 1/e2 half-angle (not with a flash pattern)"),
+    ("--tol", positive_float, BEAM_DEFAULTS["tol"], "FRACTION", "largest error in a "
+     "pulse's energy share beyond an edge: sets the sub-rays per pulse (a flash pattern: "
+     "m x m sub-rays a pixel, m = ceil(1/(2 tol)))"),
+    ("--sub-rays", positive_int, None, "N", "fixed sub-rays per pulse instead of --tol "
+     "(not with a flash pattern)"),
     ("--background-rate", nonnegative_float, 0.0, "PER_S", "background photoelectrons per s"),
     ("--dark-rate", nonnegative_float, 0.0, "PER_S", "dark counts per second"),
     ("--max-returns", positive_int, 5, "N", "most returns per pulse (1-15)"),
@@ -342,8 +351,9 @@ def _scan(sub, commands):
     sc.add_argument("-o", "--output", required=True, help="points file (.las, .laz, .h5)")
     sc.add_argument("--waveforms", default=None, metavar="FILE.h5",
                     help="also write every pulse's waveform to HDF5 (default: not written)")
-    sc.add_argument("--profile", choices=("gaussian", "tophat"), default="gaussian",
-                    help="the beam's profile (default: %(default)s)")
+    sc.add_argument("--profile", choices=("gaussian", "tophat"), default=None,
+                    help="the beam's profile (not with a flash pattern) (default: "
+                         f"{BEAM_DEFAULTS['profile']})")
     sc.add_argument("--noise", action="store_true",
                     help="shot noise even without background (default: expected waveforms)")
     sc.add_argument("--discrete", action="store_true",
@@ -353,8 +363,11 @@ def _scan(sub, commands):
                     help="threshold from each record's own background (default: from "
                          "--background-rate and --dark-rate)")
     for flag, kind, default, metavar, text in _SCAN_FLAGS:
-        sc.add_argument(flag, type=kind, default=default, metavar=metavar,
-                        help=f"{text} (default: %(default)s)")
+        # the beam's defaults are applied by the command: whether a flag was given decides
+        # what applies (a flash pattern refuses --divergence)
+        later = flag.lstrip("-") in BEAM_DEFAULTS
+        sc.add_argument(flag, type=kind, default=None if later else default,
+                        metavar=metavar, help=f"{text} (default: {default})")
 
 
 _LRCS_EPILOG = """examples:
@@ -411,7 +424,7 @@ def build_parser(commands) -> argparse.ArgumentParser:
     KeyError
         When ``commands`` lacks one of the command names.
     """
-    p = argparse.ArgumentParser(
+    p = Parser(
         prog="meshladar", description="Mesh-based ladar simulation and reflection tomography.",
         epilog=_EPILOG, formatter_class=_RAW)
     p.add_argument("--version", action="version", version=f"meshladar {__version__}")

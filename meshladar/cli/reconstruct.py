@@ -55,18 +55,21 @@ def cmd_reconstruct(args) -> int:
     Raises
     ------
     ParameterError
-        When ``output`` has an extension not in :data:`IMAGE_SUFFIXES`, or it or the data
-        file beside it would overwrite ``result``; when ``smooth`` is given for views about
-        z, or ``filter`` for 3-D views; and the API's own refusals (an unreadable result,
-        an image too large).
+        Before the work: when ``output`` has an extension not in :data:`IMAGE_SUFFIXES`,
+        cannot be written where it is, or it or the data file beside it
+        (``OUTPUT.image.npz``, or ``OUTPUT.volume.npz`` in 3-D) would overwrite ``result``
+        or is a folder; when ``smooth`` is given for views about z, or ``filter`` for 3-D
+        views; and the API's own refusals (an unreadable result, an image too large).
     ImportError
         When matplotlib is not installed (checked before the work).
     """
     check_output(args.output, IMAGE_SUFFIXES, [args.result])
-    data = os.path.splitext(args.output)[0] + ".image.npz"
-    check_not_input(args.output, data, args.result, "image data")
     plotting.require("matplotlib")              # before the work, not after it
     sino, meta = io.load_sinogram(args.result)
+    data = os.path.splitext(args.output)[0] + (".image.npz" if sino.planar else
+                                               ".volume.npz")
+    check_not_input(args.output, data, args.result,
+                    "image data" if sino.planar else "volume")
     if args.log:
         sino = log_radiance(sino)
     if args.clip is not None:
@@ -74,7 +77,7 @@ def cmd_reconstruct(args) -> int:
     # no --extent: the API's default (the bins' reach about the origin), the same grid as
     # meshladar.fbp(sino) and meshladar.reconstruct.volumes.fbp3d(sino)
     if not sino.planar:
-        return _reconstruct_3d(args, sino, args.extent)
+        return _reconstruct_3d(args, sino, args.extent, data)
     if args.smooth is not None:
         raise ParameterError("--smooth applies to 3-D views (fbp3d); this sinogram's views "
                              "are about the z axis (use --filter)")
@@ -95,15 +98,13 @@ def cmd_reconstruct(args) -> int:
     return 0
 
 
-def _reconstruct_3d(args, sino, extent) -> int:
+def _reconstruct_3d(args, sino, extent, data) -> int:
     """reconstruct for views over the sphere: the 3-D Radon inversion
     (meshladar.reconstruct.volumes.fbp3d), three slices through the target as the figure,
-    the volume in OUTPUT.volume.npz."""
+    the volume in ``data`` (OUTPUT.volume.npz, checked by the caller)."""
     if args.filter is not None:
         raise ParameterError("--filter applies to FBP of views about the z axis; 3-D views "
                              "are inverted with a second difference (use --smooth BINS)")
-    data = os.path.splitext(args.output)[0] + ".volume.npz"
-    check_not_input(args.output, data, args.result, "volume")     # before the work
     size = args.size or 128
     vol = fbp3d(sino, size=size, extent=extent, smooth=args.smooth or 0.0)
     extent = vol.info["extent"]
@@ -122,7 +123,24 @@ def _reconstruct_3d(args, sino, extent) -> int:
 
 def read_samples(path):
     """A pulse's samples from a text file: numbers separated by commas, spaces or newlines
-    (# starts a comment)."""
+    (# starts a comment).
+
+    Parameters
+    ----------
+    path : str
+        The ``--pulse-samples`` file.
+
+    Returns
+    -------
+    list of float
+        The samples, in the file's order.
+
+    Raises
+    ------
+    ParameterError
+        Naming ``--pulse-samples`` and the file: when it cannot be read (missing, a
+        folder, no permission) or is not text of numbers.
+    """
     try:
         with open(path, encoding="utf-8") as fh:
             text = " ".join(line.split("#")[0] for line in fh)
@@ -131,6 +149,9 @@ def read_samples(path):
         raise ParameterError(f"--pulse-samples {path!r}: not a text file of numbers") from None
     except ValueError as exc:
         raise ParameterError(f"--pulse-samples {path!r}: {exc}") from None
+    except OSError as exc:
+        raise ParameterError(f"--pulse-samples {path!r}: cannot be read "
+                             f"({(exc.strerror or str(exc)).lower()})") from None
     return values
 
 
@@ -151,13 +172,18 @@ def _pulse(args):
     return None if args.pulse_fwhm is None else GaussianPulse(args.pulse_fwhm)
 
 
+def _check_noise_flags(args):
+    """The noise flags (and --seed) need --realisations: refused without it, before the
+    work."""
+    given = [a for a in (*_NOISE_FIELDS, "seed") if getattr(args, a) is not None]
+    if args.realisations is None and given:
+        raise ParameterError(f"--{given[0].replace('_', '-')} shapes the noise: give "
+                             "--realisations N too")
+
+
 def _noise(args, waves):
     """(noise, draws), both None without --realisations."""
     if args.realisations is None:
-        given = [a for a in (*_NOISE_FIELDS, "seed") if getattr(args, a) is not None]
-        if given:
-            raise ParameterError(f"--{given[0].replace('_', '-')} shapes the noise: give "
-                                 "--realisations N too")
         return None, None
     noise = Noise(**{field: getattr(args, a) for a, field in _NOISE_FIELDS.items()
                      if getattr(args, a) is not None})
@@ -216,8 +242,9 @@ def cmd_receive(args) -> int:
     Raises
     ------
     ParameterError
-        When ``output`` is not a ``.npz`` path or is ``result``; when ``plot`` is not a
-        ``.png`` path or names ``result`` or ``output``; when ``scale`` is given for a
+        Before the work: when ``output`` is not a ``.npz`` path, is ``result`` or cannot
+        be written where it is; when ``plot`` is not a ``.png`` path or names ``result`` or
+        ``output``; when ``scale`` is given for a
         sinogram that already counts photoelectrons; when both ``pulse_fwhm`` and
         ``pulse_samples`` are given, or one of ``pulse_samples`` and ``pulse_interval``
         without the other, or the samples file is not text of numbers; when a noise
@@ -227,10 +254,12 @@ def cmd_receive(args) -> int:
     """
     check_output(args.output, (".npz",), [args.result])
     if args.plot is not None:
-        check_output(args.plot, (".png",), [args.result, args.output], "--plot")
+        check_output(args.plot, (".png",), [args.result], "--plot",
+                     others=[("-o", args.output)])
         plotting.require("matplotlib")          # before the work, not after it
+    _check_noise_flags(args)
+    pulse = _pulse(args)                        # reads --pulse-samples: before the work
     sino = _load_for_receiver(args)
-    pulse = _pulse(args)
     waves = receive(sino, sample_rate=args.sample_rate, pulse=pulse,
                     response=None if args.response_fwhm is None
                     else GaussianPulse(args.response_fwhm),

@@ -25,10 +25,10 @@ from ..errors import ParameterError
 from ..noise import Noise
 from ..scan.files import check_writable
 from ..waveforms import GaussianPulse
-from .checks import check_output, same_file
+from .checks import check_output
 from .simulate import load_scene
 
-__all__ = ["cmd_scan", "parse_spec", "PLATFORM_KINDS"]
+__all__ = ["cmd_scan", "parse_spec", "PLATFORM_KINDS", "BEAM_DEFAULTS"]
 
 #: ``--platform`` kinds: each names its :class:`meshladar.scan.Platform` constructor.
 PLATFORM_KINDS = ("static", "moving", "waypoints")
@@ -45,6 +45,12 @@ SENSOR_FLAGS = {"max_returns": "--max-returns", "shots": "--geiger-shots",
                 "sample_rate": "--sample-rate", "fwhm": "--pulse-fwhm",
                 "background_rate": "--background-rate", "dark_rate": "--dark-rate"}
 _TRUE, _FALSE = ("true", "yes", "on", "1"), ("false", "no", "off", "0")
+#: The beam flags' values when not given (the parser leaves them None: whether one was
+#: given decides what applies, a flash pattern refusing ``--divergence`` and ``--profile``).
+BEAM_DEFAULTS = {"divergence": 5e-4, "profile": "gaussian", "tol": 0.1}
+#: What a flash array does instead of a beam, for the flags it refuses.
+_FLASH_PIXELS = ("its pixels are lit uniformly over their IFOV and sampled by m x m "
+                 "sub-rays each, m = ceil(1/(2 tol)), set with --tol (default 0.1: 5 x 5)")
 
 
 def _value(flag, key, text, default=None):
@@ -176,16 +182,46 @@ def _check_discrete(args):
                              "apply (leave out --discrete for waveforms)")
 
 
-def _sensor(args):
+def _check_beam(args, flash):
+    """The beam's flags that apply: ``--tol`` or ``--sub-rays``, not both; a flash pattern
+    takes only ``--tol``."""
+    if args.tol is not None and args.sub_rays is not None:
+        raise ParameterError("--tol and --sub-rays both set the sub-rays per pulse; give "
+                             "one (--tol T | --sub-rays N)")
+    given = [f for f, v in (("--sub-rays", args.sub_rays),
+                            ("--divergence", args.divergence), ("--profile", args.profile))
+             if v is not None]
+    if flash and given:
+        raise ParameterError(f"{given[0]} does not apply to a flash pattern: "
+                             f"{_FLASH_PIXELS}; leave {given[0]} out")
+
+
+def _beam(args, flash):
+    """The ScanBeam of the flags, its sub-rays checked (a flash pattern's: its pixels')."""
+    tol = BEAM_DEFAULTS["tol"] if args.tol is None else args.tol
+    if flash:                             # the beam's tol alone: m x m sub-rays a pixel
+        beam = scanning.ScanBeam(0.0, tol=tol)
+        side = scanning.footprint.MAX_PIXEL_SIDE
+        if tol < 0.5 / side:
+            raise ParameterError(f"--tol {tol:g} is finer than a flash array samples its "
+                                 "pixels (m x m sub-rays a pixel, m = ceil(1/(2 tol)), at "
+                                 f"most {side} x {side}); give --tol >= {0.5 / side:g}")
+        return beam
+    beam = scanning.ScanBeam(
+        BEAM_DEFAULTS["divergence"] if args.divergence is None else args.divergence,
+        profile=args.profile or BEAM_DEFAULTS["profile"], tol=tol, sub_rays=args.sub_rays)
+    beam.offsets()                        # refuses a --tol that needs too many sub-rays
+    return beam
+
+
+def _sensor(args, flash):
     _check_discrete(args)
     try:
         noise = None
         if args.background_rate or args.dark_rate or args.noise:
             noise = Noise(background_rate=args.background_rate, dark_rate=args.dark_rate)
         geiger = scanning.GeigerMode(shots=args.geiger_shots) if args.geiger_shots else None
-        beam = scanning.ScanBeam(args.divergence, profile=args.profile, tol=args.tol,
-                                 sub_rays=args.sub_rays)
-        beam.offsets()                  # refuses a --tol that needs too many sub-rays
+        beam = _beam(args, flash)
         detector = scanning.Detector(max_returns=args.max_returns, cfar=args.cfar)
         return scanning.ScanSensor(
             pulse_energy=args.pulse_energy, aperture_diameter=args.aperture,
@@ -206,10 +242,8 @@ def _check_outputs(args):
     check_output(args.output, POINT_SUFFIXES, inputs)
     check_writable(args.output, "-o")
     if args.waveforms is not None:
-        if same_file(args.waveforms, args.output):
-            raise ParameterError(f"--waveforms {args.waveforms!r} and -o {args.output!r} are "
-                                 "the same file: give each its own")
-        check_output(args.waveforms, (".h5", ".hdf5"), inputs, "--waveforms")
+        check_output(args.waveforms, (".h5", ".hdf5"), inputs, "--waveforms",
+                     others=[("-o", args.output)])
         check_writable(args.waveforms, "--waveforms")
 
 
@@ -232,13 +266,14 @@ def cmd_scan(args) -> int:
     """
     _check_outputs(args)
     make, kwargs = parse_spec("--pattern", args.pattern, scanning.PATTERNS)
+    _check_beam(args, make is scanning.PATTERNS.get("flash"))
     pattern = _build(make, kwargs, "--pattern")
     platform = _platform(args.platform)
     try:
         platform.check_covers(pattern.times)
     except ParameterError as exc:
         raise ParameterError(f"--platform: {str(exc).removeprefix('platform: ')}") from None
-    sensor = _sensor(args)
+    sensor = _sensor(args, pattern.is_flash)
     scene, _, _ = load_scene(args)
     if not scene.is_mesh:
         scene = scene.tessellate()

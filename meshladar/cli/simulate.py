@@ -5,13 +5,14 @@ The model options' flags, checks and "does not apply" errors come from
 
 from __future__ import annotations
 
+import math
 import re
 import warnings
 
 import numpy as np
 
 from .. import io
-from ..errors import ParameterError
+from ..errors import MeshladarWarning, ParameterError
 from ..forward import simulate
 from ..ladar import MAX_VIEWS, Ladar
 from ..meshes import fibonacci_sphere
@@ -21,7 +22,7 @@ from ..raytrace.backends import backend
 from ..raytrace.plan import plan_trace
 from ..sensor import FloodBeam, GaussianBeam, Sensor
 from ..stream import dask_executor
-from .checks import check_output
+from .checks import check_outdir, check_output
 from .sources import load_source
 
 __all__ = ["cmd_simulate", "load_scene", "quick_backend", "SCENE_LABELS"]
@@ -73,11 +74,32 @@ def _ladar(args, scene, default):
     angles = args.angles_deg if args.angles_deg is not None else (
         np.arange(args.views) * (360.0 / args.views) if args.views else None)
     if args.bins or args.bin_width:
-        return Ladar.covering(scene, n_bins=args.bins, bin_width=args.bin_width,
-                              angles_deg=angles, view_vectors=vectors)
+        ladar = Ladar.covering(scene, n_bins=args.bins, bin_width=args.bin_width,
+                               angles_deg=angles, view_vectors=vectors)
+        if args.bins and args.bin_width:
+            _warn_uncovered(scene, ladar)
+        return ladar
     if default is not None and vectors is None:
         return default if angles is None else Ladar(angles, default.bin_edges)
     return Ladar.covering(scene, n_bins=512, angles_deg=angles, view_vectors=vectors)
+
+
+def _warn_uncovered(scene, ladar):
+    """``--bins N --bin-width W`` fix the bins' reach (N W about the target's middle): warn,
+    with the numbers and the fix, when it does not cover the ranges the target spans over
+    the views (their returns would be cut off without a word)."""
+    lo, hi = scene.range_span(ladar.view_vectors)
+    first, last = float(ladar.bin_edges[0]), float(ladar.bin_edges[-1])
+    if lo >= first and hi <= last:
+        return
+    width = (last - first) / ladar.n_bins
+    middle = 0.5 * (first + last)
+    need = math.ceil(2.0 * max(hi - middle, middle - lo) / width - 1e-9)
+    warnings.warn(f"--bins {ladar.n_bins} x --bin-width {width:g} cover ranges "
+                  f"[{first:.6g}, {last:.6g}], but the target spans [{lo:.6g}, {hi:.6g}] "
+                  "over these views: returns beyond the bins are lost; give --bins "
+                  f"{need} (or only one of --bins and --bin-width: the bins then cover the "
+                  "target)", MeshladarWarning, stacklevel=2)
 
 
 def _sensor(args):
@@ -97,22 +119,47 @@ def _sensor(args):
         beam = FloodBeam(args.flood_radius)
     kw = {o.name: getattr(args, o.name) for o in SENSOR_OPTIONS
           if o.name not in _BEAM and getattr(args, o.name) is not None}
-    try:
-        return Sensor(beam=beam, **kw)
-    except ParameterError as exc:          # the Sensor's rule, in the flags' words
-        raise ParameterError(in_flags(str(exc))) from None
+    return Sensor(beam=beam, **kw)     # its refusals in the flags' words: main's in_flags
+
+
+#: What the API calls the values simulate's own flags set (the ladar's, the model).
+_API_FLAGS = {"n_bins": "--bins", "bin_width": "--bin-width", "angles_deg": "--angles-deg",
+              "view_vectors": "--view-vectors", "model": "--model"}
+#: Every API name with its flag: the options', the sensor fields', the ladar's.
+_FLAGS = {**{o.name: o.cli_flag for o in OPTIONS + SENSOR_OPTIONS if o.cli}, **_API_FLAGS}
+#: Names that are never English words (an underscore in them, or a sensor field's).
+_UNIQUE = sorted((n for n in _FLAGS if "_" in n or n in {o.name for o in SENSOR_OPTIONS}),
+                 key=len, reverse=True)
+#: Those names: their flag wherever they stand outside quotes (a file's name is kept).
+_ANYWHERE = re.compile(r"(?<!\w)('[^']*'|\"[^\"]*\")|(?<![-\w.])(" + "|".join(_UNIQUE)
+                       + r")\b")
+#: The others (tol, jobs, seed, mode...): their flag only where a message begins with one
+#: as the subject of a rule (``tol must be in (0, 1)``, ``jobs: ...``).
+_LEADING = re.compile(r"^(" + "|".join(n for n in _FLAGS if n not in _UNIQUE)
+                      + r")(?= must\b|:)")
 
 
 def in_flags(message):
     """An API message in the command line's words: ``mode='3d'`` becomes ``--mode 3d`` for
-    every option, and a Sensor field's name (never an English word) its flag."""
-    for o in OPTIONS + SENSOR_OPTIONS:
-        if o.cli:
-            message = re.sub(rf"\b{o.name}=(?:'([^']*)'|([\w.+-]+))",
-                             lambda m, f=o.cli_flag: f"{f} {m.group(1) or m.group(2)}",
-                             message)
-    for o in SENSOR_OPTIONS:
-        message = re.sub(rf"(?<!-)\b{o.name}\b", o.cli_flag, message)
+    every option; a name that is never an English word (``ray_spacing``, ``n_bins``, a
+    Sensor field's) becomes its flag wherever it stands outside quotes; any other
+    option's name (``tol``, ``jobs``) where the message begins with it as a rule's subject.
+
+    Parameters
+    ----------
+    message : str
+        An error's or a warning's text from the API.
+
+    Returns
+    -------
+    str
+        The text with the API's names as simulate's flags.
+    """
+    for name, flag in _FLAGS.items():
+        message = re.sub(rf"\b{name}=(?:'([^']*)'|([\w.+-]+))",
+                         lambda m, f=flag: f"{f} {m.group(1) or m.group(2)}", message)
+    message = _ANYWHERE.sub(lambda m: m.group(1) or _FLAGS[m.group(2)], message)
+    message = _LEADING.sub(lambda m: _FLAGS[m.group(1)], message)
     for api, flag in _BEAM_WORDS:
         message = message.replace(api, flag)
     return re.sub(r"^(workers|scheduler):", r"--\1:", message)
@@ -152,6 +199,12 @@ def check_applicable(args, model, is_phantom):
                              "regular")
     if _given(args, "max_rays") and not _given(args, "tol"):
         raise ParameterError("--max-rays bounds the work of --tol; give --tol too")
+    if _given(args, "ray_spacing") and _given(args, "rays_per_bin"):
+        raise ParameterError("--ray-spacing and --rays-per-bin both set how dense the rays "
+                             "are; give one")
+    if _given(args, "bounce_samples") and args.bounces in (None, 1):
+        raise ParameterError("--bounce-samples samples the paths beyond the first bounce: "
+                             "it needs --bounces 2 or more (or auto)")
     if _given(args, "jobs") and (_given(args, "scheduler") or _given(args, "workers")):
         raise ParameterError("--jobs runs local processes; with --scheduler or --workers "
                              "Dask runs the work: give one")
@@ -189,7 +242,7 @@ def _summary(args, sino, ladar, model):
     return (f"{args.scene}: {how}; {ladar.n_views} views x {ladar.n_bins} bins over range "
             f"[{ladar.bin_edges[0]:.6g}, {ladar.bin_edges[-1]:.6g}] (range 0 on the plane "
             f"through the origin facing the ladar); {sino.radiometry or 'paper'} "
-            f"radiometry; total return per view {sino.total().mean():.6g}; wrote "
+            f"radiometry; mean total return per view {sino.total().mean():.6g}; wrote "
             f"{args.output}")
 
 
@@ -294,7 +347,10 @@ def cmd_simulate(args) -> int:
     PhantomSpecError, GeometryError
         For a phantom spec or a mesh file that cannot be loaded (:func:`load_scene`).
     """
-    check_output(args.output, (".npz",), [args.scene, args.materials, args.run_dir])
+    check_output(args.output, (".npz",), [args.scene, args.materials, args.run_dir],
+                 run_dir=args.run_dir)
+    if args.run_dir is not None:
+        check_outdir(args.run_dir, "--run-dir")
     scene, default_ladar, default_model = load_scene(args)
     model = args.model or default_model
     check_applicable(args, model, default_ladar is not None)
@@ -303,16 +359,15 @@ def cmd_simulate(args) -> int:
     if model == "mesh" and not scene.is_mesh and args.tol is None:  # --tol tessellates
         scene = scene.tessellate(args.segments or 1024)
     opts = _model_options(args, model)
-    try:                                   # (the Dask cluster's own checks too)
-        opts = quick_backend(scene, ladar, model, opts)
-        if args.scheduler or args.workers:
-            with dask_executor(args.scheduler, workers=args.workers or 2) as ex:
-                sino = simulate(scene, ladar, model=model, executor=ex,
-                                **{k: v for k, v in opts.items() if k != "jobs"})
-        else:
-            sino = simulate(scene, ladar, model=model, **opts)
-    except ParameterError as exc:          # the API's rule, in the flags' words
-        raise ParameterError(in_flags(str(exc))) from None
+    # the API's refusals (the Dask cluster's own checks too) are put in the flags' words
+    # by main (in_flags), for every error of this command
+    opts = quick_backend(scene, ladar, model, opts)
+    if args.scheduler or args.workers:
+        with dask_executor(args.scheduler, workers=args.workers or 2) as ex:
+            sino = simulate(scene, ladar, model=model, executor=ex,
+                            **{k: v for k, v in opts.items() if k != "jobs"})
+    else:
+        sino = simulate(scene, ladar, model=model, **opts)
     params = {"scene": args.scene, "model": model,
               "options": {k: (v.describe() if k == "sensor" else v) for k, v in opts.items()
                           if k != "progress"},

@@ -4,13 +4,30 @@ packaged phantom, a phantom spec or any mesh file)."""
 from __future__ import annotations
 
 import os
+import re
 
 from .. import materials as _materials
 from .. import phantoms
-from ..errors import ParameterError
+from ..errors import MeshladarError, ParameterError
 from ..scene import Scene
 
 __all__ = ["load_source"]
+
+#: The scene loaders' refusal of a coating for a part or shape the scene lacks (the
+#: loaders call the overrides ``materials``; a phantom's message begins with its file).
+_UNKNOWN_PART = re.compile(r"(?:^|: )materials: (no (?:part|shape) named .*)$", re.DOTALL)
+
+
+def _labelled(exc, source, lab):
+    """A loader's refusal in the caller's words: an unknown part's under the coatings'
+    label; one that does not name ``source`` (a degenerate mesh's) prefixed with it."""
+    text = str(exc)
+    unknown = _UNKNOWN_PART.search(text)
+    if unknown:
+        return type(exc)(f"{lab['coatings']}: {unknown.group(1)}")
+    if source not in text:
+        return type(exc)(f"{lab['source']} {source!r}: {text}")
+    return exc
 
 
 def load_source(source, *, material=None, coatings=None, materials_file=None, labels=None):
@@ -40,6 +57,13 @@ def load_source(source, *, material=None, coatings=None, materials_file=None, la
     (Scene, Ladar or None, str)
         The scene, the phantom's own ladar set-up (None for a mesh), and the model it is
         simulated with by default ("analytic" for a phantom, "mesh" for a mesh).
+
+    Raises
+    ------
+    MeshladarError
+        The loaders' refusals (a ParameterError, GeometryError or PhantomSpecError): an
+        unknown coating or part under the labels of ``material`` and ``coatings``; a mesh
+        file's own (no faces left, say) naming ``source`` and the file.
     """
 
     lab = {"source": "source", "material": "material", "coatings": "coatings",
@@ -59,10 +83,16 @@ def load_source(source, *, material=None, coatings=None, materials_file=None, la
                                  f"known phantom ({', '.join(phantoms.names())})")
         base = coating("dark_gray" if material is None else material, lab["material"])
         per_part = {k: coating(v, lab["coatings"]) for k, v in (coatings or {}).items()}
-        return Scene.from_mesh(source, base, materials=per_part or None), None, "mesh"
+        try:
+            return Scene.from_mesh(source, base, materials=per_part or None), None, "mesh"
+        except MeshladarError as exc:
+            raise _labelled(exc, source, lab) from None
     if material is not None:
         raise ParameterError(f"{lab['material']} colours a mesh's parts; a phantom's shapes "
                              f"have their own coatings: use {lab['coatings']} SHAPE=NAME")
     overrides = {k: coating(v, lab["coatings"]) for k, v in (coatings or {}).items()}
-    ph = phantoms.load(source, materials=overrides or None)
+    try:
+        ph = phantoms.load(source, materials=overrides or None)
+    except MeshladarError as exc:
+        raise _labelled(exc, source, lab) from None
     return ph.scene, ph.ladar, "analytic"

@@ -68,7 +68,8 @@ def test_a_volume_that_would_overwrite_its_input_is_refused_before_the_work(
     from meshladar.cli import main, reconstruct
 
     W = fibonacci_sphere(50)
-    sino = ml.Sinogram(np.ones((50, 8)), angles_deg=np.zeros(50),
+    # the angles agree with the vectors' azimuths (a Sinogram refuses a contradiction)
+    sino = ml.Sinogram(np.ones((50, 8)), angles_deg=np.degrees(np.arctan2(W[:, 1], W[:, 0])),
                        bin_edges=np.linspace(-1.0, 1.0, 9), view_vectors=W)
     path = tmp_path / "a.volume.npz"
     ml.io.save_sinogram(path, sino)

@@ -45,10 +45,10 @@ for _argv in (["demo"], ["materials"], ["paper", "{tmp}/out"],
 
 # ------------------------------------------------------------------ demo
 for _key, _v in {"nan": "nan", "inf": "inf", "str": "x", "empty": "", "commas": ",,",
-                 "huge": "1e400", "hex": "0x10", "minus-inf": "0,-inf"}.items():
+                 "huge": "1e400", "hex": "0x10", "minus-inf": "0,-inf",
+                 "gaps": "0,,5"}.items():
     cli(f"demo.--angles-deg={_key}", ["demo", "--angles-deg", _v], "error", "--angles-deg")
-for _key, _v in {"neg": "-30", "zero": "0", "big": "1e300", "gaps": "0,,5",
-                 "space": " 5 , 10 "}.items():
+for _key, _v in {"neg": "-30", "zero": "0", "big": "1e300", "space": " 5 , 10 "}.items():
     cli(f"demo.--angles-deg={_key}", ["demo", f"--angles-deg={_v}"], "ok")
 
 # ------------------------------------------------------------------ materials
