@@ -19,7 +19,7 @@ import tempfile
 import threading
 
 __all__ = ["write_atomic", "write_text_atomic", "TEMPORARY_PREFIX", "temporary_writer",
-           "regular_file"]
+           "regular_file", "make_temporary"]
 
 #: The prefix of the temporaries meshladar writes beside a file before renaming it into
 #: place: ``.meshladar-tmp-<pid>-<8 random characters><final name>``. Only names of exactly
@@ -108,10 +108,36 @@ def write_atomic(path, write):
     _atomic(path, write)
 
 
-def _atomic(path, write):
+def make_temporary(path):
+    """Make the temporary that ``path``'s content is written into before it is renamed
+    over ``path``: ``.meshladar-tmp-<pid>-<8 characters><name>`` beside it (the folder
+    created if missing), with the permissions ``path`` will have. Stale temporaries of
+    dead meshladar processes in the folder are removed first (once per folder and
+    process), so one that a killed writer left is gone by the next write into its folder.
+
+    :func:`write_atomic` writes through it; a writer that fills its file piece by piece
+    (the scanner's streaming waveform file) opens the temporary by its name and renames
+    it over ``path`` when done.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file the temporary will replace.
+
+    Returns
+    -------
+    fd : int
+        The temporary's open file descriptor (the caller closes it).
+    tmp : str
+        The temporary's path.
+
+    Raises
+    ------
+    OSError
+        When the folder or the temporary cannot be made, naming ``path``.
+    """
     path = os.fspath(path)
     folder = os.path.dirname(os.path.abspath(path))
-    name = os.path.basename(path)
     try:
         os.makedirs(folder, exist_ok=True)
         _remove_stale_temporaries(folder)
@@ -119,12 +145,23 @@ def _atomic(path, write):
         # the writer's pid in the name: a temporary left by a killed process is recognised
         # (and removed) by the next process writing into the same folder
         fd, tmp = tempfile.mkstemp(dir=folder, prefix=f"{TEMPORARY_PREFIX}{os.getpid()}-",
-                                   suffix=name)
+                                   suffix=os.path.basename(path))
     except OSError as exc:
         raise OSError(exc.errno, exc.strerror, path) from exc
     try:
+        os.fchmod(fd, mode)
+    except OSError as exc:
+        os.close(fd)
+        os.unlink(tmp)
+        raise OSError(exc.errno, exc.strerror, path) from exc
+    return fd, tmp
+
+
+def _atomic(path, write):
+    path = os.fspath(path)
+    fd, tmp = make_temporary(path)
+    try:
         with _interrupts_held():
-            os.fchmod(fd, mode)
             with os.fdopen(fd, "wb") as fh:
                 write(fh)
                 fh.flush()

@@ -1,7 +1,8 @@
 """The frame every viewer figure shares: pyvista on demand, a headless EGL window, titled
-colour bars in fixed slots, the legend of flat colours, the mesh an analytic scene is drawn
-as, and the :class:`Shown` record an entry point returns (image or plotter, legend, colour
-bars) instead of module state."""
+colour bars in fixed slots (moved left where a title or its labels would leave the window;
+a scene can be framed clear of them), the legend of flat colours, the mesh an analytic
+scene is drawn as, and the :class:`Shown` record an entry point returns (image or plotter,
+legend, colour bars) instead of module state."""
 
 from __future__ import annotations
 
@@ -139,10 +140,85 @@ def _box(actor):
     return (x, y, x + w, y + h)
 
 
+#: Pixels kept clear between a colour bar's slot and the window's edge or the scene.
+_MARGIN = 6
+#: Pixels between a bar's title and its frame: the top label, centred on the bar's top
+#: edge, sits between them with room above it.
+_TITLE_SEPARATION = 18
+
+
+def _text_width(prop, text, dpi):
+    """The width in pixels of ``text`` drawn with text property ``prop``."""
+    from vtkmodules.vtkRenderingCore import vtkTextRenderer
+
+    bbox = [0, 0, 0, 0]
+    vtkTextRenderer().GetBoundingBox(prop, text, bbox, dpi)
+    return bbox[1] - bbox[0] + 1
+
+
+def _bar_slot(plotter):
+    """Move each colour bar left until its title (centred over its box) and its labels
+    are inside the window, and return the left edge, in pixels, of the slot the bars and
+    their titles take at the right edge: the scene is kept left of it
+    (:func:`_clear_of_bars`)."""
+    width = plotter.window_size[0]
+    dpi = plotter.ren_win.GetDPI()
+    left = float(width)
+    for bar in plotter.scalar_bars.values():
+        bar.SetVerticalTitleSeparation(_TITLE_SEPARATION)
+        box = bar.GetPosition2()[0] * width
+        title = _text_width(bar.GetTitleTextProperty(), bar.GetTitle() or "", dpi)
+        low, high = bar.GetLookupTable().GetRange()
+        labels = max(_text_width(bar.GetLabelTextProperty(), bar.GetLabelFormat() % v, dpi)
+                     for v in np.linspace(low, high, max(2, bar.GetNumberOfLabels())))
+        x0 = min(bar.GetPosition()[0] * width,
+                 width - _MARGIN - 0.5 * (box + title),          # the title inside
+                 width - _MARGIN - box * bar.GetBarRatio() - 4 - labels,   # the labels
+                 width - _MARGIN - box)
+        x0 = max(0.0, x0)
+        bar.SetPosition(x0 / width, bar.GetPosition()[1])
+        left = min(left, x0, x0 + 0.5 * (box - title))
+    return max(0.0, left - _MARGIN)
+
+
+def _clear_of_bars(plotter, xyz):
+    """Aim the camera so that points ``xyz`` (n, 3), the scene's extent, fill the window
+    left of the colour bars' slot (:func:`_bar_slot`) and nothing drawn lies under a bar
+    or its title; the view's direction is kept. Exact: a perspective view's angle scales
+    its picture about the window's centre and its window centre shifts it."""
+    width, height = plotter.window_size
+    right = _bar_slot(plotter) - _MARGIN
+    cam = plotter.camera
+    ndc = _projected(cam, np.asarray(xyz, np.float64), width / height)
+    lo, hi = ndc.min(axis=0), ndc.max(axis=0)
+    # the target, in normalised device coordinates: x in [margin, right], y in margins
+    t_lo = np.array([2.0 * _MARGIN / width - 1.0, 2.0 * _MARGIN / height - 1.0])
+    t_hi = np.array([2.0 * right / width - 1.0, 1.0 - 2.0 * _MARGIN / height])
+    span = hi - lo
+    fits = np.where(span > 1e-9, (t_hi - t_lo) / np.maximum(span, 1e-9), np.inf)
+    scale = float(fits.min()) if np.isfinite(fits).any() else 1.0    # one point: kept
+    if cam.GetParallelProjection():
+        cam.SetParallelScale(cam.GetParallelScale() / scale)
+    else:
+        half = np.radians(cam.GetViewAngle()) / 2.0
+        cam.SetViewAngle(float(np.degrees(2.0 * np.arctan(np.tan(half) / scale))))
+    shift = scale * 0.5 * (lo + hi) - 0.5 * (t_lo + t_hi)
+    cam.SetWindowCenter(*(np.asarray(cam.GetWindowCenter()) * scale + shift))
+    plotter.reset_camera_clipping_range()
+
+
+def _projected(cam, xyz, aspect):
+    """Points' (x, y) in normalised device coordinates ([-1, 1] across the window)."""
+    m = cam.GetCompositeProjectionTransformMatrix(aspect, -1.0, 1.0)
+    mat = np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
+    h = np.c_[xyz, np.ones(len(xyz))] @ mat.T
+    return h[:, :2] / h[:, 3:4]
+
+
 def _finish(plotter, off_screen, screenshot):
     bars = []
+    _bar_slot(plotter)                      # every title and label inside the window
     for bar in plotter.scalar_bars.values():
-        bar.SetVerticalTitleSeparation(12)       # the title clear of the top label
         bars.append(ScalarBar(bar.GetTitle() or "", _box(bar)))
     legend = getattr(plotter, "legend", None)
     if legend is not None:

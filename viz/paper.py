@@ -49,7 +49,8 @@ def save_run(outdir, *, size=None):
         The folder (created if missing).
     size : int, optional, keyword-only
         Pixels per side of the reconstructions (default None:
-        :func:`meshladar.studies.paper.run`'s, 512).
+        :func:`meshladar.studies.paper.run`'s, 512); at least
+        :data:`meshladar.studies.paper.MIN_SIZE` (475), where the findings hold.
 
     Returns
     -------
@@ -57,6 +58,11 @@ def save_run(outdir, *, size=None):
         The result file's path.
     metrics : dict of str to float
         The findings' numbers (:func:`meshladar.studies.paper.run`'s ``metrics``).
+
+    Raises
+    ------
+    ParameterError
+        For a ``size`` below the minimum, before any work or file is written.
     """
     kwargs = {} if size is None else {"size": size}
     res = paper.run(**kwargs)
@@ -294,7 +300,8 @@ def reproduce(outdir, *, size=None):
     outdir : str or os.PathLike
         The folder for ``paper_result.npz`` and the figures (created if missing).
     size : int, optional, keyword-only
-        Pixels per side of the reconstructions (default None: 512).
+        Pixels per side of the reconstructions (default None: 512; at least 475:
+        :func:`save_run`).
 
     Returns
     -------

@@ -10,6 +10,10 @@ alarms, which have no truth, in black), ``"doppler"`` (Hz, diverging), or the pa
 footprint on the scene is a scan with a single-ray beam coloured by one of these. Off screen it
 returns the rendered image (:class:`~meshladar.viz.viewer.Shown`), as every viewer entry
 point does.
+
+The bar sits in the viewers' fixed slot at the right edge, moved left where its title or
+labels would leave the window, and the scene (its mesh and points) is framed in the rest of
+the window: no point is drawn under the bar or its title, at any window size.
 """
 
 from __future__ import annotations
@@ -21,7 +25,7 @@ from meshladar._validate import check_choice
 from meshladar.errors import ParameterError
 from meshladar.scan import PointCloud
 
-from ._frame import _bar, _finish, _headless_window, _pyvista
+from ._frame import _bar, _clear_of_bars, _finish, _headless_window, _pyvista
 
 __all__ = ["show_points", "COLOR_BY", "NOISE_COLOR"]
 
@@ -104,4 +108,7 @@ def show_points(cloud, scene=None, *, color_by="intensity", point_size=4.0, off_
                          point_size=point_size, lighting=False)
     plotter.view_isometric()
     plotter.reset_camera()
+    drawn = [cloud.xyz] + ([p.vertices for p in scene.parts] if scene is not None else [])
+    drawn = np.concatenate(drawn)
+    _clear_of_bars(plotter, drawn[np.isfinite(drawn).all(axis=1)])   # the bar's own slot
     return _finish(plotter, off_screen, screenshot)

@@ -30,7 +30,7 @@ import threading
 
 import numpy as np
 
-from .._atomic_write import write_atomic
+from .._atomic_write import make_temporary, write_atomic
 from .._validate import check_path, check_real
 from ..errors import ParameterError
 from .points import POINT_DTYPE, POINT_FIELDS, PointCloud
@@ -307,13 +307,24 @@ def _loose(value):
 class WaveformSink:
     """An HDF5 file that a running scan streams its waveforms into, block by block as
     chunks finish (any order, any thread), so that a long scan's records never sit in
-    memory; :meth:`finish` adds the points and the parameters and puts the file in place
-    (written beside it until then: a scan that fails leaves no partial file).
+    memory; :meth:`finish` adds the points and the parameters and puts the file in place.
+
+    Until then it is written to a temporary beside it, named as every atomic write's
+    (:func:`meshladar.io.write_atomic`: ``.meshladar-tmp-<pid>-<8 characters><name>``): a
+    scan that fails or is stopped removes it, and one killed outright (SIGKILL, a lost
+    machine) leaves it to be removed by the next meshladar write into that folder.
 
     Parameters
     ----------
     path : str or os.PathLike
         The HDF5 file to make (its folder must exist).
+
+    Raises
+    ------
+    ParameterError
+        When ``path`` is not a file name or its folder does not exist.
+    OSError
+        When the temporary cannot be made, naming ``path``.
     """
 
     def __init__(self, path):
@@ -322,8 +333,13 @@ class WaveformSink:
         folder = os.path.dirname(os.path.abspath(self.path))
         if not os.path.isdir(folder):
             raise ParameterError(f"waveforms_file: no folder {folder!r} to write into")
-        self.partial = f"{self.path}.partial-{os.getpid()}"
-        self.file = h5py.File(self.partial, "w")
+        fd, self.partial = make_temporary(self.path)
+        os.close(fd)                                  # h5py opens it by its name
+        try:
+            self.file = h5py.File(self.partial, "w")
+        except BaseException:
+            os.remove(self.partial)
+            raise
         self.group = _waveform_group(self.file)
         self.lock = threading.Lock()
 
@@ -343,7 +359,7 @@ class WaveformSink:
             _write_block(self.group, first, waves, starts)
 
     def finish(self, cloud):
-        """Add the points and info and move the file into place.
+        """Add the points and info, and move the file into place (flushed to disk first).
 
         Parameters
         ----------
@@ -353,10 +369,12 @@ class WaveformSink:
         with self.lock:
             _write_points(self.file, cloud)
             self.file.close()
+            with open(self.partial, "rb") as fh:
+                os.fsync(fh.fileno())
             os.replace(self.partial, self.path)
 
     def abandon(self):
-        """Drop the partial file (the scan failed or was stopped)."""
+        """Drop the temporary file (the scan failed or was stopped)."""
         with self.lock:
             self.file.close()
             if os.path.exists(self.partial):

@@ -18,7 +18,10 @@ whose largest error is at most ``tol``. ``sub_rays=N`` fixes N instead. With
 
 A flash array's pixel is a square of its IFOV, lit uniformly: an m × m grid of sub-rays
 at the centres of equal cells; the share of an edge along a pixel's side is then within
-1/(2m) of exact, so m = ⌈1/(2 tol)⌉.
+1/(2m) of exact, so m = ⌈1/(2 tol)⌉, at most :data:`MAX_PIXEL_SIDE` (64 × 64 = 4096 sub-rays
+a pixel, the most a scanning pulse's beam takes: ``tol`` ≥ 1/128). The beam's ``tol`` is
+all a flash array takes from its :class:`ScanBeam`: its divergence, profile and
+``sub_rays`` do not apply, and :func:`check_flash_beam` refuses them set.
 """
 
 from __future__ import annotations
@@ -33,7 +36,7 @@ from .._validate import check_choice, check_count, check_real
 from ..errors import ParameterError
 
 __all__ = ["ScanBeam", "PROFILES", "SUB_RAY_COUNTS", "GAUSS_CUT", "edge_error",
-           "pixel_offsets"]
+           "pixel_offsets", "MAX_PIXEL_SIDE", "check_flash_beam", "describe_pixels"]
 
 #: The beams' angular profiles.
 PROFILES = ("gaussian", "tophat")
@@ -41,6 +44,9 @@ PROFILES = ("gaussian", "tophat")
 SUB_RAY_COUNTS = (1, 4, 8, 16, 32, 64, 128, 256, 512, 1024, 2048, 4096)
 #: The fraction of a Gaussian beam's energy beyond the outermost sub-ray's reach.
 GAUSS_CUT = 1e-4
+#: The most sub-rays along a flash pixel's side: 64 × 64 = 4096 a pixel, as many as a
+#: scanning pulse's beam takes at most (the last of :data:`SUB_RAY_COUNTS`).
+MAX_PIXEL_SIDE = 64
 _GOLDEN = math.pi * (3.0 - math.sqrt(5.0))
 _EDGE_DIRECTIONS = 36
 
@@ -94,29 +100,101 @@ def edge_error(offsets, profile):
     return float(err.max())
 
 
+def _pixel_side(tol, name="tol"):
+    """m = ⌈1/(2 tol)⌉ of a flash pixel (module docstring), checked; ``name`` is the
+    argument the messages name."""
+    tol = check_real(name, tol, low=0.0, low_open=True, high=0.5)
+    m = max(1, math.ceil(0.5 / tol - 1e-12))
+    if m > MAX_PIXEL_SIDE:
+        raise ParameterError(
+            f"{name}={tol:g}: a flash pixel is sampled by m x m sub-rays, m = ceil(1/(2 tol)) "
+            f"= {m} ({m * m} a pixel), more than {MAX_PIXEL_SIDE} x {MAX_PIXEL_SIDE} = "
+            f"{MAX_PIXEL_SIDE ** 2}; give {name} >= {0.5 / MAX_PIXEL_SIDE:g}")
+    return m
+
+
 def pixel_offsets(tol):
     """A flash pixel's sub-ray offsets (module docstring).
 
     Parameters
     ----------
     tol : float
-        The edge tolerance: m = ⌈1/(2 tol)⌉ sub-rays a side.
+        The edge tolerance, in [1/128, 0.5]: m = ⌈1/(2 tol)⌉ sub-rays a side.
 
     Returns
     -------
     (m², 2) numpy.ndarray
         Cell centres in [−½, ½]², in units of the pixel's pitch.
+
+    Raises
+    ------
+    ParameterError
+        When ``tol`` is not in (0, 0.5], or needs more than :data:`MAX_PIXEL_SIDE`
+        sub-rays a side (tol < 1/128), naming the count and the smallest ``tol`` allowed.
     """
-    m = max(1, math.ceil(0.5 / tol - 1e-12))
+    m = _pixel_side(tol)
     c = (np.arange(m) + 0.5) / m - 0.5
     y, z = np.meshgrid(c, c, indexing="ij")
     return np.stack([y.ravel(), z.ravel()], axis=1)
+
+
+def check_flash_beam(beam):
+    """Refuse a beam whose divergence, profile or ``sub_rays`` a flash array would ignore:
+    its pixels are lit uniformly over their IFOV and sampled to ``beam.tol`` (module
+    docstring), so only ``tol`` applies.
+
+    Parameters
+    ----------
+    beam : ScanBeam
+        The flash sensor's beam.
+
+    Raises
+    ------
+    ParameterError
+        Naming the field set away from its default (``divergence`` 0, ``profile``
+        "gaussian", ``sub_rays`` None), its value and what a flash array uses; or a ``tol``
+        that needs too many sub-rays a pixel (:func:`pixel_offsets`).
+    """
+    for name, default in (("divergence", 0.0), ("profile", "gaussian"), ("sub_rays", None)):
+        value = getattr(beam, name)
+        if value != default:
+            raise ParameterError(
+                f"beam.{name}={value!r} does not apply to a flash array: its pixels are lit "
+                "uniformly over their IFOV, sampled by ceil(1/(2 tol)) x ceil(1/(2 tol)) "
+                f"sub-rays to beam.tol={beam.tol:g}; leave {name} at its default "
+                f"({default!r}) and set tol")
+    _pixel_side(beam.tol, "beam.tol")
+
+
+def describe_pixels(beam, ifov_deg):
+    """What a flash array's pixels were sampled with, for the scan's ``info`` in place of
+    the beam's own description (:meth:`ScanBeam.describe`).
+
+    Parameters
+    ----------
+    beam : ScanBeam
+        The flash sensor's beam (its ``tol`` only).
+    ifov_deg : float
+        A pixel's field of view, deg.
+
+    Returns
+    -------
+    dict
+        ``profile`` ("flash pixel": uniform over the pixel's IFOV), ``ifov_deg``, ``tol``,
+        ``sub_rays`` (a pixel's, m²) and ``side`` (m).
+    """
+    m = _pixel_side(beam.tol)
+    return {"profile": "flash pixel", "ifov_deg": ifov_deg, "tol": beam.tol,
+            "sub_rays": m * m, "side": m}
 
 
 @dataclass(frozen=True)
 class ScanBeam:
     """A pulse's beam: its angular profile and how finely sub-rays sample it (module
     docstring).
+
+    A flash array takes only ``tol`` from its beam: a flash scan with ``divergence``,
+    ``profile`` or ``sub_rays`` set is refused (:func:`check_flash_beam`).
 
     Parameters
     ----------
@@ -128,7 +206,8 @@ class ScanBeam:
     tol : float
         The largest error allowed in the share of a pulse's energy on either side of a
         straight edge, in (0, 0.5] (default 0.1: 32 sub-rays for either profile); chooses
-        the number of sub-rays.
+        the number of sub-rays. A flash array's pixels are sampled to it too (m × m
+        sub-rays a pixel, m = ⌈1/(2 tol)⌉ ≤ 64: ``tol`` ≥ 1/128).
     sub_rays : int, optional
         A fixed number of sub-rays (1 to 4096) instead of ``tol``.
 

@@ -153,8 +153,10 @@ class ScanSensor:
         return's time is its echo's centroid less the combined shape's mean
         (:attr:`delay`), so a shape that does not start at t = 0 ranges true.
     beam : ScanBeam
-        The beam's divergence and profile (default one ray per pulse); ignored by a flash
-        array, whose pixels are lit uniformly.
+        The beam's divergence and profile (default one ray per pulse). A flash array's
+        pixels are lit uniformly over their IFOV and take only the beam's ``tol`` (their
+        sub-rays, :mod:`.footprint`): a flash scan refuses a beam whose divergence,
+        profile or ``sub_rays`` is set, and records its pixels' sampling as the beam.
     noise : meshladar.noise.Noise, optional
         The receiver's noise (shot noise of signal, background and dark counts, speckle,
         APD gain); None: the expected waveform, no noise.

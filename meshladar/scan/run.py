@@ -28,7 +28,7 @@ from ._records import fill_records
 from .cast import cast_static, photoelectrons, world_directions
 from .echoes import Returns, cfar_background, echo_shape, find_returns, waveforms_with_echoes
 from .files import WaveformSink
-from .footprint import pixel_offsets
+from .footprint import check_flash_beam, describe_pixels, pixel_offsets
 from .geiger import blind_shots, coates, fire
 from .instrument import FWHM_PER_SIGMA, ScanSensor
 from .moving import cast_moving, doppler, moving_parts
@@ -53,6 +53,8 @@ def _check(scene, pattern, platform, sensor):
             raise ParameterError(f"{name} must be a {kind.__name__}; got "
                                  f"{type(value).__name__}")
     platform.check_covers(pattern.times)          # a trajectory must span the pulses
+    if pattern.is_flash:                          # its pixels take only the beam's tol
+        check_flash_beam(sensor.beam)
 
 
 def _footprint(pattern, sensor):
@@ -64,6 +66,15 @@ def _footprint(pattern, sensor):
             float(np.tan(np.radians(pattern.ifov_deg)))
     off = sensor.beam.offsets()
     return off, np.full(len(off), 1.0 / len(off)), None
+
+
+def _sensor_info(pattern, sensor):
+    """The sensor's parameters as the scan used them: a flash array's beam is its pixels'
+    sampling (:func:`.footprint.describe_pixels`), not the beam it ignores."""
+    out = sensor.describe()
+    if pattern.is_flash:
+        out["beam"] = describe_pixels(sensor.beam, pattern.ifov_deg)
+    return out
 
 
 _NO_SHIFT = np.zeros((0, 0))
@@ -206,7 +217,8 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
     ------
     ParameterError
         When an argument is of the wrong kind or out of range (waypoints not spanning the
-        pulses: :meth:`Platform.check_covers`), before any ray is cast.
+        pulses: :meth:`Platform.check_covers`; a flash array's beam with more set than
+        ``tol``: :func:`~meshladar.scan.footprint.check_flash_beam`), before any ray is cast.
     """
     _check(scene, pattern, platform, sensor)
     split = moving_parts(scene, motions)
@@ -226,8 +238,8 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
                                      run_dir=run_dir, job=description))
     points, waves, starts = records(results, slots)
     info = {"conventions": dict(CONVENTIONS), "pattern": pattern.describe(),
-            "platform": platform.describe(), "sensor": sensor.describe(), "seed": seed,
-            "motions": {str(k): m.describe() for k, m in (motions or {}).items()}}
+            "platform": platform.describe(), "sensor": _sensor_info(pattern, sensor),
+            "seed": seed, "motions": {str(k): m.describe() for k, m in (motions or {}).items()}}
     cloud = PointCloud(points, info, waves, starts)
     if sink is not None:
         sink.finish(cloud)

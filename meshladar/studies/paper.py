@@ -45,6 +45,7 @@ Metrics (dimensionless, defined here and asserted in tests/studies/test_paper.py
 from __future__ import annotations
 
 import functools
+import math
 import warnings
 
 import numpy as np
@@ -52,7 +53,8 @@ import numpy as np
 from .. import materials
 from .. import phantoms as _phantoms
 from ..brdf import SandfordRobertson
-from ..errors import EnergyConservationWarning
+from .._validate import check_count, check_real
+from ..errors import EnergyConservationWarning, ParameterError
 from ..forward import simulate
 from ..forward.sampling import checked_by_caller
 from ..ladar import Ladar
@@ -64,12 +66,38 @@ from ._paper_metrics import (_shell_peak, disk_darkening, ellipse_darkening, rin
                              shell_darkening)
 
 __all__ = ["FIGURES", "run", "disk_darkening", "ellipse_darkening", "ring_visibility",
-           "IMAGE_SIZE", "IMAGE_EXTENT"]
+           "IMAGE_SIZE", "IMAGE_EXTENT", "MIN_SIZE", "FINDINGS", "RELATIVE_TOLERANCE"]
 
 #: Reconstruction grid of the figures: 512² pixels over [−1, 1]².
 IMAGE_SIZE = 512
 IMAGE_EXTENT = 1.0
 _A = 0.8                       # the paper's disk radius, which sets the A/256 bins
+
+#: The findings docs/guide/paper.md states (their 512² figures), each with the absolute part
+#: a of its tolerance: a finding holds at a size when its value v there and its 512²
+#: figure f meet |v − f| ≤ a + :data:`RELATIVE_TOLERANCE` × |f| (a = 0.1 for darkenings
+#: and visibilities, 0.01 for trough widths, in units of the radius).
+FINDINGS = {
+    "disk_b0.darkening": 0.1, "disk_b0.99.darkening": 0.1, "disk_e0.007.darkening": 0.1,
+    "disk_e0.007.darkening_width": 0.01, "disk_b0.99.darkening_width": 0.01,
+    "ellipse_b0.ends_darkening": 0.1, "ellipse_b0.99.ends_darkening": 0.1,
+    "ellipse_b0.99.sides_darkening": 0.1, "pair_gray_al.visibility": 0.1,
+    "pair_al_gray.visibility": 0.1, "pair_gray_al_log.visibility": 0.1,
+    "pair_gray_al_clip.visibility": 0.1, "power.disk_b0.darkening": 0.1,
+    "power.ellipse_b0.ends_darkening": 0.1, "power.disk_b0.99.darkening": 0.1,
+    "power.ellipse_b0.99.ends_darkening": 0.1, "power.pair_gray_al_log.visibility": 0.1,
+    "power.pair_gray_al_clip.visibility": 0.1}
+#: The relative part of every finding's tolerance (:data:`FINDINGS`).
+RELATIVE_TOLERANCE = 0.05
+#: The smallest ``size`` :func:`run` takes (at its default extent; pixels no coarser than
+#: 2/475 at any other): from 475 up, every finding of :data:`FINDINGS` is within its
+#: tolerance of its 512² figure at every size measured (each from 97 to 560, every 8th to
+#: 1024). Below, the b = 0.99 ellipse's sides leave it first (−0.45 at 474, −0.33 at 512:
+#: FBP's pixel grid moves them by ±0.1 from one size to the next), then the Lambertian
+#: ellipse's ends (below 327), the clipped pair's visibility (317), the b = 0.99 disk's
+#: trough width (306), the gray disk's visibility (238; −0.47 against 0.010 at 128); at
+#: 1 pixel the visibilities are NaN.
+MIN_SIZE = 475
 
 
 def _diffuse(b):
@@ -153,6 +181,22 @@ def _measure(key, scene, prep, raw, ladar, size, extent, metrics):
     return image
 
 
+def _checked_size(size, extent):
+    """``size``, refused below :data:`MIN_SIZE` (scaled up with an ``extent`` above the
+    default's, so that pixels are no coarser), before any work."""
+    extent = check_real("extent", extent, low=0.0, low_open=True)
+    minimum = max(MIN_SIZE, math.ceil(MIN_SIZE * extent / IMAGE_EXTENT - 1e-9))
+    integer = isinstance(size, (int, np.integer)) and not isinstance(size, (bool, np.bool_))
+    if integer and size < minimum:
+        raise ParameterError(
+            f"size={size} is below the minimum {minimum}"
+            + (f" at extent={extent:g}" if minimum != MIN_SIZE else "")
+            + ": the paper's findings hold, each within its tolerance of its 512x512 figure "
+            f"(docs/guide/paper.md), from {minimum} pixels a side up; give size >= "
+            f"{minimum} (default {IMAGE_SIZE})")
+    return check_count("size", size, low=minimum)
+
+
 def run(*, size=IMAGE_SIZE, extent=IMAGE_EXTENT, ladar=None):
     """Compute every panel and metric of Figs 5-11.
 
@@ -164,10 +208,12 @@ def run(*, size=IMAGE_SIZE, extent=IMAGE_EXTENT, ladar=None):
     Parameters
     ----------
     size : int, keyword-only
-        Pixels per side of every reconstruction (default :data:`IMAGE_SIZE`, 512).
+        Pixels per side of every reconstruction (default :data:`IMAGE_SIZE`, 512), at
+        least :data:`MIN_SIZE` (475), where the findings hold.
     extent : float, keyword-only
         Half-width of the reconstructions' square about the origin, scene units (default
-        :data:`IMAGE_EXTENT`, 1.0).
+        :data:`IMAGE_EXTENT`, 1.0); above it, ``size`` must be at least :data:`MIN_SIZE`
+        × ``extent`` (pixels no coarser than at 475 over the default).
     ladar : Ladar, optional, keyword-only
         The views and bins (default :meth:`meshladar.ladar.Ladar.paper` with A = 0.8: 360
         views at 1°, 512 bins of A/256 over [−A, A]). The disk metrics take the paper's
@@ -181,7 +227,15 @@ def run(*, size=IMAGE_SIZE, extent=IMAGE_EXTENT, ladar=None):
         ``bin_edges``, ``angles_deg``, ``extent``, ``size``, ``captions``, ``outlines``
         (each panel's shapes, for the figures' colour scales), and ``metrics``: a flat
         dict of the findings' numbers (see the module docstring).
+
+    Raises
+    ------
+    ParameterError
+        When ``size`` is not an integer of at least :data:`MIN_SIZE` (scaled with
+        ``extent``), or ``extent`` is not a positive real, before any work: below it the
+        findings do not hold (:data:`MIN_SIZE`).
     """
+    size = _checked_size(size, extent)
     ladar = Ladar.paper(_A) if ladar is None else ladar
     panels = _panels()
     sinos, images, captions, metrics, outlines = {}, {}, {}, {}, {}

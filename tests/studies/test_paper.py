@@ -13,8 +13,9 @@ from meshladar.studies import paper
 
 @pytest.fixture(scope="module")
 def result():
-    # 256² images keep the run to ~3 s; the metrics move by < 0.1 between 256² and 512²
-    return paper.run(size=256)
+    # the smallest size run() takes (475²: every finding within 0.1 + 5 % of its 512²
+    # figure; 256² is refused, its ellipse figures moved by up to 0.28)
+    return paper.run(size=paper.MIN_SIZE)
 
 
 @pytest.mark.slow
@@ -65,10 +66,10 @@ def test_shadowing_leaves_range_gaps(result):
 def test_figures_are_drawn_from_the_saved_result(tmp_path):
     from meshladar.viz import paper as vpaper
 
-    path, metrics = vpaper.save_run(tmp_path, size=64)
+    path, metrics = vpaper.save_run(tmp_path, size=paper.MIN_SIZE)    # 64 is refused
     arrays, meta = results.load_result(path)
     assert meta["metrics"] == metrics and meta["model"] == "analytic"
-    assert arrays["image/disk_b0"].shape == (64, 64)
+    assert arrays["image/disk_b0"].shape == (paper.MIN_SIZE, paper.MIN_SIZE)
     paths = vpaper.draw(path, tmp_path / "figs", dpi=40)
     assert [os.path.basename(p) for p in paths] == [f"fig{n:02d}.png" for n in range(5, 12)]
     import matplotlib.image as mpimg

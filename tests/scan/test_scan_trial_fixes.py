@@ -1,0 +1,136 @@
+"""A user trial's scanner defects: a killed scan's waveform temporary is removed by the next
+write into its folder (named as every atomic write's temporary), and a flash array refuses
+the beam settings it ignores, bounds its pixels' sub-rays by its own tolerance and records
+what it sampled its pixels with."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from meshladar.errors import ParameterError
+from meshladar.io import TEMPORARY_PREFIX, temporary_writer
+from meshladar.scan import Platform, ScanBeam, flash, read_hdf5, scan
+from meshladar.scan.files import WaveformSink
+from meshladar.scan.footprint import pixel_offsets
+
+from _scan_scenes import plate, scene, sensor
+
+#: A child that opens a streaming waveform file, writes a block, says where its temporary
+#: is, then waits on its stdin (for a SIGKILL, or for the test to close it).
+_STREAMING_CHILD = """
+import os, sys
+import numpy as np
+from meshladar.scan.files import WaveformSink
+sink = WaveformSink(sys.argv[1])
+sink.write(0, np.ones((4, 64)), np.zeros(4))
+sink.file.flush()
+print(os.path.basename(sink.partial), flush=True)
+sys.stdin.read()
+"""
+
+
+def _streaming_child(path):
+    """A child process streaming into ``path``, and its temporary's name (read once the
+    child has written it: the test waits on that line, not on time)."""
+    h5py = pytest.importorskip("h5py")
+    assert h5py
+    child = subprocess.Popen([sys.executable, "-c", _STREAMING_CHILD, str(path)],
+                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    return child, child.stdout.readline().strip()
+
+
+def test_a_killed_scans_waveform_temporary_is_removed_by_the_next_scan_there(tmp_path):
+    """``scan ... --waveforms bigw.h5`` killed by SIGKILL left ``bigw.h5.partial-<pid>``
+    (16 MB in the trial) that no later write removed. Its temporary is now an atomic
+    write's (``.meshladar-tmp-<pid>-…bigw.h5``): the next scan writing into that folder
+    removes the dead writer's, and keeps a live writer's."""
+    dead, dead_name = _streaming_child(tmp_path / "bigw.h5")
+    live, live_name = _streaming_child(tmp_path / "other.h5")
+    try:
+        dead.kill()                                           # SIGKILL: no clean-up runs
+        assert dead.wait() == -signal.SIGKILL
+        assert dead_name.startswith(TEMPORARY_PREFIX) and dead_name.endswith("bigw.h5")
+        assert temporary_writer(dead_name) == dead.pid
+        assert temporary_writer(live_name) == live.pid
+        assert sorted(os.listdir(tmp_path)) == sorted([dead_name, live_name])
+        cloud = scan(scene(plate(50.0)), flash(2, 2, ifov_deg=0.1), Platform.static((0, 0, 0)),
+                     sensor(), waveforms_file=tmp_path / "bigw.h5")
+        assert sorted(os.listdir(tmp_path)) == sorted(["bigw.h5", live_name])
+        back = read_hdf5(tmp_path / "bigw.h5")
+        assert back.points.tobytes() == cloud.points.tobytes()
+        assert len(back.waveforms) == 1 and back.waveforms[0].shape[0] == 4
+    finally:
+        live.communicate("")                                 # its stdin closed: it ends
+        dead.communicate()
+    assert live.returncode == 0
+
+
+def test_the_waveform_sink_streams_into_a_temporary_of_its_own_pid(tmp_path):
+    """While streaming, the only file is this process's temporary (its pid in the name,
+    the permissions a new file gets); finished, the file alone; abandoned, nothing."""
+    pytest.importorskip("h5py")
+    sink = WaveformSink(tmp_path / "w.h5")
+    (name,) = os.listdir(tmp_path)
+    assert temporary_writer(name) == os.getpid() and name.endswith("w.h5")
+    umask = os.umask(0o022)
+    os.umask(umask)
+    assert os.stat(tmp_path / name).st_mode & 0o777 == 0o666 & ~umask
+    sink.write(0, np.ones((2, 8)), np.zeros(2))
+    sink.abandon()
+    assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("beam, field, value", [
+    (ScanBeam(5e-4), "divergence", "0.0005"),
+    (ScanBeam(0.0, profile="tophat"), "profile", "'tophat'"),
+    (ScanBeam(0.0, sub_rays=4), "sub_rays", "4"),
+    (ScanBeam(0.0, sub_rays=4, tol=0.001), "sub_rays", "4"),
+])
+def test_a_flash_scan_refuses_the_beam_settings_its_pixels_ignore(beam, field, value):
+    """A flash pixel is lit uniformly over its IFOV and sampled to the beam's tol: a beam's
+    divergence, profile or sub_rays changed nothing but were recorded in the file's
+    info. Now refused, naming the field, its value and what flash uses."""
+    with pytest.raises(ParameterError) as exc:
+        scan(scene(plate(50.0)), flash(2, 2, ifov_deg=0.1), Platform.static((0, 0, 0)),
+             sensor(beam=beam))
+    msg = str(exc.value)
+    assert msg.startswith(f"beam.{field}={value} does not apply to a flash array")
+    assert "uniformly over their IFOV" in msg and f"beam.tol={beam.tol:g}" in msg
+
+
+def test_a_flash_pixels_tolerance_is_bounded_by_its_own_sub_rays():
+    """tol=0.001 was refused with the beam's "more than 4096 sub-rays per pulse" (a beam
+    flash does not use), or, with sub_rays given, run at 500 x 500 sub-rays a pixel. The
+    pixels' own bound: m = ceil(1/(2 tol)) <= 64 a side (4096 a pixel, a beam's most)."""
+    with pytest.raises(ParameterError) as exc:
+        scan(scene(plate(50.0)), flash(2, 2, ifov_deg=0.1), Platform.static((0, 0, 0)),
+             sensor(beam=ScanBeam(0.0, tol=0.001)))
+    assert str(exc.value) == (
+        "beam.tol=0.001: a flash pixel is sampled by m x m sub-rays, m = ceil(1/(2 tol)) = "
+        "500 (250000 a pixel), more than 64 x 64 = 4096; give beam.tol >= 0.0078125")
+    with pytest.raises(ParameterError, match=r"^tol=0.0078: .* = 65 \(4225 a pixel\)"):
+        pixel_offsets(0.0078)
+    assert pixel_offsets(1 / 128).shape == (4096, 2)
+    assert pixel_offsets(0.1).shape == (25, 2)
+
+
+@pytest.mark.parametrize("tol, side", [(0.1, 5), (1 / 128, 64)])
+def test_a_flash_scan_records_its_pixels_sampling_as_its_beam(tol, side):
+    """The cloud's info says what the pixels were sampled with (the beam's description
+    said one sub-ray), and the frame's photoelectrons are the same at either sampling (a
+    plate filling the field)."""
+    cloud = scan(scene(plate(50.0)), flash(2, 2, ifov_deg=0.1), Platform.static((0, 0, 0)),
+                 sensor(beam=ScanBeam(0.0, tol=tol)), keep_waveforms=True)
+    assert cloud.info["sensor"]["beam"] == {"profile": "flash pixel", "ifov_deg": 0.1,
+                                            "tol": tol, "sub_rays": side * side,
+                                            "side": side}
+    coarse = scan(scene(plate(50.0)), flash(2, 2, ifov_deg=0.1), Platform.static((0, 0, 0)),
+                  sensor(beam=ScanBeam(0.0, tol=0.5)), keep_waveforms=True)
+    assert coarse.info["sensor"]["beam"]["sub_rays"] == 1
+    assert cloud.waveforms[0].sum() == pytest.approx(coarse.waveforms[0].sum(), rel=1e-4)
