@@ -135,6 +135,22 @@ def check_views_agree(angles_deg, view_vectors) -> None:
             f"{float(azimuth[k]):g} deg); give one of them")
 
 
+def check_weights(weights, shape, *, expected, sign, zero) -> np.ndarray:
+    """``weights`` as a finite float64 array of ``shape``, every one ≥ 0 and some > 0; the
+    messages read "weights must be {expected}; got shape …", "weights must be {sign}; got
+    {value} at index {index} (of shape …)" and "weights are all zero (shape …): {zero}"."""
+    w = finite_array("weights", weights)
+    if w.shape != tuple(shape):
+        raise ParameterError(f"weights must be {expected}; got shape {w.shape}")
+    if np.any(w < 0):
+        idx = tuple(int(i) for i in np.argwhere(w < 0)[0])
+        raise ParameterError(f"weights must be {sign}; got {w[idx]:g} at index "
+                             f"{idx[0] if len(idx) == 1 else idx} (of shape {w.shape})")
+    if not np.any(w > 0):
+        raise ParameterError(f"weights are all zero (shape {w.shape}): {zero}")
+    return w
+
+
 def check_size(name: str, count, bytes_each: int, what: str, reduce: str) -> None:
     """Refuse an allocation of ``count`` items of ``bytes_each`` over MAX_ARRAY_BYTES."""
     need = float(count) * bytes_each

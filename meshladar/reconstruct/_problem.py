@@ -13,7 +13,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._validate import check_count, check_real, check_sinogram, check_size, finite_array
+from .._validate import (check_count, check_real, check_sinogram, check_size, check_weights,
+                         finite_array)
 from ..errors import ParameterError
 from ..forward.siddon import PixelGrid
 from ..images import Image
@@ -124,18 +125,10 @@ def _kept_at_unit_scale(sino, W):
 def _weights(weights, b):
     """The per-bin weights W, checked (finite, ≥ 0, one per bin, not all 0) and divided by
     their largest: relative, as every solver is invariant to their scale. None: all 1."""
-    W = np.ones_like(b) if weights is None else finite_array("weights", weights)
-    if W.shape != b.shape:
-        raise ParameterError(f"weights must be one value >= 0 per bin, shape {b.shape} "
-                             f"(n_views, n_bins); got shape {W.shape}")
-    if np.any(W < 0):
-        idx = tuple(int(i) for i in np.argwhere(W < 0)[0])
-        raise ParameterError(f"weights must be >= 0 (0 drops a bin); got {W[idx]:g} at "
-                             f"index {idx} (of shape {W.shape})")
-    if not np.any(W > 0):
-        raise ParameterError(f"weights are all zero (shape {W.shape}): every bin is dropped, "
-                             "so there is no data to reconstruct from (keep some bins, "
-                             "weight > 0)")
+    W = np.ones_like(b) if weights is None else check_weights(
+        weights, b.shape, expected=f"one value >= 0 per bin, shape {b.shape} (n_views, n_bins)",
+        sign=">= 0 (0 drops a bin)", zero="every bin is dropped, so there is no data to "
+                                          "reconstruct from (keep some bins, weight > 0)")
     return W / W.max()
 
 

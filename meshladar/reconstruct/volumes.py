@@ -31,7 +31,8 @@ import warnings
 
 import numpy as np
 
-from .._validate import check_count, check_real, check_sinogram, check_size, finite_array
+from .._validate import (check_count, check_real, check_sinogram, check_size, check_weights,
+                         finite_array)
 from ..errors import MeshladarWarning, ParameterError, user_stacklevel
 from ..images import Volume
 from ..meshes import fibonacci_sphere
@@ -125,18 +126,11 @@ def _view_weights(weights, n):
     0), or 4π/n each."""
     if weights is None:
         return np.full(n, 4 * math.pi / n)
-    wts = finite_array("weights", weights)
-    if wts.shape != (n,):
-        raise ParameterError(f"weights must be {n} solid angles >= 0, shape ({n},) (one per "
-                             f"view); got shape {wts.shape}")
-    if np.any(wts < 0):
-        k = int(np.argmax(wts < 0))
-        raise ParameterError(f"weights must be solid angles >= 0 (one per view); got "
-                             f"{wts[k]:g} at index {k} (of shape {wts.shape})")
-    if not np.any(wts > 0):
-        raise ParameterError(f"weights are all zero (shape {wts.shape}): every view is "
-                             "dropped and the volume would be 0; give each view's solid "
-                             "angle (> 0 for some), e.g. sphere_weights(sino.view_vectors)")
+    wts = check_weights(weights, (n,), expected=f"{n} solid angles >= 0, shape ({n},) (one "
+                        "per view)", sign="solid angles >= 0 (one per view)",
+                        zero="every view is dropped and the volume would be 0; give each "
+                             "view's solid angle (> 0 for some), e.g. "
+                             "sphere_weights(sino.view_vectors)")
     return wts
 
 
