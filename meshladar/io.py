@@ -13,6 +13,7 @@ import json
 import math
 import os
 import stat
+import warnings
 
 import numpy as np
 
@@ -23,7 +24,7 @@ from ._atomic_write import (_atomic, regular_file, temporary_writer, write_atomi
 from ._atomic_write import _SWEPT  # noqa: F401  (the deprecated meshladar.results offers it)
 from ._version import __version__
 from ._validate import check_path
-from .errors import MeshladarError, ParameterError
+from .errors import MeshladarError, MeshladarWarning, ParameterError, user_stacklevel
 from .noise import Noise
 from .sinogram import Sinogram, check_sinogram
 from .waveforms import Waveforms
@@ -319,12 +320,36 @@ def load_sinogram(path):
     if missing:
         raise ResultFileError(f"{os.fspath(path)}: sinogram result lacks {missing[0]!r}")
     try:
-        sino = Sinogram(arrays["values"], angles_deg=arrays["angles_deg"],
+        vectors = arrays.get("view_vectors")
+        sino = Sinogram(arrays["values"], angles_deg=_stored_angles(path, arrays["angles_deg"],
+                                                                    vectors),
                         bin_edges=arrays["bin_edges"], model=meta.get("model", "measured"),
-                        info=meta.get("info", {}), view_vectors=arrays.get("view_vectors"))
+                        info=meta.get("info", {}), view_vectors=vectors)
     except ValueError as exc:
         raise ResultFileError(f"{os.fspath(path)}: invalid sinogram ({exc})") from exc
     return sino, meta
+
+
+def _stored_angles(path, angles, vectors):
+    """A file's ``angles_deg``, or None (its view vectors' azimuths, with a warning) where
+    they contradict its 3-D view vectors: files written before ``angles_deg`` became
+    optional beside ``view_vectors`` could hold made-up angles (zeros) there."""
+    if vectors is None:
+        return angles
+    a, v = np.asarray(angles, dtype=float), np.asarray(vectors, dtype=float)
+    if a.ndim != 1 or v.shape != (a.size, 3):
+        return angles                          # the Sinogram names what is wrong
+    with np.errstate(invalid="ignore", divide="ignore"):
+        unit = v / np.linalg.norm(v, axis=1, keepdims=True)
+    try:
+        _validate.check_views_agree(a, unit)
+    except ParameterError:
+        warnings.warn(f"{os.fspath(path)}: its angles_deg contradict its view_vectors "
+                      "(a file from before angles_deg became optional with 3-D views may "
+                      "hold made-up angles): the views' azimuths are used",
+                      MeshladarWarning, stacklevel=user_stacklevel())
+        return None
+    return angles
 
 
 def save_waveforms(path, waves, *, realisations=None, noise=None, params=None):

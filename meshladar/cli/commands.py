@@ -124,12 +124,19 @@ def cmd_paper(args) -> int:
     Raises
     ------
     ParameterError
-        When ``outdir`` is not a folder name, or a ``size`` × ``size`` image (24 bytes a
-        pixel) would exceed the 4 GiB meshladar allocates at once; both before any work.
+        When ``outdir`` is not a folder name, ``size`` is below
+        :data:`meshladar.studies.paper.MIN_SIZE`, or a ``size`` × ``size`` image (24 bytes
+        a pixel) would exceed the 4 GiB meshladar allocates at once; all before any work.
     ImportError
         When matplotlib is not installed (checked before the work).
     """
     check_outdir(args.outdir)
+    minimum = _ml.studies.paper.MIN_SIZE
+    if args.size < minimum:
+        raise ParameterError(f"--size must be at least {minimum}: the paper's findings hold, "
+                             "each within its tolerance of its 512x512 figure "
+                             f"(docs/guide/paper.md), from {minimum} pixels a side up; got "
+                             f"{args.size}")
     check_size("--size", float(args.size) ** 2, 8 * 3, f"a {args.size} x {args.size} image",
                "use a smaller --size")
     plotting.require("matplotlib")              # before the work, not after it

@@ -105,7 +105,8 @@ def _simple(sub, commands):
               "example:\n  meshladar paper paper-figures/")
     pp.add_argument("outdir", help="folder for the PNGs and paper_result.npz")
     pp.add_argument("--size", type=positive_int, default=512,
-                    help="reconstruction size in pixels (default: %(default)s)")
+                    help="reconstruction size in pixels, at least 475, where the findings "
+                         "hold (default: %(default)s)")
 
 
 def _simulate(sub, commands):

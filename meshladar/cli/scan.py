@@ -46,7 +46,9 @@ SENSOR_FLAGS = {"max_returns": "--max-returns", "shots": "--geiger-shots",
                 "background_rate": "--background-rate", "dark_rate": "--dark-rate"}
 _TRUE, _FALSE = ("true", "yes", "on", "1"), ("false", "no", "off", "0")
 #: The beam flags' values when not given (the parser leaves them None: whether one was
-#: given decides what applies, a flash pattern refusing ``--divergence`` and ``--profile``).
+#: given decides what applies, a flash pattern refusing ``--divergence`` and ``--profile``);
+#: ``profile`` and ``tol`` are ScanBeam's own defaults (tested; written out so that the
+#: parser's help does not load the scanner).
 BEAM_DEFAULTS = {"divergence": 5e-4, "profile": "gaussian", "tol": 0.1}
 #: What a flash array does instead of a beam, for the flags it refuses.
 _FLASH_PIXELS = ("its pixels are lit uniformly over their IFOV and sampled by m x m "
@@ -201,11 +203,11 @@ def _beam(args, flash):
     tol = BEAM_DEFAULTS["tol"] if args.tol is None else args.tol
     if flash:                             # the beam's tol alone: m x m sub-rays a pixel
         beam = scanning.ScanBeam(0.0, tol=tol)
-        side = scanning.footprint.MAX_PIXEL_SIDE
-        if tol < 0.5 / side:
-            raise ParameterError(f"--tol {tol:g} is finer than a flash array samples its "
-                                 "pixels (m x m sub-rays a pixel, m = ceil(1/(2 tol)), at "
-                                 f"most {side} x {side}); give --tol >= {0.5 / side:g}")
+        try:
+            scanning.footprint.check_flash_beam(beam)
+        except ParameterError as exc:
+            raise ParameterError(str(exc).replace("beam.tol=", "--tol ")
+                                 .replace("beam.tol", "--tol")) from None
         return beam
     beam = scanning.ScanBeam(
         BEAM_DEFAULTS["divergence"] if args.divergence is None else args.divergence,

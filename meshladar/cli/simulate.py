@@ -127,12 +127,14 @@ _API_FLAGS = {"n_bins": "--bins", "bin_width": "--bin-width", "angles_deg": "--a
               "view_vectors": "--view-vectors", "model": "--model"}
 #: Every API name with its flag: the options', the sensor fields', the ladar's.
 _FLAGS = {**{o.name: o.cli_flag for o in OPTIONS + SENSOR_OPTIONS if o.cli}, **_API_FLAGS}
-#: Names that are never English words (an underscore in them, or a sensor field's).
+#: Names a message uses only for their values: an underscore in them, or a sensor
+#: field's (the sensor's messages say "standoff" and "wavelength" for its flags').
 _UNIQUE = sorted((n for n in _FLAGS if "_" in n or n in {o.name for o in SENSOR_OPTIONS}),
                  key=len, reverse=True)
-#: Those names: their flag wherever they stand outside quotes (a file's name is kept).
-_ANYWHERE = re.compile(r"(?<!\w)('[^']*'|\"[^\"]*\")|(?<![-\w.])(" + "|".join(_UNIQUE)
-                       + r")\b")
+#: Those names: their flag wherever they stand outside quotes and outside a path (a
+#: file's name is kept, quoted or not: ``/data/n_bins/part.stl``).
+_ANYWHERE = re.compile(r"(?<!\w)('[^']*'|\"[^\"]*\")|(?<![-\w./\\])(" + "|".join(_UNIQUE)
+                       + r")\b(?![./\\]\w)")
 #: The others (tol, jobs, seed, mode...): their flag only where a message begins with one
 #: as the subject of a rule (``tol must be in (0, 1)``, ``jobs: ...``).
 _LEADING = re.compile(r"^(" + "|".join(n for n in _FLAGS if n not in _UNIQUE)
@@ -141,9 +143,10 @@ _LEADING = re.compile(r"^(" + "|".join(n for n in _FLAGS if n not in _UNIQUE)
 
 def in_flags(message):
     """An API message in the command line's words: ``mode='3d'`` becomes ``--mode 3d`` for
-    every option; a name that is never an English word (``ray_spacing``, ``n_bins``, a
-    Sensor field's) becomes its flag wherever it stands outside quotes; any other
-    option's name (``tol``, ``jobs``) where the message begins with it as a rule's subject.
+    every option; a name messages use only for its value (``ray_spacing``, ``n_bins``, a
+    Sensor field's) becomes its flag wherever it stands outside quotes and paths
+    (``/data/n_bins/part.stl`` is kept); any other option's name (``tol``, ``jobs``)
+    where the message begins with it as a rule's subject.
 
     Parameters
     ----------

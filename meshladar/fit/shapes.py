@@ -102,15 +102,15 @@ def find_shapes(sino, *, size=512, extent=None, center=(0.0, 0.0), kind="disk", 
     """
 
     kind = check_choice("kind", kind, SHAPE_KINDS)
-    seed = check_seed("seed", seed)                    # before the first reconstruction
+    seed = check_seed("seed", seed)                    # all before the first reconstruction
+    tol_bins = check_real("tol_bins", tol_bins, low=0.0, low_open=True)
+    min_share = check_real("min_share", min_share, low=0.0, high=1.0)
+    max_shapes = check_count("max_shapes", max_shapes)
     if first is None:
         first = first_image(sino, size, extent, center)
     surface = estimate_surface(first, sino, shadows=False)
-    dr = float(np.mean(np.diff(sino.bin_edges)))
-    tol = check_real("tol_bins", tol_bins, low=0.0, low_open=True) * dr
-    n = surface.points.shape[0]
-    min_points = max(10, int(check_real("min_share", min_share, low=0.0, high=1.0) * n))
-    max_shapes = check_count("max_shapes", max_shapes)
+    tol = tol_bins * float(np.mean(np.diff(sino.bin_edges)))
+    min_points = max(10, int(min_share * surface.points.shape[0]))
     if kind == "disk":
         groups = _ransac_circles(surface.points, tol, min_points, max_shapes, seed)
     else:

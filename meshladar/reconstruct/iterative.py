@@ -21,8 +21,9 @@ runs its iterations (the private ``_iterations``: each method's loop and record)
 
 The solvers are invariant to the data's scale: they run on the values divided by the power
 of two 2^k nearest below the largest value the weights keep, and multiply the image back,
-so data of any magnitude (1e-300 to 1e307) gives the unit-scale run's image times the scale
-(exactly, for a power of two) and the same residuals, without underflow or overflow.
+so data of any magnitude (tested from 1e-300 to 1e300) gives the unit-scale run's image
+times the scale (exactly for a power of two, to round-off otherwise) and the same
+residuals, without underflow or overflow; an image beyond float64's range is refused.
 """
 
 from __future__ import annotations
@@ -343,8 +344,9 @@ def tv_fista(sino, size=256, extent=None, *, center=(0.0, 0.0), tv=0.005, n_iter
     steps, warm-started from the previous step's dual).
 
     ``tv`` sets λ relative to the image's scale: λ = tv · L · s with s the 99th percentile
-    of |FBP image| of the data the weights keep (dropped bins at 0), so each step smooths away jumps below about tv × s (the default 0.005:
-    half a per cent of the image's level; on an exact disk sinogram at 10° view spacing
+    of |FBP image| of the data the weights keep (dropped bins at 0), so each step smooths
+    away jumps below about tv × s (the default 0.005: half a per cent of the image's
+    level; on an exact disk sinogram at 10° view spacing
     the error is then 0.092, below FBP's 0.104 at 1°). Other parameters as :func:`sirt`
     (default warm start from FBP). ``info["residuals"]`` holds the data term,
     ``info["objective"]`` the whole objective per iteration relative to ½‖W^½ b‖² (its value

@@ -286,8 +286,9 @@ def surface_weights(surface, angles_deg, material, *, labels=None, radiometry="p
     material : BRDF or sequence of BRDF
         The coatings.
     labels : (size, size) int array_like, keyword-only, optional
-        Each pixel's index into ``material``, whole numbers in [0, len(material)); needed
-        when it holds more than one BRDF, and checked whenever given.
+        Each pixel's index into ``material``: whole numbers, in [0, len(material)) on the
+        surface (any value off it, e.g. -1); needed when it holds more than one BRDF, and
+        checked whenever given.
     radiometry : {"paper", "power"}, keyword-only, default "paper"
         h = F cos θ (the paper's Eq. 8) or the received power F cos² θ.
     blur_deg : float in [0, 90], keyword-only, default 1.0
@@ -306,8 +307,8 @@ def surface_weights(surface, angles_deg, material, *, labels=None, radiometry="p
         When ``radiometry`` or ``blur_deg`` is invalid; a material is not a
         :class:`~meshladar.brdf.BRDF` or returns no light to a monostatic ladar; several
         materials come without ``labels``, or ``labels`` (whenever given) is not (size,
-        size) or holds a value that is not a whole number in [0, len(material)) (the first
-        named, with its pixel); ``angles_deg`` is not finite; or
+        size) of whole numbers, or holds an index outside [0, len(material)) on the
+        surface (the first named, with its pixel); ``angles_deg`` is not finite; or
         the shadow map's views do not match ``angles_deg``.
     ModelError
         When a material's class does not define ``projected``.
@@ -346,9 +347,10 @@ def _materials(material):
 
 
 def _checked_labels(labels, size, n_materials):
-    """``labels`` as a (size, size) int array, each pixel's index into ``n_materials``
-    materials, checked whenever given (one material included): finite whole numbers in
-    [0, n_materials). None is refused for several materials and stands for all 0."""
+    """``labels`` as a (size, size) int array of indices into ``n_materials`` materials,
+    checked whenever given (one material included): finite whole numbers (the range is
+    the surface's, :func:`_material_of`: pixels off it may hold a background value such
+    as -1). None is refused for several materials and stands for all 0."""
     if labels is None:
         if n_materials > 1:
             raise ParameterError(f"several materials ({n_materials}) need labels: a ({size}, "
@@ -358,19 +360,26 @@ def _checked_labels(labels, size, n_materials):
     if lab.shape != (size, size):
         raise ParameterError(f"labels must be a ({size}, {size}) array of indices into "
                              f"material; got shape {lab.shape}")
-    bad = (lab != np.round(lab)) | (lab < 0) | (lab >= n_materials)
+    bad = lab != np.round(lab)
     if np.any(bad):
         i, j = (int(k) for k in np.argwhere(bad)[0])
-        raise ParameterError(f"labels must be whole numbers in [0, {n_materials}) (indices "
-                             f"into the {n_materials} material(s)); got {lab[i, j]:g} at "
-                             f"index ({i}, {j})")
+        raise ParameterError(f"labels must be whole numbers (indices into material); got "
+                             f"{lab[i, j]:g} at index ({i}, {j})")
     return lab.astype(np.intp)
 
 
 def _material_of(surface, n_materials, labels):
     """Each surface point's index into the materials: ``labels`` (a (size, size) image,
-    :func:`_checked_labels`) at the point's pixel; 0 for one material without labels."""
-    return _checked_labels(labels, surface.size, n_materials)[surface.rows, surface.cols]
+    :func:`_checked_labels`) at the point's pixel, in [0, n_materials) on the surface; 0
+    for one material without labels."""
+    which = _checked_labels(labels, surface.size, n_materials)[surface.rows, surface.cols]
+    bad = (which < 0) | (which >= n_materials)
+    if np.any(bad):
+        k = int(np.argmax(bad))
+        raise ParameterError(f"labels on the surface must be in [0, {n_materials}) (indices "
+                             f"into the {n_materials} material(s)); got {which[k]} at pixel "
+                             f"({int(surface.rows[k])}, {int(surface.cols[k])})")
+    return which
 
 
 def _subset(surface, keep):

@@ -23,7 +23,7 @@ from meshladar.cli import scan as cli_scan
 from meshladar.cli import simulate as cli_simulate
 from meshladar.cli.argv import join_negative_lists
 from meshladar.cli.parser import build_parser
-from meshladar.cli.simulate import check_applicable
+from meshladar.cli.simulate import check_applicable, in_flags
 from meshladar.errors import MeshladarWarning
 from meshladar.io import load_sinogram, save_sinogram
 from meshladar.scan import read_hdf5
@@ -107,8 +107,8 @@ _FLASH_PIXELS = ("its pixels are lit uniformly over their IFOV and sampled by m 
     (_FLASH, ["--profile", "tophat"], f"--profile does not apply to a flash pattern: "
                                       f"{_FLASH_PIXELS}; leave --profile out"),
     (_FLASH, ["--tol", "0.001"],
-     "--tol 0.001 is finer than a flash array samples its pixels (m x m sub-rays a pixel, "
-     "m = ceil(1/(2 tol)), at most 64 x 64); give --tol >= 0.0078125"),
+     "--tol 0.001: a flash pixel is sampled by m x m sub-rays, m = ceil(1/(2 tol)) = 500 "
+     "(250000 a pixel), more than 64 x 64 = 4096; give --tol >= 0.0078125"),
 ], ids=["tol+sub-rays", "flash+sub-rays", "flash+divergence", "flash+profile", "flash-tol"])
 def test_scan_refuses_beam_flags_that_do_not_apply(pattern, extra, message, files, capsys,
                                                    no_work):
@@ -288,3 +288,26 @@ def test_the_apis_refusals_are_put_in_flags(files, capsys):
         code, _, err = _run(capsys, _SIM + extra)
         assert code == 2
         assert err == f"meshladar: error: {message}\n"
+
+
+@pytest.mark.parametrize("message, expected", [
+    ("/data/n_bins/part.stl: no faces left", "/data/n_bins/part.stl: no faces left"),
+    ("runs/standoff/a.stl: cannot be read", "runs/standoff/a.stl: cannot be read"),
+    ("n_bins.stl: empty", "n_bins.stl: empty"),
+    ("give ray_spacing or rays_per_bin, not both", "give --ray-spacing or --rays-per-bin, "
+                                                   "not both"),
+    ("a sensor at a finite standoff needs mode='3d'", "a sensor at a finite --standoff needs "
+                                                      "--mode 3d"),
+])
+def test_api_names_become_flags_but_paths_are_kept(message, expected):
+    """Every error of the command is translated at one place (main): a file's path that
+    happens to hold an API name (unquoted) is not rewritten."""
+    assert in_flags(message) == expected
+
+
+def test_the_beam_flags_defaults_are_the_beams():
+    """The parser's help shows the beam's defaults without loading the scanner: they are
+    ScanBeam's own (profile and tol), so the help cannot drift from what a scan uses."""
+    fields = ml.scan.ScanBeam.__dataclass_fields__
+    assert cli_scan.BEAM_DEFAULTS["tol"] == fields["tol"].default
+    assert cli_scan.BEAM_DEFAULTS["profile"] == fields["profile"].default

@@ -111,3 +111,20 @@ def test_no_shape_is_a_clear_error():
         find_shapes(empty, size=64)
     with pytest.raises(ParameterError, match="kind"):
         find_shapes(empty, size=64, kind="square")
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(tol_bins=0.0), r"tol_bins must be in \(0, inf\]; got 0.0"),
+    (dict(min_share=1.5), r"min_share must be in \[0, 1\]; got 1.5"),
+    (dict(max_shapes=0), r"max_shapes must be an integer >= 1; got 0"),
+])
+def test_the_options_are_refused_before_the_first_reconstruction(kwargs, message,
+                                                                  monkeypatch):
+    def work(*args, **kw):
+        raise AssertionError("the first reconstruction ran before the refusal")
+
+    monkeypatch.setattr(ml.fit.shapes, "first_image", work)
+    lad = Ladar(np.arange(0.0, 360.0, 10.0), Ladar.centered(32, 0.05).bin_edges)
+    sino = ml.Sinogram(np.ones((36, 32)), angles_deg=lad.angles_deg, bin_edges=lad.bin_edges)
+    with pytest.raises(ParameterError, match=message):
+        find_shapes(sino, size=64, **kwargs)

@@ -246,3 +246,21 @@ def test_a_second_interrupt_stops_a_write_at_once(tmp_path):
         write_atomic(target, writer)
     assert reached == [] and list(tmp_path.iterdir()) == []
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_an_old_3d_sinogram_with_made_up_angles_still_loads(tmp_path):
+    """Files from before angles_deg became optional beside view_vectors could hold zeros
+    for the angles of 3-D views; such a file loads with its views' azimuths and a warning
+    naming it (the views, values and bins as stored)."""
+    vec = meshladar.meshes.fibonacci_sphere(6)
+    arrays = {"values": np.arange(48.0).reshape(6, 8), "angles_deg": np.zeros(6),
+              "bin_edges": np.linspace(-1.0, 1.0, 9), "view_vectors": vec}
+    path = tmp_path / "old.npz"
+    save_result(path, arrays, {"kind": "sinogram", "model": "mesh", "info": {}})
+    with pytest.warns(meshladar.errors.MeshladarWarning, match=r"old\.npz: its angles_deg "
+                                                        r"contradict its view_vectors"):
+        sino, _ = meshladar.io.load_sinogram(path)
+    np.testing.assert_allclose(sino.angles_deg, np.degrees(np.arctan2(vec[:, 1], vec[:, 0])),
+                               atol=1e-12)
+    np.testing.assert_array_equal(sino.values, arrays["values"])
+    np.testing.assert_allclose(sino.view_vectors, vec, atol=1e-15)

@@ -68,6 +68,21 @@ def test_the_paper_figures_refuse_a_small_size_and_write_nothing(tmp_path, no_wo
     assert os.listdir(tmp_path) == []
 
 
+def test_the_command_names_its_flag_and_its_help_the_minimum(tmp_path, capsys, no_work):
+    """`meshladar paper OUT --size 128`: one line naming --size and the minimum, status 2,
+    nothing written; the flag's help states the minimum."""
+    from meshladar.cli import main
+
+    assert main(["paper", str(tmp_path / "out"), "--size", "128"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"meshladar: error: --size must be at least {paper.MIN_SIZE}: ")
+    assert err.endswith("; got 128\n") and not (tmp_path / "out").exists()
+    with pytest.raises(SystemExit):
+        main(["paper", "--help"])
+    assert f"at least {paper.MIN_SIZE}, where the findings hold" in " ".join(
+        capsys.readouterr().out.split())
+
+
 @pytest.mark.slow
 def test_at_the_minimum_every_finding_holds_and_below_it_one_does_not():
     """At 475² every finding is within its tolerance (0.1 or 0.01, plus 5 % of the figure)
