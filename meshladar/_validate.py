@@ -151,6 +151,23 @@ def check_weights(weights, shape, *, expected, sign, zero) -> np.ndarray:
     return w
 
 
+def views_agree(angles_deg, view_vectors) -> bool:
+    """False only where ``view_vectors`` (n, 3) and ``angles_deg`` (n,) can be compared
+    and :func:`check_views_agree` refuses them (a file's stored views)."""
+    if view_vectors is None:
+        return True
+    a, v = np.asarray(angles_deg, dtype=float), np.asarray(view_vectors, dtype=float)
+    if a.ndim != 1 or v.shape != (a.size, 3):
+        return True                           # the Sinogram names what is wrong
+    with np.errstate(invalid="ignore", divide="ignore"):
+        unit = v / np.linalg.norm(v, axis=1, keepdims=True)
+    try:
+        check_views_agree(a, unit)
+    except ParameterError:
+        return False
+    return True
+
+
 def check_size(name: str, count, bytes_each: int, what: str, reduce: str) -> None:
     """Refuse an allocation of ``count`` items of ``bytes_each`` over MAX_ARRAY_BYTES."""
     need = float(count) * bytes_each

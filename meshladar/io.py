@@ -320,36 +320,19 @@ def load_sinogram(path):
     if missing:
         raise ResultFileError(f"{os.fspath(path)}: sinogram result lacks {missing[0]!r}")
     try:
-        vectors = arrays.get("view_vectors")
-        sino = Sinogram(arrays["values"], angles_deg=_stored_angles(path, arrays["angles_deg"],
-                                                                    vectors),
+        angles, vectors = arrays["angles_deg"], arrays.get("view_vectors")
+        if not _validate.views_agree(angles, vectors):      # made-up angles of an old file
+            warnings.warn(f"{os.fspath(path)}: its angles_deg contradict its view_vectors (a "
+                          "file from before angles_deg became optional with 3-D views may "
+                          "hold made-up angles): the views' azimuths are used",
+                          MeshladarWarning, stacklevel=user_stacklevel())
+            angles = None
+        sino = Sinogram(arrays["values"], angles_deg=angles,
                         bin_edges=arrays["bin_edges"], model=meta.get("model", "measured"),
                         info=meta.get("info", {}), view_vectors=vectors)
     except ValueError as exc:
         raise ResultFileError(f"{os.fspath(path)}: invalid sinogram ({exc})") from exc
     return sino, meta
-
-
-def _stored_angles(path, angles, vectors):
-    """A file's ``angles_deg``, or None (its view vectors' azimuths, with a warning) where
-    they contradict its 3-D view vectors: files written before ``angles_deg`` became
-    optional beside ``view_vectors`` could hold made-up angles (zeros) there."""
-    if vectors is None:
-        return angles
-    a, v = np.asarray(angles, dtype=float), np.asarray(vectors, dtype=float)
-    if a.ndim != 1 or v.shape != (a.size, 3):
-        return angles                          # the Sinogram names what is wrong
-    with np.errstate(invalid="ignore", divide="ignore"):
-        unit = v / np.linalg.norm(v, axis=1, keepdims=True)
-    try:
-        _validate.check_views_agree(a, unit)
-    except ParameterError:
-        warnings.warn(f"{os.fspath(path)}: its angles_deg contradict its view_vectors "
-                      "(a file from before angles_deg became optional with 3-D views may "
-                      "hold made-up angles): the views' azimuths are used",
-                      MeshladarWarning, stacklevel=user_stacklevel())
-        return None
-    return angles
 
 
 def save_waveforms(path, waves, *, realisations=None, noise=None, params=None):
