@@ -119,12 +119,17 @@ def unit_vectors(name: str, value) -> np.ndarray:
     return a / norm
 
 
+def azimuths_deg(view_vectors) -> np.ndarray:
+    """The azimuths, in degrees about z, of (n, 3) view vectors: the angles of their views."""
+    return np.degrees(np.arctan2(view_vectors[:, 1], view_vectors[:, 0]))
+
+
 def check_views_agree(angles_deg, view_vectors) -> None:
     """Refuse view angles (degrees) that differ from their unit view vectors' azimuths by
     more than :data:`meshladar.precision.ANGLE_TOL_DEG` (vectors along ±z excepted): the
     analytic and pixel models and 2-D FBP read the angles, the mesh model and 3-D
     reconstruction the vectors, so a contradiction would give each its own views."""
-    azimuth = np.degrees(np.arctan2(view_vectors[:, 1], view_vectors[:, 0]))
+    azimuth = azimuths_deg(view_vectors)
     off = np.abs((angles_deg - azimuth + 180.0) % 360.0 - 180.0)
     off = np.where(np.hypot(view_vectors[:, 0], view_vectors[:, 1]) > 0, off, 0.0)
     if np.any(off > ANGLE_TOL_DEG):

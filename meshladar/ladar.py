@@ -15,8 +15,8 @@ from functools import cached_property
 import numpy as np
 
 from ._summary import table, text
-from ._validate import (check_count, check_real, check_size, check_views_agree, finite_array,
-                        readonly_copy, unit_vectors)
+from ._validate import (azimuths_deg, check_count, check_real, check_size, check_views_agree,
+                        finite_array, readonly_copy, unit_vectors)
 from .errors import MeshladarWarning, ParameterError, user_stacklevel
 from .precision import COUNT_SLACK, SCENE_RADIUS_RANGE, SPAN_FLOOR
 from .scene import Scene
@@ -82,7 +82,7 @@ class Ladar:
             if vec.ndim != 2 or len(vec) == 0:
                 raise ParameterError(f"view_vectors must have shape (n_views, 3); got "
                                      f"{vec.shape}")
-            azimuth = np.degrees(np.arctan2(vec[:, 1], vec[:, 0]))
+            azimuth = azimuths_deg(vec)
             if self.angles_deg is None:
                 object.__setattr__(self, "angles_deg", azimuth)
             else:

@@ -15,7 +15,8 @@ import numpy as np
 
 from . import plotting
 from ._summary import table, text
-from ._validate import check_views_agree, finite_array, readonly_copy, unit_vectors
+from ._validate import (azimuths_deg, check_views_agree, finite_array, readonly_copy,
+                        unit_vectors)
 from .errors import ParameterError
 
 __all__ = ["Sinogram", "RecordInfo", "TYPED_INFO_KEYS", "check_sinogram", "split_info"]
@@ -206,7 +207,7 @@ class Sinogram:
             if vec.ndim != 2 or vec.shape[1] != 3:
                 raise ParameterError(f"view_vectors must have shape (n_views, 3); got "
                                      f"{vec.shape}")
-            given = np.degrees(np.arctan2(vec[:, 1], vec[:, 0]))
+            given = azimuths_deg(vec)
         angles = finite_array("angles_deg", given)
         edges = finite_array("bin_edges", self.bin_edges)
         if values.ndim != 2 or 0 in values.shape:
