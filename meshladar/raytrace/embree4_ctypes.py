@@ -59,6 +59,7 @@ The structures, as laid out in memory::
     Entry points (rtcore_scene.h:176, 214; rtcore_device.h:15, 84; rtcore_geometry.h:130-172):
         void rtcIntersect16(const int* valid, RTCScene, RTCRayHit16*, RTCIntersectArguments*)
         void rtcOccluded16 (const int* valid, RTCScene, RTCRay16*,    RTCOccludedArguments*)
+        void rtcIntersect1 (RTCScene, RTCRayHit*, RTCIntersectArguments*)   (W = 1, no mask)
         ssize_t rtcGetDeviceProperty(RTCDevice, enum RTCDeviceProperty)
       valid: W int32, -1 = active lane, 0 = inactive.  valid and ray structs must be aligned to
       4*W bytes (release builds do not check: a misaligned packet segfaults), we align to 64.
@@ -208,6 +209,9 @@ class EmbreeLib:
         The widest natively supported packet width, 16, 8 or else 4.
     intersect, occluded : dict
         {4, 8, 16: ``rtcIntersect{w}`` / ``rtcOccluded{w}``}, the packet queries.
+    intersect1 : ctypes function
+        ``rtcIntersect1(scene, rayhit*, args*)``, one ray: its RTCRayHit is laid out as
+        RTCRayHitW at W = 1 (field k at byte 4k), so the packet loaders fill it with w = 1.
 
     Raises
     ------
@@ -255,6 +259,8 @@ class EmbreeLib:
         # packet queries (valid*, scene, rayhit*, args*): identical C signature for W=4/8/16
         self.intersect = {w: proto(f"rtcIntersect{w}", None, P, P, P, P) for w in (4, 8, 16)}
         self.occluded = {w: proto(f"rtcOccluded{w}", None, P, P, P, P) for w in (4, 8, 16)}
+        # one ray (scene, rayhit*, args*): RTCRayHit is RTCRayHitW's layout at W = 1
+        self.intersect1 = proto("rtcIntersect1", None, P, P, P)
 
         self.device = self.rtcNewDevice(None)
         if not self.device:

@@ -32,13 +32,15 @@ __all__ = ["TracePlan", "View", "plan_trace", "check_scene", "check_sensor", "ch
            "COHERENT_RAYS_PER_FACE", "COHERENT_SCALE"]
 
 #: A grid is dense from this many rays on the face a ray hits (TracePlan.rays_per_face):
-#: a slice's packets are cast with Embree's coherent flag from there on (below it its
-#: hybrid traversal follows rays singly where they part), footprints made before the cast.
+#: a slice's rays are cast in coherent packets from there on (below it one at a time,
+#: where a packet's rays would part at once), footprints made before the cast.
 COHERENT_RAYS_PER_FACE = 1.0
-#: 3-D grids are cast in coherent tiles from COHERENT_SCALE / √faces rays a face on (a
-#: bigger BVH has more levels that a tile's rays share): icospheres' same tiles with and
-#: without the flag even out at 0.45 rays a face at 82k faces, 0.25 at 328k, 0.11 at
-#: 1.31M, 0.06 at 5.2M (× √faces: 129, 143, 126, 137; the guide's Sparse grids).
+#: 3-D grids are cast in coherent tiles from COHERENT_SCALE / √faces rays a face on, below
+#: it one ray at a time (a bigger BVH has more levels that a tile's rays share):
+#: icospheres' same tiles with and without Embree's coherent flag even out at 0.45 rays a
+#: face at 82k faces, 0.25 at 328k, 0.11 at 1.31M, 0.06 at 5.2M (× √faces: 129, 143,
+#: 126, 137), and coherent tiles against single rays near 0.4 at 82k, 0.05 at 1.31M and
+#: 3.7 at 1.3k (× √faces: 110, 55, 132; the guide's Sparse grids).
 COHERENT_SCALE = 128.0
 
 
@@ -105,9 +107,9 @@ class TracePlan:
 
     @property
     def coherent(self) -> bool:
-        """Whether the grid's packets are cast coherent: in 3-D from
-        :data:`COHERENT_SCALE` / √faces rays on the face a ray hits, in a slice where the
-        grid is :attr:`dense`."""
+        """Whether the grid's rays are cast in coherent packets (else one at a time): in
+        3-D from :data:`COHERENT_SCALE` / √faces rays on the face a ray hits, in a slice
+        where the grid is :attr:`dense`."""
         if self.mode == "3d":
             return self.rays_per_face * math.sqrt(len(self.geo.faces)) >= COHERENT_SCALE
         return self.dense

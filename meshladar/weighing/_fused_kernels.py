@@ -132,13 +132,16 @@ def _keep_hits(i32, f32, w, m, one, scale, lanes, slot, band):
 
 
 @njit_loop()
-def _cast_band(fn, scene, w, ws, a0, grid, d, inv_scale, scale, buffers):
+def _cast_band(query, scene, w, ws, a0, grid, d, inv_scale, scale, buffers):
     """Cast the band of rows a0.. of the grid (s, t, offsets, sp, u, v, lw) in tiles
-    (:func:`tile_shape`): each packet's float32 origins built as
-    :func:`meshladar.raytrace.grid.ray_grid` builds them, cast at unit size with ``fn``
-    (rtcIntersectW), its hits kept in the band's slots in scan order. Returns the band's
-    rays."""
+    (:func:`tile_shape`): each tile's float32 origins built as
+    :func:`meshladar.raytrace.grid.ray_grid` builds them, cast at unit size, its hits kept
+    in the band's slots in scan order. ``query`` (rtcIntersectW, rtcIntersect1, single):
+    a packet of w lanes per tile, or with ``single`` each ray on its own (grids sparser
+    than their faces, where a packet's rays part at once: see
+    :attr:`meshladar.raytrace.plan.TracePlan.coherent`). Returns the band's rays."""
     i32, f32, _, base = ws
+    fn, fn1, single = query
     s, t, offsets, sp, u, v, lw = grid
     lanes, cast, slot, band = buffers
     ns, nt = s.shape[0], t.shape[0]
@@ -148,6 +151,12 @@ def _cast_band(fn, scene, w, ws, a0, grid, d, inv_scale, scale, buffers):
     for b0 in range(0, nt, tw):
         m = _tile_origins(a0, b0, rows, min(tw, nt - b0), nt, s, t, offsets, sp, u, v, lw,
                           one, inv_scale, lanes, cast, slot)
+        if single:
+            for j in range(m):
+                load_packet(f32, i32, cast[j:], d, np.float32(np.inf), 0, 1, 1)
+                fn1(scene, base, base + ARGS_OFF)
+                _keep_hits(i32, f32, 1, 1, one, scale, lanes[j:], slot[j:], band)
+            continue
         load_packet(f32, i32, cast, d, np.float32(np.inf), 0, m, w)
         fn(base + VALID_OFF, scene, base, base + ARGS_OFF)
         _keep_hits(i32, f32, w, m, one, scale, lanes, slot, band)
@@ -159,7 +168,7 @@ def _cast_band(fn, scene, w, ws, a0, grid, d, inv_scale, scale, buffers):
 # differs in how a band's hits are weighed and binned.
 
 @njit_loop()
-def cast_bin_flat(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, face_normals,
+def cast_bin_flat(query, scene, w, flags, grid, d, inv_scale, scale, plane_d, face_normals,
                   face_material, params, wv, start, edges, area, power, ignore_back, out,
                   stamp, weight, tag, footprint, scratch):
     """One monostatic view with flat normals, grid to bins in one loop: each band's hits
@@ -173,7 +182,7 @@ def cast_bin_flat(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, face_
     prim, tf, o = buffers[3][0], buffers[3][1], buffers[3][2]
     back = 0
     for a0 in range(0, grid[0].shape[0], tile_shape(w)[0]):
-        k = _cast_band(fn, scene, w, ws, a0, grid, d, inv_scale, scale, buffers)
+        k = _cast_band(query, scene, w, ws, a0, grid, d, inv_scale, scale, buffers)
         back += bin_flat_hits(prim[:k], tf[:k], o[:k], plane_d, face_normals, face_material,
                               params, wv, start, edges, area, power, ignore_back, out, stamp,
                               weight, tag, footprint)
@@ -181,7 +190,7 @@ def cast_bin_flat(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, face_
 
 
 @njit_loop()
-def cast_bin_smooth(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, face_normals,
+def cast_bin_smooth(query, scene, w, flags, grid, d, inv_scale, scale, plane_d, face_normals,
                     face_material, params, wv, start, edges, area, power, ignore_back, out,
                     footprint, corner, min_cos_facet, scratch):
     """One monostatic view with smooth normals, as :func:`cast_bin_flat` with the packets'
@@ -192,7 +201,7 @@ def cast_bin_smooth(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, fac
     prim, tf, o, bu, bv = buffers[3]
     back = 0
     for a0 in range(0, grid[0].shape[0], tile_shape(w)[0]):
-        k = _cast_band(fn, scene, w, ws, a0, grid, d, inv_scale, scale, buffers)
+        k = _cast_band(query, scene, w, ws, a0, grid, d, inv_scale, scale, buffers)
         back += bin_smooth_hits(prim[:k], tf[:k], bu[:k], bv[:k], o[:k], plane_d,
                                 face_normals, corner, face_material, params, wv, start,
                                 edges, area, power, ignore_back, min_cos_facet, out,
@@ -201,7 +210,7 @@ def cast_bin_smooth(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, fac
 
 
 @njit_loop()
-def cast_bin_bistatic(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, face_normals,
+def cast_bin_bistatic(query, scene, w, flags, grid, d, inv_scale, scale, plane_d, face_normals,
                       wv, start, edges, ignore_back, out, weight, occ, wr, lift, stamp, tag,
                       coating, lone, scratch):
     """One bistatic view (receiver direction ``wr``), flat normals: each band's hits first
@@ -221,7 +230,7 @@ def cast_bin_bistatic(fn, scene, w, flags, grid, d, inv_scale, scale, plane_d, f
     one = scale == 1.0
     back = 0
     for a0 in range(0, grid[0].shape[0], tile_shape(w)[0]):
-        k = _cast_band(fn, scene, w, ws, a0, grid, d, inv_scale, scale, buffers)
+        k = _cast_band(query, scene, w, ws, a0, grid, d, inv_scale, scale, buffers)
         _occlude_band(occ, scene, w, ws, buffers[3], k // nt, nt, hits, spare, plane_d,
                       face_normals, wv, lift, inv_scale, one,
                       (wr, ignore_back, coating[5], lone))
@@ -297,7 +306,7 @@ def _sensor_tile(a0, b0, rows, cols, plane, sensor, one, inv_scale, lanes, dirs,
 
 
 @njit_loop()
-def cast_bin_sensor(fn, scene, w, flags, plane, sensor, inv_scale, scale, smooth, binning,
+def cast_bin_sensor(query, scene, w, flags, plane, sensor, inv_scale, scale, smooth, binning,
                     out, scratch):
     """One view seen by a sensor at a standoff, grid to bins in one loop: each tile's rays
     built as :func:`meshladar.raytrace.perspective.sensor_cast` builds them
@@ -319,8 +328,15 @@ def cast_bin_sensor(fn, scene, w, flags, plane, sensor, inv_scale, scale, smooth
         for b0 in range(0, nt, tw):
             m = _sensor_tile(a0, b0, rows, min(tw, nt - b0), plane, sensor, one, inv_scale,
                              lanes, dirs, slot, band)
+            if query[2]:                         # single rays (see _cast_band)
+                for j in range(m):
+                    load_packet(f32, i32, lanes[j:], dirs[j:], np.float32(np.inf), 0, 1, 1)
+                    query[1](scene, base, base + ARGS_OFF)
+                    _keep_sensor_hits(i32, f32, 1, 1, one, scale, sensor[2], slot[j:], band,
+                                      smooth)
+                continue
             load_packet(f32, i32, lanes, dirs, np.float32(np.inf), 0, m, w)
-            fn(base + VALID_OFF, scene, base, base + ARGS_OFF)
+            query[0](base + VALID_OFF, scene, base, base + ARGS_OFF)
             _keep_sensor_hits(i32, f32, w, m, one, scale, sensor[2], slot, band, smooth)
         k = rows * nt
         back += bin_sensor_hits(band[0][:k], band[1][:k], band[4][:k], band[5][:k],

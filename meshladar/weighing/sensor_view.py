@@ -15,6 +15,7 @@ from ..sensor import FloodBeam
 from ._fused_kernels import cast_bin_sensor
 from ._scratch import scratch
 from ._sensor_kernels import bin_sensor_hits
+from .fused import queries
 from ..brdf import material_table
 
 __all__ = ["bin_sensor_view"]
@@ -96,7 +97,7 @@ def _fused_view(plan, weighing, scene, w, rng, out, aim):
     lib = pk.lib
     flags = query_flags(plan.coherent)
     back, n = cast_bin_sensor(
-        lib.intersect[lib.width], pk.live(), lib.width, flags, plane,
+        queries(lib, plan.coherent), pk.live(), lib.width, flags, plane,
         (D, sensor_pos, start_distance(geo, sensor_pos, spacing)), np.float32(scene.inverse),
         float(scene.scale), geo.normals == "smooth",
         _binning(plan, weighing, aim, u, v, sensor_pos, w), out,

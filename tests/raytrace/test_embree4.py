@@ -213,10 +213,10 @@ def test_the_fused_loop_gives_the_unfused_numbers_bit_for_bit(sampling, normals,
 
 
 @pytest.mark.parametrize("footprint", [False, True])
-def test_grids_sparser_than_their_faces_are_cast_incoherent_with_the_same_numbers(
+def test_grids_sparser_than_their_faces_are_cast_ray_by_ray_with_the_same_numbers(
         footprint, monkeypatch):
     """A grid with fewer rays than a face's area holds (Σa²/Σa over δ²: 0.3 here) is cast
-    without Embree's coherent flag, a dense one (12) with it; either flag gives the same
+    one ray at a time, a dense one (12) in coherent packets; either way gives the same
     hits, so the same sinogram. With footprint bins, a sparse grid makes each face's row
     at its first hit and a dense one every row before the cast: the same rows."""
     from meshladar.forward import job
@@ -244,7 +244,7 @@ def test_grids_sparser_than_their_faces_are_cast_incoherent_with_the_same_number
                              backend="packets", footprint=footprint)
         assert flags == [coherent] * 7                              # what the loop got
         monkeypatch.setattr(plan_module, "COHERENT_SCALE",
-                            np.inf if coherent else 0.0)            # the other flag
+                            np.inf if coherent else 0.0)            # the other way
         other = ml.simulate(scene, ladar, model="mesh", ray_spacing=spacing,
                             backend="packets", footprint=footprint)
         assert flags[7:] == [not coherent] * 7

@@ -1,0 +1,71 @@
+"""Grids sparser than their faces go through the packet backend's compiled loops ray by ray
+(rtcIntersect1, meshladar.weighing.fused.queries): the numbers of the embreex backend,
+which casts the same float32 rays one at a time and weighs them in numpy, for every kind
+of view the loops serve (flat and smooth normals, footprint bins, a bistatic receiver, a
+sensor at a standoff); dense grids still go in packets."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import meshladar as ml
+from meshladar.sensor import Sensor
+from meshladar.materials import ALUMINUM
+from meshladar.raytrace import embree4
+
+pytestmark = pytest.mark.skipif(not embree4.available(),
+                                reason="the packet backend does not load here")
+
+#: The two backends agree to float64 round-off where they report the same face (ranges
+#: and weights recomputed in float64 from the same float32 origin and face plane).
+SAME_HITS_RTOL = 1e-12
+
+KINDS = {
+    "flat": {},
+    "smooth": {"normals": "smooth"},
+    "footprint": {"footprint": True},
+    "bistatic": {"receiver": [0.6, 0.0, 0.8], "radiometry": "power"},
+    "sensor": {"sensor": Sensor(standoff=40.0), "radiometry": "power"},
+}
+
+
+def _scene():
+    return ml.Scene.from_parts([ml.meshes.sphere((0.1, -0.2, 0.3), 0.5, 0, subdivisions=4)],
+                               [ALUMINUM])
+
+
+def _spacing(scene, per_face):
+    """The ray spacing that puts ``per_face`` rays on the face a ray hits."""
+    area = scene.parts[0].face_normals_areas()[1]
+    return (float(area @ area / area.sum()) / per_face) ** 0.5
+
+
+@pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # sparse on purpose
+@pytest.mark.parametrize("kind", list(KINDS))
+def test_sparse_grids_are_cast_ray_by_ray_with_embreex_numbers(kind, monkeypatch):
+    from meshladar.weighing import fused, sensor_view
+
+    asked = []
+    queries = fused.queries
+
+    def spy(lib, coherent):
+        asked.append(coherent)
+        return queries(lib, coherent)
+
+    monkeypatch.setattr(fused, "queries", spy)
+    monkeypatch.setattr(sensor_view, "queries", spy)
+    scene = _scene()
+    ladar = ml.Ladar.covering(scene, n_bins=48, view_vectors=ml.meshes.fibonacci_sphere(5))
+    for per_face, single in ((0.1, True), (40.0, False)):
+        spacing = _spacing(scene, per_face)
+        asked.clear()
+        got = ml.simulate(scene, ladar, model="mesh", ray_spacing=spacing, backend="packets",
+                          **KINDS[kind])
+        assert asked == [not single] * 5                    # each view's loop, as planned
+        ref = ml.simulate(scene, ladar, model="mesh", ray_spacing=spacing, backend="embreex",
+                          **KINDS[kind])
+        assert got.info["rays"] == ref.info["rays"] > 0
+        assert np.count_nonzero(ref.values) >= 5 * 4        # the sphere fills bins each view
+        np.testing.assert_allclose(got.values, ref.values, rtol=SAME_HITS_RTOL,
+                                   atol=SAME_HITS_RTOL * np.abs(ref.values).max())
