@@ -62,7 +62,8 @@ The structures, as laid out in memory::
         void rtcIntersect1 (RTCScene, RTCRayHit*, RTCIntersectArguments*)   (W = 1, no mask)
         ssize_t rtcGetDeviceProperty(RTCDevice, enum RTCDeviceProperty)
       valid: W int32, -1 = active lane, 0 = inactive.  valid and ray structs must be aligned to
-      4*W bytes (release builds do not check: a misaligned packet segfaults), we align to 64.
+      4*W bytes, RTCRayHit (W = 1) to 16 (release builds do not check: a misaligned packet
+      segfaults), we align to 64.
       rtcOccluded sets tfar = -inf on occluded lanes.
 
 Enums: RTC_DEVICE_PROPERTY_VERSION_MAJOR/MINOR/PATCH = 1/2/3, NATIVE_RAY4/8/16_SUPPORTED

@@ -2,7 +2,7 @@
 (rtcIntersect1, meshladar.weighing.fused.queries): the numbers of the embreex backend,
 which casts the same float32 rays one at a time and weighs them in numpy, for every kind
 of view the loops serve (flat and smooth normals, footprint bins, a bistatic receiver, a
-sensor at a standoff); dense grids still go in packets."""
+sensor at a standoff, a slice's row); dense grids still go in packets."""
 
 from __future__ import annotations
 
@@ -27,6 +27,7 @@ KINDS = {
     "footprint": {"footprint": True},
     "bistatic": {"receiver": [0.6, 0.0, 0.8], "radiometry": "power"},
     "sensor": {"sensor": Sensor(standoff=40.0), "radiometry": "power"},
+    "slice": {"mode": "slice"},      # rays a face: the square roots, 0.32 and 6.3
 }
 
 
@@ -56,7 +57,9 @@ def test_sparse_grids_are_cast_ray_by_ray_with_embreex_numbers(kind, monkeypatch
     monkeypatch.setattr(fused, "queries", spy)
     monkeypatch.setattr(sensor_view, "queries", spy)
     scene = _scene()
-    ladar = ml.Ladar.covering(scene, n_bins=48, view_vectors=ml.meshes.fibonacci_sphere(5))
+    views = ({"angles_deg": [0.0, 72.0, 144.0, 216.0, 288.0]} if kind == "slice" else
+             {"view_vectors": ml.meshes.fibonacci_sphere(5)})     # a slice's: about z
+    ladar = ml.Ladar.covering(scene, n_bins=48, **views)
     for per_face, single in ((0.1, True), (40.0, False)):
         spacing = _spacing(scene, per_face)
         asked.clear()
