@@ -63,8 +63,26 @@ def _self_test(lib):
             raise OSError(f"{lib.path}: Embree {'.'.join(map(str, lib.version))} does not "
                           f"answer a {w}-wide packet as the layouts this module uses "
                           "expect (a build with other options?)")
+        got, miss = _single_ray(lib, scene, 0.25), _single_ray(lib, scene, 2.0)
+        if not (miss == (-1,) and len(got) == 4 and got[0] == 0
+                and np.allclose(got[1:], (2.0, 0.25, 0.125))):
+            raise OSError(f"{lib.path}: Embree {'.'.join(map(str, lib.version))} does not "
+                          "answer a single ray (rtcIntersect1) as the layouts this module "
+                          "uses expect (a build with other options?)")
     finally:
         scene.release()
+
+
+def _single_ray(lib, scene, x):
+    """The self-test's triangle hit by one ray from (x, 0.125, 2) along −z through
+    ``lib.intersect1`` (RTCRayHit: RTCRayHitW's layout at W = 1): (primID, tfar, u, v), or
+    (-1,) on a miss."""
+    i32, base = _packet(1, x, 0.125, 2.0, np.array([True]))
+    lib.intersect1(scene.handle, base, base + _ARGS_OFF)
+    f32 = i32.view(np.float32)
+    if i32[_PRIMID] == -1:
+        return (-1,)
+    return (int(i32[_PRIMID]), float(f32[_TFAR]), float(f32[_U]), float(f32[_V]))
 
 
 def _packet(w, x, y, z, active):
@@ -102,7 +120,8 @@ def library():
     The first call loads the library (:class:`EmbreeLib`: ``MESHLADAR_EMBREE4``, else the
     copy embreex ships) and checks it against the packet layouts this module uses, with one
     triangle and one packet of the width it runs natively (hits, barycentrics, misses, a
-    masked lane, occlusion), filled in numpy and passed through ctypes.
+    masked lane, occlusion) and one single ray (``rtcIntersect1``), filled in numpy and
+    passed through ctypes.
     Thread-safe.
 
     Returns

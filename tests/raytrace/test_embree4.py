@@ -41,7 +41,7 @@ def test_the_self_test_passes_at_every_width_and_fails_a_library_that_does_not_a
     """The check library() runs once (at the native width) holds at every width, and a
     library whose packet queries leave the packet untouched (as one with other layouts
     would answer nothing where these layouts read) fails it with an OSError naming the
-    width, not later in a cast."""
+    width, not later in a cast; so does one whose single-ray query answers nothing."""
     lib = embree4.library()
     probe = copy.copy(lib)                      # the same library and device, another width
     probe.width = width
@@ -51,6 +51,9 @@ def test_the_self_test_passes_at_every_width_and_fails_a_library_that_does_not_a
         embree4._self_test(probe)
     probe.intersect, probe.occluded = lib.intersect, {width: lambda *args: None}
     with pytest.raises(OSError, match=f"a {width}-wide packet"):
+        embree4._self_test(probe)
+    probe.occluded, probe.intersect1 = lib.occluded, lambda *args: None
+    with pytest.raises(OSError, match=r"a single ray \(rtcIntersect1\)"):
         embree4._self_test(probe)
 
 
