@@ -171,11 +171,11 @@ def _cast_band(query, scene, w, ws, a0, grid, d, inv_scale, scale, buffers):
 def cast_bin_flat(query, scene, w, flags, grid, d, inv_scale, scale, plane_d, face_normals,
                   face_material, params, wv, start, edges, area, power, ignore_back, out,
                   stamp, weight, tag, footprint, scratch):
-    """One monostatic view with flat normals, grid to bins in one loop: each band's hits
-    (a few rows: they stay in cache), with Embree's distance scaled back (× ``scale``),
-    weighed and binned in scan order by :func:`._kernels.bin_flat_hits` (point or
-    footprint bins): the numbers of the unfused path, summed in its order, without per-ray
-    arrays; ``scratch`` (:func:`._scratch.scratch`) holds the workspace and the band's
+    """One monostatic view with flat normals, grid to bins in one loop (``query``: see
+    :func:`_cast_band`): each band's hits (a few rows: they stay in cache), with Embree's
+    distance scaled back (× ``scale``), weighed and binned in scan order by
+    :func:`._kernels.bin_flat_hits` (point or footprint bins): the numbers of the unfused
+    path, summed in its order, without per-ray arrays; ``scratch`` (:func:`._scratch.scratch`) holds the workspace and the band's
     buffers. Returns (back-face hits, rays cast)."""
     ws, buffers = scratch
     init_args(ws[0], ws[2], ws[3], flags)
@@ -310,7 +310,8 @@ def cast_bin_sensor(query, scene, w, flags, plane, sensor, inv_scale, scale, smo
                     out, scratch):
     """One view seen by a sensor at a standoff, grid to bins in one loop: each tile's rays
     built as :func:`meshladar.raytrace.perspective.sensor_cast` builds them
-    (:func:`_sensor_tile`), cast in a packet with their own directions, and each band of
+    (:func:`_sensor_tile`), cast with their own directions in a packet (or, with
+    ``query``'s ``single``, one at a time: :func:`_cast_band`), and each band of
     rows weighed and binned in scan order by :func:`._sensor_kernels.bin_sensor_hits` (its
     arguments after ``sensor_pos`` but ``out``: ``binning``), with the hit distance
     t0 + Embree's (scaled back) as the per-hit path has it. The same numbers, without
@@ -318,6 +319,7 @@ def cast_bin_sensor(query, scene, w, flags, plane, sensor, inv_scale, scale, smo
     buffers (:func:`._scratch.scratch`). Returns (back-face hits, rays cast)."""
     ws, (lanes, dirs, slot), band = scratch
     i32, f32, i64, base = ws
+    fn, fn1, single = query
     init_args(i32, i64, base, flags)
     ns, nt = plane[0].shape[0], plane[1].shape[0]
     th, tw = tile_shape(w)
@@ -328,15 +330,15 @@ def cast_bin_sensor(query, scene, w, flags, plane, sensor, inv_scale, scale, smo
         for b0 in range(0, nt, tw):
             m = _sensor_tile(a0, b0, rows, min(tw, nt - b0), plane, sensor, one, inv_scale,
                              lanes, dirs, slot, band)
-            if query[2]:                         # single rays (see _cast_band)
+            if single:                           # each ray on its own (see _cast_band)
                 for j in range(m):
                     load_packet(f32, i32, lanes[j:], dirs[j:], np.float32(np.inf), 0, 1, 1)
-                    query[1](scene, base, base + ARGS_OFF)
+                    fn1(scene, base, base + ARGS_OFF)
                     _keep_sensor_hits(i32, f32, 1, 1, one, scale, sensor[2], slot[j:], band,
                                       smooth)
                 continue
             load_packet(f32, i32, lanes, dirs, np.float32(np.inf), 0, m, w)
-            query[0](base + VALID_OFF, scene, base, base + ARGS_OFF)
+            fn(base + VALID_OFF, scene, base, base + ARGS_OFF)
             _keep_sensor_hits(i32, f32, w, m, one, scale, sensor[2], slot, band, smooth)
         k = rows * nt
         back += bin_sensor_hits(band[0][:k], band[1][:k], band[4][:k], band[5][:k],
