@@ -175,8 +175,9 @@ def cast_bin_flat(query, scene, w, flags, grid, d, inv_scale, scale, plane_d, fa
     :func:`_cast_band`): each band's hits (a few rows: they stay in cache), with Embree's
     distance scaled back (× ``scale``), weighed and binned in scan order by
     :func:`._kernels.bin_flat_hits` (point or footprint bins): the numbers of the unfused
-    path, summed in its order, without per-ray arrays; ``scratch`` (:func:`._scratch.scratch`) holds the workspace and the band's
-    buffers. Returns (back-face hits, rays cast)."""
+    path, summed in its order, without per-ray arrays; ``scratch``
+    (:func:`._scratch.scratch`) holds the workspace and the band's buffers. Returns
+    (back-face hits, rays cast)."""
     ws, buffers = scratch
     init_args(ws[0], ws[2], ws[3], flags)
     prim, tf, o = buffers[3][0], buffers[3][1], buffers[3][2]
