@@ -27,11 +27,10 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
-from .._executors import thread_pool
 from ..precision import MIN_COS_FACET, RECEIVER_LIFT
 from ..raytrace.backends import backend as get_backend
 from ..raytrace.embree import embree_scene
-from ..raytrace.grid import grid_plan, ray_grid
+from ..raytrace.grid import ray_grid
 from ..raytrace.perspective import trace_sensor_view
 from ..raytrace.plan import TracePlan, View
 from ..raytrace.views import range_offset, trace_view
@@ -39,10 +38,10 @@ from ..weighing import bin_one as _bin_one
 from ..brdf import material_table
 from ..weighing.faces import (check_edge_on_receiver, face_bistatic_weights, footprint_args,
                               face_weights)
-from ..weighing.fused import cast_bin_grid
 from ..weighing.record import Weighing
 from ..weighing._kernels import bin_flat_hits, bin_smooth_hits
 from ..weighing.resolved import bin_resolved
+from .fused_views import FlatBins, flat_views, fused_view
 from ..weighing.sensor_view import bin_sensor_view
 
 __all__ = ["MeshJob", "plan_job", "mesh_job", "sensor_offset", "QUICK_RAYS"]
@@ -51,11 +50,13 @@ __all__ = ["MeshJob", "plan_job", "mesh_job", "sensor_offset", "QUICK_RAYS"]
 class Stage(NamedTuple):
     """A view stage: ``run(job, scene, view, chunk)`` casts (and weighs) one view into
     ``chunk``, returning (rays cast, back-face hits); ``faces``: it reads the per-face
-    weight cache."""
+    weight cache; ``views``: ``views(job, scene, views, chunk)`` does a whole chunk at once,
+    returning (k, 2) (rays cast, back-face hits), for a :attr:`MeshJob.batched` job."""
 
     name: str
     run: Callable
     faces: bool = False
+    views: Callable | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -83,6 +84,12 @@ class MeshJob:
         ``"smooth"`` and ``"bistatic"`` stages only (default 1).
     fused : bool
         Whether the backend's fused cast-weigh-bin loop casts the grids (default False).
+    batched : bool
+        Whether each chunk's views go through the fused loop in one call
+        (:func:`.fused_views.flat_views`; default False): sparse grids (not
+        :attr:`~meshladar.raytrace.plan.TracePlan.coherent`: small views, where planning
+        and calling a view cost as much as casting it), flat normals, monostatic, point
+        bins, built-in coatings, one thread a view.
     """
 
     plan: TracePlan
@@ -91,6 +98,7 @@ class MeshJob:
     stage: Stage
     row_jobs: int = 1
     fused: bool = False
+    batched: bool = False
 
 
 @dataclass(eq=False)
@@ -105,26 +113,6 @@ class Chunk:
     stamp: np.ndarray | None = None
     weight: np.ndarray | None = None
     footprints: tuple | None = None
-
-
-class FlatBins(NamedTuple):
-    """The compiled binning loop's arguments after the hits (flat, for numba)."""
-
-    plane_d: np.ndarray
-    face_normals: np.ndarray
-    face_material: np.ndarray
-    params: np.ndarray
-    w: np.ndarray
-    start: float
-    edges: np.ndarray
-    area: float
-    power: bool
-    ignore_back: bool
-    out: np.ndarray
-    stamp: np.ndarray
-    weight: np.ndarray
-    tag: int
-    footprint: tuple | None
 
 
 def sensor_offset(geo, w, sensor):
@@ -229,7 +217,7 @@ def _smooth_stage(job, scene, view, chunk):
     start = range_offset(p.geo.center, view.w, None)
     if job.fused:
         # packets: grid, cast, weigh and bin in one loop, the barycentrics kept per band
-        return _fused_view(job, scene, view, _bins(job, view, chunk, start), None,
+        return fused_view(job, scene, view, _bins(job, view, chunk, start), None,
                            (p.geo.corner, MIN_COS_FACET))
     o, res = _cast(job, scene, view)
     back = bin_smooth_hits(
@@ -260,7 +248,7 @@ def _flat_stage(job, scene, view, chunk):
     bins = _bins(job, view, chunk, start)
     if job.fused:
         # packets: grid, cast, weigh and bin in one loop, no per-ray arrays
-        return _fused_view(job, scene, view, bins, receiver, None)
+        return fused_view(job, scene, view, bins, receiver, None)
     if scene.bins_hits and receiver is None and not wg.footprint:
         # a backend with its own cast-weigh-bin kernel (Warp): every face's weight first
         if wg.compiled:
@@ -269,52 +257,6 @@ def _flat_stage(job, scene, view, chunk):
         return len(grid.origins), scene.cast_bin(grid.origins, -view.w, bins)
     o, res = _cast(job, scene, view)
     return len(o), bin_flat_hits(res["primID"], res["tfar"], o, *bins)
-
-
-def _fused_view(job, scene, view, bins, receiver, smooth):
-    """One view through the fused loop: its grid cast, weighed and binned, on one thread
-    or (``job.row_jobs`` > 1) with its rows split over threads. Returns (rays, back)."""
-    p = job.plan
-    grid = grid_plan(p.geo, view.w, p.mode, p.spacing, p.z0_shifted, view.rng)
-    if job.row_jobs > 1:
-        return _rows_on_threads(scene, grid, view.w, p.spacing, bins, job.row_jobs,
-                                (receiver, smooth, p.coherent))[::-1]
-    back, n = cast_bin_grid(scene, grid, view.w, p.spacing, bins, receiver, smooth,
-                            p.coherent)
-    return n, back
-
-
-def _rows_on_threads(scene, grid, w, spacing, bins, row_jobs, how=(None, None, True)):
-    """One big view's grid split into ``row_jobs`` bands of rows, cast on as many threads
-    (the fused loop releases the GIL), each band with its own bins and a copy of the weight
-    cache (weights already evaluated for the view stay valid); the
-    bands' bins are added in order, so a given ``row_jobs`` always gives the same numbers
-    (and the one-thread numbers to rounding). ``how``: :func:`cast_bin_grid`'s
-    (receiver, smooth, coherent). Returns (back-face hits, rays cast)."""
-    cuts = np.linspace(0, grid.s.size, row_jobs + 1).astype(int)
-    parts = []
-    for a0, a1 in zip(cuts[:-1], cuts[1:]):
-        if a1 > a0:
-            band = grid._replace(s=grid.s[a0:a1], offsets=None if grid.offsets is None else
-                                 _rows_of(grid.offsets, a0, a1))
-            fp = bins.footprint                # each band makes its own faces' rows
-            parts.append((band, bins._replace(out=np.zeros_like(bins.out),
-                                              stamp=bins.stamp.copy(),
-                                              weight=bins.weight.copy(),
-                                              footprint=None if fp is None else
-                                              (fp[0].copy(), fp[1].copy()) + fp[2:])))
-    with thread_pool(len(parts)) as ex:
-        done = list(ex.map(lambda p: cast_bin_grid(scene, p[0], w, spacing, p[1], *how),
-                           parts))
-    for _, band in parts:
-        bins.out[...] += band.out
-    return sum(b for b, _ in done), sum(n for _, n in done)
-
-
-def _rows_of(offsets, a0, a1):
-    """The stratified offsets' sequences of rows a0..a1 (xi and kv run along the rows)."""
-    xi, ku, kv, eta = offsets
-    return xi[a0:a1], ku, kv[a0:a1], eta
 
 
 def _fused(plan):
@@ -332,7 +274,8 @@ QUICK_RAYS = 1 << 20
 STAGES = {s.name: s for s in (
     Stage("hits", _hits_stage), Stage("per_hit", _per_hit_stage),
     Stage("resolved", _resolved_stage), Stage("sensor", _sensor_stage),
-    Stage("smooth", _smooth_stage, faces=True), Stage("flat", _flat_stage, faces=True),
+    Stage("smooth", _smooth_stage, faces=True),
+    Stage("flat", _flat_stage, faces=True, views=flat_views),
     Stage("bistatic", _flat_stage, faces=True))}
 
 
@@ -385,10 +328,12 @@ def plan_job(plan, weighing, vectors, row_jobs=1) -> MeshJob:
     MeshJob
         The job :func:`mesh_job` runs on every chunk of views.
     """
+    stage, fused = STAGES[_stage_name(plan, weighing)], _fused(plan)
+    batched = (stage.views is not None and fused and not plan.coherent and row_jobs == 1
+               and plan.receivers is None and weighing.compiled and not weighing.footprint)
     return MeshJob(plan=plan, weighing=weighing,
-                   vectors=np.asarray(vectors, dtype=np.float64),
-                   stage=STAGES[_stage_name(plan, weighing)], row_jobs=row_jobs,
-                   fused=_fused(plan))
+                   vectors=np.asarray(vectors, dtype=np.float64), stage=stage,
+                   row_jobs=row_jobs, fused=fused, batched=batched)
 
 
 def _chunk(job, n_views):
@@ -439,6 +384,9 @@ def mesh_job(geo, views, job):
     seed, receivers = job.plan.seed, job.plan.receivers
     rays = np.zeros(len(views), np.int64)
     backs = np.zeros(len(views), np.int64)
+    if job.batched:
+        rays[:], backs[:] = job.stage.views(job, scene, views, chunk).T
+        return {"values": chunk.values, "rays": rays, "backs": backs}
     for j, i in enumerate(views):
         view = View(slot=j, index=int(i), w=job.vectors[i],
                     w_r=None if receivers is None else receivers[i],

@@ -15,7 +15,7 @@ from ..precision import FAR_RATIO as _FAR_RATIO
 from ..precision import SCENE_RADIUS_RANGE
 from ..meshes import corner_normals
 from ..scene import Scene
-from ._support import ClusteredPoints, points_extent
+from ._support import ClusteredPoints, axes_extents, points_extent
 from .backends import BACKENDS, resolve_backend
 from .backends import backend as get_backend
 
@@ -103,6 +103,14 @@ class Geometry:
         if clusters is not None:
             return clusters.extent(u, origin)
         return points_extent(self.support, u, origin)
+
+    def extents(self, axes):
+        """:meth:`extent` along each row of ``axes`` (k, 3), in one compiled pass: (k, 2)
+        float64 (least, greatest), the same numbers."""
+        clusters = self._clustered()
+        if clusters is not None:
+            return clusters.extents(axes)
+        return axes_extents(self.support, axes)
 
     def seen_extent(self, u, w, scale, origin):
         """(least, greatest) (q·u)·scale / (−q·w) over the support points (shifted),

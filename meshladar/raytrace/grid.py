@@ -116,6 +116,49 @@ def grid_plan(geo, w, mode, spacing, z0_shifted, rng):
     return GridPlan(s, t, offsets, u, v, L)
 
 
+class GridPlans(NamedTuple):
+    """Many views' grids as :func:`grid_plans` describes them, each view's as
+    :func:`grid_plan`'s: view j's cell centres are ``s[s_at[j]:s_at[j + 1]]`` along its
+    ``u[j]`` and ``t[t_at[j]:t_at[j + 1]]`` along ``v[j]``, all from the start distance
+    ``L``."""
+
+    s: np.ndarray
+    s_at: np.ndarray
+    t: np.ndarray
+    t_at: np.ndarray
+    u: np.ndarray
+    v: np.ndarray
+    L: float
+
+
+def grid_plans(geo, vectors, mode, spacing, z0_shifted):
+    """The regular grids of many views (k, 3) at once, the same numbers as :func:`grid_plan`
+    gives each (with ``rng`` None): the frames view by view, every extent in one compiled
+    pass (:meth:`meshladar.raytrace.embree.Geometry.extents`) and the cell centres in numpy
+    over all views (a run of many small views plans a chunk of them in one go)."""
+    frames = [frame(w) for w in vectors]
+    u = np.array([f[0] for f in frames]).reshape(-1, 3)
+    v = np.array([f[1] for f in frames]).reshape(-1, 3)
+    L = (1.0 + _ORIGIN_MARGIN) * geo.radius + spacing
+    s, s_at = _centres(geo.extents(u), spacing)
+    if mode == "slice":
+        t, t_at = np.full(len(u), float(z0_shifted)), np.arange(len(u) + 1)
+    else:
+        t, t_at = _centres(geo.extents(v), spacing)
+    return GridPlans(s, s_at, t, t_at, u, v, L)
+
+
+def _centres(extents, spacing):
+    """Every view's cell centres along one axis, packed, and where each view's start: the
+    operations of :func:`grid_plan`, element by element."""
+    lo = extents[:, 0] - spacing
+    n = np.maximum(1, np.ceil((extents[:, 1] + spacing - lo) / spacing)).astype(np.int64)
+    at = np.zeros(len(n) + 1, np.int64)
+    np.cumsum(n, out=at[1:])
+    step = np.arange(at[-1]) - np.repeat(at[:-1], n)
+    return np.repeat(lo, n) + (step + 0.5) * spacing, at
+
+
 def ray_grid(geo, w, mode, spacing, z0_shifted, rng):
     """Origins (n, 3) float32 in shifted coordinates, the start distance L, and (u, v).
 
@@ -163,10 +206,13 @@ def stratified_sequences(ns, nt, rng):
     (ns, then nt uniforms) and the centred Kronecker sequences frac(kα) − ½."""
     xi = rng.uniform(0.0, 1.0, ns).astype(np.float32)     # one shift per column (along v)
     eta = rng.uniform(0.0, 1.0, nt).astype(np.float32)    # one shift per row (along u)
-    # frac(kα) − ½ in float64, then float32 (offsets within a cell: float32 is plenty)
-    ku = (np.mod(np.arange(nt) * _GOLDEN, 1.0) - 0.5).astype(np.float32)
-    kv = (np.mod(np.arange(ns) * _GOLDEN, 1.0) - 0.5).astype(np.float32)
-    return xi, ku, kv, eta
+    return xi, kronecker(nt), kronecker(ns), eta
+
+
+def kronecker(n):
+    """The centred Kronecker sequence frac(kα) − ½, k = 0 … n − 1, in float64 then float32
+    (offsets within a cell: float32 is plenty); a longer one starts with a shorter one."""
+    return (np.mod(np.arange(n) * _GOLDEN, 1.0) - 0.5).astype(np.float32)
 
 
 def stratified_offsets(sequences):
@@ -186,8 +232,8 @@ def stratified_offsets(sequences):
     (η and ξ are uniform and independent), hence the expectation is exact.
     """
     xi, ku, kv, eta = sequences
-    du = np.add.outer(xi, ku)                             # frac(ξ + jα) − ½ ∈ [−½, 1½) ...
-    du -= du >= np.float32(0.5)                           # ... wrapped into [−½, ½)
+    du = np.add.outer(xi, ku)                           # frac(ξ + jα) − ½ ∈ [−½, 1½) ...
+    du -= du >= np.float32(0.5)                         # ... wrapped into [−½, ½)
     dv = np.add.outer(kv, eta)
     dv -= dv >= np.float32(0.5)
     return du, dv

@@ -18,7 +18,8 @@ from ._compiled import njit_loop
 from ._prefetch import ahead as _ahead
 from ._prefetch import prefetch as _prefetch
 
-__all__ = ["cast_bin_flat", "cast_bin_smooth", "cast_bin_bistatic", "cast_bin_sensor"]
+__all__ = ["cast_bin_flat", "cast_bin_flat_views", "cast_bin_smooth", "cast_bin_bistatic",
+           "cast_bin_sensor"]
 
 
 @njit_loop()
@@ -186,8 +187,32 @@ def cast_bin_flat(query, scene, w, flags, grid, d, inv_scale, scale, plane_d, fa
         k = _cast_band(query, scene, w, ws, a0, grid, d, inv_scale, scale, buffers)
         back += bin_flat_hits(prim[:k], tf[:k], o[:k], plane_d, face_normals, face_material,
                               params, wv, start, edges, area, power, ignore_back, out, stamp,
-                              weight, tag, footprint)
+                              weight, tag, footprint, query[2])
     return back, grid[0].shape[0] * grid[1].shape[0]
+
+
+@njit_loop()
+def cast_bin_flat_views(query, scene, w, flags, grids, d, inv_scale, scale, plane_d,
+                        face_normals, face_material, params, wv, start, edges, area, power,
+                        ignore_back, out, stamp, weight, counts, scratch):
+    """Many monostatic views with flat normals and point bins in one call, view j as
+    :func:`cast_bin_flat` casts it alone (a run of many small views pays the call once a
+    chunk): its grid j of ``grids`` = (s, s_at, t, t_at, (xi, ku, kv, eta), sp, u, v, lw)
+    (:class:`meshladar.raytrace.grid.GridPlans`' centres in float32, xi packed as s and eta
+    as t, ku and kv the Kronecker sequences of the longest rows and columns; all four
+    empty on a regular grid), the direction ``d[j]`` (1, 3), ``wv[j]``, ``start[j]``, its
+    bins ``out[j]`` and tag j + 1 in the shared weight cache. Fills ``counts[j]`` with
+    (back-face hits, rays cast)."""
+    s, s_at, t, t_at, seq, sp, u, v, lw = grids
+    xi, ku, kv, eta = seq
+    for j in range(s_at.shape[0] - 1):
+        a, b, c, e = s_at[j], s_at[j + 1], t_at[j], t_at[j + 1]
+        grid = (s[a:b], t[c:e], (xi[a:b], ku[:e - c], kv[:b - a], eta[c:e]), sp, u[j], v[j],
+                lw[j])
+        counts[j, 0], counts[j, 1] = cast_bin_flat(
+            query, scene, w, flags, grid, d[j], inv_scale, scale, plane_d, face_normals,
+            face_material, params, wv[j], start[j], edges, area, power, ignore_back, out[j],
+            stamp, weight, j + 1, None, scratch)
 
 
 @njit_loop()

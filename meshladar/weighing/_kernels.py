@@ -193,7 +193,7 @@ def _spread_hit(out, r, r_rel, wt, fp, p, edges, e0, inv):
 @njit_loop()
 def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, params,
                   w, start, edges, area, power, ignore_back, out, stamp, weight, tag,
-                  footprint):
+                  footprint, single=False):
     """Monostatic, flat-normal weighing and binning of one view's Embree hits, fused:
     out[k] += F(θ)·area (``power``: F(θ)·cos θ·area, received power) for each hit with range start + t − o·w in bin k (o the float32 origin
     as cast), t the hit distance recomputed in float64 against the face's plane (as
@@ -207,7 +207,9 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
     ``footprint`` (:func:`footprint_row`'s tuple: each face's row made at its first hit)
     spreads each hit over its footprint's ranges (:func:`_spread_hit`) instead of binning
     it at a point; None bins at a point (numba then prunes the spreading branches: a run
-    of point bins does not compile them).
+    of point bins does not compile them). ``single``: the hits' rays were cast one at a
+    time (a sparse grid), so the faces' rows are prefetched at any mesh size
+    (:func:`._prefetch.ahead`).
     Returns the number of back-face hits."""
     nb = edges.size - 1
     e0 = edges[0]
@@ -216,7 +218,7 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
     rows, stamps, tag_fp = _NO_ROWS, _NO_STAMPS, -1    # out of the tuple once, not per hit
     if footprint is not None:
         rows, stamps, tag_fp = footprint[0], footprint[1], footprint[9]
-    ahead, n = _ahead(face_normals), prim.size
+    ahead, n = _ahead(face_normals, single), prim.size
     for i in range(n):
         if i + ahead < n and prim[i + ahead] >= 0:   # a later hit's rows (._prefetch)
             _prefetch((face_normals, plane_d, stamp, weight), prim[i + ahead])

@@ -30,13 +30,16 @@ _NEVER = 1 << 62
 
 
 @njit_loop(inline="always")
-def ahead(face_normals):                                  # pragma: no cover - compiled
+def ahead(face_normals, single=False):                    # pragma: no cover - compiled
     """How many hits ahead a loop over the hits on this mesh (``face_normals``, one row a
-    face) prefetches their faces' rows: :data:`AHEAD`, or from :data:`PREFETCH_FROM` faces
-    down a distance past every hit (none). The loops write the test out themselves
+    face) prefetches their faces' rows: :data:`AHEAD` from :data:`PREFETCH_FROM` faces on,
+    or at any size where the rays were cast one at a time (``single``: a sparse grid,
+    whose every hit is a new face and whose casts, between two hits, evict the rows:
+    82k faces, 2,000 views of 1,444 rays, flat, one thread: 4 % faster); else a distance
+    past every hit (none). The loops write the test out themselves
     (``if i + ahead < n and prim[i + ahead] >= 0: prefetch((a, b), prim[i + ahead])``):
     a helper function holding it, even inlined, made them slower."""
-    return AHEAD if face_normals.shape[0] >= PREFETCH_FROM else _NEVER
+    return AHEAD if single or face_normals.shape[0] >= PREFETCH_FROM else _NEVER
 
 
 @intrinsic

@@ -8,10 +8,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..raytrace.embree4_ctypes import query_flags
-from ._fused_kernels import cast_bin_bistatic, cast_bin_flat, cast_bin_smooth
+from ._fused_kernels import (cast_bin_bistatic, cast_bin_flat, cast_bin_flat_views,
+                             cast_bin_smooth)
 from ._scratch import scratch
 
-__all__ = ["cast_bin_grid", "queries"]
+__all__ = ["cast_bin_grid", "cast_bin_views", "queries"]
 
 
 def queries(lib, coherent):
@@ -35,6 +36,61 @@ def queries(lib, coherent):
         (ctypes function, ctypes function, bool).
     """
     return lib.intersect[lib.width], lib.intersect1, not coherent
+
+
+def _head(emb, coherent):
+    """The compiled loops' first arguments: (query, the scene's handle, the width, the
+    flags) and, after the grid, (inverse scale, scale)."""
+    sc = emb.scene.scene
+    lib = sc.lib
+    return ((queries(lib, coherent), sc.live(), lib.width, query_flags(coherent)),
+            (np.float32(emb.inverse), float(emb.scale)))
+
+
+def cast_bin_views(emb, plans, sequences, spacing, bins, coherent=False):
+    """Cast, weigh and bin many monostatic views with flat normals and point bins in one
+    compiled call (:func:`._fused_kernels.cast_bin_flat_views`), each view as
+    :func:`cast_bin_grid` casts it alone: a run of many small views (sparse grids) pays
+    the call and its planning once a chunk.
+
+    Parameters
+    ----------
+    emb : EmbreeScene
+        As for :func:`cast_bin_grid`.
+    plans : meshladar.raytrace.grid.GridPlans
+        The views' grids (k views).
+    sequences : tuple of numpy.ndarray or None
+        The stratified offsets' sequences (xi packed as ``plans.s``, ku and kv for the
+        longest columns and rows, eta packed as ``plans.t``: view j's are those
+        :func:`meshladar.raytrace.grid.stratified_sequences` draws for it); None: regular
+        grids.
+    spacing : float
+        The ray spacing δ.
+    bins : FlatBins
+        As for :func:`cast_bin_grid`, with ``w`` the views' directions (k, 3), ``start``
+        their range offsets (k,) and ``out`` their bins (k, n_bins); view j is tagged
+        j + 1 in the weight cache (``tag`` is unused) and ``footprint`` must be None.
+    coherent : bool
+        As for :func:`cast_bin_grid` (default False: the sparse grids this is for).
+
+    Returns
+    -------
+    (k, 2) int64 numpy.ndarray
+        Each view's back-face hits and rays cast.
+    """
+    w = np.ascontiguousarray(bins.w, dtype=np.float64)
+    f32 = np.float32
+    seq = sequences or (np.empty(0, f32),) * 4
+    grids = (plans.s.astype(f32), plans.s_at, plans.t.astype(f32), plans.t_at, seq,
+             f32(spacing), plans.u.astype(f32), plans.v.astype(f32), (plans.L * w).astype(f32))
+    head, size = _head(emb, coherent)
+    counts = np.zeros((len(w), 2), np.int64)
+    columns = int(np.max(np.diff(plans.t_at)))
+    cast_bin_flat_views(*head, grids, (-w).astype(f32)[:, None, :], *size,
+                        *bins[:4], w, np.asarray(bins.start, np.float64), *bins[6:11],
+                        bins.stamp, bins.weight, counts,
+                        scratch("flat", head[2], columns))
+    return counts
 
 
 def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=None,
@@ -75,9 +131,10 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
         face's normal, turned toward the ladar, from which each hit's occlusion ray toward
         it starts, whether the coatings are built in (F is 0 where the face turns away
         from the receiver: no occlusion ray), and the ``lone`` faces (a hit on the front
-        of one casts none: :meth:`~meshladar.raytrace.embree.Geometry.for_receivers`). A face whose ``bins.stamp`` is not ``bins.tag`` gets its bistatic
-        weight at its first hit, from the SR table ``bins.params`` (built-in coatings);
-        for other coatings the job stamps every face's weight
+        of one casts none: :meth:`~meshladar.raytrace.embree.Geometry.for_receivers`).
+        A face whose ``bins.stamp`` is not ``bins.tag`` gets its bistatic weight at its
+        first hit, from the SR table ``bins.params`` (built-in coatings); for other
+        coatings the job stamps every face's weight
         (:func:`meshladar.weighing.faces.face_bistatic_weights`) first. None (default):
         monostatic.
     smooth : tuple of ((m, 3, 3) numpy.ndarray, float), optional
@@ -96,14 +153,13 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
         The rays cast, len(s) × len(t).
     """
     s, t, u, v, L = plan.s, plan.t, plan.u, plan.v, plan.L
-    sc = emb.scene.scene
-    lib = sc.lib
+    lib = emb.scene.scene.lib
     w = np.asarray(direction, dtype=np.float64)
     offsets = plan.offsets or (np.empty(0, np.float32),) * 4
     grid = (s.astype(np.float32), t.astype(np.float32), offsets, np.float32(spacing),
             u.astype(np.float32), v.astype(np.float32), (L * w).astype(np.float32))
-    head = (queries(lib, coherent), sc.live(), lib.width, query_flags(coherent), grid,
-            (-w).astype(np.float32)[None, :], np.float32(emb.inverse), float(emb.scale))
+    first, size = _head(emb, coherent)
+    head = first + (grid, (-w).astype(np.float32)[None, :]) + size
     b = bins
     if receiver is not None:
         wr = np.asarray(receiver[0], np.float64)

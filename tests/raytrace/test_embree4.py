@@ -222,15 +222,17 @@ def test_grids_sparser_than_their_faces_are_cast_ray_by_ray_with_the_same_number
     one ray at a time, a dense one (12) in coherent packets; either way gives the same
     hits, so the same sinogram. With footprint bins, a sparse grid makes each face's row
     at its first hit and a dense one every row before the cast: the same rows."""
-    from meshladar.forward import job
+    from meshladar.forward import fused_views
     from meshladar.raytrace import plan as plan_module
     from meshladar.raytrace.plan import plan_trace
 
-    flags, cast = [], job.cast_bin_grid
+    flags, casts = [], {f: getattr(fused_views, f) for f in ("cast_bin_grid", "cast_bin_views")}
 
-    def spy(*args):
-        flags.append(args[-1])
-        return cast(*args)
+    def spying(name):                    # a view alone, or a chunk's views in one call
+        def spy(*args):
+            flags.append(args[-1])
+            return casts[name](*args)
+        return spy
 
     scene = _sphere(5)
     ladar = ml.Ladar.covering(scene, n_bins=32, view_vectors=ml.meshes.fibonacci_sphere(7))
@@ -241,7 +243,8 @@ def test_grids_sparser_than_their_faces_are_cast_ray_by_ray_with_the_same_number
         plan = plan_trace(scene, ladar, ray_spacing=spacing, backend="packets")
         assert plan.geo.hit_face_area == pytest.approx(typical, rel=1e-12)
         assert plan.coherent is coherent
-        monkeypatch.setattr(job, "cast_bin_grid", spy)
+        for name in casts:
+            monkeypatch.setattr(fused_views, name, spying(name))
         flags.clear()
         chosen = ml.simulate(scene, ladar, model="mesh", ray_spacing=spacing,
                              backend="packets", footprint=footprint)

@@ -59,12 +59,13 @@ def test_a_views_extent_over_clusters_is_every_points_extent(compiled_from, monk
     along unit and non-unit directions and the axes; and so do the extents from an origin
     and in perspective from a pinhole (a sensor at a standoff). points_extent's compiled
     pass (every set, with COMPILED_FROM 0) and its numpy branch (these sets are below the
-    default) alike."""
+    default) alike; and many directions' extents in one pass (axes_extents), over the
+    clusters or every point."""
     import trimesh
 
     from meshladar.meshes import fibonacci_sphere
     from meshladar.raytrace import _support
-    from meshladar.raytrace._support import ClusteredPoints, points_extent
+    from meshladar.raytrace._support import ClusteredPoints, axes_extents, points_extent
     from meshladar.raytrace.grid import dot
 
     if compiled_from is not None:
@@ -84,6 +85,10 @@ def test_a_views_extent_over_clusters_is_every_points_extent(compiled_from, monk
         clusters = ClusteredPoints(points)
         centre = points.mean(axis=0)
         reach = np.linalg.norm(points - centre, axis=1).max()
+        # many directions in one compiled pass (a chunk of views planned together)
+        want = np.array([(dot(points, u).min(), dot(points, u).max()) for u in dirs])
+        np.testing.assert_array_equal(clusters.extents(dirs), want)
+        np.testing.assert_array_equal(axes_extents(points, dirs), want)     # every point
         for u in dirs:
             x = dot(points, u)
             assert clusters.extent(u) == (x.min(), x.max())

@@ -10,6 +10,7 @@ import pytest
 
 import meshladar as ml
 from meshladar.errors import ModelError, ParameterError
+from meshladar.forward import fused_views
 from meshladar.forward import job as mesh_job
 from meshladar.forward.resolved import resolve
 from meshladar.materials import DARK_GRAY
@@ -28,7 +29,8 @@ def no_rays(monkeypatch):
         raise AssertionError("a ray was cast before the run was refused")
 
     monkeypatch.setattr(mesh_job, "embree_scene", cast)
-    monkeypatch.setattr(mesh_job, "cast_bin_grid", cast)
+    monkeypatch.setattr(fused_views, "cast_bin_grid", cast)
+    monkeypatch.setattr(fused_views, "cast_bin_views", cast)
     monkeypatch.setattr(embree.EmbreeScene, "run", cast)
 
 

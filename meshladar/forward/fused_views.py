@@ -1,0 +1,159 @@
+"""The mesh job's calls of the packet backend's fused loop (:mod:`meshladar.weighing.fused`):
+one view at a time, its rows split over threads when it is big, or, where the grids are
+sparse (many small views), every view of a chunk in one compiled call, planned together.
+
+A view's numbers are the same whichever way it goes: the chunk's grids are planned with the
+operations of :func:`meshladar.raytrace.grid.grid_plan`, its stratified offsets drawn view
+by view from the view's own seed, and each view cast, weighed and binned by the same
+compiled loop in the same order (``tests/weighing/test_sparse_chunks.py``).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from .._executors import thread_pool
+from ..raytrace.grid import grid_plan, grid_plans, kronecker
+from ..raytrace.views import range_offset
+from ..weighing.fused import cast_bin_grid, cast_bin_views
+
+__all__ = ["FlatBins", "fused_view", "flat_views"]
+
+
+class FlatBins(NamedTuple):
+    """The compiled binning loop's arguments after the hits (flat, for numba)."""
+
+    plane_d: np.ndarray
+    face_normals: np.ndarray
+    face_material: np.ndarray
+    params: np.ndarray
+    w: np.ndarray
+    start: float
+    edges: np.ndarray
+    area: float
+    power: bool
+    ignore_back: bool
+    out: np.ndarray
+    stamp: np.ndarray
+    weight: np.ndarray
+    tag: int
+    footprint: tuple | None
+
+
+def fused_view(job, scene, view, bins, receiver, smooth):
+    """One view through the fused loop: its grid cast, weighed and binned, on one thread
+    or (``job.row_jobs`` > 1) with its rows split over threads.
+
+    Parameters
+    ----------
+    job : meshladar.forward.job.MeshJob
+        The run's job (its plan's grid and ``row_jobs``).
+    scene : meshladar.raytrace.embree.EmbreeScene
+        The packet backend's scene.
+    view : meshladar.raytrace.plan.View
+        The view.
+    bins : FlatBins
+        Its weigh-and-bin arguments.
+    receiver, smooth : tuple or None
+        As :func:`meshladar.weighing.fused.cast_bin_grid` takes them.
+
+    Returns
+    -------
+    (int, int)
+        The rays cast and the back-face hits.
+    """
+    p = job.plan
+    grid = grid_plan(p.geo, view.w, p.mode, p.spacing, p.z0_shifted, view.rng)
+    if job.row_jobs > 1:
+        return _rows_on_threads(scene, grid, view.w, p.spacing, bins, job.row_jobs,
+                                (receiver, smooth, p.coherent))[::-1]
+    back, n = cast_bin_grid(scene, grid, view.w, p.spacing, bins, receiver, smooth,
+                            p.coherent)
+    return n, back
+
+
+def flat_views(job, scene, views, chunk):
+    """A chunk's monostatic views with flat normals and point bins in one compiled call
+    (:func:`meshladar.weighing.fused.cast_bin_views`): the grids planned together
+    (:func:`meshladar.raytrace.grid.grid_plans`), each view's stratified offsets drawn
+    from its own seed as :func:`meshladar.raytrace.grid.stratified_sequences` draws them.
+    For sparse grids, whose views are small (:attr:`meshladar.forward.job.MeshJob.batched`).
+
+    Parameters
+    ----------
+    job : meshladar.forward.job.MeshJob
+        The run's job.
+    scene : meshladar.raytrace.embree.EmbreeScene
+        The packet backend's scene.
+    views : (k,) array_like of int
+        The chunk's view indices.
+    chunk : meshladar.forward.job.Chunk
+        The chunk's bins (k, n_bins) and weight cache; view j is tagged j + 1.
+
+    Returns
+    -------
+    (k, 2) int64 numpy.ndarray
+        Each view's rays cast and back-face hits.
+    """
+    p, wg = job.plan, job.weighing
+    w = job.vectors[np.asarray(views, dtype=np.int64)]
+    plans = grid_plans(p.geo, w, p.mode, p.spacing, p.z0_shifted)
+    sequences = None
+    if p.seed is not None and p.mode == "3d":
+        sequences = _sequences(plans, views, p.seed)
+    starts = np.array([range_offset(p.geo.center, x, None) for x in w])
+    bins = FlatBins(p.geo.plane_d, p.geo.face_normals, p.geo.material, chunk.params, w,
+                    starts, wg.edges[0], p.area, wg.power, p.ignore_back, chunk.values,
+                    chunk.stamp, chunk.weight, 0, None)
+    return cast_bin_views(scene, plans, sequences, p.spacing, bins, p.coherent)[:, ::-1]
+
+
+def _sequences(plans, views, seed):
+    """The views' stratified sequences, packed: view i's ξ (its columns) then η (its rows)
+    drawn from ``np.random.default_rng([seed, i])``, as
+    :func:`meshladar.raytrace.grid.stratified_sequences` draws them."""
+    xi, eta = np.empty(plans.s.size), np.empty(plans.t.size)
+    for j, i in enumerate(views):
+        rng = np.random.default_rng([seed, int(i)])
+        xi[plans.s_at[j]:plans.s_at[j + 1]] = rng.uniform(0.0, 1.0, plans.s_at[j + 1]
+                                                          - plans.s_at[j])
+        eta[plans.t_at[j]:plans.t_at[j + 1]] = rng.uniform(0.0, 1.0, plans.t_at[j + 1]
+                                                           - plans.t_at[j])
+    ku = kronecker(int(np.max(np.diff(plans.t_at))))
+    kv = kronecker(int(np.max(np.diff(plans.s_at))))
+    return xi.astype(np.float32), ku, kv, eta.astype(np.float32)
+
+
+def _rows_on_threads(scene, grid, w, spacing, bins, row_jobs, how=(None, None, True)):
+    """One big view's grid split into ``row_jobs`` bands of rows, cast on as many threads
+    (the fused loop releases the GIL), each band with its own bins and a copy of the weight
+    cache (weights already evaluated for the view stay valid); the
+    bands' bins are added in order, so a given ``row_jobs`` always gives the same numbers
+    (and the one-thread numbers to rounding). ``how``: :func:`cast_bin_grid`'s
+    (receiver, smooth, coherent). Returns (back-face hits, rays cast)."""
+    cuts = np.linspace(0, grid.s.size, row_jobs + 1).astype(int)
+    parts = []
+    for a0, a1 in zip(cuts[:-1], cuts[1:]):
+        if a1 > a0:
+            band = grid._replace(s=grid.s[a0:a1], offsets=None if grid.offsets is None else
+                                 _rows_of(grid.offsets, a0, a1))
+            fp = bins.footprint                # each band makes its own faces' rows
+            parts.append((band, bins._replace(out=np.zeros_like(bins.out),
+                                              stamp=bins.stamp.copy(),
+                                              weight=bins.weight.copy(),
+                                              footprint=None if fp is None else
+                                              (fp[0].copy(), fp[1].copy()) + fp[2:])))
+    with thread_pool(len(parts)) as ex:
+        done = list(ex.map(lambda p: cast_bin_grid(scene, p[0], w, spacing, p[1], *how),
+                           parts))
+    for _, band in parts:
+        bins.out[...] += band.out
+    return sum(b for b, _ in done), sum(n for _, n in done)
+
+
+def _rows_of(offsets, a0, a1):
+    """The stratified offsets' sequences of rows a0..a1 (xi and kv run along the rows)."""
+    xi, ku, kv, eta = offsets
+    return xi[a0:a1], ku, kv[a0:a1], eta
