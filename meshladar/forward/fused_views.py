@@ -1,6 +1,7 @@
 """The mesh job's calls of the packet backend's fused loop (:mod:`meshladar.weighing.fused`):
 one view at a time, its rows split over threads when it is big, or, where the grids are
-sparse (many small views), every view of a chunk in one compiled call, planned together.
+sparse (many small views), every view of a chunk in one compiled call, planned together
+(flat or smooth normals, monostatic, point bins, built-in coatings).
 
 A view's numbers are the same whichever way it goes: the chunk's grids are planned with the
 operations of :func:`meshladar.raytrace.grid.grid_plan`, its stratified offsets drawn view
@@ -15,11 +16,12 @@ from typing import NamedTuple
 import numpy as np
 
 from .._executors import thread_pool
+from ..precision import MIN_COS_FACET
 from ..raytrace.grid import grid_plan, grid_plans, kronecker
 from ..raytrace.views import range_offset
 from ..weighing.fused import cast_bin_grid, cast_bin_views
 
-__all__ = ["FlatBins", "fused_view", "flat_views"]
+__all__ = ["FlatBins", "fused_view", "chunk_views", "flat_views", "smooth_views"]
 
 
 class FlatBins(NamedTuple):
@@ -75,8 +77,19 @@ def fused_view(job, scene, view, bins, receiver, smooth):
 
 
 def flat_views(job, scene, views, chunk):
-    """A chunk's monostatic views with flat normals and point bins in one compiled call
-    (:func:`meshladar.weighing.fused.cast_bin_views`): the grids planned together
+    """:func:`chunk_views` with flat normals."""
+    return chunk_views(job, scene, views, chunk)
+
+
+def smooth_views(job, scene, views, chunk):
+    """:func:`chunk_views` with smooth normals (the faces' corner normals, the least
+    |cos θ| of a facet as the one-view loop takes them)."""
+    return chunk_views(job, scene, views, chunk, (job.plan.geo.corner, MIN_COS_FACET))
+
+
+def chunk_views(job, scene, views, chunk, smooth=None):
+    """A chunk's monostatic views with flat (or ``smooth``) normals and point bins in one
+    compiled call (:func:`meshladar.weighing.fused.cast_bin_views`): the grids planned together
     (:func:`meshladar.raytrace.grid.grid_plans`), each view's stratified offsets drawn
     from its own seed as :func:`meshladar.raytrace.grid.stratified_sequences` draws them.
     For sparse grids, whose views are small (:attr:`meshladar.forward.job.MeshJob.batched`).
@@ -91,6 +104,8 @@ def flat_views(job, scene, views, chunk):
         The chunk's view indices.
     chunk : meshladar.forward.job.Chunk
         The chunk's bins (k, n_bins) and weight cache; view j is tagged j + 1.
+    smooth : tuple of ((m, 3, 3) numpy.ndarray, float), optional
+        Smooth normals, as :func:`meshladar.weighing.fused.cast_bin_views` takes them.
 
     Returns
     -------
@@ -107,7 +122,8 @@ def flat_views(job, scene, views, chunk):
     bins = FlatBins(p.geo.plane_d, p.geo.face_normals, p.geo.material, chunk.params, w,
                     starts, wg.edges[0], p.area, wg.power, p.ignore_back, chunk.values,
                     chunk.stamp, chunk.weight, 0, None)
-    return cast_bin_views(scene, plans, sequences, p.spacing, bins, p.coherent)[:, ::-1]
+    return cast_bin_views(scene, plans, sequences, p.spacing, bins, p.coherent,
+                          smooth)[:, ::-1]
 
 
 def _sequences(plans, views, seed):

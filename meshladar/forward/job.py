@@ -4,16 +4,20 @@
 :class:`~meshladar.weighing.Weighing` (or none: keep the hits) once and picks the view
 stage; :func:`mesh_job` is the function the stream runs on every chunk of views: it builds
 the chunk's state (its bins, and the per-face weight cache the compiled loops read), then
-runs the chosen stage on each view. The stages:
+runs the chosen stage on each view (or, for a batched job, on all of them at once). The
+stages:
 
 * ``hits``: each view's :class:`~meshladar.hits.ViewHits` (:func:`meshladar.trace`);
 * ``per_hit``: hits weighed and binned in numpy (any normals, coating, receiver, sensor),
   and every run of at most :data:`QUICK_RAYS` rays on a ``quick_start`` backend (embreex),
   which then calls none of numba's compiled loops;
 * ``flat``: flat normals, monostatic: F·δA⊥ one number per face and view, binned by the
-  compiled loop (in the fused cast-weigh-bin loop on a fused backend);
+  compiled loop (in the fused cast-weigh-bin loop on a fused backend; grids sparser than
+  their faces with point bins and built-in coatings, a chunk's views in one call:
+  :attr:`MeshJob.batched`);
 * ``smooth``: smooth normals, coatings with a compiled kernel, binned by the compiled loop
-  (in the fused cast-weigh-bin loop on a fused backend, the barycentrics kept per band);
+  (in the fused cast-weigh-bin loop on a fused backend, the barycentrics kept per band;
+  sparse grids with point bins a chunk's views in one call, as ``flat``);
 * ``bistatic``: flat normals, a receiver, a fused backend: per-face bistatic weights and
   occlusion rays cast in the fused loop;
 * ``sensor``: a sensor at a finite standoff, flat or smooth normals, compiled coatings;
@@ -41,7 +45,7 @@ from ..weighing.faces import (check_edge_on_receiver, face_bistatic_weights, foo
 from ..weighing.record import Weighing
 from ..weighing._kernels import bin_flat_hits, bin_smooth_hits
 from ..weighing.resolved import bin_resolved
-from .fused_views import FlatBins, flat_views, fused_view
+from .fused_views import FlatBins, flat_views, fused_view, smooth_views
 from ..weighing.sensor_view import bin_sensor_view
 
 __all__ = ["MeshJob", "plan_job", "mesh_job", "sensor_offset", "QUICK_RAYS"]
@@ -86,10 +90,10 @@ class MeshJob:
         Whether the backend's fused cast-weigh-bin loop casts the grids (default False).
     batched : bool
         Whether each chunk's views go through the fused loop in one call
-        (:func:`.fused_views.flat_views`; default False): sparse grids (not
+        (:func:`.fused_views.chunk_views`; default False): sparse grids (not
         :attr:`~meshladar.raytrace.plan.TracePlan.coherent`: small views, where planning
-        and calling a view cost as much as casting it), flat normals, monostatic, point
-        bins, built-in coatings, one thread a view.
+        and calling a view cost as much as casting it), the ``"flat"`` or ``"smooth"``
+        stage, monostatic, point bins, built-in coatings, one thread a view.
     """
 
     plan: TracePlan
@@ -274,7 +278,7 @@ QUICK_RAYS = 1 << 20
 STAGES = {s.name: s for s in (
     Stage("hits", _hits_stage), Stage("per_hit", _per_hit_stage),
     Stage("resolved", _resolved_stage), Stage("sensor", _sensor_stage),
-    Stage("smooth", _smooth_stage, faces=True),
+    Stage("smooth", _smooth_stage, faces=True, views=smooth_views),
     Stage("flat", _flat_stage, faces=True, views=flat_views),
     Stage("bistatic", _flat_stage, faces=True))}
 

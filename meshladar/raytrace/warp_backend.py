@@ -235,7 +235,7 @@ class WarpScene:
             Every ray's direction (−w).
         inverse, scale : float
             The scene's unit-size factor and its inverse (powers of two).
-        bins : meshladar.forward.job.FlatBins
+        bins : meshladar.forward.fused_views.FlatBins
             ``plane_d``, ``face_normals``, ``w``, ``start``, ``edges``, ``ignore_back``,
             ``weight`` (read) and ``out`` (added into).
 

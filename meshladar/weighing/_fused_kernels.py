@@ -18,8 +18,8 @@ from ._compiled import njit_loop
 from ._prefetch import ahead as _ahead
 from ._prefetch import prefetch as _prefetch
 
-__all__ = ["cast_bin_flat", "cast_bin_flat_views", "cast_bin_smooth", "cast_bin_bistatic",
-           "cast_bin_sensor"]
+__all__ = ["cast_bin_flat", "cast_bin_flat_views", "cast_bin_smooth", "cast_bin_smooth_views",
+           "cast_bin_bistatic", "cast_bin_sensor"]
 
 
 @njit_loop()
@@ -191,28 +191,47 @@ def cast_bin_flat(query, scene, w, flags, grid, d, inv_scale, scale, plane_d, fa
     return back, grid[0].shape[0] * grid[1].shape[0]
 
 
+@njit_loop(inline="always")
+def _view_grid(grids, j):
+    """View j's grid (s, t, offsets, sp, u, v, lw) of a chunk's ``grids`` =
+    (s, s_at, t, t_at, (xi, ku, kv, eta), sp, u, v, lw):
+    :class:`meshladar.raytrace.grid.GridPlans`' centres in float32, xi packed as s and eta
+    as t, ku and kv the Kronecker sequences of the longest rows and columns (all four
+    empty on a regular grid)."""
+    s, s_at, t, t_at, seq, sp, u, v, lw = grids
+    xi, ku, kv, eta = seq
+    a, b, c, e = s_at[j], s_at[j + 1], t_at[j], t_at[j + 1]
+    return (s[a:b], t[c:e], (xi[a:b], ku[:e - c], kv[:b - a], eta[c:e]), sp, u[j], v[j],
+            lw[j])
+
+
 @njit_loop()
 def cast_bin_flat_views(query, scene, w, flags, grids, d, inv_scale, scale, plane_d,
                         face_normals, face_material, params, wv, start, edges, area, power,
                         ignore_back, out, stamp, weight, counts, scratch):
     """Many monostatic views with flat normals and point bins in one call, view j as
     :func:`cast_bin_flat` casts it alone (a run of many small views pays the call once a
-    chunk): its grid j of ``grids`` = (s, s_at, t, t_at, (xi, ku, kv, eta), sp, u, v, lw)
-    (:class:`meshladar.raytrace.grid.GridPlans`' centres in float32, xi packed as s and eta
-    as t, ku and kv the Kronecker sequences of the longest rows and columns; all four
-    empty on a regular grid), the direction ``d[j]`` (1, 3), ``wv[j]``, ``start[j]``, its
-    bins ``out[j]`` and tag j + 1 in the shared weight cache. Fills ``counts[j]`` with
-    (back-face hits, rays cast)."""
-    s, s_at, t, t_at, seq, sp, u, v, lw = grids
-    xi, ku, kv, eta = seq
-    for j in range(s_at.shape[0] - 1):
-        a, b, c, e = s_at[j], s_at[j + 1], t_at[j], t_at[j + 1]
-        grid = (s[a:b], t[c:e], (xi[a:b], ku[:e - c], kv[:b - a], eta[c:e]), sp, u[j], v[j],
-                lw[j])
+    chunk): its grid j of ``grids`` (:func:`_view_grid`), the direction ``d[j]`` (1, 3),
+    ``wv[j]``, ``start[j]``, its bins ``out[j]`` and tag j + 1 in the shared weight cache.
+    Fills ``counts[j]`` with (back-face hits, rays cast)."""
+    for j in range(grids[1].shape[0] - 1):
         counts[j, 0], counts[j, 1] = cast_bin_flat(
-            query, scene, w, flags, grid, d[j], inv_scale, scale, plane_d, face_normals,
-            face_material, params, wv[j], start[j], edges, area, power, ignore_back, out[j],
-            stamp, weight, j + 1, None, scratch)
+            query, scene, w, flags, _view_grid(grids, j), d[j], inv_scale, scale, plane_d,
+            face_normals, face_material, params, wv[j], start[j], edges, area, power,
+            ignore_back, out[j], stamp, weight, j + 1, None, scratch)
+
+
+@njit_loop()
+def cast_bin_smooth_views(query, scene, w, flags, grids, d, inv_scale, scale, plane_d,
+                          face_normals, face_material, params, wv, start, edges, area, power,
+                          ignore_back, out, corner, min_cos_facet, counts, scratch):
+    """:func:`cast_bin_flat_views` with smooth normals: view j as :func:`cast_bin_smooth`
+    casts it alone. Fills ``counts[j]`` with (back-face hits, rays cast)."""
+    for j in range(grids[1].shape[0] - 1):
+        counts[j, 0], counts[j, 1] = cast_bin_smooth(
+            query, scene, w, flags, _view_grid(grids, j), d[j], inv_scale, scale, plane_d,
+            face_normals, face_material, params, wv[j], start[j], edges, area, power,
+            ignore_back, out[j], None, corner, min_cos_facet, scratch)
 
 
 @njit_loop()
@@ -231,7 +250,7 @@ def cast_bin_smooth(query, scene, w, flags, grid, d, inv_scale, scale, plane_d, 
         back += bin_smooth_hits(prim[:k], tf[:k], bu[:k], bv[:k], o[:k], plane_d,
                                 face_normals, corner, face_material, params, wv, start,
                                 edges, area, power, ignore_back, min_cos_facet, out,
-                                footprint)
+                                footprint, query[2])
     return back, grid[0].shape[0] * grid[1].shape[0]
 
 

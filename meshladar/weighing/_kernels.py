@@ -336,14 +336,15 @@ def edge_on_receiver(face_normals, w, wr, ignore_back, cos_max):
 @njit_loop()
 def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, face_material,
                     params, w, start, edges, area, power, ignore_back, min_cos_facet, out,
-                    footprint):
+                    footprint, single=False):
     """Monostatic weighing and binning with smooth normals, as :func:`bin_flat_hits` with
     flat ones: the shading normal interpolated from the face's ``corner`` normals (m, 3, 3)
     with Embree's barycentrics (bu, bv), F of the SR coating at its angle, and the area
     factor cos θs / max(|cos θg|, ``min_cos_facet``) of meshladar.raytrace.views.
     _shading_factor, so each ray weighs F(θs)·area·factor (``power``: times cos θs; 0 where
     the shading normal faces away); ``footprint`` as in :func:`bin_flat_hits` (the flat
-    facet's extent). Returns the number of back-face hits."""
+    facet's extent); ``single`` as in :func:`bin_flat_hits`. Returns the number of
+    back-face hits."""
     nb = edges.size - 1
     e0 = edges[0]
     inv = nb / (edges[nb] - edges[0])
@@ -351,7 +352,7 @@ def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, 
     rows, stamps, tag_fp = _NO_ROWS, _NO_STAMPS, -1    # out of the tuple once, not per hit
     if footprint is not None:
         rows, stamps, tag_fp = footprint[0], footprint[1], footprint[9]
-    ahead, n = _ahead(face_normals), prim.size
+    ahead, n = _ahead(face_normals, single), prim.size
     for i in range(n):
         if i + ahead < n and prim[i + ahead] >= 0:   # a later hit's rows (._prefetch)
             _prefetch((face_normals, plane_d, corner, face_material), prim[i + ahead])

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..raytrace.embree4_ctypes import query_flags
 from ._fused_kernels import (cast_bin_bistatic, cast_bin_flat, cast_bin_flat_views,
-                             cast_bin_smooth)
+                             cast_bin_smooth, cast_bin_smooth_views)
 from ._scratch import scratch
 
 __all__ = ["cast_bin_grid", "cast_bin_views", "queries"]
@@ -47,11 +47,11 @@ def _head(emb, coherent):
             (np.float32(emb.inverse), float(emb.scale)))
 
 
-def cast_bin_views(emb, plans, sequences, spacing, bins, coherent=False):
-    """Cast, weigh and bin many monostatic views with flat normals and point bins in one
-    compiled call (:func:`._fused_kernels.cast_bin_flat_views`), each view as
-    :func:`cast_bin_grid` casts it alone: a run of many small views (sparse grids) pays
-    the call and its planning once a chunk.
+def cast_bin_views(emb, plans, sequences, spacing, bins, coherent=False, smooth=None):
+    """Cast, weigh and bin many monostatic views with flat (or smooth) normals and point
+    bins in one compiled call (:func:`._fused_kernels.cast_bin_flat_views`,
+    ``cast_bin_smooth_views``), each view as :func:`cast_bin_grid` casts it alone: a run
+    of many small views (sparse grids) pays the call and its planning once a chunk.
 
     Parameters
     ----------
@@ -72,6 +72,9 @@ def cast_bin_views(emb, plans, sequences, spacing, bins, coherent=False):
         j + 1 in the weight cache (``tag`` is unused) and ``footprint`` must be None.
     coherent : bool
         As for :func:`cast_bin_grid` (default False: the sparse grids this is for).
+    smooth : tuple of ((m, 3, 3) numpy.ndarray, float), optional
+        Smooth normals, as for :func:`cast_bin_grid` (``bins.stamp`` and ``bins.weight``
+        are then unused). None (default): flat normals.
 
     Returns
     -------
@@ -86,10 +89,14 @@ def cast_bin_views(emb, plans, sequences, spacing, bins, coherent=False):
     head, size = _head(emb, coherent)
     counts = np.zeros((len(w), 2), np.int64)
     columns = int(np.max(np.diff(plans.t_at)))
-    cast_bin_flat_views(*head, grids, (-w).astype(f32)[:, None, :], *size,
-                        *bins[:4], w, np.asarray(bins.start, np.float64), *bins[6:11],
-                        bins.stamp, bins.weight, counts,
-                        scratch("flat", head[2], columns))
+    head += (grids, (-w).astype(f32)[:, None, :]) + size + tuple(bins[:4]) + (
+        w, np.asarray(bins.start, np.float64)) + tuple(bins[6:11])
+    if smooth is not None:
+        cast_bin_smooth_views(*head, smooth[0], float(smooth[1]), counts,
+                              scratch("smooth", head[2], columns))
+    else:
+        cast_bin_flat_views(*head, bins.stamp, bins.weight, counts,
+                            scratch("flat", head[2], columns))
     return counts
 
 
@@ -98,8 +105,9 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
     """Cast, weigh and bin one view of the packet scene ``emb``
     (:class:`meshladar.raytrace.embree.EmbreeScene` whose backend is fused): ``plan`` is
     :func:`meshladar.raytrace.grid.grid_plan`'s :class:`~meshladar.raytrace.grid.GridPlan`,
-    ``bins`` the weigh-and-bin arguments (:class:`~meshladar.forward.job.FlatBins`,
-    flat for the compiled loop); ``receiver`` (direction, lift) makes the view bistatic.
+    ``bins`` the weigh-and-bin arguments
+    (:class:`~meshladar.forward.fused_views.FlatBins`, flat for the compiled loop);
+    ``receiver`` (direction, lift) makes the view bistatic.
 
     Monostatic or bistatic with flat normals, or monostatic with smooth ones (``smooth``),
     binned at a point (``bins.footprint`` None) or over each face's footprint, in packets
@@ -111,8 +119,7 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
     ----------
     emb : EmbreeScene
         The view's scene (``meshladar.raytrace.embree.embree_scene``) on the packet
-        backend: ``emb.scene.scene`` is its
-        :class:`~meshladar.raytrace.embree4.PacketGeometry`.
+        backend: ``emb.scene.scene`` is its :class:`~meshladar.raytrace.embree4.PacketGeometry`.
     plan : GridPlan
         The view's ray grid (``s``, ``t``, the stratified offsets' 1-D sequences or None,
         the axes ``u``, ``v`` and the start distance ``L``, shifted coordinates).
