@@ -21,7 +21,7 @@ from ..raytrace.grid import grid_plan, grid_plans, kronecker
 from ..raytrace.views import range_offset
 from ..weighing.fused import cast_bin_grid, cast_bin_views
 
-__all__ = ["FlatBins", "fused_view", "chunk_views", "flat_views", "smooth_views"]
+__all__ = ["FlatBins", "fused_view", "chunk_views"]
 
 
 class FlatBins(NamedTuple):
@@ -76,12 +76,12 @@ def fused_view(job, scene, view, bins, receiver, smooth):
     return n, back
 
 
-def flat_views(job, scene, views, chunk):
+def _flat_views(job, scene, views, chunk):
     """:func:`chunk_views` with flat normals."""
     return chunk_views(job, scene, views, chunk)
 
 
-def smooth_views(job, scene, views, chunk):
+def _smooth_views(job, scene, views, chunk):
     """:func:`chunk_views` with smooth normals (the faces' corner normals, the least
     |cos θ| of a facet as the one-view loop takes them)."""
     return chunk_views(job, scene, views, chunk, (job.plan.geo.corner, MIN_COS_FACET))

@@ -45,7 +45,7 @@ from ..weighing.faces import (check_edge_on_receiver, face_bistatic_weights, foo
 from ..weighing.record import Weighing
 from ..weighing._kernels import bin_flat_hits, bin_smooth_hits
 from ..weighing.resolved import bin_resolved
-from .fused_views import FlatBins, flat_views, fused_view, smooth_views
+from .fused_views import FlatBins, _flat_views, _smooth_views, fused_view
 from ..weighing.sensor_view import bin_sensor_view
 
 __all__ = ["MeshJob", "plan_job", "mesh_job", "sensor_offset", "QUICK_RAYS"]
@@ -278,8 +278,8 @@ QUICK_RAYS = 1 << 20
 STAGES = {s.name: s for s in (
     Stage("hits", _hits_stage), Stage("per_hit", _per_hit_stage),
     Stage("resolved", _resolved_stage), Stage("sensor", _sensor_stage),
-    Stage("smooth", _smooth_stage, faces=True, views=smooth_views),
-    Stage("flat", _flat_stage, faces=True, views=flat_views),
+    Stage("smooth", _smooth_stage, faces=True, views=_smooth_views),
+    Stage("flat", _flat_stage, faces=True, views=_flat_views),
     Stage("bistatic", _flat_stage, faces=True))}
 
 
