@@ -1,7 +1,8 @@
 """The mesh job's calls of the packet backend's fused loop (:mod:`meshladar.weighing.fused`):
 one view at a time, its rows split over threads when it is big, or, where the grids are
 sparse (many small views), every view of a chunk in one compiled call, planned together
-(flat or smooth normals, monostatic, point bins, built-in coatings).
+(point bins, built-in coatings; monostatic with flat or smooth normals, or bistatic with
+flat ones).
 
 A view's numbers are the same whichever way it goes: the chunk's grids are planned with the
 operations of :func:`meshladar.raytrace.grid.grid_plan`, its stratified offsets drawn view
@@ -16,9 +17,10 @@ from typing import NamedTuple
 import numpy as np
 
 from .._executors import thread_pool
-from ..precision import MIN_COS_FACET
+from ..precision import MIN_COS_FACET, RECEIVER_LIFT
 from ..raytrace.grid import grid_plan, grid_plans, kronecker
 from ..raytrace.views import range_offset
+from ..weighing.faces import check_edge_on_receiver
 from ..weighing.fused import cast_bin_grid, cast_bin_views
 
 __all__ = ["FlatBins", "fused_view", "chunk_views"]
@@ -81,15 +83,29 @@ def _flat_views(job, scene, views, chunk):
     return chunk_views(job, scene, views, chunk)
 
 
+def _bistatic_views(job, scene, views, chunk):
+    """:func:`chunk_views` for bistatic views (flat normals, built-in coatings): under the
+    paper's radiometry each view's faces edge-on to its receiver warn first, as they do
+    a view at a time."""
+    p = job.plan
+    w_r = p.receivers[np.asarray(views, dtype=np.int64)]
+    if not job.weighing.power:
+        for w, x in zip(job.vectors[np.asarray(views, dtype=np.int64)], w_r):
+            check_edge_on_receiver(p.geo, w, x, p.ignore_back)
+    return chunk_views(job, scene, views, chunk,
+                       receiver=(w_r, RECEIVER_LIFT * p.geo.radius, True, p.geo.lone))
+
+
 def _smooth_views(job, scene, views, chunk):
     """:func:`chunk_views` with smooth normals (the faces' corner normals, the least
     |cos θ| of a facet as the one-view loop takes them)."""
     return chunk_views(job, scene, views, chunk, (job.plan.geo.corner, MIN_COS_FACET))
 
 
-def chunk_views(job, scene, views, chunk, smooth=None):
-    """A chunk's monostatic views with flat (or ``smooth``) normals and point bins in one
-    compiled call (:func:`meshladar.weighing.fused.cast_bin_views`): the grids planned together
+def chunk_views(job, scene, views, chunk, smooth=None, receiver=None):
+    """A chunk's views with point bins in one compiled call
+    (:func:`meshladar.weighing.fused.cast_bin_views`), monostatic with flat or ``smooth``
+    normals, or bistatic (``receiver``) with flat ones: the grids planned together
     (:func:`meshladar.raytrace.grid.grid_plans`), each view's stratified offsets drawn
     from its own seed as :func:`meshladar.raytrace.grid.stratified_sequences` draws them.
     For sparse grids, whose views are small (:attr:`meshladar.forward.job.MeshJob.batched`).
@@ -106,6 +122,9 @@ def chunk_views(job, scene, views, chunk, smooth=None):
         The chunk's bins (k, n_bins) and weight cache; view j is tagged j + 1.
     smooth : tuple of ((m, 3, 3) numpy.ndarray, float), optional
         Smooth normals, as :func:`meshladar.weighing.fused.cast_bin_views` takes them.
+    receiver : tuple, optional
+        The views' receivers, as :func:`meshladar.weighing.fused.cast_bin_views` takes
+        them (each view's direction a row, in the order of ``views``).
 
     Returns
     -------
@@ -118,12 +137,13 @@ def chunk_views(job, scene, views, chunk, smooth=None):
     sequences = None
     if p.seed is not None and p.mode == "3d":
         sequences = _sequences(plans, views, p.seed)
-    starts = np.array([range_offset(p.geo.center, x, None) for x in w])
+    w_r = [None] * len(w) if receiver is None else receiver[0]
+    starts = np.array([range_offset(p.geo.center, x, y) for x, y in zip(w, w_r)])
     bins = FlatBins(p.geo.plane_d, p.geo.face_normals, p.geo.material, chunk.params, w,
                     starts, wg.edges[0], p.area, wg.power, p.ignore_back, chunk.values,
                     chunk.stamp, chunk.weight, 0, None)
-    return cast_bin_views(scene, plans, sequences, p.spacing, bins, p.coherent,
-                          smooth)[:, ::-1]
+    return cast_bin_views(scene, plans, sequences, p.spacing, bins, p.coherent, smooth,
+                          receiver)[:, ::-1]
 
 
 def _sequences(plans, views, seed):

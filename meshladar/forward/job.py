@@ -19,7 +19,8 @@ stages:
   (in the fused cast-weigh-bin loop on a fused backend, the barycentrics kept per band;
   sparse grids with point bins a chunk's views in one call, as ``flat``);
 * ``bistatic``: flat normals, a receiver, a fused backend: per-face bistatic weights and
-  occlusion rays cast in the fused loop;
+  occlusion rays cast in the fused loop (sparse grids with point bins and built-in
+  coatings a chunk's views in one call, as ``flat``);
 * ``sensor``: a sensor at a finite standoff, flat or smooth normals, compiled coatings;
 * ``resolved``: hits weighed and binned by one to three coordinates (resolved returns).
 """
@@ -45,7 +46,7 @@ from ..weighing.faces import (check_edge_on_receiver, face_bistatic_weights, foo
 from ..weighing.record import Weighing
 from ..weighing._kernels import bin_flat_hits, bin_smooth_hits
 from ..weighing.resolved import bin_resolved
-from .fused_views import FlatBins, _flat_views, _smooth_views, fused_view
+from .fused_views import FlatBins, _bistatic_views, _flat_views, _smooth_views, fused_view
 from ..weighing.sensor_view import bin_sensor_view
 
 __all__ = ["MeshJob", "plan_job", "mesh_job", "sensor_offset", "QUICK_RAYS"]
@@ -92,8 +93,8 @@ class MeshJob:
         Whether each chunk's views go through the fused loop in one call
         (:func:`.fused_views.chunk_views`; default False): sparse grids (not
         :attr:`~meshladar.raytrace.plan.TracePlan.coherent`: small views, where planning
-        and calling a view cost as much as casting it), the ``"flat"`` or ``"smooth"``
-        stage, monostatic, point bins, built-in coatings, one thread a view.
+        and calling a view cost as much as casting it), the ``"flat"``, ``"smooth"`` or
+        ``"bistatic"`` stage, point bins, built-in coatings, one thread a view.
     """
 
     plan: TracePlan
@@ -280,7 +281,7 @@ STAGES = {s.name: s for s in (
     Stage("resolved", _resolved_stage), Stage("sensor", _sensor_stage),
     Stage("smooth", _smooth_stage, faces=True, views=_smooth_views),
     Stage("flat", _flat_stage, faces=True, views=_flat_views),
-    Stage("bistatic", _flat_stage, faces=True))}
+    Stage("bistatic", _flat_stage, faces=True, views=_bistatic_views))}
 
 
 def _stage_name(plan, weighing):
@@ -334,7 +335,8 @@ def plan_job(plan, weighing, vectors, row_jobs=1) -> MeshJob:
     """
     stage, fused = STAGES[_stage_name(plan, weighing)], _fused(plan)
     batched = (stage.views is not None and fused and not plan.coherent and row_jobs == 1
-               and plan.receivers is None and weighing.compiled and not weighing.footprint)
+               and weighing.compiled and not weighing.footprint
+               and (plan.receivers is None or weighing.compiled_bistatic))
     return MeshJob(plan=plan, weighing=weighing,
                    vectors=np.asarray(vectors, dtype=np.float64), stage=stage,
                    row_jobs=row_jobs, fused=fused, batched=batched)

@@ -19,7 +19,7 @@ from ._prefetch import ahead as _ahead
 from ._prefetch import prefetch as _prefetch
 
 __all__ = ["cast_bin_flat", "cast_bin_flat_views", "cast_bin_smooth", "cast_bin_smooth_views",
-           "cast_bin_bistatic", "cast_bin_sensor"]
+           "cast_bin_bistatic", "cast_bin_bistatic_views", "cast_bin_sensor"]
 
 
 @njit_loop()
@@ -232,6 +232,22 @@ def cast_bin_smooth_views(query, scene, w, flags, grids, d, inv_scale, scale, pl
             query, scene, w, flags, _view_grid(grids, j), d[j], inv_scale, scale, plane_d,
             face_normals, face_material, params, wv[j], start[j], edges, area, power,
             ignore_back, out[j], None, corner, min_cos_facet, scratch)
+
+
+@njit_loop()
+def cast_bin_bistatic_views(query, scene, w, flags, grids, d, inv_scale, scale, plane_d,
+                            face_normals, wv, start, edges, ignore_back, out, weight, occ,
+                            wr, lift, stamp, coating, lone, counts, scratch):
+    """:func:`cast_bin_flat_views` for bistatic views: view j as :func:`cast_bin_bistatic`
+    casts it alone, toward its receiver ``wr[j]``, its half vector ``coating[2][j]``
+    (``coating`` = (face materials, SR table, half vectors (k, 3), area, power, built
+    in)). Fills ``counts[j]`` with (back-face hits, rays cast)."""
+    for j in range(grids[1].shape[0] - 1):
+        own = (coating[0], coating[1], coating[2][j], coating[3], coating[4], coating[5])
+        counts[j, 0], counts[j, 1] = cast_bin_bistatic(
+            query, scene, w, flags, _view_grid(grids, j), d[j], inv_scale, scale, plane_d,
+            face_normals, wv[j], start[j], edges, ignore_back, out[j], weight, occ, wr[j],
+            lift, stamp, j + 1, own, lone, scratch)
 
 
 @njit_loop()

@@ -8,8 +8,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..raytrace.embree4_ctypes import query_flags
-from ._fused_kernels import (cast_bin_bistatic, cast_bin_flat, cast_bin_flat_views,
-                             cast_bin_smooth, cast_bin_smooth_views)
+from ._fused_kernels import (cast_bin_bistatic, cast_bin_bistatic_views, cast_bin_flat,
+                             cast_bin_flat_views, cast_bin_smooth, cast_bin_smooth_views)
 from ._scratch import scratch
 
 __all__ = ["cast_bin_grid", "cast_bin_views", "queries"]
@@ -47,10 +47,11 @@ def _head(emb, coherent):
             (np.float32(emb.inverse), float(emb.scale)))
 
 
-def cast_bin_views(emb, plans, sequences, spacing, bins, coherent=False, smooth=None):
-    """Cast, weigh and bin many monostatic views with flat (or smooth) normals and point
-    bins in one compiled call (:func:`._fused_kernels.cast_bin_flat_views`,
-    ``cast_bin_smooth_views``), each view as :func:`cast_bin_grid` casts it alone: a run
+def cast_bin_views(emb, plans, sequences, spacing, bins, coherent=False, smooth=None,
+                   receiver=None):
+    """Cast, weigh and bin many views with point bins in one compiled call
+    (:func:`._fused_kernels.cast_bin_flat_views`, ``cast_bin_smooth_views``,
+    ``cast_bin_bistatic_views``), each view as :func:`cast_bin_grid` casts it alone: a run
     of many small views (sparse grids) pays the call and its planning once a chunk.
 
     Parameters
@@ -75,6 +76,9 @@ def cast_bin_views(emb, plans, sequences, spacing, bins, coherent=False, smooth=
     smooth : tuple of ((m, 3, 3) numpy.ndarray, float), optional
         Smooth normals, as for :func:`cast_bin_grid` (``bins.stamp`` and ``bins.weight``
         are then unused). None (default): flat normals.
+    receiver : tuple of ((k, 3) array_like, float, bool, (n_faces,) uint8), optional
+        Bistatic views (flat normals), as for :func:`cast_bin_grid` with each view's
+        receiver direction a row. None (default): monostatic.
 
     Returns
     -------
@@ -86,17 +90,27 @@ def cast_bin_views(emb, plans, sequences, spacing, bins, coherent=False, smooth=
     seq = sequences or (np.empty(0, f32),) * 4
     grids = (plans.s.astype(f32), plans.s_at, plans.t.astype(f32), plans.t_at, seq,
              f32(spacing), plans.u.astype(f32), plans.v.astype(f32), (plans.L * w).astype(f32))
-    head, size = _head(emb, coherent)
+    first, size = _head(emb, coherent)
+    lib, b, start = emb.scene.scene.lib, bins, np.asarray(bins.start, np.float64)
     counts = np.zeros((len(w), 2), np.int64)
     columns = int(np.max(np.diff(plans.t_at)))
-    head += (grids, (-w).astype(f32)[:, None, :]) + size + tuple(bins[:4]) + (
-        w, np.asarray(bins.start, np.float64)) + tuple(bins[6:11])
+    head = first + (grids, (-w).astype(f32)[:, None, :]) + size
+    if receiver is not None:
+        wr = np.ascontiguousarray(receiver[0], dtype=np.float64).reshape(-1, 3)
+        half = np.array([(x + y) / np.linalg.norm(x + y) for x, y in zip(w, wr)])
+        coating = (b.face_material, b.params, half.reshape(-1, 3), float(b.area),
+                   bool(b.power), bool(receiver[2]))
+        cast_bin_bistatic_views(*head, b.plane_d, b.face_normals, w, start, b.edges,
+                                b.ignore_back, b.out, b.weight, lib.occluded[lib.width], wr,
+                                float(receiver[1]), b.stamp, coating, receiver[3], counts,
+                                scratch("bistatic", lib.width, columns))
+        return counts
+    head += tuple(b[:4]) + (w, start) + tuple(b[6:11])
     if smooth is not None:
         cast_bin_smooth_views(*head, smooth[0], float(smooth[1]), counts,
-                              scratch("smooth", head[2], columns))
+                              scratch("smooth", lib.width, columns))
     else:
-        cast_bin_flat_views(*head, bins.stamp, bins.weight, counts,
-                            scratch("flat", head[2], columns))
+        cast_bin_flat_views(*head, b.stamp, b.weight, counts, scratch("flat", lib.width, columns))
     return counts
 
 

@@ -1,6 +1,6 @@
 """A run of many small views (grids sparser than their faces) casts each chunk's views in one
-compiled call (meshladar.forward.fused_views.chunk_views: flat or smooth normals, point
-bins, built-in coatings): the grids planned together
+compiled call (meshladar.forward.fused_views.chunk_views: point bins, built-in coatings;
+flat or smooth normals, monostatic, or flat ones and a receiver): the grids planned together
 (meshladar.raytrace.grid.grid_plans, Geometry.extents), each view's offsets drawn from its
 own seed. Every number is the one the view gets alone (cast_bin_grid, a call a view), bit
 for bit, and the embreex backend's (its own caster, weighed in numpy) to round-off."""
@@ -56,8 +56,11 @@ def _run(scene, ladar, batched, monkeypatch, **options):
 @pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # sparse on purpose
 @pytest.mark.parametrize("options", [{}, {"sampling": "regular"},
                                      {"radiometry": "power", "back_faces": "ignore"},
-                                     {"normals": "smooth"}, {"mode": "slice"}],
-                         ids=["stratified", "regular", "power", "smooth", "slice"])
+                                     {"normals": "smooth"}, {"mode": "slice"},
+                                     {"receiver": [0.6, 0.0, 0.8], "radiometry": "power"},
+                                     {"receiver": [0.0, 0.6, 0.8], "back_faces": "ignore"}],
+                         ids=["stratified", "regular", "power", "smooth", "slice",
+                              "bistatic", "bistatic-paper"])
 def test_a_chunk_in_one_call_gives_each_views_own_numbers(options, monkeypatch):
     scene = _scene()
     views = ({"angles_deg": np.linspace(0.0, 360.0, 40, endpoint=False)}
@@ -83,10 +86,11 @@ def test_a_chunk_in_one_call_gives_each_views_own_numbers(options, monkeypatch):
 @pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")
 @pytest.mark.parametrize("options", [{"sampling": "regular"}, {"footprint": True},
                                      {"normals": "smooth", "footprint": True},
-                                     {"receiver": [0.6, 0.0, 0.8]}, {"phong": True}],
-                         ids=["dense", "footprint", "smooth-footprint", "bistatic",
-                              "phong"])
-def test_only_sparse_monostatic_point_bins_go_a_chunk_a_call(options, monkeypatch):
+                                     {"phong": True},
+                                     {"receiver": [0.6, 0.0, 0.8], "phong": True}],
+                         ids=["dense", "footprint", "smooth-footprint", "phong",
+                              "bistatic-phong"])
+def test_only_sparse_point_bins_of_built_in_coatings_go_a_chunk_a_call(options, monkeypatch):
     scene, options = _scene(2), dict(options)
     if options.pop("phong", False):               # a coating without a compiled kernel
         scene = ml.Scene.from_parts(scene.parts, [ml.brdf.Phong(0.3, 0.5, 40.0)] * 2)
