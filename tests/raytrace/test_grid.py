@@ -116,6 +116,34 @@ def test_a_views_extent_over_clusters_is_every_points_extent(compiled_from, monk
                 points, a, pinhole, w, 2.5)
 
 
+def test_a_clusters_cone_bounds_every_point_of_it():
+    """The cone bound a cluster is held to (its points' reach from the centroid and the
+    widest angle of their directions from its axis) is at least every one of its points'
+    (p − o)·a, for clouds a sphere's, a flat disk's, a line's and repeated points', along
+    unit and non-unit directions, from the origin and from a far point."""
+    import trimesh
+
+    from meshladar.meshes import fibonacci_sphere
+    from meshladar.raytrace._support import ClusteredPoints, _cone_bound
+
+    rng = np.random.default_rng(8)
+    sets = [trimesh.creation.icosphere(4).vertices * 3.0 + [40.0, 0.0, -2.0],
+            np.c_[rng.uniform(-1, 1, (3000, 2)), np.zeros(3000)],
+            np.c_[np.linspace(0.0, 1.0, 500), np.zeros(500), np.zeros(500)],
+            np.repeat(rng.normal(size=(20, 3)), 50, axis=0),
+            trimesh.creation.capsule(height=8.0, radius=1.0, count=[40, 40]).vertices]
+    dirs = np.vstack([fibonacci_sphere(300), rng.normal(size=(50, 3)) * 4.0])
+    for points in sets:
+        c = ClusteredPoints(np.asarray(points, np.float64))
+        for o in (np.zeros(3), np.array([-7.0, 3.0, 11.0])):
+            for a in dirs:
+                oa = float((c.cones[0] - o) @ a)
+                la = float(np.linalg.norm(a))
+                for k in range(len(c.radii)):
+                    q = c.points[c.starts[k]:c.starts[k + 1]] - o
+                    assert _cone_bound.py_func(c.cones, k, oa, a, la) >= (q @ a).max()
+
+
 def _python_extent(points, u, origin=(0.0, 0.0, 0.0), w=None, scale=1.0):
     """(least, greatest) of q·u (or (q·u)·scale / (−q·w)), q = p − origin, one point at
     a time in Python floats (q·u summed q₀u₀ + q₁u₁ + q₂u₂, as the engine defines it)."""
