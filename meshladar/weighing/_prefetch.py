@@ -18,10 +18,14 @@ from numba.extending import intrinsic
 
 from ._compiled import njit_loop
 
-__all__ = ["prefetch", "ahead", "AHEAD", "PREFETCH_FROM"]
+__all__ = ["prefetch", "ahead", "AHEAD", "AHEAD_SINGLE", "PREFETCH_FROM"]
 
 #: How many hits ahead the loops prefetch (24 to 64 measured alike at 1.31M faces).
 AHEAD = 32
+#: The same for hits of rays cast one at a time: a sparse grid's few hits a band, each
+#: after a whole cast (2,000 views of 1,444 rays of an 82k sphere, stratified, one
+#: thread, in alternate runs: 0.79-0.80x raw embreex at 8 or 32, 0.80-0.82x at 16).
+AHEAD_SINGLE = 16
 #: Meshes of this many faces or more prefetch (their per-face arrays, ~52 bytes a face,
 #: exceed a 16–32 MiB last-level cache).
 PREFETCH_FROM = 1 << 19
@@ -33,13 +37,15 @@ _NEVER = 1 << 62
 def ahead(face_normals, single=False):                    # pragma: no cover - compiled
     """How many hits ahead a loop over the hits on this mesh (``face_normals``, one row a
     face) prefetches their faces' rows: :data:`AHEAD` from :data:`PREFETCH_FROM` faces on,
-    or at any size where the rays were cast one at a time (``single``: a sparse grid,
-    whose every hit is a new face and whose casts, between two hits, evict the rows:
-    82k faces, 2,000 views of 1,444 rays, flat, one thread: 4 % faster); else a distance
-    past every hit (none). The loops write the test out themselves
+    or :data:`AHEAD_SINGLE` at any size where the rays were cast one at a time
+    (``single``: a sparse grid, whose every hit is a new face and whose casts, between two
+    hits, evict the rows: 82k faces, 2,000 views of 1,444 rays, flat, one thread: 4 %
+    faster); else a distance past every hit (none). The loops write the test out themselves
     (``if i + ahead < n and prim[i + ahead] >= 0: prefetch((a, b), prim[i + ahead])``):
     a helper function holding it, even inlined, made them slower."""
-    return AHEAD if single or face_normals.shape[0] >= PREFETCH_FROM else _NEVER
+    if single:
+        return AHEAD_SINGLE
+    return AHEAD if face_normals.shape[0] >= PREFETCH_FROM else _NEVER
 
 
 @intrinsic
