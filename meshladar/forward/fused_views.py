@@ -1,7 +1,7 @@
 """The mesh job's calls of the packet backend's fused loop (:mod:`meshladar.weighing.fused`):
 one view at a time, its rows split over threads when it is big, or, where the grids are
 sparse (many small views), every view of a chunk in one compiled call, planned together
-(point bins, built-in coatings; monostatic with flat or smooth normals, or bistatic with
+(point bins, compiled coatings; monostatic with flat or smooth normals, or bistatic with
 flat ones).
 
 A view's numbers are the same whichever way it goes: the chunk's grids are planned with the
@@ -84,9 +84,9 @@ def _flat_views(job, scene, views, chunk):
 
 
 def _bistatic_views(job, scene, views, chunk):
-    """:func:`chunk_views` for bistatic views (flat normals, built-in coatings): under the
-    paper's radiometry each view's faces edge-on to its receiver warn first, as they do
-    a view at a time."""
+    """:func:`chunk_views` for bistatic views (flat normals, built-in compiled coatings):
+    under the paper's radiometry each view's faces edge-on to its receiver warn first, as
+    they do a view at a time."""
     p = job.plan
     w_r = p.receivers[np.asarray(views, dtype=np.int64)]
     if not job.weighing.power:

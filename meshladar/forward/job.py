@@ -13,14 +13,14 @@ stages:
   which then calls none of numba's compiled loops;
 * ``flat``: flat normals, monostatic: F·δA⊥ one number per face and view, binned by the
   compiled loop (in the fused cast-weigh-bin loop on a fused backend; grids sparser than
-  their faces with point bins and built-in coatings, a chunk's views in one call:
+  their faces with point bins and compiled coatings, a chunk's views in one call:
   :attr:`MeshJob.batched`);
 * ``smooth``: smooth normals, coatings with a compiled kernel, binned by the compiled loop
   (in the fused cast-weigh-bin loop on a fused backend, the barycentrics kept per band;
   sparse grids with point bins a chunk's views in one call, as ``flat``);
 * ``bistatic``: flat normals, a receiver, a fused backend: per-face bistatic weights and
   occlusion rays cast in the fused loop (sparse grids with point bins and built-in
-  coatings a chunk's views in one call, as ``flat``);
+  compiled coatings a chunk's views in one call, as ``flat``);
 * ``sensor``: a sensor at a finite standoff, flat or smooth normals, compiled coatings;
 * ``resolved``: hits weighed and binned by one to three coordinates (resolved returns).
 """
@@ -94,7 +94,8 @@ class MeshJob:
         (:func:`.fused_views.chunk_views`; default False): sparse grids (not
         :attr:`~meshladar.raytrace.plan.TracePlan.coherent`: small views, where planning
         and calling a view cost as much as casting it), the ``"flat"``, ``"smooth"`` or
-        ``"bistatic"`` stage, point bins, built-in coatings, one thread a view.
+        ``"bistatic"`` stage, point bins, coatings with compiled kernels (SR, Lambertian;
+        bistatic: built-in ones), one thread a view.
     """
 
     plan: TracePlan
