@@ -18,12 +18,13 @@ import numpy as np
 
 from .._executors import thread_pool
 from ..precision import MIN_COS_FACET, RECEIVER_LIFT
-from ..raytrace.grid import grid_plan, grid_plans, kronecker
+from ..raytrace.draws import plans_sequences
+from ..raytrace.grid import grid_plan, grid_plans
 from ..raytrace.views import range_offset
 from ..weighing.faces import check_edge_on_receiver
 from ..weighing.fused import cast_bin_grid, cast_bin_views
 
-__all__ = ["FlatBins", "fused_view", "chunk_views"]
+__all__ = ["FlatBins", "fused_view", "chunk_views", "receiver_args"]
 
 
 class FlatBins(NamedTuple):
@@ -84,16 +85,37 @@ def _flat_views(job, scene, views, chunk):
 
 
 def _bistatic_views(job, scene, views, chunk):
-    """:func:`chunk_views` for bistatic views (flat normals, built-in compiled coatings):
-    under the paper's radiometry each view's faces edge-on to its receiver warn first, as
-    they do a view at a time."""
-    p = job.plan
-    w_r = p.receivers[np.asarray(views, dtype=np.int64)]
-    if not job.weighing.power:
-        for w, x in zip(job.vectors[np.asarray(views, dtype=np.int64)], w_r):
-            check_edge_on_receiver(p.geo, w, x, p.ignore_back)
+    """:func:`chunk_views` for bistatic views (flat normals, built-in compiled coatings)."""
+    at = np.asarray(views, dtype=np.int64)
     return chunk_views(job, scene, views, chunk,
-                       receiver=(w_r, RECEIVER_LIFT * p.geo.radius, True, p.geo.lone))
+                       receiver=receiver_args(job, job.vectors[at], job.plan.receivers[at]))
+
+
+def receiver_args(job, w, w_r):
+    """The compiled loops' ``receiver`` for bistatic views w (3,) or (k, 3) toward w_r:
+    (w_r, the occlusion rays' lift, whether each face's weight is made at its first hit
+    (built-in coatings), the lone faces); under the paper's radiometry, with weights made
+    at first hits, each view's faces edge-on to its receiver warn first (as numpy's
+    per-face weights do).
+
+    Parameters
+    ----------
+    job : meshladar.forward.job.MeshJob
+        The run's job.
+    w, w_r : (3,) or (k, 3) numpy.ndarray
+        The views' directions and their receivers'.
+
+    Returns
+    -------
+    tuple
+        As :func:`meshladar.weighing.fused.cast_bin_grid` and
+        :func:`meshladar.weighing.fused.cast_bin_views` take ``receiver``.
+    """
+    p, built_in = job.plan, job.weighing.compiled_bistatic
+    if built_in and not job.weighing.power:
+        for a, b in zip(np.reshape(w, (-1, 3)), np.reshape(w_r, (-1, 3))):
+            check_edge_on_receiver(p.geo, a, b, p.ignore_back)
+    return w_r, RECEIVER_LIFT * p.geo.radius, built_in, p.geo.lone
 
 
 def _smooth_views(job, scene, views, chunk):
@@ -136,7 +158,7 @@ def chunk_views(job, scene, views, chunk, smooth=None, receiver=None):
     plans = grid_plans(p.geo, w, p.mode, p.spacing, p.z0_shifted)
     sequences = None
     if p.seed is not None and p.mode == "3d":
-        sequences = _sequences(plans, views, p.seed)
+        sequences = plans_sequences(plans, views, p.seed)
     w_r = [None] * len(w) if receiver is None else receiver[0]
     starts = np.array([range_offset(p.geo.center, x, y) for x, y in zip(w, w_r)])
     bins = FlatBins(p.geo.plane_d, p.geo.face_normals, p.geo.material, chunk.params, w,
@@ -144,22 +166,6 @@ def chunk_views(job, scene, views, chunk, smooth=None, receiver=None):
                     chunk.stamp, chunk.weight, 0, None)
     return cast_bin_views(scene, plans, sequences, p.spacing, bins, p.coherent, smooth,
                           receiver)[:, ::-1]
-
-
-def _sequences(plans, views, seed):
-    """The views' stratified sequences, packed: view i's ξ (its columns) then η (its rows)
-    drawn from ``np.random.default_rng([seed, i])``, as
-    :func:`meshladar.raytrace.grid.stratified_sequences` draws them."""
-    xi, eta = np.empty(plans.s.size), np.empty(plans.t.size)
-    for j, i in enumerate(views):
-        rng = np.random.default_rng([seed, int(i)])
-        xi[plans.s_at[j]:plans.s_at[j + 1]] = rng.uniform(0.0, 1.0, plans.s_at[j + 1]
-                                                          - plans.s_at[j])
-        eta[plans.t_at[j]:plans.t_at[j + 1]] = rng.uniform(0.0, 1.0, plans.t_at[j + 1]
-                                                           - plans.t_at[j])
-    ku = kronecker(int(np.max(np.diff(plans.t_at))))
-    kv = kronecker(int(np.max(np.diff(plans.s_at))))
-    return xi.astype(np.float32), ku, kv, eta.astype(np.float32)
 
 
 def _rows_on_threads(scene, grid, w, spacing, bins, row_jobs, how=(None, None, True)):

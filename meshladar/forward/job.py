@@ -32,7 +32,7 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
-from ..precision import MIN_COS_FACET, RECEIVER_LIFT
+from ..precision import MIN_COS_FACET
 from ..raytrace.backends import backend as get_backend
 from ..raytrace.embree import embree_scene
 from ..raytrace.grid import ray_grid
@@ -41,12 +41,13 @@ from ..raytrace.plan import TracePlan, View
 from ..raytrace.views import range_offset, trace_view
 from ..weighing import bin_one as _bin_one
 from ..brdf import material_table
-from ..weighing.faces import (check_edge_on_receiver, face_bistatic_weights, footprint_args,
+from ..weighing.faces import (face_bistatic_weights, footprint_args,
                               face_weights)
 from ..weighing.record import Weighing
 from ..weighing._kernels import bin_flat_hits, bin_smooth_hits
 from ..weighing.resolved import bin_resolved
-from .fused_views import FlatBins, _bistatic_views, _flat_views, _smooth_views, fused_view
+from .fused_views import (FlatBins, _bistatic_views, _flat_views, _smooth_views, fused_view,
+                          receiver_args)
 from ..weighing.sensor_view import bin_sensor_view
 
 __all__ = ["MeshJob", "plan_job", "mesh_job", "sensor_offset", "QUICK_RAYS"]
@@ -245,9 +246,7 @@ def _flat_stage(job, scene, view, chunk):
             face_bistatic_weights(p.geo, wg.materials, view.w, view.w_r, p.area,
                                   chunk.weight, wg.power, p.ignore_back)
             chunk.stamp[:] = view.slot + 1
-        elif not wg.power:                           # each face's first hit weighs it
-            check_edge_on_receiver(p.geo, view.w, view.w_r, p.ignore_back)
-        receiver = (view.w_r, RECEIVER_LIFT * p.geo.radius, wg.compiled_bistatic, p.geo.lone)
+        receiver = receiver_args(job, view.w, view.w_r)
     elif not wg.compiled:
         face_weights(p.geo, wg.materials, view.w, p.area, chunk.weight, wg.power)
         chunk.stamp[:] = view.slot + 1               # every face's weight is this view's

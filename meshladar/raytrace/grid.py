@@ -51,16 +51,31 @@ def frame(w):
 
     u = z × w / |z × w| and v = w × u, each cross product written out as ``np.cross``
     computes it (a product, a product, a difference: the same bits, signed zeros
-    included) without its array overhead (tens of µs a call, paid per view)."""
+    included) and |z × w| as the root of the sum of squares in order, so the frame is the
+    same on every CPU (a BLAS dot's order and fused multiplies are the CPU's) and
+    :func:`frames` gives the same bits for many views at once."""
     w0, w1, w2 = (float(x) for x in w)
-    u = np.array([0.0 * w2 - 1.0 * w1, 1.0 * w0 - 0.0 * w2, 0.0 * w1 - 0.0 * w0])
-    n = np.linalg.norm(u)
+    a, b, c = 0.0 * w2 - 1.0 * w1, 1.0 * w0 - 0.0 * w2, 0.0 * w1 - 0.0 * w0
+    n = math.sqrt(a * a + b * b + c * c)
     if n < PARALLEL_SLACK:                                         # looking along ±z
-        u = np.array([1.0, 0.0, 0.0])
+        a, b, c = 1.0, 0.0, 0.0
     else:
-        u = u / n
-    u0, u1, u2 = (float(x) for x in u)
-    return u, np.array([w1 * u2 - w2 * u1, w2 * u0 - w0 * u2, w0 * u1 - w1 * u0])
+        a, b, c = a / n, b / n, c / n
+    return np.array([a, b, c]), np.array([w1 * c - w2 * b, w2 * a - w0 * c, w0 * b - w1 * a])
+
+
+def frames(vectors):
+    """:func:`frame` of each row of ``vectors`` (k, 3): (u, v), each (k, 3), the same
+    operations element by element (the same bits)."""
+    w0, w1, w2 = np.asarray(vectors, dtype=float).reshape(-1, 3).T
+    a, b, c = 0.0 * w2 - 1.0 * w1, 1.0 * w0 - 0.0 * w2, 0.0 * w1 - 0.0 * w0
+    n = np.sqrt(a * a + b * b + c * c)
+    along = n < PARALLEL_SLACK                                     # looking along ±z
+    n[along] = 1.0
+    a, b, c = np.where(along, 1.0, a / n), np.where(along, 0.0, b / n), np.where(along, 0.0,
+                                                                                  c / n)
+    return (np.stack([a, b, c], axis=-1),
+            np.stack([w1 * c - w2 * b, w2 * a - w0 * c, w0 * b - w1 * a], axis=-1))
 
 
 class GridPlan(NamedTuple):
@@ -133,12 +148,10 @@ class GridPlans(NamedTuple):
 
 def grid_plans(geo, vectors, mode, spacing, z0_shifted):
     """The regular grids of many views (k, 3) at once, the same numbers as :func:`grid_plan`
-    gives each (with ``rng`` None): the frames view by view, every extent in one compiled
+    gives each (with ``rng`` None): the frames (:func:`frames`), every extent in one compiled
     pass (:meth:`meshladar.raytrace.embree.Geometry.extents`) and the cell centres in numpy
     over all views (a run of many small views plans a chunk of them in one go)."""
-    frames = [frame(w) for w in vectors]
-    u = np.array([f[0] for f in frames]).reshape(-1, 3)
-    v = np.array([f[1] for f in frames]).reshape(-1, 3)
+    u, v = frames(vectors)
     L = (1.0 + _ORIGIN_MARGIN) * geo.radius + spacing
     s, s_at = _centres(geo.extents(u), spacing)
     if mode == "slice":
@@ -303,10 +316,10 @@ def _largest_grid(geo, vectors, mode, spacing, limit=None):
         return bound
     largest = 0.0
     for start in range(0, len(vectors), 4096):        # the views' frames a block at a time
-        frames = [frame(w) for w in vectors[start:start + 4096]]
+        axes = frames(vectors[start:start + 4096])
         n = 1.0
         for axis in range(2 if mode == "3d" else 1):   # extents along u, and v in 3-D
-            lo, hi = point_ranges(geo.support, np.array([f[axis] for f in frames]))
+            lo, hi = point_ranges(geo.support, axes[axis])
             n = n * np.ceil((hi - lo + 2 * spacing) / spacing)
         largest = max(largest, float(np.max(n)))
     return largest

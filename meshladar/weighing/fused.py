@@ -47,6 +47,16 @@ def _head(emb, coherent):
             (np.float32(emb.inverse), float(emb.scale)))
 
 
+def _coating(bins, w, wr, built_in):
+    """The bistatic loops' ``coating``: (face materials, SR table, the half vector
+    (w + w_r)/|w + w_r| of each view, a row each for (k, 3) ``w`` and ``wr``, area, power,
+    built in)."""
+    half = [(x + y) / np.linalg.norm(x + y) for x, y in zip(np.reshape(w, (-1, 3)),
+                                                             np.reshape(wr, (-1, 3)))]
+    return (bins.face_material, bins.params, np.reshape(half, np.shape(w)), float(bins.area),
+            bool(bins.power), bool(built_in))
+
+
 def cast_bin_views(emb, plans, sequences, spacing, bins, coherent=False, smooth=None,
                    receiver=None):
     """Cast, weigh and bin many views with point bins in one compiled call
@@ -97,9 +107,7 @@ def cast_bin_views(emb, plans, sequences, spacing, bins, coherent=False, smooth=
     head = first + (grids, (-w).astype(f32)[:, None, :]) + size
     if receiver is not None:
         wr = np.ascontiguousarray(receiver[0], dtype=np.float64).reshape(-1, 3)
-        half = np.array([(x + y) / np.linalg.norm(x + y) for x, y in zip(w, wr)])
-        coating = (b.face_material, b.params, half.reshape(-1, 3), float(b.area),
-                   bool(b.power), bool(receiver[2]))
+        coating = _coating(b, w, wr, receiver[2])
         cast_bin_bistatic_views(*head, b.plane_d, b.face_normals, w, start, b.edges,
                                 b.ignore_back, b.out, b.weight, lib.occluded[lib.width], wr,
                                 float(receiver[1]), b.stamp, coating, receiver[3], counts,
@@ -184,8 +192,7 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
     b = bins
     if receiver is not None:
         wr = np.asarray(receiver[0], np.float64)
-        coating = (b.face_material, b.params, (w + wr) / np.linalg.norm(w + wr),
-                   float(b.area), bool(b.power), bool(receiver[2]))
+        coating = _coating(b, w, wr, receiver[2])
         return cast_bin_bistatic(*head, b.plane_d, b.face_normals, b.w, b.start, b.edges,
                                  b.ignore_back, b.out, b.weight, lib.occluded[lib.width],
                                  wr, float(receiver[1]), b.stamp, b.tag, coating, receiver[3],

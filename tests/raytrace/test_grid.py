@@ -1,5 +1,6 @@
-"""Ray grids (meshladar.raytrace.grid): the view's frame against numpy's cross products, and
-the stratified offsets' 1-D form against their definition."""
+"""Ray grids (meshladar.raytrace.grid): the view's frame against numpy's cross products (one
+view and many), the stratified offsets' 1-D form against their definition, and many
+views' shifts against numpy's own generators."""
 
 from __future__ import annotations
 
@@ -7,13 +8,14 @@ import numpy as np
 import pytest
 
 from meshladar.precision import PARALLEL_SLACK
-from meshladar.raytrace.grid import stratified_sequences, frame, stratified_offsets
+from meshladar.raytrace.draws import entropy_words, view_uniforms
+from meshladar.raytrace.grid import (stratified_sequences, frame, frames, stratified_offsets)
 
 
 def _numpy_frame(w):
     z = np.array([0.0, 0.0, 1.0])
     u = np.cross(z, w)
-    n = np.linalg.norm(u)
+    n = np.sqrt(np.add.reduce(u * u))          # the squares summed in order (not a BLAS dot)
     u = np.array([1.0, 0.0, 0.0]) if n < PARALLEL_SLACK else u / n
     return u, np.cross(w, u)
 
@@ -32,6 +34,29 @@ def test_the_frame_is_numpys_cross_products_bit_for_bit():
             np.testing.assert_array_equal(np.signbit(got), np.signbit(want))
     u, v = frame(np.array([0.0, 0.0, 1.0]))
     np.testing.assert_array_equal(u, [1.0, 0.0, 0.0])
+    many = np.vstack([w, axes])                  # and many views at once: the same bits
+    u, v = frames(many)
+    for d, a, b in zip(many, u, v):
+        for got, want in zip((a, b), frame(d)):
+            np.testing.assert_array_equal(got, want)
+            np.testing.assert_array_equal(np.signbit(got), np.signbit(want))
+
+
+@pytest.mark.parametrize("seed", [0, 7, 2**32 - 1, 2**32, 2**64 + 5, [3, 2**33], [[1, 2], 0]])
+def test_many_views_draw_what_numpys_generators_draw(seed):
+    """view_uniforms (the seed sequence and PCG64 written out) gives each view exactly
+    ``default_rng([seed, i]).uniform(0, 1, n)`` for its column count n, then for its row
+    count, bit for bit: seeds of one, two and three 32-bit words, lists and nested lists,
+    view indices past 2³², empty draws."""
+    views = np.array([0, 1, 2, 5, 2**32 - 1, 2**32, 2**40, 10**6], np.int64)
+    ns, nt = np.array([3, 0, 40, 1, 7, 2, 5, 9]), np.array([2, 5, 0, 33, 1, 2, 3, 4])
+    s_at, t_at = np.r_[0, np.cumsum(ns)], np.r_[0, np.cumsum(nt)]
+    xi, eta = np.full(s_at[-1], np.nan), np.full(t_at[-1], np.nan)
+    view_uniforms(entropy_words(seed), views, s_at, t_at, xi, eta)
+    for j, i in enumerate(views):
+        rng = np.random.default_rng([seed, int(i)])
+        np.testing.assert_array_equal(xi[s_at[j]:s_at[j + 1]], rng.uniform(0, 1, ns[j]))
+        np.testing.assert_array_equal(eta[t_at[j]:t_at[j + 1]], rng.uniform(0, 1, nt[j]))
 
 
 def test_stratified_offsets_are_one_per_cell_from_row_and_column_sequences():
