@@ -1,8 +1,8 @@
 """The mesh job's calls of the packet backend's fused loop (:mod:`meshladar.weighing.fused`):
 one view at a time, its rows split over threads when it is big, or, where the grids are
 sparse (many small views), every view of a chunk in one compiled call, planned together
-(point bins, compiled coatings; monostatic with flat or smooth normals, or bistatic with
-flat ones).
+(compiled coatings; monostatic with flat or smooth normals, point or footprint bins, or
+bistatic with flat ones).
 
 A view's numbers are the same whichever way it goes: the chunk's grids are planned with the
 operations of :func:`meshladar.raytrace.grid.grid_plan`, its stratified offsets drawn view
@@ -125,11 +125,14 @@ def _smooth_views(job, scene, views, chunk):
 
 
 def chunk_views(job, scene, views, chunk, smooth=None, receiver=None):
-    """A chunk's views with point bins in one compiled call
+    """A chunk's views in one compiled call
     (:func:`meshladar.weighing.fused.cast_bin_views`), monostatic with flat or ``smooth``
-    normals, or bistatic (``receiver``) with flat ones: the grids planned together
+    normals (point or footprint bins), or bistatic (``receiver``) with flat ones (point
+    bins): the grids planned together
     (:func:`meshladar.raytrace.grid.grid_plans`), each view's stratified offsets drawn
-    from its own seed as :func:`meshladar.raytrace.grid.stratified_sequences` draws them.
+    from its own seed as :func:`meshladar.raytrace.grid.stratified_sequences` draws them
+    (:func:`meshladar.raytrace.draws.plans_sequences`), each view's footprint rows made
+    as :func:`meshladar.weighing.faces.footprint_args` makes them.
     For sparse grids, whose views are small (:attr:`meshladar.forward.job.MeshJob.batched`).
 
     Parameters
@@ -141,7 +144,8 @@ def chunk_views(job, scene, views, chunk, smooth=None, receiver=None):
     views : (k,) array_like of int
         The chunk's view indices.
     chunk : meshladar.forward.job.Chunk
-        The chunk's bins (k, n_bins) and weight cache; view j is tagged j + 1.
+        The chunk's bins (k, n_bins), weight cache and footprint rows; view j is tagged
+        j + 1.
     smooth : tuple of ((m, 3, 3) numpy.ndarray, float), optional
         Smooth normals, as :func:`meshladar.weighing.fused.cast_bin_views` takes them.
     receiver : tuple, optional
@@ -161,9 +165,12 @@ def chunk_views(job, scene, views, chunk, smooth=None, receiver=None):
         sequences = plans_sequences(plans, views, p.seed)
     w_r = [None] * len(w) if receiver is None else receiver[0]
     starts = np.array([range_offset(p.geo.center, x, y) for x, y in zip(w, w_r)])
+    fp = None if chunk.footprints is None else (
+        chunk.footprints + (p.geo.shifted, p.geo.faces, float(p.spacing), p.mode == "3d",
+                            p.dense))
     bins = FlatBins(p.geo.plane_d, p.geo.face_normals, p.geo.material, chunk.params, w,
                     starts, wg.edges[0], p.area, wg.power, p.ignore_back, chunk.values,
-                    chunk.stamp, chunk.weight, 0, None)
+                    chunk.stamp, chunk.weight, 0, fp)
     return cast_bin_views(scene, plans, sequences, p.spacing, bins, p.coherent, smooth,
                           receiver)[:, ::-1]
 

@@ -13,13 +13,13 @@ stages:
   which then calls none of numba's compiled loops;
 * ``flat``: flat normals, monostatic: F·δA⊥ one number per face and view, binned by the
   compiled loop (in the fused cast-weigh-bin loop on a fused backend; grids sparser than
-  their faces with point bins and compiled coatings, a chunk's views in one call:
+  their faces with compiled coatings, a chunk's views in one call:
   :attr:`MeshJob.batched`);
 * ``smooth``: smooth normals, coatings with a compiled kernel, binned by the compiled loop
   (in the fused cast-weigh-bin loop on a fused backend, the barycentrics kept per band;
-  sparse grids with point bins a chunk's views in one call, as ``flat``);
+  sparse grids a chunk's views in one call, as ``flat``);
 * ``bistatic``: flat normals, a receiver, a fused backend: per-face bistatic weights and
-  occlusion rays cast in the fused loop (sparse grids with point bins and built-in
+  occlusion rays cast in the fused loop (sparse grids with built-in
   compiled coatings a chunk's views in one call, as ``flat``);
 * ``sensor``: a sensor at a finite standoff, flat or smooth normals, compiled coatings;
 * ``resolved``: hits weighed and binned by one to three coordinates (resolved returns).
@@ -95,8 +95,8 @@ class MeshJob:
         (:func:`.fused_views.chunk_views`; default False): sparse grids (not
         :attr:`~meshladar.raytrace.plan.TracePlan.coherent`: small views, where planning
         and calling a view cost as much as casting it), the ``"flat"``, ``"smooth"`` or
-        ``"bistatic"`` stage, point bins, coatings with compiled kernels (SR, Lambertian;
-        bistatic: built-in ones), one thread a view.
+        ``"bistatic"`` stage, coatings with compiled kernels (SR, Lambertian; bistatic:
+        built-in ones), point or footprint bins, one thread a view.
     """
 
     plan: TracePlan
@@ -335,7 +335,7 @@ def plan_job(plan, weighing, vectors, row_jobs=1) -> MeshJob:
     """
     stage, fused = STAGES[_stage_name(plan, weighing)], _fused(plan)
     batched = (stage.views is not None and fused and not plan.coherent and row_jobs == 1
-               and weighing.compiled and not weighing.footprint
+               and weighing.compiled
                and (plan.receivers is None or weighing.compiled_bistatic))
     return MeshJob(plan=plan, weighing=weighing,
                    vectors=np.asarray(vectors, dtype=np.float64), stage=stage,

@@ -12,7 +12,8 @@ import numpy as np
 
 from ..raytrace.embree4_kernels import init_args, load_packet, tile_shape
 from ..raytrace.embree4_ctypes import ARGS_OFF, GEOMID, PRIMID, TFAR, U, V, VALID_OFF
-from ._kernels import bin_bistatic_hits, bin_flat_hits, bin_smooth_hits, face_hit
+from ._kernels import (bin_bistatic_hits, bin_flat_hits, bin_smooth_hits, face_hit,
+                       view_footprint)
 from ._sensor_kernels import bin_sensor_hits
 from ._compiled import njit_loop
 from ._prefetch import ahead as _ahead
@@ -208,30 +209,33 @@ def _view_grid(grids, j):
 @njit_loop()
 def cast_bin_flat_views(query, scene, w, flags, grids, d, inv_scale, scale, plane_d,
                         face_normals, face_material, params, wv, start, edges, area, power,
-                        ignore_back, out, stamp, weight, counts, scratch):
-    """Many monostatic views with flat normals and point bins in one call, view j as
+                        ignore_back, out, stamp, weight, fp, counts, scratch):
+    """Many monostatic views with flat normals in one call, view j as
     :func:`cast_bin_flat` casts it alone (a run of many small views pays the call once a
     chunk): its grid j of ``grids`` (:func:`_view_grid`), the direction ``d[j]`` (1, 3),
-    ``wv[j]``, ``start[j]``, its bins ``out[j]`` and tag j + 1 in the shared weight cache.
+    ``wv[j]``, ``start[j]``, its bins ``out[j]`` and tag j + 1 in the shared weight cache;
+    binned at a point (``fp`` None) or over footprints (:func:`._kernels.view_footprint`).
     Fills ``counts[j]`` with (back-face hits, rays cast)."""
     for j in range(grids[1].shape[0] - 1):
+        f = view_footprint(fp, j, wv, face_normals)
         counts[j, 0], counts[j, 1] = cast_bin_flat(
             query, scene, w, flags, _view_grid(grids, j), d[j], inv_scale, scale, plane_d,
             face_normals, face_material, params, wv[j], start[j], edges, area, power,
-            ignore_back, out[j], stamp, weight, j + 1, None, scratch)
+            ignore_back, out[j], stamp, weight, j + 1, f, scratch)
 
 
 @njit_loop()
 def cast_bin_smooth_views(query, scene, w, flags, grids, d, inv_scale, scale, plane_d,
                           face_normals, face_material, params, wv, start, edges, area, power,
-                          ignore_back, out, corner, min_cos_facet, counts, scratch):
+                          ignore_back, out, fp, corner, min_cos_facet, counts, scratch):
     """:func:`cast_bin_flat_views` with smooth normals: view j as :func:`cast_bin_smooth`
     casts it alone. Fills ``counts[j]`` with (back-face hits, rays cast)."""
     for j in range(grids[1].shape[0] - 1):
+        f = view_footprint(fp, j, wv, face_normals)
         counts[j, 0], counts[j, 1] = cast_bin_smooth(
             query, scene, w, flags, _view_grid(grids, j), d[j], inv_scale, scale, plane_d,
             face_normals, face_material, params, wv[j], start[j], edges, area, power,
-            ignore_back, out[j], None, corner, min_cos_facet, scratch)
+            ignore_back, out[j], f, corner, min_cos_facet, scratch)
 
 
 @njit_loop()

@@ -59,7 +59,7 @@ def _coating(bins, w, wr, built_in):
 
 def cast_bin_views(emb, plans, sequences, spacing, bins, coherent=False, smooth=None,
                    receiver=None):
-    """Cast, weigh and bin many views with point bins in one compiled call
+    """Cast, weigh and bin many views in one compiled call
     (:func:`._fused_kernels.cast_bin_flat_views`, ``cast_bin_smooth_views``,
     ``cast_bin_bistatic_views``), each view as :func:`cast_bin_grid` casts it alone: a run
     of many small views (sparse grids) pays the call and its planning once a chunk.
@@ -80,7 +80,10 @@ def cast_bin_views(emb, plans, sequences, spacing, bins, coherent=False, smooth=
     bins : FlatBins
         As for :func:`cast_bin_grid`, with ``w`` the views' directions (k, 3), ``start``
         their range offsets (k,) and ``out`` their bins (k, n_bins); view j is tagged
-        j + 1 in the weight cache (``tag`` is unused) and ``footprint`` must be None.
+        j + 1 in the weight cache (``tag`` is unused). ``footprint``: None (point bins),
+        or for footprint bins (rows, stamps, vertices, faces, spacing, 3-D, dense), whose
+        view j is :func:`meshladar.weighing.faces.footprint_args`' tuple for it (its rows
+        made at their faces' first hits under tag j + 1; a dense grid's every row first).
     coherent : bool
         As for :func:`cast_bin_grid` (default False: the sparse grids this is for).
     smooth : tuple of ((m, 3, 3) numpy.ndarray, float), optional
@@ -114,11 +117,13 @@ def cast_bin_views(emb, plans, sequences, spacing, bins, coherent=False, smooth=
                                 scratch("bistatic", lib.width, columns))
         return counts
     head += tuple(b[:4]) + (w, start) + tuple(b[6:11])
+    fp = None if b.footprint is None else b.footprint[:4] + (plans.u, plans.v) + b.footprint[4:]
     if smooth is not None:
-        cast_bin_smooth_views(*head, smooth[0], float(smooth[1]), counts,
+        cast_bin_smooth_views(*head, fp, smooth[0], float(smooth[1]), counts,
                               scratch("smooth", lib.width, columns))
     else:
-        cast_bin_flat_views(*head, b.stamp, b.weight, counts, scratch("flat", lib.width, columns))
+        cast_bin_flat_views(*head, b.stamp, b.weight, fp, counts,
+                            scratch("flat", lib.width, columns))
     return counts
 
 

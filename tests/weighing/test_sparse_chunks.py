@@ -1,6 +1,7 @@
 """A run of many small views (grids sparser than their faces) casts each chunk's views in one
-compiled call (meshladar.forward.fused_views.chunk_views: point bins, built-in coatings;
-flat or smooth normals, monostatic, or flat ones and a receiver): the grids planned together
+compiled call (meshladar.forward.fused_views.chunk_views: built-in coatings; flat or smooth
+normals, monostatic, point or footprint bins, or flat ones, point bins and a receiver): the
+grids planned together
 (meshladar.raytrace.grid.grid_plans, Geometry.extents), each view's offsets drawn from its
 own seed. Every number is the one the view gets alone (cast_bin_grid, a call a view), bit
 for bit, and the embreex backend's (its own caster, weighed in numpy) to round-off."""
@@ -58,17 +59,25 @@ def _run(scene, ladar, batched, monkeypatch, **options):
                                      {"radiometry": "power", "back_faces": "ignore"},
                                      {"normals": "smooth"}, {"mode": "slice"},
                                      {"receiver": [0.6, 0.0, 0.8], "radiometry": "power"},
-                                     {"receiver": [0.0, 0.6, 0.8], "back_faces": "ignore"}],
+                                     {"receiver": [0.0, 0.6, 0.8], "back_faces": "ignore"},
+                                     {"footprint": True}, {"footprint": True, "per_face": 1.3},
+                                     {"normals": "smooth", "footprint": True},
+                                     {"mode": "slice", "footprint": True}],
                          ids=["stratified", "regular", "power", "smooth", "slice",
-                              "bistatic", "bistatic-paper"])
+                              "bistatic", "bistatic-paper", "footprint", "footprint-dense",
+                              "smooth-footprint", "slice-footprint"])
 def test_a_chunk_in_one_call_gives_each_views_own_numbers(options, monkeypatch):
-    scene = _scene()
+    """Footprint bins too, their rows made at first hits, or every row first where the grid
+    is dense (1.3 rays a face) though sparser than coherent packets need (5,440 faces:
+    128 / √faces = 1.7)."""
+    scene, options = _scene(), dict(options)
     views = ({"angles_deg": np.linspace(0.0, 360.0, 40, endpoint=False)}
              if options.get("mode") == "slice" else
              {"view_vectors": np.vstack([ml.meshes.fibonacci_sphere(38),
                                          [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]]])})
     ladar = ml.Ladar.covering(scene, n_bins=64, **views)
-    spacing = _spacing(scene, 0.1 if options.get("mode") != "slice" else 0.05)
+    spacing = _spacing(scene, options.pop("per_face", 0.1 if options.get("mode") != "slice"
+                                          else 0.05))
     together, planned = _run(scene, ladar, True, monkeypatch, ray_spacing=spacing, **options)
     assert planned == [True]                                  # sparse: a chunk a call
     alone, _ = _run(scene, ladar, False, monkeypatch, ray_spacing=spacing, **options)
@@ -84,13 +93,12 @@ def test_a_chunk_in_one_call_gives_each_views_own_numbers(options, monkeypatch):
 
 
 @pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")
-@pytest.mark.parametrize("options", [{"sampling": "regular"}, {"footprint": True},
-                                     {"normals": "smooth", "footprint": True},
+@pytest.mark.parametrize("options", [{"sampling": "regular"},
+                                     {"sampling": "regular", "footprint": True},
                                      {"phong": True},
                                      {"receiver": [0.6, 0.0, 0.8], "phong": True}],
-                         ids=["dense", "footprint", "smooth-footprint", "phong",
-                              "bistatic-phong"])
-def test_only_sparse_point_bins_of_built_in_coatings_go_a_chunk_a_call(options, monkeypatch):
+                         ids=["dense", "dense-footprint", "phong", "bistatic-phong"])
+def test_only_sparse_grids_of_built_in_coatings_go_a_chunk_a_call(options, monkeypatch):
     scene, options = _scene(2), dict(options)
     if options.pop("phong", False):               # a coating without a compiled kernel
         scene = ml.Scene.from_parts(scene.parts, [ml.brdf.Phong(0.3, 0.5, 40.0)] * 2)
