@@ -76,9 +76,16 @@ def entropy_words(value):
     uint64 numpy.ndarray
         Each int's 32-bit words from the least significant ([0] for zero), a sequence's
         concatenated in order, as ``numpy.random.SeedSequence`` assembles its entropy.
+
+    Raises
+    ------
+    ValueError
+        For a negative int (numpy refuses them too).
     """
     if isinstance(value, (int, np.integer)):
         n, words = int(value), []
+        if n < 0:
+            raise ValueError(f"seed: entropy must be non-negative integers; got {n}")
         while True:
             words.append(n & 0xFFFFFFFF)
             n >>= 32

@@ -28,7 +28,7 @@ _NO_ROWS = np.empty((0, 4))
 _NO_STAMPS = np.empty(0, np.int64)
 
 __all__ = ["bin_flat_hits", "bin_bistatic_hits", "bin_smooth_hits",
-           "face_hit", "footprint_row", "footprint_rows", "edge_on_receiver"]
+           "face_hit", "footprint_row", "footprint_rows", "view_footprint", "edge_on_receiver"]
 
 
 @njit_loop()

@@ -27,7 +27,9 @@ def test_the_frame_is_numpys_cross_products_bit_for_bit():
     w = rng.normal(size=(20_000, 3))
     w /= np.linalg.norm(w, axis=1)[:, None]
     axes = [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0], [0.0, -1.0, 0.0],
-            [-0.0, 0.0, 1.0], [1e-17, 0.0, 1.0]]
+            [-0.0, 0.0, 1.0], [1e-17, 0.0, 1.0], [PARALLEL_SLACK, 0.0, 1.0],
+            [0.0, -PARALLEL_SLACK * (1 - 2**-52), 1.0], [-0.0, -0.0, -1.0],
+            [3.0, -4.0, 12.0], [1e-200, 1e-200, 1.0], [5e-324, 0.0, 1.0]]
     for d in np.vstack([w, axes]):
         for got, want in zip(frame(d), _numpy_frame(d)):
             np.testing.assert_array_equal(got, want)
@@ -36,6 +38,7 @@ def test_the_frame_is_numpys_cross_products_bit_for_bit():
     np.testing.assert_array_equal(u, [1.0, 0.0, 0.0])
     many = np.vstack([w, axes])                  # and many views at once: the same bits
     u, v = frames(many)
+    assert np.array_equal(frames([[0, 3, 4]])[0][0], frame(np.array([0, 3, 4]))[0])  # ints
     for d, a, b in zip(many, u, v):
         for got, want in zip((a, b), frame(d)):
             np.testing.assert_array_equal(got, want)
