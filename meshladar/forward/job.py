@@ -216,7 +216,7 @@ def _cast(job, scene, view):
     grid = ray_grid(p.geo, view.w, p.mode, p.spacing, p.z0_shifted, view.rng)
     return grid.origins, scene.run(grid.origins, np.ascontiguousarray((-view.w)[None, :],
                                                                       dtype=np.float32),
-                                   output=1, columns=grid.columns)
+                                   output=1, columns=grid.columns, coherent=p.coherent)
 
 
 def _smooth_stage(job, scene, view, chunk):

@@ -210,10 +210,14 @@ class EmbreeScene:
         as built (shifted coordinates), cast at unit size; returns the back-face hits."""
         return self.scene.cast_bin(origins, direction, self.inverse, self.scale, bins)
 
-    def run(self, origins, directions, columns=0, **kwargs):
+    def run(self, origins, directions, columns=0, coherent=True, **kwargs):
         """The backend's ``run`` at unit size; ``columns`` (the rows' length of a grid of
-        rays) lets the packet backend cast it in tiles, and is dropped for the others."""
-        if self.fused and columns:
+        rays) lets the packet backend cast it in tiles, and ``coherent`` False (a grid
+        sparser than its faces: :attr:`meshladar.raytrace.plan.TracePlan.coherent`) one ray
+        at a time; both are dropped for the other backends."""
+        if self.fused and not coherent:
+            kwargs["single"] = True
+        elif self.fused and columns:
             kwargs["columns"] = columns
         if self.scale != 1.0:
             origins = origins * self.inverse

@@ -28,7 +28,8 @@ from .embree4_ctypes import (EmbreeLib, RTC_BUFFER_TYPE_INDEX, RTC_BUFFER_TYPE_V
                              query_flags)
 # the compiled packet loops, importable from here as before (the fused loop reads the
 # building blocks workspace, init_args and load_packet)
-from .embree4_kernels import cast_grid, init_args, load_packet, occluded_grid, workspace
+from .embree4_kernels import (cast_grid, cast_single, init_args, load_packet, occluded_grid,
+                              workspace)
 
 __all__ = ["library", "available", "PacketGeometry", "cast_grid", "occluded_grid", "EmbreeLib",
            "library_candidates", "RTC_RAY_QUERY_FLAG_COHERENT", "RTC_RAY_QUERY_FLAG_INCOHERENT"]
@@ -297,7 +298,7 @@ class PacketGeometry:
         return self._live()
 
     def cast_grid(self, origins, direction, *, width=None, coherent=True, tmax=np.inf,
-                  barycentrics=False, columns=0):
+                  barycentrics=False, columns=0, single=False):
         """First hits of rays from ``origins`` (n, 3) all along ``direction`` (3,) (or each
         along its own, (n, 3): coherent when neighbours are nearly parallel):
         ``prim`` (int32, -1 on a miss), ``tfar`` (float32, inf on a miss; distances in
@@ -328,6 +329,11 @@ class PacketGeometry:
             in rows of ``columns`` rays (n a multiple of it), and each packet is a tile of
             it (4 × 4 rays at width 16, 2 × 4 at 8, 2 × 2 at 4): the same hits, found
             faster, as a tile's rays share their path through the BVH.
+        single : bool
+            Cast the rays one at a time (``rtcIntersect1``; ``width`` and ``columns``
+            unused): faster where a grid is sparser than its faces, whose packets' rays
+            part at once (:attr:`meshladar.raytrace.plan.TracePlan.coherent`). Default
+            False.
 
         Returns
         -------
@@ -356,9 +362,13 @@ class PacketGeometry:
         tfar = np.empty(n, np.float32)
         m = n if barycentrics else 0
         u, v = np.empty(m, np.float32), np.empty(m, np.float32)
-        flags = query_flags(coherent)
-        cast_grid(self.lib.intersect[w], self._live(), o, d, np.float32(tmax), w, flags,
-                  prim, tfar, u, v, int(columns))
+        flags = query_flags(coherent and not single)
+        if single:
+            cast_single(self.lib.intersect1, self._live(), o, d, np.float32(tmax), flags,
+                        prim, tfar, u, v)
+        else:
+            cast_grid(self.lib.intersect[w], self._live(), o, d, np.float32(tmax), w, flags,
+                      prim, tfar, u, v, int(columns))
         return GridHits(prim, tfar, u, v) if barycentrics else (prim, tfar)
 
     def occluded_grid(self, origins, direction, *, tmax=np.inf, width=None, coherent=True):

@@ -3,8 +3,9 @@ ray packets (:mod:`.embree4_ctypes`' layouts) in an aligned workspace and call t
 ``rtcIntersect``/``rtcOccluded`` entry points through ctypes.
 
 :func:`cast_grid` and :func:`occluded_grid` cast every ray of a grid in packets of the
-library's width (:meth:`meshladar.raytrace.embree4.PacketGeometry.cast_grid` and
-``occluded_grid`` call them). Their building blocks, :func:`workspace`, :func:`init_args`,
+library's width, :func:`cast_single` one ray at a time
+(:meth:`meshladar.raytrace.embree4.PacketGeometry.cast_grid` and ``occluded_grid`` call
+them). Their building blocks, :func:`workspace`, :func:`init_args`,
 :func:`load_packet` and :func:`tile_shape`, are public for the compiled loops beside other
 stages (the scanner's pulse loop; the weigh stage's cast-weigh-bin loops,
 :mod:`meshladar.weighing.fused`, take a workspace their caller made in numpy,
@@ -20,7 +21,7 @@ from .embree4_ctypes import (_ALIGN, _ARGS_OFF, _CTX_OFF, _DIR_X, _DIR_Y, _DIR_Z
                              _GEOMID, _ID, _INSTID, _MASK, _ORG_X, _ORG_Y, _ORG_Z, _PRIMID,
                              _TFAR, _TIME, _TNEAR, _U, _V, _VALID_OFF, _WS_BYTES)
 
-__all__ = ["cast_grid", "occluded_grid"]
+__all__ = ["cast_grid", "cast_single", "occluded_grid"]
 
 
 @njit(cache=True, nogil=True)
@@ -194,6 +195,29 @@ def cast_grid(fn, scene, o, d, tmax, w, flags, prim, tfar, u, v, cols):
             if u.shape[0] == n:
                 u[r] = f32[_U * w + j]
                 v[r] = f32[_V * w + j]
+
+
+@njit(cache=True, nogil=True)
+def cast_single(fn1, scene, o, d, tmax, flags, prim, tfar, u, v):
+    """rtcIntersect1 over rays o[i] + t d one at a time: what a grid sparser than its faces
+    is cast with (its packets' rays part at once; RTCRayHit is RTCRayHitW's layout at
+    W = 1, so :func:`load_packet` fills it). ``fn1`` is ``EmbreeLib.intersect1``; the other
+    arguments as :func:`cast_grid`'s."""
+    i32, f32, i64, base = workspace()
+    init_args(i32, i64, base, flags)
+    n = o.shape[0]
+    for r in range(n):
+        load_packet(f32, i32, o, d, tmax, r, n, 1)
+        fn1(scene, base, base + _ARGS_OFF)
+        if i32[_GEOMID] == -1:
+            prim[r] = -1
+            tfar[r] = np.inf
+        else:
+            prim[r] = i32[_PRIMID]
+            tfar[r] = f32[_TFAR]
+        if u.shape[0] == n:
+            u[r] = f32[_U]
+            v[r] = f32[_V]
 
 
 @njit(cache=True, nogil=True)

@@ -37,7 +37,8 @@ class PacketScene:
     def __init__(self, scene):
         self.scene = scene
 
-    def run(self, origins, directions, output=None, query="INTERSECT", columns=0):
+    def run(self, origins, directions, output=None, query="INTERSECT", columns=0,
+            single=False):
         """Cast rays as embreex's ``run`` does: first hits, or occlusion.
 
         Parameters
@@ -57,6 +58,9 @@ class PacketScene:
             First hits: the length of the rows of a grid of rays (row-major), cast in tiles
             (:meth:`meshladar.raytrace.embree4.PacketGeometry.cast_grid`); 0 (default):
             packets of consecutive rays.
+        single : bool
+            First hits: cast the rays one at a time (``rtcIntersect1``), as a grid sparser
+            than its faces is cast fastest; default False.
 
         Returns
         -------
@@ -77,7 +81,8 @@ class PacketScene:
         d = np.asarray(directions, dtype=np.float32).reshape(-1, 3)
         if query == "OCCLUDED":
             return np.where(self.scene.occluded_grid(origins, d), 0, -1)
-        got = self.scene.cast_grid(origins, d, barycentrics=True, columns=columns)
+        got = self.scene.cast_grid(origins, d, barycentrics=True, columns=columns,
+                                   single=single)
         return {"primID": got.prim, "tfar": got.tfar, "u": got.u, "v": got.v}
 
 

@@ -143,7 +143,7 @@ def trace_sensor_view(plan, scene, view):
         grid = ray_grid(geo, w, mode, spacing, z0_shifted, rng)
         o, u, v = grid.origins, grid.u, grid.v
         d = np.ascontiguousarray((-w)[None, :], dtype=np.float32)
-        res = scene.run(o, d, output=1, columns=grid.columns)
+        res = scene.run(o, d, output=1, columns=grid.columns, coherent=plan.coherent)
         prim = res["primID"]
         hit = prim >= 0
         prim = prim[hit]

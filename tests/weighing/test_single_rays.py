@@ -72,3 +72,41 @@ def test_sparse_grids_are_cast_ray_by_ray_with_embreex_numbers(kind, monkeypatch
         assert np.count_nonzero(ref.values) >= 5 * 4        # the sphere fills bins each view
         np.testing.assert_allclose(got.values, ref.values, rtol=SAME_HITS_RTOL,
                                    atol=SAME_HITS_RTOL * np.abs(ref.values).max())
+
+
+@pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")  # sparse on purpose
+@pytest.mark.parametrize("options", [{}, {"normals": "smooth"}, {"mode": "slice"},
+                                     {"sensor": Sensor(standoff=None)}],
+                         ids=["flat", "smooth", "slice", "sensor-at-infinity"])
+def test_the_per_hit_path_casts_sparse_grids_ray_by_ray_with_embreex_hits(options,
+                                                                          monkeypatch):
+    """``trace`` (the hits, for any later weighing) on the packet backend casts a grid
+    sparser than its faces one ray at a time (``cast_grid(single=True)``) and a dense one
+    in tiles; either way its hits are embreex's: the same rays hit, their ranges and
+    angles to round-off."""
+    from meshladar.raytrace.embree4 import PacketGeometry
+
+    asked = []
+    cast = PacketGeometry.cast_grid
+
+    def spy(self, *args, **kwargs):
+        asked.append(kwargs.get("single", False))
+        return cast(self, *args, **kwargs)
+
+    monkeypatch.setattr(PacketGeometry, "cast_grid", spy)
+    scene = _scene()
+    views = ({"angles_deg": [0.0, 72.0, 144.0]} if options.get("mode") == "slice" else
+             {"view_vectors": ml.meshes.fibonacci_sphere(3)})
+    ladar = ml.Ladar.covering(scene, n_bins=48, **views)
+    for per_face, single in ((0.1, True), (40.0, False)):
+        spacing = _spacing(scene, per_face)
+        asked.clear()
+        got = ml.trace(scene, ladar, ray_spacing=spacing, backend="packets", jobs=1, **options)
+        assert asked == [single] * 3
+        ref = ml.trace(scene, ladar, ray_spacing=spacing, backend="embreex", jobs=1, **options)
+        np.testing.assert_array_equal(got.rays, ref.rays)
+        np.testing.assert_array_equal(got.view, ref.view)        # the same rays hit
+        assert len(got.range) >= 3 * 10
+        for name in ("range", "cos_theta", "sin_theta"):
+            np.testing.assert_allclose(getattr(got, name), getattr(ref, name), rtol=0,
+                                       atol=SAME_HITS_RTOL)
