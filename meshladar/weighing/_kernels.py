@@ -219,10 +219,17 @@ def _spread_hit(out, r, r_rel, wt, fp, p, edges, e0, inv):
 
 
 @njit_loop(inline="always")
-def _corners_ahead(footprint, prim, k, n, stamps, tag):   # pragma: no cover - compiled
-    """Prefetch the corners of hit k's face where its footprint row is still to be made
-    (its face's row of ``faces`` was prefetched further ahead, so it is read from cache)."""
-    if k < n:
+def _footprint_ahead(footprint, prim, i, ahead, n, rows, stamps, tag):  # pragma: no cover
+    """Prefetch the footprint row of the hit ``ahead`` places on (and, where rows are made
+    at first hits, its stamp and its face's row of ``faces``), and the corners of the hit
+    half as far on whose row is still to be made (its row of faces fetched before, so
+    read from cache)."""
+    if i + ahead < n and prim[i + ahead] >= 0:
+        _prefetch(rows, prim[i + ahead])
+        if tag >= 0:
+            _prefetch((stamps, footprint[3]), prim[i + ahead])
+    k = i + (ahead >> 1)
+    if tag >= 0 and k < n:
         q = prim[k]
         if q >= 0 and stamps[q] != tag:
             faces = footprint[3]
@@ -265,12 +272,8 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
     for i in range(n):
         if i + ahead < n and prim[i + ahead] >= 0:   # a later hit's rows (._prefetch)
             _prefetch((face_normals, plane_d, stamp, weight), prim[i + ahead])
-            if footprint is not None:
-                _prefetch(rows, prim[i + ahead])
-                if tag_fp >= 0:                      # rows made at first hits
-                    _prefetch((stamps, footprint[3]), prim[i + ahead])
-        if footprint is not None and tag_fp >= 0:    # the corners of a row to be made
-            _corners_ahead(footprint, prim, i + (ahead >> 1), n, stamps, tag_fp)
+        if footprint is not None:
+            _footprint_ahead(footprint, prim, i, ahead, n, rows, stamps, tag_fp)
         p = prim[i]
         if p < 0:
             continue
@@ -403,12 +406,8 @@ def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, 
     for i in range(n):
         if i + ahead < n and prim[i + ahead] >= 0:   # a later hit's rows (._prefetch)
             _prefetch((face_normals, plane_d, corner, face_material), prim[i + ahead])
-            if footprint is not None:
-                _prefetch(rows, prim[i + ahead])
-                if tag_fp >= 0:                      # rows made at first hits
-                    _prefetch((stamps, footprint[3]), prim[i + ahead])
-        if footprint is not None and tag_fp >= 0:    # the corners of a row to be made
-            _corners_ahead(footprint, prim, i + (ahead >> 1), n, stamps, tag_fp)
+        if footprint is not None:
+            _footprint_ahead(footprint, prim, i, ahead, n, rows, stamps, tag_fp)
         p = prim[i]
         if p < 0:
             continue
