@@ -193,7 +193,7 @@ def _resolved_stage(job, scene, view, chunk):
 
 def _sensor_stage(job, scene, view, chunk):
     n, back = bin_sensor_view(job.plan, job.weighing, scene, view.w, view.rng,
-                              chunk.values[view.slot])
+                              chunk.values[view.slot], chunk.params)
     return n, back
 
 
@@ -348,6 +348,8 @@ def _chunk(job, n_views):
         return Chunk(values=None, hits=[])
     shape = tuple(e.size - 1 for e in wg.edges)
     chunk = Chunk(values=np.zeros((n_views,) + shape), hits=[])
+    if job.stage.name == "sensor":          # its loop reads the coatings' table
+        chunk.params = material_table(wg.materials)
     if job.stage.faces:
         chunk.params = material_table(wg.materials) if wg.compiled else \
             np.zeros((len(wg.materials), 7))

@@ -16,7 +16,8 @@ vertices, 2.5 clusters projected a direction instead of 34). Seen in perspective
 pinhole o (a sensor at a standoff),
 a point's value is (q·u)·D / (−q·w), q = p − o: its numerator and depth each lie within
 r|u| and r|w| of the centre's, which bounds the ratio the same way (a cluster that
-reaches the pinhole's plane is always projected). Bounds are widened by
+reaches the pinhole's plane is always projected), and its cone's bound on the numerator
+over the same depths keeps out the same fringe. Bounds are widened by
 :data:`_BOUND_SLACK` of their terms for rounding, so the extents are exact.
 """
 
@@ -247,12 +248,28 @@ def _cone_bound(cones, c, oa, a, la):                       # pragma: no cover -
     return oa + r * (cb + _CONE_SLACK) + _BOUND_SLACK * (abs(oa) + r)
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _seen_bound(hi, centres, radii, c, o, b, lb, scale):     # pragma: no cover - compiled
+    """A bound on (q·a)·scale / (−q·b) over cluster c's points from ``hi``, a bound on
+    their q·a: their depth −q·b lies within r|b| of its centre's, so the ratio is at most
+    ``hi`` · scale over the least depth (``hi`` ≥ 0) or the greatest (``hi`` < 0); inf
+    where the cluster reaches the pinhole's plane."""
+    q0, q1, q2 = centres[c, 0] - o[0], centres[c, 1] - o[1], centres[c, 2] - o[2]
+    nb = -(q0 * b[0] + q1 * b[1] + q2 * b[2])
+    rb = radii[c] * lb
+    near = nb - rb - _BOUND_SLACK * (abs(nb) + rb)
+    if near <= 0.0:
+        return np.inf
+    return hi * scale / (near if hi >= 0.0 else nb + rb)
+
+
 @njit(cache=True, nogil=True)
 def _top(points, starts, centres, radii, cones, o, a, b, scale):  # pragma: no cover
     """The greatest of q·a (b = 0) or of (q·a)·scale / (−q·b) over the points, q = p − o
     (module docstring): the cluster of the greatest bound projected first, then every
-    cluster whose bound reaches the top found, and (b = 0) whose cone's bound
-    (:func:`_cone_bound`) reaches it too."""
+    cluster whose bound reaches the top found, and whose cone's bound
+    (:func:`_cone_bound`; in perspective over the sphere's depths, :func:`_seen_bound`)
+    reaches it too."""
     seen = b[0] != 0.0 or b[1] != 0.0 or b[2] != 0.0
     la = math.sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
     lb = math.sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2])
@@ -268,22 +285,20 @@ def _top(points, starts, centres, radii, cones, o, a, b, scale):  # pragma: no c
         ra = radii[c] * la
         hi = na + ra + _BOUND_SLACK * (abs(na) + ra)
         if seen:
-            nb = -(q0 * b[0] + q1 * b[1] + q2 * b[2])
-            rb = radii[c] * lb
-            near = nb - rb - _BOUND_SLACK * (abs(nb) + rb)
-            if near <= 0.0:
-                hi = np.inf                   # the cluster reaches the pinhole's plane
-            else:
-                hi = hi * scale / (near if hi >= 0.0 else nb + rb)
+            hi = _seen_bound(hi, centres, radii, c, o, b, lb, scale)
         bounds[c] = hi
         if hi > bounds[first]:
             first = c
     top = _cluster_top(points, starts[first], starts[first + 1], o, a, b, scale, seen)
-    cone = not seen and la > 0.0
+    cone = la > 0.0
     for c in range(k):
         if c != first and bounds[c] >= top:
-            if cone and _cone_bound(cones, c, oa, a, la) < top:
-                continue                       # its sphere reaches the top, its cone not
+            if cone:
+                hi = _cone_bound(cones, c, oa, a, la)
+                if seen:
+                    hi = _seen_bound(hi, centres, radii, c, o, b, lb, scale)
+                if hi < top:
+                    continue                   # its sphere reaches the top, its cone not
             top = max(top, _cluster_top(points, starts[c], starts[c + 1], o, a, b, scale,
                                         seen))
     return top

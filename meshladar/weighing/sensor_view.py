@@ -21,7 +21,7 @@ from ..brdf import material_table
 __all__ = ["bin_sensor_view"]
 
 
-def bin_sensor_view(plan, weighing, scene, w, rng, out):
+def bin_sensor_view(plan, weighing, scene, w, rng, out, params=None):
     """One view seen by the plan's sensor at a finite standoff, weighed and binned into
     ``out`` by the compiled loop (``meshladar.weighing._sensor_kernels.bin_sensor_hits``; flat or
     smooth normals, coatings with ``kernel_params``): the numbers of
@@ -51,6 +51,9 @@ def bin_sensor_view(plan, weighing, scene, w, rng, out):
         The view's generator for a stratified grid on the reference plane; None: regular.
     out : (n_bins,) float64 numpy.ndarray
         The view's range profile; the weights are added into it.
+    params : numpy.ndarray, optional
+        The coatings' table (:func:`meshladar.brdf.material_table` of
+        ``weighing.materials``), made once for a run's many views; default: made here.
 
     Returns
     -------
@@ -67,8 +70,10 @@ def bin_sensor_view(plan, weighing, scene, w, rng, out):
     """
     geo, sensor, spacing = plan.geo, plan.traced_with, plan.spacing
     aim = np.asarray(sensor.aim, np.float64) - geo.center
+    if params is None:
+        params = material_table(weighing.materials)
     if scene.fused:
-        return _fused_view(plan, weighing, scene, w, rng, out, aim)
+        return _fused_view(plan, weighing, scene, w, rng, out, aim, params)
     cast = sensor_cast(geo, scene, w, spacing, rng, sensor, aim)
     sensor_pos, u, v = cast.sensor_pos, cast.u, cast.v
     o, res = cast.origins, cast.res
@@ -78,11 +83,11 @@ def bin_sensor_view(plan, weighing, scene, w, rng, out):
         res["primID"], cast.t0 + res["tfar"].astype(np.float64), cast.dirs, cast.length,
         res["u"] if smooth else empty, res["v"] if smooth else empty,
         float(sensor.standoff), sensor_pos, *_binning(plan, weighing, aim, u, v, sensor_pos,
-                                                      w), out)
+                                                      w, params), out)
     return len(o), back
 
 
-def _fused_view(plan, weighing, scene, w, rng, out, aim):
+def _fused_view(plan, weighing, scene, w, rng, out, aim, params):
     """The view through the packet backend's fused loop
     (:func:`._fused_kernels.cast_bin_sensor`): rays built, cast, weighed and binned a band
     of rows at a time. Returns (rays cast, back-face hits)."""
@@ -100,15 +105,15 @@ def _fused_view(plan, weighing, scene, w, rng, out, aim):
         queries(lib, plan.coherent), pk.live(), lib.width, flags, plane,
         (D, sensor_pos, start_distance(geo, sensor_pos, spacing)), np.float32(scene.inverse),
         float(scene.scale), geo.normals == "smooth",
-        _binning(plan, weighing, aim, u, v, sensor_pos, w), out,
+        _binning(plan, weighing, aim, u, v, sensor_pos, w, params), out,
         scratch("sensor", lib.width, t.size))
     return n, back
 
 
-def _binning(plan, weighing, aim, u, v, sensor_pos, w):
+def _binning(plan, weighing, aim, u, v, sensor_pos, w, params):
     """bin_sensor_hits' arguments after the sensor's position, but ``out``."""
     geo, sensor = plan.geo, plan.traced_with
-    back_faces, materials, area = plan.back_faces, weighing.materials, plan.area
+    back_faces, area = plan.back_faces, plan.area
     power, edges = weighing.power, weighing.edges[0]
     beam = sensor.beam
     off = aim if isinstance(beam, FloodBeam) else \
@@ -121,6 +126,6 @@ def _binning(plan, weighing, aim, u, v, sensor_pos, w):
     smooth = geo.normals == "smooth"
     return (float(sensor.standoff) + float((aim + geo.center) @ w), geo.plane_d,
             geo.face_normals, geo.corner if smooth else np.zeros((0, 3, 3)), smooth,
-            geo.material, material_table(materials), np.array(spec + tuple(axis)),
+            geo.material, params, np.array(spec + tuple(axis)),
             float(sensor.extinction), edges, float(area), bool(power), back_faces == "ignore",
             MIN_COS_FACET, REFINE_MIN_COS)

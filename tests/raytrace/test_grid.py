@@ -132,6 +132,16 @@ def test_a_views_extent_over_clusters_is_every_points_extent(compiled_from, monk
                 seen = dot(q, a) * 2.5 / -dot(q, w)
                 assert clusters.seen_extent(a, w, 2.5, pinhole) == (seen.min(), seen.max())
                 assert points_extent(points, a, pinhole, w, 2.5) == (seen.min(), seen.max())
+        # pinholes just outside the points (strong perspective: depths vary most) and far
+        # (nearly parallel: the clusters' bounds, sphere and cone, decide which are seen)
+        for u in dirs[::7]:
+            w = u / np.linalg.norm(u)
+            for distance in (1.05, 60.0):
+                pinhole = centre + distance * reach * w
+                q = points - pinhole
+                for a in frame(w):
+                    seen = dot(q, a) * 7.0 / -dot(q, w)
+                    assert clusters.seen_extent(a, w, 7.0, pinhole) == (seen.min(), seen.max())
         # and against plain Python floats, point by point (not numpy's expression, which
         # points_extent's numpy branch shares), along a few of the directions
         for u in dirs[::97]:
