@@ -50,11 +50,13 @@ def _head(emb, coherent):
 def _coating(bins, w, wr, built_in):
     """The bistatic loops' ``coating``: (face materials, SR table, the half vector
     (w + w_r)/|w + w_r| of each view, a row each for (k, 3) ``w`` and ``wr``, area, power,
-    built in)."""
-    half = [(x + y) / np.linalg.norm(x + y) for x, y in zip(np.reshape(w, (-1, 3)),
-                                                             np.reshape(wr, (-1, 3)))]
-    return (bins.face_material, bins.params, np.reshape(half, np.shape(w)), float(bins.area),
-            bool(bins.power), bool(built_in))
+    built in); |w + w_r| the root of its squares summed in order, as
+    :func:`meshladar.raytrace.grid.frames` takes |z × w| (a BLAS dot's order and fused
+    multiplies would be the CPU's)."""
+    x = np.reshape(w, (-1, 3)) + np.reshape(wr, (-1, 3))
+    n = np.sqrt(x[:, 0] * x[:, 0] + x[:, 1] * x[:, 1] + x[:, 2] * x[:, 2])
+    return (bins.face_material, bins.params, np.reshape(x / n[:, None], np.shape(w)),
+            float(bins.area), bool(bins.power), bool(built_in))
 
 
 def cast_bin_views(emb, plans, sequences, spacing, bins, coherent=False, smooth=None,

@@ -9,6 +9,7 @@ for bit, and the embreex backend's (its own caster, weighed in numpy) to round-o
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 import pytest
@@ -19,6 +20,7 @@ from meshladar.materials import ALUMINUM, DARK_GRAY
 from meshladar.raytrace import embree4
 from meshladar.raytrace.embree import Geometry
 from meshladar.raytrace.grid import grid_plan, grid_plans
+from meshladar.weighing.fused import _coating
 
 pytestmark = pytest.mark.skipif(not embree4.available(),
                                 reason="the packet backend does not load here")
@@ -131,3 +133,20 @@ def test_grids_planned_together_are_each_views_own(views, mode):
     x = geo.support @ plans.u.T
     np.testing.assert_allclose(ext[:, 0], x.min(axis=0), rtol=0, atol=1e-15 * geo.radius)
     np.testing.assert_allclose(ext[:, 1], x.max(axis=0), rtol=0, atol=1e-15 * geo.radius)
+
+
+def test_the_bistatic_half_vectors_are_the_same_on_every_cpu():
+    """The bistatic loops' half vectors (w + w_r)/|w + w_r| (fused._coating), one view or a
+    chunk's rows, equal plain Python floats' (|w + w_r| the root of the squares summed in
+    order: no BLAS dot, whose order and fused multiplies are the CPU's), bit for bit."""
+    rng = np.random.default_rng(11)
+    w = rng.normal(size=(500, 3))
+    wr = rng.normal(size=(500, 3)) * rng.uniform(1e-3, 1e3, (500, 1))
+    bins = dataclasses.make_dataclass("Bins", ["face_material", "params", "area", "power"])(
+        None, None, 1.0, True)
+    half = _coating(bins, w, wr, True)[2]
+    for k in range(len(w)):
+        x = [float(a + b) for a, b in zip(w[k], wr[k])]
+        n = math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
+        assert half[k].tolist() == [c / n for c in x]
+        assert _coating(bins, w[k], wr[k], True)[2].tolist() == [c / n for c in x]
