@@ -436,6 +436,3 @@ def bin_smooth_hits(prim, tfar, bu, bv, origins, plane_d, face_normals, corner, 
                 footprint_row(footprint, p, face_normals)
             _spread_hit(out, r, r_rel, wt, rows, p, edges, e0, inv)
     return back
-
-
-#: The hit of ray i on face p, public for the packet loops (:mod:`.fused`).
