@@ -350,7 +350,7 @@ def _chunk(job, n_views):
     chunk = Chunk(values=np.zeros((n_views,) + shape), hits=[])
     if job.stage.name == "sensor":          # its loop reads the coatings' table
         chunk.params = material_table(wg.materials)
-    if job.stage.faces:
+    elif job.stage.faces:
         chunk.params = material_table(wg.materials) if wg.compiled else \
             np.zeros((len(wg.materials), 7))
         chunk.stamp = np.zeros(len(geo.faces), np.int64)
