@@ -56,13 +56,16 @@ __all__ = ["MeshJob", "plan_job", "mesh_job", "sensor_offset", "QUICK_RAYS"]
 class Stage(NamedTuple):
     """A view stage: ``run(job, scene, view, chunk)`` casts (and weighs) one view into
     ``chunk``, returning (rays cast, back-face hits); ``faces``: it reads the per-face
-    weight cache; ``views``: ``views(job, scene, views, chunk)`` does a whole chunk at once,
-    returning (k, 2) (rays cast, back-face hits), for a :attr:`MeshJob.batched` job."""
+    weight cache (and the coatings' table); ``views``: ``views(job, scene, views, chunk)``
+    does a whole chunk at once, returning (k, 2) (rays cast, back-face hits), for a
+    :attr:`MeshJob.batched` job; ``table``: it reads the coatings' compiled table
+    (``chunk.params``) without the cache."""
 
     name: str
     run: Callable
     faces: bool = False
     views: Callable | None = None
+    table: bool = False
 
 
 @dataclass(frozen=True, eq=False)
@@ -278,7 +281,7 @@ QUICK_RAYS = 1 << 20
 
 STAGES = {s.name: s for s in (
     Stage("hits", _hits_stage), Stage("per_hit", _per_hit_stage),
-    Stage("resolved", _resolved_stage), Stage("sensor", _sensor_stage),
+    Stage("resolved", _resolved_stage), Stage("sensor", _sensor_stage, table=True),
     Stage("smooth", _smooth_stage, faces=True, views=_smooth_views),
     Stage("flat", _flat_stage, faces=True, views=_flat_views),
     Stage("bistatic", _flat_stage, faces=True, views=_bistatic_views))}
@@ -348,11 +351,10 @@ def _chunk(job, n_views):
         return Chunk(values=None, hits=[])
     shape = tuple(e.size - 1 for e in wg.edges)
     chunk = Chunk(values=np.zeros((n_views,) + shape), hits=[])
-    if job.stage.name == "sensor":          # its loop reads the coatings' table
-        chunk.params = material_table(wg.materials)
-    elif job.stage.faces:
+    if job.stage.faces or job.stage.table:
         chunk.params = material_table(wg.materials) if wg.compiled else \
             np.zeros((len(wg.materials), 7))
+    if job.stage.faces:
         chunk.stamp = np.zeros(len(geo.faces), np.int64)
         chunk.weight = np.empty(len(geo.faces))
         # None for point bins: the compiled loops then leave out (and do not compile)
