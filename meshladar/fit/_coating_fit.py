@@ -67,6 +67,10 @@ class CoatingFit:
         iterations, the fitted sinogram values.
     bootstrap : (n_boot, n) array or None
         Parametric-bootstrap estimates.
+    bias : (n,) array or None
+        The estimate's first-order bias (Cox and Snell), from the model's curvature and
+        the Fisher information at the estimate; NaN where σ is not finite. ``corrected``
+        is the estimate less it.
     """
 
     names: tuple
@@ -86,6 +90,7 @@ class CoatingFit:
     combinations: tuple = ()
     kernel_error: float | None = None
     samples: int | None = None
+    bias: np.ndarray | None = None
     _likelihood: object = field(default=None, repr=False, compare=False)
     _profiled: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
@@ -93,6 +98,16 @@ class CoatingFit:
     def undetermined(self):
         """The names the data cannot determine."""
         return tuple(n for n in self.names if self.identifiable[n] is not True)
+
+    @property
+    def corrected(self):
+        """The estimate less its first-order bias (``bias``), kept within the search's
+        bounds; the estimate itself where the bias is unknown."""
+        if self.bias is None:
+            return self.estimate.copy()
+        out = self.estimate - np.where(np.isfinite(self.bias), self.bias, 0.0)
+        bounds = self.info.get("bounds")
+        return out if bounds is None else np.clip(out, bounds[0], bounds[1])
 
     def _kernel_line(self):
         if self.kernel_error is None:

@@ -34,7 +34,7 @@ from ..ladar import Ladar
 from ..precision import ANGLE_TOL_DEG
 from ..waveforms import Waveforms
 from ..scene import Scene
-from . import _irls, _profile
+from . import _bias, _irls, _profile
 from ._coating_fit import CoatingFit
 from ._identify import NULL_REL, _correlation, _misfit, _uncertainty, describe
 from ._building import parts_of
@@ -157,6 +157,9 @@ def _result(model, solved, ladder, boot):
     names = tuple(f"{kernel.parts[p.part]}.{p.name}" for p in params)
     found = _uncertainty(fit.fisher, x, params, lambda i: names[i])
     covariance = found.covariance
+    bias = _bias.first_order(model.values, x, J,
+                             1.0 / V if fit.sigma2 is None else np.full(V.size, 1.0 / fit.sigma2),
+                             covariance)
     if ladder.step is not None:              # the last shift, at this x and kernel
         covariance = with_kernel_error(covariance, ladder.step)
     stderr, corr = _correlation(covariance)
@@ -174,6 +177,7 @@ def _result(model, solved, ladder, boot):
                       iterations, (full / scale).reshape(kernel.shape), boots,
                       {"photons_per_unit": scale if problem.noise == "poisson" else None,
                        "positive": tuple(bool(p.low >= 0.0) for p in params),
+                       "bounds": (problem.low, problem.high),
                        "radiometry": kernel.radiometry, "source": kernel.source,
                        "combination_coefficients": tuple(c for c, _ in found.combinations),
                        "covariance": "inverse Fisher information of the user's parameters "
@@ -183,7 +187,7 @@ def _result(model, solved, ladder, boot):
                                         "kernel's N to 2N (its estimated error)"
                                         if ladder.active else ""), **res},
                       combinations=combos, kernel_error=res["kernel_error"],
-                      samples=res["samples"], _likelihood=functools.partial(
+                      samples=res["samples"], bias=bias, _likelihood=functools.partial(
                           _profile.intervals, model, x, m, fit.sigma2))
 
 

@@ -3,7 +3,8 @@ profiles (not the fit's kernel) with seeded Poisson noise at 10³, 10⁴, 10⁵ 
 photoelectrons in the brightest bin, on a diffuse coating and a glinting one (e = 0.02),
 400 seeded trials per scene, and on the paper's gray/aluminium pair (e = 0.007) at 10⁵ and
 10⁶ (200 trials) and, on demand (``pytest -m exhaustive``), at 10⁴ with profile intervals
-(200 trials); and on a mesh, its data from the mesh model at a finer spacing."""
+(200 trials), and on 120 views at 10⁴ the bias-corrected estimates (200 trials); and on a
+mesh, its data from the mesh model at a finer spacing."""
 
 from __future__ import annotations
 
@@ -57,11 +58,12 @@ def _floor(n):
     return MIN_COVERAGE - SAMPLING_SIGMAS * np.sqrt(MIN_COVERAGE * (1 - MIN_COVERAGE) / n)
 
 
-def _seeded_fit(scene, kernel, exact, k, seed):
-    """(fit, true values of its parameters) of the exact profiles ``exact`` with seeded
-    Poisson noise at ``k`` counts per unit, started from the truth."""
+def _seeded_fit(scene, kernel, exact, k, seed, lad=LAD):
+    """(fit, true values of its parameters) of the exact profiles ``exact`` (on ``lad``'s
+    views and bins) with seeded Poisson noise at ``k`` counts per unit, started from the
+    truth."""
     y = np.random.default_rng(seed).poisson(exact * k) / k
-    measured = ml.Sinogram(y, angles_deg=LAD.angles_deg, bin_edges=LAD.bin_edges,
+    measured = ml.Sinogram(y, angles_deg=lad.angles_deg, bin_edges=lad.bin_edges,
                            info={"radiometry": "paper"})
     with warnings.catch_warnings():
         # a weakly determined parameter at 10³ photons is named; it keeps its σ
@@ -269,6 +271,55 @@ def test_the_pair_at_1e4_names_the_ridge_and_measures_across_it():
     assert np.all(np.abs(bias) < MAX_BIAS), dict(zip(names[others], bias))
     assert np.all(inside[:, others].mean(axis=0) >= _floor(RIDGE_TRIALS)), dict(
         zip(names[others], inside[:, others].mean(axis=0)))
+
+
+#: The pair at 10⁴ on twice the views (3° apart: twice the data). On 60 views the maximum-
+#: likelihood estimates of the aluminium's ε and e fall in two basins along their ridge
+#: (ε ≈ 0.51, e ≈ 0.0074 and ε ≈ 0.82, e ≈ 0.0017, in 143 and 57 of 200 trials), so no
+#: correction brings their mean within 0.25 σ (the first-order one: bias 0.40 → 0.29 of
+#: the estimates' spread); on 120 views 11 of 200 reach the narrow basin, the estimate's
+#: bias is ±0.24 of the spread (e: −0.30 σ) and the first-order correction brings every
+#: parameter's within 0.22 σ (measured 2026-12-06).
+WIDE_LAD = Ladar(np.arange(0.0, 360.0, 3.0), LAD.bin_edges)
+WIDE_TRIALS = 200
+
+
+def _pair_wide(seeds):
+    """One worker's share of the pair's trials at 10⁴ photoelectrons on WIDE_LAD: per trial,
+    the z of the estimate and of the bias-corrected estimate, and whether each parameter's
+    normal 95 % interval holds the truth."""
+    scene = SCENES["pair"]
+    exact = ml.simulate(scene, WIDE_LAD, model="analytic").values
+    kernel = coating_kernel(scene, WIDE_LAD, samples=2048)
+    rows = []
+    for seed in seeds:
+        fit, true = _seeded_fit(scene, kernel, exact, 1e4 / exact.max(), seed, WIDE_LAD)
+        lo, hi = fit.interval(0.95)
+        rows.append(((fit.estimate - true) / fit.stderr, (fit.corrected - true) / fit.stderr,
+                     (lo <= true) & (true <= hi)))
+    return fit.names, rows
+
+
+@pytest.mark.slow
+def test_the_corrected_estimates_of_the_pair_at_1e4_are_unbiased():
+    """The paper's pair at 10⁴ photoelectrons on 120 views over WIDE_TRIALS seeded trials (on
+    every core): the bias-corrected estimates (``fit.corrected``, the estimate less its
+    first-order bias) of all eight parameters have |mean bias| < 0.25 σ, where the
+    estimates themselves do not (the aluminium's e beyond it); the normal intervals cover
+    the truth within the sampling error of 0.90 (_floor)."""
+    cores = len(os.sched_getaffinity(0))
+    seeds = [range(i, WIDE_TRIALS, cores) for i in range(cores)]
+    with ProcessPoolExecutor(cores, mp_context=multiprocessing.get_context("spawn")) as pool:
+        parts = list(pool.map(_pair_wide, seeds))
+    names = parts[0][0]
+    rows = [r for p in parts for r in p[1]]
+    assert len(rows) == WIDE_TRIALS
+    z, zc, inside = (np.array([r[i] for r in rows]) for i in range(3))
+    raw, corrected = dict(zip(names, z.mean(axis=0))), dict(zip(names, zc.mean(axis=0)))
+    assert max(abs(v) for v in corrected.values()) < MAX_BIAS, (corrected, raw)
+    assert abs(raw["small.e"]) > MAX_BIAS, raw
+    cover = inside.mean(axis=0)
+    assert np.all(cover >= _floor(WIDE_TRIALS)), dict(zip(names, cover))
 
 
 #: The mesh model's data: 4096 rays per bin width, twice the most the kernel's refinement

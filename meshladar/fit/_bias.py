@@ -1,0 +1,95 @@
+"""The first-order bias of a coating fit's maximum-likelihood estimate (Cox and Snell).
+
+For independent data whose distribution is a one-parameter exponential family in its mean
+m_i(θ) (Gaussian with known σ², Poisson, negative binomial of known M), with weights
+w_i = 1/Var(y_i) and Fisher information F = Jᵀ W J, the estimate's bias to order 1/F is
+
+    b = −½ C Jᵀ W d,    d_i = tr(C H_i),    C = F⁻¹,
+
+H_i the Hessian of m_i in the parameters: the terms in the variance function's derivative
+cancel, so the bias comes from the curvature of the model alone (for Gaussian noise this is
+Box's nonlinear-regression bias). tr(C H_i) is summed over C's principal axes, each a
+central second difference of the model (one-sided where a step leaves the coatings' valid
+set). The estimate less b, θ̂ − b(θ̂), is the bias-corrected estimate.
+
+References
+----------
+D. R. Cox and E. J. Snell, "A general definition of residuals", J. R. Stat. Soc. B 30,
+248-275 (1968); M. J. Box, "Bias in nonlinear estimation", J. R. Stat. Soc. B 33, 171-201
+(1971); G. M. Cordeiro and P. McCullagh, "Bias correction in generalized linear models",
+J. R. Stat. Soc. B 53, 629-643 (1991).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["first_order"]
+
+#: The second differences' step along each principal axis of C, in that axis's σ.
+STEP = 0.1
+#: Steps tried (each a tenth of the last) before an axis whose neighbourhood is outside the
+#: coatings' valid set on both sides leaves the bias unknown.
+TRIES = 3
+
+
+def first_order(values, x, J, w, covariance):
+    """The first-order bias b of the estimate ``x`` (NaN on parameters whose σ is not
+    finite, and on every parameter where the model cannot be evaluated around ``x``).
+
+    Parameters
+    ----------
+    values : callable
+        The model's values at parameters (None where the coatings are invalid).
+    x : (n,) array
+        The estimate.
+    J : (rows, n) array
+        The model's Jacobian at ``x``.
+    w : (rows,) array
+        The inverse variance of each datum.
+    covariance : (n, n) array
+        The inverse Fisher information (inf on the diagonal of a parameter it does not
+        determine).
+
+    Returns
+    -------
+    (n,) array
+    """
+    n = x.size
+    bias = np.full(n, np.nan)
+    live = np.flatnonzero(np.isfinite(np.diag(covariance)))
+    if live.size == 0:
+        return bias
+    C = covariance[np.ix_(live, live)]
+    sd = np.sqrt(np.maximum(np.diag(C), 1e-300))
+    lam, vec = np.linalg.eigh(C / np.outer(sd, sd))
+    m0 = values(x)
+    d = np.zeros_like(m0)
+    for k in range(live.size):
+        if not lam[k] > 0.0:
+            continue
+        axis = np.zeros(n)
+        axis[live] = sd * vec[:, k]
+        curve = _second_difference(values, x, m0, axis, STEP * np.sqrt(lam[k]))
+        if curve is None:
+            return bias
+        d += lam[k] * curve
+    Jl = J[:, live]
+    bias[live] = -0.5 * C @ (Jl.T @ (w * d))
+    return bias
+
+
+def _second_difference(values, x, m0, axis, h):
+    """The model's second derivative along ``axis`` at ``x`` (steps ``h``): central, or
+    one-sided where one side is invalid; None where no step of TRIES makes one."""
+    for _ in range(TRIES):
+        up, down = values(x + h * axis), values(x - h * axis)
+        if up is not None and down is not None:
+            return (up - 2.0 * m0 + down) / (h * h)
+        side = 1.0 if up is not None else -1.0
+        first = up if up is not None else down
+        second = values(x + 2.0 * side * h * axis) if first is not None else None
+        if second is not None:
+            return (second - 2.0 * first + m0) / (h * h)
+        h *= 0.1
+    return None
