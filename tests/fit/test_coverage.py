@@ -58,6 +58,22 @@ def _floor(n):
     return MIN_COVERAGE - SAMPLING_SIGMAS * np.sqrt(MIN_COVERAGE * (1 - MIN_COVERAGE) / n)
 
 
+#: One BLAS thread a worker: the trials fill every core with processes, and each one's own
+#: BLAS threads on top oversubscribe them (the 120-view trials on 2 cores: 335 s with the
+#: default threads, 230 s with one).
+ONE_THREAD = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+def _on_every_core(work, trials, monkeypatch):
+    """``work`` (a function of a range of seeds) on every core, the ``trials`` seeds dealt
+    round-robin, one BLAS thread a worker: the list of its results."""
+    for name in ONE_THREAD:
+        monkeypatch.setenv(name, "1")
+    cores = len(os.sched_getaffinity(0))
+    with ProcessPoolExecutor(cores, mp_context=multiprocessing.get_context("spawn")) as pool:
+        return list(pool.map(work, [range(i, trials, cores) for i in range(cores)]))
+
+
 def _seeded_fit(scene, kernel, exact, k, seed, lad=LAD):
     """(fit, true values of its parameters) of the exact profiles ``exact`` (on ``lad``'s
     views and bins) with seeded Poisson noise at ``k`` counts per unit, started from the
@@ -175,17 +191,14 @@ def _pair_1e4(seeds):
 
 @pytest.mark.slow
 @pytest.mark.exhaustive
-def test_the_pair_at_1e4_covers_the_truth_with_profile_intervals():
+def test_the_pair_at_1e4_covers_the_truth_with_profile_intervals(monkeypatch):
     """The paper's pair at 10⁴ photoelectrons over PAIR_1E4_TRIALS seeded trials: every
     parameter's 95 % interval (profile likelihood for the aluminium's ε and e, normal for
     the rest) covers the truth in ≥ 90 % of them within the sampling error (_floor). The
     six parameters with normal intervals have |mean bias| < 0.25 σ; the two profiled ones,
     whose estimates spread four to five times their normal σ (a heavy-tailed, far from
     normal likelihood), have |median bias| < 0.25 σ (their mean is ±0.5 σ)."""
-    cores = len(os.sched_getaffinity(0))
-    seeds = [range(i, PAIR_1E4_TRIALS, cores) for i in range(cores)]
-    with ProcessPoolExecutor(cores, mp_context=multiprocessing.get_context("spawn")) as pool:
-        parts = list(pool.map(_pair_1e4, seeds))
+    parts = _on_every_core(_pair_1e4, PAIR_1E4_TRIALS, monkeypatch)
     names = parts[0][0]
     inside = np.concatenate([p[1][0] for p in parts])
     assert len(inside) == PAIR_1E4_TRIALS
@@ -243,7 +256,7 @@ def test_the_ridge_the_guide_shows():
 
 
 @pytest.mark.slow
-def test_the_pair_at_1e4_names_the_ridge_and_measures_across_it():
+def test_the_pair_at_1e4_names_the_ridge_and_measures_across_it(monkeypatch):
     """The paper's pair at 10⁴ photoelectrons over RIDGE_TRIALS seeded trials (on every
     core), normal intervals: the fit names the combination across the aluminium's ε-e
     ridge in at least 98 % of them, and that combination's mean bias is below 0.25 σ and
@@ -251,10 +264,7 @@ def test_the_pair_at_1e4_names_the_ridge_and_measures_across_it():
     error of 0.90 (_floor); the other six parameters have mean bias below 0.25 σ and
     cover as well. (Measured 2026-12-05: named in 198 of 200, mean bias −0.07 σ, spread 1.10 σ,
     coverage 0.91.)"""
-    cores = len(os.sched_getaffinity(0))
-    seeds = [range(i, RIDGE_TRIALS, cores) for i in range(cores)]
-    with ProcessPoolExecutor(cores, mp_context=multiprocessing.get_context("spawn")) as pool:
-        parts = list(pool.map(_pair_ridge, seeds))
+    parts = _on_every_core(_pair_ridge, RIDGE_TRIALS, monkeypatch)
     names = np.array(parts[0][0])
     rows = [r for p in parts for r in p[1]]
     assert len(rows) == RIDGE_TRIALS
@@ -301,16 +311,13 @@ def _pair_wide(seeds):
 
 
 @pytest.mark.slow
-def test_the_corrected_estimates_of_the_pair_at_1e4_are_unbiased():
+def test_the_corrected_estimates_of_the_pair_at_1e4_are_unbiased(monkeypatch):
     """The paper's pair at 10⁴ photoelectrons on 120 views over WIDE_TRIALS seeded trials (on
     every core): the bias-corrected estimates (``fit.corrected``, the estimate less its
     first-order bias) of all eight parameters have |mean bias| < 0.25 σ, where the
     estimates themselves do not (the aluminium's e beyond it); the normal intervals cover
     the truth within the sampling error of 0.90 (_floor)."""
-    cores = len(os.sched_getaffinity(0))
-    seeds = [range(i, WIDE_TRIALS, cores) for i in range(cores)]
-    with ProcessPoolExecutor(cores, mp_context=multiprocessing.get_context("spawn")) as pool:
-        parts = list(pool.map(_pair_wide, seeds))
+    parts = _on_every_core(_pair_wide, WIDE_TRIALS, monkeypatch)
     names = parts[0][0]
     rows = [r for p in parts for r in p[1]]
     assert len(rows) == WIDE_TRIALS
