@@ -10,7 +10,11 @@ H_i the Hessian of m_i in the parameters: the terms in the variance function's d
 cancel, so the bias comes from the curvature of the model alone (for Gaussian noise this is
 Box's nonlinear-regression bias). tr(C H_i) is summed over C's principal axes, each a
 central second difference of the model (one-sided where a step leaves the coatings' valid
-set). The estimate less b, θ̂ − b(θ̂), is the bias-corrected estimate.
+set), at steps of STEP and 2 STEP of the axis's σ: where the two biases differ by more than
+AGREE σ the expansion does not hold and the bias is NaN. Undetermined parameters (a null
+direction of the Fisher matrix) take part through the generalised inverse, as a
+reparametrisation to the determined combinations would. The estimate less b, θ̂ − b(θ̂),
+is the bias-corrected estimate.
 
 References
 ----------
@@ -28,14 +32,19 @@ __all__ = ["first_order"]
 
 #: The second differences' step along each principal axis of C, in that axis's σ.
 STEP = 0.1
+#: The bias is computed at steps of STEP and 2 STEP; where they differ by more than this
+#: share of σ, the model's curvature changes within a few tenths of σ, the expansion the
+#: bias comes from does not hold, and the bias is NaN.
+AGREE = 0.05
 #: Steps tried (each a tenth of the last) before an axis whose neighbourhood is outside the
 #: coatings' valid set on both sides leaves the bias unknown.
 TRIES = 3
 
 
-def first_order(values, x, J, w, covariance):
-    """The first-order bias b of the estimate ``x`` (NaN on parameters whose σ is not
-    finite, and on every parameter where the model cannot be evaluated around ``x``).
+def first_order(values, x, J, w, generalised, determined=None):
+    """The first-order bias b of the estimate ``x``: NaN on a parameter not ``determined``,
+    and wherever the model cannot be evaluated around ``x`` or steps of STEP and 2 STEP
+    disagree by more than AGREE σ.
 
     Parameters
     ----------
@@ -47,20 +56,41 @@ def first_order(values, x, J, w, covariance):
         The model's Jacobian at ``x``.
     w : (rows,) array
         The inverse variance of each datum.
-    covariance : (n, n) array
-        The inverse Fisher information (inf on the diagonal of a parameter it does not
-        determine).
+    generalised : (n, n) array
+        The inverse Fisher information, or its generalised inverse over the parameters the
+        data act on (NaN on the others), null directions included: a determined
+        parameter's bias holds the undetermined ones free along the determined
+        combinations, as a reparametrisation to those combinations would.
+    determined : (n,) bool array, optional
+        The parameters whose bias is wanted (default: those with a finite diagonal).
 
     Returns
     -------
     (n,) array
     """
     n = x.size
+    live = np.flatnonzero(np.isfinite(np.diag(generalised)))
+    wanted = np.zeros(n, bool)
+    wanted[live] = True
+    if determined is not None:
+        wanted &= np.asarray(determined, bool)
     bias = np.full(n, np.nan)
-    live = np.flatnonzero(np.isfinite(np.diag(covariance)))
-    if live.size == 0:
+    if not wanted.any():
         return bias
-    C = covariance[np.ix_(live, live)]
+    C = generalised[np.ix_(live, live)]
+    fine, coarse = (_bias(values, x, J[:, live], w, C, live, step) for step in (STEP, 2 * STEP))
+    if fine is None or coarse is None:
+        return bias
+    sd = np.sqrt(np.maximum(np.diag(C), 0.0))
+    held = np.abs(fine - coarse) <= AGREE * sd
+    bias[live] = np.where(held, fine, np.nan)
+    bias[~wanted] = np.nan
+    return bias
+
+
+def _bias(values, x, Jl, w, C, live, step):
+    """−½ C Jᵀ W d over the ``live`` parameters, d from second differences at ``step`` of
+    each principal axis's σ (None where an axis cannot be evaluated)."""
     sd = np.sqrt(np.maximum(np.diag(C), 1e-300))
     lam, vec = np.linalg.eigh(C / np.outer(sd, sd))
     m0 = values(x)
@@ -68,15 +98,13 @@ def first_order(values, x, J, w, covariance):
     for k in range(live.size):
         if not lam[k] > 0.0:
             continue
-        axis = np.zeros(n)
+        axis = np.zeros(x.size)
         axis[live] = sd * vec[:, k]
-        curve = _second_difference(values, x, m0, axis, STEP * np.sqrt(lam[k]))
+        curve = _second_difference(values, x, m0, axis, step * np.sqrt(lam[k]))
         if curve is None:
-            return bias
+            return None
         d += lam[k] * curve
-    Jl = J[:, live]
-    bias[live] = -0.5 * C @ (Jl.T @ (w * d))
-    return bias
+    return -0.5 * C @ (Jl.T @ (w * d))
 
 
 def _second_difference(values, x, m0, axis, h):

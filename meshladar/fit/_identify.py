@@ -51,12 +51,14 @@ RIDGE_REL = 0.01
 class Identified(NamedTuple):
     """Covariance (inf on the diagonal of a parameter the data do not act on or that takes
     part in a null direction, NaN beside it; weakly determined ones keep their finite σ),
-    per-parameter True or the reason, and the determined combinations as (coefficients, σ)
-    pairs."""
+    per-parameter True or the reason, the determined combinations as (coefficients, σ)
+    pairs, and the generalised inverse D S⁺ D over the parameters the data act on (NaN on
+    the others' rows and columns), null directions included."""
 
     covariance: np.ndarray
     reasons: list
     combinations: list
+    generalised: np.ndarray
 
 
 def _scales(params, x, floor=1e-12):
@@ -100,12 +102,13 @@ def _uncertainty(fisher, x, params, label):
         _loose_ones(reasons, live, involved, (sub, width, x), (params, label))
         combinations += _ridges(sub, involved)
         combinations = [(_widened(c, live, n), s) for c, s in combinations]
+    generalised = cov.copy()
     unknown = [i for i in range(n) if i not in live]
     unknown += [i for a, i in enumerate(live) if involved[a]]
     for i in unknown:
         cov[i, :] = cov[:, i] = np.nan
         cov[i, i] = math.inf
-    return Identified(cov, reasons, combinations)
+    return Identified(cov, reasons, combinations, generalised)
 
 
 def _combinations(null_user, involved, sub):

@@ -159,7 +159,7 @@ def _result(model, solved, ladder, boot):
     covariance = found.covariance
     bias = _bias.first_order(model.values, x, J,
                              1.0 / V if fit.sigma2 is None else np.full(V.size, 1.0 / fit.sigma2),
-                             covariance)
+                             found.generalised, np.isfinite(np.diag(covariance)))
     if ladder.step is not None:              # the last shift, at this x and kernel
         covariance = with_kernel_error(covariance, ladder.step)
     stderr, corr = _correlation(covariance)

@@ -2,13 +2,18 @@
 against closed forms: Poisson counts whose mean is c_i/θ (the estimate Σc/Σy, its bias θ/N
 to order 1/N, N = Σ c_i/θ), Gaussian data about a·exp(θ) (the estimate log(ȳ/a), its bias
 the delta method's −σ²/(2 n a² exp(2θ))), a mean linear in its parameters (no bias) and the
-same in log α (the delta method's −Var(α̂)/(2α²)), an undetermined parameter, and a model
-valid on one side of the estimate only."""
+same in log α (the delta method's −Var(α̂)/(2α²)), an undetermined parameter, a model
+valid on one side of the estimate only; against Cox and Snell's sum written out with
+analytic derivatives and expectations over the data's distribution (three correlated
+parameters with a full Hessian, for Poisson, negative binomial and Gaussian data; a
+parameter beside a null direction); a curvature that changes within the steps (NaN); and a
+fit's own field on a linear and a nonlinear coating parameter."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy import stats
 
 import meshladar as ml
 from meshladar.brdf import Lambertian, SandfordRobertson
@@ -126,3 +131,107 @@ def test_a_fit_linear_in_its_parameter_has_no_bias():
             i = fit.names.index("disk.e")
             assert 0.0 < abs(fit.bias[i]) < fit.stderr[i]
             assert fit.corrected[i] == fit.estimate[i] - fit.bias[i]
+
+
+def _cox_snell(mu, jac, hess, third, theta, noise):
+    """Cox and Snell's bias Σ I^{sr} I^{tu} (κ_{rt,u} + ½ κ_{rtu}) written out, each κ an
+    expectation summed over the data's distribution (Poisson, negative binomial of
+    ``noise`` cells, or Gaussian of variance 0.5) with the model's analytic derivatives:
+    no use of the simplified form under test."""
+    m, J, H, T = mu(theta), jac(theta), hess(theta), third(theta)
+    n = theta.size
+    info, k2, k3 = np.zeros((n, n)), np.zeros((n, n, n)), np.zeros((n, n, n))
+    for i in range(m.size):
+        if noise == "gaussian":
+            ys = np.linspace(m[i] - 12.0, m[i] + 12.0, 4001)
+            p = stats.norm.pdf(ys, m[i], np.sqrt(0.5))
+            l1, l2, l3 = (ys - m[i]) / 0.5, np.full(ys.size, -2.0), np.zeros(ys.size)
+        else:
+            ys = np.arange(0.0, 2000.0)
+            if noise is None:
+                p = stats.poisson.pmf(ys, m[i])
+                l1, l2, l3 = ys / m[i] - 1, -ys / m[i] ** 2, 2 * ys / m[i] ** 3
+            else:
+                M = noise
+                p = stats.nbinom.pmf(ys, M, M / (M + m[i]))
+                l1 = ys / m[i] - (ys + M) / (m[i] + M)
+                l2 = -ys / m[i] ** 2 + (ys + M) / (m[i] + M) ** 2
+                l3 = 2 * ys / m[i] ** 3 - 2 * (ys + M) / (m[i] + M) ** 3
+        p = p / p.sum()
+        j, h, t3 = J[i], H[i], T[i]
+        u1 = l1[:, None] * j
+        u2 = l2[:, None, None] * np.outer(j, j) + l1[:, None, None] * h
+        sym = (np.einsum("ru,t->rtu", h, j) + np.einsum("r,tu->rtu", j, h)
+               + np.einsum("rt,u->rtu", h, j))
+        u3 = (l3[:, None, None, None] * np.einsum("r,t,u->rtu", j, j, j)
+              + l2[:, None, None, None] * sym + l1[:, None, None, None] * t3)
+        info += np.einsum("y,yr,yt->rt", p, u1, u1)
+        k2 += np.einsum("y,yrt,yu->rtu", p, u2, u1)
+        k3 += np.einsum("y,yrtu->rtu", p, u3)
+    inv = np.linalg.inv(info)
+    return np.einsum("sr,tu,rtu->s", inv, inv, k2 + 0.5 * k3)
+
+
+#: The written-out expectations' own error (the Gaussian's sum over 4001 points, the
+#: counts' truncated at 2000) against the second differences' truncation at 0.1 σ.
+EXACT_REL = 2e-3
+
+
+@pytest.mark.parametrize("noise", [None, 3.0, "gaussian"])
+def test_three_correlated_parameters_with_cross_curvature(noise):
+    """μ_i = c_i + exp(X_i θ), three correlated parameters whose Hessian is full: the bias
+    equals Cox and Snell's written out (_cox_snell) for Poisson, negative binomial (M = 3)
+    and Gaussian data."""
+    t = np.linspace(-1.0, 1.0, 15)
+    X = np.c_[np.ones_like(t), t, t * t]
+    c = 2.0 + 3.0 * t ** 2
+    theta = np.array([np.log(12.0), 0.8, -0.6])
+    mu = lambda th: c + np.exp(X @ th)
+    jac = lambda th: np.exp(X @ th)[:, None] * X
+    hess = lambda th: np.exp(X @ th)[:, None, None] * X[:, :, None] * X[:, None, :]
+    third = lambda th: hess(th)[..., None] * X[:, None, None, :]
+    m = mu(theta)
+    w = (np.full(m.size, 2.0) if noise == "gaussian"
+         else 1.0 / (m + (0.0 if noise is None else m * m / noise)))
+    J = jac(theta)
+    b = first_order(mu, theta, J, w, _fisher_parts(J, w))
+    exact = _cox_snell(mu, jac, hess, third, theta, noise)
+    assert np.allclose(b, exact, rtol=EXACT_REL, atol=0.0), (b, exact)
+
+
+def test_beside_a_null_direction_the_combination_is_free():
+    """μ = 20 exp(θ0 + θ1 + θ2 t): the data see θ0 + θ1 only. With the generalised inverse
+    (as the fit passes it) θ2's bias is that of the model in (s = θ0 + θ1, θ2) written out;
+    θ0 and θ1 get none (not determined)."""
+    t = np.linspace(0.2, 2.0, 12)
+    x = np.array([0.1, 0.2, -0.7])
+    mu = lambda z: 20.0 * np.exp(z[0] + z[1] + z[2] * t)
+    m = mu(x)
+    w = 1.0 / m
+    J = m[:, None] * np.c_[np.ones_like(t), np.ones_like(t), t]
+    generalised = np.linalg.pinv(J.T @ (w[:, None] * J))
+    b = first_order(mu, x, J, w, generalised, determined=[False, False, True])
+    A = np.c_[np.ones_like(t), t]
+    mu2 = lambda z: 20.0 * np.exp(A @ z)
+    jac2 = lambda z: mu2(z)[:, None] * A
+    hess2 = lambda z: jac2(z)[:, :, None] * A[:, None, :]
+    third2 = lambda z: hess2(z)[..., None] * A[:, None, None, :]
+    exact = _cox_snell(mu2, jac2, hess2, third2, np.array([0.3, -0.7]), None)
+    assert np.isnan(b[:2]).all()
+    assert b[2] == pytest.approx(exact[1], rel=EXACT_REL)
+
+
+def test_a_curvature_that_changes_within_the_steps_gives_no_bias():
+    """μ_i = a_i (1 + θ) + K (θ − θ̂)⁴: the second difference is 2 K h² at h and 8 K h² at
+    2h, so with K large the two steps disagree beyond AGREE σ and the bias is NaN; with
+    K = 0 it is 0."""
+    a = np.array([30.0, 20.0, 10.0])
+    x = np.array([0.5])
+    for K, finite in ((0.0, True), (1e9, False)):
+        mu = lambda z, K=K: a * (1.0 + z[0]) + K * (z[0] - x[0]) ** 4
+        J = a[:, None]
+        w = 1.0 / mu(x)
+        b = first_order(mu, x, J, w, _fisher_parts(J, w))
+        assert np.isfinite(b[0]) == finite
+        if finite:
+            assert abs(b[0]) < 1e-9
