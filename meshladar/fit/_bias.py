@@ -78,33 +78,33 @@ def first_order(values, x, J, w, generalised, determined=None):
     if not wanted.any():
         return bias
     C = generalised[np.ix_(live, live)]
-    fine, coarse = (_bias(values, x, J[:, live], w, C, live, step) for step in (STEP, 2 * STEP))
+    sd = np.sqrt(np.maximum(np.diag(C), 1e-300))
+    lam, vec = np.linalg.eigh(C / np.outer(sd, sd))
+    axes = []
+    for k in np.flatnonzero(lam > 0.0):
+        axis = np.zeros(n)
+        axis[live] = sd * vec[:, k]
+        axes.append((lam[k], axis))
+    m0 = values(x)
+    fine, coarse = (_bias(values, x, m0, axes, step) for step in (STEP, 2 * STEP))
     if fine is None or coarse is None:
         return bias
-    sd = np.sqrt(np.maximum(np.diag(C), 0.0))
-    held = np.abs(fine - coarse) <= AGREE * sd
-    bias[live] = np.where(held, fine, np.nan)
+    b = -0.5 * C @ (J[:, live].T @ (w[:, None] * np.vstack([fine, coarse]).T))
+    bias[live] = np.where(np.abs(b[:, 0] - b[:, 1]) <= AGREE * sd, b[:, 0], np.nan)
     bias[~wanted] = np.nan
     return bias
 
 
-def _bias(values, x, Jl, w, C, live, step):
-    """−½ C Jᵀ W d over the ``live`` parameters, d from second differences at ``step`` of
-    each principal axis's σ (None where an axis cannot be evaluated)."""
-    sd = np.sqrt(np.maximum(np.diag(C), 1e-300))
-    lam, vec = np.linalg.eigh(C / np.outer(sd, sd))
-    m0 = values(x)
+def _bias(values, x, m0, axes, step):
+    """d_i = tr(C H_i), C = Σ λ a aᵀ over its principal ``axes`` (λ, a), from second
+    differences at ``step`` of each axis's σ (None where an axis cannot be evaluated)."""
     d = np.zeros_like(m0)
-    for k in range(live.size):
-        if not lam[k] > 0.0:
-            continue
-        axis = np.zeros(x.size)
-        axis[live] = sd * vec[:, k]
-        curve = _second_difference(values, x, m0, axis, step * np.sqrt(lam[k]))
+    for lam, axis in axes:
+        curve = _second_difference(values, x, m0, axis, step * np.sqrt(lam))
         if curve is None:
             return None
-        d += lam[k] * curve
-    return -0.5 * C @ (Jl.T @ (w * d))
+        d += lam * curve
+    return d
 
 
 def _second_difference(values, x, m0, axis, h):
