@@ -178,7 +178,8 @@ def test_the_pair_at_1e3_names_what_it_cannot_determine():
 #: spread over every core (about an hour of CPU). Measured 2026-12-04 on these 200 trials:
 #: coverage 0.91-0.965 (the aluminium's ε and e 0.965), mean bias of the six ≤ 0.21 σ,
 #: median bias of the profiled two +0.20 and −0.17 σ (their mean +0.42 and −0.48 σ,
-#: heavy-tailed: spread 2.6 and 3.1 σ).
+#: heavy-tailed: spread 2.6 and 3.1 σ): the estimates fall in two basins along the
+#: ridge (see WIDE_LAD).
 PAIR_1E4_TRIALS = 200
 PAIR_1E4_PROFILED = ("small.epsilon", "small.e")
 
