@@ -86,7 +86,7 @@ def first_order(values, x, J, w, generalised, determined=None):
         axis[live] = sd * vec[:, k]
         axes.append((lam[k], axis))
     m0 = values(x)
-    fine, coarse = (_bias(values, x, m0, axes, step) for step in (STEP, 2 * STEP))
+    fine, coarse = (_traces(values, x, m0, axes, step) for step in (STEP, 2 * STEP))
     if fine is None or coarse is None:
         return bias
     b = -0.5 * C @ (J[:, live].T @ (w[:, None] * np.vstack([fine, coarse]).T))
@@ -95,7 +95,7 @@ def first_order(values, x, J, w, generalised, determined=None):
     return bias
 
 
-def _bias(values, x, m0, axes, step):
+def _traces(values, x, m0, axes, step):
     """d_i = tr(C H_i), C = Σ λ a aᵀ over its principal ``axes`` (λ, a), from second
     differences at ``step`` of each axis's σ (None where an axis cannot be evaluated)."""
     d = np.zeros_like(m0)
