@@ -166,8 +166,9 @@ def _widened(coefficients, live, n):
 
 def _loose_ones(reasons, live, involved, at, named):
     """Mark, among the determined live parameters, those whose σ exceeds half their range
-    (or, non-negative or unbounded, half their value) or which trade off with another
-    beyond _CORR_LIMIT while loose."""
+    (or, non-negative or unbounded, half their value), and both of a pair that trade off
+    beyond _CORR_LIMIT where either is loose (σ beyond _LOOSE of its value): the loose
+    one's skew carries along the ridge to the other, however small the other's σ."""
     sub, width, x = at
     params, label = named
     sd = np.sqrt(np.maximum(np.diag(sub), 0.0))
@@ -181,11 +182,14 @@ def _loose_ones(reasons, live, involved, at, named):
                           f"({x[i]:.3g})")
     safe = np.where(sd > 0, sd, 1.0)
     corr = sub / np.outer(safe, safe)
+    loose = sd > _LOOSE * np.maximum(np.abs(np.asarray(x, float)[live]), 1e-12)
     for a, i in enumerate(live):
         for b, j in enumerate(live):
-            if i < j and not (involved[a] or involved[b]) and abs(corr[a, b]) > _CORR_LIMIT:
-                for k, other, s in ((i, j, sd[a]), (j, i, sd[b])):
-                    if reasons[k] is True and s > _LOOSE * max(abs(x[k]), 1e-12):
+            # a pair on a ridge with a loose member: both estimates move along it together
+            if (i < j and not (involved[a] or involved[b]) and abs(corr[a, b]) > _CORR_LIMIT
+                    and (loose[a] or loose[b])):
+                for k, other in ((i, j), (j, i)):
+                    if reasons[k] is True:
                         reasons[k] = (f"it trades off with {label(other)} (correlation "
                                       f"{corr[a, b]:+.4f})")
 

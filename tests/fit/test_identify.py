@@ -195,3 +195,31 @@ def test_a_ridge_names_the_combination_across_it(rho):
     (c, sigma), = found.combinations
     assert np.allclose(c, [-np.sign(rho) * s2 / s1, 1.0, 0.0], rtol=1e-9, atol=1e-15)
     assert sigma == pytest.approx(s2 * np.sqrt(2.0 * (1.0 - abs(rho))), rel=1e-6)
+
+
+@pytest.mark.parametrize("rho, e, flagged", [(-0.999, 0.006, True), (-0.999, 0.02, False),
+                                             (-0.99, 0.006, False)])
+def test_both_of_a_ridge_with_a_loose_member_are_weakly_determined(rho, e, flagged):
+    """Two parameters correlated at ρ (σ 0.1 and 0.002, as above) beside an independent
+    third: where the pair trades off beyond ±0.995 and one of them is loose (e's σ 0.002
+    beyond a quarter of its value 0.006, yet within half of it), both are named weakly
+    determined, the tight ε too (σ 0.1 of 0.5: its estimate moves along the ridge with e's),
+    and both keep their σ; with e at 0.02 (σ a tenth of it) or at ρ = −0.99 neither is."""
+    from meshladar.fit._identify import _uncertainty
+    from meshladar.fit._params import _Param
+
+    s1, s2 = RIDGE_SIGMAS
+    cov = np.array([[s1 ** 2, rho * s1 * s2, 0.0], [rho * s1 * s2, s2 ** 2, 0.0],
+                    [0.0, 0.0, 0.01 ** 2]])
+    params = [_Param(0, "epsilon", 0.0, 1.0), _Param(0, "e", 1e-4, 1.0),
+              _Param(1, "rho_d", 0.0, 1.0)]
+    found = _uncertainty(np.linalg.inv(cov), np.array([0.5, e, 0.3]), params,
+                         lambda i: params[i].label)
+    assert np.allclose(np.sqrt(np.diag(found.covariance)), [s1, s2, 0.01], rtol=1e-9)
+    if not flagged:
+        assert found.reasons == [True, True, True]
+        return
+    assert found.reasons[2] is True
+    for i, other in ((0, 1), (1, 0)):
+        assert found.reasons[i] == (f"it trades off with {params[other].label} "
+                                    f"(correlation {rho:+.4f})")
