@@ -12,12 +12,13 @@
 from __future__ import annotations
 
 from ._params import SR_BOUNDS
-from .coatings import (KERNEL_TOL, NOISE_MODELS, CoatingFit, IdentifiabilityWarning,
-                       KernelErrorWarning, fit_coatings)
+from .coatings import (KERNEL_TOL, NOISE_MODELS, NOTED_BIAS, CoatingFit,
+                       IdentifiabilityWarning, KernelErrorWarning, fit_coatings)
 from .design import ViewDesign, design_views
 from .kernels import GRID, CoatingKernel, coating_kernel
 from .shapes import SceneFit, find_shapes, fit_scene
 
 __all__ = ["CoatingKernel", "coating_kernel", "fit_coatings", "CoatingFit",
-           "IdentifiabilityWarning", "KernelErrorWarning", "KERNEL_TOL", "design_views", "ViewDesign", "NOISE_MODELS",
+           "IdentifiabilityWarning", "KernelErrorWarning", "KERNEL_TOL", "NOTED_BIAS",
+           "design_views", "ViewDesign", "NOISE_MODELS",
            "SR_BOUNDS", "GRID", "SceneFit", "find_shapes", "fit_scene"]

@@ -35,7 +35,7 @@ from ..precision import ANGLE_TOL_DEG
 from ..waveforms import Waveforms
 from ..scene import Scene
 from . import _bias, _irls, _profile
-from ._coating_fit import CoatingFit
+from ._coating_fit import NOTED_BIAS, CoatingFit
 from ._identify import NULL_REL, _correlation, _misfit, _uncertainty, describe
 from ._building import parts_of
 from ._params import PartList, _materials, _resolve_params
@@ -45,7 +45,7 @@ from ._tables import _table
 from .kernels import MAX_KERNEL_SAMPLES, CoatingKernel, coating_kernel
 
 __all__ = ["fit_coatings", "CoatingFit", "IdentifiabilityWarning", "KernelErrorWarning",
-           "NOISE_MODELS", "KERNEL_TOL"]
+           "NOISE_MODELS", "KERNEL_TOL", "NOTED_BIAS"]
 
 #: Noise models of :func:`fit_coatings`.
 NOISE_MODELS = ("gaussian", "poisson")

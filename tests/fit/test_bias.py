@@ -6,18 +6,22 @@ same in log α (the delta method's −Var(α̂)/(2α²)), an undetermined parame
 valid on one side of the estimate only; against Cox and Snell's sum written out with
 analytic derivatives and expectations over the data's distribution (three correlated
 parameters with a full Hessian, for Poisson, negative binomial and Gaussian data; a
-parameter beside a null direction); a curvature that changes within the steps (NaN); and a
-fit's own field on a linear and a nonlinear coating parameter."""
+parameter beside a null direction); a curvature that changes within the steps (NaN); a
+fit's own field on a linear and a nonlinear coating parameter; and the report's line of
+notable biases, on a user's coating whose estimate is the log of a Poisson mean."""
 
 from __future__ import annotations
+
+import dataclasses
+import math
 
 import numpy as np
 import pytest
 from scipy import stats
 
 import meshladar as ml
-from meshladar.brdf import Lambertian, SandfordRobertson
-from meshladar.fit import fit_coatings
+from meshladar.brdf import BRDF, Lambertian, SandfordRobertson
+from meshladar.fit import NOTED_BIAS, fit_coatings
 from meshladar.fit._bias import first_order
 from meshladar.ladar import Ladar
 from meshladar.scene import Scene
@@ -235,3 +239,41 @@ def test_a_curvature_that_changes_within_the_steps_gives_no_bias():
         assert np.isfinite(b[0]) == finite
         if finite:
             assert abs(b[0]) < 1e-9
+
+
+@dataclasses.dataclass(frozen=True)
+class _LogLambert(BRDF):
+    """A user's model: a Lambertian coating of albedo exp(log_albedo)."""
+
+    log_albedo: float
+
+    def projected(self, cos_theta, sin_theta):
+        return math.exp(self.log_albedo) * np.maximum(cos_theta, 0.0) / math.pi
+
+
+@pytest.mark.parametrize("total, listed", [(16, True), (400, False)])
+def test_the_report_names_a_bias_from_a_tenth_of_sigma(total, listed):
+    """A user's coating of albedo exp(θ) under Poisson counts: the estimate matches the
+    counts' total N, so its σ is 1/√N and its first-order bias, that of the log of a
+    Poisson mean, −1/(2N): −1/(2√N) σ (closed form). With about 16 counts in all that is
+    about −0.125 σ, and the report names it (seed 5: 15 counts, −0.13 σ, the coatings
+    guide's example); with about 400, −0.025 σ, below NOTED_BIAS, it names none."""
+    lad = Ladar(np.arange(0.0, 360.0, 10.0), Ladar.centered(48, 1.4 / 48).bin_edges)
+    scene = Scene([Disk((0.0, 0.0), 0.5, _LogLambert(math.log(0.5)), name="disk")])
+    exact = ml.simulate(scene, lad, model="analytic").values
+    k = total / exact.sum()
+    y = np.random.default_rng(5).poisson(exact * k)
+    measured = ml.Sinogram(y / k, angles_deg=lad.angles_deg, bin_edges=lad.bin_edges,
+                           info={"radiometry": "paper"})
+    fit = fit_coatings(scene, measured, noise="poisson", photons_per_unit=k,
+                       bounds={"log_albedo": (-10.0, 10.0)})
+    n = y.sum()
+    assert fit.stderr[0] == pytest.approx(1.0 / math.sqrt(n), rel=REL)
+    assert fit.bias[0] / fit.stderr[0] == pytest.approx(-0.5 / math.sqrt(n), rel=REL)
+    line = [s for s in fit.report() if "first-order bias" in s]
+    assert (0.5 / math.sqrt(n) >= NOTED_BIAS) == listed
+    if listed:                                     # the coatings guide's example
+        assert n == 15 and line == ["  first-order bias: disk.log_albedo -0.13 σ "
+                                    "(fit.corrected removes it)"]
+    else:
+        assert line == []
