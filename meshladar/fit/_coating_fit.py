@@ -230,7 +230,7 @@ class CoatingFit:
             out.append(f"  determined: {c} = {v:.5g} ± {e:.3g}")
         skewed = self._skewed()
         if skewed:
-            out.append(f"  first-order bias: {skewed} (fit.corrected removes it)")
+            out.append(f"  first-order bias: {skewed} (fit.corrected subtracts it)")
         out.append(f"  kernel error: {self._kernel_line()}")
         return out
 
@@ -239,7 +239,7 @@ class CoatingFit:
         :data:`NOTED_BIAS` of their σ ('' where none does, or the bias is unknown)."""
         if self.bias is None:
             return ""
-        with np.errstate(invalid="ignore", divide="ignore"):
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             z = self.bias / self.stderr
         return ", ".join(f"{n} {v:+.2f} σ" for n, v in zip(self.names, z)
                          if np.isfinite(v) and abs(v) >= NOTED_BIAS)

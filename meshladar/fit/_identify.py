@@ -31,7 +31,8 @@ NULL_REL = 1e-9
 _SHARE = 0.05
 #: Also undetermined: a σ beyond half the bounds' width, a non-negative or unbounded
 #: parameter's σ beyond half its value (its 95 % interval spans more than a factor 7), or a
-#: correlation beyond _CORR_LIMIT with another while σ exceeds _LOOSE of the value.
+#: correlation beyond _CORR_LIMIT with another while either of the two is loose: σ beyond
+#: _LOOSE of its value (non-negative or unbounded) or of its bounds' width (signed).
 _REL_LIMIT = 0.5
 _CORR_LIMIT = 0.995
 _LOOSE = 0.25
@@ -167,8 +168,9 @@ def _widened(coefficients, live, n):
 def _loose_ones(reasons, live, involved, at, named):
     """Mark, among the determined live parameters, those whose σ exceeds half their range
     (or, non-negative or unbounded, half their value), and both of a pair that trade off
-    beyond _CORR_LIMIT where either is loose (σ beyond _LOOSE of its value): the loose
-    one's skew carries along the ridge to the other, however small the other's σ."""
+    beyond _CORR_LIMIT where either is loose (σ beyond _LOOSE of its value, or of its
+    bounds' width where it may be negative): the loose one's skew carries along the ridge
+    to the other, however small the other's σ."""
     sub, width, x = at
     params, label = named
     sd = np.sqrt(np.maximum(np.diag(sub), 0.0))
@@ -182,7 +184,8 @@ def _loose_ones(reasons, live, involved, at, named):
                           f"({x[i]:.3g})")
     safe = np.where(sd > 0, sd, 1.0)
     corr = sub / np.outer(safe, safe)
-    loose = sd > _LOOSE * np.maximum(np.abs(np.asarray(x, float)[live]), 1e-12)
+    loose = [sd[a] > _LOOSE * max(abs(x[i]) if params[i].low >= 0.0 or not math.isfinite(
+        width[i]) else width[i], 1e-12) for a, i in enumerate(live)]
     for a, i in enumerate(live):
         for b, j in enumerate(live):
             # a pair on a ridge with a loose member: both estimates move along it together

@@ -287,6 +287,7 @@ def test_the_pair_at_1e4_names_the_ridge_and_measures_across_it(monkeypatch):
     known = np.array([r[3] for r in rows])
     eps = list(names).index(RIDGE[0])
     called = known[:, eps]
+    assert called.any()
     assert inside[called, eps].mean() >= _floor(called.sum()), (called.sum(),
                                                                inside[called, eps].mean())
     others = ~np.isin(names, RIDGE)
