@@ -29,6 +29,10 @@ def order_returns(pulse, time, order, number, count):    # pragma: no cover - co
         b = a
         while b < n and pulse[b] == pulse[a]:
             b += 1
+        if b == a + 1:                  # a pulse's one return: no sort
+            order[a], number[a], count[a] = a, 1, 1
+            a = b
+            continue
         sort_small(time[a:b], order[a:b])
         for i in range(a, b):
             order[i] += a
@@ -119,11 +123,15 @@ def find_peaks(waves, echoes, tables, detect, level, weights, half, separation, 
                     c += 1
         if c == 0:
             continue
+        if c == 1 and max_returns > 0:  # the one peak: kept, no sort
+            count = _keep_peak(p, at[0], amp[0], filt, out_p, out_j, out_f, count)
+            continue
         for i in range(c):
             neg[i] = -amp[i]
         sort_small(neg[:c], order[:c])             # strongest first, ties in time order
         nk = 0
-        for o in order[:c]:
+        for r in range(c):
+            o = order[r]
             if nk == max_returns:
                 break
             ok = True
@@ -135,14 +143,20 @@ def find_peaks(waves, echoes, tables, detect, level, weights, half, separation, 
                 continue
             kept[nk] = at[o]
             nk += 1
-            i = at[o]
-            out_p[count] = p
-            out_j[count] = i
-            out_f[count, 0] = filt[i]
-            out_f[count, 1] = amp[o]
-            out_f[count, 2] = filt[i + 2]
-            count += 1
+            count = _keep_peak(p, at[o], amp[o], filt, out_p, out_j, out_f, count)
     return count
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _keep_peak(p, i, f, filt, out_p, out_j, out_f, count):   # pragma: no cover - compiled
+    """:func:`find_peaks`' output row ``count``: pulse p's peak at sample i (filtered
+    value f, its neighbours from ``filt``). Returns the next row."""
+    out_p[count] = p
+    out_j[count] = i
+    out_f[count, 0] = filt[i]
+    out_f[count, 1] = f
+    out_f[count, 2] = filt[i + 2]
+    return count + 1
 
 
 @numba.njit(cache=True, nogil=True)
