@@ -4,9 +4,9 @@ width in their flat order (a packet may hold the end of one pulse and the start 
 next), Embree's first hits, and each hit refined in float64 (:func:`._kernels.refine_hit`).
 The rays, packets and hits are those of the staged path (:func:`.cast.cast_chunk` over
 :func:`.cast.world_directions`) number for number, without its per-sub-ray direction,
-origin and distance arrays. Where the coatings have compiled rows (and are not all
-Lambertian), each hit is weighed in the loop too: its photoelectrons, those of
-:func:`.cast.photoelectrons` bit for bit (the same compiled twin, :func:`projected`)."""
+origin and distance arrays. Where the coatings have compiled rows, each hit is weighed
+in the loop too: its photoelectrons, those of :func:`.cast.photoelectrons` bit for bit
+(the same compiled twin, :func:`projected`)."""
 
 from __future__ import annotations
 
@@ -109,8 +109,12 @@ def link_budget(weight, r, share, budget, extinction):    # pragma: no cover - c
 @numba.njit(cache=True, nogil=True, inline="always")
 def projected(c, s2, params, i):                          # pragma: no cover - compiled
     """F(θ; −θ)·cos θ of the coating whose compiled row is params[i] (read by index: no
-    row view per hit), from cos θ and sin²θ; a Lambertian row's is its numpy
-    ``projected`` bit for bit."""
+    row view per hit), from cos θ and sin²θ. A diffuse-only row with b = 0 and G = 1 (a
+    Lambertian's) is ρd/π · cos θ, as its numpy ``projected`` computes it and bit for bit
+    the SR expression's value there (g ≡ 1), without evaluating it."""
+    if params[i, 6] <= 0.5 and params[i, 5] > 0.5 and params[i, 2] == 0.0 \
+            and params[i, 4] == 1.0:
+        return params[i, 0] / math.pi * c
     return sr_monostatic(c, s2, params[i, 0], params[i, 1], params[i, 2], params[i, 3],
                          params[i, 4], params[i, 5] > 0.5, params[i, 6] > 0.5) * c
 
