@@ -146,7 +146,9 @@ class CoatingFit:
         estimate) (the delta method's σ of the logarithm): it stays positive and follows
         the right skew of a width's estimates (the glinting disk's b at 10³ photons covers
         0.93 of the truths, against 0.88 for estimate ∓ z σ; the same at 10⁴, on 100
-        seeded trials each); any other gets estimate ∓ z σ.
+        seeded trials each); any other gets estimate ∓ z σ. Either end stops at the
+        search's bound (``info["bounds"]``): a narrow glint's ε of 0.80 ± 0.17 gets
+        [0.53, 1], not [0.53, 1.21] (tested).
 
         ``method="profile"``: the likelihood-ratio interval, the values whose profile
         misfit (the others refitted) rises at most z² (:mod:`._profile`): right where the
@@ -185,6 +187,9 @@ class CoatingFit:
         method = check_choice("method", method, ("normal", "profile"))
         z = float(ndtri(0.5 + 0.5 * level))
         low, high = _profile.normal(self.estimate, self.stderr, self.info.get("positive"), z)
+        bounds = self.info.get("bounds")
+        if bounds is not None:                     # no end beyond what the search allows
+            low, high = np.maximum(low, bounds[0]), np.minimum(high, bounds[1])
         if method == "normal":
             return low, high
         if self._likelihood is None:

@@ -244,7 +244,8 @@ def test_a_glint_never_seen_leaves_its_parameters_undetermined():
 
 def test_an_interval_with_a_sigma_far_beyond_its_estimate_is_unbounded_without_a_warning():
     """On the log scale a σ 10⁴ times its estimate takes the top past float64: the interval
-    is (0, inf), not an overflow warning (warnings are errors here)."""
+    is (0, 1], ending at the search's bound, not an overflow warning (warnings are errors
+    here)."""
     import dataclasses
 
     scene = Scene([Disk((0.0, 0.0), 0.5, materials.DARK_GRAY, name="disk")])
@@ -254,5 +255,27 @@ def test_an_interval_with_a_sigma_far_beyond_its_estimate_is_unbounded_without_a
     wide = dataclasses.replace(fit, estimate=np.array([1e-3, 0.5]),
                                stderr=np.array([10.0, 0.01]))
     lo, hi = wide.interval(0.95)
-    assert hi[0] == np.inf and 0.0 <= lo[0] < 1e-300
+    assert hi[0] == fit.info["bounds"][1][0] == 1.0 and 0.0 <= lo[0] < 1e-300
     assert np.isfinite(hi[1]) and 0.48 < lo[1] < 0.5 < hi[1] < 0.52
+
+
+def test_a_normal_interval_ends_at_the_searchs_bound():
+    """A narrow glint's ε of 0.80 ± 0.17 (the paper's aluminium at 10⁴ photoelectrons on
+    one trial): its log-scale interval 0.80 · exp(∓1.96 · 0.17 / 0.80) = [0.5275, 1.2133]
+    ends at ε's bound, 1 (the interval method's docstring); within the bounds it is the
+    closed form's."""
+    import dataclasses
+
+    scene = Scene([Disk((0.0, 0.0), 0.5, materials.DARK_GRAY, name="disk")])
+    lad = ml.Ladar.paper(angles_deg=np.arange(0.0, 360.0, 30.0))
+    fit = fit_coatings(scene, ml.simulate(scene, lad), free=["epsilon", "b"],
+                       kernel_tol=None)                                   # noiseless
+    wide = dataclasses.replace(fit, estimate=np.array([0.80, 0.5]),
+                               stderr=np.array([0.17, 0.01]))
+    lo, hi = wide.interval(0.95)
+    z = 1.959963984540054
+    assert lo[0] == pytest.approx(0.80 * np.exp(-z * 0.17 / 0.80), rel=1e-12)
+    assert round(lo[0], 4) == 0.5275 and round(0.80 * np.exp(z * 0.17 / 0.80), 4) == 1.2133
+    assert hi[0] == 1.0
+    assert (lo[1], hi[1]) == pytest.approx((0.5 * np.exp(-z * 0.02), 0.5 * np.exp(z * 0.02)),
+                                           rel=1e-12)

@@ -65,8 +65,9 @@ def test_specular_only_sr_names_rho_d_plus_epsilon():
     assert sigma == pytest.approx(ref.stderr[0], rel=0.02)
     text = "\n".join(fit.report())
     assert "determined: disk.rho_d + disk.epsilon" in text and "NOT DETERMINED" in text
-    lo, hi = fit.interval()
-    assert lo[0] == -np.inf and hi[1] == np.inf                # no NaN, no warning
+    lo, hi = fit.interval()                      # the search's bounds: no NaN, no warning
+    assert lo[0] == fit.info["bounds"][0][0] and hi[1] == fit.info["bounds"][1][1]
+    assert np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))
 
 
 @pytest.mark.parametrize("case", ["sr diffuse-only", "sr no glint", "phong ks=0",
