@@ -110,9 +110,14 @@ class CoatingFit:
         bounds; the estimate itself where the bias is unknown."""
         if self.bias is None:
             return self.estimate.copy()
-        out = self.estimate - np.where(np.isfinite(self.bias), self.bias, 0.0)
+        return self._within_bounds(self.estimate - np.where(np.isfinite(self.bias),
+                                                            self.bias, 0.0))
+
+    def _within_bounds(self, values):
+        """``values`` (one per parameter) clipped to the search's bounds
+        (``info["bounds"]``, where the fit records them)."""
         bounds = self.info.get("bounds")
-        return out if bounds is None else np.clip(out, bounds[0], bounds[1])
+        return values if bounds is None else np.clip(values, bounds[0], bounds[1])
 
     def _kernel_line(self):
         if self.kernel_error is None:
@@ -186,10 +191,8 @@ class CoatingFit:
         level = check_real("level", level, low=0.0, high=1.0, low_open=True, high_open=True)
         method = check_choice("method", method, ("normal", "profile"))
         z = float(ndtri(0.5 + 0.5 * level))
-        low, high = _profile.normal(self.estimate, self.stderr, self.info.get("positive"), z)
-        bounds = self.info.get("bounds")
-        if bounds is not None:                     # no end beyond what the search allows
-            low, high = np.maximum(low, bounds[0]), np.minimum(high, bounds[1])
+        low, high = (self._within_bounds(v) for v in _profile.normal(
+            self.estimate, self.stderr, self.info.get("positive"), z))
         if method == "normal":
             return low, high
         if self._likelihood is None:

@@ -174,18 +174,20 @@ def _loose_ones(reasons, live, involved, at, named):
     sub, width, x = at
     params, label = named
     sd = np.sqrt(np.maximum(np.diag(sub), 0.0))
+    # a σ is weighed against the value where the parameter is non-negative or unbounded,
+    # else against its bounds' width
+    by_value = [params[i].low >= 0.0 or not math.isfinite(width[i]) for i in live]
     for a, i in enumerate(live):
         bounded = math.isfinite(params[i].high - params[i].low)
         if not involved[a] and bounded and sd[a] > _REL_LIMIT * width[i]:
             reasons[i] = f"its uncertainty ({sd[a]:.3g}) exceeds half its range"
-        elif (not involved[a] and (params[i].low >= 0.0 or not bounded)
-              and sd[a] > _REL_LIMIT * abs(x[i])):
+        elif not involved[a] and by_value[a] and sd[a] > _REL_LIMIT * abs(x[i]):
             reasons[i] = (f"its uncertainty ({sd[a]:.3g}) exceeds half its value "
                           f"({x[i]:.3g})")
     safe = np.where(sd > 0, sd, 1.0)
     corr = sub / np.outer(safe, safe)
-    loose = [sd[a] > _LOOSE * max(abs(x[i]) if params[i].low >= 0.0 or not math.isfinite(
-        width[i]) else width[i], 1e-12) for a, i in enumerate(live)]
+    loose = [sd[a] > _LOOSE * max(abs(x[i]) if by_value[a] else width[i], 1e-12)
+             for a, i in enumerate(live)]
     for a, i in enumerate(live):
         for b, j in enumerate(live):
             # a pair on a ridge with a loose member: both estimates move along it together
