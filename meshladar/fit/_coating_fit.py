@@ -132,6 +132,7 @@ class CoatingFit:
                                                else " (undetermined)"))
                   for n, v, e in zip(self.names, self.estimate, self.stderr)),
                 *((c, f"{v:.5g} ± {e:.3g} (determined)") for c, v, e in self.combinations),
+                *((("first-order bias", self._skewed()),) if self._skewed() else ()),
                 ("misfit", f"{self.deviance:.4g} on {self.dof} dof"),
                 ("kernel error", self._kernel_line()))
 

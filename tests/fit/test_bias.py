@@ -289,5 +289,8 @@ def test_the_report_names_a_bias_from_a_tenth_of_sigma(coating, sign, total, lis
     if listed:                                     # the coatings guide's example, and its sign
         assert n == 15 and line == [f"  first-order bias: disk.{name} {'-+'[sign > 0]}0.13 σ "
                                     "(fit.corrected subtracts it)"]
+        assert f"first-order bias='disk.{name} {'-+'[sign > 0]}0.13 σ'" in repr(fit)
+        assert f"disk.{name} {'-+'[sign > 0]}0.13 σ" in fit._repr_html_()
     else:
         assert line == []
+        assert "first-order bias" not in repr(fit) + fit._repr_html_()
