@@ -314,13 +314,16 @@ def _scatter(ex, payload):
 
 
 def _on_executor(ex, tasks, todo, keep):
-    """Run the chunks ``todo`` on ``ex``, ``keep(k, result)`` as each completes."""
+    """Run the chunks ``todo`` on ``ex``, ``keep(k, result)`` as each completes: one pass of
+    ``as_completed`` over the submitted futures (time linear in the chunks), then one over
+    those sent again, until none is left."""
     shared = _scatter(ex, tasks.payload)
     futures = {ex.submit(tasks.fn, shared, tasks.chunks[k], *tasks.args): k for k in todo}
     retries = {}
     while futures:
-        for f in as_completed(list(futures)):
-            k = futures.pop(f)
+        again = {}
+        for f in as_completed(futures):
+            k = futures[f]
             try:
                 keep(k, f.result())
             except CancelledError:
@@ -329,8 +332,8 @@ def _on_executor(ex, tasks, todo, keep):
                 retries[k] = retries.get(k, 0) + 1
                 if retries[k] > _MAX_RETRIES:
                     raise
-                futures[ex.submit(tasks.fn, tasks.payload, tasks.chunks[k], *tasks.args)] = k
-            break
+                again[ex.submit(tasks.fn, tasks.payload, tasks.chunks[k], *tasks.args)] = k
+        futures = again
 
 
 #: Address schemes of a Dask scheduler.
