@@ -9,8 +9,8 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["MIN_RANGE", "world_sub_rays", "pulse_sub_rays", "pack_rays", "refine_hits",
-           "refine_hit", "assign_truth", "erf", "sort_small", "discrete_returns"]
+__all__ = ["MIN_RANGE", "world_sub_rays", "offset_table", "pulse_sub_rays", "pack_rays",
+           "refine_hits", "refine_hit", "assign_truth", "erf", "sort_small", "discrete_returns"]
 
 #: The nearest hit a sub-ray can range, m: a hit at this distance from its origin or
 #: nearer (zero or, by rounding, negative: a sensor on a surface) is a miss, and the
@@ -104,22 +104,44 @@ def world_sub_rays(rot, local, offsets, pitch, out):     # pragma: no cover - co
     """out[p, k] = rot[p] @ (pulse p's sub-ray k in the sensor frame), normalised; a beam's
     offsets are angles about the pulse's direction (pitch < 0), a flash pixel's fractions
     of ``pitch`` on the focal plane x = 1."""
-    ab = offsets.copy() if pitch >= 0.0 else np.tan(offsets)     # once, not per pulse
+    ab = offset_table(offsets, pitch)                    # once, not per pulse
     for p in range(local.shape[0]):
         pulse_sub_rays(rot, local, p, ab, pitch, out, p)
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
+def offset_table(offsets, pitch):                         # pragma: no cover - compiled
+    """:func:`pulse_sub_rays`' table of the sub-rays' offsets, (m, 3): a beam's (pitch < 0)
+    tan a, tan b and 1/√(1 + tan²a + tan²b), the length's inverse of d + tan a u + tan b v
+    for orthonormal d, u, v; a flash pixel's offsets as they are (the third column 0)."""
+    m = offsets.shape[0]
+    ab = np.zeros((m, 3))
+    for k in range(m):
+        if pitch >= 0.0:
+            ab[k, 0], ab[k, 1] = offsets[k, 0], offsets[k, 1]
+        else:
+            ab[k, 0], ab[k, 1] = math.tan(offsets[k, 0]), math.tan(offsets[k, 1])
+            ab[k, 2] = 1.0 / math.sqrt(1.0 + ab[k, 0] * ab[k, 0] + ab[k, 1] * ab[k, 1])
+    return ab
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
 def pulse_sub_rays(rot, local, p, ab, pitch, out, q):     # pragma: no cover - compiled
     """out[q, k] = rot[p] @ (pulse p's sub-ray k in the sensor frame), normalised
-    (:func:`world_sub_rays`; ``ab`` the offsets, a beam's as their tangents; indices, not
-    array views, in the hot loop)."""
+    (:func:`world_sub_rays`; ``ab`` :func:`offset_table`'s; indices, not array views, in
+    the hot loop). The pulse's frame d, u, v is turned once, each sub-ray is then
+    D + a U + b V: a beam's scaled by its table's 1/length (d normalised here, u and v
+    orthonormal to it), a flash pixel's normalised itself. Either is a unit vector to a
+    few ulp (the sub-ray's direction, not its length, differs from normalising rot @ s
+    after the turn by ~1e-16)."""
     dx, dy, dz = local[p, 0], local[p, 1], local[p, 2]
     if pitch >= 0.0:
         ux, uy, uz = 0.0, pitch, 0.0
         vx, vy, vz = 0.0, 0.0, pitch
         dx, dy, dz = 1.0, dy / local[p, 0], dz / local[p, 0]
     else:
+        nd = 1.0 / math.sqrt(dx * dx + dy * dy + dz * dz)
+        dx, dy, dz = dx * nd, dy * nd, dz * nd
         # u = ref × d normalised, v = d × u (ref = z unless d is near z)
         if abs(dz) < 0.9:
             ux, uy, uz = -dy, dx, 0.0
@@ -128,15 +150,26 @@ def pulse_sub_rays(rot, local, p, ab, pitch, out, q):     # pragma: no cover - c
         nu = math.sqrt(ux * ux + uy * uy + uz * uz)
         ux, uy, uz = ux / nu, uy / nu, uz / nu
         vx, vy, vz = dy * uz - dz * uy, dz * ux - dx * uz, dx * uy - dy * ux
+    d0, d1, d2 = _turn(rot, p, dx, dy, dz)
+    u0, u1, u2 = _turn(rot, p, ux, uy, uz)
+    v0, v1, v2 = _turn(rot, p, vx, vy, vz)
     for k in range(ab.shape[0]):
-        a = ab[k, 0]
-        b = ab[k, 1]
-        s0 = dx + a * ux + b * vx
-        s1 = dy + a * uy + b * vy
-        s2 = dz + a * uz + b * vz
-        inv = 1.0 / math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
-        for i in range(3):
-            out[q, k, i] = inv * (rot[p, i, 0] * s0 + rot[p, i, 1] * s1 + rot[p, i, 2] * s2)
+        a, b = ab[k, 0], ab[k, 1]
+        s0 = d0 + a * u0 + b * v0
+        s1 = d1 + a * u1 + b * v1
+        s2 = d2 + a * u2 + b * v2
+        inv = ab[k, 2] if pitch < 0.0 else 1.0 / math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
+        out[q, k, 0] = inv * s0
+        out[q, k, 1] = inv * s1
+        out[q, k, 2] = inv * s2
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _turn(rot, p, x, y, z):                               # pragma: no cover - compiled
+    """rot[p] @ (x, y, z)."""
+    return (rot[p, 0, 0] * x + rot[p, 0, 1] * y + rot[p, 0, 2] * z,
+            rot[p, 1, 0] * x + rot[p, 1, 1] * y + rot[p, 1, 2] * z,
+            rot[p, 2, 0] * x + rot[p, 2, 1] * y + rot[p, 2, 2] * z)
 
 
 @numba.njit(cache=True, nogil=True)

@@ -18,7 +18,7 @@ import numpy as np
 from ..brdf._sandford_robertson_kernel import sr_monostatic
 from ..raytrace.embree4_ctypes import ARGS_OFF, GEOMID, PRIMID, TFAR, VALID_OFF
 from ..raytrace.embree4_kernels import init_args, load_packet, workspace
-from ._kernels import pulse_sub_rays, refine_hit
+from ._kernels import offset_table, pulse_sub_rays, refine_hit
 
 __all__ = ["cast_pulses", "projected", "projected_weights", "link_budget"]
 
@@ -42,7 +42,7 @@ def cast_pulses(fn, handle, w, flags, origins, rot, local, offsets, pitch, inver
     i32, f32, i64, base = workspace()
     init_args(i32, i64, base, flags)
     n, m = local.shape[0], offsets.shape[0]
-    ab = offsets.copy() if pitch >= 0.0 else np.tan(offsets)
+    ab = offset_table(offsets, pitch)
     dirs = np.empty((1, m, 3))                    # the current pulse's sub-rays, float64
     lane_d = np.empty((w, 3))                     # each lane's, float64, and its sub-ray
     lane_p = np.empty(w, np.int64)

@@ -158,6 +158,48 @@ def test_the_one_loop_cast_gives_the_staged_casts_hits_number_for_number(sub_ray
         np.testing.assert_array_equal(getattr(one, name), getattr(two, name))
 
 
+#: Sub-ray directions against numpy's: a few ulp of a unit vector (measured 7.8e-16, the
+#: flash's; a beam's 5.6e-16).
+DIRECTION_ULP = 1e-15
+
+
+@pytest.mark.parametrize("pitch", [None, 2e-3])
+def test_sub_ray_directions_are_the_turned_offsets_normalised(pitch):
+    """:func:`world_directions` against numpy written here from its definition: a beam's
+    sub-ray is R (d + tan a u + tan b v) normalised, u = z × d normalised (y × d where d is
+    near z), v = d × u; a flash pixel's R (1, d_y/d_x + a p, d_z/d_x + b p) normalised.
+    Unit vectors, each component within DIRECTION_ULP, for directions of every kind
+    (some near ±z, some not of unit length as given: a beam's d is normalised first; the
+    kernel once took a pulse's length for 1, and a direction of length 2 got half its
+    sub-rays' spread)."""
+    from meshladar.scan.cast import world_directions
+
+    rng = np.random.default_rng(5)
+    n, m = 400, 9
+    rot = np.linalg.qr(rng.normal(size=(n, 3, 3)))[0]
+    local = rng.normal(size=(n, 3))
+    local[:, 0] = np.abs(local[:, 0]) + 0.2
+    local[:40] = [0.01, 0.02, 1.0]                              # near +z: u from y
+    local *= rng.uniform(0.5, 2.0, (n, 1)) if pitch is None else 1.0
+    offsets = rng.uniform(-1e-2, 1e-2, (m, 2)) if pitch is None else rng.uniform(-1, 1, (m, 2))
+    got = world_directions(rot, local, offsets, pitch)
+    if pitch is None:
+        d = local / np.linalg.norm(local, axis=1)[:, None]
+        ref = np.where(np.abs(d[:, 2:]) < 0.9, [0.0, 0.0, 1.0], [0.0, 1.0, 0.0])
+        u = np.cross(ref, d)
+        u /= np.linalg.norm(u, axis=1)[:, None]
+        v = np.cross(d, u)
+        t = np.tan(offsets)
+        s = d[:, None] + t[None, :, :1] * u[:, None] + t[None, :, 1:] * v[:, None]
+    else:
+        s = np.stack(np.broadcast_arrays(
+            1.0, local[:, None, 1] / local[:, None, 0] + offsets[None, :, 0] * pitch,
+            local[:, None, 2] / local[:, None, 0] + offsets[None, :, 1] * pitch), -1)
+    want = np.einsum("nij,nkj->nki", rot, s / np.linalg.norm(s, axis=2)[..., None])
+    assert np.abs(got - want).max() < DIRECTION_ULP
+    assert np.abs(np.linalg.norm(got, axis=2) - 1.0).max() < DIRECTION_ULP
+
+
 @pytest.mark.parametrize("coating, extinction", [
     (ml.brdf.Lambertian(0.4), 0.0),
     (ml.brdf.SandfordRobertson(rho_d=0.05, epsilon=0.4, b=0.5, e=0.1), 2e-3),
