@@ -8,7 +8,8 @@ integers at ``scale`` (default 0.1 mm, coarser where the cloud spans more than 2
 steps: :func:`write_las`) from an offset at the cloud's minimum, so they read back within
 ``scale``/2; LAS's own intensity is the photoelectrons rounded and
 clipped to 16 bits (the exact value is the ``photoelectrons`` extra bytes), its scan angle
-the pattern's in LAS's 0.006° steps, its GPS time the emission time (s). Every extra-bytes
+the pattern's in LAS's 0.006° steps, its GPS time the emission time plus the platform's
+``time_origin`` (a trajectory file's ``time_offset``; s). Every extra-bytes
 field reads back exactly (:data:`EXTRA_NAMES`: the exact intensity and scan angle).
 
 HDF5: ``/points`` is one compound dataset of the records (each field's unit in the
@@ -164,7 +165,9 @@ def write_las(path, cloud, *, scale=None):
     las.intensity = np.clip(np.rint(pts["intensity"]), 0, 65535).astype(np.uint16)
     las.scan_angle = np.clip(np.rint(pts["scan_angle"] / _SCAN_ANGLE_STEP), -30000,
                              30000).astype(np.int16)
-    las.gps_time = pts["emission_time"]
+    # GPS time: the platform's clock (a trajectory's time_offset) plus the emission time
+    las.gps_time = pts["emission_time"] + cloud.info.get("platform", {}).get("time_origin_s",
+                                                                            0.0)
     for n, _, _, _ in POINT_FIELDS:
         if n not in LAS_NATIVE:
             las[_extra(n)] = pts[n]
@@ -322,17 +325,14 @@ class WaveformSink:
     Raises
     ------
     ParameterError
-        When ``path`` is not a file name or its folder does not exist.
+        When ``path`` is not a file name, names a folder, or its folder does not exist.
     OSError
         When the temporary cannot be made, naming ``path``.
     """
 
     def __init__(self, path):
         h5py = _need("h5py")
-        self.path = check_path("waveforms_file", path)
-        folder = os.path.dirname(os.path.abspath(self.path))
-        if not os.path.isdir(folder):
-            raise ParameterError(f"waveforms_file: no folder {folder!r} to write into")
+        self.path = _target(path, "waveforms_file")
         fd, self.partial = make_temporary(self.path)
         os.close(fd)                                  # h5py opens it by its name
         try:
@@ -379,6 +379,15 @@ class WaveformSink:
             self.file.close()
             if os.path.exists(self.partial):
                 os.remove(self.partial)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, kind, value, trace):
+        """Drop the temporary where the block failed (the scan, or :meth:`finish`)."""
+        if kind is not None:
+            self.abandon()
+        return False
 
 
 def read_hdf5(path):

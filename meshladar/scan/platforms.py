@@ -95,6 +95,10 @@ class Platform:
     extrapolate : bool
         Two waypoints' constant velocity holds at every time (:meth:`moving`'s); default
         False: the poses are the waypoints' between their first and last times only.
+    time_origin : float
+        The clock's time at the pattern's t = 0, s (default 0; a trajectory file's
+        ``time_offset``): LAS files take a return's GPS time as it plus its emission
+        time, and ``describe`` records it.
 
     Raises
     ------
@@ -111,6 +115,7 @@ class Platform:
     mount_offset: tuple = (0.0, 0.0, 0.0)
     boresight_deg: tuple = (0.0, 0.0, 0.0)
     extrapolate: bool = False
+    time_origin: float = 0.0
 
     def __post_init__(self):
         t = finite_array("times", self.times).astype(np.float64).ravel()
@@ -129,6 +134,7 @@ class Platform:
             raise ParameterError("extrapolate=True is a constant velocity: it needs 2 "
                                  f"waypoints interpolated linearly; got {k}, "
                                  f"{self.interpolation!r}")
+        object.__setattr__(self, "time_origin", check_real("time_origin", self.time_origin))
         object.__setattr__(self, "times", readonly_copy(t))
         object.__setattr__(self, "positions", readonly_copy(pos))
         object.__setattr__(self, "attitudes_deg", readonly_copy(att))
@@ -155,7 +161,8 @@ class Platform:
         -------
         Platform
         """
-        return cls([0.0], [position], [attitude_deg], **mount)
+        return cls([0.0], [_triple("position", position)], [_triple("attitude_deg", attitude_deg)],
+                   **mount)
 
     @classmethod
     def moving(cls, position, velocity, attitude_deg=(0.0, 0.0, 0.0), **mount):
@@ -213,7 +220,8 @@ class Platform:
             ``"linear"`` or ``"spline"``.
         time_offset : float
             The file's time at the pattern's t = 0, s (default 0): the platform's times
-            are the file's less it (a trajectory in GPS seconds of week, its scan's start).
+            are the file's less it (a trajectory in GPS seconds of week, its scan's start),
+            and its ``time_origin``.
         **mount
             ``mount_offset`` and ``boresight_deg``.
 
@@ -225,7 +233,8 @@ class Platform:
         ------
         ParameterError
             When the file cannot be read, its header differs, a row does not hold 7
-            values (its line named), or a value is not a number.
+            values (its line named), a value is not a number, or it holds fewer than two
+            rows (one pose covers no span of time: :meth:`static` is a platform at rest).
         """
         path = check_path("path", path)
         offset = check_real("time_offset", time_offset)
@@ -240,7 +249,12 @@ class Platform:
                                  f"got {','.join(header) or 'nothing'}")
         data = np.array([_row(path, line, r) for line, r in enumerate(rows[1:], 2) if r],
                         np.float64).reshape(-1, len(TRAJECTORY_COLUMNS))
-        return cls(data[:, 0] - offset, data[:, 1:4], data[:, 4:7], interpolation, **mount)
+        if len(data) < 2:
+            raise ParameterError(f"{path}: a trajectory needs 2 or more rows (its poses cover "
+                                 f"their first to last time); got {len(data)} (a platform "
+                                 "at rest: Platform.static)")
+        return cls(data[:, 0] - offset, data[:, 1:4], data[:, 4:7], interpolation,
+                   time_origin=offset, **mount)
 
     # -- poses -------------------------------------------------------------------------
     @functools.cached_property
@@ -346,12 +360,13 @@ class Platform:
         -------
         dict
             ``times_s``, ``positions``, ``attitudes_deg``, ``interpolation``,
-            ``mount_offset``, ``boresight_deg``, ``extrapolate`` and
+            ``mount_offset``, ``boresight_deg``, ``extrapolate``, ``time_origin_s`` and
             ``attitude_convention``.
         """
         return {"times_s": self.times.tolist(), "positions": self.positions.tolist(),
                 "attitudes_deg": self.attitudes_deg.tolist(),
                 "interpolation": self.interpolation, "mount_offset": list(self.mount_offset),
                 "boresight_deg": list(self.boresight_deg), "extrapolate": self.extrapolate,
+                "time_origin_s": self.time_origin,
                 "attitude_convention": "roll, pitch, yaw: Rotation.from_euler('ZYX', "
                                        "[yaw, pitch, roll]), body x forward, y left, z up"}

@@ -11,6 +11,7 @@ face. A return no sub-ray explains (a false alarm) has true part and face −1 a
 
 from __future__ import annotations
 
+import contextlib
 import math
 
 import numpy as np
@@ -228,36 +229,27 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
     per = _chunk_pulses(pattern, chunk_pulses, len(foot[0]))
     slots = sensor.detector.max_returns
     sink = _sink(waveforms_file, keep_waveforms, run_dir, executor, sensor)
-    job = ScanJob(scene, pattern, platform, sensor, foot, seed, keep_waveforms, slots, _chunk,
-                  split, sink, folder=run_dir is not None, backend=resolve_backend("auto"),
-                  part_of=_part_of(scene))
-    description = None if run_dir is None else job_description(
-        scene, pattern, platform, sensor, seed, keep_waveforms,
-        geometry(scene, "flat").key, motions)
-    results = _stream(job, per, dict(jobs=jobs, executor=executor, progress=progress,
-                                     run_dir=run_dir, job=description))
-    points, waves, starts = records(results, slots)
-    info = {"conventions": dict(CONVENTIONS), "pattern": pattern.describe(),
-            "platform": platform.describe(), "sensor": _sensor_info(pattern, sensor),
-            "seed": seed, "motions": {str(k): m.describe() for k, m in (motions or {}).items()}}
-    cloud = PointCloud(points, info, waves, starts)
-    if sink is not None:
-        sink.finish(cloud)
+    with sink if sink is not None else contextlib.nullcontext():   # dropped on a failure
+        job = ScanJob(scene, pattern, platform, sensor, foot, seed, keep_waveforms, slots,
+                      _chunk, split, sink, folder=run_dir is not None,
+                      backend=resolve_backend("auto"), part_of=_part_of(scene))
+        description = None if run_dir is None else job_description(
+            scene, pattern, platform, sensor, seed, keep_waveforms,
+            geometry(scene, "flat").key, motions)
+        results = run_chunks(scan_chunk, job, len(pattern), chunk_size=per, unit="pulses",
+                             work=float(len(pattern) * len(foot[0])),
+                             arrays=chunk_arrays(slots, sensor.samples, keep_waveforms),
+                             threads=True, jobs=jobs, executor=executor, progress=progress,
+                             run_dir=run_dir, job=description)
+        points, waves, starts = records(results, slots)
+        info = {"conventions": dict(CONVENTIONS), "pattern": pattern.describe(),
+                "platform": platform.describe(), "sensor": _sensor_info(pattern, sensor),
+                "seed": seed,
+                "motions": {str(k): m.describe() for k, m in (motions or {}).items()}}
+        cloud = PointCloud(points, info, waves, starts)
+        if sink is not None:
+            sink.finish(cloud)
     return cloud
-
-
-def _stream(job, per, options):
-    """The chunks' results (:func:`meshladar.stream.run_chunks`, threads); a streaming
-    waveform file is dropped if the run fails or is stopped."""
-    try:
-        return run_chunks(scan_chunk, job, len(job.pattern), chunk_size=per, unit="pulses",
-                          work=float(len(job.pattern) * len(job.foot[0])),
-                          arrays=chunk_arrays(job.slots, job.sensor.samples, job.keep),
-                          threads=True, **options)
-    except BaseException:
-        if job.sink is not None:
-            job.sink.abandon()
-        raise
 
 
 def _check_keep(keep, run_dir, sensor):

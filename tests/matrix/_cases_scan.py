@@ -145,6 +145,8 @@ api("scan.waveforms_file+run_dir", lambda: _scan(waveforms_file="w.h5", run_dir=
     "error", ("waveforms_file", "run_dir"))
 api("scan.waveforms_file=no-folder", lambda: _scan(waveforms_file="/no/such/folder/w.h5"),
     "error", "waveforms_file")
+api("scan.waveforms_file=folder", lambda: _scan(waveforms_file="."), "error",
+    ("waveforms_file", "folder"))
 api("ScanSensor.echoes=x", lambda: _sensor(echoes="x"), "error", "echoes")
 api("ScanSensor.discrete+noise", lambda: _sensor(echoes="discrete", noise=ml.noise.Noise()),
     "error", ("discrete", "noise"))

@@ -9,6 +9,7 @@ import pytest
 
 from meshladar.noise import Noise
 from meshladar.scan import Platform, ScanBeam, rotating, scan
+from meshladar.scan import files as scan_files
 from meshladar.scan import run as scan_run
 
 from _scan_scenes import plate, scene, sensor
@@ -88,6 +89,26 @@ def test_a_failed_streaming_scan_leaves_no_file(tmp_path, monkeypatch):
 
     monkeypatch.setattr(scan_run, "_chunk", fail_second)
     with pytest.raises(RuntimeError, match="boom"):
+        scan(sc, pat, plat, sen, chunk_pulses=300, jobs=1, waveforms_file=tmp_path / "w.h5")
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("step", ["_write_points", "replace"])
+def test_a_waveform_file_that_cannot_be_finished_leaves_no_temporary(step, tmp_path,
+                                                                   monkeypatch):
+    """A scan whose waveform file fails at the end (writing the points, or moving the
+    file into place: the name taken by a folder meanwhile) raises, and leaves neither the
+    file nor its temporary."""
+    sc, pat, plat, sen = _setup()
+
+    def fails(*args):
+        raise OSError("disk full")
+
+    if step == "replace":
+        monkeypatch.setattr(scan_files.os, "replace", fails)
+    else:
+        monkeypatch.setattr(scan_files, step, fails)
+    with pytest.raises(OSError, match="disk full"):
         scan(sc, pat, plat, sen, chunk_pulses=300, jobs=1, waveforms_file=tmp_path / "w.h5")
     assert list(tmp_path.iterdir()) == []
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from meshladar.errors import ParameterError
-from meshladar.scan import Platform, ScanPattern, oscillating, scan
+from meshladar.scan import Platform, ScanPattern, oscillating, read_las, scan, write_las
 
 from _scan_scenes import plate, scene, sensor
 
@@ -55,6 +55,41 @@ def test_time_offset_reads_a_gps_time_trajectory_from_its_start(tmp_path):
     np.testing.assert_allclose(cloud.points["x"], 60.0 * cloud.points["emission_time"],
                                atol=1e-3)
     np.testing.assert_allclose(cloud.points["z"], 0.0, atol=1e-3)
+    assert cloud.info["platform"]["time_origin_s"] == 345000.0
+
+
+def test_a_las_file_keeps_the_trajectorys_gps_time(tmp_path):
+    """A scan from a trajectory in GPS time writes LAS GPS times of 345000 s plus each
+    pulse's emission time (the pattern's clock, kept exactly in its own field); one from
+    a static platform writes the emission times."""
+    laspy = pytest.importorskip("laspy")
+    (tmp_path / "t.csv").write_text(GPS)
+    platform = Platform.from_csv(tmp_path / "t.csv", time_offset=345000.0)
+    for where, origin in ((platform, 345000.0), (Platform.static((0, 0, 300)), 0.0)):
+        cloud = scan(_ground(), _nadir(), where, sensor())
+        write_las(tmp_path / "p.las", cloud)
+        las = laspy.read(tmp_path / "p.las")
+        np.testing.assert_array_equal(np.asarray(las.gps_time),
+                                      origin + cloud.points["emission_time"])
+        np.testing.assert_array_equal(read_las(tmp_path / "p.las").points["emission_time"],
+                                      cloud.points["emission_time"])
+
+
+def test_a_trajectory_of_one_row_is_refused(tmp_path):
+    """One pose covers no span of time: the file is refused, naming it and pointing to a
+    platform at rest (the pulses of a forgotten GPS offset were scanned from it)."""
+    (tmp_path / "one.csv").write_text("time,x,y,z,roll,pitch,yaw\n345000,0,0,300,0,90,0\n")
+    with pytest.raises(ParameterError, match=r"one\.csv: a trajectory needs 2 or more rows .*"
+                                             r"got 1 .*Platform\.static"):
+        Platform.from_csv(tmp_path / "one.csv")
+
+
+@pytest.mark.parametrize("kw, match", [
+    (dict(position=(0, 0)), r"position must have shape \(3,\); got \(2,\)"),
+    (dict(position=(0, 0, 1), attitude_deg=(0, 90)), r"attitude_deg must have shape \(3,\)")])
+def test_a_static_platform_names_its_own_arguments(kw, match):
+    with pytest.raises(ParameterError, match=match):
+        Platform.static(**kw)
 
 
 def test_static_and_constant_velocity_platforms_cover_every_time():
