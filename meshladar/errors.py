@@ -21,6 +21,7 @@ __all__ = [
     "LobeSamplingWarning",
     "BounceWarning",
     "EnergyConservationWarning",
+    "RecordLengthWarning",
     "user_stacklevel",
 ]
 
@@ -144,6 +145,18 @@ class LobeSamplingWarning(MeshladarWarning):
 class BounceWarning(MeshladarWarning):
     """A single-bounce run of a scene whose second bounce is estimated above the threshold
     (the warning gives the estimate; ``bounces=2`` or ``"auto"`` includes it).
+
+    Parameters
+    ----------
+    *args : object
+        The message (a ``str``), passed on to :class:`UserWarning` unchanged.
+    """
+
+
+class RecordLengthWarning(MeshladarWarning):
+    """A scan's fixed record length (the sensor's ``samples``) cut off some pulses' echoes:
+    their returns there are dropped (the warning counts the pulses and names the length
+    that holds them).
 
     Parameters
     ----------

@@ -35,7 +35,8 @@ class ScanJob(NamedTuple):
     seed: object
     keep: bool
     slots: int
-    run: object          # the chunk function: (job, slice, seed) -> (records, waves, starts)
+    run: object          # the chunk function: (job, slice, seed) -> (records, waves, starts,
+    #                      each pulse's needed record length or None)
     split: object        # the moving parts (meshladar.scan.moving.MovingParts) or None
     sink: object = None  # a WaveformSink the chunks stream their records into, or None
     folder: bool = False  # a run folder keeps the chunks: fixed slots, not records
@@ -53,8 +54,10 @@ def scan_chunk(job, items):
     """One chunk's slots (module docstring), or its records as they are where no run
     folder keeps them: ``job.run`` on the pulses ``items``."""
     lo, hi = int(items[0]), int(items[-1]) + 1
-    rec, waves, starts = job.run(job, slice(lo, hi), _chunk_seed(job.seed, lo))
+    rec, waves, starts, needed = job.run(job, slice(lo, hi), _chunk_seed(job.seed, lo))
     out = _slots(rec, lo, hi, job.slots) if job.folder else {"records": rec}
+    if needed is not None:                 # the record length each pulse's echoes need
+        out["needed"] = needed
     if job.sink is not None and waves is not None:
         job.sink.write(lo, waves, starts)
     elif job.keep and waves is not None:
@@ -78,9 +81,12 @@ def _slots(rec, lo, hi, slots):
     return out
 
 
-def chunk_arrays(slots, samples, keep):
-    """``{name: trailing shape}`` of a chunk's arrays, for the run folder's checks."""
+def chunk_arrays(slots, samples, keep, echoes="waveform"):
+    """``{name: trailing shape}`` of a chunk's arrays, for the run folder's checks (a fixed
+    record length of waveforms: ``needed``, each pulse's echoes' length)."""
     shapes = {"returns": ()}
+    if samples is not None and echoes == "waveform":
+        shapes["needed"] = ()
     shapes.update({name: (slots,) for name in POINT_DTYPE.names})
     if keep:
         shapes.update(waveform=(samples,), start=())

@@ -26,8 +26,8 @@ from ._sampling import (SUPPORT, accumulate, accumulate_table, lit_spans, matche
                         sample_table)
 from .instrument import FWHM_PER_SIGMA
 
-__all__ = ["SUPPORT", "waveforms", "waveforms_with_echoes", "echo_shape", "find_returns",
-           "cfar_background", "Returns"]
+__all__ = ["SUPPORT", "CENTROID_SIGMAS", "waveforms", "waveforms_with_echoes",
+           "record_samples", "echo_shape", "find_returns", "cfar_background", "Returns"]
 
 #: A pulse's sub-rays arriving within this many σ of each other are spread as one, at
 #: their photoelectron-weighted mean time: the record's sum and first moment are exact,
@@ -40,7 +40,7 @@ _OVERLAP_SIGMAS = 4.0
 #: The most Levenberg-Marquardt steps of a decomposition.
 _FIT_ITERATIONS = 100
 #: An echo's time is the centroid of its samples within this many σ.
-_CENTROID_SIGMAS = 3.0
+CENTROID_SIGMAS = 3.0
 
 
 def echo_shape(pulse, response, dt):
@@ -76,6 +76,30 @@ def echo_shape(pulse, response, dt):
         dens = d if dens is None else np.convolve(dens, d)
     cdf = np.concatenate([[0.0], np.cumsum(dens / dens.sum())])
     return step * sum(math.floor(x.support[0] / step) for x in shapes), step, cdf
+
+
+def record_samples(tau, pe, start, sigma, dt, shape=None):
+    """The samples each pulse's record needs to hold its echoes whole from its ``start``
+    (:func:`waveforms_with_echoes`' default length, pulse by pulse; 0 where nothing is
+    lit).
+
+    Parameters
+    ----------
+    tau, pe, sigma, dt, shape
+        As :func:`waveforms`.
+    start : (n,) numpy.ndarray
+        Each record's start after emission, s.
+
+    Returns
+    -------
+    (n,) int64 numpy.ndarray
+    """
+    _, last = lit_spans(np.ascontiguousarray(tau, np.float64),
+                        np.ascontiguousarray(pe, np.float64))
+    after = SUPPORT * sigma if shape is None else shape[0] + shape[1] * (len(shape[2]) - 1)
+    seen = np.isfinite(last)
+    need = np.ceil((np.where(seen, last, start) - start + after) / dt) + 1
+    return np.where(seen, need, 0).astype(np.int64)
 
 
 def waveforms(tau, pe, sigma, dt, samples=None, shape=None):
@@ -299,7 +323,7 @@ def find_returns(waves, start, dt, sigma, level, max_returns, decompose, backgro
     centre, s_e, height = np.empty(k), np.empty(k), np.empty(k)
     size_peaks(f3, j, waves.shape[1], s, centre, s_e, height)
     back = np.broadcast_to(np.asarray(background, np.float64), (len(waves),))[p]
-    centroids(waves, np.ascontiguousarray(back), p, centre, _CENTROID_SIGMAS * s, 2)
+    centroids(waves, np.ascontiguousarray(back), p, centre, CENTROID_SIGMAS * s, 2)
     if decompose and len(p):
         _decompose(waves, p, centre, s_e, height, s)
     time = start[p] + centre * dt

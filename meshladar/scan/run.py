@@ -13,11 +13,12 @@ from __future__ import annotations
 
 import contextlib
 import math
+import warnings
 
 import numpy as np
 
 from .._validate import check_count, check_seed
-from ..errors import ParameterError
+from ..errors import ParameterError, RecordLengthWarning, user_stacklevel
 from ..noise import draw_noise
 from ..raytrace.backends import resolve_backend
 from ..raytrace.embree import geometry
@@ -27,7 +28,8 @@ from ..sensor import SPEED_OF_LIGHT
 from ._kernels import discrete_returns
 from ._records import fill_records
 from .cast import cast_static, photoelectrons, world_directions
-from .echoes import Returns, cfar_background, echo_shape, find_returns, waveforms_with_echoes
+from .echoes import (CENTROID_SIGMAS, Returns, cfar_background, echo_shape, find_returns,
+                     record_samples, waveforms_with_echoes)
 from .files import WaveformSink
 from .footprint import check_flash_beam, describe_pixels, pixel_offsets
 from .geiger import blind_shots, coates, fire
@@ -82,7 +84,8 @@ _NO_SHIFT = np.zeros((0, 0))
 
 
 def _chunk(job, sl, seed):
-    """One chunk's records, its measured waveforms (when kept) and their starts."""
+    """One chunk's records, its measured waveforms (when kept), their starts, and the
+    record length each pulse's echoes need where the sensor fixes it (else None)."""
     scene, pattern, platform, sensor = job.scene, job.pattern, job.platform, job.sensor
     offsets, shares, pitch = job.foot
     t = pattern.times[sl]
@@ -100,6 +103,7 @@ def _chunk(job, sl, seed):
     shift = _NO_SHIFT if still else doppler(job.split, platform, cast, origins, t,
                                             sensor.wavelength)
     tau = 2.0 * cast.distance / SPEED_OF_LIGHT
+    needed = None
     if sensor.echoes == "discrete":
         ret, measured, start = _discrete(sensor, tau, pe), None, None
     else:
@@ -107,6 +111,9 @@ def _chunk(job, sl, seed):
         waves, start, echoes = waveforms_with_echoes(tau, pe, sensor.sigma, sensor.dt,
                                                      sensor.samples, shape)
         ret, measured = _detect(sensor, waves, start, seed, echoes)
+        if sensor.samples is not None:                 # a fixed length may cut echoes
+            needed = record_samples(tau, pe, start, sensor.sigma, sensor.dt, shape)
+            ret = _within_records(ret, start, needed, sensor)
         ret.time = ret.time - sensor.delay             # the shape's own delay taken off
     rec = np.empty(len(ret), POINT_DTYPE)
     fill_records(rec, (ret.pulse, np.ascontiguousarray(ret.time, np.float64), ret.amplitude,
@@ -114,7 +121,37 @@ def _chunk(job, sl, seed):
                  (sl.start, t, pattern.scan_angles_deg[sl], pattern.channels[sl]),
                  (origins, axis, 0.5 * SPEED_OF_LIGHT),
                  (tau, pe, cast.distance, cast.points, cast.face, shift), job.part_of)
-    return rec, (measured if job.keep or job.sink is not None else None), start
+    return rec, (measured if job.keep or job.sink is not None else None), start, needed
+
+
+def _within_records(ret, start, needed, sensor):
+    """``ret`` less the returns of pulses whose echoes a fixed record cut (``needed`` more
+    samples than it holds) whose centroid window (:data:`.echoes.CENTROID_SIGMAS` σ either
+    side) reaches past the record's end: a centroid there is pulled early."""
+    samples = sensor.samples
+    if not np.any(needed > samples):
+        return ret
+    p = ret.pulse
+    end = start[p] + samples * sensor.dt
+    keep = (needed[p] <= samples) | (ret.time + CENTROID_SIGMAS * sensor.sigma <= end)
+    return Returns(p[keep], ret.time[keep], ret.amplitude[keep], ret.width[keep],
+                   ret.intensity[keep])
+
+
+def _warn_cut(results, sensor, pulses):
+    """Warn where a fixed record length cut some pulses' echoes (their returns there were
+    dropped: :func:`_within_records`), naming the length that holds them all."""
+    if sensor.samples is None or sensor.echoes == "discrete" or not results:
+        return
+    needed = np.concatenate([np.asarray(r["needed"]).ravel() for r in results])
+    cut = needed > sensor.samples
+    if cut.any():
+        warnings.warn(f"samples={sensor.samples}: the echoes of {int(cut.sum())} of {pulses} "
+                      "pulses end past their records (a record starts at its pulse's "
+                      "first echo less its support): a return whose centroid window the "
+                      "record cuts is dropped; "
+                      f"samples={int(needed.max())} holds them all, or leave samples unset",
+                      RecordLengthWarning, stacklevel=user_stacklevel())
 
 
 def _discrete(sensor, tau, pe):
@@ -238,9 +275,11 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
             geometry(scene, "flat").key, motions)
         results = run_chunks(scan_chunk, job, len(pattern), chunk_size=per, unit="pulses",
                              work=float(len(pattern) * len(foot[0])),
-                             arrays=chunk_arrays(slots, sensor.samples, keep_waveforms),
+                             arrays=chunk_arrays(slots, sensor.samples, keep_waveforms,
+                                                 sensor.echoes),
                              threads=True, jobs=jobs, executor=executor, progress=progress,
                              run_dir=run_dir, job=description)
+        _warn_cut(results, sensor, len(pattern))
         points, waves, starts = records(results, slots)
         info = {"conventions": dict(CONVENTIONS), "pattern": pattern.describe(),
                 "platform": platform.describe(), "sensor": _sensor_info(pattern, sensor),

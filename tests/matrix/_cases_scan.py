@@ -61,6 +61,8 @@ for _key, _v in {"zero": 0.0, "nan": nan, "inf": inf, "str": "1"}.items():
         "sample_rate")
 api("ScanSensor.beam=float", lambda: _sensor(beam=0.001), "error", "beam")
 api("ScanSensor.samples=2", lambda: _sensor(samples=2), "error", "samples")
+api("ScanSensor.samples=40", lambda: _sensor(samples=40), "error",
+    ("samples", "cannot hold one echo", "give 70 or more"))
 api("ScanSensor.geiger+speckle", lambda: _sensor(geiger=_sc().GeigerMode(),
                                                  noise=ml.noise.Noise(speckle_cells=1)),
     "error", "geiger")

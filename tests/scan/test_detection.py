@@ -105,12 +105,13 @@ def test_cfar_finds_an_echo_over_a_background_the_detector_was_not_told():
 
 
 def test_cfar_on_short_quiet_records_does_not_take_the_background_for_zero():
-    """Short records (64 samples) of a faint background (0.05 per sample): many hold no
-    count at all beyond the guard, and a background estimated as 0 would set a threshold
-    of one count, which ~3 % of the samples cross (~1000 false returns here); kept off
-    zero, the threshold is 4 counts and P(N ≥ 4 | 0.05) × 32 000 samples ≈ 0.01."""
+    """Short records (70 samples, the fewest that hold one echo) of a faint background
+    (0.05 per sample): many hold no count at all beyond the guard, and a background
+    estimated as 0 would set a threshold of one count, which ~3 % of the samples cross
+    (~1000 false returns here); kept off zero, the threshold is 4 counts and
+    P(N ≥ 4 | 0.05) × 35 000 samples ≈ 0.01."""
     dt = 0.5e-9
-    sen = sensor(noise=Noise(background_rate=0.05 / dt), samples=64,
+    sen = sensor(noise=Noise(background_rate=0.05 / dt), samples=70,
                  detector=Detector(cfar=True))
     pc = scan(scene(plate(R0)), _repeat((-1.0, 0.0, 0.0), 500), Platform.static((0, 0, 0)),
               sen, seed=6)

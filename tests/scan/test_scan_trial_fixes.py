@@ -134,3 +134,38 @@ def test_a_flash_scan_records_its_pixels_sampling_as_its_beam(tol, side):
                   sensor(beam=ScanBeam(0.0, tol=0.5)), keep_waveforms=True)
     assert coarse.info["sensor"]["beam"]["sub_rays"] == 1
     assert cloud.waveforms[0].sum() == pytest.approx(coarse.waveforms[0].sum(), rel=1e-4)
+
+
+#: The ring's and the wall's distances (m) and the hole's radius: a beam of 1/e² half-angle
+#: 1e-2 rad lights both (footprint radius 0.1 m at the ring).
+RING, WALL, HOLE = 10.0, 20.0, 0.05
+
+
+def test_a_fixed_record_that_cuts_an_echo_drops_its_return_and_says_how_long_to_make_it():
+    """A pulse through a hole in a ring at 10 m onto a wall at 20 m: its record starts at
+    the ring's echo less 8 σ, so at 80 samples the wall's echo (66.7 ns = 133 samples
+    later) lies past its end. The wall's return is dropped (it was reported at the
+    record's end, metres short), the ring's kept at 10 m, and one RecordLengthWarning
+    names the length that holds both: the wall's time less the ring's plus 16 σ, in
+    samples, and one or two for the record's start on a sample (201.3 + 1 to 2, by hand).
+    At that length both come back, at 10 and 20 m. Fewer samples than one echo takes
+    (70 here: 16 σ of 2.12 ns at 2 GS/s, and 2) are refused before any ray is cast."""
+    from meshladar.errors import RecordLengthWarning
+    from meshladar.scan import ScanPattern
+
+    sc = scene(plate(RING, hole=HOLE), plate(WALL))
+    pat = ScanPattern([0.0], [[1.0, 0.0, 0.0]])
+    beam = ScanBeam(1e-2, sub_rays=64)
+    dt, sigma = 0.5e-9, 5e-9 / 2.3548200450309493
+    by_hand = (2 * (WALL - RING) / 299_792_458.0 + 16 * sigma) / dt + 1
+    with pytest.warns(RecordLengthWarning, match=r"echoes of 1 of 1 pulses") as caught:
+        short = scan(sc, pat, Platform.static((0, 0, 0)), sensor(beam=beam, samples=80))
+    assert len(caught) == 1
+    need = int(str(caught[0].message).split("; samples=")[1].split()[0])
+    assert by_hand <= need <= by_hand + 2
+    np.testing.assert_allclose(short.points["range"], [RING], atol=0.02)
+    whole = scan(sc, pat, Platform.static((0, 0, 0)), sensor(beam=beam, samples=need))
+    np.testing.assert_allclose(np.sort(whole.points["range"]), [RING, WALL], atol=0.02)
+    with pytest.raises(ParameterError, match=r"samples: a record of 69 samples cannot hold "
+                                             r"one echo .* give 70 or more"):
+        sensor(samples=69)
