@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import functools
 import inspect
-import os
+import re
 
 import numpy as np
 
@@ -149,11 +149,12 @@ def _rows(key, value):
 def _platform(text):
     """The ``--platform`` of the module docstring: a platform kind's spec, a trajectory
     file, or a trajectory file and its keys."""
-    first = text.split()[0] if text.split() else ""
-    if text.lower().endswith(".csv") and (os.path.exists(text) or "=" not in text):
-        return _build(scanning.Platform.from_csv, {"path": text}, "--platform")
-    if first.lower().endswith(".csv"):
-        kinds = {first: functools.partial(scanning.Platform.from_csv, first)}
+    found = _trajectory(text)
+    if found and not found[1]:
+        return _build(scanning.Platform.from_csv, {"path": found[0]}, "--platform")
+    if found:
+        kinds = {"trajectory": functools.partial(scanning.Platform.from_csv, found[0])}
+        text = "trajectory " + found[1]
     else:
         kinds = {kind: getattr(scanning.Platform, kind) for kind in PLATFORM_KINDS}
     make, kwargs = parse_spec("--platform", text, kinds, MOUNT_KEYS)
@@ -161,6 +162,13 @@ def _platform(text):
         if key in kwargs and make == scanning.Platform.waypoints:
             kwargs[key] = _rows(key, kwargs[key])
     return _build(make, kwargs, "--platform")
+
+
+def _trajectory(text):
+    """(path, its keys) where ``--platform`` starts with a trajectory file (its name up to
+    the first ``.csv`` that ends a word: a name with spaces too), else None."""
+    found = re.match(r"\s*(.*?\.csv)(?:\s+(.*?))?\s*$", text, re.IGNORECASE | re.DOTALL)
+    return (found.group(1), found.group(2) or "") if found else None
 
 
 def _flagged(exc):
@@ -237,10 +245,8 @@ def _sensor(args, flash):
 def _check_outputs(args):
     """-o and --waveforms: writable files of known formats, never an input, never one
     file (compared as real paths: links resolved)."""
-    words = args.platform.split()
-    trajectory = [p for p in (args.platform, words[0] if words else None)
-                  if p and p.lower().endswith(".csv")]
-    inputs = [args.scene, args.materials] + trajectory
+    found = _trajectory(args.platform)
+    inputs = [args.scene, args.materials] + ([found[0]] if found else [])
     check_output(args.output, POINT_SUFFIXES, inputs)
     check_writable(args.output, "-o")
     if args.waveforms is not None:

@@ -108,6 +108,14 @@ def _target(path, flag):
     return path
 
 
+def _not_named_as(path, suffixes, writer):
+    """``path``, refused where its extension names the other writer's format."""
+    if path.lower().endswith(suffixes):
+        raise ParameterError(f"path: {path!r} names a {suffixes[0][1:].upper()} file; "
+                             f"{writer} writes that format")
+    return path
+
+
 def _readable(path, what):
     """``path`` checked to be an existing file before a reader opens it."""
     path = check_path("path", path)
@@ -141,12 +149,13 @@ def write_las(path, cloud, *, scale=None):
     Raises
     ------
     ParameterError
-        Before anything is written: when ``path`` is a folder or in a folder that does not
-        exist, ``cloud`` is not a PointCloud, or ``scale`` is out of range or too fine for
+        Before anything is written: when ``path`` is a folder, in a folder that does not
+        exist, or ends in .h5 or .hdf5 (:func:`write_hdf5`'s), ``cloud`` is not a
+        PointCloud, or ``scale`` is out of range or too fine for
         the cloud's span (the message names the finest scale that fits).
     """
     laspy = _need("laspy")
-    path = check_writable(path, "path")
+    path = _not_named_as(check_writable(path, "path"), (".h5", ".hdf5"), "write_hdf5")
     if not isinstance(cloud, PointCloud):
         raise ParameterError(f"cloud must be a PointCloud; got {type(cloud).__name__}")
     pts = cloud.points
@@ -247,11 +256,12 @@ def write_hdf5(path, cloud):
     Raises
     ------
     ParameterError
-        Before anything is written: when ``path`` is a folder or in a folder that does not
-        exist, or ``cloud`` is not a PointCloud.
+        Before anything is written: when ``path`` is a folder, in a folder that does not
+        exist, or ends in .las or .laz (:func:`write_las`'s), or ``cloud`` is not a
+        PointCloud.
     """
     h5py = _need("h5py")
-    path = _target(path, "path")
+    path = _not_named_as(_target(path, "path"), (".las", ".laz"), "write_las")
     if not isinstance(cloud, PointCloud):
         raise ParameterError(f"cloud must be a PointCloud; got {type(cloud).__name__}")
 

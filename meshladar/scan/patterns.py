@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._validate import check_count, check_real, finite_array, readonly_copy
+from .._validate import check_count, check_flag, check_real, finite_array, readonly_copy
 from ..errors import ParameterError
 
 __all__ = ["ScanPattern", "raster", "rotating", "oscillating", "risley", "flash",
@@ -147,7 +147,11 @@ def _times(pulse_rate, n):
 
 
 def _angles(name, value):
-    a = finite_array(name, value).astype(np.float64).ravel()
+    a = finite_array(name, value).astype(np.float64)
+    if a.ndim > 1:
+        raise ParameterError(f"{name} must be one angle or a 1-D array of them; got shape "
+                             f"{a.shape}")
+    a = a.ravel()
     if a.size == 0 or np.any(np.abs(a) > _MAX_ANGLE_DEG):
         raise ParameterError(f"{name} must be 1 or more angles in [-180, 180] deg; got "
                              f"{a.size} values")
@@ -179,6 +183,7 @@ def raster(azimuth_deg, elevation_deg, *, pulse_rate, bidirectional=False):
     """
     az, el = np.radians(_angles("azimuth_deg", azimuth_deg)), np.radians(
         _angles("elevation_deg", elevation_deg))
+    bidirectional = check_flag("bidirectional", bidirectional)
     rows = np.repeat(el, len(az))
     cols = np.tile(az, len(el)).reshape(len(el), len(az))
     if bidirectional:

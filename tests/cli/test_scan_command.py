@@ -139,6 +139,12 @@ def test_a_gps_time_trajectory_file_takes_its_time_offset(tmp_path, capsys):
     cloud = read_hdf5(tmp_path / "p.h5")
     np.testing.assert_allclose(cloud.points["x"], 60 * cloud.points["emission_time"],
                                atol=1e-3)
+    # a file name with a space: the name runs to its .csv, its keys follow
+    (tmp_path / "my flight.csv").write_text((tmp_path / "t.csv").read_text())
+    assert main(base + [f"{tmp_path / 'my flight.csv'} time_offset=345000"]) == 0
+    np.testing.assert_array_equal(read_hdf5(tmp_path / "p.h5").points["x"], cloud.points["x"])
+    assert main(base + [str(tmp_path / "my flight.csv")]) == 2       # no offset: refused
+    assert "outside the platform's waypoints" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("extra, message", [

@@ -87,6 +87,15 @@ api("Platform.mount_offset=two", lambda: _sc().Platform.static((0, 0, 0),
                                                                mount_offset=(1, 2)),
     "error", "mount_offset")
 api("write_las.cloud=array", lambda: _sc().write_las("x.las", np.zeros(3)), "error", "cloud")
+api("write_las.path=h5", lambda: _sc().write_las("x.h5", _scan()), "error",
+    ("path", "HDF5", "write_hdf5"))
+api("write_hdf5.path=las", lambda: _sc().write_hdf5("x.las", _scan()), "error",
+    ("path", "LAS", "write_las"))
+api("raster.bidirectional=yes", lambda: _sc().raster([0.0, 1.0], [0.0], pulse_rate=1e3,
+                                                     bidirectional="yes"),
+    "error", "bidirectional must be True or False")
+api("raster.azimuth_deg=2-D", lambda: _sc().raster([[0.0, 1.0]], [0.0], pulse_rate=1e3),
+    "error", ("azimuth_deg", "1-D", "(1, 2)"))
 _file_cases("scan.read_las", "api", lambda p: _sc().read_las(p), ".las", BAD_FILES, "path")
 _file_cases("scan.read_hdf5", "api", lambda p: _sc().read_hdf5(p), ".h5", BAD_FILES, "path")
 _file_cases("scan.Platform.from_csv", "api", lambda p: _sc().Platform.from_csv(p), ".csv",
