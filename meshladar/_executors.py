@@ -314,9 +314,8 @@ def _scatter(ex, payload):
 
 
 def _on_executor(ex, tasks, todo, keep):
-    """Run the chunks ``todo`` on ``ex``, ``keep(k, result)`` as each completes: one pass of
-    ``as_completed`` over the submitted futures (time linear in the chunks), then one over
-    those sent again, until none is left."""
+    """Run the chunks ``todo`` on ``ex``, ``keep(k, result)`` as each completes (one pass
+    of ``as_completed`` a round of submissions: linear in the chunks)."""
     shared = _scatter(ex, tasks.payload)
     futures = {ex.submit(tasks.fn, shared, tasks.chunks[k], *tasks.args): k for k in todo}
     retries = {}
@@ -327,8 +326,7 @@ def _on_executor(ex, tasks, todo, keep):
             try:
                 keep(k, f.result())
             except CancelledError:
-                # a lost worker took the scattered payload (or the task) with it: send the
-                # chunk again with the payload itself, a bounded number of times
+                # a lost worker took the shared payload: resend with it, a few times
                 retries[k] = retries.get(k, 0) + 1
                 if retries[k] > _MAX_RETRIES:
                     raise

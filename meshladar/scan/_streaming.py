@@ -81,11 +81,12 @@ def _slots(rec, lo, hi, slots):
     return out
 
 
-def chunk_arrays(slots, samples, keep, echoes="waveform"):
+def chunk_arrays(slots, sensor, keep):
     """``{name: trailing shape}`` of a chunk's arrays, for the run folder's checks (a fixed
     record length of waveforms: ``needed``, each pulse's echoes' length)."""
     shapes = {"returns": ()}
-    if samples is not None and echoes == "waveform":
+    samples = sensor.samples
+    if samples is not None and sensor.echoes == "waveform":
         shapes["needed"] = ()
     shapes.update({name: (slots,) for name in POINT_DTYPE.names})
     if keep:

@@ -124,6 +124,13 @@ def _chunk(job, sl, seed):
     return rec, (measured if job.keep or job.sink is not None else None), start, needed
 
 
+def _info(pattern, platform, sensor, seed, motions):
+    """A scan's ``info``: its conventions and everything that made it."""
+    return {"conventions": dict(CONVENTIONS), "pattern": pattern.describe(),
+            "platform": platform.describe(), "sensor": _sensor_info(pattern, sensor),
+            "seed": seed, "motions": {str(k): m.describe() for k, m in (motions or {}).items()}}
+
+
 def _within_records(ret, start, needed, sensor):
     """``ret`` less the returns of pulses whose echoes a fixed record cut (``needed`` more
     samples than it holds) whose centroid window (:data:`.echoes.CENTROID_SIGMAS` σ either
@@ -263,8 +270,7 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
     seed = check_seed("seed", seed)
     _check_keep(keep_waveforms, run_dir, sensor)
     foot = _footprint(pattern, sensor)
-    per = _chunk_pulses(pattern, chunk_pulses, len(foot[0]))
-    slots = sensor.detector.max_returns
+    per, slots = _chunk_pulses(pattern, chunk_pulses, len(foot[0])), sensor.detector.max_returns
     sink = _sink(waveforms_file, keep_waveforms, run_dir, executor, sensor)
     with sink if sink is not None else contextlib.nullcontext():   # dropped on a failure
         job = ScanJob(scene, pattern, platform, sensor, foot, seed, keep_waveforms, slots,
@@ -275,17 +281,12 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
             geometry(scene, "flat").key, motions)
         results = run_chunks(scan_chunk, job, len(pattern), chunk_size=per, unit="pulses",
                              work=float(len(pattern) * len(foot[0])),
-                             arrays=chunk_arrays(slots, sensor.samples, keep_waveforms,
-                                                 sensor.echoes),
+                             arrays=chunk_arrays(slots, sensor, keep_waveforms),
                              threads=True, jobs=jobs, executor=executor, progress=progress,
                              run_dir=run_dir, job=description)
         _warn_cut(results, sensor, len(pattern))
         points, waves, starts = records(results, slots)
-        info = {"conventions": dict(CONVENTIONS), "pattern": pattern.describe(),
-                "platform": platform.describe(), "sensor": _sensor_info(pattern, sensor),
-                "seed": seed,
-                "motions": {str(k): m.describe() for k, m in (motions or {}).items()}}
-        cloud = PointCloud(points, info, waves, starts)
+        cloud = PointCloud(points, _info(pattern, platform, sensor, seed, motions), waves, starts)
         if sink is not None:
             sink.finish(cloud)
     return cloud
