@@ -27,7 +27,7 @@ from ._sampling import (SUPPORT, accumulate, accumulate_table, lit_spans, matche
 from .instrument import FWHM_PER_SIGMA
 
 __all__ = ["SUPPORT", "CENTROID_SIGMAS", "waveforms", "waveforms_with_echoes",
-           "record_samples", "echo_shape", "find_returns", "cfar_background", "Returns"]
+           "record_samples", "record_blocks", "echo_shape", "find_returns", "cfar_background", "Returns"]
 
 #: A pulse's sub-rays arriving within this many σ of each other are spread as one, at
 #: their photoelectron-weighted mean time: the record's sum and first moment are exact,
@@ -96,10 +96,57 @@ def record_samples(tau, pe, start, sigma, dt, shape=None):
     """
     _, last = lit_spans(np.ascontiguousarray(tau, np.float64),
                         np.ascontiguousarray(pe, np.float64))
-    after = SUPPORT * sigma if shape is None else shape[0] + shape[1] * (len(shape[2]) - 1)
+    after = _support(sigma, shape)[1]
     seen = np.isfinite(last)
     need = np.ceil((np.where(seen, last, start) - start + after) / dt) + 1
     return np.where(seen, need, 0).astype(np.int64)
+
+
+def record_blocks(tau, pe, sigma, dt, shape, budget):
+    """Runs of consecutive pulses, ``[(lo, hi), …]``, whose records (each run's as long as
+    its own widest spread of echoes needs, :func:`waveforms`' default) hold at most
+    ``budget`` samples in all where they can (a run of one pulse may hold more): one run
+    where the chunk's records fit, else runs grown while the pulses times their widest
+    record fit.
+
+    Parameters
+    ----------
+    tau, pe, sigma, dt, shape
+        As :func:`waveforms`.
+    budget : int
+        The most samples a run's records hold.
+
+    Returns
+    -------
+    list of (int, int)
+    """
+    first, last = lit_spans(np.ascontiguousarray(tau, np.float64),
+                            np.ascontiguousarray(pe, np.float64))
+    n = len(first)
+    seen = np.isfinite(first)
+    if not seen.any():
+        return [(0, n)]
+    before, after = _support(sigma, shape)
+    floor = first[seen].min()
+    start = np.floor((np.where(seen, first, floor) - before) / dt) * dt
+    need = np.ceil((np.where(seen, last, floor) - start + after) / dt) + 1
+    if n * need.max() <= budget:
+        return [(0, n)]
+    runs, lo, widest = [], 0, 0.0
+    for p, k in enumerate(need.tolist()):
+        if p > lo and (p - lo + 1) * max(widest, k) > budget:
+            runs.append((lo, p))
+            lo, widest = p, 0.0
+        widest = max(widest, k)
+    return runs + [(lo, n)]
+
+
+def _support(sigma, shape):
+    """(before, after): how far an echo reaches either side of its time, s (SUPPORT σ, or
+    the echo shape's table's extent)."""
+    if shape is None:
+        return SUPPORT * sigma, SUPPORT * sigma
+    return -shape[0], shape[0] + shape[1] * (len(shape[2]) - 1)
 
 
 def waveforms(tau, pe, sigma, dt, samples=None, shape=None):
@@ -153,9 +200,7 @@ def waveforms_with_echoes(tau, pe, sigma, dt, samples=None, shape=None):
     floor = first[seen].min() if seen.any() else 0.0
     first = np.where(seen, first, floor)
     last = np.where(seen, last, floor)
-    before, after = SUPPORT * sigma, SUPPORT * sigma
-    if shape is not None:
-        before, after = -shape[0], shape[0] + shape[1] * (len(shape[2]) - 1)
+    before, after = _support(sigma, shape)
     start = np.floor((first - before) / dt) * dt
     if samples is None:
         spread = (last - start + after) / dt

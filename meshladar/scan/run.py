@@ -29,7 +29,7 @@ from ._kernels import discrete_returns
 from ._records import fill_records
 from .cast import cast_static, photoelectrons, world_directions
 from .echoes import (CENTROID_SIGMAS, Returns, cfar_background, echo_shape, find_returns,
-                     record_samples, waveforms_with_echoes)
+                     record_blocks, record_samples, waveforms_with_echoes)
 from .files import WaveformSink
 from .footprint import check_flash_beam, describe_pixels, pixel_offsets
 from .geiger import blind_shots, coates, fire
@@ -40,10 +40,13 @@ from .platforms import Platform
 from .points import CONVENTIONS, POINT_DTYPE, PointCloud
 from ._streaming import ScanJob, chunk_arrays, job_description, records, scan_chunk
 
-__all__ = ["scan", "CHUNK_RAYS"]
+__all__ = ["scan", "CHUNK_RAYS", "RECORD_SAMPLES"]
 
 #: Sub-rays cast per chunk (a chunk's pulses × sub-rays per pulse).
 CHUNK_RAYS = 1 << 17
+#: The most samples a chunk's records hold at once where they are not kept (64 MiB of
+#: float64): beyond it they are made and searched in runs of pulses (a deep scene).
+RECORD_SAMPLES = 1 << 23
 
 
 def _check(scene, pattern, platform, sensor):
@@ -103,17 +106,10 @@ def _chunk(job, sl, seed):
     shift = _NO_SHIFT if still else doppler(job.split, platform, cast, origins, t,
                                             sensor.wavelength)
     tau = 2.0 * cast.distance / SPEED_OF_LIGHT
-    needed = None
     if sensor.echoes == "discrete":
-        ret, measured, start = _discrete(sensor, tau, pe), None, None
+        ret, measured, start, needed = _discrete(sensor, tau, pe), None, None, None
     else:
-        shape = echo_shape(sensor.pulse, sensor.response, sensor.dt)
-        waves, start, echoes = waveforms_with_echoes(tau, pe, sensor.sigma, sensor.dt,
-                                                     sensor.samples, shape)
-        ret, measured = _detect(sensor, waves, start, seed, echoes)
-        if sensor.samples is not None:                 # a fixed length may cut echoes
-            needed = record_samples(tau, pe, start, sensor.sigma, sensor.dt, shape)
-            ret = _within_records(ret, start, needed, sensor)
+        ret, measured, start, needed = _waveform_returns(job, tau, pe, seed)
         ret.time = ret.time - sensor.delay             # the shape's own delay taken off
     rec = np.empty(len(ret), POINT_DTYPE)
     fill_records(rec, (ret.pulse, np.ascontiguousarray(ret.time, np.float64), ret.amplitude,
@@ -122,6 +118,36 @@ def _chunk(job, sl, seed):
                  (origins, axis, 0.5 * SPEED_OF_LIGHT),
                  (tau, pe, cast.distance, cast.points, cast.face, shift), job.part_of)
     return rec, (measured if job.keep or job.sink is not None else None), start, needed
+
+
+def _waveform_returns(job, tau, pe, seed):
+    """The returns of a chunk's records (:func:`_detect`), the records as measured, their
+    starts and, where the sensor fixes their length, each pulse's needed length. Records
+    not kept are made in runs of pulses of at most :data:`RECORD_SAMPLES` samples
+    (:func:`.echoes.record_blocks`), each run's noise seeded by ``seed`` and its first
+    pulse: a deep scene's few long records do not make every record of the chunk long."""
+    sensor = job.sensor
+    shape = echo_shape(sensor.pulse, sensor.response, sensor.dt)
+    kept = job.keep or job.sink is not None or sensor.samples is not None
+    runs = [(0, len(tau))] if kept else record_blocks(tau, pe, sensor.sigma, sensor.dt,
+                                                      shape, RECORD_SAMPLES)
+    if len(runs) > 1:
+        found = []
+        for lo, hi in runs:
+            waves, start, echoes = waveforms_with_echoes(tau[lo:hi], pe[lo:hi], sensor.sigma,
+                                                         sensor.dt, None, shape)
+            run_seed = None if seed is None else list(seed) + [lo]
+            ret = _detect(sensor, waves, start, run_seed, echoes)[0]
+            found.append((ret.pulse + lo, ret.time, ret.amplitude, ret.width, ret.intensity))
+        return Returns(*(np.concatenate(x) for x in zip(*found))), None, None, None
+    waves, start, echoes = waveforms_with_echoes(tau, pe, sensor.sigma, sensor.dt,
+                                                 sensor.samples, shape)
+    ret, measured = _detect(sensor, waves, start, seed, echoes)
+    needed = None
+    if sensor.samples is not None:                     # a fixed length may cut echoes
+        needed = record_samples(tau, pe, start, sensor.sigma, sensor.dt, shape)
+        ret = _within_records(ret, start, needed, sensor)
+    return ret, measured, start, needed
 
 
 def _info(pattern, platform, sensor, seed, motions):

@@ -169,3 +169,59 @@ def test_a_fixed_record_that_cuts_an_echo_drops_its_return_and_says_how_long_to_
     with pytest.raises(ParameterError, match=r"samples: a record of 69 samples cannot hold "
                                              r"one echo .* give 70 or more"):
         sensor(samples=69)
+
+
+def test_record_runs_hold_at_most_their_budget_of_samples():
+    """Pulses of one echo at 5 m or two (5 m and 1.5 km, ~20,000 samples apart) in an
+    irregular order: record_blocks' runs cover the pulses in order, and each run's records
+    as waveforms() makes them (its own length) hold at most the budget, but a run of one
+    pulse; one run where the chunk fits."""
+    from meshladar.scan.echoes import record_blocks, waveforms
+
+    rng = np.random.default_rng(3)
+    n, m, dt, sigma = 300, 4, 0.5e-9, 2.1e-9
+    tau = np.full((n, m), 2 * 5.0 / 299_792_458.0)
+    deep = rng.random(n) < 0.3
+    tau[deep, 2:] = 2 * 1500.0 / 299_792_458.0
+    pe = np.ones((n, m))
+    pe[rng.random(n) < 0.1] = 0.0                                 # some pulses see nothing
+    for budget in (60_000, 400_000, 10**8):
+        runs = record_blocks(tau, pe, sigma, dt, None, budget)
+        assert runs[0][0] == 0 and runs[-1][1] == n
+        assert all(a[1] == b[0] for a, b in zip(runs, runs[1:]))
+        for lo, hi in runs:
+            waves, _ = waveforms(tau[lo:hi], pe[lo:hi], sigma, dt)
+            assert waves.size <= budget or hi - lo == 1
+        assert (len(runs) == 1) == (budget == 10**8)
+
+
+def test_a_deep_scenes_records_in_runs_give_the_points_of_one(monkeypatch):
+    """A raster across a plate's edge at 5 m onto a wall 1.5 km behind: the pulses that
+    light both need records of ~20,000 samples, and one record length for the chunk made
+    every record that long (2.1 GB for 1,500 pulses with the wall at 12 km). Made in runs
+    of at most RECORD_SAMPLES samples (set to 200,000 here), the expected points are
+    those of one run (to 1e-9 m), both surfaces at their distances; with noise each run
+    draws its own, the same on one thread and two."""
+    import trimesh
+
+    import meshladar as ml
+    from meshladar.scan import raster
+    from meshladar.scan import run as scan_run
+
+    edge = trimesh.creation.box((0.01, 2.0, 2.0))
+    edge.apply_translation((5.005, 1.0, 0.0))                       # y from 0 to 2
+    sc = scene(edge, plate(1505.0, half=400.0))
+    pat = raster(np.linspace(-2, 2, 200), [0.0], pulse_rate=1e4)
+    beam = ScanBeam(1e-2, sub_rays=32)
+    one = scan(sc, pat, Platform.static((0, 0, 0)), sensor(beam=beam), jobs=1)
+    monkeypatch.setattr(scan_run, "RECORD_SAMPLES", 200_000)
+    runs = scan(sc, pat, Platform.static((0, 0, 0)), sensor(beam=beam), jobs=1)
+    assert len(runs) == len(one) > 200
+    for name in ("range", "x", "y", "z", "intensity", "true_range"):
+        np.testing.assert_allclose(runs.points[name], one.points[name], rtol=0, atol=1e-9)
+    assert set(np.round(runs.points["true_range"], -1)) <= {0.0, 10.0, 1500.0, 1510.0}
+    noisy = sensor(beam=beam, noise=ml.noise.Noise(background_rate=1e6))
+    a = scan(sc, pat, Platform.static((0, 0, 0)), noisy, jobs=1, chunk_pulses=50)
+    b = scan(sc, pat, Platform.static((0, 0, 0)), noisy, jobs=2, chunk_pulses=50)
+    for name in a.points.dtype.names:                              # (a false alarm's nan)
+        np.testing.assert_array_equal(a.points[name], b.points[name])
