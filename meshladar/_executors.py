@@ -322,7 +322,7 @@ def _on_executor(ex, tasks, todo, keep):
     while futures:
         again = {}
         for f in as_completed(futures):
-            k = futures[f]
+            k = futures.pop(f)                        # (as_completed holds its own set)
             try:
                 keep(k, f.result())
             except CancelledError:

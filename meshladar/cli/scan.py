@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import functools
 import inspect
+import os
 import re
 
 import numpy as np
@@ -167,6 +168,8 @@ def _platform(text):
 def _trajectory(text):
     """(path, its keys) where ``--platform`` starts with a trajectory file (its name up to
     the first ``.csv`` that ends a word: a name with spaces too), else None."""
+    if text.lower().endswith(".csv") and os.path.exists(text):     # a whole name
+        return text, ""
     found = re.match(r"\s*(.*?\.csv)(?:\s+(.*?))?\s*$", text, re.IGNORECASE | re.DOTALL)
     return (found.group(1), found.group(2) or "") if found else None
 

@@ -27,10 +27,12 @@ import math
 import numba
 import numpy as np
 
+from .._pulses import GaussianPulse
 from ._kernels import erf, sort_small
 
-__all__ = ["SUPPORT", "NODES_PER_R", "TABLE_BYTES", "sample_table", "matched_filter", "lit_spans",
-           "accumulate", "filtered_span", "accumulate_table"]
+__all__ = ["SUPPORT", "NODES_PER_R", "TABLE_BYTES", "echo_shape", "echo_support",
+           "sample_table", "matched_filter", "lit_spans", "accumulate", "filtered_span",
+           "accumulate_table"]
 
 #: The echo's Gaussian is cut beyond this many σ (exp(−32) of its peak).
 SUPPORT = 8.0
@@ -39,6 +41,62 @@ SUPPORT = 8.0
 NODES_PER_R = 762.0
 #: The largest table made (its four arrays); beyond it the erf differences are evaluated.
 TABLE_BYTES = 4 << 20
+
+
+
+def echo_shape(pulse, response, dt):
+    """The echo's shape, the pulse convolved with the response: None for two Gaussians
+    (exact erf integrals), else its CDF tabulated on a step of a 64th of the finer of Δt
+    and the shapes' own widths, ``(t0, step, cdf)``.
+
+    Parameters
+    ----------
+    pulse : GaussianPulse or SampledPulse
+        The transmitted pulse.
+    response : GaussianPulse, SampledPulse or None
+        The receiver's impulse response.
+    dt : float
+        The sample interval, s.
+
+    Returns
+    -------
+    tuple or None
+        ``(t0, step, cdf)``: the table's first time (s), its step (s) and the CDF at
+        ``t0 + i·step``.
+    """
+    shapes = [pulse] + ([response] if response is not None else [])
+    if all(isinstance(x, GaussianPulse) for x in shapes):
+        return None
+    widths = [x.fwhm if isinstance(x, GaussianPulse) else x.interval for x in shapes]
+    step = min([dt] + widths) / 64.0
+    dens = None
+    for x in shapes:
+        a, b = x.support
+        k0 = math.floor(a / step)
+        d = np.diff(x.cdf(step * np.arange(k0, math.ceil(b / step) + 1)))
+        dens = d if dens is None else np.convolve(dens, d)
+    cdf = np.concatenate([[0.0], np.cumsum(dens / dens.sum())])
+    return step * sum(math.floor(x.support[0] / step) for x in shapes), step, cdf
+
+
+def echo_support(sigma, shape):
+    """(before, after): how far an echo reaches either side of its time, s (SUPPORT σ for
+    a Gaussian, ``shape`` None; else the echo shape's table's extent, :func:`echo_shape`).
+
+    Parameters
+    ----------
+    sigma : float
+        The echo's σ, s.
+    shape : tuple or None
+        :func:`echo_shape`'s table.
+
+    Returns
+    -------
+    (float, float)
+    """
+    if shape is None:
+        return SUPPORT * sigma, SUPPORT * sigma
+    return -shape[0], shape[0] + shape[1] * (len(shape[2]) - 1)
 
 
 @numba.njit(cache=True, nogil=True)

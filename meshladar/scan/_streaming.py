@@ -22,6 +22,9 @@ from .points import POINT_DTYPE
 __all__ = ["ScanJob", "scan_chunk", "chunk_arrays", "records", "job_description"]
 
 _TRUTH = ("true_range", "true_x", "true_y", "true_z")
+#: What a scan's chunk computes, for its run folder: 2 since sub-rays are built from the
+#: pulse's turned frame, records in runs, and the platform's time origin is described.
+JOB_FORMAT = 2
 
 
 class ScanJob(NamedTuple):
@@ -35,8 +38,8 @@ class ScanJob(NamedTuple):
     seed: object
     keep: bool
     slots: int
-    run: object          # the chunk function: (job, slice, seed) -> (records, waves, starts,
-    #                      each pulse's needed record length or None)
+    run: object          # the chunk function: (job, slice, seed) -> (records, blocks of
+    #                      (first pulse, waves, starts) or None, needed lengths or None)
     split: object        # the moving parts (meshladar.scan.moving.MovingParts) or None
     sink: object = None  # a WaveformSink the chunks stream their records into, or None
     folder: bool = False  # a run folder keeps the chunks: fixed slots, not records
@@ -54,14 +57,18 @@ def scan_chunk(job, items):
     """One chunk's slots (module docstring), or its records as they are where no run
     folder keeps them: ``job.run`` on the pulses ``items``."""
     lo, hi = int(items[0]), int(items[-1]) + 1
-    rec, waves, starts, needed = job.run(job, slice(lo, hi), _chunk_seed(job.seed, lo))
+    rec, blocks, needed = job.run(job, slice(lo, hi), _chunk_seed(job.seed, lo))
     out = _slots(rec, lo, hi, job.slots) if job.folder else {"records": rec}
     if needed is not None:                 # the record length each pulse's echoes need
         out["needed"] = needed
-    if job.sink is not None and waves is not None:
-        job.sink.write(lo, waves, starts)
-    elif job.keep and waves is not None:
-        out["waveform"], out["start"] = waves, starts
+    if job.sink is not None and blocks is not None:
+        for first, waves, starts in blocks:
+            job.sink.write(lo + first, waves, starts)
+    elif job.keep and blocks is not None and job.folder:     # a fixed length: one block
+        out["waveform"], out["start"] = blocks[0][1], blocks[0][2]
+    elif job.keep and blocks is not None:
+        out["waveform"] = [b[1] for b in blocks]
+        out["start"] = [b[2] for b in blocks]
     return out
 
 
@@ -99,8 +106,8 @@ def records(results, slots):
     starts (None when not kept). Chunks that kept their records (no run folder) are joined
     as they are; slots are written field by field into one array made once."""
     waves = "waveform" in results[0] if results else False
-    waves = (tuple(np.asarray(r["waveform"]) for r in results) if waves else None,
-             tuple(np.asarray(r["start"]) for r in results) if waves else None)
+    waves = (_blocks(results, "waveform") if waves else None,
+             _blocks(results, "start") if waves else None)
     if results and "records" in results[0]:
         # joined as bytes (numpy joins structured arrays field by field, 2-5x slower)
         joined = np.concatenate([np.ascontiguousarray(r["records"]).view(np.uint8)
@@ -122,9 +129,16 @@ def records(results, slots):
     return (rec,) + waves
 
 
+def _blocks(results, name):
+    """The chunks' blocks of ``name`` in order (a chunk's one array, or its list of runs)."""
+    return tuple(np.asarray(b) for r in results
+                 for b in (r[name] if isinstance(r[name], list) else [r[name]]))
+
+
 def job_description(scene, pattern, platform, sensor, seed, keep, geometry_key, motions):
-    """Everything that determines a scan's points, for its run folder."""
-    return {"kind": "scan", "geometry": geometry_key,
+    """Everything that determines a scan's points, for its run folder (``format``: the
+    version of what a chunk computes from them; a folder of another is refused)."""
+    return {"kind": "scan", "format": JOB_FORMAT, "geometry": geometry_key,
             "materials": [repr(m) for m in scene.materials],
             "times": array_digest(pattern.times), "directions": array_digest(pattern.directions),
             "channels": array_digest(pattern.channels), "pattern": pattern.describe(),

@@ -20,14 +20,14 @@ import math
 
 import numpy as np
 
-from .._pulses import GaussianPulse
 from ._peaks import centroids, find_peaks, fit_gaussians, order_returns, size_peaks
-from ._sampling import (SUPPORT, accumulate, accumulate_table, lit_spans, matched_filter,
-                        sample_table)
+from ._sampling import (SUPPORT, accumulate, accumulate_table, echo_shape, echo_support,
+                        lit_spans, matched_filter, sample_table)
 from .instrument import FWHM_PER_SIGMA
 
 __all__ = ["SUPPORT", "CENTROID_SIGMAS", "waveforms", "waveforms_with_echoes",
-           "record_samples", "record_blocks", "echo_shape", "find_returns", "cfar_background", "Returns"]
+           "record_samples", "record_blocks", "echo_shape", "find_returns", "cfar_background",
+           "Returns"]
 
 #: A pulse's sub-rays arriving within this many σ of each other are spread as one, at
 #: their photoelectron-weighted mean time: the record's sum and first moment are exact,
@@ -41,41 +41,6 @@ _OVERLAP_SIGMAS = 4.0
 _FIT_ITERATIONS = 100
 #: An echo's time is the centroid of its samples within this many σ.
 CENTROID_SIGMAS = 3.0
-
-
-def echo_shape(pulse, response, dt):
-    """The echo's shape, the pulse convolved with the response: None for two Gaussians
-    (exact erf integrals), else its CDF tabulated on a step of a 64th of the finer of Δt
-    and the shapes' own widths, ``(t0, step, cdf)``.
-
-    Parameters
-    ----------
-    pulse : GaussianPulse or SampledPulse
-        The transmitted pulse.
-    response : GaussianPulse, SampledPulse or None
-        The receiver's impulse response.
-    dt : float
-        The sample interval, s.
-
-    Returns
-    -------
-    tuple or None
-        ``(t0, step, cdf)``: the table's first time (s), its step (s) and the CDF at
-        ``t0 + i·step``.
-    """
-    shapes = [pulse] + ([response] if response is not None else [])
-    if all(isinstance(x, GaussianPulse) for x in shapes):
-        return None
-    widths = [x.fwhm if isinstance(x, GaussianPulse) else x.interval for x in shapes]
-    step = min([dt] + widths) / 64.0
-    dens = None
-    for x in shapes:
-        a, b = x.support
-        k0 = math.floor(a / step)
-        d = np.diff(x.cdf(step * np.arange(k0, math.ceil(b / step) + 1)))
-        dens = d if dens is None else np.convolve(dens, d)
-    cdf = np.concatenate([[0.0], np.cumsum(dens / dens.sum())])
-    return step * sum(math.floor(x.support[0] / step) for x in shapes), step, cdf
 
 
 def record_samples(tau, pe, start, sigma, dt, shape=None):
@@ -96,7 +61,7 @@ def record_samples(tau, pe, start, sigma, dt, shape=None):
     """
     _, last = lit_spans(np.ascontiguousarray(tau, np.float64),
                         np.ascontiguousarray(pe, np.float64))
-    after = _support(sigma, shape)[1]
+    after = echo_support(sigma, shape)[1]
     seen = np.isfinite(last)
     need = np.ceil((np.where(seen, last, start) - start + after) / dt) + 1
     return np.where(seen, need, 0).astype(np.int64)
@@ -126,7 +91,7 @@ def record_blocks(tau, pe, sigma, dt, shape, budget):
     seen = np.isfinite(first)
     if not seen.any():
         return [(0, n)]
-    before, after = _support(sigma, shape)
+    before, after = echo_support(sigma, shape)
     floor = first[seen].min()
     start = np.floor((np.where(seen, first, floor) - before) / dt) * dt
     need = np.ceil((np.where(seen, last, floor) - start + after) / dt) + 1
@@ -139,14 +104,6 @@ def record_blocks(tau, pe, sigma, dt, shape, budget):
             lo, widest = p, 0.0
         widest = max(widest, k)
     return runs + [(lo, n)]
-
-
-def _support(sigma, shape):
-    """(before, after): how far an echo reaches either side of its time, s (SUPPORT σ, or
-    the echo shape's table's extent)."""
-    if shape is None:
-        return SUPPORT * sigma, SUPPORT * sigma
-    return -shape[0], shape[0] + shape[1] * (len(shape[2]) - 1)
 
 
 def waveforms(tau, pe, sigma, dt, samples=None, shape=None):
@@ -200,7 +157,7 @@ def waveforms_with_echoes(tau, pe, sigma, dt, samples=None, shape=None):
     floor = first[seen].min() if seen.any() else 0.0
     first = np.where(seen, first, floor)
     last = np.where(seen, last, floor)
-    before, after = _support(sigma, shape)
+    before, after = echo_support(sigma, shape)
     start = np.floor((first - before) / dt) * dt
     if samples is None:
         spread = (last - start + after) / dt

@@ -214,7 +214,9 @@ def read_las(path):
     Returns
     -------
     PointCloud
-        x, y, z as quantised; every other field exact; ``info`` names the file.
+        x, y, z as quantised; every other field exact; ``info`` names the file and the
+        platform's time origin (``info["platform"]["time_origin_s"]``: GPS time less
+        emission time), so the cloud written again keeps its GPS times.
 
     Raises
     ------
@@ -239,7 +241,10 @@ def read_las(path):
     for n, *_ in POINT_FIELDS:
         if n not in LAS_NATIVE:
             pts[n] = np.asarray(las[_extra(n)])
-    return PointCloud(pts, {"file": os.fspath(path)})
+    # the platform's time origin, GPS time less emission time (written again as it was)
+    origin = float(np.median(np.asarray(las.gps_time) - pts["emission_time"])) if len(pts) \
+        else 0.0
+    return PointCloud(pts, {"file": os.fspath(path), "platform": {"time_origin_s": origin}})
 
 
 def write_hdf5(path, cloud):

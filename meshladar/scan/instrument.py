@@ -29,7 +29,7 @@ from .._validate import check_choice, check_count, check_real
 from ..errors import ParameterError
 from ..noise import Noise
 from ..sensor import LIMITS, MIN_WAVELENGTH
-from ._sampling import SUPPORT
+from ._sampling import echo_shape, echo_support
 from .footprint import ScanBeam
 from .geiger import GeigerMode
 
@@ -167,7 +167,8 @@ class ScanSensor:
         The record length per pulse (samples), at least :attr:`echo_samples`; default each
         chunk's spread of echoes plus the pulse's support on either side. A record starts
         at its pulse's first echo less the support: an echo that ends past a fixed
-        record's end is cut, its returns dropped, and the scan warns
+        record's end is cut, a return whose centroid window it cuts is dropped, and the
+        scan warns
         (:class:`~meshladar.errors.RecordLengthWarning`), naming the length that holds
         them.
     echoes : str
@@ -234,9 +235,9 @@ class ScanSensor:
         if self.samples is not None and self.samples < self.echo_samples:
             raise ParameterError(
                 f"samples: a record of {self.samples} samples cannot hold one echo (its "
-                f"support, ±{SUPPORT:g} σ of {self.sigma:.3g} s at {self.sample_rate:.3g} "
-                f"samples/s, takes {self.echo_samples}); give {self.echo_samples} or "
-                "more, or leave samples unset (each chunk's spread of echoes)")
+                f"support at {self.sample_rate:.3g} samples/s takes {self.echo_samples}); "
+                f"give {self.echo_samples} or more, or leave samples unset (each chunk's "
+                "spread of echoes)")
         if self.geiger is not None and self.detector.cfar:
             raise ParameterError("detector: cfar applies to a linear receiver's records; "
                                  "Geiger-mode thresholds follow each sample's armed shots")
@@ -260,12 +261,15 @@ class ScanSensor:
         shapes = [self.pulse] + ([self.response] if self.response is not None else [])
         return sum(_moments(x)[1] for x in shapes) ** 0.5
 
-    @property
+    @functools.cached_property
     def echo_samples(self) -> int:
-        """The samples one echo's record takes: its support, :data:`SUPPORT
-        <meshladar.scan.echoes.SUPPORT>` σ either side, and two (a record starts on a
-        sample; the fewest ``samples`` may be)."""
-        return math.ceil(2.0 * SUPPORT * self.sigma / self.dt) + 2
+        """The samples one echo's record takes: its support (:data:`SUPPORT
+        <meshladar.scan.echoes.SUPPORT>` σ either side of a Gaussian echo, the echo shape's
+        extent for a sampled pulse or response), and two (a record starts on a sample);
+        the fewest ``samples`` may be."""
+        before, after = echo_support(self.sigma, echo_shape(self.pulse, self.response,
+                                                            self.dt))
+        return math.ceil((before + after) / self.dt) + 2
 
     @property
     def fwhm(self) -> float:

@@ -87,8 +87,9 @@ _NO_SHIFT = np.zeros((0, 0))
 
 
 def _chunk(job, sl, seed):
-    """One chunk's records, its measured waveforms (when kept), their starts, and the
-    record length each pulse's echoes need where the sensor fixes it (else None)."""
+    """One chunk's records, the blocks of its measured waveforms (when kept: ``[(first
+    pulse in the chunk, records, starts), …]``), and the record length each pulse's
+    echoes need where the sensor fixes it (else None)."""
     scene, pattern, platform, sensor = job.scene, job.pattern, job.platform, job.sensor
     offsets, shares, pitch = job.foot
     t = pattern.times[sl]
@@ -107,9 +108,9 @@ def _chunk(job, sl, seed):
                                             sensor.wavelength)
     tau = 2.0 * cast.distance / SPEED_OF_LIGHT
     if sensor.echoes == "discrete":
-        ret, measured, start, needed = _discrete(sensor, tau, pe), None, None, None
+        ret, blocks, needed = _discrete(sensor, tau, pe), None, None
     else:
-        ret, measured, start, needed = _waveform_returns(job, tau, pe, seed)
+        ret, blocks, needed = _waveform_returns(job, tau, pe, seed)
         ret.time = ret.time - sensor.delay             # the shape's own delay taken off
     rec = np.empty(len(ret), POINT_DTYPE)
     fill_records(rec, (ret.pulse, np.ascontiguousarray(ret.time, np.float64), ret.amplitude,
@@ -117,37 +118,36 @@ def _chunk(job, sl, seed):
                  (sl.start, t, pattern.scan_angles_deg[sl], pattern.channels[sl]),
                  (origins, axis, 0.5 * SPEED_OF_LIGHT),
                  (tau, pe, cast.distance, cast.points, cast.face, shift), job.part_of)
-    return rec, (measured if job.keep or job.sink is not None else None), start, needed
+    return rec, (blocks if job.keep or job.sink is not None else None), needed
 
 
 def _waveform_returns(job, tau, pe, seed):
-    """The returns of a chunk's records (:func:`_detect`), the records as measured, their
-    starts and, where the sensor fixes their length, each pulse's needed length. Records
-    not kept are made in runs of pulses of at most :data:`RECORD_SAMPLES` samples
-    (:func:`.echoes.record_blocks`), each run's noise seeded by ``seed`` and its first
-    pulse: a deep scene's few long records do not make every record of the chunk long."""
+    """The returns of a chunk's records (:func:`_detect`), the blocks of its records as
+    measured, ``[(first pulse, records, starts), …]``, and, where the sensor fixes their
+    length, each pulse's needed length (else None). Records of the default length are
+    made in runs of pulses of at most :data:`RECORD_SAMPLES` samples
+    (:func:`.echoes.record_blocks`, one run where the chunk's fit), each run's noise
+    seeded by ``seed`` and the run's first pulse (the chunk's own seed where it is one
+    run): a deep scene's few long records do not make every record of the chunk long.
+    The runs depend on the chunk's echoes alone, not on whether the records are kept."""
     sensor = job.sensor
     shape = echo_shape(sensor.pulse, sensor.response, sensor.dt)
-    kept = job.keep or job.sink is not None or sensor.samples is not None
-    runs = [(0, len(tau))] if kept else record_blocks(tau, pe, sensor.sigma, sensor.dt,
-                                                      shape, RECORD_SAMPLES)
-    if len(runs) > 1:
-        found = []
-        for lo, hi in runs:
-            waves, start, echoes = waveforms_with_echoes(tau[lo:hi], pe[lo:hi], sensor.sigma,
-                                                         sensor.dt, None, shape)
-            run_seed = None if seed is None else list(seed) + [lo]
-            ret = _detect(sensor, waves, start, run_seed, echoes)[0]
-            found.append((ret.pulse + lo, ret.time, ret.amplitude, ret.width, ret.intensity))
-        return Returns(*(np.concatenate(x) for x in zip(*found))), None, None, None
-    waves, start, echoes = waveforms_with_echoes(tau, pe, sensor.sigma, sensor.dt,
-                                                 sensor.samples, shape)
-    ret, measured = _detect(sensor, waves, start, seed, echoes)
+    runs = ([(0, len(tau))] if sensor.samples is not None
+            else record_blocks(tau, pe, sensor.sigma, sensor.dt, shape, RECORD_SAMPLES))
+    found, blocks = [], []
+    for lo, hi in runs:
+        waves, start, echoes = waveforms_with_echoes(tau[lo:hi], pe[lo:hi], sensor.sigma,
+                                                     sensor.dt, sensor.samples, shape)
+        run_seed = seed if len(runs) == 1 or seed is None else list(seed) + [lo]
+        ret, measured = _detect(sensor, waves, start, run_seed, echoes)
+        found.append((ret.pulse + lo, ret.time, ret.amplitude, ret.width, ret.intensity))
+        blocks.append((lo, measured, start))
+    ret = Returns(*(np.concatenate(x) for x in zip(*found)))
     needed = None
     if sensor.samples is not None:                     # a fixed length may cut echoes
-        needed = record_samples(tau, pe, start, sensor.sigma, sensor.dt, shape)
-        ret = _within_records(ret, start, needed, sensor)
-    return ret, measured, start, needed
+        needed = record_samples(tau, pe, blocks[0][2], sensor.sigma, sensor.dt, shape)
+        ret = _within_records(ret, blocks[0][2], needed, sensor)
+    return ret, blocks, needed
 
 
 def _info(pattern, platform, sensor, seed, motions):
@@ -256,8 +256,8 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
         ``{part (index or name): meshladar.motion.Motion}``: parts that move rigidly
         while the scan runs (:mod:`meshladar.scan.moving`: motion blur and Doppler).
     seed : int or None
-        The noise's seed: the chunk from pulse k draws from ``default_rng([seed, k])``
-        (default 0), whatever the threads or executor.
+        The noise's seed (default 0): the chunk from pulse k draws from ``[seed, k]`` (a
+        run of its records, :data:`RECORD_SAMPLES`, from ``[seed, k, the run's first]``).
     keep_waveforms : bool
         Return every pulse's record (memory: pulses × samples × 8 bytes); with
         ``run_dir`` the sensor's ``samples`` must fix their length.

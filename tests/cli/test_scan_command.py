@@ -145,6 +145,11 @@ def test_a_gps_time_trajectory_file_takes_its_time_offset(tmp_path, capsys):
     np.testing.assert_array_equal(read_hdf5(tmp_path / "p.h5").points["x"], cloud.points["x"])
     assert main(base + [str(tmp_path / "my flight.csv")]) == 2       # no offset: refused
     assert "outside the platform's waypoints" in capsys.readouterr().err
+    # a folder whose name holds ".csv " itself: a whole existing name is taken as it is
+    (tmp_path / "run.csv files").mkdir()
+    (tmp_path / "run.csv files" / "t.csv").write_text("time,x,y,z,roll,pitch,yaw\n"
+                                                       "0,0,0,0,0,90,0\n1,60,0,0,0,90,0\n")
+    assert main(base + [str(tmp_path / "run.csv files" / "t.csv")]) == 0
 
 
 @pytest.mark.parametrize("extra, message", [

@@ -124,3 +124,18 @@ def test_a_dask_cluster_gives_the_points_of_one_thread():
     with dask_executor(workers=2) as ex:
         far = scan(sc, pat, plat, sen, chunk_pulses=300, seed=4, executor=ex)
     assert len(one) > 500 and one.points.tobytes() == far.points.tobytes()
+
+
+def test_a_run_folder_of_another_format_is_refused_naming_it(tmp_path, monkeypatch):
+    """A run folder kept by an earlier version's scan (another JOB_FORMAT: what a chunk
+    computes changed) is refused, the message naming ``format``, not only the other keys
+    that moved with it."""
+    from meshladar.runs import RunFolderError
+    from meshladar.scan import _streaming
+
+    sc, pat, plat, sen = _setup()
+    monkeypatch.setattr(_streaming, "JOB_FORMAT", 1)
+    scan(sc, pat, plat, sen, jobs=1, chunk_pulses=300, run_dir=tmp_path / "run")
+    monkeypatch.setattr(_streaming, "JOB_FORMAT", 2)
+    with pytest.raises(RunFolderError, match=r"differs in format"):
+        scan(sc, pat, plat, sen, jobs=1, chunk_pulses=300, run_dir=tmp_path / "run")

@@ -200,12 +200,15 @@ def test_a_deep_scenes_records_in_runs_give_the_points_of_one(monkeypatch):
     light both need records of ~20,000 samples, and one record length for the chunk made
     every record that long (2.1 GB for 1,500 pulses with the wall at 12 km). Made in runs
     of at most RECORD_SAMPLES samples (set to 200,000 here), the expected points are
-    those of one run (to 1e-9 m), both surfaces at their distances; with noise each run
-    draws its own, the same on one thread and two."""
+    those of one run (to 1e-9 m), both surfaces at their distances. With noise each run
+    draws its own (the records of two runs' like pulses differ), the same on one thread
+    and two, and the same whether the records are kept or not (the runs depend on the
+    echoes alone); kept, they come back a block a run, each pulse's record found by
+    ``waveform``."""
     import trimesh
 
     import meshladar as ml
-    from meshladar.scan import raster
+    from meshladar.scan import ScanPattern, raster
     from meshladar.scan import run as scan_run
 
     edge = trimesh.creation.box((0.01, 2.0, 2.0))
@@ -223,5 +226,43 @@ def test_a_deep_scenes_records_in_runs_give_the_points_of_one(monkeypatch):
     noisy = sensor(beam=beam, noise=ml.noise.Noise(background_rate=1e6))
     a = scan(sc, pat, Platform.static((0, 0, 0)), noisy, jobs=1, chunk_pulses=50)
     b = scan(sc, pat, Platform.static((0, 0, 0)), noisy, jobs=2, chunk_pulses=50)
-    for name in a.points.dtype.names:                              # (a false alarm's nan)
-        np.testing.assert_array_equal(a.points[name], b.points[name])
+    kept = scan(sc, pat, Platform.static((0, 0, 0)), noisy, jobs=1, chunk_pulses=50,
+                keep_waveforms=True)
+    for other in (b, kept):
+        for name in a.points.dtype.names:                          # (a false alarm's nan)
+            np.testing.assert_array_equal(a.points[name], other.points[name])
+    sizes = [len(w) for w in kept.waveforms]
+    assert sum(sizes) == 200 and len(sizes) > 200 // 50             # runs within chunks
+    # 40 like pulses at the plate's edge (both echoes): each run's first record is the
+    # same expected record, measured with the run's own noise
+    like = ScanPattern(np.arange(40) * 1e-4, [[1.0, 0.0, 0.0]] * 40)
+    same = scan(sc, like, Platform.static((0, 0, 0)), noisy, jobs=1, keep_waveforms=True)
+    assert len(same.waveforms) >= 2
+    firsts = [w[0] for w in same.waveforms]
+    assert len({len(w) for w in firsts}) == 1 and not np.array_equal(firsts[0], firsts[1])
+
+
+@pytest.mark.parametrize("kind", ["gaussian", "box", "box+response"])
+def test_the_fewest_samples_hold_one_echo_of_any_shape(kind):
+    """ScanSensor.echo_samples against the record a one-echo scan makes at the default
+    length (its echo's support from its start on a sample): that record is echo_samples
+    or one fewer long; at echo_samples a fixed record holds the echo (no warning, the
+    plate at its distance), one fewer is refused. A 5 ns box pulse at 2 GS/s needs its
+    10 samples and 2 (by hand), a Gaussian 16 σ and 2 (70), not 16 σ of the box's σ."""
+    from meshladar.scan import ScanPattern
+    from meshladar.waveforms import GaussianPulse, SampledPulse
+
+    box = SampledPulse(np.ones(10), interval=0.5e-9)
+    kw = {"gaussian": {}, "box": {"pulse": box},
+          "box+response": {"pulse": box, "response": GaussianPulse(1e-9)}}[kind]
+    fewest = sensor(**kw).echo_samples
+    assert fewest == {"gaussian": 70, "box": 12}.get(kind, fewest)
+    pat = ScanPattern([0.0], [[1.0, 0.0, 0.0]])
+    free = scan(scene(plate(100.0)), pat, Platform.static((0, 0, 0)), sensor(**kw),
+                keep_waveforms=True)
+    assert len(free.waveforms[0][0]) in (fewest - 1, fewest)
+    fixed = scan(scene(plate(100.0)), pat, Platform.static((0, 0, 0)),
+                 sensor(samples=fewest, **kw))
+    np.testing.assert_allclose(fixed.points["range"], free.points["range"], atol=1e-9)
+    with pytest.raises(ParameterError, match=f"give {fewest} or more"):
+        sensor(samples=fewest - 1, **kw)

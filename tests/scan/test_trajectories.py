@@ -61,7 +61,8 @@ def test_time_offset_reads_a_gps_time_trajectory_from_its_start(tmp_path):
 def test_a_las_file_keeps_the_trajectorys_gps_time(tmp_path):
     """A scan from a trajectory in GPS time writes LAS GPS times of 345000 s plus each
     pulse's emission time (the pattern's clock, kept exactly in its own field); one from
-    a static platform writes the emission times."""
+    a static platform writes the emission times; a file read and written again keeps its
+    GPS times (to 1 ns)."""
     laspy = pytest.importorskip("laspy")
     (tmp_path / "t.csv").write_text(GPS)
     platform = Platform.from_csv(tmp_path / "t.csv", time_offset=345000.0)
@@ -71,8 +72,12 @@ def test_a_las_file_keeps_the_trajectorys_gps_time(tmp_path):
         las = laspy.read(tmp_path / "p.las")
         np.testing.assert_array_equal(np.asarray(las.gps_time),
                                       origin + cloud.points["emission_time"])
-        np.testing.assert_array_equal(read_las(tmp_path / "p.las").points["emission_time"],
+        back = read_las(tmp_path / "p.las")
+        np.testing.assert_array_equal(back.points["emission_time"],
                                       cloud.points["emission_time"])
+        write_las(tmp_path / "q.las", back)                        # read, written again
+        np.testing.assert_allclose(np.asarray(laspy.read(tmp_path / "q.las").gps_time),
+                                   np.asarray(las.gps_time), rtol=0, atol=1e-9)
 
 
 def test_a_trajectory_of_one_row_is_refused(tmp_path):
