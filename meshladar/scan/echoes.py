@@ -67,7 +67,7 @@ def record_samples(tau, pe, start, sigma, dt, shape=None):
     return np.where(seen, need, 0).astype(np.int64)
 
 
-def record_blocks(tau, pe, sigma, dt, shape, budget):
+def record_blocks(spans, sigma, dt, shape, budget):
     """Runs of consecutive pulses, ``[(lo, hi), …]``, whose records (each run's as long as
     its own widest spread of echoes needs, :func:`waveforms`' default) hold at most
     ``budget`` samples in all where they can (a run of one pulse may hold more): one run
@@ -76,7 +76,10 @@ def record_blocks(tau, pe, sigma, dt, shape, budget):
 
     Parameters
     ----------
-    tau, pe, sigma, dt, shape
+    spans : ((n,) numpy.ndarray, (n,) numpy.ndarray)
+        Each pulse's earliest and latest lit time (:func:`._sampling.lit_spans`: inf and
+        −inf where nothing is lit).
+    sigma, dt, shape
         As :func:`waveforms`.
     budget : int
         The most samples a run's records hold.
@@ -85,8 +88,7 @@ def record_blocks(tau, pe, sigma, dt, shape, budget):
     -------
     list of (int, int)
     """
-    first, last = lit_spans(np.ascontiguousarray(tau, np.float64),
-                            np.ascontiguousarray(pe, np.float64))
+    first, last = spans
     n = len(first)
     seen = np.isfinite(first)
     if not seen.any():
@@ -129,7 +131,7 @@ def waveforms(tau, pe, sigma, dt, samples=None, shape=None):
     return waveforms_with_echoes(tau, pe, sigma, dt, samples, shape)[:2]
 
 
-def waveforms_with_echoes(tau, pe, sigma, dt, samples=None, shape=None):
+def waveforms_with_echoes(tau, pe, sigma, dt, samples=None, shape=None, spans=None):
     """:func:`waveforms`, and each record's one echo where it holds just one, whole: its
     matched-filtered samples are then read from :mod:`._sampling`'s filtered table by
     :func:`find_returns` (``echoes=``) instead of filtering the record (they agree to the
@@ -139,6 +141,8 @@ def waveforms_with_echoes(tau, pe, sigma, dt, samples=None, shape=None):
     ----------
     tau, pe, sigma, dt, samples, shape
         As :func:`waveforms`.
+    spans : tuple, optional
+        :func:`._sampling.lit_spans` of ``tau`` and ``pe`` where already found.
 
     Returns
     -------
@@ -152,7 +156,8 @@ def waveforms_with_echoes(tau, pe, sigma, dt, samples=None, shape=None):
     """
     tau = np.ascontiguousarray(tau, np.float64)
     pe = np.ascontiguousarray(pe, np.float64)
-    first, last = lit_spans(tau, pe)                     # a miss, or no light: never arrives
+    # a miss, or no light: never arrives
+    first, last = lit_spans(tau, pe) if spans is None else spans
     seen = np.isfinite(first)
     floor = first[seen].min() if seen.any() else 0.0
     first = np.where(seen, first, floor)

@@ -27,6 +27,7 @@ from ..stream import run_chunks
 from ..sensor import SPEED_OF_LIGHT
 from ._kernels import discrete_returns
 from ._records import fill_records
+from ._sampling import lit_spans
 from .cast import cast_static, photoelectrons, world_directions
 from .echoes import (CENTROID_SIGMAS, Returns, cfar_background, echo_shape, find_returns,
                      record_blocks, record_samples, waveforms_with_echoes)
@@ -132,12 +133,14 @@ def _waveform_returns(job, tau, pe, seed):
     The runs depend on the chunk's echoes alone, not on whether the records are kept."""
     sensor = job.sensor
     shape = echo_shape(sensor.pulse, sensor.response, sensor.dt)
+    spans = lit_spans(tau, pe)
     runs = ([(0, len(tau))] if sensor.samples is not None
-            else record_blocks(tau, pe, sensor.sigma, sensor.dt, shape, RECORD_SAMPLES))
+            else record_blocks(spans, sensor.sigma, sensor.dt, shape, RECORD_SAMPLES))
     found, blocks = [], []
     for lo, hi in runs:
-        waves, start, echoes = waveforms_with_echoes(tau[lo:hi], pe[lo:hi], sensor.sigma,
-                                                     sensor.dt, sensor.samples, shape)
+        waves, start, echoes = waveforms_with_echoes(
+            tau[lo:hi], pe[lo:hi], sensor.sigma, sensor.dt, sensor.samples, shape,
+            (spans[0][lo:hi], spans[1][lo:hi]))
         run_seed = seed if len(runs) == 1 or seed is None else list(seed) + [lo]
         ret, measured = _detect(sensor, waves, start, run_seed, echoes)
         found.append((ret.pulse + lo, ret.time, ret.amplitude, ret.width, ret.intensity))

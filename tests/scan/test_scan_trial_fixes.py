@@ -176,6 +176,7 @@ def test_record_runs_hold_at_most_their_budget_of_samples():
     irregular order: record_blocks' runs cover the pulses in order, and each run's records
     as waveforms() makes them (its own length) hold at most the budget, but a run of one
     pulse; one run where the chunk fits."""
+    from meshladar.scan._sampling import lit_spans
     from meshladar.scan.echoes import record_blocks, waveforms
 
     rng = np.random.default_rng(3)
@@ -186,7 +187,7 @@ def test_record_runs_hold_at_most_their_budget_of_samples():
     pe = np.ones((n, m))
     pe[rng.random(n) < 0.1] = 0.0                                 # some pulses see nothing
     for budget in (60_000, 400_000, 10**8):
-        runs = record_blocks(tau, pe, sigma, dt, None, budget)
+        runs = record_blocks(lit_spans(tau, pe), sigma, dt, None, budget)
         assert runs[0][0] == 0 and runs[-1][1] == n
         assert all(a[1] == b[0] for a, b in zip(runs, runs[1:]))
         for lo, hi in runs:
