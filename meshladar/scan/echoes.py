@@ -43,27 +43,47 @@ _FIT_ITERATIONS = 100
 CENTROID_SIGMAS = 3.0
 
 
-def record_samples(tau, pe, start, sigma, dt, shape=None):
+def _extents(spans, sigma, dt, shape, start=None):
+    """Each pulse's record start (its earliest echo less the support, rounded down to a
+    sample; the chunk's earliest for a pulse that meets nothing) unless given, and the
+    samples its record needs to hold its echoes whole from there.
+
+    Returns
+    -------
+    seen : (n,) bool numpy.ndarray
+        Where something is lit.
+    start : (n,) float64 numpy.ndarray
+    need : (n,) float64 numpy.ndarray
+    """
+    first, last = spans
+    seen = np.isfinite(first)
+    floor = first[seen].min() if seen.any() else 0.0
+    before, after = echo_support(sigma, shape)
+    if start is None:
+        start = np.floor((np.where(seen, first, floor) - before) / dt) * dt
+    need = np.ceil((np.where(seen, last, floor) - start + after) / dt) + 1
+    return seen, start, need
+
+
+def record_samples(spans, start, sigma, dt, shape=None):
     """The samples each pulse's record needs to hold its echoes whole from its ``start``
     (:func:`waveforms_with_echoes`' default length, pulse by pulse; 0 where nothing is
     lit).
 
     Parameters
     ----------
-    tau, pe, sigma, dt, shape
-        As :func:`waveforms`.
+    spans : ((n,) numpy.ndarray, (n,) numpy.ndarray)
+        As :func:`record_blocks`.
     start : (n,) numpy.ndarray
         Each record's start after emission, s.
+    sigma, dt, shape
+        As :func:`waveforms`.
 
     Returns
     -------
     (n,) int64 numpy.ndarray
     """
-    _, last = lit_spans(np.ascontiguousarray(tau, np.float64),
-                        np.ascontiguousarray(pe, np.float64))
-    after = echo_support(sigma, shape)[1]
-    seen = np.isfinite(last)
-    need = np.ceil((np.where(seen, last, start) - start + after) / dt) + 1
+    seen, _, need = _extents(spans, sigma, dt, shape, start)
     return np.where(seen, need, 0).astype(np.int64)
 
 
@@ -88,16 +108,9 @@ def record_blocks(spans, sigma, dt, shape, budget):
     -------
     list of (int, int)
     """
-    first, last = spans
-    n = len(first)
-    seen = np.isfinite(first)
-    if not seen.any():
-        return [(0, n)]
-    before, after = echo_support(sigma, shape)
-    floor = first[seen].min()
-    start = np.floor((np.where(seen, first, floor) - before) / dt) * dt
-    need = np.ceil((np.where(seen, last, floor) - start + after) / dt) + 1
-    if n * need.max() <= budget:
+    n = len(spans[0])
+    seen, _, need = _extents(spans, sigma, dt, shape)
+    if not seen.any() or n * need.max() <= budget:
         return [(0, n)]
     runs, lo, widest = [], 0, 0.0
     for p, k in enumerate(need.tolist()):
@@ -157,16 +170,10 @@ def waveforms_with_echoes(tau, pe, sigma, dt, samples=None, shape=None, spans=No
     tau = np.ascontiguousarray(tau, np.float64)
     pe = np.ascontiguousarray(pe, np.float64)
     # a miss, or no light: never arrives
-    first, last = lit_spans(tau, pe) if spans is None else spans
-    seen = np.isfinite(first)
-    floor = first[seen].min() if seen.any() else 0.0
-    first = np.where(seen, first, floor)
-    last = np.where(seen, last, floor)
-    before, after = echo_support(sigma, shape)
-    start = np.floor((first - before) / dt) * dt
+    _, start, need = _extents(lit_spans(tau, pe) if spans is None else spans, sigma, dt,
+                              shape)
     if samples is None:
-        spread = (last - start + after) / dt
-        samples = max(3, int(math.ceil(spread.max())) + 1)
+        samples = max(3, int(need.max()))
     out = np.zeros((len(tau), samples))
     if shape is not None:
         accumulate_table(tau, pe, start, float(dt), float(shape[0]), float(shape[1]),

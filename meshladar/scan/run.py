@@ -148,7 +148,7 @@ def _waveform_returns(job, tau, pe, seed):
     ret = Returns(*(np.concatenate(x) for x in zip(*found)))
     needed = None
     if sensor.samples is not None:                     # a fixed length may cut echoes
-        needed = record_samples(tau, pe, blocks[0][2], sensor.sigma, sensor.dt, shape)
+        needed = record_samples(spans, blocks[0][2], sensor.sigma, sensor.dt, shape)
         ret = _within_records(ret, blocks[0][2], needed, sensor)
     return ret, blocks, needed
 
