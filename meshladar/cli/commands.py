@@ -17,7 +17,7 @@ from .. import materials, phantoms, plotting
 from .._validate import check_size
 from ..errors import ParameterError
 from ..io import write_text_atomic
-from ..scan.files import read_hdf5, read_las
+from ..scan.files import points_format, read_hdf5, read_las
 from .checks import check_outdir, check_output
 from .simulate import load_scene
 
@@ -265,7 +265,7 @@ def check_view_options(args):
 def _read_points(path):
     """A point cloud file (LAS/LAZ, or HDF5 by extension), its errors naming --points."""
     try:
-        return (read_hdf5 if path.lower().endswith((".h5", ".hdf5")) else read_las)(path)
+        return (read_hdf5 if points_format(path) == "HDF5" else read_las)(path)
     except ParameterError as exc:
         raise ParameterError(f"--points: {exc}") from None
 

@@ -24,7 +24,7 @@ import numpy as np
 from .. import scan as scanning          # its modules load when a scan runs
 from ..errors import ParameterError
 from ..noise import Noise
-from ..scan.files import check_writable
+from ..scan.files import FORMATS, check_writable, points_format
 from ..waveforms import GaussianPulse
 from .checks import check_output
 from .simulate import load_scene
@@ -38,7 +38,9 @@ MOUNT_KEYS = ("mount_offset", "boresight_deg")
 #: A waypoints platform's keys given as flat lists, three values a waypoint.
 ROW_KEYS = ("positions", "attitudes_deg")
 #: The point files ``-o`` writes, by extension.
-POINT_SUFFIXES = (".las", ".laz", ".h5", ".hdf5")
+POINT_SUFFIXES = tuple(FORMATS)
+#: The waveform files `--waveforms` writes (HDF5).
+HDF5_SUFFIXES = tuple(k for k, (named, _) in FORMATS.items() if named == "HDF5")
 #: The sensor's API arguments and the flags that set them (named in the messages).
 SENSOR_FLAGS = {"max_returns": "--max-returns", "shots": "--geiger-shots",
                 "divergence": "--divergence", "sub_rays": "--sub-rays", "tol": "--tol",
@@ -253,7 +255,7 @@ def _check_outputs(args):
     check_output(args.output, POINT_SUFFIXES, inputs)
     check_writable(args.output, "-o")
     if args.waveforms is not None:
-        check_output(args.waveforms, (".h5", ".hdf5"), inputs, "--waveforms",
+        check_output(args.waveforms, HDF5_SUFFIXES, inputs, "--waveforms",
                      others=[("-o", args.output)])
         check_writable(args.waveforms, "--waveforms")
 
@@ -290,10 +292,8 @@ def cmd_scan(args) -> int:
         scene = scene.tessellate()
     cloud = scanning.scan(scene, pattern, platform, sensor, seed=args.seed,
                           waveforms_file=args.waveforms, progress=not args.quiet)
-    if args.output.lower().endswith((".h5", ".hdf5")):
-        scanning.write_hdf5(args.output, cloud)
-    else:
-        scanning.write_las(args.output, cloud)
+    write = scanning.write_hdf5 if points_format(args.output) == "HDF5" else scanning.write_las
+    write(args.output, cloud)
     if not args.quiet:
         pts = cloud.points
         print(f"{len(pts)} returns from {len(pattern)} pulses -> {args.output}"

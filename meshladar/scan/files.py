@@ -37,8 +37,14 @@ from ..errors import ParameterError
 from .points import POINT_DTYPE, POINT_FIELDS, PointCloud
 
 __all__ = ["write_las", "read_las", "write_hdf5", "read_hdf5", "LAS_NATIVE", "EXTRA_NAMES",
-           "WaveformSink", "check_writable", "NON_FINITE"]
+           "WaveformSink", "check_writable", "points_format", "FORMATS", "NON_FINITE"]
 
+#: Each points file's extension, the format it names and the writer of that format.
+FORMATS = {".las": ("LAS", "write_las"), ".laz": ("LAS", "write_las"),
+           ".h5": ("HDF5", "write_hdf5"), ".hdf5": ("HDF5", "write_hdf5")}
+#: The packages each format's writer needs (any one of a tuple).
+_NEEDS = {".las": ("laspy",), ".laz": ("laspy", ("lazrs", "laszip")), ".h5": ("h5py",),
+          ".hdf5": ("h5py",)}
 #: The record fields LAS 1.4 stores in its own dimensions (all others are extra bytes).
 LAS_NATIVE = ("x", "y", "z", "return_number", "number_of_returns")
 _SCAN_ANGLE_STEP = 0.006
@@ -86,9 +92,7 @@ def check_writable(path, flag="path"):
         Naming the folder, or the missing package and the extra that installs it.
     """
     path = _target(path, flag)
-    name = path.lower()
-    need = (["h5py"] if name.endswith((".h5", ".hdf5"))
-            else ["laspy"] + ([("lazrs", "laszip")] if name.endswith(".laz") else []))
+    need = _NEEDS.get(os.path.splitext(path)[1].lower(), _NEEDS[".las"])
     for module in need:
         options = module if isinstance(module, tuple) else (module,)
         if not any(importlib.util.find_spec(m) is not None for m in options):
@@ -108,11 +112,28 @@ def _target(path, flag):
     return path
 
 
-def _not_named_as(path, suffixes, writer):
-    """``path``, refused where its extension names the other writer's format."""
-    if path.lower().endswith(suffixes):
-        raise ParameterError(f"path: {path!r} names a {suffixes[0][1:].upper()} file; "
-                             f"{writer} writes that format")
+def points_format(path):
+    """The format a points file's extension names (:data:`FORMATS`): ``"LAS"`` (.las,
+    .laz), ``"HDF5"`` (.h5, .hdf5), or None for any other extension.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    str or None
+    """
+    return FORMATS.get(os.path.splitext(os.fspath(path))[1].lower(), (None,))[0]
+
+
+def _not_named_as(path, writes, flag="path"):
+    """``path``, refused where its extension names a format other than ``writes``."""
+    named = points_format(path)
+    if named not in (None, writes):
+        writer = FORMATS[os.path.splitext(path)[1].lower()][1]
+        raise ParameterError(f"{flag}: {path!r} names a{'n' if named == 'HDF5' else ''} "
+                             f"{named} file; {writer} writes that format")
     return path
 
 
@@ -155,7 +176,7 @@ def write_las(path, cloud, *, scale=None):
         the cloud's span (the message names the finest scale that fits).
     """
     laspy = _need("laspy")
-    path = _not_named_as(check_writable(path, "path"), (".h5", ".hdf5"), "write_hdf5")
+    path = _not_named_as(check_writable(path, "path"), "LAS")
     if not isinstance(cloud, PointCloud):
         raise ParameterError(f"cloud must be a PointCloud; got {type(cloud).__name__}")
     pts = cloud.points
@@ -266,7 +287,7 @@ def write_hdf5(path, cloud):
         PointCloud.
     """
     h5py = _need("h5py")
-    path = _not_named_as(_target(path, "path"), (".las", ".laz"), "write_las")
+    path = _not_named_as(_target(path, "path"), "HDF5")
     if not isinstance(cloud, PointCloud):
         raise ParameterError(f"cloud must be a PointCloud; got {type(cloud).__name__}")
 
@@ -347,7 +368,7 @@ class WaveformSink:
 
     def __init__(self, path):
         h5py = _need("h5py")
-        self.path = _target(path, "waveforms_file")
+        self.path = _not_named_as(_target(path, "waveforms_file"), "HDF5", "waveforms_file")
         fd, self.partial = make_temporary(self.path)
         os.close(fd)                                  # h5py opens it by its name
         try:

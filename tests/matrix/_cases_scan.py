@@ -158,6 +158,8 @@ api("scan.waveforms_file=no-folder", lambda: _scan(waveforms_file="/no/such/fold
     "error", "waveforms_file")
 api("scan.waveforms_file=folder", lambda: _scan(waveforms_file="."), "error",
     ("waveforms_file", "folder"))
+api("scan.waveforms_file=las", lambda: _scan(waveforms_file="w.las"), "error",
+    ("waveforms_file", "LAS", "write_las"))
 api("ScanSensor.echoes=x", lambda: _sensor(echoes="x"), "error", "echoes")
 api("ScanSensor.discrete+noise", lambda: _sensor(echoes="discrete", noise=ml.noise.Noise()),
     "error", ("discrete", "noise"))

@@ -99,3 +99,20 @@ def test_a_flash_image_refuses_a_frame_it_does_not_hold():
             cloud.image("range", frame=frame)
     with pytest.raises(ParameterError, match="return_number"):
         cloud.image("range", return_number=0)
+
+
+def test_a_points_files_extension_names_its_format_for_every_writer_and_reader(tmp_path):
+    """One table of extensions: .las/.laz are LAS, .h5/.hdf5 HDF5 whatever their case,
+    anything else none; each writer refuses the other's extensions naming that writer."""
+    from meshladar.scan.files import points_format
+    named = {p: points_format(p) for p in ("a.las", "b.LAZ", "c.h5", "d.HDF5", "e.txt",
+                                           "f", "g.las.bak")}
+    assert named == {"a.las": "LAS", "b.LAZ": "LAS", "c.h5": "HDF5", "d.HDF5": "HDF5",
+                     "e.txt": None, "f": None, "g.las.bak": None}
+    with pytest.raises(ParameterError, match=r"path: .*'\S*x\.H5' names an HDF5 file; "
+                                             "write_hdf5 writes that format"):
+        write_las(str(tmp_path / "x.H5"), _cloud([0.0]))
+    with pytest.raises(ParameterError, match=r"path: .*x\.laz' names a LAS file; "
+                                             "write_las writes that format"):
+        write_hdf5(str(tmp_path / "x.laz"), _cloud([0.0]))
+    assert not any(tmp_path.iterdir())
