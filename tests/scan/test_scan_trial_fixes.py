@@ -224,6 +224,19 @@ def test_a_deep_scenes_records_in_runs_give_the_points_of_one(monkeypatch):
     for name in ("range", "x", "y", "z", "intensity", "true_range"):
         np.testing.assert_allclose(runs.points[name], one.points[name], rtol=0, atol=1e-9)
     assert set(np.round(runs.points["true_range"], -1)) <= {0.0, 10.0, 1500.0, 1510.0}
+    # measured, against the scene: the plate's face at x = 5 m (to 1 mm); the wall at
+    # x = 1505 m, a point off by no more than its beam's sub-rays' slant can make it (the
+    # point lies on the axis, its sub-rays up to 2 radii off it; 2 cm for the samples) and,
+    # over the pulses, by the whole Gaussian footprint's mean slant 1505 w²/4 (to 1 cm:
+    # 32 sub-rays sample it)
+    pts, w = runs.points, beam.divergence
+    near, az = pts["true_range"] < 100.0, np.abs(np.deg2rad(runs.points["scan_angle"]))
+    assert near.sum() > 100 and (~near).sum() > 100
+    np.testing.assert_allclose(pts["x"][near], 5.0, rtol=0, atol=1e-3)
+    off = pts["x"][~near] - 1505.0
+    slant = 1505.0 * (np.cos(az[~near]) / np.cos(az[~near] + 2 * w) - 1.0)
+    assert np.all(np.abs(off) <= slant + 0.02)
+    assert abs(np.median(off) - 1505.0 * w ** 2 / 4) < 0.01
     noisy = sensor(beam=beam, noise=ml.noise.Noise(background_rate=1e6))
     a = scan(sc, pat, Platform.static((0, 0, 0)), noisy, jobs=1, chunk_pulses=50)
     b = scan(sc, pat, Platform.static((0, 0, 0)), noisy, jobs=2, chunk_pulses=50)
