@@ -71,11 +71,10 @@ def fused_view(job, scene, view, bins, receiver, smooth):
     """
     p = job.plan
     grid = grid_plan(p.geo, view.w, p.mode, p.spacing, p.z0_shifted, view.rng)
+    how = (receiver, smooth, p.coherent, p.geo.closed)
     if job.row_jobs > 1:
-        return _rows_on_threads(scene, grid, view.w, p.spacing, bins, job.row_jobs,
-                                (receiver, smooth, p.coherent))[::-1]
-    back, n = cast_bin_grid(scene, grid, view.w, p.spacing, bins, receiver, smooth,
-                            p.coherent)
+        return _rows_on_threads(scene, grid, view.w, p.spacing, bins, job.row_jobs, how)[::-1]
+    back, n = cast_bin_grid(scene, grid, view.w, p.spacing, bins, *how)
     return n, back
 
 
@@ -175,13 +174,13 @@ def chunk_views(job, scene, views, chunk, smooth=None, receiver=None):
                           receiver)[:, ::-1]
 
 
-def _rows_on_threads(scene, grid, w, spacing, bins, row_jobs, how=(None, None, True)):
+def _rows_on_threads(scene, grid, w, spacing, bins, row_jobs, how=(None, None, True, None)):
     """One big view's grid split into ``row_jobs`` bands of rows, cast on as many threads
     (the fused loop releases the GIL), each band with its own bins and a copy of the weight
     cache (weights already evaluated for the view stay valid); the
     bands' bins are added in order, so a given ``row_jobs`` always gives the same numbers
     (and the one-thread numbers to rounding). ``how``: :func:`cast_bin_grid`'s
-    (receiver, smooth, coherent). Returns (back-face hits, rays cast)."""
+    (receiver, smooth, coherent, closed). Returns (back-face hits, rays cast)."""
     cuts = np.linspace(0, grid.s.size, row_jobs + 1).astype(int)
     parts = []
     for a0, a1 in zip(cuts[:-1], cuts[1:]):

@@ -21,12 +21,13 @@ __all__ = ["BACKENDS", "Backend", "REGISTRY", "register", "backend", "choices",
            "resolve_backend"]
 
 #: The ``backend=`` choices; "auto" takes the first of :data:`PREFERENCE` that loads.
-BACKENDS = ("auto", "packets", "embreex", "warp", "warp-cpu")
+BACKENDS = ("auto", "packets", "raster", "embreex", "warp", "warp-cpu")
 #: "auto"'s order of preference: a CUDA device through Warp where there is one (an
 #: optional backend: passed over in silence where it cannot load), then the packets.
 PREFERENCE = ("warp", "packets", "embreex")
 #: The built-in backends' modules, imported on first use (they register themselves).
 BUILTIN = {"packets": "meshladar.raytrace.packets",
+           "raster": "meshladar.raytrace.packets",
            "embreex": "meshladar.raytrace.embreex_backend",
            "warp": "meshladar.raytrace.warp_backend",
            "warp-cpu": "meshladar.raytrace.warp_backend"}

@@ -61,6 +61,12 @@ class Geometry:
         self.support = self.shifted
         self._views, self._clusters = 0, None      # the runs' most views; extents' clusters
         self.lone = None                           # :meth:`for_receivers`
+        # 1 where a face's part is closed with outward normals (watertight, not inverted):
+        # a ray from outside meets such a part first on a face turned toward it
+        report = scene.report
+        closed = np.array([w and not i for w, i in zip(report["watertight"],
+                                                       report["inverted"])], np.uint8)
+        self.closed = np.ascontiguousarray(closed[self.part_of])
         self.for_views(scene, 0)
         self.normals = normals
         self.corner = None
@@ -198,6 +204,13 @@ class EmbreeScene:
         """Whether the weigh stage's fused loop can cast with this scene (the packet
         backend's, :mod:`meshladar.weighing.fused`)."""
         return getattr(self.scene, "fused", False)
+
+    @property
+    def raster(self):
+        """(vertices at unit size (n, 3) float64, faces (m, 3) int32) where the fused loop
+        draws a dense orthographic view's first hits (the "raster" backend's scenes), else
+        None."""
+        return getattr(self.scene, "raster", None)
 
     @property
     def bins_hits(self):

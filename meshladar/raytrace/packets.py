@@ -10,7 +10,7 @@ import numpy as np
 from . import embree4
 from .backends import Backend, register
 
-__all__ = ["PacketScene", "build"]
+__all__ = ["PacketScene", "build", "build_raster"]
 
 
 class PacketScene:
@@ -33,6 +33,9 @@ class PacketScene:
 
     #: the weigh stage's fused loop casts with this scene (:mod:`meshladar.weighing.fused`)
     fused = True
+    #: (vertices, faces) where the fused loop finds an orthographic view's first hits by
+    #: drawing them (:func:`build_raster`), else None
+    raster = None
 
     def __init__(self, scene):
         self.scene = scene
@@ -115,4 +118,28 @@ def build(vertices, faces):
     return PacketScene(embree4.PacketGeometry(vertices, faces, robust=True))
 
 
+def build_raster(vertices, faces):
+    """:func:`build`'s scene, which also keeps its vertices (float64 of the float32 ones
+    Embree holds) and faces, so that the fused loop finds a dense orthographic view's
+    first hits by drawing its faces into a depth buffer over the ray grid
+    (:mod:`meshladar.weighing._raster_kernels`; the "raster" backend). Everything else
+    casts with Embree, as :func:`build`'s.
+
+    Parameters
+    ----------
+    vertices, faces
+        As :func:`build`.
+
+    Returns
+    -------
+    PacketScene
+        With ``raster`` = (vertices (n, 3) float64, faces (m, 3) int32).
+    """
+    scene = build(vertices, faces)
+    scene.raster = (np.asarray(vertices, np.float32).astype(np.float64),
+                    np.ascontiguousarray(faces, np.int32))
+    return scene
+
+
 register(Backend("packets", build, embree4.available, fused=True))
+register(Backend("raster", build_raster, embree4.available, fused=True))

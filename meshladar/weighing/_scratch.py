@@ -20,7 +20,7 @@ import numpy as np
 from ..raytrace.embree4_ctypes import new_workspace
 from ..raytrace.embree4_kernels import tile_shape
 
-__all__ = ["scratch"]
+__all__ = ["scratch", "depth_buffer"]
 
 _HELD = threading.local()
 
@@ -79,3 +79,27 @@ def scratch(kind, w, columns):
         size = max(size, 1) if have is None else max(size, have[0] + have[0] // 4)
         have = held[(kind, w)] = (size, _make(kind, w, size))
     return have[1]
+
+
+def depth_buffer(size):
+    """This thread's depth buffer for a view of ``size`` rays
+    (:func:`._raster_kernels.zbuffer`): (faces (size,) int32, heights (size,) float64),
+    grown as :func:`scratch`'s bands are; every slot is written before it is read.
+
+    Parameters
+    ----------
+    size : int
+        The view's rays.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+    """
+    held = getattr(_HELD, "buffers", None)
+    if held is None:
+        held = _HELD.buffers = {}
+    have = held.get("depth")
+    if have is None or have[0] < size:
+        n = max(size, 1) if have is None else max(size, have[0] + have[0] // 4)
+        have = held["depth"] = (n, (np.empty(n, np.int32), np.empty(n)))
+    return have[1][0][:size], have[1][1][:size]

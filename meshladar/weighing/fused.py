@@ -8,11 +8,13 @@ from __future__ import annotations
 import numpy as np
 
 from ..raytrace.embree4_ctypes import query_flags
+from ..raytrace.embree4_kernels import tile_shape
 from ._fused_kernels import (cast_bin_bistatic, cast_bin_bistatic_views, cast_bin_flat,
                              cast_bin_flat_views, cast_bin_smooth, cast_bin_smooth_views)
-from ._scratch import scratch
+from ._raster_kernels import raster_bin_flat
+from ._scratch import depth_buffer, scratch
 
-__all__ = ["cast_bin_grid", "cast_bin_views", "queries"]
+__all__ = ["cast_bin_grid", "cast_bin_views", "queries", "draw_bin_grid"]
 
 
 def queries(lib, coherent):
@@ -130,7 +132,7 @@ def cast_bin_views(emb, plans, sequences, spacing, bins, coherent=False, smooth=
 
 
 def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=None,
-                  coherent=True):
+                  coherent=True, closed=None):
     """Cast, weigh and bin one view of the packet scene ``emb``
     (:class:`meshladar.raytrace.embree.EmbreeScene` whose backend is fused): ``plan`` is
     :func:`meshladar.raytrace.grid.grid_plan`'s :class:`~meshladar.raytrace.grid.GridPlan`,
@@ -180,6 +182,10 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
     coherent : bool
         Whether the rays are cast in coherent packets (default True), else one at a time
         (:func:`queries`; :attr:`meshladar.raytrace.plan.TracePlan.coherent`).
+    closed : (n_faces,) uint8 numpy.ndarray, optional
+        :attr:`meshladar.raytrace.embree.Geometry.closed`: on the "raster" backend
+        (``emb.raster``), a monostatic flat-normal view's first hits are drawn
+        (:func:`draw_bin_grid`) instead of cast. None (default): cast.
 
     Returns
     -------
@@ -207,4 +213,43 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
     if smooth is not None:
         return cast_bin_smooth(*head, *b[:11], b.footprint, smooth[0], float(smooth[1]),
                                scratch("smooth", lib.width, t.size))
+    if emb.raster is not None and closed is not None:
+        return draw_bin_grid(emb, grid, w, bins, lib.width, closed)
     return cast_bin_flat(*head, *bins, scratch("flat", lib.width, t.size))
+
+
+def draw_bin_grid(emb, grid, w, bins, width, closed):
+    """:func:`cast_bin_grid` of a monostatic flat-normal view on the "raster" backend: its
+    first hits drawn into a depth buffer (:func:`._raster_kernels.raster_bin_flat`), then
+    weighed and binned as the packet loop bins them, a packet tile's rows at a time.
+
+    Parameters
+    ----------
+    emb : EmbreeScene
+        A "raster" scene (``emb.raster`` its vertices at unit size and faces).
+    grid : tuple
+        The packet loop's ``grid``: (s, t, offsets, sp, u, v, lw), float32.
+    w : (3,) numpy.ndarray
+        The view direction.
+    bins : FlatBins
+        As :func:`cast_bin_grid`'s.
+    width : int
+        The packet width (the band's rows: a tile's).
+    closed : (n_faces,) uint8 numpy.ndarray
+        1 where a face's part is closed with outward normals
+        (:attr:`meshladar.raytrace.embree.Geometry.closed`): its faces turned away from
+        the view are not drawn.
+
+    Returns
+    -------
+    (int, int)
+        The back-face hits and the rays.
+    """
+    vertices, faces = emb.raster
+    proj = (vertices * emb.scale) @ np.array([grid[4], grid[5], w], np.float64).T
+    rows = tile_shape.py_func(width)[0]
+    band = scratch("flat", width, grid[1].size)[1][3][:3]
+    return raster_bin_flat(np.ascontiguousarray(proj), faces, bins.face_normals @ w, closed,
+                           grid,
+                           depth_buffer(grid[0].size * grid[1].size), rows, *bins[:14],
+                           bins.footprint, band)

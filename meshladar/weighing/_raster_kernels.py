@@ -1,0 +1,145 @@
+"""The raster path of a view (numba): an orthographic view's first hits found by drawing
+its faces into a depth buffer over the view's ray grid instead of tracing each ray, then
+weighed and binned by the fused loop's own :func:`._kernels.bin_flat_hits`, band by band
+in scan order.
+
+Every ray of an orthographic view travels along −w from its point (S, T) of the grid
+plane (:func:`meshladar.raytrace.grid.grid_plan`: the cell centre plus its stratified
+offset, in the float32 operations of the packet loop), so the face it meets first is the
+face whose projection onto the plane (u, v) holds (S, T) and whose plane lies highest
+along w there: each face is projected once, the cells of its bounding box tested against
+its edge functions (float64), and its height at the ray compared with the buffer's. A
+closed part's faces turned away from the view are not drawn (a ray from outside meets the
+part first on a face turned toward it). A ray on an edge shared by two faces takes the
+first drawn (Embree may take the other: the hit's range is the same; its face's weight may
+differ).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ._compiled import njit_loop
+from ._kernels import bin_flat_hits
+
+__all__ = ["zbuffer", "raster_bin_flat"]
+
+
+@njit_loop(inline="always")
+def _sample(s, t, offsets, sp, a, b):
+    """Ray (a, b)'s point (S, T) of the grid plane, in the packet loop's float32
+    operations (:func:`._fused_kernels._offsets`): the cell centre plus its stratified
+    offset (none on a regular grid)."""
+    xi, ku, kv, eta = offsets
+    if xi.shape[0] == 0:
+        return s[a], t[b]
+    half, one, zero = np.float32(0.5), np.float32(1.0), np.float32(0.0)
+    du = np.float32(xi[a] + ku[b])
+    dv = np.float32(kv[a] + eta[b])
+    du = np.float32(du - (one if du >= half else zero))
+    dv = np.float32(dv - (one if dv >= half else zero))
+    return np.float32(du * sp) + s[a], np.float32(dv * sp) + t[b]
+
+
+@njit_loop()
+def _draw(proj, faces, f, s, t, offsets, sp, prim, height):
+    """Draw face f (its corners' (S, T, height) in ``proj``) into the buffer: every ray of
+    its bounding box's cells inside its three edges (inclusive) whose height there is above
+    the buffer's takes it."""
+    i0, i1, i2 = faces[f, 0], faces[f, 1], faces[f, 2]
+    s0, t0, z0 = proj[i0, 0], proj[i0, 1], proj[i0, 2]
+    s1, t1, z1 = proj[i1, 0], proj[i1, 1], proj[i1, 2]
+    s2, t2, z2 = proj[i2, 0], proj[i2, 1], proj[i2, 2]
+    det = (s1 - s0) * (t2 - t0) - (s2 - s0) * (t1 - t0)
+    if det == 0.0:                                    # edge-on: no ray meets it
+        return
+    ns, nt = s.shape[0], t.shape[0]
+    inv, first_s, first_t = 1.0 / sp, s[0], t[0]
+    a_lo = max(int(math.floor((min(s0, s1, s2) - first_s) * inv + 0.5)), 0)
+    a_hi = min(int(math.floor((max(s0, s1, s2) - first_s) * inv + 0.5)), ns - 1)
+    b_lo = max(int(math.floor((min(t0, t1, t2) - first_t) * inv + 0.5)), 0)
+    b_hi = min(int(math.floor((max(t0, t1, t2) - first_t) * inv + 0.5)), nt - 1)
+    r = 1.0 / det                                     # barycentrics of corners 1 and 2
+    a1, b1, c1 = (t2 - t0) * r, (s0 - s2) * r, (s2 * t0 - s0 * t2) * r
+    a2, b2, c2 = (t0 - t1) * r, (s1 - s0) * r, (s0 * t1 - s1 * t0) * r
+    dz1, dz2 = z1 - z0, z2 - z0
+    xi, ku, kv, eta = offsets
+    jitter = xi.shape[0] > 0
+    half, one, zero = np.float32(0.5), np.float32(1.0), np.float32(0.0)
+    for a in range(a_lo, a_hi + 1):
+        sa = s[a]
+        xa = xi[a] if jitter else zero
+        ka = kv[a] if jitter else zero
+        row = a * nt
+        for b in range(b_lo, b_hi + 1):
+            if jitter:                      # the packet loop's float32 operations
+                du = np.float32(xa + ku[b])
+                dv = np.float32(ka + eta[b])
+                du = np.float32(du - (one if du >= half else zero))
+                dv = np.float32(dv - (one if dv >= half else zero))
+                qs = np.float64(np.float32(du * sp) + sa)
+                qt = np.float64(np.float32(dv * sp) + t[b])
+            else:
+                qs, qt = np.float64(sa), np.float64(t[b])
+            l1 = a1 * qs + b1 * qt + c1
+            l2 = a2 * qs + b2 * qt + c2
+            if l1 < 0.0 or l2 < 0.0 or l1 + l2 > 1.0:
+                continue
+            z = z0 + l1 * dz1 + l2 * dz2
+            if z > height[row + b]:
+                height[row + b] = z
+                prim[row + b] = f
+
+
+@njit_loop()
+def zbuffer(proj, faces, normals_w, closed, s, t, offsets, sp, prim, height):
+    """Each ray's first face (−1: none) and its height along w, row-major over the grid
+    (s, t, offsets, sp as the packet loop's ``grid``) into ``prim`` and ``height``
+    (len(s) × len(t) each): ``proj`` the vertices' (u, v, w) coordinates (shifted),
+    ``normals_w`` each face's n·w. A face turned away from the view (n·w ≤ 0) of a
+    ``closed`` part (watertight, normals outward) is not drawn: a ray from outside meets
+    its part first on a face turned toward it."""
+    for k in range(s.shape[0] * t.shape[0]):
+        prim[k] = -1
+        height[k] = -np.inf
+    for f in range(faces.shape[0]):
+        if normals_w[f] > 0.0 or not closed[f]:
+            _draw(proj, faces, f, s, t, offsets, sp, prim, height)
+
+
+@njit_loop()
+def raster_bin_flat(proj, faces, normals_w, closed, grid, zbuf, rows, plane_d, face_normals,
+                    face_material, params, wv, start, edges, area, power, ignore_back, out,
+                    stamp, weight, tag, footprint, band):
+    """One monostatic view with flat normals: its first hits by :func:`zbuffer` (into
+    ``zbuf`` = (prim, height)), then, ``rows`` rows at a time in scan order, each hit's
+    face, distance L − height and float32 origin as the packet loop builds it (``grid`` =
+    (s, t, offsets, sp, u, v, lw)) into ``band`` = (prim, distance, origins) and weighed
+    and binned by :func:`._kernels.bin_flat_hits`: the packet loop's numbers where the
+    two find the same faces. Returns (back-face hits, rays cast)."""
+    s, t, offsets, sp, u, v, lw = grid
+    prim, height = zbuf
+    zbuffer(proj, faces, normals_w, closed, s, t, offsets, sp, prim, height)
+    band_prim, band_t, band_o = band
+    ns, nt = s.shape[0], t.shape[0]
+    L = np.float64(lw[0]) * wv[0] + np.float64(lw[1]) * wv[1] + np.float64(lw[2]) * wv[2]
+    back = 0
+    for a0 in range(0, ns, rows):
+        m = 0
+        for a in range(a0, min(a0 + rows, ns)):
+            for b in range(nt):
+                k = a * nt + b
+                band_prim[m] = prim[k]
+                if prim[k] >= 0:
+                    S, T = _sample(s, t, offsets, sp, a, b)
+                    for c in range(3):
+                        band_o[m, c] = np.float32(np.float32(S * u[c])
+                                                  + np.float32(T * v[c])) + lw[c]
+                    band_t[m] = np.float32(L - height[k])
+                m += 1
+        back += bin_flat_hits(band_prim[:m], band_t[:m], band_o[:m], plane_d, face_normals,
+                              face_material, params, wv, start, edges, area, power,
+                              ignore_back, out, stamp, weight, tag, footprint, False)
+    return back, ns * nt
