@@ -1,8 +1,9 @@
 """The mesh engine's paths against raw embreex on the same rays, one thread, in interleaved
 rounds, timed in CPU seconds (robust to a loaded machine): raw embreex, the packet cast in
 rows of the packet width and in square tiles of the grid, and the whole run from rays to
-bins (flat normals on a regular and a stratified grid, smooth normals, footprint bins, and
-a bistatic receiver 60° off the first view, the same for every view, in received power:
+bins (flat normals on a regular and a stratified grid, the stratified one's first hits
+drawn into a depth buffer instead of cast (the "raster" backend), smooth normals, footprint
+bins, and a bistatic receiver 60° off the first view, the same for every view, in received power:
 under the paper's radiometry faces edge-on to the receiver would warn; and a sensor at a
 standoff of 100 radii, whose perspective grid's rays are counted for it).
 
@@ -56,14 +57,17 @@ def main(argv=None):
         return run
 
     def pipeline(**options):
+        options = {"backend": "packets"} | options
         return lambda: simulate_mesh(scene, ladar, mode="3d", ray_spacing=spacing, jobs=1,
-                                     backend="packets", **options).info["rays"]
+                                     **options).info["rays"]
 
     fns = {"raw embreex cast": cast(raw, False),
            "packet cast, rows": cast(packets, False),
            "packet cast, tiles": cast(packets, True),
            "rays to bins, flat, regular grid": pipeline(sampling="regular"),
            "rays to bins, flat, stratified": pipeline(sampling="stratified"),
+           "rays to bins, stratified, drawn": pipeline(sampling="stratified",
+                                                       backend="raster"),
            "rays to bins, smooth normals": pipeline(normals="smooth"),
            "rays to bins, footprint bins": pipeline(footprint=True),
            "rays to bins, bistatic (60 deg off)": pipeline(receiver=_off_axis(vecs[0]),

@@ -17,7 +17,8 @@ from .. import materials, phantoms, plotting
 from .._validate import check_size
 from ..errors import ParameterError
 from ..io import write_text_atomic
-from ..scan.files import points_format, read_hdf5, read_las
+from ..scan.files import read_hdf5, read_las
+from ..scan.formats import points_format
 from .checks import check_outdir, check_output
 from .simulate import load_scene
 

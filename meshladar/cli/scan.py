@@ -24,7 +24,7 @@ import numpy as np
 from .. import scan as scanning          # its modules load when a scan runs
 from ..errors import ParameterError
 from ..noise import Noise
-from ..scan.files import FORMATS, check_writable, points_format
+from ..scan.formats import FORMATS, check_writable, points_format
 from ..waveforms import GaussianPulse
 from .checks import check_output
 from .simulate import load_scene

@@ -129,7 +129,9 @@ OPTIONS: tuple[Option, ...] = (
     Option("rays_per_bin", "positive_float", "rays per range-bin width",
            "1 in 3d, at least 128 across the target; 8 in slice", _MESH),
     Option("backend", "choice", "mesh model ray casting: packets (coherent packets, Embree 4 "
-           "from the embreex wheel), embreex (one ray at a time, the reference), warp "
+           "from the embreex wheel), raster (packets, with a dense orthographic view's "
+           "first hits drawn into a depth buffer where its normals are flat and its "
+           "receiver at the ladar), embreex (one ray at a time, the reference), warp "
            "(NVIDIA Warp on a CUDA device; warp-cpu: its kernels on the CPU) or auto",
            "auto: warp on a CUDA device, else packets when they load; on the command "
            "line, embreex for a run of at most 2^20 rays (it starts without numba's "

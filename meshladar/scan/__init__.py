@@ -9,7 +9,8 @@ BRDFs and the link budget, recorded as a waveform with the receiver's noise and 
 for returns (:class:`Detector`). Every return carries its ground truth (the part, face,
 range and point its light came from). Layout: :mod:`.patterns`, :mod:`.platforms`,
 :mod:`.footprint`, :mod:`.instrument`, :mod:`.cast`, :mod:`.echoes`, :mod:`.points`,
-:mod:`.run`, and the files :mod:`.files` (LAS 1.4 through laspy, HDF5 through h5py).
+:mod:`.run`, and the files :mod:`.files` (LAS 1.4 through laspy, HDF5 through h5py), their
+formats by extension :mod:`.formats`.
 
 Conventions: monostatic, received power in photoelectrons, one bounce, flat two-sided
 normals (:data:`~meshladar.scan.points.CONVENTIONS`, recorded in every result's ``info``).
@@ -38,7 +39,7 @@ _HOMES = {"ScanBeam": "footprint", "GeigerMode": "geiger", "coates": "geiger",
 
 #: The package's modules, also reached as attributes (``meshladar.scan.points``).
 _SUBMODULES = ("patterns", "platforms", "footprint", "instrument", "cast", "echoes", "points",
-               "run", "files", "geiger", "moving")
+               "run", "files", "formats", "geiger", "moving")
 
 
 __getattr__, __dir__ = _lazy_attributes(__name__, globals(), _HOMES, _SUBMODULES)

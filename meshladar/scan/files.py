@@ -23,7 +23,6 @@ strict JSON (a non-finite number, such as a Geiger-mode dead time of inf, as the
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
 import os
@@ -34,17 +33,12 @@ import numpy as np
 from .._atomic_write import make_temporary, write_atomic
 from .._validate import check_path, check_real
 from ..errors import ParameterError
+from .formats import _not_named_as, _target, check_writable
 from .points import POINT_DTYPE, POINT_FIELDS, PointCloud
 
 __all__ = ["write_las", "read_las", "write_hdf5", "read_hdf5", "LAS_NATIVE", "EXTRA_NAMES",
-           "WaveformSink", "check_writable", "points_format", "FORMATS", "NON_FINITE"]
+           "WaveformSink", "NON_FINITE"]
 
-#: Each points file's extension, the format it names and the writer of that format.
-FORMATS = {".las": ("LAS", "write_las"), ".laz": ("LAS", "write_las"),
-           ".h5": ("HDF5", "write_hdf5"), ".hdf5": ("HDF5", "write_hdf5")}
-#: The packages each format's writer needs (any one of a tuple).
-_NEEDS = {".las": ("laspy",), ".laz": ("laspy", ("lazrs", "laszip")), ".h5": ("h5py",),
-          ".hdf5": ("h5py",)}
 #: The record fields LAS 1.4 stores in its own dimensions (all others are extra bytes).
 LAS_NATIVE = ("x", "y", "z", "return_number", "number_of_returns")
 _SCAN_ANGLE_STEP = 0.006
@@ -67,74 +61,6 @@ def _need(module):
     except ImportError:
         raise ParameterError(f"{module} is not installed: pip install 'meshladar[scan]'") \
             from None
-
-
-def check_writable(path, flag="path"):
-    """Refuse, before any work, a points file that cannot be written: a folder, a file in
-    a folder that does not exist, or one whose writer is not installed (laspy for
-    ``.las``, laspy and lazrs (or laszip) for ``.laz``, h5py for ``.h5``/``.hdf5``).
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The file to write.
-    flag : str
-        The option or argument named in the message.
-
-    Returns
-    -------
-    str
-        The path, as a string.
-
-    Raises
-    ------
-    ParameterError
-        Naming the folder, or the missing package and the extra that installs it.
-    """
-    path = _target(path, flag)
-    need = _NEEDS.get(os.path.splitext(path)[1].lower(), _NEEDS[".las"])
-    for module in need:
-        options = module if isinstance(module, tuple) else (module,)
-        if not any(importlib.util.find_spec(m) is not None for m in options):
-            raise ParameterError(f"{flag}: writing {path!r} needs {options[0]}, "
-                                 "which is not installed: pip install 'meshladar[scan]'")
-    return path
-
-
-def _target(path, flag):
-    """``path`` checked to name a file in a folder that exists (not a folder)."""
-    path = check_path(flag, path)
-    if os.path.isdir(path):
-        raise ParameterError(f"{flag}: {path!r} is a folder; name a file in it")
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise ParameterError(f"{flag}: no folder {folder!r} to write {path!r} into")
-    return path
-
-
-def points_format(path):
-    """The format a points file's extension names (:data:`FORMATS`): ``"LAS"`` (.las,
-    .laz), ``"HDF5"`` (.h5, .hdf5), or None for any other extension.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-
-    Returns
-    -------
-    str or None
-    """
-    return FORMATS.get(os.path.splitext(os.fspath(path))[1].lower(), (None,))[0]
-
-
-def _not_named_as(path, writes, flag="path"):
-    """``path``, refused where its extension names a format other than ``writes``."""
-    named = points_format(path)
-    if named not in (None, writes):
-        writer = FORMATS[os.path.splitext(path)[1].lower()][1]
-        raise ParameterError(f"{flag}: {path!r} names a{'n' if named == 'HDF5' else ''} "
-                             f"{named} file; {writer} writes that format")
-    return path
 
 
 def _readable(path, what):

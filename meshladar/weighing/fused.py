@@ -137,8 +137,7 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
     (:class:`meshladar.raytrace.embree.EmbreeScene` whose backend is fused): ``plan`` is
     :func:`meshladar.raytrace.grid.grid_plan`'s :class:`~meshladar.raytrace.grid.GridPlan`,
     ``bins`` the weigh-and-bin arguments
-    (:class:`~meshladar.forward.fused_views.FlatBins`, flat for the compiled loop);
-    ``receiver`` (direction, lift) makes the view bistatic.
+    (:class:`~meshladar.forward.fused_views.FlatBins`).
 
     Monostatic or bistatic with flat normals, or monostatic with smooth ones (``smooth``),
     binned at a point (``bins.footprint`` None) or over each face's footprint, in packets
@@ -149,14 +148,11 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
     Parameters
     ----------
     emb : EmbreeScene
-        The view's scene (``meshladar.raytrace.embree.embree_scene``) on the packet
-        backend: ``emb.scene.scene`` is its :class:`~meshladar.raytrace.embree4.PacketGeometry`.
+        The view's packet scene (``emb.scene.scene`` a ``PacketGeometry``).
     plan : GridPlan
-        The view's ray grid (``s``, ``t``, the stratified offsets' 1-D sequences or None,
-        the axes ``u``, ``v`` and the start distance ``L``, shifted coordinates).
+        The view's ray grid (s, t, offsets, u, v, L; shifted coordinates).
     direction : (3,) array_like
-        The view direction w, a unit vector from the scene toward the ladar; the rays
-        travel along −w.
+        The view direction w (unit, toward the ladar; the rays travel along −w).
     spacing : float
         The ray spacing δ (scene units) that scales the stratified offsets.
     bins : FlatBins
@@ -183,9 +179,8 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
         Whether the rays are cast in coherent packets (default True), else one at a time
         (:func:`queries`; :attr:`meshladar.raytrace.plan.TracePlan.coherent`).
     closed : (n_faces,) uint8 numpy.ndarray, optional
-        :attr:`meshladar.raytrace.embree.Geometry.closed`: on the "raster" backend
-        (``emb.raster``), a monostatic flat-normal view's first hits are drawn
-        (:func:`draw_bin_grid`) instead of cast. None (default): cast.
+        ``Geometry.closed``: on the "raster" backend a flat monostatic view's first hits
+        are drawn (:func:`draw_bin_grid`). None (default): cast.
 
     Returns
     -------

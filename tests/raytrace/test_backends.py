@@ -32,7 +32,8 @@ def test_a_registered_backend_is_chosen_by_name_and_gives_the_references_numbers
     monkeypatch.setitem(backends.REGISTRY, "counting", backends.Backend(
         "counting", lambda v, f: Counting(reference.build(v, f)), lambda: (True, "test"),
         quick_start=reference.quick_start))
-    assert backends.choices() == ("auto", "packets", "embreex", "warp", "warp-cpu", "counting")
+    assert backends.choices() == ("auto", "packets", "raster", "embreex", "warp", "warp-cpu",
+                                 "counting")
     scene = ml.Scene.from_mesh(trimesh.creation.icosphere(subdivisions=2),
                                material=ml.materials.DARK_GRAY)
     ladar = ml.Ladar.covering(scene, n_bins=16, angles_deg=[0.0, 90.0])
@@ -44,5 +45,6 @@ def test_a_registered_backend_is_chosen_by_name_and_gives_the_references_numbers
 
 def test_an_unregistered_backend_names_the_registered_ones():
     with pytest.raises(ParameterError, match=r"backend must be one of \('auto', 'packets', "
-                                             r"'embreex', 'warp', 'warp-cpu'\); got 'optix'"):
+                                             r"'raster', 'embreex', 'warp', 'warp-cpu'\); "
+                                             r"got 'optix'"):
         backends.resolve_backend("optix")

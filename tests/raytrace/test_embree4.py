@@ -168,7 +168,8 @@ def test_a_backend_that_cannot_load_is_said_once_and_never_changes_the_numbers(m
 def test_an_unknown_backend_is_refused():
     scene = _sphere(1)
     with pytest.raises(ParameterError, match=r"backend must be one of \('auto', 'packets', "
-                                             r"'embreex', 'warp', 'warp-cpu'\); got 'optix'"):
+                                             r"'raster', 'embreex', 'warp', 'warp-cpu'\); "
+                                             r"got 'optix'"):
         ml.simulate(scene, ml.Ladar.covering(scene, n_bins=4, angles_deg=[0.0]),
                     model="mesh", backend="optix")
 

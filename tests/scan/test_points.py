@@ -111,7 +111,7 @@ def test_a_missing_writer_is_named_before_any_work(monkeypatch, tmp_path):
 
     from meshladar.cli import main
     from meshladar.errors import ParameterError
-    from meshladar.scan.files import check_writable
+    from meshladar.scan.formats import check_writable
 
     real = importlib.util.find_spec
     monkeypatch.setattr(importlib.util, "find_spec",

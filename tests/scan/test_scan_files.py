@@ -104,7 +104,7 @@ def test_a_flash_image_refuses_a_frame_it_does_not_hold():
 def test_a_points_files_extension_names_its_format_for_every_writer_and_reader(tmp_path):
     """One table of extensions: .las/.laz are LAS, .h5/.hdf5 HDF5 whatever their case,
     anything else none; each writer refuses the other's extensions naming that writer."""
-    from meshladar.scan.files import points_format
+    from meshladar.scan.formats import points_format
     named = {p: points_format(p) for p in ("a.las", "b.LAZ", "c.h5", "d.HDF5", "e.txt",
                                            "f", "g.las.bak")}
     assert named == {"a.las": "LAS", "b.LAZ": "LAS", "c.h5": "HDF5", "d.HDF5": "HDF5",
