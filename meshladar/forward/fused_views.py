@@ -71,7 +71,7 @@ def fused_view(job, scene, view, bins, receiver, smooth):
     """
     p = job.plan
     grid = grid_plan(p.geo, view.w, p.mode, p.spacing, p.z0_shifted, view.rng)
-    how = (receiver, smooth, p.coherent, p.geo.closed)
+    how = (receiver, smooth, p.coherent, p.geo.closed if p.coherent else None)
     if job.row_jobs > 1:
         return _rows_on_threads(scene, grid, view.w, p.spacing, bins, job.row_jobs, how)[::-1]
     back, n = cast_bin_grid(scene, grid, view.w, p.spacing, bins, *how)

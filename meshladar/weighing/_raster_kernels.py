@@ -43,11 +43,37 @@ def _sample(s, t, offsets, sp, a, b):
     return np.float32(du * sp) + s[a], np.float32(dv * sp) + t[b]
 
 
+#: The cells a face's span covers are widened by this fraction of a cell each side, so that
+#: round-off in the cells' float32 centres loses no ray on the span's edge.
+_SPAN_MARGIN = 1e-3
+
+
+@njit_loop(inline="always")
+def _edge_span(s0, t0, s1, t1, inv, lo, hi, span):
+    """``span`` (T low, T high) widened to hold the edge (s0, t0)–(s1, t1) clipped to the
+    strip lo ≤ S ≤ hi (unchanged where the edge misses it); ``inv`` 1 / (s1 − s0), or 0
+    where the edge runs along T."""
+    if inv == 0.0:
+        if lo <= s0 <= hi:
+            return min(span[0], t0, t1), max(span[1], t0, t1)
+        return span
+    a = (lo - s0) * inv
+    b = (hi - s0) * inv
+    if a > b:
+        a, b = b, a
+    a, b = max(a, 0.0), min(b, 1.0)
+    if a > b:
+        return span
+    ta, tb = t0 + a * (t1 - t0), t0 + b * (t1 - t0)
+    return min(span[0], ta, tb), max(span[1], ta, tb)
+
+
 @njit_loop()
 def _draw(proj, faces, f, s, t, offsets, sp, prim, height):
-    """Draw face f (its corners' (S, T, height) in ``proj``) into the buffer: every ray of
-    its bounding box's cells inside its three edges (inclusive) whose height there is above
-    the buffer's takes it."""
+    """Draw face f (its corners' (S, T, height) in ``proj``) into the buffer: row by row
+    over the rows its S range covers, every ray of the cells its T span on the row's strip
+    covers that lies inside its three edges (inclusive) and where its height is above the
+    buffer's takes it."""
     i0, i1, i2 = faces[f, 0], faces[f, 1], faces[f, 2]
     s0, t0, z0 = proj[i0, 0], proj[i0, 1], proj[i0, 2]
     s1, t1, z1 = proj[i1, 0], proj[i1, 1], proj[i1, 2]
@@ -56,19 +82,31 @@ def _draw(proj, faces, f, s, t, offsets, sp, prim, height):
     if det == 0.0:                                    # edge-on: no ray meets it
         return
     ns, nt = s.shape[0], t.shape[0]
-    inv, first_s, first_t = 1.0 / sp, s[0], t[0]
-    a_lo = max(int(math.floor((min(s0, s1, s2) - first_s) * inv + 0.5)), 0)
-    a_hi = min(int(math.floor((max(s0, s1, s2) - first_s) * inv + 0.5)), ns - 1)
-    b_lo = max(int(math.floor((min(t0, t1, t2) - first_t) * inv + 0.5)), 0)
-    b_hi = min(int(math.floor((max(t0, t1, t2) - first_t) * inv + 0.5)), nt - 1)
+    inv, first_s, first_t = 1.0 / sp, np.float64(s[0]), np.float64(t[0])
+    a_lo = max(int(math.floor((min(s0, s1, s2) - first_s) * inv + 0.5 - _SPAN_MARGIN)), 0)
+    a_hi = min(int(math.floor((max(s0, s1, s2) - first_s) * inv + 0.5 + _SPAN_MARGIN)),
+               ns - 1)
     r = 1.0 / det                                     # barycentrics of corners 1 and 2
     a1, b1, c1 = (t2 - t0) * r, (s0 - s2) * r, (s2 * t0 - s0 * t2) * r
     a2, b2, c2 = (t0 - t1) * r, (s1 - s0) * r, (s0 * t1 - s1 * t0) * r
     dz1, dz2 = z1 - z0, z2 - z0
+    e01 = 1.0 / (s1 - s0) if s1 != s0 else 0.0
+    e12 = 1.0 / (s2 - s1) if s2 != s1 else 0.0
+    e20 = 1.0 / (s0 - s2) if s0 != s2 else 0.0
     xi, ku, kv, eta = offsets
     jitter = xi.shape[0] > 0
     half, one, zero = np.float32(0.5), np.float32(1.0), np.float32(0.0)
     for a in range(a_lo, a_hi + 1):
+        lo = first_s + (a - 0.5 - _SPAN_MARGIN) * sp  # the row's strip of S
+        hi = first_s + (a + 0.5 + _SPAN_MARGIN) * sp
+        span = (np.inf, -np.inf)
+        span = _edge_span(s0, t0, s1, t1, e01, lo, hi, span)
+        span = _edge_span(s1, t1, s2, t2, e12, lo, hi, span)
+        span = _edge_span(s2, t2, s0, t0, e20, lo, hi, span)
+        if span[0] > span[1]:
+            continue
+        b_lo = max(int(math.floor((span[0] - first_t) * inv + 0.5 - _SPAN_MARGIN)), 0)
+        b_hi = min(int(math.floor((span[1] - first_t) * inv + 0.5 + _SPAN_MARGIN)), nt - 1)
         sa = s[a]
         xa = xi[a] if jitter else zero
         ka = kv[a] if jitter else zero

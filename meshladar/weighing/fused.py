@@ -14,7 +14,11 @@ from ._fused_kernels import (cast_bin_bistatic, cast_bin_bistatic_views, cast_bi
 from ._raster_kernels import raster_bin_flat
 from ._scratch import depth_buffer, scratch
 
-__all__ = ["cast_bin_grid", "cast_bin_views", "queries", "draw_bin_grid"]
+__all__ = ["cast_bin_grid", "cast_bin_views", "queries", "draw_bin_grid", "DRAWN_RAYS"]
+
+#: The most rays a view's depth buffer holds (12 bytes each: 48 MiB a thread); a bigger
+#: view is drawn in blocks of rows (:func:`draw_bin_grid`), binned in the same order.
+DRAWN_RAYS = 1 << 22
 
 
 def queries(lib, coherent):
@@ -216,7 +220,8 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
 def draw_bin_grid(emb, grid, w, bins, width, closed):
     """:func:`cast_bin_grid` of a monostatic flat-normal view on the "raster" backend: its
     first hits drawn into a depth buffer (:func:`._raster_kernels.raster_bin_flat`), then
-    weighed and binned as the packet loop bins them, a packet tile's rows at a time.
+    weighed and binned as the packet loop bins them, a packet tile's rows at a time; a view
+    of more than :data:`DRAWN_RAYS` rays in blocks of rows, each drawn on its own.
 
     Parameters
     ----------
@@ -241,10 +246,18 @@ def draw_bin_grid(emb, grid, w, bins, width, closed):
         The back-face hits and the rays.
     """
     vertices, faces = emb.raster
-    proj = (vertices * emb.scale) @ np.array([grid[4], grid[5], w], np.float64).T
+    proj = np.ascontiguousarray((vertices * emb.scale)
+                                @ np.array([grid[4], grid[5], w], np.float64).T)
+    normals_w = bins.face_normals @ w
     rows = tile_shape.py_func(width)[0]
     band = scratch("flat", width, grid[1].size)[1][3][:3]
-    return raster_bin_flat(np.ascontiguousarray(proj), faces, bins.face_normals @ w, closed,
-                           grid,
-                           depth_buffer(grid[0].size * grid[1].size), rows, *bins[:14],
-                           bins.footprint, band)
+    s, t, (xi, ku, kv, eta) = grid[0], grid[1], grid[2]
+    step = max(rows, DRAWN_RAYS // max(t.size, 1) // rows * rows)
+    back = 0
+    for a0 in range(0, s.size, step):              # at most DRAWN_RAYS rays a buffer
+        part = (s[a0:a0 + step], t, (xi[a0:a0 + step], ku, kv[a0:a0 + step], eta)
+                if xi.size else grid[2]) + grid[3:]
+        back += raster_bin_flat(proj, faces, normals_w, closed, part,
+                                depth_buffer(part[0].size * t.size), rows, *bins[:14],
+                                bins.footprint, band)[0]
+    return back, s.size * t.size

@@ -151,3 +151,32 @@ def test_a_drawn_lambertian_sphere_is_the_textbook_profile():
                            rays_per_bin=40, backend="raster")
         exact = 2 * rho / n * R * R * (c[:-1] ** n - c[1:] ** n)
         assert np.abs(sino.values - exact).max() < SPHERE_TOL * exact.max(), radiometry
+
+
+@pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")   # facets
+def test_a_view_bigger_than_one_buffer_is_drawn_in_blocks_of_rows_with_the_same_bins(
+        monkeypatch):
+    """DRAWN_RAYS bounds a view's depth buffer: a view drawn in blocks of a few rows each
+    (its rows binned in the same order) gives the one-buffer bins exactly."""
+    from meshladar.weighing import fused
+    scene = _scene(_scenes()["ring and open box"])
+    ladar = ml.Ladar(angles_deg=[10.0, 100.0], bin_edges=np.linspace(-3, 3, 61))
+    kw = dict(model="mesh", mode="3d", ray_spacing=0.006, backend="raster")
+    whole = ml.simulate(scene, ladar, **kw)
+    monkeypatch.setattr(fused, "DRAWN_RAYS", 5_000)
+    blocks = ml.simulate(scene, ladar, **kw)
+    assert whole.info["rays"] > 20 * 5_000
+    np.testing.assert_array_equal(blocks.values, whole.values)
+
+
+def test_grids_sparser_than_their_faces_are_cast_not_drawn():
+    """A view of fewer rays than faces goes ray by ray through Embree (its faces would be
+    drawn for nothing): the packet backend's numbers exactly."""
+    scene = ml.Scene.from_mesh(trimesh.creation.icosphere(subdivisions=5, radius=1.0),
+                               material=ml.brdf.Lambertian(0.5))
+    ladar = ml.Ladar(angles_deg=[0.0, 50.0], bin_edges=np.linspace(-1, 1, 11))
+    kw = dict(model="mesh", mode="3d", ray_spacing=0.05)
+    drawn = ml.simulate(scene, ladar, backend="raster", **kw)
+    assert drawn.info["rays"] < 2 * 20 * 4 ** 5
+    np.testing.assert_array_equal(drawn.values,
+                                  ml.simulate(scene, ladar, backend="packets", **kw).values)
