@@ -278,11 +278,11 @@ def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0
         to run chunks of views on; overrides ``jobs``.
     progress : bool
         A progress bar on a terminal.
-    backend : {"auto", "packets", "embreex"}
-        How rays are cast: "packets", coherent packets of the CPU's native width through
-        the Embree 4 library embreex ships (:mod:`meshladar.raytrace.embree4`); "embreex",
-        one ray at a time through embreex (the reference); "auto" (default), packets when
-        they load, else embreex with one warning saying so. Both give the same hits (a ray
+    backend : {"auto", "packets", "raster", "embreex"}
+        How rays are cast: "packets" (and "raster": the same here), coherent packets of
+        the CPU's native width through the Embree 4 library embreex ships; "embreex", one
+        ray at a time (the reference); "auto" (default), raster when the packets load,
+        else embreex with one warning saying so. All give the same hits (a ray
         exactly along an edge shared by two faces may report the other face). The result's
         ``info["backend"]`` says which ran.
     sensor : meshladar.sensor.Sensor, optional

@@ -133,7 +133,7 @@ OPTIONS: tuple[Option, ...] = (
            "first hits drawn into a depth buffer where its normals are flat and its "
            "receiver at the ladar), embreex (one ray at a time, the reference), warp "
            "(NVIDIA Warp on a CUDA device; warp-cpu: its kernels on the CPU) or auto",
-           "auto: warp on a CUDA device, else packets when they load; on the command "
+           "auto: warp on a CUDA device, else raster when the packets load; on the command "
            "line, embreex for a run of at most 2^20 rays (it starts without numba's "
            "compiled loops)", _MESH,
            choices=BACKENDS),

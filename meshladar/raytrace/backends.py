@@ -1,7 +1,8 @@
 """The ray-casting backends, chosen from a registry (no ``if backend == ...`` chains).
 
 Each backend module fills :data:`REGISTRY` with a :class:`Backend` when it is imported:
-:mod:`.packets` (coherent Embree 4 packets through ctypes and numba) and
+:mod:`.packets` (coherent Embree 4 packets through ctypes and numba; as "raster", the
+same with a dense orthographic view's first hits drawn into a depth buffer) and
 :mod:`.embreex_backend` (embreex, one ray at a time: the reference) and
 :mod:`.warp_backend` (NVIDIA Warp's ray queries, on a CUDA device or the CPU). A new
 backend is a module that calls :func:`register`; :data:`BUILTIN` names the modules loaded
@@ -23,8 +24,9 @@ __all__ = ["BACKENDS", "Backend", "REGISTRY", "register", "backend", "choices",
 #: The ``backend=`` choices; "auto" takes the first of :data:`PREFERENCE` that loads.
 BACKENDS = ("auto", "packets", "raster", "embreex", "warp", "warp-cpu")
 #: "auto"'s order of preference: a CUDA device through Warp where there is one (an
-#: optional backend: passed over in silence where it cannot load), then the packets.
-PREFERENCE = ("warp", "packets", "embreex")
+#: optional backend: passed over in silence where it cannot load), then the packets with
+#: dense orthographic views drawn ("raster"), then the packets alone.
+PREFERENCE = ("warp", "raster", "packets", "embreex")
 #: The built-in backends' modules, imported on first use (they register themselves).
 BUILTIN = {"packets": "meshladar.raytrace.packets",
            "raster": "meshladar.raytrace.packets",
@@ -154,7 +156,8 @@ def resolve_backend(name):
     str
         The name of a backend whose ``available()`` is true here: ``name`` itself, or for
         ``"auto"`` the first of :data:`PREFERENCE` (``"warp"`` where a CUDA device is
-        present, then ``"packets"``, then ``"embreex"``).
+        present, then ``"raster"`` (the packets, dense orthographic views drawn), then
+        ``"packets"``, then ``"embreex"``).
 
     Raises
     ------

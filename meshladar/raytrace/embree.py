@@ -163,8 +163,9 @@ def _digest(v, f):
 
 #: The mesh engine's ray casters. "packets": coherent packets of the CPU's native width,
 #: cast through the Embree 4 library that the embreex wheel ships (:mod:`.embree4`);
-#: "embreex": embreex's own run(), one ray at a time, the reference; "auto": packets when
-#: they load, else embreex (said once, in a warning).
+#: "raster": the same, a dense orthographic view's first hits drawn into a depth buffer;
+#: "embreex": embreex's own run(), one ray at a time, the reference; "auto": raster when
+#: the packets load, else embreex (said once, in a warning).
 #: Embree scenes built in this process, most recent last, keyed by the geometry's content
 #: and the backend: alternating between a few meshes (a study, a comparison) reuses each
 #: one's BVH. Threads of one run share them (the lock guards the cache, not the casts).

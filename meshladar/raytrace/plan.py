@@ -393,7 +393,7 @@ def plan_trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided
     receiver : (3,) or (n_views, 3) array_like, optional
         Bistatic receivers' direction(s) (:func:`check_receivers`); default None.
     backend : str
-        The ray caster, one of ``"auto"`` (default), ``"packets"``, ``"embreex"`` or a
+        The ray caster: ``"auto"`` (default), ``"packets"``, ``"raster"``, ``"embreex"`` or a
         registered backend (:func:`meshladar.raytrace.backends.resolve_backend`).
     sensor : meshladar.sensor.Sensor, optional
         The sensor (:func:`check_sensor`); default None, parallel rays.

@@ -1,7 +1,8 @@
 """The raster path of a view (numba): an orthographic view's first hits found by drawing
 its faces into a depth buffer over the view's ray grid instead of tracing each ray, then
-weighed and binned by the fused loop's own :func:`._kernels.bin_flat_hits`, band by band
-in scan order.
+weighed and binned by the fused loop's own :func:`._kernels.bin_flat_hits` (or, with
+smooth normals, :func:`._kernels.bin_smooth_hits`, each hit's barycentrics found at its
+point of the plane), band by band in scan order.
 
 Every ray of an orthographic view travels along −w from its point (S, T) of the grid
 plane (:func:`meshladar.raytrace.grid.grid_plan`: the cell centre plus its stratified
@@ -22,9 +23,9 @@ import math
 import numpy as np
 
 from ._compiled import njit_loop
-from ._kernels import bin_flat_hits
+from ._kernels import bin_flat_hits, bin_smooth_hits
 
-__all__ = ["zbuffer", "raster_bin_flat"]
+__all__ = ["zbuffer", "raster_bin_flat", "raster_bin_smooth"]
 
 
 @njit_loop(inline="always")
@@ -148,36 +149,82 @@ def zbuffer(proj, faces, normals_w, closed, s, t, offsets, sp, prim, height):
 
 
 @njit_loop()
+def _band_hits(proj, faces, zbuf, grid, L, a0, rows, band):
+    """The hits of rows a0 … a0 + rows − 1 of a drawn grid, in scan order, into ``band`` =
+    (prim, distance, origins, u, v): each hit's face, distance L − height, float32 origin as
+    the packet loop builds it (``grid`` = (s, t, offsets, sp, u, v, lw)) and, where ``u``
+    holds any slot, its barycentrics of corners 1 and 2 (Embree's u, v) at the ray's point
+    of the plane. Returns the rays."""
+    s, t, offsets, sp, u, v, lw = grid
+    prim, height = zbuf
+    band_prim, band_t, band_o, band_u, band_v = band
+    nt = t.shape[0]
+    m = 0
+    for a in range(a0, min(a0 + rows, s.shape[0])):
+        for b in range(nt):
+            k = a * nt + b
+            p = prim[k]
+            band_prim[m] = p
+            if p >= 0:
+                S, T = _sample(s, t, offsets, sp, a, b)
+                for c in range(3):
+                    band_o[m, c] = np.float32(np.float32(S * u[c]) + np.float32(T * v[c])) \
+                        + lw[c]
+                band_t[m] = np.float32(L - height[k])
+                if band_u.shape[0]:
+                    band_u[m], band_v[m] = _barycentrics(proj, faces, p, S, T)
+            m += 1
+    return m
+
+
+@njit_loop(inline="always")
+def _barycentrics(proj, faces, f, S, T):
+    """Face f's barycentrics of its corners 1 and 2 at the point (S, T) of the plane."""
+    i0, i1, i2 = faces[f, 0], faces[f, 1], faces[f, 2]
+    s0, t0 = proj[i0, 0], proj[i0, 1]
+    s1, t1 = proj[i1, 0], proj[i1, 1]
+    s2, t2 = proj[i2, 0], proj[i2, 1]
+    r = 1.0 / ((s1 - s0) * (t2 - t0) - (s2 - s0) * (t1 - t0))
+    qs, qt = np.float64(S), np.float64(T)
+    return (np.float32(((t2 - t0) * qs + (s0 - s2) * qt + (s2 * t0 - s0 * t2)) * r),
+            np.float32(((t0 - t1) * qs + (s1 - s0) * qt + (s0 * t1 - s1 * t0)) * r))
+
+
+@njit_loop()
 def raster_bin_flat(proj, faces, normals_w, closed, grid, zbuf, rows, plane_d, face_normals,
                     face_material, params, wv, start, edges, area, power, ignore_back, out,
                     stamp, weight, tag, footprint, band):
     """One monostatic view with flat normals: its first hits by :func:`zbuffer` (into
-    ``zbuf`` = (prim, height)), then, ``rows`` rows at a time in scan order, each hit's
-    face, distance L − height and float32 origin as the packet loop builds it (``grid`` =
-    (s, t, offsets, sp, u, v, lw)) into ``band`` = (prim, distance, origins) and weighed
-    and binned by :func:`._kernels.bin_flat_hits`: the packet loop's numbers where the
-    two find the same faces. Returns (back-face hits, rays cast)."""
+    ``zbuf`` = (prim, height)), then ``rows`` rows at a time in scan order
+    (:func:`_band_hits`) weighed and binned by :func:`._kernels.bin_flat_hits`: the packet
+    loop's numbers where the two find the same faces. Returns (back-face hits, rays)."""
     s, t, offsets, sp, u, v, lw = grid
-    prim, height = zbuf
-    zbuffer(proj, faces, normals_w, closed, s, t, offsets, sp, prim, height)
-    band_prim, band_t, band_o = band
-    ns, nt = s.shape[0], t.shape[0]
+    zbuffer(proj, faces, normals_w, closed, s, t, offsets, sp, zbuf[0], zbuf[1])
     L = np.float64(lw[0]) * wv[0] + np.float64(lw[1]) * wv[1] + np.float64(lw[2]) * wv[2]
     back = 0
-    for a0 in range(0, ns, rows):
-        m = 0
-        for a in range(a0, min(a0 + rows, ns)):
-            for b in range(nt):
-                k = a * nt + b
-                band_prim[m] = prim[k]
-                if prim[k] >= 0:
-                    S, T = _sample(s, t, offsets, sp, a, b)
-                    for c in range(3):
-                        band_o[m, c] = np.float32(np.float32(S * u[c])
-                                                  + np.float32(T * v[c])) + lw[c]
-                    band_t[m] = np.float32(L - height[k])
-                m += 1
-        back += bin_flat_hits(band_prim[:m], band_t[:m], band_o[:m], plane_d, face_normals,
+    for a0 in range(0, s.shape[0], rows):
+        m = _band_hits(proj, faces, zbuf, grid, L, a0, rows, band)
+        back += bin_flat_hits(band[0][:m], band[1][:m], band[2][:m], plane_d, face_normals,
                               face_material, params, wv, start, edges, area, power,
                               ignore_back, out, stamp, weight, tag, footprint, False)
-    return back, ns * nt
+    return back, s.shape[0] * t.shape[0]
+
+
+@njit_loop()
+def raster_bin_smooth(proj, faces, normals_w, closed, grid, zbuf, rows, plane_d,
+                      face_normals, face_material, params, wv, start, edges, area, power,
+                      ignore_back, out, footprint, corner, min_cos_facet, band):
+    """:func:`raster_bin_flat` with smooth normals: each hit's barycentrics found at its
+    point of the plane, weighed and binned by :func:`._kernels.bin_smooth_hits`.
+    Returns (back-face hits, rays)."""
+    s, t, offsets, sp, u, v, lw = grid
+    zbuffer(proj, faces, normals_w, closed, s, t, offsets, sp, zbuf[0], zbuf[1])
+    L = np.float64(lw[0]) * wv[0] + np.float64(lw[1]) * wv[1] + np.float64(lw[2]) * wv[2]
+    back = 0
+    for a0 in range(0, s.shape[0], rows):
+        m = _band_hits(proj, faces, zbuf, grid, L, a0, rows, band)
+        back += bin_smooth_hits(band[0][:m], band[1][:m], band[3][:m], band[4][:m],
+                                band[2][:m], plane_d, face_normals, corner, face_material,
+                                params, wv, start, edges, area, power, ignore_back,
+                                min_cos_facet, out, footprint, False)
+    return back, s.shape[0] * t.shape[0]

@@ -11,7 +11,7 @@ from ..raytrace.embree4_ctypes import query_flags
 from ..raytrace.embree4_kernels import tile_shape
 from ._fused_kernels import (cast_bin_bistatic, cast_bin_bistatic_views, cast_bin_flat,
                              cast_bin_flat_views, cast_bin_smooth, cast_bin_smooth_views)
-from ._raster_kernels import raster_bin_flat
+from ._raster_kernels import raster_bin_flat, raster_bin_smooth
 from ._scratch import depth_buffer, scratch
 
 __all__ = ["cast_bin_grid", "cast_bin_views", "queries", "draw_bin_grid", "DRAWN_RAYS"]
@@ -183,8 +183,8 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
         Whether the rays are cast in coherent packets (default True), else one at a time
         (:func:`queries`; :attr:`meshladar.raytrace.plan.TracePlan.coherent`).
     closed : (n_faces,) uint8 numpy.ndarray, optional
-        ``Geometry.closed``: on the "raster" backend a flat monostatic view's first hits
-        are drawn (:func:`draw_bin_grid`). None (default): cast.
+        ``Geometry.closed``: on the "raster" backend a monostatic view's first hits are
+        drawn (:func:`draw_bin_grid`). None (default): cast.
 
     Returns
     -------
@@ -209,18 +209,19 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
                                  b.ignore_back, b.out, b.weight, lib.occluded[lib.width],
                                  wr, float(receiver[1]), b.stamp, b.tag, coating, receiver[3],
                                  scratch("bistatic", lib.width, t.size))
+    if emb.raster is not None and closed is not None:
+        return draw_bin_grid(emb, grid, w, bins, lib.width, closed, smooth)
     if smooth is not None:
         return cast_bin_smooth(*head, *b[:11], b.footprint, smooth[0], float(smooth[1]),
                                scratch("smooth", lib.width, t.size))
-    if emb.raster is not None and closed is not None:
-        return draw_bin_grid(emb, grid, w, bins, lib.width, closed)
     return cast_bin_flat(*head, *bins, scratch("flat", lib.width, t.size))
 
 
-def draw_bin_grid(emb, grid, w, bins, width, closed):
-    """:func:`cast_bin_grid` of a monostatic flat-normal view on the "raster" backend: its
-    first hits drawn into a depth buffer (:func:`._raster_kernels.raster_bin_flat`), then
-    weighed and binned as the packet loop bins them, a packet tile's rows at a time; a view
+def draw_bin_grid(emb, grid, w, bins, width, closed, smooth=None):
+    """:func:`cast_bin_grid` of a monostatic view on the "raster" backend: its first hits
+    drawn into a depth buffer (:func:`._raster_kernels.raster_bin_flat`, with ``smooth``
+    normals ``raster_bin_smooth``), then weighed and binned as the packet loop bins them,
+    a packet tile's rows at a time; a view
     of more than :data:`DRAWN_RAYS` rays in blocks of rows, each drawn on its own.
 
     Parameters
@@ -239,6 +240,8 @@ def draw_bin_grid(emb, grid, w, bins, width, closed):
         1 where a face's part is closed with outward normals
         (:attr:`meshladar.raytrace.embree.Geometry.closed`): its faces turned away from
         the view are not drawn.
+    smooth : tuple, optional
+        As :func:`cast_bin_grid`'s (None: flat normals).
 
     Returns
     -------
@@ -250,14 +253,16 @@ def draw_bin_grid(emb, grid, w, bins, width, closed):
                                 @ np.array([grid[4], grid[5], w], np.float64).T)
     normals_w = bins.face_normals @ w
     rows = tile_shape.py_func(width)[0]
-    band = scratch("flat", width, grid[1].size)[1][3][:3]
+    band = scratch("flat" if smooth is None else "smooth", width, grid[1].size)[1][3]
     s, t, (xi, ku, kv, eta) = grid[0], grid[1], grid[2]
     step = max(rows, DRAWN_RAYS // max(t.size, 1) // rows * rows)
     back = 0
     for a0 in range(0, s.size, step):              # at most DRAWN_RAYS rays a buffer
         part = (s[a0:a0 + step], t, (xi[a0:a0 + step], ku, kv[a0:a0 + step], eta)
                 if xi.size else grid[2]) + grid[3:]
-        back += raster_bin_flat(proj, faces, normals_w, closed, part,
-                                depth_buffer(part[0].size * t.size), rows, *bins[:14],
-                                bins.footprint, band)[0]
+        head = (proj, faces, normals_w, closed, part, depth_buffer(part[0].size * t.size),
+                rows)
+        back += (raster_bin_flat(*head, *bins[:14], bins.footprint, band) if smooth is None
+                 else raster_bin_smooth(*head, *bins[:11], bins.footprint, smooth[0],
+                                        float(smooth[1]), band))[0]
     return back, s.size * t.size

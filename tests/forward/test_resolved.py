@@ -48,9 +48,10 @@ def test_rotating_lambertian_sphere_doppler_profile(sphere, radiometry):
         prim = rho / (2 * R) * (R * R * y - y ** 3 / 3)
     exact = -np.diff(prim)
     assert np.abs(ret.values[0] - exact).max() < SPHERE_BIN_TOL * exact.max()
-    # the same rays as the range sinogram: the same total
+    # the same rays as the range sinogram, traced: the same total ("auto" draws the
+    # sinogram's first hits, which differ at rays within round-off of an edge)
     sino = ml.simulate(sphere, ladar, model="mesh", radiometry=radiometry, normals="smooth",
-                       rays_per_bin=8)
+                       rays_per_bin=8, backend="packets")
     np.testing.assert_allclose(ret.total(), sino.total(), rtol=SUM_RTOL)
     assert ret.info["radiometry"] == radiometry and ret.units == ("Hz",)
 
@@ -166,11 +167,14 @@ def test_each_view_total_is_the_same_whatever_it_is_binned_by():
                                material=ALUMINUM)
     ladar = ml.Ladar.covering(scene, n_bins=32, view_vectors=ml.meshes.fibonacci_sphere(5))
     wide = np.linspace(-1.2, 1.2, 17)
-    by = [resolve(scene, ladar, [("range", ladar.bin_edges)]),
-          resolve(scene, ladar, [("cross_range", wide)]),
-          resolve(scene, ladar, [("elevation", wide), ("range", ladar.bin_edges)]),
+    # one engine throughout: "auto" draws a range-only run's first hits ("raster") and
+    # traces the others', which differ at rays within round-off of an edge
+    by = [resolve(scene, ladar, [("range", ladar.bin_edges)], backend="packets"),
+          resolve(scene, ladar, [("cross_range", wide)], backend="packets"),
+          resolve(scene, ladar, [("elevation", wide), ("range", ladar.bin_edges)],
+                  backend="packets"),
           resolve(scene, ladar, [("doppler", np.linspace(-1e6, 1e6, 9))],
-                  motion=Motion(omega=(0.1, 0.2, 0.3)))]
+                  motion=Motion(omega=(0.1, 0.2, 0.3)), backend="packets")]
     for ret in by[1:]:
         np.testing.assert_allclose(ret.total(), by[0].total(), rtol=SUM_RTOL)
     np.testing.assert_allclose(by[2].marginal("range"), by[0].values, rtol=1e-12,

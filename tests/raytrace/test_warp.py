@@ -130,7 +130,7 @@ def test_warp_without_a_cuda_device_is_refused_in_one_line():
         backends.resolve_backend("warp")
     with warnings.catch_warnings():
         warnings.simplefilter("error")         # "auto" passes over it without a word
-        assert backends.resolve_backend("auto") == "packets"
+        assert backends.resolve_backend("auto") == "raster"
 
 
 def test_without_warp_installed_both_say_how_to_install_it(monkeypatch):

@@ -91,6 +91,8 @@ VARIANTS = {
     "footprint": {"footprint": True},
     "power, back faces ignored": {"radiometry": "power", "back_faces": "ignore"},
     "one view on two threads": {"jobs": 2},
+    "smooth normals": {"normals": "smooth"},
+    "smooth normals, footprint": {"normals": "smooth", "footprint": True},
 }
 
 
@@ -115,11 +117,10 @@ def test_drawn_sinograms_are_the_packet_backends_but_at_edge_rays(variant):
 
 
 @pytest.mark.filterwarnings("ignore::meshladar.errors.LobeSamplingWarning")   # facets
-@pytest.mark.parametrize("options", [{"normals": "smooth"},
-                                     {"receiver": [0.6, 0.0, 0.8], "radiometry": "power"},
+@pytest.mark.parametrize("options", [{"receiver": [0.6, 0.0, 0.8], "radiometry": "power"},
                                      {"sensor": Sensor(standoff=40.0), "radiometry": "power"},
                                      {"mode": "slice"}],
-                         ids=["smooth", "bistatic", "sensor", "slice"])
+                         ids=["bistatic", "sensor", "slice"])
 def test_views_the_raster_does_not_draw_are_cast_as_the_packet_backend_casts_them(options):
     scene = _scene(_scenes()["intersecting spheres"])
     ladar = ml.Ladar(angles_deg=[0.0, 70.0], bin_edges=np.linspace(-1, 1, 41))
