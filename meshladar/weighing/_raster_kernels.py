@@ -23,6 +23,7 @@ import math
 import numpy as np
 
 from ._compiled import njit_loop
+from ._fused_kernels import _offsets
 from ._kernels import bin_flat_hits, bin_smooth_hits
 
 __all__ = ["zbuffer", "raster_bin_flat", "raster_bin_smooth"]
@@ -31,16 +32,12 @@ __all__ = ["zbuffer", "raster_bin_flat", "raster_bin_smooth"]
 @njit_loop(inline="always")
 def _sample(s, t, offsets, sp, a, b):
     """Ray (a, b)'s point (S, T) of the grid plane, in the packet loop's float32
-    operations (:func:`._fused_kernels._offsets`): the cell centre plus its stratified
-    offset (none on a regular grid)."""
+    operations: the cell centre plus its stratified offset (:func:`._fused_kernels._offsets`;
+    none on a regular grid)."""
     xi, ku, kv, eta = offsets
     if xi.shape[0] == 0:
         return s[a], t[b]
-    half, one, zero = np.float32(0.5), np.float32(1.0), np.float32(0.0)
-    du = np.float32(xi[a] + ku[b])
-    dv = np.float32(kv[a] + eta[b])
-    du = np.float32(du - (one if du >= half else zero))
-    dv = np.float32(dv - (one if dv >= half else zero))
+    du, dv = _offsets(xi, ku, kv, eta, a, b)
     return np.float32(du * sp) + s[a], np.float32(dv * sp) + t[b]
 
 
@@ -94,9 +91,6 @@ def _draw(proj, faces, f, s, t, offsets, sp, prim, height):
     e01 = 1.0 / (s1 - s0) if s1 != s0 else 0.0
     e12 = 1.0 / (s2 - s1) if s2 != s1 else 0.0
     e20 = 1.0 / (s0 - s2) if s0 != s2 else 0.0
-    xi, ku, kv, eta = offsets
-    jitter = xi.shape[0] > 0
-    half, one, zero = np.float32(0.5), np.float32(1.0), np.float32(0.0)
     for a in range(a_lo, a_hi + 1):
         lo = first_s + (a - 0.5 - _SPAN_MARGIN) * sp  # the row's strip of S
         hi = first_s + (a + 0.5 + _SPAN_MARGIN) * sp
@@ -108,20 +102,10 @@ def _draw(proj, faces, f, s, t, offsets, sp, prim, height):
             continue
         b_lo = max(int(math.floor((span[0] - first_t) * inv + 0.5 - _SPAN_MARGIN)), 0)
         b_hi = min(int(math.floor((span[1] - first_t) * inv + 0.5 + _SPAN_MARGIN)), nt - 1)
-        sa = s[a]
-        xa = xi[a] if jitter else zero
-        ka = kv[a] if jitter else zero
         row = a * nt
         for b in range(b_lo, b_hi + 1):
-            if jitter:                      # the packet loop's float32 operations
-                du = np.float32(xa + ku[b])
-                dv = np.float32(ka + eta[b])
-                du = np.float32(du - (one if du >= half else zero))
-                dv = np.float32(dv - (one if dv >= half else zero))
-                qs = np.float64(np.float32(du * sp) + sa)
-                qt = np.float64(np.float32(dv * sp) + t[b])
-            else:
-                qs, qt = np.float64(sa), np.float64(t[b])
+            S, T = _sample(s, t, offsets, sp, a, b)
+            qs, qt = np.float64(S), np.float64(T)
             l1 = a1 * qs + b1 * qt + c1
             l2 = a2 * qs + b2 * qt + c2
             if l1 < 0.0 or l2 < 0.0 or l1 + l2 > 1.0:
@@ -190,6 +174,16 @@ def _barycentrics(proj, faces, f, S, T):
             np.float32(((t0 - t1) * qs + (s1 - s0) * qt + (s0 * t1 - s1 * t0)) * r))
 
 
+@njit_loop(inline="always")
+def _drawn(proj, faces, normals_w, closed, grid, zbuf, wv):
+    """Draw the grid (:func:`zbuffer` into ``zbuf``); returns (the start distance L of its
+    rays along w, its rows, its columns)."""
+    s, t, offsets, sp, u, v, lw = grid
+    zbuffer(proj, faces, normals_w, closed, s, t, offsets, sp, zbuf[0], zbuf[1])
+    L = np.float64(lw[0]) * wv[0] + np.float64(lw[1]) * wv[1] + np.float64(lw[2]) * wv[2]
+    return L, s.shape[0], t.shape[0]
+
+
 @njit_loop()
 def raster_bin_flat(proj, faces, normals_w, closed, grid, zbuf, rows, plane_d, face_normals,
                     face_material, params, wv, start, edges, area, power, ignore_back, out,
@@ -198,16 +192,14 @@ def raster_bin_flat(proj, faces, normals_w, closed, grid, zbuf, rows, plane_d, f
     ``zbuf`` = (prim, height)), then ``rows`` rows at a time in scan order
     (:func:`_band_hits`) weighed and binned by :func:`._kernels.bin_flat_hits`: the packet
     loop's numbers where the two find the same faces. Returns (back-face hits, rays)."""
-    s, t, offsets, sp, u, v, lw = grid
-    zbuffer(proj, faces, normals_w, closed, s, t, offsets, sp, zbuf[0], zbuf[1])
-    L = np.float64(lw[0]) * wv[0] + np.float64(lw[1]) * wv[1] + np.float64(lw[2]) * wv[2]
+    L, ns, nt = _drawn(proj, faces, normals_w, closed, grid, zbuf, wv)
     back = 0
-    for a0 in range(0, s.shape[0], rows):
+    for a0 in range(0, ns, rows):
         m = _band_hits(proj, faces, zbuf, grid, L, a0, rows, band)
         back += bin_flat_hits(band[0][:m], band[1][:m], band[2][:m], plane_d, face_normals,
                               face_material, params, wv, start, edges, area, power,
                               ignore_back, out, stamp, weight, tag, footprint, False)
-    return back, s.shape[0] * t.shape[0]
+    return back, ns * nt
 
 
 @njit_loop()
@@ -217,14 +209,12 @@ def raster_bin_smooth(proj, faces, normals_w, closed, grid, zbuf, rows, plane_d,
     """:func:`raster_bin_flat` with smooth normals: each hit's barycentrics found at its
     point of the plane, weighed and binned by :func:`._kernels.bin_smooth_hits`.
     Returns (back-face hits, rays)."""
-    s, t, offsets, sp, u, v, lw = grid
-    zbuffer(proj, faces, normals_w, closed, s, t, offsets, sp, zbuf[0], zbuf[1])
-    L = np.float64(lw[0]) * wv[0] + np.float64(lw[1]) * wv[1] + np.float64(lw[2]) * wv[2]
+    L, ns, nt = _drawn(proj, faces, normals_w, closed, grid, zbuf, wv)
     back = 0
-    for a0 in range(0, s.shape[0], rows):
+    for a0 in range(0, ns, rows):
         m = _band_hits(proj, faces, zbuf, grid, L, a0, rows, band)
         back += bin_smooth_hits(band[0][:m], band[1][:m], band[3][:m], band[4][:m],
                                 band[2][:m], plane_d, face_normals, corner, face_material,
                                 params, wv, start, edges, area, power, ignore_back,
                                 min_cos_facet, out, footprint, False)
-    return back, s.shape[0] * t.shape[0]
+    return back, ns * nt
