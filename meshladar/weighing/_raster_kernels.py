@@ -11,9 +11,9 @@ face whose projection onto the plane (u, v) holds (S, T) and whose plane lies hi
 along w there: each face is projected once, the cells of its bounding box tested against
 its edge functions (float64), and its height at the ray compared with the buffer's. A
 closed part's faces turned away from the view are not drawn (a ray from outside meets the
-part first on a face turned toward it). A ray on an edge shared by two faces takes the
-first drawn (Embree may take the other: the hit's range is the same; its face's weight may
-differ).
+part first on a face turned toward it). A ray on an edge shared by two faces, or on two
+coincident faces, takes the first drawn, a face turned toward the view before the others
+(Embree may take the other: the hit's range is the same; its face's weight may differ).
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from ._compiled import njit_loop
 from ._fused_kernels import _offsets
 from ._kernels import bin_flat_hits, bin_smooth_hits
 
-__all__ = ["zbuffer", "raster_bin_flat", "raster_bin_smooth"]
+__all__ = ["zbuffer", "raster_bin_flat", "raster_bin_smooth", "TIE"]
 
 
 @njit_loop(inline="always")
@@ -41,6 +41,9 @@ def _sample(s, t, offsets, sp, a, b):
     return np.float32(du * sp) + s[a], np.float32(dv * sp) + t[b]
 
 
+#: Coincident faces' heights agree to this fraction of the grid's extent: a face turned
+#: away from the view must lie higher than one turned toward it by more to take its ray.
+TIE = 1e-12
 #: The cells a face's span covers are widened by this fraction of a cell each side, so that
 #: round-off in the cells' float32 centres loses no ray on the span's edge.
 _SPAN_MARGIN = 1e-3
@@ -67,11 +70,11 @@ def _edge_span(s0, t0, s1, t1, inv, lo, hi, span):
 
 
 @njit_loop()
-def _draw(proj, faces, f, s, t, offsets, sp, prim, height):
+def _draw(proj, faces, f, s, t, offsets, sp, prim, height, above):
     """Draw face f (its corners' (S, T, height) in ``proj``) into the buffer: row by row
     over the rows its S range covers, every ray of the cells its T span on the row's strip
-    covers that lies inside its three edges (inclusive) and where its height is above the
-    buffer's takes it."""
+    covers that lies inside its three edges (inclusive) and where its height is more than
+    ``above`` above the buffer's takes it."""
     i0, i1, i2 = faces[f, 0], faces[f, 1], faces[f, 2]
     s0, t0, z0 = proj[i0, 0], proj[i0, 1], proj[i0, 2]
     s1, t1, z1 = proj[i1, 0], proj[i1, 1], proj[i1, 2]
@@ -111,7 +114,7 @@ def _draw(proj, faces, f, s, t, offsets, sp, prim, height):
             if l1 < 0.0 or l2 < 0.0 or l1 + l2 > 1.0:
                 continue
             z = z0 + l1 * dz1 + l2 * dz2
-            if z > height[row + b]:
+            if z > height[row + b] + above:
                 height[row + b] = z
                 prim[row + b] = f
 
@@ -123,13 +126,22 @@ def zbuffer(proj, faces, normals_w, closed, s, t, offsets, sp, prim, height):
     (len(s) × len(t) each): ``proj`` the vertices' (u, v, w) coordinates (shifted),
     ``normals_w`` each face's n·w. A face turned away from the view (n·w ≤ 0) of a
     ``closed`` part (watertight, normals outward) is not drawn: a ray from outside meets
-    its part first on a face turned toward it."""
+    its part first on a face turned toward it. The faces turned toward the view are drawn
+    first and a face turned away must lie higher by more than :data:`TIE` of the grid's
+    extent to take a ray, so where two faces coincide (a sheet modelled as two faces back
+    to back) the one turned toward the view is hit."""
     for k in range(s.shape[0] * t.shape[0]):
         prim[k] = -1
         height[k] = -np.inf
+    for f in range(faces.shape[0]):                # turned toward the view first ...
+        if normals_w[f] > 0.0:
+            _draw(proj, faces, f, s, t, offsets, sp, prim, height, 0.0)
+    # ... so that they win a tie: a face turned away must lie higher by more than the
+    # round-off of a height (coincident faces' heights differ by their corners' order)
+    above = TIE * max(abs(s[0]), abs(s[-1]), abs(t[0]), abs(t[-1]), sp)
     for f in range(faces.shape[0]):
-        if normals_w[f] > 0.0 or not closed[f]:
-            _draw(proj, faces, f, s, t, offsets, sp, prim, height)
+        if not normals_w[f] > 0.0 and not closed[f]:
+            _draw(proj, faces, f, s, t, offsets, sp, prim, height, above)
 
 
 @njit_loop()

@@ -181,3 +181,25 @@ def test_grids_sparser_than_their_faces_are_cast_not_drawn():
     assert drawn.info["rays"] < 2 * 20 * 4 ** 5
     np.testing.assert_array_equal(drawn.values,
                                   ml.simulate(scene, ladar, backend="packets", **kw).values)
+
+
+def test_a_sheet_of_two_faces_back_to_back_shows_the_face_turned_toward_the_view():
+    """A plate modelled twice, once each way round (a 'double-sided' sheet), with back
+    faces ignored: every drawn ray takes the face turned toward the ladar, so the sheet
+    returns what the plate alone returns, seen from either side (Embree takes either of
+    two coincident faces)."""
+    quad = np.array([[0, 1, 2], [0, 2, 3]])
+    v = np.array([[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]])
+    lam = ml.brdf.Lambertian(0.5)
+    sheet = ml.Scene.from_parts([ml.meshes.MeshPart(v, np.vstack([quad, quad[:, ::-1]]),
+                                                    np.zeros(4, np.int64), "sheet")], [lam])
+    for up in (1.0, -1.0):
+        plate = ml.Scene.from_parts([ml.meshes.MeshPart(
+            v, quad if up > 0 else quad[:, ::-1], np.zeros(2, np.int64), "plate")], [lam])
+        ladar = ml.Ladar(None, np.linspace(-2, 2, 21),
+                         view_vectors=[[0.3, 0.2, up * 0.9], [-0.5, 0.1, up * 0.8]])
+        kw = dict(model="mesh", mode="3d", ray_spacing=0.004, back_faces="ignore")
+        drawn = ml.simulate(sheet, ladar, backend="raster", **kw)
+        alone = ml.simulate(plate, ladar, backend="packets", **kw)
+        assert alone.total().min() > 0
+        np.testing.assert_allclose(drawn.values, alone.values, rtol=1e-12, atol=1e-15)
