@@ -22,7 +22,7 @@ from ..raytrace.draws import plans_sequences
 from ..raytrace.grid import grid_plan, grid_plans
 from ..raytrace.views import range_offset
 from ..weighing.faces import check_edge_on_receiver
-from ..weighing.fused import cast_bin_grid, cast_bin_views
+from ..weighing.fused import DRAWN_RAYS_PER_FACE, cast_bin_grid, cast_bin_views
 
 __all__ = ["FlatBins", "fused_view", "chunk_views", "receiver_args"]
 
@@ -48,8 +48,10 @@ class FlatBins(NamedTuple):
 
 
 def fused_view(job, scene, view, bins, receiver, smooth):
-    """One view through the fused loop: its grid cast, weighed and binned, on one thread
-    or (``job.row_jobs`` > 1) with its rows split over threads.
+    """One view through the fused loop: its grid cast (on the "raster" backend, a 3-D grid
+    of at least :data:`meshladar.weighing.fused.DRAWN_RAYS_PER_FACE` rays a face drawn),
+    weighed and binned, on one thread or (``job.row_jobs`` > 1) with its rows split over
+    threads.
 
     Parameters
     ----------
@@ -71,7 +73,8 @@ def fused_view(job, scene, view, bins, receiver, smooth):
     """
     p = job.plan
     grid = grid_plan(p.geo, view.w, p.mode, p.spacing, p.z0_shifted, view.rng)
-    how = (receiver, smooth, p.coherent, p.geo.closed if p.coherent else None)
+    drawn = p.mode == "3d" and p.rays_per_face >= DRAWN_RAYS_PER_FACE
+    how = (receiver, smooth, p.coherent, p.geo.closed if drawn else None)
     if job.row_jobs > 1:
         return _rows_on_threads(scene, grid, view.w, p.spacing, bins, job.row_jobs, how)[::-1]
     back, n = cast_bin_grid(scene, grid, view.w, p.spacing, bins, *how)
