@@ -300,7 +300,8 @@ def _mesh_lines(repeats):
     yield (f"  pipeline, stratified sampling      {m['stratified_mrays']:7.2f} Mrays/s "
            f"({100 * m['stratified_over_regular']:.0f}% of the regular grid's)")
     yield (f"  pipeline, raster, stratified       {m['raster_mrays']:7.2f} Mrays/s "
-           f"({m['raster_over_raw']:.2f}x raw embreex)")
+           f"({m['raster_over_raw']:.2f}x raw embreex; 2 threads "
+           f"{m['raster_two_over_one']:.2f}x one)")
     yield (f"  pipeline, packets, 2 threads       {m['two_thread_mrays']:7.2f} Mrays/s "
            f"({m['two_over_one']:.2f}x one, {m['two_over_raw']:.2f}x raw embreex)")
     for sub in (3, 8):                                 # 1.3k and 1.3M triangles

@@ -31,16 +31,15 @@ __all__ = ["bench_mesh", "bench_fused", "bench_single_view", "bench_streaming",
 
 
 def bench_mesh(*, repeats=3, subdivisions=6, rays_per_view=1_000_000, views=16, build=True):
-    """Mesh engine throughput against raw embreex on the same rays, and its build cost.
-
-    Timed in rounds (:func:`interleaved`), one process, the same rays. Returns a dict: ``raw_mrays`` (embreex's run() alone), ``packet_mrays`` (the packet
-    backend's cast alone), ``pipeline_mrays`` (rays → hits → weights → bins, packets, one
-    thread, regular grid), ``embreex_pipeline_mrays`` (the same through embreex),
-    ``stratified_mrays``, ``raster_mrays`` (stratified, first hits drawn: the "raster"
-    backend), ``two_thread_mrays`` (packets, 2 threads), their ratios,
-    ``packet_width``, and the build of a 1.3M-triangle mesh: embreex's upload and BVH
-    (``upload_s``, ``bvh_s``) against the packet backend's shared-buffer scene
-    (``packet_build_s``), unless ``build`` is False.
+    """Mesh engine throughput against raw embreex on the same rays, and its build cost,
+    timed in rounds (:func:`interleaved`), one process, the same rays. Returns a dict:
+    ``raw_mrays`` (embreex's run() alone), ``packet_mrays`` (the packet backend's cast),
+    ``pipeline_mrays`` (rays → hits → weights → bins, packets, one thread, regular grid),
+    ``embreex_pipeline_mrays`` (the same through embreex), ``stratified_mrays``,
+    ``raster_mrays`` (stratified, drawn: "raster", the default), ``two_thread_mrays``
+    (packets, 2 threads), their ratios, ``packet_width``, and the build of a 1.3M-triangle
+    mesh: embreex's upload and BVH (``upload_s``, ``bvh_s``) against the packet backend's
+    shared-buffer scene (``packet_build_s``), unless ``build`` is False.
 
     The target: a dark gray icosphere of radius 0.5 (:func:`.timing.icosphere_scene`),
     ``views`` Fibonacci directions, 512 range bins over [−0.6, 0.6], ``mode="3d"``.
@@ -62,14 +61,13 @@ def bench_mesh(*, repeats=3, subdivisions=6, rays_per_view=1_000_000, views=16, 
     Returns
     -------
     dict
-        ``faces``, ``rays`` (all views), ``views``, ``packet_width`` (the packet backend's
-        width), the throughputs in millions of rays per second (``*_mrays``, from median
-        times) and their ratios ``packet_over_raw``, ``pipeline_over_raw``,
-        ``stratified_over_regular``, ``raster_over_raw``, ``two_over_one`` and ``two_over_raw`` (each a ratio
-        of times: > 1 when the first named is faster); with ``build``, ``build_faces`` and
-        the build times in seconds ``upload_s``, ``bvh_s`` and ``packet_build_s``, and the
-        ratios ``build_over_bvh`` (embreex's upload and BVH over its BVH) and
-        ``packet_build_over_bvh``.
+        ``faces``, ``rays``, ``views``, ``packet_width``, the ``*_mrays`` (from median
+        times), the ratios ``packet_over_raw``, ``pipeline_over_raw``,
+        ``stratified_over_regular``, ``raster_over_raw``, ``raster_two_over_one``,
+        ``two_over_one``, ``two_over_raw`` (of times: > 1 when the first named is faster);
+        with ``build``, ``build_faces``, the build times ``upload_s``, ``bvh_s``,
+        ``packet_build_s`` (s) and the ratios ``build_over_bvh`` (embreex's upload and BVH
+        over its BVH) and ``packet_build_over_bvh``.
     """
     scene = _icosphere_scene(subdivisions, materials.DARK_GRAY)
     spacing = 1.0 / math.sqrt(rays_per_view)          # the sphere's 1 × 1 projected square
@@ -96,6 +94,7 @@ def bench_mesh(*, repeats=3, subdivisions=6, rays_per_view=1_000_000, views=16, 
                      "pipe_embreex": pipeline("embreex"),
                      "stratified": pipeline("packets", sampling="stratified"),
                      "drawn": pipeline("raster", sampling="stratified"),
+                     "drawn_two": pipeline("raster", jobs=2, sampling="stratified"),
                      "two": pipeline("packets", jobs=2)}, repeats=repeats)
     build = _build_split(8) if build else {}
     m = {k: n_rays / v / 1e6 for k, v in t.items()}
@@ -108,6 +107,7 @@ def bench_mesh(*, repeats=3, subdivisions=6, rays_per_view=1_000_000, views=16, 
             "stratified_mrays": m["stratified"],
             "stratified_over_regular": t["pipe"] / t["stratified"],
             "raster_mrays": m["drawn"], "raster_over_raw": t["raw"] / t["drawn"],
+            "raster_two_over_one": t["drawn"] / t["drawn_two"],
             "two_thread_mrays": m["two"], "two_over_one": t["pipe"] / t["two"],
             "two_over_raw": t["raw"] / t["two"], **build}
 
