@@ -8,8 +8,9 @@ Every ray of an orthographic view travels along −w from its point (S, T) of th
 plane (:func:`meshladar.raytrace.grid.grid_plan`: the cell centre plus its stratified
 offset, in the float32 operations of the packet loop), so the face it meets first is the
 face whose projection onto the plane (u, v) holds (S, T) and whose plane lies highest
-along w there: each face is projected once, the cells of its bounding box tested against
-its edge functions (float64), and its height at the ray compared with the buffer's. A
+along w there: each face is projected once, the rays of the cells its span covers on each
+row tested against its edge functions (float64, watertight: :func:`_edge`), and its
+height at the ray compared with the buffer's. A
 closed part's faces turned away from the view are not drawn (a ray from outside meets the
 part first on a face turned toward it). A ray on an edge shared by two faces, or on two
 coincident faces, takes the first drawn, a face turned toward the view before the others
@@ -44,9 +45,44 @@ def _sample(s, t, offsets, sp, a, b):
 #: Coincident faces' heights agree to this fraction of the grid's extent: a face turned
 #: away from the view must lie higher than one turned toward it by more to take its ray.
 TIE = 1e-12
-#: The cells a face's span covers are widened by this fraction of a cell each side, so that
-#: round-off in the cells' float32 centres loses no ray on the span's edge.
-_SPAN_MARGIN = 1e-3
+
+
+@njit_loop(inline="always")
+def _edge(as_, at, bs, bt, qs, qt):
+    """The edge function of the point (qs, qt) against the edge a → b: twice the signed
+    area of (a, b, q), > 0 where q lies to the left of a → b, made from the corner that
+    comes first in (S, T) order whichever way the edge runs, so that two faces sharing an
+    edge find the same number, of opposite signs where they run it opposite ways: a ray on
+    the edge is inside both (0) or inside exactly one, never neither (a watertight
+    test)."""
+    if (as_, at) <= (bs, bt):
+        return (bs - as_) * (qt - at) - (bt - at) * (qs - as_)
+    return -((as_ - bs) * (qt - bt) - (at - bt) * (qs - bs))
+
+
+@njit_loop(inline="always")
+def _first_at_least(c, x, inv):
+    """The first index i of the ascending ``c`` with c[i] ≥ x (len(c) if none), from the
+    guess of a uniform spacing 1 / ``inv`` (the float32 centres' own values decide)."""
+    n = c.shape[0]
+    i = min(max(int(math.floor((x - c[0]) * inv)), 0), n)
+    while i > 0 and c[i - 1] >= x:
+        i -= 1
+    while i < n and c[i] < x:
+        i += 1
+    return i
+
+
+@njit_loop(inline="always")
+def _last_at_most(c, x, inv):
+    """The last index i of the ascending ``c`` with c[i] ≤ x (−1 if none)."""
+    n = c.shape[0]
+    i = min(max(int(math.floor((x - c[0]) * inv)) + 1, -1), n - 1)
+    while i < n - 1 and c[i + 1] <= x:
+        i += 1
+    while i >= 0 and c[i] > x:
+        i -= 1
+    return i
 
 
 @njit_loop(inline="always")
@@ -70,11 +106,12 @@ def _edge_span(s0, t0, s1, t1, inv, lo, hi, span):
 
 
 @njit_loop()
-def _draw(proj, faces, f, s, t, offsets, sp, prim, height, above):
-    """Draw face f (its corners' (S, T, height) in ``proj``) into the buffer: row by row
-    over the rows its S range covers, every ray of the cells its T span on the row's strip
-    covers that lies inside its three edges (inclusive) and where its height is more than
-    ``above`` above the buffer's takes it."""
+def _draw(proj, faces, f, s, t, offsets, sp, reach, prim, height, above):
+    """Draw face f (its corners' (S, T, height) in ``proj``) into the buffer: over the rows
+    whose rays' S can fall within its S range (a ray lies within ``reach`` of its cell's
+    float32 centre), and on each the cells whose rays' T can fall within its T span on the
+    row's strip, every ray inside its three edges (:func:`_edge`, inclusive) whose height
+    there is more than ``above`` above the buffer's takes it."""
     i0, i1, i2 = faces[f, 0], faces[f, 1], faces[f, 2]
     s0, t0, z0 = proj[i0, 0], proj[i0, 1], proj[i0, 2]
     s1, t1, z1 = proj[i1, 0], proj[i1, 1], proj[i1, 2]
@@ -82,38 +119,33 @@ def _draw(proj, faces, f, s, t, offsets, sp, prim, height, above):
     det = (s1 - s0) * (t2 - t0) - (s2 - s0) * (t1 - t0)
     if det == 0.0:                                    # edge-on: no ray meets it
         return
-    ns, nt = s.shape[0], t.shape[0]
-    inv, first_s, first_t = 1.0 / sp, np.float64(s[0]), np.float64(t[0])
-    a_lo = max(int(math.floor((min(s0, s1, s2) - first_s) * inv + 0.5 - _SPAN_MARGIN)), 0)
-    a_hi = min(int(math.floor((max(s0, s1, s2) - first_s) * inv + 0.5 + _SPAN_MARGIN)),
-               ns - 1)
-    r = 1.0 / det                                     # barycentrics of corners 1 and 2
-    a1, b1, c1 = (t2 - t0) * r, (s0 - s2) * r, (s2 * t0 - s0 * t2) * r
-    a2, b2, c2 = (t0 - t1) * r, (s1 - s0) * r, (s0 * t1 - s1 * t0) * r
+    nt, inv = t.shape[0], 1.0 / sp
+    sign = 1.0 if det > 0.0 else -1.0
     dz1, dz2 = z1 - z0, z2 - z0
     e01 = 1.0 / (s1 - s0) if s1 != s0 else 0.0
     e12 = 1.0 / (s2 - s1) if s2 != s1 else 0.0
     e20 = 1.0 / (s0 - s2) if s0 != s2 else 0.0
-    for a in range(a_lo, a_hi + 1):
-        lo = first_s + (a - 0.5 - _SPAN_MARGIN) * sp  # the row's strip of S
-        hi = first_s + (a + 0.5 + _SPAN_MARGIN) * sp
+    for a in range(_first_at_least(s, min(s0, s1, s2) - reach, inv),
+                   _last_at_most(s, max(s0, s1, s2) + reach, inv) + 1):
+        lo, hi = s[a] - reach, s[a] + reach           # the row's rays' S
         span = (np.inf, -np.inf)
         span = _edge_span(s0, t0, s1, t1, e01, lo, hi, span)
         span = _edge_span(s1, t1, s2, t2, e12, lo, hi, span)
         span = _edge_span(s2, t2, s0, t0, e20, lo, hi, span)
         if span[0] > span[1]:
             continue
-        b_lo = max(int(math.floor((span[0] - first_t) * inv + 0.5 - _SPAN_MARGIN)), 0)
-        b_hi = min(int(math.floor((span[1] - first_t) * inv + 0.5 + _SPAN_MARGIN)), nt - 1)
         row = a * nt
-        for b in range(b_lo, b_hi + 1):
+        for b in range(_first_at_least(t, span[0] - reach, inv),
+                       _last_at_most(t, span[1] + reach, inv) + 1):
             S, T = _sample(s, t, offsets, sp, a, b)
             qs, qt = np.float64(S), np.float64(T)
-            l1 = a1 * qs + b1 * qt + c1
-            l2 = a2 * qs + b2 * qt + c2
-            if l1 < 0.0 or l2 < 0.0 or l1 + l2 > 1.0:
+            w0 = sign * _edge(s1, t1, s2, t2, qs, qt)
+            w1 = sign * _edge(s2, t2, s0, t0, qs, qt)
+            w2 = sign * _edge(s0, t0, s1, t1, qs, qt)
+            if w0 < 0.0 or w1 < 0.0 or w2 < 0.0:
                 continue
-            z = z0 + l1 * dz1 + l2 * dz2
+            area = w0 + w1 + w2                       # barycentrics w1, w2 over it
+            z = z0 + (w1 * dz1 + w2 * dz2) / area if area > 0.0 else z0
             if z > height[row + b] + above:
                 height[row + b] = z
                 prim[row + b] = f
@@ -133,15 +165,19 @@ def zbuffer(proj, faces, normals_w, closed, s, t, offsets, sp, prim, height):
     for k in range(s.shape[0] * t.shape[0]):
         prim[k] = -1
         height[k] = -np.inf
+    # a ray's S (T) lies within reach of its cell's float32 centre: half a cell and the
+    # float32 round-off of the centre, the offset and their sum (2⁻²⁴ each of the
+    # largest coordinate and the spacing, taken twice over)
+    extent = max(abs(s[0]), abs(s[-1]), abs(t[0]), abs(t[-1]), sp)
+    reach = 0.5 * sp + (extent + sp) * 2.0 ** -22
     for f in range(faces.shape[0]):                # turned toward the view first ...
         if normals_w[f] > 0.0:
-            _draw(proj, faces, f, s, t, offsets, sp, prim, height, 0.0)
+            _draw(proj, faces, f, s, t, offsets, sp, reach, prim, height, 0.0)
     # ... so that they win a tie: a face turned away must lie higher by more than the
     # round-off of a height (coincident faces' heights differ by their corners' order)
-    above = TIE * max(abs(s[0]), abs(s[-1]), abs(t[0]), abs(t[-1]), sp)
     for f in range(faces.shape[0]):
         if not normals_w[f] > 0.0 and not closed[f]:
-            _draw(proj, faces, f, s, t, offsets, sp, prim, height, above)
+            _draw(proj, faces, f, s, t, offsets, sp, reach, prim, height, TIE * extent)
 
 
 @njit_loop()

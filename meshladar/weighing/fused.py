@@ -224,6 +224,11 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
     return cast_bin_flat(*head, *bins, scratch("flat", lib.width, t.size))
 
 
+def _dot(rows, axis):
+    """Each row's dot product with ``axis``, summed in order, elementwise."""
+    return rows[:, 0] * axis[0] + rows[:, 1] * axis[1] + rows[:, 2] * axis[2]
+
+
 def draw_bin_grid(emb, grid, w, bins, width, closed, smooth=None):
     """:func:`cast_bin_grid` of a monostatic view on the "raster" backend: its first hits
     drawn into a depth buffer (:func:`._raster_kernels.raster_bin_flat`, with ``smooth``
@@ -256,9 +261,10 @@ def draw_bin_grid(emb, grid, w, bins, width, closed, smooth=None):
         The back-face hits and the rays.
     """
     vertices, faces = emb.raster
-    proj = np.ascontiguousarray((vertices * emb.scale)
-                                @ np.array([grid[4], grid[5], w], np.float64).T)
-    normals_w = bins.face_normals @ w
+    proj = np.empty((len(vertices), 3))      # elementwise (no BLAS): a vertex's numbers
+    for k, axis in enumerate((grid[4], grid[5], w)):      # are the same in every face
+        proj[:, k] = _dot(vertices * emb.scale, np.asarray(axis, np.float64))
+    normals_w = _dot(bins.face_normals, np.asarray(w, np.float64))
     rows = tile_shape.py_func(width)[0]
     band = scratch("flat" if smooth is None else "smooth", width, grid[1].size)[1][3]
     s, t, (xi, ku, kv, eta) = grid[0], grid[1], grid[2]

@@ -223,3 +223,54 @@ def test_a_sheet_of_two_faces_back_to_back_shows_the_face_turned_toward_the_view
         assert alone.total().min() > 0
         np.testing.assert_allclose(drawn.values, alone.values, rtol=1e-12, atol=1e-15)
     assert drawn_views[0] == 4
+
+
+def _rod(length, segment=0.00413, half_width=0.002):
+    """A closed square rod along x, its rings ``segment`` apart: faces of a few cells each,
+    far from the origin at its ends (the float32 coordinates coarse against a cell)."""
+    n = int(round(length / segment))
+    xs = -length / 2 + np.arange(n + 1) * segment
+    ring = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]]) * half_width
+    v = np.array([[x, y, z] for x in xs for y, z in ring])
+    f = []
+    for k in range(n):
+        a, b = 4 * k, 4 * (k + 1)
+        for j in range(4):
+            f += [[a + j, a + (j + 1) % 4, b + (j + 1) % 4], [a + j, b + (j + 1) % 4, b + j]]
+    e = 4 * n
+    f += [[0, 2, 1], [0, 3, 2], [e, e + 1, e + 2], [e, e + 2, e + 3]]
+    mesh = trimesh.Trimesh(v, np.array(f), process=False)
+    if mesh.volume < 0:
+        mesh.invert()
+    return mesh
+
+
+@pytest.mark.parametrize("length, spacing", [(20.0, 5e-4), (200.0, 1e-3)])
+def test_no_ray_inside_a_closed_rods_outline_falls_through(length, spacing):
+    """Every ray more than a twentieth of a cell inside a closed rod's outline meets it:
+    faces sharing an edge test a ray on it with the same edge function (one of them, or
+    both, takes it: watertight), and the cells a face may cover are found from the
+    float32 centres themselves, up to 10⁵ cells from the grid's first (a float32 centre
+    drifts by a fraction of a cell there)."""
+    from meshladar.raytrace.grid import stratified_offsets
+    scene = _scene([_rod(length)])
+    geo = geometry(scene, "flat")
+    assert geo.closed.all()
+    w = np.array([0.0, 0.3, 1.0]) / np.hypot(0.3, 1.0)
+    plan = grid_plan(geo, w, "3d", spacing, 0.0, np.random.default_rng(0))
+    f32 = np.float32
+    vertices = embree_scene(geo, "raster").raster[0] * geo.scale
+    axes = np.array([plan.u.astype(f32), plan.v.astype(f32), w], np.float64)
+    proj = np.stack([vertices @ a for a in axes], axis=1)
+    n = plan.s.size * plan.t.size
+    prim, height = np.empty(n, np.int32), np.empty(n)
+    zbuffer(proj, geo.faces32, geo.face_normals @ w, geo.closed, plan.s.astype(f32),
+            plan.t.astype(f32), plan.offsets, f32(spacing), prim, height)
+    du, dv = stratified_offsets(plan.offsets)
+    inside = np.ones(du.shape, bool)
+    for d, centres, axis in ((du, plan.s[:, None], axes[0]), (dv, plan.t[None, :], axes[1])):
+        x = d * f32(spacing) + centres.astype(f32)         # the rays' S, T
+        ends = geo.shifted @ axis
+        inside &= np.minimum(x - ends.min(), ends.max() - x) > 0.05 * spacing
+    assert inside.sum() > 100_000
+    assert (prim.reshape(inside.shape)[inside] < 0).sum() == 0
