@@ -216,10 +216,11 @@ def _barycentrics(proj, faces, f, S, T):
     s0, t0 = proj[i0, 0], proj[i0, 1]
     s1, t1 = proj[i1, 0], proj[i1, 1]
     s2, t2 = proj[i2, 0], proj[i2, 1]
-    r = 1.0 / ((s1 - s0) * (t2 - t0) - (s2 - s0) * (t1 - t0))
     qs, qt = np.float64(S), np.float64(T)
-    return (np.float32(((t2 - t0) * qs + (s0 - s2) * qt + (s2 * t0 - s0 * t2)) * r),
-            np.float32(((t0 - t1) * qs + (s1 - s0) * qt + (s0 * t1 - s1 * t0)) * r))
+    w1 = _edge(s2, t2, s0, t0, qs, qt)                # the edge functions _draw tested
+    w2 = _edge(s0, t0, s1, t1, qs, qt)
+    area = _edge(s1, t1, s2, t2, qs, qt) + w1 + w2
+    return np.float32(w1 / area), np.float32(w2 / area)
 
 
 @njit_loop(inline="always")

@@ -9,6 +9,7 @@ import numpy as np
 
 from ..raytrace.embree4_ctypes import query_flags
 from ..raytrace.embree4_kernels import tile_shape
+from ..raytrace.grid import dot
 from ._fused_kernels import (cast_bin_bistatic, cast_bin_bistatic_views, cast_bin_flat,
                              cast_bin_flat_views, cast_bin_smooth, cast_bin_smooth_views)
 from ._raster_kernels import raster_bin_flat, raster_bin_smooth
@@ -224,11 +225,6 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
     return cast_bin_flat(*head, *bins, scratch("flat", lib.width, t.size))
 
 
-def _dot(rows, axis):
-    """Each row's dot product with ``axis``, summed in order, elementwise."""
-    return rows[:, 0] * axis[0] + rows[:, 1] * axis[1] + rows[:, 2] * axis[2]
-
-
 def draw_bin_grid(emb, grid, w, bins, width, closed, smooth=None):
     """:func:`cast_bin_grid` of a monostatic view on the "raster" backend: its first hits
     drawn into a depth buffer (:func:`._raster_kernels.raster_bin_flat`, with ``smooth``
@@ -263,8 +259,8 @@ def draw_bin_grid(emb, grid, w, bins, width, closed, smooth=None):
     vertices, faces = emb.raster
     proj = np.empty((len(vertices), 3))      # elementwise (no BLAS): a vertex's numbers
     for k, axis in enumerate((grid[4], grid[5], w)):      # are the same in every face
-        proj[:, k] = _dot(vertices * emb.scale, np.asarray(axis, np.float64))
-    normals_w = _dot(bins.face_normals, np.asarray(w, np.float64))
+        proj[:, k] = dot(vertices * emb.scale, np.asarray(axis, np.float64))
+    normals_w = dot(bins.face_normals, np.asarray(w, np.float64))
     rows = tile_shape.py_func(width)[0]
     band = scratch("flat" if smooth is None else "smooth", width, grid[1].size)[1][3]
     s, t, (xi, ku, kv, eta) = grid[0], grid[1], grid[2]
