@@ -246,7 +246,7 @@ def draw_bin_grid(emb, grid, w, bins, width, closed, smooth=None):
         The packet width (the band's rows: a tile's).
     closed : (n_faces,) uint8 numpy.ndarray
         1 where a face's part is closed with outward normals
-        (:attr:`meshladar.raytrace.embree.Geometry.closed`): its faces turned away from
+        (``Geometry.closed`` of :mod:`meshladar.raytrace.embree`): its faces turned away from
         the view are not drawn.
     smooth : tuple, optional
         As :func:`cast_bin_grid`'s (None: flat normals).
