@@ -6,8 +6,10 @@ loop alone.
     taskset -c 0 python benchmarks/fbp.py [--rounds 5] [--size 1024] [--bins 1024]
 
 Prints millions of pixel-views (pixels × views) per CPU second of each, the median of the
-rounds' ratios, every round's ratio, the largest difference of the two images, and the
-SIMD registers of the loop's gathers when it was compiled in this process.
+rounds' ratios, the largest difference of the two images, the backprojection loop alone
+(each view on its own, linear and nearest-sample, and with the views 180° apart folded
+into one, as ``meshladar.fbp`` runs it), and the SIMD registers of the loop's gathers when
+it was compiled in this process.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ def main(argv=None):
     ap.add_argument("--bins", type=int, default=1024)
     args = ap.parse_args(argv)
 
+    from meshladar.reconstruct._folded import backproject_views
     from meshladar.reconstruct._kernels import backproject
     from meshladar.studies.timing import interleaved_times
     from meshladar.studies.bench import bench_fbp
@@ -54,7 +57,10 @@ def main(argv=None):
     def loop(nearest):
         return lambda: backproject(q, c, s, w, r0, dr_inv, x, x, nearest, out)
 
-    t = interleaved_times({"linear": loop(False), "nearest": loop(True)},
+    def folded():
+        return backproject_views(q, np.arange(360.0), w, r0, dr_inv, x, x, False, out)
+
+    t = interleaved_times({"linear": loop(False), "nearest": loop(True), "folded": folded},
                           repeats=args.rounds, clock=time.process_time)
     for k, v in t.items():
         print(f"  backprojection loop alone, {k:7s} {statistics.median(v):.3f} s  "

@@ -43,7 +43,7 @@ from ..images import Image, pixel_centres
 from ..precision import ANGLE_TOL_DEG, COUNT_SLACK
 from ..precision import UNIFORM_RTOL as _UNIFORM_RTOL
 from ..sinogram import Sinogram
-from ._kernels import backproject
+from ._folded import backproject_views
 from .filters import FILTERS, _filtered, fourier_filter
 from .radiance import LOG_FLOOR, PAPER_CLIP, clip_radiance, log_radiance, noise_floor
 
@@ -302,6 +302,9 @@ def fbp(sinogram, size=512, extent=None, *, filter="ramp", interpolation="linear
     Normalised so that the FBP of the exact Radon transform of f over 360° returns f:
     image = Σ_v w_v q_v(r), w_v half of view v's share of 2π (an angle's share split evenly
     among the views repeating it), q_v the ramp-filtered projection values_v / bin_width².
+    With linear interpolation, views 180° apart on bins symmetric about 0 (to a whole
+    number of bins) are backprojected as one, their profiles added with one reversed:
+    half the work, the same image to rounding (1e-12 of its maximum, tested).
 
     References
     ----------
@@ -351,12 +354,11 @@ def _backprojected(sinogram, size, extent, c, filter, interpolation):
     scale = 2.0 ** math.floor(math.log2(peak)) if peak > 0 else 1.0
     q = _filtered(sinogram.values / scale, filter)
 
-    phi = np.deg2rad(sinogram.angles_deg)
     xs = c[0] + pixel_centres(size, extent)
     ys = c[1] + pixel_centres(size, extent)
     out = np.zeros((size, size))
-    backproject(q, np.cos(phi), np.sin(phi), weights, float(sinogram.bin_centers[0]),
-                1.0 / dr, xs, ys, interpolation == "nearest", out)
+    backproject_views(q, sinogram.angles_deg, weights, float(sinogram.bin_centers[0]),
+                      1.0 / dr, xs, ys, interpolation == "nearest", out)
     with np.errstate(over="ignore"):
         out *= scale / dr
         out /= dr
