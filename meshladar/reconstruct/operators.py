@@ -33,6 +33,7 @@ from ..errors import ParameterError
 from ..forward.siddon import backproject as siddon_backproject
 from ..forward.siddon import parallel_rays
 from ..forward.siddon import project as siddon_project
+from ._folded import opposite_pairs
 from ._kernels import backproject, splat_project, surface_backproject, surface_project
 from .projector import Projector
 from .surface import _segments, _uniform
@@ -245,29 +246,21 @@ class LinearProjector(Projector):
 
 def _opposite_views(angles_deg, edges):
     """(base, mirror, partner): the views to compute, and the views that are the
-    reversed-bin copy of base view ``partner`` (an index into base), when the bins are
-    symmetric about 0; otherwise every view is a base view."""
+    reversed-bin copy of base view ``partner`` (an index into base): the later view of
+    each pair 180° apart (:func:`~meshladar.reconstruct._folded.opposite_pairs`) when the
+    bins are symmetric about 0; otherwise every view is a base view."""
     n = angles_deg.size
-    everything = (np.arange(n), np.zeros(0, int), np.zeros(0, int))
     scale = float(np.max(np.abs(edges)))
     if not np.allclose(edges, -edges[::-1], rtol=0.0, atol=1e-12 * scale):
-        return everything
-    key = np.round(np.mod(angles_deg, 360.0) * 1e6).astype(np.int64)
-    where = {}
-    for i, k in enumerate(key):
-        where.setdefault(int(k), i)
+        return np.arange(n), np.zeros(0, int), np.zeros(0, int)
+    phi = np.deg2rad(angles_deg)
+    partner_of, mirror = opposite_pairs(angles_deg, np.cos(phi), np.sin(phi))
     is_base = np.ones(n, bool)
-    partner_of = np.full(n, -1)
-    for i, k in enumerate(key):
-        j = where.get(int((k + 180_000_000) % 360_000_000))
-        if j is not None and j < i and is_base[j] and partner_of[j] < 0 and where[int(k)] == i:
-            is_base[i] = False
-            partner_of[i] = j
+    is_base[mirror] = False
     base = np.flatnonzero(is_base)
     index = np.full(n, -1)
     index[base] = np.arange(base.size)
-    mirror = np.flatnonzero(~is_base)
-    return base, mirror, index[partner_of[mirror]]
+    return base, mirror, index[partner_of]
 
 
 class _SurfaceArgs(NamedTuple):
