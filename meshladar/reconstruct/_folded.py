@@ -67,6 +67,8 @@ def backproject_views(q, angles_deg, weight, r0, inv_dr, x, y, nearest, out):
     m = -2.0 * r0 * inv_dr
     whole = float(np.round(m)) if np.isfinite(m) else np.nan
     a, b = opposite_pairs(angles_deg, cos_phi, sin_phi)
+    keep = weight[a] > 0                     # w_b / w_a weighs b's samples into a's profile
+    a, b = a[keep], b[keep]
     # fold where the bins both views cover are most of them (|m − (n − 1)| ≤ n / 8)
     if nearest or a.size == 0 or not abs(m - whole) <= FOLD_TOL or abs(whole - (n - 1)) > n / 8:
         backproject(q, cos_phi, sin_phi, weight, r0, inv_dr, x, y, nearest, out)

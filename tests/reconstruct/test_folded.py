@@ -91,6 +91,18 @@ def test_not_folded_where_the_bins_do_not_mirror():
         np.testing.assert_array_equal(out, plain)
 
 
+def test_one_bin_and_a_view_of_weight_zero():
+    # one bin at r = 0: the profile is its one sample at u = 0 exactly, nothing between
+    # samples to fold; a pair whose first view weighs 0 is backprojected view by view
+    x = np.array([-0.5, 0.0, 0.5])
+    angles = np.array([0.0, 180.0, 30.0, 210.0])
+    q = np.array([[2.0], [3.0], [5.0], [7.0]])
+    out, pairs, plain = _both(q, angles, np.array([1.0, 1.0, 0.0, 0.5]), 0.0, 4.0, x, x)
+    assert pairs == 1
+    assert np.abs(out - plain).max() <= FOLD_RTOL * np.abs(plain).max()
+    assert out[1, 1] == 2.0 + 3.0 + 0.5 * 7.0                # the centre pixel is on it
+
+
 def test_rows_beyond_float64_take_each_view_pixel_by_pixel():
     # u overflows to ±inf at the outer columns: those rows sample each view with its
     # bounds tested per pixel, as the plain loop does
