@@ -45,6 +45,7 @@ import numpy as np
 
 from ..brdf import SandfordRobertson
 from ..errors import ModelError
+from ..meshes.part import axis_spans
 from ..meshes.visibility import CONVEX_RTOL, part_plane
 from ..precision import COS_HORIZON
 from ..weighing.hit_weights import GRAZING_RECEIVER_COS
@@ -151,7 +152,7 @@ def _found(scene, geo):
 def _join(planes, plane, index, part):
     """Add a mirror part to the plane it lies in, or as a new plane."""
     normal, point = plane
-    tol = CONVEX_RTOL * float(np.linalg.norm(np.ptp(part.vertices, axis=0)))
+    tol = CONVEX_RTOL * float(np.linalg.norm(axis_spans(part.vertices)))
     for p in planes:
         if abs(abs(float(p[0] @ normal)) - 1.0) <= 1e-12 and \
                 np.all(np.abs((part.vertices - p[1]) @ p[0]) <= max(tol, 1e-300)):

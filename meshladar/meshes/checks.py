@@ -14,7 +14,7 @@ import numpy as np
 
 from ..errors import GeometryError
 from ..precision import DEGENERATE_AREA as _DEGENERATE_AREA
-from .part import MeshPart, _edges
+from .part import MeshPart, _edges, axis_spans
 
 __all__ = ["inspect_parts"]
 
@@ -24,7 +24,7 @@ def _clean(part: MeshPart):
     if not len(part.faces):
         return part, 0
     _, area = part.face_normals_areas()
-    diag = float(np.linalg.norm(np.ptp(part.vertices, axis=0)))
+    diag = float(np.linalg.norm(axis_spans(part.vertices)))
     f = part.faces
     repeated = (f[:, 0] == f[:, 1]) | (f[:, 1] == f[:, 2]) | (f[:, 0] == f[:, 2])
     bad = repeated | (area <= _DEGENERATE_AREA * diag * diag)

@@ -329,8 +329,10 @@ def _weld(vertices, faces, where):
     if len(v):
         # positions on a grid of _WELD_REL × the mesh's size, from its lowest corner: exact
         # integers in float64 (below 2**40), whatever the scale and offset
-        size = float(np.ptp(v, axis=0).max())
-        key = np.round((v - v.min(axis=0)) / (size * _WELD_REL)) if size > 0 else 0.0 * v
+        # column by column: numpy's min over axis 0 of (n, 3) is ~25x slower
+        low = np.array([v[:, c].min() for c in range(3)])
+        size = max(float(v[:, c].max() - low[c]) for c in range(3))
+        key = np.round((v - low) / (size * _WELD_REL)) if size > 0 else 0.0 * v
         point, n = _point_index(key)
         first = np.full(n, len(v))
         np.minimum.at(first, point, np.arange(len(v)))     # each point's first vertex

@@ -88,7 +88,8 @@ def _outside_extremes(v):
         eq = ConvexHull(v[ext]).equations               # a·x + b <= 0 inside
     except (QhullError, ValueError):
         return v
-    tol = 1e-9 * float(np.ptp(v, axis=0).max() + np.abs(v).max())
+    span = max(float(v[:, c].max() - v[:, c].min()) for c in range(3))   # not ptp(axis=0): slow
+    tol = 1e-9 * (span + float(np.abs(v).max()))
     keep = np.zeros(len(v), bool)
     for a in range(0, len(v), step):
         keep[a:a + step] = (v[a:a + step] @ eq[:, :3].T + eq[:, 3]).max(axis=1) > -tol

@@ -16,7 +16,7 @@ from .._summary import text
 from ..errors import GeometryError, ParameterError
 from .hull import convex_hull
 
-__all__ = ["MeshPart", "part_from_trimesh"]
+__all__ = ["MeshPart", "axis_spans", "part_from_trimesh"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -172,14 +172,23 @@ def part_from_trimesh(mesh, material_index, *, name="mesh", transform=None):
     return MeshPart(v, np.asarray(mesh.faces), material_index, name)
 
 
+def axis_spans(points):
+    """(d,) float64: max − min of ``points`` (n, d) along each axis, column by column (numpy's
+    ``ptp(axis=0)`` of an (n, 3) array is ~25× slower: its inner loop runs over 3 values)."""
+    p = np.asarray(points, dtype=np.float64)
+    return np.array([p[:, c].max() - p[:, c].min() for c in range(p.shape[1])])
+
+
 def _point_index(vertices):
     """((n,) int64, k): each vertex's index among the k distinct positions, by exact float
     equality (-0.0 equals 0.0), numbered in lexicographic order of the positions."""
     v = np.asarray(vertices, dtype=np.float64)
     order = np.lexsort(v.T[::-1])
     s = v[order]
-    new = np.ones(len(v), dtype=bool)
-    new[1:] = np.any(s[1:] != s[:-1], axis=1)
+    new = np.zeros(len(v), dtype=bool)
+    new[:1] = True
+    for c in range(v.shape[1]):        # column by column: np.any(axis=1) is ~8x slower
+        new[1:] |= s[1:, c] != s[:-1, c]
     out = np.empty(len(v), dtype=np.int64)
     out[order] = np.cumsum(new) - 1
     return out, int(new.sum())

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .checks import components
-from .part import MeshPart, _edges
+from .part import MeshPart, _edges, axis_spans
 
 __all__ = ["CONVEX_RTOL", "Visibility", "part_plane", "part_sees_itself", "scene_visibility"]
 
@@ -77,7 +77,7 @@ def part_plane(part: MeshPart):
         part is not flat.
     """
     f, v = part.faces, part.vertices
-    tol = CONVEX_RTOL * float(np.linalg.norm(np.ptp(v, axis=0)))
+    tol = CONVEX_RTOL * float(np.linalg.norm(axis_spans(v)))
     normals, areas = part.face_normals_areas()
     big = int(np.argmax(areas))
     point = v[f[big, 0]]
@@ -108,7 +108,7 @@ def part_sees_itself(part: MeshPart, bodies=None) -> bool:
     if part_plane(part) is not None:
         return False                                          # flat
     v = part.vertices
-    tol = CONVEX_RTOL * float(np.linalg.norm(np.ptp(v, axis=0)))
+    tol = CONVEX_RTOL * float(np.linalg.norm(axis_spans(v)))
     normals, _ = part.face_normals_areas()
     a, b, forward, key = _edges(f, len(v))
     far = np.concatenate([f[:, 2], f[:, 0], f[:, 1]])         # each edge's opposite vertex
@@ -172,7 +172,7 @@ def _coplanar(parts, sees):
         for b in flat:
             if a < b:
                 both = np.concatenate([parts[a].vertices, parts[b].vertices])
-                tol = CONVEX_RTOL * float(np.linalg.norm(np.ptp(both, axis=0)))
+                tol = CONVEX_RTOL * float(np.linalg.norm(axis_spans(both)))
                 if all(np.all(np.abs((parts[k].vertices - planes[j][1]) @ planes[j][0]) <= tol)
                        for j, k in ((a, b), (b, a))):
                     sees[a, b] = sees[b, a] = False

@@ -13,7 +13,7 @@ import pytest
 import meshladar as ml
 from meshladar.meshes._normals_kernel import accumulate_corner_normals
 from meshladar.meshes.normals import corner_normals
-from meshladar.meshes.part import _point_index
+from meshladar.meshes.part import _point_index, axis_spans
 
 #: the loop and the numpy sums add the same terms in a different order: a few ulps
 ORDER_RTOL = 1e-13
@@ -55,3 +55,18 @@ def test_import_meshladar_meshes_stays_light_until_normals_are_asked_for():
             "from meshladar.meshes import CREASE_DEG; "
             "assert CREASE_DEG == 30.0")
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_point_index_and_axis_spans_against_numpy():
+    # the column-by-column forms against numpy's row-wise ones: distinct positions by exact
+    # equality (-0.0 is 0.0), numbered in lexicographic order; max − min per axis
+    rng = np.random.default_rng(7)
+    v = rng.integers(-2, 3, (2000, 3)).astype(float)
+    v[::7] *= -0.0                                     # signed zeros among the integers
+    point, n = _point_index(v)
+    unique, inverse = np.unique(v + 0.0, axis=0, return_inverse=True)
+    assert n == len(unique) == len(np.unique(point))
+    np.testing.assert_array_equal(point, inverse.ravel())
+    assert _point_index(v[:1])[1] == 1 and _point_index(v[:0])[1] == 0
+    w = rng.normal(size=(1000, 3)) * [1.0, 1e-3, 1e6] + [5.0, -7.0, 1e9]
+    np.testing.assert_array_equal(axis_spans(w), np.ptp(w, axis=0))
