@@ -173,8 +173,19 @@ def part_from_trimesh(mesh, material_index, *, name="mesh", transform=None):
 
 
 def axis_spans(points):
-    """(d,) float64: max − min of ``points`` (n, d) along each axis, column by column (numpy's
-    ``ptp(axis=0)`` of an (n, 3) array is ~25× slower: its inner loop runs over 3 values)."""
+    """The extent of a point set along each axis, column by column (numpy's ``ptp(axis=0)``
+    of an (n, 3) array is ~25× slower: its inner loop runs over 3 values).
+
+    Parameters
+    ----------
+    points : (n, d) array_like
+        At least one point.
+
+    Returns
+    -------
+    numpy.ndarray
+        (d,) float64: max − min of each column, as ``np.ptp(points, axis=0)``.
+    """
     p = np.asarray(points, dtype=np.float64)
     return np.array([p[:, c].max() - p[:, c].min() for c in range(p.shape[1])])
 
