@@ -184,7 +184,8 @@ def axis_spans(points):
     Returns
     -------
     numpy.ndarray
-        (d,) float64: max − min of each column, as ``np.ptp(points, axis=0)``.
+        (d,) float64: max − min of each column, as ``np.ptp(points, axis=0)`` of the
+        points as float64.
     """
     p = np.asarray(points, dtype=np.float64)
     return np.array([p[:, c].max() - p[:, c].min() for c in range(p.shape[1])])

@@ -22,16 +22,27 @@ from numba import carray, njit, prange
 from ._kernels import (_CHUNK, _add_linear, _add_view_scalar, _finite_ends, _first,
                        _row_buffer, _view_line, backproject)
 
-__all__ = ["END_MARGIN", "FOLD_TOL", "backproject_views", "opposite_pairs"]
+__all__ = ["END_MARGIN", "FOLD_REACH", "FOLD_TOL", "backproject_views", "opposite_pairs"]
 
-#: Largest distance (in bins) of m = −2 r₀ / Δr from a whole number for the views 180°
-#: apart to be folded, and the largest |cos φ_a + cos φ_b| and |sin φ_a + sin φ_b| of a
-#: pair: beyond them each view is backprojected on its own.
-FOLD_TOL = 1e-12
+_EPS = float(np.finfo(np.float64).eps)
+
+#: The largest |cos φ_a + cos φ_b| and |sin φ_a + sin φ_b| of a pair of views folded, and
+#: (times max(1, |m|)) the largest distance of m = −2 r₀ / Δr from a whole number: 8 units
+#: in the last place of 1. Angles 180° apart in floating point give directions opposite to
+#: 4.6 of them (measured over 10⁵ angles), so view b's positions m − u differ from its own by
+#: no more than the rounding both already have; angles that differ from 180° by more (made
+#: by repeated addition, say: 2e-11° off) are backprojected view by view.
+FOLD_TOL = 8 * _EPS
+
+#: The reach of pixels and bins from range zero, (max |x| + max |y| + |r₀|) / Δr, in bins,
+#: beyond which nothing is folded: sample positions are rounded to ~1e-16 of it, which must
+#: stay well below :data:`END_MARGIN`.
+FOLD_REACH = 1e7
 
 #: Columns whose u lies within this many bins of either end of the range both views cover
 #: are sampled view by view on each view's own line (u_b = m − u holds there only to
-#: rounding, ~1e-13 bins, and a sample on a profile's last bin is in or out by it).
+#: rounding, below 1e-8 bins within :data:`FOLD_REACH`, and a sample on a profile's last
+#: bin is in or out by it).
 END_MARGIN = 1e-6
 
 
@@ -58,34 +69,51 @@ def opposite_pairs(angles_deg, cos_phi, sin_phi):
 
 def backproject_views(q, angles_deg, weight, r0, inv_dr, x, y, nearest, out):
     """:func:`~meshladar.reconstruct._kernels.backproject` of views at ``angles_deg``
-    (degrees), with the pairs of views 180° apart folded (:func:`backproject_folded`) where
-    the interpolation is linear and the bins are symmetric about 0 to a whole number of
-    bins (:data:`FOLD_TOL`). Returns the number of pairs folded."""
+    (degrees), with the pairs of views 180° apart folded (:func:`backproject_folded`)
+    where that gives each view's own image to rounding: linear interpolation, x
+    non-decreasing, bins symmetric about 0 to a whole number m − n + 1 of bins with
+    |m − (n − 1)| ≤ n / 8, directions opposite to :data:`FOLD_TOL`, everything within
+    :data:`FOLD_REACH` bins of range zero, and the pair's folded profile finite (w_a > 0).
+    Every other view is backprojected on its own. Returns the number of pairs folded."""
     phi = np.deg2rad(angles_deg)
     cos_phi, sin_phi = np.cos(phi), np.sin(phi)
     n = q.shape[1]
     m = -2.0 * r0 * inv_dr
     whole = float(np.round(m)) if np.isfinite(m) else np.nan
-    a, b = opposite_pairs(angles_deg, cos_phi, sin_phi)
-    keep = weight[a] > 0                     # w_b / w_a weighs b's samples into a's profile
-    a, b = a[keep], b[keep]
-    # fold where the bins both views cover are most of them (|m − (n − 1)| ≤ n / 8)
-    if nearest or a.size == 0 or not abs(m - whole) <= FOLD_TOL or abs(whole - (n - 1)) > n / 8:
+    with np.errstate(over="ignore", invalid="ignore"):       # inf or NaN: not folded
+        reach = (np.max(np.abs(x), initial=0.0) + np.max(np.abs(y), initial=0.0)
+                 + abs(r0)) * inv_dr
+    if (nearest or n == 0 or not abs(m - whole) <= FOLD_TOL * max(1.0, abs(m))
+            or abs(whole - (n - 1)) > n / 8 or not reach <= FOLD_REACH
+            or not np.all(x[:-1] <= x[1:])):
         backproject(q, cos_phi, sin_phi, weight, r0, inv_dr, x, y, nearest, out)
         return 0
+    a, b, folded, mi = _folded_profiles(q, angles_deg, cos_phi, sin_phi, weight, int(whole))
     rest = np.setdiff1d(np.arange(q.shape[0]), np.concatenate([a, b]))
     if rest.size:
         backproject(np.ascontiguousarray(q[rest]), cos_phi[rest], sin_phi[rest], weight[rest],
                     r0, inv_dr, x, y, False, out)
-    mi = int(whole)
-    lo, hi = max(0, mi - (n - 1)), min(n - 1, mi)
-    rho = weight[b] / weight[a]
-    folded = np.zeros((a.size, n))
-    k = np.arange(lo, hi + 1)
-    folded[:, lo:hi + 1] = q[a][:, k] + rho[:, None] * q[b][:, mi - k]
-    backproject_folded(q, folded, a, b, mi, cos_phi, sin_phi, weight, r0, inv_dr, x, y,
-                       out)
+    if a.size:
+        backproject_folded(q, folded, a, b, mi, cos_phi, sin_phi, weight, r0, inv_dr, x, y,
+                           out)
     return int(a.size)
+
+
+def _folded_profiles(q, angles_deg, cos_phi, sin_phi, weight, m):
+    """(a, b, folded, m): the pairs to fold and their profiles q_a[k] + (w_b / w_a) q_b[m − k]
+    on [max(0, m − n + 1), min(n − 1, m)], only pairs whose folded profile is finite (a
+    NaN or inf in either view, or an overflow, leaves the pair to go view by view)."""
+    n = q.shape[1]
+    a, b = opposite_pairs(angles_deg, cos_phi, sin_phi)
+    a, b = a[weight[a] > 0], b[weight[a] > 0]
+    lo, hi = max(0, m - (n - 1)), min(n - 1, m)
+    k = np.arange(lo, hi + 1)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        rho = weight[b] / weight[a]
+        folded = np.zeros((a.size, n))
+        folded[:, lo:hi + 1] = q[a][:, k] + rho[:, None] * q[b][:, m - k]
+    finite = np.all(np.isfinite(folded), axis=1)
+    return a[finite], b[finite], np.ascontiguousarray(folded[finite]), m
 
 
 @njit(parallel=True, cache=True)

@@ -304,7 +304,8 @@ def fbp(sinogram, size=512, extent=None, *, filter="ramp", interpolation="linear
     among the views repeating it), q_v the ramp-filtered projection values_v / bin_width².
     With linear interpolation, views 180° apart on bins symmetric about 0 (to a whole
     number of bins) are backprojected as one, their profiles added with one reversed:
-    half the work, the same image to rounding (1e-12 of its maximum, tested).
+    half the work, the same image to the rounding of the sample positions (the
+    conditions: ``meshladar.reconstruct._folded.backproject_views``).
 
     References
     ----------

@@ -189,7 +189,9 @@ class LinearProjector(Projector):
     only one view of each opposite pair (half the work on a full circle of views).
 
     Views count as opposite when their angles modulo 360°, rounded to 1e-6 degree, differ
-    by 180°; bins count as symmetric when every edge matches the negated mirrored edge to
+    by 180° and their directions are opposite to
+    ``meshladar.reconstruct._folded.FOLD_TOL`` (8 units in the last place; repeated
+    angles pair in order); bins count as symmetric when every edge matches the negated mirrored edge to
     within 1e-12 of the largest |edge|.
 
     Parameters
@@ -247,7 +249,7 @@ class LinearProjector(Projector):
 def _opposite_views(angles_deg, edges):
     """(base, mirror, partner): the views to compute, and the views that are the
     reversed-bin copy of base view ``partner`` (an index into base): the later view of
-    each pair 180° apart (:func:`~meshladar.reconstruct._folded.opposite_pairs`) when the
+    each pair 180° apart (``meshladar.reconstruct._folded.opposite_pairs``) when the
     bins are symmetric about 0; otherwise every view is a base view."""
     n = angles_deg.size
     scale = float(np.max(np.abs(edges)))

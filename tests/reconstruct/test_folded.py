@@ -9,7 +9,8 @@ import pytest
 import meshladar as ml
 import meshladar.reconstruct._folded as folded_module
 from meshladar import phantoms
-from meshladar.reconstruct._folded import backproject_views, opposite_pairs
+from meshladar.reconstruct._folded import (_folded_profiles, backproject_folded,
+                                           backproject_views, opposite_pairs)
 from meshladar.reconstruct._kernels import backproject
 
 from test_kernels import _interp
@@ -104,18 +105,69 @@ def test_one_bin_and_a_view_of_weight_zero():
 
 
 def test_rows_beyond_float64_take_each_view_pixel_by_pixel():
-    # u overflows to ±inf at the outer columns: those rows sample each view with its
-    # bounds tested per pixel, as the plain loop does
+    # u overflows to ±inf at the outer columns: such pixels lie beyond FOLD_REACH, so
+    # backproject_views leaves every view to the plain loop; the folded kernel called on
+    # them directly samples those rows view by view with the bounds tested per pixel
     rng = np.random.default_rng(6)
     n = 16
     angles = np.array([10.0, 190.0, 100.0, 280.0])
     q = rng.normal(size=(4, n))
     w = np.full(4, 0.5)
     x = np.array([-1e305, -0.5, 0.0, 0.25, 1e305])
-    out, pairs, plain = _both(q, angles, w, -(n - 1) / 2e5, 1e5, x, x)
-    assert pairs == 2
-    assert np.all(np.isfinite(out))
-    assert np.abs(out - plain).max() <= FOLD_RTOL * np.abs(plain).max()
+    r0, inv_dr = -(n - 1) / 2e5, 1e5
+    out, pairs, plain = _both(q, angles, w, r0, inv_dr, x, x)
+    assert pairs == 0
+    np.testing.assert_array_equal(out, plain)
+    phi = np.deg2rad(angles)
+    a, b, folded, m = _folded_profiles(q, angles, np.cos(phi), np.sin(phi), w, n - 1)
+    assert a.size == 2
+    direct = np.zeros((5, 5))
+    backproject_folded(q, folded, a, b, m, np.cos(phi), np.sin(phi), w, r0, inv_dr, x, x,
+                       direct)
+    assert np.all(np.isfinite(direct))
+    assert np.abs(direct - plain).max() <= FOLD_RTOL * np.abs(plain).max()
+
+
+def test_what_is_not_folded_goes_view_by_view():
+    # each case leaves pairs to the plain loop, so the image is its image bit for bit
+    rng = np.random.default_rng(8)
+    n = 32
+    angles = np.arange(0.0, 360.0, 5.0)
+    q = rng.normal(size=(angles.size, n))
+    w = np.full(angles.size, 0.1)
+    x = np.linspace(-1.0, 1.0, 21)
+    inv_dr = n / 2.0
+    r0 = -(n - 1) / 2.0 / inv_dr
+    cases = {
+        # angles made by repeated addition: 180° apart only to ~1e-13°, directions opposite
+        # to more than FOLD_TOL
+        "summed angles": (q, np.cumsum(np.full(72, 5.0000000000001)) - 5.0, w, x),
+        "x decreasing": (q, angles, w, x[::-1].copy()),
+        "no bins": (q[:, :0], angles, w, x),
+        "far pixels": (q, angles, w, x * 1e6),
+    }
+    for name, (qq, aa, ww, xx) in cases.items():
+        phi = np.deg2rad(aa)
+        plain = np.zeros((21, xx.size))
+        backproject(qq, np.cos(phi), np.sin(phi), ww, r0, inv_dr, xx, x, False, plain)
+        out = np.zeros((21, xx.size))
+        assert backproject_views(qq, aa, ww, r0, inv_dr, xx, x, False, out) == 0, name
+        np.testing.assert_array_equal(out, plain, err_msg=name)
+    # a NaN in one view, or weights whose ratio overflows: that pair alone goes view by view
+    # (NaN where the plain loop puts it), the other 35 are folded
+    bad_q = q.copy()
+    bad_q[37, 5] = np.nan                                  # 185°, partner of 5°
+    bad_w = w.copy()
+    bad_w[[2, 38]] = 1e-310, 1.0                           # 10° and 190°
+    phi = np.deg2rad(angles)
+    plain = np.zeros((21, 21))
+    backproject(bad_q, np.cos(phi), np.sin(phi), bad_w, r0, inv_dr, x, x, False, plain)
+    out = np.zeros((21, 21))
+    assert backproject_views(bad_q, angles, bad_w, r0, inv_dr, x, x, False, out) == 34
+    np.testing.assert_array_equal(np.isnan(out), np.isnan(plain))
+    assert np.isnan(plain).any()
+    ok = ~np.isnan(plain)
+    assert np.abs(out - plain)[ok].max() <= FOLD_RTOL * np.abs(plain[ok]).max()
 
 
 def test_opposite_pairs_match_directions():
