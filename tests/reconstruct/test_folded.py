@@ -74,24 +74,6 @@ def test_unpaired_repeated_and_unequal_views():
     assert np.abs(out - plain).max() <= FOLD_RTOL * np.abs(plain).max()
 
 
-def test_not_folded_where_the_bins_do_not_mirror():
-    rng = np.random.default_rng(5)
-    n = 40
-    angles = np.arange(0.0, 360.0, 3.0)
-    q = rng.normal(size=(angles.size, n))
-    w = np.full(angles.size, 0.05)
-    x = np.linspace(-1, 1, 31)
-    inv_dr = n / 2.0
-    for r0, nearest in ((-1.0 + 0.3 / inv_dr, False),     # m = n − 0.6: not a whole bin
-                        (-3.0, False),                    # m = 3n: mostly one view's bins
-                        (-1.0, True)):                    # nearest samples: never folded
-        out, plain = np.zeros((31, 31)), np.zeros((31, 31))
-        phi = np.deg2rad(angles)
-        backproject(q, np.cos(phi), np.sin(phi), w, r0, inv_dr, x, x, nearest, plain)
-        assert backproject_views(q, angles, w, r0, inv_dr, x, x, nearest, out) == 0
-        np.testing.assert_array_equal(out, plain)
-
-
 def test_one_bin_and_a_view_of_weight_zero():
     # one bin at r = 0: the profile is its one sample at u = 0 exactly, nothing between
     # samples to fold; a pair whose first view weighs 0 is backprojected view by view
@@ -141,17 +123,20 @@ def test_what_is_not_folded_goes_view_by_view():
     cases = {
         # angles made by repeated addition: 180° apart only to ~1e-13°, directions opposite
         # to more than FOLD_TOL
-        "summed angles": (q, np.cumsum(np.full(72, 5.0000000000001)) - 5.0, w, x),
-        "x decreasing": (q, angles, w, x[::-1].copy()),
-        "no bins": (q[:, :0], angles, w, x),
-        "far pixels": (q, angles, w, x * 1e6),
+        "summed angles": (q, np.cumsum(np.full(72, 5.0000000000001)) - 5.0, x, r0, False),
+        "x decreasing": (q, angles, x[::-1].copy(), r0, False),
+        "no bins": (q[:, :0], angles, x, r0, False),
+        "far pixels": (q, angles, x * 1e6, r0, False),
+        "m = n - 0.4, not a whole bin": (q, angles, x, r0 + 0.3 / inv_dr, False),
+        "m = 3n, mostly one view's bins": (q, angles, x, -3.0, False),
+        "nearest samples": (q, angles, x, r0, True),
     }
-    for name, (qq, aa, ww, xx) in cases.items():
+    for name, (qq, aa, xx, rr, nearest) in cases.items():
         phi = np.deg2rad(aa)
         plain = np.zeros((21, xx.size))
-        backproject(qq, np.cos(phi), np.sin(phi), ww, r0, inv_dr, xx, x, False, plain)
+        backproject(qq, np.cos(phi), np.sin(phi), w, rr, inv_dr, xx, x, nearest, plain)
         out = np.zeros((21, xx.size))
-        assert backproject_views(qq, aa, ww, r0, inv_dr, xx, x, False, out) == 0, name
+        assert backproject_views(qq, aa, w, rr, inv_dr, xx, x, nearest, out) == 0, name
         np.testing.assert_array_equal(out, plain, err_msg=name)
     # a NaN in one view, or weights whose ratio overflows: that pair alone goes view by view
     # (NaN where the plain loop puts it), the other 35 are folded
