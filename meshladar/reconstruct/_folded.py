@@ -105,7 +105,8 @@ def _folded_profiles(q, angles_deg, cos_phi, sin_phi, weight, m):
     NaN or inf in either view, or an overflow, leaves the pair to go view by view)."""
     n = q.shape[1]
     a, b = opposite_pairs(angles_deg, cos_phi, sin_phi)
-    a, b = a[weight[a] > 0], b[weight[a] > 0]
+    keep = weight[a] > 0
+    a, b = a[keep], b[keep]
     lo, hi = max(0, m - (n - 1)), min(n - 1, m)
     k = np.arange(lo, hi + 1)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
@@ -147,9 +148,9 @@ def _folded_row(q, folded, a, b, m, cos_phi, sin_phi, weight, r0, inv_dr, x, yi,
     for j in range(c1 - c0):
         acc[j] = src[j]
     for p in range(a.size):
-        ka, kb = _ends_and_middle(acc, c0, c1, q, a[p], b[p], cos_phi, sin_phi, weight, r0,
-                                  inv_dr, x, yi, lo, hi, bottom, top)
-        wv, base, step = _view_line(cos_phi, sin_phi, weight, r0, inv_dr, yi, a[p])
+        ka, kb, wv, base, step = _ends_and_middle(acc, c0, c1, q, a[p], b[p], cos_phi,
+                                                  sin_phi, weight, r0, inv_dr, x, yi, lo, hi,
+                                                  bottom, top)
         _add_linear(acc, c0, folded, p, wv, base, step, x, ka, kb)
     dst = row[c0:c1]
     for j in range(c1 - c0):
@@ -160,19 +161,20 @@ def _folded_row(q, folded, a, b, m, cos_phi, sin_phi, weight, r0, inv_dr, x, yi,
 def _ends_and_middle(acc, c0, c1, q, va, vb, cos_phi, sin_phi, weight, r0, inv_dr, x, yi, lo,
                      hi, bottom, top):
     """Adds views va and vb (180° apart) where one of them is sampled on its own line, and
-    returns the columns [ka, kb) left to the folded profile: none (0, 0) when u is not
-    finite at the row's ends (both views then added pixel by pixel, bounds tested on each)."""
+    returns the columns [ka, kb) left to the folded profile, with view va's line (w, base,
+    step): no columns (0, 0) when u is not finite at the row's ends (both views then added
+    pixel by pixel, bounds tested on each)."""
     wa, base, step = _view_line(cos_phi, sin_phi, weight, r0, inv_dr, yi, va)
     wb, base_b, step_b = _view_line(cos_phi, sin_phi, weight, r0, inv_dr, yi, vb)
     if not (_finite_ends(x, c0, c1, base, step) and _finite_ends(x, c0, c1, base_b, step_b)):
         _add_view_scalar(acc, c0, c1, q, va, wa, base, step, x, False)
         _add_view_scalar(acc, c0, c1, q, vb, wb, base_b, step_b, x, False)
-        return 0, 0
+        return 0, 0, wa, base, step
     ja, jb = _window(x, c0, c1, base, step, bottom, top)
     ka, kb = _window(x, ja, jb, base, step, lo, hi)
     _add_ends(acc, c0, q, va, wa, base, step, vb, wb, base_b, step_b, x, ja, ka)
     _add_ends(acc, c0, q, va, wa, base, step, vb, wb, base_b, step_b, x, kb, jb)
-    return ka, kb
+    return ka, kb, wa, base, step
 
 
 @njit(cache=True)
