@@ -1,12 +1,13 @@
-"""Attributes of a package resolved on first use (PEP 562): its heavier names and
-submodules stay unimported until asked for, so that ``import meshladar`` and the command
-line's one-view start load only numpy and scipy."""
+"""Names resolved on first use: a package's heavier names and submodules (PEP 562), and
+a module's compiled loops (:func:`deferred_module`), stay unimported until asked for, so
+that ``import meshladar`` loads only numpy and scipy and the command line's one-view start
+(which calls no compiled loop) does not load numba."""
 
 from __future__ import annotations
 
 import importlib
 
-__all__ = ["lazy_attributes"]
+__all__ = ["lazy_attributes", "deferred_module"]
 
 
 def lazy_attributes(package, namespace, names=(), submodules=(), hidden=()):
@@ -46,3 +47,50 @@ def lazy_attributes(package, namespace, names=(), submodules=(), hidden=()):
         return sorted(set(namespace) | set(names) | set(submodules))
 
     return __getattr__, __dir__
+
+
+class _DeferredModule:
+    """A module's stand-in that imports it at its first attribute lookup (thread-safe:
+    Python's import lock; :func:`deferred_module`)."""
+
+    __slots__ = ("_name", "_module")
+
+    def __init__(self, name):
+        self._name = name
+        self._module = None
+
+    def __getattr__(self, attr):
+        module = self._module
+        if module is None:
+            module = self._module = importlib.import_module(self._name)
+        return getattr(module, attr)
+
+    def __repr__(self):
+        return f"<deferred module {self._name!r}>"
+
+
+def deferred_module(name):
+    """A stand-in for the module ``name`` that imports it when one of its attributes is
+    first looked up: for a module of compiled loops (numba's), which a small run never
+    calls. The importer names the module statically too, under ``TYPE_CHECKING``, so
+    that the import graph (the layers' check) still holds the edge.
+
+    Parameters
+    ----------
+    name : str
+        The module's absolute dotted name.
+
+    Returns
+    -------
+    object
+        Its attributes are the module's (looked up in the module at each use, so a test
+        that patches the module is seen).
+
+    Examples
+    --------
+    >>> from meshladar._lazy import deferred_module
+    >>> heavy = deferred_module("json")
+    >>> heavy.dumps([1, 2])
+    '[1, 2]'
+    """
+    return _DeferredModule(name)

@@ -33,11 +33,13 @@ def test_import_is_light():
 
 #: What a one-view `meshladar simulate` of a binary STL does not need, so does not import:
 #: the studies, the fits, the scanner's modules (scipy's interpolation with them), scipy's
-#: statistics and matplotlib, and trimesh (numpy reads the file; trimesh would bring
-#: scipy's optimisers, graphs, images and spatial trees with it).
+#: statistics and matplotlib, trimesh (numpy reads the file; trimesh would bring scipy's
+#: optimisers, graphs, images and spatial trees with it), and numba (such a run calls no
+#: compiled loop, and the modules of compiled loops are imported at their first use).
 NOT_FOR_SIMULATE = ("meshladar.studies", "meshladar.fit", "meshladar.scan.run",
                     "meshladar.scan.geiger", "meshladar.scan.platforms", "scipy.interpolate",
-                    "scipy.stats", "matplotlib", "trimesh", "scipy.spatial", "scipy.optimize")
+                    "scipy.stats", "matplotlib", "trimesh", "scipy.spatial", "scipy.optimize",
+                    "numba")
 
 
 def test_a_one_view_simulate_imports_only_what_it_uses(tmp_path):
@@ -52,6 +54,26 @@ def test_a_one_view_simulate_imports_only_what_it_uses(tmp_path):
             f"print(','.join(m for m in {NOT_FOR_SIMULATE!r} if m in sys.modules))")
     out = _run("-c", code).stdout
     assert out.splitlines()[-1] == "", f"simulate pulled in: {out}"
+
+
+def test_a_deferred_module_imports_at_its_first_attribute(tmp_path, monkeypatch):
+    """meshladar._lazy.deferred_module: nothing is imported until an attribute is looked
+    up; then the module's own attribute, patched ones included."""
+    from meshladar._lazy import deferred_module
+
+    (tmp_path / "meshladar_probe_kernels.py").write_text("LOADS = 1\ndef twice(x):\n"
+                                                         "    return 2 * x\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.delitem(sys.modules, "meshladar_probe_kernels", raising=False)
+    probe = deferred_module("meshladar_probe_kernels")
+    assert "meshladar_probe_kernels" not in sys.modules
+    assert repr(probe) == "<deferred module 'meshladar_probe_kernels'>"
+    assert probe.twice(21) == 42 and "meshladar_probe_kernels" in sys.modules
+    monkeypatch.setattr(sys.modules["meshladar_probe_kernels"], "twice", lambda x: -x)
+    assert probe.twice(21) == -21                  # looked up in the module at each use
+    with pytest.raises(AttributeError, match="nothing"):
+        probe.nothing
+    monkeypatch.delitem(sys.modules, "meshladar_probe_kernels")
 
 
 def test_subpackages_install_from_top_level_folders():

@@ -42,19 +42,21 @@ that face again (a bowl's second order came out 31 % low that way).
 from __future__ import annotations
 
 from dataclasses import dataclass
-
 import numpy as np
 
+from .._lazy import deferred_module
 from .._executors import thread_pool
 from ..errors import ModelError, ParameterError
 from ..raytrace.backends import resolve_backend
 from ..raytrace.embree import embree_scene, geometry
-from ._bounce_kernels import sample_mixture
 from ._paths import (Leg, Paths, blocked, cast, dot, edge_on_glints, lobe_width,
                      warn_edge_on, weight)
 from .bounce_ends import Ends, entries, to_receiver, view_ends
 from .mesh import first_hits
 from .mirrors import find_mirrors, through_mirrors
+
+# compiled loops, imported (with numba) at their first use: a small run loads neither
+_bounce_kernels = deferred_module("meshladar.forward._bounce_kernels")
 
 __all__ = ["BRANCHES", "BOUNCE_SAMPLES", "Orders", "higher_orders", "check_bistatic", "walk",
            "single_bounce"]
@@ -125,8 +127,9 @@ def _sample(n, wi, width, rng):
     k = len(n)
     u1, u2, pick = rng.random(k), rng.random(k), rng.random(k)
     d, pdf = np.empty((k, 3)), np.empty(k)
-    sample_mixture(np.ascontiguousarray(n, np.float64), np.ascontiguousarray(wi, np.float64),
-                   np.ascontiguousarray(width, np.float64), u1, u2, pick, _WIDE_LOBE, d, pdf)
+    _bounce_kernels.sample_mixture(
+        np.ascontiguousarray(n, np.float64), np.ascontiguousarray(wi, np.float64),
+        np.ascontiguousarray(width, np.float64), u1, u2, pick, _WIDE_LOBE, d, pdf)
     return d, pdf
 
 

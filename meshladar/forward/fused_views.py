@@ -12,17 +12,22 @@ compiled loop in the same order (``tests/weighing/test_sparse_chunks.py``).
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
+from .._lazy import deferred_module
 from .._executors import thread_pool
 from ..precision import MIN_COS_FACET, RECEIVER_LIFT
-from ..raytrace.draws import plans_sequences
 from ..raytrace.grid import grid_plan, grid_plans
 from ..raytrace.views import range_offset
 from ..weighing.faces import check_edge_on_receiver
 from ..weighing.fused import DRAWN_RAYS_PER_FACE, cast_bin_grid, cast_bin_views
+
+if TYPE_CHECKING:            # the layers' check sees the edge; numba loads at first use
+    from ..raytrace import draws
+else:
+    draws = deferred_module("meshladar.raytrace.draws")
 
 __all__ = ["FlatBins", "fused_view", "chunk_views", "receiver_args"]
 
@@ -164,7 +169,7 @@ def chunk_views(job, scene, views, chunk, smooth=None, receiver=None):
     plans = grid_plans(p.geo, w, p.mode, p.spacing, p.z0_shifted)
     sequences = None
     if p.seed is not None and p.mode == "3d":
-        sequences = plans_sequences(plans, views, p.seed)
+        sequences = draws.plans_sequences(plans, views, p.seed)
     w_r = [None] * len(w) if receiver is None else receiver[0]
     starts = np.array([range_offset(p.geo.center, x, y) for x, y in zip(w, w_r)])
     fp = None if chunk.footprints is None else (

@@ -28,10 +28,11 @@ stages:
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, NamedTuple
+from typing import TYPE_CHECKING, Callable, NamedTuple
 
 import numpy as np
 
+from .._lazy import deferred_module
 from ..precision import MIN_COS_FACET
 from ..raytrace.backends import backend as get_backend
 from ..raytrace.embree import embree_scene
@@ -44,11 +45,15 @@ from ..brdf import material_table
 from ..weighing.faces import (face_bistatic_weights, footprint_args,
                               face_weights)
 from ..weighing.record import Weighing
-from ..weighing._kernels import bin_flat_hits, bin_smooth_hits
 from ..weighing.resolved import bin_resolved
 from .fused_views import (FlatBins, _bistatic_views, _flat_views, _smooth_views, fused_view,
                           receiver_args)
 from ..weighing.sensor_view import bin_sensor_view
+
+if TYPE_CHECKING:            # the layers' check sees the edge; numba loads at first use
+    import meshladar.weighing._kernels as _weigh_kernels
+else:
+    _weigh_kernels = deferred_module("meshladar.weighing._kernels")
 
 __all__ = ["MeshJob", "plan_job", "mesh_job", "sensor_offset", "QUICK_RAYS"]
 
@@ -230,7 +235,7 @@ def _smooth_stage(job, scene, view, chunk):
         return fused_view(job, scene, view, _bins(job, view, chunk, start), None,
                            (p.geo.corner, MIN_COS_FACET))
     o, res = _cast(job, scene, view)
-    back = bin_smooth_hits(
+    back = _weigh_kernels.bin_smooth_hits(
         res["primID"], res["tfar"], res["u"], res["v"], o, p.geo.plane_d,
         p.geo.face_normals, p.geo.corner, p.geo.material, chunk.params, view.w, start,
         wg.edges[0], p.area, wg.power, p.ignore_back, MIN_COS_FACET,
@@ -264,7 +269,7 @@ def _flat_stage(job, scene, view, chunk):
         grid = ray_grid(p.geo, view.w, p.mode, p.spacing, p.z0_shifted, view.rng)
         return len(grid.origins), scene.cast_bin(grid.origins, -view.w, bins)
     o, res = _cast(job, scene, view)
-    return len(o), bin_flat_hits(res["primID"], res["tfar"], o, *bins)
+    return len(o), _weigh_kernels.bin_flat_hits(res["primID"], res["tfar"], o, *bins)
 
 
 def _fused(plan):

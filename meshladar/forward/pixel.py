@@ -28,24 +28,26 @@ narrow glint lobe carry O(pixel) errors that the analytic model does not have.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
-
+import math
 import numpy as np
 
+from .._lazy import deferred_module
 from .._validate import check_real, check_size
 from ..brdf import projected_weight
 from ..errors import ParameterError
 from ..ladar import Ladar
 from ..scene import Scene
 from ..shapes import ellipse_normal
-from . import _siddon_kernels as _kernels
 from .siddon import PixelGrid
 from ..runs import array_digest
 from ..sensor import check_radiometry
 from ..sinogram import Sinogram
 from ..stream import in_worker, joined, run_chunks
 from ..precision import TINY
+
+# compiled loops, imported (with numba) at their first use: a small run loads neither
+_kernels = deferred_module("meshladar.forward._siddon_kernels")
 
 __all__ = ["simulate_pixel", "rasterize"]
 

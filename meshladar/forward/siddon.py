@@ -13,15 +13,17 @@ along u = (−sin φ, cos φ).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from functools import cached_property
-
+import math
 import numpy as np
 
+from .._lazy import deferred_module
 from .._validate import check_count, check_real, finite_array
 from ..errors import ParameterError
-from . import _siddon_kernels as _kernels
+
+# compiled loops, imported (with numba) at their first use: a small run loads neither
+_kernels = deferred_module("meshladar.forward._siddon_kernels")
 
 #: The farthest a parallel ray may start, in units of the largest of 1 and the positions'
 #: reach: the traversal walks each ray's whole line, so the start only has to be on it, but

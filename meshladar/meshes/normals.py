@@ -1,18 +1,20 @@
 """Normals of a mesh: the unit normal at each face corner, averaged over the faces around
 the corner's point within a crease angle (smooth where the surface is, sharp at creases).
 
-Its compiled loop is ``meshladar.meshes._normals_kernel`` (numba), imported here: this
-module is reached lazily through :mod:`meshladar.meshes`, so ``import meshladar`` stays light.
+Its compiled loop is ``meshladar.meshes._normals_kernel`` (numba), imported at its first
+call: a run on flat normals loads neither.
 """
 
 from __future__ import annotations
 
 import math
-
 import numpy as np
 
-from ._normals_kernel import accumulate_corner_normals
+from .._lazy import deferred_module
 from .part import MeshPart, _edges, _point_index
+
+# compiled loops, imported (with numba) at their first use: a small run loads neither
+_normals_kernel = deferred_module("meshladar.meshes._normals_kernel")
 
 __all__ = ["corner_normals", "curved_edge_angles", "curved_edge_rates", "CREASE_DEG"]
 
@@ -53,7 +55,8 @@ def corner_normals(part: MeshPart, *, crease_deg=CREASE_DEG):
     face_of = order // 3
     ptr = np.searchsorted(point_at, np.arange(n_points + 1))
     out = np.zeros((len(f), 3, 3))
-    accumulate_corner_normals(f, fn, area, ptr, face_of, math.cos(math.radians(crease_deg)), out)
+    _normals_kernel.accumulate_corner_normals(f, fn, area, ptr, face_of,
+                                              math.cos(math.radians(crease_deg)), out)
     return out
 
 

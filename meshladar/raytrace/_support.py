@@ -18,7 +18,7 @@ a point's value is (q·u)·D / (−q·w), q = p − o: its numerator and depth e
 r|u| and r|w| of the centre's, which bounds the ratio the same way (a cluster that
 reaches the pinhole's plane is always projected), and its cone's bound on the numerator
 over the same depths keeps out the same fringe. Bounds are widened by
-:data:`_BOUND_SLACK` of their terms for rounding, so the extents are exact.
+``_support_kernels.BOUND_SLACK`` of their terms for rounding, so the extents are exact.
 """
 
 from __future__ import annotations
@@ -26,9 +26,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from .._lazy import deferred_module
 from .grid import dot
+
+# compiled loops, imported (with numba) at their first use: a small run loads neither
+_kernels = deferred_module("meshladar.raytrace._support_kernels")
 
 __all__ = ["ClusteredPoints", "SIDE", "POINTS_A_CLUSTER", "points_extent", "axes_extents"]
 
@@ -126,7 +129,8 @@ class ClusteredPoints:
         u = np.asarray(u, dtype=np.float64)
         o = _NO_AXIS if origin is None else np.asarray(origin, dtype=np.float64)
         args = (self.points, self.starts, self.centres, self.radii, self.cones, o)
-        return -_top(*args, -u, w, scale), _top(*args, u, w, scale)
+        return (-_kernels.greatest(*args, -u, w, scale),
+                _kernels.greatest(*args, u, w, scale))
 
 
 #: No origin (q = p) / no depth (a plain projection).
@@ -143,10 +147,10 @@ COMPILED_FROM = 1 << 17
 def points_extent(points, u, origin=None, w=None, scale=1.0):
     """(least, greatest) q·u over every point, q = p − ``origin`` (default q = p), or with
     ``w`` their perspective (q·u)·``scale`` / (−q·w), each by one compiled pass over all
-    the points (:func:`_cluster_top`, as a cluster is projected): the numbers of numpy's
-    projection then its min and max (the same operations in the same order), without its
-    temporaries (a 2.6M-point mesh's two extents a view: 3 ms instead of 42); below
-    :data:`COMPILED_FROM` points, by numpy's projection itself.
+    the points (``_support_kernels.cluster_top``, as a cluster is projected): the numbers
+    of numpy's projection then its min and max (the same operations in the same order),
+    without its temporaries (a 2.6M-point mesh's two extents a view: 3 ms instead of 42);
+    below :data:`COMPILED_FROM` points, by numpy's projection itself.
 
     Parameters
     ----------
@@ -173,8 +177,8 @@ def points_extent(points, u, origin=None, w=None, scale=1.0):
         q = points if origin is None else points - o
         x = dot(q, u) * scale / -dot(q, b) if seen else dot(q, u)
         return float(x.min()), float(x.max())
-    return (-float(_cluster_top(points, 0, n, o, -u, b, float(scale), seen)),
-            float(_cluster_top(points, 0, n, o, u, b, float(scale), seen)))
+    return (-float(_kernels.cluster_top(points, 0, n, o, -u, b, float(scale), seen)),
+            float(_kernels.cluster_top(points, 0, n, o, u, b, float(scale), seen)))
 
 
 def axes_extents(points, axes, clusters=None):
@@ -204,116 +208,8 @@ def axes_extents(points, axes, clusters=None):
         clusters = (np.array([0, len(points)], np.int64), np.zeros((1, 3)), inf,
                     (np.zeros(3), np.zeros((1, 3)), -np.ones(1), np.ones(1), inf))
     out = np.empty((len(axes), 2))
-    _axes_extents(points, *clusters, axes, _NO_AXIS, out)
+    _kernels.axes_extents(points, *clusters, axes, _NO_AXIS, out)
     return out
-
-
-#: A bound is widened by this fraction of the magnitudes it is made of (its rounding is
-#: some 1e-15 of them).
-_BOUND_SLACK = 1e-9
-
-
-@njit(cache=True, nogil=True)
-def _cluster_top(points, lo, hi, o, a, b, scale, seen):   # pragma: no cover - compiled
-    """The greatest value over points lo..hi (:func:`_top`)."""
-    top = -np.inf
-    for i in range(lo, hi):
-        q0, q1, q2 = points[i, 0] - o[0], points[i, 1] - o[1], points[i, 2] - o[2]
-        x = q0 * a[0] + q1 * a[1] + q2 * a[2]
-        if seen:
-            x = x * scale / -(q0 * b[0] + q1 * b[1] + q2 * b[2])
-        top = max(top, x)
-    return top
-
-
-#: The cone bound's allowance for its rounding, a fraction of the cluster's reach: its
-#: cosines come through square roots of 1 − c² near c = 1, good to some 3e-8.
-_CONE_SLACK = 1e-6
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _cone_bound(cones, c, oa, a, la):                       # pragma: no cover - compiled
-    """A bound on (p − o)·a over cluster c's points from its cone (:func:`_cones`): with
-    p − O = ρ e, ρ ≤ R and e within α of the cone's axis d, e·a ≤ |a| cos(max(0, θ − α)),
-    θ the angle of a from d; so (p − o)·a ≤ (O − o)·a + R |a| max(0, cos(max(0, θ − α)))
-    (``oa`` = (O − o)·a). Tight where the points lie on a sphere about O, which the
-    clusters' spheres are not (their centres sink below the surface)."""
-    _, axes, cos_alpha, sin_alpha, reach = cones
-    ct = (axes[c, 0] * a[0] + axes[c, 1] * a[1] + axes[c, 2] * a[2]) / la
-    ct = min(1.0, max(-1.0, ct))
-    cb = 1.0
-    if ct < cos_alpha[c]:
-        cb = max(0.0, ct * cos_alpha[c] + math.sqrt(1.0 - ct * ct) * sin_alpha[c])
-    r = reach[c] * la
-    return oa + r * (cb + _CONE_SLACK) + _BOUND_SLACK * (abs(oa) + r)
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _seen_bound(hi, centres, radii, c, o, b, lb, scale):     # pragma: no cover - compiled
-    """A bound on (q·a)·scale / (−q·b) over cluster c's points from ``hi``, a bound on
-    their q·a: their depth −q·b lies within r|b| of its centre's, so the ratio is at most
-    ``hi`` · scale over the least depth (``hi`` ≥ 0) or the greatest (``hi`` < 0); inf
-    where the cluster reaches the pinhole's plane."""
-    q0, q1, q2 = centres[c, 0] - o[0], centres[c, 1] - o[1], centres[c, 2] - o[2]
-    nb = -(q0 * b[0] + q1 * b[1] + q2 * b[2])
-    rb = radii[c] * lb
-    near = nb - rb - _BOUND_SLACK * (abs(nb) + rb)
-    if near <= 0.0:
-        return np.inf
-    return hi * scale / (near if hi >= 0.0 else nb + rb)
-
-
-@njit(cache=True, nogil=True)
-def _top(points, starts, centres, radii, cones, o, a, b, scale):  # pragma: no cover
-    """The greatest of q·a (b = 0) or of (q·a)·scale / (−q·b) over the points, q = p − o
-    (module docstring): the cluster of the greatest bound projected first, then every
-    cluster whose bound reaches the top found, and whose cone's bound
-    (:func:`_cone_bound`; in perspective over the sphere's depths, :func:`_seen_bound`)
-    reaches it too."""
-    seen = b[0] != 0.0 or b[1] != 0.0 or b[2] != 0.0
-    la = math.sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
-    lb = math.sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2])
-    k = centres.shape[0]
-    bounds = np.empty(k)
-    first = 0
-    origin = cones[0]
-    oa = ((origin[0] - o[0]) * a[0] + (origin[1] - o[1]) * a[1]
-          + (origin[2] - o[2]) * a[2])
-    for c in range(k):
-        q0, q1, q2 = centres[c, 0] - o[0], centres[c, 1] - o[1], centres[c, 2] - o[2]
-        na = q0 * a[0] + q1 * a[1] + q2 * a[2]
-        ra = radii[c] * la
-        hi = na + ra + _BOUND_SLACK * (abs(na) + ra)
-        if seen:
-            hi = _seen_bound(hi, centres, radii, c, o, b, lb, scale)
-        bounds[c] = hi
-        if hi > bounds[first]:
-            first = c
-    top = _cluster_top(points, starts[first], starts[first + 1], o, a, b, scale, seen)
-    cone = la > 0.0
-    for c in range(k):
-        if c != first and bounds[c] >= top:
-            if cone:
-                hi = _cone_bound(cones, c, oa, a, la)
-                if seen:
-                    hi = _seen_bound(hi, centres, radii, c, o, b, lb, scale)
-                if hi < top:
-                    continue                   # its sphere reaches the top, its cone not
-            top = max(top, _cluster_top(points, starts[c], starts[c + 1], o, a, b, scale,
-                                        seen))
-    return top
-
-
-@njit(cache=True, nogil=True)
-def _axes_extents(points, starts, centres, radii, cones, axes, zero, out):  # pragma: no cover
-    """:func:`axes_extents`' loop: each axis's least value as −(greatest along −u), as
-    :meth:`ClusteredPoints.extent` finds it."""
-    neg = np.empty(3)
-    for j in range(axes.shape[0]):
-        for k in range(3):
-            neg[k] = -axes[j, k]
-        out[j, 0] = -_top(points, starts, centres, radii, cones, zero, neg, zero, 1.0)
-        out[j, 1] = _top(points, starts, centres, radii, cones, zero, axes[j], zero, 1.0)
 
 
 def _cones(points, starts):

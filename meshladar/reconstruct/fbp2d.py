@@ -22,10 +22,9 @@ square is centred on the origin (the axis the views turn about) with half-width 
 reach max(|r_0|, |r_n|) (:func:`bins_reach`): every point whose range falls in the bins in
 some view lies in it, so nothing the data holds is cropped, whatever the scene's units.
 
-The paper's glint preprocessing (:func:`log_radiance`, :func:`clip_radiance`,
-:func:`noise_floor`) lives in :mod:`meshladar.reconstruct.radiance`, the filters
-(:func:`fourier_filter`, :data:`FILTERS`) in :mod:`meshladar.reconstruct.filters`; both are
-importable from here too.
+The paper's glint preprocessing (:func:`log_radiance`, :func:`clip_radiance`, :func:`noise_floor`:
+:mod:`meshladar.reconstruct.radiance`) and the filters (:func:`fourier_filter`, :data:`FILTERS`:
+:mod:`meshladar.reconstruct.filters`) are importable from here too.
 """
 
 from __future__ import annotations
@@ -36,6 +35,7 @@ import warnings
 
 import numpy as np
 
+from .._lazy import deferred_module
 from .._validate import (check_choice, check_count, check_real, check_sinogram, check_size,
                          finite_array)
 from ..errors import MeshladarWarning, ParameterError, user_stacklevel
@@ -43,13 +43,15 @@ from ..images import Image, pixel_centres
 from ..precision import ANGLE_TOL_DEG, COUNT_SLACK
 from ..precision import UNIFORM_RTOL as _UNIFORM_RTOL
 from ..sinogram import Sinogram
-from ._folded import backproject_views
 from .filters import FILTERS, _filtered, fourier_filter
 from .radiance import LOG_FLOOR, PAPER_CLIP, clip_radiance, log_radiance, noise_floor
 
-__all__ = ["Image", "fbp", "bins_reach", "default_extent", "fourier_filter", "log_radiance", "clip_radiance",
-           "resample_uniform", "noise_floor", "quiet_fbp", "FILTERS", "INTERPOLATIONS",
-           "LOG_FLOOR", "PAPER_CLIP"]
+# compiled loops, imported (with numba) at their first use: a small run loads neither
+_folded = deferred_module("meshladar.reconstruct._folded")
+
+__all__ = ["Image", "fbp", "bins_reach", "default_extent", "fourier_filter", "log_radiance",
+           "clip_radiance", "resample_uniform", "noise_floor", "quiet_fbp", "FILTERS",
+           "INTERPOLATIONS", "LOG_FLOOR", "PAPER_CLIP"]
 
 #: Interpolation of filtered projections at each pixel's range.
 INTERPOLATIONS = ("linear", "nearest")
@@ -59,16 +61,13 @@ _GAP_FACTOR = 3.0
 #: FBP samples the angles fully with about π/2 views per bin across the target's returns
 #: (π·bins_across/views ≲ 1). Measured on the disk phantom, streaks away from the disk as a
 #: fraction of the image's peak: 0.2 % at a ratio of 0.3, 1.4–2.8 % at 0.75, 7 % at 3 (the
-#: paper's figures: 350 bins across, 360 views), 18 % at 6. Beyond this ratio (streaks of a
-#: quarter of the peak and more) fbp warns.
+#: paper's 350 bins across, 360 views), 18 % at 6. Beyond this ratio (streaks ≥ ¼ peak) it warns.
 _UNDERSAMPLED_RATIO = 8.0
 
 
 def resample_uniform(sino: Sinogram, n_bins=None) -> Sinogram:
     """Resample a sinogram with non-uniform bins onto uniform ones, conserving every view's
     integral over each new bin (linear interpolation of the cumulative integral).
-
-    ``n_bins`` defaults to the span divided by the narrowest bin.
 
     Parameters
     ----------
@@ -153,9 +152,9 @@ def _view_weights(angles_deg):
 def bins_across(sinogram) -> int:
     """The most bins any view's returns span, first to last non-zero bin (0: no returns)."""
     v = np.abs(sinogram.values) > 0
-    if not v.any():
-        return 0
     rows = v.any(axis=1)
+    if not rows.any():
+        return 0
     first = np.argmax(v[rows], axis=1)
     last = v.shape[1] - 1 - np.argmax(v[rows][:, ::-1], axis=1)
     return int(np.max(last - first + 1))
@@ -180,9 +179,8 @@ def default_extent(sino, extent):
     Returns
     -------
     float or object
-        ``extent`` itself (returned as given, not checked: the reconstructions check it)
-        when not None, else ``bins_reach(sino)``, the half-width max(|r_0|, |r_n|) in
-        scene units.
+        ``extent`` itself when not None (as given, not checked: the reconstructions check
+        it), else ``bins_reach(sino)``, the half-width max(|r_0|, |r_n|), scene units.
 
     Raises
     ------
@@ -358,8 +356,9 @@ def _backprojected(sinogram, size, extent, c, filter, interpolation):
     xs = c[0] + pixel_centres(size, extent)
     ys = c[1] + pixel_centres(size, extent)
     out = np.zeros((size, size))
-    backproject_views(q, sinogram.angles_deg, weights, float(sinogram.bin_centers[0]),
-                      1.0 / dr, xs, ys, interpolation == "nearest", out)
+    _folded.backproject_views(q, sinogram.angles_deg, weights,
+                              float(sinogram.bin_centers[0]), 1.0 / dr, xs, ys,
+                              interpolation == "nearest", out)
     with np.errstate(over="ignore"):
         out *= scale / dr
         out /= dr

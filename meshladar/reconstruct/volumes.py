@@ -31,6 +31,7 @@ import warnings
 
 import numpy as np
 
+from .._lazy import deferred_module
 from .._validate import (check_count, check_real, check_sinogram, check_size, check_weights,
                          finite_array)
 from ..errors import MeshladarWarning, ParameterError, user_stacklevel
@@ -38,8 +39,10 @@ from ..images import Volume
 from ..meshes import fibonacci_sphere
 from ..returns import Returns
 from ..sinogram import Sinogram
-from ._kernels import backproject3d
 from .fbp2d import EXTENT_RANGE, bins_across, bins_reach, fbp
+
+# compiled loops, imported (with numba) at their first use: a small run loads neither
+_kernels = deferred_module("meshladar.reconstruct._kernels")
 
 __all__ = ["Volume", "fbp3d", "fbp_slices", "sphere_weights", "coverage_gap_deg",
            "views_needed", "MAX_GAP_DEG", "UNDERSAMPLED_FACTOR", "radon3d", "fbp_stack"]
@@ -271,9 +274,9 @@ def fbp3d(sino, *, size=128, extent=None, center=(0.0, 0.0, 0.0), weights=None,
     q = _second_differences(sino, dr, smooth)
     out = np.zeros((n, n, n))
     w = sino.view_vectors
-    backproject3d(q, np.ascontiguousarray(w[:, 0]), np.ascontiguousarray(w[:, 1]),
-                  np.ascontiguousarray(w[:, 2]), wts, float(sino.bin_centers[0]), 1.0 / dr,
-                  x, y, z, out)
+    _kernels.backproject3d(q, np.ascontiguousarray(w[:, 0]), np.ascontiguousarray(w[:, 1]),
+                           np.ascontiguousarray(w[:, 2]), wts, float(sino.bin_centers[0]),
+                           1.0 / dr, x, y, z, out)
     return Volume(out, x=x, y=y, z=z, info=_fbp3d_info(sino, smooth, grid))
 
 

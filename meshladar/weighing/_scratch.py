@@ -14,11 +14,17 @@ ones.
 from __future__ import annotations
 
 import threading
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .._lazy import deferred_module
 from ..raytrace.embree4_ctypes import new_workspace
-from ..raytrace.embree4_kernels import tile_shape
+
+if TYPE_CHECKING:            # the layers' check sees the edge; numba loads at first use
+    from ..raytrace import embree4_kernels
+else:
+    embree4_kernels = deferred_module("meshladar.raytrace.embree4_kernels")
 
 __all__ = ["scratch", "depth_buffer"]
 
@@ -73,7 +79,7 @@ def scratch(kind, w, columns):
     held = getattr(_HELD, "buffers", None)
     if held is None:
         held = _HELD.buffers = {}
-    size = tile_shape.py_func(w)[0] * columns     # (its Python: nothing to compile)
+    size = embree4_kernels.tile_shape.py_func(w)[0] * columns   # (its Python: no compile)
     have = held.get((kind, w))
     if have is None or have[0] < size:
         size = max(size, 1) if have is None else max(size, have[0] + have[0] // 4)

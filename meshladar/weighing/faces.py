@@ -10,11 +10,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._lazy import deferred_module
 from ..raytrace.grid import dot
 from ..raytrace.grid import frame
 from ..raytrace.views import bistatic_angles
-from ._kernels import edge_on_receiver, footprint_rows
 from .hit_weights import GRAZING_RECEIVER_COS, warn_edge_on_receiver, weights
+
+# compiled loops, imported (with numba) at their first use: a small run loads neither
+_kernels = deferred_module("meshladar.weighing._kernels")
 
 __all__ = ["footprint_args", "face_footprints", "face_weights", "face_bistatic_weights",
            "check_edge_on_receiver"]
@@ -52,7 +55,7 @@ def footprint_args(geo, w, mode, spacing, rows, tag):
                                                        for a in (w, u, v)),
           float(spacing), mode == "3d", int(tag))
     if tag < 0:
-        footprint_rows(fp, geo.face_normals)
+        _kernels.footprint_rows(fp, geo.face_normals)
     return fp
 
 
@@ -146,8 +149,9 @@ def check_edge_on_receiver(geo, w, w_r, ignore_back):
         When 0 ≤ cos θr < :data:`meshladar.weighing.hit_weights.GRAZING_RECEIVER_COS` on a
         face toward the ladar.
     """
-    if edge_on_receiver(geo.face_normals, np.asarray(w, np.float64),
-                        np.asarray(w_r, np.float64), bool(ignore_back), GRAZING_RECEIVER_COS):
+    if _kernels.edge_on_receiver(geo.face_normals, np.asarray(w, np.float64),
+                                 np.asarray(w_r, np.float64), bool(ignore_back),
+                                 GRAZING_RECEIVER_COS):
         warn_edge_on_receiver()
 
 

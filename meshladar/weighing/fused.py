@@ -5,15 +5,23 @@ bistatic views, so that a run compiles or loads only its own), with the weights 
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
+from .._lazy import deferred_module
 from ..raytrace.embree4_ctypes import query_flags
-from ..raytrace.embree4_kernels import tile_shape
 from ..raytrace.grid import dot
-from ._fused_kernels import (cast_bin_bistatic, cast_bin_bistatic_views, cast_bin_flat,
-                             cast_bin_flat_views, cast_bin_smooth, cast_bin_smooth_views)
-from ._raster_kernels import raster_bin_flat, raster_bin_smooth
 from ._scratch import depth_buffer, scratch
+
+# compiled loops, imported (with numba) at their first use: a small run loads neither
+_fused_kernels = deferred_module("meshladar.weighing._fused_kernels")
+_raster_kernels = deferred_module("meshladar.weighing._raster_kernels")
+
+if TYPE_CHECKING:            # the layers' check sees the edge; numba loads at first use
+    from ..raytrace import embree4_kernels
+else:
+    embree4_kernels = deferred_module("meshladar.raytrace.embree4_kernels")
 
 __all__ = ["cast_bin_grid", "cast_bin_views", "queries", "draw_bin_grid", "DRAWN_RAYS",
            "DRAWN_RAYS_PER_FACE"]
@@ -127,19 +135,19 @@ def cast_bin_views(emb, plans, sequences, spacing, bins, coherent=False, smooth=
     if receiver is not None:
         wr = np.ascontiguousarray(receiver[0], dtype=np.float64).reshape(-1, 3)
         coating = _coating(b, w, wr, receiver[2])
-        cast_bin_bistatic_views(*head, b.plane_d, b.face_normals, w, start, b.edges,
-                                b.ignore_back, b.out, b.weight, lib.occluded[lib.width], wr,
-                                float(receiver[1]), b.stamp, coating, receiver[3], counts,
-                                scratch("bistatic", lib.width, columns))
+        _fused_kernels.cast_bin_bistatic_views(
+            *head, b.plane_d, b.face_normals, w, start, b.edges, b.ignore_back, b.out,
+            b.weight, lib.occluded[lib.width], wr, float(receiver[1]), b.stamp, coating,
+            receiver[3], counts, scratch("bistatic", lib.width, columns))
         return counts
     head += tuple(b[:4]) + (w, start) + tuple(b[6:11])
     fp = None if b.footprint is None else b.footprint[:4] + (plans.u, plans.v) + b.footprint[4:]
     if smooth is not None:
-        cast_bin_smooth_views(*head, fp, smooth[0], float(smooth[1]), counts,
-                              scratch("smooth", lib.width, columns))
+        _fused_kernels.cast_bin_smooth_views(*head, fp, smooth[0], float(smooth[1]), counts,
+                                             scratch("smooth", lib.width, columns))
     else:
-        cast_bin_flat_views(*head, b.stamp, b.weight, fp, counts,
-                            scratch("flat", lib.width, columns))
+        _fused_kernels.cast_bin_flat_views(*head, b.stamp, b.weight, fp, counts,
+                                           scratch("flat", lib.width, columns))
     return counts
 
 
@@ -148,8 +156,7 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
     """Cast, weigh and bin one view of the packet scene ``emb``
     (:class:`meshladar.raytrace.embree.EmbreeScene` whose backend is fused): ``plan`` is
     :func:`meshladar.raytrace.grid.grid_plan`'s :class:`~meshladar.raytrace.grid.GridPlan`,
-    ``bins`` the weigh-and-bin arguments
-    (:class:`~meshladar.forward.fused_views.FlatBins`).
+    ``bins`` the weigh-and-bin arguments (:class:`~meshladar.forward.fused_views.FlatBins`).
 
     Monostatic or bistatic with flat normals, or monostatic with smooth ones (``smooth``),
     binned at a point (``bins.footprint`` None) or over each face's footprint, in packets
@@ -213,16 +220,17 @@ def cast_bin_grid(emb, plan, direction, spacing, bins, receiver=None, smooth=Non
     if receiver is not None:
         wr = np.asarray(receiver[0], np.float64)
         coating = _coating(b, w, wr, receiver[2])
-        return cast_bin_bistatic(*head, b.plane_d, b.face_normals, b.w, b.start, b.edges,
-                                 b.ignore_back, b.out, b.weight, lib.occluded[lib.width],
-                                 wr, float(receiver[1]), b.stamp, b.tag, coating, receiver[3],
-                                 scratch("bistatic", lib.width, t.size))
+        return _fused_kernels.cast_bin_bistatic(
+            *head, b.plane_d, b.face_normals, b.w, b.start, b.edges, b.ignore_back, b.out,
+            b.weight, lib.occluded[lib.width], wr, float(receiver[1]), b.stamp, b.tag,
+            coating, receiver[3], scratch("bistatic", lib.width, t.size))
     if emb.raster is not None and closed is not None:
         return draw_bin_grid(emb, grid, w, bins, lib.width, closed, smooth)
     if smooth is not None:
-        return cast_bin_smooth(*head, *b[:11], b.footprint, smooth[0], float(smooth[1]),
-                               scratch("smooth", lib.width, t.size))
-    return cast_bin_flat(*head, *bins, scratch("flat", lib.width, t.size))
+        return _fused_kernels.cast_bin_smooth(*head, *b[:11], b.footprint, smooth[0],
+                                              float(smooth[1]),
+                                              scratch("smooth", lib.width, t.size))
+    return _fused_kernels.cast_bin_flat(*head, *bins, scratch("flat", lib.width, t.size))
 
 
 def draw_bin_grid(emb, grid, w, bins, width, closed, smooth=None):
@@ -261,7 +269,7 @@ def draw_bin_grid(emb, grid, w, bins, width, closed, smooth=None):
     for k, axis in enumerate((grid[4], grid[5], w)):      # are the same in every face
         proj[:, k] = dot(vertices * emb.scale, np.asarray(axis, np.float64))
     normals_w = dot(bins.face_normals, np.asarray(w, np.float64))
-    rows = tile_shape.py_func(width)[0]
+    rows = embree4_kernels.tile_shape.py_func(width)[0]
     band = scratch("flat" if smooth is None else "smooth", width, grid[1].size)[1][3]
     s, t, (xi, ku, kv, eta) = grid[0], grid[1], grid[2]
     step = max(rows, DRAWN_RAYS // max(t.size, 1) // rows * rows)
@@ -271,7 +279,8 @@ def draw_bin_grid(emb, grid, w, bins, width, closed, smooth=None):
                 if xi.size else grid[2]) + grid[3:]
         head = (proj, faces, normals_w, closed, part, depth_buffer(part[0].size * t.size),
                 rows)
-        back += (raster_bin_flat(*head, *bins[:14], bins.footprint, band) if smooth is None
-                 else raster_bin_smooth(*head, *bins[:11], bins.footprint, smooth[0],
-                                        float(smooth[1]), band))[0]
+        back += (_raster_kernels.raster_bin_flat(*head, *bins[:14], bins.footprint, band)
+                 if smooth is None else
+                 _raster_kernels.raster_bin_smooth(*head, *bins[:11], bins.footprint,
+                                                   smooth[0], float(smooth[1]), band))[0]
     return back, s.size * t.size

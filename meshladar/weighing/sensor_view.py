@@ -7,16 +7,19 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._lazy import deferred_module
 from ..precision import MIN_COS_FACET, REFINE_MIN_COS
 from ..raytrace.embree4_ctypes import query_flags
 from ..raytrace.grid import stratified_sequences
 from ..raytrace.perspective import plane_axes, sensor_cast, start_distance
 from ..sensor import FloodBeam
-from ._fused_kernels import cast_bin_sensor
 from ._scratch import scratch
-from ._sensor_kernels import bin_sensor_hits
 from .fused import queries
 from ..brdf import material_table
+
+# compiled loops, imported (with numba) at their first use: a small run loads neither
+_fused_kernels = deferred_module("meshladar.weighing._fused_kernels")
+_sensor_kernels = deferred_module("meshladar.weighing._sensor_kernels")
 
 __all__ = ["bin_sensor_view"]
 
@@ -79,7 +82,7 @@ def bin_sensor_view(plan, weighing, scene, w, rng, out, params=None):
     o, res = cast.origins, cast.res
     smooth = geo.normals == "smooth"
     empty = np.zeros(0, np.float32)
-    back = bin_sensor_hits(
+    back = _sensor_kernels.bin_sensor_hits(
         res["primID"], cast.t0 + res["tfar"].astype(np.float64), cast.dirs, cast.length,
         res["u"] if smooth else empty, res["v"] if smooth else empty,
         float(sensor.standoff), sensor_pos, *_binning(plan, weighing, aim, u, v, sensor_pos,
@@ -101,7 +104,7 @@ def _fused_view(plan, weighing, scene, w, rng, out, aim, params):
     pk = scene.scene.scene
     lib = pk.lib
     flags = query_flags(plan.coherent)
-    back, n = cast_bin_sensor(
+    back, n = _fused_kernels.cast_bin_sensor(
         queries(lib, plan.coherent), pk.live(), lib.width, flags, plane,
         (D, sensor_pos, start_distance(geo, sensor_pos, spacing)), np.float32(scene.inverse),
         float(scene.scale), geo.normals == "smooth",

@@ -162,7 +162,8 @@ def test_a_clusters_cone_bounds_every_point_of_it():
     import trimesh
 
     from meshladar.meshes import fibonacci_sphere
-    from meshladar.raytrace._support import ClusteredPoints, _cone_bound
+    from meshladar.raytrace._support import ClusteredPoints
+    from meshladar.raytrace._support_kernels import cone_bound
 
     rng = np.random.default_rng(8)
     sets = [trimesh.creation.icosphere(4).vertices * 3.0 + [40.0, 0.0, -2.0],
@@ -179,7 +180,7 @@ def test_a_clusters_cone_bounds_every_point_of_it():
                 la = float(np.linalg.norm(a))
                 for k in range(len(c.radii)):
                     q = c.points[c.starts[k]:c.starts[k + 1]] - o
-                    assert _cone_bound.py_func(c.cones, k, oa, a, la) >= (q @ a).max()
+                    assert cone_bound.py_func(c.cones, k, oa, a, la) >= (q @ a).max()
 
 
 def _python_extent(points, u, origin=(0.0, 0.0, 0.0), w=None, scale=1.0):
