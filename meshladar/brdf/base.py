@@ -379,8 +379,13 @@ def check_brdf(name, value):
         When its class does not define :meth:`BRDF.projected`.
     """
     if not isinstance(value, BRDF):
+        hint = ""
+        if isinstance(value, str):          # a coating's name, as the command line takes
+            hint = (f" {value!r}: a packaged coating by name is "
+                    f"meshladar.materials.PAPER[{value!r}], a table's "
+                    "meshladar.materials.load_table(path)[name]")
         raise ParameterError(f"{name} must be a meshladar.brdf.BRDF ({', '.join(MODELS)} "
-                             f"or a subclass); got {type(value).__name__}")
+                             f"or a subclass); got {type(value).__name__}{hint}")
     if type(value).projected is BRDF.projected:
         raise ModelError(f"{name}: {type(value).__name__} must define projected(cos_theta, "
                          "sin_theta), the monostatic F·cos θ (meshladar.brdf.BRDF)")
