@@ -161,7 +161,8 @@ def _reconstruct(sub, commands):
     rec.add_argument("result", help="a result file written by meshladar simulate")
     rec.add_argument("-o", "--output", required=True,
                      help="figure file: .png, .pdf, .svg, .jpg or .tif (the image's values go "
-                          "to OUTPUT.image.npz beside it)")
+                          "to OUTPUT.image.npz beside it); or .npz: the values alone, no "
+                          "figure (no matplotlib needed)")
     rec.add_argument("--size", type=positive_int, default=None,
                      help="image size in pixels, or voxels per side for 3-D views (default: "
                           "512, 128 in 3-D)")

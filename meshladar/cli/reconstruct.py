@@ -14,21 +14,27 @@ from ..reconstruct import clip_radiance, fbp, log_radiance
 from ..reconstruct.volumes import fbp3d
 from .checks import check_not_input, check_output
 
-__all__ = ["cmd_reconstruct", "cmd_receive", "IMAGE_SUFFIXES"]
+__all__ = ["cmd_reconstruct", "cmd_receive", "IMAGE_SUFFIXES", "VALUES_SUFFIX"]
 
 #: Image formats reconstruct writes (matplotlib's own writers; JPEG and TIFF through Pillow,
 #: a dependency of matplotlib).
 IMAGE_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg", ".tif", ".tiff")
+#: reconstruct's -o with this extension writes the values alone, no figure (no matplotlib).
+VALUES_SUFFIX = ".npz"
 
 
 def _save_figure(fig, output):
+    """``fig`` to ``output`` (by its extension); nothing for a values-only ``.npz``."""
+    if output.lower().endswith(VALUES_SUFFIX):
+        return
     fmt = os.path.splitext(output)[1].lower().lstrip(".")
-    io.write_atomic(output, lambda fh: fig.savefig(fh, format=fmt, dpi=150))
+    io.write_atomic(output, lambda fh: fig().savefig(fh, format=fmt, dpi=150))
 
 
 def cmd_reconstruct(args) -> int:
     """Reconstruct a saved sinogram by FBP: a figure (PNG, PDF, SVG, JPEG or TIFF, chosen by
-    the extension of -o) and the image's values in OUTPUT.image.npz.
+    the extension of -o) and the image's values in OUTPUT.image.npz; or, where -o ends in
+    ``.npz``, the values alone in it (no figure: matplotlib is not needed).
 
     A sinogram whose views are not all about z (``--view-vectors``) is inverted in 3-D
     instead (:func:`meshladar.reconstruct.volumes.fbp3d`): the figure shows three slices
@@ -39,7 +45,8 @@ def cmd_reconstruct(args) -> int:
     ----------
     args : argparse.Namespace
         ``result``: the ``.npz`` written by ``meshladar simulate``; ``output``: the figure's
-        path (its extension one of :data:`IMAGE_SUFFIXES`); ``size``: pixels per side
+        path (its extension one of :data:`IMAGE_SUFFIXES`), or the values' (``.npz``,
+        :data:`VALUES_SUFFIX`); ``size``: pixels per side
         (default 512), or voxels per side in 3-D (default 128); ``extent``: the half-width
         of the image or cube in scene units (default None: the bins' reach);
         ``filter``: the FBP filter (default ``"ramp"``; 2-D only); ``smooth``: Gaussian
@@ -55,21 +62,24 @@ def cmd_reconstruct(args) -> int:
     Raises
     ------
     ParameterError
-        Before the work: when ``output`` has an extension not in :data:`IMAGE_SUFFIXES`,
-        cannot be written where it is, or it or the data file beside it
+        Before the work: when ``output`` has an extension not in :data:`IMAGE_SUFFIXES`
+        or ``.npz``, cannot be written where it is, or it or the data file beside it
         (``OUTPUT.image.npz``, or ``OUTPUT.volume.npz`` in 3-D) would overwrite ``result``
         or is a folder; when ``smooth`` is given for views about z, or ``filter`` for 3-D
         views; and the API's own refusals (an unreadable result, an image too large).
     ImportError
-        When matplotlib is not installed (checked before the work).
+        When a figure is asked for and matplotlib is not installed (before the work).
     """
-    check_output(args.output, IMAGE_SUFFIXES, [args.result])
-    plotting.require("matplotlib")              # before the work, not after it
+    check_output(args.output, IMAGE_SUFFIXES + (VALUES_SUFFIX,), [args.result])
+    values_only = args.output.lower().endswith(VALUES_SUFFIX)
+    if not values_only:
+        plotting.require("matplotlib")          # before the work, not after it
     sino, meta = io.load_sinogram(args.result)
-    data = os.path.splitext(args.output)[0] + (".image.npz" if sino.planar else
-                                               ".volume.npz")
-    check_not_input(args.output, data, args.result,
-                    "image data" if sino.planar else "volume")
+    data = args.output if values_only else (os.path.splitext(args.output)[0]
+                                            + (".image.npz" if sino.planar else ".volume.npz"))
+    if not values_only:
+        check_not_input(args.output, data, args.result,
+                        "image data" if sino.planar else "volume")
     if args.log:
         sino = log_radiance(sino)
     if args.clip is not None:
@@ -85,17 +95,21 @@ def cmd_reconstruct(args) -> int:
     extent = image.extent
     # the quick look's symmetric scale, log input labelled as such, and a centre slice
     prep = sino.info.get("preprocess")
-    fig = plotting.viz("quick").image(image, title=f"FBP of {os.path.basename(args.result)}"
-                                         + (f", {prep}" if prep else "")
-                                         + f" ({args.filter or 'ramp'} filter)")
-    _save_figure(fig, args.output)
+    _save_figure(lambda: plotting.viz("quick").image(
+        image, title=f"FBP of {os.path.basename(args.result)}" + (f", {prep}" if prep else "")
+        + f" ({args.filter or 'ramp'} filter)"), args.output)
     io.save_result(data, {"image": image.values},
                         {"kind": "image", "extent": extent, "info": image.info,
                          "source": os.path.basename(args.result)})
     if not args.quiet:
         size = args.size or 512
-        print(f"wrote {args.output} and {data} ({size}x{size}, extent {extent:g})")
+        print(f"wrote {_written(args.output, data)} ({size}x{size}, extent {extent:g})")
     return 0
+
+
+def _written(output, data):
+    """The files a reconstruction wrote, for its summary line."""
+    return data if output == data else f"{output} and {data}"
 
 
 def _reconstruct_3d(args, sino, extent, data) -> int:
@@ -108,15 +122,14 @@ def _reconstruct_3d(args, sino, extent, data) -> int:
     size = args.size or 128
     vol = fbp3d(sino, size=size, extent=extent, smooth=args.smooth or 0.0)
     extent = vol.info["extent"]
-    fig = plotting.viz("quick").volume(
+    _save_figure(lambda: plotting.viz("quick").volume(
         vol, title=f"3-D Radon inversion of {os.path.basename(args.result)} "
-                   f"({sino.n_views} views, {size}^3)")
-    _save_figure(fig, args.output)
+                   f"({sino.n_views} views, {size}^3)"), args.output)
     io.save_result(data, {"values": vol.values, "x": vol.x, "y": vol.y, "z": vol.z},
                         {"kind": "volume", "info": vol.info,
                          "source": os.path.basename(args.result)})
     if not args.quiet:
-        print(f"wrote {args.output} and {data} ({size}^3, extent {extent:g}, "
+        print(f"wrote {_written(args.output, data)} ({size}^3, extent {extent:g}, "
               f"{sino.n_views} views)")
     return 0
 

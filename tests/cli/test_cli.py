@@ -191,6 +191,38 @@ def test_a_plain_install_is_told_before_the_work(argv, work, tmp_path, capsys, m
     assert not any(tmp_path.iterdir())                            # nothing half-written
 
 
+def test_reconstruct_to_npz_writes_the_values_alone_without_matplotlib(tmp_path, capsys,
+                                                                       monkeypatch):
+    # -o X.npz: the image's (or volume's) values alone in X.npz, no figure, so a plain
+    # install reconstructs; an -o naming the input is still refused before the work
+    from meshladar.meshes import fibonacci_sphere
+    from meshladar.reconstruct.volumes import fbp3d
+
+    monkeypatch.setitem(sys.modules, "matplotlib", None)          # import fails
+    scene = ml.Scene([ml.Disk((0.2, -0.1), 0.5, ml.materials.lambertian(0.5))])
+    planar = ml.simulate(scene, ml.Ladar.covering(scene, n_bins=64))
+    W = fibonacci_sphere(60)
+    solid = ml.Sinogram(np.ones((60, 16)), angles_deg=np.degrees(np.arctan2(W[:, 1], W[:, 0])),
+                        bin_edges=np.linspace(-1.0, 1.0, 17), view_vectors=W)
+    for name, sino, key, api in (("disk", planar, "image", lambda s: ml.fbp(s, size=32)),
+                                 ("ball", solid, "values", lambda s: fbp3d(s, size=12))):
+        path, out = tmp_path / f"{name}.npz", tmp_path / f"{name}-values.npz"
+        results.save_sinogram(path, sino)
+        assert main(["reconstruct", str(path), "-o", str(out), "--size",
+                     "32" if key == "image" else "12"]) == 0
+        assert capsys.readouterr().out.startswith(f"wrote {out} (")
+        arrays, meta = results.load_result(out)
+        np.testing.assert_allclose(arrays[key], api(sino).values, rtol=0,
+                                   atol=1e-12 * np.abs(api(sino).values).max())
+        assert meta["kind"] == ("image" if key == "image" else "volume")
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "ball-values.npz", "ball.npz", "disk-values.npz", "disk.npz"]     # no figure
+    before = (tmp_path / "disk.npz").read_bytes()
+    assert main(["reconstruct", str(tmp_path / "disk.npz"), "-o",
+                 str(tmp_path / "disk.npz")]) == 2
+    assert (tmp_path / "disk.npz").read_bytes() == before
+
+
 def test_model_errors_name_the_flags(tmp_path, capsys):
     # the API's own words (model='mesh') are Python; the command line names its flags
     box = tmp_path / "box.stl"
