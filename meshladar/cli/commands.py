@@ -18,6 +18,7 @@ from .._validate import check_size
 from ..errors import ParameterError
 from ..io import write_text_atomic
 from ..scan.files import read_hdf5, read_las
+from ..scan.npz import read_npz
 from ..scan.formats import points_format
 from .checks import check_outdir, check_output
 from .simulate import load_scene
@@ -264,9 +265,9 @@ def check_view_options(args):
 
 
 def _read_points(path):
-    """A point cloud file (LAS/LAZ, or HDF5 by extension), its errors naming --points."""
+    """A point cloud file (LAS/LAZ, HDF5 or .npz by extension), its errors naming --points."""
     try:
-        return (read_hdf5 if points_format(path) == "HDF5" else read_las)(path)
+        return {"HDF5": read_hdf5, "NPZ": read_npz}.get(points_format(path), read_las)(path)
     except ParameterError as exc:
         raise ParameterError(f"--points: {exc}") from None
 

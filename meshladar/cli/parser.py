@@ -244,7 +244,7 @@ def _view(sub, commands):
     vw.add_argument("--size", type=window_size, default=(900, 700), metavar="WxH",
                     help="window or screenshot size in pixels (default: 900x700)")
     vw.add_argument("--points", default=None, metavar="FILE",
-                    help="a point cloud written by meshladar scan (.las, .laz, .h5), drawn "
+                    help="a point cloud written by meshladar scan (.las, .laz, .h5, .npz), drawn "
                          "over the scene (default: the scene coloured by its return)")
     vw.add_argument("--color-by", default=None,
                     choices=("intensity", "range", "return_number", "range_error", "doppler",
@@ -337,7 +337,7 @@ _SCAN_FLAGS = (
 
 
 def _scan(sub, commands):
-    sc = _sub(sub, "scan", commands, "a scanner's point cloud of a scene (LAS, HDF5)",
+    sc = _sub(sub, "scan", commands, "a scanner's point cloud of a scene (LAS, HDF5, NPZ)",
               _SCAN_EPILOG)
     _scene_args(sc)
     sc.add_argument("--pattern", required=True, metavar="'KIND key=value ...'",
@@ -350,7 +350,8 @@ def _scan(sub, commands):
                          "a trajectory file (time,x,y,z,roll,pitch,yaw), optionally "
                          "followed by interpolation=, time_offset= (the file's time at "
                          "the pattern's t = 0), mount_offset=, boresight_deg=")
-    sc.add_argument("-o", "--output", required=True, help="points file (.las, .laz, .h5)")
+    sc.add_argument("-o", "--output", required=True,
+                    help="points file (.las, .laz, .h5; .npz needs numpy alone)")
     sc.add_argument("--waveforms", default=None, metavar="FILE.h5",
                     help="also write every pulse's waveform to HDF5 (default: not written)")
     sc.add_argument("--profile", choices=("gaussian", "tophat"), default=None,

@@ -24,7 +24,7 @@ import numpy as np
 from .. import scan as scanning          # its modules load when a scan runs
 from ..errors import ParameterError
 from ..noise import Noise
-from ..scan.formats import FORMATS, check_writable, points_format
+from ..scan.formats import FORMATS, check_writable
 from ..waveforms import GaussianPulse
 from .checks import check_output
 from .simulate import load_scene
@@ -261,8 +261,8 @@ def _check_outputs(args):
 
 
 def cmd_scan(args) -> int:
-    """Scan a scene with a pattern from a platform and write its point cloud (LAS 1.4, LAZ
-    or HDF5 by -o's extension), each return with its ground truth (part, face, true range
+    """Scan a scene with a pattern from a platform and write its point cloud (LAS 1.4, LAZ,
+    HDF5 or numpy's .npz by -o's extension), each return with its ground truth (part, face, true range
     and point); --waveforms also streams every pulse's record to HDF5 as the scan runs.
 
     Parameters
@@ -292,8 +292,8 @@ def cmd_scan(args) -> int:
         scene = scene.tessellate()
     cloud = scanning.scan(scene, pattern, platform, sensor, seed=args.seed,
                           waveforms_file=args.waveforms, progress=not args.quiet)
-    write = scanning.write_hdf5 if points_format(args.output) == "HDF5" else scanning.write_las
-    write(args.output, cloud)
+    writer = FORMATS[os.path.splitext(args.output)[1].lower()][1]
+    getattr(scanning, writer)(args.output, cloud)
     if not args.quiet:
         pts = cloud.points
         print(f"{len(pts)} returns from {len(pattern)} pulses -> {args.output}"

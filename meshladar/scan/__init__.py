@@ -9,8 +9,8 @@ BRDFs and the link budget, recorded as a waveform with the receiver's noise and 
 for returns (:class:`Detector`). Every return carries its ground truth (the part, face,
 range and point its light came from). Layout: :mod:`.patterns`, :mod:`.platforms`,
 :mod:`.footprint`, :mod:`.instrument`, :mod:`.cast`, :mod:`.echoes`, :mod:`.points`,
-:mod:`.run`, and the files :mod:`.files` (LAS 1.4 through laspy, HDF5 through h5py), their
-formats by extension :mod:`.formats`.
+:mod:`.run`, and the files :mod:`.files` (LAS 1.4 through laspy, HDF5 through h5py) and
+``npz`` (numpy's archive, no extra package), their formats by extension :mod:`.formats`.
 
 Conventions: monostatic, received power in photoelectrons, one bounce, flat two-sided
 normals (:data:`~meshladar.scan.points.CONVENTIONS`, recorded in every result's ``info``).
@@ -20,9 +20,10 @@ from __future__ import annotations
 
 from .._lazy import lazy_attributes as _lazy_attributes
 
-__all__ = ["scan", "PATTERNS", "ScanPattern", "raster", "rotating", "oscillating", "risley", "flash",
-           "Platform", "ScanBeam", "ScanSensor", "Detector", "PointCloud", "POINT_DTYPE",
-           "POINT_FIELDS", "GeigerMode", "coates", "write_las", "read_las", "write_hdf5", "read_hdf5"]
+__all__ = ["scan", "PATTERNS", "ScanPattern", "raster", "rotating", "oscillating", "risley",
+           "flash", "Platform", "ScanBeam", "ScanSensor", "Detector", "PointCloud",
+           "POINT_DTYPE", "POINT_FIELDS", "GeigerMode", "coates", "write_las", "read_las",
+           "write_hdf5", "read_hdf5", "write_npz", "read_npz"]
 
 #: Each public name's module: loaded on first use (``meshladar.scan.Platform``,
 #: ``from meshladar.scan import scan``), so that the command line, which names this
@@ -34,12 +35,12 @@ _HOMES = {"ScanBeam": "footprint", "GeigerMode": "geiger", "coates": "geiger",
           "raster": "patterns", "risley": "patterns", "rotating": "patterns",
           "Platform": "platforms", "POINT_DTYPE": "points", "POINT_FIELDS": "points",
           "PointCloud": "points", "scan": "run", "read_hdf5": "files", "read_las": "files",
-          "write_hdf5": "files", "write_las": "files"}
+          "write_hdf5": "files", "write_las": "files", "read_npz": "npz", "write_npz": "npz"}
 
 
 #: The package's modules, also reached as attributes (``meshladar.scan.points``).
 _SUBMODULES = ("patterns", "platforms", "footprint", "instrument", "cast", "echoes", "points",
-               "run", "files", "formats", "geiger", "moving")
+               "run", "files", "npz", "formats", "geiger", "moving")
 
 
 __getattr__, __dir__ = _lazy_attributes(__name__, globals(), _HOMES, _SUBMODULES)

@@ -13,15 +13,17 @@ __all__ = ["FORMATS", "points_format", "check_writable"]
 
 #: Each points file's extension, the format it names and the writer of that format.
 FORMATS = {".las": ("LAS", "write_las"), ".laz": ("LAS", "write_las"),
-           ".h5": ("HDF5", "write_hdf5"), ".hdf5": ("HDF5", "write_hdf5")}
-#: The packages each format's writer needs (any one of a tuple).
+           ".h5": ("HDF5", "write_hdf5"), ".hdf5": ("HDF5", "write_hdf5"),
+           ".npz": ("NPZ", "write_npz")}
+#: The packages each format's writer needs (any one of a tuple): numpy's .npz none.
 _NEEDS = {".las": ("laspy",), ".laz": ("laspy", ("lazrs", "laszip")), ".h5": ("h5py",),
-          ".hdf5": ("h5py",)}
+          ".hdf5": ("h5py",), ".npz": ()}
 
 def check_writable(path, flag="path"):
     """Refuse, before any work, a points file that cannot be written: a folder, a file in
     a folder that does not exist, or one whose writer is not installed (laspy for
-    ``.las``, laspy and lazrs (or laszip) for ``.laz``, h5py for ``.h5``/``.hdf5``).
+    ``.las``, laspy and lazrs (or laszip) for ``.laz``, h5py for ``.h5``/``.hdf5``;
+    ``.npz`` needs numpy alone).
 
     Parameters
     ----------
@@ -63,7 +65,7 @@ def _target(path, flag):
 
 def points_format(path):
     """The format a points file's extension names (:data:`FORMATS`): ``"LAS"`` (.las,
-    .laz), ``"HDF5"`` (.h5, .hdf5), or None for any other extension.
+    .laz), ``"HDF5"`` (.h5, .hdf5), ``"NPZ"`` (.npz), or None for any other extension.
 
     Parameters
     ----------
@@ -81,6 +83,6 @@ def _not_named_as(path, writes, flag="path"):
     named = points_format(path)
     if named not in (None, writes):
         writer = FORMATS[os.path.splitext(path)[1].lower()][1]
-        raise ParameterError(f"{flag}: {path!r} names a{'n' if named == 'HDF5' else ''} "
+        raise ParameterError(f"{flag}: {path!r} names a{'n' if named != 'LAS' else ''} "
                              f"{named} file; {writer} writes that format")
     return path

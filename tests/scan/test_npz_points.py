@@ -1,0 +1,122 @@
+"""Point clouds in numpy's .npz archive (meshladar.scan.npz): exact round trips of a real
+scan (records, waveform blocks, an info with inf and nan), the formats' table and each
+writer refusing the others' extensions, foreign files refused by the reader, and the
+command line writing and reading .npz points where laspy and h5py are missing."""
+
+from __future__ import annotations
+
+import math
+import sys
+
+import numpy as np
+import pytest
+
+from meshladar import io as results
+from meshladar.errors import ParameterError
+from meshladar.scan import (GeigerMode, Platform, PointCloud, flash, read_npz, rotating, scan,
+                            write_hdf5, write_las, write_npz)
+from meshladar.scan.formats import points_format
+from meshladar.scan.points import POINT_DTYPE
+
+from _scan_scenes import plate, scene, sensor
+
+
+def _equal_clouds(a, b):
+    assert a.points.dtype == b.points.dtype == POINT_DTYPE
+    for name in POINT_DTYPE.names:        # field by field, NaN where NaN (bits compared)
+        np.testing.assert_array_equal(a.points[name], b.points[name], strict=True)
+    assert (a.waveforms is None) == (b.waveforms is None)
+    if a.waveforms is not None:
+        assert len(a.waveforms) == len(b.waveforms) >= 1
+        for x, y, s, t in zip(a.waveforms, b.waveforms, a.starts, b.starts):
+            np.testing.assert_array_equal(x, y, strict=True)
+            np.testing.assert_array_equal(s, t, strict=True)
+
+
+def test_a_scan_with_waveforms_reads_back_exactly(tmp_path):
+    """A rotating head's scan of a plate, waveforms kept in several blocks: every field of
+    every return, every sample and start, and the info, bit for bit."""
+    pattern = rotating(np.linspace(-5, 5, 4), rotation_hz=50, pulse_rate=2e4, duration=0.01)
+    cloud = scan(scene(plate(30.0)), pattern, Platform.static((0, 0, 0)), sensor(),
+                 keep_waveforms=True, chunk_pulses=64)
+    assert len(cloud) > 0 and len(cloud.waveforms) >= 3
+    write_npz(tmp_path / "p.npz", cloud)
+    back = read_npz(tmp_path / "p.npz")
+    _equal_clouds(cloud, back)
+    assert back.info == cloud.info
+    assert back.waveform(70)[1] == cloud.waveform(70)[1]
+
+
+def test_an_infinite_dead_time_and_nans_in_the_info_read_back(tmp_path):
+    geiger = sensor(pulse_energy=1e-12, geiger=GeigerMode(shots=10))
+    cloud = scan(scene(plate(50.0)), flash(2, 2, ifov_deg=0.1), Platform.static((0, 0, 0)),
+                 geiger)
+    cloud = PointCloud(cloud.points, dict(cloud.info, extra=[-math.inf, math.nan]))
+    path = tmp_path / "g.npz"
+    write_npz(path, cloud)
+    arrays, meta = results.load_result(path)                 # the archive as numpy sees it
+    assert meta["kind"] == "points" and meta["units"]["range"] == "m"
+    assert meta["info"]["sensor"]["geiger"]["dead_time_s"] == "inf"
+    back = read_npz(path)
+    assert back.info["sensor"]["geiger"]["dead_time_s"] == math.inf
+    assert back.info["extra"][0] == -math.inf and math.isnan(back.info["extra"][1])
+    _equal_clouds(cloud, back)
+
+
+def test_the_formats_table_and_each_writer_refusing_the_others_extensions(tmp_path):
+    cloud = PointCloud(np.zeros(2, POINT_DTYPE))
+    assert points_format("a.NPZ") == points_format("b.npz") == "NPZ"
+    with pytest.raises(ParameterError, match=r"path: .*x\.las' names a LAS file; "
+                                             "write_las writes that format"):
+        write_npz(tmp_path / "x.las", cloud)
+    with pytest.raises(ParameterError, match=r"path: .*x\.h5' names an HDF5 file; "
+                                             "write_hdf5 writes that format"):
+        write_npz(tmp_path / "x.h5", cloud)
+    with pytest.raises(ParameterError, match=r"path: .*x\.npz' names an NPZ file; "
+                                             "write_npz writes that format"):
+        write_las(tmp_path / "x.npz", cloud)
+    with pytest.raises(ParameterError, match=r"path: .*x\.npz' names an NPZ file; "
+                                             "write_npz writes that format"):
+        write_hdf5(tmp_path / "x.npz", cloud)
+    with pytest.raises(ParameterError, match="cloud must be a PointCloud; got ndarray"):
+        write_npz(tmp_path / "x.npz", cloud.points)
+    assert not any(tmp_path.iterdir())
+
+
+def test_foreign_files_are_refused_by_the_reader(tmp_path):
+    sino = results.save_result(tmp_path / "s.npz", {"values": np.ones((2, 3))},
+                               {"kind": "sinogram"})
+    assert sino is None
+    with pytest.raises(ParameterError, match=r"is not a meshladar point cloud \(its kind: "
+                                             r"'sinogram'\)"):
+        read_npz(tmp_path / "s.npz")
+    (tmp_path / "m.stl").write_bytes(b"solid x\nendsolid x\n")
+    with pytest.raises(ParameterError, match=r"path: .*m\.stl"):
+        read_npz(tmp_path / "m.stl")
+    with pytest.raises(ParameterError, match="no such file"):
+        read_npz(tmp_path / "none.npz")
+    results.save_result(tmp_path / "o.npz", {"points": np.zeros(3)}, {"kind": "points"})
+    with pytest.raises(ParameterError, match="its points are not meshladar's records"):
+        read_npz(tmp_path / "o.npz")
+
+
+def test_the_command_line_scans_to_npz_without_laspy_or_h5py(tmp_path, capsys, monkeypatch):
+    """A plain install: -o points.npz scans (LAS and HDF5 are refused at once, naming the
+    extra), and ``view --points`` reads the file back (its reader)."""
+    from meshladar.cli import commands, main
+
+    for module in ("laspy", "h5py"):
+        monkeypatch.setitem(sys.modules, module, None)             # import fails
+    ball = tmp_path / "ball.stl"
+    trimesh = pytest.importorskip("trimesh")
+    trimesh.creation.icosphere(3, radius=2.0).export(ball)           # the scanner inside
+    argv = ["scan", str(ball), "--pattern", "rotating elevations_deg=-15:15:4 rotation_hz=50 "
+            "pulse_rate=2e4 duration=0.005", "--platform", "static position=0,0,0",
+            "--quiet", "-o"]
+    assert main(argv + [str(tmp_path / "p.las")]) == 2
+    assert "needs laspy, which is not installed" in capsys.readouterr().err
+    assert main(argv + [str(tmp_path / "p.npz")]) == 0
+    cloud = commands._read_points(str(tmp_path / "p.npz"))
+    assert len(cloud) > 0
+    np.testing.assert_allclose(np.linalg.norm(cloud.xyz, axis=1), 2.0, atol=0.02)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ball.stl", "p.npz"]
