@@ -66,18 +66,13 @@ def test_an_infinite_dead_time_and_nans_in_the_info_read_back(tmp_path):
 def test_the_formats_table_and_each_writer_refusing_the_others_extensions(tmp_path):
     cloud = PointCloud(np.zeros(2, POINT_DTYPE))
     assert points_format("a.NPZ") == points_format("b.npz") == "NPZ"
-    with pytest.raises(ParameterError, match=r"path: .*x\.las' names a LAS file; "
-                                             "write_las writes that format"):
-        write_npz(tmp_path / "x.las", cloud)
-    with pytest.raises(ParameterError, match=r"path: .*x\.h5' names an HDF5 file; "
-                                             "write_hdf5 writes that format"):
-        write_npz(tmp_path / "x.h5", cloud)
-    with pytest.raises(ParameterError, match=r"path: .*x\.npz' names an NPZ file; "
-                                             "write_npz writes that format"):
-        write_las(tmp_path / "x.npz", cloud)
-    with pytest.raises(ParameterError, match=r"path: .*x\.npz' names an NPZ file; "
-                                             "write_npz writes that format"):
-        write_hdf5(tmp_path / "x.npz", cloud)
+    for write, name, named in ((write_npz, "x.las", "a LAS file; write_las"),
+                               (write_npz, "x.h5", "an HDF5 file; write_hdf5"),
+                               (write_las, "x.npz", "an NPZ file; write_npz"),
+                               (write_hdf5, "x.npz", "an NPZ file; write_npz")):
+        with pytest.raises(ParameterError, match=rf"path: .*{name}' names {named} writes "
+                                                 "that format"):
+            write(tmp_path / name, cloud)
     with pytest.raises(ParameterError, match="cloud must be a PointCloud; got ndarray"):
         write_npz(tmp_path / "x.npz", cloud.points)
     assert not any(tmp_path.iterdir())
