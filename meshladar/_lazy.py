@@ -60,10 +60,15 @@ class _DeferredModule:
         self._module = None
 
     def __getattr__(self, attr):
+        if attr in _DeferredModule.__slots__:     # unset (a copy made without __init__)
+            raise AttributeError(attr)
         module = self._module
         if module is None:
             module = self._module = importlib.import_module(self._name)
         return getattr(module, attr)
+
+    def __reduce__(self):                         # copied or pickled: a stand-in again
+        return deferred_module, (self._name,)
 
     def __repr__(self):
         return f"<deferred module {self._name!r}>"
@@ -84,7 +89,8 @@ def deferred_module(name):
     -------
     object
         Its attributes are the module's (looked up in the module at each use, so a test
-        that patches the module is seen).
+        that patches the module is seen; patch the module, not the stand-in). Copied or
+        pickled, it is a stand-in for the same module.
 
     Examples
     --------

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import copy
 import importlib.util
+import pickle
 import re
 import subprocess
 import sys
@@ -73,6 +75,8 @@ def test_a_deferred_module_imports_at_its_first_attribute(tmp_path, monkeypatch)
     assert probe.twice(21) == -21                  # looked up in the module at each use
     with pytest.raises(AttributeError, match="nothing"):
         probe.nothing
+    for copied in (copy.copy(probe), pickle.loads(pickle.dumps(probe))):   # (they recursed)
+        assert repr(copied) == repr(probe) and copied.twice(2) == -2
     monkeypatch.delitem(sys.modules, "meshladar_probe_kernels")
 
 

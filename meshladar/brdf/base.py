@@ -381,9 +381,9 @@ def check_brdf(name, value):
     if not isinstance(value, BRDF):
         hint = ""
         if isinstance(value, str):          # a coating's name, as the command line takes
-            hint = (f" {value!r}: a packaged coating by name is "
-                    f"meshladar.materials.PAPER[{value!r}], a table's "
-                    "meshladar.materials.load_table(path)[name]")
+            hint = (f" {value!r}: a coating by name is meshladar.materials.PAPER[name] "
+                    "(list(meshladar.materials.PAPER) names the packaged ones), or a "
+                    "table's meshladar.materials.load_table(path)[name]")
         raise ParameterError(f"{name} must be a meshladar.brdf.BRDF ({', '.join(MODELS)} "
                              f"or a subclass); got {type(value).__name__}{hint}")
     if type(value).projected is BRDF.projected:

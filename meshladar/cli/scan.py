@@ -1,4 +1,4 @@
-"""``meshladar scan``: a scanner's point cloud of a scene, to LAS/LAZ or HDF5.
+"""``meshladar scan``: a scanner's point cloud of a scene, to LAS/LAZ, HDF5 or ``.npz``.
 
 ``--pattern`` and ``--platform`` take a kind and ``key=value`` words, one string (a key
 at most once): the keys are the Python constructor's keyword arguments

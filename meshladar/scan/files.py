@@ -97,9 +97,9 @@ def write_las(path, cloud, *, scale=None):
     ------
     ParameterError
         Before anything is written: when ``path`` is a folder, in a folder that does not
-        exist, or ends in .h5 or .hdf5 (:func:`write_hdf5`'s), ``cloud`` is not a
-        PointCloud, or ``scale`` is out of range or too fine for
-        the cloud's span (the message names the finest scale that fits).
+        exist, or ends in .h5, .hdf5 (:func:`write_hdf5`'s) or .npz (``write_npz``'s),
+        ``cloud`` is not a PointCloud, or ``scale`` is out of range or too fine for the
+        cloud's span (the message names the finest scale that fits).
     """
     laspy = _need("laspy")
     path = _not_named_as(check_writable(path, "path"), "LAS")
@@ -209,8 +209,8 @@ def write_hdf5(path, cloud):
     ------
     ParameterError
         Before anything is written: when ``path`` is a folder, in a folder that does not
-        exist, or ends in .las or .laz (:func:`write_las`'s), or ``cloud`` is not a
-        PointCloud.
+        exist, or ends in .las, .laz (:func:`write_las`'s) or .npz (``write_npz``'s), or
+        ``cloud`` is not a PointCloud.
     """
     h5py = _need("h5py")
     path = _not_named_as(_target(path, "path"), "HDF5")

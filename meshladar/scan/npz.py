@@ -5,13 +5,18 @@ a scan, every field and every waveform exactly, without pickle.
 The archive holds ``points``, the records as one structured array
 (:data:`~meshladar.scan.points.POINT_DTYPE`); where the cloud holds waveforms, for each
 block of consecutive pulses ``block_<first pulse, 12 digits>`` (pulses × samples,
-photoelectrons per sample) and ``starts_<first pulse>`` (s), as in the HDF5 file; and its
-metadata (JSON): ``kind`` ``"points"``, each field's ``units`` and ``meaning``, and the
-scan's ``info`` (a non-finite number, such as a Geiger-mode dead time of inf, as the
-string ``"inf"``, ``"-inf"`` or ``"nan"``, read back as the float).
+photoelectrons per sample) and ``starts_<first pulse>`` (s), as in the HDF5 file (a block
+of no pulse is not stored); and its metadata (JSON): ``kind`` ``"points"``, each field's
+``units`` and ``meaning``, and the scan's ``info`` (a non-finite number, such as a
+Geiger-mode dead time of inf, as the string ``"inf"``, ``"-inf"`` or ``"nan"``, read back
+as the float; numpy numbers and arrays as JSON numbers and lists; tuples read back as
+lists, as from HDF5).
 """
 
 from __future__ import annotations
+
+import json
+import re
 
 import numpy as np
 
@@ -22,6 +27,8 @@ from .formats import _not_named_as, _target
 from .points import POINT_DTYPE, POINT_FIELDS, PointCloud
 
 __all__ = ["write_npz", "read_npz"]
+
+_BLOCK = re.compile(r"block_(\d{12})")
 
 
 def write_npz(path, cloud):
@@ -39,8 +46,9 @@ def write_npz(path, cloud):
     ------
     ParameterError
         Before anything is written: when ``path`` is a folder, in a folder that does not
-        exist, or ends in .las, .laz, .h5 or .hdf5 (the other writers'), or ``cloud`` is
-        not a PointCloud.
+        exist, or ends in .las, .laz, .h5 or .hdf5 (the other writers'), ``cloud`` is not
+        a PointCloud, or its ``info`` holds what JSON cannot (other than numpy's numbers
+        and arrays).
 
     Examples
     --------
@@ -60,12 +68,30 @@ def write_npz(path, cloud):
     if cloud.waveforms is not None:
         first = 0
         for waves, starts in zip(cloud.waveforms, cloud.starts):
-            arrays[f"block_{first:012d}"] = waves
-            arrays[f"starts_{first:012d}"] = starts
+            if len(waves):                   # (an empty block's key would be the next's)
+                arrays[f"block_{first:012d}"] = waves
+                arrays[f"starts_{first:012d}"] = starts
             first += len(waves)
-    save_result(path, arrays, {"kind": "points", "info": _strict(cloud.info),
-                               "units": {n: u for n, _, u, _ in POINT_FIELDS},
-                               "meaning": {n: m for n, _, _, m in POINT_FIELDS}})
+    meta = {"kind": "points", "info": _strict(_plain(cloud.info)),
+            "units": {n: u for n, _, u, _ in POINT_FIELDS},
+            "meaning": {n: m for n, _, _, m in POINT_FIELDS}}
+    try:
+        json.dumps(meta)
+    except (TypeError, ValueError) as exc:
+        raise ParameterError(f"cloud.info must hold what JSON can (numbers, strings, lists, "
+                             f"dicts; numpy's numbers and arrays); {exc}") from None
+    save_result(path, arrays, meta)
+
+
+def _plain(value):
+    """``value`` with numpy's numbers and arrays as Python's (JSON's) numbers and lists."""
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, (np.generic, np.ndarray)):
+        return value.tolist()
+    return value
 
 
 def read_npz(path):
@@ -84,8 +110,9 @@ def read_npz(path):
     Raises
     ------
     ParameterError
-        When the file is missing, a folder, not an ``.npz`` archive, or not a point
-        cloud's (a sinogram's result file, say).
+        When the file is missing, a folder, not an ``.npz`` archive, not a point cloud's (a
+        sinogram's result file, say), or damaged (records not one row a return, a block
+        without its starts or of another length, a member of another name).
     """
     path = _readable(path, "npz")
     try:
@@ -95,11 +122,33 @@ def read_npz(path):
     if meta.get("kind") != "points" or "points" not in arrays:
         raise ParameterError(f"path: {path!r} is not a meshladar point cloud (its kind: "
                              f"{meta.get('kind', 'none')!r})")
-    points = arrays["points"]
-    if points.dtype != POINT_DTYPE:
-        raise ParameterError(f"path: {path!r}: its points are not meshladar's records "
-                             f"(fields {points.dtype.names})")
-    blocks = sorted(k for k in arrays if k.startswith("block_"))
-    waves = tuple(arrays[k] for k in blocks) if blocks else None
-    starts = tuple(arrays[k.replace("block_", "starts_")] for k in blocks) if blocks else None
-    return PointCloud(np.asarray(points), _loose(meta.get("info", {})), waves, starts)
+    points = arrays.pop("points")
+    if points.dtype != POINT_DTYPE or points.ndim != 1:
+        raise ParameterError(f"path: {path!r}: its points are not meshladar's records (one "
+                             f"row a return: fields {points.dtype.names}, shape "
+                             f"{points.shape})")
+    waves, starts = _blocks(path, arrays)
+    return PointCloud(points, _loose(meta.get("info", {})), waves, starts)
+
+
+def _blocks(path, arrays):
+    """The archive's waveform blocks and their starts, in pulse order (None, None for
+    none), each block checked to be (pulses, samples) with one start a pulse and every
+    member named as :func:`write_npz` names them."""
+    first = {}
+    for key in arrays:
+        m = _BLOCK.fullmatch(key)
+        if m is None and not (key.startswith("starts_") and "block_" + key[7:] in arrays):
+            raise ParameterError(f"path: {path!r} is damaged: member {key!r} is not a "
+                                 "waveform block or its starts")
+        if m is not None:
+            first[key] = int(m.group(1))
+    waves, starts = [], []
+    for key in sorted(first, key=first.get):
+        w, t = arrays[key], arrays.get("starts_" + key[6:])
+        if t is None or w.ndim != 2 or t.shape != (len(w),):
+            raise ParameterError(f"path: {path!r} is damaged: {key} is not (pulses, "
+                                 "samples) with one start a pulse")
+        waves.append(w)
+        starts.append(t)
+    return (tuple(waves), tuple(starts)) if waves else (None, None)

@@ -390,8 +390,9 @@ BAD_CALLS = {
     "weigh bad coating": (lambda: ml.weigh(ml.trace(_SPHERE, _LAD), ["x"]),
                           r"materials\[0\] must be a meshladar.brdf.BRDF \(SandfordRobertson, "
                           r"Lambertian, Phong, GGX, Tabulated or a subclass\); got str 'x': "
-                          r"a packaged coating by name is meshladar.materials.PAPER\['x'\], "
-                          r"a table's meshladar.materials.load_table\(path\)\[name\]"),
+                          r"a coating by name is meshladar.materials.PAPER\[name\] "
+                          r"\(list\(meshladar.materials.PAPER\) names the packaged ones\), "
+                          r"or a table's meshladar.materials.load_table\(path\)\[name\]"),
     "run_dir number": (lambda: ml.simulate(_SPHERE, _LAD, model="mesh", run_dir=123),
                        r"run_dir must be a folder path; got 123"),
     "no views": (lambda: ml.Sinogram(np.zeros((0, 4)), angles_deg=[],

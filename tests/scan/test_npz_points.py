@@ -115,3 +115,31 @@ def test_the_command_line_scans_to_npz_without_laspy_or_h5py(tmp_path, capsys, m
     assert len(cloud) > 0
     np.testing.assert_allclose(np.linalg.norm(cloud.xyz, axis=1), 2.0, atol=0.02)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["ball.stl", "p.npz"]
+
+
+def test_empty_blocks_numpy_info_and_damaged_archives(tmp_path):
+    """A block of no pulse is not stored (its key was the next block's, which replaced
+    it); numpy numbers and arrays in the info are written as JSON's; an archive whose
+    blocks lack their starts, whose starts are of another length, whose records are not
+    one row a return, or which holds a member of another name is refused as damaged."""
+    blocks = (np.zeros((2, 5)), np.zeros((0, 7)), np.ones((1, 9)))
+    starts = (np.zeros(2), np.zeros(0), np.ones(1))
+    info = {"gain": np.float32(1.5), "n": np.int64(3), "axis": np.arange(3.0), "t": (1, 2)}
+    write_npz(tmp_path / "e.npz", PointCloud(np.zeros(0, POINT_DTYPE), info, blocks, starts))
+    back = read_npz(tmp_path / "e.npz")
+    assert [w.shape for w in back.waveforms] == [(2, 5), (1, 9)]
+    assert back.waveform(2)[1] == 1.0                  # pulse 2: the third block's first
+    assert back.info == {"gain": 1.5, "n": 3, "axis": [0.0, 1.0, 2.0], "t": [1, 2]}
+    with pytest.raises(ParameterError, match="cloud.info must hold what JSON can"):
+        write_npz(tmp_path / "o.npz", PointCloud(np.zeros(0, POINT_DTYPE), {"x": object()}))
+    arrays, meta = results.load_result(tmp_path / "e.npz")
+    for name, change in (("no starts", lambda a: a.pop("starts_000000000002")),
+                         ("short starts", lambda a: a.update(starts_000000000002=np.ones(2))),
+                         ("2-D points", lambda a: a.update(points=np.zeros((2, 2),
+                                                                           POINT_DTYPE))),
+                         ("stray member", lambda a: a.update(block_10=np.ones((1, 3))))):
+        damaged = {k: v for k, v in arrays.items()}
+        change(damaged)
+        results.save_result(tmp_path / "d.npz", damaged, meta)
+        with pytest.raises(ParameterError, match=r"is damaged|not meshladar's records"):
+            read_npz(tmp_path / "d.npz")

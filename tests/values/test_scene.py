@@ -39,8 +39,8 @@ def test_shapes_are_frozen_values():
     (lambda: ml.Disk((0, 0, 0), 1.0, M), r"center must be a point \(x, y\); got shape \(3,\)"),
     (lambda: ml.Disk((0, float("inf")), 1.0, M), r"center must be finite"),
     (lambda: ml.Disk((0, 0), 1.0, "aluminum"), r"material must be a meshladar.brdf.BRDF .*"
-     r"got str 'aluminum': a packaged coating by name is "
-     r"meshladar.materials.PAPER\['aluminum'\]"),
+     r"got str 'aluminum': a coating by name is meshladar.materials.PAPER\[name\] "
+     r"\(list\(meshladar.materials.PAPER\) names the packaged ones\)"),
     (lambda: ml.Ellipse((0, 0), (0.6, 0.0), 0.0, M), r"semi_axes must be two positive"),
     (lambda: ml.Ellipse((0, 0), (0.6, 0.3), float("nan"), M), r"angle_deg must be finite"),
 ])
