@@ -77,8 +77,8 @@ class _DeferredModule:
 def deferred_module(name):
     """A stand-in for the module ``name`` that imports it when one of its attributes is
     first looked up: for a module of compiled loops (numba's), which a small run never
-    calls. The importer names the module statically too, under ``TYPE_CHECKING``, so
-    that the import graph (the layers' check) still holds the edge.
+    calls. Where the edge crosses packages, the importer also names the module under
+    ``TYPE_CHECKING``, so that the import graph (the layers' check) still holds it.
 
     Parameters
     ----------
