@@ -250,12 +250,15 @@ def _write_points(f, cloud):
 
 
 def _strict(value):
-    """``value`` with its non-finite floats as :data:`NON_FINITE`'s strings (strict JSON)."""
+    """``value`` with numpy's numbers and arrays as Python's (JSON's) numbers and lists and
+    its non-finite floats as :data:`NON_FINITE`'s strings (strict JSON)."""
+    if isinstance(value, (np.generic, np.ndarray)):
+        value = value.tolist()
     if isinstance(value, dict):
         return {k: _strict(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
         return [_strict(v) for v in value]
-    if isinstance(value, (float, np.floating)) and not math.isfinite(value):
+    if isinstance(value, float) and not math.isfinite(value):
         return "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
     return value
 

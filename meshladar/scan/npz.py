@@ -18,8 +18,6 @@ from __future__ import annotations
 import json
 import re
 
-import numpy as np
-
 from ..errors import ParameterError
 from ..io import ResultFileError, load_result, save_result
 from .files import _loose, _readable, _strict
@@ -72,7 +70,7 @@ def write_npz(path, cloud):
                 arrays[f"block_{first:012d}"] = waves
                 arrays[f"starts_{first:012d}"] = starts
             first += len(waves)
-    meta = {"kind": "points", "info": _strict(_plain(cloud.info)),
+    meta = {"kind": "points", "info": _strict(cloud.info),
             "units": {n: u for n, _, u, _ in POINT_FIELDS},
             "meaning": {n: m for n, _, _, m in POINT_FIELDS}}
     try:
@@ -81,17 +79,6 @@ def write_npz(path, cloud):
         raise ParameterError(f"cloud.info must hold what JSON can (numbers, strings, lists, "
                              f"dicts; numpy's numbers and arrays); {exc}") from None
     save_result(path, arrays, meta)
-
-
-def _plain(value):
-    """``value`` with numpy's numbers and arrays as Python's (JSON's) numbers and lists."""
-    if isinstance(value, dict):
-        return {k: _plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    if isinstance(value, (np.generic, np.ndarray)):
-        return value.tolist()
-    return value
 
 
 def read_npz(path):

@@ -50,6 +50,19 @@ def test_a_geiger_scans_info_is_strict_json_and_reads_back_its_infinite_dead_tim
     assert back["sensor"]["geiger"]["shots"] == 10
 
 
+def test_numpy_numbers_and_arrays_in_the_info_read_back_as_numbers(tmp_path):
+    """HDF5 wrote numpy's numbers through ``str`` (np.float32(1.5) came back as "1.5"):
+    now as JSON's numbers and lists, as the .npz writer does; non-finite ones as strings."""
+    pytest.importorskip("h5py")
+    info = {"gain": np.float32(1.5), "n": np.int64(3), "axis": np.array([0.0, np.inf]),
+            "flag": np.bool_(True), "t": (np.float64(-np.inf), 2)}
+    write_hdf5(tmp_path / "n.h5", _cloud([0.0], info))
+    back = read_hdf5(tmp_path / "n.h5").info
+    assert back == {"gain": 1.5, "n": 3, "axis": [0.0, math.inf], "flag": True,
+                    "t": [-math.inf, 2]}
+    assert type(back["gain"]) is float and type(back["n"]) is int
+
+
 def test_las_14_format_6_sets_the_wkt_bit_of_its_global_encoding(tmp_path):
     """LAS 1.4 R15 §2.4: bit 4 (WKT) must be set for point formats 6-10."""
     laspy = pytest.importorskip("laspy")
