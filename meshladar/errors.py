@@ -22,6 +22,7 @@ __all__ = [
     "BounceWarning",
     "EnergyConservationWarning",
     "RecordLengthWarning",
+    "EmptyScanWarning",
     "user_stacklevel",
 ]
 
@@ -157,6 +158,17 @@ class RecordLengthWarning(MeshladarWarning):
     """A scan's fixed record length (the sensor's ``samples``) cut off some pulses' echoes:
     their returns there are dropped (the warning counts the pulses and names the length
     that holds them).
+
+    Parameters
+    ----------
+    *args : object
+        The message (a ``str``), passed on to :class:`UserWarning` unchanged.
+    """
+
+
+class EmptyScanWarning(MeshladarWarning):
+    """A scan recorded no return: the warning says whether no pulse met the scene (with
+    where the sensor was and where the scene is) or the echoes were too weak to detect.
 
     Parameters
     ----------

@@ -18,7 +18,7 @@ import warnings
 import numpy as np
 
 from .._validate import check_count, check_seed
-from ..errors import ParameterError, RecordLengthWarning, user_stacklevel
+from ..errors import EmptyScanWarning, ParameterError, RecordLengthWarning, user_stacklevel
 from ..noise import draw_noise
 from ..raytrace.backends import resolve_backend
 from ..raytrace.embree import geometry
@@ -89,8 +89,9 @@ _NO_SHIFT = np.zeros((0, 0))
 
 def _chunk(job, sl, seed):
     """One chunk's records, the blocks of its measured waveforms (when kept: ``[(first
-    pulse in the chunk, records, starts), …]``), and the record length each pulse's
-    echoes need where the sensor fixes it (else None)."""
+    pulse in the chunk, records, starts), …]``), the record length each pulse's
+    echoes need where the sensor fixes it (else None), and each pulse's photoelectrons
+    before noise."""
     scene, pattern, platform, sensor = job.scene, job.pattern, job.platform, job.sensor
     offsets, shares, pitch = job.foot
     t = pattern.times[sl]
@@ -119,7 +120,8 @@ def _chunk(job, sl, seed):
                  (sl.start, t, pattern.scan_angles_deg[sl], pattern.channels[sl]),
                  (origins, axis, 0.5 * SPEED_OF_LIGHT),
                  (tau, pe, cast.distance, cast.points, cast.face, shift), job.part_of)
-    return rec, (blocks if job.keep or job.sink is not None else None), needed
+    return (rec, (blocks if job.keep or job.sink is not None else None), needed,
+            pe.sum(axis=1))
 
 
 def _waveform_returns(job, tau, pe, seed):
@@ -188,6 +190,33 @@ def _warn_cut(results, sensor, pulses):
                       "record cuts is dropped; "
                       f"samples={int(needed.max())} holds them all, or leave samples unset",
                       RecordLengthWarning, stacklevel=user_stacklevel())
+
+
+def _warn_empty(results, scene, pattern, platform):
+    """Say why a scan recorded no return: no pulse's beam met the scene, or the echoes were
+    too weak to cross the threshold; either way where the sensor was and where the scene
+    is (a scene in millimetres, read as metres, lies a thousand times farther)."""
+    returned = np.concatenate([np.ravel(r["returned"]) for r in results]) if results \
+        else np.zeros(0)
+    lit = int(np.count_nonzero(returned > 0.0))
+    pulses = f"{len(pattern)} {'pixels' if pattern.is_flash else 'pulses'}"
+    at = platform.sensor_poses(pattern.times[:1])[0][0]
+    lo, hi = scene.bounds()
+    where = (f"the sensor at {np.array2string(at, precision=4)} at the first pulse, the "
+             f"scene within {np.array2string(lo, precision=4)} to "
+             f"{np.array2string(hi, precision=4)}, its centre "
+             f"{np.linalg.norm(0.5 * (lo + hi) - at):.4g} m away; a scan's units are metres")
+    if lit:
+        why = (f"{lit} of {pulses} met the scene, but no echo crossed the "
+               f"detection threshold (the brightest returned {returned.max():.3g} "
+               "photoelectrons in all, before noise): raise the sensor's pulse_energy or "
+               f"aperture_diameter, or lower its detector's threshold ({where})")
+    else:
+        why = (f"none of the {pulses} met the scene ({where}): check the "
+               "platform's position and attitude (the sensor looks along its x; a beam that "
+               "starts on a surface ranges nothing) and the pattern's angles")
+    warnings.warn(f"the scan recorded no return: {why}", EmptyScanWarning,
+                  stacklevel=user_stacklevel())
 
 
 def _discrete(sensor, tau, pe):
@@ -270,8 +299,7 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
         :func:`~meshladar.scan.files.read_hdf5` reads it. Not with ``keep_waveforms``,
         ``run_dir`` or ``executor``.
     chunk_pulses : int, optional
-        Pulses per chunk (default :data:`CHUNK_RAYS` sub-rays' worth; a flash scan's
-        chunks hold whole frames).
+        Pulses per chunk (default :data:`CHUNK_RAYS` sub-rays' worth; a flash's: whole frames).
     jobs : int, optional
         Threads (default: one per core for long scans, as :func:`meshladar.stream.run_chunks`).
     executor : concurrent.futures.Executor, optional
@@ -287,6 +315,11 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
     PointCloud
         The returns with their ground truth; ``info`` says the conventions.
 
+    Warns
+    -----
+    RecordLengthWarning, EmptyScanWarning
+        A fixed record cut echoes; no return was recorded (each says why and what helps).
+
     Raises
     ------
     ParameterError
@@ -295,8 +328,7 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
         ``tol``: :func:`~meshladar.scan.footprint.check_flash_beam`), before any ray is cast.
     """
     _check(scene, pattern, platform, sensor)
-    split = moving_parts(scene, motions)
-    seed = check_seed("seed", seed)
+    split, seed = moving_parts(scene, motions), check_seed("seed", seed)
     _check_keep(keep_waveforms, run_dir, sensor)
     foot = _footprint(pattern, sensor)
     per, slots = _chunk_pulses(pattern, chunk_pulses, len(foot[0])), sensor.detector.max_returns
@@ -305,20 +337,33 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
         job = ScanJob(scene, pattern, platform, sensor, foot, seed, keep_waveforms, slots,
                       _chunk, split, sink, folder=run_dir is not None,
                       backend=resolve_backend("auto"), part_of=_part_of(scene))
-        description = None if run_dir is None else job_description(
-            scene, pattern, platform, sensor, seed, keep_waveforms,
-            geometry(scene, "flat").key, motions)
         results = run_chunks(scan_chunk, job, len(pattern), chunk_size=per, unit="pulses",
                              work=float(len(pattern) * len(foot[0])),
                              arrays=chunk_arrays(slots, sensor, keep_waveforms),
                              threads=True, jobs=jobs, executor=executor, progress=progress,
-                             run_dir=run_dir, job=description)
-        _warn_cut(results, sensor, len(pattern))
+                             run_dir=run_dir, job=_description(job, run_dir, motions))
         points, waves, starts = records(results, slots)
+        _warn(results, points, job)
         cloud = PointCloud(points, _info(pattern, platform, sensor, seed, motions), waves, starts)
         if sink is not None:
             sink.finish(cloud)
     return cloud
+
+
+def _description(job, run_dir, motions):
+    """What a run folder's chunks were computed from (None without a folder)."""
+    if run_dir is None:
+        return None
+    return job_description(job.scene, job.pattern, job.platform, job.sensor, job.seed,
+                           job.keep, geometry(job.scene, "flat").key, motions)
+
+
+def _warn(results, points, job):
+    """The scan's warnings once its chunks are in: echoes that a fixed record cut, and a
+    cloud with no return (:func:`_warn_cut`, :func:`_warn_empty`)."""
+    _warn_cut(results, job.sensor, len(job.pattern))
+    if not len(points):
+        _warn_empty(results, job.scene, job.pattern, job.platform)
 
 
 def _check_keep(keep, run_dir, sensor):

@@ -11,6 +11,7 @@ import pytest
 from scipy.special import erf
 from scipy.stats import poisson
 
+from meshladar.errors import EmptyScanWarning
 from meshladar.noise import Noise
 from meshladar.scan import Detector, Platform, ScanPattern, scan
 
@@ -113,8 +114,9 @@ def test_cfar_on_short_quiet_records_does_not_take_the_background_for_zero():
     dt = 0.5e-9
     sen = sensor(noise=Noise(background_rate=0.05 / dt), samples=70,
                  detector=Detector(cfar=True))
-    pc = scan(scene(plate(R0)), _repeat((-1.0, 0.0, 0.0), 500), Platform.static((0, 0, 0)),
-              sen, seed=6)
+    with pytest.warns(EmptyScanWarning, match="none of the 500 pulses met the scene"):
+        pc = scan(scene(plate(R0)), _repeat((-1.0, 0.0, 0.0), 500),
+                  Platform.static((0, 0, 0)), sen, seed=6)
     assert len(pc) == 0
 
 

@@ -13,13 +13,13 @@ import sys
 import numpy as np
 import pytest
 
-from meshladar.errors import ParameterError
+from meshladar.errors import EmptyScanWarning, ParameterError
 from meshladar.io import TEMPORARY_PREFIX, temporary_writer
-from meshladar.scan import Platform, ScanBeam, flash, read_hdf5, scan
+from meshladar.scan import Platform, ScanBeam, flash, raster, read_hdf5, scan
 from meshladar.scan.files import WaveformSink
 from meshladar.scan.footprint import pixel_offsets
 
-from _scan_scenes import plate, scene, sensor
+from _scan_scenes import photoelectrons_by_hand, plate, scene, sensor
 
 #: A child that opens a streaming waveform file, writes a block, says where its temporary
 #: is, then waits on its stdin (for a SIGKILL, or for the test to close it).
@@ -280,3 +280,39 @@ def test_the_fewest_samples_hold_one_echo_of_any_shape(kind):
     np.testing.assert_allclose(fixed.points["range"], free.points["range"], atol=1e-9)
     with pytest.raises(ParameterError, match=f"give {fewest} or more"):
         sensor(samples=fewest - 1, **kw)
+
+
+def _raster():
+    """13 pulses, 10° apart in azimuth (one sub-ray each with :func:`sensor`'s beam)."""
+    return raster(np.arange(-60.0, 61.0, 10.0), [0.0], pulse_rate=1e4)
+
+
+def test_a_scan_with_no_return_says_which_pulses_met_the_scene_and_how_bright_they_were():
+    """An empty cloud was returned without a word (a scene in millimetres read as metres
+    lies a thousand times farther and gives nothing). Too weak: the pulses within
+    atan(20/50) = 21.8° of the boresight (5 of 13) meet the plate, the brightest (on the
+    boresight) returning the link budget by hand; facing away: none."""
+    target = scene(plate(50.0))
+    weak = sensor(pulse_energy=1e-16)
+    with pytest.warns(EmptyScanWarning) as got:
+        cloud = scan(target, _raster(), Platform.static((0, 0, 0)), weak)
+    assert len(cloud) == 0 and len(got) == 1
+    brightest = photoelectrons_by_hand(1e-16, 0.05, 50.0)
+    text = str(got[0].message)
+    assert "5 of 13 pulses met the scene" in text and f"returned {brightest:.3g} " in text
+    centre = f"{50.0 + 0.01 / 2:.4g} m away"                 # the plate's middle, x = 50.005
+    assert centre in text and got[0].filename == __file__
+    with pytest.warns(EmptyScanWarning, match=f"none of the 13 pulses met the scene .*{centre}"):
+        scan(target, _raster(), Platform.static((0, 0, 0), attitude_deg=(0, 0, 180)),
+             sensor())
+
+
+def test_an_empty_scan_resumed_from_its_folder_still_says_why(tmp_path):
+    """The photoelectrons each pulse returned are kept with its chunk, so a run read back
+    from its folder gives the same word as the run that made it."""
+    args = (scene(plate(50.0)), _raster(), Platform.static((0, 0, 0)),
+            sensor(pulse_energy=1e-16))
+    for _ in range(2):
+        with pytest.warns(EmptyScanWarning, match="5 of 13 pulses met the scene"):
+            scan(*args, run_dir=tmp_path / "run")
+    assert list((tmp_path / "run").glob("chunk_*.npz"))

@@ -11,6 +11,7 @@ import pytest
 import trimesh
 
 import meshladar as ml
+from meshladar.errors import EmptyScanWarning
 from meshladar.motion import Motion
 from meshladar.raytrace.backends import resolve_backend
 from meshladar.scan import Platform, ScanBeam, ScanSensor, raster, rotating, scan
@@ -41,7 +42,8 @@ def test_a_sensor_on_the_plate_ranges_nothing_and_just_above_it_ranges_the_plate
     (it raised ZeroDivisionError); from 1 cm above, the beam down ranges the plate at
     0.01 / sin 5° = 11.5 cm (true range to 1e-12, its true point on z = 0)."""
     pattern = raster([0.0], [-5.0, 5.0], pulse_rate=1e3)
-    on = scan(_ground(coating), pattern, Platform.static((0, 0, 0)), _sensor(echoes))
+    with pytest.warns(EmptyScanWarning, match="none of the 2 pulses met the scene"):
+        on = scan(_ground(coating), pattern, Platform.static((0, 0, 0)), _sensor(echoes))
     assert len(on) == 0
     above = scan(_ground(coating), pattern, Platform.static((0, 0, 0.01)), _sensor(echoes))
     assert len(above) == 1 and above.points["pulse_id"][0] == 0
@@ -59,7 +61,8 @@ def test_a_spinning_head_on_the_plate_ranges_nothing_and_just_above_it_sees_the_
     sc = _ground(ml.materials.DARK_GRAY, room)
     elevations = np.linspace(-15, 15, 16)
     pattern = rotating(elevations, rotation_hz=10, pulse_rate=1e5, duration=0.01)
-    on = scan(sc, pattern, Platform.static((0, 0, 0)), _sensor(echoes, 5e-4))
+    with pytest.warns(EmptyScanWarning, match=f"none of the {len(pattern)} pulses met"):
+        on = scan(sc, pattern, Platform.static((0, 0, 0)), _sensor(echoes, 5e-4))
     assert len(on) == 0
     above = scan(sc, pattern, Platform.static((0, 0, 0.01)), _sensor(echoes, 5e-4))
     first = above.points["return_number"] == 1

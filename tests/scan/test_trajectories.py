@@ -66,8 +66,10 @@ def test_a_las_file_keeps_the_trajectorys_gps_time(tmp_path):
     laspy = pytest.importorskip("laspy")
     (tmp_path / "t.csv").write_text(GPS)
     platform = Platform.from_csv(tmp_path / "t.csv", time_offset=345000.0)
-    for where, origin in ((platform, 345000.0), (Platform.static((0, 0, 300)), 0.0)):
+    at_rest = Platform.static((0, 0, 300), attitude_deg=(0, 90, 0))    # looking down
+    for where, origin in ((platform, 345000.0), (at_rest, 0.0)):
         cloud = scan(_ground(), _nadir(), where, sensor())
+        assert len(cloud) == len(_nadir())                   # one return a pulse
         write_las(tmp_path / "p.las", cloud)
         las = laspy.read(tmp_path / "p.las")
         np.testing.assert_array_equal(np.asarray(las.gps_time),
