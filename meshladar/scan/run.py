@@ -192,7 +192,7 @@ def _warn_cut(results, sensor, pulses):
                       RecordLengthWarning, stacklevel=user_stacklevel())
 
 
-def _warn_empty(results, scene, pattern, platform):
+def _warn_empty(results, scene, pattern, platform, sensor):
     """Say why a scan recorded no return: no pulse's beam met the scene, or the echoes were
     too weak to cross the threshold; either way where the sensor was and where the scene
     is (a scene in millimetres, read as metres, lies a thousand times farther)."""
@@ -207,10 +207,12 @@ def _warn_empty(results, scene, pattern, platform):
              f"{np.array2string(hi, precision=4)}, its centre "
              f"{np.linalg.norm(0.5 * (lo + hi) - at):.4g} m away; a scan's units are metres")
     if lit:
-        why = (f"{lit} of {pulses} met the scene, but no echo crossed the "
-               f"detection threshold (the brightest returned {returned.max():.3g} "
-               "photoelectrons in all, before noise): raise the sensor's pulse_energy or "
-               f"aperture_diameter, or lower its detector's threshold ({where})")
+        detector = ("a Geiger-mode histogram (raise its GeigerMode's shots)"
+                    if sensor.geiger is not None else
+                    "the detection threshold (or lower its detector's threshold)")
+        why = (f"{lit} of {pulses} met the scene, but no echo was detected in {detector}: "
+               f"the brightest returned {returned.max():.3g} photoelectrons in all, before "
+               f"noise; raise the sensor's pulse_energy or aperture_diameter ({where})")
     else:
         why = (f"none of the {pulses} met the scene ({where}): check the "
                "platform's position and attitude (the sensor looks along its x; a beam that "
@@ -363,7 +365,7 @@ def _warn(results, points, job):
     cloud with no return (:func:`_warn_cut`, :func:`_warn_empty`)."""
     _warn_cut(results, job.sensor, len(job.pattern))
     if not len(points):
-        _warn_empty(results, job.scene, job.pattern, job.platform)
+        _warn_empty(results, job.scene, job.pattern, job.platform, job.sensor)
 
 
 def _check_keep(keep, run_dir, sensor):

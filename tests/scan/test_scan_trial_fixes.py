@@ -15,7 +15,7 @@ import pytest
 
 from meshladar.errors import EmptyScanWarning, ParameterError
 from meshladar.io import TEMPORARY_PREFIX, temporary_writer
-from meshladar.scan import Platform, ScanBeam, flash, raster, read_hdf5, scan
+from meshladar.scan import GeigerMode, Platform, ScanBeam, flash, raster, read_hdf5, scan
 from meshladar.scan.files import WaveformSink
 from meshladar.scan.footprint import pixel_offsets
 
@@ -291,7 +291,8 @@ def test_a_scan_with_no_return_says_which_pulses_met_the_scene_and_how_bright_th
     """An empty cloud was returned without a word (a scene in millimetres read as metres
     lies a thousand times farther and gives nothing). Too weak: the pulses within
     atan(20/50) = 21.8° of the boresight (5 of 13) meet the plate, the brightest (on the
-    boresight) returning the link budget by hand; facing away: none."""
+    boresight) returning the link budget by hand; a Geiger-mode flash array's pixels, all
+    on the plate, named as pixels; facing away: none."""
     target = scene(plate(50.0))
     weak = sensor(pulse_energy=1e-16)
     with pytest.warns(EmptyScanWarning) as got:
@@ -300,8 +301,14 @@ def test_a_scan_with_no_return_says_which_pulses_met_the_scene_and_how_bright_th
     brightest = photoelectrons_by_hand(1e-16, 0.05, 50.0)
     text = str(got[0].message)
     assert "5 of 13 pulses met the scene" in text and f"returned {brightest:.3g} " in text
+    assert "lower its detector's threshold" in text
     centre = f"{50.0 + 0.01 / 2:.4g} m away"                 # the plate's middle, x = 50.005
     assert centre in text and got[0].filename == __file__
+    with pytest.warns(EmptyScanWarning, match="16 of 16 pixels met the scene, but no echo was "
+                                              r"detected in a Geiger-mode histogram \(raise its "
+                                              "GeigerMode's shots"):
+        scan(target, flash(4, 4, ifov_deg=0.1), Platform.static((0, 0, 0)),
+             sensor(pulse_energy=1e-22, geiger=GeigerMode(shots=10)))
     with pytest.warns(EmptyScanWarning, match=f"none of the 13 pulses met the scene .*{centre}"):
         scan(target, _raster(), Platform.static((0, 0, 0), attitude_deg=(0, 0, 180)),
              sensor())
