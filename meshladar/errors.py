@@ -167,8 +167,9 @@ class RecordLengthWarning(MeshladarWarning):
 
 
 class EmptyScanWarning(MeshladarWarning):
-    """A scan recorded no return: the warning says whether no pulse met the scene (with
-    where the sensor was and where the scene is) or the echoes were too weak to detect.
+    """A scan recorded no return: the warning says whether no pulse met the scene, the
+    echoes were too weak to detect, or a fixed record length cut them, with where the
+    sensor was and where the scene is.
 
     Parameters
     ----------

@@ -40,7 +40,8 @@ class ScanJob(NamedTuple):
     slots: int
     run: object          # the chunk function: (job, slice, seed) -> (records, blocks of
     #                      (first pulse, waves, starts) or None, needed lengths or None,
-    #                      each pulse's photoelectrons returned before noise)
+    #                      (pulses that met the scene, the most photoelectrons a pulse
+    #                      returned before noise))
     split: object        # the moving parts (meshladar.scan.moving.MovingParts) or None
     sink: object = None  # a WaveformSink the chunks stream their records into, or None
     folder: bool = False  # a run folder keeps the chunks: fixed slots, not records
@@ -58,9 +59,10 @@ def scan_chunk(job, items):
     """One chunk's slots (module docstring), or its records as they are where no run
     folder keeps them: ``job.run`` on the pulses ``items``."""
     lo, hi = int(items[0]), int(items[-1]) + 1
-    rec, blocks, needed, returned = job.run(job, slice(lo, hi), _chunk_seed(job.seed, lo))
+    rec, blocks, needed, lit = job.run(job, slice(lo, hi), _chunk_seed(job.seed, lo))
     out = _slots(rec, lo, hi, job.slots) if job.folder else {"records": rec}
-    out["returned"] = returned             # for the scan's word on an empty cloud
+    out["lit"] = np.asarray(lit, float)    # for the scan's word on an empty cloud (older
+    #                                        run folders' chunks lack it)
     if needed is not None:                 # the record length each pulse's echoes need
         out["needed"] = needed
     if job.sink is not None and blocks is not None:
@@ -92,9 +94,9 @@ def _slots(rec, lo, hi, slots):
 
 def chunk_arrays(slots, sensor, keep):
     """``{name: trailing shape}`` of a chunk's arrays, for the run folder's checks (a fixed
-    record length of waveforms: ``needed``, each pulse's echoes' length; ``returned``, each
-    pulse's photoelectrons before noise)."""
-    shapes = {"returns": (), "returned": ()}
+    record length of waveforms: ``needed``, each pulse's echoes' length). A chunk's ``lit``
+    (:func:`scan_chunk`) is one pair a chunk, not a row a pulse: not listed."""
+    shapes = {"returns": ()}
     samples = sensor.samples
     if samples is not None and sensor.echoes == "waveform":
         shapes["needed"] = ()

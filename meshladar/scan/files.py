@@ -254,6 +254,8 @@ def _strict(value):
     its non-finite floats as :data:`NON_FINITE`'s strings (strict JSON)."""
     if isinstance(value, (np.generic, np.ndarray)):
         value = value.tolist()
+    if isinstance(value, np.floating):        # a long double's tolist() keeps its type
+        value = float(value)
     if isinstance(value, dict):
         return {k: _strict(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):

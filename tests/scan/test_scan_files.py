@@ -55,11 +55,11 @@ def test_numpy_numbers_and_arrays_in_the_info_read_back_as_numbers(tmp_path):
     now as JSON's numbers and lists, as the .npz writer does; non-finite ones as strings."""
     pytest.importorskip("h5py")
     info = {"gain": np.float32(1.5), "n": np.int64(3), "axis": np.array([0.0, np.inf]),
-            "flag": np.bool_(True), "t": (np.float64(-np.inf), 2)}
+            "flag": np.bool_(True), "t": (np.float64(-np.inf), 2), "long": np.longdouble(2.5)}
     write_hdf5(tmp_path / "n.h5", _cloud([0.0], info))
     back = read_hdf5(tmp_path / "n.h5").info
     assert back == {"gain": 1.5, "n": 3, "axis": [0.0, math.inf], "flag": True,
-                    "t": [-math.inf, 2]}
+                    "t": [-math.inf, 2], "long": 2.5}
     assert type(back["gain"]) is float and type(back["n"]) is int
 
 

@@ -13,7 +13,9 @@ import sys
 import numpy as np
 import pytest
 
-from meshladar.errors import EmptyScanWarning, ParameterError
+import meshladar as ml
+
+from meshladar.errors import EmptyScanWarning, MeshladarWarning, ParameterError
 from meshladar.io import TEMPORARY_PREFIX, temporary_writer
 from meshladar.scan import GeigerMode, Platform, ScanBeam, flash, raster, read_hdf5, scan
 from meshladar.scan.files import WaveformSink
@@ -292,7 +294,7 @@ def test_a_scan_with_no_return_says_which_pulses_met_the_scene_and_how_bright_th
     lies a thousand times farther and gives nothing). Too weak: the pulses within
     atan(20/50) = 21.8° of the boresight (5 of 13) meet the plate, the brightest (on the
     boresight) returning the link budget by hand; a Geiger-mode flash array's pixels, all
-    on the plate, named as pixels; facing away: none."""
+    on the plate, named as pixels; a black plate met by as many; facing away: none."""
     target = scene(plate(50.0))
     weak = sensor(pulse_energy=1e-16)
     with pytest.warns(EmptyScanWarning) as got:
@@ -301,14 +303,18 @@ def test_a_scan_with_no_return_says_which_pulses_met_the_scene_and_how_bright_th
     brightest = photoelectrons_by_hand(1e-16, 0.05, 50.0)
     text = str(got[0].message)
     assert "5 of 13 pulses met the scene" in text and f"returned {brightest:.3g} " in text
-    assert "lower its detector's threshold" in text
+    assert "or its detector's false_alarm (the threshold follows it)" in text
     centre = f"{50.0 + 0.01 / 2:.4g} m away"                 # the plate's middle, x = 50.005
     assert centre in text and got[0].filename == __file__
-    with pytest.warns(EmptyScanWarning, match="16 of 16 pixels met the scene, but no echo was "
-                                              r"detected in a Geiger-mode histogram \(raise its "
-                                              "GeigerMode's shots"):
+    with pytest.warns(EmptyScanWarning, match="16 of 16 pixels met the scene, but no echo "
+                                              "stood out of a Geiger-mode pixel's histogram "
+                                              r"\(the brightest pixel .* or its GeigerMode's "
+                                              "shots"):
         scan(target, flash(4, 4, ifov_deg=0.1), Platform.static((0, 0, 0)),
              sensor(pulse_energy=1e-22, geiger=GeigerMode(shots=10)))
+    with pytest.warns(EmptyScanWarning, match=r"5 of 13 pulses met .* returned 0 photo"):
+        scan(ml.Scene.from_meshes([(plate(50.0), ml.brdf.Lambertian(0.0))]), _raster(),
+             Platform.static((0, 0, 0)), sensor())                      # a black plate
     with pytest.warns(EmptyScanWarning, match=f"none of the 13 pulses met the scene .*{centre}"):
         scan(target, _raster(), Platform.static((0, 0, 0), attitude_deg=(0, 0, 180)),
              sensor())
@@ -323,3 +329,65 @@ def test_an_empty_scan_resumed_from_its_folder_still_says_why(tmp_path):
         with pytest.warns(EmptyScanWarning, match="5 of 13 pulses met the scene"):
             scan(*args, run_dir=tmp_path / "run")
     assert list((tmp_path / "run").glob("chunk_*.npz"))
+
+
+def test_an_empty_scan_whose_records_cut_its_echoes_names_the_length_not_the_energy():
+    """The ring of the test above, too dark to detect, and the wall behind it past an
+    80-sample record: both warnings name the same length that holds the echoes (the
+    empty scan's word does not ask for more pulse energy)."""
+    from meshladar.errors import RecordLengthWarning
+    from meshladar.scan import ScanPattern
+
+    sc = ml.Scene.from_meshes([(plate(RING, hole=HOLE), ml.brdf.Lambertian(1e-9)),
+                               (plate(WALL), ml.brdf.Lambertian(0.5))])
+    with pytest.warns(MeshladarWarning) as caught:
+        scan(sc, ScanPattern([0.0], [[1.0, 0.0, 0.0]]), Platform.static((0, 0, 0)),
+             sensor(beam=ScanBeam(1e-2, sub_rays=64), samples=80))
+    kinds = [type(w.message) for w in caught]
+    assert kinds == [RecordLengthWarning, EmptyScanWarning]
+    need = str(caught[0].message).split("; samples=")[1].split()[0]
+    assert f"samples=80 cut the echoes" in str(caught[1].message)
+    assert f"(samples={need} holds them all" in str(caught[1].message)
+    assert "pulse_energy" not in str(caught[1].message)
+
+
+class _NanAtNormal(ml.brdf.BRDF):
+    """A user's coating that gives NaN near normal incidence (cos θ > 0.99)."""
+
+    def projected(self, cos_theta, sin_theta):
+        c = np.asarray(cos_theta, float)
+        return np.where(c > 0.99, np.nan, 0.1 * c)
+
+
+def test_a_coating_that_gives_nan_scans_into_a_run_folder_as_without_one(tmp_path):
+    """A sub-ray's photoelectrons count where positive (as the echoes count them): a NaN
+    from a user's coating reaches no chunk's numbers, so a run folder takes the chunk
+    (it refused non-finite values) and gives the points of a run without one."""
+    args = (ml.Scene.from_meshes([(plate(50.0), _NanAtNormal())]), _raster(),
+            Platform.static((0, 0, 0)), sensor())
+    plain = scan(*args)
+    folder = scan(*args, run_dir=tmp_path / "run")
+    assert len(plain) == 4                     # the 4 pulses off the boresight's NaN
+    np.testing.assert_array_equal(folder.points, plain.points)
+
+
+def test_an_empty_scan_read_from_an_older_run_folder_says_what_it_can(tmp_path):
+    """Chunks made before they kept what met the scene (here: a run's chunks with it taken
+    out, checksums redone) still load, not recomputed: the word then names where the
+    sensor and the scene were, and no count."""
+    from meshladar.io import load_result, save_result
+    from meshladar.runs import chunk_digest
+
+    args = (scene(plate(50.0)), _raster(), Platform.static((0, 0, 0)),
+            sensor(pulse_energy=1e-16))
+    with pytest.warns(EmptyScanWarning, match="5 of 13 pulses met"):
+        scan(*args, run_dir=tmp_path / "run")
+    chunks = sorted((tmp_path / "run").glob("chunk_*.npz"))
+    for f in chunks:
+        arrays, meta = load_result(f)
+        del arrays["lit"]
+        save_result(f, arrays, dict(meta, sha256=chunk_digest(arrays)))
+    with pytest.warns(EmptyScanWarning, match="the chunks read from an older run folder "
+                                              r"do not say more \(the sensor at"):
+        scan(*args, run_dir=tmp_path / "run")
+    assert all("lit" not in load_result(f)[0] for f in chunks)      # read, not made again
