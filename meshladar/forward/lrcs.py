@@ -19,7 +19,7 @@ import numpy as np
 
 from .._validate import check_choice, check_count, unit_vectors
 from ..brdf import Lambertian
-from ..errors import BounceWarning, ParameterError
+from ..errors import MeshladarWarning, ParameterError
 from ..ladar import Ladar
 from ..meshes import MeshPart
 from ..plotting import plot
@@ -213,8 +213,10 @@ def lrcs(scene, views, *, model=None, bounces=1, per_part=False, n_bins=LRCS_BIN
     shares = None
     if per_part:
         single = {**options, "bounces": 1} if model == "mesh" else options
-        with warnings.catch_warnings():       # the bounce check spoke for the whole scene
-            warnings.simplefilter("ignore", BounceWarning)
+        # each part's run has the whole scene's geometry (the others black): the whole
+        # scene's run has said what there is to say, and a part's would say it again
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", MeshladarWarning)
             shares = np.stack([4.0 * np.pi * simulate(_alone(scene, i), ladar, model=model,
                                                       radiometry="power", **single)
                                .values.sum(axis=1) for i in range(len(names))], axis=1)
