@@ -5,8 +5,6 @@ commands' few flags are written here."""
 from __future__ import annotations
 
 import argparse
-import inspect
-import re
 
 from .. import __version__
 from ..forward.options import MODELS, OPTIONS, SENSOR_OPTIONS
@@ -15,6 +13,7 @@ from .argtypes import (KIND_TYPES, MergeCoatings, angle_list, bounce_count, boun
                        coatings, nonnegative_float, nonnegative_int, positive_float,
                        positive_int, unit_fraction, window_size)
 from .argv import Parser
+from .helptext import description
 from .scan import BEAM_DEFAULTS
 
 __all__ = ["build_parser"]
@@ -75,20 +74,8 @@ def _scene_args(q):
 
 
 def _sub(sub, name, commands, help, epilog):
-    return sub.add_parser(name, help=help, description=_description(commands[name]),
+    return sub.add_parser(name, help=help, description=description(commands[name]),
                           epilog=epilog, formatter_class=_RAW)
-
-
-def _description(command):
-    """A command's ``--help`` description: its docstring's prose, before the numpydoc
-    sections (which document the function for the API reference, not the user)."""
-    text = inspect.cleandoc(command.__doc__ or "")
-    cut = _SECTION.search(text)
-    return text[:cut.start()].rstrip() if cut else text
-
-
-#: A numpydoc section heading: a line of words under a line of dashes.
-_SECTION = re.compile(r"^\w[\w ]*\n-{3,}$", re.MULTILINE)
 
 
 def _simple(sub, commands):

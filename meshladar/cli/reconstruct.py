@@ -228,7 +228,7 @@ def cmd_receive(args) -> int:
     saved with :func:`meshladar.io.save_waveforms`; the figure is
     :func:`meshladar.viz.waveforms.draw`. A sinogram not simulated with
     ``--radiometry power`` warns (a :class:`~meshladar.errors.MeshladarWarning`) unless
-    ``quiet``.
+    ``--quiet``.
 
     Parameters
     ----------

@@ -213,10 +213,8 @@ def lrcs(scene, views, *, model=None, bounces=1, per_part=False, n_bins=LRCS_BIN
     shares = None
     if per_part:
         single = {**options, "bounces": 1} if model == "mesh" else options
-        # each part's run has the whole scene's geometry (the others black): the whole
-        # scene's run has said what there is to say, and a part's would say it again
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", MeshladarWarning)
+        with warnings.catch_warnings():  # a part's run (the others black) would say again
+            warnings.simplefilter("ignore", MeshladarWarning)   # what the whole scene's did
             shares = np.stack([4.0 * np.pi * simulate(_alone(scene, i), ladar, model=model,
                                                       radiometry="power", **single)
                                .values.sum(axis=1) for i in range(len(names))], axis=1)

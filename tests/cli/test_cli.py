@@ -241,7 +241,7 @@ def test_model_errors_name_the_flags(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("command", ["demo", "materials", "paper", "simulate", "reconstruct",
-                                     "receive", "view", "study", "bench"])
+                                     "receive", "scan", "lrcs", "view", "study", "bench"])
 def test_help_describes_a_command_in_prose_without_its_api_sections(command, capsys):
     """A command's description is its docstring's prose: the numpydoc sections that
     document the function for the API reference stay out of ``--help``."""
@@ -254,3 +254,32 @@ def test_help_describes_a_command_in_prose_without_its_api_sections(command, cap
     first = COMMANDS[command].__doc__.split("\n")[0].strip()
     assert first in out
     assert "----------" not in out and "argparse.Namespace" not in out
+    for markup in (":func:", ":class:", ":meth:", ":mod:", ":data:", "``", "`~"):
+        assert markup not in out, markup
+
+
+def test_help_turns_the_docstrings_markup_into_plain_words(capsys):
+    """reST roles and literals read as plain text in ``--help`` (they showed as
+    ``:func:`meshladar.waveforms.receive```), paragraphs filled again to 88 columns."""
+    from meshladar.cli import main
+    from meshladar.cli.helptext import description
+
+    def doc():
+        """Runs :func:`a.b.run` on ``x``, warns a :class:`~meshladar.errors.MeshladarWarning`
+        (:meth:`Ladar.covering <meshladar.ladar.Ladar.covering>`)
+        unless ``--quiet``.
+
+        Parameters
+        ----------
+        args : argparse.Namespace
+        """
+    assert description(doc) == ("Runs a.b.run() on x, warns a MeshladarWarning "
+                                "(Ladar.covering()) unless --quiet.")
+    with pytest.raises(SystemExit):
+        main(["receive", "--help"])
+    out = capsys.readouterr().out
+    words = " ".join(out.split())
+    assert "The waveforms (meshladar.waveforms.receive()) and any noise" in words
+    assert "with --radiometry power warns (a MeshladarWarning) unless --quiet." in words
+    prose = out.split("positional arguments")[0]
+    assert max(map(len, prose.splitlines())) <= 88
