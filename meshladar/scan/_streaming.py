@@ -41,7 +41,7 @@ class ScanJob(NamedTuple):
     run: object          # the chunk function: (job, slice, seed) -> (records, blocks of
     #                      (first pulse, waves, starts) or None, needed lengths or None,
     #                      (pulses that met the scene, the most photoelectrons a pulse
-    #                      returned before noise))
+    #                      returned before noise) for a chunk without a record, else None)
     split: object        # the moving parts (meshladar.scan.moving.MovingParts) or None
     sink: object = None  # a WaveformSink the chunks stream their records into, or None
     folder: bool = False  # a run folder keeps the chunks: fixed slots, not records
@@ -61,8 +61,8 @@ def scan_chunk(job, items):
     lo, hi = int(items[0]), int(items[-1]) + 1
     rec, blocks, needed, lit = job.run(job, slice(lo, hi), _chunk_seed(job.seed, lo))
     out = _slots(rec, lo, hi, job.slots) if job.folder else {"records": rec}
-    out["lit"] = np.asarray(lit, float)    # for the scan's word on an empty cloud (older
-    #                                        run folders' chunks lack it)
+    if lit is not None:                    # for the scan's word on an empty cloud (older
+        out["lit"] = np.asarray(lit, float)  # run folders' chunks lack it)
     if needed is not None:                 # the record length each pulse's echoes need
         out["needed"] = needed
     if job.sink is not None and blocks is not None:

@@ -18,13 +18,14 @@ import warnings
 import numpy as np
 
 from .._validate import check_count, check_seed
-from ..errors import EmptyScanWarning, ParameterError, RecordLengthWarning, user_stacklevel
+from ..errors import ParameterError, RecordLengthWarning, user_stacklevel
 from ..noise import draw_noise
 from ..raytrace.backends import resolve_backend
 from ..raytrace.embree import geometry
 from ..scene import Scene
 from ..stream import run_chunks
 from ..sensor import SPEED_OF_LIGHT
+from ._empty import pulses_lit, warn_empty
 from ._kernels import discrete_returns
 from ._records import fill_records
 from ._sampling import lit_spans
@@ -90,7 +91,8 @@ _NO_SHIFT = np.zeros((0, 0))
 def _chunk(job, sl, seed):
     """One chunk's records, the blocks of its measured waveforms (when kept: ``[(first
     pulse in the chunk, records, starts), …]``), the record length each pulse's
-    echoes need where the sensor fixes it (else None), and :func:`_lit`."""
+    echoes need where the sensor fixes it (else None), and
+    ``_empty.pulses_lit`` where the chunk has no record (else None)."""
     scene, pattern, platform, sensor = job.scene, job.pattern, job.platform, job.sensor
     offsets, shares, pitch = job.foot
     t = pattern.times[sl]
@@ -119,14 +121,8 @@ def _chunk(job, sl, seed):
                  (sl.start, t, pattern.scan_angles_deg[sl], pattern.channels[sl]),
                  (origins, axis, 0.5 * SPEED_OF_LIGHT),
                  (tau, pe, cast.distance, cast.points, cast.face, shift), job.part_of)
-    return rec, (blocks if job.keep or job.sink is not None else None), needed, _lit(cast, pe)
-
-
-def _lit(cast, pe):
-    """(pulses a sub-ray of which met the scene, the most photoelectrons one pulse returned
-    in all before noise): its sub-rays' positive ones, as the echoes count them."""
-    met = np.count_nonzero((cast.face >= 0).any(axis=1))
-    return met, float(np.where(pe > 0.0, pe, 0.0).sum(axis=1).max(initial=0.0))
+    lit = None if len(rec) else pulses_lit(cast, pe)  # asked only where a scan is empty
+    return rec, (blocks if job.keep or job.sink is not None else None), needed, lit
 
 
 def _waveform_returns(job, tau, pe, seed):
@@ -198,60 +194,6 @@ def _warn_cut(results, sensor, pulses):
                       RecordLengthWarning, stacklevel=user_stacklevel())
         return int(needed.max())
     return None
-
-
-def _warn_empty(results, job, cut):
-    """Say why a scan recorded no return: no pulse met the scene, a fixed record length
-    (``cut``: the length that holds them, or None) dropped the returns, or the echoes were
-    too weak; with where the sensor was and where the scene is (a scene in millimetres,
-    read as metres, lies a thousand times farther)."""
-    pattern, sensor = job.pattern, job.sensor
-    one = "pixel" if pattern.is_flash else "pulse"
-    pulses = f"{len(pattern)} {one}s"
-    at = job.platform.sensor_poses(pattern.times[:1])[0][0]
-    lo, hi = job.scene.bounds()
-    where = (f"the sensor at {np.array2string(at, precision=4)} at the first pulse, the "
-             f"scene{'' if job.split is None else ' at rest'} within "
-             f"{np.array2string(lo, precision=4)} to {np.array2string(hi, precision=4)}, its "
-             f"centre {np.linalg.norm(0.5 * (lo + hi) - at):.4g} m away; a scan's units are "
-             "metres")
-    lit = [r["lit"] for r in results if "lit" in r]
-    met, top = (int(sum(x[0] for x in lit)), max(x[1] for x in lit)) \
-        if len(lit) == len(results) and lit else (None, None)
-    if cut is not None:
-        why = (f"samples={sensor.samples} cut the echoes of the pulses that met the scene "
-               f"(samples={cut} holds them all: the RecordLengthWarning) ({where})")
-    elif met is None:
-        why = f"the chunks read from an older run folder do not say more ({where})"
-    elif met:
-        why = (f"{met} of {pulses} met the scene, but {_undetected(sensor)} (the brightest "
-               f"{one} returned {top:.3g} photoelectrons in all, before noise, spread over "
-               f"its echoes' samples): raise the sensor's pulse_energy or aperture_diameter"
-               f"{_lower(sensor)} ({where})")
-    else:
-        why = (f"none of the {pulses} met the scene ({where}): check the platform's "
-               "position and attitude (the sensor looks along its x; a beam that starts on "
-               "a surface ranges nothing) and the pattern's angles")
-    warnings.warn(f"the scan recorded no return: {why}", EmptyScanWarning,
-                  stacklevel=user_stacklevel())
-
-
-def _undetected(sensor):
-    if sensor.geiger is not None:
-        return "no echo stood out of a Geiger-mode pixel's histogram"
-    if sensor.echoes == "discrete":
-        return (f"no return reached the {sensor.detector.threshold or 1.0:g} photoelectrons "
-                "a discrete return needs")
-    return "no echo crossed the detection threshold (photoelectrons per sample)"
-
-
-def _lower(sensor):
-    det = sensor.detector
-    if sensor.geiger is not None:
-        return ", or its GeigerMode's shots"
-    if sensor.echoes == "discrete" or det.threshold is not None:
-        return ", or lower its detector's threshold"
-    return "" if det.cfar else ", or its detector's false_alarm (the threshold follows it)"
 
 
 def _discrete(sensor, tau, pe):
@@ -395,10 +337,10 @@ def _description(job, run_dir, motions):
 
 def _warn(results, points, job):
     """The scan's warnings once its chunks are in: echoes that a fixed record cut, and a
-    cloud with no return (:func:`_warn_cut`, :func:`_warn_empty`)."""
+    cloud with no return (:func:`_warn_cut`, ``_empty.warn_empty``)."""
     cut = _warn_cut(results, job.sensor, len(job.pattern))
     if not len(points):
-        _warn_empty(results, job, cut)
+        warn_empty(results, job, cut)
 
 
 def _check_keep(keep, run_dir, sensor):
