@@ -97,6 +97,7 @@ def parts_by_name(loaded, material, materials, transform):
         if coat is None:
             raise ParameterError(f"part {name!r} has no material: give material= or "
                                  f"materials={{{name!r}: ...}}")
+        check_brdf(f"materials[{name!r}]" if name in named else "material", coat)
         if coat not in mats:
             mats.append(coat)
         parts.append(part_from_trimesh(m, mats.index(coat), name=name, transform=transform))

@@ -43,8 +43,8 @@ def check_real(name: str, value, *, low: float | None = None, high: float | None
         x = float(value)
     except OverflowError:          # an integer beyond float64 (a 400-digit table entry)
         x = math.inf if value > 0 else -math.inf
-    lo = "(" if low_open else "["
-    hi = ")" if high_open else "]"
+    lo = "(" if low_open or low is None else "["       # an infinite end is never in it
+    hi = ")" if high_open or high is None else "]"
     valid = f"{lo}{'-inf' if low is None else f'{low:g}'}, {'inf' if high is None else f'{high:g}'}{hi}"
     if not math.isfinite(x):
         raise ParameterError(f"{name} must be finite and in {valid}; got {x!r}")

@@ -22,8 +22,8 @@ import warnings
 from ..errors import MeshladarError
 from .commands import cmd_bench, cmd_demo, cmd_materials, cmd_paper, cmd_study, cmd_view
 from .parser import build_parser
-from .reconstruct import cmd_receive, cmd_reconstruct
-from .lrcs import cmd_lrcs
+from .reconstruct import cmd_receive, cmd_reconstruct, receive_words, reconstruct_words
+from .lrcs import cmd_lrcs, lrcs_words
 from .scan import cmd_scan
 from .simulate import cmd_simulate, in_flags
 
@@ -42,8 +42,9 @@ def _one_line_warning(message, category, filename, lineno, line=None, *, words=s
 
 #: Per command, how an API message (an error's or a warning's) is put in its flags' words
 #: (simulate's: ``normals='smooth'`` becomes ``--normals smooth``, ``ray_spacing``
-#: ``--ray-spacing``): the one place the command's messages are translated.
-_WORDS = {"simulate": in_flags}
+#: ``--ray-spacing``; :mod:`.words`): the one place the command's messages are translated.
+_WORDS = {"simulate": in_flags, "lrcs": lrcs_words, "receive": receive_words,
+          "reconstruct": reconstruct_words}
 
 
 def main(argv=None) -> int:

@@ -13,8 +13,15 @@ from ..forward.lrcs import lrcs
 from ..meshes import fibonacci_sphere
 from .checks import check_output
 from .simulate import load_scene
+from .words import flag_words
 
-__all__ = ["cmd_lrcs"]
+__all__ = ["cmd_lrcs", "lrcs_words"]
+
+#: lrcs' messages in its flags' words (:func:`.words.flag_words`): the options it sets.
+lrcs_words = flag_words({"ray_spacing": "--ray-spacing", "angles_deg": "--angles-deg",
+                         "view_vectors": "--view-vectors", "per_part": "--per-part",
+                         "bounces": "--bounces", "seed": "--seed", "views": "--views"},
+                        ("ray_spacing", "angles_deg", "view_vectors", "per_part"))
 
 
 def _views(args, scene):

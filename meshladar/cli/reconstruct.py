@@ -9,12 +9,16 @@ import warnings
 from .. import io, plotting
 from ..errors import MeshladarWarning, ParameterError
 from ..noise import Noise
-from ..waveforms import GaussianPulse, SampledPulse, receive
+from ..sensor import LIMITS as SENSOR_LIMITS
+from ..waveforms import MAX_OVERSAMPLE, SAMPLE_RATE_RANGE, GaussianPulse, SampledPulse, receive
+from .._validate import check_count, check_real
 from ..reconstruct import clip_radiance, fbp, log_radiance
 from ..reconstruct.volumes import fbp3d
 from .checks import check_not_input, check_output
+from .words import flag_words
 
-__all__ = ["cmd_reconstruct", "cmd_receive", "IMAGE_SUFFIXES", "VALUES_SUFFIX"]
+__all__ = ["cmd_reconstruct", "cmd_receive", "IMAGE_SUFFIXES", "VALUES_SUFFIX",
+           "reconstruct_words", "receive_words"]
 
 #: Image formats reconstruct writes (matplotlib's own writers; JPEG and TIFF through Pillow,
 #: a dependency of matplotlib).
@@ -174,6 +178,41 @@ _NOISE_FIELDS = {"speckle_cells": "speckle_cells", "background_rate": "backgroun
                  "gain": "gain", "bits": "bits", "full_scale": "full_scale"}
 
 
+#: reconstruct's messages in its flags' words (:func:`.words.flag_words`).
+reconstruct_words = flag_words({"size": "--size", "extent": "--extent", "smooth": "--smooth",
+                                "filter": "--filter", "threshold": "--clip"})
+#: receive's: the waveforms' and the noise's parameters (a pulse's and the response's
+#: ``fwhm`` are named as they are made: :func:`_gaussian`).
+receive_words = flag_words(
+    {"sample_rate": "--sample-rate", "oversample": "--oversample", "standoff": "--standoff",
+     "scale": "--scale", "seed": "--seed", "interval": "--pulse-interval",
+     **{field: "--" + a.replace("_", "-") for a, field in _NOISE_FIELDS.items()}},
+    ("sample_rate", "oversample", "standoff", "speckle_cells", "background_rate",
+     "dark_rate", "excess_noise_factor", "full_scale"))
+
+
+def _gaussian(flag, fwhm):
+    """A Gaussian pulse of ``fwhm`` seconds, refused in ``flag``'s words."""
+    try:
+        return GaussianPulse(fwhm)
+    except ParameterError as exc:
+        raise ParameterError(str(exc).replace("fwhm", flag, 1)) from None
+
+
+def _check_receiver(args):
+    """receive's numbers refused in its flags' words before the sinogram is read: the
+    digitiser's rate, the oversampling, the standoff (as :func:`meshladar.waveforms.receive`
+    checks them), the response and the noise (as they are made)."""
+    check_real("--sample-rate", args.sample_rate, low=SAMPLE_RATE_RANGE[0],
+               high=SAMPLE_RATE_RANGE[1])
+    check_count("--oversample", args.oversample, high=MAX_OVERSAMPLE)
+    if args.standoff is not None:
+        check_real("--standoff", args.standoff, low=0.0, high=SENSOR_LIMITS["standoff"])
+    response = None if args.response_fwhm is None else _gaussian("--response-fwhm",
+                                                                 args.response_fwhm)
+    return response, _noise_model(args)
+
+
 def _pulse(args):
     if args.pulse_fwhm is not None and args.pulse_samples is not None:
         raise ParameterError("--pulse-fwhm and --pulse-samples both give the pulse; give one")
@@ -182,7 +221,7 @@ def _pulse(args):
                              "and the other way round")
     if args.pulse_samples is not None:
         return SampledPulse(read_samples(args.pulse_samples), args.pulse_interval)
-    return None if args.pulse_fwhm is None else GaussianPulse(args.pulse_fwhm)
+    return None if args.pulse_fwhm is None else _gaussian("--pulse-fwhm", args.pulse_fwhm)
 
 
 def _check_noise_flags(args):
@@ -194,13 +233,12 @@ def _check_noise_flags(args):
                              "--realisations N too")
 
 
-def _noise(args, waves):
-    """(noise, draws), both None without --realisations."""
+def _noise_model(args):
+    """The noise the flags give, None without --realisations."""
     if args.realisations is None:
-        return None, None
-    noise = Noise(**{field: getattr(args, a) for a, field in _NOISE_FIELDS.items()
-                     if getattr(args, a) is not None})
-    return noise, waves.realise(noise, args.realisations, seed=args.seed)
+        return None
+    return Noise(**{field: getattr(args, a) for a, field in _NOISE_FIELDS.items()
+                    if getattr(args, a) is not None})
 
 
 def _load_for_receiver(args):
@@ -272,14 +310,14 @@ def cmd_receive(args) -> int:
         plotting.require("matplotlib")          # before the work, not after it
     _check_noise_flags(args)
     pulse = _pulse(args)                        # reads --pulse-samples: before the work
+    response, noise = _check_receiver(args)
     sino = _load_for_receiver(args)
-    waves = receive(sino, sample_rate=args.sample_rate, pulse=pulse,
-                    response=None if args.response_fwhm is None
-                    else GaussianPulse(args.response_fwhm),
+    waves = receive(sino, sample_rate=args.sample_rate, pulse=pulse, response=response,
                     standoff=args.standoff, oversample=args.oversample)
     if args.scale is not None:
         waves = waves.scaled(args.scale)
-    noise, draws = _noise(args, waves)
+    draws = None if noise is None else waves.realise(noise, args.realisations,
+                                                     seed=args.seed)
     params = {"source": os.path.basename(args.result), "seed": args.seed,
               "realisations": args.realisations}
     io.save_waveforms(args.output, waves, realisations=draws, noise=noise,

@@ -24,6 +24,7 @@ from ..sensor import FloodBeam, GaussianBeam, Sensor
 from ..stream import dask_executor
 from .checks import check_outdir, check_output
 from .sources import load_source
+from .words import flag_words
 
 __all__ = ["cmd_simulate", "load_scene", "quick_backend", "SCENE_LABELS"]
 
@@ -127,26 +128,24 @@ _API_FLAGS = {"n_bins": "--bins", "bin_width": "--bin-width", "angles_deg": "--a
               "view_vectors": "--view-vectors", "model": "--model"}
 #: Every API name with its flag: the options', the sensor fields', the ladar's.
 _FLAGS = {**{o.name: o.cli_flag for o in OPTIONS + SENSOR_OPTIONS if o.cli}, **_API_FLAGS}
-#: Names a message uses only for their values: an underscore in them, or a sensor
+#: Names a message uses only for their values: an underscore in them, ``tol``, or a sensor
 #: field's (the sensor's messages say "standoff" and "wavelength" for its flags').
-_UNIQUE = sorted((n for n in _FLAGS if "_" in n or n in {o.name for o in SENSOR_OPTIONS}),
-                 key=len, reverse=True)
-#: Those names: their flag wherever they stand outside quotes and outside a path (a
-#: file's name is kept, quoted or not: ``/data/n_bins/part.stl``).
-_ANYWHERE = re.compile(r"(?<!\w)('[^']*'|\"[^\"]*\")|(?<![-\w./\\])(" + "|".join(_UNIQUE)
-                       + r")\b(?![./\\]\w)")
-#: The others (tol, jobs, seed, mode...): their flag only where a message begins with one
-#: as the subject of a rule (``tol must be in (0, 1)``, ``jobs: ...``).
-_LEADING = re.compile(r"^(" + "|".join(n for n in _FLAGS if n not in _UNIQUE)
-                      + r")(?= must\b|:)")
+_UNIQUE = [n for n in _FLAGS if "_" in n or n == "tol" or n in {o.name for o in SENSOR_OPTIONS}]
+#: The beam classes' words and the flags that make them; the API's advice that has no one
+#: flag (a switch to leave out, the sensor the standoff makes).
+_PHRASES = (("FloodBeam(radius=...)", "--flood-radius"), ("a GaussianBeam", "--beam-waist"),
+            ("sensor.beam=FloodBeam(radius=None)", "no --flood-radius"),
+            ("use no --footprint", "leave out --footprint"),
+            ("drop receiver or sensor", "drop --receiver or --standoff"))
+_WORDS = flag_words(_FLAGS, _UNIQUE, _PHRASES)
 
 
 def in_flags(message):
-    """An API message in the command line's words: ``mode='3d'`` becomes ``--mode 3d`` for
-    every option; a name messages use only for its value (``ray_spacing``, ``n_bins``, a
-    Sensor field's) becomes its flag wherever it stands outside quotes and paths
-    (``/data/n_bins/part.stl`` is kept); any other option's name (``tol``, ``jobs``)
-    where the message begins with it as a rule's subject.
+    """An API message in the command line's words (:func:`.words.flag_words`):
+    ``mode='3d'`` becomes ``--mode 3d`` for every option; a name messages use only for its
+    value (``ray_spacing``, ``n_bins``, ``tol``, a Sensor field's) becomes its flag
+    wherever it stands outside quotes and paths (``/data/n_bins/part.stl`` is kept); any
+    other option's name (``jobs``) where the message begins with it as a rule's subject.
 
     Parameters
     ----------
@@ -158,19 +157,7 @@ def in_flags(message):
     str
         The text with the API's names as simulate's flags.
     """
-    for name, flag in _FLAGS.items():
-        message = re.sub(rf"\b{name}=(?:'([^']*)'|([\w.+-]+))",
-                         lambda m, f=flag: f"{f} {m.group(1) or m.group(2)}", message)
-    message = _ANYWHERE.sub(lambda m: m.group(1) or _FLAGS[m.group(2)], message)
-    message = _LEADING.sub(lambda m: _FLAGS[m.group(1)], message)
-    for api, flag in _BEAM_WORDS:
-        message = message.replace(api, flag)
-    return re.sub(r"^(workers|scheduler):", r"--\1:", message)
-
-
-#: The beam classes' words and the flags that make them.
-_BEAM_WORDS = (("FloodBeam(radius=...)", "--flood-radius"), ("a GaussianBeam", "--beam-waist"),
-               ("sensor.beam=FloodBeam(radius=None)", "no --flood-radius"))
+    return re.sub(r"^(workers|scheduler):", r"--\1:", _WORDS(message))
 
 
 def _given(args, attr):

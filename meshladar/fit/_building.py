@@ -43,6 +43,33 @@ def parts_of(geometry):
     return names, materials
 
 
+def scene_aliases(scene, names):
+    """A mesh scene's part names → the index of the coating each holds alone (its kernel
+    part, named ``names[i]``), or a str saying why a part holds none alone (several
+    coatings, or one it shares); a part named as a coating is left out (the coating's
+    name wins). Empty for anything but a mesh Scene."""
+    if not isinstance(scene, Scene) or not scene.is_mesh:
+        return {}
+    held = [np.unique(np.asarray(p.material, dtype=np.int64)) for p in scene.parts]
+    out = {}
+    for part, mine in zip(scene.parts, held):
+        if part.name in names or part.name in out:
+            continue
+        if mine.size != 1:
+            out[part.name] = (f"part {part.name!r} holds {mine.size} coatings "
+                              f"{[names[i] for i in mine]}: name them (a mesh's fit has "
+                              "a part per coating)")
+            continue
+        others = [q.name for q, theirs in zip(scene.parts, held)
+                  if q is not part and mine[0] in theirs]
+        out[part.name] = int(mine[0]) if not others else (
+            f"part {part.name!r} shares its coating {names[mine[0]]!r} with "
+            f"{others} (a mesh's fit has a part per coating): give {part.name!r} a "
+            f"coating of its own (Scene.from_mesh(..., materials={{{part.name!r}: ...}})) "
+            f"to fit it alone, or name {names[mine[0]]!r} to fit them together")
+    return out
+
+
 def analytic_fields(scene, ladar, radiometry, samples):
     """The kernel of an analytic scene with ``samples`` pieces per boundary."""
     n_views, n_bins = ladar.n_views, ladar.bin_edges.size - 1

@@ -83,14 +83,38 @@ def part_index(parts, part) -> int:
 
 class PartList(NamedTuple):
     """A geometry's part names and coatings, as a kernel would have them (what
-    :func:`_resolve_params` reads before a kernel is traced)."""
+    :func:`_resolve_params` reads before a kernel is traced), and ``aliases``: a mesh
+    scene's own part names → the index of the coating each holds alone, or why it holds
+    none alone (a str: :func:`meshladar.fit._building.scene_aliases`)."""
 
     parts: tuple
     materials: tuple
+    aliases: dict = {}
 
     def part_index(self, part):
-        """The index of a part's name or index (:func:`part_index`)."""
-        return part_index(self.parts, part)
+        """The index of a part's name or index (:func:`part_index`), or of the coating a
+        mesh scene's part of that name holds alone."""
+        if part in self.parts or not isinstance(part, str) or part not in self.aliases:
+            try:
+                return part_index(self.parts, part)
+            except ParameterError:
+                if not self.aliases:
+                    raise
+                raise ParameterError(f"part must be one of {list(self.parts)} (a mesh's "
+                                     "fit has a part per coating, named by it), an index "
+                                     f"below {len(self.parts)} or one of the scene's parts "
+                                     f"{list(self.aliases)}; got {part!r}") from None
+        found = self.aliases[part]
+        if isinstance(found, str):
+            raise ParameterError(found)
+        return found
+
+
+def names_of(kernel, p):
+    """The names part ``p`` of ``kernel`` answers to in ``free`` and ``bounds``: its own,
+    and the scene's parts that hold its coating alone (:class:`PartList`'s aliases)."""
+    aliases = getattr(kernel, "aliases", {})
+    return (kernel.parts[p],) + tuple(a for a, i in aliases.items() if i == p)
 
 
 def _resolve_params(kernel, parts, free, bounds, initial):
@@ -139,7 +163,8 @@ def _free_names(kernel, p, m, free):
     """The names of part ``p``'s free parameters (its coating ``m``), checked."""
     names = _float_fields(m)
     if free is not None:
-        want = free.get(kernel.parts[p], free.get(p)) if isinstance(free, dict) else free
+        want = (next((free[k] for k in (*names_of(kernel, p), p) if k in free), None)
+                if isinstance(free, dict) else free)
         if want is None:
             return ()
         want = (want,) if isinstance(want, str) else tuple(want)
@@ -162,7 +187,7 @@ def _bounds_of(kernel, p, m, n, bounds):
     valid range), else the valid range."""
     lo, hi = valid = valid_range(m, n)
     if bounds is not None:
-        for key in (f"{kernel.parts[p]}.{n}", f"{p}.{n}", n):
+        for key in (*(f"{a}.{n}" for a in names_of(kernel, p)), f"{p}.{n}", n):
             if key in bounds:
                 lo, hi = _bound_pair(key, bounds[key])
                 break
@@ -182,7 +207,8 @@ def _check_bound_keys(kernel, params, bounds):
         return
     labels = [f"{kernel.parts[q.part]}.{q.name}" for q in params]
     bare = list(dict.fromkeys(q.name for q in params))
-    known = set(labels) | set(bare) | {q.label for q in params}
+    known = set(bare) | {q.label for q in params} | {
+        f"{a}.{q.name}" for q in params for a in names_of(kernel, q.part)}
     bad = [key for key in bounds if key not in known]
     if bad:
         raise ParameterError(f"bounds' keys must name free parameters, among "

@@ -37,7 +37,7 @@ from ..scene import Scene
 from . import _bias, _irls, _profile
 from ._coating_fit import NOTED_BIAS, CoatingFit
 from ._identify import NULL_REL, _correlation, _misfit, _uncertainty, describe
-from ._building import parts_of
+from ._building import parts_of, scene_aliases
 from ._params import PartList, _materials, _resolve_params
 from ._resolution import (KERNEL_TOL, MAX_SAMPLES, MIN_KERNEL_TOL, KernelErrorWarning, Ladder,
                           kernel_shift, with_kernel_error)
@@ -72,8 +72,8 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
         The data (its ``info["radiometry"]`` picks the radiometry for a Scene); waveforms
         need a waveform kernel (:meth:`CoatingKernel.received`).
     parts : sequence, optional
-        Parts (names or indices) whose coatings are fitted (default all); the others keep
-        their coatings.
+        Parts (names or indices) whose coatings are fitted (default all; a mesh's are its
+        coatings, or a Scene part's name for one it holds alone); the others keep theirs.
     free : sequence or dict, optional
         Parameter names to fit (dataclass fields of each part's BRDF; default all four SR
         parameters, or ρd and b of a diffuse-only SR coating, or every float field of
@@ -95,8 +95,8 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
     bootstrap, seed : int
         Parametric-bootstrap refits (0: none) from the fitted model, and their seed.
     samples : float
-        Pieces per boundary an analytic Scene's kernel starts from (default 2048); rays per
-        bin width a mesh Scene's starts from (default trace's).
+        Pieces per boundary an analytic Scene's kernel starts from (default 2048); rays
+        per bin width a mesh Scene's (default trace's).
     kernel_tol : float or None
         The kernel's error allowed, in σ (default 0.1, at least 1e-6): N doubles until the
         model's change from N to 2N (a mesh traced again at half the spacing) is at most
@@ -268,7 +268,8 @@ def _geometry_parts(geometry, measured, *, waveforms):
     elif not isinstance(geometry, Scene):
         raise ParameterError(f"geometry must be a CoatingKernel, a Scene or Hits; got "
                              f"{type(geometry).__name__}")
-    return PartList(*parts_of(geometry))
+    names, materials = parts_of(geometry)
+    return PartList(names, materials, scene_aliases(geometry, names))
 
 
 class _Views(NamedTuple):

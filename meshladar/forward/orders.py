@@ -222,6 +222,6 @@ def _check_second_order(scene, ladar, sino, share, seed):
     if first > 0 and second > share * first:
         warnings.warn(f"this scene is not convex and its second bounce adds about "
                       f"{100 * second / first:.2g} % to the single bounce's received power "
-                      f"(a cheap estimate "
-                      f"on {len(pick)} views); bounces=2 or bounces='auto' includes it",
+                      f"(a cheap estimate on {len(pick)} "
+                      f"view{'s' if len(pick) > 1 else ''}); bounces=2 or bounces='auto' includes it",
                       BounceWarning, stacklevel=user_stacklevel())

@@ -259,11 +259,9 @@ def bin_flat_hits(prim, tfar, origins, plane_d, face_normals, face_material, par
     time (a sparse grid), so the faces' rows are prefetched at any mesh size
     (:func:`._prefetch.ahead`); where footprint rows are made at first hits, a face's
     corners are prefetched half as far ahead (its row of faces already fetched): on
-    2,000 sparse views of an 82k sphere 12-15 % faster. There, with point bins, a face is
-    hit about once a view, so a hit whose face's weight is not stamped (a built-in
-    coating's: other coatings' are all stamped before the loop) has its weight made and
-    binned at once, not kept (no write to ``weight`` and ``stamp``; the same number): 4-10 %
-    faster on those views.
+    2,000 sparse views of an 82k sphere 12-15 % faster; with point bins a face is hit about
+    once a view there, so an unstamped face's weight (a built-in coating's: the others'
+    are stamped first) is binned at once, not kept: 4-10 % faster, the same numbers.
     Returns the number of back-face hits."""
     nb = edges.size - 1
     e0 = edges[0]

@@ -7,11 +7,9 @@ warn; and errors name the flags, never the API's parameters."""
 from __future__ import annotations
 
 import os
-import struct
 
 import numpy as np
 import pytest
-import trimesh
 
 import meshladar as ml
 import meshladar.studies.reconstruction
@@ -25,7 +23,7 @@ from meshladar.cli.argv import join_negative_lists
 from meshladar.cli.parser import build_parser
 from meshladar.cli.simulate import check_applicable, in_flags
 from meshladar.errors import MeshladarWarning
-from meshladar.io import load_sinogram, save_sinogram
+from meshladar.io import load_sinogram
 from meshladar.scan import read_hdf5
 
 
@@ -39,22 +37,6 @@ def no_work(monkeypatch):
     for module, name in ((cli_simulate, "simulate"), (plotting, "viz"),
                          (cli_scan.scanning, "scan"), (ml.studies.reconstruction, "run")):
         monkeypatch.setattr(module, name, _work)
-
-
-@pytest.fixture
-def files(tmp_path, monkeypatch):
-    """The working folder: a unit box (box.stl), an all-degenerate STL (flat.stl), a file
-    (f.txt) and a small sinogram (s.npz)."""
-    monkeypatch.chdir(tmp_path)
-    trimesh.creation.box().export(tmp_path / "box.stl")
-    flat = np.array([[0, 0, 1], [0, 0, 0], [1, 0, 0], [2, 0, 0]], np.float32)   # collinear
-    (tmp_path / "flat.stl").write_bytes(bytes(80) + struct.pack("<I", 1) + flat.tobytes()
-                                        + bytes(2))
-    (tmp_path / "f.txt").write_text("a file")
-    save_sinogram(tmp_path / "s.npz", ml.Sinogram(np.ones((8, 16)),
-                                                  angles_deg=np.arange(8) * 45.0,
-                                                  bin_edges=np.linspace(-1.0, 1.0, 17)))
-    return tmp_path
 
 
 def _run(capsys, argv):

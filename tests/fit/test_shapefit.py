@@ -114,7 +114,7 @@ def test_no_shape_is_a_clear_error():
 
 
 @pytest.mark.parametrize("kwargs, message", [
-    (dict(tol_bins=0.0), r"tol_bins must be in \(0, inf\]; got 0.0"),
+    (dict(tol_bins=0.0), r"tol_bins must be in \(0, inf\); got 0.0"),
     (dict(min_share=1.5), r"min_share must be in \[0, 1\]; got 1.5"),
     (dict(max_shapes=0), r"max_shapes must be an integer >= 1; got 0"),
 ])

@@ -74,7 +74,7 @@ def test_shadow_gap_is_dark():
 
 def test_bad_options():
     scene = _pair(DARK_GRAY, DARK_GRAY)
-    with pytest.raises(ml.errors.ParameterError, match=r"pixel_size must be in \(0, inf\]"):
+    with pytest.raises(ml.errors.ParameterError, match=r"pixel_size must be in \(0, inf\)"):
         ml.simulate(scene, PAPER, model="pixel", pixel_size=0.0)
     with pytest.raises(ml.errors.ParameterError, match=r"model 'pixel' takes options "
                                                         r"\('pixel_size', 'ray_spacing', "

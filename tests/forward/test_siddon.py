@@ -88,7 +88,7 @@ def test_rays_missing_the_grid_and_axis_aligned_rays():
 def test_bad_inputs():
     with pytest.raises(ParameterError, match=r"nx must be an integer >= 1; got 0"):
         PixelGrid(0, 3, 1.0, (0, 0))
-    with pytest.raises(ParameterError, match=r"pixel_size must be in \(0, inf\]"):
+    with pytest.raises(ParameterError, match=r"pixel_size must be in \(0, inf\)"):
         PixelGrid(2, 3, 0.0, (0, 0))
     grid = PixelGrid(2, 2, 1.0, (0, 0))
     rays = Rays([0.0], [0.0], [1.0], [0.0])

@@ -300,13 +300,13 @@ for _flag in ("--sample-rate", "--pulse-fwhm", "--realisations", "--speckle-cell
         cli(f"receive.{_flag}={_key}", _RECV + [_flag, _POS_BAD[_key]], "error", _flag,
             setup=_RESULT_FILE)
 cli("receive.--sample-rate=huge", _RECV + ["--sample-rate", "1e18"], "error",
-    "sample_rate", setup=_RESULT_FILE)
+    "--sample-rate", setup=_RESULT_FILE)
 cli("receive.noise-on-relative-units", _RECV + ["--realisations", "2"], "error",
     "photoelectrons", setup=_RESULT_FILE)
 cli("receive.--gain-without-realisations", _RECV + ["--gain", "2"], "error", "--realisations",
     setup=_RESULT_FILE)
 cli("receive.--speckle-cells=0.5", _RECV + ["--scale", "10", "--realisations", "2",
-                                           "--speckle-cells", "0.5"], "error", "speckle_cells",
+                                           "--speckle-cells", "0.5"], "error", "--speckle-cells",
     setup=_RESULT_FILE)
 cli("receive.-o=input", ["receive", "{tmp}/r.npz", "-o", "{tmp}/r.npz", "--sample-rate",
                          "1e10"], "error", "input", setup=_RESULT_FILE)

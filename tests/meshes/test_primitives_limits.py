@@ -47,10 +47,10 @@ def test_the_largest_allowed_icosphere_is_within_the_cap():
 
 
 @pytest.mark.parametrize("height, message", [
-    (-1.0, r"^height must be in \(0, inf\]; got -1.0"),
-    (0.0, r"^height must be in \(0, inf\]; got 0.0"),
-    (math.nan, r"^height must be finite and in \(0, inf\]; got nan"),
-    (math.inf, r"^height must be finite and in \(0, inf\]; got inf"),
+    (-1.0, r"^height must be in \(0, inf\); got -1.0"),
+    (0.0, r"^height must be in \(0, inf\); got 0.0"),
+    (math.nan, r"^height must be finite and in \(0, inf\); got nan"),
+    (math.inf, r"^height must be finite and in \(0, inf\); got inf"),
 ])
 def test_a_prism_needs_a_finite_positive_height(height, message):
     with pytest.raises(ParameterError, match=message):

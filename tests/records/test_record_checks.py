@@ -61,8 +61,8 @@ def test_a_sinogram_of_none_says_so():
     (dict(values=np.zeros((3, 4)), extent=1.0), r"square \(size, size\) array; got shape "
                                                 r"\(3, 4\)"),
     (dict(values=np.zeros((0, 0)), extent=1.0), r"got shape \(0, 0\)"),
-    (dict(values=np.zeros((4, 4)), extent=-1.0), r"extent must be in \(0, inf\]; got -1.0"),
-    (dict(values=np.zeros((4, 4)), extent=0.0), r"extent must be in \(0, inf\]; got 0.0"),
+    (dict(values=np.zeros((4, 4)), extent=-1.0), r"extent must be in \(0, inf\); got -1.0"),
+    (dict(values=np.zeros((4, 4)), extent=0.0), r"extent must be in \(0, inf\); got 0.0"),
     (dict(values=np.zeros((4, 4)), extent=math.inf), "extent must be finite"),
     (dict(values=np.zeros((4, 4)), extent=1.0, center=(0.0, 1.0, 2.0)),
      r"center must be two numbers"),

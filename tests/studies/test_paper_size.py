@@ -55,7 +55,7 @@ def test_a_wider_extent_needs_as_fine_pixels(no_work):
         paper.run(size=950, extent=2.0)
     with pytest.raises(AssertionError, match="simulate reached"):
         paper.run(size=475, extent=0.9)              # finer pixels than the measured ones
-    with pytest.raises(ParameterError, match=r"^extent must be in \(0, inf\]; got 0.0"):
+    with pytest.raises(ParameterError, match=r"^extent must be in \(0, inf\); got 0.0"):
         paper.run(size=512, extent=0.0)
 
 

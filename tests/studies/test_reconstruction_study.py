@@ -22,8 +22,8 @@ def _no_work():
     (dict(methods=["fbp", "fbpp"]), rf"^methods\[1\] must be one of {CHOICES}; got 'fbpp'$"),
     (dict(methods="fbp"), r"^methods must be a non-empty list or tuple; got 'fbp'$"),
     (dict(methods=[]), r"^methods must be a non-empty list or tuple; got \[\]$"),
-    (dict(spacings=[5.0, 0.0]), r"^spacings\[1\] must be in \(0, inf\]; got 0\.0$"),
-    (dict(spacings=[float("nan")]), r"^spacings\[0\] must be finite and in \(0, inf\]; "
+    (dict(spacings=[5.0, 0.0]), r"^spacings\[1\] must be in \(0, inf\); got 0\.0$"),
+    (dict(spacings=[float("nan")]), r"^spacings\[0\] must be finite and in \(0, inf\); "
                                     r"got nan$"),
     (dict(spacings=5.0), r"^spacings must be a non-empty list or tuple; got 5\.0$"),
 ])

@@ -33,8 +33,8 @@ def test_shapes_are_frozen_values():
 
 
 @pytest.mark.parametrize("make, match", [
-    (lambda: ml.Disk((0, 0), 0.0, M), r"radius must be in \(0, inf\]; got 0.0"),
-    (lambda: ml.Disk((0, 0), -1.0, M), r"radius must be in \(0, inf\]; got -1.0"),
+    (lambda: ml.Disk((0, 0), 0.0, M), r"radius must be in \(0, inf\); got 0.0"),
+    (lambda: ml.Disk((0, 0), -1.0, M), r"radius must be in \(0, inf\); got -1.0"),
     (lambda: ml.Disk((0, 0), float("nan"), M), r"radius must be finite"),
     (lambda: ml.Disk((0, 0, 0), 1.0, M), r"center must be a point \(x, y\); got shape \(3,\)"),
     (lambda: ml.Disk((0, float("inf")), 1.0, M), r"center must be finite"),

@@ -1,0 +1,81 @@
+"""Every command speaks its flags (a user trial: ``receive`` said "fwhm must be in [1e-18,
+1]" for ``--pulse-fwhm``, after reading the sinogram and warning about it; ``reconstruct``
+"size: ..." and "extent must be ..."; ``lrcs`` warned "ray_spacing=0.131" and
+"bounces='auto'"; simulate advised "--footprint False", which its switch does not take,
+"drop receiver or sensor" with no --sensor flag, and "drop tol"); and a range with no
+upper end is written [low, inf), inf not in it."""
+
+from __future__ import annotations
+
+import pytest
+
+from meshladar.cli import main
+from meshladar.cli.lrcs import lrcs_words
+
+
+def _error(capsys, argv):
+    """The one line a refused command prints (exit status 2, nothing else on stderr)."""
+    code = main([str(a) for a in argv])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1, err
+    assert err.startswith("meshladar: error: "), err
+    return err[len("meshladar: error: "):-1]
+
+
+#: receive's numbers, refused before the sinogram is read: the result named does not
+#: exist, so a refusal after reading it would say so instead.
+RECEIVE = [
+    (["--pulse-fwhm", "1e300"], "--pulse-fwhm must be in [1e-18, 1]; got 1e+300"),
+    (["--response-fwhm", "10"], "--response-fwhm must be in [1e-18, 1]; got 10.0"),
+    (["--sample-rate", "1e20"], "--sample-rate must be in [1, 1e+18]; got 1e+20"),
+    (["--oversample", "5000"], "--oversample must be an integer in [1, 1024]; got 5000"),
+    (["--standoff", "1e30"], "--standoff must be in [0, 1e+09]; got 1e+30"),
+    (["--realisations", "2", "--excess-noise", "0.5"],
+     "--excess-noise must be in [1, 1e+09]; got 0.5"),
+]
+
+
+@pytest.mark.parametrize("extra, message", RECEIVE)
+def test_receive_refuses_in_its_flags_before_reading(extra, message, files, capsys):
+    argv = ["receive", "missing.npz", "-o", "w.npz", "--sample-rate", "1e9", *extra]
+    assert _error(capsys, argv) == message
+    assert not (files / "w.npz").exists()
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--size", "100000"], "--size: a 100000 x 100000 image would need 224 GiB, more than "
+                           "the 4 GiB meshladar allocates at once; use a smaller size"),
+    (["--extent", "1e-300"], "--extent must be in [1e-150, 1e+300]; got 1e-300"),
+])
+def test_reconstruct_refuses_in_its_flags(extra, message, files, capsys):
+    assert _error(capsys, ["reconstruct", "s.npz", "-o", "i.npz", *extra]) == message
+    assert not (files / "i.npz").exists()
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--footprint", "--standoff", "2000", "--radiometry", "power"],
+     "footprint binning is for parallel rays without a sensor; leave out --footprint with "
+     "a sensor"),
+    (["--receiver", "0,1,1", "--standoff", "2000", "--radiometry", "power"],
+     "a sensor is monostatic (its receiver sits with its transmitter); drop --receiver or "
+     "--standoff"),
+    (["--tol", "0.1", "--ray-spacing", "0.1"],
+     "--tol chooses the ray density itself: drop --ray-spacing and --rays-per-bin, or drop "
+     "--tol"),
+    (["--bin-width", "1e-300"], "--bin-width must be in [1e-200, inf); got 1e-300"),
+])
+def test_simulates_advice_is_in_flags_it_takes(extra, message, files, capsys):
+    argv = ["simulate", "box.stl", "--views", "2", "-o", "x.npz", *extra]
+    assert _error(capsys, argv) == message
+    assert not (files / "x.npz").exists()
+
+
+def test_lrcs_warnings_name_its_flags():
+    """lrcs' warnings come from the same API as simulate's (the lobe's sampling, the second
+    bounce's estimate): put in lrcs' own flags."""
+    got = lrcs_words("the normal turns by 0.182 rad between neighbouring rays (ray_spacing "
+                     "0.141) ...; ray_spacing=0.131 puts 2 rays across it; "
+                     "bounces=2 or bounces='auto' includes it")
+    assert got == ("the normal turns by 0.182 rad between neighbouring rays (--ray-spacing "
+                   "0.141) ...; --ray-spacing 0.131 puts 2 rays across it; --bounces 2 or "
+                   "--bounces auto includes it")
