@@ -181,11 +181,13 @@ def _bar_slot(plotter):
     return max(0.0, left - _MARGIN)
 
 
-def _clear_of_bars(plotter, xyz):
+def _clear_of_bars(plotter, xyz, grow=True):
     """Aim the camera so that points ``xyz`` (n, 3), the scene's extent, fill the window
     left of the colour bars' slot (:func:`_bar_slot`) and nothing drawn lies under a bar
     or its title; the view's direction is kept. Exact: a perspective view's angle scales
-    its picture about the window's centre and its window centre shifts it."""
+    its picture about the window's centre and its window centre shifts it. ``grow``
+    False: the picture is only made smaller and moved as little as it must (a view that
+    is clear of the bars is kept as it is)."""
     width, height = plotter.window_size
     right = _bar_slot(plotter) - _MARGIN
     cam = plotter.camera
@@ -197,12 +199,15 @@ def _clear_of_bars(plotter, xyz):
     span = hi - lo
     fits = np.where(span > 1e-9, (t_hi - t_lo) / np.maximum(span, 1e-9), np.inf)
     scale = float(fits.min()) if np.isfinite(fits).any() else 1.0    # one point: kept
+    shift = scale * 0.5 * (lo + hi) - 0.5 * (t_lo + t_hi)
+    if not grow:
+        scale = min(scale, 1.0)
+        shift = np.clip(0.0, scale * hi - t_hi, scale * lo - t_lo)
     if cam.GetParallelProjection():
         cam.SetParallelScale(cam.GetParallelScale() / scale)
     else:
         half = np.radians(cam.GetViewAngle()) / 2.0
         cam.SetViewAngle(float(np.degrees(2.0 * np.arctan(np.tan(half) / scale))))
-    shift = scale * 0.5 * (lo + hi) - 0.5 * (t_lo + t_hi)
     cam.SetWindowCenter(*(np.asarray(cam.GetWindowCenter()) * scale + shift))
     plotter.reset_camera_clipping_range()
 

@@ -36,8 +36,8 @@ from meshladar._validate import check_count, check_real, unit_vectors
 from meshladar.errors import ParameterError
 from meshladar.forward.mesh import first_hits, occluded
 
-from ._frame import (Legend, ScalarBar, Shown, _bar, _finish, _headless_window, _legend,
-                     _mesh_scene, _pyvista)
+from ._frame import (Legend, ScalarBar, Shown, _bar, _clear_of_bars, _finish,
+                     _headless_window, _legend, _mesh_scene, _pyvista)
 from ._reconstruction_view import show_slice, show_volume, volume_iso, volume_surface
 
 __all__ = ["show_scene", "show_slice", "show_volume", "volume_surface", "volume_iso",
@@ -198,8 +198,20 @@ def show_scene(scene, *, view_angle_deg=None, view_vector=None, ladar=None, segm
     if ladar is not None and show_hits:
         legend += _draw_hits(plotter, pv, mesh, ladar, frame, iso_ranges)
     plotter.camera_position = _camera_position(camera, frame)
+    if camera is None or isinstance(camera, str):     # a named view: kept clear of the bar
+        _clear_of_bars(plotter, np.vstack([v, _rays_extent(frame)]) if show_rays else v,
+                       grow=False)
     _legend(plotter, legend)
     return _finish(plotter, off_screen, screenshot)
+
+
+def _rays_extent(frame):
+    """Points that hold what :func:`_draw_rays` draws: the arrow's tail and the corners of
+    a cube about the ray grid's square."""
+    center, size, w = frame
+    corners = np.array([[a, b, c] for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)])
+    return np.vstack([center + 1.25 * size * w,
+                      center + 0.8 * size * w + 0.55 * size * corners])
 
 
 class _Frame(NamedTuple):
