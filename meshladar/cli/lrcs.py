@@ -20,7 +20,8 @@ __all__ = ["cmd_lrcs", "lrcs_words"]
 #: lrcs' messages in its flags' words (:func:`.words.flag_words`): the options it sets.
 lrcs_words = flag_words({"ray_spacing": "--ray-spacing", "angles_deg": "--angles-deg",
                          "view_vectors": "--view-vectors", "per_part": "--per-part",
-                         "bounces": "--bounces", "seed": "--seed", "views": "--views"},
+                         "bounces": "--bounces", "seed": "--seed", "views": "--views",
+                         "normals": "--normals"},
                         ("ray_spacing", "angles_deg", "view_vectors", "per_part"))
 
 
@@ -65,7 +66,7 @@ def cmd_lrcs(args) -> int:
     args : argparse.Namespace
         ``scene``, ``material``, ``coating``, ``materials`` (as ``simulate``'s);
         ``views``, ``angles_deg`` or ``view_vectors``; ``bounces``, ``per_part``,
-        ``ray_spacing``, ``seed``, ``output`` (CSV or None) and ``quiet``.
+        ``ray_spacing``, ``seed``, ``normals``, ``output`` (CSV or None) and ``quiet``.
 
     Returns
     -------
@@ -76,7 +77,7 @@ def cmd_lrcs(args) -> int:
         check_output(args.output, (".csv",), [args.scene, args.materials])
     scene, _, _ = load_scene(args)
     views = _views(args, scene)
-    options = {k: getattr(args, k) for k in ("ray_spacing", "seed")
+    options = {k: getattr(args, k) for k in ("ray_spacing", "seed", "normals")
                if getattr(args, k) is not None}
     result = lrcs(scene, views, bounces=args.bounces, per_part=args.per_part, **options)
     text = _table(result, views)

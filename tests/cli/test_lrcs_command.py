@@ -3,6 +3,9 @@ Lambertian sphere, and bad input as one line."""
 
 from __future__ import annotations
 
+import sys
+import warnings
+
 import numpy as np
 import pytest
 import trimesh
@@ -69,3 +72,36 @@ def test_bad_input_is_one_line(tmp_path, capsys, argv, match):
     code = cli.main(["lrcs", str(_ball(tmp_path))] + argv)
     err = capsys.readouterr().err
     assert code == 2 and match in err and "Traceback" not in err
+
+
+def test_normals_are_the_apis_and_the_lobe_warning_names_the_flag(tmp_path, capsys):
+    """``--normals smooth`` gives the API's ``lrcs(..., normals="smooth")`` numbers (and not
+    the flat ones), and the faceting warning it answers speaks of ``--normals smooth``,
+    not of ``normals='smooth'`` (lrcs had no such flag: its advice could not be taken)."""
+    import meshladar as ml
+    from meshladar.forward.lrcs import lrcs
+    from meshladar.materials import ALUMINUM
+
+    path = tmp_path / "coarse.stl"
+    trimesh.creation.icosphere(2, radius=1.0).export(path)
+    args = ["lrcs", str(path), "--material", "aluminum", "--views", "3", "--ray-spacing",
+            "0.02"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", ml.errors.LobeSamplingWarning)
+        # shown as a plain Python shows it (pytest records warnings instead)
+        warnings.showwarning = lambda m, c, f, n, file=None, line=None: sys.stderr.write(
+            warnings.formatwarning(m, c, f, n, line))
+        assert cli.main(args) == 0
+    err = capsys.readouterr().err
+    assert "use --normals smooth" in err and "normals='smooth'" not in err, err
+    out = tmp_path / "smooth.csv"
+    with pytest.warns(ml.errors.MeshladarWarning):     # the lobe's sampling, smooth
+        assert cli.main(args + ["--normals", "smooth", "--quiet", "-o", str(out)]) == 0
+    _, rows = _rows(out.read_text())
+    scene = ml.Scene.from_mesh(str(path), material=ALUMINUM)
+    views = np.arange(3) * 120.0
+    with pytest.warns(ml.errors.MeshladarWarning):
+        smooth = lrcs(scene, views, ray_spacing=0.02, normals="smooth")
+        flat = lrcs(scene, views, ray_spacing=0.02)
+    np.testing.assert_allclose(rows[:, 1], smooth.values, rtol=1e-9)
+    assert np.all(np.abs(rows[:, 1] / flat.values - 1.0) > 1e-3)
