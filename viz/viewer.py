@@ -193,25 +193,16 @@ def show_scene(scene, *, view_angle_deg=None, view_vector=None, ladar=None, segm
     legend = _draw_faces(plotter, pv, mesh, ret, state, log_scale=log_scale,
                          colors=(shadow_color, back_color))
     frame = _Frame(0.5 * (v.min(axis=0) + v.max(axis=0)), float(np.ptp(v, axis=0).max()), w)
+    drawn = [v]
     if show_rays:
-        legend += _draw_rays(plotter, pv, frame, arrow=camera != "view")
+        legend += _draw_rays(plotter, pv, frame, drawn, arrow=camera != "view")
     if ladar is not None and show_hits:
         legend += _draw_hits(plotter, pv, mesh, ladar, frame, iso_ranges)
     plotter.camera_position = _camera_position(camera, frame)
     if camera is None or isinstance(camera, str):     # a named view: kept clear of the bar
-        _clear_of_bars(plotter, np.vstack([v, _rays_extent(frame)]) if show_rays else v,
-                       grow=False)
+        _clear_of_bars(plotter, np.vstack(drawn), grow=False)
     _legend(plotter, legend)
     return _finish(plotter, off_screen, screenshot)
-
-
-def _rays_extent(frame):
-    """Points that hold what :func:`_draw_rays` draws: the arrow's tail and the corners of
-    a cube about the ray grid's square."""
-    center, size, w = frame
-    corners = np.array([[a, b, c] for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)])
-    return np.vstack([center + 1.25 * size * w,
-                      center + 0.8 * size * w + 0.55 * size * corners])
 
 
 class _Frame(NamedTuple):
@@ -257,16 +248,19 @@ def _draw_faces(plotter, pv, mesh, ret, state, *, log_scale, colors):
     return legend
 
 
-def _draw_rays(plotter, pv, frame, *, arrow):
-    """The beam (an arrow, unless seen end-on) and the ray grid's footprint, in yellow."""
+def _draw_rays(plotter, pv, frame, drawn, *, arrow):
+    """The beam (an arrow, unless seen end-on) and the ray grid's footprint, in yellow;
+    their points appended to ``drawn``."""
     center, size, w = frame
     if arrow:          # seen end-on from the ladar the arrow is a disc: omitted
         # outside the scene's extent, so it covers none of it
-        plotter.add_mesh(pv.Arrow(start=center + 1.25 * size * w, direction=-w,
-                                  scale=0.4 * size), color="yellow", lighting=False)
+        shaft = pv.Arrow(start=center + 1.25 * size * w, direction=-w, scale=0.4 * size)
+        plotter.add_mesh(shaft, color="yellow", lighting=False)
+        drawn.append(np.asarray(shaft.points))
     plane = pv.Plane(center=center + 0.8 * size * w, direction=w, i_size=1.1 * size,
                      j_size=1.1 * size, i_resolution=1, j_resolution=1)
     plotter.add_mesh(plane, style="wireframe", color="yellow", line_width=2, lighting=False)
+    drawn.append(np.asarray(plane.points))
     return [("ladar beam and ray grid", (1.0, 1.0, 0.0))]
 
 

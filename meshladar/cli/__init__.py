@@ -83,7 +83,7 @@ def main(argv=None) -> int:
     args = build_parser(COMMANDS).parse_args(argv)
     stop = _Stop()
     previous = _terminate_as_interrupt(stop)
-    words = _WORDS.get(args.command, str)
+    words = _kept_paths(_WORDS.get(args.command, str), args)
     format_before = warnings.formatwarning
     warnings.formatwarning = functools.partial(_one_line_warning, words=words)
     try:
@@ -111,6 +111,27 @@ def main(argv=None) -> int:
         warnings.formatwarning = format_before           # a caller's own is left as it was
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
+
+
+def _kept_paths(words, args):
+    """``words`` (a command's translator, :data:`_WORDS`) that keeps the command's own
+    paths as typed: every argument that names an existing file or folder, or holds a dot
+    or a separator (``seed=3/x.npz``, a file named ``oversample``), is set aside before the
+    translation and put back after it."""
+    paths = sorted({v for v in vars(args).values() if isinstance(v, str) and v and (
+        os.path.exists(v) or "." in v or os.sep in v)}, key=len, reverse=True)
+    if not paths:
+        return words
+
+    def kept(message):
+        for i, path in enumerate(paths):
+            message = message.replace(path, f"\x00{i}\x00")
+        message = words(message)
+        for i, path in enumerate(paths):
+            message = message.replace(f"\x00{i}\x00", path)
+        return message
+
+    return kept
 
 
 def _save_traceback():

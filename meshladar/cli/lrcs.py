@@ -76,6 +76,9 @@ def cmd_lrcs(args) -> int:
     if args.output is not None:
         check_output(args.output, (".csv",), [args.scene, args.materials])
     scene, _, _ = load_scene(args)
+    if args.normals is not None and not scene.is_mesh:
+        raise ParameterError("--normals shades a mesh's faces; a phantom's cross sections "
+                             "come from its exact shapes (leave out --normals)")
     views = _views(args, scene)
     options = {k: getattr(args, k) for k in ("ray_spacing", "seed", "normals")
                if getattr(args, k) is not None}

@@ -8,7 +8,6 @@ import argparse
 
 from .. import __version__
 from ..forward.options import MODELS, OPTIONS, SENSOR_OPTIONS
-from ..raytrace.views import NORMALS
 from ..reconstruct import FILTERS
 from .argtypes import (KIND_TYPES, MergeCoatings, angle_list, bounce_count, bounces,
                        coatings, nonnegative_float, nonnegative_int, positive_float,
@@ -386,9 +385,8 @@ def _lrcs(sub, commands):
                          "leaving from it; default: off)")
     lr.add_argument("--ray-spacing", type=positive_float, default=None,
                     help="distance between rays, scene units (default: the model's)")
-    lr.add_argument("--normals", choices=NORMALS, default=None,
-                    help="shading normals (meshes: flat or smooth; phantoms: exact) "
-                         "(default: flat)")
+    lr.add_argument("--normals", choices=("flat", "smooth"), default=None,
+                    help="a mesh's shading normals (default: flat)")
     lr.add_argument("--seed", type=nonnegative_int, default=None,
                     help="seed of the sampling (default: 0)")
 

@@ -188,7 +188,7 @@ receive_words = flag_words(
      "scale": "--scale", "seed": "--seed", "interval": "--pulse-interval",
      **{field: "--" + a.replace("_", "-") for a, field in _NOISE_FIELDS.items()}},
     ("sample_rate", "oversample", "standoff", "speckle_cells", "background_rate",
-     "dark_rate", "excess_noise_factor", "full_scale"))
+     "dark_rate", "excess_noise_factor", "full_scale", "bits"))
 
 
 def _gaussian(flag, fwhm):

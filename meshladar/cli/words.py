@@ -33,8 +33,8 @@ def flag_words(flags, anywhere=(), phrases=()):
     -------
     callable
         ``words(message) -> str``: ``name='value'`` and ``name=value`` become ``--flag
-        value`` for every name in ``flags`` (``name=True`` the flag alone, ``name=False``
-        ``no --flag``), then the rules above.
+        value`` for every name in ``flags`` outside quotes and paths (``name=True`` the flag
+        alone, ``name=False`` and ``name=None`` ``no --flag``), then the rules above.
     """
     flags = dict(flags)
     unique = sorted(anywhere, key=len, reverse=True)
@@ -42,11 +42,13 @@ def flag_words(flags, anywhere=(), phrases=()):
     everywhere = re.compile(r"(?<!\w)('[^']*'|\"[^\"]*\")|(?<![-\w./\\])(" + "|".join(unique)
                             + r")\b(?![./\\]\w)") if unique else None
     leading = re.compile(r"^(" + "|".join(others) + r")(?= must\b|:)") if others else None
-    assigned = re.compile(r"\b(" + "|".join(flags) + r")=(?:'([^']*)'|([\w.+-]+))")
+    assigned = re.compile(r"(?<!\w)('[^']*'|\"[^\"]*\")|(?<![-\w./\\])(" + "|".join(flags)
+                          + r")=(?:'([^']*)'|([\w.+-]+))(?![\w/\\])")
     phrases = tuple(phrases)
 
     def words(message):
-        message = assigned.sub(lambda m: _set(flags[m.group(1)], m.group(2) or m.group(3)),
+        message = assigned.sub(lambda m: m.group(1) or _set(flags[m.group(2)],
+                                                            m.group(3) or m.group(4)),
                                message)
         if everywhere is not None:
             message = everywhere.sub(lambda m: m.group(1) or flags[m.group(2)], message)
@@ -60,9 +62,10 @@ def flag_words(flags, anywhere=(), phrases=()):
 
 
 def _set(flag, value):
-    """``flag value`` as typed: a switch's True is the flag alone, its False no flag."""
+    """``flag value`` as typed: a switch's True is the flag alone, its False (or a value
+    None) no flag."""
     if value == "True":
         return flag
-    if value == "False":
+    if value in ("False", "None"):
         return f"no {flag}"
     return f"{flag} {value}"

@@ -44,30 +44,35 @@ def parts_of(geometry):
 
 
 def scene_aliases(scene, names):
-    """A mesh scene's part names → the index of the coating each holds alone (its kernel
-    part, named ``names[i]``), or a str saying why a part holds none alone (several
-    coatings, or one it shares); a part named as a coating is left out (the coating's
-    name wins). Empty for anything but a mesh Scene."""
+    """A mesh scene's part names → the index of the coating the parts of that name hold
+    alone (its kernel part, named ``names[i]``), or a str saying why they hold none alone
+    (several coatings, or one that a part of another name holds too); a part named as a
+    coating is left out (the coating's name wins). Empty for anything but a mesh Scene."""
     if not isinstance(scene, Scene) or not scene.is_mesh:
         return {}
-    held = [np.unique(np.asarray(p.material, dtype=np.int64)) for p in scene.parts]
-    out = {}
-    for part, mine in zip(scene.parts, held):
-        if part.name in names or part.name in out:
-            continue
-        if mine.size != 1:
-            out[part.name] = (f"part {part.name!r} holds {mine.size} coatings "
-                              f"{[names[i] for i in mine]}: name them (a mesh's fit has "
-                              "a part per coating)")
-            continue
-        others = [q.name for q, theirs in zip(scene.parts, held)
-                  if q is not part and mine[0] in theirs]
-        out[part.name] = int(mine[0]) if not others else (
-            f"part {part.name!r} shares its coating {names[mine[0]]!r} with "
-            f"{others} (a mesh's fit has a part per coating): give {part.name!r} a "
-            f"coating of its own (Scene.from_mesh(..., materials={{{part.name!r}: ...}})) "
-            f"to fit it alone, or name {names[mine[0]]!r} to fit them together")
-    return out
+    held = {}
+    for part in scene.parts:
+        if part.name not in names:
+            held.setdefault(part.name, set()).update(
+                np.unique(np.asarray(part.material, dtype=np.int64)).tolist())
+    return {name: _alias(name, mine, scene, names) for name, mine in held.items()}
+
+
+def _alias(name, mine, scene, names):
+    """:func:`scene_aliases`' entry for the parts named ``name``, holding coatings
+    ``mine``."""
+    if len(mine) != 1:
+        return (f"part {name!r} holds {len(mine)} coatings {[names[i] for i in sorted(mine)]}"
+                ": name them (a mesh's fit has a part per coating)")
+    (mat,) = mine
+    others = sorted({q.name for q in scene.parts if q.name != name
+                     and mat in np.asarray(q.material, dtype=np.int64)})
+    if not others:
+        return int(mat)
+    return (f"part {name!r} shares its coating {names[mat]!r} with {others} (a mesh's fit "
+            f"has a part per coating): give {name!r} a coating of its own "
+            f"(Scene.from_mesh(..., materials={{{name!r}: ...}})) to fit it alone, or name "
+            f"{names[mat]!r} to fit them together")
 
 
 def analytic_fields(scene, ladar, radiometry, samples):

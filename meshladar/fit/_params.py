@@ -143,9 +143,10 @@ def _resolve_params(kernel, parts, free, bounds, initial):
 
 
 def _check_free_parts(kernel, chosen, free):
-    """A dict ``free``'s keys: each a part (name or index) that is fitted."""
-    bad = []
+    """A dict ``free``'s keys: each a part (name or index) that is fitted, once."""
+    bad, seen = [], {}
     for key in free:
+        _refused_alias(kernel, key)
         try:
             index = kernel.part_index(key)
         except ParameterError:
@@ -154,9 +155,22 @@ def _check_free_parts(kernel, chosen, free):
         if index not in chosen:
             raise ParameterError(f"free names part {kernel.parts[index]!r}, which parts= "
                                  f"leaves out (fitted: {[kernel.parts[i] for i in chosen]})")
+        if index in seen:
+            raise ParameterError(f"free names part {kernel.parts[index]!r} twice (as "
+                                 f"{seen[index]!r} and {key!r}): give it once")
+        seen[index] = key
     if bad:
+        scene = (f" or the scene's parts {list(kernel.aliases)}"
+                 if getattr(kernel, "aliases", None) else "")
         raise ParameterError(f"free's parts must be among {list(kernel.parts)} (or an "
-                             f"index below {len(kernel.parts)}); got {bad}")
+                             f"index below {len(kernel.parts)}){scene}; got {bad}")
+
+
+def _refused_alias(kernel, key):
+    """Raise why a scene part named ``key`` names no coating alone (:class:`PartList`)."""
+    found = getattr(kernel, "aliases", {}).get(key) if isinstance(key, str) else None
+    if isinstance(found, str) and key not in kernel.parts:
+        raise ParameterError(found)
 
 
 def _free_names(kernel, p, m, free):
@@ -210,6 +224,8 @@ def _check_bound_keys(kernel, params, bounds):
     known = set(bare) | {q.label for q in params} | {
         f"{a}.{q.name}" for q in params for a in names_of(kernel, q.part)}
     bad = [key for key in bounds if key not in known]
+    for key in bad:
+        _refused_alias(kernel, str(key).rpartition(".")[0])
     if bad:
         raise ParameterError(f"bounds' keys must name free parameters, among "
                              f"{labels + bare} (or 'index.param', e.g. {params[0].label!r}); "

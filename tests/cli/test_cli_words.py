@@ -32,6 +32,8 @@ RECEIVE = [
     (["--standoff", "1e30"], "--standoff must be in [0, 1e+09]; got 1e+30"),
     (["--realisations", "2", "--excess-noise", "0.5"],
      "--excess-noise must be in [1, 1e+09]; got 0.5"),
+    (["--realisations", "2", "--bits", "8"],
+     "quantisation needs both --bits and --full-scale; got --bits 8, no --full-scale"),
 ]
 
 
@@ -79,3 +81,25 @@ def test_lrcs_warnings_name_its_flags():
     assert got == ("the normal turns by 0.182 rad between neighbouring rays (--ray-spacing "
                    "0.141) ...; --ray-spacing 0.131 puts 2 rays across it; --bounces 2 or "
                    "--bounces auto includes it")
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["receive", "seed=3/missing.npz", "-o", "w.npz", "--sample-rate", "1e9"],
+     "seed=3/missing.npz: no such result file"),
+    (["reconstruct", "filter=hann/none.npz", "-o", "i.npz"],
+     "filter=hann/none.npz: no such result file"),
+    (["reconstruct", "size", "-o", "i.npz"],
+     "size: not a readable result file: not an .npz archive (its first bytes are not a zip "
+     "archive's); give an .npz file that meshladar wrote"),
+])
+def test_a_path_named_like_a_parameter_is_kept(argv, message, files, capsys):
+    """A sweep's folders (``seed=3/``) and a file named as a parameter are the user's
+    names, not the API's: a message quotes them as typed."""
+    (files / "size").write_text("not a sinogram")
+    assert _error(capsys, argv) == message
+
+
+def test_lrcs_normals_are_a_meshs(files, capsys):
+    assert _error(capsys, ["lrcs", "disk", "--views", "4", "--normals", "smooth"]) == (
+        "--normals shades a mesh's faces; a phantom's cross sections come from its exact "
+        "shapes (leave out --normals)")

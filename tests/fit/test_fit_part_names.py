@@ -87,3 +87,43 @@ def test_a_part_holding_several_coatings_is_refused():
     with pytest.raises(ParameterError, match=r"part 'ball' holds 2 coatings "
                                              r"\['aluminum', 'dark_gray'\]: name them"):
         fit_coatings(scene, data, kernel_tol=None, parts=["ball"])
+
+
+def test_parts_of_one_name_are_taken_together():
+    """Two parts of one name (unnamed spheres are all 'sphere'; glTF nodes repeat names)
+    name a coating only where together they hold one that no other part holds: of two
+    coatings they are refused (the first one's was fitted alone, without a word)."""
+    two = [ml.meshes.sphere((-0.5, 0.0, 0.0), 0.3, 0, subdivisions=2, name="x"),
+           ml.meshes.sphere((0.5, 0.0, 0.0), 0.3, 1, subdivisions=2, name="x")]
+    data = _data(_scene())
+    scene = ml.Scene.from_parts(two, [ALUMINUM, DARK_GRAY])
+    for choice in ({"parts": ["x"]}, {"free": {"x": ["rho_d"]}}):
+        with pytest.raises(ParameterError, match=r"part 'x' holds 2 coatings "
+                                                 r"\['aluminum', 'dark_gray'\]: name them"):
+            fit_coatings(scene, data, kernel_tol=None, **choice)
+    same = [dataclasses.replace(two[0], material=1), two[1]]
+    scene = ml.Scene.from_parts(same + [ml.meshes.sphere((0.0, 0.6, 0.0), 0.2, 0,
+                                                         subdivisions=2, name="y")],
+                                [ALUMINUM, DARK_GRAY])
+    fit = _fit(scene, data, parts=["x"], free={"x": ["rho_d"]})
+    assert fit.names == ("dark_gray.rho_d",)
+
+
+def test_free_and_bounds_say_why_a_part_names_no_coating():
+    scene = _scene(shared=True)
+    data = _data(_scene())
+    why = r"part 'right' shares its coating 'dark_gray' with \['top'\]"
+    with pytest.raises(ParameterError, match=why):
+        fit_coatings(scene, data, kernel_tol=None, free={"right": ["rho_d"]})
+    with pytest.raises(ParameterError, match=why):
+        fit_coatings(scene, data, kernel_tol=None, bounds={"right.rho_d": (0.0, 0.5)})
+    with pytest.raises(ParameterError, match=r"free's parts must be among \['aluminum', "
+                                             r"'dark_gray'\] \(or an index below 2\) or the "
+                                             r"scene's parts \['left', 'right', 'top'\]; "
+                                             r"got \['nope'\]"):
+        fit_coatings(scene, data, kernel_tol=None, free={"nope": ["rho_d"]})
+    alone = _scene()
+    with pytest.raises(ParameterError, match=r"free names part 'dark_gray' twice \(as "
+                                             r"'right' and 'dark_gray'\): give it once"):
+        fit_coatings(alone, data, kernel_tol=None,
+                     free={"right": ["e"], "dark_gray": ["rho_d"]})
