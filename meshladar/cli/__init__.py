@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import functools
 import os
+import re
 import signal
 import sys
 import tempfile
@@ -116,16 +117,17 @@ def main(argv=None) -> int:
 def _kept_paths(words, args):
     """``words`` (a command's translator, :data:`_WORDS`) that keeps the command's own
     paths as typed: every argument that names an existing file or folder, or holds a dot
-    or a separator (``seed=3/x.npz``, a file named ``oversample``), is set aside before the
-    translation and put back after it."""
+    or a separator (``seed=3/x.npz``, a file named ``oversample``), is set aside where it
+    stands whole (not inside a longer name) before the translation and put back after."""
     paths = sorted({v for v in vars(args).values() if isinstance(v, str) and v and (
         os.path.exists(v) or "." in v or os.sep in v)}, key=len, reverse=True)
     if not paths:
         return words
+    whole = [re.compile(r"(?<![\w./\\-])" + re.escape(p) + r"(?![\w/\\])") for p in paths]
 
     def kept(message):
-        for i, path in enumerate(paths):
-            message = message.replace(path, f"\x00{i}\x00")
+        for i, path in enumerate(whole):
+            message = path.sub(f"\x00{i}\x00", message)
         message = words(message)
         for i, path in enumerate(paths):
             message = message.replace(f"\x00{i}\x00", path)

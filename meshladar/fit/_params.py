@@ -94,20 +94,18 @@ class PartList(NamedTuple):
     def part_index(self, part):
         """The index of a part's name or index (:func:`part_index`), or of the coating a
         mesh scene's part of that name holds alone."""
-        if part in self.parts or not isinstance(part, str) or part not in self.aliases:
-            try:
-                return part_index(self.parts, part)
-            except ParameterError:
-                if not self.aliases:
-                    raise
-                raise ParameterError(f"part must be one of {list(self.parts)} (a mesh's "
-                                     "fit has a part per coating, named by it), an index "
-                                     f"below {len(self.parts)} or one of the scene's parts "
-                                     f"{list(self.aliases)}; got {part!r}") from None
-        found = self.aliases[part]
-        if isinstance(found, str):
-            raise ParameterError(found)
-        return found
+        _refused_alias(self, part)
+        if isinstance(part, str) and part not in self.parts and part in self.aliases:
+            return self.aliases[part]
+        try:
+            return part_index(self.parts, part)
+        except ParameterError:
+            if not self.aliases:
+                raise
+            raise ParameterError(f"part must be one of {list(self.parts)} (a mesh's fit has "
+                                 f"a part per coating, named by it), an index below "
+                                 f"{len(self.parts)} or one of the scene's parts "
+                                 f"{list(self.aliases)}; got {part!r}") from None
 
 
 def names_of(kernel, p):

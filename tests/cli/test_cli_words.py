@@ -103,3 +103,11 @@ def test_lrcs_normals_are_a_meshs(files, capsys):
     assert _error(capsys, ["lrcs", "disk", "--views", "4", "--normals", "smooth"]) == (
         "--normals shades a mesh's faces; a phantom's cross sections come from its exact "
         "shapes (leave out --normals)")
+
+
+def test_a_short_file_name_is_kept_only_where_it_stands_whole(files, capsys):
+    """A sinogram in a file named ``e``: its name is kept where it stands, the letter e in
+    the API's words is not (``sample_rate`` still becomes ``--sample-rate``)."""
+    (files / "e").write_bytes((files / "s.npz").read_bytes())
+    got = _error(capsys, ["receive", "e", "-o", "w.npz", "--sample-rate", "1e18", "--quiet"])
+    assert got.startswith("--sample-rate: ") and "give a lower --sample-rate" in got, got
