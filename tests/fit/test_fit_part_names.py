@@ -20,6 +20,10 @@ from meshladar.fit import fit_coatings
 from meshladar.materials import ALUMINUM, DARK_GRAY
 
 
+#: The data's ray spacing (the spheres' radius is 0.3): several times finer than the fit's.
+DATA_SPACING = 0.002
+
+
 def _scene(shared=False):
     parts = [ml.meshes.sphere((-0.5, 0.0, 0.0), 0.3, 0, subdivisions=3, name="left"),
              ml.meshes.sphere((0.5, 0.0, 0.0), 0.3, 1, subdivisions=3, name="right")]
@@ -30,12 +34,14 @@ def _scene(shared=False):
 
 def _data(scene):
     """The data of the scene's coatings with dark gray's ρd raised a fifth (a fit starts
-    at the scene's own coatings: it must move)."""
+    at the scene's own coatings: it must move), simulated at a ray spacing finer than the
+    fit's kernel traces (its own resolution's data would be the kernel's prediction)."""
     ladar = ml.Ladar.covering(scene, n_bins=24, angles_deg=np.arange(0.0, 360.0, 30.0))
     truth = [ALUMINUM, dataclasses.replace(DARK_GRAY, rho_d=1.2 * DARK_GRAY.rho_d)]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ml.errors.MeshladarWarning)
-        return ml.simulate(ml.Scene.from_parts(scene.parts, truth), ladar, model="mesh")
+        return ml.simulate(ml.Scene.from_parts(scene.parts, truth), ladar, model="mesh",
+                           ray_spacing=DATA_SPACING)
 
 
 def _fit(scene, data, **choice):
