@@ -404,9 +404,11 @@ def receive(sino: Sinogram, *, sample_rate, pulse=None, response=None, standoff=
     pulse = _check_shape("pulse", pulse)
     response = _check_shape("response", response)
     m = check_count("oversample", oversample, high=MAX_OVERSAMPLE)
-    if standoff is None:
-        standoff = (sino.info.get("sensor") or {}).get("standoff_m") or 0.0
-    D = check_real("standoff", standoff, low=0.0, high=SENSOR_LIMITS["standoff"])
+    name = "standoff"
+    if standoff is None:        # a file's record is named as such, not as the argument
+        name, standoff = ("the sinogram's info['sensor']['standoff_m']",
+                          (sino.info.get("sensor") or {}).get("standoff_m") or 0.0)
+    D = check_real(name, standoff, low=0.0, high=SENSOR_LIMITS["standoff"])
     t_edges = 2.0 * (sino.bin_edges + D) / SPEED_OF_LIGHT
     dt = 1.0 / (fs * m)
     kp, kr, shift, (first, last) = _window(sino, t_edges, dt, m, (pulse, response))

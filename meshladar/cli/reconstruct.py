@@ -179,8 +179,11 @@ _NOISE_FIELDS = {"speckle_cells": "speckle_cells", "background_rate": "backgroun
 
 
 #: reconstruct's messages in its flags' words (:func:`.words.flag_words`).
-reconstruct_words = flag_words({"size": "--size", "extent": "--extent", "smooth": "--smooth",
-                                "filter": "--filter", "threshold": "--clip"})
+reconstruct_words = flag_words(
+    {"size": "--size", "extent": "--extent", "smooth": "--smooth", "filter": "--filter",
+     "threshold": "--clip"},
+    phrases=[("wider bins (meshladar.reconstruct.resample_uniform) or more views",
+              "fewer, wider bins or more views (simulate --bins, --views)")])
 #: receive's: the waveforms' and the noise's parameters (a pulse's and the response's
 #: ``fwhm`` are named as they are made: :func:`_gaussian`).
 receive_words = flag_words(

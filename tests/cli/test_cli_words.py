@@ -7,6 +7,9 @@ upper end is written [low, inf), inf not in it."""
 
 from __future__ import annotations
 
+import sys
+import warnings
+
 import pytest
 
 from meshladar.cli import main
@@ -111,3 +114,18 @@ def test_a_short_file_name_is_kept_only_where_it_stands_whole(files, capsys):
     (files / "e").write_bytes((files / "s.npz").read_bytes())
     got = _error(capsys, ["receive", "e", "-o", "w.npz", "--sample-rate", "1e18", "--quiet"])
     assert got.startswith("--sample-rate: ") and "give a lower --sample-rate" in got, got
+
+
+def test_reconstructs_view_advice_names_simulates_flags(files, capsys):
+    """reconstruct has no bins to widen: a sinogram of 12 views is too few, and the advice
+    names the flags that make another (simulate's), not the API's resampler."""
+    assert main(["simulate", "disk", "--views", "12", "--bins", "64", "-o", "s.npz",
+                 "--quiet"]) == 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        warnings.showwarning = lambda m, c, f, n, file=None, line=None: sys.stderr.write(
+            warnings.formatwarning(m, c, f, n, line))
+        assert main(["reconstruct", "s.npz", "-o", "i.npz", "--size", "32", "--quiet"]) == 0
+    (line,) = [ln for ln in capsys.readouterr().err.splitlines() if "warning" in ln]
+    assert line.startswith("meshladar: warning: 12 views are too few for the "), line
+    assert line.endswith("use fewer, wider bins or more views (simulate --bins, --views)"), line

@@ -63,6 +63,20 @@ def test_waveform_of_one_bin_is_the_pulse():
     np.testing.assert_allclose(waves.range_edges, c * waves.time_edges / 2 - D, rtol=1e-15)
 
 
+def test_a_recorded_standoff_out_of_range_is_named_as_the_files():
+    """The standoff taken from the sinogram's record is refused in its own name (a user who
+    gave none was told their standoff was wrong); one given is refused as the argument."""
+    sino = ml.Sinogram([[1.0]], angles_deg=[0.0], bin_edges=[0.0, 0.1],
+                       info={"sensor": {"standoff_m": -5.0}})
+    with pytest.raises(ml.errors.ParameterError, match=r"^the sinogram's info\['sensor'\]"
+                                                r"\['standoff_m'\] must be in \[0, 1e\+09\]; "
+                                                r"got -5.0$"):
+        receive(sino, sample_rate=1e9)
+    with pytest.raises(ml.errors.ParameterError, match=r"^standoff must be in \[0, 1e\+09\]; got -1.0"):
+        receive(sino, sample_rate=1e9, standoff=-1.0)
+    assert receive(sino, sample_rate=1e9, standoff=2.0).standoff == 2.0
+
+
 def _photo_waves():
     values = np.array([[0.0, 0.05, 1.0, 5.0, 50.0, 400.0]])
     return Waveforms(values, time_edges=np.arange(7) * 1e-9, angles_deg=[0.0],
