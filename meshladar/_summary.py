@@ -61,7 +61,7 @@ def scene_summary(scene):
         lo, hi = scene.bounds()
         rep = scene.report
         return (("kind", "mesh"),
-                ("parts", listing(f"{p.name} ({len(p.faces)} faces)" for p in scene.parts)),
+                ("parts", listing(f"{p.name}: {len(p.faces)} faces" for p in scene.parts)),
                 ("faces", rep.get("faces")), ("materials", mats),
                 ("bounds", f"[{', '.join(f'{a:.4g}' for a in lo)}] to "
                            f"[{', '.join(f'{b:.4g}' for b in hi)}]"),

@@ -176,6 +176,7 @@ def test_inputs_summarise_too():
     text = repr(big)
     assert len(text) <= MAX_REPR and "array(" not in text
     assert "kind='mesh'" in text and "faces=81920" in text and "materials='aluminum'" in text
+    assert "parts='sphere: 81920 faces'" in text        # a part's name, then its faces
     assert "bounds='[-0.5, -0.5, -0.5] to [0.5, 0.5, 0.5]'" in text and "watertight=True" in text
     part = repr(big.parts[0])
     assert part.startswith("MeshPart(name='sphere'") and "faces=81920" in part
