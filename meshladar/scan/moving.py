@@ -9,7 +9,8 @@ motion) and at the static parts as they are; the nearest hit wins, and its point
 forward into the world.
 
 Doppler: each sub-ray's hit point moves at v = V + Ω × (p − c − V t); the sensor at the
-platform's velocity v_s (its position's derivative, a central difference of 1 µs); the
+platform's velocity v_s (:meth:`Platform.sensor_velocities
+<meshladar.scan.platforms.Platform.sensor_velocities>`); the
 shift is f_D = 2 (v − v_s)·u / λ with u the unit vector from the point toward the sensor
 (positive when they close), λ the sensor's wavelength. A return's ``doppler`` is its
 sub-rays' photoelectron-weighted shift.
@@ -28,9 +29,6 @@ from ..scene import Scene
 from .cast import Cast, cast_chunk
 
 __all__ = ["moving_parts", "cast_moving", "doppler"]
-
-#: The platform velocity's central difference step (s).
-_VELOCITY_STEP = 1e-6
 
 
 class _MovingParts:
@@ -188,8 +186,7 @@ def doppler(split, platform, cast, origins, t, wavelength):
     """
     if split is None and platform.is_static:             # nothing moves: no shift at all
         return np.zeros(cast.face.shape)
-    step = _VELOCITY_STEP
-    v_s = (platform.sensor_poses(t + step)[0] - platform.sensor_poses(t - step)[0]) / (2 * step)
+    v_s = platform.sensor_velocities(t)
     vel = np.zeros(cast.points.shape)
     if split is not None:
         for part_scene, motion, first in split.moving:

@@ -44,6 +44,8 @@ TRAJECTORY_COLUMNS = ("time", "x", "y", "z", "roll", "pitch", "yaw")
 #: How far beyond its waypoints' ends a time still counts as covered, s: the rounding of a
 #: GPS time less its offset (~1e-10 s), not a pose anyone could tell from the end's.
 _TIME_SLACK = 1e-9
+#: The half-step of the sensor velocity's difference, s.
+_VELOCITY_STEP = 1e-6
 
 
 def _triple(name, value, shape=(3,)):
@@ -352,6 +354,33 @@ class Platform:
         origin = pos + rot.apply(np.asarray(self.mount_offset))
         mats = (rot * rotation(np.asarray(self.boresight_deg))).as_matrix()
         return origin, mats.reshape(len(t), 3, 3)
+
+    def sensor_velocities(self, t, step=_VELOCITY_STEP):
+        """The sensor's velocity at times ``t``: its position's difference over ``step``
+        either side, one-sided at the waypoints' first and last times (the pose is held
+        beyond them, which a central difference there would halve); within ``step`` of a
+        linear path's corner, a blend of its two legs'.
+
+        Parameters
+        ----------
+        t : array_like
+            Times, s.
+        step : float
+            The difference's half-step, s.
+
+        Returns
+        -------
+        (n, 3) numpy.ndarray
+            m/s, world frame.
+        """
+        t = np.asarray(t, np.float64).ravel()
+        lo, hi = t - step, t + step
+        if len(self.times) > 1 and not self.extrapolate:
+            lo = np.maximum(lo, self.times[0])
+            hi = np.minimum(hi, self.times[-1])
+        span = hi - lo
+        return ((self.sensor_poses(hi)[0] - self.sensor_poses(lo)[0])
+                / np.where(span > 0, span, 1.0)[:, None])
 
     def describe(self) -> dict:
         """The platform's waypoints and mount, with units in the names (for result files).

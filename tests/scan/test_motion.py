@@ -73,3 +73,24 @@ def test_bad_motions_are_refused_by_name(motions, name):
     with pytest.raises(ParameterError, match=name):
         scan(scene(plate(R0)), _along_x(1), Platform.static((0, 0, 0)), sensor(),
              motions=motions)
+
+
+@pytest.mark.parametrize("interpolation", ["linear", "spline"])
+def test_doppler_at_the_waypoints_first_and_last_times_is_the_paths_own(interpolation):
+    """A platform flying along x toward a wall R0 ahead, by waypoints at 0, 0.05, 0.1 s:
+    the shift is 2 v_x(t)/λ with v the path's derivative (linear: each leg's slope; spline:
+    scipy's natural spline's derivative), at the first and last times too, where the pose
+    is held beyond the path (a central difference there halved it), to 1e-6."""
+    from scipy.interpolate import CubicSpline
+
+    times = np.array([0.0, 0.05, 0.1])
+    x = np.array([0.0, 0.5, 1.5])
+    path = Platform.waypoints(times, np.c_[x, np.zeros(3), np.zeros(3)], np.zeros((3, 3)),
+                              interpolation=interpolation)
+    t = np.array([0.0, 0.02, 0.08, 0.1])
+    pc = scan(scene(plate(R0, half=50.0)), ScanPattern(t, np.tile([1.0, 0.0, 0.0], (4, 1))),
+              path, sensor())
+    v = (np.array([10.0, 10.0, 20.0, 20.0]) if interpolation == "linear"
+         else CubicSpline(times, x, bc_type="natural")(t, 1))
+    assert len(pc.points) == 4
+    np.testing.assert_allclose(pc.points["doppler"], 2 * v / LAMBDA, rtol=1e-6)
