@@ -269,7 +269,7 @@ def _read_points(path):
     try:
         return {"HDF5": read_hdf5, "NPZ": read_npz}.get(points_format(path), read_las)(path)
     except ParameterError as exc:
-        raise ParameterError(f"--points: {exc}") from None
+        raise ParameterError(f"--points: {str(exc).removeprefix('path: ')}") from None
 
 
 def cmd_study(args) -> int:

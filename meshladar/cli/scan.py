@@ -28,8 +28,9 @@ from ..scan.formats import FORMATS, check_writable
 from ..waveforms import GaussianPulse
 from .checks import check_output
 from .simulate import load_scene
+from .words import flag_words
 
-__all__ = ["cmd_scan", "parse_spec", "PLATFORM_KINDS", "BEAM_DEFAULTS"]
+__all__ = ["cmd_scan", "parse_spec", "scan_words", "PLATFORM_KINDS", "BEAM_DEFAULTS"]
 
 #: ``--platform`` kinds: each names its :class:`meshladar.scan.Platform` constructor.
 PLATFORM_KINDS = ("static", "moving", "waypoints")
@@ -47,6 +48,16 @@ SENSOR_FLAGS = {"max_returns": "--max-returns", "shots": "--geiger-shots",
                 "pulse_energy": "--pulse-energy", "aperture_diameter": "--aperture",
                 "sample_rate": "--sample-rate", "fwhm": "--pulse-fwhm",
                 "background_rate": "--background-rate", "dark_rate": "--dark-rate"}
+#: scan's messages in its flags' words (:func:`.words.flag_words`): the sensor's arguments,
+#: and the API's advice naming what the command line sets by other flags or not at all.
+scan_words = flag_words(
+    SENSOR_FLAGS, [n for n in SENSOR_FLAGS if "_" in n],
+    [("raise the sensor's --pulse-energy or --aperture", "raise --pulse-energy or --aperture"),
+     (", or its detector's false_alarm (the threshold follows it)", ""),
+     (", or lower its detector's threshold", ""),
+     (", or its GeigerMode's shots", ", or --geiger-shots"),
+     ("or a wider pulse", "or a wider pulse (--pulse-fwhm)"),
+     ("--platform: path: cannot read", "--platform: cannot read")])
 _TRUE, _FALSE = ("true", "yes", "on", "1"), ("false", "no", "off", "0")
 #: The beam flags' values when not given (the parser leaves them None: whether one was
 #: given decides what applies, a flash pattern refusing ``--divergence`` and ``--profile``);
@@ -105,8 +116,8 @@ def parse_spec(flag, text, kinds, extra=()):
     ------
     ParameterError
         When the kind is unknown, a word is not ``key=value`` of one of the constructor's
-        parameters, a key is given twice, or a value is not a number, a comma list or
-        ``start:stop:count`` (or true/false for a boolean).
+        parameters, a key is given twice, a required key is missing, or a value is not a
+        number, a comma list or ``start:stop:count`` (or true/false for a boolean).
     """
     words = text.split() if isinstance(text, str) else []
     if not words or words[0] not in kinds:
@@ -125,6 +136,11 @@ def parse_spec(flag, text, kinds, extra=()):
         if key in kwargs:
             raise ParameterError(f"{flag}: {key} is given twice; give each key once")
         kwargs[key] = _value(flag, key, val, defaults[key])
+    missing = [n for n, d in defaults.items() if d is inspect.Parameter.empty
+               and n not in kwargs]
+    if missing:
+        raise ParameterError(f"{flag}: {words[0]} needs {', '.join(missing)} as key=value "
+                             f"(it takes {', '.join(defaults)}); got {text!r}")
     for key in ("rows", "columns", "frames"):
         if isinstance(kwargs.get(key), float) and kwargs[key].is_integer():
             kwargs[key] = int(kwargs[key])
@@ -132,10 +148,10 @@ def parse_spec(flag, text, kinds, extra=()):
 
 
 def _build(make, kwargs, flag):
+    """``make(**kwargs)`` (its keys checked by :func:`parse_spec`), its refusal named as
+    ``flag``'s."""
     try:
         return make(**kwargs)
-    except TypeError as exc:            # a required key missing
-        raise ParameterError(f"{flag}: {exc}") from None
     except ParameterError as exc:
         raise ParameterError(f"{flag}: {exc}") from None
 
@@ -174,16 +190,6 @@ def _trajectory(text):
         return text, ""
     found = re.match(r"\s*(.*?\.csv)(?:\s+(.*?))?\s*$", text, re.IGNORECASE | re.DOTALL)
     return (found.group(1), found.group(2) or "") if found else None
-
-
-def _flagged(exc):
-    """``exc`` with the sensor's argument it names as its flag (:data:`SENSOR_FLAGS`)."""
-    msg = str(exc)
-    for name, flag in SENSOR_FLAGS.items():
-        rest = msg[len(name):]
-        if msg.startswith(name) and not rest[:1].isidentifier():
-            return ParameterError(flag + (" " + rest[1:] if rest[:1] == "=" else rest))
-    return exc
 
 
 def _check_discrete(args):
@@ -230,21 +236,19 @@ def _beam(args, flash):
 
 
 def _sensor(args, flash):
+    """The ScanSensor of the flags (the API's refusals put in the flags' words by
+    :data:`scan_words`)."""
     _check_discrete(args)
-    try:
-        noise = None
-        if args.background_rate or args.dark_rate or args.noise:
-            noise = Noise(background_rate=args.background_rate, dark_rate=args.dark_rate)
-        geiger = scanning.GeigerMode(shots=args.geiger_shots) if args.geiger_shots else None
-        beam = _beam(args, flash)
-        detector = scanning.Detector(max_returns=args.max_returns, cfar=args.cfar)
-        return scanning.ScanSensor(
-            pulse_energy=args.pulse_energy, aperture_diameter=args.aperture,
-            sample_rate=args.sample_rate, pulse=GaussianPulse(args.pulse_fwhm), beam=beam,
-            noise=noise, geiger=geiger, detector=detector,
-            echoes="discrete" if args.discrete else "waveform")
-    except ParameterError as exc:
-        raise _flagged(exc) from None
+    noise = None
+    if args.background_rate or args.dark_rate or args.noise:
+        noise = Noise(background_rate=args.background_rate, dark_rate=args.dark_rate)
+    geiger = scanning.GeigerMode(shots=args.geiger_shots) if args.geiger_shots else None
+    return scanning.ScanSensor(
+        pulse_energy=args.pulse_energy, aperture_diameter=args.aperture,
+        sample_rate=args.sample_rate, pulse=GaussianPulse(args.pulse_fwhm),
+        beam=_beam(args, flash), noise=noise, geiger=geiger,
+        detector=scanning.Detector(max_returns=args.max_returns, cfar=args.cfar),
+        echoes="discrete" if args.discrete else "waveform")
 
 
 def _check_outputs(args):

@@ -129,3 +129,53 @@ def test_reconstructs_view_advice_names_simulates_flags(files, capsys):
     (line,) = [ln for ln in capsys.readouterr().err.splitlines() if "warning" in ln]
     assert line.startswith("meshladar: warning: 12 views are too few for the "), line
     assert line.endswith("use fewer, wider bins or more views (simulate --bins, --views)"), line
+
+
+_RASTER = "raster azimuth_deg=-2:2:5 elevation_deg=-2:2:5 pulse_rate=1e5"
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"--platform": "static"}, "--platform: static needs position as key=value (it takes "
+                               "position, attitude_deg, mount_offset, boresight_deg); got "
+                               "'static'"),
+    ({"--pattern": "rotating elevations_deg=0 rotation_hz=10 pulse_rate=1e3"},
+     "--pattern: rotating needs duration as key=value (it takes elevations_deg, rotation_hz, "
+     "pulse_rate, duration); got 'rotating elevations_deg=0 rotation_hz=10 pulse_rate=1e3'"),
+    ({"--platform": "nofile.csv"}, "--platform: cannot read the trajectory 'nofile.csv' "
+                                   "([Errno 2] No such file or directory: 'nofile.csv')"),
+    ({"--sample-rate": "1e6"},
+     "the echo (the pulse and the response: 5e-09 s FWHM) spans 0.005 samples at "
+     "--sample-rate 1e+06; a linear receiver's detector needs 1 or more (ranges fall on the "
+     "sample grid): give --sample-rate >= 4e+08 or a wider pulse (--pulse-fwhm)"),
+])
+def test_scan_speaks_its_flags(change, message, files, capsys):
+    """A user's trial: scan said "Platform.static() missing 1 required positional argument",
+    "path: cannot read the trajectory", and took --sample-rate 1e6 for a 5 ns pulse (every
+    range on a 150 m sample grid) without a word."""
+    flags = {"--pattern": _RASTER, "--platform": "static position=-5,0,0", **change}
+    argv = ["scan", "box.stl", "-o", "p.npz"] + [w for kv in flags.items() for w in kv]
+    assert _error(capsys, argv) == message
+    assert not (files / "p.npz").exists()
+
+
+def test_an_empty_scans_advice_names_scans_flags(files, capsys):
+    """The box 500 m away returns too little at 0.01 pJ: the advice names --pulse-energy and
+    --aperture, not the API's pulse_energy, aperture_diameter or the detector's
+    false_alarm (no flag); with Geiger-mode pixels, --geiger-shots."""
+    for extra, more in (([], ""), (["--geiger-shots", "10"], ", or --geiger-shots")):
+        with warnings.catch_warnings():
+            warnings.simplefilter("always")
+            warnings.showwarning = lambda m, c, f, n, file=None, line=None: sys.stderr.write(
+                warnings.formatwarning(m, c, f, n, line))
+            assert main(["scan", "box.stl", "--quiet", "--pattern", "raster azimuth_deg="
+                         "-1e-4:1e-4:3 elevation_deg=-1e-4:1e-4:3 pulse_rate=1e5",
+                         "--platform", "static position=-500,0,0", "-o", "p.npz",
+                         "--pulse-energy", "1e-14", *extra]) == 0
+        (line,) = capsys.readouterr().err.splitlines()
+        assert f"raise --pulse-energy or --aperture{more} (the sensor at " in line, line
+        assert "_" not in line.split("(the sensor at")[0], line
+
+
+def test_view_names_points_not_path(files, capsys):
+    assert _error(capsys, ["view", "box.stl", "--points", "nope.las"]) == (
+        "--points: no such file 'nope.las'")
