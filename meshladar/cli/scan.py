@@ -257,11 +257,11 @@ def _check_outputs(args):
     found = _trajectory(args.platform)
     inputs = [args.scene, args.materials] + ([found[0]] if found else [])
     check_output(args.output, POINT_SUFFIXES, inputs)
-    check_writable(args.output, "-o")
+    check_writable(args.output, "-o", folder=False)        # a missing folder: made
     if args.waveforms is not None:
         check_output(args.waveforms, HDF5_SUFFIXES, inputs, "--waveforms",
                      others=[("-o", args.output)])
-        check_writable(args.waveforms, "--waveforms")
+        check_writable(args.waveforms, "--waveforms", folder=False)
 
 
 def cmd_scan(args) -> int:
@@ -294,6 +294,9 @@ def cmd_scan(args) -> int:
     scene, _, _ = load_scene(args)
     if not scene.is_mesh:
         scene = scene.tessellate()
+    for path in (args.output, args.waveforms):      # every check passed: missing folders
+        if path is not None:
+            os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     cloud = scanning.scan(scene, pattern, platform, sensor, seed=args.seed,
                           waveforms_file=args.waveforms, progress=not args.quiet)
     writer = FORMATS[os.path.splitext(args.output)[1].lower()][1]

@@ -19,11 +19,11 @@ FORMATS = {".las": ("LAS", "write_las"), ".laz": ("LAS", "write_las"),
 _NEEDS = {".las": ("laspy",), ".laz": ("laspy", ("lazrs", "laszip")), ".h5": ("h5py",),
           ".hdf5": ("h5py",), ".npz": ()}
 
-def check_writable(path, flag="path"):
+def check_writable(path, flag="path", folder=True):
     """Refuse, before any work, a points file that cannot be written: a folder, a file in
-    a folder that does not exist, or one whose writer is not installed (laspy for
-    ``.las``, laspy and lazrs (or laszip) for ``.laz``, h5py for ``.h5``/``.hdf5``;
-    ``.npz`` needs numpy alone).
+    a folder that does not exist (unless ``folder`` is False), or one whose writer is not
+    installed (laspy for ``.las``, laspy and lazrs (or laszip) for ``.laz``, h5py for
+    ``.h5``/``.hdf5``; ``.npz`` needs numpy alone).
 
     Parameters
     ----------
@@ -31,6 +31,9 @@ def check_writable(path, flag="path"):
         The file to write.
     flag : str
         The option or argument named in the message.
+    folder : bool
+        Whether the file's folder must exist (the command line makes a missing one, its
+        nearest existing folder checked by its own output checks).
 
     Returns
     -------
@@ -42,7 +45,7 @@ def check_writable(path, flag="path"):
     ParameterError
         Naming the folder, or the missing package and the extra that installs it.
     """
-    path = _target(path, flag)
+    path = _target(path, flag, folder)
     need = _NEEDS.get(os.path.splitext(path)[1].lower(), _NEEDS[".las"])
     for module in need:
         options = module if isinstance(module, tuple) else (module,)
@@ -52,13 +55,14 @@ def check_writable(path, flag="path"):
     return path
 
 
-def _target(path, flag):
-    """``path`` checked to name a file in a folder that exists (not a folder)."""
+def _target(path, flag, exists=True):
+    """``path`` checked to name a file (not a folder) in a folder that exists (with
+    ``exists``)."""
     path = check_path(flag, path)
     if os.path.isdir(path):
         raise ParameterError(f"{flag}: {path!r} is a folder; name a file in it")
     folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
+    if exists and not os.path.isdir(folder):
         raise ParameterError(f"{flag}: no folder {folder!r} to write {path!r} into")
     return path
 
