@@ -6,17 +6,19 @@ LAS: point format 6 (its global encoding's WKT bit set, as LAS 1.4 requires of f
 named extra-bytes dimension (its unit in the description): x, y, z are stored as 32-bit
 integers at ``scale`` (default 0.1 mm, coarser where the cloud spans more than 2³¹ − 1
 steps: :func:`write_las`) from an offset at the cloud's minimum, so they read back within
-``scale``/2; LAS's own intensity is the photoelectrons rounded and
-clipped to 16 bits (the exact value is the ``photoelectrons`` extra bytes), its scan angle
-the pattern's in LAS's 0.006° steps, its GPS time the emission time plus the platform's
-``time_origin`` (a trajectory file's ``time_offset``; s). Every extra-bytes
+``scale``/2; LAS's own intensity is the photoelectrons times :func:`las_intensity_scale`
+(1 where the brightest fits 16 bits, else 65535 over it), rounded, the factor recorded in
+a VLR (:data:`INTENSITY_VLR`) and the exact value in the ``photoelectrons`` extra bytes;
+its scan angle the pattern's in LAS's 0.006° steps, its GPS time the emission time plus
+the platform's ``time_origin`` (a trajectory file's ``time_offset``; s). Every extra-bytes
 field reads back exactly (:data:`EXTRA_NAMES`: the exact intensity and scan angle).
 
 HDF5: ``/points`` is one compound dataset of the records (each field's unit in the
 attribute ``units``, a JSON object); when the cloud holds waveforms, the group
 ``/waveforms`` holds one dataset per block of consecutive pulses, ``block_<first pulse, 12
-digits>`` (pulses × samples, its ``first_pulse`` as an attribute) and their starts
-``starts_<first pulse>`` (s); the root's ``info`` attribute holds the scan's parameters as
+digits>`` (pulses × samples, its ``first_pulse`` as an attribute; the group's ``units``
+:data:`RECORD_UNITS`: photoelectrons per sample, a Geiger-mode array's detections) and
+their starts ``starts_<first pulse>`` (s); the root's ``info`` attribute holds the scan's parameters as
 strict JSON (a non-finite number, such as a Geiger-mode dead time of inf, as the string
 ``"inf"``, ``"-inf"`` or ``"nan"``, read back as the float). Everything reads back exactly.
 """
@@ -26,6 +28,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import struct
 import threading
 
 import numpy as np
@@ -36,14 +39,17 @@ from ..errors import ParameterError
 from .formats import _not_named_as, _target, check_writable
 from .points import POINT_DTYPE, POINT_FIELDS, PointCloud
 
-__all__ = ["write_las", "read_las", "write_hdf5", "read_hdf5", "LAS_NATIVE", "EXTRA_NAMES",
-           "WaveformSink", "NON_FINITE"]
+__all__ = ["write_las", "read_las", "write_hdf5", "read_hdf5", "las_intensity_scale",
+           "LAS_NATIVE", "EXTRA_NAMES", "INTENSITY_VLR", "RECORD_UNITS", "WaveformSink",
+           "NON_FINITE"]
 
 #: The record fields LAS 1.4 stores in its own dimensions (all others are extra bytes).
 LAS_NATIVE = ("x", "y", "z", "return_number", "number_of_returns")
 _SCAN_ANGLE_STEP = 0.006
 #: The largest coordinate LAS stores, in steps of its scale (a signed 32-bit integer).
 _LAS_STEPS = 2 ** 31 - 1
+#: LAS intensity's largest value (16 bits).
+_LAS_INTENSITY_TOP = 65535
 #: The strings that stand for the non-finite floats in the HDF5 file's strict JSON.
 NON_FINITE = {"inf": math.inf, "-inf": -math.inf, "nan": math.nan}
 #: Extra-bytes names of the fields whose own names LAS's format 6 takes: the exact
@@ -76,6 +82,29 @@ def _readable(path, what):
 def _unreadable(path, what, exc):
     first = (str(exc).splitlines() or [type(exc).__name__])[0][:100]
     return ParameterError(f"path: {path!r} is not a {what} file ({first})")
+
+
+#: The VLR that records LAS intensity's units (user id, record id): its data the
+#: little-endian float64 LAS intensity per photoelectron.
+INTENSITY_VLR = ("meshladar", 1)
+
+
+def las_intensity_scale(photoelectrons):
+    """LAS intensity per photoelectron: 1 where the brightest return fits LAS's 16 bits,
+    else 65535 over it (the LAS specification's normalisation to the data's dynamic range:
+    at 1, a scan's strong returns all read 65535).
+
+    Parameters
+    ----------
+    photoelectrons : numpy.ndarray
+        The returns' ``intensity``.
+
+    Returns
+    -------
+    float
+    """
+    top = float(np.max(photoelectrons, initial=0.0))
+    return 1.0 if top <= _LAS_INTENSITY_TOP else _LAS_INTENSITY_TOP / top
 
 
 def write_las(path, cloud, *, scale=None):
@@ -118,7 +147,12 @@ def write_las(path, cloud, *, scale=None):
     las.x, las.y, las.z = xyz.T
     las.return_number = np.clip(pts["return_number"], 1, 15)
     las.number_of_returns = np.clip(pts["number_of_returns"], 1, 15)
-    las.intensity = np.clip(np.rint(pts["intensity"]), 0, 65535).astype(np.uint16)
+    per_pe = las_intensity_scale(pts["intensity"])
+    las.intensity = np.clip(np.rint(pts["intensity"] * per_pe), 0,
+                            _LAS_INTENSITY_TOP).astype(np.uint16)
+    las.vlrs.append(laspy.VLR(user_id=INTENSITY_VLR[0], record_id=INTENSITY_VLR[1],
+                              description="LAS intensity per photoelectron",
+                              record_data=struct.pack("<d", per_pe)))
     las.scan_angle = np.clip(np.rint(pts["scan_angle"] / _SCAN_ANGLE_STEP), -30000,
                              30000).astype(np.int16)
     # GPS time: the platform's clock (a trajectory's time_offset) plus the emission time
@@ -221,7 +255,7 @@ def write_hdf5(path, cloud):
         with h5py.File(fh, "w") as f:
             _write_points(f, cloud)
             if cloud.waveforms is not None:
-                g = _waveform_group(f)
+                g = _waveform_group(f, (cloud.info.get("sensor") or {}).get("geiger"))
                 first = 0
                 for w, t in zip(cloud.waveforms, cloud.starts):
                     _write_block(g, first, w, t)
@@ -230,9 +264,14 @@ def write_hdf5(path, cloud):
     write_atomic(path, fill)
 
 
-def _waveform_group(f):
+#: The ``waveforms`` group's ``units``: a linear receiver's records, a Geiger-mode array's.
+RECORD_UNITS = {False: "photoelectrons per sample; starts: s",
+                True: "detections per sample over each pulse's shots; starts: s"}
+
+
+def _waveform_group(f, geiger):
     g = f.create_group("waveforms")
-    g.attrs["units"] = "photoelectrons per sample; starts: s"
+    g.attrs["units"] = RECORD_UNITS[bool(geiger)]
     return g
 
 
@@ -288,6 +327,8 @@ class WaveformSink:
     ----------
     path : str or os.PathLike
         The HDF5 file to make (its folder must exist).
+    geiger : bool
+        Whether the records are a Geiger-mode array's detections (their ``units``).
 
     Raises
     ------
@@ -297,7 +338,7 @@ class WaveformSink:
         When the temporary cannot be made, naming ``path``.
     """
 
-    def __init__(self, path):
+    def __init__(self, path, geiger=False):
         h5py = _need("h5py")
         self.path = _not_named_as(_target(path, "waveforms_file"), "HDF5", "waveforms_file")
         fd, self.partial = make_temporary(self.path)
@@ -307,7 +348,7 @@ class WaveformSink:
         except BaseException:
             os.remove(self.partial)
             raise
-        self.group = _waveform_group(self.file)
+        self.group = _waveform_group(self.file, geiger)
         self.lock = threading.Lock()
 
     def write(self, first, waves, starts):

@@ -389,4 +389,4 @@ def _sink(path, keep, run_dir, executor, sensor):
         raise ParameterError("waveforms_file with run_dir: a resumed scan would not write "
                              "the chunks done before; use keep_waveforms=True with run_dir "
                              "(and the sensor's samples), then write_hdf5")
-    return WaveformSink(path)
+    return WaveformSink(path, geiger=sensor.geiger is not None)

@@ -129,3 +129,49 @@ def test_a_points_files_extension_names_its_format_for_every_writer_and_reader(t
                                              "write_las writes that format"):
         write_hdf5(str(tmp_path / "x.laz"), _cloud([0.0]))
     assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("photoelectrons, per_pe", [
+    ([0.4, 7.0, 65535.0], 1.0),                             # the brightest fits: as counted
+    ([3e3, 1.2e5, 2.4e6], 65535.0 / 2.4e6),                 # normalised to the brightest
+])
+def test_las_intensity_is_photoelectrons_normalised_to_16_bits_with_its_factor(
+        tmp_path, photoelectrons, per_pe):
+    """LAS's intensity is the photoelectrons times 1, or 65535 over the brightest where it
+    would not fit (a user's room scan clipped 98 % of its points at 65535, its intensity
+    useless), the factor in the meshladar VLR as a float64; the exact count reads back."""
+    import struct
+
+    laspy = pytest.importorskip("laspy")
+    cloud = _cloud([0.0, 1.0, 2.0])
+    cloud.points["intensity"] = photoelectrons
+    write_las(tmp_path / "p.las", cloud)
+    las = laspy.read(tmp_path / "p.las")
+    (vlr,) = [v for v in las.vlrs if (v.user_id, v.record_id) == ("meshladar", 1)]
+    assert struct.unpack("<d", vlr.record_data) == (per_pe,)
+    np.testing.assert_array_equal(las.intensity, np.rint(np.array(photoelectrons) * per_pe))
+    np.testing.assert_array_equal(read_las(tmp_path / "p.las").points["intensity"],
+                                  cloud.points["intensity"])          # float32, exact
+
+
+def test_a_geiger_arrays_records_are_labelled_detections(tmp_path):
+    """A Geiger-mode array's records count detections over its shots, not photoelectrons
+    (a user's trial read "photoelectrons per sample" on integer counts): streamed during
+    the scan or written after it; a linear receiver's are photoelectrons."""
+    h5py = pytest.importorskip("h5py")
+    geiger = sensor(pulse_energy=1e-12, geiger=GeigerMode(shots=10))
+    frame, at = flash(2, 2, ifov_deg=0.1), Platform.static((0, 0, 0))
+    scan(scene(plate(50.0)), frame, at, geiger, waveforms_file=tmp_path / "s.h5")
+    write_hdf5(tmp_path / "w.h5", scan(scene(plate(50.0)), frame, at, geiger,
+                                       keep_waveforms=True))
+    write_hdf5(tmp_path / "l.h5", scan(scene(plate(50.0)), frame, at, sensor(),
+                                       keep_waveforms=True))
+    for name, units in (("s", "detections per sample over each pulse's shots; starts: s"),
+                        ("w", "detections per sample over each pulse's shots; starts: s"),
+                        ("l", "photoelectrons per sample; starts: s")):
+        with h5py.File(tmp_path / f"{name}.h5", "r") as f:
+            assert f["waveforms"].attrs["units"] == units, name
+            if name != "l":
+                block = np.concatenate([f["waveforms"][k][()].ravel()
+                                        for k in f["waveforms"] if k.startswith("block")])
+                np.testing.assert_array_equal(block, np.rint(block))     # counts
