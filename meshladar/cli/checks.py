@@ -5,7 +5,9 @@ in a place that can hold them (the nearest existing folder above is a folder, wr
 from __future__ import annotations
 
 import os
+import tempfile
 
+from .._atomic_write import TEMPORARY_PREFIX
 from ..errors import ParameterError
 
 __all__ = ["check_output", "check_outdir", "check_not_input", "check_place", "same_file"]
@@ -29,8 +31,9 @@ def check_place(path, flag, folder=False):
     ------
     ParameterError
         When the nearest existing path at or above the place is a file (``cone.stl/x.npz``
-        with ``cone.stl`` a file), or a folder without write permission; naming ``flag``,
-        ``path`` and that path.
+        with ``cone.stl`` a file), or a folder without write permission or that takes no
+        new file (a read-only mount, ``/sys``: tried with a temporary, removed at once);
+        naming ``flag``, ``path`` and that path.
     """
     above = os.path.abspath(path)
     if not folder or not os.path.exists(above):
@@ -43,6 +46,13 @@ def check_place(path, flag, folder=False):
     if not os.access(above, os.W_OK | os.X_OK):
         raise ParameterError(f"{flag}: cannot write {path!r}: no permission to write in "
                              f"the folder {above!r}")
+    try:        # what the permission bits do not tell (root on /sys, read-only mounts)
+        fd, probe = tempfile.mkstemp(dir=above, prefix=f"{TEMPORARY_PREFIX}{os.getpid()}-")
+    except OSError as exc:
+        raise ParameterError(f"{flag}: cannot write {path!r}: the folder {above!r} takes no "
+                             f"new file ({exc.strerror})") from None
+    os.close(fd)
+    os.remove(probe)
 
 
 def check_outdir(outdir, flag="outdir"):

@@ -118,6 +118,38 @@ def test_an_output_in_a_folder_without_write_permission_is_refused(tmp_path, mon
                    f"the folder {locked!r}\n")
 
 
+@pytest.mark.parametrize("argv", [
+    ["simulate", "disk", "--views", "4", "-o", "ro/x.npz"],
+    ["scan", "box.stl", "--pattern", "raster azimuth_deg=0 elevation_deg=0 pulse_rate=1",
+     "--platform", "static position=-5,0,0", "-o", "ro/x.las"]])
+def test_a_folder_that_takes_no_file_is_refused_before_the_work(tmp_path, monkeypatch, capsys,
+                                                                 no_work, argv):
+    """Permission bits that say yes to a folder that takes no file (root on /sys, a
+    read-only mount: a user's scan ran 4 s and then failed "Permission denied" without
+    naming -o): a temporary is tried, and the refusal names the flag before the work."""
+    import errno
+    import tempfile
+    import trimesh
+
+    monkeypatch.chdir(tmp_path)
+    trimesh.creation.box().export(tmp_path / "box.stl")
+    (tmp_path / "ro").mkdir()
+    locked = os.path.join(os.getcwd(), "ro")
+    mkstemp = tempfile.mkstemp
+
+    def refuse(*args, dir=None, **kw):
+        if os.fspath(dir) == locked:
+            raise OSError(errno.EROFS, "Read-only file system")
+        return mkstemp(*args, dir=dir, **kw)
+
+    monkeypatch.setattr(tempfile, "mkstemp", refuse)
+    code, _, err = _run(capsys, argv)
+    assert code == 2
+    assert err == (f"meshladar: error: -o: cannot write {argv[-1]!r}: the folder {locked!r} "
+                   "takes no new file (Read-only file system)\n")
+    assert os.listdir(locked) == []
+
+
 def test_missing_folders_above_an_output_are_accepted(tmp_path):
     # the writers create them: only the nearest existing path above must be a folder
     check_place(str(tmp_path / "new" / "sub" / "x.npz"), "-o")
