@@ -57,7 +57,9 @@ scan_words = flag_words(
      (", or lower its detector's threshold", ""),
      (", or its GeigerMode's shots", ", or --geiger-shots"),
      ("or a wider pulse", "or a wider pulse (--pulse-fwhm)"),
-     ("--platform: path: cannot read", "--platform: cannot read")])
+     ("--platform: path: cannot read", "--platform: cannot read"),
+     ("(a platform at rest: Platform.static)",
+      "(a platform at rest: --platform 'static position=X,Y,Z')")])
 _TRUE, _FALSE = ("true", "yes", "on", "1"), ("false", "no", "off", "0")
 #: The beam flags' values when not given (the parser leaves them None: whether one was
 #: given decides what applies, a flash pattern refusing ``--divergence`` and ``--profile``);

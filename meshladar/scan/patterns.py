@@ -152,9 +152,12 @@ def _angles(name, value):
         raise ParameterError(f"{name} must be one angle or a 1-D array of them; got shape "
                              f"{a.shape}")
     a = a.ravel()
-    if a.size == 0 or np.any(np.abs(a) > _MAX_ANGLE_DEG):
+    if a.size == 0:
+        raise ParameterError(f"{name} must be 1 or more angles in [-180, 180] deg; got none")
+    outside = np.flatnonzero(np.abs(a) > _MAX_ANGLE_DEG)
+    if outside.size:
         raise ParameterError(f"{name} must be 1 or more angles in [-180, 180] deg; got "
-                             f"{a.size} values")
+                             f"{a[outside[0]]:g} (value {outside[0]} of {a.size})")
     return a
 
 

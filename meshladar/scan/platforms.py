@@ -25,6 +25,7 @@ its time at the pattern's t = 0.
 from __future__ import annotations
 
 import csv
+import math
 import functools
 from dataclasses import dataclass
 
@@ -61,10 +62,15 @@ def _row(path, line, values):
         raise ParameterError(f"{path}, line {line}: a row holds {len(TRAJECTORY_COLUMNS)} "
                              f"values ({','.join(TRAJECTORY_COLUMNS)}); got {len(values)}")
     try:
-        return [float(x) for x in values]
+        row = [float(x) for x in values]
     except ValueError as exc:
         raise ParameterError(f"{path}, line {line}: every value must be a number "
                              f"({exc})") from None
+    for name, x in zip(TRAJECTORY_COLUMNS, row):
+        if not math.isfinite(x):
+            raise ParameterError(f"{path}, line {line}: {name} is {x}; every value must be a "
+                                 "finite number")
+    return row
 
 
 def rotation(attitude_deg):
@@ -249,8 +255,15 @@ class Platform:
         if tuple(header) != TRAJECTORY_COLUMNS:
             raise ParameterError(f"{path}: the header must be {','.join(TRAJECTORY_COLUMNS)}; "
                                  f"got {','.join(header) or 'nothing'}")
-        data = np.array([_row(path, line, r) for line, r in enumerate(rows[1:], 2) if r],
+        lines = [line for line, r in enumerate(rows[1:], 2) if r]
+        data = np.array([_row(path, line, rows[line - 1]) for line in lines],
                         np.float64).reshape(-1, len(TRAJECTORY_COLUMNS))
+        back = np.flatnonzero(np.diff(data[:, 0]) <= 0)
+        if back.size:
+            a, b = int(back[0]), int(back[0]) + 1
+            raise ParameterError(f"{path}, line {lines[b]}: time {data[b, 0]:.9g} does not "
+                                 f"follow line {lines[a]}'s {data[a, 0]:.9g}; the times must "
+                                 "increase")
         if len(data) < 2:
             raise ParameterError(f"{path}: a trajectory needs 2 or more rows (its poses cover "
                                  f"their first to last time); got {len(data)} (a platform "

@@ -143,6 +143,12 @@ _RASTER = "raster azimuth_deg=-2:2:5 elevation_deg=-2:2:5 pulse_rate=1e5"
      "pulse_rate, duration); got 'rotating elevations_deg=0 rotation_hz=10 pulse_rate=1e3'"),
     ({"--platform": "nofile.csv"}, "--platform: cannot read the trajectory 'nofile.csv' "
                                    "([Errno 2] No such file or directory: 'nofile.csv')"),
+    ({"--platform": "one.csv"},
+     "--platform: one.csv: a trajectory needs 2 or more rows (its poses cover their first to "
+     "last time); got 1 (a platform at rest: --platform 'static position=X,Y,Z')"),
+    ({"--pattern": "raster azimuth_deg=-200:10:5 elevation_deg=0 pulse_rate=1e5"},
+     "--pattern: azimuth_deg must be 1 or more angles in [-180, 180] deg; got -200 (value 0 "
+     "of 5)"),
     ({"--sample-rate": "1e6"},
      "the echo (the pulse and the response: 5e-09 s FWHM) spans 0.005 samples at "
      "--sample-rate 1e+06; a linear receiver's detector needs 1 or more (ranges fall on the "
@@ -152,6 +158,7 @@ def test_scan_speaks_its_flags(change, message, files, capsys):
     """A user's trial: scan said "Platform.static() missing 1 required positional argument",
     "path: cannot read the trajectory", and took --sample-rate 1e6 for a 5 ns pulse (every
     range on a 150 m sample grid) without a word."""
+    (files / "one.csv").write_text("time,x,y,z,roll,pitch,yaw\n0,0,0,0,0,0,0\n")
     flags = {"--pattern": _RASTER, "--platform": "static position=-5,0,0", **change}
     argv = ["scan", "box.stl", "-o", "p.npz"] + [w for kv in flags.items() for w in kv]
     assert _error(capsys, argv) == message

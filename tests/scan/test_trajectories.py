@@ -137,7 +137,11 @@ def test_a_trajectory_file_with_a_byte_order_mark_reads(tmp_path):
 @pytest.mark.parametrize("row, match", [
     ("1,1,0,300,0,90", r"line 3: a row holds 7 values \(time,x,y,z,roll,pitch,yaw\); got 6"),
     ("1,1,0,300,0,90,0,5", "line 3: a row holds 7 values .*got 8"),
-    ("1,1,0,abc,0,90,0", "line 3: every value must be a number")])
+    ("1,1,0,abc,0,90,0", "line 3: every value must be a number"),
+    ("1,nan,0,300,0,90,0", r"t\.csv, line 3: x is nan; every value must be a finite number"),
+    ("1,1,0,300,0,inf,0", r"line 3: pitch is inf; every value must be a finite number"),
+    ("0,1,0,300,0,90,0", r"t\.csv, line 3: time 0 does not follow line 2's 0; the times "
+                         "must increase")])
 def test_a_bad_row_is_named_by_its_line(tmp_path, row, match):
     path = tmp_path / "t.csv"
     path.write_text(f"time,x,y,z,roll,pitch,yaw\n0,0,0,300,0,90,0\n{row}\n")
