@@ -21,7 +21,7 @@ _NAMES = {
     "trace": "forward", "weigh": "weighing", "Hits": "hits", "lrcs": "forward.lrcs",
 }
 
-#: the public submodules, in layer order (DESIGN.md), each ``meshladar.<name>``
+#: the public submodules, in layer order (the guide's Layout page), each ``meshladar.<name>``
 _SUBMODULES = (
     "errors", "precision", "plotting",
     "brdf", "materials", "shapes", "meshes", "scene", "ladar", "sensor", "motion", "noise",
@@ -48,5 +48,5 @@ __getattr__, __dir__ = _lazy_attributes(__name__, globals(), _NAMES, _SUBMODULES
 
 
 __all__ = ["SandfordRobertson", "Disk", "Ellipse", "Scene", "Ladar", "Sinogram", "simulate",
-           "fbp", "Image", "log_radiance", "clip_radiance", "trace", "weigh", "Hits",
+           "fbp", "Image", "log_radiance", "clip_radiance", "trace", "weigh", "Hits", "lrcs",
            "brdf", "errors", "materials", "__version__"]

@@ -5,6 +5,7 @@ that ``import meshladar`` loads only numpy and scipy and the command line's one-
 
 from __future__ import annotations
 
+import __future__
 import importlib
 
 __all__ = ["lazy_attributes", "deferred_module"]
@@ -43,8 +44,9 @@ def lazy_attributes(package, namespace, names=(), submodules=(), hidden=()):
         namespace[name] = value
         return value
 
-    def __dir__():
-        return sorted(set(namespace) | set(names) | set(submodules))
+    def __dir__():        # less ``from __future__ import annotations``'s feature object
+        own = {n for n, v in namespace.items() if v is not __future__.annotations}
+        return sorted(own | set(names) | set(submodules))
 
     return __getattr__, __dir__
 

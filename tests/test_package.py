@@ -163,6 +163,20 @@ def test_no_public_name_shadows_a_submodule():
                 f"{mod.name} shadows the stdlib"
 
 
+def test_dir_lists_the_public_names_the_layout_page_tabulates():
+    """dir(meshladar) holds its public names and submodules and nothing stray (it listed
+    ``annotations``, the __future__ feature), and the guide's Layout table names each
+    (it lacked ``lrcs`` and ``scan``)."""
+    import meshladar as ml
+
+    public = {n for n in dir(ml) if not n.startswith("_")}
+    assert public == set(ml._NAMES) | set(ml._SUBMODULES)
+    table = (ROOT / "docs" / "guide" / "layout.md").read_text(encoding="utf-8")
+    rows = table[table.index("| `ml.<name>` | from |"):].split("\n\n")[0]
+    named = set(re.findall(r"`(\w+)`", rows))
+    assert public <= named, sorted(public - named)
+
+
 def test_every_public_submodule_is_an_attribute_and_old_names_warn():
     # one lazy table: ml.<name> for every public submodule, imported on first use; the
     # modules that moved are deprecated aliases that name their new home
