@@ -181,13 +181,15 @@ def _bar_slot(plotter):
     return max(0.0, left - _MARGIN)
 
 
-def _clear_of_bars(plotter, xyz, grow=True):
+def _clear_of_bars(plotter, xyz, grow=True, legend=None):
     """Aim the camera so that points ``xyz`` (n, 3), the scene's extent, fill the window
     left of the colour bars' slot (:func:`_bar_slot`) and nothing drawn lies under a bar
     or its title; the view's direction is kept. Exact: a perspective view's angle scales
     its picture about the window's centre and its window centre shifts it. ``grow``
     False: the picture is only made smaller and moved as little as it must (a view that
-    is clear of the bars is kept as it is)."""
+    is clear of the bars is kept as it is). ``legend``: its actor, drawn already (the
+    top-left corner): the picture's box is kept below it or right of it, whichever leaves
+    it larger."""
     width, height = plotter.window_size
     right = _bar_slot(plotter) - _MARGIN
     cam = plotter.camera
@@ -196,13 +198,14 @@ def _clear_of_bars(plotter, xyz, grow=True):
     # the target, in normalised device coordinates: x in [margin, right], y in margins
     t_lo = np.array([2.0 * _MARGIN / width - 1.0, 2.0 * _MARGIN / height - 1.0])
     t_hi = np.array([2.0 * right / width - 1.0, 1.0 - 2.0 * _MARGIN / height])
-    span = hi - lo
-    fits = np.where(span > 1e-9, (t_hi - t_lo) / np.maximum(span, 1e-9), np.inf)
-    scale = float(fits.min()) if np.isfinite(fits).any() else 1.0    # one point: kept
-    shift = scale * 0.5 * (lo + hi) - 0.5 * (t_lo + t_hi)
-    if not grow:
-        scale = min(scale, 1.0)
-        shift = np.clip(0.0, scale * hi - t_hi, scale * lo - t_lo)
+    scale, shift = _fit(lo, hi, t_lo, t_hi, grow)
+    if legend is not None:
+        x0, y0, x1, _ = 2.0 * np.asarray(_box(legend)) - 1.0          # its box, NDC
+        gap = 2.0 * _MARGIN / np.array([width, height])
+        if (scale * lo - shift)[0] < x1 + gap[0] and (scale * hi - shift)[1] > y0 - gap[1]:
+            below = _fit(lo, hi, t_lo, np.array([t_hi[0], y0 - gap[1]]), grow)
+            beside = _fit(lo, hi, np.array([x1 + gap[0], t_lo[1]]), t_hi, grow)
+            scale, shift = max(below, beside, key=lambda fit: fit[0])
     if cam.GetParallelProjection():
         cam.SetParallelScale(cam.GetParallelScale() / scale)
     else:
@@ -210,6 +213,20 @@ def _clear_of_bars(plotter, xyz, grow=True):
         cam.SetViewAngle(float(np.degrees(2.0 * np.arctan(np.tan(half) / scale))))
     cam.SetWindowCenter(*(np.asarray(cam.GetWindowCenter()) * scale + shift))
     plotter.reset_camera_clipping_range()
+
+
+def _fit(lo, hi, t_lo, t_hi, grow):
+    """(scale, shift) taking the picture's box [lo, hi] into [t_lo, t_hi] (normalised
+    device coordinates: x' = scale x − shift), filling it; ``grow`` False: made no larger,
+    moved as little as it must."""
+    span = hi - lo
+    fits = np.where(span > 1e-9, (t_hi - t_lo) / np.maximum(span, 1e-9), np.inf)
+    scale = float(fits.min()) if np.isfinite(fits).any() else 1.0    # one point: kept
+    shift = scale * 0.5 * (lo + hi) - 0.5 * (t_lo + t_hi)
+    if not grow:
+        scale = min(scale, 1.0)
+        shift = np.clip(0.0, scale * hi - t_hi, scale * lo - t_lo)
+    return scale, shift
 
 
 def _projected(cam, xyz, aspect):

@@ -199,9 +199,9 @@ def show_scene(scene, *, view_angle_deg=None, view_vector=None, ladar=None, segm
     if ladar is not None and show_hits:
         legend += _draw_hits(plotter, pv, mesh, ladar, frame, iso_ranges)
     plotter.camera_position = _camera_position(camera, frame)
-    if camera is None or isinstance(camera, str):     # a named view: kept clear of the bar
-        _clear_of_bars(plotter, np.vstack(drawn), grow=False)
-    _legend(plotter, legend)
+    legend = _legend(plotter, legend)
+    if camera is None or isinstance(camera, str):     # a named view: clear of bar and legend
+        _clear_of_bars(plotter, np.vstack(drawn), grow=False, legend=legend)
     return _finish(plotter, off_screen, screenshot)
 
 

@@ -35,3 +35,30 @@ def test_nothing_of_the_scene_is_drawn_in_the_colour_bars_slot(size):
     left = slot_left(shown)
     assert left > 0.5 * size[0]
     assert drawn[:, left - 2:].sum() == 0
+
+
+#: The legend's own coloured pixels: its icons, in the first part of its box's width.
+ICON_SHARE = 0.12
+
+
+@pytest.mark.parametrize("size", [(640, 480), (720, 540), (900, 700)])
+def test_nothing_of_the_scene_is_drawn_under_the_legend(size):
+    """The tour's view (the pair from 20°, with its ladar's hits and iso-range planes): the
+    ray grid's frame, the planes and the disks' hits ran under the legend at the top left
+    (the translucent box dimmed them: 11,672 coloured pixels in it at 720 x 540). Inside
+    the legend's box only its icons are coloured (its text is white on grey)."""
+    from meshladar.viz import viewer
+
+    pair = ml.phantoms.scene("disk_pair", large=DARK_GRAY, small=ALUMINUM)
+    lad = ml.Ladar(np.arange(0.0, 360.0, 1.0), np.linspace(-0.8, 0.8, 513))
+    shown = viewer.show_scene(pair, view_angle_deg=20.0, ladar=lad, off_screen=True,
+                              window_size=size)
+    img = shown.image[..., :3] / 255.0
+    h, w = img.shape[:2]
+    x0, y0, x1, y1 = shown.legend.box
+    box = img[int((1 - y1) * h):int((1 - y0) * h), int(x0 * w):int(x1 * w)]
+    coloured = np.nonzero(((box.max(-1) - box.min(-1)) > COLOUR_TOL).any(axis=0))[0]
+    assert coloured.size and coloured.max() < ICON_SHARE * box.shape[1], coloured.max()
+    drawn = _is(shown.image, (1.0, 1.0, 0.0))             # the frame, clear of the bars
+    left = min(int(box[0] * w) for _, box in shown.scalar_bars)
+    assert drawn.sum() > 500 and drawn[:, left - 2:].sum() == 0
