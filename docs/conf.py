@@ -40,7 +40,7 @@ html_title = "meshladar"
 html_theme_options = {"navigation_with_keys": False, "show_toc_level": 2}
 html_static_path: list = []
 exclude_patterns = ["_build", "gallery"]
-# the guide's pages are Markdown (MyST), so that they read on GitHub as well and the test
+# the guide's pages are Markdown (MyST), so that their text reads on GitHub as well and the test
 # suite runs their examples as it runs the README's; ::: fences hold directives (images,
 # includes) where a ``` fence would read as code
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
@@ -101,6 +101,19 @@ def _public_modules():
     return out
 
 
+def _defined_here(obj, dotted):
+    """Whether module ``dotted`` is where ``obj`` is documented: it is defined there, or in
+    a private module, or its home module does not export it (a value a function made, such
+    as a command's translator made by ``flag_words``)."""
+    import importlib
+
+    home = getattr(obj, "__module__", None) or dotted
+    if home == dotted or any(part.startswith("_") for part in home.split(".")):
+        return True
+    exported = getattr(importlib.import_module(home), "__all__", ())
+    return not any(getattr(importlib.import_module(home), n, None) is obj for n in exported)
+
+
 def _uncovered(packages):
     """{module: [names]}: the public names a module defines (``__all__``) that no page of
     ``packages`` documents (no package above it re-exports them)."""
@@ -115,7 +128,7 @@ def _uncovered(packages):
         module = importlib.import_module(dotted)
         names = [n for n in getattr(module, "__all__", ())
                  if id(getattr(module, n, None)) not in covered
-                 and getattr(getattr(module, n, None), "__module__", dotted) == dotted]
+                 and _defined_here(getattr(module, n, None), dotted)]
         if names and dotted.removeprefix("meshladar.") not in packages:
             out[dotted] = names
     return out

@@ -1,9 +1,10 @@
 """The ladar: view directions and range bins (monostatic, range-resolved).
 
-Conventions (DESIGN.md): a view is a unit vector w from the scene toward the ladar, which
-sits at infinity along w; for views about the z axis, view angle φ gives
-w = (cos φ, sin φ, 0). The range of a point p is r = −p·w (zero on the plane through the
-origin, growing away from the ladar). Range bins are given by strictly increasing edges.
+Conventions (the guide's Concepts page, "Views and range"): a view is a unit vector w from
+the scene toward the ladar, which sits at infinity along w; for views about the z axis, view
+angle φ gives w = (cos φ, sin φ, 0). The range of a point p is r = −p·w (zero on the plane
+through the origin, growing away from the ladar). Range bins are given by strictly
+increasing edges.
 """
 
 from __future__ import annotations

@@ -385,7 +385,7 @@ class Scene:
 
     def view_ranges(self, view_vectors) -> tuple[np.ndarray, np.ndarray]:
         """(nearest, farthest) range r = −p·w of the scene in each view, two (n_views,)
-        arrays (DESIGN.md: range zero is the plane through the world origin perpendicular
+        arrays (range zero is the plane through the world origin perpendicular
         to w, growing away from the ladar).
 
         Parameters

@@ -1,4 +1,4 @@
-"""The sensor: what a ladar's receiver records (DESIGN.md's sensor stage).
+"""The sensor: what a ladar's receiver records (the sensor chain of the guide's Concepts page).
 
 Radiometry conventions (``radiometry=`` on every forward model and on :func:`weigh`):
 

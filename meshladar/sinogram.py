@@ -150,7 +150,7 @@ class Sinogram:
     Parameters
     ----------
     values : (n_views, n_bins) array_like, float64
-        Bin integrals over the visible surface: of F(θ) cos θ dA (DESIGN.md, paper Eq. 8,
+        Bin integrals over the visible surface: of F(θ) cos θ dA (paper Eq. 8,
         ``radiometry="paper"``) or of the received power F cos θ_i cos θ_r dA
         (``"power"``), in scene units of area (length in 2D) times 1/sr, or photoelectrons
         with a sensor that counts them (``units``).

@@ -112,6 +112,8 @@ class Progress:
         self.stream.flush()
 
     def close(self):
+        """End the bar's line (a newline on the stream, where the bar is drawn), so that
+        what is written next starts on a line of its own."""
         if self.enabled:
             self.stream.write("\n")
             self.stream.flush()

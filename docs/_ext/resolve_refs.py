@@ -53,15 +53,16 @@ def _candidates(target, contexts):
 
 
 def _documented(env):
-    """id(object) → (documented name, docname, objtype) of everything the site documents."""
-    cache = getattr(env, "_meshladar_documented", None)
+    """id(object) → (documented name, docname, anchor) of everything the site documents (a
+    module's anchor is ``module-<name>``, not its name)."""
+    cache = getattr(env, "_meshladar_anchors", None)
     if cache is None:
         cache = {}
         for name, entry in env.get_domain("py").objects.items():
             obj = _lookup(name)
             if obj is not None:
-                cache.setdefault(id(obj), (name, entry.docname, entry.objtype))
-        env._meshladar_documented = cache
+                cache.setdefault(id(obj), (name, entry.docname, entry.node_id))
+        env._meshladar_anchors = cache
     return cache
 
 
@@ -84,7 +85,7 @@ def _resolve(app, env, node, contnode):
                 if found:
                     break
         if found:
-            return make_refnode(app.builder, node["refdoc"], found[1], found[0], contnode,
+            return make_refnode(app.builder, node["refdoc"], found[1], found[2], contnode,
                                 found[0])
     if any(part.startswith("_") for part in target.split(".")):
         return nodes.literal(text=node.astext())

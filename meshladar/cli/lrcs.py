@@ -17,7 +17,8 @@ from .words import flag_words
 
 __all__ = ["cmd_lrcs", "lrcs_words"]
 
-#: lrcs' messages in its flags' words (:func:`.words.flag_words`): the options it sets.
+#: The translator of the API's messages into lrcs' flags (:func:`.words.flag_words`):
+#: ``lrcs_words(message)`` names each option lrcs sets by its flag.
 lrcs_words = flag_words({"ray_spacing": "--ray-spacing", "angles_deg": "--angles-deg",
                          "view_vectors": "--view-vectors", "per_part": "--per-part",
                          "bounces": "--bounces", "seed": "--seed", "views": "--views",

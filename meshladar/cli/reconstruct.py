@@ -178,14 +178,17 @@ _NOISE_FIELDS = {"speckle_cells": "speckle_cells", "background_rate": "backgroun
                  "gain": "gain", "bits": "bits", "full_scale": "full_scale"}
 
 
-#: reconstruct's messages in its flags' words (:func:`.words.flag_words`).
+#: The translator of the API's messages into reconstruct's flags
+#: (:func:`.words.flag_words`): ``reconstruct_words(message)`` names each option
+#: reconstruct sets by its flag, and gives the bins' advice in simulate's flags.
 reconstruct_words = flag_words(
     {"size": "--size", "extent": "--extent", "smooth": "--smooth", "filter": "--filter",
      "threshold": "--clip"},
     phrases=[("wider bins (meshladar.reconstruct.resample_uniform) or more views",
               "fewer, wider bins or more views (simulate --bins, --views)")])
-#: receive's: the waveforms' and the noise's parameters (a pulse's and the response's
-#: ``fwhm`` are named as they are made: :func:`_gaussian`).
+#: The translator of the API's messages into receive's flags (:func:`.words.flag_words`):
+#: ``receive_words(message)`` names the waveforms' and the noise's parameters by their
+#: flags (a pulse's and the response's ``fwhm`` are named where they are made).
 receive_words = flag_words(
     {"sample_rate": "--sample-rate", "oversample": "--oversample", "standoff": "--standoff",
      "scale": "--scale", "seed": "--seed", "interval": "--pulse-interval",

@@ -1,11 +1,12 @@
 """The parameters a coating fit frees: which fields of which part, their bounds, the
 coatings with values put in, and the model's Jacobian through a part's kernel matrix.
 
-A built-in coating's parameters are bounded by their valid ranges (:data:`VALID_RANGES`,
-as the classes check them; Phong's exponent below only): the solver never steps out of
-them, a parameter on its bound is handled as SR's, and the Jacobian's finite-difference
-step goes the other way where a step would leave the coating's valid set (Phong's
-kd + ks ≤ 1, SR's ρd + ε ≤ G(b)). Unknown names in ``free`` and ``bounds`` are refused."""
+A built-in coating's parameters are bounded by their valid ranges (:data:`VALID_RANGES`, as
+the classes check them, but SR's e from 1e-4 and Phong's exponent below only): the solver
+never steps out of them, a parameter on its bound is handled as SR's, and the Jacobian's
+finite-difference step goes the other way where a step would leave the coating's valid set
+(Phong's kd + ks ≤ 1, SR's ρd + ε ≤ G(b)). Unknown names in ``free`` and ``bounds`` are
+refused."""
 
 from __future__ import annotations
 
@@ -23,11 +24,12 @@ from .._validate import check_real, short
 from ..errors import EnergyConservationWarning, ParameterError
 from ._tables import GRID, _table
 
-#: Default bounds of the Sandford-Robertson parameters.
+#: Default bounds of the Sandford-Robertson parameters: the class's valid ranges, but e from
+#: 1e-4 (the class takes e down to E_MIN).
 SR_BOUNDS = {"rho_d": (0.0, 1.0), "epsilon": (0.0, 1.0), "b": (0.0, 1.0), "e": (1e-4, 1.0)}
 
 #: The built-in coatings' float fields with their valid ranges, as each class checks them
-#: when it is made (SR's e from 1e-4, :data:`SR_BOUNDS`): a fit's default bounds, and the
+#: when it is made but SR's e from 1e-4 (:data:`SR_BOUNDS`): a fit's default bounds, and the
 #: widest it takes. Phong's exponent is bounded below only: its class's cap, 1e6 (a lobe
 #: of 1.4 mrad), would stand for its scale where parameters are weighed by their ranges
 #: (design_views: for an exponent of 30, the σ of 8 even views came out 42 % low), and a

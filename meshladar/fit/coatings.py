@@ -79,19 +79,20 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
         parameters, or ρd and b of a diffuse-only SR coating, or every float field of
         another BRDF); a dict gives them per part (its keys parts that are fitted).
     bounds : dict, optional
-        "part.param", "index.param" or "param" of a free parameter → (low, high)
-        (default, and at most, a built-in coating's valid ranges: :data:`SR_BOUNDS`; [0, 1]
-        but Phong's exponent, ≥ 0, and GGX's α, [1e-4, 1]; a user's own BRDF's fields
-        unbounded): they limit the search only, not σ.
+        "part.param", "index.param" or "param" of a free parameter → (low, high), limits of
+        the search only, not of σ (default, and at most, the built-in coatings' valid ranges
+        as their classes check them, but SR's e from 1e-4: :data:`SR_BOUNDS`; [0, 1] but
+        Phong's exponent, ≥ 0, and GGX's α, [1e-4, 1]; a user's BRDF's fields unbounded).
     initial : dict, optional
         part → BRDF to start from (default the geometry's own coatings).
     noise : {"gaussian", "poisson"}
-        Least squares with σ from the residuals, or photoelectron counts: Poisson, or with
-        ``speckle_cells`` M the negative binomial of M speckle cells per bin.
+        Least squares with σ from the residuals (default), or photoelectron counts.
     photons_per_unit : float
         Counts per unit of ``measured.values`` (required for ``"poisson"``).
+    speckle_cells : float, optional
+        ``"poisson"`` only: M ≥ 1 speckle cells a bin, negative binomial counts (default None).
     background : float
-        Known mean background counts per bin (``"poisson"``), not subtracted from the data.
+        Known mean background counts per bin (``"poisson"`` only; default 0), not subtracted.
     bootstrap, seed : int
         Parametric-bootstrap refits (0: none) from the fitted model, and their seed.
     samples : float
@@ -99,9 +100,8 @@ def fit_coatings(geometry, measured, *, parts=None, free=None, bounds=None, init
         per bin width a mesh Scene's (default trace's).
     kernel_tol : float or None
         The kernel's error allowed, in σ (default 0.1, at least 1e-6): N doubles until the
-        model's change from N to 2N (a mesh traced again at half the spacing) is at most
-        this in each bin and in each parameter's shift (a mesh: the shift alone,
-        :mod:`._resolution`); the fit uses 2N. None: no check.
+        change from N to 2N (a mesh traced again at half the spacing) is at most this in each
+        bin and each parameter's shift (a mesh: the shift alone); the fit uses 2N. None: no check.
     max_samples : int
         The most N (default 2^16, at most 2^20; a mesh stops at 2^23 rays too); above it
         a :class:`KernelErrorWarning` gives the error and the N that would do.

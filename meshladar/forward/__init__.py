@@ -1,4 +1,4 @@
-"""``simulate``: one entry point for the forward models (DESIGN.md's pipeline)."""
+"""``simulate``: one entry point for the forward models."""
 
 from __future__ import annotations
 
@@ -47,9 +47,10 @@ def simulate(scene, ladar, model="analytic", **options) -> Sinogram:
         until a refinement check estimates the error at most ``tol``, within ``max_rays``;
         ``info`` records the choice and every run (:mod:`meshladar.forward.refine`).
     jobs : int, optional
-        Workers for chunks of views (default 1): the mesh model's are threads sharing one
-        Embree scene (default one per core from :data:`meshladar.stream.THREADS_FROM`
-        rays), the analytic and pixel models' processes.
+        Workers for chunks of views. The mesh model's are threads sharing one Embree
+        scene; by default 1 below :data:`meshladar.stream.THREADS_FROM` rays in all, else
+        one per core (at most one per chunk of views; a single view splits its rows over
+        them). The analytic and pixel models' are processes; by default 1 (no pool).
     executor : concurrent.futures.Executor, optional
         Any executor to run the chunks on (:func:`meshladar.stream.dask_executor`'s for a
         Dask cluster); overrides ``jobs``.

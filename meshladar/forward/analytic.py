@@ -1,7 +1,7 @@
 """Exact range profiles of disks and ellipses with component shadowing (``model="analytic"``).
 
 The profile value of bin k is P[k] = ∫ F(θ) cos θ dl over the visible boundary points whose
-range falls in bin k (paper Eq. 8, DESIGN.md). Every analytic shape is an ellipse (a disk
+range falls in bin k (paper Eq. 8). Every analytic shape is an ellipse (a disk
 has equal semi-axes), and for each view everything this integral needs is in closed form in
 the ellipse's eccentric angle t, with p(t) = c + R(ψ)(A cos t, B sin t):
 

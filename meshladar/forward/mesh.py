@@ -278,13 +278,13 @@ def trace(scene, ladar, *, mode=None, normals="flat", back_faces="two-sided", z0
         to run chunks of views on; overrides ``jobs``.
     progress : bool
         A progress bar on a terminal.
-    backend : {"auto", "packets", "raster", "embreex"}
-        How rays are cast: "packets" (and "raster": the same here), coherent packets of
-        the CPU's native width through the Embree 4 library embreex ships; "embreex", one
-        ray at a time (the reference); "auto" (default), raster when the packets load,
-        else embreex with one warning saying so. All give the same hits (a ray
-        exactly along an edge shared by two faces may report the other face). The result's
-        ``info["backend"]`` says which ran.
+    backend : {"auto", "packets", "raster", "embreex", "warp", "warp-cpu"}
+        How rays are cast: "packets" ("raster": the same here), Embree 4 packets of the CPU's
+        native width; "embreex", one ray at a time (the reference); "warp" and "warp-cpu",
+        NVIDIA Warp's kernels on a CUDA device or the CPU (the ``gpu`` extra); "auto"
+        (default): warp where a CUDA device is present, else raster when the packets load,
+        else embreex, with a warning. All give the same hits (a ray along an edge shared by
+        two faces may report either; Warp's, to float32 round-off); ``info["backend"]`` says which.
     sensor : meshladar.sensor.Sensor, optional
         A sensor at a finite standoff (perspective rays, true distances) and/or a beam
         pattern, atmosphere and link budget (:mod:`meshladar.sensor`). Monostatic, point

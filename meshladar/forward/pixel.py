@@ -9,11 +9,11 @@ For each view, parallel rays spaced ``ray_spacing`` apart across the scene trave
 ladar along −w and are traced through the grid with Siddon's algorithm
 (``meshladar.forward.siddon``) to the first filled pixel they cross: the rasterised surface.
 The hit's range is that of the middle of the ray's path through the pixel. A ray of
-cross-section δs covers the arc length δs / cos θ of the
-surface, cos θ = n·w, and deposits F(θ) cos θ times that arc (Σ F δs → ∫ F cos θ dl,
-DESIGN.md), but never more arc than one ray can cover on the true shape: the outermost ray
-at a silhouette covers at most sqrt(2 ρ δs) of a boundary with radius of curvature ρ, so
-the weight is F(θ) cos θ · min(δs / cos θ, sqrt(2 ρ_max δs)). Without that cap, surface
+cross-section δs covers the arc length δs / cos θ of the surface, cos θ = n·w, and deposits
+F(θ) cos θ times that arc (Σ F δs → ∫ F cos θ dl), but never more arc than one ray can cover
+on the true shape: the outermost ray at a silhouette covers at most sqrt(2 ρ δs) of a
+boundary with radius of curvature ρ, so the weight is
+F(θ) cos θ · min(δs / cos θ, sqrt(2 ρ_max δs)). Without that cap, surface
 pixels whose centre normal is near grazing (cos θ → 0 on the staircase near a silhouette,
 where the true surface is not) would deposit the divergent 1/cos θ of the specular lobe
 (A5) and dominate the view. A pixel whose centre normal faces away (cos θ < 0, on the

@@ -5,7 +5,7 @@ convex hull's projection, not a fixed square) and travels along −w from just o
 scene. Embree (embreex) returns each ray's first hit: that is the shadowing, so a monostatic
 ladar casts no other ray. Each hit carries its range, cos θ of the chosen normal, the face's
 material, and its footprint; weighing turns hits into bins with F(θ)·δA⊥ per ray
-(DESIGN.md: P[k] = Σ F(θ_hit) δA⊥ over the rays whose first hit lies in bin k).
+(P[k] = Σ F(θ_hit) δA⊥ over the rays whose first hit lies in bin k).
 
 Two modes:
 
@@ -36,7 +36,7 @@ interval, not a point: along the transverse axis u the range changes at dr/du = 
 The ray's weight is spread over that interval (a box in slice mode; in 3-D the sum of the u
 and v boxes, a trapezoid), exactly as the flat facet would return it.
 
-Layout (this stage only casts; DESIGN.md layer 4): :mod:`.plan` (the
+Layout (this stage only casts; layer 4 of the guide's Layout page): :mod:`.plan` (the
 :class:`~meshladar.raytrace.plan.TracePlan` record, built and validated once by
 :func:`~meshladar.raytrace.plan.plan_trace`), :mod:`.grid` (ray grids and their defaults),
 :mod:`.views` (one view's parallel rays → :class:`~meshladar.hits.ViewHits`),

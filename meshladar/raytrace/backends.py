@@ -103,9 +103,10 @@ def backend(name: str) -> Backend:
     Parameters
     ----------
     name : str
-        A registered backend's name, or a built-in one (``"packets"``, ``"embreex"``:
-        :data:`BUILTIN`), whose module is imported (and registers itself) here. ``"auto"``
-        is not a backend: :func:`resolve_backend` chooses one for it.
+        A registered backend's name, or a built-in one (:data:`BUILTIN`: ``"packets"``,
+        ``"raster"``, ``"embreex"``, ``"warp"``, ``"warp-cpu"``), whose module is imported
+        (and registers itself) here. ``"auto"`` is not a backend: :func:`resolve_backend`
+        chooses one for it.
 
     Returns
     -------
@@ -148,8 +149,8 @@ def resolve_backend(name):
     Parameters
     ----------
     name : str
-        One of :func:`choices`: ``"auto"``, ``"packets"``, ``"embreex"`` or a registered
-        backend's name.
+        One of :func:`choices`: ``"auto"``, a built-in backend's name (``"packets"``,
+        ``"raster"``, ``"embreex"``, ``"warp"``, ``"warp-cpu"``) or a registered one's.
 
     Returns
     -------

@@ -148,9 +148,9 @@ def _shading_factor(cos_shading, cos_facet):
     A ray of cross-section δA⊥ hitting a facet at incidence θg stands for the facet area
     δA⊥ / cos θg; with the shading normal (interpolated or exact) the integrand there is
     F(θs) cos θs, so the ray's weight is F(θs) cos θs · δA⊥ / cos θg = F(θs) δA⊥ · factor.
-    F(θs) cos θs is finite up to θs = 90° (DESIGN.md), so a shading normal near grazing on a
-    facet that faces the ladar no longer multiplies a divergent F by a full ray
-    cross-section (F δA⊥ alone returned bins tens of times too large at mesh silhouettes).
+    F(θs) cos θs is finite up to θs = 90° (every BRDF's ``projected``), so a shading normal
+    near grazing on a facet that faces the ladar no longer multiplies a divergent F by a full
+    ray cross-section (F δA⊥ alone returned bins tens of times too large at mesh silhouettes).
     The expectation over rays is ∫ F(θs) cos θs dA over the facets: consistent as the mesh
     is refined. With flat normals θs = θg and the factor is 1.
     """

@@ -1,7 +1,7 @@
 """Filtered backprojection of reflective sinograms.
 
 ``fbp`` treats ``values / bin_width`` as the Radon transform of an image along iso-range
-lines (DESIGN.md) and inverts it over the full circle of views:
+lines and inverts it over the full circle of views:
 
     f(x) = ½ ∫₀^{2π} (p_φ ∗ h)(r(x)) dφ,   r(x) = −x·w(φ),   ĥ(ν) = |ν| (windowed),
 

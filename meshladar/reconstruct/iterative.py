@@ -2,7 +2,7 @@
 SART and CGLS, with non-negativity, per-bin weights, a mask, a warm start from FBP, a
 stopping rule and progress.
 
-The data model is FBP's (DESIGN.md): a sinogram's ``values / bin_width`` are line integrals
+The data model is FBP's: a sinogram's ``values / bin_width`` are line integrals
 of the image along the iso-range lines −p·w = r. A projector
 (:class:`~meshladar.reconstruct.operators.RangeProjector`, Siddon's exact pixel lengths;
 :class:`~meshladar.reconstruct.operators.LinearProjector`, the pixel-driven pair) is that

@@ -14,7 +14,7 @@ filter_op``; the solvers of :mod:`meshladar.reconstruct.iterative` only use ``@`
   backprojection;
 * :class:`SurfaceProjector` — the surface segments of BRDF compensation, weighted per view.
 
-The data model is FBP's (DESIGN.md): a sinogram's ``values / bin_width`` are line integrals
+The data model is FBP's: a sinogram's ``values / bin_width`` are line integrals
 of the image along the iso-range lines −p·w = r, so ``A @ image`` is directly comparable
 with ``sino.values``.
 """

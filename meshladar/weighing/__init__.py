@@ -1,4 +1,5 @@
-"""The weigh stage (DESIGN.md layer 5): every weight and every binning of first hits.
+"""The weigh stage: every weight and every binning of first hits (layer 5 of the guide's
+Layout page).
 
 :mod:`.record` (the :class:`Weighing` record, whose ``check(plan)`` refuses every
 inapplicable combination before the first ray), :mod:`.hit_weights` (per-hit weights

@@ -1,4 +1,4 @@
-"""Weigh and bin (DESIGN.md's weigh stage): cached hits into a sinogram, F(θ)·δA⊥ per ray,
+"""Weigh and bin (the weigh stage): cached hits into a sinogram, F(θ)·δA⊥ per ray,
 binned by range at a point or spread over its footprint (:func:`weigh`), and the mesh
 model's sinogram of binned values with the record of how it was made (:func:`sinogram_of`).
 It imports the :class:`Hits` record, never the tracer's entry points, so a material sweep

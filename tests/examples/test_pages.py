@@ -50,7 +50,7 @@ PAGES = [README] + sorted((ROOT / "docs" / "guide").glob("*.md"))
 #: Blocks the README says warn: (section start, ordinal of the block in its section) ->
 #: the warning class name the block must give (and may give, alone of all warnings).
 WARNS = {
-    ("The Sandford", 0): "EnergyConservationWarning",
+    ("BRDFs and coatings", 0): "EnergyConservationWarning",
 }
 
 #: Blocks over ~5 s (section start, ordinal): run by the full suite, left out of the fast one.
