@@ -39,6 +39,24 @@ NOISE_COLOR = (0.0, 0.0, 0.0)
 _DIVERGING = ("range_error", "doppler")
 
 
+def _title(cloud, color_by):
+    """The colour bar's title: another tool's LAS intensity is not photoelectrons."""
+    if color_by == "intensity" and cloud.info.get("foreign"):
+        return "log10 LAS intensity"
+    return COLOR_BY[color_by]
+
+
+def _check_fields(cloud, color_by):
+    """Refuse colouring another tool's LAS (``info["fields"]``) by a field it lacks."""
+    fields = cloud.info.get("fields")
+    need = ("range", "true_range") if color_by == "range_error" else (color_by,)
+    if fields is not None and not set(need) <= set(fields):
+        usable = [c for c in COLOR_BY if c in fields]
+        raise ParameterError(f"color_by={color_by!r}: {cloud.info.get('file', 'the cloud')} "
+                             f"is another tool's LAS, without meshladar's {need[-1]}; "
+                             f"colour it by one of {usable}")
+
+
 def _values(cloud, color_by):
     pts = cloud.points
     if color_by == "intensity":
@@ -56,7 +74,9 @@ def show_points(cloud, scene=None, *, color_by="intensity", point_size=4.0, off_
     Parameters
     ----------
     cloud : meshladar.scan.PointCloud
-        The returns (:func:`meshladar.scan.scan`, :func:`meshladar.scan.read_las`).
+        The returns (:func:`meshladar.scan.scan`, :func:`meshladar.scan.read_las`; another
+        tool's LAS read with ``foreign=True`` is coloured by the fields it holds, its
+        intensity titled "log10 LAS intensity").
     scene : meshladar.Scene, optional
         The scene scanned, drawn under the points (default: the points alone).
     color_by : str
@@ -75,7 +95,7 @@ def show_points(cloud, scene=None, *, color_by="intensity", point_size=4.0, off_
     ------
     ParameterError
         When ``cloud`` is not a PointCloud or holds no returns, ``scene`` is not a mesh
-        Scene, or ``color_by`` is unknown.
+        Scene, or ``color_by`` is unknown or a field another tool's LAS lacks.
     """
     if not isinstance(cloud, PointCloud):
         raise ParameterError(f"cloud must be a meshladar.scan.PointCloud; got "
@@ -85,6 +105,8 @@ def show_points(cloud, scene=None, *, color_by="intensity", point_size=4.0, off_
     if scene is not None and not (isinstance(scene, Scene) and scene.is_mesh):
         raise ParameterError("scene must be a mesh Scene (or None)")
     check_choice("color_by", color_by, tuple(COLOR_BY))
+    _check_fields(cloud, color_by)
+    title = _title(cloud, color_by)
     pv = _pyvista()
     plotter = pv.Plotter(off_screen=off_screen, window_size=list(window_size))
     plotter.set_background("white")
@@ -96,13 +118,13 @@ def show_points(cloud, scene=None, *, color_by="intensity", point_size=4.0, off_
     values = _values(cloud, color_by)
     known = np.isfinite(values)
     cloud_pts = pv.PolyData(cloud.xyz[known])
-    cloud_pts[COLOR_BY[color_by]] = values[known]
+    cloud_pts[title] = values[known]
     span = np.abs(values[known]).max() if known.any() else 1.0
-    plotter.add_mesh(cloud_pts, scalars=COLOR_BY[color_by], point_size=point_size,
+    plotter.add_mesh(cloud_pts, scalars=title, point_size=point_size,
                      render_points_as_spheres=False, lighting=False,
                      cmap="coolwarm" if color_by in _DIVERGING else "viridis",
                      clim=(-span, span) if color_by in _DIVERGING and span > 0 else None,
-                     scalar_bar_args=dict(_bar(COLOR_BY[color_by]), color="black"))
+                     scalar_bar_args=dict(_bar(title), color="black"))
     if not known.all():
         plotter.add_mesh(pv.PolyData(cloud.xyz[~known]), color=NOISE_COLOR,
                          point_size=point_size, lighting=False)

@@ -21,7 +21,8 @@ import traceback
 import warnings
 
 from ..errors import MeshladarError
-from .commands import cmd_bench, cmd_demo, cmd_materials, cmd_paper, cmd_study, cmd_view
+from .commands import (cmd_bench, cmd_demo, cmd_materials, cmd_paper, cmd_study, cmd_view,
+                       view_words)
 from .parser import build_parser
 from .reconstruct import cmd_receive, cmd_reconstruct, receive_words, reconstruct_words
 from .lrcs import cmd_lrcs, lrcs_words
@@ -45,7 +46,7 @@ def _one_line_warning(message, category, filename, lineno, line=None, *, words=s
 #: (simulate's: ``normals='smooth'`` becomes ``--normals smooth``, ``ray_spacing``
 #: ``--ray-spacing``; :mod:`.words`): the one place the command's messages are translated.
 _WORDS = {"simulate": in_flags, "lrcs": lrcs_words, "receive": receive_words,
-          "reconstruct": reconstruct_words, "scan": scan_words}
+          "reconstruct": reconstruct_words, "scan": scan_words, "view": view_words}
 
 
 def main(argv=None) -> int:

@@ -22,9 +22,10 @@ from ..scan.npz import read_npz
 from ..scan.formats import points_format
 from .checks import check_outdir, check_output
 from .simulate import load_scene
+from .words import flag_words
 
-__all__ = ["cmd_demo", "cmd_materials", "cmd_paper", "cmd_view", "cmd_study", "cmd_bench",
-           "DEMO_ANGLES_DEG"]
+__all__ = ["cmd_demo", "cmd_materials", "cmd_paper", "cmd_view", "view_words", "cmd_study",
+           "cmd_bench", "DEMO_ANGLES_DEG"]
 
 DEMO_ANGLES_DEG = (0.0, 1.0, 5.0, 10.0, 30.0, 60.0, 85.0, 90.0)
 
@@ -264,9 +265,16 @@ def check_view_options(args):
                              "coloured by its return)")
 
 
+#: view's messages in its flags' words (:func:`.words.flag_words`).
+view_words = flag_words({"color_by": "--color-by", "view_angle_deg": "--view-angle"},
+                        ("color_by", "view_angle_deg"))
+
+
 def _read_points(path):
     """A point cloud file (LAS/LAZ, HDF5 or .npz by extension), its errors naming --points."""
     try:
+        if points_format(path) == "LAS":          # another tool's too: its own fields
+            return read_las(path, foreign=True)
         return {"HDF5": read_hdf5, "NPZ": read_npz}.get(points_format(path), read_las)(path)
     except ParameterError as exc:
         raise ParameterError(f"--points: {str(exc).removeprefix('path: ')}") from None

@@ -40,7 +40,7 @@ _HOMES = {"ScanBeam": "footprint", "GeigerMode": "geiger", "coates": "geiger",
 
 #: The package's modules, also reached as attributes (``meshladar.scan.points``).
 _SUBMODULES = ("patterns", "platforms", "footprint", "instrument", "cast", "echoes", "points",
-               "run", "files", "npz", "formats", "geiger", "moving")
+               "run", "files", "foreign", "npz", "formats", "geiger", "moving")
 
 
 __getattr__, __dir__ = _lazy_attributes(__name__, globals(), _HOMES, _SUBMODULES)

@@ -37,6 +37,7 @@ from .._atomic_write import make_temporary, write_atomic
 from .._validate import check_path, check_real
 from ..errors import ParameterError
 from .formats import _not_named_as, _target, check_writable
+from .foreign import foreign_points
 from .points import POINT_DTYPE, POINT_FIELDS, PointCloud
 
 __all__ = ["write_las", "read_las", "write_hdf5", "read_hdf5", "las_intensity_scale",
@@ -184,13 +185,16 @@ def _las_scale(xyz, offsets, scale):
     return scale
 
 
-def read_las(path):
+def read_las(path, *, foreign=False):
     """Read a LAS/LAZ file that :func:`write_las` wrote back into a :class:`PointCloud`.
 
     Parameters
     ----------
     path : str or os.PathLike
         The file.
+    foreign : bool
+        Read another tool's LAS file too (one without meshladar's fields): its own
+        fields only (:func:`meshladar.scan.foreign.foreign_points`), for drawing it.
 
     Returns
     -------
@@ -202,7 +206,8 @@ def read_las(path):
     Raises
     ------
     ParameterError
-        When the file is missing, a folder, not LAS/LAZ, or lacks meshladar's fields.
+        When the file is missing, a folder, not LAS/LAZ, or lacks meshladar's fields
+        (unless ``foreign``).
     """
     laspy = _need("laspy")
     path = _readable(path, "LAS/LAZ")
@@ -213,8 +218,11 @@ def read_las(path):
     names = set(las.point_format.extra_dimension_names)
     missing = [_extra(n) for n, *_ in POINT_FIELDS if n not in LAS_NATIVE
                and _extra(n) not in names]
+    if missing and foreign:
+        return foreign_points(las, path)
     if missing:
-        raise ParameterError(f"{path}: not a meshladar point cloud (no {missing[0]!r} field)")
+        raise ParameterError(f"{path}: not a meshladar point cloud (no {missing[0]!r} field; "
+                             "another tool's LAS reads with foreign=True)")
     pts = np.zeros(len(las.points), POINT_DTYPE)
     pts["x"], pts["y"], pts["z"] = np.asarray(las.x), np.asarray(las.y), np.asarray(las.z)
     pts["return_number"] = np.asarray(las.return_number)

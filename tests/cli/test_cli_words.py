@@ -10,6 +10,7 @@ from __future__ import annotations
 import sys
 import warnings
 
+import numpy as np
 import pytest
 
 from meshladar.cli import main
@@ -186,3 +187,18 @@ def test_an_empty_scans_advice_names_scans_flags(files, capsys):
 def test_view_names_points_not_path(files, capsys):
     assert _error(capsys, ["view", "box.stl", "--points", "nope.las"]) == (
         "--points: no such file 'nope.las'")
+
+
+def test_view_colours_another_tools_las_only_by_what_it_holds(files, capsys):
+    """A LAS without meshladar's fields is drawn (it was refused); coloured by a field it
+    lacks, the refusal names --color-by and the fields it holds."""
+    laspy = pytest.importorskip("laspy")
+    header = laspy.LasHeader(point_format=1, version="1.2")
+    las = laspy.LasData(header)
+    las.x, las.y, las.z = np.array([[-0.5, -0.5], [0.0, 0.1], [0.0, 0.1]])
+    las.write(files / "other.las")
+    assert _error(capsys, ["view", "box.stl", "--points", "other.las", "--color-by",
+                           "range_error", "--screenshot", "v.png"]) == (
+        "--color-by range_error: other.las is another tool's LAS, without meshladar's "
+        "true_range; colour it by one of ['intensity', 'return_number', 'scan_angle', "
+        "'emission_time']")

@@ -175,3 +175,48 @@ def test_a_geiger_arrays_records_are_labelled_detections(tmp_path):
                 block = np.concatenate([f["waveforms"][k][()].ravel()
                                         for k in f["waveforms"] if k.startswith("block")])
                 np.testing.assert_array_equal(block, np.rint(block))     # counts
+
+
+def _foreign_las(path, point_format):
+    """A LAS file as another tool writes it (laspy directly, no meshladar field)."""
+    laspy = pytest.importorskip("laspy")
+    header = laspy.LasHeader(point_format=point_format, version="1.4" if point_format >= 6
+                             else "1.2")
+    header.scales, header.offsets = [0.001] * 3, [0.0] * 3
+    las = laspy.LasData(header)
+    las.x, las.y, las.z = np.array([[1.0, 2.0, 3.0], [0.5, 0.25, 0.0], [-1.0, 0.0, 1.0]])
+    las.intensity = np.array([10, 2000, 65535], np.uint16)
+    las.return_number = np.array([1, 1, 2], np.uint8)
+    las.number_of_returns = np.array([1, 2, 2], np.uint8)
+    if point_format >= 6:
+        las.scan_angle = np.array([-5000, 0, 5000], np.int16)
+        las.gps_time = np.array([10.0, 10.5, 11.0])
+    else:
+        las.scan_angle_rank = np.array([-30, 0, 30], np.int8)
+    las.write(path)
+
+
+@pytest.mark.parametrize("point_format, angles, times", [
+    (6, [-30.0, 0.0, 30.0], [10.0, 10.5, 11.0]), (0, [-30.0, 0.0, 30.0], None)])
+def test_another_tools_las_reads_with_its_own_fields_when_asked(tmp_path, point_format,
+                                                                 angles, times):
+    """A user's trial: a LAS of another tool could not be drawn over the scene at all. It
+    is refused as not meshladar's, naming foreign=True; with it, LAS's own fields come back
+    (scan angle from LAS 1.4's 0.006° steps or an old format's degrees, GPS time as the
+    emission time where the format has one) and the rest are NaN or -1, listed in info."""
+    path = tmp_path / "other.las"
+    _foreign_las(path, point_format)
+    with pytest.raises(ParameterError, match=r"not a meshladar point cloud .*foreign=True"):
+        read_las(path)
+    cloud = read_las(path, foreign=True)
+    pts = cloud.points
+    np.testing.assert_allclose(cloud.xyz, [[1.0, 0.5, -1.0], [2.0, 0.25, 0.0], [3.0, 0, 1.0]])
+    np.testing.assert_array_equal(pts["intensity"], [10, 2000, 65535])
+    np.testing.assert_array_equal(pts["number_of_returns"], [1, 2, 2])
+    np.testing.assert_allclose(pts["scan_angle"], angles, rtol=1e-6)
+    assert cloud.info["foreign"] and cloud.info["intensity_units"] == "LAS intensity"
+    assert ("emission_time" in cloud.info["fields"]) == (times is not None)
+    if times is not None:
+        np.testing.assert_array_equal(pts["emission_time"], times)
+    assert np.isnan(pts["range"]).all() and np.isnan(pts["true_range"]).all()
+    assert (pts["true_part"] == -1).all() and (pts["true_face"] == -1).all()
