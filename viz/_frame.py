@@ -198,14 +198,18 @@ def _clear_of_bars(plotter, xyz, grow=True, legend=None):
     # the target, in normalised device coordinates: x in [margin, right], y in margins
     t_lo = np.array([2.0 * _MARGIN / width - 1.0, 2.0 * _MARGIN / height - 1.0])
     t_hi = np.array([2.0 * right / width - 1.0, 1.0 - 2.0 * _MARGIN / height])
-    scale, shift = _fit(lo, hi, t_lo, t_hi, grow)
+    fit = _fit(lo, hi, t_lo, t_hi, grow)
+    if fit is None:                  # a window too small for any room: the view as it is
+        return
+    scale, shift = fit
     if legend is not None:
         x0, y0, x1, _ = 2.0 * np.asarray(_box(legend)) - 1.0          # its box, NDC
         gap = 2.0 * _MARGIN / np.array([width, height])
         if (scale * lo - shift)[0] < x1 + gap[0] and (scale * hi - shift)[1] > y0 - gap[1]:
-            below = _fit(lo, hi, t_lo, np.array([t_hi[0], y0 - gap[1]]), grow)
-            beside = _fit(lo, hi, np.array([x1 + gap[0], t_lo[1]]), t_hi, grow)
-            scale, shift = max(below, beside, key=lambda fit: fit[0])
+            fits = [f for f in (_fit(lo, hi, t_lo, np.array([t_hi[0], y0 - gap[1]]), grow),
+                                _fit(lo, hi, np.array([x1 + gap[0], t_lo[1]]), t_hi, grow))
+                    if f is not None]                      # below it, or beside it
+            scale, shift = max(fits, key=lambda f: f[0]) if fits else (scale, shift)
     if cam.GetParallelProjection():
         cam.SetParallelScale(cam.GetParallelScale() / scale)
     else:
@@ -218,7 +222,10 @@ def _clear_of_bars(plotter, xyz, grow=True, legend=None):
 def _fit(lo, hi, t_lo, t_hi, grow):
     """(scale, shift) taking the picture's box [lo, hi] into [t_lo, t_hi] (normalised
     device coordinates: x' = scale x − shift), filling it; ``grow`` False: made no larger,
-    moved as little as it must."""
+    moved as little as it must. None where the target has no room (a window a few dozen
+    pixels wide: a negative scale would mirror the picture)."""
+    if np.any(t_hi <= t_lo):
+        return None
     span = hi - lo
     fits = np.where(span > 1e-9, (t_hi - t_lo) / np.maximum(span, 1e-9), np.inf)
     scale = float(fits.min()) if np.isfinite(fits).any() else 1.0    # one point: kept

@@ -39,6 +39,9 @@ def check_place(path, flag, folder=False):
     if not folder or not os.path.exists(above):
         above = os.path.dirname(above)
         while not os.path.exists(above):
+            if os.path.islink(above):               # a link to nothing: no folder to make
+                raise ParameterError(f"{flag}: cannot write {path!r}: {above!r} is a link to "
+                                     f"{os.readlink(above)!r}, which does not exist")
             above = os.path.dirname(above)
     if not os.path.isdir(above):
         raise ParameterError(f"{flag}: cannot write {path!r}: {above!r} is a file, not a "
@@ -47,12 +50,15 @@ def check_place(path, flag, folder=False):
         raise ParameterError(f"{flag}: cannot write {path!r}: no permission to write in "
                              f"the folder {above!r}")
     try:        # what the permission bits do not tell (root on /sys, read-only mounts)
-        fd, probe = tempfile.mkstemp(dir=above, prefix=f"{TEMPORARY_PREFIX}{os.getpid()}-")
-    except OSError as exc:
+        fd, probe = tempfile.mkstemp(dir=above, prefix=f"{TEMPORARY_PREFIX}{os.getpid()}-",
+                                     suffix="probe")     # named as a temporary: one a kill
+    except OSError as exc:                               # leaves is cleaned up later
         raise ParameterError(f"{flag}: cannot write {path!r}: the folder {above!r} takes no "
                              f"new file ({exc.strerror})") from None
-    os.close(fd)
-    os.remove(probe)
+    try:
+        os.close(fd)
+    finally:
+        os.remove(probe)
 
 
 def check_outdir(outdir, flag="outdir"):

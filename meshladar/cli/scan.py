@@ -57,6 +57,9 @@ scan_words = flag_words(
      (", or lower its detector's threshold", ""),
      (", or its GeigerMode's shots", ", or --geiger-shots"),
      ("or a wider pulse", "or a wider pulse (--pulse-fwhm)"),
+     ("or a shorter pulse", "or a shorter pulse (--pulse-fwhm)"),
+     ("detector: cfar applies to a linear receiver's records;",
+      "--cfar applies to a linear receiver's records, not --geiger-shots;"),
      ("--platform: path: cannot read", "--platform: cannot read"),
      ("(a platform at rest: Platform.static)",
       "(a platform at rest: --platform 'static position=X,Y,Z')")])

@@ -93,7 +93,8 @@ INTENSITY_VLR = ("meshladar", 1)
 def las_intensity_scale(photoelectrons):
     """LAS intensity per photoelectron: 1 where the brightest return fits LAS's 16 bits,
     else 65535 over it (the LAS specification's normalisation to the data's dynamic range:
-    at 1, a scan's strong returns all read 65535).
+    at 1, a scan's strong returns all read 65535); non-finite values are left out (and
+    written as 0).
 
     Parameters
     ----------
@@ -104,7 +105,8 @@ def las_intensity_scale(photoelectrons):
     -------
     float
     """
-    top = float(np.max(photoelectrons, initial=0.0))
+    pe = np.asarray(photoelectrons, np.float64)
+    top = float(np.max(pe[np.isfinite(pe)], initial=0.0))       # a non-finite one: no say
     return 1.0 if top <= _LAS_INTENSITY_TOP else _LAS_INTENSITY_TOP / top
 
 
@@ -149,8 +151,8 @@ def write_las(path, cloud, *, scale=None):
     las.return_number = np.clip(pts["return_number"], 1, 15)
     las.number_of_returns = np.clip(pts["number_of_returns"], 1, 15)
     per_pe = las_intensity_scale(pts["intensity"])
-    las.intensity = np.clip(np.rint(pts["intensity"] * per_pe), 0,
-                            _LAS_INTENSITY_TOP).astype(np.uint16)
+    scaled = np.nan_to_num(pts["intensity"] * per_pe, nan=0.0, posinf=0.0, neginf=0.0)
+    las.intensity = np.clip(np.rint(scaled), 0, _LAS_INTENSITY_TOP).astype(np.uint16)
     las.vlrs.append(laspy.VLR(user_id=INTENSITY_VLR[0], record_id=INTENSITY_VLR[1],
                               description="LAS intensity per photoelectron",
                               record_data=struct.pack("<d", per_pe)))

@@ -52,6 +52,14 @@ MAX_SAMPLES = 1 << 16
 #: and 2.2 % from 1 to 2; 46 % and ×1.5 below 1 (ranges on the sample grid).
 MIN_SAMPLES_PER_ECHO = 1.0
 FEW_SAMPLES_PER_ECHO = 2.0
+#: The relative rounding a rate given as its 3 significant figures carries.
+_ROUNDING = 5e-3
+
+
+def _up(rate):
+    """``rate`` rounded up to 3 significant figures (a rate advised is never short)."""
+    step = 10.0 ** (math.floor(math.log10(rate)) - 2)
+    return math.ceil(rate / step * (1.0 - 1e-12)) * step
 
 
 def _moments(shape):
@@ -241,7 +249,7 @@ class ScanSensor:
                 raise ParameterError(f"echoes='discrete' has no records: "
                                      f"{(given or ['detector.cfar'])[0]} does not apply "
                                      "(use echoes='waveform')")
-        if self.echoes == "waveform" and self.geiger is None:
+        if self.echoes == "waveform":
             self._check_echo_sampling()
         if self.samples is not None and self.samples < self.echo_samples:
             raise ParameterError(
@@ -261,24 +269,34 @@ class ScanSensor:
                                                           low=0.0, high=1.0))
 
     def _check_echo_sampling(self):
-        """Refuse an echo narrower than :data:`MIN_SAMPLES_PER_ECHO` samples (FWHM), warn
-        below :data:`FEW_SAMPLES_PER_ECHO`: the detector locates and sizes echoes from
-        their samples."""
-        across = self.fwhm * self.sample_rate
-        if across >= FEW_SAMPLES_PER_ECHO:
+        """Refuse an echo narrower than :data:`MIN_SAMPLES_PER_ECHO` samples (its
+        :attr:`fwhm`: 2.355 σ, a Gaussian's FWHM; the detector's matched filter and peak fit
+        are Gaussians of its σ), warn below :data:`FEW_SAMPLES_PER_ECHO` (to rounding),
+        and refuse one whose support a record cannot hold (:data:`MAX_SAMPLES`); a
+        Geiger-mode array's histogram bins take any width."""
+        if self.echo_samples > MAX_SAMPLES:
+            raise ParameterError(f"the echo (the pulse and the response) takes "
+                                 f"{self.echo_samples} samples at sample_rate="
+                                 f"{self.sample_rate:g}, more than a record's {MAX_SAMPLES}: "
+                                 "give a lower sample_rate or a shorter pulse")
+        if self.geiger is not None:
             return
-        need = FEW_SAMPLES_PER_ECHO / self.fwhm
-        what = (f"the echo (the pulse and the response: {self.fwhm:.3g} s FWHM) spans "
-                f"{across:.3g} samples at sample_rate={self.sample_rate:g}")
+        across = self.fwhm * self.sample_rate
+        need = _up(FEW_SAMPLES_PER_ECHO / self.fwhm)
+        what = (f"the echo (the pulse and the response: 2.355 sigma = {self.fwhm:.3g} s, a "
+                f"Gaussian's FWHM) spans {across:.3g} samples at "
+                f"sample_rate={self.sample_rate:g}")
         if across < MIN_SAMPLES_PER_ECHO:
             raise ParameterError(f"{what}; a linear receiver's detector needs "
                                  f"{MIN_SAMPLES_PER_ECHO:g} or more (ranges fall on the "
                                  f"sample grid): give sample_rate >= {need:.3g} or a wider "
                                  "pulse")
-        warnings.warn(f"{what}: ranges may be off by ~1 % of c tau / 2 and photoelectrons by "
-                      f"~2 % (within 0.2 % from {FEW_SAMPLES_PER_ECHO:g} samples): give "
-                      f"sample_rate >= {need:.3g} or a wider pulse", MeshladarWarning,
-                      stacklevel=user_stacklevel())
+        if across < FEW_SAMPLES_PER_ECHO * (1.0 - _ROUNDING):
+            warnings.warn(f"{what}: ranges may be off by ~1 % of c tau / 2 and "
+                          f"photoelectrons by ~2 % (a Gaussian echo's, within 0.2 % from "
+                          f"{FEW_SAMPLES_PER_ECHO:g} samples): give sample_rate >= "
+                          f"{need:.3g} or a wider pulse", MeshladarWarning,
+                          stacklevel=user_stacklevel())
 
     @property
     def dt(self) -> float:

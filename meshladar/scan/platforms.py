@@ -261,9 +261,9 @@ class Platform:
         back = np.flatnonzero(np.diff(data[:, 0]) <= 0)
         if back.size:
             a, b = int(back[0]), int(back[0]) + 1
-            raise ParameterError(f"{path}, line {lines[b]}: time {data[b, 0]:.9g} does not "
-                                 f"follow line {lines[a]}'s {data[a, 0]:.9g}; the times must "
-                                 "increase")
+            raise ParameterError(f"{path}, line {lines[b]}: time {float(data[b, 0])!r} does "
+                                 f"not follow line {lines[a]}'s {float(data[a, 0])!r}; the "
+                                 "times must increase")
         if len(data) < 2:
             raise ParameterError(f"{path}: a trajectory needs 2 or more rows (its poses cover "
                                  f"their first to last time); got {len(data)} (a platform "

@@ -150,6 +150,40 @@ def test_a_folder_that_takes_no_file_is_refused_before_the_work(tmp_path, monkey
     assert os.listdir(locked) == []
 
 
+@pytest.mark.parametrize("argv", [
+    ["simulate", "disk", "--views", "4", "-o", "brk/x.npz"],
+    ["scan", "box.stl", "--pattern", "raster azimuth_deg=0 elevation_deg=0 pulse_rate=1",
+     "--platform", "static position=-5,0,0", "-o", "brk/x.las"]])
+def test_an_output_under_a_link_to_nothing_is_refused_naming_the_link(tmp_path, monkeypatch,
+                                                                      capsys, no_work, argv):
+    """A review: -o under a dangling link passed the checks (its parent takes files) and
+    scan failed after loading the scene with "File exists", naming no flag."""
+    import trimesh
+
+    monkeypatch.chdir(tmp_path)
+    trimesh.creation.box().export(tmp_path / "box.stl")
+    os.symlink(tmp_path / "gone", tmp_path / "brk")
+    code, _, err = _run(capsys, argv)
+    assert code == 2
+    assert err == (f"meshladar: error: -o: cannot write {argv[-1]!r}: "
+                   f"{str(tmp_path / 'brk')!r} is a link to {str(tmp_path / 'gone')!r}, which "
+                   "does not exist\n")
+
+
+def test_the_folder_probe_is_named_as_a_temporary_and_removed(tmp_path, monkeypatch):
+    """The probe a check makes is one of meshladar's temporaries by name (a kill between
+    making and removing it leaves one the next write in that folder removes)."""
+    from meshladar._atomic_write import temporary_writer
+
+    removed = []
+    remove = os.remove
+    monkeypatch.setattr(os, "remove", lambda p: (removed.append(p), remove(p)))
+    check_place(str(tmp_path / "x.npz"), "-o")
+    (probe,) = removed
+    assert temporary_writer(os.path.basename(probe)) == os.getpid()
+    assert os.listdir(tmp_path) == []
+
+
 def test_missing_folders_above_an_output_are_accepted(tmp_path):
     # the writers create them: only the nearest existing path above must be a folder
     check_place(str(tmp_path / "new" / "sub" / "x.npz"), "-o")

@@ -151,9 +151,17 @@ _RASTER = "raster azimuth_deg=-2:2:5 elevation_deg=-2:2:5 pulse_rate=1e5"
      "--pattern: azimuth_deg must be 1 or more angles in [-180, 180] deg; got -200 (value 0 "
      "of 5)"),
     ({"--sample-rate": "1e6"},
-     "the echo (the pulse and the response: 5e-09 s FWHM) spans 0.005 samples at "
-     "--sample-rate 1e+06; a linear receiver's detector needs 1 or more (ranges fall on the "
-     "sample grid): give --sample-rate >= 4e+08 or a wider pulse (--pulse-fwhm)"),
+     "the echo (the pulse and the response: 2.355 sigma = 5e-09 s, a Gaussian's FWHM) spans "
+     "0.005 samples at --sample-rate 1e+06; a linear receiver's detector needs 1 or more "
+     "(ranges fall on the sample grid): give --sample-rate >= 4e+08 or a wider pulse "
+     "(--pulse-fwhm)"),
+    ({"--pulse-fwhm": "1e-3"},
+     "the echo (the pulse and the response) takes 13589151 samples at --sample-rate 2e+09, "
+     "more than a record's 65536: give a lower --sample-rate or a shorter pulse "
+     "(--pulse-fwhm)"),
+    ({"--cfar": None, "--geiger-shots": "4"},
+     "--cfar applies to a linear receiver's records, not --geiger-shots; Geiger-mode "
+     "thresholds follow each sample's armed shots"),
 ])
 def test_scan_speaks_its_flags(change, message, files, capsys):
     """A user's trial: scan said "Platform.static() missing 1 required positional argument",
@@ -161,7 +169,8 @@ def test_scan_speaks_its_flags(change, message, files, capsys):
     range on a 150 m sample grid) without a word."""
     (files / "one.csv").write_text("time,x,y,z,roll,pitch,yaw\n0,0,0,0,0,0,0\n")
     flags = {"--pattern": _RASTER, "--platform": "static position=-5,0,0", **change}
-    argv = ["scan", "box.stl", "-o", "p.npz"] + [w for kv in flags.items() for w in kv]
+    argv = ["scan", "box.stl", "-o", "p.npz"] + [w for kv in flags.items() for w in kv
+                                                  if w is not None]
     assert _error(capsys, argv) == message
     assert not (files / "p.npz").exists()
 

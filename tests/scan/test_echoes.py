@@ -336,9 +336,14 @@ def test_an_echo_of_two_samples_ranges_and_counts_true_and_one_of_fewer_is_refus
         assert pc.points["intensity"][0] == pytest.approx(
             photoelectrons_by_hand(1e-6, 0.05, R0 - shift), rel=TWO_SAMPLE_PE_RTOL)
     with pytest.warns(MeshladarWarning, match=r"^the echo \(the pulse and the response: "
-                                              r"1\.5e-09 s FWHM\) spans 1\.5 samples at "
-                                              r"sample_rate=1e\+09: .* sample_rate >= 1\.33e"):
+                                              r"2\.355 sigma = 1\.5e-09 s, a Gaussian's "
+                                              r"FWHM\) spans 1\.5 samples at sample_rate="
+                                              r"1e\+09: .* sample_rate >= 1\.34e\+09 "):
         sensor(sample_rate=1e9, pulse=GaussianPulse(1.5e-9))
+    # the rate advised does not warn, nor does one two samples to rounding (filterwarnings
+    # is error): 4/3 GS/s rounded up, and a 0.7 ns pulse at 2 / (0.7 ns) samples a second
+    sensor(sample_rate=1.34e9, pulse=GaussianPulse(1.5e-9))
+    sensor(sample_rate=2.0 / 7e-10, pulse=GaussianPulse(7e-10))
     with pytest.raises(ParameterError, match=r"spans 0\.5 samples at sample_rate=1e\+09; a "
                                              r"linear receiver's detector needs 1 or more"):
         sensor(sample_rate=1e9, pulse=GaussianPulse(0.5e-9))

@@ -134,6 +134,8 @@ def test_a_points_files_extension_names_its_format_for_every_writer_and_reader(t
 @pytest.mark.parametrize("photoelectrons, per_pe", [
     ([0.4, 7.0, 65535.0], 1.0),                             # the brightest fits: as counted
     ([3e3, 1.2e5, 2.4e6], 65535.0 / 2.4e6),                 # normalised to the brightest
+    ([np.nan, 1.2e5, 2.4e6], 65535.0 / 2.4e6),              # a non-finite one: no say, 0
+    ([np.inf, 7.0, 100.0], 1.0),
 ])
 def test_las_intensity_is_photoelectrons_normalised_to_16_bits_with_its_factor(
         tmp_path, photoelectrons, per_pe):
@@ -149,7 +151,8 @@ def test_las_intensity_is_photoelectrons_normalised_to_16_bits_with_its_factor(
     las = laspy.read(tmp_path / "p.las")
     (vlr,) = [v for v in las.vlrs if (v.user_id, v.record_id) == ("meshladar", 1)]
     assert struct.unpack("<d", vlr.record_data) == (per_pe,)
-    np.testing.assert_array_equal(las.intensity, np.rint(np.array(photoelectrons) * per_pe))
+    np.testing.assert_array_equal(las.intensity, np.nan_to_num(
+        np.rint(np.array(photoelectrons) * per_pe), nan=0.0, posinf=0.0))
     np.testing.assert_array_equal(read_las(tmp_path / "p.las").points["intensity"],
                                   cloud.points["intensity"])          # float32, exact
 

@@ -140,8 +140,9 @@ def test_a_trajectory_file_with_a_byte_order_mark_reads(tmp_path):
     ("1,1,0,abc,0,90,0", "line 3: every value must be a number"),
     ("1,nan,0,300,0,90,0", r"t\.csv, line 3: x is nan; every value must be a finite number"),
     ("1,1,0,300,0,inf,0", r"line 3: pitch is inf; every value must be a finite number"),
-    ("0,1,0,300,0,90,0", r"t\.csv, line 3: time 0 does not follow line 2's 0; the times "
-                         "must increase")])
+    ("0,1,0,300,0,90,0", r"t\.csv, line 3: time 0\.0 does not follow line 2's 0\.0; the "
+                         "times must increase"),
+    ("-0.00005,1,0,300,0,90,0", r"line 3: time -5e-05 does not follow line 2's 0\.0")])
 def test_a_bad_row_is_named_by_its_line(tmp_path, row, match):
     path = tmp_path / "t.csv"
     path.write_text(f"time,x,y,z,roll,pitch,yaw\n0,0,0,300,0,90,0\n{row}\n")

@@ -62,3 +62,24 @@ def test_nothing_of_the_scene_is_drawn_under_the_legend(size):
     drawn = _is(shown.image, (1.0, 1.0, 0.0))             # the frame, clear of the bars
     left = min(int(box[0] * w) for _, box in shown.scalar_bars)
     assert drawn.sum() > 500 and drawn[:, left - 2:].sum() == 0
+
+
+@pytest.mark.parametrize("size", [(120, 90), (60, 45)])
+def test_a_window_with_no_room_beside_its_bars_keeps_the_view(size, monkeypatch):
+    """A review: at 120 pixels or less the bars' slot leaves no room, and the fit's scale
+    came out negative (the camera's angle set below zero, clamped by VTK to 1e-8 degrees:
+    nothing to see). The view is then kept as it is (pyvista's 30 degrees)."""
+    from meshladar.viz import viewer
+
+    angles = []
+    fit = viewer._clear_of_bars
+
+    def spy(plotter, xyz, **kw):
+        fit(plotter, xyz, **kw)
+        angles.append(plotter.camera.GetViewAngle())
+
+    monkeypatch.setattr(viewer, "_clear_of_bars", spy)
+    shown = viewer.show_scene(ml.phantoms.scene("disk_pair"), view_angle_deg=20.0,
+                              off_screen=True, window_size=size)
+    assert shown.image.shape[:2] == (size[1], size[0])
+    assert angles == [30.0]
