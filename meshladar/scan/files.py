@@ -37,7 +37,7 @@ from .._atomic_write import make_temporary, write_atomic
 from .._validate import check_path, check_real
 from ..errors import ParameterError
 from .formats import _not_named_as, _target, check_writable
-from .foreign import foreign_points
+from .foreign import LAS_SCAN_ANGLE_STEP, foreign_points
 from .points import POINT_DTYPE, POINT_FIELDS, PointCloud
 
 __all__ = ["write_las", "read_las", "write_hdf5", "read_hdf5", "las_intensity_scale",
@@ -46,7 +46,6 @@ __all__ = ["write_las", "read_las", "write_hdf5", "read_hdf5", "las_intensity_sc
 
 #: The record fields LAS 1.4 stores in its own dimensions (all others are extra bytes).
 LAS_NATIVE = ("x", "y", "z", "return_number", "number_of_returns")
-_SCAN_ANGLE_STEP = 0.006
 #: The largest coordinate LAS stores, in steps of its scale (a signed 32-bit integer).
 _LAS_STEPS = 2 ** 31 - 1
 #: LAS intensity's largest value (16 bits).
@@ -156,7 +155,7 @@ def write_las(path, cloud, *, scale=None):
     las.vlrs.append(laspy.VLR(user_id=INTENSITY_VLR[0], record_id=INTENSITY_VLR[1],
                               description="LAS intensity per photoelectron",
                               record_data=struct.pack("<d", per_pe)))
-    las.scan_angle = np.clip(np.rint(pts["scan_angle"] / _SCAN_ANGLE_STEP), -30000,
+    las.scan_angle = np.clip(np.rint(pts["scan_angle"] / LAS_SCAN_ANGLE_STEP), -30000,
                              30000).astype(np.int16)
     # GPS time: the platform's clock (a trajectory's time_offset) plus the emission time
     las.gps_time = pts["emission_time"] + cloud.info.get("platform", {}).get("time_origin_s",

@@ -10,14 +10,15 @@ import numpy as np
 
 from .points import POINT_DTYPE, PointCloud
 
-__all__ = ["FOREIGN_FIELDS", "foreign_points"]
+__all__ = ["FOREIGN_FIELDS", "LAS_SCAN_ANGLE_STEP", "foreign_points"]
 
 #: The fields a LAS file of any tool gives (``emission_time``: its GPS time, where its point
 #: format has one); the others are NaN, or -1 for the truth's part and face.
 FOREIGN_FIELDS = ("x", "y", "z", "intensity", "return_number", "number_of_returns",
                   "pulse_id", "scan_angle", "emission_time")
-#: LAS 1.4's scan-angle step for point formats 6-10 (degrees); earlier formats count degrees.
-_SCAN_ANGLE_STEP = 0.006
+#: LAS 1.4's scan-angle step for point formats 6-10 (degrees; earlier formats count
+#: degrees), for reading and writing alike.
+LAS_SCAN_ANGLE_STEP = 0.006
 
 
 def foreign_points(las, path):
@@ -47,7 +48,7 @@ def foreign_points(las, path):
     pts["pulse_id"] = np.arange(len(pts))
     fields = list(FOREIGN_FIELDS)
     if las.point_format.id >= 6:
-        pts["scan_angle"] = np.asarray(las.scan_angle) * _SCAN_ANGLE_STEP
+        pts["scan_angle"] = np.asarray(las.scan_angle) * LAS_SCAN_ANGLE_STEP
     else:
         pts["scan_angle"] = np.asarray(las.scan_angle_rank)
     if "gps_time" in las.point_format.dimension_names:
