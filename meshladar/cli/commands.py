@@ -265,19 +265,18 @@ def check_view_options(args):
                              "coloured by its return)")
 
 
-#: view's messages in its flags' words (:func:`.words.flag_words`).
-view_words = flag_words({"color_by": "--color-by", "view_angle_deg": "--view-angle"},
-                        ("color_by", "view_angle_deg"))
+#: view's messages in its flags' words (:func:`.words.flag_words`): ``path`` is the point
+#: file's (the readers' ``path: ...``).
+view_words = flag_words({"color_by": "--color-by", "view_angle_deg": "--view-angle",
+                         "path": "--points"}, ("color_by", "view_angle_deg"))
 
 
 def _read_points(path):
-    """A point cloud file (LAS/LAZ, HDF5 or .npz by extension), its errors naming --points."""
-    try:
-        if points_format(path) == "LAS":          # another tool's too: its own fields
-            return read_las(path, foreign=True)
-        return {"HDF5": read_hdf5, "NPZ": read_npz}.get(points_format(path), read_las)(path)
-    except ParameterError as exc:
-        raise ParameterError(f"--points: {str(exc).removeprefix('path: ')}") from None
+    """A point cloud file (LAS/LAZ, HDF5 or .npz by extension; its errors' ``path`` is
+    --points in :data:`view_words`)."""
+    if points_format(path) == "LAS":              # another tool's too: its own fields
+        return read_las(path, foreign=True)
+    return {"HDF5": read_hdf5, "NPZ": read_npz}.get(points_format(path), read_las)(path)
 
 
 def cmd_study(args) -> int:

@@ -49,9 +49,10 @@ SENSOR_FLAGS = {"max_returns": "--max-returns", "shots": "--geiger-shots",
                 "sample_rate": "--sample-rate", "fwhm": "--pulse-fwhm",
                 "background_rate": "--background-rate", "dark_rate": "--dark-rate"}
 #: scan's messages in its flags' words (:func:`.words.flag_words`): the sensor's arguments,
-#: and the API's advice naming what the command line sets by other flags or not at all.
+#: the platform's (``platform: ...``, its coverage of the pattern's times), and the API's
+#: advice naming what the command line sets by other flags or not at all.
 scan_words = flag_words(
-    SENSOR_FLAGS, [n for n in SENSOR_FLAGS if "_" in n],
+    {**SENSOR_FLAGS, "platform": "--platform"}, [n for n in SENSOR_FLAGS if "_" in n],
     [("raise the sensor's --pulse-energy or --aperture", "raise --pulse-energy or --aperture"),
      (", or its detector's false_alarm (the threshold follows it)", ""),
      (", or lower its detector's threshold", ""),
@@ -61,6 +62,7 @@ scan_words = flag_words(
      ("detector: cfar applies to a linear receiver's records;",
       "--cfar applies to a linear receiver's records, not --geiger-shots;"),
      ("--platform: path: cannot read", "--platform: cannot read"),
+     ("beam.tol=", "--tol "), ("beam.tol", "--tol"),
      ("(a platform at rest: Platform.static)",
       "(a platform at rest: --platform 'static position=X,Y,Z')")])
 _TRUE, _FALSE = ("true", "yes", "on", "1"), ("false", "no", "off", "0")
@@ -227,11 +229,7 @@ def _beam(args, flash):
     tol = BEAM_DEFAULTS["tol"] if args.tol is None else args.tol
     if flash:                             # the beam's tol alone: m x m sub-rays a pixel
         beam = scanning.ScanBeam(0.0, tol=tol)
-        try:
-            scanning.footprint.check_flash_beam(beam)
-        except ParameterError as exc:
-            raise ParameterError(str(exc).replace("beam.tol=", "--tol ")
-                                 .replace("beam.tol", "--tol")) from None
+        scanning.footprint.check_flash_beam(beam)
         return beam
     beam = scanning.ScanBeam(
         BEAM_DEFAULTS["divergence"] if args.divergence is None else args.divergence,
@@ -291,10 +289,7 @@ def cmd_scan(args) -> int:
     _check_beam(args, make is scanning.PATTERNS.get("flash"))
     pattern = _build(make, kwargs, "--pattern")
     platform = _platform(args.platform)
-    try:
-        platform.check_covers(pattern.times)
-    except ParameterError as exc:
-        raise ParameterError(f"--platform: {str(exc).removeprefix('platform: ')}") from None
+    platform.check_covers(pattern.times)
     sensor = _sensor(args, pattern.is_flash)
     scene, _, _ = load_scene(args)
     if not scene.is_mesh:
