@@ -219,6 +219,13 @@ def _clear_of_bars(plotter, xyz, grow=True, legend=None):
     plotter.reset_camera_clipping_range()
 
 
+def _corners(plotter):
+    """The eight corners of the box around everything the plotter draws in 3-D (its
+    ``bounds``): the points to keep clear of its bars and legend."""
+    x0, x1, y0, y1, z0, z1 = plotter.bounds
+    return np.array([(x, y, z) for x in (x0, x1) for y in (y0, y1) for z in (z0, z1)])
+
+
 def _fit(lo, hi, t_lo, t_hi, grow):
     """(scale, shift) taking the picture's box [lo, hi] into [t_lo, t_hi] (normalised
     device coordinates: x' = scale x − shift), filling it; ``grow`` False: made no larger,

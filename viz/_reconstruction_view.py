@@ -12,7 +12,8 @@ from meshladar._validate import check_choice, check_real, finite_array, short
 from meshladar.errors import ParameterError
 from meshladar.images import Image, Volume
 
-from ._frame import _bar, _finish, _headless_window, _legend, _mesh_scene, _pyvista
+from ._frame import (_bar, _clear_of_bars, _corners, _finish, _headless_window, _legend,
+                     _mesh_scene, _pyvista)
 
 __all__ = ["show_slice", "show_volume", "volume_surface", "volume_iso"]
 
@@ -48,7 +49,9 @@ def show_slice(image, *, z=0.0, scene=None, clim=None, off_screen=False, screens
         See the module docstring; ``window_size`` (width, height) in pixels, default
         (800, 700).
     camera : pyvista camera position, optional, keyword-only
-        Default None: above the slice's centre at 4 × its half-width, looking down, y up.
+        Default None: above the slice's centre at 4 × its half-width, looking down, y up,
+        the picture made smaller and moved just enough to clear the colour bar's slot
+        and the legend (a camera given is kept as given).
 
     Returns
     -------
@@ -64,6 +67,7 @@ def show_slice(image, *, z=0.0, scene=None, clim=None, off_screen=False, screens
     plotter = pv.Plotter(off_screen=off_screen, window_size=window_size)
     plotter.set_background("black")
     grid = _image_data(pv, image, z)
+    legend = None
     inp = image.info.get("preprocess") or ""
     plotter.add_mesh(grid, scalars="reconstruction", cmap="gray", lighting=False, clim=clim,
                      scalar_bar_args=_bar("reconstruction of log input" if
@@ -75,10 +79,12 @@ def show_slice(image, *, z=0.0, scene=None, clim=None, off_screen=False, screens
             cells = np.hstack([np.full((len(p.faces), 1), 3), p.faces]).ravel()
             plotter.add_mesh(pv.PolyData(p.vertices, cells), style="wireframe",
                              color="orange", opacity=0.3, lighting=False)
-        _legend(plotter, [("scene (wireframe)", (1.0, 0.65, 0.0))])
+        legend = _legend(plotter, [("scene (wireframe)", (1.0, 0.65, 0.0))])
     c = (float(image.center[0]), float(image.center[1]), float(z))
     plotter.camera_position = camera if camera is not None else [
         (c[0], c[1], c[2] + 4.0 * image.extent), c, (0.0, 1.0, 0.0)]
+    if camera is None:                    # the default view: clear of the bar and legend
+        _clear_of_bars(plotter, _corners(plotter), grow=False, legend=legend)
     return _finish(plotter, off_screen, screenshot)
 
 
@@ -159,7 +165,8 @@ def show_volume(images, zs=None, *, iso=None, render="iso", off_screen=False,
         See the module docstring; ``window_size`` (width, height) in pixels, default
         (800, 700).
     camera : pyvista camera position, optional, keyword-only
-        Default None: pyvista's isometric view.
+        Default None: pyvista's isometric view (a volume rendering's made smaller and
+        moved just enough to clear its colour bar's slot; a camera given is kept).
 
     Returns
     -------
@@ -194,12 +201,15 @@ def show_volume(images, zs=None, *, iso=None, render="iso", off_screen=False,
         top = float(np.percentile(vals, 99.5)) if vals.size else 1.0
         plotter.add_volume(grid, scalars="reconstruction", cmap="magma", opacity="sigmoid",
                            clim=(0.0, top), scalar_bar_args=_bar("reconstruction", 0))
-    else:
-        if iso is None:                   # half the robust peak: the bright surfaces
-            vals = vol[vol > 0]
-            iso = 0.5 * float(np.percentile(vals, 99.5)) if vals.size else 0.0
-        plotter.add_mesh(grid.contour([iso], scalars="reconstruction"), color="white",
-                         smooth_shading=True)
+        _aim(plotter, camera)
+        if camera is None:                # pyvista's isometric view, clear of the bar
+            _clear_of_bars(plotter, _corners(plotter), grow=False)
+        return _finish(plotter, off_screen, screenshot)
+    if iso is None:                       # half the robust peak: the bright surfaces
+        vals = vol[vol > 0]
+        iso = 0.5 * float(np.percentile(vals, 99.5)) if vals.size else 0.0
+    plotter.add_mesh(grid.contour([iso], scalars="reconstruction"), color="white",
+                     smooth_shading=True)
     _aim(plotter, camera)
     return _finish(plotter, off_screen, screenshot)
 

@@ -8,7 +8,7 @@ import numpy as np
 
 from meshladar.forward.bounce_paths import dominant_order, face_orders, sample_paths
 
-from ._frame import _finish, _headless_window, _legend, _pyvista
+from ._frame import _clear_of_bars, _finish, _headless_window, _legend, _pyvista
 from .viewer import _camera_position, _check_view_options, _Frame, _joined, _view_vector
 
 __all__ = ["show_bounces", "ORDER_COLORS", "PATH_COLOR", "DARK_COLOR"]
@@ -42,7 +42,8 @@ def show_bounces(scene, *, view_angle_deg=None, view_vector=None, bounces=3, pat
     seed : int
         Seeds both samplings.
     off_screen, screenshot, window_size, camera :
-        As :func:`meshladar.viz.viewer.show_scene`.
+        As :func:`meshladar.viz.viewer.show_scene` (a named camera's picture, the scene
+        and the paths, kept below or beside the legend).
 
     Returns
     -------
@@ -76,13 +77,17 @@ def show_bounces(scene, *, view_angle_deg=None, view_vector=None, bounces=3, pat
         legend.append(("no return" if k == 0 else
                        f"order {k}{' or more' if k == 4 else ''} dominates", colour))
     frame = _Frame(0.5 * (v.min(axis=0) + v.max(axis=0)), float(np.ptp(v, axis=0).max()), w)
+    drawn = [v]
     for pts in trails:
         line = np.vstack([pts[0] + frame.size * w, pts, pts[-1] + 0.5 * frame.size * w])
         plotter.add_mesh(pv.lines_from_points(line), color=PATH_COLOR, line_width=2,
                          lighting=False)
+        drawn.append(line)
     if trails:
         legend.append((f"{len(trails)} sampled paths (in from the ladar, out toward it)",
                        PATH_COLOR))
     plotter.camera_position = _camera_position(camera, frame)
-    _legend(plotter, legend)
+    legend = _legend(plotter, legend)
+    if camera is None or isinstance(camera, str):     # a named view: clear of the legend
+        _clear_of_bars(plotter, np.vstack(drawn), grow=False, legend=legend)
     return _finish(plotter, off_screen, screenshot)

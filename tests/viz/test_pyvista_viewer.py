@@ -8,11 +8,12 @@ import sys
 
 import numpy as np
 import pytest
+from scipy.ndimage import center_of_mass, label
 
 import meshladar as ml
 from meshladar.materials import ALUMINUM, DARK_GRAY, lambertian
 
-from _rendering import _SMOKE  # noqa: E402  (tests/, on the path with the conftest)
+from _rendering import _SMOKE, slot_left  # noqa: E402  (tests/, on the path with the conftest)
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -88,15 +89,28 @@ def test_lit_lambertian_sphere_is_brightest_at_its_centre(tmp_path):
 
 
 def test_slice_sits_at_its_position():
+    """Cell (i, j) sits at (x_j, y_i): x to the right, y up, each at its distance from the
+    centre. The picture is framed clear of the bar, so positions are read against each
+    other: a bright cell at (x, y) ≈ (+0.58, +0.3), a dimmer one at (−0.58, +0.3), a dim
+    one at (0, +0.86) (above the rows where the bar's title is found)."""
     from meshladar.viz import viewer
 
     values = np.zeros((64, 64))
-    values[32, 50] = 1.0                      # a bright pixel at x ≈ +0.58, y ≈ 0
+    values[41, 50], values[41, 13], values[59, 32] = 0.8, 0.5, 0.25
     image = ml.Image(values, 1.0)
-    img = viewer.show_slice(image, z=0.3, off_screen=True, window_size=(300, 300)).image
-    gray = img[..., :3].astype(float).sum(axis=-1)
-    i, j = np.unravel_index(np.argmax(gray), gray.shape)
-    assert j > 150 + 40 and abs(i - 150) < 20      # right of centre, on the x axis
+    shown = viewer.show_slice(image, z=0.3, clim=(0.0, 1.0), off_screen=True,
+                              window_size=(600, 300))
+    left = shown.image[:, :slot_left(shown) - 2, :3].astype(float).mean(axis=-1)  # picture
+
+    spots, n = label(left > 15)
+    assert n == 3
+    found = sorted((left[spots == k].max(), *center_of_mass(spots == k))
+                   for k in range(1, 4))                   # dimmest first
+    (_, i_u, j_u), (_, i_l, j_l), (_, i_r, j_r) = found
+    cell = (j_r - j_l) / 37                                # pixels per cell
+    assert cell > 2 and abs(i_r - i_l) < 1.0               # x to the right, same row
+    assert abs(j_u - j_l - 19 * cell) < 1.0                # at x's cell 32
+    assert abs(i_r - i_u - 18 * cell) < 1.0                # y up, x's scale
 
 
 def test_volume_iso_surface_of_a_stack():

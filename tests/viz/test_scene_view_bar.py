@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.ndimage import binary_erosion
 
 import meshladar as ml
 from meshladar.materials import ALUMINUM, DARK_GRAY
@@ -83,3 +84,77 @@ def test_a_window_with_no_room_beside_its_bars_keeps_the_view(size, monkeypatch)
                               off_screen=True, window_size=size)
     assert shown.image.shape[:2] == (size[1], size[0])
     assert angles == [30.0]
+
+
+#: A slice's grey, clim (0, 2) at value 1: each channel near 128 of 255.
+SLICE_GREY = (0.5, 0.5, 0.5)
+
+
+def _in_slot(shown, drawn):
+    """``drawn`` (a pixel mask) right of the bar's slot's left edge, less the bar itself
+    (its colours are the scene's) and a 2-pixel rim around it, and less lines thinner
+    than 3 pixels (the anti-aliased edges of the bar's white text are grey too)."""
+    h, w = drawn.shape
+    (_, (x0, y0, x1, y1)), = shown.scalar_bars
+    drawn = binary_erosion(drawn, np.ones((3, 3), bool))
+    drawn[max(0, int((1 - y1) * h) - 2):int((1 - y0) * h) + 2,
+          max(0, int(x0 * w) - 2):int(x1 * w) + 2] = False
+    return drawn[:, slot_left(shown) - 2:]
+
+
+@pytest.mark.parametrize("size", [(640, 480), (900, 700)])
+def test_a_slice_is_drawn_clear_of_its_bar_and_legend(size):
+    """The default view of a slice over the disk pair: the slice ran under its colour bar,
+    whose title ('reconstruction [radiance / area]', white) was lost on a bright slice,
+    and its top rows under the legend. Now no pixel of the slice lies in the bar's slot
+    and its top row is below the legend's box."""
+    from meshladar.viz import viewer
+
+    pair = ml.phantoms.scene("disk_pair")
+    image = ml.Image(np.ones((64, 64)), 1.0)
+    shown = viewer.show_slice(image, scene=pair, clim=(0.0, 2.0), off_screen=True,
+                              window_size=size)
+    grey = _is(shown.image, SLICE_GREY)
+    h = shown.image.shape[0]
+    assert grey.sum() > 0.2 * grey.size
+    assert _in_slot(shown, grey).sum() == 0
+    rows = np.nonzero(binary_erosion(grey, np.ones((3, 3), bool)).any(axis=1))[0]
+    assert rows.min() >= int((1 - shown.legend.box[1]) * h)
+
+
+@pytest.mark.parametrize("size", [(400, 300), (640, 480)])
+def test_the_bounce_view_draws_nothing_under_its_legend(size):
+    """A Lambertian ball seen obliquely with its sampled paths: the paths and the ball's
+    top ran under the legend (949 coloured pixels in its box at 400 x 300)."""
+    from meshladar.viz import bounce_view
+
+    ball = ml.Scene.from_parts([ml.meshes.sphere((0, 0, 0), 0.5, 0, subdivisions=3)],
+                               [ml.brdf.Lambertian(0.9)])
+    shown = bounce_view.show_bounces(ball, view_vector=(0.3, 0.2, 1.0), off_screen=True,
+                                     window_size=size)
+    img = shown.image[..., :3] / 255.0
+    h, w = img.shape[:2]
+    x0, y0, x1, y1 = shown.legend.box
+    box = img[int((1 - y1) * h):int((1 - y0) * h), int(x0 * w):int(x1 * w)]
+    coloured = ((box.max(-1) - box.min(-1)) > COLOUR_TOL)
+    assert coloured[:, int(ICON_SHARE * box.shape[1]):].sum() == 0
+    assert _is(shown.image, bounce_view.PATH_COLOR).sum() > 200
+
+
+@pytest.mark.parametrize("size", [(400, 400), (500, 700)])
+def test_a_volume_rendering_is_drawn_clear_of_its_bar(size):
+    """pyvista's isometric view of a stack drawn as a volume ran under the bar's slot in
+    a square or tall window (2039 of its pixels at 400 x 400); now clear of it. The
+    volume's magma colours are told from the bar's grey text by their hue."""
+    from meshladar.viz import viewer
+
+    x = np.linspace(-1, 1, 32)
+    X, Y = np.meshgrid(x, x)
+    zs = np.linspace(-0.5, 0.5, 8)
+    images = [ml.Image(3.0 * (np.hypot(X, Y) < 0.8), 1.0) for _ in zs]
+    shown = viewer.show_volume(images, zs, render="volume", off_screen=True,
+                               window_size=size)
+    rgb = shown.image[..., :3].astype(int)
+    lit = (rgb.max(axis=-1) - rgb.min(axis=-1)) > 30
+    assert lit.sum() > 2000
+    assert _in_slot(shown, lit).sum() == 0
