@@ -6,7 +6,8 @@ Two painted plates at 90° (the paper's dark gray coating) seen from 72 views ab
 shared edge. Outside the quadrant between the plates each view sees at most one plate from
 its front, and the return is single-bounce; inside it the plates face each other and light
 reflected by one reaches the other: the second bounce adds to every view there.
-``bounces="auto"`` adds orders until the next is below 1 % of the single bounce. The
+``bounces="auto"`` sums the orders up to the highest at or above 1 % of the single
+bounce. The
 right panel is the brightest view's range-resolved cross section, whose bins sum to its σ.
 """
 

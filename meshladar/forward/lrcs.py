@@ -119,17 +119,28 @@ def _ladar(scene, views, bounces, n_bins, bistatic):
     lo, hi = scene.view_ranges(w)
     top = 1 if bounces == "auto" and not scene.visibility().needs_bounces else (
         MAX_BOUNCES if bounces == "auto" else bounces)
-    # the scene's diameter D: a k-bounce path's apparent range is at most the farthest
-    # range plus (k − 1) D / 2; a bistatic one's within D of the monostatic span
-    reach = float(np.linalg.norm(np.ptp(scene.hull_points(), axis=0))) if scene.is_mesh \
-        else 2.0 * scene.bounding_circle()[1]
+    # a k-bounce path's apparent range is at most the farthest range plus (k − 1) D / 2;
+    # a bistatic one's within D of the monostatic span
+    reach = _diameter(scene)
     if bistatic:
         lo, hi = lo - reach, hi + reach
     size = float(np.max(hi - lo))
     a, b = float(lo.min()), float(hi.max()) + 0.5 * (top - 1) * reach
+    # at least D / 2 across (a sphere's depth): a flat plate seen face-on spans no range
+    # at all, and bins of its width (1e-312) gave an infinite ray count
+    grow = max(0.0, 0.5 * (0.5 * reach - (b - a)))
+    a, b = a - grow, b + grow
     pad = max(0.5 * (b - a) / n_bins, 1e-9 * max(abs(a), abs(b), size, 1e-300))
     edges = np.linspace(a - pad, b + pad, n_bins + 1)
     return Ladar(kw.get("angles_deg"), view_vectors=kw.get("view_vectors"), bin_edges=edges)
+
+
+def _diameter(scene):
+    """The scene's diameter D: its hull's bounding box diagonal (a mesh's), or its bounding
+    circle's (2-D shapes)."""
+    if scene.is_mesh:
+        return float(np.linalg.norm(np.ptp(scene.hull_points(), axis=0)))
+    return 2.0 * scene.bounding_circle()[1]
 
 
 def _alone(scene, i):
@@ -165,7 +176,11 @@ def lrcs(scene, views, *, model=None, bounces=1, per_part=False, n_bins=LRCS_BIN
         ranges over the views (and the longer paths of higher orders).
     **options
         The model's other options (``ray_spacing``, ``tol``, ``receiver`` for a bistatic
-        σ, ``seed``, …); not ``radiometry`` (always ``"power"``) or ``sensor``.
+        σ, ``seed``, …); not ``radiometry`` (always ``"power"``) or ``sensor``. A mesh's
+        ``ray_spacing``, unless it, ``rays_per_bin`` or ``tol`` is given, is R /
+        ``n_bins``, R the largest distance of a vertex from its bounding box's centre
+        (a sphere's range depth over the bins): the same for every view and every
+        ``bounces`` (a flat plate seen face-on, which spans no range, included).
 
     Returns
     -------
@@ -203,6 +218,12 @@ def lrcs(scene, views, *, model=None, bounces=1, per_part=False, n_bins=LRCS_BIN
     ladar = _ladar(scene, views, bounces, n_bins, options.get("receiver") is not None)
     if model == "mesh":
         options["bounces"] = bounces
+        if options.get("mode", "3d") == "3d" and all(
+                options.get(k) is None for k in ("ray_spacing", "rays_per_bin", "tol")):
+            pts = scene.hull_points()
+            centre = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
+            options["ray_spacing"] = float(np.max(np.linalg.norm(pts - centre, axis=1))
+                                           / n_bins)
     elif bounces != 1:
         raise ParameterError(f"bounces > 1 needs model='mesh'; got model={model!r}")
     sino = simulate(scene, ladar, model=model, radiometry="power", **options)

@@ -148,8 +148,8 @@ OPTIONS: tuple[Option, ...] = (
     Option("tol", "positive_float", "relative sinogram accuracy: meshladar picks rays and "
            "segments (meshladar.forward.refine)", "off", _MESH),
     Option("bounces", "bounces", "surface interactions per path: 1 (single bounce), up to "
-           "8, or auto (orders added until the next is below --tol, else 0.01, of the "
-           "single bounce); a convex scene never samples a second bounce "
+           "8, or auto (the orders up to the highest at or above --tol, else 0.01, of the "
+           "single bounce, of 8 sampled); a convex scene never samples a second bounce "
            "(meshladar.forward.bounces)", "1", _MESH),
     Option("bounce_samples", "positive_int", "sampled paths per view and order beyond the "
            "first", "32768", _MESH),

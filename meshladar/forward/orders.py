@@ -31,8 +31,11 @@ MAX_BOUNCES = 8
 #: share of the single bounce's (unless ``tol`` is given) is left out or not warned about.
 BOUNCE_SHARE = 1e-2
 #: The single bounce's check of a scene that needs bounces: paths per view on at most this
-#: many views, first hits on a grid of about CHECK_GRID rays across the scene.
-CHECK_SAMPLES, CHECK_VIEWS, CHECK_GRID = 4096, 8, 64
+#: many views, first hits on a grid of about CHECK_GRID rays across the scene, orders 2 to
+#: CHECK_ORDERS (a corner reflector returns at the third: its second can be nothing).
+CHECK_SAMPLES, CHECK_VIEWS, CHECK_GRID, CHECK_ORDERS = 4096, 8, 64, 4
+#: The orders' names in the check's warning.
+_ORDINALS = {2: "second", 3: "third", 4: "fourth"}
 
 
 def check_bounces(scene, bounces, samples, options):
@@ -136,7 +139,7 @@ def add_bounces(scene, ladar, sino, bounces, samples, *, tol=None, seed=None, se
     if bounces == 1 or not needs:
         if bounces == 1 and needs and sino.radiometry == "power" and \
                 sino.info.get("mode") != "slice":
-            _check_second_order(scene, ladar, sino, share, 0 if seed is None else seed)
+            _check_orders(scene, ladar, sino, share, 0 if seed is None else seed)
         n = 1 if bounces == "auto" else bounces                  # exact zeros beyond 1
         return _with_orders(sino, sino.values, n, [first] + [0.0] * (n - 1), [0.0] * n)
     top = MAX_BOUNCES if bounces == "auto" else bounces
@@ -144,9 +147,11 @@ def add_bounces(scene, ladar, sino, bounces, samples, *, tol=None, seed=None, se
     totals = orders.values.sum(axis=(1, 2))
     errors = np.sqrt((orders.stderr ** 2).sum(axis=(1, 2)))
     keep = top - 1
-    if bounces == "auto":
-        below = np.flatnonzero(np.abs(totals) < share * abs(first))
-        keep = int(below[0]) if below.size else top - 1
+    if bounces == "auto":            # up to the highest order at or above the share (a
+        above = np.flatnonzero(np.abs(totals) >= share * abs(first))   # corner's 2nd is 0)
+        keep = int(above[-1]) + 1 if above.size else 0
+    if isinstance(bounces, int) and bounces < CHECK_ORDERS and sino.radiometry == "power":
+        _check_orders(scene, ladar, sino, share, 0 if seed is None else seed, bounces)
     values = sino.values + orders.values[:keep].sum(axis=0)
     out = _with_orders(sino, values, keep + 1, [first, *totals[:keep]],
                        [0.0, *errors[:keep]])
@@ -195,13 +200,15 @@ def _with_orders(sino, values, n, totals, errors):
         order_stderr=[float(e) for e in errors]))
 
 
-def _check_second_order(scene, ladar, sino, share, seed):
-    """The cheap pass of a single bounce on a scene that needs bounces: on at most
-    CHECK_VIEWS of the views, first hits on a grid of about CHECK_GRID rays across the
-    scene, the single bounce and CHECK_SAMPLES second-bounce paths summed over all ranges
-    (both in received power; parallel rays);
-    warns when their ratio exceeds ``share``. Not done where a coating has no bistatic
-    evaluation."""
+def _check_orders(scene, ladar, sino, share, seed, done=1):
+    """The cheap pass of a run that sums ``done`` orders (below CHECK_ORDERS) of a scene
+    that needs bounces: on at most CHECK_VIEWS of the views, first hits on a grid of about
+    CHECK_GRID rays across the scene, the single bounce and CHECK_SAMPLES paths of orders
+    2 to CHECK_ORDERS summed over all ranges (in received power; parallel rays), view by
+    view. Warns, with the worst view's shares, when in any view checked an order beyond
+    ``done`` exceeds ``share`` of the single bounce (``done`` 1), or returns more than
+    each order summed (``done`` 2 or more: a corner reflector's third order, its second
+    nearly nothing). Not done where a coating has no bistatic evaluation."""
     try:
         check_bistatic(scene.materials)
     except ModelError:
@@ -212,16 +219,36 @@ def _check_second_order(scene, ladar, sino, share, seed):
                   float(np.linalg.norm(hi - lo)) / CHECK_GRID)
     geo = geometry(scene, "flat")
     emb = embree_scene(geo, resolve_backend("embreex"))      # as higher_orders: incoherent
-    first = second = 0.0
+    ratios = []
     for i, rng in zip(pick, np.random.SeedSequence(seed).spawn(len(pick))):
         w = np.asarray(ladar.view_vectors[i], np.float64)
-        first += float(single_bounce(scene, geo, w, spacing)[1].sum())
-        second += float(_view_orders(scene, geo, emb, w, np.array([-np.inf, np.inf]),
-                                     spacing, (2, CHECK_SAMPLES),
-                                     np.random.default_rng(rng))[0][0].sum())
-    if first > 0 and second > share * first:
-        warnings.warn(f"this scene is not convex and its second bounce adds about "
-                      f"{100 * second / first:.2g} % to the single bounce's received power "
-                      f"(a cheap estimate on {len(pick)} "
-                      f"view{'s' if len(pick) > 1 else ''}); bounces=2 or bounces='auto' includes it",
-                      BounceWarning, stacklevel=user_stacklevel())
+        first = float(single_bounce(scene, geo, w, spacing)[1].sum())
+        orders = _view_orders(scene, geo, emb, w, np.array([-np.inf, np.inf]), spacing,
+                              (CHECK_ORDERS, CHECK_SAMPLES), np.random.default_rng(rng))
+        if first > 0:
+            ratios.append(orders[0][0][:, 0] / first)             # orders 2, 3, ...
+    if not ratios:
+        return
+    summed, ratios = np.split(np.array(ratios), [done - 1], axis=1)
+    # a single bounce: an order above the share; more: one above every order summed
+    big = share if done == 1 else np.maximum(1.0, summed.max(axis=1, initial=0.0))[:, None]
+    if not np.any(ratios > big):
+        return
+    worst = ratios[np.argmax(ratios.sum(axis=1))]
+    top = int(np.flatnonzero((ratios > big).any(axis=0))[-1]) + done + 1
+    each = ", ".join(f"the {_ORDINALS[k + done + 1]} {_share(r)}"
+                     for k, r in enumerate(worst) if r > 0.1 * share)
+    warnings.warn(f"this scene is not convex and its bounces beyond the first"
+                  f"{'' if done == 1 else f' {done}'} return about {_share(worst.sum(), 'of')} "
+                  f"the single bounce's received power in the worst of {len(ratios)} "
+                  f"view{'s' if len(ratios) > 1 else ''} checked ({each}; a cheap "
+                  f"estimate); bounces={top} or bounces='auto' includes them",
+                  BounceWarning, stacklevel=user_stacklevel())
+
+
+def _share(ratio, of=""):
+    """A share of the single bounce as read: ``4.9 %`` (``of``: ``4.9 % of``), or
+    ``6e+07 times`` from 10 up."""
+    if ratio >= 10:
+        return f"{ratio:.2g} times"
+    return f"{100 * ratio:{'.0f' if ratio >= 1 else '.2g'}} %{of and ' ' + of}"

@@ -195,12 +195,13 @@ def test_convex_scenes_are_exactly_single_bounce_without_a_ray(monkeypatch):
 
 
 def test_simulate_adds_orders_and_says_so():
-    """bounces=2 adds the second order to the single bounce; "auto" keeps orders until
-    one is below 1 % of the single bounce; bounces=1 on the dihedral warns with the
-    cheap estimate."""
+    """bounces=2 adds the second order to the single bounce; "auto" keeps the orders up
+    to the highest at or above 1 % of the single bounce; bounces=1 on the dihedral warns
+    with the cheap estimate, each order's."""
     scene = dihedral(Lambertian(RHO))
     lad = ml.Ladar(np.arange(15.0, 90.0, 30.0), np.linspace(-1.5, 1.5, 61))
-    with pytest.warns(MeshladarWarning, match=r"second bounce adds about \d"):
+    with pytest.warns(MeshladarWarning, match=r"bounces beyond the first return about \d.* "
+                                              r"\(the second \d"):
         one = ml.simulate(scene, lad, model="mesh", radiometry="power")
     two = ml.simulate(scene, lad, model="mesh", radiometry="power", bounces=2, seed=0)
     first, second = two.info["order_totals"]
@@ -263,8 +264,10 @@ def test_the_guide_states_the_constants():
 
     from meshladar.forward import orders, specular
     text = Path(__file__).parents[2].joinpath("docs", "guide", "bounces.md").read_text()
-    assert (orders.CHECK_VIEWS, orders.CHECK_GRID, orders.CHECK_SAMPLES) == (8, 64, 4096)
-    assert "8 of its views, a 64-ray grid across the scene, 4096 second-bounce paths" in \
+    assert (orders.CHECK_VIEWS, orders.CHECK_GRID, orders.CHECK_SAMPLES,
+            orders.CHECK_ORDERS) == (8, 64, 4096, 4)
+    assert "8 of its views, a 64-ray grid across the scene, 4096 paths a view of orders " \
+           "2 to 4" in \
         " ".join(text.split())
     assert orders.BOUNCE_SHARE == 0.01 and "(default 0.01)" in text
     assert orders.MAX_BOUNCES == 8 and "(up to 8)" in text
@@ -335,3 +338,51 @@ def test_an_edge_on_glint_under_the_papers_radiometry_is_warned():
         warn_edge_on(glint, value)
     assert not edge_on_glints([Lambertian(0.5)], np.array([0]), n, wi, wo).any()
     warn_edge_on(np.array([GRAZING_SHARE * 0.5]), np.array([1.0]))     # below: silent
+
+
+def _corner(coating, edge=1.0):
+    """A trihedral corner of three right triangles (edge ``edge``), open toward +x+y+z."""
+    return ml.Scene.from_parts([MeshPart(
+        edge * np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]]),
+        [[0, 1, 2], [0, 2, 3], [0, 3, 1]], 0, "corner")], [coating])
+
+
+#: A near-mirror coating: a corner of it retroreflects at the third bounce, its second
+#: bounce nearly nothing.
+MIRROR = SandfordRobertson(0.0, 0.1, 0.0, 0.005)
+
+
+def test_a_mirror_corner_is_found_at_its_third_bounce():
+    """A user's trial: a mirror corner seen along its axis returns at the third bounce;
+    the check looked at the second alone (160 % of a tiny single bounce) and advised
+    bounces=2 (7 orders of magnitude short), and "auto" stopped at the first order below
+    1 % (the second's share of the total, not the last order's). Now the check names the
+    third and bounces=3, bounces=2 warns that the third returns more than every order
+    summed, and "auto" sums the third: the same paths as bounces=3."""
+    scene = _corner(MIRROR)
+    lad = ml.Ladar(None, view_vectors=[np.ones(3) / np.sqrt(3)], bin_edges=np.linspace(
+        -2.0, 4.0, 61))
+    options = dict(model="mesh", radiometry="power", ray_spacing=2e-3, seed=0)
+    with pytest.warns(ml.errors.BounceWarning, match=r"the second 1\d\d %, the third \S+ "
+                                                     r"times.*bounces=[34] "):
+        ml.simulate(scene, lad, **options)
+    with pytest.warns(ml.errors.BounceWarning, match=r"beyond the first 2 .*the third .*"
+                                                     r"bounces=3 "):
+        two = ml.simulate(scene, lad, bounces=2, **options)
+    three = ml.simulate(scene, lad, bounces=3, **options)
+    auto = ml.simulate(scene, lad, bounces="auto", **options)
+    first, second, third = three.info["order_totals"]
+    assert third > 1e6 * max(first, second) and two.info["order_totals"][1] < first * 10
+    assert auto.info["bounces"] >= 3
+    assert auto.info["order_totals"][:3] == three.info["order_totals"]        # same paths
+
+
+def test_the_check_warns_for_one_view_among_many():
+    """A user's trial: the check summed its views, so one view into a corner among views
+    of the same plates' backs (no second bounce) went unwarned (its 1.8 % spread over four
+    views: 0.45 %). A dim dihedral (ρ 0.1) seen at 45° and from behind."""
+    scene = dihedral(Lambertian(0.1))
+    lad = ml.Ladar([45.0, 225.0, 230.0, 235.0], np.linspace(-1.5, 1.5, 61))
+    with pytest.warns(ml.errors.BounceWarning, match=r"the worst of 4 views checked "
+                                                     r"\(the second 1\.\d %"):
+        ml.simulate(scene, lad, model="mesh", radiometry="power", ray_spacing=1e-2)
