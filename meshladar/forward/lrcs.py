@@ -135,6 +135,31 @@ def _ladar(scene, views, bounces, n_bins, bistatic):
     return Ladar(kw.get("angles_deg"), view_vectors=kw.get("view_vectors"), bin_edges=edges)
 
 
+def _default_spacing(scene, n_bins, options):
+    """A mesh's ``ray_spacing`` into ``options`` unless it, ``rays_per_bin`` or ``tol`` is
+    given (or the mode is a slice): R / ``n_bins``, R the largest distance of a vertex from
+    the bounding box's centre."""
+    if options.get("mode", "3d") == "3d" and all(
+            options.get(k) is None for k in ("ray_spacing", "rays_per_bin", "tol")):
+        pts = scene.hull_points()
+        centre = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
+        options["ray_spacing"] = float(np.max(np.linalg.norm(pts - centre, axis=1)) / n_bins)
+
+
+def _shares(scene, ladar, model, sino, options, n_parts):
+    """Each part's σ per view (n_views, n_parts): its single bounce with the others black,
+    plus the orders beyond the first that leave from it (``sino``'s)."""
+    single = {**options, "bounces": 1} if model == "mesh" else options
+    with warnings.catch_warnings():      # a part's run (the others black) would say again
+        warnings.simplefilter("ignore", MeshladarWarning)       # what the whole scene's did
+        shares = np.stack([4.0 * np.pi * simulate(_alone(scene, i), ladar, model=model,
+                                                  radiometry="power", **single)
+                           .values.sum(axis=1) for i in range(n_parts)], axis=1)
+    if "bounce_part_totals" in sino.info:
+        shares = shares + 4.0 * np.pi * np.asarray(sino.info["bounce_part_totals"])
+    return shares
+
+
 def _diameter(scene):
     """The scene's diameter D: its hull's bounding box diagonal (a mesh's), or its bounding
     circle's (2-D shapes)."""
@@ -218,12 +243,7 @@ def lrcs(scene, views, *, model=None, bounces=1, per_part=False, n_bins=LRCS_BIN
     ladar = _ladar(scene, views, bounces, n_bins, options.get("receiver") is not None)
     if model == "mesh":
         options["bounces"] = bounces
-        if options.get("mode", "3d") == "3d" and all(
-                options.get(k) is None for k in ("ray_spacing", "rays_per_bin", "tol")):
-            pts = scene.hull_points()
-            centre = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
-            options["ray_spacing"] = float(np.max(np.linalg.norm(pts - centre, axis=1))
-                                           / n_bins)
+        _default_spacing(scene, n_bins, options)
     elif bounces != 1:
         raise ParameterError(f"bounces > 1 needs model='mesh'; got model={model!r}")
     sino = simulate(scene, ladar, model=model, radiometry="power", **options)
@@ -231,16 +251,7 @@ def lrcs(scene, views, *, model=None, bounces=1, per_part=False, n_bins=LRCS_BIN
                       info=dict(sino.info, quantity="laser radar cross section"))
     names = tuple(p.name for p in scene.parts) if scene.is_mesh else tuple(
         s.name or f"shape {i}" for i, s in enumerate(scene.shapes))
-    shares = None
-    if per_part:
-        single = {**options, "bounces": 1} if model == "mesh" else options
-        with warnings.catch_warnings():  # a part's run (the others black) would say again
-            warnings.simplefilter("ignore", MeshladarWarning)   # what the whole scene's did
-            shares = np.stack([4.0 * np.pi * simulate(_alone(scene, i), ladar, model=model,
-                                                      radiometry="power", **single)
-                               .values.sum(axis=1) for i in range(len(names))], axis=1)
-        if "bounce_part_totals" in sino.info:
-            shares = shares + 4.0 * np.pi * np.asarray(sino.info["bounce_part_totals"])
+    shares = _shares(scene, ladar, model, sino, options, len(names)) if per_part else None
     units = "unit^2" if scene.is_mesh or model == "mesh" and options.get("mode") == "3d" \
         else "unit^2 per unit height"
     return CrossSection(profile.values.sum(axis=1), shares, profile, names,
