@@ -231,11 +231,12 @@ def refine_hit(f, tf, o0, o1, o2, d0, d1, d2, normals, plane_d, min_cos, center,
 
 
 @numba.njit(cache=True, nogil=True)
-def assign_truth(first, count, ret_time, tau, pe, distance, points, face, shift,
+def assign_truth(first, count, ret_time, reach, tau, pe, distance, points, face, shift,
                  true_range, true_xyz, true_face, doppler):   # pragma: no cover - compiled
     """Each return's photoelectron-weighted true range, point and Doppler ``shift`` (0 where
     ``shift`` has no rows), and the face of its strongest sub-ray, from the lit sub-rays
-    whose echo lies nearest it in time."""
+    whose echo lies nearest it in time and within its ``reach`` (s) of it: a return no
+    sub-ray's echo reaches (a false alarm of the noise) has none (NaN, face −1)."""
     n, m = tau.shape
     n_ret = ret_time.shape[0]
     total = np.zeros(n_ret)
@@ -254,6 +255,8 @@ def assign_truth(first, count, ret_time, tau, pe, distance, points, face, shift,
                 g = abs(ret_time[q] - tau[p, k])
                 if g < gap:
                     gap, r = g, q
+            if gap > reach[r]:
+                continue
             total[r] += e
             true_range[r] += e * distance[p, k]
             if shift.shape[0]:                   # (none: nothing moves)

@@ -117,12 +117,23 @@ def _chunk(job, sl, seed):
         ret.time = ret.time - sensor.delay             # the shape's own delay taken off
     rec = np.empty(len(ret), POINT_DTYPE)
     fill_records(rec, (ret.pulse, np.ascontiguousarray(ret.time, np.float64), ret.amplitude,
-                       ret.width, ret.intensity, ret.return_number, ret.number_of_returns),
+                       ret.width, ret.intensity, ret.return_number, ret.number_of_returns,
+                       _truth_reach(sensor, ret)),
                  (sl.start, t, pattern.scan_angles_deg[sl], pattern.channels[sl]),
                  (origins, axis, 0.5 * SPEED_OF_LIGHT),
                  (tau, pe, cast.distance, cast.points, cast.face, shift), job.part_of)
     lit = None if len(rec) else pulses_lit(cast, pe)  # asked only where a scan is empty
     return rec, (blocks if job.keep or job.sink is not None else None), needed, lit
+
+
+def _truth_reach(sensor, ret):
+    """How far in time (s) a sub-ray's echo may lie from a return for the return's ground
+    truth: :data:`.echoes.CENTROID_SIGMAS` of its echo's σ (its fitted width's, at least
+    the pulse's): a false alarm of the noise away from every echo has none. Discrete
+    returns are the sub-rays' own groups (no noise): each takes its nearest sub-rays."""
+    if sensor.echoes == "discrete":
+        return np.full(len(ret), np.inf)
+    return CENTROID_SIGMAS * np.maximum(ret.width / FWHM_PER_SIGMA, sensor.sigma)
 
 
 def _waveform_returns(job, tau, pe, seed):

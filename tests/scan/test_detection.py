@@ -49,6 +49,29 @@ def test_false_alarms_on_noise_alone_follow_the_poisson_tail():
     assert np.all(pc.points["true_face"] == -1) and np.all(np.isnan(pc.points["true_range"]))
 
 
+def test_a_false_alarm_away_from_every_echo_has_no_ground_truth():
+    """A user's trial: pulses lighting a plate with 1e-6 photoelectrons over a background
+    of 0.5 a sample: every return is noise, yet each took the plate's truth (the nearest
+    lit sub-ray's, however far in time: range errors of ±2.4 m, 7.5 σ). A return more than
+    3 σ of its echo (the fitted width's, at least the pulse's) from every sub-ray's echo
+    has none; the plate's range R0 is known here."""
+    dt = 0.5e-9
+    energy = 1e-6 / photoelectrons_by_hand(1.0, 0.05, R0)
+    sen = sensor(noise=Noise(background_rate=0.5 / dt), pulse_energy=energy, samples=256,
+                 detector=Detector(false_alarm=1e-3))
+    pc = scan(scene(plate(R0)), _repeat((1.0, 0.0, 0.0), 2000), Platform.static((0, 0, 0)),
+              sen, seed=3)
+    p = pc.points
+    sigma = np.maximum(p["width"].astype(float) / 2.3548200450309493, sen.sigma)
+    gap = np.abs(p["range"] - R0) / (0.5 * 299_792_458.0)          # s, from the echo
+    far, near = gap > 3.0 * sigma * (1 + 1e-6), gap < 3.0 * sigma * (1 - 1e-6)
+    assert far.sum() > 20 and near.sum() > 0
+    assert np.all(p["true_face"][far] == -1) and np.all(p["true_part"][far] == -1)
+    assert np.all(np.isnan(p["true_range"][far])) and np.all(np.isnan(p["true_x"][far]))
+    assert np.all(p["true_part"][near] == 0)
+    assert np.allclose(p["true_range"][near], R0, atol=1e-9)
+
+
 def test_the_detection_probability_of_a_weak_echo_follows_its_samples_poisson_counts():
     """An echo of 15 photoelectrons, no background, threshold 3: it is detected when one of
     its samples reaches 3 counts; P = 1 − Π P(N_j < 3 | λ_j), λ_j the echo's expected
