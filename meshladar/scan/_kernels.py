@@ -235,8 +235,11 @@ def assign_truth(first, count, ret_time, reach, tau, pe, distance, points, face,
                  true_range, true_xyz, true_face, doppler):   # pragma: no cover - compiled
     """Each return's photoelectron-weighted true range, point and Doppler ``shift`` (0 where
     ``shift`` has no rows), and the face of its strongest sub-ray, from the lit sub-rays
-    whose echo lies nearest it in time and within its ``reach`` (s) of it: a return no
-    sub-ray's echo reaches (a false alarm of the noise) has none (NaN, face −1)."""
+    whose echo lies nearest it in time and within its reach of it: ``reach`` = (each
+    return's, s; each pulse's further reach for a return earlier than the echo, s: a
+    first-photon detector's walk). A return no sub-ray's echo reaches (a false alarm of the
+    noise) has none (NaN, face −1)."""
+    reach, walk = reach
     n, m = tau.shape
     n_ret = ret_time.shape[0]
     total = np.zeros(n_ret)
@@ -255,7 +258,7 @@ def assign_truth(first, count, ret_time, reach, tau, pe, distance, points, face,
                 g = abs(ret_time[q] - tau[p, k])
                 if g < gap:
                     gap, r = g, q
-            if gap > reach[r]:
+            if gap > reach[r] + (walk[p] if ret_time[r] < tau[p, k] else 0.0):
                 continue
             total[r] += e
             true_range[r] += e * distance[p, k]

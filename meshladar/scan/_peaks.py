@@ -177,7 +177,7 @@ def size_peaks(f3, j, ns, s, centre, s_e, height):        # pragma: no cover - c
             s_f = math.sqrt(-1.0 / curv)
             h_f = math.exp(lb - 0.25 * (la - lc) * delta)
         else:
-            delta, s_f, h_f = 0.0, s * math.sqrt(2.0), b
+            delta, s_f, h_f = 0.0, s * math.sqrt(2.0), max(b, 0.0)
         centre[i] = j[i] + 0.5 + delta
         s_e[i] = math.sqrt(max(s_f ** 2 - s ** 2, 0.25 * s ** 2))
         height[i] = h_f * s_f * root / (s_e[i] * root)

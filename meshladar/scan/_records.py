@@ -19,11 +19,12 @@ def fill_records(rec, ret, pulse_of, optics, hits, part_of):   # pragma: no cove
     """rec[i] for return i (sorted by pulse): ``ret`` = (pulse, time, amplitude, width,
     intensity, return_number, number_of_returns, reach: the most a sub-ray's echo time may
     lie from the return's for its truth, s); ``pulse_of`` = (first pulse id, emission
-    times, scan angles, channels), per pulse of the chunk; ``optics`` = (origins, axes,
+    times, scan angles, channels, each pulse's further reach for an early return, s:
+    :func:`._kernels.assign_truth`), per pulse of the chunk; ``optics`` = (origins, axes,
     c/2): the point is origin + (c/2 · time) · axis; ``hits`` = (tau, pe, distance,
     points, face, shift) of the sub-rays for the truth; ``part_of`` each face's part."""
     pulse, time, amplitude, width, intensity, number, count, reach = ret
-    first_id, emitted, angles, channels = pulse_of
+    first_id, emitted, angles, channels, walk = pulse_of
     origins, axes, half_c = optics
     tau, pe, distance, points, face, shift = hits
     n, n_ret = tau.shape[0], pulse.shape[0]
@@ -34,7 +35,7 @@ def fill_records(rec, ret, pulse_of, optics, hits, part_of):   # pragma: no cove
         many[pulse[i]] += 1
     true_range, xyz = np.zeros(n_ret), np.zeros((n_ret, 3))
     true_face, doppler = np.full(n_ret, -1, np.int64), np.zeros(n_ret)
-    assign_truth(first, many, time, reach, tau, pe, distance, points, face, shift, true_range, xyz,
+    assign_truth(first, many, time, (reach, walk), tau, pe, distance, points, face, shift, true_range, xyz,
                  true_face, doppler)
     for i in range(n_ret):
         p = pulse[i]

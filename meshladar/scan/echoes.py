@@ -227,10 +227,11 @@ class Returns:
         return len(self.pulse)
 
 
-def _decompose(waves, p, centre, s, height, sigma_samples):
-    """Refit each pulse's overlapping peaks as one sum of Gaussians (in place), by a
-    compiled Levenberg-Marquardt within bounds (heights ≥ 0, centres in the window,
-    widths 0.5 to 3 σ); a height taken to 0 is left for the caller to drop."""
+def _decompose(waves, back, p, centre, s, height, sigma_samples):
+    """Refit each pulse's overlapping peaks as one sum of Gaussians (in place) over its
+    record less its background per sample (``back``, per peak), by a compiled
+    Levenberg-Marquardt within bounds (heights ≥ 0, centres in the window, widths 0.5 to
+    3 σ); a height taken to 0 is left for the caller to drop."""
     ns = waves.shape[1]
     change = np.diff(p)                                             # p is sorted
     if change.all():                                 # pulses of one peak need no refit
@@ -247,7 +248,7 @@ def _decompose(waves, p, centre, s, height, sigma_samples):
         lo = int(max(0, centre[idx].min() - SUPPORT * sigma_samples))
         hi = int(min(ns, centre[idx].max() + SUPPORT * sigma_samples + 1))
         x = np.arange(lo, hi) + 0.5
-        y = np.ascontiguousarray(waves[q, lo:hi], np.float64)
+        y = np.ascontiguousarray(waves[q, lo:hi] - back[a], np.float64)
         k = len(idx)
         lower = np.concatenate([np.zeros(k), np.full(k, lo), np.full(k, 0.5 * sigma_samples)])
         upper = np.concatenate([np.full(k, np.inf), np.full(k, hi),
@@ -290,10 +291,12 @@ def find_returns(waves, start, dt, sigma, level, max_returns, decompose, backgro
     """The returns in a chunk's waveforms (photoelectrons per sample), as :class:`Returns`
     (:mod:`.instrument`'s detection): maxima of the matched-filtered waveform whose
     largest sample within the echo's FWHM reaches ``level``, located and sized by a
-    Gaussian through the filtered peak's three samples, and timed by the centroid of the
-    samples within three σ of it, less the background per sample (the maximum-likelihood
-    time of a Gaussian echo in shot noise); with ``decompose``, peaks closer than six σ
-    refitted as one sum of Gaussians, and a peak the refit takes to zero height dropped.
+    Gaussian through the filtered peak's three samples less the background per sample
+    (amplitude and intensity are the echo's, above the background), and timed by the
+    centroid of the samples within three σ of it, less the background (the
+    maximum-likelihood time of a Gaussian echo in shot noise); with ``decompose``, peaks
+    closer than six σ refitted as one sum of Gaussians over the record less its
+    background, and a peak the refit takes to zero height dropped.
 
     Parameters
     ----------
@@ -310,7 +313,7 @@ def find_returns(waves, start, dt, sigma, level, max_returns, decompose, backgro
     decompose : bool
         Refit overlapping peaks as a sum of Gaussians.
     background : float or (n,) numpy.ndarray
-        Background per sample, taken off before the centroid.
+        Background per sample, taken off before the sizing and the centroid.
     detect : numpy.ndarray, optional
         What ``level`` applies to (default ``waves``).
     echoes : (n, 2) numpy.ndarray, optional
@@ -338,14 +341,16 @@ def find_returns(waves, start, dt, sigma, level, max_returns, decompose, backgro
                    max_returns, p, j, f3)
     p, j, f3 = p[:k], j[:k], f3[:k]
     centre, s_e, height = np.empty(k), np.empty(k), np.empty(k)
-    size_peaks(f3, j, waves.shape[1], s, centre, s_e, height)
-    back = np.broadcast_to(np.asarray(background, np.float64), (len(waves),))[p]
-    centroids(waves, np.ascontiguousarray(back), p, centre, CENTROID_SIGMAS * s, 2)
+    back = np.ascontiguousarray(np.broadcast_to(np.asarray(background, np.float64),
+                                                (len(waves),))[p])
+    # the filter has unit area: its background is the record's, taken off before sizing
+    size_peaks(f3 - back[:, None], j, waves.shape[1], s, centre, s_e, height)
+    centroids(waves, back, p, centre, CENTROID_SIGMAS * s, 2)
     if decompose and len(p):
-        _decompose(waves, p, centre, s_e, height, s)
-        kept = height > 0.0          # a peak the sum of Gaussians took to nothing: gone
-        if not kept.all():
-            p, centre, s_e, height = p[kept], centre[kept], s_e[kept], height[kept]
+        _decompose(waves, back, p, centre, s_e, height, s)
+    kept = height > 0.0     # a peak the sum of Gaussians took to nothing (or no higher
+    if not kept.all():      # than the background): gone
+        p, centre, s_e, height = p[kept], centre[kept], s_e[kept], height[kept]
     time = start[p] + centre * dt
     return Returns(p, time, height, s_e * dt * FWHM_PER_SIGMA,
                    height * s_e * math.sqrt(2.0 * math.pi))

@@ -16,6 +16,7 @@ import math
 import warnings
 
 import numpy as np
+from scipy.special import ndtri
 
 from .._validate import check_count, check_seed
 from ..errors import ParameterError, RecordLengthWarning, user_stacklevel
@@ -119,7 +120,8 @@ def _chunk(job, sl, seed):
     fill_records(rec, (ret.pulse, np.ascontiguousarray(ret.time, np.float64), ret.amplitude,
                        ret.width, ret.intensity, ret.return_number, ret.number_of_returns,
                        _truth_reach(sensor, ret)),
-                 (sl.start, t, pattern.scan_angles_deg[sl], pattern.channels[sl]),
+                 (sl.start, t, pattern.scan_angles_deg[sl], pattern.channels[sl],
+                  _walk(sensor, pe)),
                  (origins, axis, 0.5 * SPEED_OF_LIGHT),
                  (tau, pe, cast.distance, cast.points, cast.face, shift), job.part_of)
     lit = None if len(rec) else pulses_lit(cast, pe)  # asked only where a scan is empty
@@ -134,6 +136,17 @@ def _truth_reach(sensor, ret):
     if sensor.echoes == "discrete":
         return np.full(len(ret), np.inf)
     return CENTROID_SIGMAS * np.maximum(ret.width / FWHM_PER_SIGMA, sensor.sigma)
+
+
+def _walk(sensor, pe):
+    """Each pulse's further reach (s) for a return earlier than its echo: a Geiger-mode
+    pixel's first photon comes where the echo's cumulative events per shot reach about
+    one, −Φ⁻¹(1/N) σ before its centre (N its events per shot); none in linear mode."""
+    if sensor.geiger is None:
+        return np.zeros(len(pe))
+    events = sensor.geiger.detection_efficiency * pe.sum(axis=1)
+    with np.errstate(divide="ignore"):
+        return sensor.sigma * np.maximum(0.0, -ndtri(np.minimum(1.0 / events, 0.5)))
 
 
 def _waveform_returns(job, tau, pe, seed):

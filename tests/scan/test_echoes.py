@@ -36,6 +36,30 @@ def test_a_plates_echo_carries_the_link_budget_at_normal_and_oblique_incidence()
     assert pc.info["conventions"]["radiometry"] == "power"
 
 
+#: The mean intensity's tolerance over 400 pulses of 200 photoelectrons in a background
+#: (its shot noise over the echo's ~10 samples: sd ≈ 0.1 of S a pulse, 0.005 the mean).
+BACKGROUND_MEAN_TOL = 0.02
+
+
+@pytest.mark.parametrize("b", [0.5, 5.0])
+def test_an_echos_intensity_and_amplitude_are_above_the_background(b):
+    """A user's trial: the echo was sized on its samples with the background in them, so
+    its photoelectrons read 1.057 and 1.617 of the link budget over backgrounds of 0.5
+    and 5 a sample (its timing took the background off, its size did not). Now the mean
+    intensity over 400 pulses is the link budget S = 200 (by hand) and the amplitude the
+    echo's peak per sample, S dt / (σ √(2π)), each within BACKGROUND_MEAN_TOL."""
+    dt = 0.5e-9
+    energy = 200.0 / photoelectrons_by_hand(1.0, 0.05, R0)
+    sen = sensor(pulse_energy=energy, noise=Noise(background_rate=b / dt))
+    pat = ScanPattern(np.arange(400) * 1e-4, np.tile((1.0, 0.0, 0.0), (400, 1)))
+    p = scan(scene(plate(R0)), pat, Platform.static((0, 0, 0)), sen, seed=4).points
+    p = p[np.abs(p["range"] - R0) < 0.5]                            # the echo's returns
+    assert len(p) == 400
+    assert np.mean(p["intensity"]) / 200.0 == pytest.approx(1.0, abs=BACKGROUND_MEAN_TOL)
+    peak = 200.0 * dt / (sen.sigma * math.sqrt(2 * math.pi))
+    assert np.mean(p["amplitude"]) / peak == pytest.approx(1.0, abs=BACKGROUND_MEAN_TOL)
+
+
 def test_range_precision_meets_the_cramer_rao_bound_of_a_gaussian_pulse_in_shot_noise():
     """2000 pulses on a Lambertian plate, shot noise only, ~N photoelectrons each: the
     range's standard deviation is (c/2) σ_eff / √N (σ_eff² = σ² + Δt²/12: the pulse and the
