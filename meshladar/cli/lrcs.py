@@ -22,8 +22,9 @@ __all__ = ["cmd_lrcs", "lrcs_words"]
 lrcs_words = flag_words({"ray_spacing": "--ray-spacing", "angles_deg": "--angles-deg",
                          "view_vectors": "--view-vectors", "per_part": "--per-part",
                          "bounces": "--bounces", "seed": "--seed", "views": "--views",
-                         "normals": "--normals"},
-                        ("ray_spacing", "angles_deg", "view_vectors", "per_part"))
+                         "normals": "--normals", "bounce_samples": "--bounce-samples"},
+                        ("ray_spacing", "angles_deg", "view_vectors", "per_part",
+                         "bounce_samples"))
 
 
 def _views(args, scene):
@@ -46,10 +47,13 @@ def _table(result, views):
     out = io.StringIO()
     head = ["angle_deg"] if views.ndim == 1 else ["wx", "wy", "wz"]
     parts = [] if result.per_part is None else [f"sigma_{n}" for n in result.names]
-    out.write(",".join(head + ["sigma", "dbsm"] + parts) + "\n")
+    sampled = bool(np.any(result.stderr))            # orders beyond the first, sampled
+    out.write(",".join(head + ["sigma"] + ["sigma_stderr"] * sampled + ["dbsm"] + parts)
+              + "\n")
     for i, v in enumerate(views):
         row = [f"{x:.10g}" for x in np.atleast_1d(v)]
-        row += [f"{result.values[i]:.10g}", f"{result.dbsm[i]:.10g}"]
+        row += [f"{result.values[i]:.10g}"] + [f"{result.stderr[i]:.3g}"] * sampled
+        row += [f"{result.dbsm[i]:.10g}"]
         if result.per_part is not None:
             row += [f"{x:.10g}" for x in result.per_part[i]]
         out.write(",".join(row) + "\n")
@@ -60,14 +64,17 @@ def cmd_lrcs(args) -> int:
     """Laser radar cross sections of a scene (a mesh file or a phantom) from each view:
     sigma = 4 pi x the power returned toward the receiver per unit solid angle per unit
     incident irradiance, in square scene units (a phantom's per unit height), with dBsm;
-    --per-part adds each part's share, --bounces the orders beyond the first (mesh).
+    --per-part adds each part's share, --bounces the orders beyond the first (mesh;
+    sampled: a sigma_stderr column gives each sigma's standard error, which
+    --bounce-samples lowers). --quiet prints the table alone, and nothing with -o.
 
     Parameters
     ----------
     args : argparse.Namespace
         ``scene``, ``material``, ``coating``, ``materials`` (as ``simulate``'s);
-        ``views``, ``angles_deg`` or ``view_vectors``; ``bounces``, ``per_part``,
-        ``ray_spacing``, ``seed``, ``normals``, ``output`` (CSV or None) and ``quiet``.
+        ``views``, ``angles_deg`` or ``view_vectors``; ``bounces``, ``bounce_samples``,
+        ``per_part``, ``ray_spacing``, ``seed``, ``normals``, ``output`` (CSV or None) and
+        ``quiet``.
 
     Returns
     -------
@@ -81,7 +88,8 @@ def cmd_lrcs(args) -> int:
         raise ParameterError("--normals shades a mesh's faces; a phantom's cross sections "
                              "come from its exact shapes (leave out --normals)")
     views = _views(args, scene)
-    options = {k: getattr(args, k) for k in ("ray_spacing", "seed", "normals")
+    options = {k: getattr(args, k) for k in ("ray_spacing", "seed", "normals",
+                                             "bounce_samples")
                if getattr(args, k) is not None}
     result = lrcs(scene, views, bounces=args.bounces, per_part=args.per_part, **options)
     text = _table(result, views)
@@ -91,5 +99,6 @@ def cmd_lrcs(args) -> int:
         print(f"# laser radar cross section, {result.units} (the scene's length unit: m^2 "
               f"and dBsm for metres), {result.bounces} "
               f"bounce{'s' if result.bounces > 1 else ''}; {result.convention}")
-        print(text, end="")
+    if not args.quiet or args.output is None:     # the table is the result: --quiet
+        print(text, end="")                          # keeps it where it is not written
     return 0

@@ -380,6 +380,9 @@ def _lrcs(sub, commands):
                     help="N view directions spread evenly over the sphere (meshes)")
     lr.add_argument("--bounces", type=bounces, default=1,
                     help="orders of bounces, 1-8 or auto (meshes; default: %(default)s)")
+    lr.add_argument("--bounce-samples", type=positive_int, default=None, metavar="N",
+                    help="sampled paths per view and order beyond the first (the "
+                         "sigma_stderr column falls as 1/sqrt(N); default: 32768)")
     lr.add_argument("--per-part", action="store_true",
                     help="each part's cross section too (its single bounce and the paths "
                          "leaving from it; default: off)")

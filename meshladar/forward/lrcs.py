@@ -19,19 +19,21 @@ import numpy as np
 
 from .._validate import check_choice, check_count, unit_vectors
 from ..brdf import Lambertian
-from ..errors import MeshladarWarning, ParameterError
+from ..errors import MeshladarWarning, ParameterError, user_stacklevel
 from ..ladar import Ladar
 from ..meshes import MeshPart
 from ..plotting import plot
 from ..scene import Scene
 from ..sinogram import Sinogram
 from . import simulate
-from .orders import MAX_BOUNCES, check_bounces
+from .orders import MAX_BOUNCE_SAMPLES, MAX_BOUNCES, check_bounces
 
-__all__ = ["CrossSection", "LRCS_BINS", "CONVENTION", "lrcs"]
+__all__ = ["CrossSection", "LRCS_BINS", "CONVENTION", "STDERR_SHARE", "lrcs"]
 
 #: Range bins of the profile by default.
 LRCS_BINS = 256
+#: A σ whose standard error (its sampled orders') exceeds this share of it is warned of.
+STDERR_SHARE = 0.05
 #: The convention every cross section states.
 CONVENTION = ("sigma = 4 pi x power toward the receiver per unit solid angle per unit "
               "incident irradiance (received-power radiometry, plane wave, far field)")
@@ -60,6 +62,10 @@ class CrossSection:
         one in millimetres) or ``"unit^2 per unit height"`` (2-D scenes).
     convention : str
         :data:`CONVENTION`.
+    stderr : (n_views,) numpy.ndarray
+        The standard error of each σ from the sampled orders beyond the first (Monte
+        Carlo paths; ``bounce_samples`` sets their number): 0 where only the exact single
+        bounce is summed.
     """
 
     values: np.ndarray
@@ -69,6 +75,7 @@ class CrossSection:
     bounces: int
     units: str
     convention: str = CONVENTION
+    stderr: np.ndarray | None = None
 
     def plot(self, *, floor_db=60.0):
         """The signature over the views and the brightest view's range-resolved cross
@@ -133,6 +140,24 @@ def _ladar(scene, views, bounces, n_bins, bistatic):
     pad = max(0.5 * (b - a) / n_bins, 1e-9 * max(abs(a), abs(b), size, 1e-300))
     edges = np.linspace(a - pad, b + pad, n_bins + 1)
     return Ladar(kw.get("angles_deg"), view_vectors=kw.get("view_vectors"), bin_edges=edges)
+
+
+def _check_stderr(values, stderr, samples):
+    """Warn where a σ's standard error passes :data:`STDERR_SHARE` of it, with the
+    bounce_samples that would bring the worst view's within it (the error falls as
+    1/√N)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        share = np.where(values > 0, stderr / values, 0.0)
+    worst = int(np.argmax(share))
+    if share[worst] > STDERR_SHARE:
+        need = min(int(np.ceil(samples * (share[worst] / STDERR_SHARE) ** 2)),
+                   MAX_BOUNCE_SAMPLES)
+        then = share[worst] * np.sqrt(samples / need)
+        warnings.warn(f"the sampled orders beyond the first leave sigma uncertain: a "
+                      f"standard error of {100 * share[worst]:.3g} % in view {worst} "
+                      f"({samples} paths a view and order); bounce_samples={need} brings it "
+                      f"to {100 * then:.2g} %", MeshladarWarning,
+                      stacklevel=user_stacklevel())
 
 
 def _default_spacing(scene, n_bins, options):
@@ -254,5 +279,7 @@ def lrcs(scene, views, *, model=None, bounces=1, per_part=False, n_bins=LRCS_BIN
     shares = _shares(scene, ladar, model, sino, options, len(names)) if per_part else None
     units = "unit^2" if scene.is_mesh or model == "mesh" and options.get("mode") == "3d" \
         else "unit^2 per unit height"
+    stderr = 4.0 * np.pi * np.asarray(sino.info.get("view_stderr", np.zeros(ladar.n_views)))
+    _check_stderr(profile.values.sum(axis=1), stderr, sino.info.get("bounce_samples"))
     return CrossSection(profile.values.sum(axis=1), shares, profile, names,
-                        int(sino.info.get("bounces", 1)), units)
+                        int(sino.info.get("bounces", 1)), units, stderr=stderr)

@@ -120,7 +120,8 @@ def add_bounces(scene, ladar, sino, bounces, samples, *, tol=None, seed=None, se
         ``info["order_totals"]`` and ``info["order_stderr"]`` each order's total over
         the sinogram and its standard error (order 1 exact: 0), ``info["bounce_samples"]``
         the paths per view and order used, ``info["bounce_part_totals"]`` (n_views,
-        n_parts) the orders beyond the first per part of each path's last surface (when
+        n_parts) the orders beyond the first per part of each path's last surface, and
+        ``info["view_stderr"]`` (n_views,) the standard error of each view's total (when
         sampled).
 
     Warns
@@ -156,8 +157,10 @@ def add_bounces(scene, ladar, sino, bounces, samples, *, tol=None, seed=None, se
     out = _with_orders(sino, values, keep + 1, [first, *totals[:keep]],
                        [0.0, *errors[:keep]])
     shares = orders.per_part[:keep].sum(axis=0)
+    views = np.sqrt((orders.stderr[:keep] ** 2).sum(axis=(0, 2)))
     return replace(out, info=dict(out.info, bounce_samples=orders.samples,
-                                  bounce_part_totals=shares.tolist()))
+                                  bounce_part_totals=shares.tolist(),
+                                  view_stderr=views.tolist()))
 
 
 def _sampled(scene, ladar, sino, plan, tol, seed, sensor):

@@ -177,3 +177,28 @@ def test_the_default_spacing_is_the_same_for_every_order():
         assert s.profile.info["order_totals"][0] == pytest.approx(
             first[0].values[0] / (4 * np.pi), rel=1e-12)
     assert first[0].profile.info["ray_spacing"] == pytest.approx(1.3 / 256)   # R from x = 0.3
+
+
+def test_a_sampled_sigmas_standard_error_describes_its_spread_and_is_warned_of():
+    """CrossSection.stderr (0 for one bounce) against the spread of σ over 12 seeds (ratio
+    in [0.5, 2]: the sampling error of a standard deviation from 12 draws is ~20 %); with
+    few paths the error passes STDERR_SHARE and a warning names the bounce_samples that
+    brings it within, which then does not warn."""
+    plates = [MeshPart([[0, 0, 0], [1, 0, 0], [1, 0, 0.7], [0, 0, 0.7]], [[0, 1, 2], [0, 2, 3]],
+                       0, "a"),
+              MeshPart([[0, 0, 0], [0, 0, 0.7], [0, 1, 0.7], [0, 1, 0]], [[0, 1, 2], [0, 2, 3]],
+                       0, "b")]
+    scene = ml.Scene.from_parts(plates, [Lambertian(0.9)])
+    runs = [ml.lrcs(scene, [45.0], ray_spacing=1e-2, bounces=2, bounce_samples=4096, seed=s)
+            for s in range(12)]
+    spread = np.std([r.values[0] for r in runs], ddof=1)
+    assert 0.5 < np.mean([r.stderr[0] for r in runs]) / spread < 2.0
+    with pytest.warns(ml.errors.MeshladarWarning, match=r"standard error of [\d.]+ % .*"
+                                                        r"bounce_samples=(\d+)") as caught:
+        ml.lrcs(scene, [45.0], ray_spacing=1e-2, bounces=2, bounce_samples=16, seed=0)
+    import re
+    advised = int(re.search(r"bounce_samples=(\d+)", str(caught[0].message)).group(1))
+    s = ml.lrcs(scene, [45.0], ray_spacing=1e-2, bounces=2, bounce_samples=advised, seed=0)
+    assert s.stderr[0] <= 1.2 * ml.forward.lrcs.STDERR_SHARE * s.values[0]
+    with pytest.warns(ml.errors.BounceWarning):                   # one bounce: exact
+        assert not ml.lrcs(scene, [45.0], ray_spacing=1e-2).stderr.any()

@@ -21,7 +21,7 @@ def _dihedral(coating):
 
 def test_views_about_z_draw_a_polar_signature():
     cs = ml.lrcs(_dihedral(ml.SandfordRobertson(0.1, 0.5, 0.3, 0.1)), np.arange(0, 360, 10.0),
-                 ray_spacing=1e-2, bounces=2, bounce_samples=1024, seed=0)
+                 ray_spacing=1e-2, bounces=2, bounce_samples=8192, seed=0)
     fig = cs.plot(floor_db=30.0)
     polar, profile = fig.axes
     assert polar.name == "polar"
