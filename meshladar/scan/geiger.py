@@ -31,8 +31,9 @@ import numba
 import numpy as np
 
 from .._validate import check_count, check_real
+from ..errors import ParameterError
 
-__all__ = ["GeigerMode", "fire", "coates", "blind_shots"]
+__all__ = ["GeigerMode", "fire", "coates", "blind_shots", "FIRE_BLOCK"]
 
 
 @dataclass(frozen=True)
@@ -57,8 +58,13 @@ class GeigerMode:
     def __post_init__(self):
         object.__setattr__(self, "shots", check_count("shots", self.shots, high=10 ** 6))
         if self.dead_time != math.inf:
-            object.__setattr__(self, "dead_time", check_real(
-                "dead_time", self.dead_time, low=0.0, low_open=True, high=1.0))
+            try:
+                check_real("dead_time", self.dead_time, low=0.0, low_open=True, high=1.0)
+            except ParameterError:
+                raise ParameterError(f"dead_time must be in (0, 1] s, or inf (a pixel that "
+                                     f"fires once per shot, the default); got "
+                                     f"{self.dead_time!r}") from None
+            object.__setattr__(self, "dead_time", float(self.dead_time))
         object.__setattr__(self, "detection_efficiency", check_real(
             "detection_efficiency", self.detection_efficiency, low=0.0, low_open=True,
             high=1.0))
@@ -90,9 +96,15 @@ class GeigerMode:
                 "detection_efficiency": self.detection_efficiency}
 
 
+#: Shot-samples (rows × shots × samples) a compiled call of :func:`fire` takes at most
+#: (about 0.1 s here): between calls Ctrl-C and SIGTERM are heard.
+FIRE_BLOCK = 1 << 24
+
+
 @numba.njit(cache=True)
 def _fire(lam, shots, dead, seed, out):                 # pragma: no cover - compiled
-    np.random.seed(seed)
+    if seed >= 0:                    # the stream's start; a later block continues it
+        np.random.seed(seed)
     n, ns = lam.shape
     for p in range(n):
         for _ in range(shots):
@@ -127,15 +139,21 @@ def fire(lam, shots, dead, seed):
     dead : int
         Dead samples after a detection (0: one detection per shot).
     seed : int
-        The compiled generator's seed.
+        The compiled generator's seed (≥ 0). The records are drawn in blocks of at most
+        :data:`FIRE_BLOCK` shot-samples, one stream (the same draws as one block), so an
+        interrupt is heard between blocks.
 
     Returns
     -------
     (n, samples) numpy.ndarray
         Detections per sample, int64.
     """
+    lam = np.ascontiguousarray(lam, np.float64)
     out = np.zeros(lam.shape, np.int64)
-    _fire(np.ascontiguousarray(lam, np.float64), int(shots), int(dead), int(seed), out)
+    rows = max(1, FIRE_BLOCK // max(1, int(shots) * lam.shape[1]))
+    for lo in range(0, len(lam), rows):    # one stream, in blocks: the same draws
+        _fire(lam[lo:lo + rows], int(shots), int(dead), int(seed) if lo == 0 else -1,
+              out[lo:lo + rows])
     return out
 
 

@@ -123,3 +123,30 @@ def test_a_saturating_echo_walks_early_as_the_guide_says():
     assert first["true_range"][0] - first["range"][0] > 1.0       # its truth: the face's
     assert first["true_part"][0] == 0 and first["true_range"][0] == pytest.approx(6.0, abs=0.01)
     assert first["range"][1] == pytest.approx(first["true_range"][1], abs=0.05)
+
+
+def test_the_histograms_are_drawn_in_blocks_of_one_stream(monkeypatch):
+    """A user's trial: a flash frame of 10^6 shots a pixel ran as one compiled call that
+    no Ctrl-C or SIGTERM could stop (17 s after SIGTERM for 16 x 16 pixels, ten minutes
+    and more for 128 x 128). The records are drawn in blocks (the interpreter runs between
+    them) from one stream: the same histograms whatever the block."""
+    from meshladar.scan import geiger
+
+    lam = np.random.default_rng(0).uniform(0.0, 0.05, (37, 60))
+    whole = geiger.fire(lam, 500, 3, 7)
+    calls = []
+    original = geiger._fire
+
+    def spy(*args):
+        calls.append(len(args[0]))
+        return original(*args)
+
+    monkeypatch.setattr(geiger, "_fire", spy)
+    monkeypatch.setattr(geiger, "FIRE_BLOCK", 5 * 500 * 60)
+    assert np.array_equal(geiger.fire(lam, 500, 3, 7), whole)
+    assert calls == [5] * 7 + [2]
+
+
+def test_a_dead_time_out_of_range_names_inf_too():
+    with pytest.raises(ValueError, match=r"dead_time must be in \(0, 1\] s, or inf .*got 0"):
+        GeigerMode(dead_time=0)
