@@ -341,6 +341,10 @@ def _scan(sub, commands):
                     help="points file (.las, .laz, .h5; .npz needs numpy alone)")
     sc.add_argument("--waveforms", default=None, metavar="FILE.h5",
                     help="also write every pulse's waveform to HDF5 (default: not written)")
+    sc.add_argument("--run-dir", default=None, metavar="DIR",
+                    help="resumable run folder: finished chunks are kept there, and the "
+                         "same command run again computes only the rest, to the same "
+                         "points (not with --waveforms; default: none)")
     sc.add_argument("--profile", choices=("gaussian", "tophat"), default=None,
                     help="the beam's profile (not with a flash pattern) (default: "
                          f"{BEAM_DEFAULTS['profile']})")

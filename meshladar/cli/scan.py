@@ -26,7 +26,7 @@ from ..errors import ParameterError
 from ..noise import Noise
 from ..scan.formats import FORMATS, check_writable
 from ..waveforms import GaussianPulse
-from .checks import check_output
+from .checks import check_outdir, check_output
 from .simulate import load_scene
 from .words import flag_words
 
@@ -200,7 +200,8 @@ def _trajectory(text):
 
 
 def _check_discrete(args):
-    """``--discrete`` makes no records: the flags that need them are refused."""
+    """``--discrete`` makes no records: the flags that need them are refused; and
+    ``--noise`` with ``--geiger-shots``, whose detections are always drawn."""
     given = [f for f, v in (("--geiger-shots", args.geiger_shots), ("--noise", args.noise),
                             ("--background-rate", args.background_rate),
                             ("--dark-rate", args.dark_rate), ("--cfar", args.cfar),
@@ -208,6 +209,10 @@ def _check_discrete(args):
     if args.discrete and given:
         raise ParameterError(f"--discrete makes no waveform records: {given[0]} does not "
                              "apply (leave out --discrete for waveforms)")
+    if args.noise and args.geiger_shots:
+        raise ParameterError("--noise does not apply with --geiger-shots: a Geiger-mode "
+                             "pixel's detections are always drawn, photon by photon "
+                             "(leave out --noise)")
 
 
 def _check_beam(args, flash):
@@ -258,9 +263,14 @@ def _check_outputs(args):
     """-o and --waveforms: writable files of known formats, never an input, never one
     file (compared as real paths: links resolved)."""
     found = _trajectory(args.platform)
-    inputs = [args.scene, args.materials] + ([found[0]] if found else [])
-    check_output(args.output, POINT_SUFFIXES, inputs)
+    inputs = [args.scene, args.materials, args.run_dir] + ([found[0]] if found else [])
+    check_output(args.output, POINT_SUFFIXES, inputs, run_dir=args.run_dir)
     check_writable(args.output, "-o", folder=False)        # a missing folder: made
+    if args.run_dir is not None:
+        if args.waveforms is not None:
+            raise ParameterError("--waveforms streams the records as the scan runs; a "
+                                 "--run-dir run resumes from its chunks: give one of them")
+        check_outdir(args.run_dir, "--run-dir")
     if args.waveforms is not None:
         check_output(args.waveforms, HDF5_SUFFIXES, inputs, "--waveforms",
                      others=[("-o", args.output)])
@@ -276,7 +286,9 @@ def cmd_scan(args) -> int:
     ----------
     args : argparse.Namespace
         ``scene``, ``material``, ``coating``, ``materials`` (as ``simulate``'s),
-        ``pattern`` and ``platform`` (module docstring), the sensor's flags, ``output``,
+        ``pattern`` and ``platform`` (module docstring), the sensor's flags, ``run_dir``
+        (a resumable run folder: the same command run again computes only the chunks it
+        lacks), ``output``,
         ``waveforms``, ``seed`` and ``quiet``.
 
     Returns
@@ -298,7 +310,8 @@ def cmd_scan(args) -> int:
         if path is not None:
             os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     cloud = scanning.scan(scene, pattern, platform, sensor, seed=args.seed,
-                          waveforms_file=args.waveforms, progress=not args.quiet)
+                          waveforms_file=args.waveforms, progress=not args.quiet,
+                          run_dir=args.run_dir)
     writer = FORMATS[os.path.splitext(args.output)[1].lower()][1]
     getattr(scanning, writer)(args.output, cloud)
     if not args.quiet:

@@ -138,8 +138,8 @@ def _direction(azimuth, elevation):
     return np.stack([ce * np.cos(azimuth), ce * np.sin(azimuth), np.sin(elevation)], axis=1)
 
 
-def _times(pulse_rate, n):
-    rate = check_real("pulse_rate", pulse_rate, low=0.0, low_open=True, high=1e12)
+def _times(pulse_rate, n, name="pulse_rate"):
+    rate = check_real(name, pulse_rate, low=0.0, low_open=True, high=1e12)
     if n > MAX_PULSES:
         raise ParameterError(f"the pattern would hold {n} pulses, above {MAX_PULSES}: "
                              "shorten duration or lower pulse_rate")
@@ -320,7 +320,7 @@ def flash(rows, columns, *, ifov_deg, frame_rate=1.0, frames=1):
     pitch = math.tan(math.radians(ifov))        # pixels evenly spaced on the focal plane
     d = np.stack([np.ones(r * c), ((c - 1) / 2 - j) * pitch, ((r - 1) / 2 - i) * pitch], axis=1)
     az = np.arctan2(d[:, 1], 1.0)
-    t = np.repeat(_times(frame_rate, k), r * c)
+    t = np.repeat(_times(frame_rate, k, "frame_rate"), r * c)
     return ScanPattern(t, np.tile(d, (k, 1)), channels=np.tile(i * c + j, k).astype(np.int32),
                        scan_angles_deg=np.tile(np.degrees(az), k), kind="flash", shape=(r, c),
                        ifov_deg=ifov)

@@ -49,10 +49,19 @@ _TIME_SLACK = 1e-9
 _VELOCITY_STEP = 1e-6
 
 
+#: The largest angle an attitude or boresight takes, degrees (angles wrap; beyond this
+#: a float64 angle keeps less than 1e-6 degree of precision).
+MAX_ANGLE_DEG = 1e9
+
+
 def _triple(name, value, shape=(3,)):
     a = finite_array(name, value).astype(np.float64)
     if a.shape != shape:
         raise ParameterError(f"{name} must have shape {shape}; got {a.shape}")
+    if name.endswith("_deg") and np.any(np.abs(a) > MAX_ANGLE_DEG):
+        raise ParameterError(f"{name} must be angles within ±{MAX_ANGLE_DEG:g} degrees "
+                             f"(they wrap; larger ones lose their precision); got "
+                             f"{float(a[np.abs(a) > MAX_ANGLE_DEG][0])!r}")
     return a
 
 

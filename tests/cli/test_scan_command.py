@@ -157,6 +157,12 @@ def test_a_gps_time_trajectory_file_takes_its_time_offset(tmp_path, capsys):
     (["--geiger-shots", "10", "--discrete"],
      "--discrete makes no waveform records: --geiger-shots does not apply"),
     (["--discrete", "--waveforms", "w.h5"], "--discrete .* --waveforms does not apply"),
+    (["--noise", "--geiger-shots", "10"],                          # (a user's trial)
+     "--noise does not apply with --geiger-shots: .* always drawn"),
+    (["--pattern", "flash rows=2 columns=2 ifov_deg=0.1 frame_rate=inf frames=2"],
+     r"--pattern: frame_rate must be finite and in \(0, 1e\+12\]; got inf"),
+    (["--platform", "static position=0,0,0 attitude_deg=0,1e308,0"],
+     r"--platform: attitude_deg must be angles within ±1e\+09 degrees .*got 1e\+308"),
     (["--tol", "1e-9"], "--tol 1e-09 needs more than 4096 sub-rays"),
     (["--pattern", "rotating elevations_deg=0 rotation_hz=10 pulse_rate=1e3 duration=0.02 "
                    "duration=0.01"], "--pattern: duration is given twice"),
@@ -196,3 +202,22 @@ def test_missing_output_folders_are_made_as_for_every_command(tmp_path, capsys):
     assert capsys.readouterr().err.startswith("meshladar: error: -o: ")
     assert main(argv + ["-o", str(tmp_path / "d" / "p.las"), "--sample-rate", "1e6"]) == 2
     assert not (tmp_path / "d").exists()
+
+
+def test_a_run_folder_resumes_a_scan_from_the_command_line(tmp_path, capsys, monkeypatch):
+    """A user's trial: scan had no --run-dir (resuming was the API's alone). The same
+    command run again over a finished folder computes no chunk and writes the same
+    points; --run-dir with --waveforms is refused before any work."""
+    import meshladar.scan.run as scan_run
+
+    argv = ["scan", _room(tmp_path), "--quiet", "--pattern", _OSC, "--platform",
+            "static position=0,0,0", "--noise", "--background-rate", "1e7",
+            "--run-dir", str(tmp_path / "run")]
+    assert main(argv + ["-o", str(tmp_path / "a.npz")]) == 0
+    assert (tmp_path / "run" / "manifest.json").exists()
+    monkeypatch.setattr(scan_run, "_chunk", lambda *a: pytest.fail("a chunk recomputed"))
+    assert main(argv + ["-o", str(tmp_path / "b.npz")]) == 0
+    a, b = np.load(tmp_path / "a.npz"), np.load(tmp_path / "b.npz")
+    assert np.array_equal(a["points"], b["points"]) and len(a["points"]) > 0
+    assert main(argv + ["-o", str(tmp_path / "c.npz"), "--waveforms", "w.h5"]) == 2
+    assert "give one of them" in capsys.readouterr().err
