@@ -19,16 +19,17 @@ sub-rays' photoelectron-weighted shift.
 from __future__ import annotations
 
 import warnings
+from dataclasses import replace
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..errors import MeshladarWarning, ParameterError
+from ..errors import MeshladarWarning, ParameterError, user_stacklevel
 from ..motion import Motion
 from ..scene import Scene
 from .cast import Cast, cast_chunk
 
-__all__ = ["moving_parts", "cast_moving", "doppler"]
+__all__ = ["moving_parts", "cast_moving", "doppler", "at_wavelength"]
 
 
 class _MovingParts:
@@ -50,6 +51,35 @@ def _part_index(scene, key):
         return names.index(key)
     raise ParameterError(f"motions: {key!r} is not a part of the scene; its parts are "
                          f"0 to {len(names) - 1}, named {names[:8]}")
+
+
+def at_wavelength(motions, wavelength):
+    """``motions`` (checked by :func:`moving_parts`) at the sensor's ``wavelength``: a
+    scan's Doppler shifts are the sensor's (2 v·u / λ), whatever a Motion's own (which is
+    :func:`meshladar.simulate`'s and ``resolve``'s); a Motion whose wavelength is not the
+    sensor's is warned of.
+
+    Parameters
+    ----------
+    motions : dict or None
+        ``{part: Motion}``.
+    wavelength : float
+        The sensor's, m.
+
+    Returns
+    -------
+    dict or None
+        The motions with the sensor's wavelength (what the scan records).
+    """
+    if not motions:
+        return motions
+    for part, m in motions.items():
+        if m.wavelength != wavelength:
+            warnings.warn(f"motions[{part!r}] has wavelength {m.wavelength:g} m; a scan's "
+                          f"Doppler shifts are at its sensor's, {wavelength:g} m (a "
+                          "Motion's own wavelength is simulate's and resolve's)",
+                          MeshladarWarning, stacklevel=user_stacklevel())
+    return {part: replace(m, wavelength=wavelength) for part, m in motions.items()}
 
 
 def moving_parts(scene, motions):

@@ -37,7 +37,7 @@ from .files import WaveformSink
 from .footprint import check_flash_beam, describe_pixels, pixel_offsets
 from .geiger import blind_shots, coates, fire
 from .instrument import FWHM_PER_SIGMA, ScanSensor
-from .moving import cast_moving, doppler, moving_parts
+from .moving import at_wavelength, cast_moving, doppler, moving_parts
 from .patterns import ScanPattern
 from .platforms import Platform
 from .points import CONVENTIONS, POINT_DTYPE, PointCloud
@@ -330,6 +330,7 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
     """
     _check(scene, pattern, platform, sensor)
     split, seed = moving_parts(scene, motions), check_seed("seed", seed)
+    motions = at_wavelength(motions, sensor.wavelength)          # as recorded
     _check_keep(keep_waveforms, run_dir, sensor)
     foot = _footprint(pattern, sensor)
     per, slots = _chunk_pulses(pattern, chunk_pulses, len(foot[0])), sensor.detector.max_returns

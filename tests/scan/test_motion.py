@@ -38,6 +38,19 @@ def test_a_part_closing_on_the_sensor_blurs_its_range_and_shifts_by_2v_over_lamb
     assert behind.points["true_part"][0] == 1 and behind.points["doppler"][0] == 0.0
 
 
+def test_the_shift_is_at_the_sensors_wavelength_and_another_motions_is_warned_of():
+    """A user's trial: a Motion's wavelength other than the sensor's was ignored without
+    a word (the shift is the sensor's: 2v/λ at 1.55 µm) and recorded as the motion's."""
+    sc = scene(plate(R0, half=5.0))
+    sen = sensor(wavelength=1.55e-6)
+    with pytest.warns(ml.errors.MeshladarWarning, match=r"motions\[0\] has wavelength "
+                                                        r"1\.064e-06 m; .* 1\.55e-06 m"):
+        pc = scan(sc, _along_x(3), Platform.static((0, 0, 0)), sen,
+                  motions={0: Motion(velocity=(-V, 0.0, 0.0))})
+    np.testing.assert_allclose(pc.points["doppler"], 2 * V / 1.55e-6, rtol=1e-6)
+    assert pc.info["motions"]["0"]["wavelength_m"] == 1.55e-6
+
+
 def test_a_platform_closing_on_a_static_plate_sees_the_same_shift():
     pc = scan(scene(plate(R0)), _along_x(10), Platform.moving((0, 0, 0), (V, 0, 0)),
               sensor())
