@@ -287,7 +287,8 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
         Transmitter, receiver, noise and detector.
     motions : dict, optional
         ``{part (index or name): meshladar.motion.Motion}``: parts that move rigidly
-        while the scan runs (:mod:`meshladar.scan.moving`: motion blur and Doppler).
+        while the scan runs (:mod:`meshladar.scan.moving`: motion blur and Doppler, at
+        the sensor's wavelength).
     seed : int or None
         The noise's seed (default 0): the chunk from pulse k draws from ``[seed, k]`` (a
         run of its records, :data:`RECORD_SAMPLES`, from ``[seed, k, the run's first]``).
@@ -301,10 +302,9 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
         ``run_dir`` or ``executor``.
     chunk_pulses : int, optional
         Pulses per chunk (default :data:`CHUNK_RAYS` sub-rays' worth; a flash's: whole frames).
-    jobs : int, optional
-        Threads (default: one per core for long scans, as :func:`meshladar.stream.run_chunks`).
-    executor : concurrent.futures.Executor, optional
-        Any executor (a Dask cluster's: :func:`meshladar.stream.dask_executor`).
+    jobs, executor : optional
+        Threads (default: one per core for long scans, as :func:`meshladar.stream.run_chunks`),
+        or any executor (a Dask cluster's: :func:`meshladar.stream.dask_executor`).
     progress : bool
         A progress bar over the pulses, on a terminal only (default False).
     run_dir : str or os.PathLike, optional
@@ -318,8 +318,9 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
 
     Warns
     -----
-    RecordLengthWarning, EmptyScanWarning
-        A fixed record cut echoes; no return was recorded (each says why and what helps).
+    RecordLengthWarning, EmptyScanWarning, MeshladarWarning
+        A fixed record cut echoes; no return was recorded (each says why and what helps);
+        a Motion's wavelength is not the sensor's.
 
     Raises
     ------
