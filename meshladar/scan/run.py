@@ -286,9 +286,8 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
     sensor : ScanSensor
         Transmitter, receiver, noise and detector.
     motions : dict, optional
-        ``{part (index or name): meshladar.motion.Motion}``: parts that move rigidly
-        while the scan runs (:mod:`meshladar.scan.moving`: motion blur and Doppler, at
-        the sensor's wavelength).
+        ``{part (index or name): meshladar.motion.Motion}``: parts moving rigidly in the
+        scan (:mod:`meshladar.scan.moving`: blur, Doppler at the sensor's wavelength).
     seed : int or None
         The noise's seed (default 0): the chunk from pulse k draws from ``[seed, k]`` (a
         run of its records, :data:`RECORD_SAMPLES`, from ``[seed, k, the run's first]``).
@@ -296,10 +295,9 @@ def scan(scene, pattern, platform, sensor, *, motions=None, seed=0, keep_wavefor
         Return every pulse's record (memory: pulses × samples × 8 bytes); with
         ``run_dir`` the sensor's ``samples`` must fix their length.
     waveforms_file : str or os.PathLike, optional
-        An HDF5 file that every chunk's records stream into as it finishes (they are
-        not kept in memory), completed with the points and parameters at the end:
-        :func:`~meshladar.scan.files.read_hdf5` reads it. Not with ``keep_waveforms``,
-        ``run_dir`` or ``executor``.
+        An HDF5 file every chunk's records stream into (not kept in memory), with the
+        points and parameters at the end (:func:`~meshladar.scan.files.read_hdf5`). Not
+        with ``keep_waveforms``, ``run_dir`` or ``executor``.
     chunk_pulses : int, optional
         Pulses per chunk (default :data:`CHUNK_RAYS` sub-rays' worth; a flash's: whole frames).
     jobs, executor : optional
