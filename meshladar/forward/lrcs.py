@@ -61,7 +61,10 @@ class CrossSection:
         ``"unit^2"`` (the scene's length unit squared: m² for a scene in metres, mm² for
         one in millimetres) or ``"unit^2 per unit height"`` (2-D scenes).
     convention : str
-        :data:`CONVENTION`.
+        :data:`CONVENTION`, then the geometry's: a mesh's normals (flat or smooth) and
+        faces (two-sided: lit from either side, or one-sided), or a 2-D scene's exact
+        shapes; and geometric optics (no diffraction: a mirror plate's σ is 4π F(0) A,
+        its coating's peak, not the 4π A²/λ² of physical optics).
     stderr : (n_views,) numpy.ndarray
         The standard error of each σ from the sampled orders beyond the first (Monte
         Carlo paths; ``bounce_samples`` sets their number): 0 where only the exact single
@@ -140,6 +143,16 @@ def _ladar(scene, views, bounces, n_bins, bistatic):
     pad = max(0.5 * (b - a) / n_bins, 1e-9 * max(abs(a), abs(b), size, 1e-300))
     edges = np.linspace(a - pad, b + pad, n_bins + 1)
     return Ladar(kw.get("angles_deg"), view_vectors=kw.get("view_vectors"), bin_edges=edges)
+
+
+def _convention(scene, model, sino, options):
+    """:data:`CONVENTION` and the geometry's (:class:`CrossSection`)."""
+    if model == "mesh":
+        shape = (f"{sino.info.get('normals', 'flat')} normals, "
+                 f"{options.get('back_faces', 'two-sided')} faces")
+    else:
+        shape = "exact shapes" if model == "analytic" else "rasterised shapes"
+    return f"{CONVENTION}; {shape}; geometric optics (no diffraction)"
 
 
 def _check_stderr(values, stderr, samples):
@@ -282,4 +295,5 @@ def lrcs(scene, views, *, model=None, bounces=1, per_part=False, n_bins=LRCS_BIN
     stderr = 4.0 * np.pi * np.asarray(sino.info.get("view_stderr", np.zeros(ladar.n_views)))
     _check_stderr(profile.values.sum(axis=1), stderr, sino.info.get("bounce_samples"))
     return CrossSection(profile.values.sum(axis=1), shares, profile, names,
-                        int(sino.info.get("bounces", 1)), units, stderr=stderr)
+                        int(sino.info.get("bounces", 1)), units,
+                        _convention(scene, model, sino, options), stderr)

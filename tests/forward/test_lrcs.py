@@ -202,3 +202,19 @@ def test_a_sampled_sigmas_standard_error_describes_its_spread_and_is_warned_of()
     assert s.stderr[0] <= 1.2 * ml.forward.lrcs.STDERR_SHARE * s.values[0]
     with pytest.warns(ml.errors.BounceWarning):                   # one bounce: exact
         assert not ml.lrcs(scene, [45.0], ray_spacing=1e-2).stderr.any()
+
+
+def test_the_convention_states_the_geometry_and_the_optics():
+    """A user's trial: the convention stopped at the radiometry; a glint plate's σ is
+    4π F(0) A (geometric optics), not physical optics' 4π A²/λ², and a plate seen from
+    behind gives the same σ (faces lit from either side): both said now, and the normals."""
+    plate = MeshPart(np.array([[0, -1, 0], [0, 1, 0], [0, 1, 3], [0, -1, 3.0]]),
+                     [[0, 1, 2], [0, 2, 3]], 0, "plate")
+    scene = ml.Scene.from_parts([plate], [Lambertian(RHO)])
+    s = ml.lrcs(scene, [0.0, 180.0], normals="smooth")
+    assert s.values[0] == pytest.approx(s.values[1], rel=PLATE_DEFAULT_RTOL)   # the grids
+    assert s.convention.startswith(ml.forward.lrcs.CONVENTION)
+    assert s.convention.endswith("; smooth normals, two-sided faces; geometric optics "
+                                 "(no diffraction)")
+    disk = ml.Scene([ml.Disk((0.0, 0.0), 0.5, Lambertian(RHO))])
+    assert "; exact shapes;" in ml.lrcs(disk, [0.0]).convention
