@@ -10,7 +10,7 @@ from .. import __version__
 from ..forward.options import MODELS, OPTIONS, SENSOR_OPTIONS
 from ..reconstruct import FILTERS
 from .argtypes import (KIND_TYPES, MergeCoatings, angle_list, bounce_count, bounces,
-                       coatings, nonnegative_float, nonnegative_int, positive_float,
+                       coatings, nonnegative_float, nonnegative_int, pair, positive_float,
                        positive_int, unit_fraction, window_size)
 from .argv import Parser
 from .helptext import description
@@ -158,6 +158,9 @@ def _reconstruct(sub, commands):
                           "(default: 0)")
     rec.add_argument("--extent", type=positive_float, default=None,
                      help="half-width of the image (default: the bins' reach)")
+    rec.add_argument("--center", type=pair, default=None, metavar="X,Y",
+                     help="centre of the image (views about z; default: 0,0, the axis "
+                          "the views turn about)")
     rec.add_argument("--filter", choices=FILTERS, default=None,
                      help="FBP filter (default: ramp)")
     rec.add_argument("--log", action="store_true",

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import os
+import re
 import warnings
 
 from .. import io, plotting
@@ -91,11 +92,16 @@ def cmd_reconstruct(args) -> int:
     # no --extent: the API's default (the bins' reach about the origin), the same grid as
     # meshladar.fbp(sino) and meshladar.reconstruct.volumes.fbp3d(sino)
     if not sino.planar:
+        if args.center is not None:
+            raise ParameterError("--center places the image of views about the z axis; 3-D "
+                                 "views are inverted on a cube about the origin (leave out "
+                                 "--center)")
         return _reconstruct_3d(args, sino, args.extent, data)
     if args.smooth is not None:
         raise ParameterError("--smooth applies to 3-D views (fbp3d); this sinogram's views "
                              "are about the z axis (use --filter)")
-    image = fbp(sino, size=args.size or 512, extent=args.extent, filter=args.filter or "ramp")
+    image = fbp(sino, size=args.size or 512, extent=args.extent, filter=args.filter or "ramp",
+                center=args.center or (0.0, 0.0))
     extent = image.extent
     # the quick look's symmetric scale, log input labelled as such, and a centre slice
     prep = sino.info.get("preprocess")
@@ -181,11 +187,28 @@ _NOISE_FIELDS = {"speckle_cells": "speckle_cells", "background_rate": "backgroun
 #: The translator of the API's messages into reconstruct's flags
 #: (:func:`.words.flag_words`): ``reconstruct_words(message)`` names each option
 #: reconstruct sets by its flag, and gives the bins' advice in simulate's flags.
-reconstruct_words = flag_words(
+_words = flag_words(
     {"size": "--size", "extent": "--extent", "smooth": "--smooth", "filter": "--filter",
      "threshold": "--clip"},
     phrases=[("wider bins (meshladar.reconstruct.resample_uniform) or more views",
               "fewer, wider bins or more views (simulate --bins, --views)")])
+
+
+def reconstruct_words(message):
+    """An API message in reconstruct's flags (:data:`_words`), the image's centre
+    ``center=(X, Y)`` as ``--center X,Y``.
+
+    Parameters
+    ----------
+    message : str
+        The API's message.
+
+    Returns
+    -------
+    str
+        The message in the command's flags.
+    """
+    return re.sub(r"\bcenter=\(([^,()]+), ([^,()]+)\)", r"--center \1,\2", _words(message))
 #: The translator of the API's messages into receive's flags (:func:`.words.flag_words`):
 #: ``receive_words(message)`` names the waveforms' and the noise's parameters by their
 #: flags (a pulse's and the response's ``fwhm`` are named where they are made).

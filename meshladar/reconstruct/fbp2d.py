@@ -11,7 +11,8 @@ ladar sees the other side), so views must cover the full circle; each view is we
 half its share of the circle.
 
 The filters and their discretisation are scikit-image's (``skimage.transform.iradon``): the
-band-limited Ram-Lak kernel transformed to the frequency domain (Kak & Slaney Eq. 3.61),
+band-limited Ram-Lak kernel transformed to the frequency domain (A. C. Kak and M. Slaney,
+*Principles of Computerized Tomographic Imaging*, IEEE Press, 1988, Ch. 3, Eq. 61),
 times a window (shepp-logan, cosine, hamming, hann), on projections zero-padded to the next
 power of two ≥ 2 n_bins (no wrap-around). With bins of unit width, views 180° − φ, and
 pixel centres on skimage's grid, ``fbp`` equals iradon's output for 360° data.
@@ -22,9 +23,8 @@ square is centred on the origin (the axis the views turn about) with half-width 
 reach max(|r_0|, |r_n|) (:func:`bins_reach`): every point whose range falls in the bins in
 some view lies in it, so nothing the data holds is cropped, whatever the scene's units.
 
-The paper's glint preprocessing (:func:`log_radiance`, :func:`clip_radiance`, :func:`noise_floor`:
-:mod:`meshladar.reconstruct.radiance`) and the filters (:func:`fourier_filter`, :data:`FILTERS`:
-:mod:`meshladar.reconstruct.filters`) are importable from here too.
+A target that default square holds small is warned of (:mod:`.framing`). The paper's glint
+preprocessing (:mod:`.radiance`) and the filters (:mod:`.filters`) import from here too.
 """
 
 from __future__ import annotations
@@ -44,6 +44,7 @@ from ..precision import ANGLE_TOL_DEG, COUNT_SLACK
 from ..precision import UNIFORM_RTOL as _UNIFORM_RTOL
 from ..sinogram import Sinogram
 from .filters import FILTERS, _filtered, fourier_filter
+from .framing import check_frame
 from .radiance import LOG_FLOOR, PAPER_CLIP, clip_radiance, log_radiance, noise_floor
 
 # compiled loops, imported (with numba) at their first use: a small run loads neither
@@ -294,6 +295,8 @@ def fbp(sinogram, size=512, extent=None, *, filter="ramp", interpolation="linear
         views leave a gap wider than 3× their median spacing, or the views are too few for
         the bins across the target (π · bins across / n_views above 8: streaks). Both
         coverage checks count distinct angles: views within 1e-6° (mod 360°) are one.
+        Without ``extent``: when the target fills less than a tenth of the image's width
+        (:func:`.framing.check_frame`, naming the ``center`` and ``extent`` that fit).
 
     Notes
     -----
@@ -304,11 +307,6 @@ def fbp(sinogram, size=512, extent=None, *, filter="ramp", interpolation="linear
     number of bins) are backprojected as one, their profiles added with one reversed:
     half the work, the same image to the rounding of the sample positions (the
     conditions: ``meshladar.reconstruct._folded.backproject_views``).
-
-    References
-    ----------
-    A. C. Kak and M. Slaney, *Principles of Computerized Tomographic Imaging*, IEEE Press
-    (1988), Ch. 3 (filtered backprojection; the band-limited ramp of Eq. (61)).
 
     Examples
     --------
@@ -321,7 +319,10 @@ def fbp(sinogram, size=512, extent=None, *, filter="ramp", interpolation="linear
     >>> image.values.shape, float(image.x[0]), float(image.x[-1])   # pixel centres in ±0.8
     ((256, 256), -0.796875, 0.796875)
     """
-    size, extent, c = _check_fbp(sinogram, size, extent, filter, interpolation, center)
+    given, (size, extent, c) = extent, _check_fbp(sinogram, size, extent, filter,
+                                                  interpolation, center)
+    if given is None:                      # the default square: does it hold the target?
+        check_frame(sinogram, extent, c)
     sinogram, resampled = _on_uniform_bins(sinogram)
     out = _backprojected(sinogram, int(size), extent, c, filter, interpolation)
     return Image(out, extent, (float(c[0]), float(c[1])),

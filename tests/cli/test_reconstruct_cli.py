@@ -4,11 +4,16 @@ as ``meshladar.fbp(sino)`` and ``fbp3d(sino)``, the bins' reach about the origin
 from __future__ import annotations
 
 import math
+import re
+import sys
+import warnings
 
 import numpy as np
 import pytest
 
 import meshladar as ml
+from meshladar import cli, io
+from meshladar.brdf import Lambertian
 from meshladar.images import Volume
 from meshladar.meshes import fibonacci_sphere
 from meshladar.reconstruct.volumes import fbp3d
@@ -78,3 +83,32 @@ def test_a_volume_that_would_overwrite_its_input_is_refused_before_the_work(
     assert main(["reconstruct", str(path), "-o", str(tmp_path / "a.png"), "--quiet"]) == 2
     assert "would write the volume" in capsys.readouterr().err
     assert path.read_bytes() == before
+
+
+def test_a_target_far_from_the_axis_is_framed_by_the_flags_the_warning_names(tmp_path,
+                                                                              capsys):
+    """A user's trial: a target 1e4 units from the axis reconstructed into streaks in the
+    default square with no word. The warning names --center X,Y and --extent E (the
+    API's center=(X, Y) in the flags' words), and those flags frame the disk: its rim
+    within 0.1 of its radius from its centre (30, -20), placed by hand."""
+    scene = ml.Scene([ml.Disk((30.0, -20.0), 1.0, Lambertian(0.5))])
+    ladar = ml.Ladar(np.arange(180) * 2.0, np.linspace(-40.0, 40.0, 2049))
+    io.save_sinogram(tmp_path / "far.npz", ml.simulate(scene, ladar))
+    out = str(tmp_path / "far.image.npz")
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        warnings.showwarning = lambda m, c, f, n, file=None, line=None: sys.stderr.write(
+            warnings.formatwarning(m, c, f, n))
+        assert cli.main(["reconstruct", str(tmp_path / "far.npz"), "-o", out,
+                         "--size", "64"]) == 0
+    err = capsys.readouterr().err
+    found = re.search(r"--center ([-\d.]+),([-\d.]+) and --extent ([\d.]+) frame it", err)
+    assert found, err
+    assert cli.main(["reconstruct", str(tmp_path / "far.npz"), "-o", out, "--size", "256",
+                     "--center", f"{found[1]},{found[2]}", "--extent", found[3]]) == 0
+    data = np.load(out)
+    values, extent = data["image"], float(found[3])
+    i, j = np.unravel_index(np.argmax(values), values.shape)
+    x = float(found[1]) - extent + (j + 0.5) * 2 * extent / 256
+    y = float(found[2]) - extent + (i + 0.5) * 2 * extent / 256
+    assert abs(np.hypot(x - 30.0, y + 20.0) - 1.0) < 0.1
