@@ -273,21 +273,22 @@ class ScanSensor:
         :attr:`fwhm`: 2.355 σ, a Gaussian's FWHM; the detector's matched filter and peak fit
         are Gaussians of its σ), warn below :data:`FEW_SAMPLES_PER_ECHO` (to rounding),
         and refuse one whose support a record cannot hold (:data:`MAX_SAMPLES`); a
-        Geiger-mode array's histogram bins take any width."""
+        Geiger-mode array's histogram bins too (its returns are read from the corrected
+        histogram by the same detector: at half a bin per FWHM a return read 1.48 of
+        its photoelectrons)."""
         if self.echo_samples > MAX_SAMPLES:
             raise ParameterError(f"the echo (the pulse and the response) takes "
                                  f"{self.echo_samples} samples at sample_rate="
                                  f"{self.sample_rate:g}, more than a record's {MAX_SAMPLES}: "
                                  "give a lower sample_rate or a shorter pulse")
-        if self.geiger is not None:
-            return
         across = self.fwhm * self.sample_rate
         need = _up(FEW_SAMPLES_PER_ECHO / self.fwhm)
         what = (f"the echo (the pulse and the response: 2.355 sigma = {self.fwhm:.3g} s, a "
                 f"Gaussian's FWHM) spans {across:.3g} samples at "
                 f"sample_rate={self.sample_rate:g}")
         if across < MIN_SAMPLES_PER_ECHO:
-            raise ParameterError(f"{what}; a linear receiver's detector needs "
+            raise ParameterError(f"{what}; the detector (a linear receiver's, or a "
+                                 f"Geiger-mode array's on its histogram) needs "
                                  f"{MIN_SAMPLES_PER_ECHO:g} or more (ranges fall on the "
                                  f"sample grid): give sample_rate >= {need:.3g} or a wider "
                                  "pulse")

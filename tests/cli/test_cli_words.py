@@ -152,9 +152,14 @@ _RASTER = "raster azimuth_deg=-2:2:5 elevation_deg=-2:2:5 pulse_rate=1e5"
      "of 5)"),
     ({"--sample-rate": "1e6"},
      "the echo (the pulse and the response: 2.355 sigma = 5e-09 s, a Gaussian's FWHM) spans "
-     "0.005 samples at --sample-rate 1e+06; a linear receiver's detector needs 1 or more "
-     "(ranges fall on the sample grid): give --sample-rate >= 4e+08 or a wider pulse "
-     "(--pulse-fwhm)"),
+     "0.005 samples at --sample-rate 1e+06; the detector (a linear receiver's, or a "
+     "Geiger-mode array's on its histogram) needs 1 or more (ranges fall on the sample "
+     "grid): give --sample-rate >= 4e+08 or a wider pulse (--pulse-fwhm)"),
+    ({"--sample-rate": "1e6", "--geiger-shots": "10"},                # (a user's trial)
+     "the echo (the pulse and the response: 2.355 sigma = 5e-09 s, a Gaussian's FWHM) spans "
+     "0.005 samples at --sample-rate 1e+06; the detector (a linear receiver's, or a "
+     "Geiger-mode array's on its histogram) needs 1 or more (ranges fall on the sample "
+     "grid): give --sample-rate >= 4e+08 or a wider pulse (--pulse-fwhm)"),
     ({"--pulse-fwhm": "1e-3"},
      "the echo (the pulse and the response) takes 13589151 samples at --sample-rate 2e+09, "
      "more than a record's 65536: give a lower --sample-rate or a shorter pulse "

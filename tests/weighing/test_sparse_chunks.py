@@ -68,6 +68,7 @@ def _run(scene, ladar, batched, monkeypatch, **options):
                          ids=["stratified", "regular", "power", "smooth", "slice",
                               "bistatic", "bistatic-paper", "footprint", "footprint-dense",
                               "smooth-footprint", "slice-footprint"])
+@pytest.mark.filterwarnings("ignore::meshladar.errors.BounceWarning")  # two spheres: power
 def test_a_chunk_in_one_call_gives_each_views_own_numbers(options, monkeypatch):
     """Footprint bins too, their rows made at first hits, or every row first where the grid
     is dense (1.3 rays a face) though sparser than coherent packets need (5,440 faces:
