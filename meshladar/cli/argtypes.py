@@ -9,7 +9,7 @@ import math
 __all__ = ["KIND_TYPES", "positive_int", "nonnegative_int", "positive_float",
            "finite_float", "unit_fraction", "nonnegative_float", "pair", "direction",
            "angle_list", "window_size", "bounces", "bounce_count", "coatings",
-           "MergeCoatings"]
+           "MergeCoatings", "elevation_deg"]
 
 
 def _number(parse, ok, what):
@@ -56,6 +56,9 @@ nonnegative_int = _number(int, lambda v: v >= 0, "non-negative integer")
 positive_float = _number(float, lambda v: v > 0 and math.isfinite(v),
                          "positive finite number")
 finite_float = _number(float, math.isfinite, "finite number")
+#: An elevation above the x-y plane, degrees.
+elevation_deg = _number(float, lambda v: -90.0 <= v <= 90.0,
+                        "number of degrees from -90 to 90 (an elevation)")
 unit_fraction = _number(float, lambda v: 0 < v <= 1, "number in (0, 1]")
 nonnegative_float = _number(float, lambda v: v >= 0 and math.isfinite(v),
                             "non-negative finite number")

@@ -36,10 +36,22 @@ def _views(args, scene):
     if args.view_vectors is not None:
         if not scene.is_mesh:
             raise ParameterError("--view-vectors needs a mesh (a phantom is seen about z)")
+        if args.elevation_deg is not None:
+            raise ParameterError("--elevation-deg tilts the views of --views or "
+                                 "--angles-deg; --view-vectors spreads its own over the "
+                                 "sphere (leave out --elevation-deg)")
         return fibonacci_sphere(args.view_vectors)
     if args.angles_deg is not None:
-        return np.asarray(args.angles_deg, dtype=np.float64)
-    return np.arange(args.views or 36) * (360.0 / (args.views or 36))
+        azimuth = np.asarray(args.angles_deg, dtype=np.float64)
+    else:
+        azimuth = np.arange(args.views or 36) * (360.0 / (args.views or 36))
+    if args.elevation_deg is None:
+        return azimuth
+    if not scene.is_mesh:
+        raise ParameterError("--elevation-deg needs a mesh (a phantom is seen about z)")
+    az, el = np.radians(azimuth), np.radians(args.elevation_deg)
+    return np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az),
+                     np.full_like(az, np.sin(el))], axis=1)
 
 
 def _table(result, views):
@@ -72,7 +84,8 @@ def cmd_lrcs(args) -> int:
     ----------
     args : argparse.Namespace
         ``scene``, ``material``, ``coating``, ``materials`` (as ``simulate``'s);
-        ``views``, ``angles_deg`` or ``view_vectors``; ``bounces``, ``bounce_samples``,
+        ``views``, ``angles_deg`` or ``view_vectors``; ``elevation_deg`` (the views of
+        ``views`` or ``angles_deg`` raised above the x-y plane); ``bounces``, ``bounce_samples``,
         ``per_part``, ``ray_spacing``, ``seed``, ``normals``, ``output`` (CSV or None) and
         ``quiet``.
 

@@ -10,8 +10,8 @@ from .. import __version__
 from ..forward.options import MODELS, OPTIONS, SENSOR_OPTIONS
 from ..reconstruct import FILTERS
 from .argtypes import (KIND_TYPES, MergeCoatings, angle_list, bounce_count, bounces,
-                       coatings, nonnegative_float, nonnegative_int, pair, positive_float,
-                       positive_int, unit_fraction, window_size)
+                       coatings, elevation_deg, nonnegative_float, nonnegative_int, pair,
+                       positive_float, positive_int, unit_fraction, window_size)
 from .argv import Parser
 from .helptext import description
 from .scan import BEAM_DEFAULTS
@@ -385,6 +385,10 @@ def _lrcs(sub, commands):
                     help="view angles about z in degrees, comma-separated")
     lr.add_argument("--view-vectors", type=positive_int, default=None, metavar="N",
                     help="N view directions spread evenly over the sphere (meshes)")
+    lr.add_argument("--elevation-deg", type=elevation_deg, default=None, metavar="E",
+                    help="raise the views of --views or --angles-deg E degrees above the "
+                         "x-y plane (meshes; the table gives each view's vector; "
+                         "default: 0)")
     lr.add_argument("--bounces", type=bounces, default=1,
                     help="orders of bounces, 1-8 or auto (meshes; default: %(default)s)")
     lr.add_argument("--bounce-samples", type=positive_int, default=None, metavar="N",

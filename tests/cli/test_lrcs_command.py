@@ -144,3 +144,24 @@ def test_quiet_prints_the_table_unless_it_is_written(tmp_path, capsys):
                      "-o", str(tmp_path / "s.csv")]) == 0
     assert capsys.readouterr().out == ""
     assert (tmp_path / "s.csv").read_text() == out
+
+
+def test_views_raised_above_the_plane_by_elevation(tmp_path, capsys):
+    """A user's trial: the command line reached only views in the x-y plane (or N spread
+    over the sphere). --elevation-deg raises --angles-deg's views: a Lambertian (ρ = 1)
+    plate of area 6 facing x, seen 60° up at azimuth 0, gives 4ρA cos²60° = 6 (by hand);
+    the table gives each view's vector."""
+    plate = tmp_path / "plate.stl"
+    trimesh.Trimesh([[0, -1, 0], [0, 1, 0], [0, 1, 3], [0, -1, 3]],
+                    [[0, 1, 2], [0, 2, 3]]).export(plate)
+    assert cli.main(["lrcs", str(plate), "--material", "lambertian", "--angles-deg", "0",
+                     "--elevation-deg", "60", "--ray-spacing", "0.005", "--quiet"]) == 0
+    head, rows = _rows(capsys.readouterr().out)
+    assert head == ["wx", "wy", "wz", "sigma", "dbsm"]
+    np.testing.assert_allclose(rows[0, :3], [0.5, 0.0, np.sqrt(3) / 2], atol=1e-9)
+    assert rows[0, 3] == pytest.approx(4 * 1.0 * 6.0 * 0.25, rel=1e-3)
+    with pytest.raises(SystemExit) as parsed:                       # argparse's refusal
+        cli.main(["lrcs", str(plate), "--elevation-deg", "100"])
+    assert parsed.value.code == 2 and "from -90 to 90" in capsys.readouterr().err
+    assert cli.main(["lrcs", str(plate), "--view-vectors", "4", "--elevation-deg", "10"]) == 2
+    assert "--view-vectors spreads its own" in capsys.readouterr().err
