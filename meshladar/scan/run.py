@@ -19,7 +19,7 @@ import numpy as np
 from scipy.special import ndtri
 
 from .._validate import check_count, check_seed
-from ..errors import ParameterError, RecordLengthWarning, user_stacklevel
+from ..errors import MeshladarWarning, ParameterError, RecordLengthWarning, user_stacklevel
 from ..noise import draw_noise
 from ..raytrace.backends import resolve_backend
 from ..raytrace.embree import geometry
@@ -43,13 +43,17 @@ from .platforms import Platform
 from .points import CONVENTIONS, POINT_DTYPE, PointCloud
 from ._streaming import ScanJob, chunk_arrays, job_description, records, scan_chunk
 
-__all__ = ["scan", "CHUNK_RAYS", "RECORD_SAMPLES"]
+__all__ = ["scan", "CHUNK_RAYS", "RECORD_SAMPLES", "GEIGER_PILEUP"]
 
 #: Sub-rays cast per chunk (a chunk's pulses × sub-rays per pulse).
 CHUNK_RAYS = 1 << 17
 #: The most samples a chunk's records hold at once where they are not kept (64 MiB of
 #: float64): beyond it they are made and searched in runs of pulses (a deep scene).
 RECORD_SAMPLES = 1 << 23
+#: A Geiger-mode return of this many events per shot or more is warned of: past about it
+#: every shot fires on the echo's leading edge (a user's trial: 8 events read 0.91 of
+#: them, 5 cm early; 20 read 0.37, 32 cm early; 5 and fewer within 2 % and 5 mm).
+GEIGER_PILEUP = 6.0
 
 
 def _check(scene, pattern, platform, sensor):
@@ -360,11 +364,21 @@ def _description(job, run_dir, motions):
 
 
 def _warn(results, points, job):
-    """The scan's warnings once its chunks are in: echoes that a fixed record cut, and a
-    cloud with no return (:func:`_warn_cut`, ``_empty.warn_empty``)."""
+    """The scan's warnings once its chunks are in: echoes that a fixed record cut, a
+    cloud with no return (:func:`_warn_cut`, ``_empty.warn_empty``), and Geiger-mode
+    returns piled up past :data:`GEIGER_PILEUP` events per shot."""
     cut = _warn_cut(results, job.sensor, len(job.pattern))
     if not len(points):
         warn_empty(results, job, cut)
+    piled = int(np.count_nonzero(points["intensity"] >= GEIGER_PILEUP)) \
+        if job.sensor.geiger is not None else 0
+    if piled:
+        warnings.warn(f"{piled} of {len(points)} Geiger-mode returns hold {GEIGER_PILEUP:g} "
+                      "or more events per shot: their pixels fire on the echo's leading "
+                      "edge nearly every shot, Coates' correction cannot restore what "
+                      "came after, and they range early and read low; lower pulse_energy "
+                      "(or attenuate) toward one event per shot", MeshladarWarning,
+                      stacklevel=user_stacklevel())
 
 
 def _check_keep(keep, run_dir, sensor):

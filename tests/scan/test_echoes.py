@@ -345,7 +345,9 @@ def test_an_echo_of_two_samples_ranges_and_counts_true_and_one_of_fewer_is_refus
     offsets: range within 0.2 % of c τ / 2 and photoelectrons within 0.3 % of the link
     budget by hand. 1.5 samples warns, 0.5 refuses naming the rate that would serve (a
     user's 0.5 ns at 1 GS/s read 0.83 of the budget, 5 ns at 1 MS/s every range on a
-    150 m grid); discrete returns and Geiger-mode pixels have no such detector."""
+    150 m grid), and so is a Geiger-mode array's histogram (its returns read by the same
+    detector: half a bin per FWHM read 1.48 of the photoelectrons); discrete returns have
+    no such detector."""
     from meshladar.errors import MeshladarWarning, ParameterError
     from meshladar.scan import GeigerMode
     from meshladar.waveforms import GaussianPulse
@@ -368,8 +370,8 @@ def test_an_echo_of_two_samples_ranges_and_counts_true_and_one_of_fewer_is_refus
     # is error): 4/3 GS/s rounded up, and a 0.7 ns pulse at 2 / (0.7 ns) samples a second
     sensor(sample_rate=1.34e9, pulse=GaussianPulse(1.5e-9))
     sensor(sample_rate=2.0 / 7e-10, pulse=GaussianPulse(7e-10))
-    with pytest.raises(ParameterError, match=r"spans 0\.5 samples at sample_rate=1e\+09; a "
-                                             r"linear receiver's detector needs 1 or more"):
-        sensor(sample_rate=1e9, pulse=GaussianPulse(0.5e-9))
+    for geiger in (None, GeigerMode(shots=4)):    # a Geiger array's histogram bins too
+        with pytest.raises(ParameterError, match=r"spans 0\.5 samples at sample_rate=1e\+09; "
+                                                 r"the detector .* needs 1 or more"):
+            sensor(sample_rate=1e9, pulse=GaussianPulse(0.5e-9), geiger=geiger)
     sensor(sample_rate=1e9, pulse=GaussianPulse(0.5e-9), echoes="discrete")
-    sensor(sample_rate=1e9, pulse=GaussianPulse(0.5e-9), geiger=GeigerMode(shots=4))
