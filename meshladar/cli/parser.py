@@ -322,8 +322,18 @@ _SCAN_FLAGS = (
     ("--max-returns", positive_int, 5, "N", "most returns per pulse (1-15)"),
     ("--geiger-shots", positive_int, None, "K", "Geiger-mode pixels: K shots histogrammed "
      "per pulse, Coates-corrected"),
+    ("--dead-time", positive_float, "inf (once per shot)", "S", "Geiger-mode pixels: "
+     "seconds blind after firing (with --geiger-shots)"),
+    ("--detection-efficiency", unit_fraction, 1.0, "P", "Geiger-mode pixels: the "
+     "probability that a photoelectron fires (with --geiger-shots)"),
+    ("--false-alarm", positive_float, 1e-6, "P", "the detector's largest probability that "
+     "a noise-only sample crosses its threshold, (0, 0.5]"),
     ("--seed", nonnegative_int, 0, "N", "the noise's seed"),
 )
+
+
+#: scan's flags left None when not given (what applies depends on whether they were).
+_GIVEN_ONLY = ("--dead-time", "--detection-efficiency", "--false-alarm")
 
 
 def _scan(sub, commands):
@@ -360,9 +370,9 @@ def _scan(sub, commands):
                     help="threshold from each record's own background (default: from "
                          "--background-rate and --dark-rate)")
     for flag, kind, default, metavar, text in _SCAN_FLAGS:
-        # the beam's defaults are applied by the command: whether a flag was given decides
-        # what applies (a flash pattern refuses --divergence)
-        later = flag.lstrip("-") in BEAM_DEFAULTS
+        # the beam's and the Geiger array's defaults are applied by the command: whether a
+        # flag was given decides what applies (a flash pattern refuses --divergence)
+        later = flag.lstrip("-") in BEAM_DEFAULTS or flag in _GIVEN_ONLY
         sc.add_argument(flag, type=kind, default=None if later else default,
                         metavar=metavar, help=f"{text} (default: {default})")
 

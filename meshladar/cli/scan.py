@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import functools
 import inspect
+import math
 import os
 import re
 
@@ -44,6 +45,8 @@ POINT_SUFFIXES = tuple(FORMATS)
 HDF5_SUFFIXES = tuple(k for k, (named, _) in FORMATS.items() if named == "HDF5")
 #: The sensor's API arguments and the flags that set them (named in the messages).
 SENSOR_FLAGS = {"max_returns": "--max-returns", "shots": "--geiger-shots",
+                "dead_time": "--dead-time", "detection_efficiency": "--detection-efficiency",
+                "false_alarm": "--false-alarm",
                 "divergence": "--divergence", "sub_rays": "--sub-rays", "tol": "--tol",
                 "pulse_energy": "--pulse-energy", "aperture_diameter": "--aperture",
                 "sample_rate": "--sample-rate", "fwhm": "--pulse-fwhm",
@@ -54,8 +57,9 @@ SENSOR_FLAGS = {"max_returns": "--max-returns", "shots": "--geiger-shots",
 scan_words = flag_words(
     {**SENSOR_FLAGS, "platform": "--platform"}, [n for n in SENSOR_FLAGS if "_" in n],
     [("raise the sensor's --pulse-energy or --aperture", "raise --pulse-energy or --aperture"),
-     (", or its detector's false_alarm (the threshold follows it)", ""),
      (", or lower its detector's threshold", ""),
+     (", or its detector's --false-alarm (the threshold follows it)",
+      ", or --false-alarm (the threshold follows it)"),
      (", or its GeigerMode's shots", ", or --geiger-shots"),
      ("or a wider pulse", "or a wider pulse (--pulse-fwhm)"),
      ("or a shorter pulse", "or a shorter pulse (--pulse-fwhm)"),
@@ -250,12 +254,24 @@ def _sensor(args, flash):
     noise = None
     if args.background_rate or args.dark_rate or args.noise:
         noise = Noise(background_rate=args.background_rate, dark_rate=args.dark_rate)
-    geiger = scanning.GeigerMode(shots=args.geiger_shots) if args.geiger_shots else None
+    geiger = None
+    if args.geiger_shots:
+        geiger = scanning.GeigerMode(
+            shots=args.geiger_shots, detection_efficiency=args.detection_efficiency or 1.0,
+            dead_time=math.inf if args.dead_time is None else args.dead_time)
+    else:
+        given = [f for f, v in (("--dead-time", args.dead_time),
+                                ("--detection-efficiency", args.detection_efficiency))
+                 if v is not None]
+        if given:
+            raise ParameterError(f"{given[0]} sets a Geiger-mode array's pixels: give "
+                                 "--geiger-shots K too, or leave it out")
     return scanning.ScanSensor(
         pulse_energy=args.pulse_energy, aperture_diameter=args.aperture,
         sample_rate=args.sample_rate, pulse=GaussianPulse(args.pulse_fwhm),
         beam=_beam(args, flash), noise=noise, geiger=geiger,
-        detector=scanning.Detector(max_returns=args.max_returns, cfar=args.cfar),
+        detector=scanning.Detector(max_returns=args.max_returns, cfar=args.cfar,
+                                   false_alarm=args.false_alarm or 1e-6),
         echoes="discrete" if args.discrete else "waveform")
 
 

@@ -181,10 +181,11 @@ def test_scan_speaks_its_flags(change, message, files, capsys):
 
 
 def test_an_empty_scans_advice_names_scans_flags(files, capsys):
-    """The box 500 m away returns too little at 0.01 pJ: the advice names --pulse-energy and
-    --aperture, not the API's pulse_energy, aperture_diameter or the detector's
-    false_alarm (no flag); with Geiger-mode pixels, --geiger-shots."""
-    for extra, more in (([], ""), (["--geiger-shots", "10"], ", or --geiger-shots")):
+    """The box 500 m away returns too little at 0.01 pJ: the advice names --pulse-energy,
+    --aperture and --false-alarm, not the API's pulse_energy, aperture_diameter or the
+    detector's false_alarm; with Geiger-mode pixels, --geiger-shots."""
+    for extra, more in (([], ", or --false-alarm (the threshold follows it)"),
+                        (["--geiger-shots", "10"], ", or --geiger-shots")):
         with warnings.catch_warnings():
             warnings.simplefilter("always")
             warnings.showwarning = lambda m, c, f, n, file=None, line=None: sys.stderr.write(

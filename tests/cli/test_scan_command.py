@@ -10,7 +10,7 @@ import pytest
 import trimesh
 
 from meshladar.cli import main
-from meshladar.scan import read_hdf5, read_las
+from meshladar.scan import read_hdf5, read_las, read_npz
 
 HALF = np.array([20.0, 20.0, 6.0])
 
@@ -221,3 +221,24 @@ def test_a_run_folder_resumes_a_scan_from_the_command_line(tmp_path, capsys, mon
     assert np.array_equal(a["points"], b["points"]) and len(a["points"]) > 0
     assert main(argv + ["-o", str(tmp_path / "c.npz"), "--waveforms", "w.h5"]) == 2
     assert "give one of them" in capsys.readouterr().err
+
+
+def test_the_geiger_arrays_and_detectors_settings_are_flags(tmp_path, capsys):
+    """A user's trial: the dead time, the detection efficiency and the false-alarm
+    probability were the API's alone. They are flags, recorded in the file's parameters;
+    the Geiger array's need --geiger-shots, and a false alarm out of (0, 0.5] is refused
+    by its flag, each before any work."""
+    base = ["scan", _room(tmp_path), "--quiet", "--pattern", "flash rows=2 columns=2 "
+            "ifov_deg=0.1", "--platform", "static position=0,0,0", "--pulse-energy", "1e-12"]
+    assert main(base + ["-o", str(tmp_path / "g.npz"), "--geiger-shots", "10", "--dead-time",
+                        "1e-8", "--detection-efficiency", "0.5", "--false-alarm",
+                        "1e-4"]) == 0
+    sensor = read_npz(tmp_path / "g.npz").info["sensor"]
+    assert sensor["geiger"] == {"shots": 10, "dead_time_s": 1e-8, "detection_efficiency": 0.5}
+    assert sensor["detector"]["false_alarm"] == 1e-4
+    for extra, message in ((["--dead-time", "1e-8"], "--dead-time sets a Geiger-mode "
+                                                      "array's pixels: give --geiger-shots"),
+                           (["--false-alarm", "0.7"], r"--false-alarm must be in \(0, 0\.5\]")):
+        assert main(base + ["-o", str(tmp_path / "x.npz")] + extra) == 2
+        assert re.search(message, capsys.readouterr().err)
+        assert not (tmp_path / "x.npz").exists()
