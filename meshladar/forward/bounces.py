@@ -88,6 +88,11 @@ class Orders:
     per_part : (n_orders, n_views, n_parts) numpy.ndarray or None
         Each order's total per part of the scene, by the part of each path's last surface
         (they sum to ``values`` over the bins).
+    total_stderr : (2, n_orders, n_views) numpy.ndarray or None
+        The standard errors of each view's total over the bins: [0, k] of order k + 2
+        alone, [1, k] of orders 2..k + 2 together; from the spread of the first hits'
+        totals (``stderr`` is per bin: a hit's paths reach several bins and orders, so
+        their variances summed would leave out the covariance).
     """
 
     orders: tuple
@@ -96,6 +101,7 @@ class Orders:
     samples: int
     radiometry: str = "power"
     per_part: np.ndarray | None = None
+    total_stderr: np.ndarray | None = None
 
 
 def check_bistatic(materials):
@@ -305,15 +311,33 @@ def _leg(scene, geo, emb, ends, paths, mirrors):
 
 
 def _view_orders(scene, geo, emb, w, edges, spacing, plan, rng):
-    """One view's orders 2..n binned: (sums (n−1, bins), variances (n−1, bins)), and each
-    part's share of each order (n−1, parts): by the part of the path's last surface."""
+    """One view's orders 2..n binned: (sums (n−1, bins), variances (n−1, bins)); each
+    part's share of each order (n−1, parts), by the part of the path's last surface; and
+    (2, n−1) the variances of the view's total within the bins of each order and of
+    orders 2..k, for each k, from the spread of the first hits' totals (a hit's paths
+    reach several bins and orders: the bins' variances summed leave out their
+    covariance)."""
     out = np.zeros((2, plan[0] - 1, len(edges) - 1))
     parts = np.zeros((plan[0] - 1, len(scene.parts)))
     draw = max(2, plan[1] // BRANCHES)
+    totals, total_var = np.zeros(draw), np.zeros((2, plan[0] - 1))
     for order, leg in enumerate(walk(scene, geo, emb, w, spacing, plan, rng)):
         out[:, order] = _bin_stats(edges, leg.range, leg.value, leg.path, draw)
         parts[order] = np.bincount(geo.part_of[leg.face], leg.value, len(scene.parts))
-    return out, parts
+        inside = (leg.range >= edges[0]) & (leg.range < edges[-1])
+        per_hit = np.bincount(leg.path[inside] // BRANCHES, leg.value[inside], draw)
+        if len(per_hit) > len(totals):
+            totals = np.pad(totals, (0, len(per_hit) - len(totals)))
+        totals[:len(per_hit)] += per_hit
+        total_var[:, order] = _spread(per_hit, draw), _spread(totals, draw)
+    return out, parts, total_var
+
+
+def _spread(per_hit, draws):
+    """The variance of a sum over ``draws`` independent first hits from their totals
+    ``per_hit`` (a hit with no path counts as 0)."""
+    return draws / (draws - 1.0) * max(
+        float(np.sum(per_hit * per_hit) - per_hit.sum() ** 2 / draws), 0.0)
 
 
 def higher_orders(scene, ladar, *, bounces, ray_spacing, samples=BOUNCE_SAMPLES,
@@ -368,6 +392,7 @@ def higher_orders(scene, ladar, *, bounces, ray_spacing, samples=BOUNCE_SAMPLES,
     shape = (bounces - 1, ladar.n_views, ladar.n_bins)
     values, var = np.zeros(shape), np.zeros(shape)
     per_part = np.zeros((bounces - 1, ladar.n_views, len(scene.parts)))
+    total_var = np.zeros((2, bounces - 1, ladar.n_views))
     if scene.visibility().needs_bounces:
         geo = geometry(scene, "flat")
         emb = embree_scene(geo, resolve_backend(backend))
@@ -380,7 +405,7 @@ def higher_orders(scene, ladar, *, bounces, ray_spacing, samples=BOUNCE_SAMPLES,
             return _view_orders(scene, geo, emb, ends, ladar.bin_edges, ray_spacing,
                                 (bounces, samples), np.random.default_rng(seeds[i]))
         with thread_pool(min(jobs, ladar.n_views)) as pool:
-            for i, ((v, e), share) in enumerate(pool.map(view, range(ladar.n_views))):
-                values[:, i], var[:, i], per_part[:, i] = v, e, share
+            for i, ((v, e), share, t) in enumerate(pool.map(view, range(ladar.n_views))):
+                values[:, i], var[:, i], per_part[:, i], total_var[:, :, i] = v, e, share, t
     return Orders(tuple(range(2, bounces + 1)), values, np.sqrt(var), samples, radiometry,
-                  per_part=per_part)
+                  per_part=per_part, total_stderr=np.sqrt(total_var))

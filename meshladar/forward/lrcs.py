@@ -148,8 +148,8 @@ def _ladar(scene, views, bounces, n_bins, bistatic):
 def _convention(scene, model, sino, options):
     """:data:`CONVENTION` and the geometry's (:class:`CrossSection`)."""
     if model == "mesh":
-        shape = (f"{sino.info.get('normals', 'flat')} normals, "
-                 f"{options.get('back_faces', 'two-sided')} faces")
+        faces = {"ignore": "one-sided"}.get(options.get("back_faces"), "two-sided")
+        shape = f"{sino.info.get('normals', 'flat')} normals, {faces} faces"
     else:
         shape = "exact shapes" if model == "analytic" else "rasterised shapes"
     return f"{CONVENTION}; {shape}; geometric optics (no diffraction)"
@@ -174,14 +174,16 @@ def _check_stderr(values, stderr, samples):
 
 
 def _default_spacing(scene, n_bins, options):
-    """A mesh's ``ray_spacing`` into ``options`` unless it, ``rays_per_bin`` or ``tol`` is
-    given (or the mode is a slice): R / ``n_bins``, R the largest distance of a vertex from
-    the bounding box's centre."""
-    if options.get("mode", "3d") == "3d" and all(
+    """A mesh scene's ``ray_spacing`` into ``options`` unless it, ``rays_per_bin`` or
+    ``tol`` is given (or the mode is a slice): R / max(``n_bins``, :data:`LRCS_BINS`), R
+    the largest distance of a vertex from the bounding box's centre (fewer bins, for σ
+    alone, keep the default's rays: at R / 1 a sphere read 1.52 of its σ)."""
+    if scene.is_mesh and options.get("mode", "3d") == "3d" and all(
             options.get(k) is None for k in ("ray_spacing", "rays_per_bin", "tol")):
         pts = scene.hull_points()
         centre = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
-        options["ray_spacing"] = float(np.max(np.linalg.norm(pts - centre, axis=1)) / n_bins)
+        options["ray_spacing"] = float(np.max(np.linalg.norm(pts - centre, axis=1))
+                                       / max(n_bins, LRCS_BINS))
 
 
 def _shares(scene, ladar, model, sino, options, n_parts):
@@ -241,8 +243,8 @@ def lrcs(scene, views, *, model=None, bounces=1, per_part=False, n_bins=LRCS_BIN
         The model's other options (``ray_spacing``, ``tol``, ``receiver`` for a bistatic
         σ, ``seed``, …); not ``radiometry`` (always ``"power"``) or ``sensor``. A mesh's
         ``ray_spacing``, unless it, ``rays_per_bin`` or ``tol`` is given, is R /
-        ``n_bins``, R the largest distance of a vertex from its bounding box's centre
-        (a sphere's range depth over the bins): the same for every view and every
+        max(``n_bins``, 256), R the largest distance of a vertex from its bounding box's
+        centre (a sphere's range depth over the bins): the same for every view and every
         ``bounces`` (a flat plate seen face-on, which spans no range, included).
 
     Returns

@@ -146,18 +146,19 @@ def add_bounces(scene, ladar, sino, bounces, samples, *, tol=None, seed=None, se
     top = MAX_BOUNCES if bounces == "auto" else bounces
     orders = _sampled(scene, ladar, sino, (top, samples), tol, seed, sensor)
     totals = orders.values.sum(axis=(1, 2))
-    errors = np.sqrt((orders.stderr ** 2).sum(axis=(1, 2)))
+    errors = np.sqrt((orders.total_stderr[0] ** 2).sum(axis=1))     # views: independent
     keep = top - 1
     if bounces == "auto":            # up to the highest order at or above the share (a
         above = np.flatnonzero(np.abs(totals) >= share * abs(first))   # corner's 2nd is 0)
         keep = int(above[-1]) + 1 if above.size else 0
-    if isinstance(bounces, int) and bounces < CHECK_ORDERS and sino.radiometry == "power":
+    if isinstance(bounces, (int, np.integer)) and bounces < CHECK_ORDERS and \
+            sino.radiometry == "power":
         _check_orders(scene, ladar, sino, share, 0 if seed is None else seed, bounces)
     values = sino.values + orders.values[:keep].sum(axis=0)
     out = _with_orders(sino, values, keep + 1, [first, *totals[:keep]],
                        [0.0, *errors[:keep]])
     shares = orders.per_part[:keep].sum(axis=0)
-    views = np.sqrt((orders.stderr[:keep] ** 2).sum(axis=(0, 2)))
+    views = orders.total_stderr[1, keep - 1] if keep else np.zeros(ladar.n_views)
     return replace(out, info=dict(out.info, bounce_samples=orders.samples,
                                   bounce_part_totals=shares.tolist(),
                                   view_stderr=views.tolist()))
@@ -178,7 +179,8 @@ def _sampled(scene, ladar, sino, plan, tol, seed, sensor):
         if sensor is None or not sensor.counts_photons:
             return o
         k = sensor.photoelectrons_per_unit()
-        return replace(o, values=o.values * k, stderr=o.stderr * k, per_part=o.per_part * k)
+        return replace(o, values=o.values * k, stderr=o.stderr * k, per_part=o.per_part * k,
+                       total_stderr=o.total_stderr * k)
     orders = run(samples)
     if tol is None:
         return orders
@@ -226,10 +228,11 @@ def _check_orders(scene, ladar, sino, share, seed, done=1):
     for i, rng in zip(pick, np.random.SeedSequence(seed).spawn(len(pick))):
         w = np.asarray(ladar.view_vectors[i], np.float64)
         first = float(single_bounce(scene, geo, w, spacing)[1].sum())
-        orders = _view_orders(scene, geo, emb, w, np.array([-np.inf, np.inf]), spacing,
-                              (CHECK_ORDERS, CHECK_SAMPLES), np.random.default_rng(rng))
+        (sums, _), _, _ = _view_orders(scene, geo, emb, w, np.array([-np.inf, np.inf]),
+                                       spacing, (CHECK_ORDERS, CHECK_SAMPLES),
+                                       np.random.default_rng(rng))
         if first > 0:
-            ratios.append(orders[0][0][:, 0] / first)             # orders 2, 3, ...
+            ratios.append(sums[:, 0] / first)                     # orders 2, 3, ...
     if not ratios:
         return
     summed, ratios = np.split(np.array(ratios), [done - 1], axis=1)

@@ -30,8 +30,9 @@ def target_frame(sinogram):
     """The target's centre and a half-width that holds it, from a sinogram of views
     about z: the middle of each view's returns (its first to its last bin above
     :data:`SUPPORT_SHARE` of its brightest) fitted by −(c_x cos φ + c_y sin φ) + d (d: the
-    lit side's offset toward the ladar), the half-width :data:`FRAME_MARGIN` × the
-    largest depth of the returns in any view.
+    lit side's offset toward the ladar), the half-width :data:`FRAME_MARGIN` × the larger
+    of the returns' largest depth in any view and 2|d| (a mirror's glint is one point of
+    its surface, |d| in front of the centre: its returns have no depth).
 
     Parameters
     ----------
@@ -59,7 +60,8 @@ def target_frame(sinogram):
     fit, _, _, s = np.linalg.lstsq(a, 0.5 * (lo + hi), rcond=None)
     if s[-1] < _CONDITION * s[0]:
         return None
-    return (float(fit[0]), float(fit[1])), FRAME_MARGIN * float(np.max(hi - lo))
+    size = max(float(np.max(hi - lo)), 2.0 * abs(float(fit[2])))
+    return (float(fit[0]), float(fit[1])), FRAME_MARGIN * size
 
 
 def check_frame(sinogram, extent, center=(0.0, 0.0)):

@@ -56,8 +56,9 @@ def _part_index(scene, key):
 def at_wavelength(motions, wavelength):
     """``motions`` (checked by :func:`moving_parts`) at the sensor's ``wavelength``: a
     scan's Doppler shifts are the sensor's (2 v·u / λ), whatever a Motion's own (which is
-    :func:`meshladar.simulate`'s and ``resolve``'s); a Motion whose wavelength is not the
-    sensor's is warned of.
+    :func:`meshladar.simulate`'s and ``resolve``'s); a Motion whose wavelength was set to
+    another than the sensor's is warned of (its default, 1.064 µm, is taken as unset: a
+    1.55 µm sensor's every motion would warn).
 
     Parameters
     ----------
@@ -73,8 +74,9 @@ def at_wavelength(motions, wavelength):
     """
     if not motions:
         return motions
+    unset = Motion.__dataclass_fields__["wavelength"].default
     for part, m in motions.items():
-        if m.wavelength != wavelength:
+        if m.wavelength not in (wavelength, unset):
             warnings.warn(f"motions[{part!r}] has wavelength {m.wavelength:g} m; a scan's "
                           f"Doppler shifts are at its sensor's, {wavelength:g} m (a "
                           "Motion's own wavelength is simulate's and resolve's)",

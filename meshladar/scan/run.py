@@ -43,18 +43,18 @@ from .platforms import Platform
 from .points import CONVENTIONS, POINT_DTYPE, PointCloud
 from ._streaming import ScanJob, chunk_arrays, job_description, records, scan_chunk
 
-__all__ = ["scan", "CHUNK_RAYS", "RECORD_SAMPLES", "GEIGER_PILEUP"]
+__all__ = ["scan", "CHUNK_RAYS", "RECORD_SAMPLES", "GEIGER_PILEUP_SHOTS"]
 
 #: Sub-rays cast per chunk (a chunk's pulses × sub-rays per pulse).
 CHUNK_RAYS = 1 << 17
 #: The most samples a chunk's records hold at once where they are not kept (64 MiB of
 #: float64): beyond it they are made and searched in runs of pulses (a deep scene).
 RECORD_SAMPLES = 1 << 23
-#: A Geiger-mode return of this many events per shot or more (or ln K − 1 for K shots,
-#: where fewer than ~1100 cap Coates' estimate near ln K) is warned of: past about it
-#: every shot fires on the echo's leading edge (1000 shots of a 5 ns pulse: 8 events read
-#: 0.91 of them, 5 cm early; 20 read 0.37, 32 cm early; 4 within 3 % and 1 cm).
-GEIGER_PILEUP = 6.0
+#: Geiger-mode arrays of at least this many shots a pulse are checked for pile-up: a
+#: return reading ln K events per shot or more, about the most Coates' correction of K
+#: shots reads (1000 shots of a 5 ns pulse: 8 events read 0.91 of them, 5 cm early; 20
+#: read 0.37, 32 cm early; 4 within 3 % and 1 cm). Fewer shots estimate too coarsely.
+GEIGER_PILEUP_SHOTS = 10
 
 
 def _check(scene, pattern, platform, sensor):
@@ -367,19 +367,23 @@ def _description(job, run_dir, motions):
 def _warn(results, points, job):
     """The scan's warnings once its chunks are in: echoes that a fixed record cut, a
     cloud with no return (:func:`_warn_cut`, ``_empty.warn_empty``), and Geiger-mode
-    returns piled up past :data:`GEIGER_PILEUP` events per shot (or ln K − 1)."""
+    returns piled up to about the most K shots read, ln K events per shot
+    (:data:`GEIGER_PILEUP_SHOTS`)."""
     cut = _warn_cut(results, job.sensor, len(job.pattern))
     if not len(points):
         warn_empty(results, job, cut)
     gm = job.sensor.geiger
-    level = GEIGER_PILEUP if gm is None else min(GEIGER_PILEUP, math.log(gm.shots) - 1.0)
-    piled = 0 if gm is None else int(np.count_nonzero(points["intensity"] >= level))
+    if gm is None or gm.shots < GEIGER_PILEUP_SHOTS:
+        return
+    level = math.log(gm.shots)
+    piled = int(np.count_nonzero(points["intensity"] >= level))
     if piled:
-        warnings.warn(f"{piled} of {len(points)} Geiger-mode returns hold {level:.3g} "
-                      "or more events per shot: their pixels fire on the echo's leading "
-                      "edge nearly every shot, Coates' correction cannot restore what "
-                      "came after, and they range early and read low; lower pulse_energy "
-                      "(or attenuate) toward one event per shot", MeshladarWarning,
+        warnings.warn(f"{piled} of {len(points)} Geiger-mode returns read {level:.3g} "
+                      f"events per shot or more (ln K, about the most {gm.shots} shots "
+                      "read): their pixels fire on the echo's leading edge nearly every "
+                      "shot, Coates' correction cannot restore what came after, and they "
+                      "range early and read low; lower pulse_energy (or attenuate) toward "
+                      "one event per shot, or histogram more shots", MeshladarWarning,
                       stacklevel=user_stacklevel())
 
 

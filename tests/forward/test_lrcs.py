@@ -218,3 +218,20 @@ def test_the_convention_states_the_geometry_and_the_optics():
                                  "(no diffraction)")
     disk = ml.Scene([ml.Disk((0.0, 0.0), 0.5, Lambertian(RHO))])
     assert "; exact shapes;" in ml.lrcs(disk, [0.0]).convention
+
+
+def test_few_bins_keep_the_default_rays_and_shapes_take_the_mesh_model():
+    """A review: with n_bins=1 (σ alone) the default spacing R / n_bins cast a handful of
+    rays (a sphere read 1.52 of its σ); it is R / max(n_bins, 256). And a 2-D shape under
+    model='mesh' crashed on the mesh-only default (it is the model's own there)."""
+    ball = ml.Scene.from_parts([ml.meshes.sphere((0, 0, 0), 1.0, 0, subdivisions=5)],
+                               [Lambertian(RHO)])
+    for n_bins in (1, 4):
+        s = ml.lrcs(ball, [33.0], n_bins=n_bins)
+        assert s.values[0] == pytest.approx(8 / 3 * np.pi * RHO, rel=1e-3)
+        assert s.profile.info["ray_spacing"] == pytest.approx(1.0 / 256, rel=1e-3)
+    disk = ml.Scene([ml.Disk((0.0, 0.0), 0.5, Lambertian(RHO))])
+    np.testing.assert_allclose(ml.lrcs(disk, [0.0, 90.0], model="mesh").values,
+                               2 * np.pi * RHO * 0.5, rtol=1e-3)
+    one_sided = ml.lrcs(ball, [0.0], back_faces="ignore").convention
+    assert "; flat normals, one-sided faces;" in one_sided

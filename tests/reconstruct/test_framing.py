@@ -65,3 +65,17 @@ def test_a_centred_target_and_a_narrow_arc_of_views_are_not_warned_of():
     narrow = ml.simulate(disk.scene, ml.Ladar(np.linspace(0.0, 10.0, 11),
                                               disk.ladar.bin_edges))
     assert target_frame(narrow) is None
+
+
+def test_a_mirror_disks_glint_is_framed_whole():
+    """A review: a near-mirror disk's returns are its glint alone (no depth), so the frame
+    took it for 0.28 wide and the warning advised cropping the radius-5 disk away. The
+    glint stands |d| = R in front of the centre: the frame holds 2|d|, and the default
+    square (which holds the disk) is not warned of."""
+    scene = ml.Scene([ml.Disk((0.0, 0.0), 5.0, ml.SandfordRobertson(0.0, 0.1, 0.0, 0.005))])
+    sino = ml.simulate(scene, ml.Ladar(np.arange(180) * 2.0, np.linspace(-6.0, 6.0, 513)))
+    (cx, cy), half = target_frame(sino)
+    assert np.hypot(cx, cy) < 0.05 and half >= 5.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        ml.fbp(sino, size=32)
