@@ -265,7 +265,8 @@ def test_the_guide_states_the_constants():
     from meshladar.forward import orders, specular
     text = Path(__file__).parents[2].joinpath("docs", "guide", "bounces.md").read_text()
     assert (orders.CHECK_VIEWS, orders.CHECK_GRID, orders.CHECK_SAMPLES,
-            orders.CHECK_ORDERS) == (8, 64, 4096, 4)
+            orders.CHECK_ORDERS, orders.CHECK_SIGMAS) == (8, 64, 4096, 4, 2.0)
+    assert "by 2 of its own standard errors" in " ".join(text.split())
     assert "8 of its views, a 64-ray grid across the scene, 4096 paths a view of orders " \
            "2 to 4" in \
         " ".join(text.split())

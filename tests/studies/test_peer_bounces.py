@@ -71,7 +71,7 @@ def test_profiles_of_each_order_match_mitransient(renderer, shape, coating):
                                   seed=0)
     scene = ml.Scene.from_parts([MeshPart(v, f, 0, "target")], [brdf])
     ladar = ml.Ladar(None, view_vectors=w[None], bin_edges=edges)
-    with pytest.warns(ml.errors.BounceWarning, match="second bounce adds about"):
+    with pytest.warns(ml.errors.BounceWarning, match="bounces beyond the first return about"):
         first = ml.simulate(scene, ladar, model="mesh", radiometry="power",
                             ray_spacing=2e-3).values[0]
     orders = higher_orders(scene, ladar, bounces=3, ray_spacing=2e-3, samples=SAMPLES,
